@@ -1,0 +1,41 @@
+# magexp — every target sets up its own virtual environment on first use.
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+JOBS   ?= 0
+
+.DEFAULT_GOAL := help
+.PHONY: help venv reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test clean
+
+help: ## list the targets
+	@grep -E '^[a-zA-Z0-9_-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+venv: $(STAMP) ## create .venv and install magexp with its test extras
+
+reproduce: $(STAMP) ## regenerate every figure, table and the report into results/
+	$(PY) -m magexp.reproduce all --jobs $(JOBS)
+
+reproduce-ding2024: $(STAMP) ## regenerate Ding 2024 only (and the report)
+	$(PY) -m magexp.reproduce ding2024 --jobs $(JOBS)
+
+reproduce-yuan2018: $(STAMP) ## regenerate Yuan 2018 only (and the report)
+	$(PY) -m magexp.reproduce yuan2018 --jobs $(JOBS)
+
+reproduce-yan2022: $(STAMP) ## regenerate Yan & Zhou 2022 only (and the report)
+	$(PY) -m magexp.reproduce yan2022 --jobs $(JOBS)
+
+report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the artifact CSVs
+	$(PY) -m magexp.report
+
+test: $(STAMP) ## run the test suite
+	$(PY) -m pytest
+
+clean: ## remove the environment, caches and Hydra run folders (never results/)
+	rm -rf $(VENV) .cache outputs multirun .pytest_cache *.egg-info

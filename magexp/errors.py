@@ -1,0 +1,37 @@
+"""The one exception type a user should ever see, as one line."""
+
+
+class MagexpError(ValueError):
+    """A bad configuration value or input file.
+
+    The message is a single line that names the bad value and says what is
+    allowed; the command-line entry points print it without a traceback.
+    """
+
+
+def check(condition: bool, message: str) -> None:
+    """Raise :class:`MagexpError` with ``message`` unless ``condition`` holds."""
+    if not condition:
+        raise MagexpError(message)
+
+
+def check_positive_int(value, name: str, minimum: int = 1) -> int:
+    """Return ``value`` as an int, or fail if it is not an integer >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int,)) and not (
+        isinstance(value, float) and value.is_integer()
+    ):
+        raise MagexpError(f"{name}={value!r} is not allowed: it must be an integer >= {minimum}")
+    if int(value) < minimum:
+        raise MagexpError(f"{name}={value!r} is not allowed: it must be an integer >= {minimum}")
+    return int(value)
+
+
+def check_nonnegative(value, name: str) -> float:
+    """Return ``value`` as a float, or fail if it is negative, NaN or infinite."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise MagexpError(f"{name}={value!r} is not allowed: it must be a finite number >= 0") from None
+    if not (v >= 0.0) or v == float("inf"):
+        raise MagexpError(f"{name}={value!r} is not allowed: it must be a finite number >= 0")
+    return v

@@ -1,0 +1,91 @@
+"""The one swarm engine behind every PSO variant in magexp.
+
+Variants differ only by small strategy pieces passed in: the velocity rule
+(:mod:`magexp.estimators.velocity`), its coefficient schedules
+(:mod:`magexp.estimators.schedules`) and the initialiser
+(:mod:`magexp.estimators.initialisers`). One iteration is
+
+.. math::
+
+    v &\\leftarrow \\mathrm{clip}(\\mathrm{rule}(x, v, p, g, t), -v_{max}, v_{max}) \\\\
+    x &\\leftarrow \\mathrm{clip}(x + v, l, u)
+
+(the new velocity moves the particle: Ding 2024 eq 11 prints ``v^t``, a typo),
+followed by the personal-best and global-best updates. The whole swarm is
+evaluated with one call of ``problem.cost``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.errors import check, check_nonnegative, check_positive_int
+from magexp.estimators.initialisers import Uniform
+from magexp.estimators.result import FitResult
+from magexp.estimators.velocity import InertiaVelocity
+
+
+class SwarmOptimizer:
+    """Global-best particle swarm over a box-bounded problem.
+
+    Parameters
+    ----------
+    name : config name of this estimator.
+    n_particles, n_iterations : swarm size and number of iterations.
+    velocity : velocity rule (default: traditional inertia-weight PSO).
+    init : initialiser (default: uniform).
+    velocity_clamp : ``v_max = velocity_clamp * (upper - lower)``; 0 disables clamping.
+    initial_velocity : ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
+    references : the paper(s) the variant comes from.
+    """
+
+    def __init__(self, *, name: str = "pso", n_particles: int = 50, n_iterations: int = 800,
+                 velocity=None, init=None, velocity_clamp: float = 0.2,
+                 initial_velocity: str = "uniform", references: str = ""):
+        self.name = name
+        self.n_particles = check_positive_int(n_particles, "estimator.n_particles")
+        self.n_iterations = check_positive_int(n_iterations, "estimator.n_iterations")
+        self.velocity = velocity if velocity is not None else InertiaVelocity()
+        self.init = init if init is not None else Uniform()
+        self.velocity_clamp = check_nonnegative(velocity_clamp, "estimator.velocity_clamp")
+        check(initial_velocity in ("uniform", "zero"),
+              f"estimator.initial_velocity={initial_velocity!r} is not allowed: choose uniform or zero")
+        self.initial_velocity = initial_velocity
+        self.references = references
+
+    def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
+        """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]``.
+
+        ``callback(t, gbest, gbest_cost)`` is called after every iteration; a
+        true return value stops the run.
+        """
+        lo, hi = problem.lower, problem.upper
+        n, t_max = self.n_particles, self.n_iterations
+        vmax = self.velocity_clamp * (hi - lo) if self.velocity_clamp > 0 else np.full(lo.shape, np.inf)
+        x = self.init(n, lo, hi, rng=rng)
+        v = rng.uniform(-1.0, 1.0, x.shape) * np.where(np.isfinite(vmax), vmax, 0.0) \
+            if self.initial_velocity == "uniform" else np.zeros_like(x)
+        cost = problem.cost(x)
+        pbest, pcost = x.copy(), cost.copy()
+        g = int(np.argmin(pcost))
+        history = np.empty(t_max + 1)
+        history[0] = pcost[g]
+        nit = 0
+        for t in range(1, t_max + 1):
+            v = np.clip(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), -vmax, vmax)
+            x = np.clip(x + v, lo, hi)
+            cost = problem.cost(x)
+            better = cost < pcost
+            pbest[better] = x[better]
+            pcost[better] = cost[better]
+            g = int(np.argmin(pcost))
+            history[t] = pcost[g]
+            nit = t
+            if callback is not None and callback(t, pbest[g], pcost[g]):
+                break
+        history = history[: nit + 1]
+        return FitResult(
+            x=pbest[g].copy(), fun=float(pcost[g]), nit=nit, nfev=n * (nit + 1),
+            history=history, history_nfev=n * np.arange(1, nit + 2),
+            message=f"{nit} iterations of {n} particles",
+        )

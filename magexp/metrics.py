@@ -1,0 +1,40 @@
+"""Metrics of a fitted calibration, as one flat dict per run."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def noise_floor(dataset, n_identifiable: int = 9) -> float | None:
+    """Expected total-field RMS of a perfect scalar fit under the dataset's noise.
+
+    .. math:: \\sigma \\sqrt{(N - p)/N}
+
+    with ``σ`` the per-axis noise standard deviation (``A/√12`` for Ding's
+    uniform noise, whose radial component has the same variance) and ``p = 9``
+    identifiable parameters of a scalar fit.
+    """
+    if dataset.noise_std is None:
+        return None
+    n = dataset.n
+    return float(dataset.noise_std * np.sqrt(max(n - n_identifiable, 0) / n))
+
+
+def evaluate(problem, result) -> dict:
+    """Every metric of one fitted run (direct formulas, not the swarm's fast cost)."""
+    out = {
+        "fun": float(problem.cost_direct(result.x)),
+        "nit": int(result.nit),
+        "nfev": int(result.nfev),
+        "success": bool(result.success),
+    }
+    floor = noise_floor(problem.dataset)
+    if floor is not None:
+        out["noise_floor"] = floor
+    truth = problem.truth_theta()
+    if truth is not None:
+        out["truth_fun"] = float(problem.cost_direct(truth))
+        # converged: as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
+        out["converged"] = bool(out["fun"] <= 1.01 * out["truth_fun"] + 1e-9)
+    out.update(problem.metrics(result.x))
+    return out

@@ -1,0 +1,26 @@
+"""Artifact kinds: each module turns runs into the CSV behind a figure and draws it from that CSV alone.
+
+A kind module has ``tabulate(runs) -> DataFrame`` and ``draw(frame, spec) -> Figure``.
+Kinds are looked up by name in :data:`KINDS`.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from magexp.errors import MagexpError
+
+KINDS = {
+    "convergence": "magexp.plots.convergence",
+    "field": "magexp.plots.field",
+    "final": "magexp.plots.final",
+    "sphere": "magexp.plots.sphere",  # readings vs the sphere |H| in 3-D (Yuan 2018 figs 2-4)
+    "parameters": "magexp.plots.parameters",  # parameter estimates vs truth and paper (tables)
+    "trace": "magexp.plots.trace",  # parameters vs filter step (Yan & Zhou 2022 figs 1, 3, 4)
+}
+
+
+def kind_module(kind: str):
+    if kind not in KINDS:
+        raise MagexpError(f"artifact kind={kind!r} is not allowed: choose one of {', '.join(sorted(KINDS))}")
+    return importlib.import_module(KINDS[kind])

@@ -1,0 +1,51 @@
+"""Final objective per cell (median, IQR, converged fraction) and its plot against a swept key."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts import quantiles
+from magexp.plots.style import group_values, label, panels
+
+
+def tabulate(runs) -> pd.DataFrame:
+    rows = []
+    for ci, cell in enumerate(runs.cells):
+        sub = runs.table[runs.table.cell == ci]
+        med, q25, q75 = quantiles(sub.fun)
+        row = {**cell, "estimator": sub.estimator.iloc[0], "median": med, "q25": q25, "q75": q75,
+               "n_seeds": len(sub)}
+        for extra in ("noise_floor", "truth_fun"):
+            if extra in sub:
+                row[extra] = float(sub[extra].median())
+        if "converged" in sub:
+            row["converged_fraction"] = float(sub.converged.astype(float).mean())
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def draw(frame: pd.DataFrame, spec):
+    x_key, panel_key, hue_key = spec.plot.x, spec.plot.get("panels"), spec.plot.get("hue", "estimator")
+    values = group_values(frame, panel_key)
+    fig, axes = panels(len(values))
+    for ax, pv in zip(axes, values):
+        sub = frame if pv is None else frame[frame[panel_key] == pv]
+        hues = group_values(sub, hue_key)
+        for k, hv in enumerate(hues):
+            line = sub[sub[hue_key] == hv]
+            x = line[x_key].astype(float).to_numpy() * (1 + 0.03 * (k - (len(hues) - 1) / 2))
+            y = line["median"].clip(lower=1e-14)
+            err = np.vstack([y - line.q25.clip(lower=1e-14), line.q75.clip(lower=1e-14) - y])
+            ax.errorbar(x, y, yerr=err, marker="o", ms=3.5, capsize=2, lw=1, label=str(hv))
+        if "noise_floor" in sub:
+            fl = sub.drop_duplicates(x_key)
+            ax.plot(fl[x_key].astype(float), fl.noise_floor.clip(lower=1e-14), "k--", lw=0.9, label="noise floor")
+        ax.set_yscale("log")
+        ax.set_xlabel(label(spec, x_key))
+        ax.set_ylabel(spec.plot.get("ylabel", "final total-field RMS (nT)"))
+        if pv is not None:
+            ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))
+    axes[0].legend()
+    fig.suptitle(spec.title, fontsize=10)
+    return fig

@@ -1,0 +1,52 @@
+"""Shared matplotlib style (Agg backend) and helpers used by every kind."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+STYLE = {
+    "figure.dpi": 110,
+    "savefig.dpi": 110,
+    "font.size": 9,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "legend.fontsize": 8,
+    "legend.frameon": False,
+}
+plt.rcParams.update(STYLE)
+
+
+def label(spec, key: str, value=None) -> str:
+    """Readable label of a grid key (``plot.labels`` in the artifact may rename keys)."""
+    names = dict(spec.plot.get("labels", {}) or {})
+    name = names.get(key, key.split(".")[-1].replace("_", " "))
+    return name if value is None else f"{name} = {value}"
+
+
+def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1):
+    """A row (or grid) of ``n`` axes."""
+    cols = -(-n // rows)
+    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False, sharex=False)
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    return fig, list(axes.ravel()[:n])
+
+
+def save(fig, path: Path) -> None:
+    """Write a PNG without time stamps (same figure, same bytes)."""
+    fig.savefig(path, metadata={"Software": None}, bbox_inches="tight")
+    plt.close(fig)
+
+
+def group_values(frame, key):
+    """Distinct values of ``key`` in ``frame`` in first-seen order (None: one group)."""
+    if not key:
+        return [None]
+    return list(dict.fromkeys(frame[key].tolist()))

@@ -1,0 +1,37 @@
+"""Calibration problems: a parameter vector <-> a calibration, and a vectorised cost.
+
+Every problem exposes
+
+* ``n_params``, ``lower``, ``upper`` (the search box),
+* ``cost(thetas)``: ``(n, p) -> (n,)``, the objective for a whole swarm at once,
+* ``cost_direct(theta)``: the same objective by its textbook formula (for reporting),
+* ``residuals(theta)``: residual vector whose sum of squares is minimised by least squares,
+* ``pack`` / ``unpack`` between parameters and model matrices.
+
+Problems are made with :func:`make_problem` from a dataset and an objective name.
+"""
+
+from __future__ import annotations
+
+from magexp.errors import MagexpError
+
+OBJECTIVES: dict[str, str] = {
+    "scalar": "magexp.problems.scalar:ScalarCalibration",
+    "vector": "magexp.problems.vector:VectorCalibration",  # Yuan 2018 eq 8
+    "ship": "magexp.problems.ship:ShipMagnetization",  # Yan & Zhou 2022 B = K A Be + Bp
+}
+
+
+def register(name: str, target: str) -> None:
+    """Register an objective ``name`` implemented by ``"module:Class"``."""
+    OBJECTIVES[name] = target
+
+
+def make_problem(objective: str, dataset, search, **options):
+    """Build the problem ``objective`` on ``dataset`` within ``search`` (a SearchBox)."""
+    if objective not in OBJECTIVES:
+        raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(sorted(OBJECTIVES))}")
+    import importlib
+
+    module, cls = OBJECTIVES[objective].split(":")
+    return getattr(importlib.import_module(module), cls)(dataset, search, **options)

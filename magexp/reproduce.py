@@ -1,0 +1,96 @@
+"""Regenerate a paper's artifacts into ``results/<paper>/`` and rebuild the report.
+
+    python -m magexp.reproduce all|ding2024|yuan2018|yan2022 [--jobs N] [--seeds N] [--only STEM] [--tiny] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+
+from magexp.artifacts import paper_specs, run_artifact
+from magexp.errors import MagexpError
+from magexp.paths import RESULTS
+from magexp.plots import kind_module
+from magexp.summary import COLUMNS, summarise
+
+PAPERS = ("ding2024", "yuan2018", "yan2022")
+
+
+def available_papers() -> list[str]:
+    from magexp.paths import EXPERIMENTS
+
+    return [p for p in (*PAPERS, "benchmark") if (EXPERIMENTS / p).is_dir()]
+
+
+def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False) -> pd.DataFrame:
+    """Run one artifact, write its CSVs and figure into ``out``; return its summary rows."""
+    from magexp.plots.style import save
+
+    runs = run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny)
+    kind = kind_module(spec.kind)
+    frame = kind.tabulate(runs)
+    frame.to_csv(out / f"{spec.name}.csv", index=False)
+    runs.table.drop(columns=["wall_time"], errors="ignore").to_csv(out / f"{spec.name}_runs.csv", index=False)
+    save(kind.draw(frame, spec), out / f"{spec.name}.png")
+    return summarise(runs)
+
+
+def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int = 0, tiny: bool = False,
+                    only: str | None = None, log=print) -> pd.DataFrame:
+    """Every artifact of ``paper``; writes ``root/<paper>/summary.csv`` (its part of the summary)."""
+    out = root / paper
+    out.mkdir(parents=True, exist_ok=True)
+    parts = []
+    specs = [s for s in paper_specs(paper) if only is None or s.name == only]
+    if only is not None and not specs:
+        raise MagexpError(f"--only {only!r} is not an artifact of {paper}")
+    for spec in specs:
+        start = time.perf_counter()
+        parts.append(reproduce_artifact(spec, out, seeds=seeds, jobs=jobs, tiny=tiny))
+        log(f"{spec.name}: {time.perf_counter() - start:.1f} s")
+    summary = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
+    if only is not None and (out / "summary.csv").exists():
+        old = pd.read_csv(out / "summary.csv", keep_default_na=False, na_values=[""])
+        summary = pd.concat([old[old.artifact != only], summary], ignore_index=True)
+        order = {s.name: i for i, s in enumerate(paper_specs(paper))}
+        summary = summary.sort_values("artifact", key=lambda c: c.map(order), kind="stable")
+    summary.to_csv(out / "summary.csv", index=False)
+    return summary
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m magexp.reproduce", description=__doc__.splitlines()[0])
+    parser.add_argument("paper", help="all, or one of: " + ", ".join(available_papers()))
+    parser.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
+    parser.add_argument("--seeds", type=int, default=None, help="seeds per cell (default: each artifact's own)")
+    parser.add_argument("--only", default=None, help="one artifact stem")
+    parser.add_argument("--tiny", action="store_true", help="tiny sizes (smoke test)")
+    parser.add_argument("--out", type=Path, default=RESULTS, help="results folder (default: results/)")
+    args = parser.parse_args(argv)
+    try:
+        papers = available_papers() if args.paper == "all" else [args.paper]
+        for paper in papers:
+            if paper not in available_papers():
+                raise MagexpError(f"paper={paper!r} is not allowed: choose all or one of {', '.join(available_papers())}")
+        if args.jobs < 0:
+            raise MagexpError(f"--jobs {args.jobs} is not allowed: it must be >= 0 (0: all cores)")
+        start = time.perf_counter()
+        for paper in papers:
+            reproduce_paper(paper, root=args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, only=args.only)
+        from magexp.report import build
+
+        build(args.out)
+        print(f"done in {time.perf_counter() - start:.1f} s; report: {args.out / 'REPORT.md'}")
+    except MagexpError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,100 @@
+"""Ding 2024's simulation: a fluxgate with scale, non-orthogonality, soft and hard iron.
+
+Model (Ding 2024, eqs 1-8)::
+
+    Br = M B + I,   M = K C (E + S),   I = K C Bh + b
+
+with ``K = diag(k)``, ``C(phi, theta, psi)`` the non-orthogonality matrix, ``S``
+the soft-iron matrix, ``Bh`` the hard-iron field and ``b`` the sensor bias.
+The calibration (eq 9) is ``B = M^-1 (Br - I)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.dataset import Dataset, Truth
+from magexp.errors import check_positive_int, MagexpError
+from magexp.geometry import field_ned, random_rotations
+from magexp.scenarios.noise import Noise
+from magexp.scenarios.search import SearchBox
+
+
+def nonorthogonality(phi_deg: float, theta_deg: float, psi_deg: float) -> np.ndarray:
+    """Ding's non-orthogonality matrix ``C`` for angles (phi, theta, psi) in degrees.
+
+    .. math:: C = \\begin{bmatrix}\\cos\\theta\\cos\\varphi & \\sin\\theta\\cos\\varphi & \\sin\\varphi\\\\
+              0 & \\cos\\psi & \\sin\\psi\\\\ 0 & 0 & 1\\end{bmatrix}
+    """
+    ph, th, ps = np.deg2rad([phi_deg, theta_deg, psi_deg])
+    return np.array(
+        [
+            [np.cos(th) * np.cos(ph), np.sin(th) * np.cos(ph), np.sin(ph)],
+            [0.0, np.cos(ps), np.sin(ps)],
+            [0.0, 0.0, 1.0],
+        ]
+    )
+
+
+def _vector(value, name: str, shape) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != shape or not np.all(np.isfinite(arr)):
+        raise MagexpError(f"{name}={value!r} is not allowed: it must be {shape} finite numbers")
+    return arr
+
+
+def error_model(*, scale, nonorthogonality_deg, soft_iron, hard_iron, bias) -> tuple[np.ndarray, np.ndarray]:
+    """``(M, I)`` from Ding's physical error parameters (eqs 1-8)."""
+    k = _vector(scale, "errors.scale", (3,))
+    c = nonorthogonality(*_vector(nonorthogonality_deg, "errors.nonorthogonality_deg", (3,)))
+    s = _vector(soft_iron, "errors.soft_iron", (3, 3))
+    kc = np.diag(k) @ c
+    m = kc @ (np.eye(3) + s)
+    i = kc @ _vector(hard_iron, "errors.hard_iron", (3,)) + _vector(bias, "errors.bias", (3,))
+    return m, i
+
+
+class DingScenario:
+    """Random 3-D rotations of a sensor with Ding's error model.
+
+    Parameters
+    ----------
+    name : config name (``ding2024_exp1``...).
+    field : ``{total, declination, inclination}`` in nT and degrees.
+    errors : ``{scale, nonorthogonality_deg, soft_iron, hard_iron, bias}`` (Tables 1-2).
+    noise : maximum amplitude ``A`` (nT) of the per-axis noise ``A (U - 0.5)``.
+    noise_kind : ``uniform`` (default, see :class:`~magexp.scenarios.noise.Noise`) or ``gaussian``.
+    n_readings : number of random attitudes.
+    search : search box of the calibration parameters (see :class:`SearchBox`).
+    objective : the problem used by default (``scalar``).
+    """
+
+    def __init__(self, *, name: str, field: dict, errors: dict, noise: float, n_readings: int,
+                 search: dict, noise_kind: str = "uniform", objective: str = "scalar"):
+        self.name = name
+        self.field = field_ned(field["total"], field["declination"], field["inclination"])
+        self.m, self.i = error_model(**errors)
+        self.noise = Noise(noise, noise_kind)
+        self.n_readings = check_positive_int(n_readings, "scenario.n_readings")
+        self.search = SearchBox.from_config(search)
+        self.objective = objective
+
+    def generate(self, *, rng: np.random.Generator) -> Dataset:
+        """Simulate ``n_readings`` readings at uniformly random attitudes."""
+        r = random_rotations(self.n_readings, rng=rng)  # nav -> body
+        body = r @ self.field
+        readings = body @ self.m.T + self.i + self.noise.sample(body.shape, rng=rng)
+        total = float(np.linalg.norm(self.field))
+        return Dataset(
+            readings=readings,
+            reference_norm=np.full(self.n_readings, total),
+            field_nav=np.broadcast_to(self.field, body.shape).copy(),
+            attitude=r,
+            attitude_true=r,
+            field_body_true=body,
+            truth=Truth(matrix=np.linalg.inv(self.m), offset=self.i.copy()),
+            noise_std=self.noise.std,
+            noise_kind=self.noise.kind,
+            unit="nT",
+            meta={"scenario": self.name},
+        )

@@ -1,0 +1,103 @@
+"""Reproduced numbers beside the paper's: the rows of ``results/summary.csv``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from omegaconf import OmegaConf
+
+from magexp.artifacts import ArtifactRuns, quantiles
+
+COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
+           "q25", "q75", "n_seeds", "tolerance", "verdict"]
+
+
+def _same(a, b) -> bool:
+    try:
+        return float(a) == float(b)
+    except (TypeError, ValueError):
+        return str(a) == str(b)
+
+
+def matches(selection: dict, settings: dict) -> bool:
+    """True if every ``key: value`` of ``selection`` is among ``settings``."""
+    return all(k in settings and _same(settings[k], v) for k, v in selection.items())
+
+
+def tolerance_text(tol: dict) -> str:
+    if "below" in tol:
+        return f"below {float(tol['below']):g}"
+    return f"rel {float(tol['rel']):g}"
+
+
+def verdict(value: float, paper_value: float | None, tol: dict) -> str:
+    """``match``/``differs`` against the paper under ``tol``; ``n/a`` without a paper value."""
+    if paper_value is None or not np.isfinite(paper_value):
+        return "n/a"
+    if not np.isfinite(value):
+        return "differs"
+    if "below" in tol:
+        return "match" if value < float(tol["below"]) and paper_value < float(tol["below"]) else "differs"
+    return "match" if abs(value - paper_value) <= float(tol["rel"]) * abs(paper_value) else "differs"
+
+
+def _settings(runs: ArtifactRuns, ci: int) -> dict:
+    return dict(o.split("=", 1) for o in runs.overrides[ci])
+
+
+def _reported(spec, quantity: str, settings: dict):
+    for entry in OmegaConf.to_container(spec.reported, resolve=True):
+        if entry["quantity"] == quantity and matches(entry.get("match", {}), settings):
+            return float(entry["value"]), entry.get("tolerance") or OmegaConf.to_container(spec.tolerance)
+    return None, OmegaConf.to_container(spec.tolerance)
+
+
+def _row(spec, quantity, estimator, setting, truth, values, settings, extra_setting: str = "",
+         aggregate: str = "median") -> dict:
+    if aggregate == "mean":  # fractions: the mean of 0/1 outcomes, no quantiles
+        finite = np.asarray(values, float)
+        med, q25, q75 = float(np.nanmean(finite)), np.nan, np.nan
+    else:
+        med, q25, q75 = quantiles(values)
+    paper_value, tol = _reported(spec, quantity, settings)
+    return {
+        "paper": spec.paper, "artifact": spec.name, "quantity": quantity, "estimator": estimator,
+        "setting": setting + extra_setting, "truth": truth, "paper_value": paper_value, "value": med,
+        "q25": q25, "q75": q75, "n_seeds": int(np.isfinite(np.asarray(values, float)).sum()),
+        "tolerance": tolerance_text(tol) if paper_value is not None else "", "verdict": verdict(med, paper_value, tol),
+    }
+
+
+def summarise(runs: ArtifactRuns) -> pd.DataFrame:
+    """One row per (summarised quantity, cell) and per ratio group."""
+    spec, table = runs.spec, runs.table
+    rows = []
+    for item in OmegaConf.to_container(spec.summarise, resolve=True):
+        metric = item["metric"]
+        truth_metric = item.get("truth_metric", f"truth_{metric}")
+        for ci in range(len(runs.cells)):
+            sub = table[table.cell == ci]
+            if metric not in sub or sub[metric].isna().all():
+                continue
+            truth = float(np.median(sub[truth_metric])) if truth_metric in sub and sub[truth_metric].notna().all() else None
+            rows.append(_row(spec, item["quantity"], sub.estimator.iloc[0], sub.setting.iloc[0], truth,
+                             sub[metric].astype(float).to_numpy(), _settings(runs, ci),
+                             aggregate=item.get("aggregate", "median")))
+    for item in OmegaConf.to_container(spec.ratios, resolve=True):
+        num_sel, den_sel, metric = item["numerator"], item["denominator"], item["metric"]
+        for ci in range(len(runs.cells)):
+            settings = _settings(runs, ci)
+            if not matches(den_sel, settings):
+                continue
+            partner = {**settings, **num_sel}
+            nj = [cj for cj in range(len(runs.cells)) if _settings(runs, cj) == partner]
+            if not nj:
+                continue
+            den = table[table.cell == ci].set_index("seed")[metric].astype(float)
+            num = table[table.cell == nj[0]].set_index("seed")[metric].astype(float)
+            ratio = (num / den).dropna().to_numpy()
+            sub = table[table.cell == ci]
+            ref = ",".join(f"{k}={v}" for k, v in num_sel.items())
+            rows.append(_row(spec, item["quantity"], sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio,
+                             settings, extra_setting=f";reference={ref}"))
+    return pd.DataFrame(rows, columns=COLUMNS)
