@@ -27,6 +27,7 @@ def tabulate(runs) -> pd.DataFrame:
             "median": q50, "q25": q25, "q75": q75,
             "noise_floor": float(sub.noise_floor.median()) if "noise_floor" in sub else np.nan,
             "n_seeds": len(seeds),
+            "converged": int(sub.converged.sum()) if "converged" in sub else -1,
         }))
     return pd.concat(frames, ignore_index=True)
 
@@ -40,6 +41,8 @@ def draw(frame: pd.DataFrame, spec):
         for hv in group_values(sub, hue_key):
             line = sub if hv is None else sub[sub[hue_key] == hv]
             lab = line.estimator.iloc[0] if hue_key in (None, "estimator") else label(spec, hue_key, hv)
+            if line.converged.iloc[0] >= 0:
+                lab += f" ({line.converged.iloc[0]}/{line.n_seeds.iloc[0]} conv.)"
             floor_pos = line[["median", "q25", "q75"]].clip(lower=1e-14)
             (ln,) = ax.plot(line.iteration, floor_pos["median"], lw=1.2, label=lab)
             ax.fill_between(line.iteration, floor_pos["q25"], floor_pos["q75"], color=ln.get_color(), alpha=0.2, lw=0)

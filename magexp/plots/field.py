@@ -26,7 +26,7 @@ def draw(frame: pd.DataFrame, spec):
     key = spec.plot.get("panels")
     values = group_values(frame, key)
     show_raw = spec.plot.get("quantity", "magnitude") == "magnitude"
-    fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1)
+    fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0)
     n = len(values)
     for i, v in enumerate(values):
         sub = frame if v is None else frame[frame[key] == v]
@@ -41,7 +41,7 @@ def draw(frame: pd.DataFrame, spec):
             ax = axes[n + i]
             ax.plot(sub.reading, sub.calibrated, ".", ms=2.5, label="after")
             ax.plot(sub.reading, sub.reference, "k--", lw=0.8)
-            ax.set_title(f"after calibration (RMS {rms:.3g} nT)")
+            ax.set_title(f"after (RMS {rms:.3g} nT)")
             ax.set_ylabel("total field (nT)")
             ax.ticklabel_format(axis="y", useOffset=True, style="plain")
         else:

@@ -33,7 +33,10 @@ def label(spec, key: str, value=None) -> str:
 def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1):
     """A row (or grid) of ``n`` axes."""
     cols = -(-n // rows)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False, sharex=False)
+    if n == 1:  # a single panel gets the room of a figure
+        width, height = 6.0, 4.2
+    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False, sharex=False,
+                             layout="constrained")
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
     return fig, list(axes.ravel()[:n])
