@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 JOBS   ?= 0
 
 .DEFAULT_GOAL := help
-.PHONY: help venv reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test clean
+.PHONY: help venv bench reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test clean
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
@@ -33,6 +33,10 @@ reproduce-yan2022: $(STAMP) ## regenerate Yan & Zhou 2022 only (and the report)
 
 report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the artifact CSVs
 	$(PY) -m magexp.report
+
+bench: $(STAMP) ## speed benchmark (installs pyswarms for the comparison); writes results/bench.csv
+	$(PY) -m pip install --quiet -e '.[bench]'
+	$(PY) -m magexp.bench
 
 test: $(STAMP) ## run the test suite
 	$(PY) -m pytest

@@ -140,6 +140,8 @@ def run_many(configs: list[dict], *, jobs: int = 0, use_cache: bool = True, prog
     keys = [cache.run_key(c) for c in configs]
     outputs = [cache.load(k) if use_cache else None for k in keys]
     todo = [i for i, o in enumerate(outputs) if o is None]
+    if progress:
+        progress(len(configs) - len(todo))
     n_jobs = jobs if jobs > 0 else (os.cpu_count() or 1)
     if todo:
         if n_jobs == 1 or len(todo) == 1:
@@ -188,7 +190,9 @@ def run_artifact(spec: DictConfig, *, seeds: int | None = None, jobs: int = 0, t
             cfg.seed = seed
             configs.append(OmegaConf.to_container(cfg, resolve=True))
             index.append((ci, seed))
-    outputs = run_many(configs, jobs=jobs, use_cache=use_cache)
+    from magexp.progress import Progress
+
+    outputs = run_many(configs, jobs=jobs, use_cache=use_cache, progress=Progress(len(configs), spec.name))
     rows = []
     for (ci, seed), out in zip(index, outputs):
         rows.append({"cell": ci, **grid[ci], "setting": setting_of(settings[ci]), **out.metrics})

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 CONF = ROOT / "conf"
 EXPERIMENTS = ROOT / "experiments"
 RESULTS = ROOT / "results"
-CACHE = ROOT / ".cache" / "runs"
+CACHE = Path(os.environ.get("MAGEXP_CACHE", ROOT / ".cache" / "runs"))  # finished runs, keyed by config
 DATA = ROOT / "data"
 SHARED_DATA = ROOT.parent / "shared" / "data"
 

@@ -27,11 +27,12 @@ def available_papers() -> list[str]:
     return [p for p in (*PAPERS, "benchmark") if (EXPERIMENTS / p).is_dir()]
 
 
-def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False) -> pd.DataFrame:
+def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False,
+                       force: bool = False) -> pd.DataFrame:
     """Run one artifact, write its CSVs and figure into ``out``; return its summary rows."""
     from magexp.plots.style import save
 
-    runs = run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny)
+    runs = run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force)
     kind = kind_module(spec.kind)
     frame = kind.tabulate(runs)
     frame.to_csv(out / f"{spec.name}.csv", index=False)
@@ -41,7 +42,7 @@ def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool
 
 
 def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int = 0, tiny: bool = False,
-                    only: str | None = None, log=print) -> pd.DataFrame:
+                    only: str | None = None, force: bool = False, log=print) -> pd.DataFrame:
     """Every artifact of ``paper``; writes ``root/<paper>/summary.csv`` (its part of the summary)."""
     out = root / paper
     out.mkdir(parents=True, exist_ok=True)
@@ -51,7 +52,7 @@ def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int =
         raise MagexpError(f"--only {only!r} is not an artifact of {paper}")
     for spec in specs:
         start = time.perf_counter()
-        parts.append(reproduce_artifact(spec, out, seeds=seeds, jobs=jobs, tiny=tiny))
+        parts.append(reproduce_artifact(spec, out, seeds=seeds, jobs=jobs, tiny=tiny, force=force))
         log(f"{spec.name}: {time.perf_counter() - start:.1f} s")
     summary = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
     if only is not None and (out / "summary.csv").exists():
@@ -63,6 +64,17 @@ def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int =
     return summary
 
 
+def record_timing(root: Path, target: str, seconds: float) -> None:
+    """Keep the wall time of the last full reproduction of ``target`` in ``root/timing.csv``."""
+    path = root / "timing.csv"
+    rows = pd.read_csv(path) if path.exists() else pd.DataFrame(columns=["target", "seconds", "cores"])
+    rows = rows[rows.target != target]
+    import os
+
+    new = pd.DataFrame([{"target": target, "seconds": round(seconds, 1), "cores": os.cpu_count()}])
+    pd.concat([rows, new], ignore_index=True).to_csv(path, index=False)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m magexp.reproduce", description=__doc__.splitlines()[0])
     parser.add_argument("paper", help="all, or one of: " + ", ".join(available_papers()))
@@ -71,6 +83,7 @@ def main(argv=None) -> int:
     parser.add_argument("--only", default=None, help="one artifact stem")
     parser.add_argument("--tiny", action="store_true", help="tiny sizes (smoke test)")
     parser.add_argument("--out", type=Path, default=RESULTS, help="results folder (default: results/)")
+    parser.add_argument("--force", action="store_true", help="rerun every run even if a cached result exists")
     args = parser.parse_args(argv)
     try:
         papers = available_papers() if args.paper == "all" else [args.paper]
@@ -81,11 +94,15 @@ def main(argv=None) -> int:
             raise MagexpError(f"--jobs {args.jobs} is not allowed: it must be >= 0 (0: all cores)")
         start = time.perf_counter()
         for paper in papers:
-            reproduce_paper(paper, root=args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, only=args.only)
+            reproduce_paper(paper, root=args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, only=args.only,
+                            force=args.force)
         from magexp.report import build
 
         build(args.out)
-        print(f"done in {time.perf_counter() - start:.1f} s; report: {args.out / 'REPORT.md'}")
+        seconds = time.perf_counter() - start
+        if args.only is None and args.seeds is None and not args.tiny:
+            record_timing(args.out, args.paper, seconds)
+        print(f"done in {seconds:.1f} s; report: {args.out / 'REPORT.md'}")
     except MagexpError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
