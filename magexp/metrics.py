@@ -37,4 +37,26 @@ def evaluate(problem, result) -> dict:
         # converged: as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
         out["converged"] = bool(out["fun"] <= 1.01 * out["truth_fun"] + 1e-9)
     out.update(problem.metrics(result.x))
+    out.update(bound_metrics(problem, out))
+    return out
+
+
+def bound_metrics(problem, measured: dict) -> dict:
+    """The Cramér-Rao bound of the run's problem and each error as a ratio to it."""
+    from magexp.bounds import cramer_rao
+
+    if not hasattr(problem, "invariants") or not hasattr(problem, "options"):
+        return {}
+    crb = cramer_rao(problem)
+    if crb is None:
+        return {}
+    out = {"rms_bound": crb["rms_floor"], "identifiable": crb["identifiable"]}
+    if crb["rms_floor"] > 0:
+        out["rms_ratio"] = measured["fun"] / crb["rms_floor"] if "fun" in measured else np.nan
+    for name in ("offset", "gram", "matrix"):
+        bound = crb.get(f"{name}_bound")
+        if bound is not None:
+            out[f"{name}_bound"] = bound
+            if f"{name}_error" in measured and bound > 0:
+                out[f"{name}_error_ratio"] = measured[f"{name}_error"] / bound
     return out

@@ -26,6 +26,7 @@ def tabulate(runs) -> pd.DataFrame:
             "iteration": np.arange(hist.shape[1]), "nfev": np.median(nfev, axis=0),
             "median": q50, "q25": q25, "q75": q75,
             "noise_floor": float(sub.noise_floor.median()) if "noise_floor" in sub else np.nan,
+            "rms_bound": float(sub.rms_bound.median()) if "rms_bound" in sub else np.nan,
             "n_seeds": len(seeds),
             "converged": int(sub.converged.sum()) if "converged" in sub else -1,
         }))
@@ -51,6 +52,9 @@ def draw(frame: pd.DataFrame, spec):
         floor = float(sub.noise_floor.median())
         if sub.noise_floor.nunique() == 1 and np.isfinite(floor) and floor > 0:
             ax.axhline(floor, color="k", ls="--", lw=0.9, label="noise floor")
+        bound = float(sub.rms_bound.median()) if "rms_bound" in sub else np.nan
+        if sub.rms_bound.nunique() <= 1 and np.isfinite(bound) and bound > 0:
+            ax.axhline(bound, color="0.4", ls=":", lw=1.1, label="Cramér-Rao floor")
         ax.set_yscale("log")
         ax.set_xlabel("iteration")
         ax.set_ylabel(spec.plot.get("ylabel", "total-field RMS (nT)"))

@@ -16,7 +16,7 @@ def tabulate(runs) -> pd.DataFrame:
         med, q25, q75 = quantiles(sub.fun)
         row = {**cell, "estimator": sub.estimator.iloc[0], "median": med, "q25": q25, "q75": q75,
                "n_seeds": len(sub)}
-        for extra in ("noise_floor", "truth_fun"):
+        for extra in ("noise_floor", "truth_fun", "rms_bound"):
             if extra in sub:
                 row[extra] = float(sub[extra].median())
         if "converged" in sub:
@@ -41,6 +41,10 @@ def draw(frame: pd.DataFrame, spec):
         if "noise_floor" in sub:
             fl = sub.drop_duplicates(x_key)
             ax.plot(fl[x_key].astype(float), fl.noise_floor.clip(lower=1e-14), "k--", lw=0.9, label="noise floor")
+        if "rms_bound" in sub:
+            fl = sub.drop_duplicates(x_key)
+            ax.plot(fl[x_key].astype(float), fl.rms_bound.clip(lower=1e-14), ":", color="0.4", lw=1.1,
+                    label="Cramér-Rao floor")
         ax.set_yscale("log")
         ax.set_xlabel(label(spec, x_key))
         ax.set_ylabel(spec.plot.get("ylabel", "final total-field RMS (nT)"))

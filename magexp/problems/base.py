@@ -30,6 +30,7 @@ class CalibrationProblem:
             )
         self.dataset = dataset
         self.parameterisation = parameterisation
+        self.options = {"parameterisation": parameterisation}
         self.lower, self.upper = search.bounds()
 
     # -- parameters <-> model ---------------------------------------------------------------
@@ -89,3 +90,14 @@ class CalibrationProblem:
             "matrix_error": float(np.max(np.abs(w - truth.matrix))),
         })
         return out
+
+    # -- what the data can identify (see magexp.bounds) ----------------------------------------
+    def invariants(self, theta: np.ndarray) -> np.ndarray:
+        """The identifiable functions of ``theta``: here every parameter, as ``[vec(W), o]``."""
+        w, o = self.unpack(theta)
+        return np.concatenate([w[0].ravel(), o[0]])
+
+    def invariant_bounds(self, theta: np.ndarray, cov: np.ndarray) -> dict:
+        """Expected error sizes from the CRB covariance of :meth:`invariants`."""
+        return {"offset_bound": float(np.sqrt(np.trace(cov[-3:, -3:]))),
+                "matrix_bound": float(np.sqrt(np.max(np.diag(cov)[:-3])))}

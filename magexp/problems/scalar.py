@@ -67,3 +67,17 @@ class ScalarCalibration(CalibrationProblem):
     def cost_direct(self, theta: np.ndarray) -> float:
         """Total-field RMS of one parameter vector by the direct formula."""
         return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))
+
+    def invariants(self, theta: np.ndarray) -> np.ndarray:
+        """What a scalar fit identifies: the 6 entries of ``W^T W`` (upper triangle) and ``o``."""
+        w, o = self.unpack(theta)
+        g = w[0].T @ w[0]
+        return np.concatenate([g[np.triu_indices(3)], o[0]])
+
+    def invariant_bounds(self, theta: np.ndarray, cov: np.ndarray) -> dict:
+        w, _ = self.unpack(theta)
+        g = w[0].T @ w[0]
+        return {"offset_bound": float(np.sqrt(np.trace(cov[-3:, -3:]))),
+                # Frobenius norm counts off-diagonal entries twice
+                "gram_bound": float(np.sqrt(np.trace(cov[:6, :6]) + cov[[1, 2, 4], [1, 2, 4]].sum())
+                                    / np.linalg.norm(g))}

@@ -1,0 +1,105 @@
+"""Cramér-Rao lower bound of a calibration problem, and the expected RMS floor.
+
+For residuals ``r(θ)`` whose block ``i`` depends on reading ``x_i`` only, reading noise
+``ε_i`` (per-axis variance ``σ²``) enters as ``δr_i = G_i ε_i`` with ``G_i = ∂r_i/∂x_i``, so
+the residual noise covariance is block-diagonal, ``Σ_i = σ² G_i G_iᵀ``. With ``J = ∂r/∂θ`` at
+the truth, the Fisher information (Gaussian noise of the same covariance) is
+
+.. math:: F = J^\\top Σ^{-1} J,
+
+and any unbiased estimate of an identifiable function ``h(θ)`` has
+``Cov(h) ⪰ H F^{+} H^\\top`` (``H = ∂h/∂θ``; the pseudo-inverse because a scalar objective
+leaves a 3-dimensional rotation of ``W`` unidentifiable, and ``h`` is invariant to it).
+The expected in-sample RMS of the least-squares fit (the best any estimator can do on its own
+objective) is
+
+.. math:: \\mathrm{RMS}^2_{floor} = \\tfrac1N\\,\\mathrm{tr}\\big((I - P)\\,Σ\\,(I - P)^\\top\\big),
+          \\quad P = J J^{+},
+
+which for the scalar problem with isotropic noise reduces to ``σ² (N - 9)/N``.
+Uniform noise (Ding 2024) is not Gaussian; the bound above is the Gaussian one with the same
+covariance (the usual reference; the noise floor then matches the exact expectation).
+
+Derivatives are central differences with steps scaled to each parameter and reading.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+
+def _jacobian(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    cols = []
+    for k in range(theta.size):
+        e = np.zeros_like(theta)
+        e[k] = steps[k]
+        cols.append((fun(theta + e) - fun(theta - e)) / (2 * steps[k]))
+    return np.column_stack(cols)
+
+
+def residual_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
+    """``G_i = ∂r_i/∂x_i`` for every reading, shape ``(N, m, 3)`` (``m`` residuals per reading)."""
+    ds = problem.dataset
+    scale = max(float(np.abs(ds.readings).max()), 1.0) * 1e-6
+    blocks = []
+    for axis in range(3):
+        shift = np.zeros(3)
+        shift[axis] = scale
+        plus = type(problem)(replace(ds, readings=ds.readings + shift), _Box(problem), **problem.options)
+        minus = type(problem)(replace(ds, readings=ds.readings - shift), _Box(problem), **problem.options)
+        blocks.append((plus.residuals(theta) - minus.residuals(theta)) / (2 * scale))
+    return np.stack(blocks, axis=-1).reshape(ds.n, -1, 3)
+
+
+class _Box:
+    """The problem's own bounds, as the SearchBox interface a problem is built with."""
+
+    def __init__(self, problem):
+        self._b = (problem.lower, problem.upper)
+
+    def bounds(self):
+        return self._b
+
+
+def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
+    """Bounds at ``theta`` (default: the truth) for the dataset's noise; None if unknown.
+
+    Returns ``rms_floor`` (expected best RMS of the problem's residuals), ``invariant_cov``
+    (the CRB covariance of ``problem.invariants``), and the expected error sizes
+    ``offset_bound`` (``sqrt(tr Cov(o))``) and ``gram_bound`` (relative, for ``W^T W``).
+    """
+    ds = problem.dataset
+    if theta is None:
+        theta = problem.truth_theta()
+    if theta is None or not ds.noise_std:
+        return None
+    sigma2 = float(ds.noise_std) ** 2
+    g = residual_noise_blocks(problem, theta)  # (N, m, 3)
+    m = g.shape[1]
+    cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # (N, m, m)
+    steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
+    jac = _jacobian(problem.residuals, theta, steps)  # (N*m, p)
+    # Σ^{-1/2} J: whiten block by block
+    evals, evecs = np.linalg.eigh(cov_blocks)
+    inv_sqrt = evecs @ (np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)[..., None]
+                        * evecs.transpose(0, 2, 1))
+    jw = np.einsum("nij,njp->nip", inv_sqrt, jac.reshape(ds.n, m, -1)).reshape(ds.n * m, -1)
+    fisher = jw.T @ jw
+    cov = np.linalg.pinv(fisher, rcond=1e-10, hermitian=True)
+    h = _jacobian(problem.invariants, theta, steps)
+    inv_cov = h @ cov @ h.T
+    # expected in-sample RMS of the (unweighted) least-squares fit
+    scaled = jac / np.maximum(np.linalg.norm(jac, axis=0), 1e-300)  # column scale must not decide the rank
+    u, sv, _ = np.linalg.svd(scaled, full_matrices=False)
+    rank = int(np.sum(sv > 1e-6 * sv[0]))
+    q = u[:, :rank]
+    sigma = np.zeros((ds.n * m, ds.n * m))
+    idx = np.arange(ds.n)[:, None] * m + np.arange(m)
+    sigma[idx[:, :, None], idx[:, None, :]] = cov_blocks
+    proj = np.eye(ds.n * m) - q @ q.T
+    rms_floor = float(np.sqrt(np.trace(proj @ sigma @ proj.T) / ds.n))
+    out = {"rms_floor": rms_floor, "invariant_cov": inv_cov, "identifiable": int(rank)}
+    out.update(problem.invariant_bounds(theta, inv_cov))
+    return out
