@@ -42,7 +42,8 @@ def draw(frame: pd.DataFrame, spec):
         ax.scatter(sub.cal_x, sub.cal_y, sub.cal_z, s=8, color="C0", label="after")
         rms = float(np.sqrt(np.mean(sub.radial_error**2)))
         title = "" if val is None else label(spec, key, val) + "\n"
-        ax.set_title(f"{title}| |B| - |H| | RMS after: {rms:.3g}", fontsize=8)
+        ax.set_title(f"{title}RMS of |B| - |H| after: {rms:.3g}", fontsize=8)
+        ax.set_box_aspect((1, 1, 1))
         ax.set_xlabel("x")
         ax.set_ylabel("y")
         ax.set_zlabel("z")
