@@ -46,6 +46,7 @@ def verdict(value: float, paper_value: float | None, tol: dict) -> str:
 
 
 def cell_settings(runs: ArtifactRuns, ci: int) -> dict:
+    """The ``{key: value}`` overrides of cell ``ci`` (base and grid)."""
     return dict(o.split("=", 1) for o in runs.overrides[ci])
 
 
@@ -63,6 +64,7 @@ def reported_entries(spec) -> list[dict]:
 
 
 def reported_value(spec, quantity: str, settings: dict):
+    """The paper's value of ``quantity`` for a cell with ``settings`` and its tolerance (None if absent)."""
     for entry in reported_entries(spec):
         if entry["quantity"] == quantity and matches(entry.get("match", {}), settings):
             return float(entry["value"]), entry.get("tolerance") or OmegaConf.to_container(spec.tolerance)
