@@ -14,7 +14,10 @@ An artifact is ``experiments/<paper>/<stem>.yaml``::
     ratios: [{quantity: improvement_ratio, metric: fun, numerator: {estimator: pso}, denominator: {estimator: ipso}}]
     reported:                                                     # the paper's numbers
       - {quantity: final_rms, match: {estimator: ipso, scenario.noise: 2}, value: 0.58}
-    tolerance: {rel: 0.15}        # default; an entry may give its own ({rel: x} or {below: x})
+    tolerance: {rel: 0.15}        # default; an entry may give its own ({rel: x}, {abs: x} or {below: x})
+    # parameter tables: summarise [{mode: parameters}] gives one row per estimated parameter
+    # (median over seeds beside the truth); a reported entry may be a whole column:
+    #   - {quantities: [S11, S12], match: {estimator: rdpso}, values: [-1.6013, 0.4010], tolerance: {abs: 0.01}}
     notes: ...                    # why we differ, shown in the report
 
 Every run is ``scenario x estimator x seed`` through :func:`magexp.runner.run`,

@@ -28,6 +28,7 @@ class RunOutput:
     readings: np.ndarray | None = None
     calibrated: np.ndarray | None = None
     reference_norm: np.ndarray | None = None
+    truth_x: np.ndarray | None = None  # the true parameter vector (simulations)
 
 
 def build(node, what: str):
@@ -61,7 +62,7 @@ def run(cfg: DictConfig) -> RunOutput:
     return RunOutput(metrics=metrics, history=np.asarray(result.history), history_nfev=np.asarray(result.history_nfev),
                      x=np.asarray(result.x), parameter_names=problem.parameter_names(), trace=result.trace,
                      readings=dataset.readings, calibrated=problem.calibrate(result.x),
-                     reference_norm=np.asarray(dataset.reference_norm))
+                     reference_norm=np.asarray(dataset.reference_norm), truth_x=problem.truth_theta())
 
 
 def resolved(cfg: DictConfig) -> dict:

@@ -14,7 +14,7 @@ from magexp.errors import check, check_positive_int
 from magexp.estimators.ellipsoid import EllipsoidFit
 from magexp.estimators.result import FitResult
 
-STARTS = ("ellipsoid", "centre")
+STARTS = ("ellipsoid", "centre", "problem")
 
 
 class LevenbergMarquardt:
@@ -23,7 +23,9 @@ class LevenbergMarquardt:
     Parameters
     ----------
     name : config name.
-    start : ``ellipsoid`` (closed-form fit, falls back to the centre if it fails) or ``centre``.
+    start : ``ellipsoid`` (closed-form fit, falls back to the centre if it fails), ``centre``, or
+        ``problem``: the problem's own closed-form ``initial_estimate()`` (e.g. the linear
+        least-squares fit of the vector problem), the ellipsoid fit if it has none.
     max_nfev : cap on residual evaluations.
     tol : ``xtol = ftol = gtol`` of ``least_squares``.
     """
@@ -38,7 +40,9 @@ class LevenbergMarquardt:
         self.tol = float(tol)
 
     def initial(self, problem) -> np.ndarray:
-        if self.start == "ellipsoid":
+        if self.start == "problem" and hasattr(problem, "initial_estimate"):
+            return problem.initial_estimate()
+        if self.start in ("ellipsoid", "problem"):
             first = EllipsoidFit().fit(problem)
             if first.success:
                 return first.x

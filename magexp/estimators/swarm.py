@@ -35,23 +35,35 @@ class SwarmOptimizer:
     velocity : velocity rule (default: traditional inertia-weight PSO).
     init : initialiser (default: uniform).
     velocity_clamp : ``v_max = velocity_clamp * (upper - lower)``; 0 disables clamping.
+    velocity_limit : absolute ``v_max``, the same for every dimension (Yuan 2018 Table 1:
+        1.5); when given it replaces ``velocity_clamp``.
     initial_velocity : ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
     references : the paper(s) the variant comes from.
     """
 
     def __init__(self, *, name: str = "pso", n_particles: int = 50, n_iterations: int = 800,
                  velocity=None, init=None, velocity_clamp: float = 0.2,
-                 initial_velocity: str = "uniform", references: str = ""):
+                 initial_velocity: str = "uniform", references: str = "", velocity_limit: float | None = None):
         self.name = name
         self.n_particles = check_positive_int(n_particles, "estimator.n_particles")
         self.n_iterations = check_positive_int(n_iterations, "estimator.n_iterations")
         self.velocity = velocity if velocity is not None else InertiaVelocity()
         self.init = init if init is not None else Uniform()
         self.velocity_clamp = check_nonnegative(velocity_clamp, "estimator.velocity_clamp")
+        self.velocity_limit = None if velocity_limit is None else check_nonnegative(velocity_limit,
+                                                                                     "estimator.velocity_limit")
         check(initial_velocity in ("uniform", "zero"),
               f"estimator.initial_velocity={initial_velocity!r} is not allowed: choose uniform or zero")
         self.initial_velocity = initial_velocity
         self.references = references
+
+    def velocity_max(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Per-dimension ``v_max``: absolute limit, fraction of the box, or ``inf`` (no clamp)."""
+        if self.velocity_limit is not None and self.velocity_limit > 0:
+            return np.full(lo.shape, self.velocity_limit)
+        if self.velocity_clamp > 0:
+            return self.velocity_clamp * (hi - lo)
+        return np.full(lo.shape, np.inf)
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
         """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]``.
@@ -61,7 +73,7 @@ class SwarmOptimizer:
         """
         lo, hi = problem.lower, problem.upper
         n, t_max = self.n_particles, self.n_iterations
-        vmax = self.velocity_clamp * (hi - lo) if self.velocity_clamp > 0 else np.full(lo.shape, np.inf)
+        vmax = self.velocity_max(lo, hi)
         x = self.init(n, lo, hi, rng=rng)
         v = rng.uniform(-1.0, 1.0, x.shape) * np.where(np.isfinite(vmax), vmax, 0.0) \
             if self.initial_velocity == "uniform" else np.zeros_like(x)

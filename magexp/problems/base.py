@@ -9,6 +9,20 @@ from magexp.errors import MagexpError
 PARAMETERISATIONS = ("inverse", "forward")
 
 
+def inverse(mats: np.ndarray) -> np.ndarray:
+    """Inverses of a stack of 3x3 matrices; an exactly singular one (a swarm clipped onto
+    the box edges can make one) gets its pseudo-inverse instead of stopping the run."""
+    try:
+        return np.linalg.inv(mats)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(mats)
+
+
+def reference_vectors(dataset) -> np.ndarray:
+    """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field."""
+    return np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)
+
+
 class CalibrationProblem:
     """A 12-parameter calibration ``B = W (reading - o)``.
 
@@ -39,7 +53,7 @@ class CalibrationProblem:
         thetas = np.atleast_2d(thetas)
         mat = thetas[:, :9].reshape(-1, 3, 3)
         if self.parameterisation == "forward":
-            mat = np.linalg.inv(mat)
+            mat = inverse(mat)
         return mat, thetas[:, 9:]
 
     def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray:
@@ -75,9 +89,14 @@ class CalibrationProblem:
         ``field_rms``: total-field RMS; with a known truth,
         ``gram_error``: relative Frobenius error of ``W^T W`` (rotation-invariant, what a
         scalar fit identifies); ``offset_error``: Euclidean error of the offset;
-        ``matrix_error``: largest absolute error of an entry of ``W`` (needs a vector fit).
+        ``matrix_error``: largest absolute error of an entry of ``W`` (needs a vector fit);
+        ``param_matrix_error`` / ``param_offset_error``: largest absolute error of an entry of
+        the parameter vector's matrix part (``S`` in the forward form) / offset part.
+        With known attitudes, ``fg``: Yuan 2018's ``F_g`` (eq 8) at ``theta``, whatever the objective.
         """
         out = {"field_rms": self.field_rms(theta)}
+        if self.dataset.attitude is not None and self.dataset.field_nav is not None:
+            out["fg"] = self.fg(theta)
         truth = self.dataset.truth
         if truth is None:
             return out
@@ -89,6 +108,8 @@ class CalibrationProblem:
             "offset_error": float(np.linalg.norm(o - truth.offset)),
             "matrix_error": float(np.max(np.abs(w - truth.matrix))),
         })
+        err = np.abs(np.asarray(theta, float) - self.truth_theta())
+        out.update({"param_matrix_error": float(err[:9].max()), "param_offset_error": float(err[9:].max())})
         return out
 
     # -- what the data can identify (see magexp.bounds) ----------------------------------------
@@ -101,3 +122,7 @@ class CalibrationProblem:
         """Expected error sizes from the CRB covariance of :meth:`invariants`."""
         return {"offset_bound": float(np.sqrt(np.trace(cov[-3:, -3:]))),
                 "matrix_bound": float(np.sqrt(np.max(np.diag(cov)[:-3])))}
+
+    def fg(self, theta: np.ndarray) -> float:
+        """Yuan 2018's ``F_g`` (eq 8): ``sum_i ||C_i H_i - W (r_i - o)||`` with the dataset's attitudes."""
+        return float(np.linalg.norm(reference_vectors(self.dataset) - self.calibrate(theta), axis=1).sum())

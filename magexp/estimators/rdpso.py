@@ -1,0 +1,74 @@
+"""Random drift PSO (RDPSO) velocity rule, Yuan 2018 eqs 10-16 (after Sun et al.'s RDPSO).
+
+A particle's velocity is a random thermal motion plus a directed drift:
+
+.. math::
+
+    v_{ij} &= \\alpha\\,\\lvert M_j - x_{ij}\\rvert\\,\\varphi_{ij}
+             + r_1 c_1 (p_{ij} - x_{ij}) + r_2 c_2 (g_j - x_{ij}) \\\\
+    \\alpha &= 0.3 + 0.6 / (1 + 4 k / k_{max}) \\quad\\text{(eq 12, as printed)} \\\\
+    M_j &= \\frac1m \\sum_i p_{ij} \\quad\\text{(mean personal best, eq 13)} \\\\
+    \\varphi_{ij} &= \\pm \\ln(1/u_{ij}),\\ u \\sim U(0, 1],\\ + \\text{ if } s_{ij} > 0.5 \\quad\\text{(eq 14)}
+
+with ``r_1, r_2, s ~ U(0, 1)`` per particle and dimension; the position moves by
+the new velocity (eq 17). The swarm engine clamps velocity and position.
+
+References: Yuan, Wang & Chen (2018), Navigation Positioning & Timing 5(6):92-98;
+Sun, Wu, Palade et al. (2015), *Random drift particle swarm optimization algorithm*.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.errors import check_nonnegative
+
+
+def drift_sign_log(u: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """``φ = +ln(1/u)`` where ``s > 0.5``, else ``-ln(1/u)`` (eq 14)."""
+    return np.where(s > 0.5, 1.0, -1.0) * np.log(1.0 / u)
+
+
+def random_drift_velocity(x, pbest, gbest, *, alpha, c1, c2, r1, r2, phi):
+    """RDPSO velocity for given random draws (eq 16); ``M`` is the mean of ``pbest`` over particles.
+
+    .. math:: v = \\alpha \\lvert M - x\\rvert \\varphi + c_1 r_1 (p - x) + c_2 r_2 (g - x)
+    """
+    mean_best = pbest.mean(axis=0)
+    return alpha * np.abs(mean_best - x) * phi + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x)
+
+
+class ThermalCoefficient:
+    """``α(k) = base + span / (1 + rate k / k_max)`` (eq 12 with base 0.3, span 0.6, rate 4).
+
+    Decreases from ``base + span`` (0.9) at ``k = 0`` to ``base + span / (1 + rate)`` (0.42).
+    """
+
+    def __init__(self, base: float = 0.3, span: float = 0.6, rate: float = 4.0):
+        self.base = check_nonnegative(base, "velocity.alpha.base")
+        self.span = check_nonnegative(span, "velocity.alpha.span")
+        self.rate = check_nonnegative(rate, "velocity.alpha.rate")
+
+    def __call__(self, t: int, t_max: int) -> float:
+        return self.base + self.span / (1.0 + self.rate * t / t_max)
+
+
+class RandomDriftVelocity:
+    """The RDPSO velocity rule: draws ``r1, r2, u, s`` and calls :func:`random_drift_velocity`.
+
+    Parameters
+    ----------
+    c1, c2 : learning factors (Yuan 2018 Table 1: 1.45 each).
+    alpha : thermal-coefficient schedule ``alpha(t, t_max)`` (default :class:`ThermalCoefficient`).
+    """
+
+    def __init__(self, c1: float = 1.45, c2: float = 1.45, alpha=None):
+        self.c1 = check_nonnegative(c1, "velocity.c1")
+        self.c2 = check_nonnegative(c2, "velocity.c2")
+        self.alpha = alpha if alpha is not None else ThermalCoefficient()
+
+    def __call__(self, x, v, pbest, gbest, t, t_max, *, rng):
+        r1, r2, s = rng.random(x.shape), rng.random(x.shape), rng.random(x.shape)
+        u = 1.0 - rng.random(x.shape)  # in (0, 1]: ln(1/u) stays finite
+        return random_drift_velocity(x, pbest, gbest, alpha=self.alpha(t, t_max), c1=self.c1, c2=self.c2,
+                                     r1=r1, r2=r2, phi=drift_sign_log(u, s))

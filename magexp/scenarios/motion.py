@@ -1,0 +1,157 @@
+"""Rotation trajectories, a simulated gyro and strapdown attitude integration (Yuan 2018, sec 3).
+
+A trajectory is a sequence of turns about body axes at a constant rate, sampled
+every ``dt`` seconds. The body turns with the angular rate ``ω`` (body frame);
+the body-to-navigation rotation follows ``Ṙ = R [ω]×`` and is propagated with
+the exact exponential map of each step (the rate is constant within a step)
+
+.. math:: R_{k+1} = R_k \\exp([\\omega_k]_\\times\\,\\Delta t)
+
+(Rodrigues' formula). The attitude used by the magnetometer model, nav -> body,
+is ``C_k = R_k^T``. A simulated gyro reads ``ω_m = ω + d + n`` with a constant
+drift ``d`` (°/h, along ``drift_axis``) and white noise ``n`` (°/s per sample);
+integrating ``ω_m`` from the known start gives the gyro attitude the vector
+objective uses.
+
+The paper's four rotation modes (Yuan 2018, sec 3.2) are named presets
+(:data:`MODES`); mode 3 turns "incompletely" about X and Y, and since the arc is
+not stated it is the config value ``partial_arc_deg`` (default 180°).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.errors import MagexpError, check, check_nonnegative, check_positive_int
+
+AXES = {"x": 0, "y": 1, "z": 2}
+FULL = 360.0
+PARTIAL = "partial"  # placeholder for ``partial_arc_deg`` in a preset
+
+#: The rotation modes of Yuan 2018, sec 3.2 (and 3.1: ``xyz``), as (axis, arc in degrees).
+MODES: dict[str, list[tuple[str, float | str]]] = {
+    "mode1": [("x", FULL), ("y", FULL), ("z", FULL)],  # three full turns (also Table 2)
+    "mode2": [("x", FULL), ("y", FULL)],  # two full turns
+    "mode3": [("x", PARTIAL), ("y", PARTIAL)],  # two incomplete turns
+    "mode4": [("z", FULL)],  # one full turn about Z only (readings in one plane)
+}
+
+
+def skew(w: np.ndarray) -> np.ndarray:
+    """Cross-product matrices ``[w]×`` of vectors ``w`` of shape ``(..., 3)``."""
+    w = np.asarray(w, float)
+    z = np.zeros(w.shape[:-1])
+    x, y, c = w[..., 0], w[..., 1], w[..., 2]
+    return np.stack([np.stack([z, -c, y], -1), np.stack([c, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+
+
+def exp_so3(phi: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``exp([φ]×)`` of rotation vectors ``φ`` (``(..., 3)``), Rodrigues' formula.
+
+    .. math:: \\exp([\\varphi]_\\times) = I + \\frac{\\sin\\theta}{\\theta}[\\varphi]_\\times
+              + \\frac{1 - \\cos\\theta}{\\theta^2}[\\varphi]_\\times^2,\\quad \\theta = \\lVert\\varphi\\rVert
+
+    with the Taylor series of both coefficients for ``θ < 1e-4`` (exact to round-off).
+    """
+    phi = np.asarray(phi, float)
+    theta = np.linalg.norm(phi, axis=-1)[..., None, None]
+    small = theta < 1e-4
+    t = np.where(small, 1.0, theta)
+    a = np.where(small, 1.0 - theta**2 / 6.0, np.sin(t) / t)
+    b = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(t)) / t**2)
+    k = skew(phi)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+def integrate_rates(rates: np.ndarray, dt: float, start: np.ndarray | None = None) -> np.ndarray:
+    """Body-to-nav rotations ``R_0..R_K`` from body rates ``(K, 3)`` (rad/s) held over each step.
+
+    The step rotations are computed at once; their ordered product is the only loop.
+    """
+    steps = exp_so3(np.asarray(rates, float) * dt)
+    out = np.empty((len(steps) + 1, 3, 3))
+    out[0] = np.eye(3) if start is None else start
+    for k, step in enumerate(steps):
+        out[k + 1] = out[k] @ step
+    return out
+
+
+def segments_of(mode: str | None, segments, partial_arc_deg: float) -> list[tuple[str, float]]:
+    """The list of ``(axis, arc_deg)`` of a preset ``mode`` or of explicit ``segments``."""
+    if segments:
+        out = [(str(s["axis"]).lower(), float(s["arc_deg"])) for s in segments]
+    elif mode in MODES:
+        out = [(ax, partial_arc_deg if arc == PARTIAL else arc) for ax, arc in MODES[mode]]
+    else:
+        raise MagexpError(f"rotation.mode={mode!r} is not allowed: choose one of {', '.join(MODES)} "
+                          "(or give rotation.segments)")
+    for ax, arc in out:
+        check(ax in AXES, f"rotation axis={ax!r} is not allowed: choose x, y or z")
+        check(np.isfinite(arc) and arc > 0, f"rotation arc_deg={arc!r} is not allowed: it must be > 0")
+    return out
+
+
+class Trajectory:
+    """Turns about body axes in sequence, each at ``rate_deg_s``, sampled every ``sample_period`` s.
+
+    Parameters
+    ----------
+    mode : a preset of :data:`MODES` (``mode1``..``mode4``), or None with ``segments``.
+    segments : explicit ``[{axis: x, arc_deg: 360}, ...]`` (overrides ``mode``).
+    partial_arc_deg : the arc of an incomplete turn (mode 3; not stated in the paper).
+    rate_deg_s : turn rate; 36 °/s makes a full turn 1000 samples at 0.01 s, so three
+        turns are the paper's 3000 samples.
+    sample_period : seconds (0.01 in the paper's simulations, 1/205 for the ADIS16488).
+    """
+
+    def __init__(self, *, mode: str | None = "mode1", segments=None, partial_arc_deg: float = 180.0,
+                 rate_deg_s: float = 36.0, sample_period: float = 0.01):
+        self.segments = segments_of(mode, segments, float(partial_arc_deg))
+        self.rate = check_nonnegative(rate_deg_s, "rotation.rate_deg_s")
+        self.dt = check_nonnegative(sample_period, "rotation.sample_period")
+        check(self.rate > 0, f"rotation.rate_deg_s={rate_deg_s!r} is not allowed: it must be > 0")
+        check(self.dt > 0, f"rotation.sample_period={sample_period!r} is not allowed: it must be > 0")
+
+    def rates(self) -> np.ndarray:
+        """True body rates (rad/s) of every step, shape ``(K, 3)``."""
+        parts = []
+        for ax, arc in self.segments:
+            n = max(int(round(arc / (self.rate * self.dt))), 1)
+            w = np.zeros((n, 3))
+            w[:, AXES[ax]] = np.deg2rad(arc) / (n * self.dt)  # the arc is exact
+            parts.append(w)
+        return np.concatenate(parts)
+
+    def duration(self) -> float:
+        return len(self.rates()) * self.dt
+
+
+class Gyro:
+    """A rate gyro: true rate + constant drift + white noise.
+
+    Parameters
+    ----------
+    drift_deg_h : magnitude of the constant drift (°/h), along ``drift_axis``.
+    drift_axis : direction of the drift (normalised; default equal on the three axes).
+    noise_deg_s : standard deviation of the white noise of each sample (°/s).
+    """
+
+    def __init__(self, *, drift_deg_h: float = 6.25, drift_axis=(1.0, 1.0, 1.0), noise_deg_s: float = 0.0):
+        self.drift_deg_h = check_nonnegative(drift_deg_h, "gyro.drift_deg_h")
+        self.noise_deg_s = check_nonnegative(noise_deg_s, "gyro.noise_deg_s")
+        axis = np.asarray(drift_axis, float)
+        check(axis.shape == (3,) and np.all(np.isfinite(axis)) and np.linalg.norm(axis) > 0,
+              f"gyro.drift_axis={drift_axis!r} is not allowed: it must be 3 finite numbers, not all 0")
+        self.drift = np.deg2rad(self.drift_deg_h / 3600.0) * axis / np.linalg.norm(axis)  # rad/s
+
+    def measure(self, rates: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
+        """Gyro output (rad/s) for true ``rates`` ``(K, 3)``."""
+        noise = np.deg2rad(self.noise_deg_s) * rng.standard_normal(rates.shape) if self.noise_deg_s > 0 else 0.0
+        return rates + self.drift + noise
+
+
+def even_subsample(n_total: int, n: int) -> np.ndarray:
+    """``n`` evenly spaced indices of ``0..n_total-1`` (first and last included)."""
+    n = check_positive_int(n, "scenario.n_readings")
+    check(n <= n_total, f"scenario.n_readings={n} is not allowed: the trajectory has only {n_total} samples")
+    return np.round(np.linspace(0, n_total - 1, n)).astype(int)
