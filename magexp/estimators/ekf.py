@@ -71,6 +71,8 @@ class ExtendedKalmanFilter:
     """
 
     references = "Yuan, Wang & Chen 2018 (EKF baseline of Table 7); Kalman 1960"
+    objectives = ("vector",)  # needs the attitude-aided vector measurement
+    monotone_history = False  # a filter's objective per step need not decrease
 
     def __init__(self, *, name: str = "ekf", form: str = "forward", n_steps: int = 300, s0=None, b0=None, p0_s: float = 1.0,
                  p0_b: float = 100.0, q_s: float = 0.0, q_b: float = 0.0, r: float = 1.0):
