@@ -37,4 +37,5 @@ def evaluate(problem, result) -> dict:
         # converged: as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
         out["converged"] = bool(out["fun"] <= 1.01 * out["truth_fun"] + 1e-9)
     out.update(problem.metrics(result.x))
+    out.update(result.metrics)
     return out
