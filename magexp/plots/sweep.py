@@ -32,7 +32,7 @@ def draw(frame: pd.DataFrame, spec):
     metrics, columns = list(spec.plot.metrics), group_values(frame, panel_key)
     targets = dict(spec.plot.get("targets", {}) or {})
     ylabels = dict(spec.plot.get("ylabels", {}) or {})
-    fig, axes = panels(len(metrics) * len(columns), rows=len(metrics))
+    fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1, width=3.8)
     for i, metric in enumerate(metrics):
         for j, pv in enumerate(columns):
             ax = axes[i * len(columns) + j]
@@ -48,6 +48,8 @@ def draw(frame: pd.DataFrame, spec):
                 ax.axhline(float(targets[metric]), color="k", ls="--", lw=0.9, label="paper's stated level")
             scale = spec.plot.get("xscale", "log")
             ax.set_xscale(scale, **({"linthresh": float(spec.plot.get("linthresh", 1.0))} if scale == "symlog" else {}))
+            if scale == "symlog" and (frame[x_key].astype(float) >= 0).all():
+                ax.set_xlim(left=0)
             if spec.plot.get("ylog", True):
                 ax.set_yscale("log")
             ax.set_xlabel(label(spec, x_key))

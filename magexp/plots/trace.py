@@ -2,10 +2,11 @@
 
 Reads ``trace[key]`` (``plot.trace``, default ``"x"``) of every run, shape ``(steps + 1, p)``,
 named by ``trace[key + "_names"]`` or the run's ``parameter_names``. Cells without that trace
-(closed-form estimators, a paper's fixed solution) are drawn as dotted horizontal lines at their
-final estimate; a known truth (``truth_<name>`` metrics) as dashed lines.
+(closed-form estimators, a paper's fixed solution) are drawn as horizontal lines (dotted, dash-dot,
+...) at their final estimate; a known truth (``truth_<name>`` metrics) as dashed lines.
 
-``plot.groups``: lists of parameter names, one panel each (default: one panel per parameter).
+``plot.groups``: lists of parameter names, one panel each (default: one panel per parameter);
+``plot.start``: first step drawn (to hide the transient from ``x(0) = 0``; default 0).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import pandas as pd
 
 from magexp.plots.style import panels
 
-LINES = {"truth": "--", "reference": ":"}
+REFERENCE_STYLES = {":": "dotted", "-.": "dash-dot", (0, (5, 1, 1, 1, 1, 1)): "dash-dot-dot"}
 
 
 def _names(out, key: str) -> list[str]:
@@ -66,10 +67,11 @@ def tabulate(runs) -> pd.DataFrame:
 def draw(frame: pd.DataFrame, spec):
     import matplotlib.pyplot as plt
 
-    traces = frame[frame.kind == "trace"]
+    traces = frame[(frame.kind == "trace") & (frame.step >= float(spec.plot.get("start", 0)))]
     groups = [list(g) for g in spec.plot.get("groups", [])] or [[p] for p in dict.fromkeys(traces.parameter)]
     fig, axes = panels(len(groups), width=3.6, rows=-(-len(groups) // 2) if len(groups) > 2 else 1)
     several = traces.estimator.nunique() > 1
+    refs = list(dict.fromkeys(frame[frame.kind == "reference"].estimator))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, group in zip(axes, groups):
         for k, (name, est) in enumerate((p, e) for e in dict.fromkeys(traces.estimator) for p in group):
@@ -77,14 +79,17 @@ def draw(frame: pd.DataFrame, spec):
             line = traces[(traces.parameter == name) & (traces.estimator == est)]
             ax.plot(line.step, line["median"], lw=1.1, color=colour, label=f"{name} ({est})" if several else name)
             ax.fill_between(line.step, line.q25, line.q75, color=colour, alpha=0.2, lw=0)
-            for kind, style in LINES.items():
-                for _, row in frame[(frame.kind == kind) & (frame.parameter == name)].drop_duplicates("estimator").iterrows():
+            for _, row in frame[(frame.kind == "truth") & (frame.parameter == name)].iterrows():
+                ax.axhline(row["median"], color="k" if several else colour, ls="--", lw=0.9)
+            for ref, style in zip(refs, REFERENCE_STYLES):
+                for _, row in frame[(frame.kind == "reference") & (frame.parameter == name) & (frame.estimator == ref)].iterrows():
                     ax.axhline(row["median"], color=colour, ls=style, lw=0.9)
         ax.set_xlabel("filter step")
         ax.set_ylabel(spec.plot.get("ylabel", "estimate"))
         ax.legend(loc="best", ncol=len(group) if not several else 1)
-    refs = frame[frame.kind == "reference"].estimator.unique()
-    note = ("dashed: truth; " if (frame.kind == "truth").any() else "") + (f"dotted: {', '.join(refs)}" if len(refs) else "")
+    lines = (["dashed: truth"] if (frame.kind == "truth").any() else []) + [
+        f"{word}: {ref}" for ref, word in zip(refs, REFERENCE_STYLES.values())]
+    note = "; ".join(lines)
     fig.suptitle(f"{spec.title}\n{note}".strip(), fontsize=9)
     fig.tight_layout()
     return fig
