@@ -32,6 +32,8 @@ def tabulate(runs) -> pd.DataFrame:
 
 
 def _cell(row) -> str:
+    if not np.isfinite(row["median"]):
+        return ""
     text = f"{row['median']:.6g}"
     return text + (f"\n[{row.q25:.4g}, {row.q75:.4g}]" if row.n_seeds > 1 and np.isfinite(row.q25) else "")
 
