@@ -37,6 +37,7 @@ def evaluate(problem, result) -> dict:
         # converged: as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
         out["converged"] = bool(out["fun"] <= 1.01 * out["truth_fun"] + 1e-9)
     out.update(problem.metrics(result.x))
+    out.update(result.metrics)
     out.update(bound_metrics(problem, out))
     return out
 

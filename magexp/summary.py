@@ -25,15 +25,19 @@ def matches(selection: dict, settings: dict) -> bool:
 
 
 def tolerance_text(tol: dict) -> str:
-    if "abs" in tol:
-        return f"abs {float(tol['abs']):g}"
-    if "below" in tol:
-        return f"below {float(tol['below']):g}"
+    for kind in ("below", "abs", "factor"):
+        if kind in tol:
+            return f"{kind} {float(tol[kind]):g}"
     return f"rel {float(tol['rel']):g}"
 
 
 def verdict(value: float, paper_value: float | None, tol: dict) -> str:
-    """``match``/``differs`` against the paper under ``tol``; ``n/a`` without a paper value."""
+    """``match``/``differs`` against the paper under ``tol``; ``n/a`` without a paper value.
+
+    ``tol`` is ``{rel: r}`` (``|v - p| <= r |p|``), ``{abs: a}`` (``|v - p| <= a``),
+    ``{factor: f}`` (``p/f <= v <= p f``, for "at the 1e-4 level" claims) or ``{below: b}``
+    (both below ``b``).
+    """
     if paper_value is None or not np.isfinite(paper_value):
         return "n/a"
     if not np.isfinite(value):
@@ -42,6 +46,9 @@ def verdict(value: float, paper_value: float | None, tol: dict) -> str:
         return "match" if abs(value - paper_value) <= float(tol["abs"]) else "differs"
     if "below" in tol:
         return "match" if value < float(tol["below"]) and paper_value < float(tol["below"]) else "differs"
+    if "factor" in tol:
+        f = float(tol["factor"])
+        return "match" if paper_value / f <= value <= paper_value * f else "differs"
     return "match" if abs(value - paper_value) <= float(tol["rel"]) * abs(paper_value) else "differs"
 
 

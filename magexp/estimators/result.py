@@ -20,6 +20,7 @@ class FitResult:
     history : best objective after each iteration, ``history[0]`` before the first.
     history_nfev : evaluations spent when each ``history`` entry was recorded.
     trace : optional per-iteration arrays (e.g. a filter's state at every step).
+    metrics : optional estimator-specific scalar outcomes, added to the run's metrics.
     success, message : as in scipy.
     """
 
@@ -32,3 +33,4 @@ class FitResult:
     success: bool = True
     message: str = ""
     trace: dict = field(default_factory=dict)
+    metrics: dict = field(default_factory=dict)

@@ -1,0 +1,188 @@
+"""Yan & Zhou 2022's linear Kalman filters: the magnetization parameters, then the geomagnetic field.
+
+One kernel, :func:`kalman_update`, serves both filters. For a state ``x`` (s x c: ``c``
+columns that share one gain), an observation ``y = H x + v2`` (``H``: k x s) and a
+random-walk process ``x(n+1) = x(n) + v1`` (eq 5), one step is (sec 2.1, steps (1)-(4))
+
+.. math::
+    \\mathbf R(n) &= \\mathbf P(n-1) + \\mathbf Q\\\\
+    \\mathbf m(n) &= \\mathbf R(n)\\mathbf H^T\\,[\\mathbf H\\mathbf R(n)\\mathbf H^T + \\sigma^2\\mathbf E]^{-1}\\\\
+    \\mathbf P(n) &= [\\mathbf E - \\mathbf m(n)\\mathbf H]\\,\\mathbf R(n)\\\\
+    \\mathbf x(n) &= [\\mathbf E - \\mathbf m(n)\\mathbf H]\\,\\mathbf x(n-1) + \\mathbf m(n)\\,\\mathbf y(n)
+
+(the inverse in step (2) is lost in print). :class:`KalmanFilter` (``kf``) estimates
+``x = [K Bp]^T`` (4 x 3) from rows ``H = C(n) = [Be^T A^T, 1]``, ``y = B^T``, reusing the
+readings cyclically. :class:`FieldKalmanFilter` (``kf_be``) then recomputes ``Be`` (3 x 1)
+from ``y = B - Bp = (K A) Be`` with ``K``, ``Bp`` given (the paper's Fig 4, which cites its
+ref. [3] for this filter), and :func:`direct_field` inverts eq 4, ``Be = (K A)^-1 (B - Bp)``.
+
+With ``Q = 0`` and rows reused, the parameter filter is recursive least squares: it
+converges to the least-squares solution of the readings (the prior ``P(0)`` is forgotten as
+``1/passes``); ``Q > 0`` keeps it tracking the latest rows, so it fluctuates around it.
+
+References: Yan & Zhou 2022, Chinese Journal of Ship Research, sec 2.1 and 3.2;
+Kalman 1960; Zhang 2002 (the paper's ref. [14]).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.errors import check_nonnegative, check_positive_int
+from magexp.estimators.result import FitResult
+
+
+def kalman_update(x, p, h, y, q, sigma2: float):
+    """One step (1)-(4): returns the new state ``x`` (s, c) and ``P`` (s, s)."""
+    r = p + q
+    rh = r @ h.T
+    m = np.linalg.solve(h @ rh + sigma2 * np.eye(h.shape[0]), rh.T).T
+    e_mh = np.eye(r.shape[0]) - m @ h
+    return e_mh @ x + m @ y, e_mh @ r
+
+
+def kalman_filter(h, y, *, p0, q, sigma2: float, x0) -> np.ndarray:
+    """Run :func:`kalman_update` over observations ``h`` (T, k, s), ``y`` (T, k, c) from ``x0``.
+
+    Returns the state at every step, shape ``(T + 1, s, c)`` (``[0]`` is ``x0``).
+    """
+    states = np.empty((len(h) + 1,) + np.shape(x0))
+    x, p = np.asarray(x0, float), np.asarray(p0, float)
+    states[0] = x
+    for n in range(len(h)):
+        x, p = kalman_update(x, p, h[n], y[n], q, sigma2)
+        states[n + 1] = x
+    return states
+
+
+def cyclic(n_rows: int, n_steps: int) -> np.ndarray:
+    """Row index of every filter step: the readings reused in order, ``0, 1, ..., N-1, 0, ...``."""
+    return np.arange(n_steps) % n_rows
+
+
+def settled_since(distance: np.ndarray) -> int:
+    """First step from which ``distance`` (per step, True = still apart) stays False; -1 if never."""
+    apart = np.flatnonzero(distance)
+    if apart.size == 0:
+        return 0
+    return -1 if apart[-1] == len(distance) - 1 else int(apart[-1] + 1)
+
+
+class _Tuning:
+    """Shared hyper-parameters: ``P(0) = p0 D``, ``Q = q D`` with ``D`` the state's scale matrix."""
+
+    def __init__(self, *, name: str, p0: float, q: float, sigma2: float, n_steps: int):
+        self.name = name
+        self.p0 = check_nonnegative(p0, "estimator.p0")
+        self.q = check_nonnegative(q, "estimator.q")
+        self.sigma2 = check_nonnegative(sigma2, "estimator.sigma2")
+        self.n_steps = check_positive_int(n_steps, "estimator.n_steps")
+
+
+class KalmanFilter(_Tuning):
+    """Yan & Zhou's filter for ``x = [K Bp]^T`` (``kf``).
+
+    Parameters
+    ----------
+    name : config name.
+    p0 : ``P(0) = p0 diag(1, 1, 1, offset_scale^2)`` (the paper: a diagonal matrix).
+    q : ``Q = q diag(1, 1, 1, offset_scale^2)``, process noise per step.
+    sigma2 : observation noise variance ``σ²`` (nT²), one value for the three components.
+    offset_scale : size (nT) of ``Bp`` relative to the entries of ``K`` (~1).
+    n_steps : filter steps; the readings are reused cyclically.
+    agree_k, agree_bp : tolerances of the ``steps_to_ls`` diagnostic: the first step, at the end
+        of a full pass over the readings, after which the state at every later pass end stays
+        within them of the least-squares solution (NaN if it never does). Within a pass the
+        readings are unequally weighted, so the state fluctuates around that solution.
+
+    ``x(0) = 0``. The result's ``trace["x"]`` is the state at every step as ``theta``
+    (``n_steps + 1``, 12), ``history`` the fit RMS at every step.
+    """
+
+    references = "Yan & Zhou 2022, sec 2.1"
+
+    def __init__(self, *, name: str = "kf", p0: float = 1.0, q: float = 0.0, sigma2: float = 3333.0,
+                 offset_scale: float = 3000.0, n_steps: int = 600, agree_k: float = 1e-4, agree_bp: float = 1.0):
+        super().__init__(name=name, p0=p0, q=q, sigma2=sigma2, n_steps=n_steps)
+        self.scale = np.diag([1.0, 1.0, 1.0, check_nonnegative(offset_scale, "estimator.offset_scale") ** 2])
+        self.agree_k = check_nonnegative(agree_k, "estimator.agree_k")
+        self.agree_bp = check_nonnegative(agree_bp, "estimator.agree_bp")
+
+    def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
+        from magexp.problems.ship import state_to_theta
+
+        c, y = problem.design()
+        rows = cyclic(len(c), self.n_steps)
+        states = kalman_filter(c[rows, None, :], y[rows, None, :], p0=self.p0 * self.scale, q=self.q * self.scale,
+                               sigma2=self.sigma2, x0=np.zeros((4, 3)))
+        thetas = state_to_theta(states)
+        history = problem.cost(thetas)
+        ls = problem.least_squares()
+        ends = np.arange(len(c), self.n_steps + 1, len(c))  # every full pass weighs each reading equally
+        apart = (np.abs(thetas[ends, :9] - ls[:9]).max(axis=1) > self.agree_k) | (
+            np.abs(thetas[ends, 9:] - ls[9:]).max(axis=1) > self.agree_bp)
+        first = settled_since(apart)
+        steps = float(ends[first]) if 0 <= first < len(ends) else np.nan
+        return FitResult(x=thetas[-1], fun=problem.cost_direct(thetas[-1]), nit=self.n_steps, nfev=self.n_steps,
+                         history=history, history_nfev=np.arange(self.n_steps + 1), trace={"x": thetas},
+                         metrics={"steps_to_ls": steps},
+                         message=f"{self.n_steps} steps over {len(c)} readings")
+
+
+def direct_field(k: np.ndarray, bp: np.ndarray, attitude: np.ndarray, readings: np.ndarray) -> np.ndarray:
+    """Eq 4 for every reading: ``Be_i = (K A_i)^-1 (B_i - Bp)``, shape (N, 3)."""
+    return np.linalg.solve(k @ attitude, (readings - bp)[..., None])[..., 0]
+
+
+def field_errors(estimates: np.ndarray, field: np.ndarray) -> tuple[float, float]:
+    """RMS error over all components (nT) and the largest component error relative to ``|Be|``."""
+    err = np.asarray(estimates) - field
+    return float(np.sqrt(np.mean(err**2))), float(np.max(np.abs(err)) / np.linalg.norm(field))
+
+
+class FieldKalmanFilter(_Tuning):
+    """Recompute ``Be`` with ``K``, ``Bp`` from another estimator (``kf_be``; Yan & Zhou Fig 4).
+
+    State ``Be`` (3 x 1), ``H(n) = K A(n)``, ``y(n) = B(n) - Bp``, ``Be(0) = 0``,
+    ``P(0) = p0 E``, ``Q = q E``; readings reused cyclically.
+
+    Parameters
+    ----------
+    magnetization : an estimator (built from its config node) giving ``K`` and ``Bp``.
+    p0, q, sigma2, n_steps : as :class:`KalmanFilter` (``P(0)``, ``Q`` in nT²).
+    settle : fraction of the steps after which the solution counts as converged (the paper's
+        "stable solution after convergence"): errors are measured over the last ``1 - settle``.
+
+    ``x`` is the magnetization used (so the fit metrics apply); ``trace["be"]`` is ``Be`` at
+    every step; ``metrics`` adds ``be_rms``, ``be_max_rel`` (filter) and ``be_direct_rms``,
+    ``be_direct_max_rel`` (eq 4 on every reading), with ``Be1..3`` and ``truth_Be1..3``.
+    """
+
+    references = "Yan & Zhou 2022, sec 3.2, Fig 4"
+
+    def __init__(self, *, magnetization, name: str = "kf_be", p0: float = 1e10, q: float = 0.0,
+                 sigma2: float = 3333.0, n_steps: int = 600, settle: float = 0.5):
+        super().__init__(name=name, p0=p0, q=q, sigma2=sigma2, n_steps=n_steps)
+        self.magnetization = magnetization
+        self.settle = min(check_nonnegative(settle, "estimator.settle"), 1.0)
+
+    def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
+        first = self.magnetization.fit(problem, rng=rng)
+        k, bp = first.x[:9].reshape(3, 3), first.x[9:]
+        ds = problem.dataset
+        field = ds.field_nav[0]
+        rows = cyclic(ds.n, self.n_steps)
+        h = k @ ds.attitude[rows]
+        states = kalman_filter(h, (ds.readings[rows] - bp)[..., None], p0=self.p0 * np.eye(3), q=self.q * np.eye(3),
+                               sigma2=self.sigma2, x0=np.zeros((3, 1)))[..., 0]
+        start = min(int(self.settle * self.n_steps) + 1, self.n_steps)
+        rms, rel = field_errors(states[start:], field)
+        d_rms, d_rel = field_errors(direct_field(k, bp, ds.attitude, ds.readings), field)
+        names = ["Be1", "Be2", "Be3"]
+        metrics = {"be_rms": rms, "be_max_rel": rel, "be_direct_rms": d_rms, "be_direct_max_rel": d_rel,
+                   **dict(zip(names, map(float, states[-1]))), **{f"truth_{n}": float(v) for n, v in zip(names, field)}}
+        history = np.sqrt(np.mean((states - field) ** 2, axis=1))
+        return FitResult(x=first.x, fun=problem.cost_direct(first.x), nit=self.n_steps, nfev=self.n_steps,
+                         history=history, history_nfev=np.arange(self.n_steps + 1),
+                         trace={"be": states, "be_names": names}, metrics=metrics,
+                         message=f"magnetization from {self.magnetization.name}")

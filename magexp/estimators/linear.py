@@ -1,0 +1,57 @@
+"""Closed-form and fixed solutions of linear problems.
+
+:class:`LeastSquares` (``ls``) is the ordinary least-squares solution of the problem's
+linear model (for Yan & Zhou 2022: ``min ||C x - Y||``, the solution the Kalman filter
+converges to when the readings are reused). :class:`FixedParameters` returns a published
+parameter vector unchanged, so that a paper's own solution is evaluated on the same data
+by the same metrics as every estimator.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.errors import MagexpError
+from magexp.estimators.result import FitResult
+
+
+def _result(problem, x: np.ndarray, message: str) -> FitResult:
+    fun = problem.cost_direct(x)
+    return FitResult(x=x, fun=fun, nit=1, nfev=1, history=np.array([fun]), history_nfev=np.array([1]), message=message)
+
+
+class LeastSquares:
+    """Ordinary linear least squares through ``problem.least_squares()``."""
+
+    references = "Gauss 1809; Golub & Van Loan, Matrix Computations"
+
+    def __init__(self, *, name: str = "ls"):
+        self.name = name
+
+    def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
+        if not hasattr(problem, "least_squares"):
+            raise MagexpError(f"estimator=ls is not allowed for {type(problem).__name__}: its model is not linear")
+        return _result(problem, problem.least_squares(), "closed form")
+
+
+class FixedParameters:
+    """A given parameter vector (e.g. a paper's reported solution), evaluated as is.
+
+    Parameters
+    ----------
+    name : config name.
+    x : the parameter vector, in the problem's order (``problem.parameter_names()``).
+    source : where the numbers come from (shown in the result message).
+    """
+
+    def __init__(self, *, name: str, x, source: str = ""):
+        self.name = name
+        self.x = np.asarray(x, dtype=float)
+        self.source = source
+        if self.x.ndim != 1 or not np.all(np.isfinite(self.x)):
+            raise MagexpError(f"estimator.x={x!r} is not allowed: it must be a list of finite numbers")
+
+    def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
+        if self.x.size != problem.n_params:
+            raise MagexpError(f"estimator.x has {self.x.size} values: the problem needs {problem.n_params}")
+        return _result(problem, self.x.copy(), self.source or "fixed")

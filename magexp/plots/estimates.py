@@ -1,0 +1,61 @@
+"""A table of fitted values per estimator: parameters (and chosen metrics) vs truth.
+
+Rows are the run's ``parameter_names`` followed by ``plot.rows`` (extra metrics, e.g. ``fit_rms``);
+columns are ``truth`` (if the runs know it) and one per cell (its estimator, median over seeds,
+with the interquartile range when there are several seeds). The CSV is long: one row per
+(quantity, cell). The figure renders the table.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts import quantiles
+from magexp.plots.style import panels
+
+
+def tabulate(runs) -> pd.DataFrame:
+    names = list(next(iter(runs.outputs.values())).parameter_names) + list(runs.spec.plot.get("rows", []))
+    rows = []
+    for ci, cell in enumerate(runs.cells):
+        sub = runs.table[runs.table.cell == ci]
+        for name in names:
+            if name not in sub:
+                continue
+            med, q25, q75 = quantiles(sub[name])
+            truth = f"truth_{name}"
+            rows.append({**cell, "estimator": sub.estimator.iloc[0], "quantity": name, "median": med, "q25": q25,
+                         "q75": q75, "truth": float(sub[truth].median()) if truth in sub else np.nan,
+                         "n_seeds": len(sub)})
+    return pd.DataFrame(rows)
+
+
+def _cell(row) -> str:
+    if not np.isfinite(row["median"]):
+        return ""
+    text = f"{row['median']:.6g}"
+    return text + (f"\n[{row.q25:.4g}, {row.q75:.4g}]" if row.n_seeds > 1 and np.isfinite(row.q25) else "")
+
+
+def draw(frame: pd.DataFrame, spec):
+    quantities = list(dict.fromkeys(frame.quantity))
+    estimators = list(dict.fromkeys(frame.estimator))
+    truth = frame.groupby("quantity", sort=False).truth.first()
+    columns = (["truth"] if truth.notna().any() else []) + estimators
+    body = []
+    for q in quantities:
+        cells = [f"{truth[q]:.6g}" if np.isfinite(truth[q]) else ""] if columns[0] == "truth" else []
+        for est in estimators:
+            row = frame[(frame.quantity == q) & (frame.estimator == est)]
+            cells.append(_cell(row.iloc[0]) if len(row) else "")
+        body.append(cells)
+    tall = frame.n_seeds.max() > 1
+    fig, (ax,) = panels(1, width=1.2 + 1.7 * len(columns), height=0.6 + (0.42 if tall else 0.25) * len(quantities))
+    ax.axis("off")
+    table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, loc="center", cellLoc="center")
+    table.auto_set_font_size(False)
+    table.set_fontsize(7.5)
+    table.scale(1, 2.2 if tall else 1.3)
+    fig.suptitle(spec.title, fontsize=9)
+    return fig

@@ -1,0 +1,98 @@
+"""Yan & Zhou 2022: a ship's magnetization parameters ``K`` and ``Bp`` from known ``Be`` and attitudes.
+
+Model (eq 1): :math:`\\mathbf B_i = \\mathbf K\\mathbf A_i\\mathbf B_e + \\mathbf B_p`, linear in
+``theta = [vec(K) (row-major), Bp]``. With the regressor row (eq 6)
+
+.. math:: \\mathbf C_i = [\\mathbf B_e^T\\mathbf A_i^T,\\ 1]\\quad(1\\times4),\\qquad
+          \\mathbf y_i = \\mathbf B_i^T = \\mathbf C_i\\,\\mathbf x,\\qquad
+          \\mathbf x = [\\mathbf K\\ \\mathbf B_p]^T\\ (4\\times3)
+
+every reading is one row of ``Y = C x``: the Kalman filter and least squares share :meth:`design`.
+In the calibration form of :class:`~magexp.problems.base.CalibrationProblem` this is the
+``forward`` parameterisation ``reading = S b + o`` with ``S = K``, ``o = Bp``, so
+:meth:`calibrate` returns ``K^-1 (B - Bp) = A Be``, the ambient field in the ship frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.problems.base import CalibrationProblem
+
+
+def state_to_theta(x: np.ndarray) -> np.ndarray:
+    """``theta`` (..., 12) from filter states ``x = [K Bp]^T`` of shape (..., 4, 3)."""
+    x = np.asarray(x, float)
+    k = np.swapaxes(x[..., :3, :], -1, -2)
+    return np.concatenate([k.reshape(*x.shape[:-2], 9), x[..., 3, :]], axis=-1)
+
+
+def theta_to_state(thetas: np.ndarray) -> np.ndarray:
+    """Filter states (n, 4, 3) from ``thetas`` (n, 12): the inverse of :func:`state_to_theta`."""
+    thetas = np.atleast_2d(np.asarray(thetas, float))
+    k = thetas[:, :9].reshape(-1, 3, 3)
+    return np.concatenate([np.swapaxes(k, 1, 2), thetas[:, None, 9:]], axis=1)
+
+
+class ShipMagnetization(CalibrationProblem):
+    """Fit residual of ``B = K A Be + Bp`` over the readings.
+
+    ``cost`` is the RMS over the ``3N`` components of ``C x - Y`` for a whole swarm in one
+    ``einsum``; ``residuals`` stacks them (``3N``) for ``lm``; :meth:`least_squares` is the
+    closed-form solution the filter converges to when rows are reused.
+    """
+
+    def __init__(self, dataset, search):
+        super().__init__(dataset, search, parameterisation="forward")
+        body = np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)  # A_i Be (measured attitude)
+        self._c = np.column_stack([body, np.ones(dataset.n)])
+        self._y = np.asarray(dataset.readings, float)
+
+    def design(self) -> tuple[np.ndarray, np.ndarray]:
+        """Regressors ``C`` (N, 4) with rows ``[Be^T A_i^T, 1]`` and observations ``Y`` (N, 3)."""
+        return self._c, self._y
+
+    def least_squares(self) -> np.ndarray:
+        """``theta`` minimising ``||C x - Y||_F`` (``numpy.linalg.lstsq``; column-scaled)."""
+        scale = np.linalg.norm(self._c, axis=0)
+        x = np.linalg.lstsq(self._c / scale, self._y, rcond=None)[0] / scale[:, None]
+        return state_to_theta(x)
+
+    def parameter_names(self) -> list[str]:
+        return [f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"Bp{i + 1}" for i in range(3)]
+
+    def predict(self, thetas: np.ndarray) -> np.ndarray:
+        """Modelled readings ``C x`` for every particle, shape ``(n, N, 3)``."""
+        return np.einsum("ij,njk->nik", self._c, theta_to_state(thetas))
+
+    def cost(self, thetas: np.ndarray) -> np.ndarray:
+        """Fit residual RMS of every particle, ``(n, 12) -> (n,)``."""
+        err = self.predict(thetas) - self._y
+        return np.sqrt(np.mean(err * err, axis=(1, 2)))
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        """``K A_i Be + Bp - B_i`` for every reading, stacked (3N,), by eq 1 directly."""
+        k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
+        body = np.einsum("nij,nj->ni", self.dataset.attitude, self.dataset.field_nav)
+        return (body @ k.T + bp - self._y).ravel()
+
+    def cost_direct(self, theta: np.ndarray) -> float:
+        """Fit residual RMS (nT) of one parameter vector."""
+        return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))
+
+    def metrics(self, theta: np.ndarray) -> dict:
+        """``fit_rms`` (nT); the estimate per parameter (``K11``...``Bp3``); its distance to the
+        least-squares solution (``k_vs_ls`` max abs, ``bp_vs_ls`` max abs nT) and ``ls_fit_rms``;
+        with a known truth ``k_error`` (max abs), ``bp_error`` (max abs, nT) and ``truth_<name>``."""
+        theta = np.asarray(theta, float)
+        ls = self.least_squares()
+        names = self.parameter_names()
+        out = {"fit_rms": self.cost_direct(theta), "ls_fit_rms": self.cost_direct(ls),
+               "k_vs_ls": float(np.max(np.abs(theta[:9] - ls[:9]))),
+               "bp_vs_ls": float(np.max(np.abs(theta[9:] - ls[9:]))), **dict(zip(names, map(float, theta)))}
+        truth = self.truth_theta()
+        if truth is not None:
+            out.update({"k_error": float(np.max(np.abs(theta[:9] - truth[:9]))),
+                        "bp_error": float(np.max(np.abs(theta[9:] - truth[9:]))),
+                        **{f"truth_{n}": float(v) for n, v in zip(names, truth)}})
+        return out
