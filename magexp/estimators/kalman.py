@@ -71,6 +71,9 @@ def settled_since(distance: np.ndarray) -> int:
 class _Tuning:
     """Shared hyper-parameters: ``P(0) = p0 D``, ``Q = q D`` with ``D`` the state's scale matrix."""
 
+    objectives = ("ship",)  # filters of the linear model B = K A Be + Bp
+    monotone_history = False  # the fit RMS per filter step need not decrease
+
     def __init__(self, *, name: str, p0: float, q: float, sigma2: float, n_steps: int):
         self.name = name
         self.p0 = check_nonnegative(p0, "estimator.p0")

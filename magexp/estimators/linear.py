@@ -24,6 +24,7 @@ class LeastSquares:
     """Ordinary linear least squares through ``problem.least_squares()``."""
 
     references = "Gauss 1809; Golub & Van Loan, Matrix Computations"
+    objectives = ("ship",)  # needs a linear model (problem.least_squares)
 
     def __init__(self, *, name: str = "ls"):
         self.name = name
@@ -43,6 +44,8 @@ class FixedParameters:
     x : the parameter vector, in the problem's order (``problem.parameter_names()``).
     source : where the numbers come from (shown in the result message).
     """
+
+    objectives = ("ship",)  # the printed solutions are of Yan & Zhou's model
 
     def __init__(self, *, name: str, x, source: str = ""):
         self.name = name

@@ -58,5 +58,4 @@ def draw(frame: pd.DataFrame, spec):
                 ax.set_title(label(spec, panel_key, pv))
     axes[0].legend()
     fig.suptitle(spec.title, fontsize=10)
-    fig.tight_layout()
     return fig

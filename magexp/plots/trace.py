@@ -91,5 +91,4 @@ def draw(frame: pd.DataFrame, spec):
         f"{word}: {ref}" for ref, word in zip(refs, REFERENCE_STYLES.values())]
     note = "; ".join(lines)
     fig.suptitle(f"{spec.title}\n{note}".strip(), fontsize=9)
-    fig.tight_layout()
     return fig

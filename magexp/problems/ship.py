@@ -44,6 +44,7 @@ class ShipMagnetization(CalibrationProblem):
 
     def __init__(self, dataset, search):
         super().__init__(dataset, search, parameterisation="forward")
+        self.options = {}  # constructor options (none: the parameterisation is fixed)
         body = np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)  # A_i Be (measured attitude)
         self._c = np.column_stack([body, np.ones(dataset.n)])
         self._y = np.asarray(dataset.readings, float)
