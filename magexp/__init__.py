@@ -6,4 +6,11 @@ Data flows one way::
              ──► metrics ──► tidy rows ──► results/<paper>/<artifact>.csv ──► figures, report
 """
 
+import os as _os
+
+# Deterministic numbers: one BLAS thread (the matrices here are small, so threads buy nothing,
+# and a threaded reduction order can move a flat direction of a fit in its last digits).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    _os.environ.setdefault(_var, "1")
+
 __version__ = "0.1.0"
