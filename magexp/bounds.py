@@ -66,7 +66,7 @@ class _Box:
 def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     """Bounds at ``theta`` (default: the truth) for the dataset's noise; None if unknown.
 
-    Returns ``rms_floor`` (expected best RMS of the problem's residuals), ``invariant_cov``
+    Returns ``rms_floor`` (expected best RMS of the problem's residual components), ``invariant_cov``
     (the CRB covariance of ``problem.invariants``), and the expected error sizes
     ``offset_bound`` (``sqrt(tr Cov(o))``) and ``gram_bound`` (relative, for ``W^T W``).
     """
@@ -99,7 +99,7 @@ def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     idx = np.arange(ds.n)[:, None] * m + np.arange(m)
     sigma[idx[:, :, None], idx[:, None, :]] = cov_blocks
     proj = np.eye(ds.n * m) - q @ q.T
-    rms_floor = float(np.sqrt(np.trace(proj @ sigma @ proj.T) / ds.n))
+    rms_floor = float(np.sqrt(np.trace(proj @ sigma @ proj.T) / (ds.n * m)))  # per residual component
     out = {"rms_floor": rms_floor, "invariant_cov": inv_cov, "identifiable": int(rank)}
     out.update(problem.invariant_bounds(theta, inv_cov))
     return out

@@ -38,8 +38,19 @@ def evaluate(problem, result) -> dict:
         out["converged"] = bool(out["fun"] <= 1.01 * out["truth_fun"] + 1e-9)
     out.update(problem.metrics(result.x))
     out.update(result.metrics)
-    out.update(bound_metrics(problem, out))
+    out.update(time_to_reach(result, factor=1.1))
+    out.update(bound_metrics(problem, {**out, "x": result.x}))
     return out
+
+
+def time_to_reach(result, factor: float = 1.1) -> dict:
+    """Iterations and objective evaluations until the best value first came within
+    ``factor`` times its final value (``history[k] <= factor * history[-1]``)."""
+    hist = np.asarray(result.history, float)
+    if hist.size == 0 or not np.isfinite(hist[-1]):
+        return {}
+    k = int(np.argmax(hist <= factor * hist[-1] + 1e-300))
+    return {"iterations_to_1.1": k, "nfev_to_1.1": int(np.asarray(result.history_nfev)[k])}
 
 
 def bound_metrics(problem, measured: dict) -> dict:
@@ -52,8 +63,8 @@ def bound_metrics(problem, measured: dict) -> dict:
     if crb is None:
         return {}
     out = {"rms_bound": crb["rms_floor"], "identifiable": crb["identifiable"]}
-    if crb["rms_floor"] > 0:
-        out["rms_ratio"] = measured["fun"] / crb["rms_floor"] if "fun" in measured else np.nan
+    if crb["rms_floor"] > 0:  # residual RMS per component against the expected floor
+        out["rms_ratio"] = float(np.sqrt(np.mean(problem.residuals(measured["x"]) ** 2))) / crb["rms_floor"]
     for name in ("offset", "gram", "matrix"):
         bound = crb.get(f"{name}_bound")
         if bound is not None:

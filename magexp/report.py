@@ -47,7 +47,8 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
     lines = [f"## {meta.title}\n", f"{meta.get('intro', '')}\n"]
     rows = summary[summary.paper == paper]
     counts = rows.verdict.value_counts()
-    lines.append(f"Verdicts: {', '.join(f'{k} {int(counts.get(k, 0))}' for k in ('match', 'differs', 'n/a'))}.\n")
+    if len(rows):
+            lines.append(f"Verdicts: {', '.join(f'{k} {int(counts.get(k, 0))}' for k in ('match', 'differs', 'n/a'))}.\n")
     for spec_path in sorted((EXPERIMENTS / paper).glob(f"{paper}_*.yaml")):
         spec = load_spec(spec_path)
         if not (root / paper / f"{spec.name}.png").exists():
@@ -62,9 +63,36 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
         if len(art):
             lines.append(markdown_table(art, ["quantity", "estimator", "setting", "truth", "paper_value", "value",
                                               "q25", "q75", "n_seeds", "verdict"]))
+        if spec.get("report_table"):
+            lines.append(_artifact_table(spec, root / paper / f"{spec.name}.csv"))
         if spec.notes:
             lines.append(f"\n{str(spec.notes).strip()}\n")
     return "\n".join(lines)
+
+
+def _artifact_table(spec, path: Path) -> str:
+    """The artifact's own CSV as a table (columns ``report_table``), and the best per case."""
+    from magexp.plots.benchmark_table import best_per_case
+
+    frame = pd.read_csv(path)
+    cols = [c for c in spec.report_table if c in frame]
+    text = markdown_table(frame, cols)
+    if "case" in frame and "offset_error_ratio" in frame:
+        best = best_per_case(frame)
+        text += ("\n**Most accurate estimator per case** (lowest median offset error / bound; within 5 % "
+                 "of it, the fastest):\n\n" + markdown_table(best, ["case", "estimator", "offset_error_ratio",
+                                                                    "success_rate", "wall_time"]))
+    return text
+
+
+def _speed_section(root: Path) -> str:
+    path = root / "bench.csv"
+    if not path.exists():
+        return ""
+    frame = pd.read_csv(path)
+    return ("## Speed of the core (`make bench`)\n\nPopulation 50, 300 readings, Ding 2024 simulation 1 "
+            "(A = 2 nT), 800 iterations; best of repeated runs on this machine "
+            "([`bench.csv`](bench.csv)).\n\n" + markdown_table(frame, ["measure", "value", "unit"]))
 
 
 def build(root: Path = RESULTS) -> None:
@@ -83,7 +111,9 @@ def build(root: Path = RESULTS) -> None:
         f"Overall: {len(summary)} reproduced numbers; "
         + ", ".join(f"{k} {int(counts.get(k, 0))}" for k in ("match", "differs", "n/a")) + ".\n",
     ]
+    papers += [p for p in ORDER if p not in papers and (root / p).is_dir()]  # sections without summary rows
     text += [_paper_section(p, summary, root) for p in papers]
+    text.append(_speed_section(root))
     (root / "REPORT.md").write_text("\n".join(text))
 
 

@@ -50,6 +50,7 @@ class EllipsoidFit:
     """
 
     references = "Gander, Golub & Strebel 1994"
+    objectives = ("scalar",)  # a scalar reference cannot fix the rotation of W
 
     def __init__(self, *, name: str = "ellipsoid"):
         self.name = name

@@ -23,16 +23,17 @@ class LevenbergMarquardt:
     Parameters
     ----------
     name : config name.
-    start : ``ellipsoid`` (closed-form fit, falls back to the centre if it fails), ``centre``, or
-        ``problem``: the problem's own closed-form ``initial_estimate()`` (e.g. the linear
-        least-squares fit of the vector problem), the ellipsoid fit if it has none.
+    start : ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the
+        linear least-squares fit of the vector problem), else the ellipsoid fit (scalar objective),
+        else the centre of the search box; ``ellipsoid``: the ellipsoid fit, else the centre;
+        ``centre``.
     max_nfev : cap on residual evaluations.
     tol : ``xtol = ftol = gtol`` of ``least_squares``.
     """
 
     references = "Levenberg 1944; Marquardt 1963; More 1978 (MINPACK)"
 
-    def __init__(self, *, name: str = "lm", start: str = "ellipsoid", max_nfev: int = 2000, tol: float = 1e-15):
+    def __init__(self, *, name: str = "lm", start: str = "problem", max_nfev: int = 2000, tol: float = 1e-15):
         check(start in STARTS, f"estimator.start={start!r} is not allowed: choose one of {', '.join(STARTS)}")
         self.name = name
         self.start = start
@@ -42,7 +43,7 @@ class LevenbergMarquardt:
     def initial(self, problem) -> np.ndarray:
         if self.start == "problem" and hasattr(problem, "initial_estimate"):
             return problem.initial_estimate()
-        if self.start in ("ellipsoid", "problem"):
+        if self.start in ("ellipsoid", "problem") and getattr(problem, "objective", None) in EllipsoidFit.objectives:
             first = EllipsoidFit().fit(problem)
             if first.success:
                 return first.x

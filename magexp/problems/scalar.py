@@ -32,6 +32,8 @@ class ScalarCalibration(CalibrationProblem):
     ``cost_direct`` evaluates the textbook formula and is used for reported numbers.
     """
 
+    objective = "scalar"
+
     def __init__(self, dataset, search, *, parameterisation: str = "inverse"):
         super().__init__(dataset, search, parameterisation=parameterisation)
         r = dataset.readings

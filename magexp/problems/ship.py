@@ -42,6 +42,8 @@ class ShipMagnetization(CalibrationProblem):
     closed-form solution the filter converges to when rows are reused.
     """
 
+    objective = "ship"
+
     def __init__(self, dataset, search):
         super().__init__(dataset, search, parameterisation="forward")
         self.options = {}  # constructor options (none: the parameterisation is fixed)

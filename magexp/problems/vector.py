@@ -27,6 +27,8 @@ class VectorCalibration(CalibrationProblem):
     readings (what a perfect fit reaches), since the scalar floor does not apply.
     """
 
+    objective = "vector"
+
     def __init__(self, dataset, search, *, parameterisation: str = "forward"):
         super().__init__(dataset, search, parameterisation=parameterisation)
         self.reference = reference_vectors(dataset)
