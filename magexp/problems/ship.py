@@ -55,8 +55,9 @@ class ShipMagnetization(CalibrationProblem):
     (instead of ~1e-11) at a noise-free truth.
 
     Measured (``python -m magexp.bench``, population 50, 300 readings, one BLAS thread):
-    about 1.4e9 particle-readings/s against 2.2e7 for the batched ``einsum`` of
-    :meth:`predict` (~65x; at the paper's 12 readings, ~4x, call overhead then dominates);
+    1.4e9 to 2.5e9 particle-readings/s against 1.9e7 to 2.4e7 for the batched ``einsum`` of
+    :meth:`predict` (65x to 130x; at the paper's 12 readings about 4x, call overhead then
+    dominates);
     largest relative difference from :meth:`cost_direct` ~3e-15 on random particles.
 
     ``residuals`` stacks the ``3N`` components for ``lm``; :meth:`least_squares` is the

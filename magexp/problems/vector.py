@@ -34,9 +34,9 @@ class VectorCalibration(CalibrationProblem):
     ``F`` is exact to rounding even at a noise-free optimum where it is ~1e-11 mG.
 
     Measured (``python -m magexp.bench``, population 50, 300 readings, one BLAS thread):
-    about 1.9e8 particle-readings/s against 1.7e7 for the batched ``einsum`` of
-    :meth:`calibrated_swarm` (~11x); largest relative difference from :meth:`cost_direct`
-    ~3e-15 on random particles. The expansion
+    1.5e8 to 1.9e8 particle-readings/s against 1.5e7 to 1.7e7 for the batched ``einsum`` of
+    :meth:`calibrated_swarm` (about 10x); largest relative difference from :meth:`cost_direct`
+    ~3e-15 on random particles, rounding (~1e-12 mG) at a noise-free truth. The expansion
     ``|v|² - 2 v^T W B + 2 v^T W o + |W(B - o)|²`` (features ``v ⊗ B``, ``v``, ``|v|²`` and the
     scalar quadratic features, one ``(N × 23) @ (23 × n)`` product) was slower (~1.6e8)
     and inexact: relative error ~1e-10 with 0.45 mG noise, and ``F`` at the noise-free
