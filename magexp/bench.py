@@ -4,6 +4,9 @@ Measures, on a population-50, 300-reading Ding 2024 problem (simulation 1, A = 2
 
 * the scalar cost's throughput in particle-readings per second (fast quadratic form, and the
   batched-einsum formula for comparison);
+* the same for the vector cost (Yuan 2018 eq 8, ``yuan2018_table2`` with 300 readings: one
+  product of residual components vs batched einsum) and the ship cost (Yan & Zhou 2022,
+  ``yan2022_sim`` with 300 readings: QR form, independent of the readings, vs batched einsum);
 * the swarm engine's time per iteration, as a ratio to one bare cost evaluation;
 * the same budget with ``pyswarms.single.GlobalBestPSO`` on the cost a user would write for it
   (batched einsum over readings), with IPSO's coefficients fixed at their mid values (pyswarms has
@@ -38,16 +41,18 @@ def _best_time(fn, repeat: int, number: int) -> float:
     return best
 
 
-def _problem():
+def _problem(scenario_name: str, *overrides: str):
+    """The problem of ``scenario_name`` (its own objective) with ``N_READINGS`` readings, and the config."""
     from magexp.artifacts import compose_config
     from magexp.problems import make_problem
     from magexp.runner import build
     from magexp.seeding import run_generators
 
-    cfg = compose_config(["scenario=ding2024_exp1", "scenario.noise=2", f"scenario.n_readings={N_READINGS}"])
+    cfg = compose_config([f"scenario={scenario_name}", *overrides, f"scenario.n_readings={N_READINGS}"])
     scenario = build(cfg.scenario, "scenario")
     dataset = scenario.generate(rng=run_generators(0)[0])
-    return make_problem("scalar", dataset, scenario.search), cfg
+    options = getattr(scenario, "problem_options", {})
+    return make_problem(scenario.objective, dataset, scenario.search, **options), cfg
 
 
 def einsum_cost(readings, reference):
@@ -61,11 +66,45 @@ def einsum_cost(readings, reference):
     return cost
 
 
+def einsum_swarm_costs(problem) -> dict:
+    """The previous batched formulations: calibrate (vector) or predict (ship) every reading for
+    every particle with one ``einsum``, then reduce."""
+
+    def vector(x):
+        err = problem.reference[None] - problem.calibrated_swarm(x)
+        return np.sqrt(np.einsum("nki,nki->nk", err, err)).sum(axis=1)
+
+    def ship(x):
+        err = problem.predict(x) - problem.dataset.readings
+        return np.sqrt(np.mean(err * err, axis=(1, 2)))
+
+    return {"vector": vector, "ship": ship}
+
+
+def fast_cost_rows(repeat: int) -> list[dict]:
+    """Throughput of the vector and ship swarm costs against their previous batched einsum."""
+    rows = []
+    for objective, scenario_name, name in [("vector", "yuan2018_table2", "residual-component product"),
+                                           ("ship", "yan2022_sim", "QR form")]:
+        problem, _ = _problem(scenario_name)
+        thetas = problem.lower + np.random.default_rng(0).random((N_PARTICLES, 12)) * (problem.upper - problem.lower)
+        previous = einsum_swarm_costs(problem)[objective]
+        np.testing.assert_allclose(problem.cost(thetas), previous(thetas), rtol=1e-9)
+        t_fast = _best_time(lambda: problem.cost(thetas), repeat, 2000)
+        t_einsum = _best_time(lambda: previous(thetas), repeat, 300)
+        pr = N_PARTICLES * N_READINGS
+        rows += [
+            {"measure": f"{objective} cost, {name}", "value": pr / t_fast, "unit": "particle-readings/s"},
+            {"measure": f"{objective} cost, batched einsum", "value": pr / t_einsum, "unit": "particle-readings/s"},
+        ]
+    return rows
+
+
 def measure(repeat: int = 5) -> list[dict]:
     from magexp.estimators.swarm import SwarmOptimizer
     from magexp.runner import build
 
-    problem, cfg = _problem()
+    problem, cfg = _problem("ding2024_exp1", "scenario.noise=2")
     rng = np.random.default_rng(0)
     thetas = problem.lower + rng.random((N_PARTICLES, 12)) * (problem.upper - problem.lower)
     user_cost = einsum_cost(problem.dataset.readings, problem.dataset.reference_norm)
@@ -76,6 +115,7 @@ def measure(repeat: int = 5) -> list[dict]:
     rows = [
         {"measure": "scalar cost, quadratic form", "value": pr / t_fast, "unit": "particle-readings/s"},
         {"measure": "scalar cost, batched einsum", "value": pr / t_einsum, "unit": "particle-readings/s"},
+        *fast_cost_rows(repeat),
     ]
     ipso: SwarmOptimizer = build(cfg.estimator, "estimator")  # default estimator: ipso
     ipso.n_particles, ipso.n_iterations = N_PARTICLES, N_ITER

@@ -37,8 +37,30 @@ def theta_to_state(thetas: np.ndarray) -> np.ndarray:
 class ShipMagnetization(CalibrationProblem):
     """Fit residual of ``B = K A Be + Bp`` over the readings.
 
-    ``cost`` is the RMS over the ``3N`` components of ``C x - Y`` for a whole swarm in one
-    ``einsum``; ``residuals`` stacks them (``3N``) for ``lm``; :meth:`least_squares` is the
+    ``cost`` is the RMS over the ``3N`` components of ``C x - Y``; its swarm evaluation does
+    not depend on ``N``. With the thin QR factorisation ``C = Q R`` (``R`` 4 × 4) and
+    ``Z = Q^T Y`` (4 × 3), Pythagoras splits the residual into the part in the column space
+    of ``C`` and the least-squares residual, which no particle can change:
+
+    .. math:: \\lVert C x - Y\\rVert_F^2 = \\lVert R x - Z\\rVert_F^2
+              + \\lVert (I - Q Q^T) Y\\rVert_F^2,\\qquad
+              \\mathrm{cost}(x) = \\sqrt{\\tfrac{1}{3N}\\big(\\lVert R x - Z\\rVert_F^2 + \\rho\\big)}
+
+    ``vec(R x)`` is linear in ``theta``, so ``(n × 12) @ (12 × 12)`` gives every particle's
+    ``R x`` at once; ``rho`` is computed once, as a sum of squares of residuals. Both terms
+    are sums of squares, so nothing cancels: the result is exact to rounding even for a
+    perfect fit (``~1e-11`` nT, like the direct formula). The Gram expansion
+    ``tr(x^T C^T C x) - 2 tr(x^T C^T Y) + ||Y||^2`` is as fast but subtracts numbers of
+    ``||Y||^2 ~ 1e12`` nT²: relative error ~1e-10 with 100 nT noise and an RMS of ~1e-3 nT
+    (instead of ~1e-11) at a noise-free truth.
+
+    Measured (``python -m magexp.bench``, population 50, 300 readings, one BLAS thread):
+    1.4e9 to 2.5e9 particle-readings/s against 1.9e7 to 2.4e7 for the batched ``einsum`` of
+    :meth:`predict` (65x to 130x; at the paper's 12 readings about 4x, call overhead then
+    dominates);
+    largest relative difference from :meth:`cost_direct` ~3e-15 on random particles.
+
+    ``residuals`` stacks the ``3N`` components for ``lm``; :meth:`least_squares` is the
     closed-form solution the filter converges to when rows are reused.
     """
 
@@ -50,6 +72,11 @@ class ShipMagnetization(CalibrationProblem):
         body = np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)  # A_i Be (measured attitude)
         self._c = np.column_stack([body, np.ones(dataset.n)])
         self._y = np.asarray(dataset.readings, float)
+        q, r = np.linalg.qr(self._c)
+        z = q.T @ self._y
+        self._floor = float(np.sum((self._y - q @ z) ** 2))  # rho: the least-squares residual
+        self._map = (r @ theta_to_state(np.eye(self.n_params))).reshape(self.n_params, -1)  # theta -> vec(R x)
+        self._target = z.ravel()  # vec(Z)
 
     def design(self) -> tuple[np.ndarray, np.ndarray]:
         """Regressors ``C`` (N, 4) with rows ``[Be^T A_i^T, 1]`` and observations ``Y`` (N, 3)."""
@@ -69,9 +96,9 @@ class ShipMagnetization(CalibrationProblem):
         return np.einsum("ij,njk->nik", self._c, theta_to_state(thetas))
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
-        """Fit residual RMS of every particle, ``(n, 12) -> (n,)``."""
-        err = self.predict(thetas) - self._y
-        return np.sqrt(np.mean(err * err, axis=(1, 2)))
+        """Fit residual RMS of every particle, ``(n, 12) -> (n,)`` (class docstring: QR form)."""
+        d = np.atleast_2d(thetas) @ self._map - self._target
+        return np.sqrt((np.einsum("nk,nk->n", d, d) + self._floor) / self._y.size)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         """``K A_i Be + Bp - B_i`` for every reading, stacked (3N,), by eq 1 directly."""
