@@ -15,7 +15,8 @@ absolute scale does, and the output says so.
 
 Search box of swarm estimators (:func:`search_box`), derived from the data: each offset
 within the range of the readings, ``[min, max]`` over all three axes; matrix entries scaled
-by ``s = reference / R0``: diagonal in ``[0.5 s, 1.5 s]``, off-diagonal in ``[-0.5 s, 0.5 s]``.
+by ``s = reference / R0``: diagonal in ``[0.5 s, 1.5 s]``, off-diagonal in ``[-0.5 s, 0.5 s]``
+(``1 / s`` instead of ``s`` for the vector objective, whose parameters are ``S = W^-1``: Yuan 2018).
 """
 
 from __future__ import annotations
@@ -117,12 +118,17 @@ def attitude_of(rec: Recording) -> np.ndarray | None:
     return None
 
 
-def search_box(readings: np.ndarray, reference: float) -> SearchBox:
-    """The parameter box of swarm estimators, derived from the data (module docstring)."""
+def search_box(readings: np.ndarray, reference: float, *, forward: bool = False) -> SearchBox:
+    """The parameter box of swarm estimators, derived from the data (module docstring).
+
+    ``forward``: the matrix parameters are ``S = W^-1`` (the vector problem's parameterisation,
+    which the ``ekf`` state uses), so their scale is ``1 / s``.
+    """
     lo, hi = float(readings.min()), float(readings.max())
     if hi <= lo:
         hi = lo + 1.0
     s = reference / (centroid_radius(readings) or 1.0)
+    s = 1.0 / s if forward else s
     return SearchBox(diag=(0.5 * s, 1.5 * s), offdiag=(-0.5 * s, 0.5 * s), offset=(lo, hi))
 
 
@@ -198,8 +204,8 @@ def calibrate(rec: Recording, estimator, *, objective: str = "scalar", reference
     check_applies(estimator, objective)
     reference = reference_of(rec, reference_total)
     dataset = recording_dataset(rec, reference, objective)
-    box = search_box(rec.readings, float(np.mean(reference.total)))
-    problem = make_problem(objective, dataset, box, parameterisation="inverse")
+    box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
+    problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
     result = estimator.fit(problem, rng=rng)
     w, o = (a[0] for a in problem.unpack(result.x))
     if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
