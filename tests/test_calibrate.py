@@ -193,3 +193,21 @@ def test_estimator_that_does_not_apply_is_one_line(tmp_path):
 
 def test_units_are_carried():
     assert set(UNITS) == {"nT", "uT", "mG", "G", "T"} and UNITS["uT"] == 1000 and UNITS["mG"] == 100
+
+
+def test_reference_order_and_unit_agreement(tmp_path):
+    from magexp.calibrate import reference_of
+
+    rows = np.column_stack([np.ones((12, 3)), np.arange(50.0, 62.0)])
+    body = "\n".join(",".join(map(str, r)) for r in rows) + "\n"
+    path = tmp_path / "ref.csv"
+    path.write_text("# magexp-recording v1\n# unit: uT\n# reference_total: 53\n# field: 3, 4, 0\nbx,by,bz,total\n" + body)
+    rec = load_recording(path, unit="µT")  # the same unit as the file's: accepted
+    assert reference_of(rec, 40).source == "data.reference_total" and reference_of(rec, 40).total[0] == 40
+    np.testing.assert_array_equal(reference_of(rec).total, np.arange(50.0, 62.0))  # the column first
+    rec.total = None
+    assert reference_of(rec).total[0] == 53
+    rec.reference_total = None
+    assert reference_of(rec).total[0] == 5 and not reference_of(rec).estimated
+    with pytest.raises(MagexpError, match="data.unit='nT' is not allowed for ref.csv: the file says"):
+        load_recording(path, unit="nT")
