@@ -16,6 +16,16 @@ def options(group: str) -> list[str]:
     return sorted(p.stem for p in (CONF / group).glob("*.yaml"))
 
 
+def target_class(group: str, name: str):
+    """The class named by ``_target_`` in ``conf/<group>/<name>.yaml`` (imported, not built)."""
+    import importlib
+
+    from omegaconf import OmegaConf
+
+    module, _, cls = str(OmegaConf.load(CONF / group / f"{name}.yaml")["_target_"]).rpartition(".")
+    return getattr(importlib.import_module(module), cls)
+
+
 def _choices(overrides: list[str]) -> list[list[str]]:
     """Each override expanded into its sweep values (a plain override is a sweep of one)."""
     from hydra.core.override_parser.overrides_parser import OverridesParser

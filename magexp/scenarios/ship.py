@@ -143,6 +143,9 @@ class ShipRecording:
     def __init__(self, *, name: str, path: str, search: dict, field=None):
         self.name = name
         self.recording = load_recording(path)
+        if self.recording.angles is None:
+            raise MagexpError(f"{self.recording.path.name}: missing column heading, roll, trim: "
+                              f"scenario {name!r} needs the ship attitude of every reading")
         if field is None and self.recording.field is None:
             raise MagexpError(f"scenario.field=None is not allowed for {path!r}: the file has no '# field:' line, "
                               "give scenario.field=[Be1,Be2,Be3]")

@@ -1,0 +1,107 @@
+"""What ``task=calibrate`` writes: parameters (JSON), calibrated readings (CSV), a before/after figure.
+
+Files, in the output folder (``out=...``, default Hydra's run folder):
+
+* ``calibration.json``: ``W`` and ``offset`` of ``B = W (reading - offset)``, unit, estimator,
+  objective, the reference used and how it was obtained, the search box, the spread metrics
+  and the fit's outcome (format ``magexp-calibration v1``);
+* ``calibrated.csv``: a ``magexp-recording v1`` file with the calibrated ``bx, by, bz``, their
+  ``magnitude``, and the raw ``raw_bx, raw_by, raw_bz, raw_magnitude``;
+* ``calibration.png``: plane projections of the raw and calibrated readings with the reference
+  circle, and the total field per reading and its histogram, before and after.
+
+An existing file is never overwritten, and nothing is written under ``results/``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from magexp.errors import MagexpError
+from magexp.paths import RESULTS
+from magexp.recordings import VERSION_LINE
+
+FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png"}
+
+
+def check_out(out_dir: Path) -> None:
+    """Refuse, in one line, an output folder under ``results/`` or one that holds an output file."""
+    out_dir = Path(out_dir).resolve()
+    if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: results/ holds the reproduced papers only, "
+                          "choose another folder")
+    taken = [name for name in FILES.values() if (out_dir / name).exists()]
+    if taken:
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: it already holds {', '.join(taken)} "
+                          "(never overwritten), choose another folder")
+
+
+def parameters(cal, *, seed: int) -> dict:
+    """The JSON content of a :class:`~magexp.calibrate.Calibration`."""
+    rec, box = cal.recording, cal.search
+    return {
+        "format": "magexp-calibration v1",
+        "model": "B = W (reading - offset)",
+        "recording": str(rec.path),
+        "n_readings": rec.n,
+        "unit": cal.unit,
+        "estimator": cal.estimator,
+        "objective": cal.objective,
+        "seed": int(seed),
+        "W": cal.w.tolist(),
+        "offset": cal.offset.tolist(),
+        "reference": {"total": float(np.mean(cal.reference.total)),
+                      "per_reading": bool(np.ptp(cal.reference.total) > 0), "source": cal.reference.source, "estimated": cal.reference.estimated,
+                      "how": cal.reference.describe()},
+        "search": {"diag": list(box.diag), "offdiag": list(box.offdiag), "offset": list(box.offset)},
+        "metrics": cal.metrics,
+        "fit": {"fun": float(cal.fit.fun), "nit": int(cal.fit.nit), "nfev": int(cal.fit.nfev),
+                "success": bool(cal.fit.success), "message": cal.fit.message},
+    }
+
+
+def readings_text(cal) -> str:
+    """The calibrated readings as a ``magexp-recording v1`` CSV."""
+    raw, cal_b = cal.recording.readings, cal.calibrated
+    table = np.column_stack([cal_b, np.linalg.norm(cal_b, axis=1), raw, np.linalg.norm(raw, axis=1)])
+    head = [VERSION_LINE, f"# source: {cal.recording.path.name} calibrated by magexp "
+                          f"(estimator {cal.estimator}, objective {cal.objective})",
+            f"# unit: {cal.unit}", "bx,by,bz,magnitude,raw_bx,raw_by,raw_bz,raw_magnitude"]
+    rows = [",".join(f"{v:.10g}" for v in row) for row in table]
+    return "\n".join(head + rows) + "\n"
+
+
+def write(cal, out_dir: Path, *, seed: int) -> dict:
+    """Write the three files into ``out_dir`` (checked by :func:`check_out`); return their paths."""
+    from magexp.plots.calibration import calibration_figure
+    from magexp.plots.style import save
+
+    out_dir = Path(out_dir)
+    check_out(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {key: out_dir / name for key, name in FILES.items()}
+    paths["parameters"].write_text(json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
+    paths["readings"].write_text(readings_text(cal))
+    title = f"{cal.recording.path.name}: {cal.estimator} ({cal.objective}), spread " \
+            f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
+    save(calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.unit, title=title),
+         paths["figure"])
+    return paths
+
+
+def summary(cal) -> dict:
+    """The key numbers to print, in order."""
+    m, u = cal.metrics, cal.unit
+    return {
+        "recording": f"{cal.recording.path} ({cal.recording.n} readings, {u})",
+        "estimator": f"{cal.estimator} ({cal.objective} objective)",
+        "reference": cal.reference.describe(),
+        "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
+        "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
+        "rms before": f"{m['rms_before']:.6g} {u} (|raw| - reference)",
+        "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)",
+        "offset": "[" + ", ".join(f"{v:.6g}" for v in cal.offset) + f"] {u}",
+    }
