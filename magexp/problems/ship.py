@@ -124,5 +124,6 @@ class ShipMagnetization(CalibrationProblem):
         if truth is not None:
             out.update({"k_error": float(np.max(np.abs(theta[:9] - truth[:9]))),
                         "bp_error": float(np.max(np.abs(theta[9:] - truth[9:]))),
+                        "offset_error": float(np.linalg.norm(theta[9:] - truth[9:])),  # as every problem
                         **{f"truth_{n}": float(v) for n, v in zip(names, truth)}})
         return out
