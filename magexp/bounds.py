@@ -63,6 +63,20 @@ class _Box:
         return self._b
 
 
+def noise_free(problem):
+    """The same problem on the noise-free readings, when the scenario knows them.
+
+    The Fisher information is an expectation: its Jacobian belongs at the noise-free data. On
+    noisy readings a direction the data cannot identify (e.g. two planar rings of readings for a
+    scalar fit) would look weakly identified by the noise itself.
+    """
+    ds = problem.dataset
+    if ds.field_body_true is None or ds.truth is None:
+        return problem
+    clean = ds.field_body_true @ np.linalg.inv(ds.truth.matrix).T + ds.truth.offset
+    return type(problem)(replace(ds, readings=clean), _Box(problem), **problem.options)
+
+
 def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     """Bounds at ``theta`` (default: the truth) for the dataset's noise; None if unknown.
 
@@ -76,6 +90,8 @@ def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     if theta is None or not ds.noise_std:
         return None
     sigma2 = float(ds.noise_std) ** 2
+    problem = noise_free(problem)
+    ds = problem.dataset
     g = residual_noise_blocks(problem, theta)  # (N, m, 3)
     m = g.shape[1]
     cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # (N, m, m)
@@ -90,6 +106,16 @@ def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     cov = np.linalg.pinv(fisher, rcond=1e-10, hermitian=True)
     h = _jacobian(problem.invariants, theta, steps)
     inv_cov = h @ cov @ h.T
+    # an invariant is identifiable only if its gradient lies in the row space of J; otherwise
+    # the data cannot pin it down and its bound is infinite (the pseudo-inverse would hide that)
+    colnorm = np.maximum(np.linalg.norm(jac, axis=0), 1e-300)
+    _, sv_j, vt = np.linalg.svd(jac / colnorm, full_matrices=False)
+    row_space = vt[sv_j > 1e-6 * sv_j[0]]
+    h_scaled = h / colnorm
+    outside = np.linalg.norm(h_scaled - (h_scaled @ row_space.T) @ row_space, axis=1)
+    blind = outside > 1e-5 * np.maximum(np.linalg.norm(h_scaled, axis=1), 1e-300)
+    inv_cov[blind, :] = np.inf
+    inv_cov[:, blind] = np.inf
     # expected in-sample RMS of the (unweighted) least-squares fit
     scaled = jac / np.maximum(np.linalg.norm(jac, axis=0), 1e-300)  # column scale must not decide the rank
     u, sv, _ = np.linalg.svd(scaled, full_matrices=False)
@@ -100,6 +126,7 @@ def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     sigma[idx[:, :, None], idx[:, None, :]] = cov_blocks
     proj = np.eye(ds.n * m) - q @ q.T
     rms_floor = float(np.sqrt(np.trace(proj @ sigma @ proj.T) / (ds.n * m)))  # per residual component
-    out = {"rms_floor": rms_floor, "invariant_cov": inv_cov, "identifiable": int(rank)}
+    out = {"rms_floor": rms_floor, "invariant_cov": inv_cov, "identifiable": int(rank),
+           "unidentified_invariants": int(blind.sum())}
     out.update(problem.invariant_bounds(theta, inv_cov))
     return out

@@ -68,7 +68,7 @@ def bound_metrics(problem, measured: dict) -> dict:
     for name in ("offset", "gram", "matrix"):
         bound = crb.get(f"{name}_bound")
         if bound is not None:
-            out[f"{name}_bound"] = bound
-            if f"{name}_error" in measured and bound > 0:
+            out[f"{name}_bound"] = bound  # inf: the data cannot identify it
+            if f"{name}_error" in measured and 0 < bound < np.inf:
                 out[f"{name}_error_ratio"] = measured[f"{name}_error"] / bound
     return out

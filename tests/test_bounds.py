@@ -32,3 +32,14 @@ def test_least_squares_is_near_efficient_in_monte_carlo(make_cfg):
 def test_no_bound_without_noise(make_cfg):
     sc = instantiate(make_cfg("scenario.noise=0").scenario, _convert_="all")
     assert cramer_rao(make_problem("scalar", sc.generate(rng=np.random.default_rng(0)), sc.search)) is None
+
+
+def test_two_rings_leave_the_scalar_offset_unidentified(make_cfg):
+    """Turns about only two axes put the readings on two planar rings, which do not fix a
+    quadric: the scalar bound of the offset is infinite, the vector one finite."""
+    sc = instantiate(make_cfg("scenario=yuan2018_mode2").scenario, _convert_="all")
+    ds = sc.generate(rng=np.random.default_rng(0))
+    scalar = cramer_rao(make_problem("scalar", ds, sc.search, **sc.problem_options))
+    vector = cramer_rao(make_problem("vector", ds, sc.search, **sc.problem_options))
+    assert scalar["offset_bound"] == np.inf and scalar["unidentified_invariants"] > 0
+    assert 0 < vector["offset_bound"] < 1.0 and vector["unidentified_invariants"] == 0
