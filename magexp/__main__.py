@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -77,6 +78,16 @@ def _hydra_main(cfg: DictConfig):
     except MagexpError as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
+    except OSError as exc:  # a file or folder the user named
+        print(f"error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        sys.exit(2)
+    except Exception as exc:  # a bug: still one line; MAGEXP_DEBUG=1 shows the traceback
+        if os.environ.get("MAGEXP_DEBUG"):
+            raise
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        print(f"error: unexpected {type(exc).__name__}: {first} (rerun with MAGEXP_DEBUG=1 for details)",
+              file=sys.stderr)
+        sys.exit(3)
 
 
 def main() -> None:

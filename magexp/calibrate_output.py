@@ -18,6 +18,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import os
+
 import numpy as np
 
 from magexp.errors import MagexpError
@@ -33,6 +35,14 @@ def check_out(out_dir: Path) -> None:
     if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: results/ holds the reproduced papers only, "
                           "choose another folder")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: it is a file, not a folder")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: it cannot be created ({exc.strerror})") from None
+    if not os.access(out_dir, os.W_OK):
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: the folder is not writable")
     taken = [name for name in FILES.values() if (out_dir / name).exists()]
     if taken:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: it already holds {', '.join(taken)} "
