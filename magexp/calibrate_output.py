@@ -37,12 +37,11 @@ def check_out(out_dir: Path) -> None:
                           "choose another folder")
     if out_dir.exists() and not out_dir.is_dir():
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: it is a file, not a folder")
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise MagexpError(f"out={str(out_dir)!r} is not allowed: it cannot be created ({exc.strerror})") from None
-    if not os.access(out_dir, os.W_OK):
-        raise MagexpError(f"out={str(out_dir)!r} is not allowed: the folder is not writable")
+    existing = next(p for p in (out_dir, *out_dir.parents) if p.exists())  # checked, nothing created yet
+    if not existing.is_dir():
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is a file, not a folder")
+    if not os.access(existing, os.W_OK):
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is not writable")
     taken = [name for name in FILES.values() if (out_dir / name).exists()]
     if taken:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: it already holds {', '.join(taken)} "
