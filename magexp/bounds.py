@@ -78,6 +78,12 @@ def noise_free(problem):
 
 
 def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
+    """See :func:`_cramer_rao`; infinities of unidentifiable problems are expected, not warned about."""
+    with np.errstate(all="ignore"):
+        return _cramer_rao(problem, theta)
+
+
+def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     """Bounds at ``theta`` (default: the truth) for the dataset's noise; None if unknown.
 
     Returns ``rms_floor`` (expected best RMS of the problem's residual components), ``invariant_cov``
@@ -102,8 +108,11 @@ def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     inv_sqrt = evecs @ (np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)[..., None]
                         * evecs.transpose(0, 2, 1))
     jw = np.einsum("nij,njp->nip", inv_sqrt, jac.reshape(ds.n, m, -1)).reshape(ds.n * m, -1)
-    fisher = jw.T @ jw
-    cov = np.linalg.pinv(fisher, rcond=1e-10, hermitian=True)
+    # invert with the parameters scaled to unit columns: their scales differ by orders of magnitude
+    # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions
+    d = np.maximum(np.linalg.norm(jw, axis=0), 1e-300)
+    fisher_scaled = (jw / d).T @ (jw / d)
+    cov = np.linalg.pinv(fisher_scaled, rcond=1e-10, hermitian=True) / np.outer(d, d)
     h = _jacobian(problem.invariants, theta, steps)
     inv_cov = h @ cov @ h.T
     # an invariant is identifiable only if its gradient lies in the row space of J; otherwise

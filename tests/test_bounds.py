@@ -43,3 +43,20 @@ def test_two_rings_leave_the_scalar_offset_unidentified(make_cfg):
     vector = cramer_rao(make_problem("vector", ds, sc.search, **sc.problem_options))
     assert scalar["offset_bound"] == np.inf and scalar["unidentified_invariants"] > 0
     assert 0 < vector["offset_bound"] < 1.0 and vector["unidentified_invariants"] == 0
+
+
+def test_ship_offset_bound_matches_monte_carlo(make_cfg):
+    """Gains (~1) and offsets (~1000 nT) differ in scale by orders of magnitude: the bound must
+    still match the least-squares spread (a relative cut-off on the unscaled Fisher matrix
+    once dropped the offset directions and gave a bound of 1e-8 nT)."""
+    from magexp.estimators.linear import LeastSquares
+
+    sc = instantiate(make_cfg("scenario=yan2022_sim", "scenario.angle_noise_deg=0").scenario, _convert_="all")
+    errors, bounds = [], []
+    for seed in range(60):
+        prob = make_problem("ship", sc.generate(rng=np.random.default_rng(seed)), sc.search)
+        if seed < 5:
+            bounds.append(cramer_rao(prob)["offset_bound"])
+        errors.append(LeastSquares().fit(prob).x[9:] - prob.dataset.truth.offset)
+    mc = np.sqrt(np.mean(np.sum(np.square(errors), axis=1)))
+    assert 0.7 * np.mean(bounds) < mc < 1.3 * np.mean(bounds)
