@@ -21,6 +21,12 @@ def noise_floor(dataset, n_identifiable: int = 9) -> float | None:
 
 
 def evaluate(problem, result) -> dict:
+    """Every metric of one fitted run; a diverged fit is measured (inf/NaN), not warned about."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _evaluate(problem, result)
+
+
+def _evaluate(problem, result) -> dict:
     """Every metric of one fitted run (direct formulas, not the swarm's fast cost)."""
     out = {
         "fun": float(problem.cost_direct(result.x)),
@@ -62,7 +68,10 @@ def bound_metrics(problem, measured: dict) -> dict:
     crb = cramer_rao(problem)
     if crb is None:
         return {}
-    out = {"rms_bound": crb["rms_floor"], "identifiable": crb["identifiable"]}
+    # the floor is an RMS per residual component: it bounds `fun` only when the objective is such an RMS
+    # (the vector objective F is a sum of norms), so it is named after what it can be drawn against
+    name = "rms_bound" if getattr(problem, "objective_is_rms", True) else "residual_rms_bound"
+    out = {name: crb["rms_floor"], "identifiable": crb["identifiable"]}
     if crb["rms_floor"] > 0:  # residual RMS per component against the expected floor
         out["rms_ratio"] = float(np.sqrt(np.mean(problem.residuals(measured["x"]) ** 2))) / crb["rms_floor"]
     for name in ("offset", "gram", "matrix"):

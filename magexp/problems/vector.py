@@ -49,6 +49,7 @@ class VectorCalibration(CalibrationProblem):
     """
 
     objective = "vector"
+    objective_is_rms = False  # F is a sum of norms: the RMS floor is not drawn against it
 
     def __init__(self, dataset, search, *, parameterisation: str = "forward"):
         super().__init__(dataset, search, parameterisation=parameterisation)
