@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check, check_nonnegative, check_positive_int
+from magexp.estimators.kalman import kalman_update
 from magexp.estimators.result import FitResult
 from magexp.problems.base import reference_vectors
 
@@ -47,13 +48,17 @@ FORMS = {"forward": forward_measurement, "inverse": inverse_measurement}
 
 
 def ekf_step(theta, p, reference, reading, *, q, r, form=forward_measurement):
-    """One predict + update of the filter; returns the new ``(θ, P)``."""
-    p = p + q
+    """One predict + update of the filter; returns the new ``(θ, P)``.
+
+    The linear Kalman update of :func:`magexp.estimators.kalman.kalman_update` applied to the
+    measurement linearised at ``θ``: with ``y' = z - h(θ) + J θ`` it gives
+    ``θ + M (z - h(θ))``, ``M = R Jᵀ (J R Jᵀ + r²)⁻¹``, ``R = P + Q``, ``P ← (E - M J) R``.
+    ``r`` is the (isotropic) measurement variance ``r²``.
+    """
     z, h, jac = form(theta, reference, reading)
-    gain = np.linalg.solve(jac @ p @ jac.T + r, jac @ p).T
-    theta = theta + gain @ (z - h)
-    p = (np.eye(theta.size) - gain @ jac) @ p
-    return theta, 0.5 * (p + p.T)
+    y = (z - h + jac @ theta)[:, None]
+    theta, p = kalman_update(theta[:, None], p, jac, y, q, r)
+    return theta[:, 0], 0.5 * (p + p.T)
 
 
 class ExtendedKalmanFilter:
@@ -85,7 +90,7 @@ class ExtendedKalmanFilter:
               (("p0_s", p0_s), ("p0_b", p0_b), ("q_s", q_s), ("q_b", q_b), ("r", r))]
         self.p0 = np.diag(np.r_[np.full(9, sd[0]), np.full(3, sd[1])] ** 2)
         self.q = np.diag(np.r_[np.full(9, sd[2]), np.full(3, sd[3])] ** 2)
-        self.r = max(sd[4], 1e-12) ** 2 * np.eye(3)
+        self.r = max(sd[4], 1e-12) ** 2  # measurement variance r² (R = r² I)
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
         """Run the filter over the readings; ``callback(step, θ, None)`` may stop it."""
