@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from hydra.utils import instantiate
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 
 from magexp.errors import MagexpError
 from magexp.metrics import evaluate
@@ -63,8 +63,3 @@ def run(cfg: DictConfig) -> RunOutput:
                      x=np.asarray(result.x), parameter_names=problem.parameter_names(), trace=result.trace,
                      readings=dataset.readings, calibrated=problem.calibrate(result.x),
                      reference_norm=np.asarray(dataset.reference_norm), truth_x=problem.truth_theta())
-
-
-def resolved(cfg: DictConfig) -> dict:
-    """The fully resolved config as plain Python (used as a run's identity)."""
-    return OmegaConf.to_container(cfg, resolve=True)

@@ -18,15 +18,15 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.estimators.result import FitResult
+from magexp.problems.scalar import normalise, quadratic_features
+
+LINEAR_TWICE = np.array([1, 1, 1, 1, 1, 1, 2, 2, 2, 1.0])  # the quadric u^T A u + 2 b^T u + d
 
 
 def fit_ellipsoid(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
     """``(W, o)`` mapping ``readings`` onto the sphere of ``radius``; None if not an ellipsoid."""
-    c = readings.mean(axis=0)
-    s = float(np.sqrt(((readings - c) ** 2).sum(axis=1).mean())) or 1.0
-    u = (readings - c) / s
-    x, y, z = u.T
-    design = np.column_stack([x * x, y * y, z * z, 2 * x * y, 2 * x * z, 2 * y * z, 2 * x, 2 * y, 2 * z, np.ones_like(x)])
+    c, s, u = normalise(readings)
+    design = quadratic_features(u) * LINEAR_TWICE  # [u², v², w², 2uv, 2uw, 2vw, 2u, 2v, 2w, 1]
     p = np.linalg.svd(design, full_matrices=False)[2][-1]
     a = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
     try:

@@ -15,6 +15,14 @@ import numpy as np
 from magexp.problems.base import CalibrationProblem
 
 
+def normalise(readings: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """``(c, s, u)``: the readings' mean ``c``, RMS distance ``s`` from it, and ``u = (r - c)/s``
+    (well-conditioned quadratic features, whatever the reading units)."""
+    c = readings.mean(axis=0)
+    s = float(np.sqrt(((readings - c) ** 2).sum(axis=1).mean())) or 1.0
+    return c, s, (readings - c) / s
+
+
 def quadratic_features(u: np.ndarray) -> np.ndarray:
     """Features ``[x², y², z², 2xy, 2xz, 2yz, x, y, z, 1]`` of readings ``u`` (N, 3)."""
     x, y, z = u.T
@@ -36,10 +44,8 @@ class ScalarCalibration(CalibrationProblem):
 
     def __init__(self, dataset, search, *, parameterisation: str = "inverse"):
         super().__init__(dataset, search, parameterisation=parameterisation)
-        r = dataset.readings
-        self._centre = r.mean(axis=0)
-        self._scale = float(np.sqrt(((r - self._centre) ** 2).sum(axis=1).mean())) or 1.0
-        self._features = quadratic_features((r - self._centre) / self._scale)
+        self._centre, self._scale, u = normalise(dataset.readings)
+        self._features = quadratic_features(u)
         self._reference = np.asarray(dataset.reference_norm, float)[:, None]
 
     def _coefficients(self, thetas: np.ndarray) -> np.ndarray:
