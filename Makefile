@@ -6,15 +6,16 @@ STAMP  := $(VENV)/.installed
 JOBS   ?= 0
 
 .DEFAULT_GOAL := help
-.PHONY: help venv bench reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test clean
+.PHONY: help venv lock bench reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test clean
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml requirements.lock
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -r requirements.lock
+	$(PY) -m pip install --quiet --no-deps -e .
 	@touch $(STAMP)
 
 venv: $(STAMP) ## create .venv and install magexp with its test extras
@@ -34,12 +35,19 @@ reproduce-yan2022: $(STAMP) ## regenerate Yan & Zhou 2022 only (and the report)
 report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the artifact CSVs
 	$(PY) -m magexp.report
 
-bench: $(STAMP) ## speed benchmark (installs pyswarms for the comparison); writes results/bench.csv
-	$(PY) -m pip install --quiet -e '.[bench]'
+bench: $(STAMP) ## speed benchmark; writes results/bench.csv
 	$(PY) -m magexp.bench
 
 test: $(STAMP) ## run the test suite
 	$(PY) -m pytest
+
+lock: ## refresh requirements.lock from the newest releases allowed by pyproject.toml (then commit it)
+	rm -rf .lockenv && $(PYTHON) -m venv .lockenv
+	.lockenv/bin/python -m pip install --quiet --upgrade pip
+	.lockenv/bin/python -m pip install --quiet '.[test,bench]'
+	(echo "# Pinned environment for make venv / make test / make reproduce (Python 3.11). Refresh: make lock"; \
+	 .lockenv/bin/python -m pip freeze --exclude magexp) > requirements.lock
+	rm -rf .lockenv
 
 clean: ## remove the environment, caches and Hydra run folders (never results/)
 	rm -rf $(VENV) .cache outputs multirun .pytest_cache *.egg-info
