@@ -89,6 +89,17 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     Returns ``rms_floor`` (expected best RMS of the problem's residual components), ``invariant_cov``
     (the CRB covariance of ``problem.invariants``), and the expected error sizes
     ``offset_bound`` (``sqrt(tr Cov(o))``) and ``gram_bound`` (relative, for ``W^T W``).
+
+    Time and memory are O(N): nothing of size ``N m × N m`` is formed. With ``J_n`` the ``m × p``
+    rows of reading ``n`` and ``Σ_n`` its noise block,
+
+    .. math:: F = \\sum_n J_n^\\top Σ_n^{-1} J_n,\\qquad
+              \\mathrm{tr}\\big((I - P) Σ (I - P)^\\top\\big) = \\mathrm{tr}\\,Σ - \\mathrm{tr}(Q^\\top Σ Q)
+              = \\sum_n \\mathrm{tr}\\,Σ_n - \\mathrm{tr}\\big(S^{-1} V^\\top (\\textstyle\\sum_n J_n^\\top Σ_n J_n) V S^{-1}\\big)
+
+    (``P = Q Q^T`` idempotent, ``Q = J V S^{-1}`` the left singular vectors of the column-scaled
+    ``J`` for its ``rank`` kept singular values ``S``; the singular values and ``V`` come from the
+    ``p × p`` Gram matrix ``J^T J``, whose eigenvalues are ``S²``).
     """
     ds = problem.dataset
     if theta is None:
@@ -97,17 +108,17 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
         return None
     sigma2 = float(ds.noise_std) ** 2
     problem = noise_free(problem)
-    ds = problem.dataset
     g = residual_noise_blocks(problem, theta)  # (N, m, 3)
-    m = g.shape[1]
-    cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # (N, m, m)
+    n, m = g.shape[:2]
+    cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # Σ_n, (N, m, m)
     steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
     jac = _jacobian(problem.residuals, theta, steps)  # (N*m, p)
-    # Σ^{-1/2} J: whiten block by block
+    p = jac.shape[1]
+    # Σ^{-1/2} J: whiten block by block (pseudo-inverse root of a singular block)
     evals, evecs = np.linalg.eigh(cov_blocks)
     inv_sqrt = evecs @ (np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)[..., None]
                         * evecs.transpose(0, 2, 1))
-    jw = np.einsum("nij,njp->nip", inv_sqrt, jac.reshape(ds.n, m, -1)).reshape(ds.n * m, -1)
+    jw = np.einsum("nij,njp->nip", inv_sqrt, jac.reshape(n, m, p)).reshape(n * m, p)
     # invert with the parameters scaled to unit columns: their scales differ by orders of magnitude
     # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions
     d = np.maximum(np.linalg.norm(jw, axis=0), 1e-300)
@@ -115,27 +126,31 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     cov = np.linalg.pinv(fisher_scaled, rcond=1e-10, hermitian=True) / np.outer(d, d)
     h = _jacobian(problem.invariants, theta, steps)
     inv_cov = h @ cov @ h.T
+    # singular values and right singular vectors of the column-scaled J (column scale must not
+    # decide the rank), from its p x p Gram matrix
+    colnorm = np.maximum(np.linalg.norm(jac, axis=0), 1e-300)
+    scaled = jac / colnorm
+    eig, vecs = np.linalg.eigh(scaled.T @ scaled)
+    order = np.argsort(eig)[::-1]
+    sv = np.sqrt(np.maximum(eig[order], 0.0))
+    vecs = vecs[:, order]
+    rank = int(np.sum(sv > 1e-6 * sv[0]))
     # an invariant is identifiable only if its gradient lies in the row space of J; otherwise
     # the data cannot pin it down and its bound is infinite (the pseudo-inverse would hide that)
-    colnorm = np.maximum(np.linalg.norm(jac, axis=0), 1e-300)
-    _, sv_j, vt = np.linalg.svd(jac / colnorm, full_matrices=False)
-    row_space = vt[sv_j > 1e-6 * sv_j[0]]
+    row_space = vecs[:, :rank].T
     h_scaled = h / colnorm
     outside = np.linalg.norm(h_scaled - (h_scaled @ row_space.T) @ row_space, axis=1)
     blind = outside > 1e-5 * np.maximum(np.linalg.norm(h_scaled, axis=1), 1e-300)
     inv_cov[blind, :] = np.inf
     inv_cov[:, blind] = np.inf
-    # expected in-sample RMS of the (unweighted) least-squares fit
-    scaled = jac / np.maximum(np.linalg.norm(jac, axis=0), 1e-300)  # column scale must not decide the rank
-    u, sv, _ = np.linalg.svd(scaled, full_matrices=False)
-    rank = int(np.sum(sv > 1e-6 * sv[0]))
-    q = u[:, :rank]
-    sigma = np.zeros((ds.n * m, ds.n * m))
-    idx = np.arange(ds.n)[:, None] * m + np.arange(m)
-    sigma[idx[:, :, None], idx[:, None, :]] = cov_blocks
-    proj = np.eye(ds.n * m) - q @ q.T
-    rms_floor = float(np.sqrt(np.trace(proj @ sigma @ proj.T) / (ds.n * m)))  # per residual component
-    out = {"rms_floor": rms_floor, "invariant_cov": inv_cov, "identifiable": int(rank),
+    # expected in-sample RMS of the (unweighted) least-squares fit, block by block
+    blocks = scaled.reshape(n, m, p)
+    sandwich = blocks.reshape(n * m, p).T @ np.einsum("nab,nbp->nap", cov_blocks, blocks).reshape(n * m, p)
+    basis = vecs[:, :rank] / sv[:rank]
+    explained = float(np.trace(basis.T @ sandwich @ basis))
+    total = float(np.einsum("naa->", cov_blocks))
+    rms_floor = float(np.sqrt(max(total - explained, 0.0) / (n * m)))  # per residual component
+    out = {"rms_floor": rms_floor, "invariant_cov": inv_cov, "identifiable": rank,
            "unidentified_invariants": int(blind.sum())}
     out.update(problem.invariant_bounds(theta, inv_cov))
     return out

@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
+from magexp import bounds
 from magexp.bounds import cramer_rao
 from magexp.estimators.lm import LevenbergMarquardt
+from magexp.paths import CONF
 from magexp.problems import make_problem
 
 
@@ -60,3 +62,95 @@ def test_ship_offset_bound_matches_monte_carlo(make_cfg):
         errors.append(LeastSquares().fit(prob).x[9:] - prob.dataset.truth.offset)
     mc = np.sqrt(np.mean(np.sum(np.square(errors), axis=1)))
     assert 0.7 * np.mean(bounds) < mc < 1.3 * np.mean(bounds)
+
+
+# ---- the O(N) bound against the dense computation it replaced --------------------------------
+
+SCENARIOS = sorted(p.stem for p in (CONF / "scenario").glob("*.yaml"))
+
+
+def _dense_cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
+    """The bound as computed before it became O(N) (dense N m x N m noise covariance), kept
+    verbatim as the reference of ``test_block_bound_equals_the_dense_one``.
+
+    Returns ``rms_floor`` (expected best RMS of the problem's residual components), ``invariant_cov``
+    (the CRB covariance of ``problem.invariants``), and the expected error sizes
+    ``offset_bound`` (``sqrt(tr Cov(o))``) and ``gram_bound`` (relative, for ``W^T W``).
+    """
+    ds = problem.dataset
+    if theta is None:
+        theta = problem.truth_theta()
+    if theta is None or not ds.noise_std:
+        return None
+    sigma2 = float(ds.noise_std) ** 2
+    problem = bounds.noise_free(problem)
+    ds = problem.dataset
+    g = bounds.residual_noise_blocks(problem, theta)  # (N, m, 3)
+    m = g.shape[1]
+    cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # (N, m, m)
+    steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
+    jac = bounds._jacobian(problem.residuals, theta, steps)  # (N*m, p)
+    # Σ^{-1/2} J: whiten block by block
+    evals, evecs = np.linalg.eigh(cov_blocks)
+    inv_sqrt = evecs @ (np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)[..., None]
+                        * evecs.transpose(0, 2, 1))
+    jw = np.einsum("nij,njp->nip", inv_sqrt, jac.reshape(ds.n, m, -1)).reshape(ds.n * m, -1)
+    # invert with the parameters scaled to unit columns: their scales differ by orders of magnitude
+    # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions
+    d = np.maximum(np.linalg.norm(jw, axis=0), 1e-300)
+    fisher_scaled = (jw / d).T @ (jw / d)
+    cov = np.linalg.pinv(fisher_scaled, rcond=1e-10, hermitian=True) / np.outer(d, d)
+    h = bounds._jacobian(problem.invariants, theta, steps)
+    inv_cov = h @ cov @ h.T
+    # an invariant is identifiable only if its gradient lies in the row space of J; otherwise
+    # the data cannot pin it down and its bound is infinite (the pseudo-inverse would hide that)
+    colnorm = np.maximum(np.linalg.norm(jac, axis=0), 1e-300)
+    _, sv_j, vt = np.linalg.svd(jac / colnorm, full_matrices=False)
+    row_space = vt[sv_j > 1e-6 * sv_j[0]]
+    h_scaled = h / colnorm
+    outside = np.linalg.norm(h_scaled - (h_scaled @ row_space.T) @ row_space, axis=1)
+    blind = outside > 1e-5 * np.maximum(np.linalg.norm(h_scaled, axis=1), 1e-300)
+    inv_cov[blind, :] = np.inf
+    inv_cov[:, blind] = np.inf
+    # expected in-sample RMS of the (unweighted) least-squares fit
+    scaled = jac / np.maximum(np.linalg.norm(jac, axis=0), 1e-300)  # column scale must not decide the rank
+    u, sv, _ = np.linalg.svd(scaled, full_matrices=False)
+    rank = int(np.sum(sv > 1e-6 * sv[0]))
+    q = u[:, :rank]
+    sigma = np.zeros((ds.n * m, ds.n * m))
+    idx = np.arange(ds.n)[:, None] * m + np.arange(m)
+    sigma[idx[:, :, None], idx[:, None, :]] = cov_blocks
+    proj = np.eye(ds.n * m) - q @ q.T
+    rms_floor = float(np.sqrt(np.trace(proj @ sigma @ proj.T) / (ds.n * m)))  # per residual component
+    out = {"rms_floor": rms_floor, "invariant_cov": inv_cov, "identifiable": int(rank),
+           "unidentified_invariants": int(blind.sum())}
+    out.update(problem.invariant_bounds(theta, inv_cov))
+    return out
+
+
+@pytest.mark.parametrize("scenario_name", SCENARIOS)
+def test_block_bound_equals_the_dense_one(make_cfg, scenario_name):
+    """Every scenario's own objective (and the scalar one where it applies): the same numbers as
+    the dense ``N m x N m`` computation, to 1e-9 relative."""
+    sc = instantiate(make_cfg(f"scenario={scenario_name}").scenario, _convert_="all")
+    ds = sc.generate(rng=np.random.default_rng(1))
+    objectives = {sc.objective} | ({"scalar"} if ds.reference_norm is not None and sc.objective != "ship" else set())
+    compared = 0
+    for objective in sorted(objectives):
+        options = getattr(sc, "problem_options", {}) if objective != "ship" else {}
+        prob = make_problem(objective, ds, sc.search, **options)
+        with np.errstate(all="ignore"):
+            dense = _dense_cramer_rao(prob)
+        block = cramer_rao(prob)
+        if dense is None:
+            assert block is None
+            continue
+        compared += 1
+        assert block["identifiable"] == dense["identifiable"]
+        assert block["unidentified_invariants"] == dense["unidentified_invariants"]
+        np.testing.assert_allclose(block["rms_floor"], dense["rms_floor"], rtol=1e-9)
+        np.testing.assert_allclose(block["invariant_cov"], dense["invariant_cov"], rtol=1e-9)
+        for key in ("offset_bound", "gram_bound", "matrix_bound"):
+            if key in dense:
+                np.testing.assert_allclose(block[key], dense[key], rtol=1e-9)
+    assert compared or not ds.noise_std
