@@ -31,12 +31,16 @@ import numpy as np
 
 
 def _jacobian(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
-    cols = []
+    """Central differences, one row per parameter, returned transposed (``(n, p)``, column-major)."""
+    rows = None
     for k in range(theta.size):
         e = np.zeros_like(theta)
         e[k] = steps[k]
-        cols.append((fun(theta + e) - fun(theta - e)) / (2 * steps[k]))
-    return np.column_stack(cols)
+        col = (fun(theta + e) - fun(theta - e)) / (2 * steps[k])
+        if rows is None:
+            rows = np.empty((theta.size, col.size))
+        rows[k] = col
+    return rows.T
 
 
 def residual_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
@@ -110,14 +114,14 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     problem = noise_free(problem)
     g = residual_noise_blocks(problem, theta)  # (N, m, 3)
     n, m = g.shape[:2]
-    cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # Σ_n, (N, m, m)
+    cov_blocks = sigma2 * np.einsum("nik,njk->nij", g, g)  # Σ_n, (N, m, m)
     steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
     jac = _jacobian(problem.residuals, theta, steps)  # (N*m, p)
     p = jac.shape[1]
     # Σ^{-1/2} J: whiten block by block (pseudo-inverse root of a singular block)
     evals, evecs = np.linalg.eigh(cov_blocks)
-    inv_sqrt = evecs @ (np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)[..., None]
-                        * evecs.transpose(0, 2, 1))
+    root = np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)
+    inv_sqrt = np.einsum("nik,nk,njk->nij", evecs, root, evecs)
     jw = np.einsum("nij,njp->nip", inv_sqrt, jac.reshape(n, m, p)).reshape(n * m, p)
     # invert with the parameters scaled to unit columns: their scales differ by orders of magnitude
     # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions

@@ -10,9 +10,15 @@ every orthogonal ``Q``. Only ``W^T W`` and ``o`` (9 numbers) are identifiable.
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
+from magexp.problems import kernels
 from magexp.problems.base import CalibrationProblem
+from magexp.problems.kernels import quadratic_features
+
+__all__ = ["ScalarCalibration", "normalise", "quadratic_features"]
 
 
 def normalise(readings: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
@@ -23,20 +29,15 @@ def normalise(readings: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     return c, s, (readings - c) / s
 
 
-def quadratic_features(u: np.ndarray) -> np.ndarray:
-    """Features ``[x², y², z², 2xy, 2xz, 2yz, x, y, z, 1]`` of readings ``u`` (N, 3)."""
-    x, y, z = u.T
-    return np.column_stack([x * x, y * y, z * z, 2 * x * y, 2 * x * z, 2 * y * z, x, y, z, np.ones_like(x)])
-
-
 class ScalarCalibration(CalibrationProblem):
     """Total-field RMS of the calibrated readings against the reference field.
 
-    ``cost`` evaluates a whole swarm with one matrix product: with the readings
-    centred and scaled, ``u = (r - c)/s``, the squared calibrated magnitude
+    ``cost`` evaluates a whole swarm in one pass over the readings
+    (:func:`magexp.problems.kernels.scalar_cost`): with the readings centred and scaled,
+    ``u = (r - c)/s``, the squared calibrated magnitude
     ``|W (r - o)|² = u^T A u - 2 o'^T A u + o'^T A o'`` (``A = s² W^T W``,
-    ``o' = (o - c)/s``) is linear in the ten quadratic features of ``u``, so
-    ``(N × 10) @ (10 × n)`` gives every particle's magnitudes at once.
+    ``o' = (o - c)/s``) is linear in the ten quadratic features of ``u``, so each
+    particle-reading costs ten multiply-adds and one square root, and memory is ``O(P + N)``.
     ``cost_direct`` evaluates the textbook formula and is used for reported numbers.
     """
 
@@ -44,33 +45,23 @@ class ScalarCalibration(CalibrationProblem):
 
     def __init__(self, dataset, search, *, parameterisation: str = "inverse"):
         super().__init__(dataset, search, parameterisation=parameterisation)
-        self._centre, self._scale, u = normalise(dataset.readings)
-        self._features = quadratic_features(u)
-        self._reference = np.asarray(dataset.reference_norm, float)[:, None]
+        self._reference = np.ascontiguousarray(dataset.reference_norm, float)
 
-    def _coefficients(self, thetas: np.ndarray) -> np.ndarray:
-        w, o = self.unpack(thetas)
-        a = self._scale**2 * np.einsum("nki,nkj->nij", w, w)
-        op = (o - self._centre) / self._scale
-        ao = np.einsum("nij,nj->ni", a, op)
-        return np.column_stack(
-            [a[:, 0, 0], a[:, 1, 1], a[:, 2, 2], a[:, 0, 1], a[:, 0, 2], a[:, 1, 2],
-             -2 * ao, np.einsum("ni,ni->n", ao, op)]
-        )
-
-    def magnitudes(self, thetas: np.ndarray) -> np.ndarray:
-        """Calibrated total field of every reading for every particle, shape ``(N, n)``."""
-        q = self._features @ self._coefficients(thetas).T
-        return np.sqrt(np.maximum(q, 0.0))
+    @cached_property
+    def _normalised(self) -> tuple[np.ndarray, float, np.ndarray]:
+        """:func:`normalise` of the readings, on the first :meth:`cost` call (a problem built only
+        for its residuals, e.g. by :mod:`magexp.bounds`, never pays for it)."""
+        return normalise(self.dataset.readings)
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
         """Total-field RMS of every particle, ``(n, 12) -> (n,)``."""
-        err = self.magnitudes(thetas) - self._reference
-        return np.sqrt(np.mean(err * err, axis=0))
+        w, o = self.unpack(thetas)
+        return kernels.scalar_cost(w, o, *self._normalised, self._reference)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         """``|W (r_i - o)| - B_a,i`` for one parameter vector (direct formula)."""
-        return np.linalg.norm(self.calibrate(theta), axis=1) - self.dataset.reference_norm
+        w, o = self.unpack(theta)
+        return kernels.scalar_residuals(w[0], o[0], self.dataset.readings, self._reference)
 
     def cost_direct(self, theta: np.ndarray) -> float:
         """Total-field RMS of one parameter vector by the direct formula."""

@@ -15,33 +15,20 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.problems import kernels
 from magexp.problems.base import CalibrationProblem, reference_vectors
 
 
 class VectorCalibration(CalibrationProblem):
     """Sum of vector-residual norms against the gyro reference (Yuan 2018, eq 8).
 
-    ``cost`` evaluates a whole swarm with one matrix product. Each component of a residual,
-
-    .. math:: \\mathbf e_i = \\mathbf v_i - W\\mathbf B_i + W\\mathbf o,\\qquad
-              e_{ij} = [\\mathbf B_i^T,\\ 1,\\ \\mathbf v_i^T]\\,
-                       [-W_{j\\cdot},\\ (W\\mathbf o)_j,\\ \\mathbf u_j^T]^T
-
-    (``v_i = C_i H_i``, ``u_j`` the j-th unit vector), is the inner product of the reading's
-    seven features with seven coefficients of the particle, so ``(3n × 7) @ (7 × N)`` gives
-    every residual component of every particle; ``F = sum_i sqrt(e_i . e_i)`` follows.
-    Each component is formed as in the direct formula (no squared-norm expansion), so
-    ``F`` is exact to rounding even at a noise-free optimum where it is ~1e-11 mG.
-
-    Measured (``python -m magexp.bench``, population 50, 300 readings, one BLAS thread):
-    1.5e8 to 1.9e8 particle-readings/s against 1.5e7 to 1.7e7 for the batched ``einsum`` of
-    :meth:`calibrated_swarm` (about 10x); largest relative difference from :meth:`cost_direct`
-    ~3e-15 on random particles, rounding (~1e-12 mG) at a noise-free truth. The expansion
-    ``|v|² - 2 v^T W B + 2 v^T W o + |W(B - o)|²`` (features ``v ⊗ B``, ``v``, ``|v|²`` and the
-    scalar quadratic features, one ``(N × 23) @ (23 × n)`` product) was slower (~1.6e8)
-    and inexact: relative error ~1e-10 with 0.45 mG noise, and ``F`` at the noise-free
-    truth ~1e-3 mG instead of ~3e-11 mG (the terms of hundreds of mG² cancel), so the
-    swarm could not reach the noise-free optimum.
+    ``cost`` evaluates a whole swarm in one pass over the readings
+    (:func:`magexp.problems.kernels.vector_cost`): each particle-reading forms the three
+    components of ``e_i = v_i - W (B_i - o)`` (``v_i = C_i H_i``) as in the direct formula and adds
+    ``sqrt(e_i . e_i)`` to the particle's sum; memory is ``O(P + N)``. No squared-norm expansion:
+    ``|v|² - 2 v^T W B + 2 v^T W o + |W(B - o)|²`` would cancel terms of hundreds of mG² and put
+    ``F`` at the noise-free truth near 1e-3 mG instead of rounding, so a swarm could not reach the
+    noise-free optimum.
 
     ``cost_direct`` is the textbook loop over readings.
     ``metrics`` sets ``noise_floor`` to ``F`` of the true calibration on the same
@@ -54,32 +41,17 @@ class VectorCalibration(CalibrationProblem):
     def __init__(self, dataset, search, *, parameterisation: str = "forward"):
         super().__init__(dataset, search, parameterisation=parameterisation)
         self.reference = reference_vectors(dataset)
-        # the features [B_i, 1, v_i] of every reading, one column per reading: (7, N)
-        self._features = np.column_stack([dataset.readings, np.ones(len(self.reference)), self.reference]).T.copy()
+        self._readings = np.ascontiguousarray(dataset.readings, float)
 
     def calibrated_swarm(self, thetas: np.ndarray) -> np.ndarray:
         """``W (r_i - o)`` of every particle and reading, shape ``(n, N, 3)`` (batched ``einsum``)."""
         w, o = self.unpack(thetas)
         return np.einsum("nij,nkj->nki", w, self.dataset.readings[None, :, :] - o[:, None, :])
 
-    def residual_swarm(self, thetas: np.ndarray) -> np.ndarray:
-        """``C_i H_i - W (r_i - o)`` of every particle, component and reading, shape ``(n, 3, N)``.
-
-        One matrix product of the particles' coefficients ``[-W, W o, I]`` (3n × 7) with the
-        readings' features ``[B_i, 1, v_i]`` (7 × N).
-        """
-        w, o = self.unpack(thetas)
-        n = len(w)
-        coef = np.concatenate([-w, np.einsum("nij,nj->ni", w, o)[:, :, None],
-                               np.broadcast_to(np.eye(3), (n, 3, 3))], axis=2)
-        return (coef.reshape(3 * n, 7) @ self._features).reshape(n, 3, -1)
-
     def cost(self, thetas: np.ndarray) -> np.ndarray:
         """``F`` of every particle, ``(n, 12) -> (n,)``; non-finite values become ``inf``."""
-        with np.errstate(invalid="ignore", over="ignore"):
-            err = self.residual_swarm(thetas)
-            f = np.sqrt(np.einsum("nkj,nkj->nj", err, err)).sum(axis=1)
-        return np.where(np.isfinite(f), f, np.inf)
+        w, o = self.unpack(thetas)
+        return kernels.vector_cost(w, o, self._readings, self.reference)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         """The stacked ``3N`` components of ``C_i H_i - W (r_i - o)`` (for least squares)."""
