@@ -83,14 +83,17 @@ class SwarmOptimizer:
         history = np.empty(t_max + 1)
         history[0] = pcost[g]
         nit = 0
+        neg_vmax = -vmax
         for t in range(1, t_max + 1):
-            v = np.clip(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), -vmax, vmax)
-            x = np.clip(x + v, lo, hi)
+            # clip as min(max(.)) and masked copies: the same numbers as np.clip and boolean
+            # indexing, without their per-call overhead (the engine's share of an iteration)
+            v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
+            x = np.minimum(np.maximum(x + v, lo), hi)
             cost = problem.cost(x)
             better = cost < pcost
-            pbest[better] = x[better]
-            pcost[better] = cost[better]
-            g = int(np.argmin(pcost))
+            np.copyto(pbest, x, where=better[:, None])
+            np.copyto(pcost, cost, where=better)
+            g = int(pcost.argmin())
             history[t] = pcost[g]
             nit = t
             if callback is not None and callback(t, pbest[g], pcost[g]):
