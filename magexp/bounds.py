@@ -43,6 +43,14 @@ def _jacobian(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
     return rows.T
 
 
+def _blockwise(blocks: np.ndarray, jac: np.ndarray) -> np.ndarray:
+    """``diag(B_1, ..., B_N) @ J`` for ``m × m`` blocks ``(N, m, m)`` and ``J`` of shape ``(N m, p)``."""
+    n, m = blocks.shape[:2]
+    if m == 1:
+        return blocks[:, 0, 0, None] * jac
+    return np.einsum("nab,nbp->nap", blocks, jac.reshape(n, m, -1)).reshape(n * m, -1)
+
+
 def residual_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
     """``G_i = ∂r_i/∂x_i`` for every reading, shape ``(N, m, 3)`` (``m`` residuals per reading)."""
     ds = problem.dataset
@@ -103,7 +111,8 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
 
     (``P = Q Q^T`` idempotent, ``Q = J V S^{-1}`` the left singular vectors of the column-scaled
     ``J`` for its ``rank`` kept singular values ``S``; the singular values and ``V`` come from the
-    ``p × p`` Gram matrix ``J^T J``, whose eigenvalues are ``S²``).
+    ``p × p`` Gram matrix ``J^T J``, whose eigenvalues are ``S²``). Only ``p × p`` products of
+    ``J`` with itself (``J^T J``, ``J^T Σ^+ J``, ``J^T Σ J``) are formed.
     """
     ds = problem.dataset
     if theta is None:
@@ -117,24 +126,21 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     cov_blocks = sigma2 * np.einsum("nik,njk->nij", g, g)  # Σ_n, (N, m, m)
     steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
     jac = _jacobian(problem.residuals, theta, steps)  # (N*m, p)
-    p = jac.shape[1]
-    # Σ^{-1/2} J: whiten block by block (pseudo-inverse root of a singular block)
+    # pseudo-inverse of every noise block (a singular block has no information along its null space)
     evals, evecs = np.linalg.eigh(cov_blocks)
-    root = np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)
-    inv_sqrt = np.einsum("nik,nk,njk->nij", evecs, root, evecs)
-    jw = np.einsum("nij,njp->nip", inv_sqrt, jac.reshape(n, m, p)).reshape(n * m, p)
+    inv_blocks = np.einsum("nik,nk,njk->nij", evecs, np.where(evals > 0, 1 / np.maximum(evals, 1e-300), 0), evecs)
+    fisher = jac.T @ _blockwise(inv_blocks, jac)  # J^T Σ^+ J
     # invert with the parameters scaled to unit columns: their scales differ by orders of magnitude
     # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions
-    d = np.maximum(np.linalg.norm(jw, axis=0), 1e-300)
-    fisher_scaled = (jw / d).T @ (jw / d)
-    cov = np.linalg.pinv(fisher_scaled, rcond=1e-10, hermitian=True) / np.outer(d, d)
+    d = np.maximum(np.sqrt(np.diag(fisher)), 1e-300)
+    cov = np.linalg.pinv(fisher / np.outer(d, d), rcond=1e-10, hermitian=True) / np.outer(d, d)
     h = _jacobian(problem.invariants, theta, steps)
     inv_cov = h @ cov @ h.T
     # singular values and right singular vectors of the column-scaled J (column scale must not
     # decide the rank), from its p x p Gram matrix
-    colnorm = np.maximum(np.linalg.norm(jac, axis=0), 1e-300)
-    scaled = jac / colnorm
-    eig, vecs = np.linalg.eigh(scaled.T @ scaled)
+    gram = jac.T @ jac
+    colnorm = np.maximum(np.sqrt(np.diag(gram)), 1e-300)
+    eig, vecs = np.linalg.eigh(gram / np.outer(colnorm, colnorm))
     order = np.argsort(eig)[::-1]
     sv = np.sqrt(np.maximum(eig[order], 0.0))
     vecs = vecs[:, order]
@@ -148,8 +154,7 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     inv_cov[blind, :] = np.inf
     inv_cov[:, blind] = np.inf
     # expected in-sample RMS of the (unweighted) least-squares fit, block by block
-    blocks = scaled.reshape(n, m, p)
-    sandwich = blocks.reshape(n * m, p).T @ np.einsum("nab,nbp->nap", cov_blocks, blocks).reshape(n * m, p)
+    sandwich = (jac.T @ _blockwise(cov_blocks, jac)) / np.outer(colnorm, colnorm)  # scaled J^T Σ J
     basis = vecs[:, :rank] / sv[:rank]
     explained = float(np.trace(basis.T @ sandwich @ basis))
     total = float(np.einsum("naa->", cov_blocks))
