@@ -51,6 +51,15 @@ def _blockwise(blocks: np.ndarray, jac: np.ndarray) -> np.ndarray:
     return np.einsum("nab,nbp->nap", blocks, jac.reshape(n, m, -1)).reshape(n * m, -1)
 
 
+def _pinv_blocks(blocks: np.ndarray) -> np.ndarray:
+    """Pseudo-inverse of every symmetric block ``(N, m, m)`` (a singular block carries no
+    information along its null space)."""
+    if blocks.shape[1] == 1:
+        return np.where(blocks > 0, 1 / np.maximum(blocks, 1e-300), 0.0)
+    evals, evecs = np.linalg.eigh(blocks)
+    return np.einsum("nik,nk,njk->nij", evecs, np.where(evals > 0, 1 / np.maximum(evals, 1e-300), 0), evecs)
+
+
 def residual_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
     """``G_i = ∂r_i/∂x_i`` for every reading, shape ``(N, m, 3)`` (``m`` residuals per reading)."""
     ds = problem.dataset
@@ -126,10 +135,7 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     cov_blocks = sigma2 * np.einsum("nik,njk->nij", g, g)  # Σ_n, (N, m, m)
     steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
     jac = _jacobian(problem.residuals, theta, steps)  # (N*m, p)
-    # pseudo-inverse of every noise block (a singular block has no information along its null space)
-    evals, evecs = np.linalg.eigh(cov_blocks)
-    inv_blocks = np.einsum("nik,nk,njk->nij", evecs, np.where(evals > 0, 1 / np.maximum(evals, 1e-300), 0), evecs)
-    fisher = jac.T @ _blockwise(inv_blocks, jac)  # J^T Σ^+ J
+    fisher = jac.T @ _blockwise(_pinv_blocks(cov_blocks), jac)  # J^T Σ^+ J
     # invert with the parameters scaled to unit columns: their scales differ by orders of magnitude
     # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions
     d = np.maximum(np.sqrt(np.diag(fisher)), 1e-300)

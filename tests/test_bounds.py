@@ -77,13 +77,10 @@ def _dense_cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     (the CRB covariance of ``problem.invariants``), and the expected error sizes
     ``offset_bound`` (``sqrt(tr Cov(o))``) and ``gram_bound`` (relative, for ``W^T W``).
     """
-    ds = problem.dataset
-    if theta is None:
-        theta = problem.truth_theta()
-    if theta is None or not ds.noise_std:
+    theta = problem.truth_theta() if theta is None else theta
+    if theta is None or not problem.dataset.noise_std:
         return None
-    sigma2 = float(ds.noise_std) ** 2
-    problem = bounds.noise_free(problem)
+    sigma2, problem = float(problem.dataset.noise_std) ** 2, bounds.noise_free(problem)
     ds = problem.dataset
     g = bounds.residual_noise_blocks(problem, theta)  # (N, m, 3)
     m = g.shape[1]

@@ -43,11 +43,6 @@ class VectorCalibration(CalibrationProblem):
         self.reference = reference_vectors(dataset)
         self._readings = np.ascontiguousarray(dataset.readings, float)
 
-    def calibrated_swarm(self, thetas: np.ndarray) -> np.ndarray:
-        """``W (r_i - o)`` of every particle and reading, shape ``(n, N, 3)`` (batched ``einsum``)."""
-        w, o = self.unpack(thetas)
-        return np.einsum("nij,nkj->nki", w, self.dataset.readings[None, :, :] - o[:, None, :])
-
     def cost(self, thetas: np.ndarray) -> np.ndarray:
         """``F`` of every particle, ``(n, 12) -> (n,)``; non-finite values become ``inf``."""
         w, o = self.unpack(thetas)
