@@ -33,8 +33,8 @@ means one core.
    time per call.
 6. **numba's first call** in a fresh process: with the on-disk cache warm, and cold
    (compilation into an empty cache).
-7. **Memory** (``--large``): peak resident memory of ``ipso`` with 500 particles on 1e6
-   readings (a few iterations, through the command line), from the child's ``ru_maxrss``.
+7. **Memory**: peak resident memory of a command-line ``ipso`` run with 500 particles on 1e6
+   readings (3 iterations: the peak does not grow with them), from the child's ``ru_maxrss``.
 
 Writes ``results/bench.csv`` in long format (``measure, estimator, value, unit, lo, hi``) and
 prints it.
@@ -476,10 +476,9 @@ def main(argv=None) -> int:
     parser.add_argument("--rounds", type=int, default=7, help="alternating rounds per timing (default 7)")
     parser.add_argument("--seeds", type=int, default=20, help="seeds of the peer table (default 20)")
     parser.add_argument("--only", nargs="+", choices=SECTIONS, default=None, help="run only these sections")
-    parser.add_argument("--large", action="store_true", help="also measure memory at 1e6 readings x 500 particles")
     parser.add_argument("--out", type=Path, default=RESULTS / "bench.csv")
     args = parser.parse_args(argv)
-    sections = args.only or [s for s in SECTIONS if s != "memory" or args.large]
+    sections = args.only or SECTIONS
     frame = pd.DataFrame(measure(sections, args.rounds, args.seeds),
                          columns=["measure", "estimator", "value", "unit", "lo", "hi"])
     args.out.parent.mkdir(parents=True, exist_ok=True)
