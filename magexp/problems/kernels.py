@@ -10,7 +10,9 @@ compute the same numbers:
 * a pure-numpy fallback, chunked over readings (at most :data:`CHUNK` particle-readings per
   temporary), used when numba is missing or ``MAGEXP_NUMBA=0``; the tests compare both to 1e-9.
 
-numba is imported on the first kernel call only (a closed-form run never pays for it).
+numba is imported on the first swarm-cost call only: a closed-form run (``ellipsoid``, ``lm``) on
+fewer than :data:`COMPILE_MIN_READINGS` readings never pays for it; from that size on, the scalar
+residuals are compiled too (the O(N) bound evaluates them 30 times).
 
 Scalar objective (Ding 2024, eq 17), with readings centred and scaled, ``u = (r - c)/s``:
 
