@@ -12,7 +12,8 @@ means one core.
    product (``features @ coefficients``, what the quadratic form needs before any square root)
    and a measured single-pass lower bound (one pass over readings × particles doing only one
    square root and one add per particle-reading: the irreducible work of a norm-based cost).
-   Throughput in particle-readings per second per core.
+   Throughput in particle-readings per second on one core, per second of this process's CPU
+   time and per wall-clock second (the same on an idle machine).
 2. **Engine overhead**: time per swarm iteration (``ipso``) over the time of one bare cost call
    on the same swarm, at both sizes.
 3. **Engine vs pyswarms on equal terms**: magexp ``pso`` and ``pyswarms.single.GlobalBestPSO``
@@ -72,11 +73,13 @@ def row(measure: str, estimator: str, values, unit: str) -> dict:
     return {"measure": measure, "estimator": estimator, "value": med, "unit": unit, "lo": lo, "hi": hi}
 
 
-def side_by_side(variants: dict, rounds: int, target: float = 0.05) -> dict:
+def side_by_side(variants: dict, rounds: int, target: float = 0.05, clock=time.perf_counter) -> dict:
     """Seconds per call of every variant, alternating variants within each round.
 
     Each variant is called in batches of about ``target`` seconds (sized by a first call); the
-    result maps each name to its ``rounds`` batch means.
+    result maps each name to its ``rounds`` batch means, by ``clock`` (wall clock by default;
+    ``time.process_time``: this process's CPU time, which leaves out waiting for a core on a
+    shared machine).
     """
     number = {}
     for name, fn in variants.items():
@@ -87,10 +90,10 @@ def side_by_side(variants: dict, rounds: int, target: float = 0.05) -> dict:
     times = {name: [] for name in variants}
     for _ in range(rounds):
         for name, fn in variants.items():
-            start = time.perf_counter()
+            start = clock()
             for _ in range(number[name]):
                 fn()
-            times[name].append((time.perf_counter() - start) / number[name])
+            times[name].append((clock() - start) / number[name])
     return {name: np.asarray(t) for name, t in times.items()}
 
 
@@ -183,10 +186,14 @@ def cost_rows(rounds: int) -> list[dict]:
         }
         np.testing.assert_allclose(variants["scalar, fused (compiled)"](), variants["scalar, numpy (chunked)"](),
                                    rtol=1e-9)
-        times = side_by_side(variants, rounds)
         size = f"{n} readings x {n_p} particles"
+        cpu = side_by_side(variants, rounds, clock=time.process_time)
+        for name, t in cpu.items():
+            rows.append(row(f"cost throughput per CPU-second, {size}", name, n * n_p / t, "particle-readings/s"))
+        times = side_by_side(variants, rounds)
         for name, t in times.items():
-            rows.append(row(f"cost throughput, {size}", name, n * n_p / t, "particle-readings/s"))
+            rows.append(row(f"cost throughput per wall-clock second, {size}", name, n * n_p / t,
+                            "particle-readings/s"))
         floor = times["floor: single pass, one sqrt per particle-reading"]
         for name in ("scalar, fused (compiled)", "vector, fused (compiled)"):
             rows.append(row(f"cost time / single-pass floor, {size}", name, times[name] / floor, "ratio"))
