@@ -36,10 +36,11 @@ def _jacobian(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
     for k in range(theta.size):
         e = np.zeros_like(theta)
         e[k] = steps[k]
-        col = (fun(theta + e) - fun(theta - e)) / (2 * steps[k])
+        plus, minus = fun(theta + e), fun(theta - e)
         if rows is None:
-            rows = np.empty((theta.size, col.size))
-        rows[k] = col
+            rows = np.empty((theta.size, plus.size))
+        np.subtract(plus, minus, out=rows[k])  # in place: no N-sized temporaries
+        rows[k] /= 2 * steps[k]
     return rows.T
 
 
@@ -63,15 +64,19 @@ def _pinv_blocks(blocks: np.ndarray) -> np.ndarray:
 def residual_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
     """``G_i = ∂r_i/∂x_i`` for every reading, shape ``(N, m, 3)`` (``m`` residuals per reading)."""
     ds = problem.dataset
-    scale = max(float(np.abs(ds.readings).max()), 1.0) * 1e-6
-    blocks = []
+    scale = max(float(ds.readings.max()), -float(ds.readings.min()), 1.0) * 1e-6
+    blocks = None
     for axis in range(3):
         shift = np.zeros(3)
         shift[axis] = scale
         plus = type(problem)(replace(ds, readings=ds.readings + shift), _Box(problem), **problem.options)
         minus = type(problem)(replace(ds, readings=ds.readings - shift), _Box(problem), **problem.options)
-        blocks.append((plus.residuals(theta) - minus.residuals(theta)) / (2 * scale))
-    return np.stack(blocks, axis=-1).reshape(ds.n, -1, 3)
+        r_plus, r_minus = plus.residuals(theta), minus.residuals(theta)
+        if blocks is None:
+            blocks = np.empty((r_plus.size, 3))
+        np.subtract(r_plus, r_minus, out=blocks[:, axis])
+        blocks[:, axis] /= 2 * scale
+    return blocks.reshape(ds.n, -1, 3)
 
 
 class _Box:
