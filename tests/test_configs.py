@@ -6,7 +6,7 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from magexp.artifacts import cells, load_spec, overrides_of
-from magexp.cli_checks import options
+from magexp.config import options
 from magexp.estimators.result import FitResult
 from magexp.paths import EXPERIMENTS
 from magexp.plots import kind_module

@@ -1,0 +1,336 @@
+"""The one place that composes configurations: the CLI, reproduce, bench, calibrate and the tests.
+
+A run config is Hydra's composition of ``conf/config.yaml`` with one choice per config group
+(``conf/scenario/*.yaml``, ``conf/estimator/*.yaml``) and ``key=value`` overrides.
+:func:`compose_config` gives the same result as ``hydra.compose`` but composes each group
+choice only once per process (a Hydra compose costs 10-100 ms; grafting a cached node and
+applying overrides with OmegaConf costs well under one).
+
+Structured schemas (:func:`register_schemas`, Hydra's ConfigStore) type the scenario configs:
+a typo such as ``scenario.nosie=2`` or a value of the wrong type fails here, at compose time,
+in one line naming the key and the keys that exist. Range checks (``noise >= 0``...) stay in
+the constructors of the objects the configs build.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+from dataclasses import dataclass, field as _field
+from typing import Any, List, Optional
+
+from omegaconf import DictConfig, OmegaConf
+
+from magexp.errors import MagexpError
+from magexp.paths import CONF
+
+GROUPS = ("scenario", "estimator")
+PRIMARY = "config"
+#: keys that belonged to the simulation command before calibration got its own
+CALIBRATE_KEYS = ("task", "data", "out")
+
+
+# ---------------------------------------------------------------------------------------------
+# structured schemas (ConfigStore group ``schema/scenario``; a scenario YAML names one in its
+# defaults list, e.g. ``- /schema/scenario/ding@_here_``)
+
+@dataclass
+class SearchConf:
+    """Box of ``[vec(matrix), offset]``: ``[low, high]`` per kind of entry."""
+
+    diag: List[float] = _field(default_factory=lambda: [0.5, 1.5])
+    offdiag: List[float] = _field(default_factory=lambda: [-0.5, 0.5])
+    offset: List[float] = _field(default_factory=lambda: [-1000.0, 1000.0])
+
+
+@dataclass
+class DingFieldConf:
+    total: float = 51500.0
+    declination: float = 0.0
+    inclination: float = 0.0
+
+
+@dataclass
+class DingErrorsConf:
+    scale: List[float] = _field(default_factory=lambda: [1.0, 1.0, 1.0])
+    nonorthogonality_deg: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    soft_iron: List[List[float]] = _field(default_factory=lambda: [[0.0] * 3] * 3)
+    hard_iron: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    bias: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+@dataclass
+class DingScenarioConf:
+    """:class:`magexp.scenarios.ding.DingScenario`."""
+
+    _target_: str = "magexp.scenarios.ding.DingScenario"
+    name: str = "???"
+    field: DingFieldConf = _field(default_factory=DingFieldConf)
+    errors: DingErrorsConf = _field(default_factory=DingErrorsConf)
+    noise: float = 2.0
+    noise_kind: str = "uniform"
+    n_readings: int = 300
+    objective: str = "scalar"
+    search: SearchConf = _field(default_factory=SearchConf)
+
+
+@dataclass
+class RotationConf:
+    mode: Optional[str] = "mode1"
+    segments: Optional[List[Any]] = None
+    partial_arc_deg: float = 180.0
+    rate_deg_s: float = 36.0
+    sample_period: float = 0.01
+
+
+@dataclass
+class GyroConf:
+    drift_deg_h: float = 6.25
+    drift_axis: List[float] = _field(default_factory=lambda: [1.0, 1.0, 1.0])
+    noise_deg_s: float = 0.0
+
+
+@dataclass
+class YuanScenarioConf:
+    """:class:`magexp.scenarios.yuan.YuanScenario`."""
+
+    _target_: str = "magexp.scenarios.yuan.YuanScenario"
+    name: str = "???"
+    field: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    field_scale: List[float] = _field(default_factory=lambda: [1.0, 1.0])
+    S: List[List[float]] = _field(default_factory=lambda: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    b: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    rotation: RotationConf = _field(default_factory=RotationConf)
+    gyro: GyroConf = _field(default_factory=GyroConf)
+    noise: float = 0.45
+    n_readings: int = 30
+    objective: str = "vector"
+    search: SearchConf = _field(default_factory=SearchConf)
+
+
+@dataclass
+class ShipSimulationConf:
+    """:class:`magexp.scenarios.ship.ShipSimulation`."""
+
+    _target_: str = "magexp.scenarios.ship.ShipSimulation"
+    name: str = "???"
+    field: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    K: List[List[float]] = _field(default_factory=lambda: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    Bp: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    heading_deg: List[float] = _field(default_factory=lambda: [0.0, 360.0])
+    roll_deg: List[float] = _field(default_factory=lambda: [-20.0, 20.0])
+    trim_deg: List[float] = _field(default_factory=lambda: [-15.0, 15.0])
+    n_readings: int = 12
+    noise: float = 100.0
+    angle_noise_deg: float = 0.05
+    noise_kind: str = "uniform"
+    search: SearchConf = _field(default_factory=SearchConf)
+
+
+@dataclass
+class ShipRecordingConf:
+    """:class:`magexp.scenarios.ship.ShipRecording`."""
+
+    _target_: str = "magexp.scenarios.ship.ShipRecording"
+    name: str = "???"
+    path: str = "???"
+    field: Optional[List[float]] = None
+    search: SearchConf = _field(default_factory=SearchConf)
+
+
+SCHEMAS = {"ding": DingScenarioConf, "yuan": YuanScenarioConf, "ship_simulation": ShipSimulationConf,
+           "ship_recording": ShipRecordingConf}
+
+
+@functools.cache
+def register_schemas() -> None:
+    """Store the scenario schemas in Hydra's ConfigStore (group ``schema/scenario``), once."""
+    from hydra.core.config_store import ConfigStore
+
+    store = ConfigStore.instance()
+    for name, node in SCHEMAS.items():
+        store.store(group="schema/scenario", name=name, node=node)
+
+
+# ---------------------------------------------------------------------------------------------
+# values, options, errors
+
+@functools.cache
+def _override_parser():
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    return OverridesParser.create()
+
+
+def parse_overrides(overrides: list[str]) -> list:
+    """Hydra's parsed overrides, or one MagexpError line."""
+    try:
+        return _override_parser().parse_overrides(list(overrides))
+    except Exception as exc:
+        raise MagexpError(f"could not parse the overrides {' '.join(overrides)!r}: "
+                          f"{str(exc).splitlines()[0]}") from None
+
+
+def yaml_value(text: str):
+    """A command-line value typed as Hydra's override grammar types it (``2`` -> int,
+    ``1e-06`` -> float, ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str)."""
+    return parse_overrides([f"k={text}"])[0].value()
+
+
+def options(group: str) -> list[str]:
+    """Config names available in ``conf/<group>/`` (files directly in it; sub-folders hold bases)."""
+    return sorted(p.stem for p in (CONF / group).glob("*.yaml"))
+
+
+def target_class(group: str, name: str):
+    """The class named by ``_target_`` in ``conf/<group>/<name>.yaml`` (imported, not built)."""
+    import importlib
+
+    module, _, cls = str(OmegaConf.load(CONF / group / f"{name}.yaml")["_target_"]).rpartition(".")
+    return getattr(importlib.import_module(module), cls)
+
+
+def check_choice(group: str, choice: str) -> None:
+    """Fail unless ``conf/<group>/<choice>.yaml`` exists."""
+    names = options(group)
+    if choice not in names:
+        raise MagexpError(f"{group}={choice!r} is not allowed: choose one of {', '.join(names)}")
+
+
+def _keys_of(cfg: DictConfig, key: str) -> tuple[str, list[str]]:
+    """The deepest existing parent of dotted ``key`` and its keys."""
+    parts = key.split(".")
+    node, path = cfg, []
+    for part in parts[:-1]:
+        child = node.get(part) if isinstance(node, DictConfig) else None
+        if not isinstance(child, DictConfig):
+            break
+        node, path = child, path + [part]
+    return ".".join(path) or "the config", sorted(str(k) for k in node.keys()) if isinstance(node, DictConfig) else []
+
+
+def unknown_key(cfg: DictConfig, key: str, value: str) -> MagexpError:
+    """The one-line error of an override whose key is not in the config."""
+    if key.split(".")[0] in CALIBRATE_KEYS:
+        return MagexpError(f"{key}={value} is not allowed: the simulation command has no {key.split('.')[0]!r}; "
+                           "calibrate a recording with `magexp calibrate data.path=<file> ...`")
+    where, keys = _keys_of(cfg, key)
+    return MagexpError(f"{key}={value} is not allowed: {where} has no key {key.split('.')[-1]!r} "
+                       f"(keys: {', '.join(keys)})")
+
+
+def _bad_value(key: str, value: str, exc: Exception) -> MagexpError:
+    msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return MagexpError(f"{key}={value} is not allowed: {msg}")
+
+
+# ---------------------------------------------------------------------------------------------
+# composing
+
+def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY) -> DictConfig:
+    """``hydra.compose`` of ``conf/<config_name>.yaml`` (inside or outside an initialised Hydra)."""
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    register_schemas()
+    try:
+        if GlobalHydra.instance().is_initialized():
+            return compose(config_name, overrides=list(overrides))
+        with initialize_config_dir(config_dir=str(CONF), version_base=None):
+            return compose(config_name, overrides=list(overrides))
+    except MagexpError:
+        raise
+    except Exception as exc:
+        lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+        detail = "; ".join([lines[0]] + [ln for ln in lines[1:] if "not in struct" in ln or "Error" in ln][:1]) \
+            if lines else type(exc).__name__
+        raise MagexpError(f"bad override: {detail}") from None
+
+
+_SKELETONS: dict = {}  # config name -> the composed primary config without its group nodes
+_NODES: dict = {}  # (config name, group, choice) -> that choice's composed node
+_SEEN: set = set()  # config names composed at least once in this process
+
+
+def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
+    """A config with these group choices, for the caller to keep.
+
+    A process's first config is Hydra's compose itself (a one-run command composes once and
+    copies nothing). From the second on, every new choice is composed by Hydra once and kept
+    (the primary config's skeleton and each group's node); configs of known choices are
+    then grafted from copies without Hydra.
+    """
+    for group, choice in choices.items():
+        check_choice(group, choice)
+    wanted = {g: choices.get(g) or _default_choice(config_name, g) for g in GROUPS}
+    if config_name in _SKELETONS and all((config_name, g, c) in _NODES for g, c in wanted.items() if c):
+        cfg = copy.deepcopy(_SKELETONS[config_name])
+        OmegaConf.set_struct(cfg, False)
+        for group, choice in wanted.items():
+            if choice:
+                cfg[group] = copy.deepcopy(_NODES[(config_name, group, choice)])
+        OmegaConf.set_struct(cfg, True)
+        return cfg
+    cfg = hydra_compose(tuple(f"{g}={c}" for g, c in choices.items()), config_name)
+    if config_name in _SEEN:  # more than one config in this process: keep the pieces
+        kept = copy.deepcopy(cfg)
+        OmegaConf.set_struct(kept, False)
+        for group, choice in wanted.items():
+            if choice and group in kept:
+                _NODES.setdefault((config_name, group, choice), kept[group])
+                del kept[group]
+        OmegaConf.set_struct(kept, True)
+        _SKELETONS.setdefault(config_name, kept)
+    _SEEN.add(config_name)
+    return cfg
+
+
+@functools.cache
+def _default_choice(config_name: str, group: str) -> str | None:
+    """The primary config's default option of ``group`` (its defaults list)."""
+    defaults = OmegaConf.load(CONF / f"{config_name}.yaml").get("defaults", [])
+    for entry in defaults:
+        if isinstance(entry, DictConfig) and group in entry:
+            return str(entry[group])
+    return None
+
+
+def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: str = PRIMARY) -> DictConfig:
+    """The run config of ``overrides``, as Hydra composes it, or one MagexpError line.
+
+    The config-group choices (``scenario=...``, ``estimator=...``) are composed by Hydra once
+    per process; their nodes are grafted onto the primary config and the ``key=value``
+    overrides applied with OmegaConf in struct mode (an unknown key, or a value the schema's
+    type refuses, is an error naming the key and what exists). Anything beyond ``group=choice``
+    and ``key=value`` (``+key``, ``~key``, ``hydra.*``, ``group/sub=...``) goes to Hydra itself.
+    The result is the caller's own (a fresh copy).
+    """
+    choices, values = {}, []
+    for ov in overrides:
+        key, _, value = ov.partition("=")
+        if key in GROUPS:
+            choices[key] = value
+        elif key.startswith(("+", "~", "hydra")) or "/" in key or "@" in key:
+            for group, choice in choices.items():
+                check_choice(group, choice)
+            return hydra_compose(tuple(overrides), config_name)
+        else:
+            values.append((key, value))
+    cfg = _composed(config_name, choices)
+    for key, value in values:
+        if OmegaConf.select(cfg, key, default="__missing__") == "__missing__":
+            raise unknown_key(cfg, key, value)
+        try:
+            OmegaConf.update(cfg, key, yaml_value(value), merge=False)
+        except MagexpError:
+            raise
+        except Exception as exc:  # the schema refused the value's type
+            raise _bad_value(key, value, exc) from None
+    return cfg
+
+
+def resolved(cfg: DictConfig) -> dict:
+    """The plain resolved container of a run config (``hydra`` node left out): what a run reads."""
+    out = OmegaConf.to_container(cfg, resolve=True)
+    out.pop("hydra", None)
+    return out
