@@ -308,6 +308,10 @@ def run_command(args: list[str]) -> None:
 def main(argv: list[str] | None = None) -> None:
     """Entry point of ``magexp`` / ``python -m magexp``."""
     args = list(sys.argv[1:] if argv is None else argv)
+    if argv is None:  # a closed pipe (magexp --help | head) ends quietly, as for any Unix tool
+        import signal
+
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     if args and args[0] == "calibrate":
         return guarded(calibrate, args[1:])
     guarded(run_command, args)
