@@ -18,6 +18,7 @@ user mistake ends in one line on stderr and a non-zero exit, with nothing writte
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import sys
 import time
@@ -28,6 +29,7 @@ from magexp.errors import MagexpError
 RUN_DIR = "outputs/%Y-%m-%d/%H-%M-%S"     # a single run's folder (strftime), made unique
 SWEEP_DIR = "multirun/%Y-%m-%d/%H-%M-%S"  # a sweep's folder, made unique
 EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 2, 3, 130
+_PLAIN = re.compile(r"[A-Za-z0-9_.+\-]*")  # a value that cannot be a sweep or need Hydra's parser
 #: the extra that provides a Hydra launcher (``hydra/launcher=<name>``)
 LAUNCHER_EXTRAS = {"slurm": ("hydra_plugins.hydra_submitit_launcher", "cluster"),
                    "submitit_slurm": ("hydra_plugins.hydra_submitit_launcher", "cluster"),
@@ -300,7 +302,8 @@ def run_command(args: list[str]) -> None:
                           "apply to -m sweeps")
     from magexp.cli_checks import expand_sweep
 
-    if len(expand_sweep(user)) > 1:
+    plain = all(_PLAIN.fullmatch(ov.partition("=")[2]) for ov in user)  # nothing Hydra's parser must read
+    if not plain and len(expand_sweep(user)) > 1:
         raise MagexpError("a value list (a,b or range()) needs -m: magexp -m " + " ".join(user))
     single_run(user, run_dirs[-1] if run_dirs else None)
 

@@ -16,7 +16,11 @@ from __future__ import annotations
 
 import copy
 import functools
+import json
+import os
+import re
 from dataclasses import dataclass, field as _field
+from pathlib import Path
 from typing import Any, List, Optional
 
 from omegaconf import DictConfig, OmegaConf
@@ -171,9 +175,26 @@ def parse_overrides(overrides: list[str]) -> list:
                           f"{str(exc).splitlines()[0]}") from None
 
 
+_INT = re.compile(r"[-+]?(0|[1-9][0-9]*)")
+_FLOAT = re.compile(r"[-+]?((0|[1-9][0-9]*)\.[0-9]*|\.[0-9]+|(0|[1-9][0-9]*))([eE][-+]?[0-9]+)?")
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_SPECIAL = {"true", "false", "null", "inf", "nan"}
+
+
 def yaml_value(text: str):
     """A command-line value typed as Hydra's override grammar types it (``2`` -> int,
-    ``1e-06`` -> float, ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str)."""
+    ``1e-06`` -> float, ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str).
+
+    Plain integers, decimal floats and identifiers are typed here; anything else (lists,
+    quotes, ``inf``, ``null``, interpolations...) by Hydra's parser, which the common case of a
+    one-run command then never loads.
+    """
+    if _INT.fullmatch(text):
+        return int(text)
+    if _FLOAT.fullmatch(text):
+        return float(text)
+    if _WORD.fullmatch(text) and text.lower() not in _SPECIAL:
+        return text
     return parse_overrides([f"k={text}"])[0].value()
 
 
@@ -271,7 +292,7 @@ def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
                 cfg[group] = copy.deepcopy(_NODES[(config_name, group, choice)])
         OmegaConf.set_struct(cfg, True)
         return cfg
-    cfg = hydra_compose(tuple(f"{g}={c}" for g, c in choices.items()), config_name)
+    cfg = _stored_compose(config_name, choices)
     if config_name in _SEEN:  # more than one config in this process: keep the pieces
         kept = copy.deepcopy(cfg)
         OmegaConf.set_struct(kept, False)
@@ -282,6 +303,54 @@ def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
         OmegaConf.set_struct(kept, True)
         _SKELETONS.setdefault(config_name, kept)
     _SEEN.add(config_name)
+    return cfg
+
+
+def _compose_key(config_name: str, choices: dict[str, str]) -> str:
+    """Key of a composed config on disk: the choices, and the size and time of every config file,
+    of this module (the schemas) and of the Hydra and OmegaConf installed."""
+    import hashlib
+    import importlib.util
+
+    h = hashlib.sha256(json.dumps([config_name, sorted(choices.items()), OmegaConf.__module__]).encode())
+    files = sorted(CONF.rglob("*.yaml")) + [Path(__file__)]
+    for name in ("hydra", "omegaconf"):
+        spec = importlib.util.find_spec(name)
+        files.append(Path(spec.origin) if spec and spec.origin else Path(name))
+    for path in files:
+        try:
+            st = path.stat()
+            h.update(f"{path}:{st.st_size}:{st.st_mtime_ns};".encode())
+        except OSError:
+            h.update(f"{path}:missing;".encode())
+    return h.hexdigest()[:32]
+
+
+def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
+    """Hydra's compose of these choices, kept on disk (``<run cache>/configs/``) under a key of
+    every config file, so that a command whose choices were composed before needs no Hydra
+    compose at all (the largest part of a one-run command's start-up)."""
+    import pickle
+
+    from magexp import paths
+
+    path = paths.CACHE / "configs" / f"{_compose_key(config_name, choices)}.pkl"
+    try:
+        with path.open("rb") as fh:
+            return pickle.load(fh)
+    except Exception:  # absent, unreadable or from another version: compose again
+        pass
+    cfg = hydra_compose(tuple(f"{g}={c}" for g, c in choices.items()), config_name)
+    try:
+        import tempfile
+
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+        with os.fdopen(fd, "wb") as fh:
+            pickle.dump(cfg, fh, protocol=pickle.HIGHEST_PROTOCOL)
+        os.replace(tmp, path)
+    except OSError:  # a read-only cache: compose every time
+        pass
     return cfg
 
 

@@ -113,6 +113,8 @@ def snapshot(folder):
 
 @pytest.fixture
 def workdir(tmp_path, monkeypatch):
+    tmp_path = tmp_path / "work"  # beside the test's own run cache (tmp_path/cache)
+    tmp_path.mkdir()
     for name, text in FILES.items():
         (tmp_path / name).write_text(text)
     (tmp_path / "binary.csv").write_bytes(BINARY)
