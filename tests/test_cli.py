@@ -132,6 +132,7 @@ def cached_runs(cache_dir):
 
 def test_sweep_writes_one_tidy_table_with_the_swept_keys(tmp_path):
     proc = magexp("-m", "estimator=ellipsoid,lm", "scenario.noise=0,5", f"hydra.sweep.dir={tmp_path / 'sweep'}",
+                  "hydra.launcher.n_jobs=1",
                   cwd=tmp_path, env={"MAGEXP_CACHE": str(tmp_path / "cache")})
     assert proc.returncode == 0, proc.stderr
     rows = read_csv(tmp_path / "sweep" / "sweep.csv")
