@@ -23,7 +23,7 @@ from dataclasses import dataclass, field as _field
 from pathlib import Path
 from typing import Any, List, Optional
 
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import MISSING, DictConfig, OmegaConf
 
 from magexp.errors import MagexpError
 from magexp.paths import CONF
@@ -38,44 +38,64 @@ CALIBRATE_KEYS = ("task", "data", "out")
 # structured schemas (ConfigStore group ``schema/scenario``; a scenario YAML names one in its
 # defaults list, e.g. ``- /schema/scenario/ding@_here_``)
 
+def _list(*values):
+    """A list field with a default (dataclass fields need a factory for mutable defaults)."""
+    return _field(default_factory=lambda: list(values))
+
+
+# A field without a default (MISSING) must be given by the scenario's YAML file.
+
 @dataclass
 class SearchConf:
     """Box of ``[vec(matrix), offset]``: ``[low, high]`` per kind of entry."""
 
-    diag: List[float] = _field(default_factory=lambda: [0.5, 1.5])
-    offdiag: List[float] = _field(default_factory=lambda: [-0.5, 0.5])
-    offset: List[float] = _field(default_factory=lambda: [-1000.0, 1000.0])
+    diag: List[float] = MISSING
+    offdiag: List[float] = MISSING
+    offset: List[float] = MISSING
 
 
 @dataclass
 class DingFieldConf:
-    total: float = 51500.0
-    declination: float = 0.0
-    inclination: float = 0.0
+    total: float = MISSING        # nT
+    declination: float = MISSING  # deg
+    inclination: float = MISSING  # deg
 
 
 @dataclass
 class DingErrorsConf:
-    scale: List[float] = _field(default_factory=lambda: [1.0, 1.0, 1.0])
-    nonorthogonality_deg: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
-    soft_iron: List[List[float]] = _field(default_factory=lambda: [[0.0] * 3] * 3)
-    hard_iron: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
-    bias: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    scale: List[float] = MISSING
+    nonorthogonality_deg: List[float] = MISSING
+    soft_iron: List[List[float]] = MISSING
+    hard_iron: List[float] = MISSING
+    bias: List[float] = MISSING
 
 
 @dataclass
-class DingScenarioConf:
+class ScenarioConf:
+    """What every scenario config has: the class it builds, its name, its search box."""
+
+    _target_: str = MISSING
+    name: str = MISSING
+    search: SearchConf = _field(default_factory=SearchConf)
+
+
+@dataclass
+class SimulationConf(ScenarioConf):
+    """A simulated scenario: its reading noise and number of readings."""
+
+    noise: float = MISSING
+    n_readings: int = MISSING
+
+
+@dataclass
+class DingScenarioConf(SimulationConf):
     """:class:`magexp.scenarios.ding.DingScenario`."""
 
     _target_: str = "magexp.scenarios.ding.DingScenario"
-    name: str = "???"
     field: DingFieldConf = _field(default_factory=DingFieldConf)
     errors: DingErrorsConf = _field(default_factory=DingErrorsConf)
-    noise: float = 2.0
     noise_kind: str = "uniform"
-    n_readings: int = 300
     objective: str = "scalar"
-    search: SearchConf = _field(default_factory=SearchConf)
 
 
 @dataclass
@@ -90,56 +110,46 @@ class RotationConf:
 @dataclass
 class GyroConf:
     drift_deg_h: float = 6.25
-    drift_axis: List[float] = _field(default_factory=lambda: [1.0, 1.0, 1.0])
+    drift_axis: List[float] = _list(1.0, 1.0, 1.0)
     noise_deg_s: float = 0.0
 
 
 @dataclass
-class YuanScenarioConf:
+class YuanScenarioConf(SimulationConf):
     """:class:`magexp.scenarios.yuan.YuanScenario`."""
 
     _target_: str = "magexp.scenarios.yuan.YuanScenario"
-    name: str = "???"
-    field: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
-    field_scale: List[float] = _field(default_factory=lambda: [1.0, 1.0])
-    S: List[List[float]] = _field(default_factory=lambda: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    b: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
+    field: List[float] = MISSING
+    field_scale: List[float] = _list(1.0, 1.0)
+    S: List[List[float]] = MISSING
+    b: List[float] = MISSING
     rotation: RotationConf = _field(default_factory=RotationConf)
     gyro: GyroConf = _field(default_factory=GyroConf)
-    noise: float = 0.45
-    n_readings: int = 30
     objective: str = "vector"
-    search: SearchConf = _field(default_factory=SearchConf)
 
 
 @dataclass
-class ShipSimulationConf:
+class ShipSimulationConf(SimulationConf):
     """:class:`magexp.scenarios.ship.ShipSimulation`."""
 
     _target_: str = "magexp.scenarios.ship.ShipSimulation"
-    name: str = "???"
-    field: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
-    K: List[List[float]] = _field(default_factory=lambda: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    Bp: List[float] = _field(default_factory=lambda: [0.0, 0.0, 0.0])
-    heading_deg: List[float] = _field(default_factory=lambda: [0.0, 360.0])
-    roll_deg: List[float] = _field(default_factory=lambda: [-20.0, 20.0])
-    trim_deg: List[float] = _field(default_factory=lambda: [-15.0, 15.0])
-    n_readings: int = 12
-    noise: float = 100.0
-    angle_noise_deg: float = 0.05
+    field: List[float] = MISSING
+    K: List[List[float]] = MISSING
+    Bp: List[float] = MISSING
+    heading_deg: List[float] = MISSING
+    roll_deg: List[float] = MISSING
+    trim_deg: List[float] = MISSING
+    angle_noise_deg: float = MISSING
     noise_kind: str = "uniform"
-    search: SearchConf = _field(default_factory=SearchConf)
 
 
 @dataclass
-class ShipRecordingConf:
+class ShipRecordingConf(ScenarioConf):
     """:class:`magexp.scenarios.ship.ShipRecording`."""
 
     _target_: str = "magexp.scenarios.ship.ShipRecording"
-    name: str = "???"
-    path: str = "???"
+    path: str = MISSING
     field: Optional[List[float]] = None
-    search: SearchConf = _field(default_factory=SearchConf)
 
 
 SCHEMAS = {"ding": DingScenarioConf, "yuan": YuanScenarioConf, "ship_simulation": ShipSimulationConf,
