@@ -172,3 +172,13 @@ def test_killed_sweep_resumes_without_redoing_finished_runs(tmp_path):
     keep = ("scenario.noise", "seed", "fun", "x", "nfev", "config_hash")
     trim = [{k: v for k, v in r.items() if k in keep} for r in read_csv(tmp_path / "c" / "sweep.csv")]
     assert trim == [{k: v for k, v in r.items() if k in keep} for r in rows]  # as an uninterrupted sweep
+
+
+def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):
+    """Fast start: a one-run command loads only what the run needs (a fresh interpreter)."""
+    code = ("import sys; from magexp.__main__ import main; main(['estimator=ellipsoid', 'hydra.run.dir=r']); "
+            "print('heavy:', sorted(m for m in ('pandas', 'matplotlib', 'scipy', 'joblib') if m in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")})
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] == "heavy: []"
