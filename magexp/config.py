@@ -337,14 +337,14 @@ def _compose_key(config_name: str, choices: dict[str, str]) -> str:
 
 
 def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
-    """Hydra's compose of these choices, kept on disk (``<run cache>/configs/``) under a key of
+    """Hydra's compose of these choices, kept on disk (:func:`magexp.paths.composed_configs`) under a key of
     every config file, so that a command whose choices were composed before needs no Hydra
     compose at all (the largest part of a one-run command's start-up)."""
     import pickle
 
     from magexp import paths
 
-    path = paths.CACHE / "configs" / f"{_compose_key(config_name, choices)}.pkl"
+    path = paths.composed_configs() / f"{_compose_key(config_name, choices)}.pkl"
     try:
         with path.open("rb") as fh:
             return pickle.load(fh)

@@ -27,6 +27,11 @@ CACHE = Path(os.environ.get("MAGEXP_CACHE", _default_cache))  # finished runs, k
 SHARED_DATA = ROOT.parent / "shared" / "data"
 
 
+def composed_configs() -> Path:
+    """Where composed configs are kept (beside the run cache, never inside it)."""
+    return CACHE.parent / f"{CACHE.name}-configs"
+
+
 def paper_results(paper: str) -> Path:
     """``results/<paper>/``, created on demand."""
     path = RESULTS / paper

@@ -104,7 +104,7 @@ def test_exit_codes_across_the_process_boundary(tmp_path):
     assert (tmp_path / "r" / "metrics.csv").exists()
     bad = magexp("scenario.nosie=2", cwd=tmp_path)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "nosie" in bad.stderr
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "r"]
+    assert {p.name for p in tmp_path.iterdir()} == {"cache", "cache-configs", "r"}  # caches and the run only
 
 
 def test_calibrate_is_its_own_command(capsys, monkeypatch):
@@ -122,7 +122,7 @@ def test_calibrate_is_its_own_command(capsys, monkeypatch):
         assert info.value.code == 0 and seen == [["data.path=x.csv", "estimator=lm"]]
 
 
-SWEEP = ["-m", "estimator=ipso", "estimator.n_iterations=400", "scenario.noise=0,5", "seed=range(4)",
+SWEEP = ["-m", "estimator=ipso", "estimator.n_iterations=300", "scenario.noise=0,5", "seed=range(3)",
          "hydra.launcher.n_jobs=1"]
 
 
@@ -130,19 +130,21 @@ def cached_runs(cache_dir):
     return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob("*.pkl")}
 
 
-def test_sweep_writes_one_tidy_table_with_the_swept_keys(tmp_path):
-    proc = magexp("-m", "estimator=ellipsoid,lm", "scenario.noise=0,5", f"hydra.sweep.dir={tmp_path / 'sweep'}",
-                  "hydra.launcher.n_jobs=1",
-                  cwd=tmp_path, env={"MAGEXP_CACHE": str(tmp_path / "cache")})
-    assert proc.returncode == 0, proc.stderr
-    rows = read_csv(tmp_path / "sweep" / "sweep.csv")
-    assert [(r["estimator"], r["scenario.noise"]) for r in rows] == [
-        ("ellipsoid", "0"), ("ellipsoid", "5"), ("lm", "0"), ("lm", "5")]
-    assert list(rows[0])[:3] == ["estimator", "scenario.noise", "job"]
-    assert all(float(r["fun"]) >= 0 for r in rows) and {r["config_hash"] for r in rows}.__len__() == 4
-    for r in rows:  # each job's own folder holds the row's metrics
-        (job,) = read_csv(tmp_path / "sweep" / r["job"] / "metrics.csv")
-        assert job["fun"] == r["fun"]
+def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path):
+    from magexp.sweep import gather
+
+    for num, (est, noise, metrics) in enumerate([("lm", "0", {"fun": "1.5", "nfev": "40"}),
+                                                  ("ellipsoid", "5", {"fun": "2.5", "gram_error": "0.1"})]):
+        job = tmp_path / str(num)
+        (job / ".hydra").mkdir(parents=True)
+        (job / ".hydra" / "overrides.yaml").write_text(f"- estimator={est}\n- scenario.noise={noise}\n- seed=3\n")
+        with (job / "metrics.csv").open("w") as fh:
+            fh.write(",".join(["estimator", *metrics]) + "\n" + ",".join([est, *metrics.values()]) + "\n")
+    rows = read_csv(gather(tmp_path, ["estimator", "scenario.noise"]))
+    assert list(rows[0]) == ["estimator", "scenario.noise", "job", "fun", "nfev", "gram_error"]
+    assert rows == [{"estimator": "lm", "scenario.noise": "0", "job": "0", "fun": "1.5", "nfev": "40", "gram_error": ""},
+                    {"estimator": "ellipsoid", "scenario.noise": "5", "job": "1", "fun": "2.5", "nfev": "",
+                     "gram_error": "0.1"}]
 
 
 @pytest.mark.slow
@@ -158,14 +160,16 @@ def test_killed_sweep_resumes_without_redoing_finished_runs(tmp_path):
     os.killpg(first.pid, signal.SIGKILL)
     first.wait()
     finished = cached_runs(cache_dir)
-    assert 0 < len(finished) < 8, "the kill must land midway"
+    assert 0 < len(finished) < 6, "the kill must land midway"
     resumed = magexp(*SWEEP, f"hydra.sweep.dir={tmp_path / 'b'}", cwd=tmp_path, env=env)
     assert resumed.returncode == 0, resumed.stderr
     after = cached_runs(cache_dir)
-    assert len(after) == 8
+    assert len(after) == 6
     assert {k: after[k] for k in finished} == finished  # finished runs were not redone
-    rows = read_csv(tmp_path / "b" / "sweep.csv")
-    assert len(rows) == 8 and sum(r["cached"] == "True" for r in rows) == len(finished)
+    rows = read_csv(tmp_path / "b" / "sweep.csv")  # the tidy table: swept keys first, one row per job
+    assert list(rows[0])[:3] == ["scenario.noise", "seed", "job"]
+    assert [(r["scenario.noise"], r["seed"]) for r in rows] == [(n, s) for n in "05" for s in "012"]
+    assert sum(r["cached"] == "True" for r in rows) == len(finished)
     whole = magexp(*SWEEP, f"hydra.sweep.dir={tmp_path / 'c'}", cwd=tmp_path,
                    env={"MAGEXP_CACHE": str(tmp_path / "cache2")})
     assert whole.returncode == 0, whole.stderr
