@@ -251,7 +251,11 @@ def unknown_key(cfg: DictConfig, key: str, value: str) -> MagexpError:
 
 
 def _bad_value(key: str, value: str, exc: Exception) -> MagexpError:
+    """A value the schema's type refuses: one line naming the key, the value and the type wanted."""
     msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    for name, wanted in (("Integer", "an integer"), ("Float", "a number"), ("Boolean", "true or false")):
+        if f"converted to {name}" in msg:
+            return MagexpError(f"{key}={value} is not allowed: it must be {wanted}")
     return MagexpError(f"{key}={value} is not allowed: {msg}")
 
 
@@ -399,12 +403,18 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
     for key, value in values:
         if OmegaConf.select(cfg, key, default="__missing__") == "__missing__":
             raise unknown_key(cfg, key, value)
+        typed = yaml_value(value)
         try:
-            OmegaConf.update(cfg, key, yaml_value(value), merge=False)
+            OmegaConf.update(cfg, key, typed, merge=False)
         except MagexpError:
             raise
         except Exception as exc:  # the schema refused the value's type
-            raise _bad_value(key, value, exc) from None
+            if not (isinstance(typed, float) and typed.is_integer()):
+                raise _bad_value(key, value, exc) from None
+            try:  # 1e8 for an integer key means 100000000
+                OmegaConf.update(cfg, key, int(typed), merge=False)
+            except Exception:
+                raise _bad_value(key, value, exc) from None
     return cfg
 
 

@@ -62,6 +62,8 @@ CASES = [  # (arguments, words the one line must contain)
     (["estimator.init.form=weird"], ["'weird'", "printed"]),
     (["scenario.n_readings=0"], ["n_readings=0"]),
     (["scenario.n_readings=100000000"], ["n_readings=100000000", "GiB"]),  # refused up front: memory
+    (["scenario.n_readings=1e8"], ["n_readings=100000000", "GiB"]),
+    (["scenario.n_readings=1.5"], ["n_readings=1.5", "an integer"]),
     (["estimator=lm", "scenario.n_readings=5"], ["n_readings=5", "12 parameters"]),  # fewer readings than parameters
     (["estimator=ellipsoid", "scenario.n_readings=11"], ["n_readings=11"]),
     (["scenario=yuan2018_mode1", "estimator=lm", "scenario.n_readings=3"], ["n_readings=3"]),
