@@ -195,6 +195,11 @@ def sweep(user: list[str], hydra_overrides: list[str], flags: list[str]) -> None
     from magexp.paths import CONF
 
     check_launcher(hydra_overrides)
+    settings = [o for o in hydra_overrides if not o.startswith("hydra.sweep.dir=")]
+    if settings:  # launcher and other hydra.* settings: checked by composing Hydra's own node
+        from magexp.config import hydra_compose
+
+        hydra_compose(tuple(settings), with_hydra=True)
     validate_runs(expand_sweep(user))
     explicit = [o for o in hydra_overrides if o.startswith("hydra.sweep.dir=")]
     if explicit:

@@ -262,23 +262,30 @@ def _bad_value(key: str, value: str, exc: Exception) -> MagexpError:
 # ---------------------------------------------------------------------------------------------
 # composing
 
-def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY) -> DictConfig:
-    """``hydra.compose`` of ``conf/<config_name>.yaml`` (inside or outside an initialised Hydra)."""
+def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *,
+                  with_hydra: bool = False) -> DictConfig:
+    """``hydra.compose`` of ``conf/<config_name>.yaml`` (inside or outside an initialised Hydra);
+    ``with_hydra``: with the ``hydra`` node (launcher, sweeper, folders), which checks ``hydra.*``
+    overrides."""
     from hydra import compose, initialize_config_dir
     from hydra.core.global_hydra import GlobalHydra
 
     register_schemas()
     try:
         if GlobalHydra.instance().is_initialized():
-            return compose(config_name, overrides=list(overrides))
+            return compose(config_name, overrides=list(overrides), return_hydra_config=with_hydra)
         with initialize_config_dir(config_dir=str(CONF), version_base=None):
-            return compose(config_name, overrides=list(overrides))
+            return compose(config_name, overrides=list(overrides), return_hydra_config=with_hydra)
     except MagexpError:
         raise
     except Exception as exc:
-        lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-        detail = "; ".join([lines[0]] + [ln for ln in lines[1:] if "not in struct" in ln or "Error" in ln][:1]) \
-            if lines else type(exc).__name__
+        chain, cause = [], exc
+        while cause is not None and len(chain) < 5:  # Hydra keeps the reason in the cause
+            chain.append(str(cause))
+            cause = cause.__cause__ or cause.__context__
+        lines = [ln.strip() for text in chain for ln in text.splitlines() if ln.strip()]
+        detail = "; ".join([lines[0]] + [ln for ln in lines[1:] if "not in" in ln or "Error" in ln
+                                          or "could not be converted" in ln][:1]) if lines else type(exc).__name__
         raise MagexpError(f"bad override: {detail}") from None
 
 

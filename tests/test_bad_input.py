@@ -98,6 +98,8 @@ CASES = [  # (arguments, words the one line must contain)
     (["-m", "estimator=lm,ellipsoid", "scenario.n_readings=300,6"], ["n_readings=6"]),
     (["-m", "seed=range(2)", "scenario.nosie=1,2"], ["'nosie'"]),
     (["-m", "hydra/launcher=nope", "seed=1,2"], ["'nope'", "joblib"]),
+    (["-m", "hydra.launcher.foo=1", "seed=1,2"], ["hydra.launcher.foo"]),
+    (["-m", "hydra.launcher.n_jobs=abc", "seed=1,2"], ["hydra.launcher.n_jobs", "abc"]),
     (["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
 ]
 
