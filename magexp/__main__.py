@@ -186,7 +186,7 @@ def check_launcher(hydra_overrides: list[str]) -> None:
                 raise MagexpError(f"hydra/launcher={value} needs a plugin that is not installed: run {hint}")
 
 
-def sweep(user: list[str], hydra_overrides: list[str], flags: list[str]) -> None:
+def sweep(user: list[str], hydra_overrides: list[str]) -> None:
     """Check every job, create the sweep's own folder, then hand the sweep to Hydra."""
     import hydra
 
@@ -210,7 +210,7 @@ def sweep(user: list[str], hydra_overrides: list[str], flags: list[str]) -> None
         hydra_overrides = [*hydra_overrides, f"hydra.sweep.dir={create_unique(folder)[0]}"]
     register_schemas()
     app = hydra.main(version_base=None, config_path=str(CONF), config_name="config")(sweep_job)
-    sys.argv = [sys.argv[0], *flags, "-m", *user, *hydra_overrides]
+    sys.argv = [sys.argv[0], "-m", *user, *hydra_overrides]
     app()
 
 
@@ -298,7 +298,7 @@ def run_command(args: list[str]) -> None:
         validate_runs(expand_sweep(user)[:1])
         return hand_to_hydra(args)
     if multirun:
-        return sweep(user, hyd, [])
+        return sweep(user, hyd)
     run_dirs = [o.partition("=")[2] for o in hyd if o.startswith("hydra.run.dir=")]
     if len(run_dirs) != len(hyd):
         rest = [o for o in hyd if not o.startswith("hydra.run.dir=")]
