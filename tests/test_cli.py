@@ -186,3 +186,21 @@ def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):
                           env={**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")})
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip().splitlines()[-1] == "heavy: []"
+
+
+def test_provenance_names_the_commit_and_hashes_the_resolved_config():
+    from magexp.paths import ROOT
+    from magexp.provenance import commit, config_hash, provenance
+
+    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True)
+    if head.returncode == 0:
+        assert head.stdout.strip().startswith(commit())
+    a = {"seed": 1, "scenario": {"noise": 2.0, "name": "x"}}
+    assert config_hash(a) == config_hash({"scenario": {"name": "x", "noise": 2.0}, "seed": 1})  # key order
+    assert config_hash(a) != config_hash({**a, "seed": 2}) and len(config_hash(a)) == 16
+    fields = provenance(a)
+    assert set(fields) == {"magexp_version", "magexp_commit", "python", "numpy", "scipy", "hydra", "omegaconf",
+                           "config_hash"}
+    import numpy
+
+    assert fields["numpy"] == numpy.__version__ and fields["config_hash"] == config_hash(a)
