@@ -242,12 +242,13 @@ def print_help() -> None:
 
 def calibrate(argv: list[str]) -> None:
     """``magexp calibrate ...``: :func:`magexp.calibration.main`."""
-    import importlib.util
-
-    if importlib.util.find_spec("magexp.calibration") is None:
-        raise MagexpError("the calibrate command is not available in this build: magexp.calibration is missing")
-    from magexp.calibration import main as calibration_main
-
+    try:
+        from magexp.calibration import main as calibration_main
+    except ModuleNotFoundError as exc:
+        if exc.name != "magexp.calibration":
+            raise
+        raise MagexpError("the calibrate command is not available in this build: magexp.calibration is missing") \
+            from None
     code = calibration_main(argv)
     sys.exit(code or 0)
 

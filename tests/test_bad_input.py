@@ -108,6 +108,8 @@ REPRODUCE_CASES = [
     (["ding2024", "--jobs", "-1"], ["--jobs -1"]),
     (["ding2024", "--only", "nothing"], ["'nothing'"]),
     (["ding2024", "--only", "ding2024_fig3", "--out", "a_file"], ["a_file", "is a file"]),
+    (["ding2024", "--only", "ding2024_fig3", "--out", "/proc/magexp-results"], ["/proc/magexp-results", "not writable"]),
+    (["all", "--out", "a_file/results"], ["a_file", "is a file"]),
 ]
 
 

@@ -108,18 +108,28 @@ def test_exit_codes_across_the_process_boundary(tmp_path):
 
 
 def test_calibrate_is_its_own_command(capsys, monkeypatch):
-    import importlib.util
+    """``magexp calibrate ARGS`` is ``magexp.calibration.main(ARGS)``, before any composing."""
+    import types
 
-    if importlib.util.find_spec("magexp.calibration") is None:
-        with pytest.raises(SystemExit) as info:
-            magexp_main(["calibrate", "data.path=x.csv"])
-        assert info.value.code == 2 and "magexp.calibration" in capsys.readouterr().err
-    else:
-        seen = []
-        monkeypatch.setattr("magexp.calibration.main", lambda argv: seen.append(argv) or 0)
-        with pytest.raises(SystemExit) as info:
-            magexp_main(["calibrate", "data.path=x.csv", "estimator=lm"])
-        assert info.value.code == 0 and seen == [["data.path=x.csv", "estimator=lm"]]
+    seen = []
+    fake = types.ModuleType("magexp.calibration")
+    fake.main = lambda argv: seen.append(argv) or 0
+    monkeypatch.setitem(sys.modules, "magexp.calibration", fake)
+    with pytest.raises(SystemExit) as info:
+        magexp_main(["calibrate", "data.path=x.csv", "estimator=lm"])
+    assert info.value.code == 0 and seen == [["data.path=x.csv", "estimator=lm"]]
+    fake.main = lambda argv: 2
+    with pytest.raises(SystemExit) as info:
+        magexp_main(["calibrate"])
+    assert info.value.code == 2
+
+
+def test_calibrate_without_its_module_is_one_line(capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "magexp.calibration", None)  # as if absent
+    with pytest.raises(SystemExit) as info:
+        magexp_main(["calibrate", "data.path=x.csv"])
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and err.count("\n") == 1 and "magexp.calibration" in err
 
 
 SWEEP = ["-m", "estimator=ipso", "estimator.n_iterations=300", "scenario.noise=0,5", "seed=range(3)",
