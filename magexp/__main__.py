@@ -200,7 +200,7 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
         from magexp.config import hydra_compose
 
         hydra_compose(tuple(settings), with_hydra=True)
-    validate_runs(expand_sweep(user))
+    validate_runs(expand_sweep(user), keep=False)
     explicit = [o for o in hydra_overrides if o.startswith("hydra.sweep.dir=")]
     if explicit:
         check_output_folder(explicit[-1].partition("=")[2], "sweep folder")
@@ -296,7 +296,7 @@ def run_command(args: list[str]) -> None:
     if cfg_flag or others:
         from magexp.cli_checks import expand_sweep, validate_runs
 
-        validate_runs(expand_sweep(user)[:1])
+        validate_runs(expand_sweep(user)[:1], keep=False)
         return hand_to_hydra(args)
     if multirun:
         return sweep(user, hyd)

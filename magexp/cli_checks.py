@@ -16,7 +16,8 @@ import os
 import tempfile
 from pathlib import Path
 
-from magexp.config import GROUPS, check_choice, compose_config, options, parse_overrides, resolved, target_class  # noqa: F401
+from magexp.config import (GROUPS, check_choice, compose_config, options, parse_overrides,  # noqa: F401
+                           resolved, target_class, yaml_value)
 from magexp.errors import MagexpError, check
 
 #: float64 numbers per reading a run keeps (readings, reference field, attitude, calibrated
@@ -103,19 +104,28 @@ def check_seed(seed) -> None:
     check_positive_int(seed, "seed", minimum=0)
 
 
-def validate_runs(jobs: list[list[str]]) -> list:
-    """Compose and check every job; return the composed configs (one line on the first bad value).
+def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
+    """Check every job (one line on the first bad value); return the composed configs (``keep``).
 
     Each distinct scenario (with its objective) is built and its data checked once, each
-    distinct estimator built once, so a sweep over seeds costs one compose per job.
+    distinct estimator built once. Without ``keep`` (a sweep, whose jobs Hydra composes
+    itself), jobs that differ only in ``seed`` are composed once and their seeds checked
+    alone, so a sweep over many seeds costs almost nothing to check.
     """
     for job in jobs:  # group choices first: the cheapest and most common mistake
         for ov in job:
             key, _, value = ov.partition("=")
             if key in GROUPS:
                 check_choice(key, value)
-    configs, seen = [], set()
+    configs, seen, composed = [], set(), set()
     for job in jobs:
+        rest = tuple(o for o in job if o.partition("=")[0] != "seed")
+        if not keep and rest in composed:
+            for ov in job:
+                if ov.partition("=")[0] == "seed":
+                    check_seed(yaml_value(ov.partition("=")[2]))
+            continue
+        composed.add(rest)
         cfg = compose_config(job)
         check_seed(cfg.seed)
         plain = resolved(cfg)
@@ -132,7 +142,8 @@ def validate_runs(jobs: list[list[str]]) -> list:
         elif (mem_key := (s_key, e_key)) not in seen:
             check_memory(cfg)
             seen.add(mem_key)
-        configs.append(cfg)
+        if keep:
+            configs.append(cfg)
     return configs
 
 

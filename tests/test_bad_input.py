@@ -95,6 +95,7 @@ CASES = [  # (arguments, words the one line must contain)
     # sweeps: every value checked before the first job (and no multirun folder)
     (["-m", "estimator=pso,bogus"], ["'bogus'"]),
     (["-m", "scenario.noise=2,-1", "seed=range(3)"], ["scenario.noise=-1"]),
+    (["-m", "scenario.noise=1,2", "seed=0,1,-4"], ["seed=-4"]),  # a bad seed among many
     (["-m", "estimator=lm,ellipsoid", "scenario.n_readings=300,6"], ["n_readings=6"]),
     (["-m", "seed=range(2)", "scenario.nosie=1,2"], ["'nosie'"]),
     (["-m", "hydra/launcher=nope", "seed=1,2"], ["'nope'", "joblib"]),
