@@ -137,14 +137,14 @@ def execute(cfg, out_dir: Path, *, use_cache: bool = True) -> dict:
 
 def single_run(overrides: list[str], run_dir: str | None) -> None:
     """Compose once, check, create the run's own folder, run, write, print."""
-    from magexp.cli_checks import check_output_folder, create_unique, validate_runs
+    from magexp.cli_checks import check_output_folder, create_unique, first_missing, validate_runs
 
     (cfg,) = validate_runs([overrides])
     folder = Path(run_dir) if run_dir else Path(time.strftime(RUN_DIR))
     check_output_folder(folder, "run folder")
     if run_dir:
+        created = first_missing(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        created = None
     else:
         folder, created = create_unique(folder)
     try:

@@ -168,14 +168,23 @@ def check_output_folder(folder: Path | str, what: str = "output folder") -> Path
     return folder
 
 
+def first_missing(folder: Path) -> Path | None:
+    """The highest of ``folder`` and its parents that does not exist yet (None if ``folder`` exists):
+    removing it after a failure leaves no trace of the folders made for it."""
+    if folder.exists():
+        return None
+    top = folder
+    while not top.parent.exists():
+        top = top.parent
+    return top
+
+
 def create_unique(folder: Path | str) -> tuple[Path, Path]:
     """Create ``folder`` exclusively; if it exists, ``folder-2``, ``folder-3``...: two runs started
     in the same second never share a folder. Returns ``(folder, top)``, ``top`` the highest
     folder this call created (remove it to leave no trace)."""
     folder = Path(folder)
-    top = folder
-    while not top.parent.exists():
-        top = top.parent
+    top = first_missing(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     for k in itertools.count(1):
         candidate = folder if k == 1 else folder.with_name(f"{folder.name}-{k}")

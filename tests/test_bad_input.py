@@ -194,6 +194,8 @@ def test_ctrl_c_is_one_line_and_leaves_no_folder(workdir, capsys, monkeypatch):
     before = snapshot(workdir)
     one_line_failure(lambda: magexp_main(["estimator=ellipsoid"]), capsys, ["interrupted"])
     assert snapshot(workdir) == before  # the run's folder (and outputs/<date>/) removed again
+    one_line_failure(lambda: magexp_main(["estimator=ellipsoid", "hydra.run.dir=mine/run"]), capsys, ["interrupted"])
+    assert snapshot(workdir) == before  # a named folder made for the run, too
 
 
 def test_unexpected_error_is_still_one_line(workdir, capsys, monkeypatch):
