@@ -310,7 +310,7 @@ def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
         OmegaConf.set_struct(cfg, False)
         for group, choice in wanted.items():
             if choice:
-                cfg[group] = copy.deepcopy(_NODES[(config_name, group, choice)])
+                cfg[group] = _NODES[(config_name, group, choice)]  # OmegaConf assigns a copy
         OmegaConf.set_struct(cfg, True)
         return cfg
     cfg = _stored_compose(config_name, choices)
