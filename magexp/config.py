@@ -240,9 +240,9 @@ def _keys_of(cfg: DictConfig, key: str) -> tuple[str, list[str]]:
     return ".".join(path) or "the config", sorted(str(k) for k in node.keys()) if isinstance(node, DictConfig) else []
 
 
-def unknown_key(cfg: DictConfig, key: str, value: str) -> MagexpError:
+def unknown_key(cfg: DictConfig, key: str, value: str, config_name: str = PRIMARY) -> MagexpError:
     """The one-line error of an override whose key is not in the config."""
-    if key.split(".")[0] in CALIBRATE_KEYS:
+    if config_name == PRIMARY and key.split(".")[0] in CALIBRATE_KEYS:
         return MagexpError(f"{key}={value} is not allowed: the simulation command has no {key.split('.')[0]!r}; "
                            "calibrate a recording with `magexp calibrate data.path=<file> ...`")
     where, keys = _keys_of(cfg, key)
@@ -409,7 +409,7 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
     cfg = _composed(config_name, choices)
     for key, value in values:
         if OmegaConf.select(cfg, key, default="__missing__") == "__missing__":
-            raise unknown_key(cfg, key, value)
+            raise unknown_key(cfg, key, value, config_name)
         typed = yaml_value(value)
         try:
             OmegaConf.update(cfg, key, typed, merge=False)
