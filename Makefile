@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 JOBS   ?= 0
 
 .DEFAULT_GOAL := help
-.PHONY: help venv lock bench reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test clean
+.PHONY: help venv lock bench reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test test-full clean
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
@@ -38,7 +38,10 @@ report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the a
 bench: $(STAMP) ## speed benchmark; writes results/bench.csv
 	$(PY) -m magexp.bench
 
-test: $(STAMP) ## run the test suite
+test: $(STAMP) ## run the test suite (without the wheel build: make test-full)
+	$(PY) -m pytest -m "not full"
+
+test-full: $(STAMP) ## the test suite and the end-to-end cases (build the wheel, install it, run it elsewhere)
 	$(PY) -m pytest
 
 lock: ## refresh requirements.lock from the newest releases allowed by pyproject.toml (then commit it)
@@ -50,4 +53,4 @@ lock: ## refresh requirements.lock from the newest releases allowed by pyproject
 	rm -rf .lockenv
 
 clean: ## remove the environment, caches and Hydra run folders (never results/)
-	rm -rf $(VENV) .cache outputs multirun .pytest_cache *.egg-info
+	rm -rf $(VENV) .cache outputs multirun .pytest_cache *.egg-info build dist magexp/_resources

@@ -27,8 +27,6 @@ estimators (common random numbers).
 
 from __future__ import annotations
 
-import copy
-import functools
 import itertools
 import os
 from dataclasses import dataclass
@@ -40,7 +38,8 @@ from omegaconf import DictConfig, OmegaConf
 
 from magexp import cache
 from magexp.errors import MagexpError
-from magexp.paths import CONF, EXPERIMENTS
+from magexp.config import compose_config, yaml_value  # noqa: F401  (compose_config: re-exported)
+from magexp.paths import EXPERIMENTS
 
 SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50}
 
@@ -118,75 +117,12 @@ def apply_optional(spec: DictConfig, cfg: DictConfig) -> DictConfig:
     return cfg
 
 
-@functools.lru_cache(maxsize=1)
-def _override_parser():
-    from hydra.core.override_parser.overrides_parser import OverridesParser
-
-    return OverridesParser.create()
-
-
-def yaml_value(text: str):
-    """A command-line value typed as Hydra's override grammar types it (``2`` -> int,
-    ``1e-06`` -> float, ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str)."""
-    return _override_parser().parse_overrides([f"k={text}"])[0].value()
-
-
 def setting_of(overrides: list[str]) -> str:
     """``key=value`` pairs joined by ``;``, the scenario first, the estimator left out."""
     pairs = dict(o.split("=", 1) for o in overrides)
     first = [f"scenario={pairs.pop('scenario')}"] if "scenario" in pairs else []
     pairs.pop("estimator", None)
     return ";".join(first + [f"{k}={v}" for k, v in pairs.items()])
-
-
-def _hydra_compose(overrides: tuple[str, ...]) -> DictConfig:
-    from hydra import compose, initialize_config_dir
-    from hydra.core.global_hydra import GlobalHydra
-
-    if GlobalHydra.instance().is_initialized():
-        return compose("config", overrides=list(overrides))
-    with initialize_config_dir(config_dir=str(CONF), version_base=None):
-        return compose("config", overrides=list(overrides))
-
-
-@functools.lru_cache(maxsize=256)
-def _group_node(group: str, choice: str | None) -> DictConfig:
-    """The config with one group choice (Hydra compose, once per choice)."""
-    return _hydra_compose(() if choice is None else (f"{group}={choice}",))
-
-
-GROUPS = ("scenario", "estimator")
-
-
-def compose_config(overrides: list[str]) -> DictConfig:
-    """The run config for ``overrides``, as Hydra would compose it.
-
-    Each config-group choice (``scenario=...``, ``estimator=...``) is composed once and
-    cached (a Hydra compose costs about 0.3 s); the nodes are grafted onto the primary config
-    and the plain ``key=value`` overrides applied with OmegaConf (struct mode: an unknown key
-    is an error, as with Hydra).
-    """
-    choices = {g: None for g in GROUPS}
-    values = []
-    for o in overrides:
-        key, _, value = o.partition("=")
-        if key in GROUPS:
-            choices[key] = value
-        elif key.startswith(("+", "~", "hydra")) or "/" in key:
-            return _hydra_compose(tuple(overrides))  # anything else: Hydra itself
-        else:
-            values.append((key, value))
-    cfg = copy.deepcopy(_group_node("scenario", None))
-    OmegaConf.set_struct(cfg, False)
-    for group, choice in choices.items():
-        if choice is not None:
-            cfg[group] = copy.deepcopy(_group_node(group, choice)[group])
-    OmegaConf.set_struct(cfg, True)
-    for key, value in values:
-        if OmegaConf.select(cfg, key, default="__missing__") == "__missing__":
-            raise MagexpError(f"bad override {key}={value}: the key {key!r} is not in the config")
-        OmegaConf.update(cfg, key, yaml_value(value), merge=False)
-    return cfg
 
 
 def shrink(cfg: DictConfig) -> DictConfig:

@@ -1,70 +1,195 @@
-"""Pre-flight checks of command-line overrides, so that a bad value is one line, not a traceback."""
+"""Checks made before any computation, so that a user mistake is one line and nothing is written.
+
+* :func:`expand_sweep`: every job of a ``-m`` sweep, as Hydra's basic sweeper forms them;
+* :func:`validate_runs`: every job composed (:func:`magexp.config.compose_config`) and every
+  distinct scenario and estimator built, so that each value is checked by its constructor
+  before the first job starts; the data of each distinct scenario is checked against the
+  problem's parameter count, and the memory a run needs against the memory available;
+* :func:`check_output_folder`: an output folder that can be created and written.
+"""
 
 from __future__ import annotations
 
 import itertools
+import json
+import os
+import tempfile
 from pathlib import Path
 
-from magexp.errors import MagexpError
-from magexp.paths import CONF
+from magexp.config import (GROUPS, check_choice, compose_config, options, parse_overrides,  # noqa: F401
+                           resolved, target_class, yaml_value)
+from magexp.errors import MagexpError, check
 
-GROUPS = ("scenario", "estimator")
-
-
-def options(group: str) -> list[str]:
-    """Config names available in ``conf/<group>/``."""
-    return sorted(p.stem for p in (CONF / group).glob("*.yaml"))
-
-
-def target_class(group: str, name: str):
-    """The class named by ``_target_`` in ``conf/<group>/<name>.yaml`` (imported, not built)."""
-    import importlib
-
-    from omegaconf import OmegaConf
-
-    module, _, cls = str(OmegaConf.load(CONF / group / f"{name}.yaml")["_target_"]).rpartition(".")
-    return getattr(importlib.import_module(module), cls)
+#: float64 numbers per reading a run keeps (readings, reference field, attitude, calibrated
+#: readings, problem features); and per reading and particle in a swarm's cost evaluation
+FLOATS_PER_READING = 64
+FLOATS_PER_READING_PARTICLE = 3
 
 
-def _choices(overrides: list[str]) -> list[list[str]]:
-    """Each override expanded into its sweep values (a plain override is a sweep of one)."""
-    from hydra.core.override_parser.overrides_parser import OverridesParser
-
-    parser = OverridesParser.create()
-    try:
-        parsed = parser.parse_overrides(overrides)
-    except Exception as exc:
-        raise MagexpError(f"could not parse the overrides: {str(exc).splitlines()[0]}") from None
-    expanded = []
-    for ov in parsed:
+def expand_sweep(overrides: list[str]) -> list[list[str]]:
+    """The jobs of a sweep: the cartesian product of every override's values, first key slowest
+    (Hydra's basic sweeper); ``a,b``, ``range(...)`` and ``choice(...)`` are expanded."""
+    axes = []
+    for ov in parse_overrides(overrides):
         key = ov.get_key_element()
         if ov.is_sweep_override():
-            values = [str(v) for v in ov.sweep_string_iterator()]
+            try:
+                values = [str(v) for v in ov.sweep_string_iterator()]
+            except Exception as exc:
+                raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range() and choice() "
+                                  f"can be swept ({str(exc).splitlines()[0]})") from None
         else:
             values = [ov.get_value_element_as_str()]
-        expanded.append([f"{key}={v}" for v in values])
-    return expanded
+        axes.append([f"{key}={v}" for v in values])
+    return [list(job) for job in itertools.product(*axes)]
 
 
-def check_overrides(overrides: list[str]) -> None:
-    """Compose the config for every value of every override; raise a one-line MagexpError."""
-    from hydra import compose, initialize_config_dir
+def swept_keys(overrides: list[str]) -> list[str]:
+    """The keys of ``overrides`` that take more than one value."""
+    return [ov.get_key_element() for ov in parse_overrides(overrides) if ov.is_sweep_override()]
 
-    user = [o for o in overrides if not o.lstrip("+~").startswith("hydra")]
-    for ov in user:
-        key, _, value = ov.partition("=")
-        if key in GROUPS:
-            for v in value.split(","):
-                if v and v not in options(key):
-                    raise MagexpError(f"{key}={v!r} is not allowed: choose one of {', '.join(options(key))}")
-    expanded = _choices(user)
-    base = [vals[0] for vals in expanded]
-    with initialize_config_dir(config_dir=str(CONF), version_base=None):
-        trials = [base] + [base[:i] + [v] + base[i + 1:] for i, vals in enumerate(expanded) for v in vals[1:]]
-        for trial in itertools.islice(trials, 200):
-            try:
-                compose("config", overrides=trial)
-            except Exception as exc:
-                lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
-                detail = "; ".join([lines[0]] + [ln for ln in lines[1:] if "not in struct" in ln or "Error" in ln][:1])
-                raise MagexpError(f"bad override: {detail}") from None
+
+def memory_needed(cfg) -> int:
+    """Bytes a run of ``cfg`` needs, roughly: ``8 N (64 + 3 P)`` for ``N`` readings and ``P``
+    particles (1 for an estimator without a swarm)."""
+    n = cfg.scenario.get("n_readings") or 0
+    p = cfg.estimator.get("n_particles") or 1
+    if not isinstance(n, int) or not isinstance(p, int):
+        return 0
+    return 8 * n * (FLOATS_PER_READING + FLOATS_PER_READING_PARTICLE * p)
+
+
+def check_memory(cfg) -> None:
+    """Refuse a run whose estimated memory exceeds the memory available, before it starts."""
+    need = memory_needed(cfg)
+    if need < 2 ** 28:  # under 256 MB: never worth asking the system
+        return
+    import psutil
+
+    have = psutil.virtual_memory().available
+    if need > have:
+        raise MagexpError(f"scenario.n_readings={cfg.scenario.n_readings} is not allowed here: the run needs about "
+                          f"{need / 2 ** 30:.1f} GiB of memory and {have / 2 ** 30:.1f} GiB are available")
+
+
+def _build(node, what):
+    from magexp.runner import build
+
+    return build(node, what)
+
+
+def check_problem(cfg, scenario) -> None:
+    """The scenario's data (seed ``cfg.seed``) give at least as many residuals as the problem has
+    parameters: fewer readings than parameters is refused for every estimator."""
+    import numpy as np
+
+    from magexp.problems import make_problem
+    from magexp.seeding import run_generators
+
+    data_rng, _ = run_generators(cfg.seed)
+    dataset = scenario.generate(rng=data_rng)
+    objective = cfg.get("objective") or scenario.objective
+    problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
+    centre = (np.asarray(problem.lower) + np.asarray(problem.upper)) / 2
+    n_res = int(np.size(problem.residuals(centre)))
+    check(n_res >= problem.n_params,
+          f"scenario.n_readings={dataset.n} is not allowed with objective {objective!r}: {dataset.n} readings give "
+          f"{n_res} residuals for {problem.n_params} parameters; use at least "
+          f"{-(-problem.n_params * dataset.n // max(n_res, 1))} readings")
+
+
+def check_seed(seed) -> None:
+    from magexp.errors import check_positive_int
+
+    check_positive_int(seed, "seed", minimum=0)
+
+
+def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
+    """Check every job (one line on the first bad value); return the composed configs (``keep``).
+
+    Each distinct scenario (with its objective) is built and its data checked once, each
+    distinct estimator built once. Without ``keep`` (a sweep, whose jobs Hydra composes
+    itself), jobs that differ only in ``seed`` are composed once and their seeds checked
+    alone, so a sweep over many seeds costs almost nothing to check.
+    """
+    for job in jobs:  # group choices first: the cheapest and most common mistake
+        for ov in job:
+            key, _, value = ov.partition("=")
+            if key in GROUPS:
+                check_choice(key, value)
+    configs, seen, composed = [], set(), set()
+    for job in jobs:
+        rest = tuple(o for o in job if o.partition("=")[0] != "seed")
+        if not keep and rest in composed:
+            for ov in job:
+                if ov.partition("=")[0] == "seed":
+                    check_seed(yaml_value(ov.partition("=")[2]))
+            continue
+        composed.add(rest)
+        cfg = compose_config(job)
+        check_seed(cfg.seed)
+        plain = resolved(cfg)
+        s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
+        e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
+        if e_key not in seen:
+            _build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
+            seen.add(e_key)
+        if s_key not in seen:
+            check_memory(cfg)
+            scenario = _build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
+            check_problem(cfg, scenario)
+            seen.add(s_key)
+        elif (mem_key := (s_key, e_key)) not in seen:
+            check_memory(cfg)
+            seen.add(mem_key)
+        if keep:
+            configs.append(cfg)
+    return configs
+
+
+def check_output_folder(folder: Path | str, what: str = "output folder") -> Path:
+    """Fail unless ``folder`` is (or can be created as) a writable directory; create nothing."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise MagexpError(f"{what} {str(folder)!r} is a file, not a folder: name a folder")
+    probe = folder
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        raise MagexpError(f"{what} {str(folder)!r} cannot be created: {str(probe)!r} is a file")
+    try:  # a real probe (permissions alone say nothing for root or a read-only mount)
+        fd, tmp = tempfile.mkstemp(dir=probe, prefix=".magexp-probe-")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise MagexpError(f"{what} {str(folder)!r} is not writable: {str(probe)!r}: {exc.strerror}") from None
+    return folder
+
+
+def first_missing(folder: Path) -> Path | None:
+    """The highest of ``folder`` and its parents that does not exist yet (None if ``folder`` exists):
+    removing it after a failure leaves no trace of the folders made for it."""
+    if folder.exists():
+        return None
+    top = folder
+    while not top.parent.exists():
+        top = top.parent
+    return top
+
+
+def create_unique(folder: Path | str) -> tuple[Path, Path]:
+    """Create ``folder`` exclusively; if it exists, ``folder-2``, ``folder-3``...: two runs started
+    in the same second never share a folder. Returns ``(folder, top)``, ``top`` the highest
+    folder this call created (remove it to leave no trace)."""
+    folder = Path(folder)
+    top = first_missing(folder)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    for k in itertools.count(1):
+        candidate = folder if k == 1 else folder.with_name(f"{folder.name}-{k}")
+        try:
+            candidate.mkdir()
+            return candidate, (top if top != folder else candidate)
+        except FileExistsError:
+            continue

@@ -1,5 +1,9 @@
 """The one exception type a user should ever see, as one line."""
 
+#: the largest magnitude a reading, noise amplitude or search bound may have: squares and
+#: products of a few such numbers stay far from float64 overflow (1.8e308)
+LARGEST = 1e15
+
 
 class MagexpError(ValueError):
     """A bad configuration value or input file.
@@ -34,4 +38,15 @@ def check_nonnegative(value, name: str) -> float:
         raise MagexpError(f"{name}={value!r} is not allowed: it must be a finite number >= 0") from None
     if not (v >= 0.0) or v == float("inf"):
         raise MagexpError(f"{name}={value!r} is not allowed: it must be a finite number >= 0")
+    return v
+
+
+def check_magnitude(value, name: str) -> float:
+    """Return ``value`` as a float, or fail if it is not finite or larger than :data:`LARGEST` in magnitude."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise MagexpError(f"{name}={value!r} is not allowed: it must be a finite number") from None
+    if not abs(v) <= LARGEST:
+        raise MagexpError(f"{name}={value!r} is not allowed: it must be a finite number of magnitude <= {LARGEST:g}")
     return v

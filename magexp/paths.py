@@ -1,17 +1,35 @@
-"""The one place that knows where things live."""
+"""The one place that knows where things live.
+
+In a source checkout (or an editable install) the configs, experiment specs and shipped data
+are the repository's top-level ``conf/``, ``experiments/`` and ``data/``. A wheel carries the
+same folders as package data under ``magexp/_resources/`` (see ``pyproject.toml``); a
+non-editable install finds them there, and writes results and its run cache relative to the
+working folder / the user's cache folder instead of into site-packages.
+"""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-CONF = ROOT / "conf"
-EXPERIMENTS = ROOT / "experiments"
-RESULTS = ROOT / "results"
-CACHE = Path(os.environ.get("MAGEXP_CACHE", ROOT / ".cache" / "runs"))  # finished runs, keyed by config
-DATA = ROOT / "data"
+PACKAGE = Path(__file__).resolve().parent
+ROOT = PACKAGE.parent
+SOURCE_CHECKOUT = (ROOT / "conf").is_dir() and (ROOT / "experiments").is_dir()
+RESOURCES = ROOT if SOURCE_CHECKOUT else PACKAGE / "_resources"
+
+CONF = RESOURCES / "conf"
+EXPERIMENTS = RESOURCES / "experiments"
+DATA = RESOURCES / "data"
+RESULTS = ROOT / "results" if SOURCE_CHECKOUT else Path.cwd() / "results"
+_default_cache = (ROOT / ".cache" / "runs" if SOURCE_CHECKOUT
+                  else Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "magexp" / "runs")
+CACHE = Path(os.environ.get("MAGEXP_CACHE", _default_cache))  # finished runs, keyed by config
 SHARED_DATA = ROOT.parent / "shared" / "data"
+
+
+def composed_configs() -> Path:
+    """Where composed configs are kept (beside the run cache, never inside it)."""
+    return CACHE.parent / f"{CACHE.name}-configs"
 
 
 def paper_results(paper: str) -> Path:

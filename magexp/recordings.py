@@ -61,7 +61,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.errors import MagexpError
+from magexp.errors import LARGEST, MagexpError
 from magexp.paths import DATA
 
 VERSION_LINE = "# magexp-recording v1"
@@ -131,8 +131,9 @@ def _number(text: str, where: str, what: str) -> float:
         value = float(text)
     except ValueError:
         raise MagexpError(f"{where}: {what}={text.strip()!r} is not a number") from None
-    if not np.isfinite(value):
-        raise MagexpError(f"{where}: {what}={text.strip()!r} is not allowed: it must be a finite number")
+    if not abs(value) <= LARGEST:
+        raise MagexpError(f"{where}: {what}={text.strip()!r} is not allowed: it must be a finite number "
+                          f"of magnitude <= {LARGEST:g}")
     return value
 
 
@@ -277,10 +278,16 @@ def load_recording(path: str | Path, *, unit: str | None = None) -> Recording:
         bad metadata value.
     """
     file = resolve(path)
+    if file.is_dir():
+        raise MagexpError(f"recording {str(path)!r} is a directory: give a file")
     if not file.is_file():
         raise MagexpError(f"recording {str(path)!r} does not exist (looked in the working folder and {DATA})")
     name = file.name
-    lines = file.read_text().splitlines()
+    try:  # a UTF-8 byte-order mark is accepted
+        lines = file.read_text(encoding="utf-8-sig").splitlines()
+    except UnicodeDecodeError as exc:
+        raise MagexpError(f"{name}: byte {exc.start} is not UTF-8 text: a recording must be a text file "
+                          "(CSV or 3 numeric columns)") from None
     if _is_plain(lines):
         if unit is None:
             raise MagexpError(f"data.unit=None is not allowed for {name}: a file without header does not name "

@@ -45,11 +45,11 @@ def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int =
                     only: str | None = None, force: bool = False, log=print) -> pd.DataFrame:
     """Every artifact of ``paper``; writes ``root/<paper>/summary.csv`` (its part of the summary)."""
     out = root / paper
-    out.mkdir(parents=True, exist_ok=True)
     parts = []
     specs = [s for s in paper_specs(paper) if only is None or s.name == only]
     if only is not None and not specs:
         raise MagexpError(f"--only {only!r} is not an artifact of {paper}")
+    out.mkdir(parents=True, exist_ok=True)
     for spec in specs:
         start = time.perf_counter()
         parts.append(reproduce_artifact(spec, out, seeds=seeds, jobs=jobs, tiny=tiny, force=force))
@@ -92,6 +92,9 @@ def main(argv=None) -> int:
                 raise MagexpError(f"paper={paper!r} is not allowed: choose all or one of {', '.join(available_papers())}")
         if args.jobs < 0:
             raise MagexpError(f"--jobs {args.jobs} is not allowed: it must be >= 0 (0: all cores)")
+        from magexp.cli_checks import check_output_folder
+
+        check_output_folder(args.out, "--out")
         start = time.perf_counter()
         for paper in papers:
             reproduce_paper(paper, root=args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, only=args.only,
@@ -106,6 +109,10 @@ def main(argv=None) -> int:
     except MagexpError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("error: interrupted (Ctrl-C); finished runs are cached, rerun the same command to resume",
+              file=sys.stderr)
+        return 130
     return 0
 
 

@@ -1,22 +1,18 @@
-"""Shared fixtures: composing configs without a Hydra app, and a throw-away results folder."""
+"""Shared fixtures: composing configs through the one composer, and a throw-away run cache."""
 
 from __future__ import annotations
 
 import pytest
-from hydra import compose, initialize_config_dir
-from hydra.core.global_hydra import GlobalHydra
 
-from magexp.paths import CONF
+from magexp.config import compose_config
 
 
 @pytest.fixture
 def make_cfg():
-    """``make_cfg(*overrides)`` -> the composed run config."""
+    """``make_cfg(*overrides)`` -> the composed run config (:func:`magexp.config.compose_config`)."""
 
     def _make(*overrides):
-        GlobalHydra.instance().clear()
-        with initialize_config_dir(config_dir=str(CONF), version_base=None):
-            return compose("config", overrides=list(overrides))
+        return compose_config(list(overrides))
 
     return _make
 

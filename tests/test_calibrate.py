@@ -29,8 +29,13 @@ def estimator(name, **overrides):
 
 
 def magexp(*args, cwd):
+    """``magexp calibrate ...`` (the command of magexp.calibration; the simulation command has no task=)."""
+    import importlib.util
+
+    if importlib.util.find_spec("magexp.calibration") is None:
+        pytest.skip("the calibrate command (magexp.calibration) is not in this build")
     env = {**os.environ, "HYDRA_FULL_ERROR": "0"}
-    return subprocess.run([sys.executable, "-m", "magexp", "task=calibrate", *args, f"hydra.run.dir={cwd / 'hydra'}"],
+    return subprocess.run([sys.executable, "-m", "magexp", "calibrate", *args],
                           cwd=cwd, capture_output=True, text=True, timeout=120, env=env)
 
 

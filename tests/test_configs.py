@@ -6,7 +6,7 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from magexp.artifacts import cells, load_spec, overrides_of
-from magexp.cli_checks import options
+from magexp.config import options
 from magexp.estimators.result import FitResult
 from magexp.paths import EXPERIMENTS
 from magexp.plots import kind_module
@@ -92,3 +92,90 @@ def test_artifact_spec_is_well_formed(make_cfg, path):
     for entry in reported_entries(spec):  # every paper number lands on a cell
         assert per_parameter or entry["quantity"] in quantities, entry
         assert any(matches(entry.get("match", {}), s) for s in settings), entry
+
+
+# --- the one composer (magexp.config) -------------------------------------------------------
+
+@pytest.mark.parametrize("text", ["2", "-3", "+4", "007", "0", "1.5", "1e-06", "1E5", ".5", "5.", "05e1", "abc", "a_b",
+                                  "True", "null", "inf", "nan", "[1,2]", "1_000", "0x10", "'quoted'"])
+def test_yaml_value_types_as_hydras_grammar(text):
+    from magexp.config import parse_overrides, yaml_value
+
+    ours, hydra = yaml_value(text), parse_overrides([f"k={text}"])[0].value()
+    assert type(ours) is type(hydra) and (ours == hydra or ours != ours and hydra != hydra)
+
+
+@pytest.mark.parametrize("overrides", [[], ["scenario=yuan2018_mode3", "estimator=rdpso"], ["estimator=kf_be"],
+                                       ["scenario=yan2022_mockup", "estimator=ls", "seed=4"],
+                                       ["scenario=ding2024_exp2", "scenario.noise=5", "estimator.n_particles=7"]])
+def test_compose_config_equals_hydras_compose(overrides):
+    from magexp.config import compose_config, hydra_compose
+
+    expected = OmegaConf.to_container(hydra_compose(tuple(overrides)), resolve=True)
+    for _ in range(3):  # first compose, then from disk / grafted in memory
+        assert OmegaConf.to_container(compose_config(overrides), resolve=True) == expected
+
+
+def test_a_composed_config_from_disk_keeps_its_schema(tmp_path, monkeypatch):
+    import magexp.config as config
+    from magexp.errors import MagexpError
+
+    monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "fresh")
+    monkeypatch.setattr(config, "_SEEN", set())  # as in a new process
+    monkeypatch.setattr(config, "_SKELETONS", {})
+    first = config.compose_config(["scenario=yuan2018_drift"])
+    assert list((tmp_path / "fresh-configs").glob("*.pkl"))
+    again = config.compose_config(["scenario=yuan2018_drift"])  # from disk
+    assert again == first and again is not first
+    assert OmegaConf.get_type(again.scenario) is config.YuanScenarioConf
+    with pytest.raises(MagexpError, match="scenario.noise=abc"):
+        config.compose_config(["scenario=yuan2018_drift", "scenario.noise=abc"])
+
+
+def test_a_typo_names_the_key_and_the_keys_that_exist():
+    from magexp.config import compose_config
+    from magexp.errors import MagexpError
+
+    with pytest.raises(MagexpError) as info:
+        compose_config(["scenario=yuan2018_mode1", "scenario.gyro.drift_deg=3"])
+    msg = str(info.value)
+    assert "\n" not in msg and "'drift_deg'" in msg and "scenario.gyro has no key" in msg
+    assert "drift_deg_h" in msg and "noise_deg_s" in msg
+
+
+def test_schema_types_are_checked_at_compose_time():
+    """The schema refuses a value of the wrong type before any constructor runs."""
+    from magexp.config import compose_config
+    from magexp.errors import MagexpError
+
+    with pytest.raises(MagexpError, match="scenario.n_readings=many"):
+        compose_config(["scenario.n_readings=many"])
+    with pytest.raises(MagexpError, match="scenario.rotation.rate_deg_s=fast"):
+        compose_config(["scenario=yuan2018_mode2", "scenario.rotation.rate_deg_s=fast"])
+
+
+def test_yuan_scenarios_inherit_one_base():
+    from magexp.config import YuanScenarioConf, compose_config
+    from magexp.paths import CONF
+
+    names = [n for n in SCENARIOS if n.startswith("yuan2018_")]
+    assert len(names) == 8
+    base = OmegaConf.load(CONF / "scenario" / "base" / "yuan2018.yaml")
+    for name in names:
+        own = OmegaConf.load(CONF / "scenario" / f"{name}.yaml")
+        assert "base/yuan2018@_here_" in [str(d).split("#")[0].strip() for d in own.defaults]
+        assert "search" not in own  # the box lives in the base
+        cfg = compose_config([f"scenario={name}"])
+        assert OmegaConf.get_type(cfg.scenario) is YuanScenarioConf
+        assert cfg.scenario.search == base.search and cfg.scenario.name == name
+    assert compose_config(["scenario=yuan2018_mode3"]).scenario.rotation.mode == "mode3"
+    assert compose_config(["scenario=yuan2018_adis16488"]).scenario.gyro.noise_deg_s == 0.16
+
+
+def test_calibration_keys_are_unknown_to_a_simulation_run():
+    from magexp.config import compose_config
+    from magexp.errors import MagexpError
+
+    for override in ("task=calibrate", "data.path=x.csv", "out=folder"):
+        with pytest.raises(MagexpError, match="magexp calibrate"):
+            compose_config([override])

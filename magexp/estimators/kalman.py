@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.errors import check_nonnegative, check_positive_int
+from magexp.errors import check, check_nonnegative, check_positive_int
 from magexp.estimators.result import FitResult
 
 
@@ -79,6 +79,7 @@ class _Tuning:
         self.p0 = check_nonnegative(p0, "estimator.p0")
         self.q = check_nonnegative(q, "estimator.q")
         self.sigma2 = check_nonnegative(sigma2, "estimator.sigma2")
+        check(self.sigma2 > 0, f"estimator.sigma2={sigma2!r} is not allowed: the noise variance must be > 0")
         self.n_steps = check_positive_int(n_steps, "estimator.n_steps")
 
 

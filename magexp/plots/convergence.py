@@ -33,10 +33,10 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     panel_key, hue_key = spec.plot.get("panels"), spec.plot.get("hue")
     panel_vals = group_values(frame, panel_key)
-    fig, axes = panels(len(panel_vals))
+    fig, axes = panels(len(panel_vals), axes=axes)
     for ax, pv in zip(axes, panel_vals):
         sub = frame if pv is None else frame[frame[panel_key] == pv]
         for hv in group_values(sub, hue_key):

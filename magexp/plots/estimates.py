@@ -38,7 +38,7 @@ def _cell(row) -> str:
     return text + (f"\n[{row.q25:.4g}, {row.q75:.4g}]" if row.n_seeds > 1 and np.isfinite(row.q25) else "")
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     quantities = list(dict.fromkeys(frame.quantity))
     estimators = list(dict.fromkeys(frame.estimator))
     truth = frame.groupby("quantity", sort=False).truth.first()
@@ -51,7 +51,7 @@ def draw(frame: pd.DataFrame, spec):
             cells.append(_cell(row.iloc[0]) if len(row) else "")
         body.append(cells)
     tall = frame.n_seeds.max() > 1
-    fig, (ax,) = panels(1, width=1.2 + 1.7 * len(columns), height=0.6 + (0.42 if tall else 0.25) * len(quantities))
+    fig, (ax,) = panels(1, width=1.2 + 1.7 * len(columns), height=0.6 + (0.42 if tall else 0.25) * len(quantities), axes=axes)
     ax.axis("off")
     table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, loc="center", cellLoc="center")
     table.auto_set_font_size(False)

@@ -22,11 +22,11 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     key = spec.plot.get("panels")
     values = group_values(frame, key)
     show_raw = spec.plot.get("quantity", "magnitude") == "magnitude"
-    fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0)
+    fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
     n = len(values)
     for i, v in enumerate(values):
         sub = frame if v is None else frame[frame[key] == v]

@@ -31,7 +31,7 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     x_key, panel_key, hue_key = spec.plot.x, spec.plot.get("panels"), spec.plot.get("hue", "estimator")
     if not isinstance(hue_key, str):  # several keys: one line per combination
         keys = list(hue_key)
@@ -39,7 +39,7 @@ def draw(frame: pd.DataFrame, spec):
         hue_key = "_hue"
     on_objective = frame["metric"].iloc[0] == "fun" if "metric" in frame else True
     values = group_values(frame, panel_key)
-    fig, axes = panels(len(values))
+    fig, axes = panels(len(values), axes=axes)
     for ax, pv in zip(axes, values):
         sub = frame if pv is None else frame[frame[panel_key] == pv]
         hues = group_values(sub, hue_key)

@@ -8,14 +8,15 @@ from magexp.plots.benchmark_table import tabulate  # noqa: F401  (the kind's tab
 from magexp.plots.style import plt
 
 
-def draw(frame, spec):
+def draw(frame, spec, ax=None):
     value = spec.plot.get("value", "offset_error_ratio")
     cases = list(dict.fromkeys(frame.case))
     estimators = list(dict.fromkeys(frame.estimator))
     grid = np.full((len(estimators), len(cases)), np.nan)
     for _, r in frame.iterrows():
         grid[estimators.index(r.estimator), cases.index(r.case)] = r[value]
-    fig, ax = plt.subplots(figsize=(1.0 + 0.95 * len(cases), 1.2 + 0.5 * len(estimators)), layout="constrained")
+    fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(
+        figsize=(1.0 + 0.95 * len(cases), 1.2 + 0.5 * len(estimators)), layout="constrained")
     shown = np.log10(np.clip(grid, 1e-2, 1e4))
     im = ax.imshow(shown, cmap="RdYlGn_r", vmin=0, vmax=3, aspect="auto")
     for i in range(len(estimators)):

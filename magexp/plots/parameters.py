@@ -33,13 +33,13 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     """Two panels (matrix entries, offsets): estimate minus truth, symlog axis; filled marker and
     bar: median and IQR over seeds; open marker: the paper's value minus the truth."""
     names = list(dict.fromkeys(frame.parameter))
     groups = [names[:9], names[9:]]
     labels = list(dict.fromkeys(frame.label))
-    fig, axes = panels(2, width=5.2, height=3.2)
+    fig, axes = panels(2, width=5.2, height=3.2, axes=axes)
     for ax, group, linthresh in zip(axes, groups, (1e-3, 0.1)):
         width = 0.8 / max(len(labels), 1)
         for j, lab in enumerate(labels):

@@ -10,9 +10,9 @@ from magexp.plots.style import plt
 MARKERS = "osD^v<>PX*hp"
 
 
-def draw(frame, spec):
+def draw(frame, spec, ax=None):
     value = spec.plot.get("value", "offset_error_ratio")
-    fig, ax = plt.subplots(figsize=(7.5, 4.8), layout="constrained")
+    fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 4.8), layout="constrained")
     papers = list(dict.fromkeys(s.split("_")[0] for s in frame.scenario))
     colours = {p: f"C{i}" for i, p in enumerate(papers)}
     for k, est in enumerate(dict.fromkeys(frame.estimator)):

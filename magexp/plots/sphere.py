@@ -27,14 +27,15 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     key = spec.plot.get("panels")
     values = group_values(frame, key)
-    fig = plt.figure(figsize=(4.2 * len(values), 4.2))
+    axes = None if axes is None else ([axes] if hasattr(axes, "plot") else list(axes))  # the caller's 3-D axes
+    fig = plt.figure(figsize=(4.2 * len(values), 4.2)) if axes is None else axes[0].figure
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
     for i, val in enumerate(values):
         sub = frame if val is None else frame[frame[key] == val]
-        ax = fig.add_subplot(1, len(values), i + 1, projection="3d")
+        ax = fig.add_subplot(1, len(values), i + 1, projection="3d") if axes is None else axes[i]
         r = float(sub.radius.median())
         ax.plot_wireframe(r * np.cos(u) * np.sin(v), r * np.sin(u) * np.sin(v), r * np.cos(v),
                           color="0.8", lw=0.4)

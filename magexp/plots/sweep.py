@@ -27,12 +27,12 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     x_key, hue_key, panel_key = spec.plot.x, spec.plot.get("hue", "estimator"), spec.plot.get("panels")
     metrics, columns = list(spec.plot.metrics), group_values(frame, panel_key)
     targets = dict(spec.plot.get("targets", {}) or {})
     ylabels = dict(spec.plot.get("ylabels", {}) or {})
-    fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1, width=3.8)
+    fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1, width=3.8, axes=axes)
     for i, metric in enumerate(metrics):
         for j, pv in enumerate(columns):
             ax = axes[i * len(columns) + j]

@@ -64,12 +64,12 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.concat(frames + [truth], ignore_index=True)
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     import matplotlib.pyplot as plt
 
     traces = frame[(frame.kind == "trace") & (frame.step >= float(spec.plot.get("start", 0)))]
     groups = [list(g) for g in spec.plot.get("groups", [])] or [[p] for p in dict.fromkeys(traces.parameter)]
-    fig, axes = panels(len(groups), width=3.6, rows=-(-len(groups) // 2) if len(groups) > 2 else 1)
+    fig, axes = panels(len(groups), width=3.6, rows=-(-len(groups) // 2) if len(groups) > 2 else 1, axes=axes)
     several = traces.estimator.nunique() > 1
     refs = list(dict.fromkeys(frame[frame.kind == "reference"].estimator))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]

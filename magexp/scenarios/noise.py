@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.errors import MagexpError, check_nonnegative
+from magexp.errors import MagexpError, check_magnitude, check_nonnegative
 
 KINDS = ("uniform", "gaussian")
 
@@ -19,7 +19,7 @@ class Noise:
     """
 
     def __init__(self, amplitude: float, kind: str = "uniform", name: str = "scenario.noise"):
-        self.amplitude = check_nonnegative(amplitude, name)
+        self.amplitude = check_magnitude(check_nonnegative(amplitude, name), name)
         if kind not in KINDS:
             raise MagexpError(f"{name}_kind={kind!r} is not allowed: choose one of {', '.join(KINDS)}")
         self.kind = kind

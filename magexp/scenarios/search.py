@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from magexp.errors import MagexpError
+from magexp.errors import LARGEST, MagexpError
 
 
 def _interval(value, name: str) -> tuple[float, float]:
@@ -16,6 +16,8 @@ def _interval(value, name: str) -> tuple[float, float]:
         raise MagexpError(f"search.{name}={value!r} is not allowed: it must be [low, high]") from None
     if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
         raise MagexpError(f"search.{name}={value!r} is not allowed: it must be finite with low < high")
+    if max(abs(lo), abs(hi)) > LARGEST:
+        raise MagexpError(f"search.{name}={value!r} is not allowed: bounds must be of magnitude <= {LARGEST:g}")
     return lo, hi
 
 

@@ -1,0 +1,60 @@
+"""Figures a paper can take as they are: a vector twin beside every PNG, and drawing into the
+caller's own axes."""
+
+import hashlib
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from omegaconf import OmegaConf
+
+from magexp.plots import kind_module
+from magexp.plots.style import panels, save
+
+
+def frame():
+    it = np.arange(20)
+    return pd.concat([pd.DataFrame({"estimator": est, "iteration": it, "nfev": it * 50.0,
+                                    "median": 10.0 / (1 + it) + k, "q25": 9.0 / (1 + it) + k, "q75": 11.0 / (1 + it) + k,
+                                    "noise_floor": 0.5, "rms_bound": 0.4, "n_seeds": 3, "converged": 2})
+                      for k, est in enumerate(["pso", "ipso"])], ignore_index=True)
+
+
+SPEC = OmegaConf.create({"title": "test", "plot": {"hue": "estimator"}})
+
+
+def digest(path):
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_save_writes_a_deterministic_pdf_twin(tmp_path):
+    draw = kind_module("convergence").draw
+    first = save(draw(frame(), SPEC), tmp_path / "a.png")
+    second = save(draw(frame(), SPEC), tmp_path / "b.png")
+    assert [p.name for p in first] == ["a.png", "a.pdf"]
+    assert (tmp_path / "a.pdf").read_bytes().startswith(b"%PDF")
+    assert digest(tmp_path / "a.pdf") == digest(tmp_path / "b.pdf")  # same figure, same bytes
+    assert digest(tmp_path / "a.png") == digest(tmp_path / "b.png")
+    assert b"CreationDate" not in (tmp_path / "a.pdf").read_bytes()
+
+
+def test_a_kind_draws_into_the_callers_axes():
+    fig, (left, right) = plt.subplots(1, 2)
+    right.plot([0, 1], [0, 1])
+    out = kind_module("convergence").draw(frame(), SPEC, axes=[left])
+    assert out is fig
+    assert len(left.get_lines()) >= 2 and len(right.get_lines()) == 1  # only the given axes were drawn in
+    assert left.get_yscale() == "log"
+    plt.close(fig)
+
+
+def test_panels_refuses_the_wrong_number_of_axes():
+    import pytest
+
+    from magexp.errors import MagexpError
+
+    fig, axes = plt.subplots(1, 3)
+    with pytest.raises(MagexpError, match="3 given"):
+        panels(2, axes=axes)
+    assert panels(3, axes=axes) == (fig, list(axes))
+    plt.close(fig)
