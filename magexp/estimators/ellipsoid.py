@@ -50,7 +50,8 @@ class EllipsoidFit:
     """
 
     references = "Gander, Golub & Strebel 1994"
-    objectives = ("scalar",)  # a scalar reference cannot fix the rotation of W
+    needs = ("total_field",)  # a scalar reference cannot fix the rotation of W
+    iterative = False
 
     def __init__(self, *, name: str = "ellipsoid"):
         self.name = name

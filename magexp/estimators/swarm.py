@@ -41,6 +41,9 @@ class SwarmOptimizer:
     references : the paper(s) the variant comes from.
     """
 
+    needs = ("cost",)
+    iterative = True
+
     def __init__(self, *, name: str = "pso", n_particles: int = 50, n_iterations: int = 800,
                  velocity=None, init=None, velocity_clamp: float = 0.2,
                  initial_velocity: str = "uniform", references: str = "", velocity_limit: float | None = None):
