@@ -19,6 +19,7 @@ from magexp.errors import MagexpError
 OBJECTIVES: dict[str, str] = {
     "scalar": "magexp.problems.scalar:ScalarCalibration",
     "vector": "magexp.problems.vector:VectorCalibration",  # Yuan 2018 eq 8
+    "vector_ls": "magexp.problems.vector:VectorLeastSquares",  # eq 8's residuals in least squares
     "ship": "magexp.problems.ship:ShipMagnetization",  # Yan & Zhou 2022 B = K A Be + Bp
 }
 
