@@ -63,19 +63,23 @@ class LevenbergMarquardt:
                          success=status > 0, message=message)
 
 
-def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 2000, callback=None):
+def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 2000, callback=None, measure=None):
     """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``.
 
-    Returns ``(x, status, message, history)``: the best ``x`` evaluated, scipy's status
-    (``-2`` when the callback stopped it), its message, and the best RMS of the residuals after
-    every evaluation. Shared by every estimator that ends in a least-squares refinement.
+    Returns ``(x, status, message, history)``: scipy's solution (the best ``x`` evaluated when the
+    callback stopped it: status ``-2``), its message, and the best value after every evaluation
+    of ``measure(x)`` (default: the RMS of the residuals; an estimator minimising a weighted
+    criterion reports its problem's objective). Shared by every least-squares refinement.
     """
     best: dict = {}
     record = stopper(callback, best)
 
     def fun(theta):
         r = residuals(theta)
-        record(theta, float(np.sqrt(np.mean(r * r))) if np.all(np.isfinite(r)) else np.inf)
+        if not np.all(np.isfinite(r)):
+            record(theta, np.inf)
+        else:
+            record(theta, float(np.sqrt(np.mean(r * r))) if measure is None else measure(theta))
         return r
 
     try:

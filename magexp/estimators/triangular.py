@@ -136,11 +136,13 @@ class TriangularCalibration:
             return problem.pack(*self.unpack(q))
 
         relay = None if callback is None else (lambda k, q, fun: callback(k, to_x(q), fun))
+        measure = (lambda q: problem.cost_direct(to_x(q))) if self.weighted else None
         q, status, message, history = minimise_residuals(self.residuals_of(problem), self.start(problem),
-                                                         tol=self.tol, max_nfev=self.max_nfev, callback=relay)
+                                                         tol=self.tol, max_nfev=self.max_nfev, callback=relay,
+                                                         measure=measure)
         x = to_x(q)
-        # history: the best RMS of the minimised residuals per evaluation (the problem's objective for
-        # ``triangular``; the noise-weighted one for ``ml_scalar``)
+        # history: the best value of the problem's objective after each evaluation (for ``ml_scalar``
+        # not what it minimises, so its final x need not be the history's best)
         return FitResult(x=x, fun=problem.cost_direct(x), nit=len(history), nfev=len(history), history=history,
                          history_nfev=np.arange(1, len(history) + 1), success=status > 0, message=message)
 
@@ -150,7 +152,7 @@ class MaximumLikelihoodScalar(TriangularCalibration):
 
     references = "Vasconcelos et al. 2011, IEEE TAES 47(2):1293-1306"
     weighted = True
-    monotone_history = False  # its history is the weighted objective, not the problem's
+    monotone_history = False  # it minimises the weighted criterion: its x is not the best of the problem's objective
 
     def __init__(self, *, name: str = "ml_scalar", form: str = "lower", max_nfev: int = 2000, tol: float = 1e-15):
         super().__init__(name=name, form=form, max_nfev=max_nfev, tol=tol)
