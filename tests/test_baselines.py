@@ -213,3 +213,18 @@ def test_boundary_strategies_by_hand():
     qx, qv = random_reentry(x, v, lo, hi, rng=rng)
     assert np.all((qx >= lo) & (qx <= hi)) and qx[0, 1] == 0.5
     np.testing.assert_allclose(qv, [[0.0, 0.1], [0.0, 0.0]])
+
+
+def test_boundary_is_a_checked_setting_and_reflect_keeps_the_swarm_inside(make_cfg):
+    from magexp.errors import MagexpError
+    from magexp.runner import build
+
+    with pytest.raises(MagexpError, match="estimator.boundary='wall' is not allowed: choose one of clip, reflect"):
+        build(make_cfg("estimator=pso", "estimator.boundary=wall").estimator, "pso")
+    for name in ("reflect", "random"):
+        est = build(make_cfg("estimator=pso", f"estimator.boundary={name}", "estimator.n_iterations=30",
+                             "estimator.n_particles=10").estimator, "pso")
+        sc = instantiate(make_cfg("scenario=ding2024_exp1").scenario, _convert_="all")
+        p = make_problem("scalar", sc.generate(rng=np.random.default_rng(0)), sc.search)
+        res = est.fit(p, rng=np.random.default_rng(0))
+        assert np.all(res.x >= p.lower) and np.all(res.x <= p.upper)
