@@ -39,9 +39,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.errors import check, check_positive_int
+from magexp.errors import check
 from magexp.estimators.ellipsoid import fit_ellipsoid
-from magexp.estimators.lm import minimise_residuals
+from magexp.estimators.lm import LevenbergMarquardt, minimise_residuals
 from magexp.estimators.result import FitResult
 
 FORMS = {"lower": np.tril_indices(3), "upper": np.triu_indices(3)}
@@ -96,10 +96,8 @@ class TriangularCalibration:
 
     def __init__(self, *, name: str = "triangular", form: str = "lower", max_nfev: int = 2000, tol: float = 1e-15):
         check(form in FORMS, f"estimator.form={form!r} is not allowed: choose one of {', '.join(FORMS)}")
-        self.name = name
-        self.form = form
-        self.max_nfev = check_positive_int(max_nfev, "estimator.max_nfev")
-        self.tol = float(tol)
+        self.name, self.form = name, form
+        self.refine = LevenbergMarquardt(max_nfev=max_nfev, tol=tol)  # its settings (checked there)
 
     def unpack(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(W, o)`` of the 9 parameters ``[triangle of W (row-major), o]``."""
@@ -138,7 +136,8 @@ class TriangularCalibration:
         relay = None if callback is None else (lambda k, q, fun: callback(k, to_x(q), fun))
         measure = (lambda q: problem.cost_direct(to_x(q))) if self.weighted else None
         q, status, message, history = minimise_residuals(self.residuals_of(problem), self.start(problem),
-                                                         tol=self.tol, max_nfev=self.max_nfev, callback=relay,
+                                                         tol=self.refine.tol, max_nfev=self.refine.max_nfev,
+                                                         callback=relay,
                                                          measure=measure)
         x = to_x(q)
         # history: the best value of the problem's objective after each evaluation (for ``ml_scalar``
