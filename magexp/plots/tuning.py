@@ -10,7 +10,8 @@ evaluations to 1.1x the final value. Per (family, scenario) ``role`` marks the `
 ``median`` and ``worst`` setting by the median metric, and ``default`` the cell whose overrides
 match ``plot.default`` (``{family: {key: value}}``; a family without one: no default).
 The figure: one panel per scenario, one column per family, a dot per setting (the metric's
-median), best / median / worst labelled, the default as a star; below, the success rates.
+median), best / median / worst labelled, the default as a star; below, the success rates (of the
+median and best settings and the default; of the one setting where a family has only one).
 """
 
 from __future__ import annotations
@@ -83,6 +84,9 @@ def draw(frame: pd.DataFrame, spec):
                 if r.role in ("best", "median", "worst"):
                     top.annotate(r.role, (x, max(r["median"], 1e-14)), fontsize=6, xytext=(3, 2),
                                  textcoords="offset points")
+            if len(f) == 1:  # one setting (an ablation variant): its success rate
+                bottom.bar(k, float(f.success_rate.iloc[0]), width=0.5, color="C0")
+                continue
             bottom.bar(k - 0.2, f.success_rate.median(), width=0.2, color="C0",
                        label="median over settings" if k == 0 else None)
             best = f[f.role == "best"] if (f.role == "best").any() else f
