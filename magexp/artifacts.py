@@ -80,16 +80,19 @@ def cells(spec: DictConfig) -> list[dict[str, str]]:
 
 
 def applicable(cfg: DictConfig) -> bool:
-    """Whether the run's estimator applies to its objective (estimators may declare ``objectives``)."""
-    import importlib
+    """Whether the run's estimator applies to its problem: :func:`magexp.estimators.base.applies_to`
+    on the classes named by the config (nothing is built or simulated)."""
+    from hydra.utils import get_class
 
-    module, _, cls = cfg.estimator._target_.rpartition(".")
-    objectives = getattr(getattr(importlib.import_module(module), cls), "objectives", None)
+    from magexp.estimators.base import applies_to
+    from magexp.problems import problem_class
+
     objective = cfg.get("objective") or cfg.scenario.get("objective")
     if objective is None:  # the scenario class fixes it
-        module, _, cls = cfg.scenario._target_.rpartition(".")
-        objective = getattr(getattr(importlib.import_module(module), cls), "objective", None)
-    return objectives is None or objective is None or objective in objectives
+        objective = getattr(get_class(cfg.scenario._target_), "objective", None)
+    if objective is None:
+        return True
+    return applies_to(get_class(cfg.estimator._target_), problem_class(objective))[0]
 
 
 def overrides_of(spec: DictConfig, cell: dict[str, str], cfg: DictConfig | None = None) -> list[str]:

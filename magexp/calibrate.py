@@ -156,15 +156,19 @@ def check_size(rec: Recording) -> None:
 
 
 def check_applies(estimator, objective: str) -> None:
-    """Fail in one line if ``estimator`` declares objectives that do not include ``objective``."""
-    if objective in getattr(estimator, "objectives", (objective,)):
-        return
+    """Fail in one line unless ``estimator`` applies to the ``objective`` problem
+    (:func:`magexp.estimators.base.applies_to`), naming the estimators that do."""
     from magexp.cli_checks import options, target_class
+    from magexp.estimators.base import applies_to
+    from magexp.problems import problem_class
 
-    ok = [n for n in options("estimator")
-          if objective in getattr(target_class("estimator", n), "objectives", (objective,))]
-    raise MagexpError(f"estimator={estimator.name!r} is not allowed for objective {objective!r}: "
-                      f"choose one of {', '.join(ok)}")
+    problem = problem_class(objective)
+    ok, reason = applies_to(estimator, problem)
+    if ok:
+        return
+    fits = [n for n in options("estimator") if applies_to(target_class("estimator", n), problem)[0]]
+    raise MagexpError(f"estimator={estimator.name!r} is not allowed for objective {objective!r}: choose one of "
+                      f"{', '.join(fits)} ({reason})")
 
 
 def spread(magnitudes: np.ndarray) -> float:

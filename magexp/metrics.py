@@ -45,8 +45,19 @@ def _evaluate(problem, result) -> dict:
     out.update(problem.metrics(result.x))
     out.update(result.metrics)
     out.update(time_to_reach(result, factor=1.1))
+    if "truth_fun" in out:
+        out["nfev_to_floor"] = evaluations_to(result, 1.01 * out["truth_fun"] + 1e-9)
     out.update(bound_metrics(problem, {**out, "x": result.x}))
     return out
+
+
+def evaluations_to(result, level: float) -> float:
+    """Objective evaluations spent when the best value first came within ``level`` (NaN if never):
+    with ``level = 1.01 x`` the true calibration's objective, the cost of reaching the floor.
+    Only meaningful for a history of the problem's own objective (a monotone one)."""
+    hist = np.asarray(result.history, float)
+    reached = np.flatnonzero(hist <= level)
+    return float(np.asarray(result.history_nfev)[reached[0]]) if reached.size else float("nan")
 
 
 def time_to_reach(result, factor: float = 1.1) -> dict:

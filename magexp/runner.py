@@ -11,7 +11,8 @@ from omegaconf import DictConfig
 
 from magexp.errors import MagexpError
 from magexp.metrics import evaluate
-from magexp.problems import make_problem
+from magexp.estimators.base import check_applies
+from magexp.problems import make_problem, problem_class
 from magexp.seeding import run_generators
 
 
@@ -50,13 +51,16 @@ def run(cfg: DictConfig) -> RunOutput:
     """Simulate (or load) the scenario, fit the estimator, evaluate the result."""
     scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
+    objective = cfg.get("objective") or scenario.objective
+    check_applies(estimator, problem_class(objective), f"scenario {scenario.name!r}")  # before any data
     data_rng, est_rng = run_generators(cfg.seed)
     dataset = scenario.generate(rng=data_rng)
-    objective = cfg.get("objective") or scenario.objective
     problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
     start = time.perf_counter()
     result = estimator.fit(problem, rng=est_rng)
     wall = time.perf_counter() - start
+    if cfg.get("analysis"):  # an analysis step on the fitted result (conf/analysis/*.yaml)
+        result = build(cfg.analysis, f"analysis {cfg.analysis.get('name')!r}")(problem, result)
     metrics = {"scenario": scenario.name, "estimator": estimator.name, "objective": objective,
                "seed": int(cfg.seed), **evaluate(problem, result), "wall_time": wall}
     return RunOutput(metrics=metrics, history=np.asarray(result.history), history_nfev=np.asarray(result.history_nfev),

@@ -28,7 +28,7 @@ import numpy as np
 from magexp.errors import check, check_nonnegative, check_positive_int
 from magexp.estimators.kalman import kalman_update
 from magexp.estimators.result import FitResult
-from magexp.problems.base import reference_vectors
+from magexp.problems.vector import theta_to_state
 
 
 def forward_measurement(theta: np.ndarray, reference: np.ndarray, reading: np.ndarray):
@@ -76,7 +76,8 @@ class ExtendedKalmanFilter:
     """
 
     references = "Yuan, Wang & Chen 2018 (EKF baseline of Table 7); Kalman 1960"
-    objectives = ("vector",)  # needs the attitude-aided vector measurement
+    needs = ("linear_design",)  # the reference vectors u_i = C_i H_i and the readings
+    iterative = True
     monotone_history = False  # a filter's objective per step need not decrease
 
     def __init__(self, *, name: str = "ekf", form: str = "forward", n_steps: int = 300, s0=None, b0=None, p0_s: float = 1.0,
@@ -93,17 +94,21 @@ class ExtendedKalmanFilter:
         self.r = max(sd[4], 1e-12) ** 2  # measurement variance r² (R = r² I)
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        """Run the filter over the readings; ``callback(step, θ, None)`` may stop it."""
-        readings, z = problem.dataset.readings, reference_vectors(problem.dataset)
+        """Run the filter over the readings (rows of ``problem.design()``); ``callback(step, x, None)``
+        (``x`` in the problem's parameters) may stop it."""
+        c, readings = problem.design()
+        z = c[:, :3]  # the reference vectors u_i = C_i H_i
         theta, p = self.theta0.astype(float), self.p0.copy()
         states = [theta]
         for step in range(self.n_steps):
             i = step % len(readings)
             theta, p = ekf_step(theta, p, z[i], readings[i], q=self.q, r=self.r, form=FORMS[self.form])
             states.append(theta)
-            if not np.all(np.isfinite(theta)) or (callback is not None and callback(step + 1, theta, None)):
+            if not np.all(np.isfinite(theta)) or (
+                    callback is not None and callback(step + 1, problem.from_linear(theta_to_state(theta))[0], None)):
                 break
-        states = np.array(states)
+        states = problem.from_linear(theta_to_state(np.array(states)))  # forward state -> the problem's theta
+        theta = states[-1]
         history = problem.cost(states)
         ok = bool(np.all(np.isfinite(theta)))
         x = theta if ok else states[np.nanargmin(np.where(np.isfinite(history), history, np.nan))]

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.errors import check_nonnegative
 from magexp.estimators.result import FitResult
 from magexp.problems.scalar import normalise, quadratic_features
 
@@ -28,6 +29,50 @@ def fit_ellipsoid(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.n
     c, s, u = normalise(readings)
     design = quadratic_features(u) * LINEAR_TWICE  # [u², v², w², 2uv, 2uw, 2vw, 2u, 2v, 2w, 1]
     p = np.linalg.svd(design, full_matrices=False)[2][-1]
+    return quadric_calibration(p, c, s, radius)
+
+
+#: Li & Griffiths' constraint ``k J - I² = v1^T C1 v1`` on ``v1 = [A11, A22, A33, A12, A13, A23]`` (k = 4).
+def constraint_matrix(k: float = 4.0) -> np.ndarray:
+    """``C1`` with ``v1^T C1 v1 = k J - I²``, ``I = a + b + c``, ``J = ab + bc + ca - f² - g² - h²``."""
+    c1 = np.full((3, 3), k / 2 - 1) - (k / 2) * np.eye(3)
+    return np.block([[c1, np.zeros((3, 3))], [np.zeros((3, 3)), -k * np.eye(3)]])
+
+
+def fit_ellipsoid_specific(readings: np.ndarray, radius: float, k: float = 4.0) -> tuple[np.ndarray, np.ndarray] | None:
+    """Li & Griffiths' ellipsoid-specific least squares (the fit of Magneto), then as :func:`fit_ellipsoid`.
+
+    Minimise ``||D v||²`` subject to ``k J - I² = 1``: with the scatter ``D^T D`` split into the
+    quadratic (6) and linear (4) blocks ``S11, S12, S22``, ``v1`` is the eigenvector of
+    ``C1^{-1}(S11 - S12 S22^{-1} S12^T)`` of the one positive eigenvalue (the one with ``v1^T C1 v1 > 0``) and
+    ``v2 = -S22^{-1} S12^T v1`` (Li & Griffiths 2004, eqs 13-17). With ``k = 4`` the solution
+    is an ellipsoid whenever its short radius is at least half its long one, whatever the data.
+    """
+    c, s, u = normalise(readings)
+    design = quadratic_features(u) * LINEAR_TWICE
+    scatter = design.T @ design
+    s11, s12, s22 = scatter[:6, :6], scatter[:6, 6:], scatter[6:, 6:]
+    try:
+        reduced = s11 - s12 @ np.linalg.solve(s22, s12.T)
+        val, vec = np.linalg.eig(np.linalg.solve(constraint_matrix(k), reduced))
+    except np.linalg.LinAlgError:
+        return None
+    vec = vec.real
+    # C1 has one positive and five negative eigenvalues: one eigenvector has k J - I² > 0 (the
+    # ellipsoid, eigenvalue v1^T M v1 / v1^T C1 v1 >= 0; exactly 0 for noise-free data)
+    cv = np.einsum("ij,ik,kj->j", vec, constraint_matrix(k), vec)
+    if not np.any(cv > 0):
+        return None
+    mv = np.einsum("ij,ik,kj->j", vec, reduced, vec)
+    ratio = np.where(cv > 0, mv / np.where(cv > 0, cv, 1.0), np.inf)
+    v1 = vec[:, int(np.argmin(ratio))]
+    v2 = -np.linalg.solve(s22, s12.T @ v1)
+    return quadric_calibration(np.concatenate([v1, v2]), c, s, radius)
+
+
+def quadric_calibration(p: np.ndarray, c: np.ndarray, s: float, radius: float):
+    """``(W, o)`` from the quadric ``u^T A u + 2 b^T u + d = 0``, ``p = [A11, A22, A33, A12, A13, A23,
+    b, d]`` in the normalised readings ``u = (r - c)/s``; None if it is not an ellipsoid."""
     a = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
     try:
         u0 = -np.linalg.solve(a, p[6:9])
@@ -42,7 +87,7 @@ def fit_ellipsoid(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.n
 
 
 class EllipsoidFit:
-    """Algebraic ellipsoid fit; returns the calibration in the problem's parameters.
+    """Algebraic ellipsoid fit (``ellipsoid``); returns the calibration in the problem's parameters.
 
     The radius is the mean reference total field of the dataset. If the fit is
     not an ellipsoid (too few or degenerate readings) the result has
@@ -50,14 +95,18 @@ class EllipsoidFit:
     """
 
     references = "Gander, Golub & Strebel 1994"
-    objectives = ("scalar",)  # a scalar reference cannot fix the rotation of W
+    needs = ("total_field",)  # a scalar reference cannot fix the rotation of W
+    iterative = False
 
     def __init__(self, *, name: str = "ellipsoid"):
         self.name = name
 
+    def quadric(self, readings: np.ndarray, radius: float):
+        return fit_ellipsoid(readings, radius)
+
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
         ds = problem.dataset
-        fitted = fit_ellipsoid(ds.readings, float(np.mean(ds.reference_norm)))
+        fitted = self.quadric(ds.readings, float(np.mean(ds.reference_norm)))
         if fitted is None:
             x, ok, msg = (problem.lower + problem.upper) / 2, False, "the algebraic fit is not an ellipsoid"
         else:
@@ -65,3 +114,23 @@ class EllipsoidFit:
         fun = problem.cost_direct(x)
         return FitResult(x=x, fun=fun, nit=1, nfev=1, history=np.array([fun]), history_nfev=np.array([1]),
                          success=ok, message=msg)
+
+
+class EllipsoidSpecificFit(EllipsoidFit):
+    """Ellipsoid-specific least squares (``ellipsoid_specific``; Li & Griffiths 2004, as in Magneto):
+    :func:`fit_ellipsoid_specific`, then the calibration of :class:`EllipsoidFit`.
+
+    Parameters
+    ----------
+    name : config name.
+    k : the constraint's ``k`` (4: Li & Griffiths' choice).
+    """
+
+    references = "Li & Griffiths 2004, Least squares ellipsoid specific fitting, GMP 2004, 335-340"
+
+    def __init__(self, *, name: str = "ellipsoid_specific", k: float = 4.0):
+        super().__init__(name=name)
+        self.k = check_nonnegative(k, "estimator.k")
+
+    def quadric(self, readings: np.ndarray, radius: float):
+        return fit_ellipsoid_specific(readings, radius, self.k)

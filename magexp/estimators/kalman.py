@@ -12,7 +12,7 @@ random-walk process ``x(n+1) = x(n) + v1`` (eq 5), one step is (sec 2.1, steps (
 
 (the inverse in step (2) is lost in print). :class:`KalmanFilter` (``kf``) estimates
 ``x = [K Bp]^T`` (4 x 3) from rows ``H = C(n) = [Be^T A^T, 1]``, ``y = B^T``, reusing the
-readings cyclically. :class:`FieldKalmanFilter` (``kf_be``) then recomputes ``Be`` (3 x 1)
+readings cyclically. :class:`FieldKalmanFilter` (the analysis step ``field_kalman``) then recomputes ``Be`` (3 x 1)
 from ``y = B - Bp = (K A) Be`` with ``K``, ``Bp`` given (the paper's Fig 4, which cites its
 ref. [3] for this filter), and :func:`direct_field` inverts eq 4, ``Be = (K A)^-1 (B - Bp)``.
 
@@ -41,10 +41,11 @@ def kalman_update(x, p, h, y, q, sigma2: float):
     return e_mh @ x + m @ y, e_mh @ r
 
 
-def kalman_filter(h, y, *, p0, q, sigma2: float, x0) -> np.ndarray:
+def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
     """Run :func:`kalman_update` over observations ``h`` (T, k, s), ``y`` (T, k, c) from ``x0``.
 
-    Returns the state at every step, shape ``(T + 1, s, c)`` (``[0]`` is ``x0``).
+    Returns the state at every step, shape ``(T + 1, s, c)`` (``[0]`` is ``x0``), or up to the
+    step ``n`` at which ``stop(n, x)`` first returned a true value.
     """
     states = np.empty((len(h) + 1,) + np.shape(x0))
     x, p = np.asarray(x0, float), np.asarray(p0, float)
@@ -52,6 +53,8 @@ def kalman_filter(h, y, *, p0, q, sigma2: float, x0) -> np.ndarray:
     for n in range(len(h)):
         x, p = kalman_update(x, p, h[n], y[n], q, sigma2)
         states[n + 1] = x
+        if stop is not None and stop(n + 1, x):
+            return states[: n + 2]
     return states
 
 
@@ -71,7 +74,8 @@ def settled_since(distance: np.ndarray) -> int:
 class _Tuning:
     """Shared hyper-parameters: ``P(0) = p0 D``, ``Q = q D`` with ``D`` the state's scale matrix."""
 
-    objectives = ("ship",)  # filters of the linear model B = K A Be + Bp
+    needs = ("linear_design",)  # filters of the linear model B = K A Be + Bp (= S u + b)
+    iterative = True
     monotone_history = False  # the fit RMS per filter step need not decrease
 
     def __init__(self, *, name: str, p0: float, q: float, sigma2: float, n_steps: int):
@@ -113,24 +117,25 @@ class KalmanFilter(_Tuning):
         self.agree_bp = check_nonnegative(agree_bp, "estimator.agree_bp")
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        from magexp.problems.ship import state_to_theta
-
+        """Filter the rows of ``problem.design()``; ``callback(step, x, None)`` may stop it."""
         c, y = problem.design()
         rows = cyclic(len(c), self.n_steps)
+        stop = None if callback is None else (lambda n, x: callback(n, problem.from_linear(x), None))
         states = kalman_filter(c[rows, None, :], y[rows, None, :], p0=self.p0 * self.scale, q=self.q * self.scale,
-                               sigma2=self.sigma2, x0=np.zeros((4, 3)))
-        thetas = state_to_theta(states)
+                               sigma2=self.sigma2, x0=np.zeros((4, 3)), stop=stop)
+        thetas = problem.from_linear(states)
+        steps = len(states) - 1
         history = problem.cost(thetas)
         ls = problem.least_squares()
-        ends = np.arange(len(c), self.n_steps + 1, len(c))  # every full pass weighs each reading equally
+        ends = np.arange(len(c), steps + 1, len(c))  # every full pass weighs each reading equally
         apart = (np.abs(thetas[ends, :9] - ls[:9]).max(axis=1) > self.agree_k) | (
             np.abs(thetas[ends, 9:] - ls[9:]).max(axis=1) > self.agree_bp)
         first = settled_since(apart)
-        steps = float(ends[first]) if 0 <= first < len(ends) else np.nan
-        return FitResult(x=thetas[-1], fun=problem.cost_direct(thetas[-1]), nit=self.n_steps, nfev=self.n_steps,
-                         history=history, history_nfev=np.arange(self.n_steps + 1), trace={"x": thetas},
-                         metrics={"steps_to_ls": steps},
-                         message=f"{self.n_steps} steps over {len(c)} readings")
+        settled = float(ends[first]) if 0 <= first < len(ends) else np.nan
+        return FitResult(x=thetas[-1], fun=problem.cost_direct(thetas[-1]), nit=steps, nfev=steps,
+                         history=history, history_nfev=np.arange(steps + 1), trace={"x": thetas},
+                         metrics={"steps_to_ls": settled},
+                         message=f"{steps} steps over {len(c)} readings")
 
 
 def direct_field(k: np.ndarray, bp: np.ndarray, attitude: np.ndarray, readings: np.ndarray) -> np.ndarray:
@@ -144,35 +149,45 @@ def field_errors(estimates: np.ndarray, field: np.ndarray) -> tuple[float, float
     return float(np.sqrt(np.mean(err**2))), float(np.max(np.abs(err)) / np.linalg.norm(field))
 
 
-class FieldKalmanFilter(_Tuning):
-    """Recompute ``Be`` with ``K``, ``Bp`` from another estimator (``kf_be``; Yan & Zhou Fig 4).
+class FieldKalmanFilter:
+    """Recompute ``Be`` from a fitted ``K``, ``Bp`` (Yan & Zhou Fig 4): an analysis step on a fitted
+    result, not an estimator (``+analysis=field_kalman`` on the command line or in an artifact).
 
     State ``Be`` (3 x 1), ``H(n) = K A(n)``, ``y(n) = B(n) - Bp``, ``Be(0) = 0``,
-    ``P(0) = p0 E``, ``Q = q E``; readings reused cyclically.
+    ``P(0) = p0 E``, ``Q = q E``; readings reused cyclically. Called as
+    ``step(problem, result) -> result`` after the run's estimator: ``K``, ``Bp`` are the
+    estimate ``result.x`` (e.g. ``kf``'s, or the paper's through ``yan2022_paper_mockup``).
 
     Parameters
     ----------
-    magnetization : an estimator (built from its config node) giving ``K`` and ``Bp``.
+    name : config name.
     p0, q, sigma2, n_steps : as :class:`KalmanFilter` (``P(0)``, ``Q`` in nT²).
     settle : fraction of the steps after which the solution counts as converged (the paper's
         "stable solution after convergence"): errors are measured over the last ``1 - settle``.
 
-    ``x`` is the magnetization used (so the fit metrics apply); ``trace["be"]`` is ``Be`` at
-    every step; ``metrics`` adds ``be_rms``, ``be_max_rel`` (filter) and ``be_direct_rms``,
-    ``be_direct_max_rel`` (eq 4 on every reading), with ``Be1..3`` and ``truth_Be1..3``.
+    The returned result is ``result`` with ``trace["be"]`` (``Be`` at every step) and ``metrics``
+    ``be_rms``, ``be_max_rel`` (filter) and ``be_direct_rms``, ``be_direct_max_rel`` (eq 4 on
+    every reading), with ``Be1..3`` and ``truth_Be1..3`` added.
     """
 
     references = "Yan & Zhou 2022, sec 3.2, Fig 4"
+    needs = ("linear_design",)
 
-    def __init__(self, *, magnetization, name: str = "kf_be", p0: float = 1e10, q: float = 0.0,
-                 sigma2: float = 3333.0, n_steps: int = 600, settle: float = 0.5):
-        super().__init__(name=name, p0=p0, q=q, sigma2=sigma2, n_steps=n_steps)
-        self.magnetization = magnetization
-        self.settle = min(check_nonnegative(settle, "estimator.settle"), 1.0)
+    def __init__(self, *, name: str = "field_kalman", p0: float = 1e10, q: float = 0.0, sigma2: float = 3333.0,
+                 n_steps: int = 600, settle: float = 0.5):
+        self.name = name
+        self.p0 = check_nonnegative(p0, "analysis.p0")
+        self.q = check_nonnegative(q, "analysis.q")
+        self.sigma2 = check_nonnegative(sigma2, "analysis.sigma2")
+        self.n_steps = check_positive_int(n_steps, "analysis.n_steps")
+        self.settle = min(check_nonnegative(settle, "analysis.settle"), 1.0)
 
-    def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        first = self.magnetization.fit(problem, rng=rng)
-        k, bp = first.x[:9].reshape(3, 3), first.x[9:]
+    def __call__(self, problem, result: FitResult) -> FitResult:
+        from magexp.estimators.base import check_applies
+
+        check_applies(self, problem)
+        w, bp = (a[0] for a in problem.unpack(result.x))  # B = K u + Bp  <=>  u = K^-1 (B - Bp)
+        k = np.linalg.inv(w)
         ds = problem.dataset
         field = ds.field_nav[0]
         rows = cyclic(ds.n, self.n_steps)
@@ -183,10 +198,9 @@ class FieldKalmanFilter(_Tuning):
         rms, rel = field_errors(states[start:], field)
         d_rms, d_rel = field_errors(direct_field(k, bp, ds.attitude, ds.readings), field)
         names = ["Be1", "Be2", "Be3"]
-        metrics = {"be_rms": rms, "be_max_rel": rel, "be_direct_rms": d_rms, "be_direct_max_rel": d_rel,
-                   **dict(zip(names, map(float, states[-1]))), **{f"truth_{n}": float(v) for n, v in zip(names, field)}}
-        history = np.sqrt(np.mean((states - field) ** 2, axis=1))
-        return FitResult(x=first.x, fun=problem.cost_direct(first.x), nit=self.n_steps, nfev=self.n_steps,
-                         history=history, history_nfev=np.arange(self.n_steps + 1),
-                         trace={"be": states, "be_names": names}, metrics=metrics,
-                         message=f"magnetization from {self.magnetization.name}")
+        result.metrics.update({"be_rms": rms, "be_max_rel": rel, "be_direct_rms": d_rms, "be_direct_max_rel": d_rel,
+                               **dict(zip(names, map(float, states[-1]))),
+                               **{f"truth_{n}": float(v) for n, v in zip(names, field)}})
+        result.trace.update({"be": states, "be_names": names,
+                             "be_error": np.sqrt(np.mean((states - field) ** 2, axis=1))})
+        return result

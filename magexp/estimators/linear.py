@@ -24,14 +24,13 @@ class LeastSquares:
     """Ordinary linear least squares through ``problem.least_squares()``."""
 
     references = "Gauss 1809; Golub & Van Loan, Matrix Computations"
-    objectives = ("ship",)  # needs a linear model (problem.least_squares)
+    needs = ("linear_design",)
+    iterative = False
 
     def __init__(self, *, name: str = "ls"):
         self.name = name
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        if not hasattr(problem, "least_squares"):
-            raise MagexpError(f"estimator=ls is not allowed for {type(problem).__name__}: its model is not linear")
         return _result(problem, problem.least_squares(), "closed form")
 
 
@@ -45,7 +44,9 @@ class FixedParameters:
     source : where the numbers come from (shown in the result message).
     """
 
-    objectives = ("ship",)  # the printed solutions are of Yan & Zhou's model
+    needs = ("cost",)
+    iterative = False
+    only_objective = "ship"  # the printed solutions are of Yan & Zhou's model
 
     def __init__(self, *, name: str, x, source: str = ""):
         self.name = name

@@ -8,9 +8,10 @@ Variants differ only by small strategy pieces passed in: the velocity rule
 .. math::
 
     v &\\leftarrow \\mathrm{clip}(\\mathrm{rule}(x, v, p, g, t), -v_{max}, v_{max}) \\\\
-    x &\\leftarrow \\mathrm{clip}(x + v, l, u)
+    (x, v) &\\leftarrow \\mathrm{boundary}(x + v, v, l, u)
 
-(the new velocity moves the particle: Ding 2024 eq 11 prints ``v^t``, a typo),
+(the new velocity moves the particle: Ding 2024 eq 11 prints ``v^t``, a typo; the boundary
+handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
 followed by the personal-best and global-best updates. The whole swarm is
 evaluated with one call of ``problem.cost``.
 """
@@ -20,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check, check_nonnegative, check_positive_int
+from magexp.estimators import boundaries
 from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
 from magexp.estimators.velocity import InertiaVelocity
@@ -38,12 +40,18 @@ class SwarmOptimizer:
     velocity_limit : absolute ``v_max``, the same for every dimension (Yuan 2018 Table 1:
         1.5); when given it replaces ``velocity_clamp``.
     initial_velocity : ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
+    boundary : what a particle leaving the box does: ``clip``, ``reflect`` or ``random``
+        (:mod:`magexp.estimators.boundaries`).
     references : the paper(s) the variant comes from.
     """
 
+    needs = ("cost",)
+    iterative = True
+
     def __init__(self, *, name: str = "pso", n_particles: int = 50, n_iterations: int = 800,
                  velocity=None, init=None, velocity_clamp: float = 0.2,
-                 initial_velocity: str = "uniform", references: str = "", velocity_limit: float | None = None):
+                 initial_velocity: str = "uniform", references: str = "", velocity_limit: float | None = None,
+                 boundary: str = "clip"):
         self.name = name
         self.n_particles = check_positive_int(n_particles, "estimator.n_particles")
         self.n_iterations = check_positive_int(n_iterations, "estimator.n_iterations")
@@ -55,6 +63,8 @@ class SwarmOptimizer:
         check(initial_velocity in ("uniform", "zero"),
               f"estimator.initial_velocity={initial_velocity!r} is not allowed: choose uniform or zero")
         self.initial_velocity = initial_velocity
+        self.boundary = boundary
+        self._handle = boundaries.boundary(boundary)
         self.references = references
 
     def velocity_max(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -85,10 +95,9 @@ class SwarmOptimizer:
         nit = 0
         neg_vmax = -vmax
         for t in range(1, t_max + 1):
-            # clip as min(max(.)) and masked copies: the same numbers as np.clip and boolean
-            # indexing, without their per-call overhead (the engine's share of an iteration)
+            # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
             v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
-            x = np.minimum(np.maximum(x + v, lo), hi)
+            x, v = self._handle(x + v, v, lo, hi, rng=rng)
             cost = problem.cost(x)
             better = cost < pcost
             np.copyto(pbest, x, where=better[:, None])
@@ -99,8 +108,11 @@ class SwarmOptimizer:
             if callback is not None and callback(t, pbest[g], pcost[g]):
                 break
         history = history[: nit + 1]
+        edge = np.isclose(pbest[g], lo, rtol=0, atol=1e-9 * (hi - lo)) | np.isclose(pbest[g], hi, rtol=0,
+                                                                                 atol=1e-9 * (hi - lo))
         return FitResult(
             x=pbest[g].copy(), fun=float(pcost[g]), nit=nit, nfev=n * (nit + 1),
             history=history, history_nfev=n * np.arange(1, nit + 2),
             message=f"{nit} iterations of {n} particles",
+            metrics={"on_boundary": int(edge.sum())},  # coordinates of the best on the box's faces
         )

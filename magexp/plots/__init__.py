@@ -21,6 +21,7 @@ KINDS = {
     "speed": "magexp.plots.speed",  # accuracy vs wall time (benchmark)  # parameters vs filter step (Yan & Zhou 2022 figs 1, 3, 4)
     "estimates": "magexp.plots.estimates",  # table of fitted values per estimator vs truth (Yan & Zhou 2022)
     "sweep": "magexp.plots.sweep",  # chosen metrics vs a swept key, one panel row per metric
+    "tuning": "magexp.plots.tuning",  # settings of a method as a distribution beside its default
 }
 
 

@@ -6,7 +6,8 @@ Every problem exposes
 * ``cost(thetas)``: ``(n, p) -> (n,)``, the objective for a whole swarm at once,
 * ``cost_direct(theta)``: the same objective by its textbook formula (for reporting),
 * ``residuals(theta)``: residual vector whose sum of squares is minimised by least squares,
-* ``pack`` / ``unpack`` between parameters and model matrices.
+* ``pack`` / ``unpack`` between parameters and model matrices,
+* ``capabilities``: what it offers an estimator (:class:`magexp.problems.base.Problem`).
 
 Problems are made with :func:`make_problem` from a dataset and an objective name.
 """
@@ -18,6 +19,7 @@ from magexp.errors import MagexpError
 OBJECTIVES: dict[str, str] = {
     "scalar": "magexp.problems.scalar:ScalarCalibration",
     "vector": "magexp.problems.vector:VectorCalibration",  # Yuan 2018 eq 8
+    "vector_ls": "magexp.problems.vector:VectorLeastSquares",  # eq 8's residuals in least squares
     "ship": "magexp.problems.ship:ShipMagnetization",  # Yan & Zhou 2022 B = K A Be + Bp
 }
 
@@ -27,11 +29,17 @@ def register(name: str, target: str) -> None:
     OBJECTIVES[name] = target
 
 
-def make_problem(objective: str, dataset, search, **options):
-    """Build the problem ``objective`` on ``dataset`` within ``search`` (a SearchBox)."""
+def problem_class(objective: str):
+    """The class implementing ``objective`` (imported, not built): its ``capabilities`` say which
+    estimators apply before any data is simulated."""
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(sorted(OBJECTIVES))}")
     import importlib
 
     module, cls = OBJECTIVES[objective].split(":")
-    return getattr(importlib.import_module(module), cls)(dataset, search, **options)
+    return getattr(importlib.import_module(module), cls)
+
+
+def make_problem(objective: str, dataset, search, **options):
+    """Build the problem ``objective`` on ``dataset`` within ``search`` (a SearchBox)."""
+    return problem_class(objective)(dataset, search, **options)

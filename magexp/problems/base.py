@@ -1,12 +1,81 @@
-"""Parameterisation shared by the 12-parameter calibration problems."""
+"""What a calibration problem is (the :class:`Problem` protocol), what it can offer an estimator
+(its capabilities), and the parameterisation shared by the 12-parameter problems.
+
+A problem offers some of these capabilities (:data:`CAPABILITIES`); an estimator declares the ones
+it needs (``needs``, :mod:`magexp.estimators.base`) and
+:func:`magexp.estimators.base.applies_to` compares the two, in one place.
+
+* ``cost``: ``cost(thetas (n, p)) -> (n,)`` over the search box ``[lower, upper]`` (every problem);
+* ``residuals``: ``residuals(theta) -> (m,)`` whose sum of squares a least-squares method minimises;
+* ``linear_design``: the readings are linear in the parameters, ``B_i = S u_i + b`` with known
+  reference vectors ``u_i = C_i H_i`` (attitudes and field): :class:`LinearProblem`;
+* ``total_field``: the readings against a reference total field ``|W (r_i - o)| = B_a,i``
+  (rotation-invariant: a scalar objective).
+"""
 
 from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from magexp.errors import MagexpError
 
 PARAMETERISATIONS = ("inverse", "forward")
+
+#: Every capability a problem may offer, with the words used in a refusal.
+CAPABILITIES: dict[str, str] = {
+    "cost": "a vectorised cost over a search box",
+    "residuals": "a residual vector",
+    "linear_design": "a linear design B = S u + b with known reference vectors u (attitudes and field)",
+    "total_field": "a reference total field (a scalar objective)",
+}
+
+
+@runtime_checkable
+class Problem(Protocol):
+    """A calibration problem: parameters <-> calibration, a swarm cost and a residual vector.
+
+    Attributes
+    ----------
+    objective : its name in :data:`magexp.problems.OBJECTIVES`.
+    capabilities : the subset of :data:`CAPABILITIES` it offers.
+    n_params, lower, upper : parameter count and the search box.
+    dataset : the :class:`~magexp.dataset.Dataset` it was built on.
+    """
+
+    objective: str
+    capabilities: frozenset
+    n_params: int
+    lower: np.ndarray
+    upper: np.ndarray
+
+    def cost(self, thetas: np.ndarray) -> np.ndarray: ...
+
+    def cost_direct(self, theta: np.ndarray) -> float: ...
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray: ...
+
+    def unpack(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray: ...
+
+
+@runtime_checkable
+class LinearProblem(Problem, Protocol):
+    """A problem with the capability ``linear_design``: ``Y = C x`` (see
+    :class:`magexp.problems.vector.LinearVectorModel`)."""
+
+    def design(self) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def least_squares(self) -> np.ndarray: ...
+
+    def from_linear(self, states: np.ndarray) -> np.ndarray: ...
+
+
+def describe(capabilities) -> str:
+    """The capabilities in words, joined by ``, ``."""
+    return ", ".join(CAPABILITIES[c] for c in sorted(capabilities))
 
 
 def inverse(mats: np.ndarray) -> np.ndarray:
@@ -36,6 +105,7 @@ class CalibrationProblem:
     """
 
     n_params = 12
+    capabilities = frozenset({"cost", "residuals"})
 
     def __init__(self, dataset, search, *, parameterisation: str = "inverse"):
         if parameterisation not in PARAMETERISATIONS:

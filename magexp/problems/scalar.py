@@ -42,6 +42,7 @@ class ScalarCalibration(CalibrationProblem):
     """
 
     objective = "scalar"
+    capabilities = CalibrationProblem.capabilities | {"total_field"}
 
     def __init__(self, dataset, search, *, parameterisation: str = "inverse"):
         super().__init__(dataset, search, parameterisation=parameterisation)

@@ -7,8 +7,11 @@ Model (eq 1): :math:`\\mathbf B_i = \\mathbf K\\mathbf A_i\\mathbf B_e + \\mathb
           \\mathbf y_i = \\mathbf B_i^T = \\mathbf C_i\\,\\mathbf x,\\qquad
           \\mathbf x = [\\mathbf K\\ \\mathbf B_p]^T\\ (4\\times3)
 
-every reading is one row of ``Y = C x``: the Kalman filter and least squares share :meth:`design`.
-In the calibration form of :class:`~magexp.problems.base.CalibrationProblem` this is the
+every reading is one row of ``Y = C x``. This is the forward form of the vector problem
+(Yuan 2018 eq 1 with ``S = K``, ``b = Bp``, ``u_i = A_i Be``): the design, least squares and the
+state <-> parameter maps come from :class:`~magexp.problems.vector.LinearVectorModel`, shared
+with :class:`~magexp.problems.vector.VectorCalibration`; only the objective differs (here the
+RMS of the forward residuals, there Yuan's eq 8). In the calibration form of :class:`~magexp.problems.base.CalibrationProblem` this is the
 ``forward`` parameterisation ``reading = S b + o`` with ``S = K``, ``o = Bp``, so
 :meth:`calibrate` returns ``K^-1 (B - Bp) = A Be``, the ambient field in the ship frame.
 """
@@ -18,23 +21,10 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.problems.base import CalibrationProblem
+from magexp.problems.vector import LinearVectorModel, state_to_theta, theta_to_state  # noqa: F401 (re-exported)
 
 
-def state_to_theta(x: np.ndarray) -> np.ndarray:
-    """``theta`` (..., 12) from filter states ``x = [K Bp]^T`` of shape (..., 4, 3)."""
-    x = np.asarray(x, float)
-    k = np.swapaxes(x[..., :3, :], -1, -2)
-    return np.concatenate([k.reshape(*x.shape[:-2], 9), x[..., 3, :]], axis=-1)
-
-
-def theta_to_state(thetas: np.ndarray) -> np.ndarray:
-    """Filter states (n, 4, 3) from ``thetas`` (n, 12): the inverse of :func:`state_to_theta`."""
-    thetas = np.atleast_2d(np.asarray(thetas, float))
-    k = thetas[:, :9].reshape(-1, 3, 3)
-    return np.concatenate([np.swapaxes(k, 1, 2), thetas[:, None, 9:]], axis=1)
-
-
-class ShipMagnetization(CalibrationProblem):
+class ShipMagnetization(LinearVectorModel, CalibrationProblem):
     """Fit residual of ``B = K A Be + Bp`` over the readings.
 
     ``cost`` is the RMS over the ``3N`` components of ``C x - Y``; its swarm evaluation does
@@ -69,24 +59,12 @@ class ShipMagnetization(CalibrationProblem):
     def __init__(self, dataset, search):
         super().__init__(dataset, search, parameterisation="forward")
         self.options = {}  # constructor options (none: the parameterisation is fixed)
-        body = np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)  # A_i Be (measured attitude)
-        self._c = np.column_stack([body, np.ones(dataset.n)])
-        self._y = np.asarray(dataset.readings, float)
+        self._c, self._y = self.design()  # rows [Be^T A_i^T, 1] (measured attitude), readings
         q, r = np.linalg.qr(self._c)
         z = q.T @ self._y
         self._floor = float(np.sum((self._y - q @ z) ** 2))  # rho: the least-squares residual
         self._map = (r @ theta_to_state(np.eye(self.n_params))).reshape(self.n_params, -1)  # theta -> vec(R x)
         self._target = z.ravel()  # vec(Z)
-
-    def design(self) -> tuple[np.ndarray, np.ndarray]:
-        """Regressors ``C`` (N, 4) with rows ``[Be^T A_i^T, 1]`` and observations ``Y`` (N, 3)."""
-        return self._c, self._y
-
-    def least_squares(self) -> np.ndarray:
-        """``theta`` minimising ``||C x - Y||_F`` (``numpy.linalg.lstsq``; column-scaled)."""
-        scale = np.linalg.norm(self._c, axis=0)
-        x = np.linalg.lstsq(self._c / scale, self._y, rcond=None)[0] / scale[:, None]
-        return state_to_theta(x)
 
     def parameter_names(self) -> list[str]:
         return [f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"Bp{i + 1}" for i in range(3)]

@@ -16,10 +16,66 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.problems import kernels
-from magexp.problems.base import CalibrationProblem, reference_vectors
+from magexp.problems.base import CalibrationProblem, inverse, reference_vectors
 
 
-class VectorCalibration(CalibrationProblem):
+def state_to_theta(x: np.ndarray) -> np.ndarray:
+    """Forward ``theta = [vec(S) (row-major), b]`` (..., 12) from linear states ``x = [S b]^T`` (..., 4, 3)."""
+    x = np.asarray(x, float)
+    k = np.swapaxes(x[..., :3, :], -1, -2)
+    return np.concatenate([k.reshape(*x.shape[:-2], 9), x[..., 3, :]], axis=-1)
+
+
+def theta_to_state(thetas: np.ndarray) -> np.ndarray:
+    """Linear states (n, 4, 3) from forward ``thetas`` (n, 12): the inverse of :func:`state_to_theta`."""
+    thetas = np.atleast_2d(np.asarray(thetas, float))
+    k = thetas[:, :9].reshape(-1, 3, 3)
+    return np.concatenate([np.swapaxes(k, 1, 2), thetas[:, None, 9:]], axis=1)
+
+
+class LinearVectorModel:
+    """The forward vector model, linear in its parameters (capability ``linear_design``).
+
+    Yuan 2018 eq 1 and Yan & Zhou 2022 eq 1 are one model: with the reference vector
+    ``u_i = C_i H_i`` (Yuan: gyro attitude times the nav field; Yan: ``A_i Be``),
+
+    .. math:: \\mathbf B_i = S\\,\\mathbf u_i + \\mathbf b,\\qquad
+              \\mathbf y_i = \\mathbf B_i^T = [\\mathbf u_i^T,\\ 1]\\,\\mathbf x,\\qquad
+              \\mathbf x = [S\\ \\mathbf b]^T\\ (4\\times3)
+
+    (Yan's ``K``, ``Bp`` are ``S``, ``b``). Every reading is one row of ``Y = C x``: the Kalman
+    filters, the EKF and least squares use :meth:`design`, and :meth:`from_linear` turns a state
+    ``x`` into the problem's own parameter vector (``forward``: ``[vec(S), b]``; ``inverse``:
+    ``[vec(S^-1), b]``). Mixed into a :class:`~magexp.problems.base.CalibrationProblem`.
+    """
+
+    capabilities = CalibrationProblem.capabilities | {"linear_design"}
+
+    def design(self) -> tuple[np.ndarray, np.ndarray]:
+        """Regressors ``C`` (N, 4) with rows ``[u_i^T, 1]`` and observations ``Y`` (N, 3), the readings."""
+        if getattr(self, "_design", None) is None:
+            u = reference_vectors(self.dataset)
+            self._design = (np.column_stack([u, np.ones(len(u))]), np.asarray(self.dataset.readings, float))
+        return self._design
+
+    def from_linear(self, states: np.ndarray) -> np.ndarray:
+        """The problem's parameter vectors (..., 12) from linear states ``x`` (..., 4, 3)."""
+        theta = state_to_theta(states)
+        if self.parameterisation == "forward":
+            return theta
+        lead = theta.shape[:-1]
+        w = inverse(theta[..., :9].reshape(-1, 3, 3)).reshape(*lead, 9)
+        return np.concatenate([w, theta[..., 9:]], axis=-1)
+
+    def least_squares(self) -> np.ndarray:
+        """``theta`` minimising ``||C x - Y||_F`` (``numpy.linalg.lstsq``, columns scaled to unit norm)."""
+        c, y = self.design()
+        scale = np.linalg.norm(c, axis=0)
+        scale[scale == 0] = 1.0
+        return self.from_linear(np.linalg.lstsq(c / scale, y, rcond=None)[0] / scale[:, None])
+
+
+class VectorCalibration(LinearVectorModel, CalibrationProblem):
     """Sum of vector-residual norms against the gyro reference (Yuan 2018, eq 8).
 
     ``cost`` evaluates a whole swarm in one pass over the readings
@@ -60,13 +116,9 @@ class VectorCalibration(CalibrationProblem):
         return float(sum(np.linalg.norm(c @ h - w @ (r - b)) for c, h, r in zip(ds.attitude, ds.field_nav, ds.readings)))
 
     def initial_estimate(self) -> np.ndarray:
-        """Closed-form first estimate: ``B_i = S u_i + b`` (``u_i = C_i H_i``) is linear in
-        ``(S, b)``, so ordinary least squares on ``[u_i, 1]`` gives ``S`` and ``b`` at once
-        (the start of ``lm`` with ``start: problem``)."""
-        design = np.column_stack([self.reference, np.ones(len(self.reference))])
-        coef = np.linalg.lstsq(design, self.dataset.readings, rcond=None)[0]  # (4, 3)
-        s, b = coef[:3].T, coef[3]
-        return self.pack(np.linalg.pinv(s), b)
+        """Closed-form first estimate: the linear least squares of the forward model
+        (:meth:`LinearVectorModel.least_squares`; the start of ``lm`` with ``start: problem``)."""
+        return self.least_squares()
 
     def metrics(self, theta: np.ndarray) -> dict:
         out = super().metrics(theta)
@@ -75,3 +127,30 @@ class VectorCalibration(CalibrationProblem):
             out["noise_floor"] = self.cost_direct(truth)
         return out
 
+
+
+class VectorLeastSquares(VectorCalibration):
+    """The residuals of eq 8 in least squares (objective ``vector_ls``): the same model and data as
+    :class:`VectorCalibration`, with the RMS of the ``3N`` residual components as the cost
+
+    .. math:: \\mathrm{RMS}(S, \\mathbf b) = \\sqrt{\\frac{1}{3N}\\sum_{i=1}^N
+              \\big\\lVert C_i^b \\mathbf H_i - S^{-1}(\\mathbf B_{b,i} - \\mathbf b)\\big\\rVert^2}
+
+    instead of their sum of norms, so an optimiser can be compared on both objectives
+    (``experiments/benchmark/benchmark_objective.yaml``): under Gaussian noise this is the
+    maximum-likelihood criterion that ``lm`` minimises, eq 8 is not.
+    """
+
+    objective = "vector_ls"
+    objective_is_rms = True
+
+    def cost(self, thetas: np.ndarray) -> np.ndarray:
+        """RMS of every particle's residual components, ``(n, 12) -> (n,)``; non-finite -> ``inf``."""
+        with np.errstate(invalid="ignore", over="ignore"):
+            err = self.residual_swarm(thetas)
+            f = np.sqrt(np.einsum("nkj,nkj->n", err, err) / err[0].size)
+        return np.where(np.isfinite(f), f, np.inf)
+
+    def cost_direct(self, theta: np.ndarray) -> float:
+        """RMS of the residual components of one parameter vector."""
+        return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))

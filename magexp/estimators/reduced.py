@@ -1,0 +1,59 @@
+"""Yuan 2018's traditional PSO: the swarm on the simplified 9-parameter (symmetric) model.
+
+Yuan, Wang & Chen 2018 (sec 1 and Tables 2, 7) describe the traditional PSO calibration as using
+the total-field objective on a simplified model "assuming at least one sensor axis coincides
+with the body frame, reducing the 12 unknowns to 9" (their refs [12, 13]); its Table 7 solution
+is exactly symmetric (``S12 = S21``, ``S13 = S31``, ``S23 = S32``). :class:`SymmetricSwarm` runs
+the shared swarm engine over
+
+.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad
+          M = M^T
+
+(``M`` the matrix part of the problem's own parameters: Yuan's ``S`` in the forward form,
+``W`` in the inverse one) with the problem's total-field cost of the expanded 12-vector. The box of
+each ``q`` entry is the box of its entry of the 12-vector. A symmetric ``W`` is the unique
+symmetric root of ``W^T W`` (what a scalar fit identifies), so on a scalar problem the rotation
+valley is gone; a non-symmetric truth (Yuan's ``S``) cannot be reached.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.estimators.swarm import SwarmOptimizer
+
+UPPER = np.array([0, 1, 2, 4, 5, 8])  # row-major positions of M11 M12 M13 M22 M23 M33
+MIRROR = np.array([0, 1, 2, 1, 3, 4, 2, 4, 5])  # the 9 row-major entries from the 6 unique ones
+
+
+def expand(q: np.ndarray) -> np.ndarray:
+    """12-vectors ``[vec(M), o]`` (n, 12) with ``M`` symmetric from 9-vectors ``q`` (n, 9)."""
+    q = np.atleast_2d(q)
+    return np.concatenate([q[:, MIRROR], q[:, 6:]], axis=1)
+
+
+class SymmetricView:
+    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector)."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        keep = np.concatenate([UPPER, [9, 10, 11]])
+        self.lower, self.upper = problem.lower[keep], problem.upper[keep]
+        self.n_params = 9
+
+    def cost(self, q: np.ndarray) -> np.ndarray:
+        return self.problem.cost(expand(q))
+
+
+class SymmetricSwarm(SwarmOptimizer):
+    """``pso9``: a :class:`~magexp.estimators.swarm.SwarmOptimizer` (same settings) on the
+    symmetric 9-parameter model of a total-field problem (module docstring)."""
+
+    needs = ("total_field",)
+
+    def fit(self, problem, *, rng: np.random.Generator, callback=None):
+        relay = None if callback is None else (lambda t, q, fun: callback(t, expand(q)[0], fun))
+        result = super().fit(SymmetricView(problem), rng=rng, callback=relay)
+        result.x = expand(result.x)[0]
+        result.fun = problem.cost_direct(result.x)
+        return result

@@ -1,0 +1,109 @@
+"""Settings of one method as a distribution: every setting's median beside the default.
+
+One row per cell: ``family`` (the run's estimator name: settings of one method share it),
+``label`` (the cell's ``plot.label`` keys, short names from ``plot.labels``), ``scenario``, the
+median and quartiles of ``plot.metric`` (default ``fun``), ``success_rate`` (fraction of seeds
+``converged``: the objective within 1 % of the true calibration's on the same readings),
+``bound_success_rate`` (offset error within 2x its Cramér-Rao bound), ``on_boundary_rate``
+(fraction of seeds whose best has a coordinate on the search box's faces), median wall time and
+evaluations to 1.1x the final value. Per (family, scenario) ``role`` marks the ``best``,
+``median`` and ``worst`` setting by the median metric, and ``default`` the cell whose overrides
+match ``plot.default`` (``{family: {key: value}}``; a family without one: no default).
+The figure: one panel per scenario, one column per family, a dot per setting (the metric's
+median), best / median / worst labelled, the default as a star; below, the success rates (of the
+median and best settings and the default; of the one setting where a family has only one).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts import quantiles
+from magexp.plots.style import panels
+
+
+def _median(sub, col):
+    return quantiles(sub[col])[0] if col in sub else np.nan
+
+
+def _rate(values) -> float:
+    v = pd.Series(values).dropna()
+    return float(v.astype(float).mean()) if len(v) else np.nan
+
+
+def tabulate(runs) -> pd.DataFrame:
+    spec = runs.spec
+    metric = spec.plot.get("metric", "fun")
+    keys = list(spec.plot.get("label", []))
+    short = dict(spec.plot.get("labels", {}) or {})
+    defaults = {k: {kk: str(vv) for kk, vv in v.items()} for k, v in (spec.plot.get("default", {}) or {}).items()}
+    rows = []
+    for ci, cell in enumerate(runs.cells):
+        sub = runs.table[runs.table.cell == ci]
+        family = str(sub.estimator.iloc[0])
+        settings = dict(o.split("=", 1) for o in runs.overrides[ci])
+        label = ", ".join(f"{short.get(k, k.split('.')[-1])}={settings[k]}" for k in keys if k in settings) or family
+        med, q25, q75 = quantiles(sub[metric])
+        default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
+        rows.append({"family": family, "label": label, "scenario": str(sub.scenario.iloc[0]), "metric": metric,
+                     "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub),
+                     "success_rate": _rate(sub["converged"]) if "converged" in sub else np.nan,
+                     "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub
+                     else np.nan,
+                     "on_boundary_rate": _rate(sub["on_boundary"] > 0) if "on_boundary" in sub else np.nan,
+                     "offset_error_ratio": _median(sub, "offset_error_ratio"),
+                     "wall_time": _median(sub, "wall_time"), "nfev_to_1.1": _median(sub, "nfev_to_1.1"),
+                     "default": default, "setting": sub.setting.iloc[0]})
+    frame = pd.DataFrame(rows)
+    frame["role"] = ""
+    for _, idx in frame.groupby(["family", "scenario"], sort=False).groups.items():
+        group = frame.loc[idx].sort_values("median", kind="stable")
+        if len(group) >= 3:
+            frame.loc[group.index[0], "role"] = "best"
+            frame.loc[group.index[len(group) // 2], "role"] = "median"
+            frame.loc[group.index[-1], "role"] = "worst"
+    return frame
+
+
+def draw(frame: pd.DataFrame, spec):
+    scenarios = list(dict.fromkeys(frame.scenario))
+    families = list(dict.fromkeys(frame.family))
+    fig, axes = panels(2 * len(scenarios), rows=2, width=max(3.6, 0.9 * len(families) + 1.5), height=2.9)
+    for j, sc in enumerate(scenarios):
+        top, bottom = axes[j], axes[len(scenarios) + j]
+        sub = frame[frame.scenario == sc]
+        for k, fam in enumerate(families):
+            f = sub[sub.family == fam]
+            jitter = np.linspace(-0.2, 0.2, len(f)) if len(f) > 1 else np.zeros(1)
+            top.scatter(k + jitter, f["median"].clip(lower=1e-14), s=12, color="C0", alpha=0.7)
+            for x, (_, r) in zip(k + jitter, f.iterrows()):
+                if r.default:
+                    top.scatter([x], [max(r["median"], 1e-14)], marker="*", s=120, color="C3", zorder=3,
+                                label="default" if k == 0 or "default" not in top.get_legend_handles_labels()[1] else None)
+                if r.role in ("best", "median", "worst"):
+                    top.annotate(r.role, (x, max(r["median"], 1e-14)), fontsize=6, xytext=(3, 2),
+                                 textcoords="offset points")
+            if len(f) == 1:  # one setting (an ablation variant): its success rate
+                bottom.bar(k, float(f.success_rate.iloc[0]), width=0.5, color="C0")
+                continue
+            bottom.bar(k - 0.2, f.success_rate.median(), width=0.2, color="C0",
+                       label="median over settings" if k == 0 else None)
+            best = f[f.role == "best"] if (f.role == "best").any() else f
+            bottom.bar(k, float(best.success_rate.iloc[0]), width=0.2, color="C2",
+                       label="best setting" if k == 0 else None)
+            if f.default.any():
+                bottom.bar(k + 0.2, float(f[f.default].success_rate.iloc[0]), width=0.2, color="C3",
+                           label="default" if k == 0 else None)
+        for ax in (top, bottom):
+            ax.set_xticks(range(len(families)), families, rotation=30, ha="right", fontsize=7)
+        top.set_yscale("log")
+        top.set_ylabel(f"median {frame.metric.iloc[0]} per setting")
+        top.set_title(sc, fontsize=9)
+        bottom.set_ylim(0, 1.05)
+        bottom.set_ylabel("success rate")
+    for ax in (axes[0], axes[len(scenarios)]):
+        if ax.get_legend_handles_labels()[1]:
+            ax.legend(fontsize=7)
+    fig.suptitle(spec.title, fontsize=10)
+    return fig
