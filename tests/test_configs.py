@@ -69,7 +69,7 @@ def test_yaml_value_types_as_hydras_grammar(text):
     assert type(ours) is type(hydra) and (ours == hydra or ours != ours and hydra != hydra)
 
 
-@pytest.mark.parametrize("overrides", [[], ["scenario=yuan2018_mode3", "estimator=rdpso"], ["estimator=kf_be"],
+@pytest.mark.parametrize("overrides", [[], ["scenario=yuan2018_mode3", "estimator=rdpso"], ["estimator=kf"],
                                        ["scenario=yan2022_mockup", "estimator=ls", "seed=4"],
                                        ["scenario=ding2024_exp2", "scenario.noise=5", "estimator.n_particles=7"]])
 def test_compose_config_equals_hydras_compose(overrides):

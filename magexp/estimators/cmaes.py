@@ -47,6 +47,9 @@ class CMAES:
 
     references = "Hansen & Ostermeier 2001; Hansen 2016 (arXiv:1604.00772); pycma"
 
+    needs = ("cost",)
+    iterative = True
+
     def __init__(self, *, name: str = "cmaes", max_evaluations: int = 40050, popsize: int = 0,
                  sigma0: float = 0.3, start: str = "uniform"):
         self.name = name

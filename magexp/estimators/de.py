@@ -48,6 +48,9 @@ class DifferentialEvolution:
 
     references = "Storn & Price 1997; SciPy differential_evolution"
 
+    needs = ("cost",)
+    iterative = True
+
     def __init__(self, *, name: str = "de", max_evaluations: int = 40050, popsize: int = 10,
                  strategy: str = "best1bin", mutation=(0.5, 1.0), recombination: float = 0.9,
                  tol: float = 0.0, init: str = "latinhypercube"):
