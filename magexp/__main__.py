@@ -1,8 +1,8 @@
 """Command line (Hydra; ``-m`` sweeps).
 
 * ``python -m magexp scenario=... estimator=... seed=...``: one simulated run (``task=run``, default);
-* ``python -m magexp task=calibrate data.path=mine.csv [data.unit=uT] estimator=lm [out=folder]``:
-  calibrate a recording (:mod:`magexp.calibrate`).
+* ``python -m magexp calibrate data.path=mine.csv [data.unit=uT] estimator=lm [out=folder]``:
+  calibrate a recording (:mod:`magexp.calibration`, its own config ``conf/calibrate.yaml``).
 """
 
 from __future__ import annotations
@@ -29,26 +29,9 @@ def print_table(rows: dict) -> None:
 
 
 def calibrate_task(cfg: DictConfig, out_dir: Path) -> dict:
-    """Calibrate the recording ``cfg.data.path`` with ``cfg.estimator``; print and write the outcome."""
-    from magexp.calibrate import calibrate
-    from magexp.calibrate_output import check_out, summary, write
-    from magexp.recordings import load_recording
-    from magexp.runner import build
-    from magexp.seeding import run_generators
-
-    data = cfg.get("data") or {}
-    if data.get("path") is None:
-        raise MagexpError("data.path=None is not allowed for task=calibrate: give data.path=<recording file>")
-    out_dir = Path(cfg.out) if cfg.get("out") else out_dir
-    check_out(out_dir)
-    rec = load_recording(data.path, unit=data.get("unit"))
-    estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    _, est_rng = run_generators(cfg.seed)
-    cal = calibrate(rec, estimator, objective=cfg.get("objective") or "scalar",
-                    reference_total=data.get("reference_total"), rng=est_rng)
-    paths = write(cal, out_dir, seed=cfg.seed)
-    print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())})
-    return cal.metrics
+    """``task=calibrate`` moved to its own command."""
+    raise MagexpError("task=calibrate is not allowed: calibrate a recording with "
+                      "`magexp calibrate data.path=<file> [data.unit=uT] [estimator=lm]`")
 
 
 def run_task(cfg: DictConfig, out_dir: Path) -> dict:
@@ -94,6 +77,10 @@ def main() -> None:
     """Entry point: check the overrides first (one-line errors), then hand over to Hydra."""
     from magexp.cli_checks import check_overrides
 
+    if sys.argv[1:2] == ["calibrate"]:  # its own command and primary config (conf/calibrate.yaml)
+        from magexp.calibration import main as calibrate_main
+
+        sys.exit(calibrate_main(sys.argv[2:]))
     args = [a for a in sys.argv[1:] if not a.startswith("-")]
     try:
         check_overrides(args)

@@ -11,7 +11,11 @@ EXPERIMENTS = ROOT / "experiments"
 RESULTS = ROOT / "results"
 CACHE = Path(os.environ.get("MAGEXP_CACHE", ROOT / ".cache" / "runs"))  # finished runs, keyed by config
 DATA = ROOT / "data"
-SHARED_DATA = ROOT.parent / "shared" / "data"
+# recorded data of others (never copied into the project): $MAGEXP_DATA, else ../shared/data beside
+# the checkout (or beside its parent folder, for a git worktree)
+SHARED_DATA = Path(os.environ["MAGEXP_DATA"]) if os.environ.get("MAGEXP_DATA") else next(
+    (p for p in (ROOT.parent / "shared" / "data", ROOT.parent.parent / "shared" / "data") if p.is_dir()),
+    ROOT.parent / "shared" / "data")
 
 
 def paper_results(paper: str) -> Path:
