@@ -163,3 +163,21 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
     if cells < MIN_CELLS:
         raise MagexpError(f"{name}: the readings point into only {cells} of {CELLS} sphere cells (too few distinct "
                           f"directions): {RECORD}")
+
+
+def recording_metrics(problem, theta) -> dict:
+    """Spread of a recording before and after the fitted calibration, on the fit's readings and on
+    the held-out block (``dataset.extra["heldout"]``, :class:`magexp.scenarios.recording.RecordingScenario`)."""
+    extra = problem.dataset.extra
+    if "all_readings" not in extra:
+        return {}
+
+    def spread(values):
+        mags = np.linalg.norm(values, axis=1)
+        return float(mags.std() / mags.mean()) if len(mags) else float("nan")
+
+    out = {"spread_before": spread(extra["all_readings"]),
+           "spread_after": spread(problem.calibrate(theta))}
+    if len(extra.get("heldout", ())):
+        out["heldout_spread"] = spread(problem.calibrate(theta, extra["heldout"]))
+    return out

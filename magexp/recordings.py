@@ -22,9 +22,11 @@ key                file
 Streams with their own times: the gyroscope is *integrated* at the magnetometer's times, not
 resampled (:func:`magexp.geometry.attitude_at`: each gyro sample held until the next one and
 propagated exactly over the merged time grid). Axes: ``mag_axes`` / ``gyro_axes`` (e.g.
-``"-x,y,z"``, :func:`magexp.geometry.axis_map`) map each sensor onto the common body axes; the
-``two-stream`` default for the gyroscope is ``-x,y,z`` (the MPU6050 files' x rate is positive
-clockwise, their y and z counter-clockwise).
+``"-x,y,z"``, :func:`magexp.geometry.axis_map`) map each sensor onto the common body axes
+(default: as recorded). For the HMC5883L + MPU6050 files the data decide: a gyro-aided fit
+(:mod:`magexp.problems.gyro`) with the gyroscope as recorded leaves about 2 % of the field as
+vector residual, with its x axis flipped (``-x,y,z``, the authors' note on the gyroscope alone)
+over 50 %: the magnetometer's unstated x convention evidently matches the gyroscope's.
 
 The ``magexp-recording v1`` format:
 
@@ -398,7 +400,7 @@ def _rates(values: np.ndarray, unit: str) -> np.ndarray:
     return np.deg2rad(values) if unit == "deg/s" else values
 
 
-def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes="-x,y,z") -> Recording:
+def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
     """``<stem>_mag.csv`` + ``<stem>_imu.csv``: readings at the magnetometer's times, the gyroscope
     stream at its own (integrated at the readings' times by :meth:`Recording.attitude`)."""
     from magexp.geometry import axis_map

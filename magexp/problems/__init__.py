@@ -19,6 +19,7 @@ OBJECTIVES: dict[str, str] = {
     "scalar": "magexp.problems.scalar:ScalarCalibration",
     "vector": "magexp.problems.vector:VectorCalibration",  # Yuan 2018 eq 8
     "ship": "magexp.problems.ship:ShipMagnetization",  # Yan & Zhou 2022 B = K A Be + Bp
+    "gyro": "magexp.problems.gyro:GyroAidedCalibration",  # eq 8 with unknown field direction and gyro bias
 }
 
 
