@@ -58,10 +58,15 @@ from magexp.scenarios.search import SearchBox
 OBJECTIVES = ("scalar", "vector")
 #: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
 MIN_READINGS = 12
+#: Calibration models: ``full`` (``W`` and offset, 9 numbers a scalar fit determines) or ``sphere``
+#: (offset and one scale, ``W = s I``: the closed-form :func:`fit_sphere`, no estimator; what readings
+#: covering part of the sphere can still determine).
+MODELS = ("full", "sphere")
 #: How each objective's ``W`` is reported.
 FORMS = {"scalar": "symmetric positive-definite polar factor (W = Q P, reported P = (W^T W)^(1/2)): a total-field "
                    "fit cannot see a rotation of W",
-         "vector": "as fitted (the vector objective determines the rotation)"}
+         "vector": "as fitted (the vector objective determines the rotation)",
+         "sphere": "s I (model=sphere: offset and one scale only)"}
 
 
 @dataclass
@@ -113,19 +118,25 @@ class Calibration:
         return self.recording.unit
 
 
-def centroid_radius(readings: np.ndarray) -> float:
-    """Radius of the sphere that best fits ``readings`` (linear least squares of
-    ``|r|² = 2 cᵀr + (R² - |c|²)``, Pratt 1987); the mean distance from the centroid when that fit
-    is not a sphere. Unlike the centroid distance it stays right when the readings cover only
-    part of the sphere."""
+def fit_sphere(readings: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre and radius of the sphere that best fits ``readings``: linear least squares of
+    ``|r|² = 2 cᵀr + (R² - |c|²)`` (Pratt 1987), on readings centred on their mean. Not a sphere
+    (readings on a line): the centroid and the mean distance from it."""
     r = np.asarray(readings, float)
     shift = r.mean(axis=0)
     u = r - shift
     design = np.column_stack([2 * u, np.ones(len(u))])
     sol = np.linalg.lstsq(design, (u * u).sum(axis=1), rcond=None)[0]
     radius2 = sol[3] + sol[:3] @ sol[:3]
-    fallback = float(np.linalg.norm(u, axis=1).mean())
-    return float(np.sqrt(radius2)) if np.isfinite(radius2) and radius2 > 0 else fallback
+    if np.isfinite(radius2) and radius2 > 0:
+        return shift + sol[:3], float(np.sqrt(radius2))
+    return shift, float(np.linalg.norm(u, axis=1).mean())
+
+
+def centroid_radius(readings: np.ndarray) -> float:
+    """Radius of the sphere fitted to ``readings`` (:func:`fit_sphere`): unlike the mean distance from
+    the centroid it stays right when the readings cover only part of the sphere."""
+    return fit_sphere(readings)[1]
 
 
 def reference_of(rec: Recording, override=None) -> Reference:
@@ -216,12 +227,19 @@ def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> d
             "rms_after": float(np.sqrt(np.mean((after - reference) ** 2)))}
 
 
-def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng) -> tuple:
-    """``(W, o, calibrated, problem, result)`` of one fit (W canonical for a scalar objective)."""
+def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full") -> tuple:
+    """``(W, o, calibrated, problem, result, box)`` of one fit (W canonical for a scalar objective)."""
     from magexp.problems import make_problem
 
     dataset = recording_dataset(rec, reference, objective)
     box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
+    if model == "sphere":
+        centre, radius = fit_sphere(rec.readings)
+        w = np.eye(3) * np.mean(reference.total) / radius
+        result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
+                           history=np.zeros(1), history_nfev=np.ones(1), success=True,
+                           message="closed-form sphere fit (offset and one scale; no estimator)")
+        return w, centre, (rec.readings - centre) @ w.T, None, result, box
     problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
     result = estimator.fit(problem, rng=rng)
     w, o = (a[0] for a in problem.unpack(result.x))
@@ -237,7 +255,8 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng) -
     return w, o, calibrated, problem, result, box
 
 
-def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng) -> dict:
+def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
+            model: str = "full") -> dict:
     """Spread of each contiguous block calibrated by the fit on the others (module docstring)."""
     if folds < 2:
         return {}
@@ -248,7 +267,7 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
         train = rec.subset(keep)
         ref = Reference(reference.total[keep], reference.source, reference.estimated)
         try:
-            w, o, *_ = _fit(train, estimator, objective, ref, rng)
+            w, o, *_ = _fit(train, estimator, objective, ref, rng, model)
         except MagexpError:
             return {"heldout_spread": float("nan"), "heldout_folds": folds}
         mags = np.linalg.norm((rec.readings[lo:hi] - o) @ w.T, axis=1)
@@ -258,9 +277,13 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
             "heldout_folds": folds}
 
 
-def report_of(rec: Recording, objective: str, w, o, reference: Reference, problem) -> dict:
+def report_of(rec: Recording, objective: str, w, o, reference: Reference, problem, model: str = "full") -> dict:
     """Standard errors, conditioning, undetermined combinations (:func:`magexp.quality.identifiability`)."""
-    if objective == "scalar":
+    if model == "sphere":
+        theta = np.concatenate([[w[0, 0]], o])
+        names = ["s", "o1", "o2", "o3"]
+        fun = q.sphere_residuals(rec.readings, reference.total)
+    elif objective == "scalar":
         theta = np.concatenate([[w[i, j] for i, j in q.SYMMETRIC], o])
         names = [f"W{i + 1}{j + 1}" for i, j in q.SYMMETRIC] + ["o1", "o2", "o3"]
         fun = q.scalar_residuals(rec.readings, reference.total)
@@ -270,15 +293,20 @@ def report_of(rec: Recording, objective: str, w, o, reference: Reference, proble
         fun = q.vector_residuals(rec.readings, problem.reference)
     out = q.identifiability(fun, theta, names)
     se = out["standard_errors"]
-    out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar" else se[f"W{i + 1}{j + 1}"]
-                                 for j in range(3)] for i in range(3)]
+    if model == "sphere":
+        out["W_standard_errors"] = (np.eye(3) * se["s"]).tolist()
+    else:
+        out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar"
+                                     else se[f"W{i + 1}{j + 1}"] for j in range(3)] for i in range(3)]
     out["offset_standard_errors"] = [se["o1"], se["o2"], se["o3"]]
-    out["w_form"] = FORMS[objective]
+    out["w_form"] = FORMS["sphere" if model == "sphere" else objective]
+    out["model"] = model
     return out
 
 
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
-                        folds: int = 5, rng: np.random.Generator, checks: bool = True) -> Calibration:
+                        folds: int = 5, rng: np.random.Generator, checks: bool = True,
+                        model: str = "full") -> Calibration:
     """Fit ``estimator`` to the recording ``rec`` and measure how good the fit is.
 
     Parameters
@@ -290,6 +318,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     folds : blocks of the held-out check (0 or 1: none).
     rng : the estimator's random generator.
     checks : refuse degenerate data and failed fits (:mod:`magexp.quality`); False measures them anyway.
+    model : ``full`` or ``sphere`` (:data:`MODELS`; ``sphere`` needs the scalar objective).
 
     Returns
     -------
@@ -298,21 +327,26 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         metrics and the quality report.
     """
     check_size(rec)
+    if model not in MODELS or (model == "sphere" and objective != "scalar"):
+        raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or sphere "
+                          "with the scalar objective")
     check_applies(estimator, objective)
     reference = reference_of(rec, reference_total)
     recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
         q.check_readings(rec.readings, rec.name)
-    w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng)
+    w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model)
     cover = q.coverage(calibrated)
+    name = "sphere fit" if model == "sphere" else estimator.name
     if checks:
-        q.check_fit(rec.name, estimator.name, bool(result.success), result.message, cover)
+        q.check_fit(rec.name, name, bool(result.success), result.message, cover,
+                    q.coverage(rec.readings - fit_sphere(rec.readings)[0]))
     metrics = {**quality(rec.readings, calibrated, reference.total), **cover}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
-    metrics.update(heldout(rec, estimator, objective, reference, folds, rng))
-    report = report_of(rec, objective, w, o, reference, problem)
-    return Calibration(recording=rec, estimator=estimator.name, objective=objective, w=w, offset=o,
+    metrics.update(heldout(rec, estimator, objective, reference, folds, rng, model))
+    report = report_of(rec, objective, w, o, reference, problem, model)
+    return Calibration(recording=rec, estimator=name, objective=objective, w=w, offset=o,
                        reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
                        report=report)
 
@@ -365,7 +399,8 @@ def estimator_named(name: str, **overrides):
 
 
 def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objective: str = "scalar",
-              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, **estimator_options) -> Calibration:
+              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "full",
+              **estimator_options) -> Calibration:
     """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
 
     Parameters
@@ -374,7 +409,7 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
         or a :class:`~magexp.recordings.Recording`.
     unit : unit of an array or DataFrame (``nT, uT, mG, G, T, counts``).
     estimator : a name of ``conf/estimator/*.yaml`` (``ellipsoid``, ``lm``, ``ipso``, ...) or an estimator object.
-    objective, reference_total, folds, checks : as :func:`calibrate_recording`.
+    objective, reference_total, folds, checks, model : as :func:`calibrate_recording`.
     seed : the estimator's random generator derives from it (:func:`magexp.seeding.run_generators`).
     estimator_options : overrides of the estimator config (e.g. ``n_iterations=200``).
 
@@ -395,7 +430,7 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
     _, rng = run_generators(seed)
     return calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
-                               rng=rng, checks=checks)
+                               rng=rng, checks=checks, model=model)
 
 
 # -- the command -----------------------------------------------------------------------------------
@@ -456,7 +491,7 @@ def run(cfg) -> Calibration:
     if reference is None:
         reference = reference_from_igrf(cfg, rec)
     cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
-                              folds=int(cfg.folds), rng=est_rng)
+                              folds=int(cfg.folds), rng=est_rng, model=cfg.model)
     paths = write(cal, out_dir, seed=cfg.seed)
     print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())})
     return cal

@@ -38,6 +38,7 @@ UNDETERMINED = 1e-8
 MIN_DISTINCT = 12
 PLANE_RATIO = 0.02   # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane
 MIN_CELLS = 8        # fewer occupied cells (a quarter of the sphere): too few distinct directions
+PARTIAL = 0.75       # fewer occupied cells after a failed fit: say the coverage is partial
 ONE_ATTITUDE_DEG = 20.0  # every calibrated direction within this angle of their mean: one attitude
 
 SYMMETRIC = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
@@ -89,6 +90,16 @@ def scalar_residuals(readings: np.ndarray, reference: np.ndarray):
         p[:, iu[1], iu[0]] = thetas[:, :6]
         c = np.einsum("nij,nkj->nki", p, readings[None] - thetas[:, None, 6:])
         return np.linalg.norm(c, axis=2) - reference
+
+    return fun
+
+
+def sphere_residuals(readings: np.ndarray, reference: np.ndarray):
+    """``θ = [s, o] -> s |r_i - o| - B_i`` for a stack of ``θ`` (n, 4)."""
+
+    def fun(thetas):
+        thetas = np.atleast_2d(thetas)
+        return thetas[:, :1] * np.linalg.norm(readings[None] - thetas[:, None, 1:], axis=2) - reference
 
     return fun
 
@@ -150,12 +161,18 @@ def check_readings(readings: np.ndarray, name: str) -> None:
                           "normal nor the scale across it: also turn the sensor about a second axis")
 
 
-def check_fit(name: str, estimator: str, success: bool, message: str, cover: dict) -> None:
+def check_fit(name: str, estimator: str, success: bool, message: str, cover: dict, raw_cover: dict) -> None:
     """Fail in one line if the estimator failed or the calibrated directions show one attitude
-    or too few distinct directions."""
+    or too few distinct directions. ``raw_cover``: the coverage of the raw readings about the
+    centre of their fitted sphere (what a failed fit's message quotes)."""
     if not success:
-        raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({message.splitlines()[0] if message else 'no message'}), "
-                          "nothing written: try estimator=ellipsoid or estimator=lm, or record more orientations")
+        why = message.splitlines()[0] if message else "no message"
+        if raw_cover["coverage_cells"] < PARTIAL:
+            raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({why}), nothing written: the readings "
+                              f"cover {100 * raw_cover['coverage_cells']:.0f} % of the sphere, too little for W: record the "
+                              "missing orientations, or fit model=sphere (offset and one scale)")
+        raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({why}), nothing written: "
+                          "try another estimator (ellipsoid, lm), or record more orientations")
     if cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG:
         raise MagexpError(f"{name}: every calibrated direction lies within {cover['direction_max_angle_deg']:.1f} deg "
                           f"of one (a single attitude): {RECORD}")

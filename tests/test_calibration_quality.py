@@ -175,3 +175,15 @@ def test_array_api_rejects_bad_input():
         magexp.calibrate(np.ones((20, 2)), unit="uT")
     with pytest.raises(MagexpError, match="estimator='nope' is not allowed"):
         magexp.calibrate(sphere_readings(), unit="uT", estimator="nope")
+
+
+def test_half_sphere_full_model_fails_and_sphere_model_fits():
+    u = random_rotations(600, rng=np.random.default_rng(6))[:, :, 0]
+    u = u[u[:, 2] < -0.3]  # less than half the sphere
+    r = 50.0 * u * 1.02 + OFFSET + np.random.default_rng(7).normal(0, 0.05, (len(u), 3))  # one scale only
+    cal = magexp.calibrate(r, unit="uT", model="sphere", reference_total=50.0, folds=3)
+    np.testing.assert_allclose(cal.offset, OFFSET, atol=0.1)
+    np.testing.assert_allclose(cal.w, np.eye(3) / 1.02, atol=2e-3)
+    assert "model=sphere" in cal.report["w_form"] and cal.metrics["heldout_spread"] < 0.005
+    with pytest.raises(MagexpError, match="model='sphere' is not allowed with objective 'vector'"):
+        magexp.calibrate(r, unit="uT", model="sphere", objective="vector")

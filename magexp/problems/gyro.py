@@ -138,7 +138,10 @@ class GyroAidedCalibration(CalibrationProblem):
 
     def metrics(self, theta) -> dict:
         """``fg``; ``vector_residual_fraction``: RMS of ``|R_jᵀh - W(B_j - b)|`` over ``F``;
-        ``field_rms`` and the spread of the calibrated magnitudes; the field direction; the gyro bias."""
+        ``field_rms`` and the spread of the calibrated magnitudes; the field direction (also as
+        ``field_azimuth_deg``/``field_elevation_deg`` on their principal branches); the gyro bias;
+        ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
+        Jacobian (:func:`magexp.quality.identifiability`)."""
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
         mags = np.linalg.norm(self.calibrate(theta), axis=1)
@@ -146,6 +149,9 @@ class GyroAidedCalibration(CalibrationProblem):
                "vector_residual_fraction": float(np.sqrt(np.mean(np.sum(err**2, axis=1))) / self.total),
                "spread_after": float(mags.std() / mags.mean())}
         out.update(dict(zip(EXTRA, theta[12:].tolist())))
+        h = self.field(theta)[0] / self.total  # the direction, whatever the angles' branch
+        out.update({"field_azimuth_deg": float(np.rad2deg(np.arctan2(h[1], h[0]))),
+                    "field_elevation_deg": float(np.rad2deg(np.arcsin(np.clip(h[2], -1, 1))))})
         from magexp.quality import identifiability
 
         ident = identifiability(lambda t: self.residual_swarm(t).reshape(len(np.atleast_2d(t)), -1), theta,
