@@ -184,7 +184,8 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
 
 def recording_metrics(problem, theta) -> dict:
     """Spread of a recording before and after the fitted calibration, on the fit's readings and on
-    the held-out block (``dataset.extra["heldout"]``, :class:`magexp.scenarios.recording.RecordingScenario`)."""
+    the held-out block, and the direction coverage of the calibrated readings (a fit that sends every
+    reading to nearly one direction has a tiny spread and is wrong); the held-out block (``dataset.extra["heldout"]``, :class:`magexp.scenarios.recording.RecordingScenario`)."""
     extra = problem.dataset.extra
     if "all_readings" not in extra:
         return {}
@@ -193,8 +194,9 @@ def recording_metrics(problem, theta) -> dict:
         mags = np.linalg.norm(values, axis=1)
         return float(mags.std() / mags.mean()) if len(mags) else float("nan")
 
-    out = {"spread_before": spread(extra["all_readings"]),
-           "spread_after": spread(problem.calibrate(theta))}
+    calibrated = problem.calibrate(theta)
+    out = {"spread_before": spread(extra["all_readings"]), "spread_after": spread(calibrated),
+           "coverage_cells": coverage(calibrated)["coverage_cells"]}  # ~0: the fit collapsed the directions
     if len(extra.get("heldout", ())):
         out["heldout_spread"] = spread(problem.calibrate(theta, extra["heldout"]))
     return out

@@ -43,14 +43,15 @@ CASES = [  # (arguments, words the one line must contain)
     (["estimator.velocity_clamp=-0.1"], ["velocity_clamp=-0.1"]),
     (["estimator.init.form=weird"], ["'weird'", "printed"]),
     (["-m", "estimator=pso,bogus"], ["'bogus'"]),
-    (["task=calibrate", "data.path=missing.csv", "data.unit=nT"], ["missing.csv"]),
-    (["task=calibrate", "data.path=missing_column.csv"], ["bz"]),
-    (["task=calibrate", "data.path=text.csv"], ["abc"]),
-    (["task=calibrate", "data.path=nan.csv"], ["nan"]),
-    (["task=calibrate", "data.path=short.csv", "estimator=lm"], ["3"]),
-    (["task=calibrate", "data.path=unit.csv"], ["furlong"]),
-    (["task=calibrate", "data.path=row_length.csv"], ["row_length.csv"]),
-    (["task=calibrate", "data.path=good.csv", "out=a_file"], ["a_file"]),  # an output "folder" that is a file
+    (["task=calibrate"], ["magexp calibrate"]),  # moved to its own command
+    (["calibrate", "data.path=missing.csv", "data.unit=nT"], ["missing.csv"]),
+    (["calibrate", "data.path=missing_column.csv"], ["bz"]),
+    (["calibrate", "data.path=text.csv"], ["abc"]),
+    (["calibrate", "data.path=nan.csv"], ["nan"]),
+    (["calibrate", "data.path=short.csv", "estimator=lm"], ["3"]),
+    (["calibrate", "data.path=unit.csv"], ["furlong"]),
+    (["calibrate", "data.path=row_length.csv"], ["row_length.csv"]),
+    (["calibrate", "data.path=good.csv", "out=a_file"], ["a_file"]),  # an output "folder" that is a file
 ]
 
 REPRODUCE_CASES = [

@@ -20,6 +20,7 @@ COLUMNS = {
     "spread_before": "recordings: std/mean of the raw magnitudes",
     "spread_after": "recordings: std/mean of the calibrated magnitudes (fitted readings)",
     "heldout_spread": "recordings: std/mean of the calibrated magnitudes of the held-out block",
+    "coverage_cells": "recordings: fraction of 32 sphere cells the calibrated directions reach",
 }
 
 
