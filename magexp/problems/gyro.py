@@ -138,7 +138,8 @@ class GyroAidedCalibration(CalibrationProblem):
 
     def metrics(self, theta) -> dict:
         """``fg``; ``vector_residual_fraction``: RMS of ``|R_jᵀh - W(B_j - b)|`` over ``F``;
-        ``field_rms`` and the spread of the calibrated magnitudes; the field direction (also as
+        ``field_rms`` and the spread of the calibrated magnitudes; with a rest recording, its mean rate
+        and ``gyro_bias_difference`` (deg/s, norm) from the estimate; the field direction (also as
         ``field_azimuth_deg``/``field_elevation_deg`` on their principal branches); the gyro bias;
         ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
         Jacobian (:func:`magexp.quality.identifiability`)."""
@@ -149,6 +150,10 @@ class GyroAidedCalibration(CalibrationProblem):
                "vector_residual_fraction": float(np.sqrt(np.mean(np.sum(err**2, axis=1))) / self.total),
                "spread_after": float(mags.std() / mags.mean())}
         out.update(dict(zip(EXTRA, theta[12:].tolist())))
+        rest = self.dataset.extra.get("rest_gyro_bias_deg_s")
+        if rest is not None:  # the same gyroscope at rest: its mean rate
+            out.update({f"gyro_bias_rest_{a}": float(v) for a, v in zip("xyz", rest)})
+            out["gyro_bias_difference"] = float(np.linalg.norm(theta[14:17] - rest))
         h = self.field(theta)[0] / self.total  # the direction, whatever the angles' branch
         out.update({"field_azimuth_deg": float(np.rad2deg(np.arctan2(h[1], h[0]))),
                     "field_elevation_deg": float(np.rad2deg(np.arcsin(np.clip(h[2], -1, 1))))})

@@ -38,16 +38,19 @@ class RecordingScenario:
     n_readings : readings used by the fit (evenly spaced; null: all).
     folds, heldout_fold : contiguous blocks, and the one held out of the fit (scalar; folds 0: none).
     bias_bound_deg_s : half-width of the gyro-bias search interval (gyro).
+    rest_file : a recording of the same gyroscope at rest (gyro): its mean rate, in the same axes,
+        is reported beside the estimated bias (``gyro_bias_rest_*``, ``gyro_bias_difference``).
     """
 
     def __init__(self, *, name: str, file: str, objective: str = "scalar", unit=None, format: str = "auto",
                  mag_axes=None, gyro_axes=None, window=None, n_readings=None, folds: int = 5,
-                 heldout_fold: int = 0, bias_bound_deg_s: float = 10.0):
+                 heldout_fold: int = 0, bias_bound_deg_s: float = 10.0, rest_file=None):
         if objective not in OBJECTIVES:
             raise MagexpError(f"scenario.objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
         self.name, self.file, self.objective = name, file, objective
         self.load_options = {"unit": unit, "format": format, "mag_axes": mag_axes, "gyro_axes": gyro_axes}
         self.window = window
+        self.rest_file = rest_file
         self.n_readings = None if n_readings is None else check_positive_int(n_readings, "scenario.n_readings", 12)
         self.folds = int(folds)
         self.heldout_fold = int(heldout_fold)
@@ -56,18 +59,19 @@ class RecordingScenario:
         self.problem_options = {"bias_bound_deg_s": float(bias_bound_deg_s)} if objective == "gyro" else {}
         self._data = None
 
-    def recording(self):
-        """The loaded recording, cut to the window."""
+    def recording(self, file=None):
+        """The loaded recording (``file``, default the scenario's), cut to the window."""
         from pathlib import Path
 
         from magexp.recordings import load_recording
 
-        path = Path(self.file) if Path(self.file).is_absolute() else SHARED_DATA / self.file
+        file = file or self.file
+        path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
         if not path.exists() and not Path(f"{path}_mag.csv").exists():
-            raise MagexpError(f"scenario.file={self.file!r} is not allowed: {path} does not exist "
+            raise MagexpError(f"scenario.file={file!r} is not allowed: {path} does not exist "
                               "(set MAGEXP_DATA to the folder of the recordings)")
         rec = load_recording(path, **self.load_options)
-        if self.window is not None:
+        if self.window is not None and file == self.file:
             t = rec.reading_times()
             t0, t1 = (float(v) for v in self.window)
             keep = np.flatnonzero((t - t[0] >= t0) & (t - t[0] <= t1))
@@ -97,6 +101,9 @@ class RecordingScenario:
             if stream is None:
                 raise MagexpError(f"scenario {self.name!r}: objective 'gyro' needs a gyroscope, {rec.name} has none")
             extra["preintegration"] = preintegrate(*stream, rec.reading_times()[fit])
+            if self.rest_file:
+                rest = self.recording(self.rest_file).gyro_rates()
+                extra["rest_gyro_bias_deg_s"] = np.rad2deg(rest[1].mean(axis=0))
         self.search = search_box(rec.readings[fit], radius, forward=True)
         self._data = Dataset(readings=rec.readings[fit], reference_norm=np.full(len(fit), radius), unit=rec.unit,
                              meta={"scenario": self.name, "recording": rec.name}, extra=extra)
