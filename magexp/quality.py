@@ -39,7 +39,8 @@ MIN_DISTINCT = 12
 PLANE_RATIO = 0.02   # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane
 MIN_CELLS = 8        # fewer occupied cells (a quarter of the sphere): too few distinct directions
 PARTIAL = 0.75       # fewer occupied cells after a failed fit: say the coverage is partial
-ONE_ATTITUDE_DEG = 20.0  # every calibrated direction within this angle of their mean: one attitude
+ONE_ATTITUDE_DEG = 20.0
+STILL = 0.05         # RMS distance of the raw readings from their centroid below this fraction of their magnitude: one attitude  # every calibrated direction within this angle of their mean: one attitude
 
 SYMMETRIC = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
@@ -148,12 +149,17 @@ RECORD = "record again while turning the sensor slowly through as many orientati
 
 def check_readings(readings: np.ndarray, name: str) -> None:
     """Fail in one line if the raw readings cannot determine a calibration: too few distinct
-    readings, or readings in one plane."""
+    readings, readings that barely move (one attitude; an offset over ~20 times the field would
+    look the same), or readings in one plane."""
     distinct = len(np.unique(readings, axis=0))
     if distinct < MIN_DISTINCT:
         raise MagexpError(f"{name}: only {distinct} distinct readings, a calibration needs at least {MIN_DISTINCT}: "
                           f"{RECORD}")
     centred = readings - readings.mean(axis=0)
+    moved = float(np.sqrt((centred**2).sum(axis=1).mean()) / max(np.linalg.norm(readings, axis=1).mean(), 1e-300))
+    if moved < STILL:
+        raise MagexpError(f"{name}: the readings barely move (RMS distance from their centroid {100 * moved:.2g} % of "
+                          f"their magnitude): one attitude cannot determine a calibration: {RECORD}")
     ev = np.linalg.eigvalsh(centred.T @ centred / len(readings))
     if ev[0] <= (PLANE_RATIO**2) * ev[-1]:
         raise MagexpError(f"{name}: the readings lie in one plane (thickness {np.sqrt(max(ev[0], 0) / ev[-1]):.2g} of "
