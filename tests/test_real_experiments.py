@@ -30,6 +30,6 @@ def test_modes_artifact_runs_on_the_recordings(tmp_path):
     summary = reproduce_paper("real", root=tmp_path, seeds=1, jobs=1, tiny=True, only="real_modes", force=True,
                               log=lambda *_: None)
     frac = summary[summary.quantity == "vector_residual_fraction"]
-    assert len(frac) == 4 and (frac.value < 0.05).all()  # gyro and magnetometer agree to a few % of the field
+    assert len(frac) == 5 and (frac.value < 0.05).all()  # gyro and magnetometer agree to a few % of the field
     runs = pd.read_csv(tmp_path / "real" / "real_modes_runs.csv")
     assert runs.weakest_combination.notna().all()
