@@ -14,3 +14,10 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     _os.environ.setdefault(_var, "1")
 
 __version__ = "0.1.0"
+
+
+def calibrate(readings, **options):
+    """Calibrate readings: see :func:`magexp.calibration.calibrate` (imported on first use)."""
+    from magexp.calibration import calibrate as _calibrate
+
+    return _calibrate(readings, **options)

@@ -1,10 +1,12 @@
-"""What ``task=calibrate`` writes: parameters (JSON), calibrated readings (CSV), a before/after figure.
+"""What ``magexp calibrate`` writes: parameters (JSON), calibrated readings (CSV), a before/after figure.
 
 Files, in the output folder (``out=...``, default Hydra's run folder):
 
 * ``calibration.json``: ``W`` and ``offset`` of ``B = W (reading - offset)``, unit, estimator,
-  objective, the reference used and how it was obtained, the search box, the spread metrics
-  and the fit's outcome (format ``magexp-calibration v1``);
+  objective, the form ``W`` is given in, the reference used and how it was obtained, the search
+  box, the spread metrics (before, after, held out), the quality report (standard errors,
+  conditioning, undetermined combinations, direction coverage) and the fit's outcome
+  (format ``magexp-calibration v2``);
 * ``calibrated.csv``: a ``magexp-recording v1`` file with the calibrated ``bx, by, bz``, their
   ``magnitude``, and the raw ``raw_bx, raw_by, raw_bz, raw_magnitude``;
 * ``calibration.png``: plane projections of the raw and calibrated readings with the reference
@@ -26,7 +28,8 @@ from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.recordings import VERSION_LINE
 
-FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png"}
+FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png",
+         "figure_vector": "calibration.pdf"}  # the figure and its vector twin (magexp.plots.style.save)
 
 
 def check_out(out_dir: Path) -> None:
@@ -49,34 +52,47 @@ def check_out(out_dir: Path) -> None:
 
 
 def parameters(cal, *, seed: int) -> dict:
-    """The JSON content of a :class:`~magexp.calibrate.Calibration`."""
+    """The JSON content of a :class:`~magexp.calibration.Calibration`."""
     rec, box = cal.recording, cal.search
     return {
-        "format": "magexp-calibration v1",
+        "format": "magexp-calibration v2",
         "model": "B = W (reading - offset)",
-        "recording": str(rec.path),
+        "recording": str(rec.path or rec.name),
         "n_readings": rec.n,
         "unit": cal.unit,
         "estimator": cal.estimator,
         "objective": cal.objective,
         "seed": int(seed),
         "W": cal.w.tolist(),
+        "W_form": cal.report.get("w_form", ""),
         "offset": cal.offset.tolist(),
         "reference": {"total": float(np.mean(cal.reference.total)),
                       "per_reading": bool(np.ptp(cal.reference.total) > 0), "source": cal.reference.source, "estimated": cal.reference.estimated,
                       "how": cal.reference.describe()},
         "search": {"diag": list(box.diag), "offdiag": list(box.offdiag), "offset": list(box.offset)},
         "metrics": cal.metrics,
+        "quality": _finite(cal.report),
         "fit": {"fun": float(cal.fit.fun), "nit": int(cal.fit.nit), "nfev": int(cal.fit.nfev),
                 "success": bool(cal.fit.success), "message": cal.fit.message},
     }
+
+
+def _finite(value):
+    """``value`` with infinities as the string ``"inf"`` (JSON has no infinity)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return str(value)
+    return value
 
 
 def readings_text(cal) -> str:
     """The calibrated readings as a ``magexp-recording v1`` CSV."""
     raw, cal_b = cal.recording.readings, cal.calibrated
     table = np.column_stack([cal_b, np.linalg.norm(cal_b, axis=1), raw, np.linalg.norm(raw, axis=1)])
-    head = [VERSION_LINE, f"# source: {cal.recording.path.name} calibrated by magexp "
+    head = [VERSION_LINE, f"# source: {cal.recording.name} calibrated by magexp "
                           f"(estimator {cal.estimator}, objective {cal.objective})",
             f"# unit: {cal.unit}", "bx,by,bz,magnitude,raw_bx,raw_by,raw_bz,raw_magnitude"]
     rows = [",".join(f"{v:.10g}" for v in row) for row in table]
@@ -94,7 +110,7 @@ def write(cal, out_dir: Path, *, seed: int) -> dict:
     paths = {key: out_dir / name for key, name in FILES.items()}
     paths["parameters"].write_text(json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
     paths["readings"].write_text(readings_text(cal))
-    title = f"{cal.recording.path.name}: {cal.estimator} ({cal.objective}), spread " \
+    title = f"{cal.recording.name}: {cal.estimator} ({cal.objective}), spread " \
             f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
     save(calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.unit, title=title),
          paths["figure"])
@@ -103,14 +119,28 @@ def write(cal, out_dir: Path, *, seed: int) -> dict:
 
 def summary(cal) -> dict:
     """The key numbers to print, in order."""
-    m, u = cal.metrics, cal.unit
+    from magexp.quality import CELLS
+
+    m, u, r = cal.metrics, cal.unit, cal.report
     return {
-        "recording": f"{cal.recording.path} ({cal.recording.n} readings, {u})",
+        "recording": f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})",
         "estimator": f"{cal.estimator} ({cal.objective} objective)",
         "reference": cal.reference.describe(),
         "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
         "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
         "rms before": f"{m['rms_before']:.6g} {u} (|raw| - reference)",
         "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)",
+        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} contiguous blocks, each "
+                            "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
+        "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
+        "W std errors": "[" + "; ".join(", ".join(f"{v:.2g}" for v in row) for row in r["W_standard_errors"]) + "]",
         "offset": "[" + ", ".join(f"{v:.6g}" for v in cal.offset) + f"] {u}",
+        "offset std errors": "[" + ", ".join(f"{v:.2g}" for v in r["offset_standard_errors"]) + f"] {u}",
+        "conditioning": f"{r['condition_number']:.3g} (column-scaled Jacobian); weakest combination "
+                        f"{r['weakest_combinations'][0]['combination']} "
+                        f"(relative singular value {r['weakest_combinations'][0]['relative_singular_value']:.2g})",
+        "undetermined": ", ".join(r["undetermined"]) or "none",
+        "coverage": f"{100 * m['coverage_cells']:.0f} % of {CELLS} sphere cells; smallest direction-scatter "
+                    f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
+        "fit": f"{'success' if cal.fit.success else 'FAILED'}: {cal.fit.message}",
     }

@@ -43,6 +43,9 @@ def _evaluate(problem, result) -> dict:
         # converged: as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
         out["converged"] = bool(out["fun"] <= 1.01 * out["truth_fun"] + 1e-9)
     out.update(problem.metrics(result.x))
+    from magexp.quality import recording_metrics
+
+    out.update(recording_metrics(problem, result.x))  # recorded data: spread before, after, held out
     out.update(result.metrics)
     out.update(time_to_reach(result, factor=1.1))
     if "truth_fun" in out:

@@ -24,7 +24,11 @@ RESULTS = ROOT / "results" if SOURCE_CHECKOUT else Path.cwd() / "results"
 _default_cache = (ROOT / ".cache" / "runs" if SOURCE_CHECKOUT
                   else Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "magexp" / "runs")
 CACHE = Path(os.environ.get("MAGEXP_CACHE", _default_cache))  # finished runs, keyed by config
-SHARED_DATA = ROOT.parent / "shared" / "data"
+# recorded data of others (never copied into the project): $MAGEXP_DATA, else ../shared/data beside
+# the checkout (or beside its parent folder, for a git worktree)
+SHARED_DATA = Path(os.environ["MAGEXP_DATA"]) if os.environ.get("MAGEXP_DATA") else next(
+    (p for p in (ROOT.parent / "shared" / "data", ROOT.parent.parent / "shared" / "data") if p.is_dir()),
+    ROOT.parent / "shared" / "data")
 
 
 def composed_configs() -> Path:

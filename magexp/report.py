@@ -13,7 +13,7 @@ from magexp.artifacts import load_spec
 from magexp.paths import EXPERIMENTS, RESULTS
 from magexp.summary import COLUMNS
 
-ORDER = ("ding2024", "yuan2018", "yan2022", "benchmark")
+ORDER = ("ding2024", "yuan2018", "yan2022", "benchmark", "real")
 
 
 def _fmt(v) -> str:

@@ -27,6 +27,12 @@ FILES = {  # recordings read by scenario=yan2022_mockup scenario.path=<file>
     "no_angles.csv": "# magexp-recording v1\n# unit: nT\nbx,by,bz\n" + "".join(
         ",".join(row.split(",")[:3]) + "\n" for row in ROWS.splitlines()),
 }
+CALIB_HEADER = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
+FILES.update({  # recordings read by magexp calibrate data.path=<file>
+    "short.csv": CALIB_HEADER + "1,2,3\n4,5,6\n7,8,10\n",
+    "good.csv": CALIB_HEADER + "".join(f"{1000 + 37 * i},{-500 + 11 * i * i % 700},{200 + 53 * i % 900}\n"
+                                       for i in range(30)),
+})
 BINARY = bytes(range(256)) * 4  # not UTF-8 text
 
 MOCKUP = ["scenario=yan2022_mockup", "estimator=ls"]
@@ -102,6 +108,15 @@ CASES = [  # (arguments, words the one line must contain)
     (["-m", "hydra.launcher.foo=1", "seed=1,2"], ["hydra.launcher.foo"]),
     (["-m", "hydra.launcher.n_jobs=abc", "seed=1,2"], ["hydra.launcher.n_jobs", "abc"]),
     (["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
+    (["task=calibrate"], ["magexp calibrate"]),  # moved to its own command
+    (["calibrate", "data.path=missing.csv", "data.unit=nT"], ["missing.csv"]),
+    (["calibrate", "data.path=missing_column.csv"], ["bz"]),
+    (["calibrate", "data.path=text.csv"], ["abc"]),
+    (["calibrate", "data.path=nan.csv"], ["nan"]),
+    (["calibrate", "data.path=short.csv", "estimator=lm"], ["3"]),
+    (["calibrate", "data.path=unit.csv"], ["furlong"]),
+    (["calibrate", "data.path=row_length.csv"], ["row_length.csv"]),
+    (["calibrate", "data.path=good.csv", "out=a_file"], ["a_file"]),  # an output "folder" that is a file
 ]
 
 REPRODUCE_CASES = [

@@ -1,4 +1,4 @@
-"""task=calibrate: a user's recording calibrated with any estimator, from one command."""
+"""magexp calibrate: a user's recording calibrated with any estimator, from one command, with its quality."""
 
 import json
 import os
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.calibrate import MIN_READINGS, attitude_of, calibrate, search_box
+from magexp.calibration import MIN_READINGS, attitude_of, calibrate_recording, search_box
 from magexp.calibrate_output import FILES, check_out
 from magexp.errors import MagexpError
 from magexp.paths import CONF, RESULTS, SHARED_DATA
@@ -19,6 +19,10 @@ from magexp.scenarios.ship import ship_attitude
 
 FXOS = SHARED_DATA / "fxos8700_mag_readings.txt"
 needs_fxos = pytest.mark.skipif(not FXOS.is_file(), reason=f"{FXOS} is not present")
+
+
+def calibrate(rec, est, **kw):
+    return calibrate_recording(rec, est, folds=kw.pop("folds", 0), **kw)
 
 
 def estimator(name, **overrides):
@@ -97,6 +101,7 @@ def test_known_calibration_is_recovered_scalar(tmp_path, ding):
     assert np.linalg.norm(cal.offset * 1000 - ds.truth.offset) < 3.0  # nT, noise A = 2 nT
     w, wt = cal.w, ds.truth.matrix  # uT -> uT is nT -> nT: the same W (up to a rotation: scalar fit)
     np.testing.assert_allclose(w.T @ w, wt.T @ wt, atol=1e-3)
+    np.testing.assert_allclose(w, w.T, atol=1e-12)  # the canonical (symmetric polar) form
     assert cal.metrics["rms_after"] * 1000 < 2.0 and not cal.reference.estimated
 
 
@@ -129,7 +134,9 @@ def test_gyro_rates_integrate_to_attitudes(tmp_path):
 
 def test_search_box_from_data():
     r = np.array([[-10.0, 0, 5], [30, 2, -4], [0, 1, 1]])
-    box = search_box(r, 2 * np.linalg.norm(r - r.mean(0), axis=1).mean())
+    from magexp.calibration import centroid_radius
+
+    box = search_box(r, 2 * centroid_radius(r))
     assert box.offset == (-10.0, 30.0)
     assert box.diag == pytest.approx((1.0, 3.0)) and box.offdiag == pytest.approx((-1, 1))
 
@@ -159,7 +166,7 @@ GOOD = "# magexp-recording v1\n# unit: uT\nbx,by,bz\n" + ROWS
     ("plain_nan", ROWS.replace("3,7,-3", "3\tNaN\t-3"), ["data.unit=uT"], "y='NaN' is not allowed"),
     ("few_rows", GOOD.split("\n4,")[0] + "\n", [],
      f"3 readings is not allowed: a calibration needs at least {MIN_READINGS}"),
-    ("unit_file", GOOD.replace("uT", "gauss"), [], "unit='gauss' is not allowed: choose one of nT, uT, mG, G, T"),
+    ("unit_file", GOOD.replace("uT", "gauss"), [], "unit='gauss' is not allowed: choose one of nT, uT, mG, G, T, counts"),
     ("unit_cli", ROWS, ["data.unit=furlong"], "data.unit='furlong' is not allowed: choose one of nT, uT"),
     ("no_unit", ROWS, [], "give data.unit="),
     ("four_columns", ROWS.replace("\n", ",1\n"), ["data.unit=uT"], "exactly 3 columns"),
@@ -175,7 +182,7 @@ def test_bad_input_is_one_line(tmp_path, name, text, args, message):
 
 
 def test_missing_file_and_existing_output_are_one_line(tmp_path):
-    proc = magexp(f"data.path={tmp_path / 'absent.csv'}", "data.unit=uT", cwd=tmp_path)
+    proc = magexp(f"data.path={tmp_path / 'absent.csv'}", "data.unit=uT", f"out={tmp_path / 'o'}", cwd=tmp_path)
     assert proc.returncode != 0 and proc.stderr.count("\n") == 1 and "does not exist" in proc.stderr
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "calibrated.csv").write_text("mine\n")
@@ -197,11 +204,11 @@ def test_estimator_that_does_not_apply_is_one_line(tmp_path):
 
 
 def test_units_are_carried():
-    assert set(UNITS) == {"nT", "uT", "mG", "G", "T"} and UNITS["uT"] == 1000 and UNITS["mG"] == 100
+    assert set(UNITS) == {"nT", "uT", "mG", "G", "T"}  # and raw "counts", without a factor and UNITS["uT"] == 1000 and UNITS["mG"] == 100
 
 
 def test_reference_order_and_unit_agreement(tmp_path):
-    from magexp.calibrate import reference_of
+    from magexp.calibration import reference_of
 
     rows = np.column_stack([np.ones((12, 3)), np.arange(50.0, 62.0)])
     body = "\n".join(",".join(map(str, r)) for r in rows) + "\n"

@@ -21,6 +21,7 @@ OBJECTIVES: dict[str, str] = {
     "vector": "magexp.problems.vector:VectorCalibration",  # Yuan 2018 eq 8
     "vector_ls": "magexp.problems.vector:VectorLeastSquares",  # eq 8's residuals in least squares
     "ship": "magexp.problems.ship:ShipMagnetization",  # Yan & Zhou 2022 B = K A Be + Bp
+    "gyro": "magexp.problems.gyro:GyroAidedCalibration",  # eq 8 with unknown field direction and gyro bias
 }
 
 

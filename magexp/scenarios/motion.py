@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import MagexpError, check, check_nonnegative, check_positive_int
+from magexp.geometry import exp_so3, integrate_rates, skew  # noqa: F401  (attitude maths live in geometry)
 
 AXES = {"x": 0, "y": 1, "z": 2}
 FULL = 360.0
@@ -35,45 +36,6 @@ MODES: dict[str, list[tuple[str, float | str]]] = {
     "mode3": [("x", PARTIAL), ("y", PARTIAL)],  # two incomplete turns
     "mode4": [("z", FULL)],  # one full turn about Z only (readings in one plane)
 }
-
-
-def skew(w: np.ndarray) -> np.ndarray:
-    """Cross-product matrices ``[w]×`` of vectors ``w`` of shape ``(..., 3)``."""
-    w = np.asarray(w, float)
-    z = np.zeros(w.shape[:-1])
-    x, y, c = w[..., 0], w[..., 1], w[..., 2]
-    return np.stack([np.stack([z, -c, y], -1), np.stack([c, z, -x], -1), np.stack([-y, x, z], -1)], -2)
-
-
-def exp_so3(phi: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``exp([φ]×)`` of rotation vectors ``φ`` (``(..., 3)``), Rodrigues' formula.
-
-    .. math:: \\exp([\\varphi]_\\times) = I + \\frac{\\sin\\theta}{\\theta}[\\varphi]_\\times
-              + \\frac{1 - \\cos\\theta}{\\theta^2}[\\varphi]_\\times^2,\\quad \\theta = \\lVert\\varphi\\rVert
-
-    with the Taylor series of both coefficients for ``θ < 1e-4`` (exact to round-off).
-    """
-    phi = np.asarray(phi, float)
-    theta = np.linalg.norm(phi, axis=-1)[..., None, None]
-    small = theta < 1e-4
-    t = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta**2 / 6.0, np.sin(t) / t)
-    b = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(t)) / t**2)
-    k = skew(phi)
-    return np.eye(3) + a * k + b * (k @ k)
-
-
-def integrate_rates(rates: np.ndarray, dt: float, start: np.ndarray | None = None) -> np.ndarray:
-    """Body-to-nav rotations ``R_0..R_K`` from body rates ``(K, 3)`` (rad/s) held over each step.
-
-    The step rotations are computed at once; their ordered product is the only loop.
-    """
-    steps = exp_so3(np.asarray(rates, float) * dt)
-    out = np.empty((len(steps) + 1, 3, 3))
-    out[0] = np.eye(3) if start is None else start
-    for k, step in enumerate(steps):
-        out[k + 1] = out[k] @ step
-    return out
 
 
 def segments_of(mode: str | None, segments, partial_arc_deg: float) -> list[tuple[str, float]]:

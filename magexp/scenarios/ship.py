@@ -25,15 +25,10 @@ import numpy as np
 
 from magexp.dataset import Dataset, Truth
 from magexp.errors import MagexpError, check_nonnegative, check_positive_int
-from magexp.geometry import rot_x, rot_y, rot_z
+from magexp.geometry import ship_attitude  # noqa: F401  (eq 2 lives in geometry)
 from magexp.recordings import load_recording
 from magexp.scenarios.noise import Noise
 from magexp.scenarios.search import SearchBox
-
-
-def ship_attitude(heading, roll, trim) -> np.ndarray:
-    """``A = R_y(trim) R_x(roll) R_z(heading)`` of eq 2, angles in radians; shape ``(..., 3, 3)``."""
-    return rot_y(trim) @ rot_x(-np.asarray(roll, float)) @ rot_z(-np.asarray(heading, float))
 
 
 def _array(value, name: str, shape) -> np.ndarray:

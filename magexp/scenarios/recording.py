@@ -1,0 +1,124 @@
+"""A recording as a scenario like any other: ``scenario=real_<recording>`` (``conf/scenario/real_*.yaml``).
+
+:class:`RecordingScenario` loads a file of :data:`magexp.recordings.READERS` (from
+:data:`magexp.paths.SHARED_DATA`, i.e. ``$MAGEXP_DATA`` or ``../shared/data``), optionally cuts a
+time ``window``, and gives the :class:`~magexp.dataset.Dataset` of one objective:
+
+* ``scalar``: the readings, ``n_readings`` evenly spaced ones for the fit; the block of fold
+  ``heldout_fold`` of ``folds`` contiguous blocks is held out (``dataset.extra["heldout"]``) and
+  the metrics report its spread under the fitted calibration (:func:`magexp.quality.recording_metrics`);
+* ``gyro``: ``n_readings`` evenly spaced readings of the window and the gyroscope preintegrated
+  between them (:func:`magexp.geometry.preintegrate`) for :class:`magexp.problems.gyro.GyroAidedCalibration`.
+
+There is no truth: the reference total is the radius of the sphere fitted to the readings
+(:func:`magexp.calibration.centroid_radius`), the search box comes from the data
+(:func:`magexp.calibration.search_box`). A seed changes nothing in the data (a recording is
+what it is); it seeds the estimator only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.dataset import Dataset
+from magexp.errors import MagexpError, check_positive_int
+from magexp.paths import SHARED_DATA
+
+OBJECTIVES = ("scalar", "gyro")
+
+
+class RecordingScenario:
+    """Parameters
+    ----------
+    name : scenario name.
+    file : the recording, relative to the shared data folder (or absolute).
+    objective : ``scalar`` or ``gyro``.
+    unit, format, mag_axes, gyro_axes : as :func:`magexp.recordings.load_recording`.
+    window : ``[start, end]`` seconds from the first reading (null: all).
+    n_readings : readings used by the fit (evenly spaced; null: all).
+    folds, heldout_fold : contiguous blocks, and the one held out of the fit (scalar; folds 0: none).
+    bias_bound_deg_s : half-width of the gyro-bias search interval (gyro).
+    rest_file : a recording of the same gyroscope at rest (gyro): its mean rate, in the same axes,
+        is reported beside the estimated bias (``gyro_bias_rest_*``, ``gyro_bias_difference``).
+    """
+
+    def __init__(self, *, name: str, file: str, objective: str = "scalar", unit=None, format: str = "auto",
+                 mag_axes=None, gyro_axes=None, window=None, n_readings=None, folds: int = 5,
+                 heldout_fold: int = 0, bias_bound_deg_s: float = 10.0, rest_file=None):
+        if objective not in OBJECTIVES:
+            raise MagexpError(f"scenario.objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
+        self.name, self.file, self.objective = name, file, objective
+        self.load_options = {"unit": unit, "format": format, "mag_axes": mag_axes, "gyro_axes": gyro_axes}
+        self.window = window
+        self.rest_file = rest_file
+        self.n_readings = None if n_readings is None else check_positive_int(n_readings, "scenario.n_readings", 12)
+        self.folds = int(folds)
+        self.heldout_fold = int(heldout_fold)
+        if self.folds and not 0 <= self.heldout_fold < self.folds:
+            raise MagexpError(f"scenario.heldout_fold={heldout_fold!r} is not allowed: choose 0 to {self.folds - 1}")
+        self.problem_options = {"bias_bound_deg_s": float(bias_bound_deg_s)} if objective == "gyro" else {}
+        self._data = None
+
+    def recording(self, file=None):
+        """The loaded recording (``file``, default the scenario's), cut to the window."""
+        from pathlib import Path
+
+        from magexp.recordings import load_recording
+
+        file = file or self.file
+        path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
+        if not path.exists() and not Path(f"{path}_mag.csv").exists():
+            raise MagexpError(f"scenario.file={file!r} is not allowed: {path} does not exist "
+                              "(set MAGEXP_DATA to the folder of the recordings)")
+        rec = load_recording(path, **self.load_options)
+        if self.window is not None and file == self.file:
+            t = rec.reading_times()
+            t0, t1 = (float(v) for v in self.window)
+            keep = np.flatnonzero((t - t[0] >= t0) & (t - t[0] <= t1))
+            if len(keep) < 12:
+                raise MagexpError(f"scenario.window={list(self.window)} is not allowed: it holds {len(keep)} readings")
+            rec = rec.subset(keep)
+        return rec
+
+    def _prepare(self):
+        from magexp.calibration import centroid_radius, search_box
+
+        rec = self.recording()
+        n = rec.n
+        heldout = np.zeros(n, bool)
+        if self.objective == "scalar" and self.folds > 1:
+            edges = np.linspace(0, n, self.folds + 1).astype(int)
+            heldout[edges[self.heldout_fold]:edges[self.heldout_fold + 1]] = True
+        fit = np.flatnonzero(~heldout)
+        if self.n_readings is not None and self.n_readings < len(fit):
+            fit = fit[np.round(np.linspace(0, len(fit) - 1, self.n_readings)).astype(int)]
+        radius = centroid_radius(rec.readings[fit])
+        extra = {"heldout": rec.readings[heldout], "all_readings": rec.readings}
+        if self.objective == "gyro":
+            from magexp.geometry import preintegrate
+
+            stream = rec.gyro_rates()
+            if stream is None:
+                raise MagexpError(f"scenario {self.name!r}: objective 'gyro' needs a gyroscope, {rec.name} has none")
+            extra["preintegration"] = preintegrate(*stream, rec.reading_times()[fit])
+            if self.rest_file:
+                rest = self.recording(self.rest_file).gyro_rates()
+                extra["rest_gyro_bias_deg_s"] = np.rad2deg(rest[1].mean(axis=0))
+        self.search = search_box(rec.readings[fit], radius, forward=True)
+        self._data = Dataset(readings=rec.readings[fit], reference_norm=np.full(len(fit), radius), unit=rec.unit,
+                             meta={"scenario": self.name, "recording": rec.name}, extra=extra)
+
+    @property
+    def search(self):
+        if self._data is None:
+            self._prepare()
+        return self._search
+
+    @search.setter
+    def search(self, box):
+        self._search = box
+
+    def generate(self, *, rng: np.random.Generator | None = None) -> Dataset:
+        if self._data is None:
+            self._prepare()
+        return self._data

@@ -1,0 +1,126 @@
+"""Readers of every recorded format, axis maps, and attitude maths (prefix scan, gyro integrated at
+the readings' times, preintegrated bias Jacobians)."""
+
+import numpy as np
+import pytest
+
+from magexp.errors import MagexpError
+from magexp.geometry import (attitude_at, attitude_with_bias, axis_map, cumulative_product, exp_so3,
+                             integrate_rates, preintegrate)
+from magexp.paths import SHARED_DATA
+from magexp.recordings import READERS, detect, load_recording
+
+needs_data = pytest.mark.skipif(not SHARED_DATA.is_dir(), reason=f"{SHARED_DATA} is not present")
+
+
+def test_prefix_scan_equals_the_ordered_product():
+    rng = np.random.default_rng(0)
+    mats = exp_so3(rng.normal(0, 1, (37, 3)))
+    expected = [mats[0]]
+    for m in mats[1:]:
+        expected.append(expected[-1] @ m)
+    np.testing.assert_allclose(cumulative_product(mats), expected, atol=1e-13)
+
+
+def test_integration_at_other_times_is_exact_for_a_constant_rate():
+    gyro_t = np.linspace(0, 2, 41)  # 20 Hz
+    rates = np.tile([0.0, 0.0, 0.5], (41, 1))  # 0.5 rad/s about z
+    at = np.array([0.013, 0.4, 1.2345, 1.9])  # not on the gyro's grid
+    r = attitude_at(gyro_t, rates, at)
+    angles = np.arctan2(r[:, 1, 0], r[:, 0, 0])
+    np.testing.assert_allclose(angles, 0.5 * (at - at[0]), atol=1e-12)
+
+
+def test_preintegrated_bias_jacobian_matches_reintegration():
+    rng = np.random.default_rng(1)
+    gyro_t = np.sort(rng.uniform(0, 4, 400))
+    rates = rng.normal(0, 1.5, (400, 3))
+    at = np.sort(rng.uniform(0.05, 3.95, 80))
+    bias = np.array([0.06, -0.04, 0.05])  # ~3 deg/s
+    exact = attitude_at(gyro_t, rates, at, bias=bias)
+    delta, jac = preintegrate(gyro_t, rates, at)
+    approx = attitude_with_bias(delta, jac, bias[None])[0]
+    unbiased = attitude_with_bias(delta, jac, np.zeros((1, 3)))[0]
+    np.testing.assert_allclose(unbiased, attitude_at(gyro_t, rates, at), atol=1e-12)
+    err = np.abs(approx - exact).max()
+    assert err < 5e-3 < np.abs(unbiased - exact).max()  # first order in the bias, far better than ignoring it
+
+
+def test_integrate_rates_with_a_start():
+    start = exp_so3(np.array([0.1, 0.2, 0.3]))
+    out = integrate_rates(np.zeros((3, 3)), 0.1, start)
+    np.testing.assert_allclose(out, np.broadcast_to(start, (4, 3, 3)))
+
+
+def test_axis_maps():
+    np.testing.assert_array_equal(axis_map("-x,y,z") @ [1, 2, 3], [-1, 2, 3])
+    np.testing.assert_array_equal(axis_map("y, x, -z") @ [1, 2, 3], [2, 1, -3])
+    np.testing.assert_array_equal(axis_map(None), np.eye(3))
+    for bad in ("x,x,z", "x,y", "a,b,c", "x,y,z,x"):
+        with pytest.raises(MagexpError, match="is not allowed: give three signed axes"):
+            axis_map(bad)
+
+
+def test_two_stream_and_named_column_files(tmp_path):
+    (tmp_path / "s_mag.csv").write_text("t_s,mx_G,my_G,mz_G\n" + "".join(f"{0.1 * k:.3f},{k},{-k},{k % 3}\n" for k in range(20)))
+    (tmp_path / "s_imu.csv").write_text("t_s,gx_dps,gy_dps,gz_dps,ax_g,ay_g,az_g\n"
+                                        + "".join(f"{0.07 * k:.3f},0,0,90,0,0,1\n" for k in range(40)))
+    rec = load_recording(tmp_path / "s", gyro_axes="x,y,-z")
+    assert detect(tmp_path / "s_mag.csv") == "two-stream" and rec.unit == "G" and rec.n == 20
+    att = rec.attitude()  # -90 deg/s about z after the map: nav -> body is the inverse turn
+    ang = np.rad2deg(np.arctan2(att[:, 0, 1], att[:, 0, 0]))
+    np.testing.assert_allclose(ang[:5], [0, -9, -18, -27, -36], atol=1e-9)
+    head = "Time (s),Gyroscope X (deg/s),Gyroscope Y (deg/s),Gyroscope Z (deg/s),Magnetometer X (uT),Magnetometer Y (uT),Magnetometer Z (uT)\n"
+    rows = "".join(f"{0.01 * k},1,0,0,{k // 3},{2},{3}\n" for k in range(30))  # the magnetometer updates every 3rd row
+    (tmp_path / "x.csv").write_text(head + rows)
+    rec = load_recording(tmp_path / "x.csv")
+    assert rec.meta["format"] == "named-columns" and rec.n == 10 and rec.unit == "uT"
+    np.testing.assert_allclose(rec.reading_times(), 0.03 * np.arange(10), atol=1e-12)
+    assert len(rec.gyro_stream[0]) == 30
+    (tmp_path / "q.csv").write_text("Fs,50.00\nInitialization time,60\nmx,my,mz\n" + "1,2,3\n" * 12)
+    rec = load_recording(tmp_path / "q.csv")
+    assert rec.unit == "counts" and rec.meta["fs"] == "50.00" and rec.reading_times()[-1] == pytest.approx(0.22)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("t_s,mx_furlong,my_furlong,mz_furlong\n0,1,2,3\n", "unit suffix 'furlong' is not allowed"),
+    ("t_s,mx_G,my_G,mz_G\n0,1,2,3\n0,1,2,3\n", "times must increase"),
+    ("t_s,mx_G,my_G,mz_G\n0,1,x,3\n", "line 2: column 3='x' is not a number"),
+    ("t_s,mx_G,mx_G,mz_G\n0,1,2,3\n", "column 'mx_g' is duplicated"),
+])
+def test_bad_stream_files_are_one_line(tmp_path, text, message):
+    (tmp_path / "b_mag.csv").write_text(text)
+    (tmp_path / "b_imu.csv").write_text("t_s,gx_dps,gy_dps,gz_dps\n0,0,0,0\n1,0,0,0\n")
+    with pytest.raises(MagexpError, match=message) as err:
+        load_recording(tmp_path / "b_mag.csv")
+    assert "\n" not in str(err.value)
+
+
+def test_unknown_format_is_one_line(tmp_path):
+    (tmp_path / "a.txt").write_text("1 2 3\n")
+    with pytest.raises(MagexpError, match="data.format='nope' is not allowed: choose one of auto, " + ", ".join(READERS)):
+        load_recording(tmp_path / "a.txt", unit="uT", format="nope")
+
+
+@needs_data
+@pytest.mark.parametrize("name, fmt, n, unit", [
+    ("fxos8700_mag_readings.txt", "plain 3 columns", 324, "uT"),
+    ("hmc5883l_full-sphere", "two-stream", 8190, "G"),
+    ("xio_fusion_sensor_data.csv", "named-columns", None, "uT"),
+    ("qmc5883l_noisy_raw_data.csv", "header-counts", 22743, "counts"),
+])
+def test_every_shared_recording_loads(name, fmt, n, unit):
+    rec = load_recording(SHARED_DATA / name, unit="uT" if name.startswith("fxos") else None)
+    assert rec.meta["format"] == fmt and rec.unit == unit and np.all(np.isfinite(rec.readings))
+    assert n is None or rec.n == n
+    if fmt in ("two-stream", "named-columns"):
+        att = rec.attitude()
+        np.testing.assert_allclose(att @ att.transpose(0, 2, 1), np.broadcast_to(np.eye(3), att.shape), atol=1e-9)
+
+
+@needs_data
+def test_rest_recording_gyro_bias_is_a_few_deg_per_second():
+    rec = load_recording(SHARED_DATA / "hmc5883l_unmoved-10min")
+    bias = np.rad2deg(rec.gyro_stream[1].mean(axis=0))
+    print("rest gyro bias (deg/s):", bias.round(3))
+    assert 1.0 < np.linalg.norm(bias) < 10.0
