@@ -72,3 +72,11 @@ class RandomDriftVelocity:
         u = 1.0 - rng.random(x.shape)  # in (0, 1]: ln(1/u) stays finite
         return random_drift_velocity(x, pbest, gbest, alpha=self.alpha(t, t_max), c1=self.c1, c2=self.c2,
                                      r1=r1, r2=r2, phi=drift_sign_log(u, s))
+
+    def move(self, kernels, x, v, pbest, g, t, t_max, vmax, lower, upper, clip_box, *, rng):
+        """The compiled step (:func:`magexp.estimators._compiled.drift_move`): this rule, the clamp,
+        ``x += v`` and, if ``clip_box``, the clip to the box, in place; the same draws
+        (``r1, r2, s, u`` in one call) and the same numbers as :meth:`__call__` (``φ`` by numpy)."""
+        r = rng.random((4, *x.shape))
+        kernels.drift_move(x, v, pbest, g, r, drift_sign_log(1.0 - r[3], r[2]), self.alpha(t, t_max),
+                           self.c1, self.c2, vmax, lower, upper, clip_box)

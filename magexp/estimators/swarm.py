@@ -14,9 +14,16 @@ Variants differ only by small strategy pieces passed in: the velocity rule
 handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
 followed by the personal-best and global-best updates. The whole swarm is
 evaluated with one call of ``problem.cost``.
+
+With numba (:func:`compiled`), a rule that has a ``move`` method (the built-in ones) makes the
+rule, clamp, move and ``clip`` one compiled call, and the best updates another
+(:mod:`magexp.estimators._compiled`): the same numbers, bit for bit, as the numpy path, which
+runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``move``).
 """
 
 from __future__ import annotations
+
+from functools import cache
 
 import numpy as np
 
@@ -25,6 +32,18 @@ from magexp.estimators import boundaries
 from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
 from magexp.estimators.velocity import InertiaVelocity
+from magexp.problems import kernels
+
+
+@cache
+def compiled():
+    """The compiled swarm steps (a namespace), or None when numba is unavailable or
+    ``MAGEXP_NUMBA=0`` (the switch of :func:`magexp.problems.kernels.compiled`)."""
+    if kernels.compiled() is None:
+        return None
+    from magexp.estimators import _compiled
+
+    return _compiled
 
 
 class SwarmOptimizer:
@@ -94,15 +113,26 @@ class SwarmOptimizer:
         history[0] = pcost[g]
         nit = 0
         neg_vmax = -vmax
+        nb = compiled() if hasattr(self.velocity, "move") else None
+        clip_box = self.boundary == "clip"
+        if nb is not None:
+            x, v = np.array(x, float, order="C"), np.array(v, float, order="C")  # moved in place
+            lo, hi, vmax = (np.ascontiguousarray(a, float) for a in (lo, hi, vmax))
         for t in range(1, t_max + 1):
-            # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
-            v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
-            x, v = self._handle(x + v, v, lo, hi, rng=rng)
-            cost = problem.cost(x)
-            better = cost < pcost
-            np.copyto(pbest, x, where=better[:, None])
-            np.copyto(pcost, cost, where=better)
-            g = int(pcost.argmin())
+            if nb is not None:
+                self.velocity.move(nb, x, v, pbest, g, t, t_max, vmax, lo, hi, clip_box, rng=rng)
+                if not clip_box:
+                    x, v = self._handle(x, v, lo, hi, rng=rng)
+                g = nb.update_best(x, problem.cost(x), pbest, pcost)
+            else:
+                # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
+                v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
+                x, v = self._handle(x + v, v, lo, hi, rng=rng)
+                cost = problem.cost(x)
+                better = cost < pcost
+                np.copyto(pbest, x, where=better[:, None])
+                np.copyto(pcost, cost, where=better)
+                g = int(pcost.argmin())
             history[t] = pcost[g]
             nit = t
             if callback is not None and callback(t, pbest[g], pcost[g]):

@@ -38,3 +38,10 @@ class InertiaVelocity:
             v, x, pbest, gbest,
             w=self.inertia(t, t_max), c1=self.c1(t, t_max), c2=self.c2(t, t_max), r1=r1, r2=r2,
         )
+
+    def move(self, kernels, x, v, pbest, g, t, t_max, vmax, lower, upper, clip_box, *, rng):
+        """The compiled step (:func:`magexp.estimators._compiled.inertia_move`): this rule, the
+        clamp to ``vmax``, ``x += v`` and, if ``clip_box``, the clip to the box, in place; the
+        same draws (``r1`` then ``r2``, one call) and the same numbers as :meth:`__call__`."""
+        kernels.inertia_move(x, v, pbest, g, rng.random((2, *x.shape)), self.inertia(t, t_max),
+                             self.c1(t, t_max), self.c2(t, t_max), vmax, lower, upper, clip_box)
