@@ -1,9 +1,10 @@
 """Compiled (numba) steps of the swarm engine (:mod:`magexp.estimators.swarm`; imported on first
 use when numba is available and ``MAGEXP_NUMBA`` is not ``0``).
 
-One call moves the whole swarm in place: the velocity rule, the velocity clamp, the move
-``x <- x + v`` and (for ``clip`` boundaries) the clip to the box, element by element; another
-updates the personal bests and returns the index of the global best. They compute exactly the
+One call per iteration updates the personal bests with the last costs, finds the global best
+and then moves the whole swarm in place for the next iteration: the velocity rule, the velocity
+clamp, the move ``x <- x + v`` and (for ``clip`` boundaries) the clip to the box, element by
+element. It computes exactly the
 numbers of the numpy path they replace, operation by operation and in the same order
 (:func:`magexp.estimators.velocity.inertia_velocity`,
 :func:`magexp.estimators.rdpso.random_drift_velocity`, ``np.minimum(np.maximum(.))``,
@@ -39,38 +40,6 @@ def _settle(x, vel, vmax, lower, upper, clip_box):
 
 
 @_jit
-def inertia_move(x, v, pbest, g, r, w, c1, c2, vmax, lower, upper, clip_box):
-    """``v <- w v + c1 r1 (p - x) + c2 r2 (p_g - x)`` (Ding 2024 eq 10), clamp, move, clip;
-    ``r`` (2, n, d) holds ``r1, r2``."""
-    n, d = x.shape
-    for i in range(n):
-        for j in range(d):
-            xij = x[i, j]
-            vel = w * v[i, j] + c1 * r[0, i, j] * (pbest[i, j] - xij) + c2 * r[1, i, j] * (pbest[g, j] - xij)
-            v[i, j], x[i, j] = _settle(xij, vel, vmax[j], lower[j], upper[j], clip_box)
-
-
-@_jit
-def drift_move(x, v, pbest, g, r, phi, alpha, c1, c2, vmax, lower, upper, clip_box):
-    """``v <- α |M - x| φ + c1 r1 (p - x) + c2 r2 (p_g - x)`` (Yuan 2018 eq 16, ``M`` the mean
-    personal best summed row by row as ``pbest.mean(axis=0)``), clamp, move, clip;
-    ``r`` (>= 2, n, d) holds ``r1, r2`` first."""
-    n, d = x.shape
-    mean = pbest[0].copy()
-    for i in range(1, n):
-        for j in range(d):
-            mean[j] += pbest[i, j]
-    for j in range(d):
-        mean[j] /= n
-    for i in range(n):
-        for j in range(d):
-            xij = x[i, j]
-            vel = alpha * np.abs(mean[j] - xij) * phi[i, j] + c1 * r[0, i, j] * (pbest[i, j] - xij) \
-                + c2 * r[1, i, j] * (pbest[g, j] - xij)
-            v[i, j], x[i, j] = _settle(xij, vel, vmax[j], lower[j], upper[j], clip_box)
-
-
-@_jit
 def update_best(x, cost, pbest, pcost):
     """Personal bests where ``cost < pcost``; returns the first index of the smallest ``pcost``
     (the first NaN if there is one, as ``argmin``)."""
@@ -87,3 +56,45 @@ def update_best(x, cost, pbest, pcost):
         if pcost[i] < pcost[best]:
             best = i
     return best
+
+
+@_jit
+def inertia_step(x, v, pbest, pcost, cost, move, r, w, c1, c2, limits, clip_box):
+    """:func:`update_best` with ``cost``, then, if ``move``, ``v <- w v + c1 r1 (p - x) + c2 r2 (p_g - x)``
+    (Ding 2024 eq 10), clamp, move, clip; ``r`` (2, n, d) holds ``r1, r2``, ``limits`` (3, d)
+    ``v_max``, lower, upper. Returns the global best's index (before the move)."""
+    g = update_best(x, cost, pbest, pcost)
+    if move:
+        n, d = x.shape
+        for i in range(n):
+            for j in range(d):
+                xij = x[i, j]
+                vel = w * v[i, j] + c1 * r[0, i, j] * (pbest[i, j] - xij) + c2 * r[1, i, j] * (pbest[g, j] - xij)
+                v[i, j], x[i, j] = _settle(xij, vel, limits[0, j], limits[1, j], limits[2, j], clip_box)
+    return g
+
+
+@_jit
+def drift_step(x, v, pbest, pcost, cost, move, r, log_u, alpha, c1, c2, limits, clip_box):
+    """:func:`update_best` with ``cost``, then, if ``move``,
+    ``v <- α |M - x| φ + c1 r1 (p - x) + c2 r2 (p_g - x)`` (Yuan 2018 eq 16, ``M`` the mean
+    personal best summed row by row as ``pbest.mean(axis=0)``), clamp, move, clip;
+    ``r`` (4, n, d) holds ``r1, r2, s, ·`` and ``log_u`` ``ln(1/u)``: ``φ = ±ln(1/u)``, ``+`` where
+    ``s > 0.5`` (eq 14; a product with ±1, exact). Returns the global best's index (before the move)."""
+    g = update_best(x, cost, pbest, pcost)
+    if move:
+        n, d = x.shape
+        mean = pbest[0].copy()
+        for i in range(1, n):
+            for j in range(d):
+                mean[j] += pbest[i, j]
+        for j in range(d):
+            mean[j] /= n
+        for i in range(n):
+            for j in range(d):
+                xij = x[i, j]
+                phi = log_u[i, j] if r[2, i, j] > 0.5 else -1.0 * log_u[i, j]
+                vel = alpha * np.abs(mean[j] - xij) * phi + c1 * r[0, i, j] * (pbest[i, j] - xij) \
+                    + c2 * r[1, i, j] * (pbest[g, j] - xij)
+                v[i, j], x[i, j] = _settle(xij, vel, limits[0, j], limits[1, j], limits[2, j], clip_box)
+    return g

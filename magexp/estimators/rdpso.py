@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check_nonnegative
+from magexp.estimators.velocity import _NO_DRAWS
 
 
 def drift_sign_log(u: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -73,10 +74,15 @@ class RandomDriftVelocity:
         return random_drift_velocity(x, pbest, gbest, alpha=self.alpha(t, t_max), c1=self.c1, c2=self.c2,
                                      r1=r1, r2=r2, phi=drift_sign_log(u, s))
 
-    def move(self, kernels, x, v, pbest, g, t, t_max, vmax, lower, upper, clip_box, *, rng):
-        """The compiled step (:func:`magexp.estimators._compiled.drift_move`): this rule, the clamp,
-        ``x += v`` and, if ``clip_box``, the clip to the box, in place; the same draws
-        (``r1, r2, s, u`` in one call) and the same numbers as :meth:`__call__` (``φ`` by numpy)."""
+    def step(self, kernels, x, v, pbest, pcost, cost, t, t_max, limits, clip_box, *, rng):
+        """One compiled call (:func:`magexp.estimators._compiled.drift_step`): the best updates
+        with ``cost``, then, for ``t <= t_max``, iteration ``t``'s move in place (as
+        :meth:`magexp.estimators.velocity.InertiaVelocity.step`). The same draws (``r1, r2, s, u``
+        in one call) and the same numbers as :meth:`__call__` (``ln(1/u)`` by numpy, its sign
+        ``s > 0.5`` in the kernel: :func:`drift_sign_log`). Returns the global best's index."""
+        if t > t_max:
+            return kernels.drift_step(x, v, pbest, pcost, cost, False, _NO_DRAWS, _NO_DRAWS[0], 0.0, 0.0, 0.0,
+                                      limits, clip_box)
         r = rng.random((4, *x.shape))
-        kernels.drift_move(x, v, pbest, g, r, drift_sign_log(1.0 - r[3], r[2]), self.alpha(t, t_max),
-                           self.c1, self.c2, vmax, lower, upper, clip_box)
+        return kernels.drift_step(x, v, pbest, pcost, cost, True, r, np.log(1.0 / (1.0 - r[3])), self.alpha(t, t_max),
+                                  self.c1, self.c2, limits, clip_box)

@@ -15,10 +15,10 @@ handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
 followed by the personal-best and global-best updates. The whole swarm is
 evaluated with one call of ``problem.cost``.
 
-With numba (:func:`compiled`), a rule that has a ``move`` method (the built-in ones) makes the
-rule, clamp, move and ``clip`` one compiled call, and the best updates another
-(:mod:`magexp.estimators._compiled`): the same numbers, bit for bit, as the numpy path, which
-runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``move``).
+With numba (:func:`compiled`), a rule that has a ``step`` method (the built-in ones) makes one
+compiled call per iteration of the best updates and the next iteration's rule, clamp, move and
+``clip`` (:mod:`magexp.estimators._compiled`): the same numbers, bit for bit, as the numpy path,
+which runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
 """
 
 from __future__ import annotations
@@ -113,17 +113,19 @@ class SwarmOptimizer:
         history[0] = pcost[g]
         nit = 0
         neg_vmax = -vmax
-        nb = compiled() if hasattr(self.velocity, "move") else None
+        nb = compiled() if hasattr(self.velocity, "step") else None
         clip_box = self.boundary == "clip"
-        if nb is not None:
-            x, v = np.array(x, float, order="C"), np.array(v, float, order="C")  # moved in place
-            lo, hi, vmax = (np.ascontiguousarray(a, float) for a in (lo, hi, vmax))
+        if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
+            x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)
+            limits = np.array([vmax, lo, hi], float)
+            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, 1, t_max, limits, clip_box, rng=rng)
         for t in range(1, t_max + 1):
             if nb is not None:
-                self.velocity.move(nb, x, v, pbest, g, t, t_max, vmax, lo, hi, clip_box, rng=rng)
                 if not clip_box:
                     x, v = self._handle(x, v, lo, hi, rng=rng)
-                g = nb.update_best(x, problem.cost(x), pbest, pcost)
+                # iteration t's best updates, then iteration t + 1's move
+                g = self.velocity.step(nb, x, v, pbest, pcost, problem.cost(x), t + 1, t_max, limits, clip_box,
+                                       rng=rng)
             else:
                 # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
                 v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)

@@ -9,6 +9,8 @@ import numpy as np
 
 from magexp.estimators.schedules import Constant
 
+_NO_DRAWS = np.empty((2, 0, 0))  # the random numbers of a step that does not move
+
 
 def inertia_velocity(v, x, pbest, gbest, *, w, c1, c2, r1, r2):
     """Global-best PSO velocity (Kennedy & Eberhart 1995; Ding 2024 eq 10).
@@ -39,9 +41,13 @@ class InertiaVelocity:
             w=self.inertia(t, t_max), c1=self.c1(t, t_max), c2=self.c2(t, t_max), r1=r1, r2=r2,
         )
 
-    def move(self, kernels, x, v, pbest, g, t, t_max, vmax, lower, upper, clip_box, *, rng):
-        """The compiled step (:func:`magexp.estimators._compiled.inertia_move`): this rule, the
-        clamp to ``vmax``, ``x += v`` and, if ``clip_box``, the clip to the box, in place; the
-        same draws (``r1`` then ``r2``, one call) and the same numbers as :meth:`__call__`."""
-        kernels.inertia_move(x, v, pbest, g, rng.random((2, *x.shape)), self.inertia(t, t_max),
-                             self.c1(t, t_max), self.c2(t, t_max), vmax, lower, upper, clip_box)
+    def step(self, kernels, x, v, pbest, pcost, cost, t, t_max, limits, clip_box, *, rng):
+        """One compiled call (:func:`magexp.estimators._compiled.inertia_step`): the best updates
+        with ``cost``, then, for ``t <= t_max``, iteration ``t``'s move in place (this rule, the clamp
+        to ``limits[0]``, ``x += v`` and, if ``clip_box``, the clip to ``limits[1:]``). The same
+        draws (``r1`` then ``r2``, one call; none after the last iteration) and the same numbers
+        as :meth:`__call__`. Returns the global best's index."""
+        if t > t_max:
+            return kernels.inertia_step(x, v, pbest, pcost, cost, False, _NO_DRAWS, 0.0, 0.0, 0.0, limits, clip_box)
+        return kernels.inertia_step(x, v, pbest, pcost, cost, True, rng.random((2, *x.shape)), self.inertia(t, t_max),
+                                    self.c1(t, t_max), self.c2(t, t_max), limits, clip_box)
