@@ -113,11 +113,13 @@ def test_engine_rejects_bad_settings(kwargs, word):
 
 # ---- the compiled steps against the numpy path --------------------------------------------------
 
+@pytest.mark.parametrize("draw_block", [None, 7 * 4 * 20 * 12])  # default; a few iterations per draw, a remainder
 @pytest.mark.parametrize("boundary", ["clip", "reflect", "random"])
 @pytest.mark.parametrize("estimator, scenario", [
     ("ipso", "ding2024_exp1"), ("pso", "ding2024_exp1"), ("rdpso", "yuan2018_mode1"), ("pso9", "ding2024_exp1"),
 ])
-def test_compiled_steps_give_the_numpy_path_bit_for_bit(make_cfg, monkeypatch, estimator, scenario, boundary):
+def test_compiled_steps_give_the_numpy_path_bit_for_bit(make_cfg, monkeypatch, estimator, scenario, boundary,
+                                                         draw_block):
     """Same seed, same problem: the compiled swarm steps and the numpy path end at the same
     ``x``, ``fun`` and history, bit for bit (the same draws, the same operations in the same order)."""
     from hydra.utils import instantiate
@@ -127,6 +129,8 @@ def test_compiled_steps_give_the_numpy_path_bit_for_bit(make_cfg, monkeypatch, e
 
     if swarm.compiled() is None:
         pytest.skip("numba not installed")
+    if draw_block is not None:
+        monkeypatch.setattr(swarm, "DRAW_BLOCK", draw_block)
     cfg = make_cfg(f"scenario={scenario}", f"estimator={estimator}", "estimator.n_particles=20",
                    "estimator.n_iterations=60", f"estimator.boundary={boundary}", "scenario.n_readings=100")
     sc = instantiate(cfg.scenario, _convert_="all")

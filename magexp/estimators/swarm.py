@@ -17,8 +17,9 @@ evaluated with one call of ``problem.cost``.
 
 With numba (:func:`compiled`), a rule that has a ``step`` method (the built-in ones) makes one
 compiled call per iteration of the best updates and the next iteration's rule, clamp, move and
-``clip`` (:mod:`magexp.estimators._compiled`): the same numbers, bit for bit, as the numpy path,
-which runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
+``clip`` (:mod:`magexp.estimators._compiled`), on random numbers drawn several iterations per
+call (:func:`_draws`; the same stream): the same numbers, bit for bit, as the numpy path, which
+runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
 """
 
 from __future__ import annotations
@@ -33,6 +34,17 @@ from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
 from magexp.estimators.velocity import InertiaVelocity
 from magexp.problems import kernels
+
+
+DRAW_BLOCK = 1 << 16  # random numbers drawn per call by the compiled path (a multiple of one iteration's)
+
+
+def _draws(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
+    """The random numbers of iterations ``1..t_max``, ``shape`` each, drawn ``block`` iterations
+    per call: the same stream as one ``rng.random(shape)`` per iteration (a generator fills an
+    array in order), with less overhead per call."""
+    for start in range(1, t_max + 1, block):
+        yield from rng.random((min(block, t_max + 1 - start), *shape))
 
 
 @cache
@@ -118,14 +130,17 @@ class SwarmOptimizer:
         if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
             x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)
             limits = np.array([vmax, lo, hi], float)
-            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, 1, t_max, limits, clip_box, rng=rng)
+            # a boundary that draws (random re-entry) takes its numbers between two moves'
+            block = 1 if self.boundary == "random" else max(1, DRAW_BLOCK // (self.velocity.n_draws * x.size))
+            draws = _draws(rng, (self.velocity.n_draws, *x.shape), t_max, block)
+            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, next(draws), 1, t_max, limits, clip_box)
         for t in range(1, t_max + 1):
             if nb is not None:
                 if not clip_box:
                     x, v = self._handle(x, v, lo, hi, rng=rng)
                 # iteration t's best updates, then iteration t + 1's move
-                g = self.velocity.step(nb, x, v, pbest, pcost, problem.cost(x), t + 1, t_max, limits, clip_box,
-                                       rng=rng)
+                g = self.velocity.step(nb, x, v, pbest, pcost, problem.cost(x), next(draws, None), t + 1, t_max,
+                                       limits, clip_box)
             else:
                 # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
                 v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
