@@ -186,3 +186,20 @@ def test_analytic_jacobians_equal_central_differences(make_cfg, objective, optio
     for analytic, central in zip(prob.jacobians(theta), numeric):
         assert analytic.shape == central.shape
         np.testing.assert_allclose(analytic, central, rtol=1e-6, atol=1e-7 * np.abs(central).max())
+
+
+def test_a_subclass_that_changes_the_residuals_falls_back_to_differences(make_cfg):
+    """Analytic Jacobians belong to the residuals they were derived from: a subclass with other
+    residuals gets None (the bound then differentiates numerically)."""
+    from magexp.problems.scalar import ScalarCalibration
+
+    class Squared(ScalarCalibration):
+        def residuals(self, theta):
+            return super().residuals(theta) ** 2
+
+    sc = instantiate(make_cfg("scenario=ding2024_exp1", "scenario.n_readings=50").scenario, _convert_="all")
+    ds = sc.generate(rng=np.random.default_rng(0))
+    assert ScalarCalibration(ds, sc.search).jacobians(ScalarCalibration(ds, sc.search).truth_theta()) is not None
+    prob = Squared(ds, sc.search)
+    assert prob.jacobians(prob.truth_theta()) is None
+    assert cramer_rao(prob) is not None  # by central differences

@@ -161,3 +161,17 @@ def test_update_best_keeps_argmin_semantics():
     np.testing.assert_array_equal(pbest, [[0, 0], [0, 0], [4, 5], [6, 7]])  # particle 0: a tie is no improvement
     pcost[1] = np.nan
     assert nb.update_best(x, pcost.copy(), pbest, pcost) == int(np.argmin(pcost)) == 1
+
+
+def test_a_rule_changed_by_a_subclass_runs_its_own_numpy_rule():
+    """A subclass that overrides ``__call__`` but inherits ``step`` must not run the parent's
+    compiled step: the numpy path follows the new rule."""
+    from magexp.estimators import swarm
+
+    class Frozen(InertiaVelocity):
+        def __call__(self, x, v, pbest, gbest, t, t_max, *, rng):
+            return np.zeros_like(x)
+
+    assert swarm._has_step(InertiaVelocity()) and not swarm._has_step(Frozen())
+    res = SwarmOptimizer(n_particles=5, n_iterations=10, velocity=Frozen()).fit(_Quadratic(), rng=np.random.default_rng(0))
+    assert np.all(res.history == res.history[0])  # nobody moves

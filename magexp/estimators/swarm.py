@@ -15,7 +15,8 @@ handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
 followed by the personal-best and global-best updates. The whole swarm is
 evaluated with one call of ``problem.cost``.
 
-With numba (:func:`compiled`), a rule that has a ``step`` method (the built-in ones) makes one
+With numba (:func:`compiled`), a rule whose class has a ``step`` method beside its ``__call__``
+(the built-in ones) makes one
 compiled call per iteration of the best updates and the next iteration's rule, clamp, move and
 ``clip`` (:mod:`magexp.estimators._compiled`), on random numbers drawn several iterations per
 call (:func:`_draws`; the same stream): the same numbers, bit for bit, as the numpy path, which
@@ -34,6 +35,7 @@ from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
 from magexp.estimators.velocity import InertiaVelocity
 from magexp.problems import kernels
+from magexp.problems.base import defining_class
 
 
 DRAW_BLOCK = 1 << 16  # random numbers drawn per call by the compiled path (a multiple of one iteration's)
@@ -45,6 +47,13 @@ def _draws(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
     array in order), with less overhead per call."""
     for start in range(1, t_max + 1, block):
         yield from rng.random((min(block, t_max + 1 - start), *shape))
+
+
+def _has_step(rule) -> bool:
+    """Whether ``rule`` has a compiled ``step`` of its own rule: one defined by the class that
+    defines its ``__call__`` (a subclass that changes the rule but not the step runs in numpy)."""
+    owner = defining_class(rule, "step")
+    return owner is not None and owner is defining_class(rule, "__call__")
 
 
 @cache
@@ -125,7 +134,7 @@ class SwarmOptimizer:
         history[0] = pcost[g]
         nit = 0
         neg_vmax = -vmax
-        nb = compiled() if hasattr(self.velocity, "step") else None
+        nb = compiled() if _has_step(self.velocity) else None
         clip_box = self.boundary == "clip"
         if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
             x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)

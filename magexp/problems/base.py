@@ -87,6 +87,13 @@ def inverse(mats: np.ndarray) -> np.ndarray:
         return np.linalg.pinv(mats)
 
 
+def defining_class(obj, name: str):
+    """The class in ``type(obj)``'s method resolution order that defines attribute ``name``
+    (None if none does): whether two methods belong together (e.g. a derivative and the function
+    it differentiates) after subclassing."""
+    return next((c for c in type(obj).__mro__ if name in vars(c)), None)
+
+
 def reference_vectors(dataset) -> np.ndarray:
     """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field."""
     return np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)
@@ -189,7 +196,8 @@ class CalibrationProblem:
         return None
 
     def jacobians(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        """Analytic ``(J, G)`` of :meth:`residuals` ``r_i(b_i)``, ``b_i = W (x_i - o)``, or None.
+        """Analytic ``(J, G)`` of :meth:`residuals` ``r_i(b_i)``, ``b_i = W (x_i - o)``, or None
+        (no :meth:`_dr_db`, or one not defined beside the class's :meth:`residuals`).
 
         With ``D_i = ∂r_i/∂b_i`` (:meth:`_dr_db`) and ``G_i = D_i W`` (chain rule):
 
@@ -202,6 +210,8 @@ class CalibrationProblem:
         ``12`` contiguous rows), ``G`` ``(N, m, 3)``. Vectorised: one product per parameter
         block, no loop over readings.
         """
+        if defining_class(self, "_dr_db") is not defining_class(self, "residuals"):
+            return None  # residuals changed by a subclass (or none here): no analytic form
         w, o = self.unpack(theta)
         w, o = w[0], o[0]
         d = self.dataset.readings - o
