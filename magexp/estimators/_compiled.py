@@ -4,8 +4,8 @@ use when numba is available and ``MAGEXP_NUMBA`` is not ``0``).
 One call per iteration updates the personal bests with the last costs, finds the global best
 and then moves the whole swarm in place for the next iteration: the velocity rule, the velocity
 clamp, the move ``x <- x + v`` and (for ``clip`` boundaries) the clip to the box, element by
-element. It computes exactly the
-numbers of the numpy path they replace, operation by operation and in the same order
+element. It computes exactly the numbers of the numpy path it replaces, operation by operation
+and in the same order
 (:func:`magexp.estimators.velocity.inertia_velocity`,
 :func:`magexp.estimators.rdpso.random_drift_velocity`, ``np.minimum(np.maximum(.))``,
 ``np.clip``, ``np.copyto``, ``argmin``): no ``fastmath``, so no reassociation and no fused
