@@ -20,7 +20,9 @@ which for the scalar problem with isotropic noise reduces to ``σ² (N - 9)/N``.
 Uniform noise (Ding 2024) is not Gaussian; the bound above is the Gaussian one with the same
 covariance (the usual reference; the noise floor then matches the exact expectation).
 
-Derivatives are central differences with steps scaled to each parameter and reading.
+Derivatives ``J`` and ``G_i`` are analytic where the problem offers them
+(``problem.jacobians(theta) -> (J, G)`` or None), central differences with steps scaled to each
+parameter and reading otherwise (and always for ``H``, which has ``p`` columns of ``p`` rows).
 """
 
 from __future__ import annotations
@@ -44,12 +46,18 @@ def _jacobian(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
     return rows.T
 
 
-def _blockwise(blocks: np.ndarray, jac: np.ndarray) -> np.ndarray:
-    """``diag(B_1, ..., B_N) @ J`` for ``m × m`` blocks ``(N, m, m)`` and ``J`` of shape ``(N m, p)``."""
+def _weighted_gram(jac: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """``J^T diag(B_1, ..., B_N) J`` for ``m × m`` blocks ``(N, m, m)`` and ``J`` ``(N m, p)``.
+
+    For ``m = 1`` the blocks are non-negative numbers (variances or their pseudo-inverses) and
+    this is ``X^T X`` with ``X = diag(\\sqrt{B}) J``: one symmetric rank-k update (half the work
+    of a general product).
+    """
     n, m = blocks.shape[:2]
     if m == 1:
-        return blocks[:, 0, 0, None] * jac
-    return np.einsum("nab,nbp->nap", blocks, jac.reshape(n, m, -1)).reshape(n * m, -1)
+        xt = jac.T * np.sqrt(blocks[:, 0, 0])
+        return xt @ xt.T
+    return jac.T @ np.einsum("nab,nbp->nap", blocks, jac.reshape(n, m, -1)).reshape(n * m, -1)
 
 
 def _pinv_blocks(blocks: np.ndarray) -> np.ndarray:
@@ -61,8 +69,18 @@ def _pinv_blocks(blocks: np.ndarray) -> np.ndarray:
     return np.einsum("nik,nk,njk->nij", evecs, np.where(evals > 0, 1 / np.maximum(evals, 1e-300), 0), evecs)
 
 
-def residual_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
-    """``G_i = ∂r_i/∂x_i`` for every reading, shape ``(N, m, 3)`` (``m`` residuals per reading)."""
+def jacobians(problem, theta: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(J, G)``: ``J = ∂r/∂θ`` ``(N m, p)`` and ``G_i = ∂r_i/∂x_i`` ``(N, m, 3)``, the problem's
+    analytic ones (``problem.jacobians``) when it has them, else central differences
+    (:func:`_jacobian`, :func:`finite_difference_noise_blocks`)."""
+    both = problem.jacobians(theta) if hasattr(problem, "jacobians") else None
+    if both is not None:
+        return both
+    return _jacobian(problem.residuals, theta, steps), finite_difference_noise_blocks(problem, theta)
+
+
+def finite_difference_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
+    """``G_i = ∂r_i/∂x_i`` by central differences of the readings (six residual evaluations)."""
     ds = problem.dataset
     scale = max(float(ds.readings.max()), -float(ds.readings.min()), 1.0) * 1e-6
     blocks = None
@@ -135,12 +153,11 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
         return None
     sigma2 = float(ds.noise_std) ** 2
     problem = noise_free(problem)
-    g = residual_noise_blocks(problem, theta)  # (N, m, 3)
+    steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
+    jac, g = jacobians(problem, theta, steps)  # (N*m, p), (N, m, 3)
     n, m = g.shape[:2]
     cov_blocks = sigma2 * np.einsum("nik,njk->nij", g, g)  # Σ_n, (N, m, m)
-    steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
-    jac = _jacobian(problem.residuals, theta, steps)  # (N*m, p)
-    fisher = jac.T @ _blockwise(_pinv_blocks(cov_blocks), jac)  # J^T Σ^+ J
+    fisher = _weighted_gram(jac, _pinv_blocks(cov_blocks))  # J^T Σ^+ J
     # invert with the parameters scaled to unit columns: their scales differ by orders of magnitude
     # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions
     d = np.maximum(np.sqrt(np.diag(fisher)), 1e-300)
@@ -165,7 +182,7 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     inv_cov[blind, :] = np.inf
     inv_cov[:, blind] = np.inf
     # expected in-sample RMS of the (unweighted) least-squares fit, block by block
-    sandwich = (jac.T @ _blockwise(cov_blocks, jac)) / np.outer(colnorm, colnorm)  # scaled J^T Σ J
+    sandwich = _weighted_gram(jac, cov_blocks) / np.outer(colnorm, colnorm)  # scaled J^T Σ J
     basis = vecs[:, :rank] / sv[:rank]
     explained = float(np.trace(basis.T @ sandwich @ basis))
     total = float(np.einsum("naa->", cov_blocks))

@@ -69,9 +69,11 @@ def test_ship_offset_bound_matches_monte_carlo(make_cfg):
 SCENARIOS = sorted(p.stem for p in (CONF / "scenario").glob("*.yaml"))
 
 
-def _dense_cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
+def _dense_cramer_rao(problem, theta: np.ndarray | None = None, *, analytic: bool = True) -> dict | None:
     """The bound as computed before it became O(N) (dense N m x N m noise covariance), kept
-    verbatim as the reference of ``test_block_bound_equals_the_dense_one``.
+    verbatim as the reference of ``test_block_bound_equals_the_dense_one``; ``analytic=False``
+    takes its derivatives by central differences, as it did then (the problems' analytic
+    Jacobians, which the O(N) bound uses, differ from those by ~1e-8 relative).
 
     Returns ``rms_floor`` (expected best RMS of the problem's residual components), ``invariant_cov``
     (the CRB covariance of ``problem.invariants``), and the expected error sizes
@@ -82,11 +84,14 @@ def _dense_cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
         return None
     sigma2, problem = float(problem.dataset.noise_std) ** 2, bounds.noise_free(problem)
     ds = problem.dataset
-    g = bounds.residual_noise_blocks(problem, theta)  # (N, m, 3)
+    steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
+    if analytic:
+        jac, g = problem.jacobians(theta)  # (N*m, p), (N, m, 3)
+    else:
+        jac = bounds._jacobian(problem.residuals, theta, steps)
+        g = bounds.finite_difference_noise_blocks(problem, theta)
     m = g.shape[1]
     cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # (N, m, m)
-    steps = 1e-6 * np.maximum(np.abs(theta), 1e-3 * np.maximum(np.abs(problem.upper - problem.lower), 1e-12))
-    jac = bounds._jacobian(problem.residuals, theta, steps)  # (N*m, p)
     # Σ^{-1/2} J: whiten block by block
     evals, evecs = np.linalg.eigh(cov_blocks)
     inv_sqrt = evecs @ (np.where(evals > 0, 1 / np.sqrt(np.maximum(evals, 1e-300)), 0)[..., None]
@@ -125,10 +130,13 @@ def _dense_cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     return out
 
 
+@pytest.mark.parametrize("analytic, rtol", [(True, 1e-9), (False, 1e-6)])
 @pytest.mark.parametrize("scenario_name", SCENARIOS)
-def test_block_bound_equals_the_dense_one(make_cfg, scenario_name):
+def test_block_bound_equals_the_dense_one(make_cfg, scenario_name, analytic, rtol):
     """Every scenario's own objective (and the scalar one where it applies): the same numbers as
-    the dense ``N m x N m`` computation, to 1e-9 relative."""
+    the dense ``N m x N m`` computation, to 1e-9 relative with the same (analytic) derivatives;
+    to 1e-6 with the central differences of the dense computation as it was (their truncation
+    and rounding error, ~1e-8, is the whole difference)."""
     sc = instantiate(make_cfg(f"scenario={scenario_name}").scenario, _convert_="all")
     ds = sc.generate(rng=np.random.default_rng(1))
     objectives = {sc.objective} | ({"scalar"} if ds.reference_norm is not None and sc.objective != "ship" else set())
@@ -137,7 +145,7 @@ def test_block_bound_equals_the_dense_one(make_cfg, scenario_name):
         options = getattr(sc, "problem_options", {}) if objective != "ship" else {}
         prob = make_problem(objective, ds, sc.search, **options)
         with np.errstate(all="ignore"):
-            dense = _dense_cramer_rao(prob)
+            dense = _dense_cramer_rao(prob, analytic=analytic)
         block = cramer_rao(prob)
         if dense is None:
             assert block is None
@@ -145,14 +153,53 @@ def test_block_bound_equals_the_dense_one(make_cfg, scenario_name):
         compared += 1
         assert block["identifiable"] == dense["identifiable"]
         assert block["unidentified_invariants"] == dense["unidentified_invariants"]
-        np.testing.assert_allclose(block["rms_floor"], dense["rms_floor"], rtol=1e-9)
+        np.testing.assert_allclose(block["rms_floor"], dense["rms_floor"], rtol=rtol)
         # covariances relative to their scale sqrt(c_ii c_jj): an entry near zero compares as a correlation
         finite = np.isfinite(np.diag(dense["invariant_cov"]))
         scale = np.sqrt(np.outer(np.diag(dense["invariant_cov"])[finite], np.diag(dense["invariant_cov"])[finite]))
         np.testing.assert_array_equal(np.isinf(block["invariant_cov"]), np.isinf(dense["invariant_cov"]))
         np.testing.assert_allclose(block["invariant_cov"][np.ix_(finite, finite)] / scale,
-                                   dense["invariant_cov"][np.ix_(finite, finite)] / scale, rtol=1e-9, atol=1e-9)
+                                   dense["invariant_cov"][np.ix_(finite, finite)] / scale, rtol=rtol, atol=rtol)
         for key in ("offset_bound", "gram_bound", "matrix_bound"):
             if key in dense:
-                np.testing.assert_allclose(block[key], dense[key], rtol=1e-9)
+                np.testing.assert_allclose(block[key], dense[key], rtol=rtol)
     assert compared or not ds.noise_std
+
+
+@pytest.mark.parametrize("objective, options", [
+    ("scalar", {"parameterisation": "inverse"}), ("scalar", {"parameterisation": "forward"}),
+    ("vector", {"parameterisation": "forward"}), ("vector", {"parameterisation": "inverse"}),
+    ("vector_ls", {"parameterisation": "forward"}), ("ship", {}),
+])
+def test_analytic_jacobians_equal_central_differences(make_cfg, objective, options):
+    """``problem.jacobians`` (``∂r/∂θ`` and ``∂r_i/∂x_i``) against central differences, at a
+    point away from the truth (so no residual is zero and every term of the chain rule counts)."""
+    scenario = "yan2022_sim" if objective == "ship" else "yuan2018_mode1"
+    sc = instantiate(make_cfg(f"scenario={scenario}").scenario, _convert_="all")
+    ds = sc.generate(rng=np.random.default_rng(3))
+    prob = make_problem(objective, ds, sc.search, **options)
+    theta = prob.truth_theta()
+    theta = theta + 0.02 * np.abs(theta).max() * np.random.default_rng(4).standard_normal(theta.size) \
+        * np.r_[np.full(9, 1 / np.abs(theta).max()), np.ones(3)]
+    steps = 1e-6 * np.maximum(np.abs(theta), 1e-3)
+    numeric = bounds._jacobian(prob.residuals, theta, steps), bounds.finite_difference_noise_blocks(prob, theta)
+    for analytic, central in zip(prob.jacobians(theta), numeric):
+        assert analytic.shape == central.shape
+        np.testing.assert_allclose(analytic, central, rtol=1e-6, atol=1e-7 * np.abs(central).max())
+
+
+def test_a_subclass_that_changes_the_residuals_falls_back_to_differences(make_cfg):
+    """Analytic Jacobians belong to the residuals they were derived from: a subclass with other
+    residuals gets None (the bound then differentiates numerically)."""
+    from magexp.problems.scalar import ScalarCalibration
+
+    class Squared(ScalarCalibration):
+        def residuals(self, theta):
+            return super().residuals(theta) ** 2
+
+    sc = instantiate(make_cfg("scenario=ding2024_exp1", "scenario.n_readings=50").scenario, _convert_="all")
+    ds = sc.generate(rng=np.random.default_rng(0))
+    assert ScalarCalibration(ds, sc.search).jacobians(ScalarCalibration(ds, sc.search).truth_theta()) is not None
+    prob = Squared(ds, sc.search)
+    assert prob.jacobians(prob.truth_theta()) is None
+    assert cramer_rao(prob) is not None  # by central differences

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check_nonnegative
+from magexp.estimators.velocity import _NO_DRAWS
 
 
 def drift_sign_log(u: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -72,3 +73,17 @@ class RandomDriftVelocity:
         u = 1.0 - rng.random(x.shape)  # in (0, 1]: ln(1/u) stays finite
         return random_drift_velocity(x, pbest, gbest, alpha=self.alpha(t, t_max), c1=self.c1, c2=self.c2,
                                      r1=r1, r2=r2, phi=drift_sign_log(u, s))
+
+    n_draws = 4  # random numbers per particle and dimension in one iteration (r1, r2, s, u)
+
+    def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
+        """One compiled call (:func:`magexp.estimators._compiled.drift_step`): the best updates
+        with ``cost``, then, unless ``r`` is None, iteration ``t``'s move in place (as
+        :meth:`magexp.estimators.velocity.InertiaVelocity.step`) with ``r1, r2, s = r[:3]`` and
+        ``u = 1 - r[3]``: the same numbers as :meth:`__call__` on the same draws (``ln(1/u)`` by
+        numpy, its sign ``s > 0.5`` in the kernel: :func:`drift_sign_log`). Returns the global best's index."""
+        if r is None:
+            return kernels.drift_step(x, v, pbest, pcost, cost, False, _NO_DRAWS, _NO_DRAWS[0], 0.0, 0.0, 0.0,
+                                      limits, clip_box)
+        return kernels.drift_step(x, v, pbest, pcost, cost, True, r, np.log(1.0 / (1.0 - r[3])), self.alpha(t, t_max),
+                                  self.c1, self.c2, limits, clip_box)

@@ -14,9 +14,18 @@ Variants differ only by small strategy pieces passed in: the velocity rule
 handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
 followed by the personal-best and global-best updates. The whole swarm is
 evaluated with one call of ``problem.cost``.
+
+With numba (:func:`compiled`), a rule whose class has a ``step`` method beside its ``__call__``
+(the built-in ones) makes one
+compiled call per iteration of the best updates and the next iteration's rule, clamp, move and
+``clip`` (:mod:`magexp.estimators._compiled`), on random numbers drawn several iterations per
+call (:func:`_draws`; the same stream): the same numbers, bit for bit, as the numpy path, which
+runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
 """
 
 from __future__ import annotations
+
+from functools import cache
 
 import numpy as np
 
@@ -25,6 +34,37 @@ from magexp.estimators import boundaries
 from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
 from magexp.estimators.velocity import InertiaVelocity
+from magexp.problems import kernels
+from magexp.problems.base import defining_class
+
+
+DRAW_BLOCK = 1 << 16  # random numbers drawn per call by the compiled path (a multiple of one iteration's)
+
+
+def _draws(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
+    """The random numbers of iterations ``1..t_max``, ``shape`` each, drawn ``block`` iterations
+    per call: the same stream as one ``rng.random(shape)`` per iteration (a generator fills an
+    array in order), with less overhead per call."""
+    for start in range(1, t_max + 1, block):
+        yield from rng.random((min(block, t_max + 1 - start), *shape))
+
+
+def _has_step(rule) -> bool:
+    """Whether ``rule`` has a compiled ``step`` of its own rule: one defined by the class that
+    defines its ``__call__`` (a subclass that changes the rule but not the step runs in numpy)."""
+    owner = defining_class(rule, "step")
+    return owner is not None and owner is defining_class(rule, "__call__")
+
+
+@cache
+def compiled():
+    """The compiled swarm steps (a namespace), or None when numba is unavailable or
+    ``MAGEXP_NUMBA=0`` (the switch of :func:`magexp.problems.kernels.compiled`)."""
+    if kernels.compiled() is None:
+        return None
+    from magexp.estimators import _compiled
+
+    return _compiled
 
 
 class SwarmOptimizer:
@@ -94,15 +134,31 @@ class SwarmOptimizer:
         history[0] = pcost[g]
         nit = 0
         neg_vmax = -vmax
+        nb = compiled() if _has_step(self.velocity) else None
+        clip_box = self.boundary == "clip"
+        if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
+            x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)
+            limits = np.array([vmax, lo, hi], float)
+            # a boundary that draws (random re-entry) takes its numbers between two moves'
+            block = 1 if self.boundary == "random" else max(1, DRAW_BLOCK // (self.velocity.n_draws * x.size))
+            draws = _draws(rng, (self.velocity.n_draws, *x.shape), t_max, block)
+            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, next(draws), 1, t_max, limits, clip_box)
         for t in range(1, t_max + 1):
-            # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
-            v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
-            x, v = self._handle(x + v, v, lo, hi, rng=rng)
-            cost = problem.cost(x)
-            better = cost < pcost
-            np.copyto(pbest, x, where=better[:, None])
-            np.copyto(pcost, cost, where=better)
-            g = int(pcost.argmin())
+            if nb is not None:
+                if not clip_box:
+                    x, v = self._handle(x, v, lo, hi, rng=rng)
+                # iteration t's best updates, then iteration t + 1's move
+                g = self.velocity.step(nb, x, v, pbest, pcost, problem.cost(x), next(draws, None), t + 1, t_max,
+                                       limits, clip_box)
+            else:
+                # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
+                v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
+                x, v = self._handle(x + v, v, lo, hi, rng=rng)
+                cost = problem.cost(x)
+                better = cost < pcost
+                np.copyto(pbest, x, where=better[:, None])
+                np.copyto(pcost, cost, where=better)
+                g = int(pcost.argmin())
             history[t] = pcost[g]
             nit = t
             if callback is not None and callback(t, pbest[g], pcost[g]):

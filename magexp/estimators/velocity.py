@@ -9,6 +9,8 @@ import numpy as np
 
 from magexp.estimators.schedules import Constant
 
+_NO_DRAWS = np.empty((2, 0, 0))  # the random numbers of a step that does not move
+
 
 def inertia_velocity(v, x, pbest, gbest, *, w, c1, c2, r1, r2):
     """Global-best PSO velocity (Kennedy & Eberhart 1995; Ding 2024 eq 10).
@@ -38,3 +40,16 @@ class InertiaVelocity:
             v, x, pbest, gbest,
             w=self.inertia(t, t_max), c1=self.c1(t, t_max), c2=self.c2(t, t_max), r1=r1, r2=r2,
         )
+
+    n_draws = 2  # random numbers per particle and dimension in one iteration (r1, r2)
+
+    def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
+        """One compiled call (:func:`magexp.estimators._compiled.inertia_step`): the best updates
+        with ``cost``, then, unless ``r`` is None (after the last iteration), iteration ``t``'s move
+        in place (this rule with ``r1, r2 = r``, the clamp to ``limits[0]``, ``x += v`` and, if
+        ``clip_box``, the clip to ``limits[1:]``): the same numbers as :meth:`__call__` on the
+        same draws. Returns the global best's index."""
+        if r is None:
+            return kernels.inertia_step(x, v, pbest, pcost, cost, False, _NO_DRAWS, 0.0, 0.0, 0.0, limits, clip_box)
+        return kernels.inertia_step(x, v, pbest, pcost, cost, True, r, self.inertia(t, t_max), self.c1(t, t_max),
+                                    self.c2(t, t_max), limits, clip_box)

@@ -87,6 +87,13 @@ def inverse(mats: np.ndarray) -> np.ndarray:
         return np.linalg.pinv(mats)
 
 
+def defining_class(obj, name: str):
+    """The class in ``type(obj)``'s method resolution order that defines attribute ``name``
+    (None if none does): whether two methods belong together (e.g. a derivative and the function
+    it differentiates) after subclassing."""
+    return next((c for c in type(obj).__mro__ if name in vars(c)), None)
+
+
 def reference_vectors(dataset) -> np.ndarray:
     """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field."""
     return np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)
@@ -181,6 +188,45 @@ class CalibrationProblem:
         err = np.abs(np.asarray(theta, float) - self.truth_theta())
         out.update({"param_matrix_error": float(err[:9].max()), "param_offset_error": float(err[9:].max())})
         return out
+
+    # -- derivatives (analytic; see magexp.bounds) ---------------------------------------------
+    def _dr_db(self, b: np.ndarray) -> np.ndarray | None:
+        """``D_i = ∂r_i/∂b_i`` of the residuals at the calibrated readings ``b`` (N, 3), shape
+        ``(N, m, 3)``; None (the default) when a problem has no analytic form."""
+        return None
+
+    def jacobians(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """Analytic ``(J, G)`` of :meth:`residuals` ``r_i(b_i)``, ``b_i = W (x_i - o)``, or None
+        (no :meth:`_dr_db`, or one not defined beside the class's :meth:`residuals`).
+
+        With ``D_i = ∂r_i/∂b_i`` (:meth:`_dr_db`) and ``G_i = D_i W`` (chain rule):
+
+        .. math:: \\frac{∂r_i}{∂x_i} = G_i,\\quad \\frac{∂r_i}{∂o} = -G_i,\\quad
+                  \\frac{∂r_i}{∂W_{jk}} = D_{i,\\cdot j}\\,(x_i - o)_k,\\quad
+                  \\frac{∂r_i}{∂S_{jk}} = -G_{i,\\cdot j}\\,b_{i,k}
+
+        (the last for the forward form ``W = S^{-1}``: ``dW = -W\\,dS\\,W``).
+        ``J = ∂r/∂θ`` has shape ``(N m, 12)`` (rows as :meth:`residuals`; a transposed view of
+        ``12`` contiguous rows), ``G`` ``(N, m, 3)``. Vectorised: one product per parameter
+        block, no loop over readings.
+        """
+        if defining_class(self, "_dr_db") is not defining_class(self, "residuals"):
+            return None  # residuals changed by a subclass (or none here): no analytic form
+        w, o = self.unpack(theta)
+        w, o = w[0], o[0]
+        d = self.dataset.readings - o
+        b = d @ w.T
+        dr_db = self._dr_db(b)
+        if dr_db is None:
+            return None
+        n, m = dr_db.shape[:2]
+        g = (dr_db.reshape(n * m, 3) @ w).reshape(n, m, 3)  # one (N m x 3) @ (3 x 3) product
+        left, right = (-g, b) if self.parameterisation == "forward" else (dr_db, d)
+        rows = np.empty((12, n, m))  # row 3 j + k: left[:, :, j] * right[:, k]
+        np.multiply(np.moveaxis(left, 2, 0)[:, None], np.ascontiguousarray(right.T)[None, :, :, None],
+                    out=rows[:9].reshape(3, 3, n, m))
+        np.negative(np.moveaxis(g, 2, 0), out=rows[9:])
+        return rows.reshape(12, n * m).T, g
 
     # -- what the data can identify (see magexp.bounds) ----------------------------------------
     def invariants(self, theta: np.ndarray) -> np.ndarray:

@@ -64,6 +64,10 @@ class ScalarCalibration(CalibrationProblem):
         w, o = self.unpack(theta)
         return kernels.scalar_residuals(w[0], o[0], self.dataset.readings, self._reference)
 
+    def _dr_db(self, b: np.ndarray) -> np.ndarray:
+        """``∂r_i/∂b_i = b_i^T / |b_i|`` (``r_i = |b_i| - B_a,i``), ``(N, 1, 3)``."""
+        return (b / np.sqrt(np.einsum("ni,ni->n", b, b))[:, None])[:, None, :]
+
     def cost_direct(self, theta: np.ndarray) -> float:
         """Total-field RMS of one parameter vector by the direct formula."""
         return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))

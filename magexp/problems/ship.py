@@ -84,6 +84,16 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         body = np.einsum("nij,nj->ni", self.dataset.attitude, self.dataset.field_nav)
         return (body @ k.T + bp - self._y).ravel()
 
+    def jacobians(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(J, G)`` of :meth:`residuals` (linear: independent of ``theta``): ``J`` ``(3N, 12)``
+        with ``∂r_i/∂K_jk = e_j (A_i Be)_k`` and ``∂r_i/∂Bp = I``; ``G_i = ∂r_i/∂B_i = -I``."""
+        body = self._c[:, :3]  # (A_i Be)^T, the regressors of eq 6
+        n = len(body)
+        jac = np.zeros((n, 3, 12))
+        jac[:, :, :9].reshape(n, 3, 3, 3)[:, [0, 1, 2], [0, 1, 2], :] = body[:, None, :]
+        jac[:, :, 9:] = np.eye(3)
+        return jac.reshape(3 * n, 12), np.broadcast_to(-np.eye(3), (n, 3, 3))
+
     def cost_direct(self, theta: np.ndarray) -> float:
         """Fit residual RMS (nT) of one parameter vector."""
         return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))

@@ -108,6 +108,10 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         """The stacked ``3N`` components of ``C_i H_i - W (r_i - o)`` (for least squares)."""
         return (self.reference - self.calibrate(theta)).ravel()
 
+    def _dr_db(self, b: np.ndarray) -> np.ndarray:
+        """``∂e_i/∂b_i = -I`` (``e_i = v_i - b_i``), ``(N, 3, 3)``."""
+        return np.broadcast_to(-np.eye(3), (len(b), 3, 3))
+
     def cost_direct(self, theta: np.ndarray) -> float:
         """``F`` of one parameter vector, reading by reading (eq 8 as printed)."""
         s, b = np.reshape(theta[:9], (3, 3)), theta[9:]
