@@ -105,10 +105,11 @@ def scalar_residuals(w, o, readings, reference) -> np.ndarray:
 
 
 # -- vector objective ----------------------------------------------------------------------------
-def vector_cost_numpy(w, o, readings, reference) -> np.ndarray:
+def vector_cost_numpy(w, o, readings, reference, *, squared: bool = False) -> np.ndarray:
     """``F`` of every particle: residual components as one product per chunk (fallback).
 
     ``e_ij = [r_i^T, 1, v_i^T] [-W_j., (W o)_j, u_j^T]^T`` (``u_j`` the j-th unit vector).
+    ``squared=True`` sums ``|e_i|^2`` instead of ``|e_i|`` (the least-squares form).
     """
     n_p = len(w)
     coef = np.concatenate([-w, np.einsum("nij,nj->ni", w, o)[:, :, None],
@@ -117,7 +118,8 @@ def vector_cost_numpy(w, o, readings, reference) -> np.ndarray:
     for rows in _chunks(len(readings), 3 * n_p):
         feat = np.column_stack([readings[rows], np.ones(rows.stop - rows.start), reference[rows]]).T
         err = (coef @ feat).reshape(n_p, 3, -1)
-        acc += np.sqrt(np.einsum("nkj,nkj->nj", err, err)).sum(axis=1)
+        sq = np.einsum("nkj,nkj->nj", err, err)
+        acc += (sq if squared else np.sqrt(sq)).sum(axis=1)
     return acc
 
 

@@ -150,9 +150,10 @@ class VectorLeastSquares(VectorCalibration):
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
         """RMS of every particle's residual components, ``(n, 12) -> (n,)``; non-finite -> ``inf``."""
+        w, o = self.unpack(thetas)
         with np.errstate(invalid="ignore", over="ignore"):
-            err = self.residual_swarm(thetas)
-            f = np.sqrt(np.einsum("nkj,nkj->n", err, err) / err[0].size)
+            f = np.sqrt(kernels.vector_cost_numpy(w, o, self._readings, self.reference, squared=True)
+                        / (3 * len(self._readings)))
         return np.where(np.isfinite(f), f, np.inf)
 
     def cost_direct(self, theta: np.ndarray) -> float:
