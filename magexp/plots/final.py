@@ -64,8 +64,8 @@ def draw(frame: pd.DataFrame, spec):
             ax.plot(fl[x_key].astype(float), fl.rms_bound.clip(lower=1e-14), ":", color="0.4", lw=1.1,
                     label="Cramér-Rao floor")
         ax.set_yscale("log")
-        if spec.plot.get("logx"):
-            ax.set_xscale("log")
+        if spec.plot.get("xscale"):
+            ax.set_xscale(spec.plot.xscale)
         ax.set_xlabel(label(spec, x_key))
         ax.set_ylabel(spec.plot.get("ylabel", "final total-field RMS (nT)"))
         if pv is not None:

@@ -16,11 +16,17 @@ from magexp.artifacts import quantiles
 from magexp.plots.style import group_values, label, panels
 
 
+def metric_list(spec) -> list[str]:
+    """The metric columns drawn (``plot.metric``: one name or a list)."""
+    metric = spec.plot.get("metric", "fun")
+    return [metric] if isinstance(metric, str) else list(metric)
+
+
 def tabulate(runs) -> pd.DataFrame:
     rows = []
     for ci, cell in enumerate(runs.cells):
         sub = runs.table[runs.table.cell == ci]
-        for metric in runs.spec.plot.metrics:
+        for metric in metric_list(runs.spec):
             med, q25, q75 = quantiles(sub[metric]) if metric in sub else (np.nan,) * 3
             rows.append({**cell, "estimator": sub.estimator.iloc[0], "metric": metric, "median": med, "q25": q25,
                          "q75": q75, "n_seeds": len(sub)})
@@ -29,7 +35,7 @@ def tabulate(runs) -> pd.DataFrame:
 
 def draw(frame: pd.DataFrame, spec):
     x_key, hue_key, panel_key = spec.plot.x, spec.plot.get("hue", "estimator"), spec.plot.get("panels")
-    metrics, columns = list(spec.plot.metrics), group_values(frame, panel_key)
+    metrics, columns = metric_list(spec), group_values(frame, panel_key)
     targets = dict(spec.plot.get("targets", {}) or {})
     ylabels = dict(spec.plot.get("ylabels", {}) or {})
     fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1, width=3.8)
