@@ -250,7 +250,8 @@ def run_artifact(spec, *, seeds: int | None = None, jobs: int = 0, tiny: bool = 
     outputs = run_many(configs, jobs=jobs, use_cache=use_cache, progress=Progress(len(configs), spec.name))
     rows = []
     for (ci, seed), out in zip(index, outputs):
-        rows.append({"cell": ci, **grid[ci], "setting": setting_of(settings[ci]), **out.metrics})
+        estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
+        rows.append({"cell": ci, **grid[ci], "setting": setting_of(settings[ci]), **out.metrics, **estimate})
     table = pd.DataFrame(rows)
     if len(table):
         table["succeeded"] = succeeded(table, spec.success)

@@ -150,7 +150,7 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
         lines.append(f"### {spec.name}: {spec.title}\n")
         lines.append(f"![{spec.name}]({paper}/{spec.name}.png)\n")
         if spec.caption:
-            lines.append(f"{interpolate(str(spec.caption).strip(), table)}\n")
+            lines.append(f"{_prose(spec, spec.caption, table)}\n")
         lines.append(f"Data: [`{paper}/{spec.name}.csv`]({paper}/{spec.name}.csv), "
                      f"runs: [`{paper}/{spec.name}_runs.csv`]({paper}/{spec.name}_runs.csv).\n")
         art = rows[rows.artifact == spec.name]
@@ -159,8 +159,15 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
         if spec.report_table:
             lines.append(_artifact_table(spec, root / paper / f"{spec.name}.csv"))
         if spec.notes:
-            lines.append(f"\n{interpolate(str(spec.notes).strip(), table)}\n")
+            lines.append(f"\n{_prose(spec, spec.notes, table)}\n")
     return "\n".join(lines)
+
+
+def _prose(spec, text: str, table: pd.DataFrame | None) -> str:
+    """A caption or note with its measured values filled in: ``{seeds}`` (the artifact's seed count)
+    and every ``{stat:metric@selection:format}`` field (:func:`magexp.claims.interpolate`)."""
+    text = str(text).strip().replace("{seeds}", str(spec.seeds))
+    return interpolate(text, table) if table is not None else text
 
 
 def _artifact_table(spec, path: Path) -> str:
