@@ -163,7 +163,15 @@ def _describe(where: dict, v: np.ndarray, stat: str) -> tuple[float, tuple, str]
 
 
 def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
-    """Whether ``claim`` holds on a runs table, with its evidence (numbers from the table)."""
+    """Whether ``claim`` holds on a runs table, with its evidence (numbers from the table); a claim
+    whose metric the table lacks does not hold, and says why."""
+    try:
+        return _evaluate(claim, table)
+    except MagexpError as exc:
+        return Outcome(claim, False, f"not evaluable: {exc}")
+
+
+def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
     stat = "success_rate" if claim.kind == "success" else claim.stat
     if claim.kind in ("threshold", "success"):
         cells = cell_settings(table)
@@ -204,7 +212,10 @@ def interpolate(text: str, table: pd.DataFrame) -> str:
         if stat not in STATS:
             raise MagexpError(f"note field {m.group(0)!r}: stat {stat!r} is not allowed: choose one of {', '.join(STATS)}")
         where = dict(p.split("=", 1) for p in where_text.split(",") if "=" in p)
-        v = values(select(table, where), metric, stat)
+        try:
+            v = values(select(table, where), metric, stat)
+        except MagexpError:
+            return f"[no column {metric!r} in the runs]"
         s = statistic(v, stat)
         return format(s, fmt) if np.isfinite(s) else "n/a"
 

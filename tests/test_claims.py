@@ -73,7 +73,11 @@ def test_bad_claims_fail_with_one_line():
 
 
 def test_no_claim_the_report_states_is_false():
-    """Every ``by: magexp`` claim holds on the committed results (skipped where they are absent)."""
+    """Every ``by: magexp`` claim holds on the committed results (skipped where they are absent or
+    predate the success column, i.e. were made by an older magexp: regenerate them)."""
+    summary = RESULTS / "summary.csv"
+    if not summary.exists() or "success_rate" not in summary.read_text().splitlines()[0]:
+        pytest.skip("results/ are absent or predate the verdict columns: run make reproduce")
     outcomes = claim_outcomes(RESULTS)
     if not outcomes:
         pytest.skip("no results with claims under results/")

@@ -1,4 +1,5 @@
-"""Final objective per cell (median, IQR, converged fraction) and its plot against a swept key."""
+"""Final objective per cell (median, IQR, converged fraction, success rate) and its plot against a swept key;
+a cell where fewer than half the runs succeeded is ringed in red."""
 
 from __future__ import annotations
 
@@ -27,6 +28,8 @@ def tabulate(runs) -> pd.DataFrame:
                 row[extra] = float(sub[extra].median())
         if "converged" in sub:
             row["converged_fraction"] = float(sub.converged.astype(float).mean())
+        if "succeeded" in sub and sub.succeeded.notna().any():
+            row["success_rate"] = float(sub.succeeded.dropna().mean())
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -49,6 +52,10 @@ def draw(frame: pd.DataFrame, spec):
             y = line["median"].clip(lower=1e-14)
             err = np.vstack([y - line.q25.clip(lower=1e-14), line.q75.clip(lower=1e-14) - y])
             ax.errorbar(x, y, yerr=err, marker="o", ms=3.5, capsize=2, lw=1, label=str(hv))
+            if "success_rate" in line:  # a failed majority stands out: a red ring around the median
+                bad = (line.success_rate < 0.5).to_numpy()
+                ax.plot(x[bad], y.to_numpy()[bad], "o", mfc="none", mec="r", ms=9, mew=1.2,
+                        label="fewer than half succeeded" if bad.any() and k == 0 else None)
         if "bound" in sub and sub.bound.notna().any():  # the bound belongs to the problem: one per objective
             objectives = list(dict.fromkeys(sub.objective))
             for j, obj in enumerate(objectives):
