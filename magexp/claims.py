@@ -119,7 +119,11 @@ def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
 
 
 def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
-    """The runs of every cell whose settings include every ``key: value`` of ``where``."""
+    """The runs of every cell whose settings include every ``key: value`` of ``where``; the key
+    ``seeds: n`` keeps the first ``n`` seeds (to show that a conclusion holds at n and 2n seeds)."""
+    where = dict(where)
+    if "seeds" in where:
+        table = table[table.seed < int(where.pop("seeds"))]
     settings = cell_settings(table)
     keep = [ci for ci, s in settings.items() if all(k in s and _same(s[k], v) for k, v in where.items())]
     return table[table.cell.isin(keep)]
@@ -174,14 +178,17 @@ def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
 def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
     stat = "success_rate" if claim.kind == "success" else claim.stat
     if claim.kind in ("threshold", "success"):
+        where = dict(claim.where)
+        if "seeds" in where:
+            table = table[table.seed < int(where.pop("seeds"))]
         cells = cell_settings(table)
-        chosen = [ci for ci, s in cells.items() if all(k in s and _same(s[k], v) for k, v in claim.where.items())]
+        chosen = [ci for ci, s in cells.items() if all(k in s and _same(s[k], v) for k, v in where.items())]
         if not chosen:
             return Outcome(claim, False, f"no runs match {_name(claim.where)}")
         parts, ok = [], True
         for ci in chosen:
             v = values(table[table.cell == ci], claim.metric, stat)
-            s, _, text = _describe({k: cells[ci][k] for k in cells[ci] if k not in claim.where} or claim.where, v, stat)
+            s, _, text = _describe({k: cells[ci][k] for k in cells[ci] if k not in where} or where, v, stat)
             ok &= bool(np.isfinite(s) and OPS[claim.op](s, float(claim.value)))
             parts.append(text)
         return Outcome(claim, ok, f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts))

@@ -46,6 +46,12 @@ def test_threshold_and_success_on_every_selected_cell():
     assert not outcome.holds and "success_rate 0.375" in outcome.evidence
 
 
+def test_seeds_key_keeps_the_first_seeds():
+    c = Claim(id="t", text="", kind="success", where={"estimator": "d", "seeds": 15}, op=">=", value=1.0)
+    assert evaluate(c, TABLE).holds  # the first 15 seeds of d succeed, all 40 do not
+    assert interpolate("{n:fun@estimator=d,seeds=10}", TABLE) == "10"
+
+
 def test_no_runs_never_holds():
     c = Claim(id="t", text="", kind="threshold", where={"estimator": "zz"}, op="<", value=1)
     assert not evaluate(c, TABLE).holds
