@@ -12,7 +12,7 @@ from omegaconf import DictConfig
 from magexp.errors import MagexpError
 from magexp.metrics import evaluate
 from magexp.problems import make_problem
-from magexp.seeding import run_generators
+from magexp.seeding import run_generators, scenario_stream
 
 
 @dataclass
@@ -50,7 +50,7 @@ def run(cfg: DictConfig) -> RunOutput:
     """Simulate (or load) the scenario, fit the estimator, evaluate the result."""
     scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    data_rng, est_rng = run_generators(cfg.seed, stream=scenario.name)
+    data_rng, est_rng = run_generators(cfg.seed, stream=scenario_stream(cfg.scenario))
     dataset = scenario.generate(rng=data_rng)
     objective = cfg.get("objective") or scenario.objective
     problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))

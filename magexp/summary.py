@@ -238,12 +238,12 @@ def _problem_of(runs: ArtifactRuns, ci: int):
     from magexp.artifacts import compose_config
     from magexp.problems import make_problem
     from magexp.runner import build
-    from magexp.seeding import run_generators
+    from magexp.seeding import run_generators, scenario_stream
 
     cfg = compose_config(runs.overrides[ci])
     scenario = build(cfg.scenario, "scenario")
     seed = int(runs.table[runs.table.cell == ci].seed.min())
-    dataset = scenario.generate(rng=run_generators(seed, stream=scenario.name)[0])
+    dataset = scenario.generate(rng=run_generators(seed, stream=scenario_stream(cfg.scenario))[0])
     objective = cfg.get("objective") or scenario.objective
     return make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
 

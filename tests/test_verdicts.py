@@ -51,3 +51,16 @@ def test_tidy_keeps_six_digits_and_floors_round_off():
     assert out.a.iloc[3] == 123.457 and np.isnan(out.a.iloc[4])
     # round-off moving the 10th digit does not change what is written
     assert tidy(pd.DataFrame({"a": [0.5611518122387318]})).a.iloc[0] == tidy(pd.DataFrame({"a": [0.561151812238502]})).a.iloc[0]
+
+
+def test_each_scenario_setting_draws_its_own_stream(make_cfg):
+    from magexp.runner import run
+
+    a = run(make_cfg("scenario=ding2024_exp1", "estimator=ellipsoid", "scenario.noise=2", "seed=0"))
+    b = run(make_cfg("scenario=ding2024_exp1", "estimator=ellipsoid", "scenario.noise=5", "seed=0"))
+    c = run(make_cfg("scenario=ding2024_exp2", "estimator=ellipsoid", "scenario.noise=2", "seed=0"))
+    d = run(make_cfg("scenario=ding2024_exp1", "estimator=lm", "scenario.noise=2", "seed=0"))
+    ratio = (a.metrics["offset_error"], b.metrics["offset_error"])
+    assert not np.allclose(ratio[1] / ratio[0], 2.5)  # not the same draw scaled
+    assert not np.array_equal(a.readings, c.readings)
+    np.testing.assert_array_equal(a.readings, d.readings)  # every estimator of a scenario sees the same data
