@@ -9,9 +9,9 @@ widened only by the paper's printing precision (half a unit of its last printed 
 * ``differs``: outside, or a failed majority;
 * ``n/a``: the paper gives no number.
 
-Where the paper's value is itself a run of the success metric (e.g. a final RMS), it is compared with
-the runs of the same outcome: a successful paper run with our successful runs, a failed one with our
-failed runs. Parameter rows are taken over successful runs only (``success_rate`` counts the others).
+Where the paper's value is itself a run of the success metric (e.g. a final RMS, or a ratio of two such
+runs), it is compared with the runs of the same outcome: a successful paper run with our successful
+runs, a failed one with our failed runs (``value`` stays the median over all runs). Parameter rows are taken over successful runs only (``success_rate`` counts the others).
 ``truth_in_interval`` says whether the true calibration's value is in the interval too: then the row
 shows that the method converged to the noise floor, not more. A fixed tolerance is used only where
 the paper gives no run to compare with (``reported[].tolerance`` with its ``reason``). For a single
@@ -96,9 +96,10 @@ def reported_value(spec, quantity: str, settings: dict):
 
 
 def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None, parameters: bool = False,
-         extra_setting: str = "", aggregate: str = "median", outcome_split: bool = False, ls=None) -> dict:
+         extra_setting: str = "", aggregate: str = "median", success_threshold: float | None = None, ls=None) -> dict:
     """One summary row. ``ok``: per-value success (1/0/NaN); ``parameters``: statistics over the
-    successful runs only; ``outcome_split``: compare the paper's value with runs of its own outcome;
+    successful runs only; ``success_threshold``: a paper value at or below it is a successful run, and
+    is compared with the interval of our successful runs (else of our failed ones);
     ``ls``: ``(estimate, half width)`` of a least-squares interval (recorded data, one run)."""
     v = np.asarray(values, float)
     ok = np.full(v.shape, np.nan) if ok is None else np.asarray(ok, float)
@@ -110,15 +111,13 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     basis = v
     if parameters and judged.any():
         basis = v[ok == 1]
-    elif outcome_split and paper is not None and truth is not None and judged.any():
-        s = spec.success  # the paper's run classified by the same rule as ours
-        paper_ok = paper <= s.factor * truth + s.floor
-        same = v[ok == (1 if paper_ok else 0)]
-        basis = same if same.size else v
     if aggregate == "mean":  # fractions: the mean of 0/1 outcomes, no quantiles
         med, q25, q75 = float(np.nanmean(v)), np.nan, np.nan
     else:
         med, q25, q75 = quantiles(basis)
+    if success_threshold is not None and paper is not None and judged.any():
+        same = v[ok == (1 if paper <= success_threshold else 0)]  # the paper's run classified by our rule
+        basis = same if same.size else v
     lo, hi = interval(basis, floor)
     if ls is not None:
         lo, hi = ls[0] - ls[1], ls[0] + ls[1]
@@ -271,7 +270,8 @@ def summarise(runs: ArtifactRuns) -> pd.DataFrame:
                 ls = names[item.quantity]
             rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
                              sub[metric].astype(float).to_numpy(), cell_settings(runs, ci), ok=_cell_ok(runs, ci),
-                             aggregate=item.aggregate, outcome_split=metric == spec.success.metric, ls=ls))
+                             aggregate=item.aggregate, ls=ls, success_threshold=None if truth is None or
+                             metric != spec.success.metric else spec.success.factor * truth + spec.success.floor))
     for item in spec.ratios:
         num_sel, den_sel, metric = item.numerator, item.denominator, item.metric
         for ci in range(len(runs.cells)):
@@ -282,11 +282,15 @@ def summarise(runs: ArtifactRuns) -> pd.DataFrame:
             nj = [cj for cj in range(len(runs.cells)) if cell_settings(runs, cj) == partner]
             if not nj:
                 continue
-            den = table[table.cell == ci].set_index("seed")[metric].astype(float)
-            num = table[table.cell == nj[0]].set_index("seed")[metric].astype(float)
-            ratio = (num / den).dropna().to_numpy()
+            den = table[table.cell == ci].set_index("seed")
+            num = table[table.cell == nj[0]].set_index("seed")
+            ratio = (num[metric].astype(float) / den[metric].astype(float)).dropna()
+            both = (num["succeeded"] * den["succeeded"]).reindex(ratio.index) if "succeeded" in den else None
             sub = table[table.cell == ci]
             ref = ",".join(f"{k}={v}" for k, v in num_sel.items())
-            rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio,
-                             settings, extra_setting=f";reference={ref}"))
+            # a ratio of two successful runs is within the success factor of 1
+            threshold = spec.success.factor if item.metric == spec.success.metric else None
+            rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio.to_numpy(),
+                             settings, extra_setting=f";reference={ref}", success_threshold=threshold,
+                             ok=None if both is None else both.to_numpy(float)))
     return pd.DataFrame(rows, columns=COLUMNS)
