@@ -118,12 +118,24 @@ def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
     return out
 
 
-def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
-    """The runs of every cell whose settings include every ``key: value`` of ``where``; the key
-    ``seeds: n`` keeps the first ``n`` seeds (to show that a conclusion holds at n and 2n seeds)."""
+def _restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict]:
+    """Apply the row filters of ``where`` and return the rest (the cell settings to match):
+    ``seeds: n`` keeps the first ``n`` seeds (a conclusion at n and 2n seeds), ``succeeded: 1`` the
+    successful runs (any runs column that is not a setting filters rows by its value)."""
     where = dict(where)
     if "seeds" in where:
         table = table[table.seed < int(where.pop("seeds"))]
+    keys = {k for s in cell_settings(table).values() for k in s}
+    for key in [k for k in where if k not in keys and k in table]:
+        value = where.pop(key)
+        table = table[[_same(v, value) for v in table[key]]]
+    return table, where
+
+
+def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
+    """The runs of every cell whose settings include every ``key: value`` of ``where`` (after the
+    row filters of :func:`_restrict`)."""
+    table, where = _restrict(table, where)
     settings = cell_settings(table)
     keep = [ci for ci, s in settings.items() if all(k in s and _same(s[k], v) for k, v in where.items())]
     return table[table.cell.isin(keep)]
@@ -178,9 +190,7 @@ def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
 def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
     stat = "success_rate" if claim.kind == "success" else claim.stat
     if claim.kind in ("threshold", "success"):
-        where = dict(claim.where)
-        if "seeds" in where:
-            table = table[table.seed < int(where.pop("seeds"))]
+        table, where = _restrict(table, claim.where)
         cells = cell_settings(table)
         chosen = [ci for ci, s in cells.items() if all(k in s and _same(s[k], v) for k, v in where.items())]
         if not chosen:

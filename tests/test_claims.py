@@ -50,6 +50,7 @@ def test_seeds_key_keeps_the_first_seeds():
     c = Claim(id="t", text="", kind="success", where={"estimator": "d", "seeds": 15}, op=">=", value=1.0)
     assert evaluate(c, TABLE).holds  # the first 15 seeds of d succeed, all 40 do not
     assert interpolate("{n:fun@estimator=d,seeds=10}", TABLE) == "10"
+    assert interpolate("{max:fun@estimator=d,succeeded=1}", TABLE) == "1"  # a runs column filters rows
 
 
 def test_no_runs_never_holds():
