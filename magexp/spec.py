@@ -318,6 +318,14 @@ def parse(data: dict, path: Path) -> Artifact:
                 e = {**e, "tolerance": build(Tolerance, e["tolerance"], f"{where}.reported[{i}].tolerance")}
             reported.append(build(Reported, e, f"{where}.reported[{i}]"))
     art.reported = reported
+    for tol in [art.tolerance] + [r.tolerance for r in reported]:
+        if tol is not None and not tol.reason.strip():
+            raise MagexpError(f"{where}: a fixed tolerance needs a reason (why the paper gives no run to compare with)")
+    ls_items = {s.quantity for s in art.summarise if s.interval == "ls"}
+    loose = [r.quantity for r in reported if r.quantity not in ls_items and (r.tolerance or art.tolerance) is None]
+    if loose and art.seeds < MIN_SEEDS_COMPARED:
+        raise MagexpError(f"{where}.seeds={art.seeds} is not allowed: a cell compared with a paper number "
+                          f"({loose[0]}) needs at least {MIN_SEEDS_COMPARED} seeds")
     art.claims = [build(Claim, c, f"{where}.claims[{i}]") for i, c in enumerate(data.get("claims") or [])]
     ids = [c.id for c in art.claims]
     if len(set(ids)) != len(ids):

@@ -44,6 +44,8 @@ BASE = {"title": "t", "kind": "final", "grid": {"estimator": ["lm"]}, "plot": {"
     ({"seeds": "many"}, ["seeds='many'", "int"]),
     ({"grid": {"estimator": "lm"}}, ["grid.estimator", "list"]),
     ({"tolerance": {"rel": 0.1, "abs": 1.0}}, ["exactly one"]),
+    ({"tolerance": {"rel": 0.1}, "reported": [{"quantity": "q", "value": 1.0}]}, ["needs a reason"]),
+    ({"seeds": 10, "reported": [{"quantity": "q", "value": 1.0}]}, ["seeds=10", "at least 30 seeds"]),
 ])
 def test_a_typo_fails_with_one_line(tmp_path, change, words):
     with pytest.raises(MagexpError) as info:
