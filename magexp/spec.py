@@ -57,8 +57,8 @@ _COMMON = {"labels", "ylabel", "panels", "hue"}
 PLOT_KEYS = {
     "convergence": _COMMON,
     "field": _COMMON | {"quantity"},
-    "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh"},
-    "sweep": _COMMON | {"x", "metric", "xscale", "linthresh", "targets", "ylabels", "ylog"},
+    "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog"},
+    "sweep": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog"},
     "sphere": _COMMON,
     "parameters": _COMMON,
     "trace": _COMMON | {"groups", "trace", "start"},
