@@ -36,7 +36,8 @@ def draw(frame, spec):
             text += f"\n{r.success_rate:.0%} ok"
             if r.success_rate < 0.5:  # failures stand out whatever their ratio
                 ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, hatch="///", ec="k", lw=1.5))
-        ax.text(j, i, text, ha="center", va="center", fontsize=6)
+        dark = np.isfinite(v) and shown[i, j] > 1.2  # white on the dark red cells
+        ax.text(j, i, text, ha="center", va="center", fontsize=6, color="w" if dark else "k")
     ax.set_xticks(range(len(cases)), cases, rotation=40, ha="right")
     ax.set_yticks(range(len(estimators)), estimators)
     ax.grid(False)
