@@ -164,9 +164,10 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
 
 
 def _prose(spec, text: str, table: pd.DataFrame | None) -> str:
-    """A caption or note with its measured values filled in: ``{seeds}`` (the artifact's seed count)
+    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs)
     and every ``{stat:metric@selection:format}`` field (:func:`magexp.claims.interpolate`)."""
-    text = str(text).strip().replace("{seeds}", str(spec.seeds))
+    seeds = table.seed.nunique() if table is not None and "seed" in table else spec.seeds
+    text = str(text).strip().replace("{seeds}", str(seeds))
     return interpolate(text, table) if table is not None else text
 
 
@@ -213,7 +214,7 @@ def build(root: Path = RESULTS) -> None:
         "`truth_in_interval`: the true calibration's value is in the interval too (then the row shows "
         "convergence to the noise floor, not more). All rows: [`summary.csv`](summary.csv); versions: "
         "[`versions.csv`](versions.csv) (" + ", ".join(f"{k} {v}" for k, v in record.items()) + ").\n",
-        f"Overall: {len(summary)} reproduced numbers; "
+        f"Overall: {len(summary)} summary rows; "
         + ", ".join(f"{k} {int(counts.get(k, 0))}" for k in VERDICTS) + ".\n",
     ]
     text += [_paper_section(p, summary, root) for p in papers() if (summary.paper == p).any() or (root / p).is_dir()]
