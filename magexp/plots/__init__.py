@@ -14,7 +14,7 @@ KINDS = {
     "convergence": "magexp.plots.convergence",
     "field": "magexp.plots.field",
     "final": "magexp.plots.final",  # final values (one or more metrics) vs a swept key
-    "sphere": "magexp.plots.sphere",  # readings vs the sphere |H| in 3-D (Yuan 2018 figs 2-4)
+    "sphere": "magexp.plots.field",  # readings vs the sphere |H| in 3-D (Yuan 2018 figs 2-4): field, quantity sphere
     "parameters": "magexp.plots.parameters",  # parameter estimates vs truth and paper (tables)
     "trace": "magexp.plots.trace",  # parameters vs filter step (Yan & Zhou 2022 figs 1, 3, 4)
     "heatmap": "magexp.plots.heatmap",  # estimator x case, error / Cramér-Rao bound (benchmark)
