@@ -1,28 +1,9 @@
 """Artifacts: a paper's figure or table as data, run and drawn by generic code.
 
-An artifact is ``experiments/<paper>/<stem>.yaml``::
-
-    name: ding2024_fig5          # <firstauthor><year>_<fig|table><N>
-    paper: ding2024
-    title: ...
-    kind: convergence            # convergence | field | table | ... (magexp.kinds)
-    seeds: 10
-    base: [scenario=ding2024_exp1, estimator.n_iterations=800]   # Hydra overrides for every run
-    grid: {estimator: [pso, ipso], scenario.noise: [0, 2, 5, 10]}  # cartesian product
-    plot: {panels: scenario.noise, hue: estimator}
-    summarise: [{quantity: final_rms, metric: fun}]               # one summary row per cell
-    ratios: [{quantity: improvement_ratio, metric: fun, numerator: {estimator: pso}, denominator: {estimator: ipso}}]
-    reported:                                                     # the paper's numbers
-      - {quantity: final_rms, match: {estimator: ipso, scenario.noise: 2}, value: 0.58}
-    tolerance: {rel: 0.15}        # default; an entry may give its own ({rel: x}, {abs: x} or {below: x})
-    # parameter tables: summarise [{mode: parameters}] gives one row per estimated parameter
-    # (median over seeds beside the truth); a reported entry may be a whole column:
-    #   - {quantities: [S11, S12], match: {estimator: rdpso}, values: [-1.6013, 0.4010], tolerance: {abs: 0.01}}
-    notes: ...                    # why we differ, shown in the report
-
-Every run is ``scenario x estimator x seed`` through :func:`magexp.runner.run`,
-cached by :mod:`magexp.cache`, and the seeds of a cell share their data across
-estimators (common random numbers).
+The artifact language (keys, types, defaults) is :mod:`magexp.spec`. Every run is
+``scenario x estimator x seed`` through :func:`magexp.runner.run`, cached by :mod:`magexp.cache`;
+the seeds of a cell share their data across estimators (common random numbers), and each
+scenario draws from its own stream (:mod:`magexp.seeding`).
 """
 
 from __future__ import annotations
@@ -44,39 +25,41 @@ from magexp.paths import EXPERIMENTS
 SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50}
 
 
-def load_spec(path: Path | str) -> DictConfig:
-    """Read an artifact YAML, with defaults filled in."""
-    path = Path(path)
-    if not path.exists():
-        raise MagexpError(f"artifact {str(path)!r} does not exist")
-    spec = OmegaConf.load(path)
-    defaults = OmegaConf.create({"seeds": 10, "base": [], "grid": {}, "cases": [], "skip_inapplicable": False, "plot": {}, "summarise": [], "ratios": [],
-                                 "reported": [], "tolerance": {"rel": 0.15}, "notes": "", "caption": ""})
-    spec = OmegaConf.merge(defaults, spec)
-    spec.name = spec.get("name") or path.stem
-    return spec
+def load_spec(path: Path | str):
+    """Read and validate an artifact YAML (:func:`magexp.spec.load`)."""
+    from magexp.spec import load
+
+    return load(path)
 
 
-def paper_specs(paper: str) -> list[DictConfig]:
+def paper_specs(paper: str) -> list:
     """Every artifact of ``paper``, in file-name order."""
-    folder = EXPERIMENTS / paper
-    if not folder.is_dir():
-        known = sorted(p.name for p in EXPERIMENTS.iterdir() if p.is_dir())
-        raise MagexpError(f"paper={paper!r} is not allowed: choose one of {', '.join(known)}")
-    return [load_spec(p) for p in sorted(folder.glob(f"{paper}_*.yaml"))]
+    from magexp.spec import artifact_paths
+
+    return [load_spec(p) for p in artifact_paths(paper)]
 
 
-def cells(spec: DictConfig) -> list[dict[str, str]]:
+def cells(spec) -> list[dict[str, str]]:
     """The grid's cells, each an ordered ``{override key: value}``.
 
     ``cases`` (optional): a list of override lists (e.g. a scenario with its own settings),
     each crossed with the ``grid``; the case's overrides come first.
     """
-    grid = OmegaConf.to_container(spec.grid)
+    grid = dict(spec.grid)
     keys = list(grid)
     product = [dict(zip(keys, (str(v) for v in combo))) for combo in itertools.product(*(grid[k] for k in keys))]
-    cases = OmegaConf.to_container(spec.cases) if spec.get("cases") else [[]]
+    cases = list(spec.cases) or [[]]
     return [{**dict(str(o).split("=", 1) for o in case), **cell} for case in cases for cell in product]
+
+
+def succeeded(table: pd.DataFrame, success) -> pd.Series:
+    """Per run: ``metric <= factor * reference + floor`` (:class:`magexp.spec.Success`); NaN where the
+    reference (the true calibration's value) is unknown."""
+    if success.metric not in table or success.reference not in table:
+        return pd.Series(np.nan, index=table.index)
+    metric, ref = table[success.metric].astype(float), table[success.reference].astype(float)
+    ok = (metric <= success.factor * ref + success.floor).astype(float)  # a diverged (NaN) metric fails
+    return ok.where(ref.notna())
 
 
 def applicable(cfg: DictConfig) -> bool:
@@ -95,7 +78,7 @@ def applicable(cfg: DictConfig) -> bool:
     return applies_to(get_class(cfg.estimator._target_), problem_class(objective))[0]
 
 
-def overrides_of(spec: DictConfig, cell: dict[str, str], cfg: DictConfig | None = None) -> list[str]:
+def overrides_of(spec, cell: dict[str, str], cfg: DictConfig | None = None) -> list[str]:
     """The Hydra overrides of a cell. ``?key=value`` entries of ``base`` apply only where the
     composed config has ``key`` (e.g. a swarm size that a closed-form estimator lacks); with
     ``cfg=None`` they are left out (the plain overrides to compose with)."""
@@ -109,7 +92,7 @@ def overrides_of(spec: DictConfig, cell: dict[str, str], cfg: DictConfig | None 
     return out
 
 
-def apply_optional(spec: DictConfig, cfg: DictConfig) -> DictConfig:
+def apply_optional(spec, cfg: DictConfig) -> DictConfig:
     """Apply the ``?key=value`` overrides of ``spec.base`` that ``cfg`` has a key for."""
     for o in spec.base:
         o = str(o)
@@ -174,14 +157,14 @@ def run_many(configs: list[dict], *, jobs: int = 0, use_cache: bool = True, prog
 class ArtifactRuns:
     """Every run of an artifact: ``table`` has one row per (cell, seed) with its metrics."""
 
-    spec: DictConfig
+    spec: object  # magexp.spec.Artifact
     cells: list[dict[str, str]]
     table: pd.DataFrame
     outputs: dict  # (cell index, seed) -> RunOutput
     overrides: list[list[str]]  # per cell, the overrides that apply to it
 
 
-def run_artifact(spec: DictConfig, *, seeds: int | None = None, jobs: int = 0, tiny: bool = False,
+def run_artifact(spec, *, seeds: int | None = None, jobs: int = 0, tiny: bool = False,
                  use_cache: bool = True) -> ArtifactRuns:
     """Run every cell of ``spec`` over its seeds."""
     n_seeds = int(seeds if seeds is not None else spec.seeds)
@@ -206,8 +189,12 @@ def run_artifact(spec: DictConfig, *, seeds: int | None = None, jobs: int = 0, t
     outputs = run_many(configs, jobs=jobs, use_cache=use_cache, progress=Progress(len(configs), spec.name))
     rows = []
     for (ci, seed), out in zip(index, outputs):
-        rows.append({"cell": ci, **grid[ci], "setting": setting_of(settings[ci]), **out.metrics})
-    return ArtifactRuns(spec=spec, cells=grid, table=pd.DataFrame(rows), outputs=dict(zip(index, outputs)),
+        estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
+        rows.append({"cell": ci, **grid[ci], "setting": setting_of(settings[ci]), **out.metrics, **estimate})
+    table = pd.DataFrame(rows)
+    if len(table):
+        table["succeeded"] = succeeded(table, spec.success)
+    return ArtifactRuns(spec=spec, cells=grid, table=table, outputs=dict(zip(index, outputs)),
                         overrides=settings)
 
 

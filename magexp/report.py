@@ -1,24 +1,73 @@
-"""Assemble ``results/summary.csv`` and ``results/REPORT.md`` from the papers' parts."""
+"""Assemble ``results/summary.csv``, ``results/versions.csv`` and ``results/REPORT.md`` from the
+papers' parts: per paper its verdicts, its claims (each with its evidence and whether it holds),
+its deviations from the paper's text, and every artifact with its table and notes (measured
+values interpolated from the runs, :func:`magexp.claims.interpolate`)."""
 
 from __future__ import annotations
 
+import platform
+import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from omegaconf import OmegaConf
 
-from magexp.artifacts import load_spec
-from magexp.paths import EXPERIMENTS, RESULTS
-from magexp.summary import COLUMNS
+from magexp.claims import evaluate, interpolate
+from magexp.paths import RESULTS
+from magexp.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
+from magexp.summary import COLUMNS, VERDICTS
 
-ORDER = ("ding2024", "yuan2018", "yan2022", "benchmark", "real")
+#: significant digits of every float written to a results CSV (round-off must not churn files)
+DIGITS = 6
+SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "value", "lo", "hi", "success_rate",
+                 "n_seeds", "truth_in_interval", "verdict"]
+
+
+def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
+    """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
+    written as ``±floor``; every float then rounded to :data:`DIGITS` significant digits."""
+    out = frame.copy()
+    for col in out.columns:
+        if pd.api.types.is_float_dtype(out[col]):
+            v = out[col].to_numpy(float)
+            small = np.isfinite(v) & (v != 0) & (np.abs(v) < floor)
+            v = np.where(small, np.sign(v) * floor, v)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                mag = np.where(np.isfinite(v) & (v != 0), np.floor(np.log10(np.abs(np.where(v == 0, 1, v)))), 0)
+            scale = 10.0 ** (DIGITS - 1 - mag)
+            out[col] = np.where(np.isfinite(v), np.round(v * scale) / scale, v)
+    return out
+
+
+def write_csv(frame: pd.DataFrame, path: Path) -> None:
+    """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
+    when only round-off differs)."""
+    tidy(frame).to_csv(path, index=False, float_format=f"%.{DIGITS}g")
+
+
+def versions() -> dict:
+    """The versions behind the results: python and the libraries (:mod:`magexp.provenance`) and
+    ``code_commit``, the last commit that changed anything outside ``results/`` (so committing the
+    regenerated results does not change the record, and a fresh clone writes the same bytes)."""
+    from magexp import provenance
+
+    try:
+        commit = subprocess.run(["git", "log", "-1", "--format=%h", "--abbrev=12", "--", ".", ":(exclude)results"],
+                                capture_output=True, text=True, check=True,
+                                cwd=Path(__file__).resolve().parent.parent).stdout.strip() or provenance.commit()
+    except (OSError, subprocess.CalledProcessError):
+        commit = provenance.commit()
+    libs = provenance.provenance()
+    return {**{k: v for k, v in libs.items() if k not in ("magexp_commit", "config_hash", "commit")},
+            "code_commit": commit}
 
 
 def _fmt(v) -> str:
     if v is None or (isinstance(v, float) and not np.isfinite(v)):
         return ""
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
     if isinstance(v, (float, np.floating)):
         return f"{v:.4g}"
     return str(v)
@@ -30,58 +79,108 @@ def markdown_table(frame: pd.DataFrame, columns: list[str]) -> str:
 
 
 def collect(root: Path = RESULTS) -> pd.DataFrame:
-    """Every paper's summary part, in a fixed order."""
+    """Every paper's summary part, in the papers' order."""
     parts = []
-    for paper in ORDER:
+    for paper in papers():
         path = root / paper / "summary.csv"
         if path.exists() and path.stat().st_size > 0:
-            parts.append(pd.read_csv(path, keep_default_na=False, na_values=[""]))
+            part = pd.read_csv(path, keep_default_na=False, na_values=[""])
+            parts.append(part.reindex(columns=COLUMNS))
     if not parts:
         return pd.DataFrame(columns=COLUMNS)
     return pd.concat(parts, ignore_index=True)[COLUMNS]
 
 
+def _runs(root: Path, paper: str, name: str) -> pd.DataFrame | None:
+    path = root / paper / f"{name}_runs.csv"
+    return pd.read_csv(path) if path.exists() else None
+
+
+def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple[str, object]]:
+    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``."""
+    out = []
+    for p in [paper] if paper else papers():
+        for path in artifact_paths(p):
+            spec = load(path)
+            table = _runs(root, p, spec.name) if spec.claims else None
+            if table is not None and len(table):
+                out += [(spec.name, evaluate(c, table)) for c in spec.claims]
+    return out
+
+
+def _claims_section(root: Path, paper: str) -> str:
+    outcomes = claim_outcomes(root, paper)
+    if not outcomes:
+        return ""
+    lines = ["### Claims\n", "Each qualitative statement, as a condition on the runs (`claims:` in the artifact "
+             "YAML). *magexp*: stated by this report (a test fails if one does not hold); *paper*: the paper's "
+             "statement, checked. Intervals: 95 % bootstrap over seeds.\n",
+             "| artifact | by | claim | evidence | result |", "|---|---|---|---|---|"]
+    for name, o in outcomes:
+        lines.append(f"| {name} | {o.claim.by} | {o.claim.text} | {o.evidence} | "
+                     f"{'holds' if o.holds else '**does not hold**'} |")
+    return "\n".join(lines) + "\n"
+
+
+def _deviations_section(paper: str) -> str:
+    meta = load_paper(paper)
+    if not meta.deviations:
+        return ""
+    lines = ["### Deviations from the paper's text\n", "| what | why |", "|---|---|"]
+    lines += [f"| {d.text.strip()} | {d.reason.strip()} |" for d in meta.deviations]
+    return "\n".join(lines) + "\n"
+
+
 def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
-    meta_path = EXPERIMENTS / paper / "paper.yaml"
-    meta = OmegaConf.load(meta_path) if meta_path.exists() else OmegaConf.create({"title": paper, "intro": ""})
-    lines = [f"## {meta.title}\n", f"{meta.get('intro', '')}\n"]
+    meta = load_paper(paper)
+    lines = [f"## {meta.title}\n", f"{meta.intro}\n"]
     rows = summary[summary.paper == paper]
     counts = rows.verdict.value_counts()
     if len(rows):
-            lines.append(f"Verdicts: {', '.join(f'{k} {int(counts.get(k, 0))}' for k in ('match', 'differs', 'n/a'))}.\n")
-    for spec_path in sorted((EXPERIMENTS / paper).glob(f"{paper}_*.yaml")):
-        spec = load_spec(spec_path)
+        lines.append(f"Verdicts: {', '.join(f'{k} {int(counts.get(k, 0))}' for k in VERDICTS)}.\n")
+    lines.append(_claims_section(root, paper))
+    lines.append(_deviations_section(paper))
+    for spec_path in artifact_paths(paper):
+        spec = load(spec_path)
         if not (root / paper / f"{spec.name}.png").exists():
             continue
+        table = _runs(root, paper, spec.name)
         lines.append(f"### {spec.name}: {spec.title}\n")
         lines.append(f"![{spec.name}]({paper}/{spec.name}.png)\n")
         if spec.caption:
-            lines.append(f"{str(spec.caption).strip()}\n")
+            lines.append(f"{_prose(spec, spec.caption, table)}\n")
         lines.append(f"Data: [`{paper}/{spec.name}.csv`]({paper}/{spec.name}.csv), "
                      f"runs: [`{paper}/{spec.name}_runs.csv`]({paper}/{spec.name}_runs.csv).\n")
         art = rows[rows.artifact == spec.name]
         if len(art):
-            lines.append(markdown_table(art, ["quantity", "estimator", "setting", "truth", "paper_value", "value",
-                                              "q25", "q75", "n_seeds", "verdict"]))
-        if spec.get("report_table"):
+            lines.append(markdown_table(art, SUMMARY_SHOWN))
+        if spec.report_table:
             lines.append(_artifact_table(spec, root / paper / f"{spec.name}.csv"))
         if spec.notes:
-            lines.append(f"\n{str(spec.notes).strip()}\n")
+            lines.append(f"\n{_prose(spec, spec.notes, table)}\n")
     return "\n".join(lines)
 
 
+def _prose(spec, text: str, table: pd.DataFrame | None) -> str:
+    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs)
+    and every ``{stat:metric@selection:format}`` field (:func:`magexp.claims.interpolate`)."""
+    seeds = table.seed.nunique() if table is not None and "seed" in table else spec.seeds
+    text = str(text).strip().replace("{seeds}", str(seeds))
+    return interpolate(text, table) if table is not None else text
+
+
 def _artifact_table(spec, path: Path) -> str:
-    """The artifact's own CSV as a table (columns ``report_table``), and the best per case."""
-    from magexp.plots.benchmark_table import best_per_case
+    """The artifact's own CSV as a table (columns ``report_table``), and the winner per case."""
+    from magexp.plots.benchmark_table import winners
 
     frame = pd.read_csv(path)
     cols = [c for c in spec.report_table if c in frame]
     text = markdown_table(frame, cols)
-    if "case" in frame and "offset_error_ratio" in frame:
-        best = best_per_case(frame)
-        text += ("\n**Most accurate estimator per case** (lowest median offset error / bound; within 5 % "
-                 "of it, the fastest):\n\n" + markdown_table(best, ["case", "estimator", "offset_error_ratio",
-                                                                    "success_rate", "wall_time"]))
+    if "case" in frame and "bound_ratio_hi" in frame:
+        text += ("\n**Winner per case** (lowest RMS offset error / sqrt(tr CRB); declared only where its 95 % CI "
+                 "lies below every other estimator's; else the estimators whose CIs overlap the best):\n\n"
+                 + markdown_table(winners(frame), ["case", "winner", "bound_ratio", "bound_ratio_lo", "bound_ratio_hi",
+                                                   "success_rate", "tied"]))
     return text
 
 
@@ -96,23 +195,27 @@ def _speed_section(root: Path) -> str:
 
 
 def build(root: Path = RESULTS) -> None:
-    """Write ``root/summary.csv`` and ``root/REPORT.md``."""
+    """Write ``root/summary.csv``, ``root/versions.csv`` and ``root/REPORT.md``."""
     summary = collect(root)
-    summary.to_csv(root / "summary.csv", index=False)
-    papers = [p for p in ORDER if (summary.paper == p).any()]
+    write_csv(summary, root / "summary.csv")
+    record = versions()
+    pd.DataFrame([{"package": k, "version": v} for k, v in record.items()]).to_csv(root / "versions.csv", index=False)
     counts = summary.verdict.value_counts()
     text = [
         "# magexp report\n",
         "Every number below is regenerated by `make reproduce` (one paper: `make reproduce-<paper>`). "
-        "`value` is the median over seeds, `q25`/`q75` the interquartile range, `truth` the value of the "
-        "true calibration on the same simulated readings. Verdict `match` means within the stated tolerance "
-        "of the paper's value (chosen before comparing); `n/a` means the paper gives no number. "
-        "All rows: [`summary.csv`](summary.csv).\n",
-        f"Overall: {len(summary)} reproduced numbers; "
-        + ", ".join(f"{k} {int(counts.get(k, 0))}" for k in ("match", "differs", "n/a")) + ".\n",
+        "A paper reports one run; `value` is our median over seeds and `lo`-`hi` the interval a single run of "
+        "ours falls in (2.5-97.5 % over seeds). Verdict `reproduced`: the paper's value is in that interval "
+        "(widened only by the paper's printing precision) and at least half the runs succeeded; `differs`: "
+        "not; `n/a`: the paper gives no number. `success_rate`: the fraction of runs within the stated "
+        "factor of the optimum the true calibration gives (`success:` of the artifact). "
+        "`truth_in_interval`: the true calibration's value is in the interval too (then the row shows "
+        "convergence to the noise floor, not more). All rows: [`summary.csv`](summary.csv); versions: "
+        "[`versions.csv`](versions.csv) (" + ", ".join(f"{k} {v}" for k, v in record.items()) + ").\n",
+        f"Overall: {len(summary)} summary rows; "
+        + ", ".join(f"{k} {int(counts.get(k, 0))}" for k in VERDICTS) + ".\n",
     ]
-    papers += [p for p in ORDER if p not in papers and (root / p).is_dir()]  # sections without summary rows
-    text += [_paper_section(p, summary, root) for p in papers]
+    text += [_paper_section(p, summary, root) for p in papers() if (summary.paper == p).any() or (root / p).is_dir()]
     text.append(_speed_section(root))
     (root / "REPORT.md").write_text("\n".join(text))
 

@@ -16,15 +16,14 @@ from magexp.artifacts import paper_specs, run_artifact
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.plots import kind_module
+from magexp.report import write_csv
 from magexp.summary import COLUMNS, summarise
 
-PAPERS = ("ding2024", "yuan2018", "yan2022")
-
-
 def available_papers() -> list[str]:
-    from magexp.paths import EXPERIMENTS
+    """The folders of ``experiments/`` (:func:`magexp.spec.papers`)."""
+    from magexp.spec import papers
 
-    return [p for p in (*PAPERS, "benchmark", "real") if (EXPERIMENTS / p).is_dir()]
+    return papers()
 
 
 def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False,
@@ -35,8 +34,8 @@ def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool
     runs = run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force)
     kind = kind_module(spec.kind)
     frame = kind.tabulate(runs)
-    frame.to_csv(out / f"{spec.name}.csv", index=False)
-    runs.table.drop(columns=["wall_time"], errors="ignore").to_csv(out / f"{spec.name}_runs.csv", index=False)
+    write_csv(frame, out / f"{spec.name}.csv")
+    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{spec.name}_runs.csv")
     save(kind.draw(frame, spec), out / f"{spec.name}.png")
     return summarise(runs)
 
@@ -66,7 +65,7 @@ def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int =
         summary = pd.concat([old[old.artifact != only], summary], ignore_index=True)
         order = {s.name: i for i, s in enumerate(paper_specs(paper))}
         summary = summary.sort_values("artifact", key=lambda c: c.map(order), kind="stable")
-    summary.to_csv(out / "summary.csv", index=False)
+    write_csv(summary, out / "summary.csv")
     return summary
 
 

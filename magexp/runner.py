@@ -13,7 +13,7 @@ from magexp.errors import MagexpError
 from magexp.metrics import evaluate
 from magexp.estimators.base import check_applies
 from magexp.problems import make_problem, problem_class
-from magexp.seeding import run_generators
+from magexp.seeding import run_generators, scenario_stream
 
 
 @dataclass
@@ -53,7 +53,7 @@ def run(cfg: DictConfig) -> RunOutput:
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
     objective = cfg.get("objective") or scenario.objective
     check_applies(estimator, problem_class(objective), f"scenario {scenario.name!r}")  # before any data
-    data_rng, est_rng = run_generators(cfg.seed)
+    data_rng, est_rng = run_generators(cfg.seed, stream=scenario_stream(cfg.scenario))
     dataset = scenario.generate(rng=data_rng)
     problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
     start = time.perf_counter()

@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 from hydra.utils import instantiate
-from omegaconf import OmegaConf
 
 from magexp.artifacts import cells, load_spec, overrides_of
 from magexp.config import options
@@ -49,10 +48,8 @@ def test_artifact_spec_is_well_formed(make_cfg, path):
     for cell in grid:  # every cell composes
         make_cfg(*overrides_of(spec, cell))
     settings = [dict(o.split("=", 1) for o in overrides_of(spec, cell)) for cell in grid]
-    items = OmegaConf.to_container(spec.summarise)
-    per_parameter = any(s.get("mode") == "parameters" for s in items)
-    quantities = {s["quantity"] for s in items if "quantity" in s} | {
-        r["quantity"] for r in OmegaConf.to_container(spec.ratios)}
+    per_parameter = any(s.mode == "parameters" for s in spec.summarise)
+    quantities = {s.quantity for s in spec.summarise if s.quantity} | {r.quantity for r in spec.ratios}
     for entry in reported_entries(spec):  # every paper number lands on a cell
         assert per_parameter or entry["quantity"] in quantities, entry
         assert any(matches(entry.get("match", {}), s) for s in settings), entry

@@ -66,9 +66,11 @@ def test_noise_is_uniform_with_half_amplitude(make_cfg):
 
 @pytest.mark.parametrize("estimator", ["ipso", "pso", "lm", "ellipsoid"])
 def test_noiseless_calibration_reaches_round_off(make_cfg, estimator):
-    out = run(make_cfg(f"estimator={estimator}", "scenario.noise=0", "seed=0"))
-    assert out.metrics["fun"] < 1e-9
-    assert out.metrics["gram_error"] < 1e-9 and out.metrics["offset_error"] < 1e-6
+    """Every seed for IPSO and the baselines; the fixed-coefficient PSO gets trapped on some seeds
+    (its success rate is reported), so it must reach round-off on two of three."""
+    outs = [run(make_cfg(f"estimator={estimator}", "scenario.noise=0", f"seed={seed}")).metrics for seed in range(3)]
+    exact = [m["fun"] < 1e-9 and m["gram_error"] < 1e-9 and m["offset_error"] < 1e-6 for m in outs]
+    assert sum(exact) >= (2 if estimator == "pso" else 3), [m["fun"] for m in outs]
 
 
 def test_ipso_and_lm_reach_the_least_squares_floor(make_cfg):

@@ -15,7 +15,7 @@ from magexp.problems.ship import state_to_theta, theta_to_state
 from magexp.recordings import load_recording
 from magexp.runner import build
 from magexp.scenarios.ship import ship_attitude
-from magexp.summary import verdict
+from magexp.spec import Tolerance
 
 PAPER_MOCKUP = [0.98575, 0.08153, 0.06221, -0.06233, 0.83517, -0.02987, -0.02999, -0.07748, 1.06615,
                 2011.1, -2886.8, 2054.6]
@@ -183,8 +183,8 @@ def test_same_seed_same_numbers(make_cfg):
 
 
 def test_abs_and_factor_tolerances():
-    assert verdict(1.0005, 1.0, {"abs": 1e-3}) == "match" and verdict(1.002, 1.0, {"abs": 1e-3}) == "differs"
-    assert verdict(2.9e-4, 1e-4, {"factor": 3}) == "match" and verdict(5e-3, 1e-4, {"factor": 3}) == "differs"
+    assert Tolerance(abs=1e-3).holds(1.0005, 1.0) and not Tolerance(abs=1e-3).holds(1.002, 1.0)
+    assert Tolerance(factor=3).holds(2.9e-4, 1e-4) and not Tolerance(factor=3).holds(5e-3, 1e-4)
 
 
 @pytest.mark.slow

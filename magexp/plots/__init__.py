@@ -13,14 +13,14 @@ from magexp.errors import MagexpError
 KINDS = {
     "convergence": "magexp.plots.convergence",
     "field": "magexp.plots.field",
-    "final": "magexp.plots.final",
-    "sphere": "magexp.plots.sphere",  # readings vs the sphere |H| in 3-D (Yuan 2018 figs 2-4)
+    "final": "magexp.plots.final",  # final values (one or more metrics) vs a swept key
+    "sphere": "magexp.plots.field",  # readings vs the sphere |H| in 3-D (Yuan 2018 figs 2-4): field, quantity sphere
     "parameters": "magexp.plots.parameters",  # parameter estimates vs truth and paper (tables)
-    "trace": "magexp.plots.trace",
+    "trace": "magexp.plots.trace",  # parameters vs filter step (Yan & Zhou 2022 figs 1, 3, 4)
     "heatmap": "magexp.plots.heatmap",  # estimator x case, error / Cramér-Rao bound (benchmark)
-    "speed": "magexp.plots.speed",  # accuracy vs wall time (benchmark)  # parameters vs filter step (Yan & Zhou 2022 figs 1, 3, 4)
+    "speed": "magexp.plots.speed",  # accuracy vs wall time (benchmark)
     "estimates": "magexp.plots.estimates",  # table of fitted values per estimator vs truth (Yan & Zhou 2022)
-    "sweep": "magexp.plots.sweep",  # chosen metrics vs a swept key, one panel row per metric
+    "sweep": "magexp.plots.final",  # the old name of `final` with several metrics (one kind)
     "tuning": "magexp.plots.tuning",  # settings of a method as a distribution beside its default
 }
 

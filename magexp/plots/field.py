@@ -1,31 +1,47 @@
-"""Total field of every reading before and after calibration (the first seed of each cell)."""
+"""The readings of the first seed of each cell before and after calibration (the kinds ``field`` and
+``sphere``, one kind): ``plot.quantity`` is ``magnitude`` (the total field per reading, before and
+after; Ding 2024 fig 2), ``error`` (the calibrated total field minus the reference; fig 6) or
+``sphere`` (a 3-D scatter against the sphere of radius the median reference; Yuan 2018 figs 2-4).
+The default is ``sphere`` for the kind ``sphere``, else ``magnitude``.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from magexp.plots.style import group_values, label, panels
+from magexp.plots.style import group_values, label, panels, plt
 
 
 def tabulate(runs) -> pd.DataFrame:
+    """Per reading of the first seed of each cell: raw and calibrated vectors and total fields,
+    the reference total field and the error of the calibrated one."""
     frames = []
     for ci, cell in enumerate(runs.cells):
         seed = min(s for (c, s) in runs.outputs if c == ci)
         out = runs.outputs[(ci, seed)]
-        calibrated = np.linalg.norm(out.calibrated, axis=1)
+        raw, cal = np.asarray(out.readings), np.asarray(out.calibrated)
+        calibrated = np.linalg.norm(cal, axis=1)
         frames.append(pd.DataFrame({
-            **cell, "seed": seed, "reading": np.arange(len(calibrated)),
-            "raw": np.linalg.norm(out.readings, axis=1), "calibrated": calibrated,
+            **cell, "seed": seed, "reading": np.arange(len(raw)),
+            "raw_x": raw[:, 0], "raw_y": raw[:, 1], "raw_z": raw[:, 2],
+            "cal_x": cal[:, 0], "cal_y": cal[:, 1], "cal_z": cal[:, 2],
+            "raw": np.linalg.norm(raw, axis=1), "calibrated": calibrated,
             "reference": out.reference_norm, "error": calibrated - out.reference_norm,
         }))
     return pd.concat(frames, ignore_index=True)
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    quantity = spec.plot.get("quantity", "sphere" if spec.kind == "sphere" else "magnitude")
+    if quantity == "sphere":
+        return _draw_sphere(frame, spec)
+    return _draw_field(frame, spec, show_raw=quantity == "magnitude")
+
+
+def _draw_field(frame: pd.DataFrame, spec, show_raw: bool):
     key = spec.plot.get("panels")
     values = group_values(frame, key)
-    show_raw = spec.plot.get("quantity", "magnitude") == "magnitude"
     fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
     n = len(values)
     for i, v in enumerate(values):
@@ -51,5 +67,31 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             ax.set_title(f"{title}\nRMS {rms:.3g} nT")
             ax.set_ylabel("total-field error (nT)")
         ax.set_xlabel("reading")
+    fig.suptitle(spec.title, fontsize=10)
+    return fig
+
+
+def _draw_sphere(frame: pd.DataFrame, spec):
+    key = spec.plot.get("panels")
+    values = group_values(frame, key)
+    fig = plt.figure(figsize=(4.2 * len(values), 4.2))
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
+    for i, val in enumerate(values):
+        sub = frame if val is None else frame[frame[key] == val]
+        ax = fig.add_subplot(1, len(values), i + 1, projection="3d")
+        r = float(sub.reference.median())
+        ax.plot_wireframe(r * np.cos(u) * np.sin(v), r * np.sin(u) * np.sin(v), r * np.cos(v),
+                          color="0.8", lw=0.4)
+        ax.scatter(sub.raw_x, sub.raw_y, sub.raw_z, s=6, color="0.45", label="before")
+        ax.scatter(sub.cal_x, sub.cal_y, sub.cal_z, s=8, color="C0", label="after")
+        rms = float(np.sqrt(np.mean(sub.error**2)))
+        title = "" if val is None else label(spec, key, val) + "\n"
+        ax.set_title(f"{title}RMS of |B| - |H| after: {rms:.3g}", fontsize=8)
+        ax.set_box_aspect((1, 1, 1))
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.set_zlabel("z")
+        if i == 0:
+            ax.legend(loc="upper left", fontsize=7)
     fig.suptitle(spec.title, fontsize=10)
     return fig

@@ -1,5 +1,6 @@
-"""Every parameter estimate per cell: median and interquartile range over seeds, beside the truth
-and the paper's value (the tables of Yuan 2018). The figure shows errors against the truth."""
+"""Every parameter estimate per cell: median and interquartile range over the successful seeds (the
+failed ones counted in ``n_failed``), beside the truth and the paper's value (the tables of Yuan 2018).
+The figure shows errors against the truth; the legend gives each cell's success rate."""
 
 from __future__ import annotations
 
@@ -23,13 +24,18 @@ def tabulate(runs) -> pd.DataFrame:
         sub = runs.table[runs.table.cell == ci]
         names, values, truth = parameter_values(runs, ci)
         settings = cell_settings(runs, ci)
+        ok = sub.sort_values("seed")["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(values), np.nan)
+        judged = np.isfinite(ok)
+        kept = values[ok == 1] if judged.any() else values  # over the successful runs; failures counted beside
         for k, name in enumerate(names):
-            med, q25, q75 = quantiles(values[:, k])
+            med, q25, q75 = quantiles(kept[:, k])
             paper, _ = reported_value(runs.spec, name, settings)
             rows.append({**cell, "label": cell_label(cell, sub.estimator.iloc[0]), "estimator": sub.estimator.iloc[0],
                          "objective": sub.objective.iloc[0], "parameter": name,
                          "truth": np.nan if truth is None else float(truth[k]), "median": med, "q25": q25,
-                         "q75": q75, "paper_value": np.nan if paper is None else paper, "n_seeds": len(values)})
+                         "q75": q75, "paper_value": np.nan if paper is None else paper, "n_seeds": len(values),
+                         "n_failed": int((ok[judged] == 0).sum()),
+                         "success_rate": float(ok[judged].mean()) if judged.any() else np.nan})
     return pd.DataFrame(rows)
 
 
@@ -47,7 +53,9 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             x = np.arange(len(group)) - 0.4 + width * (j + 0.5)
             err = sub["median"] - sub.truth
             yerr = np.vstack([sub["median"] - sub.q25, sub.q75 - sub["median"]])
-            line = ax.errorbar(x, err, yerr=yerr, fmt="o", ms=3.5, capsize=2, lw=1, label=lab)
+            rate = sub.success_rate.iloc[0] if "success_rate" in sub else np.nan
+            line = ax.errorbar(x, err, yerr=yerr, fmt="o", ms=3.5, capsize=2, lw=1,
+                               label=lab + (f" ({rate:.0%} ok)" if np.isfinite(rate) else ""))
             if sub.paper_value.notna().any():
                 ax.plot(x, sub.paper_value - sub.truth, "o", mfc="none", ms=6, color=line[0].get_color())
         ax.axhline(0, color="k", lw=0.8)

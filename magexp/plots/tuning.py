@@ -66,10 +66,10 @@ def tabulate(runs) -> pd.DataFrame:
     return frame
 
 
-def draw(frame: pd.DataFrame, spec):
+def draw(frame: pd.DataFrame, spec, axes=None):
     scenarios = list(dict.fromkeys(frame.scenario))
     families = list(dict.fromkeys(frame.family))
-    fig, axes = panels(2 * len(scenarios), rows=2, width=max(3.6, 0.9 * len(families) + 1.5), height=2.9)
+    fig, axes = panels(2 * len(scenarios), rows=2, width=max(3.6, 0.9 * len(families) + 1.5), height=2.9, axes=axes)
     for j, sc in enumerate(scenarios):
         top, bottom = axes[j], axes[len(scenarios) + j]
         sub = frame[frame.scenario == sc]

@@ -1,0 +1,54 @@
+"""Every artifact file (the benchmark's included) runs end to end at tiny size, and its summary rows
+keep the contract: the columns, the verdict vocabulary, and verdicts that agree with their intervals."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from magexp.report import build
+from magexp.reproduce import reproduce_artifact
+from magexp.spec import artifact_paths, load, papers
+from magexp.summary import COLUMNS, VERDICTS
+
+ARTIFACTS = [p for paper in papers() for p in artifact_paths(paper)]
+
+
+def _consistent(row) -> bool:
+    """An ``n/a`` row has no paper value; a ``reproduced`` row no failed majority."""
+    if row.verdict == "n/a":
+        return pd.isna(row.paper_value)
+    return not (row.verdict == "reproduced" and pd.notna(row.success_rate) and row.success_rate < 0.5)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", ARTIFACTS, ids=lambda p: p.stem)
+def test_artifact_runs_tiny(tmp_path, path):
+    spec = load(path)
+    out = tmp_path / spec.paper
+    out.mkdir()
+    summary = reproduce_artifact(spec, out, seeds=2, jobs=1, tiny=True)
+    assert (out / f"{spec.name}.png").stat().st_size > 1000
+    assert len(pd.read_csv(out / f"{spec.name}.csv")) > 0
+    runs = pd.read_csv(out / f"{spec.name}_runs.csv")
+    assert "succeeded" in runs and len(runs) == 2 * runs.cell.nunique()
+    assert list(summary.columns) == COLUMNS
+    assert set(summary.verdict) <= set(VERDICTS)
+    assert all(_consistent(r) for r in summary.itertuples())
+    assert (summary.lo.dropna() <= summary.hi.dropna() + 1e-12).all()
+    if spec.reported:
+        assert (summary.verdict != "n/a").any()
+
+
+@pytest.mark.slow
+def test_report_of_one_paper_tiny(tmp_path):
+    from magexp.reproduce import reproduce_paper
+
+    reproduce_paper("yuan2018", root=tmp_path, seeds=2, jobs=1, tiny=True, only="yuan2018_table7", log=lambda *_: None)
+    build(tmp_path)
+    text = (tmp_path / "REPORT.md").read_text()
+    assert "yuan2018/yuan2018_table7.png" in text and "### Deviations from the paper's text" in text
+    assert "### Claims" in text
+    versions = pd.read_csv(tmp_path / "versions.csv")
+    assert {"python", "numpy", "scipy", "magexp_commit"} <= set(versions.package)
+    summary = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False, na_values=[""])
+    assert list(summary.columns) == COLUMNS and np.isin(summary.verdict, VERDICTS).all()
