@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import json
 import time
+from collections import OrderedDict
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 from hydra.utils import instantiate
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
 from magexp.errors import MagexpError
-from magexp.metrics import evaluate
+from magexp.metrics import evaluate, problem_bound
 from magexp.problems import make_problem
 from magexp.seeding import run_generators
 
@@ -48,18 +51,64 @@ def build(node, what: str):
 
 def run(cfg: DictConfig) -> RunOutput:
     """Simulate (or load) the scenario, fit the estimator, evaluate the result."""
-    scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
-    estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    data_rng, est_rng = run_generators(cfg.seed)
-    dataset = scenario.generate(rng=data_rng)
-    objective = cfg.get("objective") or scenario.objective
-    problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
-    start = time.perf_counter()
-    result = estimator.fit(problem, rng=est_rng)
-    wall = time.perf_counter() - start
-    metrics = {"scenario": scenario.name, "estimator": estimator.name, "objective": objective,
-               "seed": int(cfg.seed), **evaluate(problem, result), "wall_time": wall}
-    return RunOutput(metrics=metrics, history=np.asarray(result.history), history_nfev=np.asarray(result.history_nfev),
-                     x=np.asarray(result.x), parameter_names=problem.parameter_names(), trace=result.trace,
-                     readings=dataset.readings, calibrated=problem.calibrate(result.x),
-                     reference_norm=np.asarray(dataset.reference_norm), truth_x=problem.truth_theta())
+    return next(run_batch([cfg]))
+
+
+def _text(node) -> str:
+    return json.dumps(OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node,
+                      sort_keys=True, default=str)
+
+
+class _Shared:
+    """What the runs of one batch share, each built once: scenario and estimator objects (per
+    config node), and per (scenario, objective, seed) the dataset, the problem and its Cramér-Rao
+    bound (the data depend on the seed only, so every estimator of a seed sees the same readings)."""
+
+    def __init__(self, keep: int = 64):
+        self.built, self.problems, self.keep = {}, OrderedDict(), keep
+
+    def build(self, node, what: str):
+        key = (what.split()[0], _text(node))
+        if key not in self.built:
+            self.built[key] = build(node, what)
+        return self.built[key]
+
+    def problem(self, cfg, scenario, seed: int):
+        objective = cfg.get("objective") or scenario.objective
+        key = (_text(cfg["scenario"]), objective, seed)
+        if key not in self.problems:
+            data_rng, _ = run_generators(seed)
+            dataset = scenario.generate(rng=data_rng)
+            problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
+            self.problems[key] = (objective, dataset, problem, [])
+            if len(self.problems) > self.keep:  # bounded memory on long batches
+                self.problems.popitem(last=False)
+        return self.problems[key]
+
+
+def run_batch(configs) -> Iterator[RunOutput]:
+    """Run resolved configs (dicts or DictConfigs) one after the other, yielding each output.
+
+    Equal to ``run`` on each config, but what the runs share is built once (:class:`_Shared`):
+    a batch of one scenario's seeds over several estimators builds the scenario once, each seed's
+    dataset and problem once, and computes each seed's Cramér-Rao bound once.
+    """
+    shared = _Shared()
+    for cfg in configs:
+        seed = cfg["seed"]
+        scenario = shared.build(cfg["scenario"], f"scenario {cfg['scenario'].get('name')!r}")
+        estimator = shared.build(cfg["estimator"], f"estimator {cfg['estimator'].get('name')!r}")
+        _, est_rng = run_generators(seed)
+        objective, dataset, problem, bound = shared.problem(cfg, scenario, seed)
+        start = time.perf_counter()
+        result = estimator.fit(problem, rng=est_rng)
+        wall = time.perf_counter() - start
+        if not bound:
+            bound.append(problem_bound(problem))
+        metrics = {"scenario": scenario.name, "estimator": estimator.name, "objective": objective,
+                   "seed": int(seed), **evaluate(problem, result, bound[0]), "wall_time": wall}
+        yield RunOutput(metrics=metrics, history=np.asarray(result.history),
+                        history_nfev=np.asarray(result.history_nfev), x=np.asarray(result.x),
+                        parameter_names=problem.parameter_names(), trace=result.trace, readings=dataset.readings,
+                        calibrated=problem.calibrate(result.x), reference_norm=np.asarray(dataset.reference_norm),
+                        truth_x=problem.truth_theta())
