@@ -126,8 +126,18 @@ class LocalExecutor(InlineExecutor):
         self.close()
 
 
+JOBQUEUES = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster"}
+
+
 class DaskExecutor(InlineExecutor):
-    """A Dask ``distributed`` client: a ``LocalCluster`` of ``jobs`` processes, or ``scheduler``'s."""
+    """A Dask ``distributed`` client.
+
+    ``scheduler``: None starts a ``LocalCluster`` of ``jobs`` single-threaded worker processes;
+    ``slurm``, ``pbs`` or ``sge`` submits ``jobs`` batch jobs of one worker each through
+    ``dask-jobqueue`` (queue, account, memory and walltime come from its own configuration,
+    ``~/.config/dask/jobqueue.yaml``); anything else is the address of a running scheduler
+    (``tcp://host:8786``).
+    """
 
     def __init__(self, jobs: int = 0, scheduler: str | None = None):
         try:
@@ -135,16 +145,19 @@ class DaskExecutor(InlineExecutor):
         except ImportError:  # pragma: no cover - distributed is a dependency
             raise MagexpError("--executor dask needs the 'distributed' package: pip install distributed") from None
         self.cluster = None
+        n = jobs if jobs > 0 else (os.cpu_count() or 1)
         if scheduler is None:
-            self.cluster = LocalCluster(n_workers=jobs if jobs > 0 else (os.cpu_count() or 1), threads_per_worker=1,
-                                        processes=True, dashboard_address=None)
-            self.client = Client(self.cluster)
-        else:
-            try:
-                self.client = Client(scheduler, timeout="10s")
-            except OSError as exc:
-                raise MagexpError(f"--scheduler {scheduler!r}: no Dask scheduler answers there ({exc})") from None
-        self.workers = max(len(self.client.scheduler_info().get("workers", {})), 1)
+            self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        elif scheduler in JOBQUEUES:
+            self.cluster = jobqueue_cluster(scheduler)
+            self.cluster.scale(jobs=n)
+        try:
+            self.client = Client(self.cluster if self.cluster is not None else scheduler, timeout="30s")
+        except OSError as exc:
+            raise MagexpError(f"--scheduler {scheduler!r}: no Dask scheduler answers there ({exc})") from None
+        if self.cluster is not None and scheduler in JOBQUEUES:
+            self.client.wait_for_workers(1)
+        self.workers = max(len(self.client.scheduler_info().get("workers", {})), n if self.cluster else 1)
 
     def submit(self, fn, *args):
         return self.client.submit(fn, *args, pure=False)
@@ -168,6 +181,15 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
         raise MagexpError(f"--jobs {jobs!r} is not allowed: it must be an integer >= 0 (0: all cores)")
     if scheduler is not None and kind != "dask":
         raise MagexpError(f"--scheduler {scheduler!r} needs --executor dask")
+
+
+def jobqueue_cluster(system: str):
+    """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job."""
+    try:
+        import dask_jobqueue
+    except ImportError:
+        raise MagexpError(f"--scheduler {system} needs dask-jobqueue: pip install 'magexp[cluster]'") from None
+    return getattr(dask_jobqueue, JOBQUEUES[system])(processes=1, cores=1)
 
 
 def make_executor(kind: str = "local", *, jobs: int = 0, scheduler: str | None = None):

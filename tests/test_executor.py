@@ -121,11 +121,12 @@ def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, 
     midway; the scheduler reruns its task elsewhere and every output file is byte-identical."""
     from magexp.reproduce import reproduce, select
 
-    selected = select(["ding2024"], "ding2024_table_rms")
+    selected = select(["ding2024"], "ding2024_fig5")
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_local")
     reproduce(selected, tmp_path / "local", seeds=2, jobs=1, tiny=True, log=lambda *_: None)
-    sweep = [c for noise in (0, 2, 5) for c in configs(*DING, "estimator=lm", f"scenario.noise={noise}",
-                                                         seeds=range(3))]
+    sweep = [c for noise in (0, 2, 5) for c in configs(*DING, "estimator=ipso", f"scenario.noise={noise}",
+                                                         "estimator.n_particles=30", "estimator.n_iterations=150",
+                                                         seeds=range(4))]
     local_sweep = executor.run_many(sweep, jobs=1)
 
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_dask")
@@ -141,6 +142,29 @@ def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, 
             done.set()
             killer.join()
     assert killed and killed[0] is not None, "no worker was killed midway"
-    for name in ("ding2024/summary.csv", "ding2024/ding2024_table_rms.csv", "ding2024/ding2024_table_rms_runs.csv"):
+    for name in ("ding2024/summary.csv", "ding2024/ding2024_fig5.csv", "ding2024/ding2024_fig5_runs.csv"):
         assert (tmp_path / "local" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes(), name
     assert all(same(a, b) for a, b in zip(local_sweep, dask_sweep))
+
+
+def test_jobqueue_submits_single_threaded_one_worker_jobs():
+    pytest.importorskip("dask_jobqueue")
+    import dask
+
+    with dask.config.set({"jobqueue.slurm.memory": "2GB", "jobqueue.slurm.queue": "normal"}):
+        cluster = executor.jobqueue_cluster("slurm")
+        try:
+            script = cluster.job_script()
+        finally:
+            cluster.close()
+    assert "#SBATCH -p normal" in script and "--nthreads 1" in script and "#SBATCH --cpus-per-task=1" in script
+
+
+def test_jobqueue_missing_names_the_install(monkeypatch):
+    import sys
+
+    from magexp.errors import MagexpError
+
+    monkeypatch.setitem(sys.modules, "dask_jobqueue", None)
+    with pytest.raises(MagexpError, match=r"pip install 'magexp\[cluster\]'"):
+        executor.jobqueue_cluster("pbs")
