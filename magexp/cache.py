@@ -3,7 +3,7 @@
 The key of a run (:func:`run_key`) hashes
 
 * its fully resolved config (every setting, the seed included),
-* the content of every data file the config names (:func:`data_files`), so that editing a
+* the content of every data file the config names (:func:`magexp.datafiles.data_files`), so that editing a
   recording such as ``data/yan2022_mockup.csv`` reruns exactly the runs that read it,
 * the source of the code *upstream* of a run (:func:`code_version`): the static import closure of
   :mod:`magexp.runner` and of the packages a config instantiates (scenarios, problems, estimators).
@@ -25,7 +25,8 @@ import tempfile
 from functools import lru_cache
 from pathlib import Path
 
-from magexp.paths import CACHE, DATA, ROOT
+from magexp.datafiles import data_files
+from magexp.paths import CACHE, ROOT
 
 #: where the import closure starts: the run itself and the packages its configs instantiate by name
 UPSTREAM_ROOTS = ("magexp/runner.py", "magexp/scenarios", "magexp/problems", "magexp/estimators")
@@ -108,58 +109,28 @@ def code_version() -> str:
     return h.hexdigest()[:16]
 
 
-def _strings(node):
-    if isinstance(node, dict):
-        for value in node.values():
-            yield from _strings(value)
-    elif isinstance(node, (list, tuple)):
-        for value in node:
-            yield from _strings(value)
-    elif isinstance(node, str):
-        yield node
-
-
-def _as_file(text: str) -> Path | None:
-    """``text`` as an existing file (as given, or relative to ``data/``, as recordings are found)."""
-    if not text or len(text) > 4096 or "\n" in text:
-        return None
-    for path in (Path(text), DATA / text):
-        try:
-            if path.is_file():
-                return path.resolve()
-        except OSError:
-            pass
-    return None
-
-
-@lru_cache(maxsize=4096)
-def _file_digest(path: Path, mtime_ns: int, size: int) -> str:
-    h = hashlib.sha256()
-    with path.open("rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def data_files(resolved: dict) -> dict[str, str]:
-    """``{path: sha256}`` of every existing file that a string value of the config names."""
-    out = {}
-    for text in _strings(resolved):
-        path = _as_file(text)
-        if path is not None:
-            stat = path.stat()
-            out[str(path)] = _file_digest(path, stat.st_mtime_ns, stat.st_size)
-    return out
-
-
-def run_key(resolved: dict) -> str:
-    """Key of a run: its resolved config, the content of the data files it names, the upstream code."""
+def run_key(resolved: dict, files: dict[str, str] | None = None) -> str:
+    """Key of a run: its resolved config, the content of the data files it names (``files``:
+    its :func:`data_files`, found here if None), the upstream code."""
     text = json.dumps(resolved, sort_keys=True, default=str)
-    files = data_files(resolved)
+    files = data_files(resolved) if files is None else files
     if files:
         text += json.dumps(sorted(files.values()))
     text += code_version()
     return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def run_keys(configs) -> list[str]:
+    """:func:`run_key` of each config; the data files are looked up once per config that differs
+    in more than its seed."""
+    files: dict[str, dict] = {}
+    keys = []
+    for cfg in configs:
+        rest = json.dumps({k: v for k, v in cfg.items() if k != "seed"}, sort_keys=True, default=str)
+        if rest not in files:
+            files[rest] = data_files(cfg)
+        keys.append(run_key(cfg, files[rest]))
+    return keys
 
 
 def _path(key: str, root: Path) -> Path:

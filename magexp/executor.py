@@ -50,6 +50,20 @@ from magexp.errors import MagexpError
 EXECUTORS = ("local", "dask")
 
 
+def preload() -> None:
+    """Import what a run executes (runner, bounds, every scenario, problem and estimator module)
+    in this process, so that forked workers start with it instead of importing it each."""
+    import importlib
+    import pkgutil
+
+    for name in ("magexp.runner", "magexp.bounds"):
+        importlib.import_module(name)
+    for package in ("magexp.scenarios", "magexp.problems", "magexp.estimators"):
+        module = importlib.import_module(package)
+        for info in pkgutil.iter_modules(module.__path__, f"{package}."):
+            importlib.import_module(info.name)
+
+
 def _ignore_sigint() -> None:
     """Workers leave Ctrl-C to the parent, which stops them (no traceback from every worker)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -100,6 +114,8 @@ class LocalExecutor(InlineExecutor):
             from concurrent.futures import ProcessPoolExecutor
 
             method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
+            if method == "fork":
+                preload()
             self._pool = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context(method),
                                              initializer=_ignore_sigint)
         return self._pool
@@ -288,7 +304,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     number of runs just finished. ``counts`` (a dict), if given, receives ``requested``, ``distinct``,
     ``computed`` and ``cached``.
     """
-    keys = [cache.run_key(c) for c in configs]
+    keys = cache.run_keys(configs)
     first = {}
     for i, key in enumerate(keys):
         first.setdefault(key, i)

@@ -12,6 +12,7 @@ import numpy as np
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
+from magexp.datafiles import data_files
 from magexp.errors import MagexpError
 from magexp.metrics import evaluate, problem_bound
 from magexp.problems import make_problem
@@ -54,24 +55,42 @@ def run(cfg: DictConfig) -> RunOutput:
     return next(run_batch([cfg]))
 
 
+def _plain(node):
+    return OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node
+
+
 def _text(node) -> str:
-    return json.dumps(OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node,
-                      sort_keys=True, default=str)
+    return json.dumps(_plain(node), sort_keys=True, default=str)
+
+
+#: scenario and estimator objects built in this process, by config node and the data files it names
+#: (objects are stateless between fits: a worker builds each once for all its tasks)
+_BUILT: OrderedDict = OrderedDict()
+
+
+def build_once(node, what: str, keep: int = 256):
+    """:func:`build`, memoised in this process by the node's content and its data files' content."""
+    plain = _plain(node)
+    key = (what.split()[0], _text(plain), tuple(sorted(data_files(plain).values())))
+    if key in _BUILT:
+        _BUILT.move_to_end(key)
+    else:
+        _BUILT[key] = build(node, what)
+        if len(_BUILT) > keep:
+            _BUILT.popitem(last=False)
+    return _BUILT[key]
 
 
 class _Shared:
-    """What the runs of one batch share, each built once: scenario and estimator objects (per
-    config node), and per (scenario, objective, seed) the dataset, the problem and its Cramér-Rao
-    bound (the data depend on the seed only, so every estimator of a seed sees the same readings)."""
+    """What the runs of one batch share, each built once: scenario and estimator objects
+    (:func:`build_once`), and per (scenario, objective, seed) the dataset, the problem and its
+    Cramér-Rao bound (the data depend on the seed only, so every estimator of a seed sees the same
+    readings)."""
 
     def __init__(self, keep: int = 64):
-        self.built, self.problems, self.keep = {}, OrderedDict(), keep
+        self.problems, self.keep = OrderedDict(), keep
 
-    def build(self, node, what: str):
-        key = (what.split()[0], _text(node))
-        if key not in self.built:
-            self.built[key] = build(node, what)
-        return self.built[key]
+    build = staticmethod(build_once)
 
     def problem(self, cfg, scenario, seed: int):
         objective = cfg.get("objective") or scenario.objective

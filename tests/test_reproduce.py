@@ -84,7 +84,7 @@ def test_a_data_edit_reruns_exactly_the_runs_that_read_it(tmp_path, monkeypatch)
     data = tmp_path / "data"
     data.mkdir()
     shutil.copy(DATA / "yan2022_mockup.csv", data / "yan2022_mockup.csv")
-    monkeypatch.setattr(cache, "DATA", data)  # the cache looks up relative paths where recordings do
+    monkeypatch.setattr("magexp.datafiles.DATA", data)  # looked up where recordings are
     monkeypatch.setattr("magexp.recordings.DATA", data)
     mockup = run_configs("scenario=yan2022_mockup", "estimator=ls")
     ding = run_configs("scenario=ding2024_exp1", "scenario.n_readings=40", "estimator=ellipsoid", seeds=(0, 1))
