@@ -302,7 +302,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     ``executor``: from :func:`make_executor` (default: local processes over ``jobs``, 0 = all cores).
     ``use_cache=False`` reruns every distinct run (and stores it). ``progress(n)`` is called with the
     number of runs just finished. ``counts`` (a dict), if given, receives ``requested``, ``distinct``,
-    ``computed`` and ``cached``.
+    ``computed``, ``cached`` and ``fit_cpu`` (CPU seconds inside the computed runs' fits).
     """
     keys = cache.run_keys(configs)
     first = {}
@@ -323,6 +323,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
         multiplicity[key] += 1
     if progress:
         progress(len(configs) - sum(multiplicity[keys[i]] for i in todo))
+    fit_cpu = 0.0
     if todo:
         own = executor is None
         ex = executor if executor is not None else make_executor("local", jobs=jobs)
@@ -336,6 +337,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
                 for i, out in zip(futures.pop(future), future.result()):
                     cache.store(keys[i], out)
                     metrics[keys[i]] = out.metrics
+                    fit_cpu += getattr(out, "fit_cpu", 0.0)
                     if progress:
                         progress(multiplicity[keys[i]])
         except BaseException:
@@ -344,4 +346,6 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
             raise
         if own:
             ex.close()
+    if counts is not None:
+        counts["fit_cpu"] = fit_cpu
     return Outputs(keys, metrics)

@@ -169,6 +169,21 @@ def redraw(selected: dict[str, list], root: Path) -> int:
     return drawn
 
 
+def cpu_seconds() -> float:
+    """CPU seconds of this process and of its finished (waited-for) worker processes."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def cpu_line(cpu: float, counts: dict) -> str:
+    """Where the CPU went: inside the computed runs' fits, and outside them per computed run."""
+    fit, n = counts.get("fit_cpu", 0.0), counts["computed"]
+    per_run = f", {(cpu - fit) / n * 1e3:.1f} ms per computed run outside them" if n else ""
+    return f"CPU {cpu:.1f} s: {fit:.1f} s inside fits ({fit / cpu:.0%}){per_run}"
+
+
 def record_timing(root: Path, target: str, seconds: float, counts: dict) -> None:
     """Keep the wall time of the last reproduction of ``target`` in ``root/timing.csv``, with how
     many runs it computed and how many came from the cache (``source``: computed, cached or mixed)."""
@@ -232,11 +247,14 @@ def _main(args) -> int:
         build(args.out)
         print(f"redrew {n} figures, summary and report in {time.perf_counter() - start:.1f} s: {args.out / 'REPORT.md'}")
         return 0
+    cpu = cpu_seconds()
     with make_executor(args.executor, jobs=args.jobs, scheduler=args.scheduler) as executor:
         counts = reproduce(selected, args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, force=args.force,
                            executor=executor)
     build(args.out)
     seconds = time.perf_counter() - start
+    if args.executor == "local":  # remote workers' CPU is not seen here
+        print(cpu_line(cpu_seconds() - cpu, counts))
     if args.only is None and args.seeds is None and not args.tiny:
         record_timing(args.out, args.paper, seconds, counts)
     print(f"done in {seconds:.1f} s; report: {args.out / 'REPORT.md'}")
