@@ -4,9 +4,13 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 JOBS   ?= 0
+# EXECUTOR=dask runs on a Dask cluster: a local one, or SCHEDULER=tcp://host:8786 | slurm | pbs | sge
+EXECUTOR ?= local
+SCHEDULER ?=
+RUN_ON := --jobs $(JOBS) --executor $(EXECUTOR) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 .DEFAULT_GOAL := help
-.PHONY: help venv lock bench reproduce reproduce-ding2024 reproduce-yuan2018 reproduce-yan2022 report test test-full clean
+.PHONY: help venv lock bench reproduce redraw report test test-full clean
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
@@ -21,16 +25,13 @@ $(STAMP): pyproject.toml requirements.lock
 venv: $(STAMP) ## create .venv and install magexp with its test extras
 
 reproduce: $(STAMP) ## regenerate every figure, table and the report into results/
-	$(PY) -m magexp.reproduce all --jobs $(JOBS)
+	$(PY) -m magexp.reproduce all $(RUN_ON)
 
-reproduce-ding2024: $(STAMP) ## regenerate Ding 2024 only (and the report)
-	$(PY) -m magexp.reproduce ding2024 --jobs $(JOBS)
+redraw: $(STAMP) ## rebuild every figure, results/summary.csv and REPORT.md from the CSVs (no run)
+	$(PY) -m magexp.reproduce all --redraw
 
-reproduce-yuan2018: $(STAMP) ## regenerate Yuan 2018 only (and the report)
-	$(PY) -m magexp.reproduce yuan2018 --jobs $(JOBS)
-
-reproduce-yan2022: $(STAMP) ## regenerate Yan & Zhou 2022 only (and the report)
-	$(PY) -m magexp.reproduce yan2022 --jobs $(JOBS)
+reproduce-%: $(STAMP) ## regenerate one paper (a folder of experiments/: ding2024, yuan2018, yan2022, benchmark, real) and the report
+	$(PY) -m magexp.reproduce $* $(RUN_ON)
 
 report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the artifact CSVs
 	$(PY) -m magexp.report

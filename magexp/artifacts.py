@@ -9,7 +9,7 @@ scenario draws from its own stream (:mod:`magexp.seeding`).
 from __future__ import annotations
 
 import itertools
-import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,9 +17,9 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
-from magexp import cache
 from magexp.errors import MagexpError
 from magexp.config import compose_config, yaml_value  # noqa: F401  (compose_config: re-exported)
+from magexp.executor import run_many, run_row  # run_many's home is magexp.executor; importable from here too
 from magexp.paths import EXPERIMENTS
 
 SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50}
@@ -120,39 +120,6 @@ def shrink(cfg: DictConfig) -> DictConfig:
     return cfg
 
 
-def _execute(resolved: dict):
-    from magexp.runner import run
-
-    return run(OmegaConf.create(resolved))
-
-
-def run_many(configs: list[dict], *, jobs: int = 0, use_cache: bool = True, progress=None) -> list:
-    """Run resolved configs (cached), in parallel over ``jobs`` processes (0: all cores)."""
-    keys = [cache.run_key(c) for c in configs]
-    outputs = [cache.load(k) if use_cache else None for k in keys]
-    todo = [i for i, o in enumerate(outputs) if o is None]
-    if progress:
-        progress(len(configs) - len(todo))
-    n_jobs = jobs if jobs > 0 else (os.cpu_count() or 1)
-    if todo:
-        if n_jobs == 1 or len(todo) == 1:
-            for i in todo:
-                outputs[i] = _execute(configs[i])
-                cache.store(keys[i], outputs[i])
-                if progress:
-                    progress(1)
-        else:
-            from joblib import Parallel, delayed
-
-            par = Parallel(n_jobs=n_jobs, return_as="generator", batch_size=1)
-            for i, out in zip(todo, par(delayed(_execute)(configs[i]) for i in todo)):
-                outputs[i] = out
-                cache.store(keys[i], out)
-                if progress:
-                    progress(1)
-    return outputs
-
-
 @dataclass
 class ArtifactRuns:
     """Every run of an artifact: ``table`` has one row per (cell, seed) with its metrics."""
@@ -160,42 +127,91 @@ class ArtifactRuns:
     spec: object  # magexp.spec.Artifact
     cells: list[dict[str, str]]
     table: pd.DataFrame
-    outputs: dict  # (cell index, seed) -> RunOutput
+    outputs: Mapping  # (cell index, seed) -> RunOutput, read from the run cache on access
     overrides: list[list[str]]  # per cell, the overrides that apply to it
 
 
-def run_artifact(spec, *, seeds: int | None = None, jobs: int = 0, tiny: bool = False,
-                 use_cache: bool = True) -> ArtifactRuns:
-    """Run every cell of ``spec`` over its seeds."""
+@dataclass
+class ArtifactPlan:
+    """The runs of an artifact before they run: ``configs[k]`` is run ``index[k] = (cell, seed)``."""
+
+    spec: object  # magexp.spec.Artifact
+    cells: list[dict[str, str]]
+    overrides: list[list[str]]
+    configs: list[dict]
+    index: list[tuple[int, int]]
+
+
+def _per_seed(cfg: DictConfig, n_seeds: int) -> list[dict]:
+    """The resolved config of each seed: resolved once per cell when no value interpolates another."""
+    if "${" not in str(OmegaConf.to_container(cfg, resolve=False)):
+        base = OmegaConf.to_container(cfg, resolve=True)
+        return [{**base, "seed": seed} for seed in range(n_seeds)]
+    out = []
+    for seed in range(n_seeds):
+        cfg.seed = seed
+        out.append(OmegaConf.to_container(cfg, resolve=True))
+    return out
+
+
+def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False) -> ArtifactPlan:
+    """Every run of ``spec``: each cell of its grid over its seeds (``seeds`` overrides the spec's)."""
     n_seeds = int(seeds if seeds is not None else spec.seeds)
     if n_seeds < 1:
         raise MagexpError(f"seeds={n_seeds} is not allowed: it must be an integer >= 1")
-    configs, index, settings, grid = [], [], [], []
+    plan = ArtifactPlan(spec=spec, cells=[], overrides=[], configs=[], index=[])
     for cell in cells(spec):
         cfg = apply_optional(spec, compose_config(overrides_of(spec, cell)))
         if spec.skip_inapplicable and not applicable(cfg):
             continue
-        ci = len(grid)
-        grid.append(cell)
-        settings.append(overrides_of(spec, cell, cfg))
+        ci = len(plan.cells)
+        plan.cells.append(cell)
+        plan.overrides.append(overrides_of(spec, cell, cfg))
         if tiny:
             cfg = shrink(cfg)
-        for seed in range(n_seeds):
-            cfg.seed = seed
-            configs.append(OmegaConf.to_container(cfg, resolve=True))
-            index.append((ci, seed))
-    from magexp.progress import Progress
+        plan.configs.extend(_per_seed(cfg, n_seeds))
+        plan.index.extend((ci, seed) for seed in range(n_seeds))
+    return plan
 
-    outputs = run_many(configs, jobs=jobs, use_cache=use_cache, progress=Progress(len(configs), spec.name))
-    rows = []
-    for (ci, seed), out in zip(index, outputs):
-        estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
-        rows.append({"cell": ci, **grid[ci], "setting": setting_of(settings[ci]), **out.metrics, **estimate})
+
+class _ByRun(Mapping):
+    """``(cell, seed) -> RunOutput`` over :class:`magexp.executor.Outputs` (read on access)."""
+
+    def __init__(self, index: list[tuple[int, int]], outputs):
+        self._at = {key: k for k, key in enumerate(index)}
+        self._outputs = outputs
+
+    def __getitem__(self, key):
+        return self._outputs[self._at[key]]
+
+    def __iter__(self):
+        return iter(self._at)
+
+    def __len__(self) -> int:
+        return len(self._at)
+
+
+def collect(plan: ArtifactPlan, outputs) -> ArtifactRuns:
+    """The :class:`ArtifactRuns` of ``plan`` from its outputs (in ``plan.configs`` order)."""
+    metrics = outputs.metrics if hasattr(outputs, "metrics") else (lambda k: run_row(outputs[k]))
+    rows = [{"cell": ci, **plan.cells[ci], "setting": setting_of(plan.overrides[ci]), **metrics(k)}
+            for k, (ci, seed) in enumerate(plan.index)]
     table = pd.DataFrame(rows)
     if len(table):
-        table["succeeded"] = succeeded(table, spec.success)
-    return ArtifactRuns(spec=spec, cells=grid, table=table, outputs=dict(zip(index, outputs)),
-                        overrides=settings)
+        table["succeeded"] = succeeded(table, plan.spec.success)
+    return ArtifactRuns(spec=plan.spec, cells=plan.cells, table=table,
+                        outputs=_ByRun(plan.index, outputs), overrides=plan.overrides)
+
+
+def run_artifact(spec, *, seeds: int | None = None, jobs: int = 0, tiny: bool = False,
+                 use_cache: bool = True, executor=None) -> ArtifactRuns:
+    """Run every cell of ``spec`` over its seeds."""
+    from magexp.progress import Progress
+
+    plan = plan_artifact(spec, seeds=seeds, tiny=tiny)
+    outputs = run_many(plan.configs, jobs=jobs, use_cache=use_cache, executor=executor,
+                       progress=Progress(len(plan.configs), spec.name))
+    return collect(plan, outputs)
 
 
 def quantiles(values) -> tuple[float, float, float]:

@@ -20,13 +20,17 @@ def noise_floor(dataset, n_identifiable: int = 9) -> float | None:
     return float(dataset.noise_std * np.sqrt(max(n - n_identifiable, 0) / n))
 
 
-def evaluate(problem, result) -> dict:
-    """Every metric of one fitted run; a diverged fit is measured (inf/NaN), not warned about."""
+def evaluate(problem, result, crb=None) -> dict:
+    """Every metric of one fitted run; a diverged fit is measured (inf/NaN), not warned about.
+
+    ``crb``: the problem's :func:`problem_bound`, when the caller shares it between the estimators
+    of one dataset (it depends on the data and the truth only); None computes it here.
+    """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return _evaluate(problem, result)
+        return _evaluate(problem, result, problem_bound(problem) if crb is None else crb)
 
 
-def _evaluate(problem, result) -> dict:
+def _evaluate(problem, result, crb) -> dict:
     """Every metric of one fitted run (direct formulas, not the swarm's fast cost)."""
     out = {
         "fun": float(problem.cost_direct(result.x)),
@@ -50,7 +54,7 @@ def _evaluate(problem, result) -> dict:
     out.update(time_to_reach(result, factor=1.1))
     if "truth_fun" in out:
         out["nfev_to_floor"] = evaluations_to(result, 1.01 * out["truth_fun"] + 1e-9)
-    out.update(bound_metrics(problem, {**out, "x": result.x}))
+    out.update(bound_metrics(problem, {**out, "x": result.x}, crb))
     return out
 
 
@@ -73,14 +77,22 @@ def time_to_reach(result, factor: float = 1.1) -> dict:
     return {"iterations_to_1.1": k, "nfev_to_1.1": int(np.asarray(result.history_nfev)[k])}
 
 
-def bound_metrics(problem, measured: dict) -> dict:
-    """The Cramér-Rao bound of the run's problem and each error as a ratio to it."""
+def problem_bound(problem) -> dict | bool:
+    """The Cramér-Rao bound of ``problem`` at its truth (:func:`magexp.bounds.cramer_rao`), or False
+    when it has none. It depends on the dataset and the truth only, not on the estimator."""
     from magexp.bounds import cramer_rao
 
     if not hasattr(problem, "invariants") or not hasattr(problem, "options"):
-        return {}
-    crb = cramer_rao(problem)
+        return False
+    return cramer_rao(problem) or False
+
+
+def bound_metrics(problem, measured: dict, crb: dict | bool | None = None) -> dict:
+    """The Cramér-Rao bound of the run's problem (``crb``: :func:`problem_bound`, computed here if
+    None) and each error as a ratio to it."""
     if crb is None:
+        crb = problem_bound(problem)
+    if not crb:
         return {}
     # the floor is an RMS per residual component: it bounds `fun` only when the objective is such an RMS
     # (the vector objective F is a sum of norms), so it is named after what it can be drawn against

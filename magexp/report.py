@@ -5,6 +5,7 @@ values interpolated from the runs, :func:`magexp.claims.interpolate`)."""
 
 from __future__ import annotations
 
+import os
 import platform
 import subprocess
 import sys
@@ -43,7 +44,10 @@ def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
     """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
     when only round-off differs)."""
-    tidy(frame).to_csv(path, index=False, float_format=f"%.{DIGITS}g")
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp")  # atomic: an interrupt leaves the old file or the new one
+    tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
+    os.replace(tmp, path)
 
 
 def versions() -> dict:

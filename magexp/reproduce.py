@@ -1,18 +1,28 @@
-"""Regenerate a paper's artifacts into ``results/<paper>/`` and rebuild the report.
+"""Regenerate the papers' artifacts into ``results/<paper>/`` and rebuild the report.
 
-    python -m magexp.reproduce all|ding2024|yuan2018|yan2022 [--jobs N] [--seeds N] [--only STEM] [--tiny] [--out DIR]
+    python -m magexp.reproduce all|ding2024|yuan2018|yan2022|benchmark [--jobs N] [--only STEM] [--force]
+        [--seeds N] [--tiny] [--out DIR] [--redraw] [--executor local|dask] [--scheduler ADDRESS]
+
+The canonical ``results/`` folder is written only by a canonical reproduction (each artifact's own
+seeds and sizes); ``--seeds`` and ``--tiny`` explore, and need ``--out`` naming another folder.
+Every run of every selected artifact is planned first and run in one pass through
+:func:`magexp.executor.run_many` (identical runs of different artifacts run once), then each
+artifact's CSVs and figure are written. ``--redraw`` rebuilds the figures, ``summary.csv`` and
+``REPORT.md`` from the CSVs already in ``--out``, without a run.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import pandas as pd
 
-from magexp.artifacts import paper_specs, run_artifact
+from magexp.artifacts import collect, paper_specs, plan_artifact
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.plots import kind_module
@@ -26,91 +36,193 @@ def available_papers() -> list[str]:
     return papers()
 
 
-def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False,
-                       force: bool = False) -> pd.DataFrame:
-    """Run one artifact, write its CSVs and figure into ``out``; return its summary rows."""
+def select(papers: list[str], only: str | None) -> dict[str, list]:
+    """``{paper: [spec, ...]}`` of ``papers``; with ``only``, just that artifact, in whichever paper has it."""
+    chosen = {paper: paper_specs(paper) for paper in papers}
+    if only is None:
+        return chosen
+    found = {paper: [s for s in specs if s.name == only] for paper, specs in chosen.items()}
+    found = {paper: specs for paper, specs in found.items() if specs}
+    if not found:
+        where = papers[0] if len(papers) == 1 else "any paper"
+        raise MagexpError(f"--only {only!r} is not an artifact of {where}: see experiments/<paper>/*.yaml")
+    return found
+
+
+def check_out(out: Path) -> None:
+    """Refuse an output folder that is a file or cannot be written, before any computation."""
+    if out.exists() and not out.is_dir():
+        raise MagexpError(f"--out {str(out)!r} is a file: it must be a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise MagexpError(f"--out {str(out)!r} is not writable ({exc.strerror or exc})") from None
+
+
+def check_canonical(out: Path, *, seeds, tiny: bool) -> None:
+    """Exploration (``--seeds``, ``--tiny``) must not write into the canonical ``results/``."""
+    flags = [f for f, on in (("--seeds", seeds is not None), ("--tiny", tiny)) if on]
+    if flags and out.resolve() == RESULTS.resolve():
+        raise MagexpError(f"{' '.join(flags)} explores: give --out DIR other than results/ "
+                          "(results/ holds only canonical reproductions)")
+
+
+def draw(spec, frame: pd.DataFrame, out: Path) -> None:
     from magexp.plots.style import save
 
-    runs = run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force)
-    kind = kind_module(spec.kind)
-    frame = kind.tabulate(runs)
-    write_csv(frame, out / f"{spec.name}.csv")
-    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{spec.name}_runs.csv")
-    save(kind.draw(frame, spec), out / f"{spec.name}.png")
+    save(kind_module(spec.kind).draw(frame, spec), out / f"{spec.name}.png")
+
+
+def write_artifact(runs, out: Path) -> pd.DataFrame:
+    """An artifact's CSVs and figure into ``out``; returns its summary rows."""
+    frame = kind_module(runs.spec.kind).tabulate(runs)
+    write_csv(frame, out / f"{runs.spec.name}.csv")
+    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{runs.spec.name}_runs.csv")
+    draw(runs.spec, frame, out)
     return summarise(runs)
+
+
+def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
+    """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows."""
+    summary = pd.concat(list(parts.values()), ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
+    path = out / "summary.csv"
+    if path.exists() and path.stat().st_size > 0:
+        old = pd.read_csv(path, keep_default_na=False, na_values=[""])
+        summary = pd.concat([old[~old.artifact.isin(list(parts))], summary], ignore_index=True)
+    order = {s.name: i for i, s in enumerate(paper_specs(paper))}
+    summary = summary.sort_values("artifact", key=lambda c: c.map(order), kind="stable")
+    write_csv(summary, path)
+    return summary
+
+
+def skipped_for_data(spec, log=print) -> bool:
+    """Whether ``spec`` reads a recording that is not in :data:`magexp.paths.SHARED_DATA` (the
+    recordings of others are never shipped): then it is skipped, with one line."""
+    from magexp.paths import SHARED_DATA
+
+    missing = [f for f in spec.get("requires_data") or [] if not (SHARED_DATA / f).is_file()]
+    if missing:
+        log(f"{spec.name}: skipped, {missing[0]} is not in {SHARED_DATA} (set MAGEXP_DATA)")
+    return bool(missing)
+
+
+def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jobs: int = 0, tiny: bool = False,
+              force: bool = False, executor=None, log=print) -> dict:
+    """Plan every run of the ``selected`` artifacts, run them in one pass, write each artifact.
+
+    Returns ``{"requested", "distinct", "computed", "cached", "paper summaries": {...}}``.
+    """
+    from magexp.executor import run_many
+    from magexp.progress import Progress
+
+    plans = [(paper, plan_artifact(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
+             for spec in specs if not skipped_for_data(spec, log)]
+    configs = [c for _, plan in plans for c in plan.configs]
+    counts: dict = {}
+    outputs = run_many(configs, jobs=jobs, use_cache=not force, executor=executor, counts=counts,
+                       progress=Progress(len(configs), "reproduce"))
+    log(f"{counts['requested']} runs requested, {counts['distinct']} distinct: "
+        f"{counts['computed']} computed, {counts['cached']} from the cache")
+    start, parts = 0, {paper: {} for paper, _ in plans}
+    for paper, plan in plans:
+        out = root / paper
+        out.mkdir(parents=True, exist_ok=True)
+        n = len(plan.configs)
+        parts[paper][plan.spec.name] = write_artifact(collect(plan, _Slice(outputs, start, n)), out)
+        start += n
+    counts["paper summaries"] = {paper: write_summary(paper, parts[paper], root / paper) for paper in parts}
+    return counts
+
+
+class _Slice:
+    """Outputs ``start .. start + n`` of :class:`magexp.executor.Outputs`, as a sequence of their own."""
+
+    def __init__(self, outputs, start: int, n: int):
+        self.outputs, self.start, self.n = outputs, start, n
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, k: int):
+        return self.outputs[self.start + k]
+
+    def metrics(self, k: int) -> dict:
+        return self.outputs.metrics(self.start + k)
 
 
 def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int = 0, tiny: bool = False,
                     only: str | None = None, force: bool = False, log=print) -> pd.DataFrame:
-    """Every artifact of ``paper``; writes ``root/<paper>/summary.csv`` (its part of the summary)."""
-    out = root / paper
-    parts = []
-    specs = [s for s in paper_specs(paper) if only is None or s.name == only]
-    if only is not None and not specs:
-        raise MagexpError(f"--only {only!r} is not an artifact of {paper}")
-    out.mkdir(parents=True, exist_ok=True)
-    for spec in specs:
-        from magexp.paths import SHARED_DATA
-
-        missing = [f for f in spec.get("requires_data") or [] if not (SHARED_DATA / f).is_file()]
-        if missing:  # recordings of others, not shipped: skip in one line
-            log(f"{spec.name}: skipped, {missing[0]} is not in {SHARED_DATA} (set MAGEXP_DATA)")
-            continue
-        start = time.perf_counter()
-        parts.append(reproduce_artifact(spec, out, seeds=seeds, jobs=jobs, tiny=tiny, force=force))
-        log(f"{spec.name}: {time.perf_counter() - start:.1f} s")
-    summary = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
-    if only is not None and (out / "summary.csv").exists():
-        old = pd.read_csv(out / "summary.csv", keep_default_na=False, na_values=[""])
-        summary = pd.concat([old[old.artifact != only], summary], ignore_index=True)
-        order = {s.name: i for i, s in enumerate(paper_specs(paper))}
-        summary = summary.sort_values("artifact", key=lambda c: c.map(order), kind="stable")
-    write_csv(summary, out / "summary.csv")
-    return summary
+    """Every artifact of ``paper`` (or just ``only``); writes ``root/<paper>/`` and returns its summary."""
+    counts = reproduce(select([paper], only), root, seeds=seeds, jobs=jobs, tiny=tiny, force=force, log=log)
+    return counts["paper summaries"].get(paper, pd.DataFrame(columns=COLUMNS))
 
 
-def record_timing(root: Path, target: str, seconds: float) -> None:
-    """Keep the wall time of the last full reproduction of ``target`` in ``root/timing.csv``."""
+def redraw(selected: dict[str, list], root: Path) -> int:
+    """Each selected artifact's figure from its CSV in ``root``; returns how many were drawn."""
+    drawn = 0
+    for paper, specs in selected.items():
+        for spec in specs:
+            if skipped_for_data(spec):
+                continue
+            path = root / paper / f"{spec.name}.csv"
+            if not path.is_file():
+                raise MagexpError(f"--redraw: {path} does not exist: reproduce {spec.name} first")
+            draw(spec, pd.read_csv(path), root / paper)
+            drawn += 1
+    return drawn
+
+
+def cpu_seconds() -> float:
+    """CPU seconds of this process and of its finished (waited-for) worker processes."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def cpu_line(cpu: float, counts: dict) -> str:
+    """Where the CPU went: inside the computed runs' fits, and outside them per computed run."""
+    fit, n = counts.get("fit_cpu", 0.0), counts["computed"]
+    per_run = f", {(cpu - fit) / n * 1e3:.1f} ms per computed run outside them" if n else ""
+    return f"CPU {cpu:.1f} s: {fit:.1f} s inside fits ({fit / cpu:.0%}){per_run}"
+
+
+def record_timing(root: Path, target: str, seconds: float, counts: dict) -> None:
+    """Keep the wall time of the last reproduction of ``target`` in ``root/timing.csv``, with how
+    many runs it computed and how many came from the cache (``source``: computed, cached or mixed)."""
     path = root / "timing.csv"
-    rows = pd.read_csv(path) if path.exists() else pd.DataFrame(columns=["target", "seconds", "cores"])
-    rows = rows[rows.target != target]
-    import os
+    columns = ["target", "seconds", "cores", "source", "runs", "distinct", "computed", "cached"]
+    rows = pd.read_csv(path) if path.exists() else pd.DataFrame(columns=columns)
+    rows = rows[rows.target != target].reindex(columns=columns)
+    computed, cached = counts["computed"], counts["cached"]
+    source = "computed" if cached == 0 else "cached" if computed == 0 else "mixed"
+    new = pd.DataFrame([{"target": target, "seconds": round(seconds, 1), "cores": os.cpu_count(), "source": source,
+                         "runs": counts["requested"], "distinct": counts["distinct"], "computed": computed,
+                         "cached": cached}])
+    write_csv(pd.concat([rows, new], ignore_index=True) if len(rows) else new, path)
 
-    new = pd.DataFrame([{"target": target, "seconds": round(seconds, 1), "cores": os.cpu_count()}])
-    pd.concat([rows, new], ignore_index=True).to_csv(path, index=False)
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m magexp.reproduce", description=__doc__.splitlines()[0])
+    p.add_argument("paper", help="all, or one of: " + ", ".join(available_papers()))
+    p.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
+    p.add_argument("--seeds", type=int, default=None, help="seeds per cell (exploration: needs --out)")
+    p.add_argument("--only", default=None, help="one artifact stem (found in whichever paper has it)")
+    p.add_argument("--tiny", action="store_true", help="tiny sizes, a smoke test (exploration: needs --out)")
+    p.add_argument("--out", type=Path, default=RESULTS, help="results folder (default: results/)")
+    p.add_argument("--force", action="store_true", help="recompute every distinct run even if it is cached")
+    p.add_argument("--redraw", action="store_true", help="rebuild figures, summary and report from the CSVs; no run")
+    p.add_argument("--executor", default="local", help="local (processes on this machine) or dask")
+    p.add_argument("--scheduler", default=None, help="a Dask scheduler address (default: a local cluster)")
+    return p
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m magexp.reproduce", description=__doc__.splitlines()[0])
-    parser.add_argument("paper", help="all, or one of: " + ", ".join(available_papers()))
-    parser.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
-    parser.add_argument("--seeds", type=int, default=None, help="seeds per cell (default: each artifact's own)")
-    parser.add_argument("--only", default=None, help="one artifact stem")
-    parser.add_argument("--tiny", action="store_true", help="tiny sizes (smoke test)")
-    parser.add_argument("--out", type=Path, default=RESULTS, help="results folder (default: results/)")
-    parser.add_argument("--force", action="store_true", help="rerun every run even if a cached result exists")
-    args = parser.parse_args(argv)
+    args = parser().parse_args(argv)
     try:
-        papers = available_papers() if args.paper == "all" else [args.paper]
-        for paper in papers:
-            if paper not in available_papers():
-                raise MagexpError(f"paper={paper!r} is not allowed: choose all or one of {', '.join(available_papers())}")
-        if args.jobs < 0:
-            raise MagexpError(f"--jobs {args.jobs} is not allowed: it must be >= 0 (0: all cores)")
-        from magexp.cli_checks import check_output_folder
-
-        check_output_folder(args.out, "--out")
-        start = time.perf_counter()
-        for paper in papers:
-            reproduce_paper(paper, root=args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, only=args.only,
-                            force=args.force)
-        from magexp.report import build
-
-        build(args.out)
-        seconds = time.perf_counter() - start
-        if args.only is None and args.seeds is None and not args.tiny:
-            record_timing(args.out, args.paper, seconds)
-        print(f"done in {seconds:.1f} s; report: {args.out / 'REPORT.md'}")
+        return _main(args)
     except MagexpError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -118,6 +230,40 @@ def main(argv=None) -> int:
         print("error: interrupted (Ctrl-C); finished runs are cached, rerun the same command to resume",
               file=sys.stderr)
         return 130
+
+
+def _main(args) -> int:
+    from magexp.executor import check_executor, make_executor
+
+    papers = available_papers() if args.paper == "all" else [args.paper]
+    for paper in papers:
+        if paper not in available_papers():
+            raise MagexpError(f"paper={paper!r} is not allowed: choose all or one of {', '.join(available_papers())}")
+    check_executor(args.executor, args.jobs, args.scheduler)
+    if args.seeds is not None and args.seeds < 1:
+        raise MagexpError(f"--seeds {args.seeds} is not allowed: it must be an integer >= 1")
+    check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
+    selected = select(papers, args.only)
+    check_out(args.out)
+    from magexp.report import build
+
+    start = time.perf_counter()
+    if args.redraw:
+        n = redraw(selected, args.out)
+        build(args.out)
+        print(f"redrew {n} figures, summary and report in {time.perf_counter() - start:.1f} s: {args.out / 'REPORT.md'}")
+        return 0
+    cpu = cpu_seconds()
+    with make_executor(args.executor, jobs=args.jobs, scheduler=args.scheduler) as executor:
+        counts = reproduce(selected, args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, force=args.force,
+                           executor=executor)
+    build(args.out)
+    seconds = time.perf_counter() - start
+    if args.executor == "local":  # remote workers' CPU is not seen here
+        print(cpu_line(cpu_seconds() - cpu, counts))
+    if args.only is None and args.seeds is None and not args.tiny:
+        record_timing(args.out, args.paper, seconds, counts)
+    print(f"done in {seconds:.1f} s; report: {args.out / 'REPORT.md'}")
     return 0
 
 

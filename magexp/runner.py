@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import json
 import time
+from collections import OrderedDict
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 from hydra.utils import instantiate
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
+from magexp.datafiles import data_files
 from magexp.errors import MagexpError
-from magexp.metrics import evaluate
 from magexp.estimators.base import check_applies
+from magexp.metrics import evaluate, problem_bound
 from magexp.problems import make_problem, problem_class
 from magexp.seeding import run_generators, scenario_stream
 
@@ -30,6 +34,7 @@ class RunOutput:
     calibrated: np.ndarray | None = None
     reference_norm: np.ndarray | None = None
     truth_x: np.ndarray | None = None  # the true parameter vector (simulations)
+    fit_cpu: float = 0.0  # CPU seconds of this process inside ``estimator.fit`` (not a metric: it varies)
 
 
 def build(node, what: str):
@@ -49,21 +54,86 @@ def build(node, what: str):
 
 def run(cfg: DictConfig) -> RunOutput:
     """Simulate (or load) the scenario, fit the estimator, evaluate the result."""
-    scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
-    estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    objective = cfg.get("objective") or scenario.objective
-    check_applies(estimator, problem_class(objective), f"scenario {scenario.name!r}")  # before any data
-    data_rng, est_rng = run_generators(cfg.seed, stream=scenario_stream(cfg.scenario))
-    dataset = scenario.generate(rng=data_rng)
-    problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
-    start = time.perf_counter()
-    result = estimator.fit(problem, rng=est_rng)
-    wall = time.perf_counter() - start
-    if cfg.get("analysis"):  # an analysis step on the fitted result (conf/analysis/*.yaml)
-        result = build(cfg.analysis, f"analysis {cfg.analysis.get('name')!r}")(problem, result)
-    metrics = {"scenario": scenario.name, "estimator": estimator.name, "objective": objective,
-               "seed": int(cfg.seed), **evaluate(problem, result), "wall_time": wall}
-    return RunOutput(metrics=metrics, history=np.asarray(result.history), history_nfev=np.asarray(result.history_nfev),
-                     x=np.asarray(result.x), parameter_names=problem.parameter_names(), trace=result.trace,
-                     readings=dataset.readings, calibrated=problem.calibrate(result.x),
-                     reference_norm=np.asarray(dataset.reference_norm), truth_x=problem.truth_theta())
+    return next(run_batch([cfg]))
+
+
+def _plain(node):
+    return OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node
+
+
+def _text(node) -> str:
+    return json.dumps(_plain(node), sort_keys=True, default=str)
+
+
+#: scenario and estimator objects built in this process, by config node and the data files it names
+#: (objects are stateless between fits: a worker builds each once for all its tasks)
+_BUILT: OrderedDict = OrderedDict()
+
+
+def build_once(node, what: str, keep: int = 256):
+    """:func:`build`, memoised in this process by the node's content and its data files' content."""
+    plain = _plain(node)
+    key = (what.split()[0], _text(plain), tuple(sorted(data_files(plain).values())))
+    if key in _BUILT:
+        _BUILT.move_to_end(key)
+    else:
+        _BUILT[key] = build(node, what)
+        if len(_BUILT) > keep:
+            _BUILT.popitem(last=False)
+    return _BUILT[key]
+
+
+class _Shared:
+    """What the runs of one batch share, each built once: scenario and estimator objects
+    (:func:`build_once`), and per (scenario, objective, seed) the dataset, the problem and its
+    Cramér-Rao bound (the data depend on the seed only, so every estimator of a seed sees the same
+    readings)."""
+
+    def __init__(self, keep: int = 64):
+        self.problems, self.keep = OrderedDict(), keep
+
+    build = staticmethod(build_once)
+
+    def problem(self, cfg, scenario, seed: int):
+        objective = cfg.get("objective") or scenario.objective
+        key = (_text(cfg["scenario"]), objective, seed)
+        if key not in self.problems:
+            data_rng, _ = run_generators(seed, stream=scenario_stream(cfg["scenario"]))
+            dataset = scenario.generate(rng=data_rng)
+            problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
+            self.problems[key] = (objective, dataset, problem, [])
+            if len(self.problems) > self.keep:  # bounded memory on long batches
+                self.problems.popitem(last=False)
+        return self.problems[key]
+
+
+def run_batch(configs) -> Iterator[RunOutput]:
+    """Run resolved configs (dicts or DictConfigs) one after the other, yielding each output.
+
+    Equal to ``run`` on each config, but what the runs share is built once (:class:`_Shared`):
+    a batch of one scenario's seeds over several estimators builds the scenario once, each seed's
+    dataset and problem once, and computes each seed's Cramér-Rao bound once.
+    """
+    shared = _Shared()
+    for cfg in configs:
+        seed = cfg["seed"]
+        scenario = shared.build(cfg["scenario"], f"scenario {cfg['scenario'].get('name')!r}")
+        estimator = shared.build(cfg["estimator"], f"estimator {cfg['estimator'].get('name')!r}")
+        objective = cfg.get("objective") or scenario.objective
+        check_applies(estimator, problem_class(objective), f"scenario {scenario.name!r}")  # before any data
+        _, est_rng = run_generators(seed, stream=scenario_stream(cfg["scenario"]))
+        objective, dataset, problem, bound = shared.problem(cfg, scenario, seed)
+        start, cpu = time.perf_counter(), time.process_time()
+        result = estimator.fit(problem, rng=est_rng)
+        wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+        if cfg.get("analysis"):  # an analysis step on the fitted result (conf/analysis/*.yaml)
+            result = shared.build(cfg["analysis"], f"analysis {cfg['analysis'].get('name')!r}")(problem, result)
+        if not bound:
+            bound.append(problem_bound(problem))
+        metrics = {"scenario": scenario.name, "estimator": estimator.name, "objective": objective,
+                   "seed": int(seed), **evaluate(problem, result, bound[0]), "wall_time": wall}
+        yield RunOutput(metrics=metrics, history=np.asarray(result.history),
+                        history_nfev=np.asarray(result.history_nfev), x=np.asarray(result.x),
+                        parameter_names=problem.parameter_names(), trace=result.trace, readings=dataset.readings,
+                        calibrated=problem.calibrate(result.x), reference_norm=np.asarray(dataset.reference_norm),
+                        truth_x=problem.truth_theta(), fit_cpu=cpu)

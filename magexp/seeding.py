@@ -20,9 +20,11 @@ def stream_key(stream) -> int:
 def scenario_stream(scenario_cfg) -> dict:
     """The stream of a run: its scenario's whole resolved config (name and settings), so two
     scenarios, or one scenario at two settings (e.g. two noise levels), never share their draws."""
-    from omegaconf import OmegaConf
+    from omegaconf import DictConfig, OmegaConf
 
-    return OmegaConf.to_container(scenario_cfg, resolve=True)
+    if isinstance(scenario_cfg, DictConfig):
+        return OmegaConf.to_container(scenario_cfg, resolve=True)
+    return dict(scenario_cfg)
 
 
 def run_generators(seed, stream=None) -> tuple[np.random.Generator, np.random.Generator]:

@@ -1,0 +1,360 @@
+"""Where runs execute: one layer behind ``make reproduce`` and ``-m`` sweeps.
+
+Runs (resolved configs) go through :func:`run_many`, which
+
+1. keys each run (:func:`magexp.cache.run_key`) and runs each distinct key once, also under
+   ``use_cache=False`` (``--force``): identical runs of several artifacts are one run;
+2. groups the runs to do into *tasks*: the runs of one scenario (and objective) for a block of
+   seeds, every estimator included, so that a task builds its scenario and estimators once and each
+   seed's dataset, problem and Cramér-Rao bound once (:func:`magexp.runner.run_batch`);
+3. hands the tasks to an executor, longest first, and streams each finished run to the run cache
+   as it arrives; the parent keeps only the small metrics dicts, and :class:`Outputs` reads a full
+   output back from the cache when a figure needs it.
+
+Executors (:func:`make_executor`):
+
+* ``local`` (default): worker processes on this machine (``jobs``; 0 = all cores). With ``jobs=1``
+  or a single task the runs execute in this process.
+* ``dask``: a Dask ``distributed`` cluster. ``scheduler=None`` starts a ``LocalCluster`` of ``jobs``
+  single-threaded workers; ``scheduler="tcp://host:8786"`` connects to a running scheduler, e.g.
+  one started on a SLURM/PBS/SGE cluster with ``dask-jobqueue`` (the optional extra ``cluster``,
+  ``pip install 'magexp[cluster]'``). A worker that dies midway loses only its running task: the
+  scheduler gives it to another worker, and since every run is a pure function of its config the
+  results are the same bytes as a local run.
+
+The executor API, for callers other than :func:`run_many` (e.g. sweeps)::
+
+    from magexp.executor import make_executor, run_many
+
+    with make_executor("dask", jobs=2) as ex:           # or make_executor("local", jobs=0)
+        outputs = run_many(configs, executor=ex)        # cached, deduplicated, batched
+        future = ex.submit(fn, *args)                   # any picklable function
+        for future in ex.as_completed([future]):
+            value = future.result()
+
+``submit`` returns a future with ``result()``; ``as_completed`` yields futures as they finish.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+from collections import OrderedDict, defaultdict
+from collections.abc import Iterable, Iterator, Sequence
+
+from magexp import cache
+from magexp.errors import MagexpError
+
+EXECUTORS = ("local", "dask")
+
+
+def preload() -> None:
+    """Import what a run executes (runner, bounds, every scenario, problem and estimator module)
+    in this process, so that forked workers start with it instead of importing it each."""
+    import importlib
+    import pkgutil
+
+    for name in ("magexp.runner", "magexp.bounds"):
+        importlib.import_module(name)
+    for package in ("magexp.scenarios", "magexp.problems", "magexp.estimators"):
+        module = importlib.import_module(package)
+        for info in pkgutil.iter_modules(module.__path__, f"{package}."):
+            importlib.import_module(info.name)
+
+
+def _ignore_sigint() -> None:
+    """Workers leave Ctrl-C to the parent, which stops them (no traceback from every worker)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class _Deferred:
+    """A call made when its result is asked for (so results stream one at a time)."""
+
+    def __init__(self, fn, args):
+        self.fn, self.args = fn, args
+
+    def result(self):
+        return self.fn(*self.args)
+
+
+class InlineExecutor:
+    """Runs each submitted call in this process, when its result is asked for (``jobs=1``)."""
+
+    workers = 1
+
+    def submit(self, fn, *args):
+        return _Deferred(fn, args)
+
+    def as_completed(self, futures: Iterable) -> Iterator:
+        return iter(list(futures))
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class LocalExecutor(InlineExecutor):
+    """Worker processes on this machine (forked, so they start in milliseconds)."""
+
+    def __init__(self, jobs: int = 0):
+        self.workers = jobs if jobs > 0 else (os.cpu_count() or 1)
+        self._pool = None
+
+    @property
+    def pool(self):
+        if self._pool is None:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
+            if method == "fork":
+                preload()
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context(method),
+                                             initializer=_ignore_sigint)
+        return self._pool
+
+    def submit(self, fn, *args):
+        return self.pool.submit(fn, *args)
+
+    def as_completed(self, futures: Iterable) -> Iterator:
+        from concurrent.futures import as_completed
+
+        return as_completed(list(futures))
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def __exit__(self, kind, *exc) -> None:
+        if kind is not None and self._pool is not None:  # interrupted or failed: stop the workers now
+            for process in list(getattr(self._pool, "_processes", {}).values()):
+                process.terminate()
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+        self.close()
+
+
+JOBQUEUES = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster"}
+
+
+class DaskExecutor(InlineExecutor):
+    """A Dask ``distributed`` client.
+
+    ``scheduler``: None starts a ``LocalCluster`` of ``jobs`` single-threaded worker processes;
+    ``slurm``, ``pbs`` or ``sge`` submits ``jobs`` batch jobs of one worker each through
+    ``dask-jobqueue`` (queue, account, memory and walltime come from its own configuration,
+    ``~/.config/dask/jobqueue.yaml``); anything else is the address of a running scheduler
+    (``tcp://host:8786``).
+    """
+
+    def __init__(self, jobs: int = 0, scheduler: str | None = None):
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:  # pragma: no cover - distributed is a dependency
+            raise MagexpError("--executor dask needs the 'distributed' package: pip install distributed") from None
+        self.cluster = None
+        n = jobs if jobs > 0 else (os.cpu_count() or 1)
+        if scheduler is None:
+            self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        elif scheduler in JOBQUEUES:
+            self.cluster = jobqueue_cluster(scheduler)
+            self.cluster.scale(jobs=n)
+        try:
+            self.client = Client(self.cluster if self.cluster is not None else scheduler, timeout="30s")
+        except OSError as exc:
+            raise MagexpError(f"--scheduler {scheduler!r}: no Dask scheduler answers there ({exc})") from None
+        if self.cluster is not None and scheduler in JOBQUEUES:
+            self.client.wait_for_workers(1)
+        self.workers = max(len(self.client.scheduler_info().get("workers", {})), n if self.cluster else 1)
+
+    def submit(self, fn, *args):
+        return self.client.submit(fn, *args, pure=False)
+
+    def as_completed(self, futures: Iterable) -> Iterator:
+        from distributed import as_completed
+
+        return iter(as_completed(list(futures)))
+
+    def close(self) -> None:
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
+    """Refuse bad executor settings in one line (before anything is computed)."""
+    if kind not in EXECUTORS:
+        raise MagexpError(f"--executor {kind!r} is not allowed: choose one of {', '.join(EXECUTORS)}")
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
+        raise MagexpError(f"--jobs {jobs!r} is not allowed: it must be an integer >= 0 (0: all cores)")
+    if scheduler is not None and kind != "dask":
+        raise MagexpError(f"--scheduler {scheduler!r} needs --executor dask")
+
+
+def jobqueue_cluster(system: str):
+    """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job."""
+    try:
+        import dask_jobqueue
+    except ImportError:
+        raise MagexpError(f"--scheduler {system} needs dask-jobqueue: pip install 'magexp[cluster]'") from None
+    return getattr(dask_jobqueue, JOBQUEUES[system])(processes=1, cores=1)
+
+
+def make_executor(kind: str = "local", *, jobs: int = 0, scheduler: str | None = None):
+    """The executor ``kind`` (:data:`EXECUTORS`); ``jobs``: processes (0: all cores)."""
+    check_executor(kind, jobs, scheduler)
+    if kind == "dask":
+        return DaskExecutor(jobs, scheduler)
+    return InlineExecutor() if jobs == 1 else LocalExecutor(jobs)
+
+
+def _run_task(configs: list[dict]) -> list:
+    """A task, in a worker: its runs through :func:`magexp.runner.run_batch`."""
+    from magexp.runner import run_batch
+
+    return list(run_batch(configs))
+
+
+def _group_key(cfg: dict) -> str:
+    """Runs with the same key share their data: same scenario node, same objective."""
+    return json.dumps([cfg.get("scenario"), cfg.get("objective")], sort_keys=True, default=str)
+
+
+def cost_hint(cfg: dict) -> float:
+    """A rough relative cost of a run, to hand out the longest tasks first."""
+    est, scen = cfg.get("estimator") or {}, cfg.get("scenario") or {}
+
+    def number(node, *keys, default=1.0):
+        for key in keys:
+            value = node.get(key)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                return float(value)
+        return default
+
+    return number(est, "n_particles") * number(est, "n_iterations", "n_steps", "max_nfev") * number(scen, "n_readings",
+                                                                                                    default=300.0)
+
+
+def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
+    """Indices of ``configs`` in tasks: per scenario group, blocks of whole seeds (every estimator
+    of a seed in one task), about ``len(configs) / (8 workers)`` runs a task; longest first."""
+    groups: dict[str, dict[int, list[int]]] = defaultdict(lambda: defaultdict(list))
+    for i, cfg in enumerate(configs):
+        groups[_group_key(cfg)][cfg.get("seed")].append(i)
+    size = max(1, min(64, math.ceil(len(configs) / (8 * max(workers, 1)))))
+    tasks = []
+    for by_seed in groups.values():
+        task: list[int] = []
+        for seed in sorted(by_seed, key=str):
+            if task and len(task) + len(by_seed[seed]) > size:
+                tasks.append(task)
+                task = []
+            task.extend(by_seed[seed])
+        if task:
+            tasks.append(task)
+    return sorted(tasks, key=lambda t: -sum(cost_hint(configs[i]) for i in t))
+
+
+def run_row(out) -> dict:
+    """A run's row of the runs table: its metrics and its parameter estimates (one column per
+    parameter name that is not already a metric)."""
+    import numpy as np
+
+    estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
+    return {**out.metrics, **estimate}
+
+
+class Outputs(Sequence):
+    """The outputs of :func:`run_many`, read back from the run cache on access (a few are kept).
+
+    ``metrics(i)`` gives run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output.
+    """
+
+    def __init__(self, keys: list[str], metrics: dict[str, dict], root=None, keep: int = 256):
+        self.keys, self._metrics, self.root, self.keep = keys, metrics, root, keep
+        self._recent: OrderedDict = OrderedDict()
+
+    def __len__(self) -> int:
+        return len(self.keys)
+
+    def metrics(self, i: int) -> dict:
+        return self._metrics[self.keys[i]]
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        key = self.keys[i]
+        if key in self._recent:
+            self._recent.move_to_end(key)
+            return self._recent[key]
+        out = cache.load(key, self.root)
+        if out is None:
+            raise MagexpError(f"the run cache lost run {key} while it was read back (is another process clearing it?)")
+        self._recent[key] = out
+        if len(self._recent) > self.keep:
+            self._recent.popitem(last=False)
+        return out
+
+
+def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, progress=None, executor=None,
+             counts: dict | None = None) -> Outputs:
+    """Run resolved configs, each distinct one once, cached; returns their :class:`Outputs`.
+
+    ``executor``: from :func:`make_executor` (default: local processes over ``jobs``, 0 = all cores).
+    ``use_cache=False`` reruns every distinct run (and stores it). ``progress(n)`` is called with the
+    number of runs just finished. ``counts`` (a dict), if given, receives ``requested``, ``distinct``,
+    ``computed``, ``cached`` and ``fit_cpu`` (CPU seconds inside the computed runs' fits).
+    """
+    keys = cache.run_keys(configs)
+    first = {}
+    for i, key in enumerate(keys):
+        first.setdefault(key, i)
+    metrics: dict[str, dict] = {}
+    todo = []
+    for key, i in first.items():
+        out = cache.load(key) if use_cache else None
+        if out is None:
+            todo.append(i)
+        else:
+            metrics[key] = run_row(out)
+    if counts is not None:
+        counts.update(requested=len(configs), distinct=len(first), computed=len(todo), cached=len(first) - len(todo))
+    multiplicity = defaultdict(int)
+    for key in keys:
+        multiplicity[key] += 1
+    if progress:
+        progress(len(configs) - sum(multiplicity[keys[i]] for i in todo))
+    fit_cpu = 0.0
+    if todo:
+        own = executor is None
+        ex = executor if executor is not None else make_executor("local", jobs=jobs)
+        try:
+            tasks = [[todo[j] for j in t] for t in plan_tasks([configs[i] for i in todo], ex.workers)]
+            if len(tasks) == 1 and own:
+                ex.close()
+                ex = InlineExecutor()
+            futures = {ex.submit(_run_task, [configs[i] for i in task]): task for task in tasks}
+            for future in ex.as_completed(futures):
+                for i, out in zip(futures.pop(future), future.result()):
+                    cache.store(keys[i], out)
+                    metrics[keys[i]] = run_row(out)
+                    fit_cpu += getattr(out, "fit_cpu", 0.0)
+                    if progress:
+                        progress(multiplicity[keys[i]])
+        except BaseException:
+            if own:
+                ex.__exit__(KeyboardInterrupt, None, None)
+            raise
+        if own:
+            ex.close()
+    if counts is not None:
+        counts["fit_cpu"] = fit_cpu
+    return Outputs(keys, metrics)

@@ -1,0 +1,171 @@
+"""The executor layer: shared work per batch, deduplication, task plans, and the Dask backend."""
+
+import os
+import pickle
+import signal
+import threading
+import time
+
+import pytest
+from omegaconf import OmegaConf
+
+from magexp import cache, executor, runner
+from magexp.artifacts import compose_config
+
+
+def configs(*overrides, seeds=(0, 1)):
+    cfg = compose_config(list(overrides))
+    base = OmegaConf.to_container(cfg, resolve=True)
+    return [{**base, "seed": s} for s in seeds]
+
+
+DING = ("scenario=ding2024_exp1", "scenario.n_readings=60")
+
+
+def same(a, b):
+    """Two RunOutputs hold the same numbers (bit for bit), the fit's wall time aside."""
+    ma = {k: v for k, v in a.metrics.items() if k != "wall_time"}
+    mb = {k: v for k, v in b.metrics.items() if k != "wall_time"}
+    a, b = vars(a).copy(), vars(b).copy()
+    a["metrics"], b["metrics"] = ma, mb
+    a.pop("fit_cpu"), b.pop("fit_cpu")  # CPU time varies
+    return pickle.dumps(a) == pickle.dumps(b)
+
+
+def test_batch_equals_single_runs_and_shares_the_bound(monkeypatch):
+    batch = configs(*DING, "estimator=ellipsoid") + configs(*DING, "estimator=lm")
+    alone = [runner.run(OmegaConf.create(c)) for c in batch]
+    calls = []
+    real = runner.problem_bound
+    monkeypatch.setattr(runner, "problem_bound", lambda p: calls.append(1) or real(p))
+    together = list(runner.run_batch(batch))
+    assert all(same(a, b) for a, b in zip(alone, together))
+    assert len(calls) == 2  # one bound per seed, shared by both estimators
+    assert "rms_bound" in together[0].metrics
+
+
+def test_identical_runs_run_once_also_when_forced():
+    batch = configs(*DING, "estimator=ellipsoid")
+    twice = batch + batch
+    for use_cache in (True, False):
+        counts = {}
+        outputs = executor.run_many(twice, jobs=1, use_cache=use_cache, counts=counts)
+        assert counts["requested"] == 4 and counts["distinct"] == 2
+        assert counts["computed"] == (2 if not use_cache or counts["cached"] == 0 else 0)
+        assert same(outputs[0], outputs[2]) and outputs.metrics(1) == outputs.metrics(3)
+    counts = {}
+    executor.run_many(twice, jobs=1, counts=counts)
+    assert counts["cached"] == 2 and counts["computed"] == 0
+
+
+def test_outputs_are_read_back_from_the_cache():
+    batch = configs(*DING, "estimator=ellipsoid")
+    outputs = executor.run_many(batch, jobs=1)
+    keys = [cache.run_key(c) for c in batch]
+    assert outputs.keys == keys and all(cache.exists(k) for k in keys)
+    assert same(outputs[1], cache.load(keys[1]))
+
+
+def test_task_plan_keeps_each_seed_of_a_scenario_together():
+    batch = (configs(*DING, "estimator=ellipsoid", seeds=range(6)) + configs(*DING, "estimator=lm", seeds=range(6))
+             + configs("scenario=ding2024_exp2", "estimator=ellipsoid", seeds=range(3)))
+    tasks = executor.plan_tasks(batch, workers=2)
+    assert sorted(i for t in tasks for i in t) == list(range(len(batch)))
+    for task in tasks:
+        assert len({executor._group_key(batch[i]) for i in task}) == 1  # one scenario per task
+    where = {i: k for k, t in enumerate(tasks) for i in t}
+    for i in range(6):  # both estimators of a seed share a task (and so its dataset and bound)
+        assert where[i] == where[6 + i]
+    assert len(tasks) > 2  # the work is split for both workers
+
+
+def test_local_processes_give_the_same_bytes_as_this_process(tmp_path, monkeypatch):
+    batch = configs(*DING, "estimator=ellipsoid", seeds=range(4)) + configs(*DING, "estimator=lm", seeds=range(4))
+    inline = executor.run_many(batch, jobs=1)
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "other")
+    with executor.make_executor("local", jobs=2) as ex:
+        assert isinstance(ex, executor.LocalExecutor)
+        pooled = executor.run_many(batch, executor=ex)
+    assert all(same(a, b) for a, b in zip(inline, pooled))
+
+
+@pytest.mark.parametrize("kind, kwargs, words", [
+    ("slurm", {}, "'slurm'"),
+    ("local", {"jobs": -1}, "--jobs -1"),
+    ("local", {"scheduler": "tcp://x:1"}, "needs --executor dask"),
+])
+def test_bad_executor_settings(kind, kwargs, words):
+    from magexp.errors import MagexpError
+
+    with pytest.raises(MagexpError, match=words):
+        executor.make_executor(kind, **kwargs)
+
+
+def _kill_a_worker_once_busy(client, done: threading.Event):
+    """Kill one worker process (SIGKILL) as soon as it is running a task."""
+    deadline = time.time() + 120
+    while time.time() < deadline and not done.is_set():
+        busy = [addr for addr, w in client.scheduler_info()["workers"].items() if w.get("metrics", {}).get("executing")]
+        processing = client.processing()
+        busy = busy or [addr for addr, tasks in processing.items() if tasks]
+        if busy:
+            pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+            os.kill(pid, signal.SIGKILL)
+            return pid
+        time.sleep(0.02)
+    return None
+
+
+@pytest.mark.slow
+def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, monkeypatch):
+    """A LocalCluster of two workers runs a tiny reproduction and a sweep; one worker is killed
+    midway; the scheduler reruns its task elsewhere and every output file is byte-identical."""
+    from magexp.reproduce import reproduce, select
+
+    selected = select(["ding2024"], "ding2024_fig5")
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_local")
+    reproduce(selected, tmp_path / "local", seeds=2, jobs=1, tiny=True, log=lambda *_: None)
+    sweep = [c for noise in (0, 2, 5) for c in configs(*DING, "estimator=ipso", f"scenario.noise={noise}",
+                                                         "estimator.n_particles=30", "estimator.n_iterations=150",
+                                                         seeds=range(4))]
+    local_sweep = executor.run_many(sweep, jobs=1)
+
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_dask")
+    with executor.make_executor("dask", jobs=2) as ex:
+        done = threading.Event()
+        killer = threading.Thread(target=lambda: killed.append(_kill_a_worker_once_busy(ex.client, done)))
+        killed: list = []
+        killer.start()
+        try:
+            reproduce(selected, tmp_path / "dask", seeds=2, tiny=True, executor=ex, log=lambda *_: None)
+            dask_sweep = executor.run_many(sweep, executor=ex)
+        finally:
+            done.set()
+            killer.join()
+    assert killed and killed[0] is not None, "no worker was killed midway"
+    for name in ("ding2024/summary.csv", "ding2024/ding2024_fig5.csv", "ding2024/ding2024_fig5_runs.csv"):
+        assert (tmp_path / "local" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes(), name
+    assert all(same(a, b) for a, b in zip(local_sweep, dask_sweep))
+
+
+def test_jobqueue_submits_single_threaded_one_worker_jobs():
+    pytest.importorskip("dask_jobqueue")
+    import dask
+
+    with dask.config.set({"jobqueue.slurm.memory": "2GB", "jobqueue.slurm.queue": "normal"}):
+        cluster = executor.jobqueue_cluster("slurm")
+        try:
+            script = cluster.job_script()
+        finally:
+            cluster.close()
+    assert "#SBATCH -p normal" in script and "--nthreads 1" in script and "#SBATCH --cpus-per-task=1" in script
+
+
+def test_jobqueue_missing_names_the_install(monkeypatch):
+    import sys
+
+    from magexp.errors import MagexpError
+
+    monkeypatch.setitem(sys.modules, "dask_jobqueue", None)
+    with pytest.raises(MagexpError, match=r"pip install 'magexp\[cluster\]'"):
+        executor.jobqueue_cluster("pbs")

@@ -1,0 +1,174 @@
+"""Results that cannot be clobbered: canonical results/, a cache key that sees data and only upstream
+code, timing that says where its runs came from, redraw without runs, one-line refusals."""
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+from omegaconf import OmegaConf
+
+from magexp import cache, executor, reproduce, runner
+from magexp.artifacts import compose_config
+from magexp.paths import DATA, RESULTS, ROOT
+
+
+def snapshot(folder):
+    return {p: p.stat().st_mtime_ns for p in folder.rglob("*")} if folder.exists() else {}
+
+
+def one_line_error(capsys, argv, *words):
+    before = snapshot(RESULTS)
+    assert reproduce.main(argv) == 2
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    assert snapshot(RESULTS) == before
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["ding2024", "--seeds", "3"], ["--seeds", "--out"]),
+    (["ding2024", "--only", "ding2024_fig3", "--tiny"], ["--tiny", "--out"]),
+    (["ding2024", "--seeds", "2", "--out", str(RESULTS)], ["--seeds"]),
+    (["all", "--only", "nothing_like_this", "--out", "{tmp}/x"], ["'nothing_like_this'", "any paper"]),
+    (["ding2024", "--seeds", "0", "--out", "{tmp}/x"], ["--seeds 0"]),
+    (["ding2024", "--executor", "slurm", "--out", "{tmp}/x"], ["'slurm'"]),
+])
+def test_refusals_are_one_line_and_write_nothing(capsys, tmp_path, monkeypatch, argv, words):
+    monkeypatch.setattr(runner, "run_batch", lambda *a: pytest.fail("a refused command ran something"))
+    one_line_error(capsys, [a.replace("{tmp}", str(tmp_path)) for a in argv], *words)
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_file_or_unwritable_out_is_refused_before_any_run(capsys, tmp_path, monkeypatch):
+    monkeypatch.setattr(runner, "run_batch", lambda *a: pytest.fail("ran before checking --out"))
+    monkeypatch.setattr(reproduce, "plan_artifact", lambda *a, **k: pytest.fail("planned before checking --out"))
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    one_line_error(capsys, ["ding2024", "--out", str(afile)], "is a file")
+    one_line_error(capsys, ["ding2024", "--out", str(afile / "sub")], "not writable")
+    if os.geteuid() != 0:  # root writes anywhere
+        ro = tmp_path / "ro"
+        ro.mkdir()
+        ro.chmod(0o500)
+        one_line_error(capsys, ["ding2024", "--out", str(ro)], "not writable")
+    assert afile.read_text() == "x"
+
+
+def test_only_finds_the_artifact_in_its_paper():
+    found = reproduce.select(reproduce.available_papers(), "yan2022_table_mockup")
+    assert list(found) == ["yan2022"] and [s.name for s in found["yan2022"]] == ["yan2022_table_mockup"]
+
+
+def test_timing_says_whether_runs_were_computed_or_cached(tmp_path):
+    reproduce.record_timing(tmp_path, "all", 12.0, {"requested": 10, "distinct": 8, "computed": 8, "cached": 0})
+    reproduce.record_timing(tmp_path, "ding2024", 1.0, {"requested": 4, "distinct": 4, "computed": 0, "cached": 4})
+    reproduce.record_timing(tmp_path, "all", 5.0, {"requested": 10, "distinct": 8, "computed": 3, "cached": 5})
+    rows = pd.read_csv(tmp_path / "timing.csv").set_index("target")
+    assert rows.loc["all", "source"] == "mixed" and rows.loc["all", "computed"] == 3
+    assert rows.loc["ding2024", "source"] == "cached" and len(rows) == 2
+
+
+def run_configs(*overrides, seeds=(0,)):
+    base = OmegaConf.to_container(compose_config(list(overrides)), resolve=True)
+    return [{**base, "seed": s} for s in seeds]
+
+
+def test_a_data_edit_reruns_exactly_the_runs_that_read_it(tmp_path, monkeypatch):
+    data = tmp_path / "data"
+    data.mkdir()
+    shutil.copy(DATA / "yan2022_mockup.csv", data / "yan2022_mockup.csv")
+    monkeypatch.setattr("magexp.datafiles.DATA", data)  # looked up where recordings are
+    monkeypatch.setattr("magexp.recordings.DATA", data)
+    mockup = run_configs("scenario=yan2022_mockup", "estimator=ls")
+    ding = run_configs("scenario=ding2024_exp1", "scenario.n_readings=40", "estimator=ellipsoid", seeds=(0, 1))
+    counts = {}
+    first = executor.run_many(mockup + ding, jobs=1, counts=counts)
+    assert counts["computed"] == 3
+    executor.run_many(mockup + ding, jobs=1, counts=counts)
+    assert counts["computed"] == 0
+    path = data / "yan2022_mockup.csv"
+    lines = path.read_text().splitlines(keepends=True)
+    row = next(i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#") and ln[0] in "-0123456789")
+    values = lines[row].split(",")
+    values[2] = str(int(values[2]) + 50)  # bz of the first attitude, +50 nT
+    lines[row] = ",".join(values)
+    path.write_text("".join(lines))
+    again = executor.run_many(mockup + ding, jobs=1, counts=counts)
+    assert counts["computed"] == 1 and counts["cached"] == 2  # the mock-up run only
+    assert again.metrics(0)["fit_rms"] != first.metrics(0)["fit_rms"]
+
+
+def test_upstream_code_is_the_runs_import_closure():
+    files = {p.relative_to(ROOT).as_posix() for p in cache.upstream_files()}
+    for needed in ("magexp/runner.py", "magexp/metrics.py", "magexp/bounds.py", "magexp/seeding.py",
+                   "magexp/problems/scalar.py", "magexp/scenarios/ding.py", "magexp/estimators/swarm.py",
+                   "magexp/recordings.py", "magexp/__init__.py"):
+        assert needed in files, needed
+    for downstream in ("magexp/reproduce.py", "magexp/report.py", "magexp/summary.py", "magexp/executor.py",
+                       "magexp/progress.py", "magexp/plots/style.py", "magexp/plots/convergence.py"):
+        assert downstream not in files, downstream
+
+
+def test_a_plot_edit_reruns_nothing_and_a_bound_edit_reruns_all(tmp_path, monkeypatch):
+    copy = tmp_path / "repo"
+    shutil.copytree(ROOT / "magexp", copy / "magexp", ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(cache, "ROOT", copy)
+    cache.code_version.cache_clear()
+    try:
+        before = cache.code_version()
+        with (copy / "magexp/plots/convergence.py").open("a") as fh:
+            fh.write("\n# a new label\n")
+        with (copy / "magexp/report.py").open("a") as fh:
+            fh.write("\n# new wording\n")
+        cache.code_version.cache_clear()
+        assert cache.code_version() == before
+        with (copy / "magexp/bounds.py").open("a") as fh:
+            fh.write("\n# a change upstream of every run\n")
+        cache.code_version.cache_clear()
+        assert cache.code_version() != before
+    finally:
+        cache.code_version.cache_clear()
+
+
+def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monkeypatch, capsys):
+    out = tmp_path / "res"
+    argv = ["ding2024", "--only", "ding2024_fig2", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
+    assert reproduce.main(argv) == 0
+    capsys.readouterr()
+    png, csv = out / "ding2024" / "ding2024_fig2.png", out / "ding2024" / "ding2024_fig2.csv"
+    data = csv.read_bytes()
+    png.unlink()
+    (out / "REPORT.md").unlink()
+    (out / "summary.csv").unlink()
+    monkeypatch.setattr(runner, "run_batch", lambda *a: pytest.fail("--redraw ran something"))
+    monkeypatch.setattr(executor, "run_many", lambda *a, **k: pytest.fail("--redraw ran something"))
+    assert reproduce.main(["all", "--only", "ding2024_fig2", "--redraw", "--out", str(out)]) == 0
+    assert png.stat().st_size > 0 and (out / "REPORT.md").exists() and (out / "summary.csv").exists()
+    assert csv.read_bytes() == data
+    assert "redrew 1 figures" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_ctrl_c_ends_in_one_line_and_a_clean_state(tmp_path):
+    out = tmp_path / "res"
+    env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}
+    proc = subprocess.Popen([sys.executable, "-m", "magexp.reproduce", "ding2024", "--only", "ding2024_table_rms",
+                             "--seeds", "3", "--jobs", "2", "--out", str(out)],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not list((tmp_path / "cache").rglob("*.pkl")) and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    lines = [ln for ln in err.splitlines() if ln.strip() and "Warning" not in ln and not ln.startswith("  ")]
+    assert len(lines) == 1 and "interrupted" in lines[0] and "Traceback" not in err, err
+    assert not list(tmp_path.rglob("*.tmp")), "a half-written file was left behind"
+    assert not (out / "ding2024" / "ding2024_table_rms.csv").exists()
