@@ -52,7 +52,7 @@ def write_csv(frame: pd.DataFrame, path: Path) -> None:
 
 def versions() -> dict:
     """The versions behind the results: python and the libraries (:mod:`magexp.provenance`) and
-    ``code_commit``, the last commit that changed anything outside ``results/`` (so committing the
+    ``magexp_commit``, the last commit that changed anything outside ``results/`` (so committing the
     regenerated results does not change the record, and a fresh clone writes the same bytes)."""
     from magexp import provenance
 
@@ -64,7 +64,7 @@ def versions() -> dict:
         commit = provenance.commit()
     libs = provenance.provenance()
     return {**{k: v for k, v in libs.items() if k not in ("magexp_commit", "config_hash", "commit")},
-            "code_commit": commit}
+            "magexp_commit": commit}
 
 
 def _fmt(v) -> str:

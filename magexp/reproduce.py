@@ -84,6 +84,15 @@ def write_artifact(runs, out: Path) -> pd.DataFrame:
     return summarise(runs)
 
 
+def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False,
+                       force: bool = False) -> pd.DataFrame:
+    """Run one artifact and write its CSVs and figure into ``out``; returns its summary rows."""
+    from magexp.artifacts import run_artifact
+
+    out.mkdir(parents=True, exist_ok=True)
+    return write_artifact(run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force), out)
+
+
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
     """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows."""
     summary = pd.concat(list(parts.values()), ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
@@ -123,8 +132,9 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
     counts: dict = {}
     outputs = run_many(configs, jobs=jobs, use_cache=not force, executor=executor, counts=counts,
                        progress=Progress(len(configs), "reproduce"))
-    log(f"{counts['requested']} runs requested, {counts['distinct']} distinct: "
-        f"{counts['computed']} computed, {counts['cached']} from the cache")
+    if configs:
+        log(f"{counts['requested']} runs requested, {counts['distinct']} distinct: "
+            f"{counts['computed']} computed, {counts['cached']} from the cache")
     start, parts = 0, {paper: {} for paper, _ in plans}
     for paper, plan in plans:
         out = root / paper
@@ -243,6 +253,9 @@ def _main(args) -> int:
     if args.seeds is not None and args.seeds < 1:
         raise MagexpError(f"--seeds {args.seeds} is not allowed: it must be an integer >= 1")
     check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
+    from magexp.cli_checks import check_output_folder
+
+    check_output_folder(args.out, "--out")  # a file, or under one: one line, nothing created
     selected = select(papers, args.only)
     check_out(args.out)
     from magexp.report import build

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 from hydra.utils import instantiate
+from omegaconf import OmegaConf
 
 from magexp.artifacts import cells, load_spec, overrides_of
 from magexp.config import options

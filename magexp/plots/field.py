@@ -35,11 +35,11 @@ def tabulate(runs) -> pd.DataFrame:
 def draw(frame: pd.DataFrame, spec, axes=None):
     quantity = spec.plot.get("quantity", "sphere" if spec.kind == "sphere" else "magnitude")
     if quantity == "sphere":
-        return _draw_sphere(frame, spec)
-    return _draw_field(frame, spec, show_raw=quantity == "magnitude")
+        return _draw_sphere(frame, spec, axes=axes)
+    return _draw_field(frame, spec, show_raw=quantity == "magnitude", axes=axes)
 
 
-def _draw_field(frame: pd.DataFrame, spec, show_raw: bool):
+def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
     key = spec.plot.get("panels")
     values = group_values(frame, key)
     fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
@@ -71,14 +71,15 @@ def _draw_field(frame: pd.DataFrame, spec, show_raw: bool):
     return fig
 
 
-def _draw_sphere(frame: pd.DataFrame, spec):
+def _draw_sphere(frame: pd.DataFrame, spec, axes=None):
+    """One 3-D panel per value of ``panels``; ``axes`` (3-D Axes of the caller's figure) draws there."""
     key = spec.plot.get("panels")
     values = group_values(frame, key)
-    fig = plt.figure(figsize=(4.2 * len(values), 4.2))
+    fig = plt.figure(figsize=(4.2 * len(values), 4.2)) if axes is None else panels(len(values), axes=axes)[0]
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
     for i, val in enumerate(values):
         sub = frame if val is None else frame[frame[key] == val]
-        ax = fig.add_subplot(1, len(values), i + 1, projection="3d")
+        ax = fig.add_subplot(1, len(values), i + 1, projection="3d") if axes is None else panels(len(values), axes=axes)[1][i]
         r = float(sub.reference.median())
         ax.plot_wireframe(r * np.cos(u) * np.sin(v), r * np.sin(u) * np.sin(v), r * np.cos(v),
                           color="0.8", lw=0.4)

@@ -11,8 +11,8 @@ time ``window``, and gives the :class:`~magexp.dataset.Dataset` of one objective
   between them (:func:`magexp.geometry.preintegrate`) for :class:`magexp.problems.gyro.GyroAidedCalibration`.
 
 There is no truth: the reference total is the radius of the sphere fitted to the readings
-(:func:`magexp.calibration.centroid_radius`), the search box comes from the data
-(:func:`magexp.calibration.search_box`). A seed changes nothing in the data (a recording is
+(:func:`magexp.scenarios.search.centroid_radius`), the search box comes from the data
+(:func:`magexp.scenarios.search.search_box`). A seed changes nothing in the data (a recording is
 what it is); it seeds the estimator only.
 """
 
@@ -81,7 +81,7 @@ class RecordingScenario:
         return rec
 
     def _prepare(self):
-        from magexp.calibration import centroid_radius, search_box
+        from magexp.scenarios.search import centroid_radius, search_box
 
         rec = self.recording()
         n = rec.n

@@ -50,3 +50,38 @@ class SearchBox:
         lo = np.where(eye, self.diag[0], self.offdiag[0])
         hi = np.where(eye, self.diag[1], self.offdiag[1])
         return (np.concatenate([lo, np.full(3, self.offset[0])]), np.concatenate([hi, np.full(3, self.offset[1])]))
+
+
+def fit_sphere(readings: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre and radius of the sphere that best fits ``readings``: linear least squares of
+    ``|r|² = 2 cᵀr + (R² - |c|²)`` (Pratt 1987), on readings centred on their mean. Not a sphere
+    (readings on a line): the centroid and the mean distance from it."""
+    r = np.asarray(readings, float)
+    shift = r.mean(axis=0)
+    u = r - shift
+    design = np.column_stack([2 * u, np.ones(len(u))])
+    sol = np.linalg.lstsq(design, (u * u).sum(axis=1), rcond=None)[0]
+    radius2 = sol[3] + sol[:3] @ sol[:3]
+    if np.isfinite(radius2) and radius2 > 0:
+        return shift + sol[:3], float(np.sqrt(radius2))
+    return shift, float(np.linalg.norm(u, axis=1).mean())
+
+
+def centroid_radius(readings: np.ndarray) -> float:
+    """Radius of the sphere fitted to ``readings`` (:func:`fit_sphere`): unlike the mean distance from
+    the centroid it stays right when the readings cover only part of the sphere."""
+    return fit_sphere(readings)[1]
+
+
+def search_box(readings: np.ndarray, reference: float, *, forward: bool = False) -> SearchBox:
+    """The parameter box of swarm estimators, derived from the data (module docstring).
+
+    ``forward``: the matrix parameters are ``S = W^-1`` (the vector problem's parameterisation,
+    which the ``ekf`` state uses), so their scale is ``1 / s``.
+    """
+    lo, hi = float(readings.min()), float(readings.max())
+    if hi <= lo:
+        hi = lo + 1.0
+    s = reference / (centroid_radius(readings) or 1.0)
+    s = 1.0 / s if forward else s
+    return SearchBox(diag=(0.5 * s, 1.5 * s), offdiag=(-0.5 * s, 0.5 * s), offset=(lo, hi))
