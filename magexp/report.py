@@ -77,7 +77,27 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def markdown_table(frame: pd.DataFrame, columns: list[str]) -> str:
+_LATEX = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_", "{": r"\{",
+          "}": r"\}", "~": r"\textasciitilde{}", "^": r"\textasciicircum{}"}
+
+
+def _tex(text: str) -> str:
+    return "".join(_LATEX.get(ch, ch) for ch in str(text))
+
+
+def latex_table(frame: pd.DataFrame, columns: list[str]) -> str:
+    """The same table as :func:`markdown_table`, as a LaTeX ``tabular`` with ``booktabs`` rules
+    (``\\usepackage{booktabs}``), ready to ``\\input`` into a paper."""
+    lines = [r"\begin{tabular}{" + "l" * len(columns) + "}", r"\toprule",
+             " & ".join(_tex(c) for c in columns) + r" \\", r"\midrule"]
+    lines += [" & ".join(_tex(_fmt(r[c])) for c in columns) + r" \\" for _, r in frame.iterrows()]
+    return "\n".join(lines + [r"\bottomrule", r"\end{tabular}", ""])
+
+
+def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = None) -> str:
+    """A Markdown table of ``columns``; with ``tex``, its LaTeX twin (:func:`latex_table`) is written there."""
+    if tex is not None:
+        Path(tex).write_text(latex_table(frame, columns))
     head = "| " + " | ".join(columns) + " |\n|" + "---|" * len(columns) + "\n"
     return head + "".join("| " + " | ".join(_fmt(r[c]) for c in columns) + " |\n" for _, r in frame.iterrows())
 
@@ -116,23 +136,22 @@ def _claims_section(root: Path, paper: str) -> str:
     outcomes = claim_outcomes(root, paper)
     if not outcomes:
         return ""
-    lines = ["### Claims\n", "Each qualitative statement, as a condition on the runs (`claims:` in the artifact "
-             "YAML). *magexp*: stated by this report (a test fails if one does not hold); *paper*: the paper's "
-             "statement, checked. Intervals: 95 % bootstrap over seeds.\n",
-             "| artifact | by | claim | evidence | result |", "|---|---|---|---|---|"]
-    for name, o in outcomes:
-        lines.append(f"| {name} | {o.claim.by} | {o.claim.text} | {o.evidence} | "
-                     f"{'holds' if o.holds else '**does not hold**'} |")
-    return "\n".join(lines) + "\n"
+    frame = pd.DataFrame([{"artifact": name, "by": o.claim.by, "claim": o.claim.text, "evidence": o.evidence,
+                           "result": "holds" if o.holds else "does not hold"} for name, o in outcomes])
+    table = markdown_table(frame, list(frame.columns), tex=root / paper / "claims.tex")
+    return ("### Claims\n\nEach qualitative statement, as a condition on the runs (`claims:` in the artifact "
+            "YAML). *magexp*: stated by this report (a test fails if one does not hold); *paper*: the paper's "
+            "statement, checked. Intervals: 95 % bootstrap over seeds.\n\n"
+            + table.replace("| does not hold |", "| **does not hold** |"))
 
 
-def _deviations_section(paper: str) -> str:
+def _deviations_section(paper: str, root: Path) -> str:
     meta = load_paper(paper)
     if not meta.deviations:
         return ""
-    lines = ["### Deviations from the paper's text\n", "| what | why |", "|---|---|"]
-    lines += [f"| {d.text.strip()} | {d.reason.strip()} |" for d in meta.deviations]
-    return "\n".join(lines) + "\n"
+    frame = pd.DataFrame([{"what": d.text.strip(), "why": d.reason.strip()} for d in meta.deviations])
+    return "### Deviations from the paper's text\n\n" + markdown_table(frame, ["what", "why"],
+                                                                        tex=root / paper / "deviations.tex")
 
 
 def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
@@ -143,7 +162,7 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
     if len(rows):
         lines.append(f"Verdicts: {', '.join(f'{k} {int(counts.get(k, 0))}' for k in VERDICTS)}.\n")
     lines.append(_claims_section(root, paper))
-    lines.append(_deviations_section(paper))
+    lines.append(_deviations_section(paper, root))
     for spec_path in artifact_paths(paper):
         spec = load(spec_path)
         if not (root / paper / f"{spec.name}.png").exists():
@@ -157,7 +176,7 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
                      f"runs: [`{paper}/{spec.name}_runs.csv`]({paper}/{spec.name}_runs.csv).\n")
         art = rows[rows.artifact == spec.name]
         if len(art):
-            lines.append(markdown_table(art, SUMMARY_SHOWN))
+            lines.append(markdown_table(art, SUMMARY_SHOWN, tex=root / paper / f"{spec.name}_summary.tex"))
         if spec.report_table:
             lines.append(_artifact_table(spec, root / paper / f"{spec.name}.csv"))
         if spec.notes:
@@ -179,12 +198,12 @@ def _artifact_table(spec, path: Path) -> str:
 
     frame = pd.read_csv(path)
     cols = [c for c in spec.report_table if c in frame]
-    text = markdown_table(frame, cols)
+    text = markdown_table(frame, cols, tex=path.with_name(f"{spec.name}_table.tex"))
     if "case" in frame and "bound_ratio_hi" in frame:
         text += ("\n**Winner per case** (lowest RMS offset error / sqrt(tr CRB); declared only where its 95 % CI "
                  "lies below every other estimator's; else the estimators whose CIs overlap the best):\n\n"
                  + markdown_table(winners(frame), ["case", "winner", "bound_ratio", "bound_ratio_lo", "bound_ratio_hi",
-                                                   "success_rate", "tied"]))
+                                                   "success_rate", "tied"], tex=path.with_name(f"{spec.name}_winners.tex")))
     return text
 
 
@@ -193,9 +212,11 @@ def _speed_section(root: Path) -> str:
     if not path.exists():
         return ""
     frame = pd.read_csv(path)
-    return ("## Speed of the core (`make bench`)\n\nPopulation 50, 300 readings, Ding 2024 simulation 1 "
-            "(A = 2 nT), 800 iterations; best of repeated runs on this machine "
-            "([`bench.csv`](bench.csv)).\n\n" + markdown_table(frame, ["measure", "value", "unit"]))
+    cols = [c for c in ("measure", "estimator", "value", "unit", "lo", "hi") if c in frame]
+    return ("## Speed of the core (`make bench`)\n\nMeasured by `make bench` on this machine, side by side in one "
+            "run (variants alternating, one BLAS thread): medians with the interquartile range (`lo`-`hi`), or a "
+            "95 % interval for success rates ([`bench.csv`](bench.csv); the sections are described in the README)."
+            "\n\n" + markdown_table(frame, cols, tex=root / "bench.tex"))
 
 
 def build(root: Path = RESULTS) -> None:

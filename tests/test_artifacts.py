@@ -52,3 +52,11 @@ def test_report_of_one_paper_tiny(tmp_path):
     assert {"python", "numpy", "scipy", "magexp_commit"} <= set(versions.package)
     summary = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False, na_values=[""])
     assert list(summary.columns) == COLUMNS and np.isin(summary.verdict, VERDICTS).all()
+    # every report table has its LaTeX (booktabs) twin with the same rows
+    for twin, rows in [("yuan2018/yuan2018_table7_summary.tex", len(summary)), ("yuan2018/claims.tex", None),
+                       ("yuan2018/deviations.tex", None)]:
+        tex = (tmp_path / twin).read_text()
+        assert tex.startswith("\\begin{tabular}") and "\\toprule" in tex and "\\bottomrule" in tex
+        if rows is not None:
+            body = tex.split("\\midrule\n", 1)[1].split("\\bottomrule", 1)[0]
+            assert body.count("\\\\\n") == rows
