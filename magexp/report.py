@@ -25,13 +25,25 @@ SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "va
                  "n_seeds", "truth_in_interval", "verdict"]
 
 
+def _floats(column: pd.Series) -> np.ndarray | None:
+    """The column as floats if it holds floats: a float column, or an object column whose values are
+    floats and missing values (e.g. a truth that some rows lack); else None (text, integers, flags)."""
+    if pd.api.types.is_float_dtype(column):
+        return column.to_numpy(float)
+    if column.dtype == object:
+        present = [v for v in column if v is not None and not (isinstance(v, float) and np.isnan(v))]
+        if present and all(isinstance(v, (float, np.floating)) for v in present):
+            return np.array([np.nan if v is None else float(v) for v in column])
+    return None
+
+
 def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
     """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
     written as ``±floor``; every float then rounded to :data:`DIGITS` significant digits."""
     out = frame.copy()
     for col in out.columns:
-        if pd.api.types.is_float_dtype(out[col]):
-            v = out[col].to_numpy(float)
+        v = _floats(out[col])
+        if v is not None:
             small = np.isfinite(v) & (v != 0) & (np.abs(v) < floor)
             v = np.where(small, np.sign(v) * floor, v)
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -172,8 +184,10 @@ def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
         lines.append(f"![{spec.name}]({paper}/{spec.name}.png)\n")
         if spec.caption:
             lines.append(f"{_prose(spec, spec.caption, table)}\n")
+        timing = (f", wall times on this machine: [`timing/{spec.name}.csv`](timing/{spec.name}.csv)"
+                  if (root / "timing" / f"{spec.name}.csv").exists() else "")
         lines.append(f"Data: [`{paper}/{spec.name}.csv`]({paper}/{spec.name}.csv), "
-                     f"runs: [`{paper}/{spec.name}_runs.csv`]({paper}/{spec.name}_runs.csv).\n")
+                     f"runs: [`{paper}/{spec.name}_runs.csv`]({paper}/{spec.name}_runs.csv){timing}.\n")
         art = rows[rows.artifact == spec.name]
         if len(art):
             lines.append(markdown_table(art, SUMMARY_SHOWN, tex=root / paper / f"{spec.name}_summary.tex"))

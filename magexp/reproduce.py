@@ -75,12 +75,31 @@ def draw(spec, frame: pd.DataFrame, out: Path) -> None:
     save(kind_module(spec.kind).draw(frame, spec), out / f"{spec.name}.png")
 
 
+#: columns that identify a row of an artifact's table (kept beside its wall times in the timing file)
+ROW_KEYS = ("case", "family", "label", "scenario", "estimator", "objective", "setting")
+
+
+def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
+    """Move the wall-time columns of ``frame`` into the timing file ``path`` (with the row keys):
+    the results' CSVs then hold only what a fresh clone computes to the same bytes, and
+    ``results/timing/`` and ``results/timing.csv`` what this machine measured."""
+    timed = [c for c in frame.columns if "wall_time" in c]
+    if not timed:
+        return frame
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_csv(frame[[c for c in ROW_KEYS if c in frame] + timed], path)
+    return frame.drop(columns=timed)
+
+
 def write_artifact(runs, out: Path) -> pd.DataFrame:
     """An artifact's CSVs and figure into ``out``; returns its summary rows."""
+    path = out / f"{runs.spec.name}.csv"
     frame = kind_module(runs.spec.kind).tabulate(runs)
-    write_csv(frame, out / f"{runs.spec.name}.csv")
+    if runs.spec.kind != "speed":  # wall times measure this machine today: kept beside timing.csv
+        frame = split_timing(frame, out.parent / "timing" / f"{runs.spec.name}.csv")
+    write_csv(frame, path)
     write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{runs.spec.name}_runs.csv")
-    draw(runs.spec, frame, out)
+    draw(runs.spec, pd.read_csv(path), out)  # from the CSV as written: the figure --redraw gives, to the byte
     return summarise(runs)
 
 
