@@ -64,8 +64,10 @@ def tabulate(runs) -> pd.DataFrame:
             row[col] = quantiles(sub[col])[0] if col in sub else np.nan
         row["bound_ratio"], row["bound_ratio_lo"], row["bound_ratio_hi"] = bound_ratio(sub)
         ok = sub["succeeded"].dropna() if "succeeded" in sub else pd.Series(dtype=float)
-        if not len(ok) and "success" in sub:  # no truth to compare with (recordings): the fit's own verdict
-            ok = sub["success"].dropna().astype(bool)
+        if not len(ok) and "success" in sub:  # no truth to compare with (recordings): the fit's own verdict,
+            ok = sub["success"].dropna().astype(bool)  # and a calibration must not widen the spread it fits
+            if {"spread_after", "spread_before"} <= set(sub.columns):
+                ok = ok & (sub.loc[ok.index, "spread_after"] < sub.loc[ok.index, "spread_before"])
         row["success_rate"] = float(ok.mean()) if len(ok) else np.nan
         rows.append(row)
     return pd.DataFrame(rows)
