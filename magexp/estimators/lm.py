@@ -36,7 +36,7 @@ class LevenbergMarquardt:
     needs = ("residuals",)
     iterative = True
 
-    def __init__(self, *, name: str = "lm", start: str = "problem", max_nfev: int = 2000, tol: float = 1e-15):
+    def __init__(self, *, name: str = "lm", start: str = "problem", max_nfev: int = 2000, tol: float = 1e-12):
         check(start in STARTS, f"estimator.start={start!r} is not allowed: choose one of {', '.join(STARTS)}")
         self.name = name
         self.start = start
