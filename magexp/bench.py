@@ -102,10 +102,8 @@ BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 def compose(overrides: list[str]):
     """The run config of ``overrides`` (the project's one composer)."""
-    try:
-        from magexp.config import compose_config
-    except ImportError:
-        from magexp.artifacts import compose_config
+    from magexp.config import compose_config
+
     return compose_config(overrides)
 
 

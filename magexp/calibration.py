@@ -182,9 +182,7 @@ def check_applies(estimator, objective: str) -> None:
                       f"{', '.join(fits)} ({reason})")
 
 
-def spread(magnitudes: np.ndarray) -> float:
-    """Relative spread ``std / mean`` of total-field magnitudes."""
-    return float(np.std(magnitudes) / np.mean(magnitudes))
+spread = q.spread  # noqa: E305  (its home is magexp.quality; importable from here too)
 
 
 def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> dict:
@@ -196,11 +194,13 @@ def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> d
             "rms_after": float(np.sqrt(np.mean((after - reference) ** 2)))}
 
 
-def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full") -> tuple:
-    """``(W, o, calibrated, problem, result, box)`` of one fit (W canonical for a scalar objective)."""
+def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",
+         dataset: Dataset | None = None) -> tuple:
+    """``(W, o, calibrated, problem, result, box)`` of one fit (W canonical for a scalar objective);
+    ``dataset``: the recording's :func:`recording_dataset`, when the caller has it already."""
     from magexp.problems import make_problem
 
-    dataset = recording_dataset(rec, reference, objective)
+    dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
     box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
     if model == "sphere":
         centre, radius = fit_sphere(rec.readings)
@@ -301,10 +301,10 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
                           "with the scalar objective")
     check_applies(estimator, objective)
     reference = reference_of(rec, reference_total)
-    recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
+    dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
         q.check_readings(rec.readings, rec.name)
-    w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model)
+    w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
     cover = q.coverage(calibrated)
     name = "sphere fit" if model == "sphere" else estimator.name
     if checks:

@@ -98,11 +98,17 @@ class Outcome:
     evidence: str
 
 
-def _same(a, b) -> bool:
+def same(a, b) -> bool:
+    """Two setting values are equal as numbers where both are numbers (``2`` and ``2.0``), else as text."""
     try:
         return float(a) == float(b)
     except (TypeError, ValueError):
         return str(a) == str(b)
+
+
+def matches(selection: dict, settings: dict) -> bool:
+    """True if every ``key: value`` of ``selection`` is among ``settings``."""
+    return all(k in settings and same(settings[k], v) for k, v in selection.items())
 
 
 def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
@@ -128,7 +134,7 @@ def _restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict]:
     keys = {k for s in cell_settings(table).values() for k in s}
     for key in [k for k in where if k not in keys and k in table]:
         value = where.pop(key)
-        table = table[[_same(v, value) for v in table[key]]]
+        table = table[[same(v, value) for v in table[key]]]
     return table, where
 
 
@@ -137,7 +143,7 @@ def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
     row filters of :func:`_restrict`)."""
     table, where = _restrict(table, where)
     settings = cell_settings(table)
-    keep = [ci for ci, s in settings.items() if all(k in s and _same(s[k], v) for k, v in where.items())]
+    keep = [ci for ci, s in settings.items() if matches(where, s)]
     return table[table.cell.isin(keep)]
 
 
@@ -192,7 +198,7 @@ def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
     if claim.kind in ("threshold", "success"):
         table, where = _restrict(table, claim.where)
         cells = cell_settings(table)
-        chosen = [ci for ci, s in cells.items() if all(k in s and _same(s[k], v) for k, v in where.items())]
+        chosen = [ci for ci, s in cells.items() if matches(where, s)]
         if not chosen:
             return Outcome(claim, False, f"no runs match {_name(claim.where)}")
         parts, ok = [], True

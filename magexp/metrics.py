@@ -42,18 +42,19 @@ def _evaluate(problem, result, crb) -> dict:
     if floor is not None:
         out["noise_floor"] = floor
     truth = problem.truth_theta()
+    reached = None  # as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
     if truth is not None:
         out["truth_fun"] = float(problem.cost_direct(truth))
-        # converged: as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
-        out["converged"] = bool(out["fun"] <= 1.01 * out["truth_fun"] + 1e-9)
+        reached = 1.01 * out["truth_fun"] + 1e-9
+        out["converged"] = bool(out["fun"] <= reached)
     out.update(problem.metrics(result.x))
     from magexp.quality import recording_metrics
 
     out.update(recording_metrics(problem, result.x))  # recorded data: spread before, after, held out
     out.update(result.metrics)
     out.update(time_to_reach(result, factor=1.1))
-    if "truth_fun" in out:
-        out["nfev_to_floor"] = evaluations_to(result, 1.01 * out["truth_fun"] + 1e-9)
+    if reached is not None:
+        out["nfev_to_floor"] = evaluations_to(result, reached)
     out.update(bound_metrics(problem, {**out, "x": result.x}, crb))
     return out
 

@@ -188,6 +188,12 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
                           f"directions): {RECORD}")
 
 
+def spread(magnitudes) -> float:
+    """Relative spread ``std / mean`` of total-field magnitudes (NaN for none)."""
+    mags = np.asarray(magnitudes, float)
+    return float(mags.std() / mags.mean()) if mags.size else float("nan")
+
+
 def recording_metrics(problem, theta) -> dict:
     """Spread of a recording before and after the fitted calibration, on the fit's readings and on
     the held-out block, and the direction coverage of the calibrated readings (a fit that sends every
@@ -196,13 +202,12 @@ def recording_metrics(problem, theta) -> dict:
     if "all_readings" not in extra:
         return {}
 
-    def spread(values):
-        mags = np.linalg.norm(values, axis=1)
-        return float(mags.std() / mags.mean()) if len(mags) else float("nan")
+    def spread_of(vectors):
+        return spread(np.linalg.norm(vectors, axis=1))
 
     calibrated = problem.calibrate(theta)
-    out = {"spread_before": spread(extra["all_readings"]), "spread_after": spread(calibrated),
+    out = {"spread_before": spread_of(extra["all_readings"]), "spread_after": spread_of(calibrated),
            "coverage_cells": coverage(calibrated)["coverage_cells"]}  # ~0: the fit collapsed the directions
     if len(extra.get("heldout", ())):
-        out["heldout_spread"] = spread(problem.calibrate(theta, extra["heldout"]))
+        out["heldout_spread"] = spread_of(problem.calibrate(theta, extra["heldout"]))
     return out

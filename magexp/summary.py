@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts import ArtifactRuns, quantiles
+from magexp.claims import matches, same  # noqa: F401  (matches: imported from here too)
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
            "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval"]
@@ -33,16 +34,6 @@ VERDICTS = ("reproduced", "differs", "n/a")
 INTERVAL = (0.025, 0.975)
 
 
-def _same(a, b) -> bool:
-    try:
-        return float(a) == float(b)
-    except (TypeError, ValueError):
-        return str(a) == str(b)
-
-
-def matches(selection: dict, settings: dict) -> bool:
-    """True if every ``key: value`` of ``selection`` is among ``settings``."""
-    return all(k in settings and _same(settings[k], v) for k, v in selection.items())
 
 
 def interval(values, floor: float = 0.0) -> tuple[float, float]:

@@ -75,11 +75,11 @@ def _draw_sphere(frame: pd.DataFrame, spec, axes=None):
     """One 3-D panel per value of ``panels``; ``axes`` (3-D Axes of the caller's figure) draws there."""
     key = spec.plot.get("panels")
     values = group_values(frame, key)
-    fig = plt.figure(figsize=(4.2 * len(values), 4.2)) if axes is None else panels(len(values), axes=axes)[0]
+    fig, given = (plt.figure(figsize=(4.2 * len(values), 4.2)), None) if axes is None else panels(len(values), axes=axes)
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
     for i, val in enumerate(values):
         sub = frame if val is None else frame[frame[key] == val]
-        ax = fig.add_subplot(1, len(values), i + 1, projection="3d") if axes is None else panels(len(values), axes=axes)[1][i]
+        ax = fig.add_subplot(1, len(values), i + 1, projection="3d") if given is None else given[i]
         r = float(sub.reference.median())
         ax.plot_wireframe(r * np.cos(u) * np.sin(v), r * np.sin(u) * np.sin(v), r * np.cos(v),
                           color="0.8", lw=0.4)

@@ -143,12 +143,14 @@ class GyroAidedCalibration(CalibrationProblem):
         ``field_azimuth_deg``/``field_elevation_deg`` on their principal branches); the gyro bias;
         ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
         Jacobian (:func:`magexp.quality.identifiability`)."""
+        from magexp.quality import spread
+
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
         mags = np.linalg.norm(self.calibrate(theta), axis=1)
         out = {"fg": self.fg(theta), "field_rms": float(np.sqrt(np.mean((mags - self.total) ** 2))),
                "vector_residual_fraction": float(np.sqrt(np.mean(np.sum(err**2, axis=1))) / self.total),
-               "spread_after": float(mags.std() / mags.mean())}
+               "spread_after": spread(mags)}
         out.update(dict(zip(EXTRA, theta[12:].tolist())))
         rest = self.dataset.extra.get("rest_gyro_bias_deg_s")
         if rest is not None:  # the same gyroscope at rest: its mean rate
