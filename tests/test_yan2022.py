@@ -172,6 +172,11 @@ def test_yan_configs_compose_and_bad_values_are_one_line(make_cfg):
         build(make_cfg("estimator=kf", "estimator.n_steps=0").estimator, "kf")
     with pytest.raises(MagexpError, match="scenario.noise"):
         build(make_cfg("scenario=yan2022_sim", "scenario.noise=-1").scenario, "yan2022_sim")
+    from magexp.estimators.kalman import FieldKalmanFilter
+
+    for bad in (0.0, -1.0):  # the analysis filter refuses a zero or negative noise variance as kf does
+        with pytest.raises(MagexpError, match=r"analysis\.sigma2"):
+            FieldKalmanFilter(sigma2=bad)
     with pytest.raises(MagexpError, match="does not exist"):
         build(make_cfg("scenario=yan2022_mockup", "scenario.path=nowhere.csv").scenario, "yan2022_mockup")
 

@@ -71,6 +71,14 @@ def settled_since(distance: np.ndarray) -> int:
     return -1 if apart[-1] == len(distance) - 1 else int(apart[-1] + 1)
 
 
+def checked_tuning(p0: float, q: float, sigma2: float, n_steps: int, group: str) -> tuple:
+    """``(p0, q, sigma2, n_steps)`` checked (``sigma2 > 0``); ``group`` names the config group."""
+    check(check_nonnegative(sigma2, f"{group}.sigma2") > 0,
+          f"{group}.sigma2={sigma2!r} is not allowed: the noise variance must be > 0")
+    return (check_nonnegative(p0, f"{group}.p0"), check_nonnegative(q, f"{group}.q"), float(sigma2),
+            check_positive_int(n_steps, f"{group}.n_steps"))
+
+
 class _Tuning:
     """Shared hyper-parameters: ``P(0) = p0 D``, ``Q = q D`` with ``D`` the state's scale matrix."""
 
@@ -80,11 +88,7 @@ class _Tuning:
 
     def __init__(self, *, name: str, p0: float, q: float, sigma2: float, n_steps: int):
         self.name = name
-        self.p0 = check_nonnegative(p0, "estimator.p0")
-        self.q = check_nonnegative(q, "estimator.q")
-        self.sigma2 = check_nonnegative(sigma2, "estimator.sigma2")
-        check(self.sigma2 > 0, f"estimator.sigma2={sigma2!r} is not allowed: the noise variance must be > 0")
-        self.n_steps = check_positive_int(n_steps, "estimator.n_steps")
+        self.p0, self.q, self.sigma2, self.n_steps = checked_tuning(p0, q, sigma2, n_steps, "estimator")
 
 
 class KalmanFilter(_Tuning):
@@ -176,10 +180,7 @@ class FieldKalmanFilter:
     def __init__(self, *, name: str = "field_kalman", p0: float = 1e10, q: float = 0.0, sigma2: float = 3333.0,
                  n_steps: int = 600, settle: float = 0.5):
         self.name = name
-        self.p0 = check_nonnegative(p0, "analysis.p0")
-        self.q = check_nonnegative(q, "analysis.q")
-        self.sigma2 = check_nonnegative(sigma2, "analysis.sigma2")
-        self.n_steps = check_positive_int(n_steps, "analysis.n_steps")
+        self.p0, self.q, self.sigma2, self.n_steps = checked_tuning(p0, q, sigma2, n_steps, "analysis")
         self.settle = min(check_nonnegative(settle, "analysis.settle"), 1.0)
 
     def __call__(self, problem, result: FitResult) -> FitResult:

@@ -48,6 +48,7 @@ import numpy as np
 
 from magexp.errors import check_nonnegative, check_positive_int
 from magexp.estimators.result import FitResult
+from magexp.problems.kernels import quadratic_features
 
 UPPER = (np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2]))  # E11 E22 E33 E12 E13 E23
 
@@ -59,19 +60,14 @@ def sym(e6: np.ndarray) -> np.ndarray:
     return e + np.triu(e, 1).T
 
 
-def quadratic_terms(b: np.ndarray) -> np.ndarray:
-    """``S_k = [B1², B2², B3², 2B1B2, 2B1B3, 2B2B3]`` of every reading, shape (N, 6)."""
-    x, y, z = b.T
-    return np.column_stack([x * x, y * y, z * z, 2 * x * y, 2 * x * z, 2 * y * z])
-
-
 def measurement(b: np.ndarray, h_norm: np.ndarray, sigma: float):
     """``(z - mu, L, w)``: the scalar measurements, their regressors and weights ``1/sigma_k²``."""
     z = (b * b).sum(axis=1) - h_norm**2
     mu = -3.0 * sigma**2
     var = 4.0 * sigma**2 * h_norm**2 + 6.0 * sigma**4
     w = 1.0 / np.where(var > 0, var, 1.0)
-    return z - mu, np.column_stack([2.0 * b, -quadratic_terms(b)]), w
+    quad = quadratic_features(b)[:, :6]  # S_k = [B1², B2², B3², 2B1B2, 2B1B3, 2B2B3]
+    return z - mu, np.column_stack([2.0 * b, -quad]), w
 
 
 def centred_estimate(z: np.ndarray, lmat: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
