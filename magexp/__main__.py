@@ -124,6 +124,16 @@ def execute(cfg, out_dir: Path, *, use_cache: bool = True) -> dict:
     return write_outputs(out, plain, out_dir, cached=cached)
 
 
+def to_yaml(plain) -> str:
+    """``OmegaConf.to_yaml`` of a plain container, the same text without building a config first
+    (a tenth of the time: a sweep writes one per job)."""
+    import yaml
+    from omegaconf._utils import get_omega_conf_dumper
+
+    return yaml.dump(plain, default_flow_style=False, allow_unicode=True, sort_keys=False,
+                     Dumper=get_omega_conf_dumper())
+
+
 def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
     """Write a run's folder: ``metrics.csv``, ``estimate.csv``, ``history.csv``, ``config.yaml``.
 
@@ -131,8 +141,6 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
     cache) and the provenance (:func:`magexp.provenance.provenance`); ``config.yaml`` is the
     resolved config ``plain`` the run read. Returns the metrics with ``cached``.
     """
-    from omegaconf import OmegaConf
-
     from magexp.provenance import provenance
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -142,7 +150,7 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
     if plain.get("write_history", True):
         _write_csv(out_dir / "history.csv", ["iteration", "nfev", "fun"],
                    zip(range(len(out.history)), out.history_nfev.tolist(), out.history.tolist()))
-    (out_dir / "config.yaml").write_text(OmegaConf.to_yaml(plain))
+    (out_dir / "config.yaml").write_text(to_yaml(plain))
     return {**out.metrics, "cached": cached}
 
 

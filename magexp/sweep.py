@@ -32,12 +32,12 @@ TABLE = "sweep.csv"
 
 
 def _job_overrides(job_dir: Path) -> dict[str, str]:
-    from omegaconf import OmegaConf
+    import yaml
 
     path = job_dir / ".hydra" / "overrides.yaml"
     if not path.exists():
         return {}
-    return dict(str(o).split("=", 1) for o in OmegaConf.load(path) if "=" in str(o))
+    return dict(str(o).split("=", 1) for o in yaml.safe_load(path.read_text()) or [] if "=" in str(o))
 
 
 def gather(sweep_dir: Path | str, keys: list[str]) -> Path:
@@ -157,10 +157,9 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     was in the run cache when the batch started.
     """
     from hydra.core.utils import JobReturn, JobStatus
-    from omegaconf import OmegaConf
 
     from magexp import cache
-    from magexp.__main__ import write_outputs
+    from magexp.__main__ import to_yaml, write_outputs
     from magexp.executor import make_executor, run_many
     from magexp.progress import Progress
 
@@ -181,7 +180,7 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
         folder = sweep_dir / job_subdir(config, initial_job_idx + n, job)
         metrics = write_outputs(outputs[n], plain, folder, cached=cached[n])
         (folder / ".hydra").mkdir(exist_ok=True)
-        (folder / ".hydra" / "overrides.yaml").write_text(OmegaConf.to_yaml(job))
+        (folder / ".hydra" / "overrides.yaml").write_text(to_yaml(job))
         returns.append(JobReturn(overrides=job, working_dir=str(folder), task_name=str(config.hydra.job.name),
                                  status=JobStatus.COMPLETED, _return_value=metrics))
     return returns
