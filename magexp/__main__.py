@@ -215,14 +215,9 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
     from magexp.paths import CONF
 
     check_launcher(hydra_overrides)
-    settings = [o for o in hydra_overrides if not o.startswith("hydra.sweep.dir=")]
-    if settings:  # launcher and other hydra.* settings: checked by composing Hydra's own node
-        from magexp.config import hydra_compose
-        from magexp.sweep import check_settings
+    from magexp.sweep import check_hydra_settings
 
-        launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
-        if str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
-            check_settings({key: launcher.get(key) for key in ("executor", "jobs", "scheduler")})
+    check_hydra_settings([o for o in hydra_overrides if not o.startswith("hydra.sweep.dir=")])
     validate_runs(expand_sweep(user), keep=False)
     explicit = [o for o in hydra_overrides if o.startswith("hydra.sweep.dir=")]
     if explicit:

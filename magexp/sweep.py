@@ -94,6 +94,31 @@ def check_settings(settings: dict) -> None:
         raise MagexpError(message) from None
 
 
+def check_hydra_settings(settings: list[str]) -> None:
+    """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one).
+
+    Settings of magexp's launcher alone (``hydra.launcher.executor|jobs|scheduler=...``) are checked
+    against its config file; anything else (another launcher, other ``hydra.*`` keys) by composing
+    Hydra's own node (a full Hydra compose), then magexp's launcher settings if it is the one chosen.
+    """
+    from omegaconf import OmegaConf
+
+    from magexp.config import hydra_compose, yaml_value
+    from magexp.paths import CONF
+
+    own = {f"hydra.launcher.{key}" for key in SETTINGS}
+    if all(o.partition("=")[0] in own for o in settings):
+        node = OmegaConf.load(CONF / "hydra" / "launcher" / "magexp.yaml")
+        values = {key: node[key] for key in SETTINGS}
+        values.update({o.partition("=")[0].rpartition(".")[2]: yaml_value(o.partition("=")[2]) for o in settings})
+    else:
+        launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
+        if not str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
+            return
+        values = {key: launcher.get(key) for key in SETTINGS}
+    check_settings(values)
+
+
 def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
     """The folder name of job ``num``: ``hydra.sweep.subdir`` resolved for it (by default ``num``)."""
     from omegaconf import OmegaConf, open_dict

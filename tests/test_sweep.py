@@ -191,6 +191,21 @@ def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path,
     assert list(tmp_path.iterdir()) == [tmp_path / "cache"] or not list(tmp_path.iterdir())
 
 
+def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path):
+    """``a,b``, ``range()`` and a group's ``glob()``: the jobs magexp checks are the jobs Hydra launches."""
+    from magexp.cli_checks import expand_sweep
+
+    jobs = expand_sweep(["estimator=glob(*pso,exclude=pso)", "scenario.noise=0,5", "seed=range(1,3)"])
+    assert jobs == [[f"estimator={e}", f"scenario.noise={n}", f"seed={s}"]
+                    for e in ("ipso", "rdpso") for n in (0, 5) for s in (1, 2)]
+    proc = subprocess.run([sys.executable, "-m", "magexp", "-m", "estimator=glob(ellips*,exclude=*specific)",
+                           "seed=range(2)", f"hydra.sweep.dir={tmp_path / 's'}"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300, env={**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")})
+    assert proc.returncode == 0, proc.stderr
+    assert [(r["estimator"], r["seed"]) for r in read_csv(tmp_path / "s" / "sweep.csv")] == \
+        [("ellipsoid", "0"), ("ellipsoid", "1")]
+
+
 def test_job_yaml_is_omegaconfs_text(make_cfg):
     """A job's ``config.yaml`` and ``overrides.yaml`` are written without building a config; the same bytes."""
     from omegaconf import OmegaConf
