@@ -16,7 +16,8 @@ Hydra's sweeper expands a sweep into jobs; magexp's launcher (the default,
 :class:`SweepTable` (a Hydra callback, see ``conf/config.yaml``) then gathers the job folders into
 ``<sweep dir>/sweep.csv``: one row per job, the swept keys first as columns (their values as typed
 on the command line), then ``job`` and the union of the jobs' metric columns (a metric a job lacks
-is left empty). Hydra's other launchers (``hydra/launcher=basic|joblib|slurm``) still work, one
+is left empty). magexp's launcher does not call Hydra's per-job callbacks (``on_job_start``,
+``on_job_end``) or set up a job's logging: no Hydra job runs. Hydra's other launchers (``hydra/launcher=basic|joblib|slurm``) still work, one
 Hydra job at a time (:func:`magexp.__main__.sweep_job`), with the same run cache.
 """
 

@@ -234,3 +234,23 @@ def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path)
     assert rows == [{"estimator": "lm", "scenario.noise": "0", "job": "0", "fun": "1.5", "nfev": "40", "gram_error": ""},
                     {"estimator": "ellipsoid", "scenario.noise": "5", "job": "1", "fun": "2.5", "nfev": "",
                      "gram_error": "0.1"}]
+
+
+def test_sweep_bench_alternates_variants_and_reports_per_job_medians():
+    """``python -m magexp.sweep_bench``: each round runs every variant once, in turn; CPU time counts the
+    command's own processes; the table gives per-job medians and ratios to the first variant."""
+    from magexp.sweep_bench import measure, table
+
+    order = []
+
+    def env(name, k):
+        order.append((name, k))
+        return dict(os.environ)
+
+    idle, busy = [sys.executable, "-c", "pass"], [sys.executable, "-c", "sum(range(3 * 10 ** 7))"]
+    times = measure({"idle": idle, "busy": busy}, 2, env)
+    assert order == [("idle", 0), ("busy", 0), ("idle", 1), ("busy", 1)]
+    assert all(b[1] > i[1] + 0.1 for i, b in zip(times["idle"], times["busy"]))  # CPU of the child process
+    lines = table({"a": [(2.0, 1.0), (4.0, 3.0), (3.0, 2.0)], "b": [(1.0, 1.0), (1.5, 0.5), (9.0, 0.25)]}, n_jobs=10)
+    assert lines[1].split() == ["a", "300.0", "200.0", "1.000", "1.000"]
+    assert lines[2].split() == ["b", "150.0", "50.0", "0.500", "0.250"]
