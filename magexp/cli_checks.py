@@ -28,16 +28,20 @@ FLOATS_PER_READING_PARTICLE = 3
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
     """The jobs of a sweep: the cartesian product of every override's values, first key slowest
-    (Hydra's basic sweeper); ``a,b``, ``range(...)`` and ``choice(...)`` are expanded."""
+    (Hydra's basic sweeper); ``a,b``, ``range(...)``, ``choice(...)`` and, for a config group,
+    ``glob(...)`` are expanded."""
     axes = []
     for ov in parse_overrides(overrides):
         key = ov.get_key_element()
         if ov.is_sweep_override():
+            from hydra.core.override_parser.types import Glob
+
             try:
-                values = [str(v) for v in ov.sweep_string_iterator()]
+                glob = ov.value() if key in GROUPS and isinstance(ov.value(), Glob) else None
+                values = glob.filter(options(key)) if glob else [str(v) for v in ov.sweep_string_iterator()]
             except Exception as exc:
-                raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range() and choice() "
-                                  f"can be swept ({str(exc).splitlines()[0]})") from None
+                raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
+                                  f"group's glob() can be swept ({str(exc).splitlines()[0]})") from None
         else:
             values = [ov.get_value_element_as_str()]
         axes.append([f"{key}={v}" for v in values])

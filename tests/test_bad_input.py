@@ -106,7 +106,9 @@ CASES = [  # (arguments, words the one line must contain)
     (["-m", "seed=range(2)", "scenario.nosie=1,2"], ["'nosie'"]),
     (["-m", "hydra/launcher=nope", "seed=1,2"], ["'nope'", "joblib"]),
     (["-m", "hydra.launcher.foo=1", "seed=1,2"], ["hydra.launcher.foo"]),
-    (["-m", "hydra.launcher.n_jobs=abc", "seed=1,2"], ["hydra.launcher.n_jobs", "abc"]),
+    (["-m", "hydra.launcher.jobs=abc", "seed=1,2"], ["hydra.launcher.jobs", "abc"]),
+    (["-m", "hydra.launcher.executor=nope", "seed=1,2"], ["hydra.launcher.executor", "'nope'", "dask"]),
+    (["-m", "hydra.launcher.scheduler=slurm", "seed=1,2"], ["hydra.launcher.scheduler", "executor=dask"]),
     (["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
     (["task=calibrate"], ["magexp calibrate"]),  # moved to its own command
     (["calibrate", "data.path=missing.csv", "data.unit=nT"], ["missing.csv"]),

@@ -1,4 +1,4 @@
-"""The command line: one run, its folder and outputs, sweeps (checked, cached, resumable, tabled).
+"""The command line: one run, its folder and outputs (sweeps: tests/test_sweep.py).
 
 In-process through :func:`magexp.__main__.main` where the process boundary is not what is
 tested; subprocesses for the exit codes, two processes at once, and killing a sweep.
@@ -6,7 +6,6 @@ tested; subprocesses for the exit codes, two processes at once, and killing a sw
 
 import csv
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -130,62 +129,6 @@ def test_calibrate_without_its_module_is_one_line(capsys, monkeypatch):
         magexp_main(["calibrate", "data.path=x.csv"])
     err = capsys.readouterr().err
     assert info.value.code == 2 and err.count("\n") == 1 and "magexp.calibration" in err
-
-
-SWEEP = ["-m", "estimator=ipso", "estimator.n_iterations=300", "scenario.noise=0,5", "seed=range(3)",
-         "hydra.launcher.n_jobs=1"]
-
-
-def cached_runs(cache_dir):
-    return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob("*.pkl")}
-
-
-def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path):
-    from magexp.sweep import gather
-
-    for num, (est, noise, metrics) in enumerate([("lm", "0", {"fun": "1.5", "nfev": "40"}),
-                                                  ("ellipsoid", "5", {"fun": "2.5", "gram_error": "0.1"})]):
-        job = tmp_path / str(num)
-        (job / ".hydra").mkdir(parents=True)
-        (job / ".hydra" / "overrides.yaml").write_text(f"- estimator={est}\n- scenario.noise={noise}\n- seed=3\n")
-        with (job / "metrics.csv").open("w") as fh:
-            fh.write(",".join(["estimator", *metrics]) + "\n" + ",".join([est, *metrics.values()]) + "\n")
-    rows = read_csv(gather(tmp_path, ["estimator", "scenario.noise"]))
-    assert list(rows[0]) == ["estimator", "scenario.noise", "job", "fun", "nfev", "gram_error"]
-    assert rows == [{"estimator": "lm", "scenario.noise": "0", "job": "0", "fun": "1.5", "nfev": "40", "gram_error": ""},
-                    {"estimator": "ellipsoid", "scenario.noise": "5", "job": "1", "fun": "2.5", "nfev": "",
-                     "gram_error": "0.1"}]
-
-
-@pytest.mark.slow
-def test_killed_sweep_resumes_without_redoing_finished_runs(tmp_path):
-    env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}
-    cache_dir = tmp_path / "cache"
-    first = subprocess.Popen([sys.executable, "-m", "magexp", *SWEEP, f"hydra.sweep.dir={tmp_path / 'a'}"],
-                             cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                             start_new_session=True)
-    deadline = time.time() + 240
-    while len(cached_runs(cache_dir)) < 2 and time.time() < deadline and first.poll() is None:
-        time.sleep(0.02)
-    os.killpg(first.pid, signal.SIGKILL)
-    first.wait()
-    finished = cached_runs(cache_dir)
-    assert 0 < len(finished) < 6, "the kill must land midway"
-    resumed = magexp(*SWEEP, f"hydra.sweep.dir={tmp_path / 'b'}", cwd=tmp_path, env=env)
-    assert resumed.returncode == 0, resumed.stderr
-    after = cached_runs(cache_dir)
-    assert len(after) == 6
-    assert {k: after[k] for k in finished} == finished  # finished runs were not redone
-    rows = read_csv(tmp_path / "b" / "sweep.csv")  # the tidy table: swept keys first, one row per job
-    assert list(rows[0])[:3] == ["scenario.noise", "seed", "job"]
-    assert [(r["scenario.noise"], r["seed"]) for r in rows] == [(n, s) for n in "05" for s in "012"]
-    assert sum(r["cached"] == "True" for r in rows) == len(finished)
-    whole = magexp(*SWEEP, f"hydra.sweep.dir={tmp_path / 'c'}", cwd=tmp_path,
-                   env={"MAGEXP_CACHE": str(tmp_path / "cache2")})
-    assert whole.returncode == 0, whole.stderr
-    keep = ("scenario.noise", "seed", "fun", "x", "nfev", "config_hash")
-    trim = [{k: v for k, v in r.items() if k in keep} for r in read_csv(tmp_path / "c" / "sweep.csv")]
-    assert trim == [{k: v for k, v in r.items() if k in keep} for r in rows]  # as an uninterrupted sweep
 
 
 def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):

@@ -34,7 +34,8 @@ def test_wheel_installs_and_runs_from_another_folder(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     for needed in ("magexp/_resources/conf/config.yaml", "magexp/_resources/conf/scenario/base/yuan2018.yaml",
                    "magexp/_resources/experiments/ding2024/ding2024_fig3.yaml",
-                   "magexp/_resources/data/yan2022_mockup.csv", "magexp/_resources/commit.txt"):
+                   "magexp/_resources/data/yan2022_mockup.csv", "magexp/_resources/commit.txt",
+                   "hydra_plugins/magexp_launcher/magexp_launcher.py", "magexp/_resources/conf/hydra/launcher/magexp.yaml"):
         assert needed in names, needed
     env_dir = tmp_path / "env"
     run([sys.executable, "-m", "venv", str(env_dir)], cwd=tmp_path)
@@ -53,7 +54,7 @@ def test_wheel_installs_and_runs_from_another_folder(tmp_path):
     assert version.startswith("magexp ") and "commit unknown" not in version  # the commit the wheel was built from
     run([magexp, "scenario=yan2022_mockup", "estimator=ls", "hydra.run.dir=one"], cwd=work, env=env)
     assert (work / "one" / "metrics.csv").exists()
-    run([magexp, "-m", "estimator=ellipsoid,lm", "hydra.sweep.dir=sweep", "hydra.launcher.n_jobs=1"], cwd=work, env=env)
+    run([magexp, "-m", "estimator=ellipsoid,lm", "hydra.sweep.dir=sweep", "hydra.launcher.jobs=1"], cwd=work, env=env)
     assert len((work / "sweep" / "sweep.csv").read_text().splitlines()) == 3
     run([str(python), "-m", "magexp.reproduce", "yan2022", "--only", "yan2022_table_mockup", "--tiny", "--jobs", "1",
          "--out", "scratch"], cwd=work, env=env)

@@ -1,0 +1,256 @@
+"""``-m`` sweeps through magexp's launcher and :mod:`magexp.executor`: the same table and job folders
+on local processes and on a Dask cluster, a killed sweep resumed from the run cache, jobs run in
+parallel when asked, the sweep folder layout, and the launcher's settings checked before any run.
+
+Subprocesses where the process boundary is what is tested (a whole command, a kill); the
+launcher's :func:`magexp.sweep.launch` in-process otherwise.
+"""
+
+import csv
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+import yaml
+
+from magexp.__main__ import main as magexp_main
+
+IPSO = ["estimator=ipso", "estimator.n_particles=20", "estimator.n_iterations=300"]
+SWEEP = ["-m", *IPSO, "scenario.noise=0,5", "seed=range(3)"]  # 6 jobs, a stochastic estimator
+JOB_FILES = ("estimate.csv", "history.csv", "config.yaml", ".hydra/overrides.yaml")
+VARYING = ("wall_time", "cached")  # the only columns that may differ between two computations of a run
+
+
+def magexp(*args, cwd, cache, **kw):
+    env = {**os.environ, "HYDRA_FULL_ERROR": "0", "MAGEXP_CACHE": str(cache)}
+    return subprocess.run([sys.executable, "-m", "magexp", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=300, env=env, **kw)
+
+
+def read_csv(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def without(path, columns=VARYING) -> bytes:
+    """The CSV file's bytes with ``columns`` dropped, everything else as written."""
+    rows = list(csv.reader(io.StringIO(path.read_text())))
+    keep = [i for i, name in enumerate(rows[0]) if name not in columns]
+    out = io.StringIO()
+    csv.writer(out).writerows([[row[i] for i in keep] for row in rows])
+    return out.getvalue().encode()
+
+
+def cached_runs(cache_dir):
+    return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob("*.pkl")}
+
+
+def assert_same_sweeps(a, b):
+    """Two sweep folders hold the same table and job folders, byte for byte but for :data:`VARYING`."""
+    jobs = sorted(p.name for p in a.iterdir() if p.is_dir())
+    assert jobs == sorted(p.name for p in b.iterdir() if p.is_dir()) and jobs
+    assert without(a / "sweep.csv") == without(b / "sweep.csv")
+    for job in jobs:
+        assert without(a / job / "metrics.csv") == without(b / job / "metrics.csv"), job
+        for name in JOB_FILES:
+            assert (a / job / name).read_bytes() == (b / job / name).read_bytes(), (job, name)
+
+
+@pytest.mark.slow
+def test_local_processes_and_a_dask_cluster_give_the_same_sweep(tmp_path):
+    """The same sweep on 2 local processes and on a Dask LocalCluster of 2 workers, each with its own
+    empty cache (every run computed twice): the same table and job folders, byte for byte."""
+    local = magexp(*SWEEP, "hydra.launcher.jobs=2", f"hydra.sweep.dir={tmp_path / 'local'}", cwd=tmp_path,
+                   cache=tmp_path / "cache_local")
+    assert local.returncode == 0, local.stderr
+    dask = magexp(*SWEEP, "hydra.launcher.executor=dask", "hydra.launcher.jobs=2",
+                  f"hydra.sweep.dir={tmp_path / 'dask'}", cwd=tmp_path, cache=tmp_path / "cache_dask")
+    assert dask.returncode == 0, dask.stderr
+    assert "HYDRA" not in dask.stdout + dask.stderr  # no cluster chatter
+    assert len(cached_runs(tmp_path / "cache_dask")) == 6
+    assert_same_sweeps(tmp_path / "local", tmp_path / "dask")
+    rows = read_csv(tmp_path / "dask" / "sweep.csv")
+    assert [(r["scenario.noise"], r["seed"], r["job"]) for r in rows] == \
+        [(n, s, str(j)) for j, (n, s) in enumerate((n, s) for n in "05" for s in "012")]
+    assert {r["cached"] for r in rows} == {"False"}
+    overrides = yaml.safe_load((tmp_path / "dask" / "4" / ".hydra" / "overrides.yaml").read_text())
+    assert overrides == [*IPSO, "scenario.noise=5", "seed=1"]
+
+
+@pytest.mark.slow
+def test_killed_sweep_resumes_from_the_cache_with_the_same_table(tmp_path):
+    cache_dir = tmp_path / "cache"
+    first = subprocess.Popen([sys.executable, "-m", "magexp", *SWEEP, "hydra.launcher.jobs=1",
+                              f"hydra.sweep.dir={tmp_path / 'a'}"], cwd=tmp_path,
+                             env={**os.environ, "MAGEXP_CACHE": str(cache_dir)}, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, start_new_session=True)
+    deadline = time.time() + 240
+    while len(cached_runs(cache_dir)) < 2 and time.time() < deadline and first.poll() is None:
+        time.sleep(0.02)
+    os.killpg(first.pid, signal.SIGKILL)
+    first.wait()
+    finished = cached_runs(cache_dir)
+    assert 0 < len(finished) < 6, "the kill must land midway"
+    resumed = magexp(*SWEEP, "hydra.launcher.jobs=2", f"hydra.sweep.dir={tmp_path / 'b'}", cwd=tmp_path,
+                     cache=cache_dir)
+    assert resumed.returncode == 0, resumed.stderr
+    after = cached_runs(cache_dir)
+    assert len(after) == 6
+    assert {k: after[k] for k in finished} == finished  # finished runs were not redone
+    rows = read_csv(tmp_path / "b" / "sweep.csv")  # the tidy table: swept keys first, one row per job
+    assert list(rows[0])[:3] == ["scenario.noise", "seed", "job"]
+    assert sum(r["cached"] == "True" for r in rows) == len(finished)
+    whole = magexp(*SWEEP, f"hydra.sweep.dir={tmp_path / 'c'}", cwd=tmp_path, cache=tmp_path / "cache2")
+    assert whole.returncode == 0, whole.stderr
+    assert_same_sweeps(tmp_path / "b", tmp_path / "c")  # as an uninterrupted sweep
+
+
+def _hydra_config(sweep_dir, *settings):
+    from magexp.config import hydra_compose
+
+    return hydra_compose((f"hydra.sweep.dir={sweep_dir}", *settings), with_hydra=True)
+
+
+def _settings(config):
+    return {k: config.hydra.launcher[k] for k in ("executor", "jobs", "scheduler")}
+
+
+def test_jobs_run_in_two_processes_at_once_when_asked(tmp_path, monkeypatch):
+    """``hydra.launcher.jobs=2``: the runs execute in two worker processes, overlapping in time."""
+    import magexp.runner
+    from magexp.sweep import launch
+
+    real, log = magexp.runner.run_batch, tmp_path / "tasks.log"
+
+    def recorded(configs):  # inherited by the forked workers
+        start = time.time()
+        time.sleep(0.3)
+        outs = list(real(configs))
+        with log.open("a") as fh:
+            fh.write(f"{os.getpid()} {start} {time.time()}\n")
+        return iter(outs)
+
+    monkeypatch.setattr(magexp.runner, "run_batch", recorded)
+    config = _hydra_config(tmp_path / "sweep", "hydra.launcher.jobs=2")
+    jobs = [["estimator=ellipsoid", f"seed={s}"] for s in range(6)]
+    returns = launch(config, jobs, 0, _settings(config))
+    tasks = [line.split() for line in log.read_text().splitlines()]
+    pids = {int(t[0]) for t in tasks}
+    assert len(pids) == 2 and os.getpid() not in pids
+    spans = sorted((float(a), float(b)) for _, a, b in tasks)
+    assert any(b0 > a1 for (_, b0), (a1, _) in zip(spans, spans[1:])), "no two tasks ran at the same time"
+    assert [r.return_value["seed"] for r in returns] == list(range(6))
+    assert [p.name for p in sorted((tmp_path / "sweep").iterdir(), key=lambda p: int(p.name))] == \
+        [str(i) for i in range(6)]
+
+
+def test_launch_numbers_jobs_from_the_batch_start_and_honours_a_subdir(tmp_path):
+    """A second batch of Hydra's sweeper starts at ``initial_job_idx``; ``hydra.sweep.subdir`` names folders."""
+    from magexp.sweep import launch
+
+    config = _hydra_config(tmp_path / "s", "hydra.launcher.jobs=1")
+    launch(config, [["estimator=ellipsoid", "seed=7"]], 4, _settings(config))
+    assert read_csv(tmp_path / "s" / "4" / "metrics.csv")[0]["seed"] == "7"
+    config = _hydra_config(tmp_path / "t", "hydra.launcher.jobs=1", "hydra.sweep.subdir=${hydra.job.override_dirname}")
+    launch(config, [["estimator=ellipsoid", "seed=7"], ["estimator=lm", "seed=8"]], 0, _settings(config))
+    assert sorted(p.name for p in (tmp_path / "t").iterdir()) == ["estimator=ellipsoid,seed=7", "estimator=lm,seed=8"]
+    assert read_csv(tmp_path / "t" / "estimator=lm,seed=8" / "metrics.csv")[0]["estimator"] == "lm"
+
+
+def test_sweep_runs_share_the_run_cache_with_reproduce(tmp_path):
+    """A run computed by :func:`magexp.executor.run_many` (``make reproduce``'s layer) is a cached job of a
+    sweep, with the same metrics."""
+    from magexp.config import compose_config, resolved
+    from magexp.executor import run_many
+    from magexp.sweep import launch
+
+    done = run_many([resolved(compose_config(["estimator=ellipsoid", "seed=2"]))], jobs=1)
+    config = _hydra_config(tmp_path / "s", "hydra.launcher.jobs=1")
+    (ret,) = launch(config, [["estimator=ellipsoid", "seed=2"]], 0, _settings(config))
+    assert ret.return_value["cached"] is True
+    assert ret.return_value["fun"] == done.metrics(0)["fun"]
+
+
+@pytest.mark.parametrize("args, words", [
+    (["hydra.launcher.executor=nope"], ["hydra.launcher.executor='nope'", "local, dask"]),
+    (["hydra.launcher.jobs=-1"], ["hydra.launcher.jobs=-1", ">= 0"]),
+    (["hydra.launcher.scheduler=slurm"], ["hydra.launcher.scheduler='slurm'", "executor=dask"]),
+    (["hydra/launcher=nope"], ["'nope'", "magexp"]),
+])
+def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path, monkeypatch, capsys, args, words):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as info:
+        magexp_main(["-m", "estimator=ellipsoid", "seed=1,2", *args])
+    assert info.value.code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and all(w in lines[0] for w in words), lines
+    assert list(tmp_path.iterdir()) == [tmp_path / "cache"] or not list(tmp_path.iterdir())
+
+
+def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path):
+    """``a,b``, ``range()`` and a group's ``glob()``: the jobs magexp checks are the jobs Hydra launches."""
+    from magexp.cli_checks import expand_sweep
+
+    jobs = expand_sweep(["estimator=glob(*pso,exclude=pso)", "scenario.noise=0,5", "seed=range(1,3)"])
+    assert jobs == [[f"estimator={e}", f"scenario.noise={n}", f"seed={s}"]
+                    for e in ("ipso", "rdpso") for n in (0, 5) for s in (1, 2)]
+    proc = subprocess.run([sys.executable, "-m", "magexp", "-m", "estimator=glob(ellips*,exclude=*specific)",
+                           "seed=range(2)", f"hydra.sweep.dir={tmp_path / 's'}"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300, env={**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")})
+    assert proc.returncode == 0, proc.stderr
+    assert [(r["estimator"], r["seed"]) for r in read_csv(tmp_path / "s" / "sweep.csv")] == \
+        [("ellipsoid", "0"), ("ellipsoid", "1")]
+
+
+def test_job_yaml_is_omegaconfs_text(make_cfg):
+    """A job's ``config.yaml`` and ``overrides.yaml`` are written without building a config; the same bytes."""
+    from omegaconf import OmegaConf
+
+    from magexp.__main__ import to_yaml
+    from magexp.config import resolved
+
+    plain = resolved(make_cfg("scenario=yuan2018_mode1", "estimator=rdpso", "seed=4"))
+    odd = {**plain, "strings": ["null", "true", "1e-3", "a: b", "'q'", "ünï", ""], "none": None, "nested": [[1, 2.5]]}
+    for value in (plain, odd, ["estimator=ipso", "seed=3", "scenario.noise=1e-3", "x='a,b'"]):
+        assert to_yaml(value) == OmegaConf.to_yaml(value)
+
+
+def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path):
+    from magexp.sweep import gather
+
+    for num, (est, noise, metrics) in enumerate([("lm", "0", {"fun": "1.5", "nfev": "40"}),
+                                                  ("ellipsoid", "5", {"fun": "2.5", "gram_error": "0.1"})]):
+        job = tmp_path / str(num)
+        (job / ".hydra").mkdir(parents=True)
+        (job / ".hydra" / "overrides.yaml").write_text(f"- estimator={est}\n- scenario.noise={noise}\n- seed=3\n")
+        with (job / "metrics.csv").open("w") as fh:
+            fh.write(",".join(["estimator", *metrics]) + "\n" + ",".join([est, *metrics.values()]) + "\n")
+    rows = read_csv(gather(tmp_path, ["estimator", "scenario.noise"]))
+    assert list(rows[0]) == ["estimator", "scenario.noise", "job", "fun", "nfev", "gram_error"]
+    assert rows == [{"estimator": "lm", "scenario.noise": "0", "job": "0", "fun": "1.5", "nfev": "40", "gram_error": ""},
+                    {"estimator": "ellipsoid", "scenario.noise": "5", "job": "1", "fun": "2.5", "nfev": "",
+                     "gram_error": "0.1"}]
+
+
+def test_sweep_bench_alternates_variants_and_reports_per_job_medians():
+    """``python -m magexp.sweep_bench``: each round runs every variant once, in turn; CPU time counts the
+    command's own processes; the table gives per-job medians and ratios to the first variant."""
+    from magexp.sweep_bench import measure, table
+
+    order = []
+
+    def env(name, k):
+        order.append((name, k))
+        return dict(os.environ)
+
+    idle, busy = [sys.executable, "-c", "pass"], [sys.executable, "-c", "sum(range(3 * 10 ** 7))"]
+    times = measure({"idle": idle, "busy": busy}, 2, env)
+    assert order == [("idle", 0), ("busy", 0), ("idle", 1), ("busy", 1)]
+    assert all(b[1] > i[1] + 0.1 for i, b in zip(times["idle"], times["busy"]))  # CPU of the child process
+    lines = table({"a": [(2.0, 1.0), (4.0, 3.0), (3.0, 2.0)], "b": [(1.0, 1.0), (1.5, 0.5), (9.0, 0.25)]}, n_jobs=10)
+    assert lines[1].split() == ["a", "300.0", "200.0", "1.000", "1.000"]
+    assert lines[2].split() == ["b", "150.0", "50.0", "0.500", "0.250"]
