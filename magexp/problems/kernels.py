@@ -55,6 +55,20 @@ def compiled():
     return _compiled
 
 
+SCALAR, VECTOR = 0, 1  # the kinds of compiled swarm cost (:func:`magexp.problems._compiled.swarm_cost`)
+
+
+def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
+    """The cost of every particle ``thetas`` (P, 12) ``= [vec(W), o]`` in one compiled call:
+    ``kernel = (kind, data, reference, params)``, a problem's arguments prepared once
+    (:meth:`magexp.problems.base.CalibrationProblem.swarm_kernel`); no per-call conversion but
+    making ``thetas`` a C-contiguous float array (2-D), which an engine's swarm already is."""
+    thetas = np.ascontiguousarray(thetas, float)
+    if thetas.ndim != 2:
+        thetas = thetas.reshape(1, -1)
+    return compiled().swarm_cost(kernel[0], thetas, kernel[1], kernel[2], kernel[3])
+
+
 # -- scalar objective ----------------------------------------------------------------------------
 def scalar_coefficients(w: np.ndarray, o: np.ndarray, centre: np.ndarray, scale: float) -> np.ndarray:
     """The ten quadratic-form coefficients of every particle, shape ``(P, 10)`` (module docstring)."""
