@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check_nonnegative
+from magexp.estimators.schedules import values
 from magexp.estimators.velocity import _NO_DRAWS
 
 
@@ -75,6 +76,14 @@ class RandomDriftVelocity:
                                      r1=r1, r2=r2, phi=drift_sign_log(u, s))
 
     n_draws = 4  # random numbers per particle and dimension in one iteration (r1, r2, s, u)
+
+    def moves(self, r, t, t_max):
+        """``(drift, coef, log_u)``: the rule's arguments of :func:`magexp.estimators._compiled.run`
+        for the moves at times ``t, t + 1, ...``, one per draw ``r[k]`` (each ``r1, r2, s, ·``):
+        ``coef[k] = [α(t + k), c1, c2]`` and ``log_u[k] = ln(1/u)``, ``u = 1 - r[k, 3]`` (as :meth:`step`)."""
+        ts = np.arange(t, t + len(r))
+        coef = np.column_stack([values(self.alpha, ts, t_max), np.full(len(r), self.c1), np.full(len(r), self.c2)])
+        return True, coef, np.log(1.0 / (1.0 - r[:, 3]))
 
     def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
         """One compiled call (:func:`magexp.estimators._compiled.drift_step`): the best updates

@@ -26,6 +26,7 @@ runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
 from __future__ import annotations
 
 from functools import cache
+from itertools import chain
 
 import numpy as np
 
@@ -35,24 +36,25 @@ from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
 from magexp.estimators.velocity import InertiaVelocity
 from magexp.problems import kernels
-from magexp.problems.base import defining_class
+from magexp.problems.base import defining_class, swarm_kernel
 
 
 DRAW_BLOCK = 1 << 16  # random numbers drawn per call by the compiled path (a multiple of one iteration's)
 
 
-def _draws(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
+def _draw_blocks(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
     """The random numbers of iterations ``1..t_max``, ``shape`` each, drawn ``block`` iterations
-    per call: the same stream as one ``rng.random(shape)`` per iteration (a generator fills an
-    array in order), with less overhead per call."""
+    per call (arrays ``(k, *shape)``): the same stream as one ``rng.random(shape)`` per iteration
+    (a generator fills an array in order), with less overhead per call."""
     for start in range(1, t_max + 1, block):
-        yield from rng.random((min(block, t_max + 1 - start), *shape))
+        yield rng.random((min(block, t_max + 1 - start), *shape))
 
 
-def _has_step(rule) -> bool:
-    """Whether ``rule`` has a compiled ``step`` of its own rule: one defined by the class that
-    defines its ``__call__`` (a subclass that changes the rule but not the step runs in numpy)."""
-    owner = defining_class(rule, "step")
+def _has_step(rule, name: str = "step") -> bool:
+    """Whether ``rule`` has a compiled ``step`` (or ``moves``) of its own rule: one defined by the
+    class that defines its ``__call__`` (a subclass that changes the rule but not the step runs in
+    numpy)."""
+    owner = defining_class(rule, name)
     return owner is not None and owner is defining_class(rule, "__call__")
 
 
@@ -115,6 +117,23 @@ class SwarmOptimizer:
             return self.velocity_clamp * (hi - lo)
         return np.full(lo.shape, np.inf)
 
+    def _run(self, nb, kernel, x, v, pbest, pcost, history, pending, blocks, limits) -> int:
+        """Iterations ``1..t_max`` with the cost compiled in (:func:`magexp.estimators._compiled.run`):
+        one call per block of draws, the moves on ``pending`` (the draws of iterations 2, 3, ...)
+        and then on each further block, the last iteration (no move) in the last call. The same
+        numbers as one :meth:`velocity.step` and one ``problem.cost`` per iteration. Returns the
+        global best's index."""
+        t, t_max = 1, len(history) - 1
+        while t <= t_max:
+            if not len(pending) and t < t_max:
+                pending = next(blocks)
+            n_iterations = len(pending) + (t + len(pending) == t_max)
+            drift, coef, log_u = self.velocity.moves(pending, t + 1, t_max)  # iteration t moves at time t + 1
+            g = nb.run(x, v, pbest, pcost, history, t, n_iterations, pending, log_u, coef, drift, limits, True,
+                       kernel)
+            t, pending = t + n_iterations, pending[:0]
+        return g
+
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
         """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]``.
 
@@ -136,14 +155,21 @@ class SwarmOptimizer:
         neg_vmax = -vmax
         nb = compiled() if _has_step(self.velocity) else None
         clip_box = self.boundary == "clip"
+        kernel = None
         if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
             x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)
             limits = np.array([vmax, lo, hi], float)
             # a boundary that draws (random re-entry) takes its numbers between two moves'
             block = 1 if self.boundary == "random" else max(1, DRAW_BLOCK // (self.velocity.n_draws * x.size))
-            draws = _draws(rng, (self.velocity.n_draws, *x.shape), t_max, block)
-            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, next(draws), 1, t_max, limits, clip_box)
-        for t in range(1, t_max + 1):
+            blocks = _draw_blocks(rng, (self.velocity.n_draws, *x.shape), t_max, block)
+            first = next(blocks)
+            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, first[0], 1, t_max, limits, clip_box)
+            if clip_box and callback is None and _has_step(self.velocity, "moves"):
+                kernel = swarm_kernel(problem)
+            if kernel is not None:  # every iteration below, compiled in
+                g, nit = self._run(nb, kernel, x, v, pbest, pcost, history, first[1:], blocks, limits), t_max
+            draws = chain(first[1:], chain.from_iterable(blocks))
+        for t in range(1, 1 if kernel is not None else t_max + 1):
             if nb is not None:
                 if not clip_box:
                     x, v = self._handle(x, v, lo, hi, rng=rng)

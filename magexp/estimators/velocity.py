@@ -7,9 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.estimators.schedules import Constant
+from magexp.estimators.schedules import Constant, values
 
 _NO_DRAWS = np.empty((2, 0, 0))  # the random numbers of a step that does not move
+_NO_LOG = np.empty((0, 0, 0))  # ln(1/u) of a rule that draws no u
 
 
 def inertia_velocity(v, x, pbest, gbest, *, w, c1, c2, r1, r2):
@@ -42,6 +43,13 @@ class InertiaVelocity:
         )
 
     n_draws = 2  # random numbers per particle and dimension in one iteration (r1, r2)
+
+    def moves(self, r, t, t_max):
+        """``(drift, coef, log_u)``: the rule's arguments of :func:`magexp.estimators._compiled.run`
+        for the moves at times ``t, t + 1, ...``, one per draw ``r[k]`` (each ``r1, r2``):
+        ``coef[k] = [w, c1, c2](t + k)``, no ``ln(1/u)``."""
+        ts = np.arange(t, t + len(r))
+        return False, np.column_stack([values(s, ts, t_max) for s in (self.inertia, self.c1, self.c2)]), _NO_LOG
 
     def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
         """One compiled call (:func:`magexp.estimators._compiled.inertia_step`): the best updates
