@@ -77,13 +77,19 @@ class RandomDriftVelocity:
 
     n_draws = 4  # random numbers per particle and dimension in one iteration (r1, r2, s, u)
 
-    def moves(self, r, t, t_max):
-        """``(drift, coef, log_u)``: the rule's arguments of :func:`magexp.estimators._compiled.run`
-        for the moves at times ``t, t + 1, ...``, one per draw ``r[k]`` (each ``r1, r2, s, ·``):
-        ``coef[k] = [α(t + k), c1, c2]`` and ``log_u[k] = ln(1/u)``, ``u = 1 - r[k, 3]`` (as :meth:`step`)."""
-        ts = np.arange(t, t + len(r))
-        coef = np.column_stack([values(self.alpha, ts, t_max), np.full(len(r), self.c1), np.full(len(r), self.c2)])
-        return True, coef, np.log(1.0 / (1.0 - r[:, 3]))
+    drift = True  # the rule of :func:`magexp.estimators._compiled.drift_move` in a compiled run
+
+    def coefficients(self, t: np.ndarray, t_max: int) -> np.ndarray:
+        """``[α, c1, c2]`` at every time of the integer array ``t``, ``(len(t), 3)``: the
+        coefficients of :func:`magexp.estimators._compiled.run` (the same floats as :meth:`step`)."""
+        coef = np.empty((len(t), 3))
+        coef[:, 0], coef[:, 1], coef[:, 2] = values(self.alpha, t, t_max), self.c1, self.c2
+        return coef
+
+    def log_u(self, r: np.ndarray) -> np.ndarray:
+        """``ln(1/u)``, ``u = 1 - r[:, 3]``, of the draws ``r`` (k, 4, n, d) in a compiled run, as
+        :meth:`step` computes it (numpy's ``log``)."""
+        return np.log(1.0 / (1.0 - r[:, 3]))
 
     def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
         """One compiled call (:func:`magexp.estimators._compiled.drift_step`): the best updates

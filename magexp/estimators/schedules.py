@@ -16,7 +16,8 @@ def values(schedule, t: np.ndarray, t_max: int) -> np.ndarray:
     """``schedule`` at every iteration of the integer array ``t`` in one vectorised call: the
     same floats as ``schedule(t_k, t_max)`` one by one (the same IEEE operations, each exact
     ``int -> float`` conversion included)."""
-    return np.broadcast_to(np.asarray(schedule(t, t_max), float), t.shape)
+    out = schedule(t, t_max)
+    return out if isinstance(out, np.ndarray) else np.full(t.shape, out, float)  # a constant: one float
 
 
 def _number(value, name: str) -> float:

@@ -45,13 +45,15 @@ DRAW_BLOCK = 1 << 16  # random numbers drawn per call by the compiled path (a mu
 def _draw_blocks(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
     """The random numbers of iterations ``1..t_max``, ``shape`` each, drawn ``block`` iterations
     per call (arrays ``(k, *shape)``): the same stream as one ``rng.random(shape)`` per iteration
-    (a generator fills an array in order), with less overhead per call."""
+    (a generator fills an array in order), with less overhead per call. Every block is drawn into
+    the same buffer (no fresh pages per block): a block is used up before the next is drawn."""
+    buffer = np.empty((min(block, t_max), *shape))
     for start in range(1, t_max + 1, block):
-        yield rng.random((min(block, t_max + 1 - start), *shape))
+        yield rng.random(out=buffer[: min(block, t_max + 1 - start)])
 
 
 def _has_step(rule, name: str = "step") -> bool:
-    """Whether ``rule`` has a compiled ``step`` (or ``moves``) of its own rule: one defined by the
+    """Whether ``rule`` has a compiled ``step`` (or ``coefficients``) of its own rule: one defined by the
     class that defines its ``__call__`` (a subclass that changes the rule but not the step runs in
     numpy)."""
     owner = defining_class(rule, name)
@@ -123,15 +125,15 @@ class SwarmOptimizer:
         and then on each further block, the last iteration (no move) in the last call. The same
         numbers as one :meth:`velocity.step` and one ``problem.cost`` per iteration. Returns the
         global best's index."""
-        t, t_max = 1, len(history) - 1
+        rule, t, t_max = self.velocity, 1, len(history) - 1
+        coef = rule.coefficients(np.arange(2, t_max + 1), t_max)  # iteration t moves at time t + 1: row t - 1
         while t <= t_max:
             if not len(pending) and t < t_max:
                 pending = next(blocks)
-            n_iterations = len(pending) + (t + len(pending) == t_max)
-            drift, coef, log_u = self.velocity.moves(pending, t + 1, t_max)  # iteration t moves at time t + 1
-            g = nb.run(x, v, pbest, pcost, history, t, n_iterations, pending, log_u, coef, drift, limits, True,
-                       kernel)
-            t, pending = t + n_iterations, pending[:0]
+            k = len(pending)
+            g = nb.run(x, v, pbest, pcost, history, t, k + (t + k == t_max), pending, rule.log_u(pending),
+                       coef[t - 1: t - 1 + k], rule.drift, limits, True, kernel)
+            t, pending = t + k + (t + k == t_max), pending[:0]
         return g
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
@@ -164,7 +166,7 @@ class SwarmOptimizer:
             blocks = _draw_blocks(rng, (self.velocity.n_draws, *x.shape), t_max, block)
             first = next(blocks)
             g = self.velocity.step(nb, x, v, pbest, pcost, pcost, first[0], 1, t_max, limits, clip_box)
-            if clip_box and callback is None and _has_step(self.velocity, "moves"):
+            if clip_box and callback is None and _has_step(self.velocity, "coefficients"):
                 kernel = swarm_kernel(problem)
             if kernel is not None:  # every iteration below, compiled in
                 g, nit = self._run(nb, kernel, x, v, pbest, pcost, history, first[1:], blocks, limits), t_max
@@ -190,8 +192,9 @@ class SwarmOptimizer:
             if callback is not None and callback(t, pbest[g], pcost[g]):
                 break
         history = history[: nit + 1]
-        edge = np.isclose(pbest[g], lo, rtol=0, atol=1e-9 * (hi - lo)) | np.isclose(pbest[g], hi, rtol=0,
-                                                                                 atol=1e-9 * (hi - lo))
+        # on a face: |best - face| <= 1e-9 (hi - lo) (np.isclose with rtol=0 where the box is finite)
+        best, atol = pbest[g], 1e-9 * (hi - lo)
+        edge = (np.abs(best - lo) <= atol) | (np.abs(best - hi) <= atol) | (best == lo) | (best == hi)
         return FitResult(
             x=pbest[g].copy(), fun=float(pcost[g]), nit=nit, nfev=n * (nit + 1),
             history=history, history_nfev=n * np.arange(1, nit + 2),

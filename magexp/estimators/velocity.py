@@ -44,12 +44,19 @@ class InertiaVelocity:
 
     n_draws = 2  # random numbers per particle and dimension in one iteration (r1, r2)
 
-    def moves(self, r, t, t_max):
-        """``(drift, coef, log_u)``: the rule's arguments of :func:`magexp.estimators._compiled.run`
-        for the moves at times ``t, t + 1, ...``, one per draw ``r[k]`` (each ``r1, r2``):
-        ``coef[k] = [w, c1, c2](t + k)``, no ``ln(1/u)``."""
-        ts = np.arange(t, t + len(r))
-        return False, np.column_stack([values(s, ts, t_max) for s in (self.inertia, self.c1, self.c2)]), _NO_LOG
+    drift = False  # the rule of :func:`magexp.estimators._compiled.inertia_move` in a compiled run
+
+    def coefficients(self, t: np.ndarray, t_max: int) -> np.ndarray:
+        """``[w, c1, c2]`` at every time of the integer array ``t``, ``(len(t), 3)``: the
+        coefficients of :func:`magexp.estimators._compiled.run` (the same floats as :meth:`step`)."""
+        coef = np.empty((len(t), 3))
+        for k, schedule in enumerate((self.inertia, self.c1, self.c2)):
+            coef[:, k] = values(schedule, t, t_max)
+        return coef
+
+    def log_u(self, r: np.ndarray) -> np.ndarray:
+        """``ln(1/u)`` of the draws ``r`` (k, 2, n, d) in a compiled run: none (this rule draws no ``u``)."""
+        return _NO_LOG
 
     def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
         """One compiled call (:func:`magexp.estimators._compiled.inertia_step`): the best updates
