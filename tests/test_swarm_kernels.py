@@ -198,9 +198,9 @@ def test_a_rule_changed_by_a_subclass_runs_its_own_numpy_rule():
 @pytest.mark.parametrize("draw_block", [None, 7 * 4 * 20 * 12])
 @pytest.mark.parametrize("n_iterations", [1, 2, 29, 60])
 def test_the_compiled_run_covers_every_iteration_once(make_cfg, monkeypatch, draw_block, n_iterations):
-    """With a compiled cost and ``clip``, the iterations run in :func:`_compiled.run`, one call per
-    block of draws, each iteration exactly once; a callback or another boundary takes the
-    per-iteration steps (and gives the same numbers)."""
+    """With a compiled cost and ``clip``, the iterations (and the initial move) run in
+    :func:`_compiled.run`, one call per block of draws and one for the last iteration, each
+    iteration exactly once; a callback takes the per-iteration steps (and gives the same numbers)."""
     from magexp.estimators import swarm
 
     nb = swarm.compiled()
@@ -219,9 +219,9 @@ def test_the_compiled_run_covers_every_iteration_once(make_cfg, monkeypatch, dra
     monkeypatch.setattr(nb, "run", spy)
     fused = est.fit(prob, rng=np.random.default_rng(3))
     per_block = swarm.DRAW_BLOCK // (4 * 20 * 12)
-    assert [t for t, _ in calls] == list(np.cumsum([1] + [n for _, n in calls[:-1]]))  # consecutive
-    assert sum(n for _, n in calls) == n_iterations and fused.nit == n_iterations
-    assert len(calls) == -(-n_iterations // per_block)  # ceil: the first block's first draw moves before the loop
+    assert [t for t, _ in calls] == list(np.cumsum([0] + [n for _, n in calls[:-1]]))  # consecutive, from 0
+    assert sum(n for _, n in calls) == n_iterations + 1 and fused.nit == n_iterations  # the initial move too
+    assert len(calls) == -(-n_iterations // per_block) + 1  # one per block of draws, then the last iteration
     before = len(calls)
     stepped = est.fit(prob, rng=np.random.default_rng(3), callback=lambda t, x, f: False)
     assert len(calls) == before  # a callback: one step per iteration

@@ -120,14 +120,16 @@ def drift_step(x, v, pbest, pcost, cost, move, r, log_u, alpha, c1, c2, limits, 
 def run(x, v, pbest, pcost, history, t, n_iterations, r, log_u, coef, drift, limits, clip_box, kernel):
     """Iterations ``t .. t + n_iterations - 1`` of the swarm in one call, each: the cost of every
     particle (:func:`magexp.problems._compiled.swarm_cost` with ``kernel = (kind, data,
-    reference, params)``), :func:`update_best`, ``history[t] = pcost[g]`` and, for the first
-    ``len(coef)`` of them, the move (:func:`drift_move` if ``drift``, else :func:`inertia_move`)
-    with the draws ``r[k]`` (and ``log_u[k]``) and the coefficients ``coef[k]`` (``w, c1, c2``
-    or ``α, c1, c2``). Returns the global best's index."""
+    reference, params)``; iteration 0, the initial swarm, has its costs in ``pcost`` already),
+    :func:`update_best`, ``history[t] = pcost[g]`` and, for the first ``len(coef)`` of them, the
+    move (:func:`drift_move` if ``drift``, else :func:`inertia_move`) with the draws ``r[k]`` (and
+    ``log_u[k]``) and the coefficients ``coef[k]`` (``w, c1, c2`` or ``α, c1, c2``). Returns the
+    global best's index."""
     kind, data, reference, params = kernel
     g = 0
     for k in range(n_iterations):
-        g = update_best(x, swarm_cost(kind, x, data, reference, params), pbest, pcost)
+        cost = pcost if t + k == 0 else swarm_cost(kind, x, data, reference, params)
+        g = update_best(x, cost, pbest, pcost)
         history[t + k] = pcost[g]
         if k < coef.shape[0]:
             if drift:

@@ -53,9 +53,9 @@ def _draw_blocks(rng: np.random.Generator, shape: tuple, t_max: int, block: int)
 
 
 def _has_step(rule, name: str = "step") -> bool:
-    """Whether ``rule`` has a compiled ``step`` (or ``coefficients``) of its own rule: one defined by the
-    class that defines its ``__call__`` (a subclass that changes the rule but not the step runs in
-    numpy)."""
+    """Whether ``rule`` has a compiled ``step`` (or ``coefficients``) of its own rule: one defined
+    by the class that defines its ``__call__`` (a subclass that changes the rule but not the step
+    runs in numpy)."""
     owner = defining_class(rule, name)
     return owner is not None and owner is defining_class(rule, "__call__")
 
@@ -119,22 +119,20 @@ class SwarmOptimizer:
             return self.velocity_clamp * (hi - lo)
         return np.full(lo.shape, np.inf)
 
-    def _run(self, nb, kernel, x, v, pbest, pcost, history, pending, blocks, limits) -> int:
-        """Iterations ``1..t_max`` with the cost compiled in (:func:`magexp.estimators._compiled.run`):
-        one call per block of draws, the moves on ``pending`` (the draws of iterations 2, 3, ...)
-        and then on each further block, the last iteration (no move) in the last call. The same
-        numbers as one :meth:`velocity.step` and one ``problem.cost`` per iteration. Returns the
-        global best's index."""
-        rule, t, t_max = self.velocity, 1, len(history) - 1
-        coef = rule.coefficients(np.arange(2, t_max + 1), t_max)  # iteration t moves at time t + 1: row t - 1
-        while t <= t_max:
-            if not len(pending) and t < t_max:
-                pending = next(blocks)
-            k = len(pending)
-            g = nb.run(x, v, pbest, pcost, history, t, k + (t + k == t_max), pending, rule.log_u(pending),
-                       coef[t - 1: t - 1 + k], rule.drift, limits, True, kernel)
-            t, pending = t + k + (t + k == t_max), pending[:0]
-        return g
+    def _run(self, nb, kernel, x, v, pbest, pcost, history, blocks, limits) -> int:
+        """Every iteration with the cost compiled in (:func:`magexp.estimators._compiled.run`): one
+        call per block of draws, from the initial move (iteration 0, on the costs in ``pcost``) to
+        the last iteration (no move), which joins the last block's call. The same numbers as one
+        :meth:`velocity.step` and one ``problem.cost`` per iteration. Returns the global best's index."""
+        rule, t, t_max = self.velocity, 0, len(history) - 1
+        coef = rule.coefficients(np.arange(1, t_max + 1), t_max)  # iteration t moves at time t + 1: row t
+        for r in blocks:
+            k = len(r)
+            nb.run(x, v, pbest, pcost, history, t, k, r, rule.log_u(r), coef[t: t + k], rule.drift, limits, True,
+                   kernel)
+            t += k
+        return nb.run(x, v, pbest, pcost, history, t_max, 1, r[:0], rule.log_u(r[:0]), coef[:0], rule.drift, limits,
+                      True, kernel)
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
         """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]``.
@@ -160,17 +158,18 @@ class SwarmOptimizer:
         kernel = None
         if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
             x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)
-            limits = np.array([vmax, lo, hi], float)
+            limits = np.empty((3, lo.size))
+            limits[0], limits[1], limits[2] = vmax, lo, hi
             # a boundary that draws (random re-entry) takes its numbers between two moves'
             block = 1 if self.boundary == "random" else max(1, DRAW_BLOCK // (self.velocity.n_draws * x.size))
             blocks = _draw_blocks(rng, (self.velocity.n_draws, *x.shape), t_max, block)
-            first = next(blocks)
-            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, first[0], 1, t_max, limits, clip_box)
             if clip_box and callback is None and _has_step(self.velocity, "coefficients"):
                 kernel = swarm_kernel(problem)
-            if kernel is not None:  # every iteration below, compiled in
-                g, nit = self._run(nb, kernel, x, v, pbest, pcost, history, first[1:], blocks, limits), t_max
-            draws = chain(first[1:], chain.from_iterable(blocks))
+            if kernel is not None:  # every iteration, compiled in
+                g, nit = self._run(nb, kernel, x, v, pbest, pcost, history, blocks, limits), t_max
+            else:
+                draws = chain.from_iterable(blocks)
+                g = self.velocity.step(nb, x, v, pbest, pcost, pcost, next(draws), 1, t_max, limits, clip_box)
         for t in range(1, 1 if kernel is not None else t_max + 1):
             if nb is not None:
                 if not clip_box:
