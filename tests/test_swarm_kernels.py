@@ -283,3 +283,26 @@ def test_schedule_values_are_the_one_by_one_floats(schedule):
     got = values(schedule, t, 1000)
     assert got.shape == t.shape and got.dtype == float
     np.testing.assert_array_equal(got, [schedule(int(k), 1000) for k in t])
+
+
+def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
+    """numba keys a cached function by its own bytecode: the engine's run (which inlines the costs)
+    and the Circle-map sequence also carry the sources they call into, so editing those recompiles."""
+    import hashlib
+    from pathlib import Path
+
+    from magexp.estimators import swarm
+
+    nb = swarm.compiled()
+    if nb is None:
+        pytest.skip("numba not installed")
+    from magexp.estimators import initialisers
+    from magexp.problems import _compiled as costs
+    from magexp.problems import kernels
+
+    def digest(*modules):
+        return hashlib.sha256(b"".join(Path(m.__file__).read_bytes() for m in modules)).hexdigest()
+
+    codegen = nb.run.targetctx.codegen()
+    assert nb.run._cache._index_key((), codegen)[-1] == digest(costs, kernels)
+    assert nb.circle_sequence._cache._index_key((), codegen)[-1] == digest(initialisers)

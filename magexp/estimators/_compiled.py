@@ -11,14 +11,27 @@ and in the same order
 ``np.clip``, ``np.copyto``, ``argmin``): no ``fastmath``, so no reassociation and no fused
 multiply-add, and the random numbers are drawn by numpy from the run's generator in the same
 order as before. A test runs both paths from one seed and compares ``x`` and ``fun`` bit for bit.
+
+:func:`run` goes further: a block of iterations in one call, each with the problem's compiled
+cost (:func:`magexp.problems._compiled.swarm_cost`). :func:`circle_sequence` compiles the
+Circle-map initialiser's own step functions (:mod:`magexp.estimators.initialisers`). numba's
+on-disk cache keys a function by its own file and bytecode, not by the functions it calls (and
+inlines) from other modules: :func:`_keyed_on` adds those modules' sources to the key, so an edit
+there recompiles these two instead of loading stale machine code.
 """
 
 from __future__ import annotations
 
+import hashlib
+from pathlib import Path
+
 import numpy as np
 from numba import njit
 
+from magexp.estimators import initialisers
 from magexp.estimators.initialisers import printed_step, usual_step
+from magexp.problems import _compiled as costs
+from magexp.problems import kernels
 from magexp.problems._compiled import swarm_cost
 
 _jit = njit(cache=True, nogil=True, error_model="numpy")
@@ -116,6 +129,18 @@ def drift_step(x, v, pbest, pcost, cost, move, r, log_u, alpha, c1, c2, limits, 
     return g
 
 
+def _keyed_on(dispatcher, *modules):
+    """``dispatcher`` with the sources of ``modules`` (those its code calls into) in its on-disk
+    cache key (numba's key holds the function's own bytecode only); unchanged if this numba keeps
+    its cache otherwise."""
+    cache = getattr(dispatcher, "_cache", None)
+    key = getattr(cache, "_index_key", None)
+    if key is not None:
+        digest = hashlib.sha256(b"".join(Path(m.__file__).read_bytes() for m in modules)).hexdigest()
+        cache._index_key = lambda sig, codegen: (*key(sig, codegen), digest)
+    return dispatcher
+
+
 @_jit
 def run(x, v, pbest, pcost, history, t, n_iterations, r, log_u, coef, drift, limits, clip_box, kernel):
     """Iterations ``t .. t + n_iterations - 1`` of the swarm in one call, each: the cost of every
@@ -152,3 +177,7 @@ def circle_sequence(z0, n, burn_in, printed):
         if k >= burn_in:
             out[k - burn_in] = z
     return out
+
+
+run = _keyed_on(run, costs, kernels)
+circle_sequence = _keyed_on(circle_sequence, initialisers)

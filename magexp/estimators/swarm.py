@@ -19,8 +19,14 @@ With numba (:func:`compiled`), a rule whose class has a ``step`` method beside i
 (the built-in ones) makes one
 compiled call per iteration of the best updates and the next iteration's rule, clamp, move and
 ``clip`` (:mod:`magexp.estimators._compiled`), on random numbers drawn several iterations per
-call (:func:`_draws`; the same stream): the same numbers, bit for bit, as the numpy path, which
+call (:func:`_draw_blocks`; the same stream): the same numbers, bit for bit, as the numpy path, which
 runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
+
+When, besides, the problem offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`),
+the boundary is ``clip``, the rule has ``coefficients`` and no callback watches the iterations,
+the cost joins the compiled call and one call runs a whole block of draws' iterations
+(:meth:`SwarmOptimizer._run`, :func:`magexp.estimators._compiled.run`): no Python, no dispatch
+and no argument conversion per iteration, and again the same numbers, bit for bit.
 """
 
 from __future__ import annotations
