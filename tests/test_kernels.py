@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from magexp.errors import MagexpError
 from magexp.problems import kernels
 
 pytestmark = pytest.mark.skipif(kernels.compiled() is None, reason="numba not installed")
@@ -131,6 +132,8 @@ def test_the_lean_swarm_cost_gives_the_kernels_bits(objective):
     thetas = np.concatenate([w.reshape(-1, 9), o], axis=1)
     np.testing.assert_array_equal(problem.cost(thetas), expected)
     np.testing.assert_array_equal(problem.cost(thetas[5]), expected[5:6])  # one vector: shape (1,)
+    with pytest.raises(MagexpError, match=r"shape \(31, 9\)"):
+        problem.cost(thetas[:, :9])
     assert swarm_kernel(make_problem(objective, dataset, box, parameterisation="forward")) is None
     if objective == "vector":
         assert swarm_kernel(make_problem("vector_ls", dataset, box, parameterisation="inverse")) is None
