@@ -172,10 +172,10 @@ def circle_sequence(z0, n, burn_in, printed):
     z = z0.copy()
     out = np.empty((n, z.size))
     for k in range(burn_in + n):
-        for j in range(z.size):
+        for j in range(z.size):  # element by element (a row assignment costs seconds of compilation)
             z[j] = _printed_step(z[j]) if printed else _usual_step(z[j])
-        if k >= burn_in:
-            out[k - burn_in] = z
+            if k >= burn_in:
+                out[k - burn_in, j] = z[j]
     return out
 
 

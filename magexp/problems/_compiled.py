@@ -124,7 +124,8 @@ def swarm_cost(kind, thetas, data, reference, params):
         for k in range(3):
             o[p, k] = thetas[p, 9 + k]
     if kind == SCALAR:
-        return scalar_cost(w, o, params[:3], params[3], data, reference[:, 0])
+        # the column as a C-contiguous vector: the same compiled scalar_cost as a direct call
+        return scalar_cost(w, o, params[:3], params[3], data, reference.reshape(reference.size))
     f = vector_cost(w, o, data, reference)
     for p in range(n_p):
         if not np.isfinite(f[p]):
