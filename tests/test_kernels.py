@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from magexp.errors import MagexpError
 from magexp.problems import kernels
 
 pytestmark = pytest.mark.skipif(kernels.compiled() is None, reason="numba not installed")
@@ -102,3 +103,37 @@ def test_compiled_kernels_are_bitwise_reproducible_across_processes():
     namespace = {}
     exec(SNIPPET.replace("print(", "namespace_out = ("), namespace)
     assert namespace["namespace_out"] == runs[0].strip()
+
+
+@pytest.mark.parametrize("objective", ["scalar", "vector"])
+def test_the_lean_swarm_cost_gives_the_kernels_bits(objective):
+    """``problem.cost`` through the prepared compiled entry (:func:`kernels.swarm_cost`) equals the
+    kernels called on ``W``, ``o`` bit for bit, a non-finite particle included; a forward
+    parameterisation and a subclass that changes the cost get no compiled entry."""
+    from magexp.dataset import Dataset
+    from magexp.problems import make_problem
+    from magexp.problems.base import swarm_kernel
+    from magexp.scenarios.search import SearchBox
+
+    readings, w, o = swarm(257, 31)
+    w[3, 0, 0] = np.nan
+    n = len(readings)
+    body = readings - [30.0, -20.0, 10.0]
+    dataset = Dataset(readings=readings, reference_norm=np.linalg.norm(body, axis=1),
+                      attitude=np.broadcast_to(np.eye(3), (n, 3, 3)), field_nav=body)
+    box = SearchBox(diag=(0.5, 1.5), offdiag=(-0.5, 0.5), offset=(-100.0, 100.0))
+    problem = make_problem(objective, dataset, box, parameterisation="inverse")
+    assert swarm_kernel(problem) is not None
+    if objective == "scalar":
+        expected = kernels.scalar_cost(w, o, *problem._normalised, problem._reference)
+    else:
+        expected = kernels.vector_cost(w, o, problem._readings, problem.reference)
+        assert expected[3] == np.inf
+    thetas = np.concatenate([w.reshape(-1, 9), o], axis=1)
+    np.testing.assert_array_equal(problem.cost(thetas), expected)
+    np.testing.assert_array_equal(problem.cost(thetas[5]), expected[5:6])  # one vector: shape (1,)
+    with pytest.raises(MagexpError, match=r"shape \(31, 9\)"):
+        problem.cost(thetas[:, :9])
+    assert swarm_kernel(make_problem(objective, dataset, box, parameterisation="forward")) is None
+    if objective == "vector":
+        assert swarm_kernel(make_problem("vector_ls", dataset, box, parameterisation="inverse")) is None

@@ -5,6 +5,7 @@ import pytest
 
 from magexp.errors import MagexpError
 from magexp.estimators.initialisers import CircleMap, Uniform, circle_map
+from magexp.estimators.rdpso import ThermalCoefficient
 from magexp.estimators.schedules import Constant, Linear
 from magexp.estimators.swarm import SwarmOptimizer
 from magexp.estimators.velocity import InertiaVelocity, inertia_velocity
@@ -113,30 +114,47 @@ def test_engine_rejects_bad_settings(kwargs, word):
 
 # ---- the compiled steps against the numpy path --------------------------------------------------
 
-@pytest.mark.parametrize("draw_block", [None, 7 * 4 * 20 * 12])  # default; a few iterations per draw, a remainder
-@pytest.mark.parametrize("boundary", ["clip", "reflect", "random"])
-@pytest.mark.parametrize("estimator, scenario", [
-    ("ipso", "ding2024_exp1"), ("pso", "ding2024_exp1"), ("rdpso", "yuan2018_mode1"), ("pso9", "ding2024_exp1"),
-])
-def test_compiled_steps_give_the_numpy_path_bit_for_bit(make_cfg, monkeypatch, estimator, scenario, boundary,
-                                                         draw_block):
-    """Same seed, same problem: the compiled swarm steps and the numpy path end at the same
-    ``x``, ``fun`` and history, bit for bit (the same draws, the same operations in the same order)."""
+def _swarm_case(make_cfg, estimator, scenario, objective=None, parameterisation=None, *overrides):
+    """``(estimator, problem)``: ``estimator`` with 20 particles on 100 readings of ``scenario``
+    (data of seed 0), on the scenario's objective (or ``objective``) and parameterisation (or
+    ``parameterisation``)."""
     from hydra.utils import instantiate
 
-    from magexp.estimators import swarm
     from magexp.problems import make_problem
+
+    cfg = make_cfg(f"scenario={scenario}", f"estimator={estimator}", "estimator.n_particles=20",
+                   "scenario.n_readings=100", *overrides)
+    sc = instantiate(cfg.scenario, _convert_="all")
+    options = dict(getattr(sc, "problem_options", {}))
+    if parameterisation is not None:
+        options["parameterisation"] = parameterisation
+    prob = make_problem(objective or sc.objective, sc.generate(rng=np.random.default_rng(0)), sc.search, **options)
+    return instantiate(cfg.estimator, _convert_="all"), prob
+
+
+# ipso, pso and rdpso on the scalar problem and ipso on the inverse vector one run with the cost compiled
+# into the loop (boundary clip); rdpso on Yuan's forward problem and pso9 run one compiled step per iteration
+SWARM_CASES = [("ipso", "ding2024_exp1", None, None), ("pso", "ding2024_exp1", None, None),
+               ("rdpso", "ding2024_exp1", None, None), ("rdpso", "yuan2018_mode1", None, None),
+               ("pso9", "ding2024_exp1", "scalar", None), ("ipso", "yuan2018_mode1", None, "inverse")]
+
+
+@pytest.mark.parametrize("draw_block", [None, 7 * 4 * 20 * 12])  # default; a few iterations per draw, a remainder
+@pytest.mark.parametrize("boundary", ["clip", "reflect", "random"])
+@pytest.mark.parametrize("estimator, scenario, objective, parameterisation", SWARM_CASES)
+def test_compiled_steps_give_the_numpy_path_bit_for_bit(make_cfg, monkeypatch, estimator, scenario, objective,
+                                                         parameterisation, boundary, draw_block):
+    """Same seed, same problem: the compiled swarm steps (and the compiled run with the cost inside)
+    and the numpy path end at the same ``x``, ``fun`` and history, bit for bit (the same draws, the
+    same operations in the same order)."""
+    from magexp.estimators import swarm
 
     if swarm.compiled() is None:
         pytest.skip("numba not installed")
     if draw_block is not None:
         monkeypatch.setattr(swarm, "DRAW_BLOCK", draw_block)
-    cfg = make_cfg(f"scenario={scenario}", f"estimator={estimator}", "estimator.n_particles=20",
-                   "estimator.n_iterations=60", f"estimator.boundary={boundary}", "scenario.n_readings=100")
-    sc = instantiate(cfg.scenario, _convert_="all")
-    prob = make_problem(sc.objective if estimator != "pso9" else "scalar", sc.generate(rng=np.random.default_rng(0)),
-                        sc.search, **getattr(sc, "problem_options", {}))
-    est = instantiate(cfg.estimator, _convert_="all")
+    est, prob = _swarm_case(make_cfg, estimator, scenario, objective, parameterisation, "estimator.n_iterations=60",
+                            f"estimator.boundary={boundary}")
     fast = est.fit(prob, rng=np.random.default_rng(7))
     monkeypatch.setattr(swarm, "compiled", lambda: None)
     slow = est.fit(prob, rng=np.random.default_rng(7))
@@ -175,3 +193,116 @@ def test_a_rule_changed_by_a_subclass_runs_its_own_numpy_rule():
     assert swarm._has_step(InertiaVelocity()) and not swarm._has_step(Frozen())
     res = SwarmOptimizer(n_particles=5, n_iterations=10, velocity=Frozen()).fit(_Quadratic(), rng=np.random.default_rng(0))
     assert np.all(res.history == res.history[0])  # nobody moves
+
+
+@pytest.mark.parametrize("draw_block", [None, 7 * 4 * 20 * 12])
+@pytest.mark.parametrize("n_iterations", [1, 2, 29, 60])
+def test_the_compiled_run_covers_every_iteration_once(make_cfg, monkeypatch, draw_block, n_iterations):
+    """With a compiled cost and ``clip``, the iterations (and the initial move) run in
+    :func:`_compiled.run`, one call per block of draws and one for the last iteration, each
+    iteration exactly once; a callback takes the per-iteration steps (and gives the same numbers)."""
+    from magexp.estimators import swarm
+
+    nb = swarm.compiled()
+    if nb is None:
+        pytest.skip("numba not installed")
+    if draw_block is not None:
+        monkeypatch.setattr(swarm, "DRAW_BLOCK", draw_block)
+    est, prob = _swarm_case(make_cfg, "rdpso", "ding2024_exp1", None, None, f"estimator.n_iterations={n_iterations}")
+    calls = []
+    run = nb.run
+
+    def spy(x, v, pbest, pcost, history, t, n, *rest):
+        calls.append((t, n))
+        return run(x, v, pbest, pcost, history, t, n, *rest)
+
+    monkeypatch.setattr(nb, "run", spy)
+    fused = est.fit(prob, rng=np.random.default_rng(3))
+    per_block = swarm.DRAW_BLOCK // (4 * 20 * 12)
+    assert [t for t, _ in calls] == list(np.cumsum([0] + [n for _, n in calls[:-1]]))  # consecutive, from 0
+    assert sum(n for _, n in calls) == n_iterations + 1 and fused.nit == n_iterations  # the initial move too
+    assert len(calls) == -(-n_iterations // per_block) + 1  # one per block of draws, then the last iteration
+    before = len(calls)
+    stepped = est.fit(prob, rng=np.random.default_rng(3), callback=lambda t, x, f: False)
+    assert len(calls) == before  # a callback: one step per iteration
+    np.testing.assert_array_equal(stepped.history, fused.history)
+    np.testing.assert_array_equal(stepped.x, fused.x)
+
+
+# hashes of x, fun and history of seeds 1, 2, 3 (20 particles, 150 iterations, 100 readings), computed with
+# the engine before its cost was compiled into the loop: restructuring the engine must not move a bit
+PINNED = {
+    'ipso/ding2024_exp1/scalar/default': 'b07582a70b624d90',
+    'pso/ding2024_exp1/scalar/default': 'd4feb38c52e81ffb',
+    'rdpso/ding2024_exp1/scalar/default': 'd22f78e9ca51e0c8',
+    'pso9/ding2024_exp1/scalar/default': '80748a99c9e98df8',
+    'rdpso/yuan2018_mode1/vector/default': 'c2f70640b968e707',
+    'pso/yuan2018_mode1/vector/default': '3c9c201f02bed47a',
+    'ipso/yuan2018_mode1/vector/inverse': 'ae43622201645a9e',
+    'rdpso/yuan2018_mode1/vector/inverse': 'ebfb9bc01191cb3c',
+    'pso9/yuan2018_mode1/scalar/default': '84c60eefe683dd2f',
+}
+
+
+@pytest.mark.parametrize("case", sorted(PINNED))
+def test_swarm_fits_keep_their_pinned_bits(make_cfg, case):
+    import hashlib
+
+    from magexp.estimators import swarm
+
+    if swarm.compiled() is None:
+        pytest.skip("numba not installed (the pins are the compiled path's bits)")
+    estimator, scenario, objective, parameterisation = case.split("/")
+    est, prob = _swarm_case(make_cfg, estimator, scenario, objective,
+                            None if parameterisation == "default" else parameterisation, "estimator.n_iterations=150")
+    h = hashlib.sha256()
+    for seed in (1, 2, 3):
+        r = est.fit(prob, rng=np.random.default_rng(seed))
+        h.update(np.asarray(r.x, float).tobytes() + np.float64(r.fun).tobytes() + np.asarray(r.history).tobytes())
+    assert h.hexdigest()[:16] == PINNED[case]
+
+
+@pytest.mark.parametrize("form", ["printed", "usual"])
+@pytest.mark.parametrize("burn_in", [0, 5])
+def test_compiled_circle_map_gives_numpys_bits(form, burn_in):
+    """The compiled Circle-map sequence is numpy's, bit for bit, on random seeds of any size."""
+    from magexp.estimators import initialisers
+
+    if initialisers._compiled_sequence() is None:
+        pytest.skip("numba not installed, or its cos/sin/mod differ from numpy's here (numpy runs)")
+    z0 = np.random.default_rng(burn_in).random(37)
+    init = CircleMap(form, burn_in)
+    np.testing.assert_array_equal(init.sequence(z0, 300), initialisers._numpy_sequence(z0, 300, burn_in, form))
+
+
+@pytest.mark.parametrize("schedule", [Linear(0.9, 0.4), Linear(0.5, 2.5), Constant(1.49618), ThermalCoefficient()])
+def test_schedule_values_are_the_one_by_one_floats(schedule):
+    from magexp.estimators.schedules import values
+
+    t = np.arange(1, 1001)
+    got = values(schedule, t, 1000)
+    assert got.shape == t.shape and got.dtype == float
+    np.testing.assert_array_equal(got, [schedule(int(k), 1000) for k in t])
+
+
+def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
+    """numba keys a cached function by its own bytecode: the engine's run (which inlines the costs)
+    and the Circle-map sequence also carry the sources they call into, so editing those recompiles."""
+    import hashlib
+    from pathlib import Path
+
+    from magexp.estimators import swarm
+
+    nb = swarm.compiled()
+    if nb is None:
+        pytest.skip("numba not installed")
+    from magexp.estimators import initialisers
+    from magexp.problems import _compiled as costs
+    from magexp.problems import kernels
+
+    def digest(*modules):
+        return hashlib.sha256(b"".join(Path(m.__file__).read_bytes() for m in modules)).hexdigest()
+
+    codegen = nb.run.targetctx.codegen()
+    assert nb.run._cache._index_key((), codegen)[-1] == digest(costs, kernels)
+    assert nb.circle_sequence._cache._index_key((), codegen)[-1] == digest(initialisers)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check_nonnegative
+from magexp.estimators.schedules import values
 from magexp.estimators.velocity import _NO_DRAWS
 
 
@@ -75,6 +76,20 @@ class RandomDriftVelocity:
                                      r1=r1, r2=r2, phi=drift_sign_log(u, s))
 
     n_draws = 4  # random numbers per particle and dimension in one iteration (r1, r2, s, u)
+
+    drift = True  # the rule of :func:`magexp.estimators._compiled.drift_move` in a compiled run
+
+    def coefficients(self, t: np.ndarray, t_max: int) -> np.ndarray:
+        """``[α, c1, c2]`` at every time of the integer array ``t``, ``(len(t), 3)``: the
+        coefficients of :func:`magexp.estimators._compiled.run` (the same floats as :meth:`step`)."""
+        coef = np.empty((len(t), 3))
+        coef[:, 0], coef[:, 1], coef[:, 2] = values(self.alpha, t, t_max), self.c1, self.c2
+        return coef
+
+    def log_u(self, r: np.ndarray) -> np.ndarray:
+        """``ln(1/u)``, ``u = 1 - r[:, 3]``, of the draws ``r`` (k, 4, n, d) in a compiled run, as
+        :meth:`step` computes it (numpy's ``log``)."""
+        return np.log(1.0 / (1.0 - r[:, 3]))
 
     def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
         """One compiled call (:func:`magexp.estimators._compiled.drift_step`): the best updates

@@ -1,12 +1,23 @@
 """Time-varying coefficients of the swarm update (inertia and learning factors).
 
 A schedule is called as ``schedule(t, t_max)`` with the iteration number
-``t = 1..t_max`` and returns a float.
+``t = 1..t_max`` and returns a float; called with an integer array ``t`` it returns the values
+of every iteration at once (element-wise the same floats, :func:`values`).
 """
 
 from __future__ import annotations
 
+import numpy as np
+
 from magexp.errors import MagexpError
+
+
+def values(schedule, t: np.ndarray, t_max: int) -> np.ndarray:
+    """``schedule`` at every iteration of the integer array ``t`` in one vectorised call: the
+    same floats as ``schedule(t_k, t_max)`` one by one (the same IEEE operations, each exact
+    ``int -> float`` conversion included)."""
+    out = schedule(t, t_max)
+    return out if isinstance(out, np.ndarray) else np.full(t.shape, out, float)  # a constant: one float
 
 
 def _number(value, name: str) -> float:

@@ -19,13 +19,20 @@ With numba (:func:`compiled`), a rule whose class has a ``step`` method beside i
 (the built-in ones) makes one
 compiled call per iteration of the best updates and the next iteration's rule, clamp, move and
 ``clip`` (:mod:`magexp.estimators._compiled`), on random numbers drawn several iterations per
-call (:func:`_draws`; the same stream): the same numbers, bit for bit, as the numpy path, which
+call (:func:`_draw_blocks`; the same stream): the same numbers, bit for bit, as the numpy path, which
 runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
+
+When, besides, the problem offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`),
+the boundary is ``clip``, the rule has ``coefficients`` and no callback watches the iterations,
+the cost joins the compiled call and one call runs a whole block of draws' iterations
+(:meth:`SwarmOptimizer._run`, :func:`magexp.estimators._compiled.run`): no Python, no dispatch
+and no argument conversion per iteration, and again the same numbers, bit for bit.
 """
 
 from __future__ import annotations
 
 from functools import cache
+from itertools import chain
 
 import numpy as np
 
@@ -35,24 +42,27 @@ from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
 from magexp.estimators.velocity import InertiaVelocity
 from magexp.problems import kernels
-from magexp.problems.base import defining_class
+from magexp.problems.base import defining_class, swarm_kernel
 
 
-DRAW_BLOCK = 1 << 16  # random numbers drawn per call by the compiled path (a multiple of one iteration's)
+DRAW_BLOCK = 1 << 14  # random numbers drawn per call by the compiled path (128 kB: they stay in cache)
 
 
-def _draws(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
+def _draw_blocks(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
     """The random numbers of iterations ``1..t_max``, ``shape`` each, drawn ``block`` iterations
-    per call: the same stream as one ``rng.random(shape)`` per iteration (a generator fills an
-    array in order), with less overhead per call."""
+    per call (arrays ``(k, *shape)``): the same stream as one ``rng.random(shape)`` per iteration
+    (a generator fills an array in order), with less overhead per call. Every block is drawn into
+    the same buffer (no fresh pages per block): a block is used up before the next is drawn."""
+    buffer = np.empty((min(block, t_max), *shape))
     for start in range(1, t_max + 1, block):
-        yield from rng.random((min(block, t_max + 1 - start), *shape))
+        yield rng.random(out=buffer[: min(block, t_max + 1 - start)])
 
 
-def _has_step(rule) -> bool:
-    """Whether ``rule`` has a compiled ``step`` of its own rule: one defined by the class that
-    defines its ``__call__`` (a subclass that changes the rule but not the step runs in numpy)."""
-    owner = defining_class(rule, "step")
+def _has_step(rule, name: str = "step") -> bool:
+    """Whether ``rule`` has a compiled ``step`` (or ``coefficients``) of its own rule: one defined
+    by the class that defines its ``__call__`` (a subclass that changes the rule but not the step
+    runs in numpy)."""
+    owner = defining_class(rule, name)
     return owner is not None and owner is defining_class(rule, "__call__")
 
 
@@ -115,6 +125,21 @@ class SwarmOptimizer:
             return self.velocity_clamp * (hi - lo)
         return np.full(lo.shape, np.inf)
 
+    def _run(self, nb, kernel, x, v, pbest, pcost, history, blocks, limits) -> int:
+        """Every iteration with the cost compiled in (:func:`magexp.estimators._compiled.run`): one
+        call per block of draws, from the initial move (iteration 0, on the costs in ``pcost``) to
+        the last iteration (no move), which joins the last block's call. The same numbers as one
+        :meth:`velocity.step` and one ``problem.cost`` per iteration. Returns the global best's index."""
+        rule, t, t_max = self.velocity, 0, len(history) - 1
+        coef = rule.coefficients(np.arange(1, t_max + 1), t_max)  # iteration t moves at time t + 1: row t
+        for r in blocks:
+            k = len(r)
+            nb.run(x, v, pbest, pcost, history, t, k, r, rule.log_u(r), coef[t: t + k], rule.drift, limits, True,
+                   kernel)
+            t += k
+        return nb.run(x, v, pbest, pcost, history, t_max, 1, r[:0], rule.log_u(r[:0]), coef[:0], rule.drift, limits,
+                      True, kernel)
+
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
         """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]``.
 
@@ -136,14 +161,22 @@ class SwarmOptimizer:
         neg_vmax = -vmax
         nb = compiled() if _has_step(self.velocity) else None
         clip_box = self.boundary == "clip"
+        kernel = None
         if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
             x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)
-            limits = np.array([vmax, lo, hi], float)
+            limits = np.empty((3, lo.size))
+            limits[0], limits[1], limits[2] = vmax, lo, hi
             # a boundary that draws (random re-entry) takes its numbers between two moves'
             block = 1 if self.boundary == "random" else max(1, DRAW_BLOCK // (self.velocity.n_draws * x.size))
-            draws = _draws(rng, (self.velocity.n_draws, *x.shape), t_max, block)
-            g = self.velocity.step(nb, x, v, pbest, pcost, pcost, next(draws), 1, t_max, limits, clip_box)
-        for t in range(1, t_max + 1):
+            blocks = _draw_blocks(rng, (self.velocity.n_draws, *x.shape), t_max, block)
+            if clip_box and callback is None and _has_step(self.velocity, "coefficients"):
+                kernel = swarm_kernel(problem)
+            if kernel is not None:  # every iteration, compiled in
+                g, nit = self._run(nb, kernel, x, v, pbest, pcost, history, blocks, limits), t_max
+            else:
+                draws = chain.from_iterable(blocks)
+                g = self.velocity.step(nb, x, v, pbest, pcost, pcost, next(draws), 1, t_max, limits, clip_box)
+        for t in range(1, 1 if kernel is not None else t_max + 1):
             if nb is not None:
                 if not clip_box:
                     x, v = self._handle(x, v, lo, hi, rng=rng)
@@ -164,8 +197,9 @@ class SwarmOptimizer:
             if callback is not None and callback(t, pbest[g], pcost[g]):
                 break
         history = history[: nit + 1]
-        edge = np.isclose(pbest[g], lo, rtol=0, atol=1e-9 * (hi - lo)) | np.isclose(pbest[g], hi, rtol=0,
-                                                                                 atol=1e-9 * (hi - lo))
+        # on a face: |best - face| <= 1e-9 (hi - lo) (np.isclose with rtol=0 where the box is finite)
+        best, atol = pbest[g], 1e-9 * (hi - lo)
+        edge = (np.abs(best - lo) <= atol) | (np.abs(best - hi) <= atol) | (best == lo) | (best == hi)
         return FitResult(
             x=pbest[g].copy(), fun=float(pcost[g]), nit=nit, nfev=n * (nit + 1),
             history=history, history_nfev=n * np.arange(1, nit + 2),

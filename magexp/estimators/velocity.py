@@ -7,9 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.estimators.schedules import Constant
+from magexp.estimators.schedules import Constant, values
 
 _NO_DRAWS = np.empty((2, 0, 0))  # the random numbers of a step that does not move
+_NO_LOG = np.empty((0, 0, 0))  # ln(1/u) of a rule that draws no u
 
 
 def inertia_velocity(v, x, pbest, gbest, *, w, c1, c2, r1, r2):
@@ -42,6 +43,20 @@ class InertiaVelocity:
         )
 
     n_draws = 2  # random numbers per particle and dimension in one iteration (r1, r2)
+
+    drift = False  # the rule of :func:`magexp.estimators._compiled.inertia_move` in a compiled run
+
+    def coefficients(self, t: np.ndarray, t_max: int) -> np.ndarray:
+        """``[w, c1, c2]`` at every time of the integer array ``t``, ``(len(t), 3)``: the
+        coefficients of :func:`magexp.estimators._compiled.run` (the same floats as :meth:`step`)."""
+        coef = np.empty((len(t), 3))
+        for k, schedule in enumerate((self.inertia, self.c1, self.c2)):
+            coef[:, k] = values(schedule, t, t_max)
+        return coef
+
+    def log_u(self, r: np.ndarray) -> np.ndarray:
+        """``ln(1/u)`` of the draws ``r`` (k, 2, n, d) in a compiled run: none (this rule draws no ``u``)."""
+        return _NO_LOG
 
     def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
         """One compiled call (:func:`magexp.estimators._compiled.inertia_step`): the best updates

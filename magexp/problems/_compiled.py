@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from magexp.problems.kernels import SCALAR
+
 _jit = njit(cache=True, nogil=True, error_model="numpy")
 
 
@@ -100,6 +102,35 @@ def vector_cost(w, o, readings, reference):
             e2 = v2 - (c6[p] * d0 + c7[p] * d1 + c8[p] * d2)
             acc[p] += np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
     return acc
+
+
+@_jit
+def swarm_cost(kind, thetas, data, reference, params):
+    """The swarm cost of parameter vectors ``thetas`` (P, 12) ``= [vec(W) (row-major), o]``: one
+    entry for every problem with a compiled cost, so that a compiled caller (the swarm engine's
+    :func:`magexp.estimators._compiled.run`) takes the cost as data, not as a function.
+
+    ``kind`` :data:`SCALAR`: :func:`scalar_cost` with ``data`` the normalised readings ``u``,
+    ``reference`` ``B_a`` as a column (N, 1) and ``params = [c, s]``; :data:`VECTOR`:
+    :func:`vector_cost` with ``data`` the readings and ``reference`` the vectors ``v_i`` (N, 3),
+    non-finite values set to ``inf`` (as :func:`magexp.problems.kernels.vector_cost`).
+    The same numbers as those kernels called on ``W``, ``o`` directly."""
+    n_p = thetas.shape[0]
+    w = np.empty((n_p, 3, 3))
+    o = np.empty((n_p, 3))
+    for p in range(n_p):
+        for k in range(9):
+            w[p, k // 3, k % 3] = thetas[p, k]
+        for k in range(3):
+            o[p, k] = thetas[p, 9 + k]
+    if kind == SCALAR:
+        # the column as a C-contiguous vector: the same compiled scalar_cost as a direct call
+        return scalar_cost(w, o, params[:3], params[3], data, reference.reshape(reference.size))
+    f = vector_cost(w, o, data, reference)
+    for p in range(n_p):
+        if not np.isfinite(f[p]):
+            f[p] = np.inf
+    return f
 
 
 @_jit

@@ -94,6 +94,17 @@ def defining_class(obj, name: str):
     return next((c for c in type(obj).__mro__ if name in vars(c)), None)
 
 
+def swarm_kernel(problem) -> tuple | None:
+    """The prepared arguments ``(kind, data, reference, params)`` of the compiled swarm cost
+    (:func:`magexp.problems.kernels.swarm_cost`) that computes ``problem.cost``, or None: none
+    offered (a problem without :meth:`CalibrationProblem.swarm_kernel`, numba off, a forward
+    parameterisation), or one not defined beside the class's ``cost`` (a subclass that changes
+    the cost, e.g. :class:`magexp.problems.vector.VectorLeastSquares`, gets the generic path)."""
+    if defining_class(problem, "swarm_kernel") is not defining_class(problem, "cost"):
+        return None
+    return problem.swarm_kernel()
+
+
 def reference_vectors(dataset) -> np.ndarray:
     """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field."""
     return np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)
@@ -123,6 +134,12 @@ class CalibrationProblem:
         self.parameterisation = parameterisation
         self.options = {"parameterisation": parameterisation}
         self.lower, self.upper = search.bounds()
+
+    def swarm_kernel(self) -> tuple | None:
+        """``(kind, data, reference, params)``: the arguments, prepared once, of the compiled
+        swarm cost (:func:`magexp.problems.kernels.swarm_cost`) equal to :meth:`cost` bit for bit,
+        or None (here: a problem without one). Read it through :func:`swarm_kernel`."""
+        return None
 
     # -- parameters <-> model ---------------------------------------------------------------
     def unpack(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

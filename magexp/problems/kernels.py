@@ -39,6 +39,8 @@ from functools import cache
 
 import numpy as np
 
+from magexp.errors import MagexpError
+
 CHUNK = 1 << 16  # particle-readings per temporary of the numpy fallback
 COMPILE_MIN_READINGS = 1 << 14  # residuals of fewer readings stay in numpy (no numba import)
 
@@ -53,6 +55,22 @@ def compiled():
     except ImportError:  # numba not installed
         return None
     return _compiled
+
+
+SCALAR, VECTOR = 0, 1  # the kinds of compiled swarm cost (:func:`magexp.problems._compiled.swarm_cost`)
+
+
+def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
+    """The cost of every particle ``thetas`` (P, 12) ``= [vec(W), o]`` in one compiled call:
+    ``kernel = (kind, data, reference, params)``, a problem's arguments prepared once
+    (:meth:`magexp.problems.base.CalibrationProblem.swarm_kernel`); no per-call conversion but
+    making ``thetas`` a C-contiguous float array (2-D), which an engine's swarm already is."""
+    thetas = np.ascontiguousarray(thetas, float)
+    if thetas.ndim != 2:
+        thetas = thetas.reshape(1, -1)
+    if thetas.shape[1] != 12:  # the compiled kernel reads 12 columns unchecked
+        raise MagexpError(f"parameter vectors of shape {thetas.shape} are not allowed: the cost takes (n, 12)")
+    return compiled().swarm_cost(kernel[0], thetas, kernel[1], kernel[2], kernel[3])
 
 
 # -- scalar objective ----------------------------------------------------------------------------

@@ -54,8 +54,21 @@ class ScalarCalibration(CalibrationProblem):
         for its residuals, e.g. by :mod:`magexp.bounds`, never pays for it)."""
         return normalise(self.dataset.readings)
 
+    @cached_property
+    def _swarm_kernel(self) -> tuple | None:
+        if self.parameterisation != "inverse" or kernels.compiled() is None:
+            return None  # W = S^-1 is inverted by numpy in unpack
+        c, s, u = self._normalised
+        return kernels.SCALAR, u, self._reference.reshape(-1, 1), np.append(c, s)
+
+    def swarm_kernel(self) -> tuple | None:
+        """``(SCALAR, u, B_a (N, 1), [c, s])`` in the inverse parameterisation with numba, else None."""
+        return self._swarm_kernel
+
     def cost(self, thetas: np.ndarray) -> np.ndarray:
         """Total-field RMS of every particle, ``(n, 12) -> (n,)``."""
+        if self._swarm_kernel is not None:
+            return kernels.swarm_cost(self._swarm_kernel, thetas)
         w, o = self.unpack(thetas)
         return kernels.scalar_cost(w, o, *self._normalised, self._reference)
 

@@ -13,6 +13,8 @@ separated (Yuan's rotation mode 4).
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from magexp.problems import kernels
@@ -99,8 +101,20 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         self.reference = reference_vectors(dataset)
         self._readings = np.ascontiguousarray(dataset.readings, float)
 
+    @cached_property
+    def _swarm_kernel(self) -> tuple | None:
+        if self.parameterisation != "inverse" or kernels.compiled() is None:
+            return None  # W = S^-1 is inverted by numpy in unpack
+        return kernels.VECTOR, self._readings, np.ascontiguousarray(self.reference, float), np.zeros(4)
+
+    def swarm_kernel(self) -> tuple | None:
+        """``(VECTOR, readings, v_i (N, 3), ·)`` in the inverse parameterisation with numba, else None."""
+        return self._swarm_kernel
+
     def cost(self, thetas: np.ndarray) -> np.ndarray:
         """``F`` of every particle, ``(n, 12) -> (n,)``; non-finite values become ``inf``."""
+        if self._swarm_kernel is not None:
+            return kernels.swarm_cost(self._swarm_kernel, thetas)
         w, o = self.unpack(thetas)
         return kernels.vector_cost(w, o, self._readings, self.reference)
 
