@@ -67,6 +67,20 @@ def test_scalar_residuals_do_not_depend_on_the_address_of_their_inputs(partial_a
         assert np.array_equal(moved.residuals(at_offset(theta, shift)), first)
 
 
+@pytest.mark.parametrize("n", [7, 20000])  # the numpy formula, and the compiled kernel from COMPILE_MIN_READINGS on
+def test_residual_kernels_do_not_depend_on_the_address_of_their_inputs(n):
+    from magexp.problems import kernels
+
+    rng = np.random.default_rng(3)
+    readings, reference = rng.normal(size=(n, 3)) * 500, 500 + rng.normal(size=n)
+    w, o = np.eye(3) + 0.05 * rng.normal(size=(3, 3)), rng.normal(size=3) * 40
+    first = kernels.scalar_residuals(w, o, readings, reference)
+    for shift in range(8, 64, 8):
+        moved = kernels.scalar_residuals(at_offset(w, shift), at_offset(o, shift), at_offset(readings, shift),
+                                         at_offset(reference, shift))
+        assert np.array_equal(moved, first)
+
+
 def dataset_with(dataset, readings):
     return dataclasses.replace(dataset, readings=readings)
 
