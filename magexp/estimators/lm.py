@@ -22,7 +22,8 @@ estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits
 of every ``W = Q P`` (:func:`magexp.quality.canonical`, the form ``magexp calibrate`` reports),
 so the fit returns that unique member of the valley: the same numbers in every process, and
 parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
-parameters as before (kept to compare).
+parameters as before (kept to compare; ``tests/test_determinism.py`` shows its fit changing with
+the memory a process leaves behind, and the gauge-fixed one not).
 """
 
 from __future__ import annotations
@@ -90,7 +91,8 @@ class LevenbergMarquardt:
 
     def fit_symmetric(self, problem, *, callback=None) -> FitResult:
         """The gauge-fixed fit of a total-field problem (module docstring): LM over ``q`` from the polar
-        factor of the start; the result is returned in the problem's 12 parameters."""
+        factor of the start; the result is returned in the problem's 12 parameters, with the metrics
+        of :func:`offset_check` (a fit whose offset the data leave undetermined is not a success)."""
         from magexp.estimators.reduced import UPPER, expand
 
         x0 = polar(problem, self.initial(problem))
@@ -155,6 +157,8 @@ def polar(problem, x: np.ndarray) -> np.ndarray:
         return problem.pack(canonical(w[0]), o[0])
     except np.linalg.LinAlgError:  # the forward form cannot hold a singular W
         return x
+
+
 def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 2000, callback=None, measure=None):
     """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``.
 
