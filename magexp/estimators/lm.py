@@ -136,8 +136,9 @@ def offset_check(problem, q: np.ndarray) -> dict:
         return np.array([problem.residuals(expand(one)[0]) for one in np.atleast_2d(qs)])
 
     names = ["M11", "M12", "M13", "M22", "M23", "M33", "o1", "o2", "o3"]
-    se = identifiability(fun, q, names)["standard_errors"]
-    error = float(np.sqrt(sum(se[n] ** 2 for n in names[6:])))
+    with np.errstate(all="ignore"):  # a fit stuck at a singular W is measured (inf), not warned about
+        se = identifiability(fun, q, names)["standard_errors"]
+        error = float(np.nan_to_num(np.sqrt(sum(se[n] ** 2 for n in names[6:])), nan=np.inf, posinf=np.inf))
     return {"offset_standard_error": error, "offset_determined": bool(error < normalise(problem.dataset.readings)[1])}
 
 
