@@ -1,8 +1,29 @@
 """Levenberg-Marquardt refinement of the problem's residuals (``scipy.optimize.least_squares``).
 
-Minimises ``sum(problem.residuals(theta)**2)`` with MINPACK's LM, started from
-the ellipsoid fit (or the centre of the search box). For the scalar problem the
-residuals are ``|W(r_i - o)| - B_a``: the maximum-likelihood fit under Gaussian noise.
+Minimises ``sum(problem.residuals(theta)**2)`` with MINPACK's LM, started from the problem's
+closed-form estimate (or the ellipsoid fit, or the centre of the search box). For the scalar
+problem the residuals are ``|W(r_i - o)| - B_a``: the maximum-likelihood fit under Gaussian noise.
+
+**The rotation gauge of a scalar objective.** ``|Q W (r - o)| = |W (r - o)|`` for every orthogonal
+``Q`` (Ding 2024, eq 17 sees only ``W^T W`` and ``o``), so over the 12 entries of ``[vec W, o]``
+the residuals have an exact 3-dimensional valley and their Jacobian has three exactly dependent
+columns. MINPACK's pivoted QR then works on an exactly rank-deficient matrix, and where along the
+valley it ends depends on more than the data: with bit-identical residuals at every evaluation,
+its iterates differ in the last bits with the contents of memory left by earlier work in the
+process, and the difference grows along the valley to the 3rd-4th significant digit of ``W`` (and
+of ``o`` when the data also leave the offset weakly determined). On a total-field problem this
+estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits the 9 parameters
+
+.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad M = M^T
+
+(``M`` the matrix part of the problem's parameters: ``W``, or ``S = W^{-1}`` in the forward form;
+:mod:`magexp.estimators.reduced`), whose Jacobian has full rank wherever the data determine
+``W^T W`` and ``o``. A symmetric positive-definite ``W`` is the polar factor ``P = (W^T W)^{1/2}``
+of every ``W = Q P`` (:func:`magexp.quality.canonical`, the form ``magexp calibrate`` reports),
+so the fit returns that unique member of the valley: the same numbers in every process, and
+parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
+parameters as before (kept to compare; ``tests/test_determinism.py`` shows its fit changing with
+the memory a process leaves behind, and the gauge-fixed one not).
 """
 
 from __future__ import annotations
@@ -16,6 +37,7 @@ from magexp.estimators.ellipsoid import EllipsoidFit
 from magexp.estimators.result import FitResult
 
 STARTS = ("ellipsoid", "centre", "problem")
+GAUGES = ("symmetric", "free")
 
 
 class LevenbergMarquardt:
@@ -30,18 +52,24 @@ class LevenbergMarquardt:
         ``centre``.
     max_nfev : cap on residual evaluations.
     tol : ``xtol = ftol = gtol`` of ``least_squares``.
+    gauge : on a total-field (scalar) problem, ``symmetric`` (default) fits the 9 parameters of a
+        symmetric matrix part and returns the polar factor (module docstring); ``free`` fits all 12
+        (its ``W`` carries an arbitrary rotation). Other problems always fit all 12.
     """
 
     references = "Levenberg 1944; Marquardt 1963; More 1978 (MINPACK)"
     needs = ("residuals",)
     iterative = True
 
-    def __init__(self, *, name: str = "lm", start: str = "problem", max_nfev: int = 2000, tol: float = 1e-12):
+    def __init__(self, *, name: str = "lm", start: str = "problem", max_nfev: int = 2000, tol: float = 1e-12,
+                 gauge: str = "symmetric"):
         check(start in STARTS, f"estimator.start={start!r} is not allowed: choose one of {', '.join(STARTS)}")
+        check(gauge in GAUGES, f"estimator.gauge={gauge!r} is not allowed: choose one of {', '.join(GAUGES)}")
         self.name = name
         self.start = start
         self.max_nfev = check_positive_int(max_nfev, "estimator.max_nfev")
         self.tol = float(tol)
+        self.gauge = gauge
 
     def initial(self, problem) -> np.ndarray:
         if self.start == "problem" and hasattr(problem, "initial_estimate"):
@@ -55,12 +83,81 @@ class LevenbergMarquardt:
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
         """Minimise ``sum(problem.residuals(x)^2)``; ``callback(k, best x, best RMS)`` after each
         residual evaluation ``k`` may stop it (the best point so far is returned)."""
+        if self.gauge == "symmetric" and "total_field" in problem.capabilities:
+            return self.fit_symmetric(problem, callback=callback)
         x, status, message, history = minimise_residuals(problem.residuals, self.initial(problem), tol=self.tol,
                                                          max_nfev=self.max_nfev, callback=callback)
+        return self.result(problem, x, status, message, history)
+
+    def fit_symmetric(self, problem, *, callback=None) -> FitResult:
+        """The gauge-fixed fit of a total-field problem (module docstring): LM over ``q`` from the polar
+        factor of the start; the result is returned in the problem's 12 parameters, with the metrics
+        of :func:`offset_check` (a fit whose offset the data leave undetermined is not a success)."""
+        from magexp.estimators.reduced import UPPER, expand
+
+        x0 = polar(problem, self.initial(problem))
+        relay = None if callback is None else (lambda k, q, fun: callback(k, expand(q)[0], fun))
+        q, status, message, history = minimise_residuals(lambda q: problem.residuals(expand(q)[0]),
+                                                         np.concatenate([x0[UPPER], x0[9:]]), tol=self.tol,
+                                                         max_nfev=self.max_nfev, callback=relay)
+        result = self.result(problem, polar(problem, expand(q)[0]), status, message, history)
+        if np.all(np.isfinite(q)):
+            result.metrics = offset_check(problem, q)
+            if not result.metrics["offset_determined"]:
+                result.success = False
+                result.message += "; the data leave the offset undetermined"
+        return result
+
+    @staticmethod
+    def result(problem, x, status: int, message: str, history) -> FitResult:
         check(np.all(np.isfinite(x)), "lm diverged: the residuals became non-finite")
         return FitResult(x=x, fun=problem.cost_direct(x), nit=len(history), nfev=len(history),
                          history=history, history_nfev=np.arange(1, len(history) + 1),
                          success=status > 0, message=message)
+
+
+def offset_check(problem, q: np.ndarray) -> dict:
+    """Whether the data determine the offset of the gauge-fixed fit ``q`` of a total-field problem.
+
+    ``offset_standard_error``: ``sqrt(tr Cov(o))`` of the fit's own Gauss-Newton covariance
+    ``σ² (J^T J)^{-1}`` over ``q`` (:func:`magexp.quality.identifiability`: ``σ²`` from the
+    residuals, ``J`` by central differences, undetermined directions infinite). Readings on two
+    planar rings (turns about two axes only) lie on a one-parameter family of ellipsoids, so a
+    total-field fit cannot place the centre and this error exceeds the size of the data.
+    ``offset_determined``: it is below the RMS distance of the readings from their centroid
+    (:func:`magexp.problems.scalar.normalise`): the data locate the centre of the readings'
+    ellipsoid to better than the ellipsoid's own size.
+    """
+    from magexp.estimators.reduced import expand
+    from magexp.problems.scalar import normalise
+    from magexp.quality import identifiability
+
+    def fun(qs):  # identifiability evaluates a stack of 2 x 9 perturbed vectors
+        return np.array([problem.residuals(expand(one)[0]) for one in np.atleast_2d(qs)])
+
+    names = ["M11", "M12", "M13", "M22", "M23", "M33", "o1", "o2", "o3"]
+    with np.errstate(all="ignore"):  # a fit stuck at a singular W is measured (inf), not warned about
+        se = identifiability(fun, q, names)["standard_errors"]
+        error = float(np.nan_to_num(np.sqrt(sum(se[n] ** 2 for n in names[6:])), nan=np.inf, posinf=np.inf))
+    return {"offset_standard_error": error, "offset_determined": bool(error < normalise(problem.dataset.readings)[1])}
+
+
+def polar(problem, x: np.ndarray) -> np.ndarray:
+    """``x`` with its ``W`` replaced by the symmetric positive-definite polar factor
+    ``(W^T W)^{1/2}`` (:func:`magexp.quality.canonical`): the same total field, no rotation.
+    A symmetric positive-definite matrix part is kept bit for bit (it is already that factor), and so
+    is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of)."""
+    from magexp.quality import canonical
+
+    x = np.asarray(x, float)
+    mat = x[:9].reshape(3, 3)
+    if np.array_equal(mat, mat.T) and np.all(np.linalg.eigvalsh(mat) > 0):
+        return x
+    w, o = problem.unpack(x)
+    try:
+        return problem.pack(canonical(w[0]), o[0])
+    except np.linalg.LinAlgError:  # the forward form cannot hold a singular W
+        return x
 
 
 def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 2000, callback=None, measure=None):
