@@ -108,6 +108,7 @@ for k, fill in enumerate((0.0, np.nan, 1e300, -1.0) * 3):
 """ % PARTIAL_ARC
 
 
+@pytest.mark.full  # end to end in subprocesses (make test-full); the in-process bit test stays in make test
 def test_the_free_gauge_fit_depends_on_process_memory():
     """The churn itself: the 12-parameter fit, bit-identical data, different leftovers in memory."""
     out = subprocess.run([sys.executable, "-c", CHURN], check=True, capture_output=True, text=True).stdout.split()
@@ -172,6 +173,7 @@ for paper, stem in (("benchmark", "benchmark_coverage"), ("yuan2018", "yuan2018_
 """
 
 
+@pytest.mark.full  # end to end in subprocesses (make test-full); the in-process bit test stays in make test
 def test_the_churned_artifacts_give_byte_identical_runs_from_two_process_histories(tmp_path):
     """The lm/scalar cells of benchmark_coverage and yuan2018_table2, every digit of every run
     (``%.17g``), from a fresh process and from one that ran the free-gauge fits and left memory dirty."""
