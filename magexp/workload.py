@@ -10,13 +10,17 @@ overrides for the same run, ``status`` is ``ok`` or ``inexpressible: <why>``. Th
 two steps: ``tools/old_workload.py list`` (run with the old checkout's interpreter) plans the old runs
 and records each cell's old resolved config (``cells.json``); :func:`map_cells` (``python -m
 magexp.workload map``) then composes each cell with today's configs and adds an override for every
-setting whose default changed since (e.g. ``estimator.tol``, ``estimator.max_nfev`` of ``lm``), so
+setting whose default changed since (in this list only ``lm``'s ``estimator.tol``: 1e-15 then), so
 that the replay runs the old settings wherever a key still exists. A cell is *inexpressible* when an
 old setting has no key today, or today's compose refuses the old overrides.
 
 Settings that exist only today (e.g. ``estimator.boundary``) keep today's defaults, and today's
 runs draw their data from per-scenario random streams (issue 9): the replay reproduces the old
 workload's *shape* (the same scenarios, estimators, sizes, budgets and seeds), not its numbers.
+Today's :func:`~magexp.executor.run_many` finds 2,942 distinct runs among the 2,952 rows: the
+old cache keyed a run by its config's JSON text, so ``scenario.noise=100`` (an int) and the
+default ``100.0`` of ``yan2022_sim`` were two runs (10 seeds of ``kf``); today's schema types the
+value and they are one.
 
 :func:`replay` runs the ``ok`` rows through today's :func:`magexp.executor.run_many`, from an empty
 temporary run cache (never the project's ``.cache``) and measures
@@ -33,6 +37,11 @@ Command line::
     python -m magexp.workload replay experiments/benchmark/workload_b533850.csv --jobs 2
     python -m magexp.workload replay FILE --jobs 1 --limit 20          # a smoke replay
     python -m magexp.workload map RUNS.csv CELLS.json --out FILE       # write a mapped list
+    python -m magexp.workload compare --old ../old --jobs 2 --rounds 3 --every 10   # before/after
+
+``compare`` alternates the old code's replay (``tools/old_workload.py replay`` with the old
+checkout's interpreter) and today's on the same rows, each a fresh process from an empty cache,
+and reports medians and the median ratio before / after: speed as a ratio measured side by side.
 """
 
 from __future__ import annotations
@@ -43,6 +52,7 @@ import csv
 import json
 import resource
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -261,13 +271,19 @@ def cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
-def replay(rows: list[dict], *, jobs: int = 0, executor: str = "local", limit: int | None = None) -> dict:
-    """Run the ``ok`` rows (the first ``limit`` of them) from an empty run cache; returns the
-    measurements (see the module docstring) and the run counts."""
+def pick(rows: list[dict], *, every: int = 1, limit: int | None = None) -> list[dict]:
+    """The ``ok`` rows, every ``every``-th of them (a sample that keeps every artifact's mix), the
+    first ``limit``. ``tools/old_workload.py`` selects the same rows."""
+    ok = [r for r in rows if r["status"] == "ok"][::every]
+    return ok[:limit] if limit is not None else ok
+
+
+def replay(rows: list[dict], *, jobs: int = 0, executor: str = "local") -> dict:
+    """Run the ``ok`` rows from an empty run cache; returns the measurements (see the module
+    docstring) and the run counts."""
     from magexp.executor import make_executor, run_many
 
-    ok = [r for r in rows if r["status"] == "ok"]
-    ok = ok[:limit] if limit is not None else ok
+    ok = pick(rows)
     counts: dict = {}
     with empty_cache():
         start, cpu = time.perf_counter(), cpu_seconds()
@@ -284,6 +300,60 @@ def replay(rows: list[dict], *, jobs: int = 0, executor: str = "local", limit: i
             "outside_fit_ms_per_run": (cpu - counts.get("fit_cpu", 0.0)) / n * 1e3}
 
 
+def parse_line(text: str) -> dict:
+    """The last ``key=value ...`` line of a replay's output as a dict (numbers as floats)."""
+    lines = [ln for ln in text.splitlines() if ln.startswith("side=")]
+    if not lines:
+        raise MagexpError(f"a replay printed no measurement line: {text.strip()[-300:]!r}")
+    out = {}
+    for item in lines[-1].split():
+        key, _, value = item.partition("=")
+        try:
+            out[key] = float(value)
+        except ValueError:
+            out[key] = value
+    return out
+
+
+#: the measurements compared by :func:`compare` (before / after)
+COMPARED = ("wall_s", "cpu_s", "fit_cpu_s", "outside_fit_ms_per_run")
+
+
+def compare(old_checkout: Path, file: Path = DEFAULT_LIST, *, jobs: int = 2, rounds: int = 3, every: int = 10,
+            log=print) -> dict:
+    """Before/after side by side: the same rows replayed by the old code (``old_checkout``: a
+    checkout of b533850 with its own ``.venv``, running ``tools/old_workload.py replay``) and by
+    today's (``python -m magexp.workload replay``), each in a fresh process from an empty cache,
+    alternating (A B, B A, ...) for ``rounds`` rounds. Returns per measurement of :data:`COMPARED`
+    the medians before and after and the median over rounds of before / after."""
+    tool = Path(__file__).resolve().parent.parent / "tools" / "old_workload.py"
+    python = Path(old_checkout) / ".venv" / "bin" / "python"
+    if not tool.is_file():
+        raise MagexpError(f"compare needs a source checkout: {tool} does not exist")
+    if not python.is_file():
+        raise MagexpError(f"--old {str(old_checkout)!r}: {python} does not exist (a b533850 checkout with its .venv)")
+    args = [str(file), "--jobs", str(jobs), "--every", str(every)]
+    sides = {"before": ([str(python), str(tool), "replay", *args], Path(old_checkout)),
+             "after": ([sys.executable, "-m", "magexp.workload", "replay", *args], Path.cwd())}
+    measured: dict[str, list[dict]] = {"before": [], "after": []}
+    for r in range(rounds):
+        for side in (("before", "after") if r % 2 == 0 else ("after", "before")):
+            command, cwd = sides[side]
+            done = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
+            if done.returncode != 0:
+                raise MagexpError(f"the {side} replay failed: {done.stderr.strip().splitlines()[-1:]}")
+            measured[side].append(parse_line(done.stdout))
+            log(f"round {r + 1} {done.stdout.strip().splitlines()[-1]}")
+    import numpy as np
+
+    out = {"runs": measured["after"][0]["runs"], "rounds": rounds, "jobs": jobs}
+    for key in COMPARED:
+        before = np.array([m[key] for m in measured["before"]])
+        after = np.array([m[key] for m in measured["after"]])
+        out[key] = (float(np.median(before)), float(np.median(after)), float(np.median(before / after)))
+    return out
+
+
 def line(measured: dict) -> str:
     """The measurements as one ``key=value`` line (the old side prints the same shape)."""
     return " ".join(f"{k}={v:.2f}" if isinstance(v, float) else f"{k}={v}" for k, v in measured.items())
@@ -296,7 +366,14 @@ def parser() -> argparse.ArgumentParser:
     play.add_argument("file", type=Path, nargs="?", default=DEFAULT_LIST)
     play.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
     play.add_argument("--executor", default="local", help="local or dask")
+    play.add_argument("--every", type=int, default=1, help="every K-th runnable row (a sample)")
     play.add_argument("--limit", type=int, default=None, help="only the first N runnable rows")
+    both = sub.add_parser("compare", help="before/after side by side: the old checkout's replay and today's, alternating")
+    both.add_argument("file", type=Path, nargs="?", default=DEFAULT_LIST)
+    both.add_argument("--old", type=Path, required=True, help="a checkout of b533850 with its own .venv")
+    both.add_argument("--jobs", type=int, default=2)
+    both.add_argument("--rounds", type=int, default=3)
+    both.add_argument("--every", type=int, default=10, help="every K-th runnable row (default 10)")
     mapper = sub.add_parser("map", help="map the old side's runs.csv and cells.json onto today's configs")
     mapper.add_argument("runs", type=Path)
     mapper.add_argument("cells", type=Path)
@@ -313,14 +390,23 @@ def main(argv=None) -> int:
             for status, n in sorted(counts.items()):
                 print(f"{n:6d}  {status}")
             return 0
-        if args.limit is not None and args.limit < 1:
-            raise MagexpError(f"--limit {args.limit} is not allowed: it must be an integer >= 1")
+        for flag in ("limit", "every", "rounds"):
+            value = getattr(args, flag, None)
+            if value is not None and value < 1:
+                raise MagexpError(f"--{flag} {value} is not allowed: it must be an integer >= 1")
         from magexp.executor import check_executor
 
-        check_executor(args.executor, args.jobs, None)
+        check_executor(getattr(args, "executor", "local"), args.jobs, None)
         rows = read_list(args.file)
+        if args.command == "compare":
+            result = compare(args.old, args.file, jobs=args.jobs, rounds=args.rounds, every=args.every)
+            print(f"{result['runs']:.0f} runs, {args.jobs} jobs, medians of {args.rounds} alternating rounds:")
+            for key in COMPARED:
+                before, after, ratio = result[key]
+                print(f"  {key:24s} before {before:10.2f}  after {after:10.2f}  before/after {ratio:6.2f}")
+            return 0
         skipped = sum(r["status"] != "ok" for r in rows)
-        print(line(replay(rows, jobs=args.jobs, executor=args.executor, limit=args.limit))
+        print(line(replay(pick(rows, every=args.every, limit=args.limit), jobs=args.jobs, executor=args.executor))
               + f" inexpressible={skipped}")
     except MagexpError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -148,6 +148,8 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys):
     assert err.startswith("error: workload list") and err.count("\n") == 1
     assert workload.main(["replay", "--limit", "0"]) == 2
     assert "--limit 0" in capsys.readouterr().err
+    assert workload.main(["replay", "--every", "-1"]) == 2
+    assert "--every -1 is not allowed" in capsys.readouterr().err
 
 
 def test_the_old_side_refuses_todays_code(tmp_path):
@@ -156,3 +158,27 @@ def test_the_old_side_refuses_todays_code(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert done.returncode != 0 and "b533850" in done.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_pick_samples_every_kth_runnable_row(rows):
+    mixed = [dict(r, status="inexpressible: x") if r["run"] % 3 == 0 else r for r in rows[:30]]
+    picked = workload.pick(mixed, every=4, limit=3)
+    assert [r["run"] for r in picked] == [1, 7, 13]  # runnable: 1 2 4 5 7 8 10 11 13 ...
+
+
+def test_measurement_lines_parse_back():
+    measured = {"side": "after", "runs": 3, "wall_s": 1.5, "outside_fit_ms_per_run": 2.25}
+    assert workload.parse_line("noise\n" + workload.line(measured) + " inexpressible=0\n") == {
+        "side": "after", "runs": 3.0, "wall_s": 1.5, "outside_fit_ms_per_run": 2.25, "inexpressible": 0.0}
+    with pytest.raises(MagexpError, match="no measurement line"):
+        workload.parse_line("Traceback ...")
+
+
+def test_compare_needs_an_old_checkout(tmp_path):
+    with pytest.raises(MagexpError, match="a b533850 checkout with its .venv"):
+        workload.compare(tmp_path, jobs=1, rounds=1)
+    fake = tmp_path / ".venv" / "bin"
+    fake.mkdir(parents=True)
+    (fake / "python").symlink_to(sys.executable)  # today's interpreter: the old side's tool refuses it
+    with pytest.raises(MagexpError, match="the before replay failed"):
+        workload.compare(tmp_path, jobs=1, rounds=1, every=1000)
