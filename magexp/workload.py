@@ -50,7 +50,6 @@ import argparse
 import contextlib
 import csv
 import json
-import resource
 import shutil
 import subprocess
 import sys
@@ -265,12 +264,6 @@ def empty_cache():
         shutil.rmtree(root, ignore_errors=True)
 
 
-def cpu_seconds() -> float:
-    """CPU seconds of this process and of its waited-for children."""
-    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
-
-
 def pick(rows: list[dict], *, every: int = 1, limit: int | None = None) -> list[dict]:
     """The ``ok`` rows, every ``every``-th of them (a sample that keeps every artifact's mix), the
     first ``limit``. ``tools/old_workload.py`` selects the same rows."""
@@ -282,6 +275,7 @@ def replay(rows: list[dict], *, jobs: int = 0, executor: str = "local") -> dict:
     """Run the ``ok`` rows from an empty run cache; returns the measurements (see the module
     docstring) and the run counts."""
     from magexp.executor import make_executor, run_many
+    from magexp.reproduce import cpu_seconds  # this process's and its finished workers' CPU
 
     ok = pick(rows)
     counts: dict = {}
