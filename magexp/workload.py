@@ -265,9 +265,10 @@ def empty_cache():
 
 
 def pick(rows: list[dict], *, every: int = 1, limit: int | None = None) -> list[dict]:
-    """The ``ok`` rows, every ``every``-th of them (a sample that keeps every artifact's mix), the
-    first ``limit``. ``tools/old_workload.py`` selects the same rows."""
-    ok = [r for r in rows if r["status"] == "ok"][::every]
+    """The ``ok`` rows of every ``every``-th cell (``cell % every == 0``: a sample of whole cells,
+    every seed of each, so that what a cell's runs share is shared as in the full list), the first
+    ``limit`` of them. ``tools/old_workload.py`` selects the same rows."""
+    ok = [r for r in rows if r["status"] == "ok" and r["cell"] % every == 0]
     return ok[:limit] if limit is not None else ok
 
 
@@ -360,14 +361,14 @@ def parser() -> argparse.ArgumentParser:
     play.add_argument("file", type=Path, nargs="?", default=DEFAULT_LIST)
     play.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
     play.add_argument("--executor", default="local", help="local or dask")
-    play.add_argument("--every", type=int, default=1, help="every K-th runnable row (a sample)")
+    play.add_argument("--every", type=int, default=1, help="the runs of every K-th cell (a sample)")
     play.add_argument("--limit", type=int, default=None, help="only the first N runnable rows")
     both = sub.add_parser("compare", help="before/after side by side: the old checkout's replay and today's, alternating")
     both.add_argument("file", type=Path, nargs="?", default=DEFAULT_LIST)
     both.add_argument("--old", type=Path, required=True, help="a checkout of b533850 with its own .venv")
     both.add_argument("--jobs", type=int, default=2)
     both.add_argument("--rounds", type=int, default=3)
-    both.add_argument("--every", type=int, default=10, help="every K-th runnable row (default 10)")
+    both.add_argument("--every", type=int, default=10, help="the runs of every K-th cell (default 10)")
     mapper = sub.add_parser("map", help="map the old side's runs.csv and cells.json onto today's configs")
     mapper.add_argument("runs", type=Path)
     mapper.add_argument("cells", type=Path)

@@ -160,10 +160,13 @@ def test_the_old_side_refuses_todays_code(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_pick_samples_every_kth_runnable_row(rows):
-    mixed = [dict(r, status="inexpressible: x") if r["run"] % 3 == 0 else r for r in rows[:30]]
-    picked = workload.pick(mixed, every=4, limit=3)
-    assert [r["run"] for r in picked] == [1, 7, 13]  # runnable: 1 2 4 5 7 8 10 11 13 ...
+def test_pick_samples_whole_cells(rows):
+    mixed = [dict(r, status="inexpressible: x") if r["run"] % 3 == 0 else r for r in rows]
+    picked = workload.pick(mixed, every=4)
+    assert picked and all(r["cell"] % 4 == 0 and r["status"] == "ok" for r in picked)
+    assert len(picked) == sum(r["cell"] % 4 == 0 and r["run"] % 3 != 0 for r in rows)
+    assert len({r["cell"] for r in picked}) > 20
+    assert workload.pick(mixed, every=4, limit=5) == picked[:5]
 
 
 def test_measurement_lines_parse_back():

@@ -146,11 +146,11 @@ def timed_execute(resolved: dict):
 
 
 def replay(path: Path, jobs: int, every: int, limit: int | None) -> None:
-    """The ok rows of ``path`` (every ``every``-th, the first ``limit``: the rows today's
-    ``magexp.workload.pick`` selects) through the old run_many from an empty cache; prints the
-    measurements."""
+    """The ok rows of ``path`` (those of every ``every``-th cell, the first ``limit``: the rows
+    today's ``magexp.workload.pick`` selects) through the old run_many from an empty cache; prints
+    the measurements."""
     with path.open(newline="") as fh:
-        rows = [r for r in csv.DictReader(fh) if r["status"] == "ok"][::every]
+        rows = [r for r in csv.DictReader(fh) if r["status"] == "ok" and int(r["cell"]) % every == 0]
     rows = rows[:limit] if limit else rows
     start, cpu = time.perf_counter(), _cpu()
     from omegaconf import OmegaConf
@@ -189,7 +189,7 @@ def main(argv=None) -> int:
     player = sub.add_parser("replay", help="run a mapped list through the old run_many (empty cache)")
     player.add_argument("file", type=Path)
     player.add_argument("--jobs", type=int, default=0)
-    player.add_argument("--every", type=int, default=1, help="every K-th ok row (a sample)")
+    player.add_argument("--every", type=int, default=1, help="the ok rows of every K-th cell (a sample)")
     player.add_argument("--limit", type=int, default=None, help="only the first N ok rows")
     args = p.parse_args(argv)
     if args.command == "replay":  # before magexp.paths is imported: it reads MAGEXP_CACHE once
