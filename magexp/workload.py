@@ -132,6 +132,14 @@ def _constant_schedules(node):
     return {k: _constant_schedules(v) for k, v in node.items()}
 
 
+#: settings that did not exist at b533850, with the value that does what the old code did; where
+#: today's default differs, the mapping sets it (other new settings keep today's defaults)
+OLD_BEHAVIOUR = {
+    "estimator.boundary": "clip",              # the swarms clipped to the box
+    "scenario.rotation.segments": None,        # Yuan's rotations from rotation.mode
+    "estimator.gauge": "free",                 # lm fitted all 12 parameters of a scalar objective
+}
+
 #: old estimators that became today's ``analysis=field_kalman`` step after another estimator (Yan 2022 Fig 4)
 FIELD_KALMAN = {"kf_be", "kf_be_paper"}
 
@@ -175,7 +183,8 @@ def map_cell(overrides: list[str], old: dict) -> tuple[list[str], str]:
 
     ``old`` is the cell's resolved config at the old commit. Both are first put in today's
     vocabulary (:func:`translate`); today's config for ``overrides`` is then composed; every run setting (:data:`RUN_NODES`) whose value differs from ``old`` and whose key
-    exists today gets an override with the old value; the result is composed again and must then
+    exists today gets an override with the old value (a setting that is new since, the value of
+    :data:`OLD_BEHAVIOUR`, where it names one); the result is composed again and must then
     agree with ``old`` on every key both have.
     """
     from omegaconf import OmegaConf
@@ -191,6 +200,7 @@ def map_cell(overrides: list[str], old: dict) -> tuple[list[str], str]:
     except MagexpError as exc:
         return overrides, f"inexpressible: {exc}"
     wanted = _leaves(_run_part(old))
+    wanted.update({k: v for k, v in OLD_BEHAVIOUR.items() if k in today and k not in wanted})
     gone = sorted(k for k in wanted if k not in today and not k.endswith("_target_"))
     if gone:
         return overrides, f"inexpressible: {gone[0]}={override_value(wanted[gone[0]])} has no key today"

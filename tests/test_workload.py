@@ -84,6 +84,17 @@ def test_a_changed_default_becomes_an_override():
     assert mapped == ["scenario=ding2024_exp1", "estimator=lm", "estimator.tol=1e-15"]
 
 
+def test_a_new_setting_keeps_the_old_behaviour(monkeypatch):
+    """A key the old code lacked is set to the value that does what the old code did."""
+    old = OmegaConf.to_container(compose_config(["scenario=ding2024_exp1", "estimator=lm"]), resolve=True)
+    del old["estimator"]["max_nfev"]
+    mapped, status = workload.map_cell(["scenario=ding2024_exp1", "estimator=lm"], old)
+    assert (mapped, status) == (["scenario=ding2024_exp1", "estimator=lm"], "ok")  # today's default
+    monkeypatch.setitem(workload.OLD_BEHAVIOUR, "estimator.max_nfev", 5)
+    mapped, status = workload.map_cell(["scenario=ding2024_exp1", "estimator=lm"], old)
+    assert (mapped, status) == (["scenario=ding2024_exp1", "estimator=lm", "estimator.max_nfev=5"], "ok")
+
+
 def test_a_removed_setting_is_inexpressible():
     old = OmegaConf.to_container(compose_config(["scenario=ding2024_exp1", "estimator=lm"]), resolve=True)
     old["estimator"]["warp"] = 3
