@@ -21,6 +21,8 @@ deterministic run on recorded data (``interval: ls``), the interval is the least
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pandas as pd
 
@@ -171,8 +173,7 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     """
     from scipy import stats
 
-    problem = _problem_of(runs, ci)
-    c, y = problem.design()
+    c, y, names = _design_of(runs, ci)
     n, p = c.shape
     coef, *_ = np.linalg.lstsq(c, y, rcond=None)  # (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
     rss = np.sum((y - c @ coef) ** 2, axis=0)
@@ -180,7 +181,6 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     cov = np.linalg.inv(c.T @ c)
     se = np.sqrt(np.outer(np.diag(cov), rss / dof))  # (4, 3)
     t = stats.t.ppf(0.5 + level / 2, dof)
-    names = problem.parameter_names()
     out = {}
     for a in range(3):
         for j in range(3):
@@ -194,8 +194,7 @@ def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
     parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``."""
     from scipy import stats
 
-    problem = _problem_of(runs, ci)
-    c, y = problem.design()
+    c, y, _ = _design_of(runs, ci)
     n, p = c.shape
     coef, *_ = np.linalg.lstsq(c, y, rcond=None)
     k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
@@ -223,16 +222,32 @@ def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
     return rows
 
 
-def _problem_of(runs: ArtifactRuns, ci: int):
-    """The problem of cell ``ci``'s first seed, rebuilt from its overrides (deterministic data)."""
+def _design_of(runs: ArtifactRuns, ci: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``(C, y, parameter names)`` of the linear problem of cell ``ci``'s first seed
+    (``problem.design()``, :func:`_design`): built once per cell and seed, however many summary rows
+    and tests read it (the mock-up's interval rows and F-tests share one)."""
+    return _design(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
+
+
+@functools.lru_cache(maxsize=64)
+def _design(overrides: tuple[str, ...], seed: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The design of :func:`_problem_of` (read-only arrays: one copy is shared by every caller);
+    :func:`summarise` empties this cache when it returns (a data file edited later is read again)."""
+    problem = _problem_of(overrides, seed)
+    c, y = (np.array(a, float) for a in problem.design())
+    c.setflags(write=False), y.setflags(write=False)
+    return c, y, list(problem.parameter_names())
+
+
+def _problem_of(overrides, seed: int):
+    """The problem of a cell's run ``seed``, rebuilt from the cell's overrides (deterministic data)."""
     from magexp.artifacts import compose_config
     from magexp.problems import make_problem
     from magexp.runner import build
     from magexp.seeding import run_generators, scenario_stream
 
-    cfg = compose_config(runs.overrides[ci])
+    cfg = compose_config(list(overrides))
     scenario = build(cfg.scenario, "scenario")
-    seed = int(runs.table[runs.table.cell == ci].seed.min())
     dataset = scenario.generate(rng=run_generators(seed, stream=scenario_stream(cfg.scenario))[0])
     objective = cfg.get("objective") or scenario.objective
     return make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
@@ -240,6 +255,13 @@ def _problem_of(runs: ArtifactRuns, ci: int):
 
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
     """One row per (summarised quantity, cell) and per ratio group."""
+    try:
+        return _summarise(runs)
+    finally:
+        _design.cache_clear()
+
+
+def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
     spec, table = runs.spec, runs.table
     rows = []
     for item in spec.summarise:
