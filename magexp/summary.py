@@ -169,9 +169,11 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     (Yan & Zhou 2022, eq 1: per axis ``B_i = [A_i Be, 1] [K_i, Bp_i]^T``, 4 parameters).
 
     Per axis ``s^2 = RSS / (N - 4)`` and ``Cov = s^2 (C^T C)^{-1}``; the half width is
-    ``t(1 - (1 - level)/2, N - 4)`` standard errors (12 readings: 8 degrees of freedom).
+    ``t(1 - (1 - level)/2, N - 4)`` standard errors (12 readings: 8 degrees of freedom), the quantile
+    from ``scipy.special.stdtrit`` (what ``scipy.stats.t.ppf`` evaluates, without importing
+    ``scipy.stats``).
     """
-    from scipy import stats
+    from scipy.special import stdtrit
 
     c, y, names = _design_of(runs, ci)
     n, p = c.shape
@@ -180,7 +182,7 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     dof = n - p
     cov = np.linalg.inv(c.T @ c)
     se = np.sqrt(np.outer(np.diag(cov), rss / dof))  # (4, 3)
-    t = stats.t.ppf(0.5 + level / 2, dof)
+    t = stdtrit(dof, 0.5 + level / 2)
     out = {}
     for a in range(3):
         for j in range(3):
@@ -191,8 +193,9 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
 
 def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
     """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
-    parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``."""
-    from scipy import stats
+    parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
+    p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates)."""
+    from scipy.special import fdtrc
 
     c, y, _ = _design_of(runs, ci)
     n, p = c.shape
@@ -203,7 +206,7 @@ def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
         d = np.append(k[a], bp[a]) - coef[:, a]
         s2 = np.sum((y[:, a] - c @ coef[:, a]) ** 2) / (n - p)
         f = float(d @ c.T @ c @ d / p / s2)
-        out.append({"axis": a + 1, "F": f, "dof": (p, n - p), "p_value": float(stats.f.sf(f, p, n - p))})
+        out.append({"axis": a + 1, "F": f, "dof": (p, n - p), "p_value": float(fdtrc(p, n - p, f))})
     return out
 
 

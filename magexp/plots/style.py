@@ -53,7 +53,7 @@ def share_mathtext_parses() -> bool:
     def shared(self, s, dpi, prop, antialiased, load_glyph_flags):
         return parse(self._output_type, s, dpi, prop, antialiased, load_glyph_flags)
 
-    shared.shared, shared.original = True, cached
+    shared.shared, shared.original, shared.cache_info = True, cached, parse.cache_info
     mathtext.MathTextParser._parse_cached = shared
     return True
 
