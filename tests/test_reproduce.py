@@ -214,6 +214,11 @@ def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
     k = memo.key(spec, b"a,b\n1,2\n")
     assert k == memo.key(spec, b"a,b\n1,2\n")
     assert k != memo.key(spec, b"a,b\n1,3\n") and k != memo.key(other, b"a,b\n1,2\n")
+    import matplotlib
+
+    with matplotlib.rc_context({"font.size": 11}):  # e.g. a user's matplotlibrc
+        assert memo.key(spec, b"a,b\n1,2\n") != k
+    assert memo.key(spec, b"a,b\n1,2\n") == k
     memo.code_version.cache_clear()
     copy = tmp_path / "pkg"
     shutil.copytree(ROOT / "magexp", copy, ignore=shutil.ignore_patterns("__pycache__"))

@@ -8,7 +8,7 @@ bytes. So a figure is keyed by
 * the bytes of the CSV it is drawn from,
 * its artifact spec (``repr`` of the validated :class:`magexp.spec.Artifact`),
 * magexp's source (every ``magexp/**/*.py``: a plot, style or spec edit redraws every figure),
-* the versions of matplotlib, numpy and pandas,
+* the versions of matplotlib, numpy and pandas, and matplotlib's settings (``rcParams``),
 
 and the cache keeps, under that key, the SHA-256 digests of the PNG and PDF the draw wrote. A figure
 whose two files are still in place with those digests is not drawn again; otherwise it is drawn and
@@ -50,8 +50,12 @@ def code_version() -> str:
 
 
 def key(spec, csv_bytes: bytes) -> str:
-    """The key of the figure of ``spec`` drawn from a CSV holding ``csv_bytes`` (module docstring)."""
+    """The key of the figure of ``spec`` drawn from a CSV holding ``csv_bytes`` (module docstring),
+    with matplotlib's settings as they are now (a user's ``matplotlibrc`` draws otherwise)."""
+    from magexp.plots.style import plt  # the settings the draw uses: magexp's style on the user's
+
     h = hashlib.sha256(code_version().encode())
+    h.update(repr(sorted(plt.rcParams.items())).encode())
     h.update(repr(spec).encode())
     h.update(hashlib.sha256(csv_bytes).digest())
     return h.hexdigest()[:32]
