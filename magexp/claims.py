@@ -113,12 +113,17 @@ def matches(selection: dict, settings: dict) -> bool:
 
 def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
     """``{cell: {key: value}}`` of a runs table: its ``setting`` pairs, estimator and objective."""
+    if "cell" not in table or not len(table):
+        return {}
+    firsts = table.drop_duplicates("cell")  # each cell's first row: its setting is the cell's
+    firsts = firsts[firsts.cell.notna()].sort_values("cell", kind="stable")
+    named = [k for k in ("estimator", "objective", "scenario", "case") if k in table]
+    records = firsts[[c for c in ["setting", *named] if c in table]].to_dict("records")
     out = {}
-    for ci, sub in table.groupby("cell", sort=True):
-        first = sub.iloc[0]
+    for ci, first in zip(firsts.cell.tolist(), records):
         pairs = dict(p.split("=", 1) for p in str(first.get("setting", "") or "").split(";") if "=" in p)
-        for key in ("estimator", "objective", "scenario", "case"):
-            if key in sub and key not in pairs:
+        for key in named:
+            if key not in pairs:
                 pairs[key] = first[key]
         out[int(ci)] = pairs
     return out

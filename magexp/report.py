@@ -5,6 +5,7 @@ values interpolated from the runs, :func:`magexp.claims.interpolate`)."""
 
 from __future__ import annotations
 
+import functools
 import os
 import platform
 import subprocess
@@ -132,20 +133,29 @@ def _runs(root: Path, paper: str, name: str) -> pd.DataFrame | None:
     return pd.read_csv(path) if path.exists() else None
 
 
-def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple[str, object]]:
-    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``."""
+def _runs_reader(root: Path, paper: str):
+    """``name -> runs table`` of ``paper``: each runs CSV read once, however many sections use it."""
+    return functools.cache(lambda name: _runs(root, paper, name))
+
+
+def _outcomes(specs: list, runs) -> list[tuple[str, object]]:
+    """``(artifact, Outcome)`` of every claim of ``specs`` whose runs table (``runs(name)``) has rows."""
     out = []
-    for p in [paper] if paper else papers():
-        for path in artifact_paths(p):
-            spec = load(path)
-            table = _runs(root, p, spec.name) if spec.claims else None
-            if table is not None and len(table):
-                out += [(spec.name, evaluate(c, table)) for c in spec.claims]
+    for spec in specs:
+        table = runs(spec.name) if spec.claims else None
+        if table is not None and len(table):
+            out += [(spec.name, evaluate(c, table)) for c in spec.claims]
     return out
 
 
-def _claims_section(root: Path, paper: str) -> str:
-    outcomes = claim_outcomes(root, paper)
+def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple[str, object]]:
+    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``."""
+    return [o for p in ([paper] if paper else papers())
+            for o in _outcomes([load(path) for path in artifact_paths(p)], _runs_reader(root, p))]
+
+
+def _claims_section(root: Path, paper: str, specs: list, runs) -> str:
+    outcomes = _outcomes(specs, runs)
     if not outcomes:
         return ""
     frame = pd.DataFrame([{"artifact": name, "by": o.claim.by, "claim": o.claim.text, "evidence": o.evidence,
@@ -157,8 +167,7 @@ def _claims_section(root: Path, paper: str) -> str:
             + table.replace("| does not hold |", "| **does not hold** |"))
 
 
-def _deviations_section(paper: str, root: Path) -> str:
-    meta = load_paper(paper)
+def _deviations_section(meta, paper: str, root: Path) -> str:
     if not meta.deviations:
         return ""
     frame = pd.DataFrame([{"what": d.text.strip(), "why": d.reason.strip()} for d in meta.deviations])
@@ -167,19 +176,21 @@ def _deviations_section(paper: str, root: Path) -> str:
 
 
 def _paper_section(paper: str, summary: pd.DataFrame, root: Path) -> str:
+    """A paper's section; each spec parsed and each runs CSV read once for all its parts."""
     meta = load_paper(paper)
+    specs = [load(path) for path in artifact_paths(paper)]
+    runs = _runs_reader(root, paper)
     lines = [f"## {meta.title}\n", f"{meta.intro}\n"]
     rows = summary[summary.paper == paper]
     counts = rows.verdict.value_counts()
     if len(rows):
         lines.append(f"Verdicts: {', '.join(f'{k} {int(counts.get(k, 0))}' for k in VERDICTS)}.\n")
-    lines.append(_claims_section(root, paper))
-    lines.append(_deviations_section(paper, root))
-    for spec_path in artifact_paths(paper):
-        spec = load(spec_path)
+    lines.append(_claims_section(root, paper, specs, runs))
+    lines.append(_deviations_section(meta, paper, root))
+    for spec in specs:
         if not (root / paper / f"{spec.name}.png").exists():
             continue
-        table = _runs(root, paper, spec.name)
+        table = runs(spec.name)
         lines.append(f"### {spec.name}: {spec.title}\n")
         lines.append(f"![{spec.name}]({paper}/{spec.name}.png)\n")
         if spec.caption:

@@ -56,10 +56,23 @@ def check_canonical(out: Path, *, seeds, tiny: bool) -> None:
                           "(results/ holds only canonical reproductions)")
 
 
-def draw(spec, frame: pd.DataFrame, out: Path) -> None:
+def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
+    """The figure of ``spec`` (PNG and PDF twin) into ``out``, drawn from its CSV ``csv`` as written
+    (the figure ``--redraw`` gives, to the byte); not drawn again when the figure cache
+    (:mod:`magexp.plots.memo`) says the files in ``out`` are that drawing already, unless ``force``.
+    Returns whether it drew."""
+    from magexp.plots import VECTOR, memo
+
+    png = out / f"{spec.name}.png"
+    files = [png, png.with_suffix(VECTOR)]
+    key = memo.key(spec, Path(csv).read_bytes())
+    if not force and memo.current(key, files):
+        return False
     from magexp.plots.style import save
 
-    save(kind_module(spec.kind).draw(frame, spec), out / f"{spec.name}.png")
+    save(kind_module(spec.kind).draw(pd.read_csv(csv), spec), png)
+    memo.record(key, files)
+    return True
 
 
 #: columns that identify a row of an artifact's table (kept beside its wall times in the timing file)
@@ -78,15 +91,16 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
     return frame.drop(columns=timed)
 
 
-def write_artifact(runs, out: Path) -> pd.DataFrame:
-    """An artifact's CSVs and figure into ``out``; returns its summary rows."""
+def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
+    """An artifact's CSVs and figure into ``out`` (``force``: draw it even if unchanged); returns its
+    summary rows."""
     path = out / f"{runs.spec.name}.csv"
     frame = kind_module(runs.spec.kind).tabulate(runs)
     if runs.spec.kind != "speed":  # wall times measure this machine today: kept beside timing.csv
         frame = split_timing(frame, out.parent / "timing" / f"{runs.spec.name}.csv")
     write_csv(frame, path)
     write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{runs.spec.name}_runs.csv")
-    draw(runs.spec, pd.read_csv(path), out)  # from the CSV as written: the figure --redraw gives, to the byte
+    draw(runs.spec, path, out, force=force)
     return summarise(runs)
 
 
@@ -96,7 +110,8 @@ def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool
     from magexp.artifacts import run_artifact
 
     out.mkdir(parents=True, exist_ok=True)
-    return write_artifact(run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force), out)
+    return write_artifact(run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force), out,
+                          force=force)
 
 
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
@@ -123,6 +138,15 @@ def skipped_for_data(spec, log=print) -> bool:
     return bool(missing)
 
 
+def slice_outputs(outputs, start: int, n: int):
+    """Runs ``start .. start + n`` of :class:`magexp.executor.Outputs`, as an ``Outputs`` of their own
+    (metrics at hand, outputs read from the same run cache on access)."""
+    from magexp.executor import Outputs
+
+    keys = outputs.keys[start:start + n]
+    return Outputs(keys, {key: outputs.metrics(start + j) for j, key in enumerate(keys)}, outputs.root)
+
+
 def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jobs: int = 0, tiny: bool = False,
               force: bool = False, executor=None, log=print) -> dict:
     """Plan every run of the ``selected`` artifacts, run them in one pass, write each artifact.
@@ -146,26 +170,11 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
         out = root / paper
         out.mkdir(parents=True, exist_ok=True)
         n = len(plan.configs)
-        parts[paper][plan.spec.name] = write_artifact(collect(plan, _Slice(outputs, start, n)), out)
+        parts[paper][plan.spec.name] = write_artifact(collect(plan, slice_outputs(outputs, start, n)), out,
+                                                      force=force)
         start += n
     counts["paper summaries"] = {paper: write_summary(paper, parts[paper], root / paper) for paper in parts}
     return counts
-
-
-class _Slice:
-    """Outputs ``start .. start + n`` of :class:`magexp.executor.Outputs`, as a sequence of their own."""
-
-    def __init__(self, outputs, start: int, n: int):
-        self.outputs, self.start, self.n = outputs, start, n
-
-    def __len__(self) -> int:
-        return self.n
-
-    def __getitem__(self, k: int):
-        return self.outputs[self.start + k]
-
-    def metrics(self, k: int) -> dict:
-        return self.outputs.metrics(self.start + k)
 
 
 def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int = 0, tiny: bool = False,
@@ -175,9 +184,10 @@ def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int =
     return counts["paper summaries"].get(paper, pd.DataFrame(columns=COLUMNS))
 
 
-def redraw(selected: dict[str, list], root: Path) -> int:
-    """Each selected artifact's figure from its CSV in ``root``; returns how many were drawn."""
-    drawn = 0
+def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tuple[int, int]:
+    """Each selected artifact's figure from its CSV in ``root`` (unchanged ones are kept, unless
+    ``force``: :func:`draw`); returns how many were drawn and how many were unchanged."""
+    drawn = kept = 0
     for paper, specs in selected.items():
         for spec in specs:
             if skipped_for_data(spec):
@@ -185,9 +195,11 @@ def redraw(selected: dict[str, list], root: Path) -> int:
             path = root / paper / f"{spec.name}.csv"
             if not path.is_file():
                 raise MagexpError(f"--redraw: {path} does not exist: reproduce {spec.name} first")
-            draw(spec, pd.read_csv(path), root / paper)
-            drawn += 1
-    return drawn
+            if draw(spec, path, root / paper, force=force):
+                drawn += 1
+            else:
+                kept += 1
+    return drawn, kept
 
 
 def cpu_seconds() -> float:
@@ -228,7 +240,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--only", default=None, help="one artifact stem (found in whichever paper has it)")
     p.add_argument("--tiny", action="store_true", help="tiny sizes, a smoke test (exploration: needs --out)")
     p.add_argument("--out", type=Path, default=RESULTS, help="results folder (default: results/)")
-    p.add_argument("--force", action="store_true", help="recompute every distinct run even if it is cached")
+    p.add_argument("--force", action="store_true",
+                   help="recompute every distinct run even if it is cached, and draw every figure")
     p.add_argument("--redraw", action="store_true", help="rebuild figures, summary and report from the CSVs; no run")
     p.add_argument("--executor", default="local", help="local (processes on this machine) or dask")
     p.add_argument("--scheduler", default=None, help="a Dask scheduler address (default: a local cluster)")
@@ -268,9 +281,10 @@ def _main(args) -> int:
 
     start = time.perf_counter()
     if args.redraw:
-        n = redraw(selected, args.out)
+        drawn, kept = redraw(selected, args.out, force=args.force)
         build(args.out)
-        print(f"redrew {n} figures, summary and report in {time.perf_counter() - start:.1f} s: {args.out / 'REPORT.md'}")
+        print(f"redrew {drawn} figures ({kept} unchanged, kept), summary and report in "
+              f"{time.perf_counter() - start:.1f} s: {args.out / 'REPORT.md'}")
         return 0
     cpu = cpu_seconds()
     with make_executor(args.executor, jobs=args.jobs, scheduler=args.scheduler) as executor:

@@ -30,8 +30,10 @@ folders of ``experiments/`` that hold an artifact (:func:`papers`).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import decimal
+import functools
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -335,13 +337,24 @@ def parse(data: dict, path: Path) -> Artifact:
     return art
 
 
+@functools.lru_cache(maxsize=256)
+def _parsed(text: str):
+    return yaml.safe_load(text)
+
+
+def read_yaml(path: Path):
+    """``yaml.safe_load`` of the file ``path``, parsed once per distinct content (a process lists the
+    papers and reads every spec many times: planning, summary, claims, report); a fresh copy each call."""
+    return copy.deepcopy(_parsed(Path(path).read_text()))
+
+
 def load(path: Path | str) -> Artifact:
     """Read and validate an artifact YAML."""
     path = Path(path)
     if not path.exists():
         raise MagexpError(f"artifact {str(path)!r} does not exist")
     try:
-        data = yaml.safe_load(path.read_text())
+        data = read_yaml(path)
     except yaml.YAMLError as exc:
         raise MagexpError(f"artifact {str(path)!r} is not valid YAML: {str(exc).splitlines()[0]}") from None
     return parse(data or {}, path)
@@ -369,7 +382,7 @@ class Paper:
 def load_paper(paper: str, root: Path | None = None) -> Paper:
     """The validated ``paper.yaml`` of ``paper``."""
     path = (root or EXPERIMENTS) / paper / "paper.yaml"
-    data = (yaml.safe_load(path.read_text()) or {}) if path.exists() else {"title": paper}
+    data = (read_yaml(path) or {}) if path.exists() else {"title": paper}
     meta = build(Paper, data, f"{paper}/paper.yaml")
     devs = [build(Deviation, d, f"{paper}/paper.yaml.deviations[{i}]") for i, d in enumerate(meta.deviations)]
     return dataclasses.replace(meta, deviations=devs)

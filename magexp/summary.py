@@ -21,6 +21,8 @@ deterministic run on recorded data (``interval: ls``), the interval is the least
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pandas as pd
 
@@ -167,20 +169,20 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     (Yan & Zhou 2022, eq 1: per axis ``B_i = [A_i Be, 1] [K_i, Bp_i]^T``, 4 parameters).
 
     Per axis ``s^2 = RSS / (N - 4)`` and ``Cov = s^2 (C^T C)^{-1}``; the half width is
-    ``t(1 - (1 - level)/2, N - 4)`` standard errors (12 readings: 8 degrees of freedom).
+    ``t(1 - (1 - level)/2, N - 4)`` standard errors (12 readings: 8 degrees of freedom), the quantile
+    from ``scipy.special.stdtrit`` (what ``scipy.stats.t.ppf`` evaluates, without importing
+    ``scipy.stats``).
     """
-    from scipy import stats
+    from scipy.special import stdtrit
 
-    problem = _problem_of(runs, ci)
-    c, y = problem.design()
+    c, y, names = _design_of(runs, ci)
     n, p = c.shape
     coef, *_ = np.linalg.lstsq(c, y, rcond=None)  # (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
     rss = np.sum((y - c @ coef) ** 2, axis=0)
     dof = n - p
     cov = np.linalg.inv(c.T @ c)
     se = np.sqrt(np.outer(np.diag(cov), rss / dof))  # (4, 3)
-    t = stats.t.ppf(0.5 + level / 2, dof)
-    names = problem.parameter_names()
+    t = stdtrit(dof, 0.5 + level / 2)
     out = {}
     for a in range(3):
         for j in range(3):
@@ -191,11 +193,11 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
 
 def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
     """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
-    parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``."""
-    from scipy import stats
+    parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
+    p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates)."""
+    from scipy.special import fdtrc
 
-    problem = _problem_of(runs, ci)
-    c, y = problem.design()
+    c, y, _ = _design_of(runs, ci)
     n, p = c.shape
     coef, *_ = np.linalg.lstsq(c, y, rcond=None)
     k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
@@ -204,7 +206,7 @@ def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
         d = np.append(k[a], bp[a]) - coef[:, a]
         s2 = np.sum((y[:, a] - c @ coef[:, a]) ** 2) / (n - p)
         f = float(d @ c.T @ c @ d / p / s2)
-        out.append({"axis": a + 1, "F": f, "dof": (p, n - p), "p_value": float(stats.f.sf(f, p, n - p))})
+        out.append({"axis": a + 1, "F": f, "dof": (p, n - p), "p_value": float(fdtrc(p, n - p, f))})
     return out
 
 
@@ -223,16 +225,32 @@ def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
     return rows
 
 
-def _problem_of(runs: ArtifactRuns, ci: int):
-    """The problem of cell ``ci``'s first seed, rebuilt from its overrides (deterministic data)."""
+def _design_of(runs: ArtifactRuns, ci: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``(C, y, parameter names)`` of the linear problem of cell ``ci``'s first seed
+    (``problem.design()``, :func:`_design`): built once per cell and seed, however many summary rows
+    and tests read it (the mock-up's interval rows and F-tests share one)."""
+    return _design(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
+
+
+@functools.lru_cache(maxsize=64)
+def _design(overrides: tuple[str, ...], seed: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The design of :func:`_problem_of` (read-only arrays: one copy is shared by every caller);
+    :func:`summarise` empties this cache when it returns (a data file edited later is read again)."""
+    problem = _problem_of(overrides, seed)
+    c, y = (np.array(a, float) for a in problem.design())
+    c.setflags(write=False), y.setflags(write=False)
+    return c, y, list(problem.parameter_names())
+
+
+def _problem_of(overrides, seed: int):
+    """The problem of a cell's run ``seed``, rebuilt from the cell's overrides (deterministic data)."""
     from magexp.artifacts import compose_config
     from magexp.problems import make_problem
     from magexp.runner import build
     from magexp.seeding import run_generators, scenario_stream
 
-    cfg = compose_config(runs.overrides[ci])
+    cfg = compose_config(list(overrides))
     scenario = build(cfg.scenario, "scenario")
-    seed = int(runs.table[runs.table.cell == ci].seed.min())
     dataset = scenario.generate(rng=run_generators(seed, stream=scenario_stream(cfg.scenario))[0])
     objective = cfg.get("objective") or scenario.objective
     return make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
@@ -240,6 +258,13 @@ def _problem_of(runs: ArtifactRuns, ci: int):
 
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
     """One row per (summarised quantity, cell) and per ratio group."""
+    try:
+        return _summarise(runs)
+    finally:
+        _design.cache_clear()
+
+
+def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
     spec, table = runs.spec, runs.table
     rows = []
     for item in spec.summarise:

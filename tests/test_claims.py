@@ -90,3 +90,29 @@ def test_no_claim_the_report_states_is_false():
         pytest.skip("no results with claims under results/")
     false = [f"{name}: {o.claim.id}: {o.evidence}" for name, o in outcomes if o.claim.by == "magexp" and not o.holds]
     assert not false, "\n".join(false)
+
+
+def test_cell_settings_are_each_cells_first_row():
+    import pandas as pd
+
+    from magexp.claims import cell_settings
+
+    def by_groupby(table):  # the reference: a groupby over cells, each cell's first row
+        out = {}
+        for ci, sub in table.groupby("cell", sort=True):
+            first = sub.iloc[0]
+            pairs = dict(p.split("=", 1) for p in str(first.get("setting", "") or "").split(";") if "=" in p)
+            for key in ("estimator", "objective", "scenario", "case"):
+                if key in sub and key not in pairs:
+                    pairs[key] = first[key]
+            out[int(ci)] = pairs
+        return out
+
+    table = pd.DataFrame({"cell": [2, 0, 2, 1, 0], "seed": [0, 0, 1, 0, 1],
+                          "setting": ["scenario=a;noise=2", "scenario=b;noise=0.5", "x=9", None, "y=1"],
+                          "estimator": ["lm", "pso", "ipso", "kf", "ls"], "fun": [1.0, 2.0, 3.0, 4.0, 5.0]})
+    assert cell_settings(table) == by_groupby(table)
+    assert cell_settings(table) == {0: {"scenario": "b", "noise": "0.5", "estimator": "pso"},
+                                    1: {"estimator": "kf"}, 2: {"scenario": "a", "noise": "2", "estimator": "lm"}}
+    assert cell_settings(table.drop(columns=["setting"])) == by_groupby(table.drop(columns=["setting"]))
+    assert cell_settings(table.iloc[:0]) == {}

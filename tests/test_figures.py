@@ -58,3 +58,20 @@ def test_panels_refuses_the_wrong_number_of_axes():
         panels(2, axes=axes)
     assert panels(3, axes=axes) == (fig, list(axes))
     plt.close(fig)
+
+
+def test_math_text_parsed_once_for_every_figure_gives_the_same_bytes(tmp_path, monkeypatch):
+    from matplotlib import mathtext
+
+    shared = mathtext.MathTextParser._parse_cached
+    assert shared.shared  # in place once magexp.plots.style is imported
+    draw = kind_module("convergence").draw  # log axes: math text tick labels
+    hits = shared.cache_info().hits
+    save(draw(frame(), SPEC), tmp_path / "shared.png")
+    save(draw(frame(), SPEC), tmp_path / "again.png")
+    assert shared.cache_info().hits > hits  # the second figure reused the first one's parses
+    monkeypatch.setattr(mathtext.MathTextParser, "_parse_cached", shared.original)  # matplotlib's own
+    save(draw(frame(), SPEC), tmp_path / "own.png")
+    for ext in ("png", "pdf"):
+        assert digest(tmp_path / f"shared.{ext}") == digest(tmp_path / f"own.{ext}")
+        assert digest(tmp_path / f"again.{ext}") == digest(tmp_path / f"own.{ext}")

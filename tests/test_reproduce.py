@@ -172,3 +172,95 @@ def test_ctrl_c_ends_in_one_line_and_a_clean_state(tmp_path):
     assert len(lines) == 1 and "interrupted" in lines[0] and "Traceback" not in err, err
     assert not list(tmp_path.rglob("*.tmp")), "a half-written file was left behind"
     assert not (out / "ding2024" / "ding2024_table_rms.csv").exists()
+
+
+def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypatch, capsys):
+    from magexp.plots import memo, style
+
+    out = tmp_path / "res"
+    argv = ["ding2024", "--only", "ding2024_fig2", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
+    assert reproduce.main(argv) == 0
+    png, pdf = out / "ding2024" / "ding2024_fig2.png", out / "ding2024" / "ding2024_fig2.pdf"
+    csv = out / "ding2024" / "ding2024_fig2.csv"
+    first = png.read_bytes(), pdf.read_bytes()
+    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
+    drawn = []
+    real_save = style.save
+    monkeypatch.setattr(style, "save", lambda fig, path: drawn.append(path) or real_save(fig, path))
+    redraw = ["all", "--only", "ding2024_fig2", "--redraw", "--out", str(out)]
+
+    assert reproduce.main(redraw) == 0 and drawn == []  # unchanged: kept
+    assert "redrew 0 figures (1 unchanged" in capsys.readouterr().out
+    assert reproduce.main(argv) == 0 and drawn == []  # a cached reproduction keeps it too
+
+    pdf.write_bytes(b"%PDF edited")  # a figure file that is not what was drawn: drawn again, same bytes
+    assert reproduce.main(redraw) == 0 and len(drawn) == 1
+    assert (png.read_bytes(), pdf.read_bytes()) == first
+    assert reproduce.main(redraw + ["--force"]) == 0 and len(drawn) == 2  # --force draws every figure
+    assert (png.read_bytes(), pdf.read_bytes()) == first
+
+    frame = pd.read_csv(csv)  # a new CSV: drawn again from it
+    frame.loc[0, "error"] = frame["error"].abs().max() * 3
+    frame.to_csv(csv, index=False)
+    assert reproduce.main(redraw) == 0 and len(drawn) == 3 and png.read_bytes() != first[0]
+
+
+def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
+    from magexp.plots import memo
+    from magexp.spec import load
+
+    spec = load(next(p for p in (ROOT / "experiments" / "ding2024").glob("ding2024_fig2.yaml")))
+    other = load(next(p for p in (ROOT / "experiments" / "ding2024").glob("ding2024_fig3.yaml")))
+    k = memo.key(spec, b"a,b\n1,2\n")
+    assert k == memo.key(spec, b"a,b\n1,2\n")
+    assert k != memo.key(spec, b"a,b\n1,3\n") and k != memo.key(other, b"a,b\n1,2\n")
+    import matplotlib
+
+    with matplotlib.rc_context({"font.size": 11}):  # e.g. a user's matplotlibrc
+        assert memo.key(spec, b"a,b\n1,2\n") != k
+    assert memo.key(spec, b"a,b\n1,2\n") == k
+    memo.code_version.cache_clear()
+    copy = tmp_path / "pkg"
+    shutil.copytree(ROOT / "magexp", copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr("magexp.paths.PACKAGE", copy)
+    try:
+        assert memo.key(spec, b"a,b\n1,2\n") == k
+        memo.code_version.cache_clear()
+        with (copy / "plots" / "style.py").open("a") as fh:
+            fh.write("\n# a style edit\n")
+        assert memo.key(spec, b"a,b\n1,2\n") != k
+    finally:
+        memo.code_version.cache_clear()
+
+
+def test_mockup_summary_builds_each_cells_problem_once_with_the_same_rows(tmp_path, monkeypatch):
+    from magexp import summary
+    from magexp.artifacts import run_artifact
+    from magexp.spec import load
+
+    spec = load(ROOT / "experiments" / "yan2022" / "yan2022_table_mockup.yaml")
+    runs = run_artifact(spec, seeds=1, jobs=1, tiny=True)
+    built = []
+    real = summary._problem_of
+    monkeypatch.setattr(summary, "_problem_of", lambda *a: built.append(a) or real(*a))
+    rows = summary.summarise(runs)
+    ls_rows = sum(1 for item in spec.summarise if item.interval == "ls") * len(runs.cells)
+    assert len(built) == len(runs.cells) < ls_rows  # once per cell, not once per row
+    assert summary._design.cache_info().currsize == 0  # emptied when summarise returns
+
+    def rebuilt(runs, ci):  # the old path: the problem rebuilt for every row
+        problem = real(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
+        return (*problem.design(), problem.parameter_names())
+
+    monkeypatch.setattr(summary, "_design_of", rebuilt)
+    pd.testing.assert_frame_equal(rows, summary.summarise(runs), check_exact=True)
+
+
+def test_the_special_functions_are_scipy_stats_quantile_and_tail():
+    from scipy import special, stats
+
+    for dof in (2, 8, 11, 40):
+        for level in (0.9, 0.95, 0.99):
+            assert special.stdtrit(dof, 0.5 + level / 2) == stats.t.ppf(0.5 + level / 2, dof)
+        for f in (0.01, 0.7, 3.0, 40.0):
+            assert special.fdtrc(4, dof, f) == stats.f.sf(f, 4, dof)

@@ -10,6 +10,9 @@ import importlib
 
 from magexp.errors import MagexpError
 
+#: the vector twin written beside every PNG (for a paper: LaTeX's includegraphics takes it as is)
+VECTOR = ".pdf"
+
 KINDS = {
     "convergence": "magexp.plots.convergence",
     "field": "magexp.plots.field",
