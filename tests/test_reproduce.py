@@ -137,17 +137,17 @@ def test_a_plot_edit_reruns_nothing_and_a_bound_edit_reruns_all(tmp_path, monkey
 
 def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monkeypatch, capsys):
     out = tmp_path / "res"
-    argv = ["ding2024", "--only", "ding2024_fig2", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
+    argv = ["yuan2018", "--only", "yuan2018_fig6", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
     assert reproduce.main(argv) == 0
     capsys.readouterr()
-    png, csv = out / "ding2024" / "ding2024_fig2.png", out / "ding2024" / "ding2024_fig2.csv"
+    png, csv = out / "yuan2018" / "yuan2018_fig6.png", out / "yuan2018" / "yuan2018_fig6.csv"
     data = csv.read_bytes()
     png.unlink()
     (out / "REPORT.md").unlink()
     (out / "summary.csv").unlink()
     monkeypatch.setattr(runner, "run_batch", lambda *a: pytest.fail("--redraw ran something"))
     monkeypatch.setattr(executor, "run_many", lambda *a, **k: pytest.fail("--redraw ran something"))
-    assert reproduce.main(["all", "--only", "ding2024_fig2", "--redraw", "--out", str(out)]) == 0
+    assert reproduce.main(["all", "--only", "yuan2018_fig6", "--redraw", "--out", str(out)]) == 0
     assert png.stat().st_size > 0 and (out / "REPORT.md").exists() and (out / "summary.csv").exists()
     assert csv.read_bytes() == data
     assert "redrew 1 figures" in capsys.readouterr().out
