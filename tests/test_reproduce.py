@@ -154,8 +154,10 @@ def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monk
 
 
 # Ctrl-C at a fixed point: SIGINT to the process as its first run is counted, while its workers are busy
+# (Python's own SIGINT handler first: a test run started as a background job inherits SIGINT ignored)
 CTRL_C = """
 import os, signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from magexp import progress
 from magexp.reproduce import main
 count = progress.Progress.__call__
