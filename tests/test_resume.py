@@ -5,6 +5,8 @@ import signal
 import subprocess
 import sys
 
+import pytest
+
 from magexp import cache
 
 
@@ -39,6 +41,7 @@ def reproduce_in_process(out, cache_dir, monkeypatch):
     return main([*ARGS, "--out", str(out)])
 
 
+@pytest.mark.slow
 def test_kill_midway_then_resume(tmp_path, monkeypatch):
     """A reproduction killed (SIGKILL, no clean-up) after its 10th finished run resumes: the finished
     runs are not rerun, and the outputs are byte-identical to an uninterrupted reproduction's."""
