@@ -8,6 +8,9 @@ JOBS   ?= 0
 EXECUTOR ?= local
 SCHEDULER ?=
 RUN_ON := --jobs $(JOBS) --executor $(EXECUTOR) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+# tests run in TEST_JOBS processes (pytest-xdist; TEST_JOBS=0: one process), the slowest listed at the end
+TEST_JOBS ?= 2
+PYTEST := $(PY) -m pytest $(if $(filter-out 0,$(TEST_JOBS)),-n $(TEST_JOBS) --dist load) --durations=15
 
 .DEFAULT_GOAL := help
 .PHONY: help venv lock bench reproduce redraw report test test-full clean
@@ -39,11 +42,11 @@ report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the a
 bench: $(STAMP) ## speed benchmark; writes results/bench.csv
 	$(PY) -m magexp.bench
 
-test: $(STAMP) ## run the test suite (without the wheel build: make test-full)
-	$(PY) -m pytest -m "not full"
+test: $(STAMP) ## run the test suite in TEST_JOBS=2 processes (without the `full` end-to-end cases: make test-full)
+	$(PYTEST) -m "not full"
 
-test-full: $(STAMP) ## the test suite and the end-to-end cases (build the wheel, install it, run it elsewhere)
-	$(PY) -m pytest
+test-full: $(STAMP) ## the test suite and the `full` end-to-end cases (the wheel installed and run elsewhere)
+	$(PYTEST)
 
 lock: ## refresh requirements.lock from the newest releases allowed by pyproject.toml (then commit it)
 	rm -rf .lockenv && $(PYTHON) -m venv .lockenv

@@ -22,7 +22,9 @@ from magexp.config import compose_config, yaml_value  # noqa: F401  (compose_con
 from magexp.executor import run_many, run_row  # run_many's home is magexp.executor; importable from here too
 from magexp.paths import EXPERIMENTS
 
-SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50}
+# tiny sizes (--tiny, the smoke tests); black-box budgets (cmaes, de) at least de's two generations of 10 x 12
+SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50,
+          "estimator.max_evaluations": 240}
 
 
 def load_spec(path: Path | str):

@@ -10,7 +10,8 @@ from magexp.reproduce import reproduce_artifact
 from magexp.spec import artifact_paths, load, papers
 from magexp.summary import COLUMNS, VERDICTS
 
-ARTIFACTS = [p for paper in papers() for p in artifact_paths(paper)]
+WHOLE_PAPER = "yan2022"  # its artifacts run once, together, through reproduce_paper (test_whole_paper_runs_tiny)
+ARTIFACTS = [p for paper in papers() if paper != WHOLE_PAPER for p in artifact_paths(paper)]
 
 
 def _consistent(row) -> bool:
@@ -20,17 +21,12 @@ def _consistent(row) -> bool:
     return not (row.verdict == "reproduced" and pd.notna(row.success_rate) and row.success_rate < 0.5)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("path", ARTIFACTS, ids=lambda p: p.stem)
-def test_artifact_runs_tiny(tmp_path, path):
-    spec = load(path)
-    out = tmp_path / spec.paper
-    out.mkdir()
-    summary = reproduce_artifact(spec, out, seeds=2, jobs=1, tiny=True)
+def check_artifact(spec, out, summary, seeds=2):
+    """The outputs of ``spec`` in ``out`` (its figure, table and runs) and its ``summary`` rows keep the contract."""
     assert (out / f"{spec.name}.png").stat().st_size > 1000
     assert len(pd.read_csv(out / f"{spec.name}.csv")) > 0
     runs = pd.read_csv(out / f"{spec.name}_runs.csv")
-    assert "succeeded" in runs and len(runs) == 2 * runs.cell.nunique()
+    assert "succeeded" in runs and len(runs) == seeds * runs.cell.nunique()
     assert list(summary.columns) == COLUMNS
     assert set(summary.verdict) <= set(VERDICTS)
     assert all(_consistent(r) for r in summary.itertuples())
@@ -40,23 +36,42 @@ def test_artifact_runs_tiny(tmp_path, path):
 
 
 @pytest.mark.slow
-def test_report_of_one_paper_tiny(tmp_path):
+@pytest.mark.parametrize("path", ARTIFACTS, ids=lambda p: p.stem)
+def test_artifact_runs_tiny(tmp_path, path):
+    spec = load(path)
+    out = tmp_path / spec.paper
+    out.mkdir()
+    check_artifact(spec, out, reproduce_artifact(spec, out, seeds=2, jobs=1, tiny=True))
+
+
+@pytest.mark.slow
+def test_whole_paper_runs_tiny(tmp_path):
+    """Every artifact of one paper in one reproduction (one pass over all their runs), each keeping
+    the contract; the paper's summary, and its report with the LaTeX (booktabs) twin of every table."""
     from magexp.reproduce import reproduce_paper
 
-    reproduce_paper("yuan2018", root=tmp_path, seeds=2, jobs=1, tiny=True, only="yuan2018_table7", log=lambda *_: None)
+    summary = reproduce_paper(WHOLE_PAPER, root=tmp_path, seeds=2, jobs=1, tiny=True, log=lambda *_: None)
+    specs = [load(p) for p in artifact_paths(WHOLE_PAPER)]
+    assert {spec.name for spec in specs} >= {f"yan2022_{stem}" for stem in (
+        "fig1", "fig3", "fig4", "fig_noise", "fig_tuning", "table_mockup", "table_sim")}
+    assert set(summary.artifact) <= {spec.name for spec in specs}
+    for spec in specs:
+        check_artifact(spec, tmp_path / WHOLE_PAPER, summary[summary.artifact == spec.name])
+    assert {"fit_rms", "be_rms", "k_error", "steps_to_ls"} <= set(summary.quantity)
     build(tmp_path)
     text = (tmp_path / "REPORT.md").read_text()
-    assert "yuan2018/yuan2018_table7.png" in text and "### Deviations from the paper's text" in text
+    assert "yan2022/yan2022_fig4.png" in text and "### Deviations from the paper's text" in text
     assert "### Claims" in text
     versions = pd.read_csv(tmp_path / "versions.csv")
     assert {"python", "numpy", "scipy", "magexp_commit"} <= set(versions.package)
-    summary = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False, na_values=[""])
-    assert list(summary.columns) == COLUMNS and np.isin(summary.verdict, VERDICTS).all()
+    written = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False, na_values=[""])
+    assert list(written.columns) == COLUMNS and np.isin(written.verdict, VERDICTS).all()
+    assert len(written) == len(summary) > 0
     # every report table has its LaTeX (booktabs) twin with the same rows
-    for twin, rows in [("yuan2018/yuan2018_table7_summary.tex", len(summary)), ("yuan2018/claims.tex", None),
-                       ("yuan2018/deviations.tex", None)]:
+    twins = [(f"{WHOLE_PAPER}/{name}_summary.tex", n) for name, n in written.groupby("artifact").size().items()]
+    for twin, rows in [*twins, (f"{WHOLE_PAPER}/claims.tex", None), (f"{WHOLE_PAPER}/deviations.tex", None)]:
         tex = (tmp_path / twin).read_text()
         assert tex.startswith("\\begin{tabular}") and "\\toprule" in tex and "\\bottomrule" in tex
         if rows is not None:
             body = tex.split("\\midrule\n", 1)[1].split("\\bottomrule", 1)[0]
-            assert body.count("\\\\\n") == rows
+            assert body.count("\\\\\n") == rows, twin

@@ -1,10 +1,6 @@
 """magexp calibrate: a user's recording calibrated with any estimator, from one command, with its quality."""
 
 import json
-import os
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 from hydra.utils import instantiate
@@ -32,15 +28,14 @@ def estimator(name, **overrides):
     return instantiate(OmegaConf.merge(cfg, overrides), _convert_="all")
 
 
-def magexp(*args, cwd):
-    """``magexp calibrate ...`` (the command of magexp.calibration; the simulation command has no task=)."""
+@pytest.fixture
+def magexp(cli):
+    """``magexp(*args, cwd=...)``: ``magexp calibrate ARGS`` in-process (the ``cli`` fixture of conftest.py)."""
     import importlib.util
 
     if importlib.util.find_spec("magexp.calibration") is None:
         pytest.skip("the calibrate command (magexp.calibration) is not in this build")
-    env = {**os.environ, "HYDRA_FULL_ERROR": "0"}
-    return subprocess.run([sys.executable, "-m", "magexp", "calibrate", *args],
-                          cwd=cwd, capture_output=True, text=True, timeout=120, env=env)
+    return lambda *args, cwd: cli("calibrate", *args, cwd=cwd)
 
 
 def write_recording(path, readings, *, meta=(), extra=None):
@@ -68,7 +63,7 @@ def test_fxos8700_spread_below_2_3_percent(name):
 
 
 @needs_fxos
-def test_cli_end_to_end(tmp_path):
+def test_cli_end_to_end(tmp_path, magexp):
     results_before = sorted(p for p in RESULTS.rglob("*")) if RESULTS.exists() else []
     out = tmp_path / "calib"
     proc = magexp(f"data.path={FXOS}", "data.unit=uT", "estimator=lm", f"out={out}", cwd=tmp_path)
@@ -171,7 +166,7 @@ GOOD = "# magexp-recording v1\n# unit: uT\nbx,by,bz\n" + ROWS
     ("no_unit", ROWS, [], "give data.unit="),
     ("four_columns", ROWS.replace("\n", ",1\n"), ["data.unit=uT"], "exactly 3 columns"),
 ])
-def test_bad_input_is_one_line(tmp_path, name, text, args, message):
+def test_bad_input_is_one_line(tmp_path, magexp, name, text, args, message):
     path = tmp_path / f"{name}.csv"
     path.write_text(text)
     proc = magexp(f"data.path={path}", *args, f"out={tmp_path / 'out'}", "estimator=ellipsoid", cwd=tmp_path)
@@ -181,7 +176,7 @@ def test_bad_input_is_one_line(tmp_path, name, text, args, message):
     assert not (tmp_path / "out").exists()
 
 
-def test_missing_file_and_existing_output_are_one_line(tmp_path):
+def test_missing_file_and_existing_output_are_one_line(tmp_path, magexp):
     proc = magexp(f"data.path={tmp_path / 'absent.csv'}", "data.unit=uT", f"out={tmp_path / 'o'}", cwd=tmp_path)
     assert proc.returncode != 0 and proc.stderr.count("\n") == 1 and "does not exist" in proc.stderr
     (tmp_path / "out").mkdir()

@@ -1,8 +1,5 @@
 """The estimator contract, estimators chosen by capability, and the linear estimators on every linear problem."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 from hydra.utils import instantiate
@@ -123,13 +120,12 @@ def test_task_run_refuses_an_estimator_that_does_not_apply(make_cfg):
 
 
 @pytest.mark.slow
-def test_cli_runs_kf_on_yuan_and_ekf_on_yan_and_refuses_kf_on_ding(tmp_path):
-    def cli(*args):
-        return subprocess.run([sys.executable, "-m", "magexp", *args, f"hydra.run.dir={tmp_path}/run"],
-                              capture_output=True, text=True, cwd=tmp_path)
+def test_cli_runs_kf_on_yuan_and_ekf_on_yan_and_refuses_kf_on_ding(tmp_path, cli):
+    def run(*args):
+        return cli(*args, f"hydra.run.dir={tmp_path}/run", cwd=tmp_path)
 
-    assert cli("scenario=yuan2018_mode1", "estimator=kf").returncode == 0
-    assert cli("scenario=yan2022_sim", "estimator=ekf").returncode == 0
-    bad = cli("scenario=ding2024_exp1", "estimator=kf")
+    assert run("scenario=yuan2018_mode1", "estimator=kf").returncode == 0
+    assert run("scenario=yan2022_sim", "estimator=ekf").returncode == 0
+    bad = run("scenario=ding2024_exp1", "estimator=kf")
     assert bad.returncode != 0 and len(bad.stderr.strip().splitlines()) == 1
     assert "needs a linear design" in bad.stderr

@@ -24,6 +24,7 @@ def test_absent_recordings_skip_each_artifact_in_one_line(tmp_path, monkeypatch)
 
 
 @pytest.mark.skipif(not (paths.SHARED_DATA / "hmc5883l_rotate-ccw-around-z_mag.csv").is_file(), reason="recordings absent")
+@pytest.mark.slow
 def test_modes_artifact_runs_on_the_recordings(tmp_path):
     from magexp.reproduce import reproduce_paper
 

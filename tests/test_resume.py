@@ -4,44 +4,61 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 
 from magexp import cache
 
 
-def reproduce(out, cache_dir, *extra):
-    env = {**os.environ, "MAGEXP_CACHE": str(cache_dir)}
-    return subprocess.Popen([sys.executable, "-m", "magexp.reproduce", "ding2024", "--only", "ding2024_table_rms",
-                             "--seeds", "2", "--jobs", "1", "--out", str(out), *extra],
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+ARGS = ["ding2024", "--only", "ding2024_table_rms", "--seeds", "2", "--tiny", "--jobs", "1"]  # 64 runs
+KILL_AFTER = 10
+# a real process, killed by SIGKILL at a fixed point: right after its KILL_AFTER-th run reached the cache
+KILLED = f"""
+import os, signal, sys
+from magexp import cache
+from magexp.reproduce import main
+store, stored = cache.store, []
+def store_then_die(*args, **kw):
+    store(*args, **kw)
+    stored.append(1)
+    if len(stored) == {KILL_AFTER}:
+        os.kill(os.getpid(), signal.SIGKILL)
+cache.store = store_then_die
+sys.exit(main(sys.argv[1:]))
+"""
 
 
 def results(cache_dir):
     return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob("*.pkl")}
 
 
+def reproduce_in_process(out, cache_dir, monkeypatch):
+    from magexp import paths
+    from magexp.reproduce import main
+
+    monkeypatch.setattr(cache, "CACHE", cache_dir)
+    monkeypatch.setattr(paths, "CACHE", cache_dir)
+    return main([*ARGS, "--out", str(out)])
+
+
 @pytest.mark.slow
-def test_kill_midway_then_resume(tmp_path):
+def test_kill_midway_then_resume(tmp_path, monkeypatch):
+    """A reproduction killed (SIGKILL, no clean-up) after its 10th finished run resumes: the finished
+    runs are not rerun, and the outputs are byte-identical to an uninterrupted reproduction's."""
     cache_dir = tmp_path / "cache"
-    proc = reproduce(tmp_path / "a", cache_dir)
-    deadline = time.time() + 120
-    while len(results(cache_dir)) < 10 and time.time() < deadline and proc.poll() is None:
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
+    killed = subprocess.run([sys.executable, "-c", KILLED, *ARGS, "--out", str(tmp_path / "a")],
+                            env={**os.environ, "MAGEXP_CACHE": str(cache_dir)}, capture_output=True, text=True,
+                            timeout=300)
+    assert killed.returncode == -signal.SIGKILL, killed.stderr
     finished = results(cache_dir)
-    assert 0 < len(finished) < 64, "the kill must land midway"
-    resumed = reproduce(tmp_path / "a", cache_dir)
-    assert resumed.wait(timeout=300) == 0, resumed.stderr.read()
+    assert len(finished) == KILL_AFTER, "the kill must land midway"
+    assert reproduce_in_process(tmp_path / "a", cache_dir, monkeypatch) == 0
     after = results(cache_dir)
     assert len(after) == 64
     assert {k: after[k] for k in finished} == finished  # finished runs were not rerun
-    whole = reproduce(tmp_path / "b", tmp_path / "cache2")
-    assert whole.wait(timeout=300) == 0
-    for name in ("summary.csv", "ding2024/ding2024_table_rms.csv"):
-        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
+    assert reproduce_in_process(tmp_path / "b", tmp_path / "cache2", monkeypatch) == 0
+    for name in ("summary.csv", "ding2024/ding2024_table_rms.csv", "ding2024/ding2024_table_rms_runs.csv"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
 
 
 def test_corrupt_result_is_rerun(tmp_path):
