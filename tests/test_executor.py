@@ -281,3 +281,27 @@ def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
         assert cache.code_version() == cache._closure_hash() not in ("kept", version)  # a new stamp: recomputed
     finally:
         cache.code_version.cache_clear()
+
+
+@pytest.mark.parametrize("scenario", ["ding2024_exp1", "yuan2018_mode1", "yan2022_sim"])
+def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, monkeypatch):
+    import numpy as np
+
+    from magexp import bounds
+
+    problems = [runner._Shared().problem(c, runner.build(c["scenario"], "scenario"), c["seed"])[2]
+                for c in configs(f"scenario={scenario}", seeds=(0, 1))]
+    fresh = []
+    for problem in problems:  # each bound from scratch: nothing kept
+        monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
+        fresh.append(pickle.dumps(bounds.cramer_rao(problem)))
+    monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
+    calls = []
+    real = bounds._jacobian
+    monkeypatch.setattr(bounds, "_jacobian", lambda fun, *a: calls.append(fun) or real(fun, *a))
+    kept = [pickle.dumps(bounds.cramer_rao(problem)) for problem in problems]
+    assert kept == fresh  # the same bits
+    assert len(bounds._INVARIANT_JACOBIANS) == 1  # one truth: H computed once for both seeds
+    assert sum(getattr(f, "__name__", "") == "invariants" for f in calls) == 1
+    (h,) = bounds._INVARIANT_JACOBIANS.values()
+    assert not h.flags.writeable and np.isfinite(h).all()
