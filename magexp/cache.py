@@ -122,10 +122,11 @@ def _source_stamp() -> str:
 def code_version() -> str:
     """Hash of the code upstream of a run (:func:`upstream_files`): only such a change invalidates runs.
 
-    Finding the import closure parses every module (a third of a second); the result is kept beside
-    the run cache under the sources' :func:`_source_stamp`, so a later command with unchanged
-    sources reads it instead (a changed stamp only recomputes it: never a stale version)."""
-    memo = CACHE.parent / f"{CACHE.name}-code.json"
+    Finding the import closure parses every module (about 0.1 s); the result is kept in the run
+    cache folder (``code-version.json``, beside the results' two-letter folders) under the sources'
+    :func:`_source_stamp`, so a later command with unchanged sources reads it instead (a changed
+    stamp only recomputes it: never a stale version)."""
+    memo = CACHE / "code-version.json"
     stamp = _source_stamp()
     try:
         known = json.loads(memo.read_text())

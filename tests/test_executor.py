@@ -270,7 +270,7 @@ def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
     cache.code_version.cache_clear()
     try:
         version = cache.code_version()
-        memo = tmp_path / "cache" / "runs-code.json"
+        memo = tmp_path / "cache" / "runs" / "code-version.json"
         assert json.loads(memo.read_text()) == {cache._source_stamp(): version} and version == cache._closure_hash()
         memo.write_text(json.dumps({cache._source_stamp(): "kept"}))
         cache.code_version.cache_clear()
