@@ -225,22 +225,21 @@ def _run_task(configs: list[dict], keys: list[str], root=None) -> tuple[list, fl
     """A task, in a worker: its runs through :func:`magexp.runner.run_batch`; returns
     ``(results, task_cpu)``, ``task_cpu`` the CPU seconds this process spent on the task.
 
-    With ``root`` (the run cache, on a file system this worker shares with the parent) each run is
-    stored there as it finishes (a task killed midway keeps its finished runs) and ``results`` holds
-    only each run's ``(row, fit_cpu)`` (:func:`run_row`): nothing large goes back to the parent,
-    which neither unpickles nor stores the outputs. Without ``root``, ``results`` holds the outputs.
+    With ``root`` (the run cache, on a file system this worker shares with the parent) the task's
+    runs are stored there when its last fit is done, each atomically (a task killed midway is rerun
+    whole, as a remote one is), and ``results`` holds only each run's ``(row, fit_cpu)``
+    (:func:`run_row`): nothing large goes back to the parent, which neither unpickles nor stores
+    the outputs. Without ``root``, ``results`` holds the outputs.
     """
     from magexp.runner import run_batch
 
     start = time.process_time()
-    results = []
-    for key, out in zip(keys, run_batch(configs)):
-        if root is None:
-            results.append(out)
-        else:
+    outputs = list(run_batch(configs))
+    if root is not None:
+        for key, out in zip(keys, outputs):  # in one loop after the fits: measured cheaper than between them
             cache.store(key, out, root)
-            results.append((run_row(out), out.fit_cpu))
-    return results, time.process_time() - start
+        outputs = [(run_row(out), out.fit_cpu) for out in outputs]
+    return outputs, time.process_time() - start
 
 
 def _group_key(cfg: dict) -> str:
