@@ -27,9 +27,14 @@ parameter and reading otherwise (and always for ``H``, which has ``p`` columns o
 
 from __future__ import annotations
 
+import json
+from collections import OrderedDict
 from dataclasses import replace
 
 import numpy as np
+
+#: :func:`invariant_jacobian` by problem class, options, ``θ`` and steps (a few hundred kept)
+_INVARIANT_JACOBIANS: OrderedDict = OrderedDict()
 
 
 def _jacobian(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
@@ -77,6 +82,26 @@ def jacobians(problem, theta: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray
     if both is not None:
         return both
     return _jacobian(problem.residuals, theta, steps), finite_difference_noise_blocks(problem, theta)
+
+
+def invariant_jacobian(problem, theta: np.ndarray, steps: np.ndarray, keep: int = 256) -> np.ndarray:
+    """``H = ∂h/∂θ`` of ``problem.invariants`` at ``theta`` (central differences, :func:`_jacobian`),
+    read-only.
+
+    ``h`` is a function of ``θ`` alone, fixed by the problem's class and constructor options (its
+    parameterisation), not by its readings; so ``H`` is kept per (class, options, ``θ``, steps)
+    in this process: every seed of a scenario shares its truth, and computes ``H`` once.
+    """
+    key = (type(problem), json.dumps(problem.options, sort_keys=True, default=str), theta.tobytes(), steps.tobytes())
+    if key in _INVARIANT_JACOBIANS:
+        _INVARIANT_JACOBIANS.move_to_end(key)
+    else:
+        h = _jacobian(problem.invariants, theta, steps)
+        h.flags.writeable = False
+        _INVARIANT_JACOBIANS[key] = h
+        if len(_INVARIANT_JACOBIANS) > keep:
+            _INVARIANT_JACOBIANS.popitem(last=False)
+    return _INVARIANT_JACOBIANS[key]
 
 
 def finite_difference_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
@@ -162,7 +187,7 @@ def _cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
     # (a gain vs an offset in nT), and a relative cut-off on the raw matrix would drop whole directions
     d = np.maximum(np.sqrt(np.diag(fisher)), 1e-300)
     cov = np.linalg.pinv(fisher / np.outer(d, d), rcond=1e-10, hermitian=True) / np.outer(d, d)
-    h = _jacobian(problem.invariants, theta, steps)
+    h = invariant_jacobian(problem, theta, steps)
     inv_cov = h @ cov @ h.T
     # singular values and right singular vectors of the column-scaled J (column scale must not
     # decide the rank), from its p x p Gram matrix

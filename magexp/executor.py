@@ -7,9 +7,11 @@ Runs (resolved configs) go through :func:`run_many`, which
 2. groups the runs to do into *tasks*: the runs of one scenario (and objective) for a block of
    seeds, every estimator included, so that a task builds its scenario and estimators once and each
    seed's dataset, problem and Cramér-Rao bound once (:func:`magexp.runner.run_batch`);
-3. hands the tasks to an executor, longest first, and streams each finished run to the run cache
-   as it arrives; the parent keeps only the small metrics dicts, and :class:`Outputs` reads a full
-   output back from the cache when a figure needs it.
+3. hands the tasks to an executor, longest first. A worker that shares the parent's file system
+   (local processes, a Dask ``LocalCluster``) stores each run in the run cache as it finishes and
+   sends back only its metrics row (:func:`_run_task`); a remote worker sends the outputs, which the
+   parent stores as they arrive. The parent keeps only the small metrics dicts, and :class:`Outputs`
+   reads a full output back from the cache when a figure needs it.
 
 Executors (:func:`make_executor`):
 
@@ -41,6 +43,7 @@ import json
 import math
 import os
 import signal
+import time
 from collections import OrderedDict, defaultdict
 from collections.abc import Iterable, Iterator, Sequence
 
@@ -83,6 +86,7 @@ class InlineExecutor:
     """Runs each submitted call in this process, when its result is asked for (``jobs=1``)."""
 
     workers = 1
+    shares_files = True  # workers see the parent's run cache (they store runs there themselves)
 
     def submit(self, fn, *args):
         return _Deferred(fn, args)
@@ -162,6 +166,7 @@ class DaskExecutor(InlineExecutor):
             raise MagexpError("--executor dask needs the 'distributed' package: pip install distributed") from None
         self.cluster = None
         n = jobs if jobs > 0 else (os.cpu_count() or 1)
+        self.shares_files = scheduler is None  # remote workers may not see this machine's files
         if scheduler is None:
             self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
         elif scheduler in JOBQUEUES:
@@ -216,11 +221,25 @@ def make_executor(kind: str = "local", *, jobs: int = 0, scheduler: str | None =
     return InlineExecutor() if jobs == 1 else LocalExecutor(jobs)
 
 
-def _run_task(configs: list[dict]) -> list:
-    """A task, in a worker: its runs through :func:`magexp.runner.run_batch`."""
+def _run_task(configs: list[dict], keys: list[str], root=None) -> tuple[list, float]:
+    """A task, in a worker: its runs through :func:`magexp.runner.run_batch`; returns
+    ``(results, task_cpu)``, ``task_cpu`` the CPU seconds this process spent on the task.
+
+    With ``root`` (the run cache, on a file system this worker shares with the parent) the task's
+    runs are stored there when its last fit is done, each atomically (a task killed midway is rerun
+    whole, as a remote one is), and ``results`` holds only each run's ``(row, fit_cpu)``
+    (:func:`run_row`): nothing large goes back to the parent, which neither unpickles nor stores
+    the outputs. Without ``root``, ``results`` holds the outputs.
+    """
     from magexp.runner import run_batch
 
-    return list(run_batch(configs))
+    start = time.process_time()
+    outputs = list(run_batch(configs))
+    if root is not None:
+        for key, out in zip(keys, outputs):  # in one loop after the fits: measured cheaper than between them
+            cache.store(key, out, root)
+        outputs = [(run_row(out), out.fit_cpu) for out in outputs]
+    return outputs, time.process_time() - start
 
 
 def _group_key(cfg: dict) -> str:
@@ -311,7 +330,10 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     ``executor``: from :func:`make_executor` (default: local processes over ``jobs``, 0 = all cores).
     ``use_cache=False`` reruns every distinct run (and stores it). ``progress(n)`` is called with the
     number of runs just finished. ``counts`` (a dict), if given, receives ``requested``, ``distinct``,
-    ``computed``, ``cached`` and ``fit_cpu`` (CPU seconds inside the computed runs' fits).
+    ``computed``, ``cached``, ``fit_cpu`` (CPU seconds inside the computed runs' fits) and
+    ``task_cpu`` (CPU seconds of the tasks, measured inside the workers around each task: building,
+    simulating, fitting, bounds, metrics, storing), so ``task_cpu - fit_cpu`` is the workers' cost
+    outside the fits and the rest of a command's CPU is the parent's.
     """
     keys = cache.run_keys(configs)
     first = {}
@@ -332,7 +354,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
         multiplicity[key] += 1
     if progress:
         progress(len(configs) - sum(multiplicity[keys[i]] for i in todo))
-    fit_cpu = 0.0
+    fit_cpu = task_cpu = 0.0
     if todo:
         own = executor is None
         ex = executor if executor is not None else make_executor("local", jobs=jobs)
@@ -341,12 +363,18 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
             if len(tasks) == 1 and own:
                 ex.close()
                 ex = InlineExecutor()
-            futures = {ex.submit(_run_task, [configs[i] for i in task]): task for task in tasks}
+            root = cache.CACHE if getattr(ex, "shares_files", False) else None
+            futures = {ex.submit(_run_task, [configs[i] for i in task], [keys[i] for i in task], root): task
+                       for task in tasks}
             for future in ex.as_completed(futures):
-                for i, out in zip(futures.pop(future), future.result()):
-                    cache.store(keys[i], out)
-                    metrics[keys[i]] = run_row(out)
-                    fit_cpu += getattr(out, "fit_cpu", 0.0)
+                results, cpu = future.result()
+                task_cpu += cpu
+                for i, result in zip(futures.pop(future), results):
+                    if root is None:  # the worker sent the output itself: store it here
+                        cache.store(keys[i], result)
+                        result = run_row(result), result.fit_cpu
+                    metrics[keys[i]], fit = result
+                    fit_cpu += fit
                     if progress:
                         progress(multiplicity[keys[i]])
         except BaseException:
@@ -356,5 +384,5 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
         if own:
             ex.close()
     if counts is not None:
-        counts["fit_cpu"] = fit_cpu
+        counts.update(fit_cpu=fit_cpu, task_cpu=task_cpu)
     return Outputs(keys, metrics)

@@ -2,7 +2,23 @@
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
+
+#: :func:`truth_cost` of each live problem (a problem's data and truth do not change)
+_TRUTH_COST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def truth_cost(problem) -> float | None:
+    """``problem.cost_direct`` at the true parameters (None without a truth): the objective the
+    true calibration reaches on the same readings. It depends on the problem's data only, so it is
+    computed once per problem object and shared by every estimator fitted to it (and by the
+    problem's own metrics, e.g. the vector objective's noise floor)."""
+    if problem not in _TRUTH_COST:
+        truth = problem.truth_theta()
+        _TRUTH_COST[problem] = None if truth is None else float(problem.cost_direct(truth))
+    return _TRUTH_COST[problem]
 
 
 def noise_floor(dataset, n_identifiable: int = 9) -> float | None:
@@ -41,10 +57,10 @@ def _evaluate(problem, result, crb) -> dict:
     floor = noise_floor(problem.dataset)
     if floor is not None:
         out["noise_floor"] = floor
-    truth = problem.truth_theta()
+    truth_fun = truth_cost(problem)
     reached = None  # as good as the true calibration on the same readings (1 %, or 1e-9 absolute)
-    if truth is not None:
-        out["truth_fun"] = float(problem.cost_direct(truth))
+    if truth_fun is not None:
+        out["truth_fun"] = truth_fun
         reached = 1.01 * out["truth_fun"] + 1e-9
         out["converged"] = bool(out["fun"] <= reached)
     out.update(problem.metrics(result.x))

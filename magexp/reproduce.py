@@ -211,10 +211,11 @@ def cpu_seconds() -> float:
 
 
 def cpu_line(cpu: float, counts: dict) -> str:
-    """Where the CPU went: inside the computed runs' fits, and outside them per computed run."""
-    fit, n = counts.get("fit_cpu", 0.0), counts["computed"]
-    per_run = f", {(cpu - fit) / n * 1e3:.1f} ms per computed run outside them" if n else ""
-    return f"CPU {cpu:.1f} s: {fit:.1f} s inside fits ({fit / cpu:.0%}){per_run}"
+    """Where the CPU went: inside the computed runs' fits; the workers' CPU outside them per computed
+    run (``task_cpu - fit_cpu``, measured inside the workers); the parent's (all the rest)."""
+    fit, n, task = counts.get("fit_cpu", 0.0), counts["computed"], counts.get("task_cpu", 0.0)
+    split = f"; worker: {(task - fit) / n * 1e3:.1f} ms per run outside fits; parent: {cpu - task:.1f} s" if n else ""
+    return f"CPU {cpu:.1f} s: {fit:.1f} s inside fits ({fit / cpu:.0%}){split}"
 
 
 def record_timing(root: Path, target: str, seconds: float, counts: dict) -> None:

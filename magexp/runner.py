@@ -17,7 +17,7 @@ from magexp.errors import MagexpError
 from magexp.estimators.base import check_applies
 from magexp.metrics import evaluate, problem_bound
 from magexp.problems import make_problem, problem_class
-from magexp.seeding import run_generators, scenario_stream
+from magexp.seeding import run_sequences, scenario_stream
 
 
 @dataclass
@@ -70,10 +70,15 @@ def _text(node) -> str:
 _BUILT: OrderedDict = OrderedDict()
 
 
-def build_once(node, what: str, keep: int = 256):
-    """:func:`build`, memoised in this process by the node's content and its data files' content."""
-    plain = _plain(node)
-    key = (what.split()[0], _text(plain), tuple(sorted(data_files(plain).values())))
+def _build_key(plain: dict, what: str) -> tuple:
+    """What a built object depends on: its kind, its node's content and its data files' content."""
+    return what.split()[0], _text(plain), tuple(sorted(data_files(plain).values()))
+
+
+def build_once(node, what: str, keep: int = 256, key: tuple | None = None):
+    """:func:`build`, memoised in this process by the node's content and its data files' content
+    (``key``: its :func:`_build_key`, when the caller has it)."""
+    key = _build_key(_plain(node), what) if key is None else key
     if key in _BUILT:
         _BUILT.move_to_end(key)
     else:
@@ -85,23 +90,40 @@ def build_once(node, what: str, keep: int = 256):
 
 class _Shared:
     """What the runs of one batch share, each built once: scenario and estimator objects
-    (:func:`build_once`), and per (scenario, objective, seed) the dataset, the problem and its
-    Cramér-Rao bound (the data depend on the seed only, so every estimator of a seed sees the same
-    readings)."""
+    (:func:`build_once`, the key of a config node worked out once per node in the batch), and per
+    (scenario, objective, seed) the dataset, the problem, its Cramér-Rao bound and the seed
+    sequences (the data depend on the seed only, so every estimator of a seed sees the same
+    readings, and each estimator gets a fresh generator of the same estimator stream)."""
 
     def __init__(self, keep: int = 64):
         self.problems, self.keep = OrderedDict(), keep
+        self._nodes: dict = {}  # id(node) -> (node, key): the node is held, so its id is not reused
+        self._keys: dict = {}  # (kind, node text) -> key, for nodes equal but not the same object
 
-    build = staticmethod(build_once)
+    def key(self, node, what: str) -> tuple:
+        """:func:`_build_key` of ``node``, worked out once per node object and once per content."""
+        entry = self._nodes.get(id(node))
+        if entry is None or entry[0] is not node:
+            plain = _plain(node)
+            text = (what.split()[0], _text(plain))
+            if text not in self._keys:
+                self._keys[text] = _build_key(plain, what)
+            entry = self._nodes[id(node)] = (node, self._keys[text])
+        return entry[1]
+
+    def build(self, node, what: str):
+        return build_once(node, what, key=self.key(node, what))
 
     def problem(self, cfg, scenario, seed: int):
+        """``(objective, dataset, problem, bound, estimator sequence)`` of the run's scenario and seed;
+        ``bound`` is a list that holds the problem's :func:`problem_bound` once it is computed."""
         objective = cfg.get("objective") or scenario.objective
-        key = (_text(cfg["scenario"]), objective, seed)
+        key = (self.key(cfg["scenario"], "scenario")[1], objective, seed)
         if key not in self.problems:
-            data_rng, _ = run_generators(seed, stream=scenario_stream(cfg["scenario"]))
-            dataset = scenario.generate(rng=data_rng)
+            data_seq, est_seq = run_sequences(seed, stream=scenario_stream(cfg["scenario"]))
+            dataset = scenario.generate(rng=np.random.default_rng(data_seq))
             problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
-            self.problems[key] = (objective, dataset, problem, [])
+            self.problems[key] = (objective, dataset, problem, [], est_seq)
             if len(self.problems) > self.keep:  # bounded memory on long batches
                 self.problems.popitem(last=False)
         return self.problems[key]
@@ -121,8 +143,8 @@ def run_batch(configs) -> Iterator[RunOutput]:
         estimator = shared.build(cfg["estimator"], f"estimator {cfg['estimator'].get('name')!r}")
         objective = cfg.get("objective") or scenario.objective
         check_applies(estimator, problem_class(objective), f"scenario {scenario.name!r}")  # before any data
-        _, est_rng = run_generators(seed, stream=scenario_stream(cfg["scenario"]))
-        objective, dataset, problem, bound = shared.problem(cfg, scenario, seed)
+        objective, dataset, problem, bound, est_seq = shared.problem(cfg, scenario, seed)
+        est_rng = np.random.default_rng(est_seq)
         start, cpu = time.perf_counter(), time.process_time()
         result = estimator.fit(problem, rng=est_rng)
         wall, cpu = time.perf_counter() - start, time.process_time() - cpu

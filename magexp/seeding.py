@@ -35,8 +35,16 @@ def run_generators(seed, stream=None) -> tuple[np.random.Generator, np.random.Ge
     estimator of a (scenario, seed) sees the same readings (common random numbers: paired
     comparisons). ``stream=None`` is the scenario-free sequence of ``seed``.
     """
+    data, est = run_sequences(seed, stream)
+    return np.random.default_rng(data), np.random.default_rng(est)
+
+
+def run_sequences(seed, stream=None) -> tuple[np.random.SeedSequence, np.random.SeedSequence]:
+    """The seed sequences behind :func:`run_generators` (data, estimator). ``default_rng`` of a
+    sequence does not change it, so a batch derives them once per (scenario, seed) and gives each
+    estimator a fresh generator with the same draws."""
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise MagexpError(f"seed={seed!r} is not allowed: it must be an integer >= 0")
     key = () if stream is None else (stream_key(stream),)
     data, est = np.random.SeedSequence(seed, spawn_key=key).spawn(2)
-    return np.random.default_rng(data), np.random.default_rng(est)
+    return data, est

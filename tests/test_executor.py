@@ -169,3 +169,139 @@ def test_jobqueue_missing_names_the_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "dask_jobqueue", None)
     with pytest.raises(MagexpError, match=r"pip install 'magexp\[cluster\]'"):
         executor.jobqueue_cluster("pbs")
+
+
+class _RemoteLike(executor.InlineExecutor):
+    """An executor whose workers do not see the parent's files (a remote Dask scheduler)."""
+
+    shares_files = False
+
+
+def test_workers_store_their_runs_and_the_counts_split_the_cpu(tmp_path, monkeypatch):
+    from magexp.reproduce import cpu_line
+
+    batch = configs(*DING, "estimator=ellipsoid", seeds=range(3)) + configs(*DING, "estimator=pso", seeds=range(3))
+    keys = cache.run_keys(batch)
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "shared")
+    stored, sent = [], []
+    real_store, real_task = cache.store, executor._run_task
+    monkeypatch.setattr(cache, "store", lambda *a, **k: stored.append(a[0]) or real_store(*a, **k))
+
+    def task(configs, keys, root):
+        results, cpu = real_task(configs, keys, root)
+        sent.append((list(keys), list(stored), results))
+        return results, cpu
+
+    monkeypatch.setattr(executor, "_run_task", task)
+    counts = {}
+    here = executor.run_many(batch, jobs=1, counts=counts)
+    for task_keys, stored_by_then, results in sent:  # each run stored inside its task; only rows sent back
+        assert set(task_keys) <= set(stored_by_then)
+        assert all(isinstance(row, dict) and isinstance(fit, float) for row, fit in results)
+    assert sorted(stored) == sorted(keys) and all(cache.exists(k) for k in keys)
+    assert pickle.dumps(here.metrics(3)) == pickle.dumps(executor.run_row(here[3]))  # the stored run's row
+    assert counts["task_cpu"] >= counts["fit_cpu"] > 0
+    line = cpu_line(counts["task_cpu"] + 0.5, counts)
+    per_run = (counts["task_cpu"] - counts["fit_cpu"]) / len(batch) * 1e3
+    assert f"worker: {per_run:.1f} ms per run outside fits; parent: 0.5 s" in line
+
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "remote")
+    counts = {}
+    there = executor.run_many(batch, executor=_RemoteLike(), counts=counts)  # outputs come back, the parent stores
+    assert all(cache.exists(k) for k in keys) and counts["task_cpu"] >= counts["fit_cpu"] > 0
+    assert all(same(a, b) for a, b in zip(here, there))
+    for i in range(len(batch)):
+        mine, theirs = ({k: v for k, v in m.items() if k != "wall_time"} for m in (here.metrics(i), there.metrics(i)))
+        assert pickle.dumps(mine) == pickle.dumps(theirs)
+
+
+def test_a_batch_gives_each_estimator_the_generator_run_generators_gives():
+    import numpy as np
+
+    from magexp.seeding import run_generators, run_sequences
+
+    stream = {"name": "ding2024_exp1", "noise": 2}
+    data, est = run_generators(7, stream=stream)
+    data_seq, est_seq = run_sequences(7, stream=stream)
+    first, second = np.random.default_rng(est_seq), np.random.default_rng(est_seq)  # twice from one sequence
+    draws = est.random(5)
+    assert np.array_equal(first.random(5), draws) and np.array_equal(second.random(5), draws)
+    assert np.array_equal(np.random.default_rng(data_seq).normal(size=4), data.normal(size=4))
+
+
+@pytest.mark.parametrize("scenario, estimators", [("ding2024_exp1", ("ellipsoid", "lm")),
+                                                  ("yuan2018_mode1", ("lm", "ekf"))])
+def test_truth_cost_is_computed_once_per_problem_and_equals_the_direct_cost(scenario, estimators, monkeypatch):
+    import numpy as np
+
+    from magexp import metrics
+
+    batch = [c for e in estimators for c in configs(f"scenario={scenario}", f"estimator={e}", seeds=(0,))]
+    alone = [runner.run(OmegaConf.create(c)) for c in batch]
+    made, at_truth = [], []
+    real_make = runner.make_problem
+
+    def make(*args, **kwargs):  # count the problem's direct costs at its truth
+        problem = real_make(*args, **kwargs)
+        real_cost = problem.cost_direct
+        problem.cost_direct = lambda x: at_truth.append(np.array_equal(x, problem.truth_theta())) or real_cost(x)
+        made.append(problem)
+        return problem
+
+    monkeypatch.setattr(runner, "make_problem", make)
+    together = list(runner.run_batch(batch))
+    assert all(same(a, b) for a, b in zip(alone, together))
+    assert len(made) == 1 and sum(at_truth) == 1  # one dataset, its truth's cost once for both estimators
+    direct = made[0].cost_direct(made[0].truth_theta())
+    assert together[0].metrics["truth_fun"] == together[1].metrics["truth_fun"] == direct
+    assert metrics.truth_cost(made[0]) == direct and sum(at_truth) == 2  # kept: only the direct call above
+
+
+def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
+    import json
+    import shutil
+
+    from magexp.paths import ROOT
+
+    copy = tmp_path / "repo"
+    shutil.copytree(ROOT / "magexp", copy / "magexp", ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(cache, "ROOT", copy)
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "cache" / "runs")
+    cache.code_version.cache_clear()
+    try:
+        version = cache.code_version()
+        memo = tmp_path / "cache" / "runs" / "code-version.json"
+        assert json.loads(memo.read_text()) == {cache._source_stamp(): version} and version == cache._closure_hash()
+        memo.write_text(json.dumps({cache._source_stamp(): "kept"}))
+        cache.code_version.cache_clear()
+        assert cache.code_version() == "kept"  # read back, not recomputed
+        with (copy / "magexp/bounds.py").open("a") as fh:
+            fh.write("\n# an edit\n")
+        cache.code_version.cache_clear()
+        assert cache.code_version() == cache._closure_hash() not in ("kept", version)  # a new stamp: recomputed
+    finally:
+        cache.code_version.cache_clear()
+
+
+@pytest.mark.parametrize("scenario", ["ding2024_exp1", "yuan2018_mode1", "yan2022_sim"])
+def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, monkeypatch):
+    import numpy as np
+
+    from magexp import bounds
+
+    problems = [runner._Shared().problem(c, runner.build(c["scenario"], "scenario"), c["seed"])[2]
+                for c in configs(f"scenario={scenario}", seeds=(0, 1))]
+    fresh = []
+    for problem in problems:  # each bound from scratch: nothing kept
+        monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
+        fresh.append(pickle.dumps(bounds.cramer_rao(problem)))
+    monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
+    calls = []
+    real = bounds._jacobian
+    monkeypatch.setattr(bounds, "_jacobian", lambda fun, *a: calls.append(fun) or real(fun, *a))
+    kept = [pickle.dumps(bounds.cramer_rao(problem)) for problem in problems]
+    assert kept == fresh  # the same bits
+    assert len(bounds._INVARIANT_JACOBIANS) == 1  # one truth: H computed once for both seeds
+    assert sum(getattr(f, "__name__", "") == "invariants" for f in calls) == 1
+    (h,) = bounds._INVARIANT_JACOBIANS.values()
+    assert not h.flags.writeable and np.isfinite(h).all()

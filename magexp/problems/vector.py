@@ -139,10 +139,12 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         return self.least_squares()
 
     def metrics(self, theta: np.ndarray) -> dict:
+        from magexp.metrics import truth_cost
+
         out = super().metrics(theta)
-        truth = self.truth_theta()
-        if truth is not None:
-            out["noise_floor"] = self.cost_direct(truth)
+        floor = truth_cost(self)  # F at the truth, once per problem
+        if floor is not None:
+            out["noise_floor"] = floor
         return out
 
 
