@@ -179,9 +179,10 @@ def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 200
             record(theta, float(np.sqrt(np.mean(r * r))) if measure is None else measure(theta))
         return r
 
-    try:
-        sol = least_squares(fun, np.asarray(x0, float), method="lm", x_scale="jac",
-                            xtol=tol, ftol=tol, gtol=tol, max_nfev=max_nfev)
+    try:  # a trial step far out may overflow: its residuals count as inf, judged by the result, not warned
+        with np.errstate(over="ignore", invalid="ignore"):
+            sol = least_squares(fun, np.asarray(x0, float), method="lm", x_scale="jac",
+                                xtol=tol, ftol=tol, gtol=tol, max_nfev=max_nfev)
         x, status, message = sol.x, int(sol.status), str(sol.message)
     except Stop:
         x, status, message = best["x"], -2, "stopped by the callback"
