@@ -23,6 +23,7 @@ $(STAMP): pyproject.toml requirements.lock
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -r requirements.lock
 	$(PY) -m pip install --quiet --no-deps -e .
+	$(PY) -m magexp.warmup
 	@touch $(STAMP)
 
 venv: $(STAMP) ## create .venv and install magexp with its test extras
