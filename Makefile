@@ -10,7 +10,7 @@ SCHEDULER ?=
 RUN_ON := --jobs $(JOBS) --executor $(EXECUTOR) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 # tests run in TEST_JOBS processes (pytest-xdist; TEST_JOBS=0: one process), the slowest listed at the end
 TEST_JOBS ?= 2
-PYTEST := $(PY) -m pytest $(if $(filter-out 0,$(TEST_JOBS)),-n $(TEST_JOBS) --dist load) --durations=15
+PYTEST := $(PY) -m pytest $(if $(filter-out 0,$(TEST_JOBS)),-n $(TEST_JOBS) --dist worksteal) --durations=15
 
 .DEFAULT_GOAL := help
 .PHONY: help venv lock bench reproduce redraw report test test-full clean

@@ -78,7 +78,7 @@ def _missing_recording(value) -> str | None:
 
 def pytest_collection_modifyitems(config, items):
     """Tests parametrised over a recorded scenario or artifact skip cleanly without the recordings;
-    the ``slow`` tests run first (in two processes, the short ones then fill the gaps: no long tail)."""
+    the ``slow`` tests run first (in two processes with work stealing, the short ones then fill the gaps: no long tail)."""
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: slow first, in file order
     for item in items:
         params = getattr(getattr(item, "callspec", None), "params", {})

@@ -116,6 +116,7 @@ def test_the_free_gauge_fit_depends_on_process_memory():
     assert len(set(out)) > 1, "scipy's MINPACK no longer depends on memory contents: the gauge may be free again"
 
 
+@pytest.mark.slow
 def test_the_gauge_fixed_fit_gives_the_same_bits_under_any_memory_state_and_alignment(partial_arc):
     dataset, scenario = partial_arc
     first = fit(dataset, scenario)

@@ -53,6 +53,7 @@ def test_swarm_cost_agrees_with_residuals():
     np.testing.assert_allclose(p.cost(thetas), direct, rtol=1e-12)
 
 
+@pytest.mark.slow
 def test_turns_about_one_axis_leave_a_combination_undetermined():
     full = simulated(seconds=12.0)
     one = simulated(axis_only=2, seconds=12.0)

@@ -95,6 +95,7 @@ print(hashlib.sha256(nb.scalar_cost(w, o, c, s, u, ref).tobytes() + nb.vector_co
 """
 
 
+@pytest.mark.slow
 def test_compiled_kernels_are_bitwise_reproducible_across_processes():
     """No fastmath, no threads: two fresh processes give the same bits (and so does this one)."""
     runs = [subprocess.run([sys.executable, "-c", SNIPPET], capture_output=True, text=True, check=True).stdout

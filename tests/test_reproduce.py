@@ -185,6 +185,7 @@ def test_ctrl_c_ends_in_one_line_and_a_clean_state(tmp_path):
     assert not (out / "ding2024" / "ding2024_table_rms.csv").exists()
 
 
+@pytest.mark.slow
 def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypatch, capsys):
     from magexp.plots import memo, style
 

@@ -191,6 +191,7 @@ def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path,
     assert list(tmp_path.iterdir()) == [tmp_path / "cache"] or not list(tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path):
     """``a,b``, ``range()`` and a group's ``glob()``: the jobs magexp checks are the jobs Hydra launches."""
     from magexp.cli_checks import expand_sweep
