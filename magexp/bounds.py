@@ -37,8 +37,9 @@ import numpy as np
 _INVARIANT_JACOBIANS: OrderedDict = OrderedDict()
 
 
-def _jacobian(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
-    """Central differences, one row per parameter, returned transposed (``(n, p)``, column-major)."""
+def central_differences(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """Jacobian of ``fun`` (one vector in, ``(n,)`` out) at ``theta`` by central differences of the
+    given ``steps``, one row per parameter, returned transposed (``(n, p)``, column-major)."""
     rows = None
     for k in range(theta.size):
         e = np.zeros_like(theta)
@@ -77,15 +78,15 @@ def _pinv_blocks(blocks: np.ndarray) -> np.ndarray:
 def jacobians(problem, theta: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(J, G)``: ``J = ∂r/∂θ`` ``(N m, p)`` and ``G_i = ∂r_i/∂x_i`` ``(N, m, 3)``, the problem's
     analytic ones (``problem.jacobians``) when it has them, else central differences
-    (:func:`_jacobian`, :func:`finite_difference_noise_blocks`)."""
+    (:func:`central_differences`, :func:`finite_difference_noise_blocks`)."""
     both = problem.jacobians(theta) if hasattr(problem, "jacobians") else None
     if both is not None:
         return both
-    return _jacobian(problem.residuals, theta, steps), finite_difference_noise_blocks(problem, theta)
+    return central_differences(problem.residuals, theta, steps), finite_difference_noise_blocks(problem, theta)
 
 
 def invariant_jacobian(problem, theta: np.ndarray, steps: np.ndarray, keep: int = 256) -> np.ndarray:
-    """``H = ∂h/∂θ`` of ``problem.invariants`` at ``theta`` (central differences, :func:`_jacobian`),
+    """``H = ∂h/∂θ`` of ``problem.invariants`` at ``theta`` (central differences, :func:`central_differences`),
     read-only.
 
     ``h`` is a function of ``θ`` alone, fixed by the problem's class and constructor options (its
@@ -96,7 +97,7 @@ def invariant_jacobian(problem, theta: np.ndarray, steps: np.ndarray, keep: int 
     if key in _INVARIANT_JACOBIANS:
         _INVARIANT_JACOBIANS.move_to_end(key)
     else:
-        h = _jacobian(problem.invariants, theta, steps)
+        h = central_differences(problem.invariants, theta, steps)
         h.flags.writeable = False
         _INVARIANT_JACOBIANS[key] = h
         if len(_INVARIANT_JACOBIANS) > keep:

@@ -253,8 +253,10 @@ def report_of(rec: Recording, objective: str, w, o, reference: Reference, proble
         names = ["s", "o1", "o2", "o3"]
         fun = q.sphere_residuals(rec.readings, reference.total)
     elif objective == "scalar":
-        theta = np.concatenate([[w[i, j] for i, j in q.SYMMETRIC], o])
-        names = [f"W{i + 1}{j + 1}" for i, j in q.SYMMETRIC] + ["o1", "o2", "o3"]
+        from magexp.estimators.reduced import UPPER
+
+        theta = np.concatenate([w.ravel()[UPPER], o])  # the 6 upper entries of the symmetric W, then o
+        names = [f"W{k // 3 + 1}{k % 3 + 1}" for k in UPPER] + ["o1", "o2", "o3"]
         fun = q.scalar_residuals(rec.readings, reference.total)
     else:
         theta = np.concatenate([w.ravel(), o])

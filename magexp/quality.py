@@ -42,9 +42,6 @@ PARTIAL = 0.75       # fewer occupied cells after a failed fit: say the coverage
 ONE_ATTITUDE_DEG = 20.0
 STILL = 0.05         # RMS distance of the raw readings from their centroid below this fraction of their magnitude: one attitude  # every calibrated direction within this angle of their mean: one attitude
 
-SYMMETRIC = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-
-
 def canonical(w: np.ndarray) -> np.ndarray:
     """The symmetric positive-definite polar factor ``P = V Σ Vᵀ`` of ``W = U Σ Vᵀ`` (``W = (U Vᵀ) P``)."""
     _, s, vt = np.linalg.svd(w)
@@ -72,23 +69,21 @@ def coverage(calibrated: np.ndarray) -> dict:
 
 
 def _jacobian(fun, theta: np.ndarray) -> np.ndarray:
-    """Central differences of ``fun`` at ``theta``, all perturbed vectors at once (``fun`` takes ``(n, p)``)."""
+    """Central differences (:func:`magexp.bounds.central_differences`) of ``fun`` (which takes a
+    stack ``(n, p)``) at ``theta``, with steps relative to each parameter's size."""
+    from magexp.bounds import central_differences
+
     step = 1e-6 * np.maximum(np.abs(theta), 1e-3 * max(float(np.abs(theta).max()), 1e-12))
-    pert = np.concatenate([theta + np.diag(step), theta - np.diag(step)])
-    values = fun(pert)  # (2p, m)
-    p = theta.size
-    return ((values[:p] - values[p:]) / (2 * step[:, None])).T
+    return central_differences(lambda t: fun(t[None])[0], theta, step)
 
 
 def scalar_residuals(readings: np.ndarray, reference: np.ndarray):
     """``θ = [P (6 upper entries), o] -> |P (r_i - o)| - B_i`` for a stack of ``θ`` (n, 9)."""
-    iu = tuple(np.array(SYMMETRIC).T)
+    from magexp.estimators.reduced import expand
 
     def fun(thetas):
         thetas = np.atleast_2d(thetas)
-        p = np.zeros((len(thetas), 3, 3))
-        p[:, iu[0], iu[1]] = thetas[:, :6]
-        p[:, iu[1], iu[0]] = thetas[:, :6]
+        p = expand(thetas)[:, :9].reshape(-1, 3, 3)  # symmetric P from its upper entries
         c = np.einsum("nij,nkj->nki", p, readings[None] - thetas[:, None, 6:])
         return np.linalg.norm(c, axis=2) - reference
 

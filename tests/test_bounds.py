@@ -90,7 +90,7 @@ def _dense_cramer_rao(problem, theta: np.ndarray | None = None, *, analytic: boo
     if analytic:
         jac, g = problem.jacobians(theta)  # (N*m, p), (N, m, 3)
     else:
-        jac = bounds._jacobian(problem.residuals, theta, steps)
+        jac = bounds.central_differences(problem.residuals, theta, steps)
         g = bounds.finite_difference_noise_blocks(problem, theta)
     m = g.shape[1]
     cov_blocks = sigma2 * g @ g.transpose(0, 2, 1)  # (N, m, m)
@@ -104,7 +104,7 @@ def _dense_cramer_rao(problem, theta: np.ndarray | None = None, *, analytic: boo
     d = np.maximum(np.linalg.norm(jw, axis=0), 1e-300)
     fisher_scaled = (jw / d).T @ (jw / d)
     cov = np.linalg.pinv(fisher_scaled, rcond=1e-10, hermitian=True) / np.outer(d, d)
-    h = bounds._jacobian(problem.invariants, theta, steps)
+    h = bounds.central_differences(problem.invariants, theta, steps)
     inv_cov = h @ cov @ h.T
     # an invariant is identifiable only if its gradient lies in the row space of J; otherwise
     # the data cannot pin it down and its bound is infinite (the pseudo-inverse would hide that)
@@ -187,7 +187,7 @@ def test_analytic_jacobians_equal_central_differences(make_cfg, objective, optio
     theta = theta + 0.02 * np.abs(theta).max() * np.random.default_rng(4).standard_normal(theta.size) \
         * np.r_[np.full(9, 1 / np.abs(theta).max()), np.ones(3)]
     steps = 1e-6 * np.maximum(np.abs(theta), 1e-3)
-    numeric = bounds._jacobian(prob.residuals, theta, steps), bounds.finite_difference_noise_blocks(prob, theta)
+    numeric = bounds.central_differences(prob.residuals, theta, steps), bounds.finite_difference_noise_blocks(prob, theta)
     for analytic, central in zip(prob.jacobians(theta), numeric):
         assert analytic.shape == central.shape
         np.testing.assert_allclose(analytic, central, rtol=1e-6, atol=1e-7 * np.abs(central).max())
