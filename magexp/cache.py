@@ -99,13 +99,18 @@ def upstream_files() -> list[Path]:
     return sorted(seen)
 
 
+def files_digest(files, base: Path):
+    """A SHA-256 object fed with the path (relative to ``base``) and content of each of ``files``."""
+    h = hashlib.sha256()
+    for path in files:
+        h.update(path.relative_to(base).as_posix().encode())
+        h.update(path.read_bytes())
+    return h
+
+
 def _closure_hash() -> str:
     """Hash of the path and content of every file of :func:`upstream_files`."""
-    h = hashlib.sha256()
-    for path in upstream_files():
-        h.update(path.relative_to(ROOT).as_posix().encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()[:16]
+    return files_digest(upstream_files(), ROOT).hexdigest()[:16]
 
 
 def _source_stamp() -> str:

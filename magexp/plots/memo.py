@@ -41,10 +41,9 @@ def code_version() -> str:
     import numpy
     import pandas
 
-    h = hashlib.sha256()
-    for path in sorted(paths.PACKAGE.rglob("*.py")):
-        h.update(path.relative_to(paths.PACKAGE).as_posix().encode())
-        h.update(path.read_bytes())
+    from magexp.cache import files_digest
+
+    h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
     h.update(f"{matplotlib.__version__} {numpy.__version__} {pandas.__version__}".encode())
     return h.hexdigest()
 
