@@ -290,7 +290,7 @@ def compare(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, stats:
     test = claim.test
     pair = None
     if test == "auto":
-        if claim.stat == "success_rate" or claim.kind == "success":
+        if claim.stat == "success_rate":
             test = "fisher"
         else:
             pair = _paired(table, better, worse, claim.metric)
