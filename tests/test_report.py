@@ -89,3 +89,32 @@ def test_each_paper_section_opens_with_its_headline_claims():
     assert set(heads.verdict) <= {"supported", "partly", "contradicted", "not testable here"}
     assert set(claims[claims.role != "headline"].verdict) <= {HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE}
     assert (claims.reason.str.len() <= MAX_CELL).all()
+
+
+def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypatch):
+    from types import SimpleNamespace
+
+    from magexp import report
+    from magexp.claims import Claim, evaluate
+    from magexp.spec import Paper
+
+    table = pd.DataFrame({"cell": [0, 0, 1, 1], "seed": [0, 1, 0, 1], "estimator": ["a", "a", "b", "b"],
+                          "setting": ["scenario=x"] * 4, "fun": [1.0, 1.2, 5.0, 6.0], "succeeded": [1.0] * 4})
+    ok = Claim(id="ok", text="", kind="threshold", where={"estimator": "a"}, op="<", value=2)
+    bad = Claim(id="bad", text="", kind="threshold", where={"estimator": "b"}, op="<", value=2)
+    specs = [SimpleNamespace(name="art", claims=[ok, bad])]
+    outcomes = {"art.ok": evaluate(ok, table), "art.bad": evaluate(bad, table)}
+    heads = [build(Headline, h, "h") for h in (
+        {"id": "both", "text": "t", "section": "s", "parts": ["art.ok", "art.bad"], "reason": "a at {median:fun@estimator=a:.2g}"},
+        {"id": "one", "text": "t", "section": "s", "parts": ["art.ok"], "figure": "p/fig"},
+        {"id": "none", "text": "t", "section": "s", "untestable": "the data are not public"})]
+    monkeypatch.setattr(report, "load_paper", lambda paper: Paper(title="p", headline=heads))
+    rows = {r["id"]: r for r in report.headlines("p", specs, outcomes, lambda name: table)}
+    assert rows["both"]["verdict"] == "partly" and rows["both"]["reason"] == "a at 1.1"
+    assert rows["one"]["verdict"] == "supported" and rows["one"]["figure"] == "p/fig"
+    assert rows["both"]["figure"] == "p/art"  # default: the first part's artifact
+    assert rows["none"]["verdict"] == "not testable here" and rows["none"]["reason"] == "the data are not public"
+    typo = [build(Headline, {"id": "x", "text": "t", "section": "s", "parts": ["art.nope"]}, "h")]
+    monkeypatch.setattr(report, "load_paper", lambda paper: Paper(title="p", headline=typo))
+    with pytest.raises(MagexpError, match="'art.nope' names no claim"):
+        report.headlines("p", specs, outcomes, lambda name: table)
