@@ -10,30 +10,48 @@ A claim sits in the artifact YAML next to the runs it is about::
         op: ">="
         value: 0.9
       - id: table7_order
-        by: paper                         # the paper's statement, evaluated (it may not hold)
+        by: paper                         # the paper's own statement, evaluated (it may not hold)...
+        section: "Sec. 5, Table 7"        # ...with where the paper says it (required for by: paper)
         text: "F_g orders RDPSO < PSO < EKF"
         kind: ordering
         metric: fg
         cells: [{estimator: rdpso}, {estimator: pso}, {estimator: ekf}]   # best first
-      - id: lm_wins
-        text: "lm is the most accurate on mode 1"
-        kind: winner                      # holds only where the CIs separate
-        metric: offset_error / offset_bound
-        stat: rms
-        cells: [{estimator: lm}, {estimator: rdpso}, {estimator: ipso}]   # the winner first
+      - id: lm_at_optimum
+        role: sanity                      # holds by construction: a check of the code, never counted
+        ...
 
 ``metric`` is a runs column or an expression of columns (``pandas.eval``); ``stat`` one of
 :data:`STATS` over the seeds of the selected cells (pooled). Confidence intervals are 95 %
 percentile bootstrap intervals over seeds (:func:`ci`, a fixed generator: the same on every
-run). Claims with ``by: magexp`` are what the report states as true; ``tests/test_claims.py``
-fails when one of them does not hold on the results.
+run). ``role: finding`` (default) claims with ``by: magexp`` are what the report states as true;
+``tests/test_claims.py`` fails when one of them does not hold on the results. ``figure``: the
+artifact whose figure shows the claim (default: its own).
+
+**Comparisons** (``kind: ordering``: each cell better than the next; ``kind: winner``: the first
+better than every other) hold only when a test at level :data:`ALPHA` separates the two sides
+(``test:``):
+
+* ``fisher``: one-sided Fisher's exact test on the success counts (``stat: success_rate``);
+* ``paired``: one-sided Wilcoxon signed-rank test on the per-seed differences of ``metric``,
+  where the two cells share their seeds and scenario (same seed and scenario: the same readings);
+* ``intervals``: the 95 % bootstrap CIs of ``stat`` do not overlap;
+* ``auto`` (default): ``fisher`` for success rates, ``paired`` where the cells differ only in
+  estimator-side keys (``estimator``, ``estimator.*``, ``objective``) and have the same seeds,
+  ``intervals`` otherwise.
+
+A comparison's outcome is ``holds`` (every pair significant in the stated direction),
+``contradicted`` (a pair significant in the opposite direction) or ``no difference detected``;
+a threshold's or a success rate's is ``holds`` or ``does not hold``.
 
 Notes interpolate measured values with ``{stat:metric@key=value,key=value:format}``, e.g.
-``{median:fun@estimator=ipso,scenario.noise=2:.3g}`` (:func:`interpolate`).
+``{median:fun@estimator=ipso,scenario.noise=2:.3g}`` (:func:`interpolate`); a field whose
+selection matches no cell fails the build with one line naming it; one whose cells exist but whose
+row filter (``succeeded=0``, ``seeds=10``) leaves no value prints :data:`NO_RUNS`, never ``n/a``.
 """
 
 from __future__ import annotations
 
+import math
 import operator
 import re
 from dataclasses import dataclass, field
@@ -60,7 +78,15 @@ STATS = {
 }
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
 KINDS = ("threshold", "success", "ordering", "winner")
+ROLES = ("finding", "sanity")
+TESTS = ("auto", "fisher", "paired", "intervals")
 N_BOOT = 2000
+#: significance level of every comparison test
+ALPHA = 0.05
+#: outcomes of a claim; the first is the only one that counts as holding
+HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE = "holds", "does not hold", "contradicted", "no difference detected"
+#: cell keys that choose the method, not the readings: cells that differ only in these share their data
+ESTIMATOR_SIDE = ("estimator", "objective")
 
 
 @dataclass(frozen=True)
@@ -78,10 +104,15 @@ class Claim:
     value: float | None = None
     cells: list = field(default_factory=list)
     better: str = "lower"
+    section: str = ""
+    role: str = "finding"
+    figure: str = ""
+    test: str = "auto"
 
     def __post_init__(self):
         checks = [("kind", self.kind, KINDS), ("by", self.by, ("magexp", "paper")), ("stat", self.stat, tuple(STATS)),
-                  ("op", self.op, tuple(OPS)), ("better", self.better, ("lower", "higher"))]
+                  ("op", self.op, tuple(OPS)), ("better", self.better, ("lower", "higher")),
+                  ("role", self.role, ROLES), ("test", self.test, TESTS)]
         for key, value, allowed in checks:
             if value not in allowed:
                 raise MagexpError(f"claim {self.id!r}: {key}={value!r} is not allowed: choose one of {', '.join(allowed)}")
@@ -89,13 +120,26 @@ class Claim:
             raise MagexpError(f"claim {self.id!r}: kind {self.kind} needs a value")
         if self.kind in ("ordering", "winner") and len(self.cells) < 2:
             raise MagexpError(f"claim {self.id!r}: kind {self.kind} needs at least two cells")
+        if self.by == "paper" and not str(self.section).strip():
+            raise MagexpError(f"claim {self.id!r}: by: paper needs a section (where the paper says it)")
+        if self.test == "fisher" and self.stat != "success_rate":
+            raise MagexpError(f"claim {self.id!r}: test: fisher compares success counts: it needs stat: success_rate")
 
 
 @dataclass
 class Outcome:
+    """A claim's outcome (``result``: :data:`HOLDS`, :data:`FAILS`, :data:`CONTRADICTED` or
+    :data:`NO_DIFFERENCE`) with its evidence: ``short`` (the numbers) and ``evidence`` (all of them)."""
+
     claim: Claim
     holds: bool
     evidence: str
+    result: str = ""
+    short: str = ""
+
+    def __post_init__(self):
+        self.result = self.result or (HOLDS if self.holds else FAILS)
+        self.short = self.short or self.evidence
 
 
 def same(a, b) -> bool:
@@ -185,8 +229,99 @@ def _name(where: dict) -> str:
 
 
 def _describe(where: dict, v: np.ndarray, stat: str) -> tuple[float, tuple, str]:
+    """The statistic, its CI and a text; a CI over fewer than two values is not printed (n says it)."""
     s, (lo, hi) = statistic(v, stat), ci(v, stat)
-    return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g} [95 % CI {lo:.4g}, {hi:.4g}] (n={len(v)})"
+    interval = f" [95 % CI {lo:.4g}, {hi:.4g}]" if np.isfinite(lo) and np.isfinite(hi) else ""
+    return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g}{interval} (n={len(v)})"
+
+
+def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
+    """One-sided p-value of Fisher's exact test that the success probability of the first group
+    (``k1`` of ``n1``) exceeds the second's (``k2`` of ``n2``): the hypergeometric upper tail
+    ``P(X >= k1)``, ``X ~ Hypergeom(n1 + n2, k1 + k2, n1)`` (what ``scipy.stats.fisher_exact(...,
+    alternative="greater")`` gives)."""
+    total, succ = n1 + n2, k1 + k2
+    denom = math.comb(total, n1)
+    hi = min(n1, succ)
+    return float(sum(math.comb(succ, x) * math.comb(total - succ, n1 - x) for x in range(k1, hi + 1)) / denom)
+
+
+def wilcoxon_less(d: np.ndarray) -> float:
+    """One-sided p-value of the Wilcoxon signed-rank test that the paired differences ``d`` lie
+    below zero (zero differences dropped; 1 when none is left). ``scipy.stats`` is imported here
+    only: it costs seconds to import on a busy machine, and only paired comparisons need it."""
+    d = np.asarray(d, float)
+    d = d[np.isfinite(d) & (d != 0)]
+    if d.size == 0:
+        return 1.0
+    from scipy.stats import wilcoxon
+
+    return float(wilcoxon(d, alternative="less").pvalue)
+
+
+def _paired(table: pd.DataFrame, a: dict, b: dict, metric: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per-seed values of ``metric`` of the single cells ``a`` and ``b`` matched on seed, when they
+    share their seeds and differ only in :data:`ESTIMATOR_SIDE` keys (then a seed is the same
+    readings for both); else None."""
+    ta, tb = select(table, a), select(table, b)
+    if ta.cell.nunique() != 1 or tb.cell.nunique() != 1 or ta.cell.iloc[0] == tb.cell.iloc[0]:
+        return None
+    settings = cell_settings(table)
+    sa, sb = settings[int(ta.cell.iloc[0])], settings[int(tb.cell.iloc[0])]
+    data_side = lambda s: {k: v for k, v in s.items() if k not in ESTIMATOR_SIDE and not k.startswith("estimator.")}
+    if data_side(sa) != data_side(sb) or set(ta.seed) != set(tb.seed):
+        return None
+    va = pd.Series(_column(ta, metric), index=ta.seed)
+    vb = pd.Series(_column(tb, metric), index=tb.seed).reindex(va.index)
+    return va.to_numpy(float), vb.to_numpy(float)
+
+
+def _column(runs: pd.DataFrame, metric: str) -> np.ndarray:
+    """``metric`` per run (NaN kept: pairs stay aligned)."""
+    try:
+        return np.asarray(runs[metric] if metric in runs else runs.eval(metric), float)
+    except Exception as exc:
+        raise MagexpError(f"metric {metric!r} is not a column or an expression of the runs' columns: {exc}") from None
+
+
+def compare(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, stats: tuple, cis: tuple) -> tuple[str, str]:
+    """Whether the cells ``better`` beat the cells ``worse`` by the claim's test: ``(outcome, text)``."""
+    sign = 1 if claim.better == "lower" else -1
+    test = claim.test
+    pair = None
+    if test == "auto":
+        if claim.stat == "success_rate":
+            test = "fisher"
+        else:
+            pair = _paired(table, better, worse, claim.metric)
+            test = "paired" if pair is not None else "intervals"
+    if test == "fisher":
+        ka, kb = (values(select(table, w), claim.metric, "success_rate") for w in (better, worse))
+        if claim.better == "lower":  # fewer successes is better: swap the roles
+            ka, kb = kb, ka
+        p_hold = fisher_greater(int(ka.sum()), len(ka), int(kb.sum()), len(kb))
+        p_contra = fisher_greater(int(kb.sum()), len(kb), int(ka.sum()), len(ka))
+        text = f"Fisher p = {p_hold:.3g} ({int(ka.sum())}/{len(ka)} vs {int(kb.sum())}/{len(kb)})"
+    elif test == "paired":
+        pair = pair or _paired(table, better, worse, claim.metric)
+        if pair is None:
+            raise MagexpError(f"claim {claim.id!r}: test: paired needs two single cells with the same seeds and scenario")
+        d = sign * (pair[0] - pair[1])  # below zero: the first is better
+        d = d[np.isfinite(d)]
+        p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
+        wins, losses = int((d < 0).sum()), int((d > 0).sum())
+        text = (f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
+                f"equal on {d.size - wins - losses} of {d.size} seeds)")
+    else:
+        (alo, ahi), (blo, bhi) = cis
+        p_hold = 0.0 if (ahi < blo if sign > 0 else alo > bhi) else 1.0
+        p_contra = 0.0 if (bhi < alo if sign > 0 else blo > ahi) else 1.0
+        text = "95 % CIs " + ("separate" if min(p_hold, p_contra) == 0 else "overlap")
+    if p_hold < ALPHA:
+        return HOLDS, text
+    if p_contra < ALPHA:
+        return CONTRADICTED, text
+    return NO_DIFFERENCE, text
 
 
 def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
@@ -212,21 +347,54 @@ def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
             s, _, text = _describe({k: cells[ci][k] for k in cells[ci] if k not in where} or where, v, stat)
             ok &= bool(np.isfinite(s) and OPS[claim.op](s, float(claim.value)))
             parts.append(text)
-        return Outcome(claim, ok, f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts))
+        evidence = f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts)
+        got = ", ".join(_short_value(statistic(values(table[table.cell == ci], claim.metric, stat), stat)) for ci in chosen)
+        return Outcome(claim, ok, evidence, short=f"required {stat} {claim.op} {claim.value:g}; "
+                       f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {_shorten(got, 200)}")
     stats, cis, parts = [], [], []
     for where in claim.cells:
         v = values(select(table, where), claim.metric, stat)
         s, interval, text = _describe(where, v, stat)
         stats.append(s), cis.append(interval), parts.append(text)
-    sign = 1 if claim.better == "lower" else -1
     if any(not np.isfinite(s) for s in stats):
         return Outcome(claim, False, "; ".join(parts) + " (a selection has no runs)")
-    if claim.kind == "ordering":
-        ok = all(sign * a < sign * b for a, b in zip(stats, stats[1:]))
-        return Outcome(claim, ok, f"{'ascending' if sign > 0 else 'descending'} {stat} of {claim.metric}: " + "; ".join(parts))
-    (wlo, whi), others = cis[0], cis[1:]
-    ok = all((whi < lo) if sign > 0 else (wlo > hi) for lo, hi in others)
-    return Outcome(claim, ok, f"winner only where the 95 % CIs separate; {stat} of {claim.metric}: " + "; ".join(parts))
+    pairs = (list(zip(range(len(stats)), range(1, len(stats)))) if claim.kind == "ordering"
+             else [(0, j) for j in range(1, len(stats))])
+    results, tests = [], []
+    for i, j in pairs:
+        r, t = compare(claim, table, claim.cells[i], claim.cells[j], (stats[i], stats[j]), (cis[i], cis[j]))
+        results.append(r), tests.append(t)
+    result = HOLDS if all(r == HOLDS for r in results) else CONTRADICTED if CONTRADICTED in results else NO_DIFFERENCE
+    order = "lower" if claim.better == "lower" else "higher"
+    head = f"{stat} of {claim.metric} ({order} is better): "
+    short = "; ".join(f"{_short_value(stats[i])} vs {_short_value(stats[j])}, {t}" for (i, j), t in zip(pairs, tests))
+    return Outcome(claim, result == HOLDS, head + "; ".join(parts) + "; tests at alpha " + f"{ALPHA:g}: " + "; ".join(tests),
+                   result=result, short=f"{stat} {short}")
+
+
+def _short_value(v: float) -> str:
+    return f"{v:.3g}"
+
+
+#: length of the short evidence printed in the report (the full evidence goes to claims.csv)
+SHORT = 300
+
+
+def _shorten(text: str, n: int = SHORT) -> str:
+    """``text`` cut at ``n`` characters (on a ``;`` where one is near), with an ellipsis."""
+    if len(text) <= n:
+        return text
+    cut = text.rfind(";", 0, n - 2)
+    return text[:cut if cut > n // 2 else n - 2].rstrip() + " …"
+
+
+#: what a note field prints when its cells exist but its row filter (``succeeded``, ``seeds``) leaves no
+#: value (an exploration with few seeds); tests fail on it in the canonical results
+NO_RUNS = "(no runs)"
+
+
+def _setting_keys(table: pd.DataFrame) -> set:
+    return {k for s in cell_settings(table).values() for k in s}
 
 
 _FIELD = re.compile(r"\{(\w+):([^@{}]+)@([^:{}]*)(?::([^{}]+))?\}")
@@ -240,11 +408,14 @@ def interpolate(text: str, table: pd.DataFrame) -> str:
         if stat not in STATS:
             raise MagexpError(f"note field {m.group(0)!r}: stat {stat!r} is not allowed: choose one of {', '.join(STATS)}")
         where = dict(p.split("=", 1) for p in where_text.split(",") if "=" in p)
+        settings = _setting_keys(table)  # the row filters (runs columns that are no setting) are left out here
+        if not len(select(table, {k: v for k, v in where.items() if k in settings or k not in table})):
+            raise MagexpError(f"note field {m.group(0)!r}: its selection matches no cell of the runs: fix it")
         try:
             v = values(select(table, where), metric, stat)
         except MagexpError:
-            return f"[no column {metric!r} in the runs]"
+            raise MagexpError(f"note field {m.group(0)!r}: {metric!r} is not a column or an expression of the runs' columns") from None
         s = statistic(v, stat)
-        return format(s, fmt) if np.isfinite(s) else "n/a"
+        return format(s, fmt) if np.isfinite(s) else NO_RUNS
 
     return _FIELD.sub(one, text)

@@ -14,14 +14,18 @@ artifact's CSVs and figure are written. ``--redraw`` rebuilds the figures, ``sum
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
+from types import SimpleNamespace
 
+import numpy as np
 import pandas as pd
 
-from magexp.artifacts import collect, paper_specs, plan_artifact
+from magexp.artifacts import ArtifactRuns, collect, paper_specs, plan_artifact
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.plots import kind_module
@@ -91,17 +95,72 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
     return frame.drop(columns=timed)
 
 
+class StoredOutputs(Mapping):
+    """``(cell, seed) -> `` the parts of a run's output the summary reads (``x``, ``parameter_names``,
+    ``truth_x``), from the runs CSV as written: the estimates are its parameter columns, the names
+    and the truth those of the cell's problem (``facts(cell) -> (names, truth)``)."""
+
+    def __init__(self, table: pd.DataFrame, facts):
+        self._table = table.set_index(["cell", "seed"], drop=False)
+        self._facts = functools.cache(facts)
+
+    def __getitem__(self, key):
+        names, truth = self._facts(int(key[0]))
+        row = self._table.loc[key]
+        x = np.array([float(row[n]) if n in row.index else np.nan for n in names])
+        return SimpleNamespace(x=x, parameter_names=names, truth_x=truth)
+
+    def __iter__(self):
+        return iter(zip(self._table.cell.astype(int), self._table.seed.astype(int)))
+
+    def __len__(self) -> int:
+        return len(self._table)
+
+
+def stored_runs(spec, table: pd.DataFrame, cells: list, overrides: list, facts) -> ArtifactRuns:
+    """The :class:`ArtifactRuns` the summary reads, from the runs CSV ``table`` as written (a
+    reproduction and a ``--redraw`` summarise the same bytes)."""
+    return ArtifactRuns(spec=spec, cells=cells, table=table, outputs=StoredOutputs(table, facts), overrides=overrides)
+
+
+def _problem_facts(overrides: list[list[str]], table: pd.DataFrame):
+    """``cell -> (parameter names, true vector)`` of the cell's problem, rebuilt without a run."""
+    from magexp.summary import _problem_of
+
+    def facts(ci: int):
+        problem = _problem_of(tuple(overrides[ci]), int(table[table.cell == ci].seed.min()))
+        return list(problem.parameter_names()), problem.truth_theta()
+
+    return facts
+
+
+def summarise_stored(spec, root: Path) -> pd.DataFrame:
+    """The summary rows of ``spec`` from its runs CSV under ``root`` (``--redraw``: no run)."""
+    from magexp.artifacts import plan_artifact
+
+    plan = plan_artifact(spec)
+    table = pd.read_csv(root / spec.paper / f"{spec.name}_runs.csv")
+    return summarise(stored_runs(spec, table, plan.cells, plan.overrides, _problem_facts(plan.overrides, table)))
+
+
 def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     """An artifact's CSVs and figure into ``out`` (``force``: draw it even if unchanged); returns its
-    summary rows."""
+    summary rows, computed from the runs CSV as written (:func:`stored_runs`)."""
     path = out / f"{runs.spec.name}.csv"
     frame = kind_module(runs.spec.kind).tabulate(runs)
     if runs.spec.kind != "speed":  # wall times measure this machine today: kept beside timing.csv
         frame = split_timing(frame, out.parent / "timing" / f"{runs.spec.name}.csv")
     write_csv(frame, path)
-    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{runs.spec.name}_runs.csv")
+    runs_csv = out / f"{runs.spec.name}_runs.csv"
+    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), runs_csv)
     draw(runs.spec, path, out, force=force)
-    return summarise(runs)
+    table = pd.read_csv(runs_csv)
+
+    def facts(ci: int):
+        first = runs.outputs[(ci, int(table[table.cell == ci].seed.min()))]
+        return list(first.parameter_names), getattr(first, "truth_x", None)
+
+    return summarise(stored_runs(runs.spec, table, runs.cells, runs.overrides, facts))
 
 
 def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False,
@@ -186,19 +245,24 @@ def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int =
 
 def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tuple[int, int]:
     """Each selected artifact's figure from its CSV in ``root`` (unchanged ones are kept, unless
-    ``force``: :func:`draw`); returns how many were drawn and how many were unchanged."""
+    ``force``: :func:`draw`) and its summary rows from its runs CSV (:func:`summarise_stored`, into
+    ``root/<paper>/summary.csv``); returns how many figures were drawn and how many were unchanged."""
     drawn = kept = 0
     for paper, specs in selected.items():
+        parts = {}
         for spec in specs:
             if skipped_for_data(spec):
                 continue
             path = root / paper / f"{spec.name}.csv"
-            if not path.is_file():
-                raise MagexpError(f"--redraw: {path} does not exist: reproduce {spec.name} first")
+            if not path.is_file() or not (root / paper / f"{spec.name}_runs.csv").is_file():
+                raise MagexpError(f"--redraw: {path} or its runs CSV does not exist: reproduce {spec.name} first")
             if draw(spec, path, root / paper, force=force):
                 drawn += 1
             else:
                 kept += 1
+            parts[spec.name] = summarise_stored(spec, root)
+        if parts:
+            write_summary(paper, parts, root / paper)
     return drawn, kept
 
 

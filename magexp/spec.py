@@ -19,13 +19,15 @@ An artifact is a paper's figure or table as data::
     reported:                    # the paper's numbers (printed precision: decimals, else inferred from the value)
       - {quantity: final_rms, match: {estimator: ipso, scenario.noise: 2}, value: 0.58}
       - {quantities: [S11, S12], match: {estimator: rdpso}, values: [-1.6013, 0.4010], decimals: 4}
+      - {quantity: b1, match: {scenario: yuan2018_mode4}, value: -42.87, informative: false, reason: "..."}  # forced
     tolerance: {rel: 0.15, reason: ...}   # only where the paper gives no run to compare with
-    claims: [...]                # magexp.claims.Claim: conditions on the results, printed in the report
+    claims: [...]                # magexp.claims.Claim: conditions on the results (by, section, role, figure, test)
     notes: ...                   # prose; {median:fun@estimator=ipso:.3g} interpolates a measured value
     caption: ...
 
 A typo fails at load with one line naming the key and the allowed ones. The papers are the
-folders of ``experiments/`` that hold an artifact (:func:`papers`).
+folders of ``experiments/`` that hold an artifact (:func:`papers`); each has a ``paper.yaml``
+(:class:`Paper`: title, intro, order, deviations and its ``headline:`` claims, :class:`Headline`).
 """
 
 from __future__ import annotations
@@ -203,6 +205,12 @@ class Reported:
     match: dict = field(default_factory=dict)
     decimals: int | None = None
     tolerance: Tolerance | None = None
+    informative: bool = True  # false: the row's verdict is ``uninformative`` whatever its interval (``reason`` says why)
+    reason: str = ""
+
+    def __post_init__(self):
+        if not self.informative and not str(self.reason).strip():
+            raise MagexpError(f"reported {self.quantity}: informative: false needs a reason (why the runs cannot pin it down)")
 
     def half_unit(self) -> float:
         """Half a unit of the last printed digit: the paper's printing precision."""
@@ -369,14 +377,44 @@ class Deviation:
 
 
 @dataclass(frozen=True)
+class Headline:
+    """A headline claim of the paper (``headline:`` of ``paper.yaml``), in the paper's own words.
+
+    ``parts``: the artifact claims (``<artifact>.<claim id>``) that test it; its verdict is
+    ``supported`` (every part holds), ``contradicted`` (none holds), ``partly`` (some hold), or
+    ``not testable here`` when ``untestable`` (why) is given instead of parts. ``reason``: an
+    optional template interpolated with the runs of the first part's artifact
+    (:func:`magexp.claims.interpolate`). ``figure``: ``<paper folder>/<artifact>`` whose figure shows it."""
+
+    id: str
+    text: str
+    section: str
+    figure: str = ""
+    parts: list = field(default_factory=list)
+    reason: str = ""
+    untestable: str = ""
+
+    def __post_init__(self):
+        if bool(self.parts) == bool(str(self.untestable).strip()):
+            raise MagexpError(f"headline {self.id!r}: give either parts (artifact.claim ids) or untestable (why), not both or neither")
+        for part in self.parts:
+            if not isinstance(part, str) or part.count(".") != 1:
+                raise MagexpError(f"headline {self.id!r}: part {part!r} is not allowed: write <artifact>.<claim id>")
+        if self.figure and str(self.figure).count("/") != 1:
+            raise MagexpError(f"headline {self.id!r}: figure={self.figure!r} is not allowed: write <paper folder>/<artifact>")
+
+
+@dataclass(frozen=True)
 class Paper:
-    """``experiments/<paper>/paper.yaml``: the report section's title, intro, order and deviations."""
+    """``experiments/<paper>/paper.yaml``: the report section's title, intro, order, headline claims
+    (:class:`Headline`) and deviations."""
 
     title: str
     intro: str = ""
     order: int = 100
     deviations: list = field(default_factory=list)
     requires_data: list = field(default_factory=list)  # recordings its artifacts read (skipped when absent)
+    headline: list = field(default_factory=list)
 
 
 def load_paper(paper: str, root: Path | None = None) -> Paper:
@@ -385,7 +423,11 @@ def load_paper(paper: str, root: Path | None = None) -> Paper:
     data = (read_yaml(path) or {}) if path.exists() else {"title": paper}
     meta = build(Paper, data, f"{paper}/paper.yaml")
     devs = [build(Deviation, d, f"{paper}/paper.yaml.deviations[{i}]") for i, d in enumerate(meta.deviations)]
-    return dataclasses.replace(meta, deviations=devs)
+    heads = [build(Headline, h, f"{paper}/paper.yaml.headline[{i}]") for i, h in enumerate(meta.headline)]
+    ids = [h.id for h in heads]
+    if len(set(ids)) != len(ids):
+        raise MagexpError(f"{paper}/paper.yaml.headline: ids must be unique, got {ids}")
+    return dataclasses.replace(meta, deviations=devs, headline=heads)
 
 
 def papers(root: Path | None = None) -> list[str]:

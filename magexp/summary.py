@@ -2,38 +2,61 @@
 
 A paper reports one run; magexp reproduces the distribution of runs. Each row gives, over the
 seeds of a cell, the median (``value``), the quartiles, and the **interval a single run falls in**
-(``lo``, ``hi``: the 2.5 % and 97.5 % quantiles). The paper's value is judged against that interval,
-widened only by the paper's printing precision (half a unit of its last printed digit):
+(``lo``, ``hi``: the 2.5 % and 97.5 % quantiles over **all** seeds). Where the paper's run has an
+outcome, it is compared with our runs of the same outcome, whose interval is ``lo_same``-``hi_same``:
 
-* ``reproduced``: inside, and at least half the runs succeeded (:func:`magexp.artifacts.succeeded`);
+* a paper value of the success metric (a final RMS, a ratio of two such runs) is classified as a
+  successful or a failed run by the artifact's success rule, and compared with our successful or
+  our failed runs;
+* a parameter row (``mode: parameters``) is compared with our successful runs (the paper published
+  a calibration that worked); ``value`` is then their median (``success_rate`` counts the others).
+
+Elsewhere ``lo_same``/``hi_same`` are empty and the paper's value is judged against ``lo``-``hi``.
+The judged interval is widened only by the paper's printing precision (half a unit of its last
+printed digit). ``verdict``:
+
+* ``reproduced``: inside, at least half the runs succeeded, and the interval is informative;
+* ``uninformative``: inside, but the interval cannot exclude values far from the paper's
+  (:func:`uninformative`): not counted as reproduced;
 * ``differs``: outside, or a failed majority;
 * ``n/a``: the paper gives no number.
 
-Where the paper's value is itself a run of the success metric (e.g. a final RMS, or a ratio of two such
-runs), it is compared with the runs of the same outcome: a successful paper run with our successful
-runs, a failed one with our failed runs (``value`` stays the median over all runs). Parameter rows are taken over successful runs only (``success_rate`` counts the others).
-``truth_in_interval`` says whether the true calibration's value is in the interval too: then the row
-shows that the method converged to the noise floor, not more. A fixed tolerance is used only where
-the paper gives no run to compare with (``reported[].tolerance`` with its ``reason``). For a single
-deterministic run on recorded data (``interval: ls``), the interval is the least-squares estimate
-± t(0.975, dof) standard errors instead.
+``label`` names the row for a reader ("IPSO final RMS, exp1, A = 2 nT"); ``reason`` says in a
+line why the verdict is what it is. ``truth_in_interval`` says whether the true calibration's value
+is in the interval too: then the row shows that the method converged to the noise floor, not more.
+A fixed tolerance is used only where the paper gives no run to compare with
+(``reported[].tolerance`` with its ``reason``). For a single deterministic run on recorded data
+(``interval: ls``), the interval is the least-squares estimate ± t(0.975, dof) standard errors.
 """
 
 from __future__ import annotations
 
 import functools
+import re
 
 import numpy as np
 import pandas as pd
 
 from magexp.artifacts import ArtifactRuns, quantiles
 from magexp.claims import matches, same  # noqa: F401  (matches: imported from here too)
+from magexp.errors import MagexpError
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
-           "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval"]
-VERDICTS = ("reproduced", "differs", "n/a")
+           "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval",
+           "label", "reason", "lo_same", "hi_same"]
+VERDICTS = ("reproduced", "differs", "uninformative", "n/a")
 #: the interval of a single run: these quantiles over seeds
 INTERVAL = (0.025, 0.975)
+#: a parameter's interval spanning at least this fraction of its search range is uninformative
+SEARCH_FRACTION = 0.5
+#: a parameter's interval wider than this fraction of its block's scale (the RMS of the medians of the
+#: parameters sharing its name's letters: S's nine entries, b's three components) is uninformative
+BLOCK_FRACTION = 0.15
+#: readable names of estimators and quantities in row labels (others are shown as they are)
+ESTIMATOR_NAMES = {"pso": "PSO", "ipso": "IPSO", "rdpso": "RDPSO", "ekf": "EKF", "kf": "KF", "lm": "lm",
+                   "ellipsoid": "ellipsoid fit", "pso9": "PSO (9-parameter)", "ls": "least squares"}
+QUANTITY_NAMES = {"final_rms": "final RMS", "converged_fraction": "converged fraction",
+                  "improvement_ratio": "final RMS ratio", "fit_rms": "fit RMS"}
 
 
 
@@ -88,12 +111,50 @@ def reported_value(spec, quantity: str, settings: dict):
     return (None, None) if entry is None else (float(entry.value), entry)
 
 
+def uninformative(paper: float, lo: float, hi: float, *, kind: str = "value", search_range: float | None = None,
+                  block_scale: float | None = None, mixed_outcome: bool = False, median: float = np.nan) -> str:
+    """Why an interval that holds the paper's value cannot exclude values far from it ('' if it can).
+
+    The rule, in order (``kind``: ``value``, ``parameter`` or ``ratio``):
+
+    1. a ratio (``ratios:``) whose paper value is matched only by ratios with a failed run on one
+       side (``mixed_outcome``): it measures the size of a failure, not the accuracy of a method;
+    2. a parameter whose interval spans at least :data:`SEARCH_FRACTION` of its search range
+       (``search_range``: upper - lower of the box): the runs do not identify it;
+    3. a parameter whose interval is wider than :data:`BLOCK_FRACTION` of its block's scale
+       (``block_scale``: the RMS of the medians of S's entries, of b's components, ...): it cannot
+       tell the entry from values that change the calibration by that much (entries near zero are
+       judged on the block's scale, not on their own);
+    4. any other row whose interval is wider than the magnitude of the paper's value.
+    """
+    width = hi - lo
+    if not np.isfinite(width):
+        return ""
+    if kind == "ratio" and mixed_outcome:
+        return (f"the paper's ratio is matched only by ratios with a failed run on one side ({lo:.3g}-{hi:.3g}); "
+                f"our median ratio is {median:.3g}")
+    if kind == "parameter":
+        if search_range is not None and np.isfinite(search_range) and search_range > 0 \
+                and width >= SEARCH_FRACTION * search_range:
+            return f"the interval spans {width / search_range:.0%} of the search range: not identified by the runs"
+        if block_scale is not None and np.isfinite(block_scale) and block_scale > 0 and width > BLOCK_FRACTION * block_scale:
+            return (f"the interval ({lo:.3g} to {hi:.3g}) is {width / block_scale:.0%} of its block's scale "
+                    f"({block_scale:.3g}): not pinned down")
+        return ""
+    if width > abs(paper):
+        return f"the interval ({lo:.3g} to {hi:.3g}) is wider than the paper's value itself"
+    return ""
+
+
 def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None, parameters: bool = False,
-         extra_setting: str = "", aggregate: str = "median", success_threshold: float | None = None, ls=None) -> dict:
-    """One summary row. ``ok``: per-value success (1/0/NaN); ``parameters``: statistics over the
-    successful runs only; ``success_threshold``: a paper value at or below it is a successful run, and
-    is compared with the interval of our successful runs (else of our failed ones);
-    ``ls``: ``(estimate, half width)`` of a least-squares interval (recorded data, one run)."""
+         extra_setting: str = "", aggregate: str = "median", success_threshold: float | None = None, ls=None,
+         label: str = "", search_range: float | None = None, block_scale: float | None = None,
+         ratio: bool = False) -> dict:
+    """One summary row (module docstring). ``ok``: per-value success (1/0/NaN); ``parameters``:
+    compared with the successful runs; ``success_threshold``: a paper value at or below it is a
+    successful run, and is compared with our successful runs (else with our failed ones);
+    ``ls``: ``(estimate, half width)`` of a least-squares interval (recorded data, one run);
+    ``search_range``, ``block_scale``, ``ratio``: what :func:`uninformative` needs."""
     v = np.asarray(values, float)
     ok = np.full(v.shape, np.nan) if ok is None else np.asarray(ok, float)
     judged = np.isfinite(ok)
@@ -101,26 +162,39 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     entry = reported_entry(spec, quantity, settings)
     paper = None if entry is None else float(entry.value)
     floor = float(spec.floor)
-    basis = v
+    basis, same, outcome = v, None, ""
     if parameters and judged.any():
-        basis = v[ok == 1]
+        basis = same = v[ok == 1]
+        outcome = "successful"
     if aggregate == "mean":  # fractions: the mean of 0/1 outcomes, no quantiles
         med, q25, q75 = float(np.nanmean(v)), np.nan, np.nan
     else:
         med, q25, q75 = quantiles(basis)
     if success_threshold is not None and paper is not None and judged.any():
-        same = v[ok == (1 if paper <= success_threshold else 0)]  # the paper's run classified by our rule
-        basis = same if same.size else v
-    lo, hi = interval(basis, floor)
+        succeeded = paper <= success_threshold  # the paper's run classified by our rule
+        chosen = v[ok == (1 if succeeded else 0)]
+        same, outcome = (chosen, "successful" if succeeded else "failed") if chosen.size else (None, "")
+    lo, hi = interval(v, floor)
+    lo_same, hi_same = interval(same, floor) if same is not None else (np.nan, np.nan)
     if ls is not None:
         lo, hi = ls[0] - ls[1], ls[0] + ls[1]
+    jlo, jhi = (lo_same, hi_same) if same is not None else (lo, hi)
     width = entry.half_unit() if entry is not None else 0.0
     tol = None if entry is None else (entry.tolerance or spec.tolerance)
-    verdict = judge(paper, lo, hi, width, success_rate, floor=floor, tolerance=tol, value=med)
+    verdict = judge(paper, jlo, jhi, width, success_rate, floor=floor, tolerance=tol, value=med)
+    reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, outcome, ls is not None)
+    if verdict != "n/a" and entry is not None and not entry.informative:
+        verdict, reason = "uninformative", str(entry.reason).strip()
+    elif verdict == "reproduced" and tol is None:
+        why = uninformative(paper, jlo, jhi, kind="ratio" if ratio else "parameter" if parameters else "value",
+                            search_range=search_range, block_scale=block_scale, median=med,
+                            mixed_outcome=ratio and outcome == "failed")
+        if why:
+            verdict, reason = "uninformative", why
     in_interval = np.nan
     if truth is not None and np.isfinite(lo):
         t = max(truth, floor) if 0 <= truth < floor else truth
-        in_interval = bool(lo - width <= t <= hi + width)
+        in_interval = bool(jlo - width <= t <= jhi + width)
     if entry is None:
         tol_text = ""
     elif tol is not None:
@@ -132,7 +206,64 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
         "setting": setting + extra_setting, "truth": truth, "paper_value": paper, "value": med,
         "q25": q25, "q75": q75, "n_seeds": int(np.isfinite(v).sum()), "tolerance": tol_text, "verdict": verdict,
         "lo": lo, "hi": hi, "success_rate": success_rate, "truth_in_interval": in_interval,
+        "label": label or quantity, "reason": reason, "lo_same": lo_same, "hi_same": hi_same,
     }
+
+
+def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol, med: float, outcome: str,
+            ls: bool) -> str:
+    """A short line: why ``verdict`` (numbers from the row)."""
+    if verdict == "n/a":
+        return ""
+    if np.isfinite(success_rate) and success_rate < 0.5:
+        return f"our runs succeed on {success_rate:.0%} of seeds (a failed majority)"
+    if tol is not None:
+        return f"median {med:.4g} vs paper {paper:.4g} ({tol.text()})"
+    against = "the least-squares t-interval" if ls else f"our {outcome} runs" if outcome else "our runs"
+    where = "inside" if verdict == "reproduced" else "outside"
+    return f"paper {paper:.4g} {where} {against} ({lo:.4g} to {hi:.4g})"
+
+
+def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, prefix: str = "") -> str:
+    """A readable row label: estimator, quantity and the settings that tell this cell from the
+    artifact's others (``plot.labels`` names a key; a trailing ``(unit)`` moves after the value;
+    scenario names lose their paper prefix), e.g. ``IPSO final RMS, exp1, A = 2 nT``."""
+    cell = cells[ci] if ci < len(cells) else {}
+    varying = [k for k in cell if k != "estimator" and len({str(c.get(k)) for c in cells}) > 1]
+    names = dict(spec.plot.get("labels", {}) or {}) if spec.plot is not None else {}
+    parts = []
+    for key in varying:
+        value = str(cell[key])
+        if key == "scenario":
+            parts.append(re.sub(r"^[a-z]+\d{4}_", "", value).replace("_", " "))
+            continue
+        name = str(names.get(key, key.split(".")[-1].replace("_", " ")))
+        unit = ""
+        m = re.match(r"^(.*?)\s*\(([^()]*)\)$", name)
+        if m and len(m.group(2)) <= 6:
+            name, unit = m.group(1), m.group(2)
+        words = name.split()
+        if words and len(words[-1]) <= 2 and len(words) > 1:  # "noise amplitude A" -> "A"
+            name = words[-1]
+        parts.append(f"{name} = {value}" + (f" {unit}" if unit else ""))
+    head = " ".join(p for p in (prefix or ESTIMATOR_NAMES.get(estimator, estimator),
+                                QUANTITY_NAMES.get(quantity, quantity)) if p)
+    return ", ".join([head, *parts])
+
+
+def block_of(name: str) -> str:
+    """The block a parameter belongs to: its name's leading letters (``S13`` -> ``S``, ``Bp1`` -> ``Bp``)."""
+    m = re.match(r"^[A-Za-z_]*[A-Za-z]", name)
+    return m.group(0) if m else name
+
+
+def block_scales(names: list[str], medians: np.ndarray) -> dict[str, float]:
+    """``{block: RMS of its parameters' medians}`` (:func:`block_of`)."""
+    groups: dict[str, list] = {}
+    for name, m in zip(names, medians):
+        groups.setdefault(block_of(name), []).append(m)
+    return {b: float(np.sqrt(np.nanmean(np.square(v)))) if np.isfinite(v).any() else np.nan
+            for b, v in ((b, np.asarray(v, float)) for b, v in groups.items())}
 
 
 def parameter_values(runs: ArtifactRuns, ci: int) -> tuple[list[str], np.ndarray, np.ndarray | None]:
@@ -148,7 +279,7 @@ def _cell_ok(runs: ArtifactRuns, ci: int) -> np.ndarray:
 
 
 def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
-    """``mode: parameters``: one row per (cell, parameter), statistics over the successful runs;
+    """``mode: parameters``: one row per (cell, parameter), compared with the successful runs;
     ``only`` (optional) restricts to those estimators."""
     rows = []
     for ci in range(len(runs.cells)):
@@ -157,11 +288,33 @@ def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
             continue
         names, values, truth = parameter_values(runs, ci)
         ok = _cell_ok(runs, ci)
+        kept = values[ok == 1] if np.isfinite(ok).any() and (ok == 1).any() else values
+        scales = block_scales(names, np.nanmedian(kept, axis=0) if len(kept) else np.full(len(names), np.nan))
+        ranges = search_ranges(runs, ci)
         for k, name in enumerate(names):
             rows.append(_row(runs.spec, name, sub.estimator.iloc[0], sub.setting.iloc[0],
                              None if truth is None else float(truth[k]), values[:, k], cell_settings(runs, ci),
-                             ok=ok, parameters=True))
+                             ok=ok, parameters=True, label=label_of(runs.spec, runs.cells, ci, name, sub.estimator.iloc[0]),
+                             search_range=ranges.get(name), block_scale=scales[block_of(name)]))
     return rows
+
+
+def search_ranges(runs: ArtifactRuns, ci: int) -> dict[str, float]:
+    """``{parameter: upper - lower}`` of cell ``ci``'s search box (the problem rebuilt from the
+    cell's overrides, :func:`_problem_of`; no run); empty where the problem cannot be rebuilt here
+    (e.g. a recording that is absent)."""
+    try:
+        names, lower, upper = _box(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
+    except (MagexpError, OSError):  # e.g. a recording that is absent: the other rules still apply
+        return {}
+    return {n: float(u - lo) for n, lo, u in zip(names, lower, upper)}
+
+
+@functools.lru_cache(maxsize=64)
+def _box(overrides: tuple[str, ...], seed: int) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Parameter names and search box of a cell's problem (:func:`_problem_of`)."""
+    problem = _problem_of(overrides, seed)
+    return list(problem.parameter_names()), np.asarray(problem.lower, float), np.asarray(problem.upper, float)
 
 
 def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> dict:
@@ -219,9 +372,11 @@ def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
             continue
         theta = runs.outputs[(ci, int(sub.seed.min()))].x
         for test in f_test(runs, ci, theta):
-            rows.append(_row(runs.spec, f"{item.quantity}_axis{test['axis']}", sub.estimator.iloc[0],
+            quantity = f"{item.quantity}_axis{test['axis']}"
+            rows.append(_row(runs.spec, quantity, sub.estimator.iloc[0],
                              sub.setting.iloc[0] + f";F={test['F']:.4g};dof={test['dof'][0]},{test['dof'][1]}",
-                             None, [test["p_value"]], cell_settings(runs, ci)))
+                             None, [test["p_value"]], cell_settings(runs, ci),
+                             label=label_of(runs.spec, runs.cells, ci, quantity, sub.estimator.iloc[0])))
     return rows
 
 
@@ -262,6 +417,7 @@ def summarise(runs: ArtifactRuns) -> pd.DataFrame:
         return _summarise(runs)
     finally:
         _design.cache_clear()
+        _box.cache_clear()
 
 
 def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
@@ -281,13 +437,16 @@ def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
             if metric not in sub or sub[metric].isna().all():
                 continue
             truth = float(np.median(sub[truth_metric])) if truth_metric in sub and sub[truth_metric].notna().all() else None
-            ls = None
-            if item.interval == "ls" and item.quantity in (names := least_squares_interval(runs, ci)):
-                ls = names[item.quantity]
+            ls, scale = None, None
+            if item.interval == "ls" and item.quantity in (fits := least_squares_interval(runs, ci)):
+                ls = fits[item.quantity]  # a parameter of the linear model: judged on its block's scale
+                scale = block_scales(list(fits), np.array([e for e, _ in fits.values()]))[block_of(item.quantity)]
             rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
                              sub[metric].astype(float).to_numpy(), cell_settings(runs, ci), ok=_cell_ok(runs, ci),
                              aggregate=item.aggregate, ls=ls, success_threshold=None if truth is None or
-                             metric != spec.success.metric else spec.success.factor * truth + spec.success.floor))
+                             metric != spec.success.metric else spec.success.factor * truth + spec.success.floor,
+                             label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0]),
+                             parameters=scale is not None, block_scale=scale))
     for item in spec.ratios:
         num_sel, den_sel, metric = item.numerator, item.denominator, item.metric
         for ci in range(len(runs.cells)):
@@ -306,7 +465,9 @@ def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
             ref = ",".join(f"{k}={v}" for k, v in num_sel.items())
             # a ratio of two successful runs is within the success factor of 1
             threshold = spec.success.factor if item.metric == spec.success.metric else None
+            over = "/".join(ESTIMATOR_NAMES.get(str(e), str(e)) for e in (num_sel.get("estimator"), sub.estimator.iloc[0]) if e)
             rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio.to_numpy(),
                              settings, extra_setting=f";reference={ref}", success_threshold=threshold,
-                             ok=None if both is None else both.to_numpy(float)))
+                             ok=None if both is None else both.to_numpy(float), ratio=True,
+                             label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0], prefix=over)))
     return pd.DataFrame(rows, columns=COLUMNS)

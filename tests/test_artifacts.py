@@ -59,9 +59,9 @@ def test_whole_paper_runs_tiny(tmp_path):
         check_artifact(spec, tmp_path / WHOLE_PAPER, summary[summary.artifact == spec.name])
     assert {"fit_rms", "be_rms", "k_error", "steps_to_ls"} <= set(summary.quantity)
     build(tmp_path)
-    text = (tmp_path / "REPORT.md").read_text()
-    assert "yan2022/yan2022_fig4.png" in text and "### Deviations from the paper's text" in text
-    assert "### Claims" in text
+    report, appendix = (tmp_path / "REPORT.md").read_text(), (tmp_path / "APPENDIX.md").read_text()
+    assert "yan2022/yan2022_fig4.png" in appendix and "### Deviations from the paper's text" in report
+    assert "### Headline claims" in report and "### Findings" in report and (tmp_path / "claims.csv").exists()
     versions = pd.read_csv(tmp_path / "versions.csv")
     assert {"python", "numpy", "scipy", "magexp_commit"} <= set(versions.package)
     written = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False, na_values=[""])

@@ -64,3 +64,68 @@ def test_each_scenario_setting_draws_its_own_stream(make_cfg):
     assert not np.allclose(ratio[1] / ratio[0], 2.5)  # not the same draw scaled
     assert not np.array_equal(a.readings, c.readings)
     np.testing.assert_array_equal(a.readings, d.readings)  # every estimator of a scenario sees the same data
+
+
+# -- uninformative: the interval must be able to exclude something --------------------------------
+
+from types import SimpleNamespace  # noqa: E402
+
+from magexp.spec import Reported  # noqa: E402
+from magexp.summary import _row, block_scales, label_of, uninformative  # noqa: E402
+
+
+def test_rows_that_pin_a_value_down_stay_informative():
+    # an IPSO-like final RMS: 0.58 judged against 0.54-0.62
+    assert uninformative(0.58, 0.538, 0.615) == ""
+    # a well-identified S entry: width 0.001 of a block scale of 0.9
+    assert uninformative(0.3, 0.2996, 0.3004, kind="parameter", search_range=6.0, block_scale=0.9) == ""
+    # an entry near zero is judged on its block's scale, not on itself
+    assert uninformative(0.002, -0.003, 0.007, kind="parameter", search_range=6.0, block_scale=0.9) == ""
+
+
+def test_rows_that_cannot_exclude_anything_are_uninformative():
+    # Yuan Table 2's scalar-PSO S entries: +-1.7 in a [-3, 3] box
+    assert "search range" in uninformative(-1.339, -1.667, 1.64, kind="parameter", search_range=6.0, block_scale=0.34)
+    # mode 4's b1: -46..33 mG for a block of scale 13 mG (box [-100, 100]: only 40 % of it)
+    assert "block's scale" in uninformative(-42.9, -46.3, 33.3, kind="parameter", search_range=200.0, block_scale=13.3)
+    # a ratio matched only by ratios with a failed run on one side (Ding, A = 10)
+    assert "failed run" in uninformative(57.1, 13.1, 284.0, kind="ratio", mixed_outcome=True, median=1.0)
+    assert uninformative(1.05, 0.98, 1.09, kind="ratio", mixed_outcome=False) == ""
+    # any other value whose interval is wider than the value itself
+    assert "wider than" in uninformative(2011.0, -1856.0, 6202.0)
+
+
+def _spec(**entry):
+    return SimpleNamespace(paper="p", name="a", floor=1e-9, tolerance=None,
+                           reported=[Reported(quantity="q", value=entry.pop("value", 1.0), **entry)])
+
+
+def test_lo_hi_are_over_all_seeds_and_the_same_outcome_interval_is_its_own_column():
+    ok = np.r_[np.ones(27), np.zeros(3)]
+    v = np.r_[np.linspace(0.9, 1.1, 27), [300.0, 400.0, 500.0]]
+    # the paper's 350 is a failed run (threshold 1.2): judged against our failed runs only
+    row = _row(_spec(value=350.0), "q", "pso", "s", 1.0, v, {}, ok=ok, success_threshold=1.2, label="PSO q")
+    assert row["hi"] > 300 and row["lo"] < 1  # over every seed
+    assert row["lo_same"] >= 300 and row["hi_same"] <= 500 and row["verdict"] == "reproduced"
+    assert "failed runs" in row["reason"] and row["label"] == "PSO q"
+    good = _row(_spec(value=1.0), "q", "ipso", "s", 1.0, v, {}, ok=ok, success_threshold=1.2)
+    assert good["verdict"] == "reproduced" and good["hi_same"] <= 1.1
+    plain = _row(_spec(value=1.0), "q", "lm", "s", None, np.linspace(0.9, 1.1, 30), {})
+    assert np.isnan(plain["lo_same"]) and plain["verdict"] == "reproduced"
+
+
+def test_an_entry_can_be_marked_uninformative_with_its_reason():
+    row = _row(_spec(value=1.0, informative=False, reason="unidentified: mode 4 turns about one axis"), "q", "lm", "s",
+               None, np.linspace(0.9, 1.1, 30), {})
+    assert row["verdict"] == "uninformative" and row["reason"].startswith("unidentified")
+    with pytest.raises(Exception, match="needs a reason"):
+        Reported(quantity="q", value=1.0, informative=False)
+
+
+def test_block_scale_and_readable_labels():
+    scales = block_scales(["S11", "S12", "b1", "b2", "Bp1"], np.array([3.0, 4.0, 1.0, -1.0, 7.0]))
+    assert scales["S"] == pytest.approx(np.sqrt(12.5)) and scales["b"] == 1.0 and scales["Bp"] == 7.0
+    spec = SimpleNamespace(plot={"labels": {"scenario.noise": "noise amplitude A (nT)"}})
+    cells = [{"scenario": "ding2024_exp1", "scenario.noise": "2", "estimator": "ipso"},
+             {"scenario": "ding2024_exp1", "scenario.noise": "5", "estimator": "ipso"}]
+    assert label_of(spec, cells, 0, "final_rms", "ipso") == "IPSO final RMS, A = 2 nT"
