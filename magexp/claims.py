@@ -60,6 +60,8 @@ STATS = {
 }
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
 KINDS = ("threshold", "success", "ordering", "winner")
+ROLES = ("finding", "sanity")
+TESTS = ("auto", "fisher", "paired", "intervals")
 N_BOOT = 2000
 
 
@@ -78,10 +80,17 @@ class Claim:
     value: float | None = None
     cells: list = field(default_factory=list)
     better: str = "lower"
+    # issue 18's schema (ISSUE18_INTERFACE.md, section 1): where the paper says it, finding or sanity
+    # check, the artifact whose figure shows it, the comparison's test
+    section: str = ""
+    role: str = "finding"
+    figure: str = ""
+    test: str = "auto"
 
     def __post_init__(self):
         checks = [("kind", self.kind, KINDS), ("by", self.by, ("magexp", "paper")), ("stat", self.stat, tuple(STATS)),
-                  ("op", self.op, tuple(OPS)), ("better", self.better, ("lower", "higher"))]
+                  ("op", self.op, tuple(OPS)), ("better", self.better, ("lower", "higher")),
+                  ("role", self.role, ROLES), ("test", self.test, TESTS)]
         for key, value, allowed in checks:
             if value not in allowed:
                 raise MagexpError(f"claim {self.id!r}: {key}={value!r} is not allowed: choose one of {', '.join(allowed)}")

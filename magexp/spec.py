@@ -203,6 +203,8 @@ class Reported:
     match: dict = field(default_factory=dict)
     decimals: int | None = None
     tolerance: Tolerance | None = None
+    informative: bool = True  # false: the row cannot count as reproduced (``reason`` says why)
+    reason: str = ""
 
     def half_unit(self) -> float:
         """Half a unit of the last printed digit: the paper's printing precision."""
@@ -377,6 +379,7 @@ class Paper:
     order: int = 100
     deviations: list = field(default_factory=list)
     requires_data: list = field(default_factory=list)  # recordings its artifacts read (skipped when absent)
+    headline: list = field(default_factory=list)  # the paper's headline claims (ISSUE18_INTERFACE.md, section 2)
 
 
 def load_paper(paper: str, root: Path | None = None) -> Paper:
