@@ -64,6 +64,46 @@ def succeeded(table: pd.DataFrame, success) -> pd.Series:
     return ok.where(ref.notna())
 
 
+#: the offset parameters' columns of a runs table: ``I`` of the inverse parameterisation (Ding's eq 9),
+#: ``b`` of the forward one (:meth:`magexp.problems.base.CalibrationProblem.parameter_names`)
+OFFSET_COLUMNS = (("I1", "I2", "I3"), ("b1", "b2", "b3"))
+#: a coordinate is on a face of the box when ``|x - face| <= FACE_TOL (high - low)`` (the tolerance of
+#: the swarm's own ``on_boundary`` count, :mod:`magexp.estimators.swarm`)
+FACE_TOL = 1e-9
+
+
+def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None:
+    """Per run, how many of the three offset estimates sit on a face of the search box's offset
+    interval ``scenario.search.offset = [low, high]`` of that run's config (``configs[k]`` is row ``k``).
+
+    A swarm that clips positions to the box (``boundary: clip``) leaves a coordinate that crossed a face
+    exactly on it, and a run whose best particle has an offset there cannot reach the optimum when the
+    true offset lies inside the box: the count tells such a run from one that stopped at an interior
+    point. Computed from the stored estimates and the config (downstream of the run: no run changes).
+    NaN where the run's config has no numeric offset interval; None when no row has one or the table
+    has no offset columns.
+    """
+    columns = next((c for c in OFFSET_COLUMNS if all(k in table for k in c)), None)
+    if columns is None or len(configs) != len(table):
+        return None
+    box = np.full((len(table), 2), np.nan)
+    for k, cfg in enumerate(configs):
+        interval = ((cfg.get("scenario") or {}).get("search") or {}).get("offset")
+        if isinstance(interval, (list, tuple)) and len(interval) == 2:
+            try:
+                box[k] = [float(interval[0]), float(interval[1])]
+            except (TypeError, ValueError):
+                pass
+    known = np.isfinite(box).all(axis=1)
+    if not known.any():
+        return None
+    x = table[list(columns)].to_numpy(float)
+    lo, hi = box[:, :1], box[:, 1:]
+    atol = FACE_TOL * (hi - lo)
+    on = (np.abs(x - lo) <= atol) | (np.abs(x - hi) <= atol)
+    return pd.Series(np.where(known, on.sum(axis=1), np.nan), index=table.index, name="offset_at_face")
+
+
 def applicable(cfg: DictConfig) -> bool:
     """Whether the run's estimator applies to its problem: :func:`magexp.estimators.base.applies_to`
     on the classes named by the config (nothing is built or simulated)."""
@@ -200,6 +240,9 @@ def collect(plan: ArtifactPlan, outputs) -> ArtifactRuns:
             for k, (ci, seed) in enumerate(plan.index)]
     table = pd.DataFrame(rows)
     if len(table):
+        at_face = offset_at_face(table, plan.configs)
+        if at_face is not None:
+            table["offset_at_face"] = at_face
         table["succeeded"] = succeeded(table, plan.spec.success)
     return ArtifactRuns(spec=plan.spec, cells=plan.cells, table=table,
                         outputs=_ByRun(plan.index, outputs), overrides=plan.overrides)
