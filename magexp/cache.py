@@ -376,18 +376,18 @@ def write(path: Path, data: bytes, root: Path) -> None:
 # ---------------------------------------------------------------------------------------------
 # what went wrong with the cache, said once per command
 
-_NOTES: dict = {}  # (cache folder, key) -> (kind, detail)
+_NOTES: dict = {}  # (cache folder, key, kind) -> detail
 
 
 def note(root: Path, key: str, kind: str, detail: str = "") -> None:
     """Remember a problem with ``key``'s entry: ``invalid`` (detail: why), ``unreadable``
     (permissions) or ``unwritable`` (detail: the error); :func:`say_notes` tells them."""
-    _NOTES.setdefault((str(root), key), (kind, detail))
+    _NOTES.setdefault((str(root), key, kind), detail)
 
 
 def take_notes() -> list:
     """The problems noted in this process (for a worker to send to its parent), forgotten here."""
-    notes = [(root, key, kind, detail) for (root, key), (kind, detail) in _NOTES.items()]
+    notes = [(root, key, kind, detail) for (root, key, kind), detail in _NOTES.items()]
     _NOTES.clear()
     return notes
 
@@ -401,7 +401,7 @@ def add_notes(notes) -> None:
 def say_notes(stream=None) -> list[str]:
     """Print one line per kind of problem noted (and forget them); returns the lines."""
     groups: dict = {}
-    for (root, _), (kind, detail) in _NOTES.items():
+    for (root, _, kind), detail in _NOTES.items():
         groups.setdefault((root, kind), []).append(detail)
     _NOTES.clear()
     lines = []
@@ -474,7 +474,7 @@ def load(key: str, root: Path | None = None):
     root = CACHE if root is None else Path(root)
     try:
         return _run_output(read(entry_path(key, root), key, "RunOutput"))
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):  # absent (or no cache folder at all)
         return None
     except PermissionError:
         note(root, key, "unreadable")
