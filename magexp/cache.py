@@ -268,8 +268,6 @@ def unpack(buf: bytearray, key: str, kind: str):
     """The value of an entry read into ``buf`` (writable: its arrays are views of it), after checking
     that it is an entry of ``kind`` under ``key`` whose content has the digest it carries.
     Raises :class:`InvalidEntry` naming what does not hold."""
-    import numpy as np  # as in :func:`_tree`
-
     view = memoryview(buf)
     if len(buf) < _FIRST or bytes(view[:len(MAGIC)]) != MAGIC or buf[_FIRST - 1] != 0x0A:
         raise InvalidEntry("not an entry of this format")
@@ -288,17 +286,9 @@ def unpack(buf: bytearray, key: str, kind: str):
         raise InvalidEntry("stored under another key")
     if meta.get("kind") != kind:
         raise InvalidEntry(f"holds a {str(meta.get('kind'))[:40]!r}, not a {kind!r}")
-    start, arrays = _FIRST + m + n, []
+    start = _FIRST + m + n
     try:
-        for dtype, shape, at, nbytes in meta["arrays"]:
-            dtype = np.dtype(dtype) if isinstance(dtype, str) and _DTYPE.fullmatch(dtype) else None
-            if dtype is None or not all(isinstance(d, int) and d >= 0 for d in shape):
-                raise InvalidEntry("an array is not of plain numbers")
-            count = math.prod(shape)
-            if not (isinstance(at, int) and at >= 0 and nbytes == count * dtype.itemsize
-                    and start + at + nbytes <= len(buf)):
-                raise InvalidEntry("an array lies outside the entry")
-            arrays.append(np.frombuffer(buf, dtype, count, start + at).reshape(tuple(shape)))
+        arrays = _arrays(buf, meta["arrays"], start) if meta["arrays"] else []
     except (TypeError, ValueError, KeyError):
         raise InvalidEntry("its array table is malformed") from None
 
@@ -314,6 +304,23 @@ def unpack(buf: bytearray, key: str, kind: str):
         return json.loads(bytes(view[_FIRST + m:start]), object_hook=array)
     except ValueError:
         raise InvalidEntry("value is not JSON") from None
+
+
+def _arrays(buf: bytearray, table: list, start: int) -> list:
+    """The arrays of an entry's array table, views of ``buf`` from ``start`` on, each checked to be of a
+    plain dtype and to lie inside the entry."""
+    import numpy as np  # as in :func:`_tree`
+
+    arrays = []
+    for dtype, shape, at, nbytes in table:
+        dtype = np.dtype(dtype) if isinstance(dtype, str) and _DTYPE.fullmatch(dtype) else None
+        if dtype is None or not all(isinstance(d, int) and d >= 0 for d in shape):
+            raise InvalidEntry("an array is not of plain numbers")
+        count = math.prod(shape)
+        if not (isinstance(at, int) and at >= 0 and nbytes == count * dtype.itemsize and start + at + nbytes <= len(buf)):
+            raise InvalidEntry("an array lies outside the entry")
+        arrays.append(np.frombuffer(buf, dtype, count, start + at).reshape(tuple(shape)))
+    return arrays
 
 
 def read(path: Path, key: str, kind: str):
@@ -332,12 +339,13 @@ def read(path: Path, key: str, kind: str):
 def _modes(root: Path) -> tuple[int, int]:
     """``(file mode, folder mode)`` of what is written in the cache folder ``root``: readable by whom
     the folder is readable (a folder shared by a group, e.g. mode 2775, shares its entries with the
-    group), folders with the root's permissions and its setgid bit (so they keep its group)."""
+    group), folders with the root's permissions (never writable by others) and its setgid bit (so they
+    keep its group)."""
     try:
         mode = root.stat().st_mode
     except OSError:
         return 0o600, 0o700
-    return 0o600 | (mode & 0o044), 0o700 | (mode & 0o077) | (mode & stat.S_ISGID)
+    return 0o600 | (mode & 0o044), 0o700 | (mode & 0o075) | (mode & stat.S_ISGID)
 
 
 def _folder(path: Path, root: Path) -> None:
@@ -345,7 +353,13 @@ def _folder(path: Path, root: Path) -> None:
     permissions (:func:`_modes`; the umask may have taken the group's bits)."""
     if path.is_dir():
         return
-    root.mkdir(parents=True, exist_ok=True)
+    if not root.is_dir():  # a new cache folder takes the permissions of the folder it is in
+        root.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            root.mkdir()
+            os.chmod(root, _modes(root.parent)[1])
+        except FileExistsError:
+            pass
     mode, todo = _modes(root)[1], []
     while path != root and path != path.parent and not path.is_dir():
         todo.append(path)

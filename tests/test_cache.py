@@ -173,6 +173,7 @@ def test_a_cache_that_cannot_be_written_gives_one_line_and_the_results(clean, tm
     assert (tmp_path / "one" / "metrics.csv").is_file()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only folder")
 def test_a_read_only_cache_gives_one_line_and_the_results(clean, tmp_path, capsys):
     clean_cache, clean_files = clean
