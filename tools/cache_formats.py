@@ -7,8 +7,8 @@ behind the choice of :mod:`magexp.cache`'s format; not part of ``make bench``).
 is unpickled). Each run is written in three formats into a temporary folder: the former pickle, the
 current entry (:func:`magexp.cache.pack`: JSON header + raw arrays, digest, key and type checked on
 read) and an ``.npz`` (``numpy.savez``: a JSON member and one member per array, read with
-``allow_pickle=False``, with the same digest check). It prints each format's total size and the time
-to read every entry back (median of ``R`` rounds, formats alternating, files in the page cache), and
+``allow_pickle=False``, with the same digest check). It prints each format's total size and the wall and CPU
+time to read every entry back (median of ``R`` rounds, formats alternating, files in the page cache), and
 the share of the current format's time spent on its digest.
 """
 
@@ -20,6 +20,7 @@ import hashlib
 import io
 import json
 import pickle
+import shutil
 import statistics
 import tempfile
 import time
@@ -97,16 +98,19 @@ def main() -> None:
 
     loaders = {"pickle": load_pickle, "entry": load_entry, "npz": load_npz, "sha256 of the entries": digest_only}
     times: dict = {name: [] for name in loaders}
+    cpu: dict = {name: [] for name in loaders}
     for _ in range(args.rounds):
         for name, fn in loaders.items():
-            start = time.perf_counter()
+            start, start_cpu = time.perf_counter(), time.process_time()
             fn()
             times[name].append(time.perf_counter() - start)
+            cpu[name].append(time.process_time() - start_cpu)
     print(f"{len(keys)} runs from {args.old_cache}")
     for name in loaders:
         size = f"{sizes[name] / 1e6:8.1f} MB" if name in sizes else " " * 11
-        t = statistics.median(times[name])
-        print(f"{name:<22} {size}  read all: {t:6.2f} s ({t / len(keys) * 1e6:6.0f} us per entry)")
+        t, c = statistics.median(times[name]), statistics.median(cpu[name])
+        print(f"{name:<22} {size}  read all: {t:6.2f} s wall, {c:6.2f} s CPU ({c / len(keys) * 1e6:5.0f} us CPU per entry)")
+    shutil.rmtree(tmp)
 
 
 if __name__ == "__main__":
