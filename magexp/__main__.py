@@ -120,7 +120,8 @@ def execute(cfg, out_dir: Path, *, use_cache: bool = True) -> dict:
         from magexp.runner import run
 
         out = run(OmegaConf.create(plain))
-        cache.store(key, out, root=cache.CACHE)
+        cache.store(key, out, root=cache.CACHE)  # if it cannot be kept, it is noted and written all the same
+    cache.say_notes()
     return write_outputs(out, plain, out_dir, cached=cached)
 
 

@@ -221,25 +221,48 @@ def make_executor(kind: str = "local", *, jobs: int = 0, scheduler: str | None =
     return InlineExecutor() if jobs == 1 else LocalExecutor(jobs)
 
 
-def _run_task(configs: list[dict], keys: list[str], root=None) -> tuple[list, float]:
+def _run_task(configs: list[dict], keys: list[str], root=None, reuse: bool = True,
+              wait: bool = False) -> tuple[list, float, list]:
     """A task, in a worker: its runs through :func:`magexp.runner.run_batch`; returns
-    ``(results, task_cpu)``, ``task_cpu`` the CPU seconds this process spent on the task.
+    ``(results, task_cpu, notes)``, ``task_cpu`` the CPU seconds this process spent on the task and
+    ``notes`` the run cache's problems (:func:`magexp.cache.take_notes`) for the parent to say.
 
-    With ``root`` (the run cache, on a file system this worker shares with the parent) the task's
-    runs are stored there when its last fit is done, each atomically (a task killed midway is rerun
-    whole, as a remote one is), and ``results`` holds only each run's ``(row, fit_cpu)``
-    (:func:`run_row`): nothing large goes back to the parent, which neither unpickles nor stores
-    the outputs. Without ``root``, ``results`` holds the outputs.
+    With ``root`` (the run cache, on a file system this worker shares with the parent) the task
+    first claims each of its runs (:func:`magexp.cache.claim`; with ``wait``, waiting for the runs
+    another process holds, in key order); it computes the runs it claimed and stores them when its
+    last fit is done, each atomically (a task killed midway is rerun whole, as a remote one is). A
+    run that appeared in the cache meanwhile (another reproduction on the same cache computed it)
+    is read instead, unless not ``reuse`` (``--force``) and not ``wait``. ``results`` holds, per
+    run, ``(row, fit_cpu)`` (:func:`run_row`; ``fit_cpu`` None for a run read, not computed), the
+    output itself where the cache could not keep it, or None for a run another process is computing
+    (without ``wait``): nothing large goes back to the parent otherwise. Without ``root``,
+    ``results`` holds the outputs.
     """
     from magexp.runner import run_batch
 
     start = time.process_time()
-    outputs = list(run_batch(configs))
-    if root is not None:
-        for key, out in zip(keys, outputs):  # in one loop after the fits: measured cheaper than between them
-            cache.store(key, out, root)
-        outputs = [(run_row(out), out.fit_cpu) for out in outputs]
-    return outputs, time.process_time() - start
+    if root is None:
+        return list(run_batch(configs)), time.process_time() - start, []
+    results: list = [None] * len(keys)
+    mine, claims = [], []
+    for i in sorted(range(len(keys)), key=keys.__getitem__) if wait else range(len(keys)):
+        claim = cache.claim(keys[i], root, wait=wait)
+        if claim is None:  # another process is computing it
+            continue
+        out = cache.load(keys[i], root) if (reuse or wait) and cache.exists(keys[i], root) else None
+        if out is not None:  # another process computed it
+            claim.release()
+            results[i] = run_row(out), None
+        else:
+            mine.append(i)
+            claims.append(claim)
+    for i, out in zip(mine, run_batch([configs[i] for i in mine])):
+        results[i] = out
+    for i, claim in zip(mine, claims):  # in one loop after the fits: measured cheaper than between them
+        out = results[i]
+        results[i] = (run_row(out), out.fit_cpu) if cache.store(keys[i], out, root) else out
+        claim.release()
+    return results, time.process_time() - start, cache.take_notes()
 
 
 def _group_key(cfg: dict) -> str:
@@ -297,8 +320,9 @@ class Outputs(Sequence):
     ``metrics(i)`` gives run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output.
     """
 
-    def __init__(self, keys: list[str], metrics: dict[str, dict], root=None, keep: int = 256):
+    def __init__(self, keys: list[str], metrics: dict[str, dict], root=None, keep: int = 256, held=None):
         self.keys, self._metrics, self.root, self.keep = keys, metrics, root, keep
+        self.held = {} if held is None else held  # outputs the run cache could not keep, by key
         self._recent: OrderedDict = OrderedDict()
 
     def __len__(self) -> int:
@@ -311,6 +335,8 @@ class Outputs(Sequence):
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(len(self)))]
         key = self.keys[i]
+        if key in self.held:
+            return self.held[key]
         if key in self._recent:
             self._recent.move_to_end(key)
             return self._recent[key]
@@ -355,6 +381,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     if progress:
         progress(len(configs) - sum(multiplicity[keys[i]] for i in todo))
     fit_cpu = task_cpu = 0.0
+    shared, held = 0, {}
     if todo:
         own = executor is None
         ex = executor if executor is not None else make_executor("local", jobs=jobs)
@@ -364,25 +391,40 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
                 ex.close()
                 ex = InlineExecutor()
             root = cache.CACHE if getattr(ex, "shares_files", False) else None
-            futures = {ex.submit(_run_task, [configs[i] for i in task], [keys[i] for i in task], root): task
-                       for task in tasks}
-            for future in ex.as_completed(futures):
-                results, cpu = future.result()
-                task_cpu += cpu
-                for i, result in zip(futures.pop(future), results):
-                    if root is None:  # the worker sent the output itself: store it here
-                        cache.store(keys[i], result)
-                        result = run_row(result), result.fit_cpu
-                    metrics[keys[i]], fit = result
-                    fit_cpu += fit
-                    if progress:
-                        progress(multiplicity[keys[i]])
+            waiting: list[list[int]] = []  # runs another process was computing, per task
+            for wait in (False, True):  # then wait for them (their results are read, not computed)
+                futures = {ex.submit(_run_task, [configs[i] for i in task], [keys[i] for i in task], root,
+                                     use_cache, wait): task for task in (waiting if wait else tasks)}
+                waiting = []
+                for future in ex.as_completed(futures):
+                    results, cpu, notes = future.result()
+                    task_cpu += cpu
+                    cache.add_notes(notes)
+                    task = futures.pop(future)
+                    waiting.append([i for i, result in zip(task, results) if result is None])
+                    for i, result in zip(task, results):
+                        if result is None:
+                            continue
+                        if not isinstance(result, tuple):  # the output itself: store it here, or hold it
+                            if not cache.store(keys[i], result):
+                                held[keys[i]] = result
+                            result = run_row(result), result.fit_cpu
+                        metrics[keys[i]], fit = result
+                        if fit is None:  # another process computed it
+                            shared += 1
+                        else:
+                            fit_cpu += fit
+                        if progress:
+                            progress(multiplicity[keys[i]])
+                waiting = [task for task in waiting if task]
         except BaseException:
             if own:
                 ex.__exit__(KeyboardInterrupt, None, None)
             raise
         if own:
             ex.close()
+    cache.say_notes()
     if counts is not None:
-        counts.update(fit_cpu=fit_cpu, task_cpu=task_cpu)
-    return Outputs(keys, metrics)
+        counts.update(fit_cpu=fit_cpu, task_cpu=task_cpu, computed=counts["computed"] - shared,
+                      cached=counts["cached"] + shared)
+    return Outputs(keys, metrics, held=held)

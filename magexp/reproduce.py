@@ -203,7 +203,8 @@ def slice_outputs(outputs, start: int, n: int):
     from magexp.executor import Outputs
 
     keys = outputs.keys[start:start + n]
-    return Outputs(keys, {key: outputs.metrics(start + j) for j, key in enumerate(keys)}, outputs.root)
+    return Outputs(keys, {key: outputs.metrics(start + j) for j, key in enumerate(keys)}, outputs.root,
+                   held=outputs.held)
 
 
 def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jobs: int = 0, tiny: bool = False,

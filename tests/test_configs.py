@@ -86,7 +86,7 @@ def test_a_composed_config_from_disk_keeps_its_schema(tmp_path, monkeypatch):
     monkeypatch.setattr(config, "_SEEN", set())  # as in a new process
     monkeypatch.setattr(config, "_SKELETONS", {})
     first = config.compose_config(["scenario=yuan2018_drift"])
-    assert list((tmp_path / "fresh-configs").glob("*.pkl"))
+    assert list((tmp_path / "fresh-configs").glob("*.json"))
     again = config.compose_config(["scenario=yuan2018_drift"])  # from disk
     assert again == first and again is not first
     assert OmegaConf.get_type(again.scenario) is config.YuanScenarioConf

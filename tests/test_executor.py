@@ -187,10 +187,10 @@ def test_workers_store_their_runs_and_the_counts_split_the_cpu(tmp_path, monkeyp
     real_store, real_task = cache.store, executor._run_task
     monkeypatch.setattr(cache, "store", lambda *a, **k: stored.append(a[0]) or real_store(*a, **k))
 
-    def task(configs, keys, root):
-        results, cpu = real_task(configs, keys, root)
+    def task(configs, keys, root, *options):
+        results, cpu, notes = real_task(configs, keys, root, *options)
         sent.append((list(keys), list(stored), results))
-        return results, cpu
+        return results, cpu, notes
 
     monkeypatch.setattr(executor, "_run_task", task)
     counts = {}

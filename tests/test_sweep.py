@@ -17,6 +17,7 @@ import time
 import pytest
 import yaml
 
+from magexp import cache
 from magexp.__main__ import main as magexp_main
 
 IPSO = ["estimator=ipso", "estimator.n_particles=20", "estimator.n_iterations=300"]
@@ -46,7 +47,7 @@ def without(path, columns=VARYING) -> bytes:
 
 
 def cached_runs(cache_dir):
-    return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob("*.pkl")}
+    return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob(f"*{cache.SUFFIX}")}
 
 
 def assert_same_sweeps(a, b):

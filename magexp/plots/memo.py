@@ -21,12 +21,11 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from functools import lru_cache
 from pathlib import Path
 
 from magexp import paths
+from magexp.cache import files_digest, write
 
 
 def root() -> Path:
@@ -40,8 +39,6 @@ def code_version() -> str:
     import matplotlib
     import numpy
     import pandas
-
-    from magexp.cache import files_digest
 
     h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
     h.update(f"{matplotlib.__version__} {numpy.__version__} {pandas.__version__}".encode())
@@ -82,18 +79,10 @@ def current(k: str, files: list[Path]) -> bool:
 
 
 def record(k: str, files: list[Path]) -> None:
-    """Keep the digests of the ``files`` just drawn under key ``k`` (atomically; where the cache
-    cannot be written, nothing is kept and the figure is drawn again next time)."""
-    path = _stamp(k)
+    """Keep the digests of the ``files`` just drawn under key ``k`` (atomically, readable by whom the
+    cache folder is: :func:`magexp.cache.write`; where the cache cannot be written, nothing is kept
+    and the figure is drawn again next time)."""
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+        write(_stamp(k), json.dumps(digests(files)).encode(), root())
     except OSError:
-        return
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(digests(files), fh)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        pass

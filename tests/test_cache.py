@@ -1,0 +1,275 @@
+"""The run cache proves what it returns and runs no code: entries swapped between keys, crafted
+entries (a pickle that would run a shell command, forged entries of the current format), a cache
+that cannot be written, entries of another user, and two reproductions sharing one cache."""
+
+import hashlib
+import os
+import pickle
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from magexp import cache, paths, reproduce
+from magexp.runner import RunOutput
+
+ARTIFACT = ["yan2022", "--only", "yan2022_table_mockup", "--seeds", "2", "--tiny", "--jobs", "1"]  # 6 runs, 2 tasks
+RUNS = 6
+
+
+def reproduce_into(out: Path, cache_dir: Path) -> int:
+    """``python -m magexp.reproduce ARTIFACT --out out`` in this process, on the run cache ``cache_dir``."""
+    saved = cache.CACHE, paths.CACHE
+    cache.CACHE = paths.CACHE = cache_dir
+    try:
+        return reproduce.main([*ARTIFACT, "--out", str(out)])
+    finally:
+        cache.CACHE, paths.CACHE = saved
+
+
+def files(out: Path) -> dict:
+    """Every file a reproduction wrote, by relative path, with its bytes."""
+    return {p.relative_to(out).as_posix(): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+
+
+def entries(cache_dir: Path) -> list[Path]:
+    return sorted(cache_dir.rglob(f"*{cache.SUFFIX}"))
+
+
+@pytest.fixture(scope="module")
+def clean(tmp_path_factory):
+    """A clean reproduction: its run cache and its files."""
+    root = tmp_path_factory.mktemp("clean")
+    assert reproduce_into(root / "out", root / "runs") == 0
+    assert len(entries(root / "runs")) == RUNS
+    return root / "runs", files(root / "out")
+
+
+def forge(data: bytes, old: bytes, new: bytes) -> bytes:
+    """An entry with ``old`` replaced by ``new`` in its body and the digest made to match (as a forger
+    would: the layout is documented in :func:`magexp.cache.pack`)."""
+    first, _, body = data.partition(b"\n")
+    body = body.replace(old, new)
+    magic, _, m, n = first.split()
+    return b" ".join([magic, hashlib.sha256(body).hexdigest().encode(), m, n]) + b"\n" + body
+
+
+class Shell:
+    """Unpickling this runs a shell command (what the former pickle cache would have done)."""
+
+    def __init__(self, command: str):
+        self.command = command
+
+    def __reduce__(self):
+        return os.system, (self.command,)
+
+
+def a_run(**changes) -> RunOutput:
+    fields = dict(metrics={"scenario": "s", "seed": 1, "fun": 0.5, "ok": True, "none": None},
+                  history=np.array([2.0, 1.0]), history_nfev=np.array([0, 10]), x=np.arange(3.0),
+                  parameter_names=["a", "b", "c"], trace={"state": np.ones((2, 3)), "names": ["p", "q"]},
+                  readings=np.arange(6.0).reshape(2, 3).T, calibrated=None, reference_norm=np.array(1.5),
+                  truth_x=np.arange(3, dtype=np.int32), fit_cpu=0.25)
+    return RunOutput(**{**fields, **changes})
+
+
+def same_run(a: RunOutput, b: RunOutput) -> bool:
+    for name in vars(a):
+        x, y = getattr(a, name), getattr(b, name)
+        if isinstance(x, np.ndarray):
+            if not (isinstance(y, np.ndarray) and x.dtype == y.dtype and x.shape == y.shape and np.array_equal(x, y)):
+                return False
+        elif name == "trace":
+            if x.keys() != y.keys() or not all(np.array_equal(x[k], y[k]) for k in x):
+                return False
+        elif x != y or type(x) is not type(y):
+            return False
+    return True
+
+
+def test_a_stored_run_comes_back_exactly(tmp_path):
+    run = a_run()
+    assert cache.store("k1", run, tmp_path)
+    back = cache.load("k1", tmp_path)
+    assert same_run(run, back) and back.readings.flags.writeable
+    assert cache.say_notes() == []
+
+
+def test_invalid_entries_are_misses_said_once_in_one_line(tmp_path):
+    for key in ("k1", "k2", "k3", "k4", "k5", "k6"):
+        assert cache.store(key, a_run(), tmp_path)
+    path = {key: cache.entry_path(key, tmp_path) for key in ("k1", "k2", "k3", "k4", "k5", "k6")}
+    one, two = path["k1"].read_bytes(), path["k2"].read_bytes()
+    path["k1"].write_bytes(two)  # swapped: each a valid entry of the other key
+    path["k2"].write_bytes(one)
+    path["k3"].write_bytes(path["k3"].read_bytes()[:-7])  # truncated
+    path["k4"].write_bytes(forge(path["k4"].read_bytes(), b'"metrics": {', b'"metrics": [1], "x0": {'))
+    path["k5"].write_bytes(cache.pack("k5", "config", {"a": 1}))  # an entry of another kind
+    path["k6"].write_bytes(forge(path["k6"].read_bytes(), b'"<f8"', b'"|O8"'))  # an object array
+    assert all(cache.load(key, tmp_path) is None for key in path)
+    assert all(path[key].exists() for key in path)  # left in place: the recomputed run replaces it
+    lines = cache.say_notes()
+    assert len(lines) == 1 and "6 entries not valid" in lines[0] and "stored under another key: 2" in lines[0], lines
+    assert cache.say_notes() == []  # said once
+
+
+def test_only_one_process_claims_a_run():
+    first = cache.claim("k1")
+    assert first is not None and first.fd is not None
+    assert cache.claim("k1") is None  # another claimant (another open file) is refused, not queued
+    first.release()
+    again = cache.claim("k1")
+    assert again is not None and again.fd is not None
+    again.release()
+    assert not list(cache.CACHE.rglob("*.lock"))  # a released claim leaves nothing behind
+
+
+@pytest.mark.slow
+def test_swapped_and_crafted_entries_are_recomputed_and_run_no_code(clean, tmp_path, capsys):
+    """A swapped pair of entries, a pickle that would run ``touch`` under the former loader, and a forged
+    entry of the current format with a valid digest: recomputed, one line, the clean run's files."""
+    clean_cache, clean_files = clean
+    runs = tmp_path / "runs"
+    shutil.copytree(clean_cache, runs)
+    found = entries(runs)
+    first, second = found[0].read_bytes(), found[1].read_bytes()
+    found[0].write_bytes(second)
+    found[1].write_bytes(first)
+    marker = tmp_path / "pwned"
+    crafted = pickle.dumps(Shell(f"touch {marker}"))
+    found[2].write_bytes(crafted)
+    found[2].with_suffix(".pkl").write_bytes(crafted)  # where the former cache kept it
+    found[3].write_bytes(forge(found[3].read_bytes(), b'"metrics": {', b'"metrics": "x", "m0": {'))
+    capsys.readouterr()
+    assert reproduce_into(tmp_path / "out", runs) == 0
+    said = capsys.readouterr()
+    err = said.err.splitlines()
+    assert not marker.exists()
+    assert len(err) == 1 and "4 entries not valid" in err[0], err
+    assert "4 computed, 2 from the cache" in said.out
+    assert files(tmp_path / "out") == clean_files
+    assert all(cache.load(p.stem, runs) is not None for p in found)  # replaced by the recomputed runs
+    assert cache.say_notes() == []
+
+
+@pytest.mark.slow
+def test_a_cache_that_cannot_be_written_gives_one_line_and_the_results(clean, tmp_path, capsys, cli):
+    """Every write into the cache folder fails (it lies under a file: for root as for anyone): the
+    reproduction computes, says so in one line and writes the clean run's files; a single run too."""
+    _, clean_files = clean
+    (tmp_path / "file").write_text("not a folder")
+    runs = tmp_path / "file" / "runs"
+    capsys.readouterr()
+    assert reproduce_into(tmp_path / "out", runs) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"note: run cache {runs} cannot be written") and f"{RUNS} computed" in err[0]
+    assert files(tmp_path / "out") == clean_files
+    cache.CACHE = runs  # undone by the test's own cache fixture
+    done = cli("scenario=ding2024_exp1", "estimator=lm", "scenario.n_readings=60", f"hydra.run.dir={tmp_path / 'one'}")
+    assert done.returncode == 0 and len(done.stderr.splitlines()) == 1 and "cannot be written" in done.stderr
+    assert (tmp_path / "one" / "metrics.csv").is_file()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only folder")
+def test_a_read_only_cache_gives_one_line_and_the_results(clean, tmp_path, capsys):
+    clean_cache, clean_files = clean
+    runs = tmp_path / "runs"
+    shutil.copytree(clean_cache, runs)
+    entries(runs)[0].unlink()
+    for folder in [runs, *[p for p in runs.rglob("*") if p.is_dir()]]:
+        folder.chmod(0o555)
+    try:
+        capsys.readouterr()
+        assert reproduce_into(tmp_path / "out", runs) == 0
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and "cannot be written" in err[0] and "1 computed run not kept" in err[0], err
+        assert files(tmp_path / "out") == clean_files
+    finally:
+        for folder in [runs, *[p for p in runs.rglob("*") if p.is_dir()]]:
+            folder.chmod(0o755)
+
+
+def test_entries_are_shared_with_the_group_of_a_shared_folder(tmp_path):
+    """In a folder shared by a group (setgid, group-writable) entries are readable by the group and its
+    sub-folders keep the group; an entry this user cannot read is a miss, never deleted or replaced."""
+    shared = Path(os.environ.get("TMPDIR", "/tmp")) / f"magexp-shared-{os.getpid()}"
+    shared.mkdir(mode=0o755)
+    try:
+        runs = shared / "runs"
+        runs.mkdir()
+        runs.chmod(0o2775)
+        assert cache.store("ab12", a_run(), runs)
+        entry = cache.entry_path("ab12", runs)
+        assert entry.stat().st_mode & 0o777 == 0o644
+        assert entry.parent.stat().st_mode & 0o7777 == 0o2775 and entry.parent.stat().st_gid == runs.stat().st_gid
+        assert cache.store("cd34", a_run(), runs)
+        mine = cache.entry_path("cd34", runs)
+        mine.chmod(0o600)  # as the former cache wrote them
+        data = mine.read_bytes()
+        if os.geteuid() != 0:
+            pytest.skip("another user's view needs root (seteuid)")
+        cache.load("ab12", runs)  # imports what a load needs before this process gives up its rights
+        os.setegid(65534)
+        os.seteuid(65534)
+        try:
+            other_reads = cache.load("ab12", runs)
+            unreadable = cache.load("cd34", runs)
+            replaced = cache.store("cd34", a_run(fit_cpu=1.0), runs)
+        finally:
+            os.seteuid(0)
+            os.setegid(0)
+        assert other_reads is not None and unreadable is None and not replaced
+        assert mine.read_bytes() == data  # left as it was
+        lines = cache.say_notes()
+        assert len(lines) == 1 and "not readable by this user" in lines[0], lines
+    finally:
+        shutil.rmtree(shared)
+
+
+# a reproduction that logs each run it computes (one line per run) and starts computing only once
+# both processes have planned (so that they race for the same runs)
+CONCURRENT = """
+import sys, time
+from pathlib import Path
+from magexp import executor, runner
+from magexp.reproduce import main
+log, me, other = Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3])
+real_batch, real_many = runner.run_batch, executor.run_many
+def run_batch(configs):
+    for out in real_batch(configs):
+        with log.open("a") as fh:
+            fh.write(f"{out.metrics['estimator']} {out.metrics['seed']}\\n")
+        time.sleep(0.3)  # long enough for the other process to reach the same runs
+        yield out
+def run_many(*args, **kw):
+    me.touch()
+    for _ in range(600):
+        if other.exists():
+            break
+        time.sleep(0.05)
+    return real_many(*args, **kw)
+runner.run_batch, executor.run_many = run_batch, run_many
+sys.exit(main(sys.argv[4:]))
+"""
+
+
+@pytest.mark.slow
+def test_two_reproductions_on_one_cache_compute_each_run_once(clean, tmp_path):
+    _, clean_files = clean
+    env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "runs")}
+    procs = [subprocess.Popen([sys.executable, "-c", CONCURRENT, str(tmp_path / f"{name}.log"),
+                               str(tmp_path / f"{name}.ready"), str(tmp_path / f"{other}.ready"), *ARTIFACT,
+                               "--out", str(tmp_path / name)], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True)
+             for name, other in (("a", "b"), ("b", "a"))]
+    done = [p.communicate(timeout=300) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], done
+    computed = [line for name in "ab" if (tmp_path / f"{name}.log").exists()
+                for line in (tmp_path / f"{name}.log").read_text().splitlines()]
+    assert len(computed) == RUNS and len(set(computed)) == RUNS, computed  # each run once, by one of them
+    assert files(tmp_path / "a") == files(tmp_path / "b") == clean_files
+    assert all(err == "" for _, err in done)
