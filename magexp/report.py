@@ -6,7 +6,6 @@ values interpolated from the runs, :func:`magexp.claims.interpolate`)."""
 from __future__ import annotations
 
 import functools
-import os
 import platform
 import subprocess
 import sys
@@ -15,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from magexp.atomic import atomic_path, write_text
 from magexp.claims import evaluate, interpolate
 from magexp.paths import RESULTS
 from magexp.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
@@ -57,10 +57,8 @@ def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
     """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
     when only round-off differs)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")  # atomic: an interrupt leaves the old file or the new one
-    tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:  # an interrupt leaves the old file or the new one
+        tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
 
 
 def versions() -> dict:
@@ -110,7 +108,7 @@ def latex_table(frame: pd.DataFrame, columns: list[str]) -> str:
 def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = None) -> str:
     """A Markdown table of ``columns``; with ``tex``, its LaTeX twin (:func:`latex_table`) is written there."""
     if tex is not None:
-        Path(tex).write_text(latex_table(frame, columns))
+        write_text(tex, latex_table(frame, columns))
     head = "| " + " | ".join(columns) + " |\n|" + "---|" * len(columns) + "\n"
     return head + "".join("| " + " | ".join(_fmt(r[c]) for c in columns) + " |\n" for _, r in frame.iterrows())
 
@@ -249,7 +247,8 @@ def build(root: Path = RESULTS) -> None:
     summary = collect(root)
     write_csv(summary, root / "summary.csv")
     record = versions()
-    pd.DataFrame([{"package": k, "version": v} for k, v in record.items()]).to_csv(root / "versions.csv", index=False)
+    with atomic_path(root / "versions.csv") as tmp:
+        pd.DataFrame([{"package": k, "version": v} for k, v in record.items()]).to_csv(tmp, index=False)
     counts = summary.verdict.value_counts()
     text = [
         "# magexp report\n",
@@ -267,7 +266,7 @@ def build(root: Path = RESULTS) -> None:
     ]
     text += [_paper_section(p, summary, root) for p in papers() if (summary.paper == p).any() or (root / p).is_dir()]
     text.append(_speed_section(root))
-    (root / "REPORT.md").write_text("\n".join(text))
+    write_text(root / "REPORT.md", "\n".join(text))
 
 
 if __name__ == "__main__":

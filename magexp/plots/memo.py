@@ -21,12 +21,11 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from functools import lru_cache
 from pathlib import Path
 
 from magexp import paths
+from magexp.atomic import write_text
 
 
 def root() -> Path:
@@ -87,13 +86,6 @@ def record(k: str, files: list[Path]) -> None:
     path = _stamp(k)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+        write_text(path, json.dumps(digests(files)))
     except OSError:
         return
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(digests(files), fh)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
