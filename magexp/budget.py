@@ -125,7 +125,7 @@ def show(value: float, unit: str) -> str:
             if value >= factor:
                 return f"{value / factor:.3g} {name}"
         return f"{value:.0f} bytes"
-    return f"{value:.0f} {unit}" if value < 1e15 else f"{value:.3g} {unit}"
+    return f"{value:.0f} {unit}" if value < 1e9 else f"{value:.3g} {unit}"
 
 
 def limit(name: str) -> float:
@@ -374,3 +374,39 @@ def check_calibration(n_readings: int, folds: int, estimator) -> Estimate:
                 f"{fits} fits of {est.work:.3g} reading-evaluations each need")
     check_available(est.memory, est.subject())
     return est
+
+
+def canonical() -> dict:
+    """The estimates of every canonical reproduction's runs: ``runs``, the largest run's ``memory``
+    and ``run_work`` (each with its artifact), the ``work`` of all (keys of :data:`LIMITS`)."""
+    from magexp.artifacts import paper_specs, plan_artifact
+    from magexp.spec import papers
+
+    out = {"runs": 0, "work": 0, "run_memory": (0, ""), "run_work": (0, "")}
+    for paper in papers():
+        for spec in paper_specs(paper):
+            for cfg in plan_artifact(spec).configs:
+                est = estimate_run(cfg)
+                out["runs"] += 1
+                out["work"] += est.work
+                out["run_memory"] = max(out["run_memory"], (est.memory, spec.name))
+                out["run_work"] = max(out["run_work"], (est.work, spec.name))
+    return out
+
+
+def main() -> None:
+    """``python -m magexp.budget``: the limits in force beside what ``make reproduce`` needs of each."""
+    need = canonical()
+    for name, lim in LIMITS.items():
+        value = need.get(name, None)
+        if isinstance(value, tuple):
+            shown = f"{show(value[0], lim.unit)} ({value[1]})"
+        elif value is not None:
+            shown = show(value, lim.unit)
+        else:
+            shown = "none (no recording)"
+        print(f"{name}: {show(lim.value(), lim.unit)} in force ({lim.env}); make reproduce needs {shown}")
+
+
+if __name__ == "__main__":
+    main()
