@@ -348,12 +348,17 @@ def estimate_file_readings(path: Path) -> int:
 
 
 def check_recording_file(path, what: str = "data.path") -> int:
-    """Refuse a recording file whose estimated readings exceed the readings limit, before it is read."""
+    """Refuse a recording file whose estimated readings exceed the readings limit, or whose
+    calibration would exceed the memory limit (:data:`CALIBRATION_FLOATS_PER_READING` a reading),
+    before it is read; returns the estimated readings."""
     path = Path(path)
     if not path.is_file():
         return 0
     n = estimate_file_readings(path)
-    refuse_over(n, "readings", f"{what}={str(path)!r}", f"its {show(path.stat().st_size, 'bytes')} hold")
+    subject, size = f"{what}={str(path)!r}", show(path.stat().st_size, "bytes")
+    refuse_over(n, "readings", subject, f"its {size} hold")
+    refuse_over(8 * n * CALIBRATION_FLOATS_PER_READING, "run_memory", subject,
+                f"its {size} (about {n} readings) need to calibrate")
     return n
 
 

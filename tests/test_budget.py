@@ -225,3 +225,13 @@ def test_a_recording_too_big_is_refused_before_it_is_read(cli, work, started, mo
     assert result.returncode == 2
     one_line(result.stderr, f"data.path='{data}'", "hold about 5", "1000 readings", "MAGEXP_MAX_READINGS")
     assert started["reads"] == 0 and started["fits"] == 0 and tree(work) == before
+
+
+def test_a_recording_whose_calibration_would_not_fit_in_memory_is_refused_unread(cli, work, started, monkeypatch):
+    monkeypatch.setenv("MAGEXP_MAX_RUN_MEMORY", "100KiB")
+    data = work / "big.txt"
+    data.write_text("".join(f"{i}.5 {i % 7}.25 {i % 11}.125\n" for i in range(5000)))
+    result = cli("calibrate", f"data.path={data}", "data.unit=uT", f"out={work / 'cal'}", cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, f"data.path='{data}'", "need to calibrate", "100 KiB", "MAGEXP_MAX_RUN_MEMORY")
+    assert started["reads"] == 0 and started["fits"] == 0
