@@ -87,7 +87,7 @@ class Limit:
 
 #: The limits, by name (README "Limits" lists them).
 LIMITS = {limit.name: limit for limit in (
-    Limit("run_memory", "MAGEXP_MAX_RUN_MEMORY", 4 * 2 ** 30, "bytes",
+    Limit("run_memory", "MAGEXP_MAX_RUN_MEMORY", 8 * 2 ** 30, "bytes",
           "estimated memory of one run or one calibration fit"),
     Limit("run_work", "MAGEXP_MAX_RUN_WORK", 1e11, "reading-evaluations",
           "work of one run or one calibration fit"),
@@ -331,9 +331,10 @@ def check_reproduction(selected: Mapping, seeds: int | None) -> int:
 # calibrations
 
 #: float64 numbers a calibration keeps per reading: the readings, calibrated readings, their
-#: magnitudes, the reference, a fold's training copy, the written table (measured: 8 M readings
-#: peak at about 2.5 GiB with the ellipsoid estimator)
-CALIBRATION_FLOATS_PER_READING = 40
+#: magnitudes, the reference, a fold's training copy, the estimator's design matrix and its
+#: factors (measured: 8 M readings of a plain file calibrated by ``ellipsoid`` with 5 folds
+#: peak at 3.35 GiB, 56 numbers a reading with the interpreter)
+CALIBRATION_FLOATS_PER_READING = 56
 
 
 def estimate_file_readings(path: Path) -> int:

@@ -81,6 +81,8 @@ def watch_parent(parent: int, poll: float = PARENT_POLL) -> None:
     everywhere a daemon thread also looks every ``poll`` seconds whether the parent is still
     ``os.getppid()`` (an orphan is re-parented) and ends the process if not. A worker killed so
     loses only its running task: its runs are cached only once complete (:func:`_run_task`).
+    The kernel's "parent" is the *thread* that forked the worker: :class:`LocalExecutor` forks its
+    workers at the first ``submit``, from the calling thread (the command's main thread).
     """
     import sys
     import threading

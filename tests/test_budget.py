@@ -72,7 +72,7 @@ def recording(path, n: int, seed: int = 0):
 
 
 RUN_CASES = [  # one run over a limit: the words its line must name
-    (["estimator.n_iterations=1000000000000"], ["estimator.n_iterations=1000000000000", "TiB", "4 GiB",
+    (["estimator.n_iterations=1000000000000"], ["estimator.n_iterations=1000000000000", "TiB", "8 GiB",
                                                  "MAGEXP_MAX_RUN_MEMORY"]),
     (["estimator.n_particles=100000000"], ["estimator.n_particles=100000000", "MAGEXP_MAX_RUN_MEMORY"]),
     (["scenario.n_readings=2000000000"], ["scenario.n_readings=2000000000", "MAGEXP_MAX_RUN_MEMORY"]),
