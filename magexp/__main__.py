@@ -99,7 +99,9 @@ def print_table(rows: dict) -> None:
 def _write_csv(path: Path, header: list[str], rows) -> None:
     import csv
 
-    with path.open("w", newline="") as fh:
+    from magexp.atomic import atomic_open
+
+    with atomic_open(path, "w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(header)
         writer.writerows(rows)
@@ -142,6 +144,7 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
     cache) and the provenance (:func:`magexp.provenance.provenance`); ``config.yaml`` is the
     resolved config ``plain`` the run read. Returns the metrics with ``cached``.
     """
+    from magexp.atomic import write_text
     from magexp.provenance import provenance
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -151,7 +154,7 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
     if plain.get("write_history", True):
         _write_csv(out_dir / "history.csv", ["iteration", "nfev", "fun"],
                    zip(range(len(out.history)), out.history_nfev.tolist(), out.history.tolist()))
-    (out_dir / "config.yaml").write_text(to_yaml(plain))
+    write_text(out_dir / "config.yaml", to_yaml(plain))
     return {**out.metrics, "cached": cached}
 
 

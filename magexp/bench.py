@@ -56,6 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.atomic import atomic_path
 from magexp.paths import RESULTS
 
 SIZES = [(300, 50), (30_000, 500)]  # (readings, particles)
@@ -485,7 +486,8 @@ def main(argv=None) -> int:
     frame = pd.DataFrame(measure(sections, args.rounds, args.seeds),
                          columns=["measure", "estimator", "value", "unit", "lo", "hi"])
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    frame.to_csv(args.out, index=False)
+    with atomic_path(args.out) as tmp:
+        frame.to_csv(tmp, index=False)
     with pd.option_context("display.max_rows", None, "display.width", 200, "display.max_colwidth", 70):
         print(frame.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     return 0

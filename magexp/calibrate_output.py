@@ -18,12 +18,13 @@ An existing file is never overwritten, and nothing is written under ``results/``
 from __future__ import annotations
 
 import json
-from pathlib import Path
-
 import os
+import shutil
+from pathlib import Path
 
 import numpy as np
 
+from magexp.atomic import atomic_open, write_text
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.recordings import VERSION_LINE
@@ -88,32 +89,53 @@ def _finite(value):
     return value
 
 
-def readings_text(cal) -> str:
-    """The calibrated readings as a ``magexp-recording v1`` CSV."""
+#: rows of the calibrated readings formatted at a time (:func:`write_readings`)
+ROWS_PER_BLOCK = 1 << 16
+
+
+def write_readings(cal, fh) -> None:
+    """The calibrated readings as a ``magexp-recording v1`` CSV, into the text file ``fh``: a block of
+    :data:`ROWS_PER_BLOCK` rows at a time, each block one ``%``-format in C (``%.10g`` per value)."""
     raw, cal_b = cal.recording.readings, cal.calibrated
-    table = np.column_stack([cal_b, np.linalg.norm(cal_b, axis=1), raw, np.linalg.norm(raw, axis=1)])
     head = [VERSION_LINE, f"# source: {cal.recording.name} calibrated by magexp "
                           f"(estimator {cal.estimator}, objective {cal.objective})",
             f"# unit: {cal.unit}", "bx,by,bz,magnitude,raw_bx,raw_by,raw_bz,raw_magnitude"]
-    rows = [",".join(f"{v:.10g}" for v in row) for row in table]
-    return "\n".join(head + rows) + "\n"
+    fh.write("\n".join(head) + "\n")
+    row = ",".join(["%.10g"] * 8) + "\n"
+    for lo in range(0, len(raw), ROWS_PER_BLOCK):
+        b, r = cal_b[lo:lo + ROWS_PER_BLOCK], raw[lo:lo + ROWS_PER_BLOCK]
+        table = np.column_stack([b, np.linalg.norm(b, axis=1), r, np.linalg.norm(r, axis=1)])
+        fh.write(row * len(table) % tuple(table.ravel().tolist()))
 
 
 def write(cal, out_dir: Path, *, seed: int) -> dict:
-    """Write the three files into ``out_dir`` (checked by :func:`check_out`); return their paths."""
+    """Write the three files into ``out_dir`` (checked by :func:`check_out`); return their paths.
+
+    Each file is written atomically (:mod:`magexp.atomic`): a command killed midway leaves no
+    truncated file; the figure draws at most :data:`magexp.plots.calibration.MAX_POINTS` readings."""
+    from magexp.cli_checks import first_missing
     from magexp.plots.calibration import calibration_figure
     from magexp.plots.style import save
 
     out_dir = Path(out_dir)
     check_out(out_dir)
+    created = first_missing(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {key: out_dir / name for key, name in FILES.items()}
-    paths["parameters"].write_text(json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
-    paths["readings"].write_text(readings_text(cal))
-    title = f"{cal.recording.name}: {cal.estimator} ({cal.objective}), spread " \
-            f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
-    save(calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.unit, title=title),
-         paths["figure"])
+    try:
+        write_text(paths["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
+        with atomic_open(paths["readings"], "w") as fh:
+            write_readings(cal, fh)
+        title = f"{cal.recording.name}: {cal.estimator} ({cal.objective}), spread " \
+                f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
+        save(calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.unit,
+                                title=title), paths["figure"])
+    except BaseException:  # interrupted or failed: none of this command's files stays (none existed: check_out)
+        for path in paths.values():
+            path.unlink(missing_ok=True)
+        if created is not None:
+            shutil.rmtree(created, ignore_errors=True)
+        raise
     return paths
 
 

@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp import quality as q
+from magexp.budget import check_calibration, check_recording_file
 from magexp.dataset import Dataset
 from magexp.errors import MagexpError
 from magexp.estimators.result import FitResult
@@ -298,6 +299,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         metrics and the quality report.
     """
     check_size(rec)
+    check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.budget's limits
     if model not in MODELS or (model == "sphere" and objective != "scalar"):
         raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or sphere "
                           "with the scalar objective")
@@ -445,13 +447,14 @@ def reference_from_igrf(cfg, rec: Recording):
 def run(cfg) -> Calibration:
     """Load, calibrate, check and write as ``cfg`` says; print the summary."""
     from magexp.calibrate_output import check_out, summary, write
-    from magexp.recordings import load_recording
+    from magexp.recordings import load_recording, resolve
     from magexp.runner import build
     from magexp.seeding import run_generators
 
     data = cfg.data
     if data.get("path") is None:
         raise MagexpError("data.path=None is not allowed: give data.path=<recording file>")
+    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
     rec = load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
                          mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"))
     out_dir = Path(cfg.out) if cfg.get("out") else Path(f"calibration_{rec.path.stem}")

@@ -4,7 +4,8 @@
 * :func:`validate_runs`: every job composed (:func:`magexp.config.compose_config`) and every
   distinct scenario and estimator built, so that each value is checked by its constructor
   before the first job starts; the data of each distinct scenario is checked against the
-  problem's parameter count, and the memory a run needs against the memory available;
+  problem's parameter count, and each run's and the whole sweep's memory and work against
+  the limits of :mod:`magexp.budget`;
 * :func:`check_output_folder`: an output folder that can be created and written.
 """
 
@@ -16,22 +17,19 @@ import os
 import tempfile
 from pathlib import Path
 
+from magexp.budget import Tally, check_run, check_sweep
 from magexp.config import (GROUPS, check_choice, compose_config, options, parse_overrides,  # noqa: F401
                            resolved, target_class, yaml_value)
 from magexp.errors import MagexpError, check
 
-#: float64 numbers per reading a run keeps (readings, reference field, attitude, calibrated
-#: readings, problem features); and per reading and particle in a swarm's cost evaluation
-FLOATS_PER_READING = 64
-FLOATS_PER_READING_PARTICLE = 3
-
-
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
     """The jobs of a sweep: the cartesian product of every override's values, first key slowest
     (Hydra's basic sweeper); ``a,b``, ``range(...)``, ``choice(...)`` and, for a config group,
-    ``glob(...)`` are expanded."""
+    ``glob(...)`` are expanded, once their count is within the runs limit (:func:`magexp.budget.check_sweep`)."""
     axes = []
-    for ov in parse_overrides(overrides):
+    parsed = parse_overrides(overrides)
+    check_sweep(parsed, lambda key: options(key) if key in GROUPS else [])
+    for ov in parsed:
         key = ov.get_key_element()
         if ov.is_sweep_override():
             from hydra.core.override_parser.types import Glob
@@ -51,29 +49,6 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
 def swept_keys(overrides: list[str]) -> list[str]:
     """The keys of ``overrides`` that take more than one value."""
     return [ov.get_key_element() for ov in parse_overrides(overrides) if ov.is_sweep_override()]
-
-
-def memory_needed(cfg) -> int:
-    """Bytes a run of ``cfg`` needs, roughly: ``8 N (64 + 3 P)`` for ``N`` readings and ``P``
-    particles (1 for an estimator without a swarm)."""
-    n = cfg.scenario.get("n_readings") or 0
-    p = cfg.estimator.get("n_particles") or 1
-    if not isinstance(n, int) or not isinstance(p, int):
-        return 0
-    return 8 * n * (FLOATS_PER_READING + FLOATS_PER_READING_PARTICLE * p)
-
-
-def check_memory(cfg) -> None:
-    """Refuse a run whose estimated memory exceeds the memory available, before it starts."""
-    need = memory_needed(cfg)
-    if need < 2 ** 28:  # under 256 MB: never worth asking the system
-        return
-    import psutil
-
-    have = psutil.virtual_memory().available
-    if need > have:
-        raise MagexpError(f"scenario.n_readings={cfg.scenario.n_readings} is not allowed here: the run needs about "
-                          f"{need / 2 ** 30:.1f} GiB of memory and {have / 2 ** 30:.1f} GiB are available")
 
 
 def _build(node, what):
@@ -121,31 +96,32 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
             key, _, value = ov.partition("=")
             if key in GROUPS:
                 check_choice(key, value)
-    configs, seen, composed = [], set(), set()
+    configs, seen, composed, estimates = [], set(), {}, {}
+    tally = Tally("the sweep" if len(jobs) > 1 else "the run")  # memory and work: magexp.budget
     for job in jobs:
         rest = tuple(o for o in job if o.partition("=")[0] != "seed")
         if not keep and rest in composed:
             for ov in job:
                 if ov.partition("=")[0] == "seed":
                     check_seed(yaml_value(ov.partition("=")[2]))
+            tally.add(composed[rest])
             continue
-        composed.add(rest)
         cfg = compose_config(job)
         check_seed(cfg.seed)
         plain = resolved(cfg)
         s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
         e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
+        if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
+            estimates[s_key, e_key] = check_run(plain)
+        composed[rest] = estimates[s_key, e_key]
+        tally.add(composed[rest])
         if e_key not in seen:
             _build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
             seen.add(e_key)
         if s_key not in seen:
-            check_memory(cfg)
             scenario = _build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
             check_problem(cfg, scenario)
             seen.add(s_key)
-        elif (mem_key := (s_key, e_key)) not in seen:
-            check_memory(cfg)
-            seen.add(mem_key)
         if keep:
             configs.append(cfg)
     return configs

@@ -48,6 +48,7 @@ from collections import OrderedDict, defaultdict
 from collections.abc import Iterable, Iterator, Sequence
 
 from magexp import cache
+from magexp.budget import check_runs
 from magexp.errors import MagexpError
 
 EXECUTORS = ("local", "dask")
@@ -67,8 +68,47 @@ def preload() -> None:
             importlib.import_module(info.name)
 
 
-def _ignore_sigint() -> None:
-    """Workers leave Ctrl-C to the parent, which stops them (no traceback from every worker)."""
+#: seconds between two looks of a worker at its parent (:func:`watch_parent`)
+PARENT_POLL = 0.5
+#: ``prctl`` option: the signal the kernel sends this process when its parent dies (linux/prctl.h)
+PR_SET_PDEATHSIG = 1
+
+
+def watch_parent(parent: int, poll: float = PARENT_POLL) -> None:
+    """Make this process end when process ``parent`` (the one that started it) dies.
+
+    On Linux the kernel sends SIGKILL the moment the parent exits (``prctl(PR_SET_PDEATHSIG)``);
+    everywhere a daemon thread also looks every ``poll`` seconds whether the parent is still
+    ``os.getppid()`` (an orphan is re-parented) and ends the process if not. A worker killed so
+    loses only its running task: its runs are cached only once complete (:func:`_run_task`).
+    The kernel's "parent" is the *thread* that forked the worker: :class:`LocalExecutor` forks its
+    workers at the first ``submit``, from the calling thread (the command's main thread).
+    """
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # no prctl in this libc: the thread below is enough
+            pass
+    if os.getppid() != parent:  # the parent died before the kernel was told
+        os._exit(1)
+
+    def look() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll)
+        os._exit(1)
+
+    threading.Thread(target=look, name="magexp-watch-parent", daemon=True).start()
+
+
+def _init_worker(parent: int) -> None:
+    """A worker's start: it ends with its parent (:func:`watch_parent`) and leaves Ctrl-C to the
+    parent, which stops it (no traceback from every worker)."""
+    watch_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -121,7 +161,7 @@ class LocalExecutor(InlineExecutor):
             if method == "fork":
                 preload()
             self._pool = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context(method),
-                                             initializer=_ignore_sigint)
+                                             initializer=_init_worker, initargs=(os.getpid(),))
         return self._pool
 
     def submit(self, fn, *args):
@@ -361,6 +401,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     simulating, fitting, bounds, metrics, storing), so ``task_cpu - fit_cpu`` is the workers' cost
     outside the fits and the rest of a command's CPU is the parent's.
     """
+    check_runs(configs)  # the runs limit, each run's memory and work, their total: before any runs
     keys = cache.run_keys(configs)
     first = {}
     for i, key in enumerate(keys):

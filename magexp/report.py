@@ -12,7 +12,6 @@ speed of the core. ``claims.csv`` has every claim (headline, finding, sanity) wi
 from __future__ import annotations
 
 import functools
-import os
 import platform
 import subprocess
 import sys
@@ -21,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from magexp.atomic import atomic_path, write_text
 from magexp.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, _shorten, evaluate, interpolate
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
@@ -69,10 +69,8 @@ def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
     """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
     when only round-off differs)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")  # atomic: an interrupt leaves the old file or the new one
-    tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:  # an interrupt leaves the old file or the new one
+        tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
 
 
 def versions() -> dict:
@@ -131,7 +129,7 @@ def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = N
     if not len(frame):
         raise MagexpError(f"an empty table ({', '.join(columns)}) would be printed: say so in words instead")
     if tex is not None:
-        Path(tex).write_text(latex_table(frame, columns))
+        write_text(tex, latex_table(frame, columns))
     head = "| " + " | ".join(names or columns) + " |\n|" + "---|" * len(columns) + "\n"
     return head + "".join("| " + " | ".join(_cell(r[c]) for c in columns) + " |\n" for _, r in frame.iterrows())
 
@@ -377,7 +375,7 @@ def _appendix_section(p: Paper) -> str:
                      "never counted as findings.\n\n" + markdown_table(sanity, ["artifact", "text", "verdict", "reason"],
                                                                         names=["artifact", "check", "result", "evidence"]))
     if len(frame):
-        Path(p.root / p.paper / "claims.tex").write_text(latex_table(frame, ["artifact", "by", "role", "text", "verdict"]))
+        write_text(p.root / p.paper / "claims.tex", latex_table(frame, ["artifact", "by", "role", "text", "verdict"]))
     for spec in p.specs:
         if not (p.root / p.paper / f"{spec.name}.png").exists():
             continue
@@ -461,7 +459,8 @@ def build(root: Path = RESULTS) -> None:
     summary = collect(root)
     write_csv(summary, root / "summary.csv")
     record = versions()
-    pd.DataFrame([{"package": k, "version": v} for k, v in record.items()]).to_csv(root / "versions.csv", index=False)
+    with atomic_path(root / "versions.csv") as tmp:
+        pd.DataFrame([{"package": k, "version": v} for k, v in record.items()]).to_csv(tmp, index=False)
     parts = [Paper(p, summary, root) for p in papers() if (summary.paper == p).any() or (root / p).is_dir()]
     claims = pd.DataFrame([r for p in parts for r in p.headlines + p.claims], columns=CLAIM_COLUMNS)
     write_csv(claims, root / "claims.csv")
@@ -480,13 +479,13 @@ def build(root: Path = RESULTS) -> None:
         f"{len(compared)} of {len(summary)} summary rows have a paper value): {_counts(compared)}.\n",
     ]
     text += [_report_section(p) for p in parts]
-    (root / "REPORT.md").write_text("\n".join(text))
+    write_text(root / "REPORT.md", "\n".join(text))
     appendix = ["# magexp report: appendix\n", "Everything [REPORT.md](REPORT.md) leaves out: per artifact its figure, "
                 "caption, every summary row (`n/a` rows too), its table and notes; per paper its sanity checks. "
                 "Columns of the tables: see the README (`results/summary.csv`).\n"]
     appendix += [_appendix_section(p) for p in parts]
     appendix.append(_speed_section(root))
-    (root / "APPENDIX.md").write_text("\n".join(appendix))
+    write_text(root / "APPENDIX.md", "\n".join(appendix))
 
 
 if __name__ == "__main__":

@@ -342,6 +342,10 @@ def _main(args) -> int:
 
     check_output_folder(args.out, "--out")  # a file, or under one: one line, nothing created
     selected = select(papers, args.only)
+    if not args.redraw:
+        from magexp.budget import check_reproduction
+
+        check_reproduction(selected, args.seeds)  # cells x seeds within the runs limit, before planning
     args.out.mkdir(parents=True, exist_ok=True)
     from magexp.report import build
 

@@ -29,6 +29,8 @@ from pathlib import Path
 
 from hydra.experimental.callback import Callback
 
+from magexp.atomic import atomic_open, write_text
+
 TABLE = "sweep.csv"
 
 
@@ -57,12 +59,10 @@ def gather(sweep_dir: Path | str, keys: list[str]) -> Path:
         columns.update(dict.fromkeys(row))
         rows.append(row)
     path = sweep_dir / TABLE
-    tmp = path.with_suffix(".tmp")
-    with tmp.open("w", newline="") as fh:
+    with atomic_open(path, "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(columns), restval="")
         writer.writeheader()
         writer.writerows(rows)
-    tmp.replace(path)
     return path
 
 
@@ -206,7 +206,7 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
         folder = sweep_dir / job_subdir(config, initial_job_idx + n, job)
         metrics = write_outputs(outputs[n], plain, folder, cached=cached[n])
         (folder / ".hydra").mkdir(exist_ok=True)
-        (folder / ".hydra" / "overrides.yaml").write_text(to_yaml(job))
+        write_text(folder / ".hydra" / "overrides.yaml", to_yaml(job))
         returns.append(JobReturn(overrides=job, working_dir=str(folder), task_name=str(config.hydra.job.name),
                                  status=JobStatus.COMPLETED, _return_value=metrics))
     return returns

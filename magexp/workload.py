@@ -57,6 +57,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from magexp.atomic import atomic_open
 from magexp.errors import MagexpError
 from magexp.paths import EXPERIMENTS
 
@@ -226,7 +227,7 @@ def map_cells(runs_csv: Path, cells_json: Path, out: Path) -> dict:
         rows = list(csv.DictReader(fh))
     counts: dict = {}
     out.parent.mkdir(parents=True, exist_ok=True)
-    with out.open("w", newline="") as fh:
+    with atomic_open(out, "w", newline="") as fh:
         writer = csv.DictWriter(fh, COLUMNS, lineterminator="\n")
         writer.writeheader()
         for row in rows:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import matplotlib
 
+from magexp.atomic import atomic_path
 from magexp.plots import VECTOR
 
 matplotlib.use("Agg")
@@ -93,11 +94,15 @@ def save(fig, path: Path) -> list[Path]:
     """Write the figure as a PNG and its vector twin (PDF), both without time stamps or
     producer strings, so the same figure gives the same bytes; return both paths."""
     path = Path(path)
-    fig.savefig(path, metadata={"Software": None}, bbox_inches="tight")
     twin = path.with_suffix(VECTOR)
-    fig.savefig(twin, metadata={"CreationDate": None, "ModDate": None, "Producer": None, "Creator": None},
-                bbox_inches="tight")
-    plt.close(fig)
+    try:  # each file atomically (magexp.atomic): a killed drawing leaves no truncated figure
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format=path.suffix[1:], metadata={"Software": None}, bbox_inches="tight")
+        with atomic_path(twin) as tmp:
+            fig.savefig(tmp, format=VECTOR[1:], bbox_inches="tight",
+                        metadata={"CreationDate": None, "ModDate": None, "Producer": None, "Creator": None})
+    finally:
+        plt.close(fig)
     return [path, twin]
 
 

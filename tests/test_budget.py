@@ -1,0 +1,237 @@
+"""Bounded work (:mod:`magexp.budget`): every command refuses work over a limit in one line naming the
+value and the limit, exit 2, before anything runs or is written.
+
+"Before anything runs" is asserted by counting: the fit, the run and the planning functions are
+wrapped, and a refused command must not have called them (never by timing)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from magexp import budget
+from magexp.config import compose_config, options, parse_overrides, resolved
+from magexp.errors import MagexpError
+
+CALIB = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
+
+
+@pytest.fixture
+def started(monkeypatch):
+    """Counts of what a command started: runs (``runner.run_batch``), fits of a calibration
+    (``calibration._fit``), reproduction plans (``artifacts.plan_artifact``), recordings read."""
+    import magexp.artifacts
+    import magexp.calibration
+    import magexp.recordings
+    import magexp.runner
+
+    counts = {"runs": 0, "fits": 0, "plans": 0, "reads": 0}
+
+    def counted(module, name, key):
+        original = getattr(module, name)
+
+        def wrapper(*args, **kwargs):
+            counts[key] += 1
+            return original(*args, **kwargs)
+
+        monkeypatch.setattr(module, name, wrapper)
+
+    counted(magexp.runner, "run_batch", "runs")
+    counted(magexp.calibration, "_fit", "fits")
+    counted(magexp.artifacts, "plan_artifact", "plans")
+    counted(magexp.recordings, "load_recording", "reads")
+    return counts
+
+
+def tree(folder):
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
+
+
+@pytest.fixture
+def work(tmp_path):
+    """An empty working folder (``tmp_path`` also holds the test's caches)."""
+    folder = tmp_path / "work"
+    folder.mkdir()
+    return folder
+
+
+def one_line(err: str, *words: str) -> None:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), err
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+
+
+def recording(path, n: int, seed: int = 0):
+    """An ``n``-reading recording of a distorted sphere (a calibration succeeds on it)."""
+    rng = np.random.default_rng(seed)
+    u = rng.normal(size=(n, 3))
+    u = 48000 * u / np.linalg.norm(u, axis=1, keepdims=True) * [1.1, 0.95, 1.02] + [120, -75, 32]
+    path.write_text(CALIB + "".join(f"{a:.3f},{b:.3f},{c:.3f}\n" for a, b, c in u))
+    return path
+
+
+RUN_CASES = [  # one run over a limit: the words its line must name
+    (["estimator.n_iterations=1000000000000"], ["estimator.n_iterations=1000000000000", "TiB", "8 GiB",
+                                                 "MAGEXP_MAX_RUN_MEMORY"]),
+    (["estimator.n_particles=100000000"], ["estimator.n_particles=100000000", "MAGEXP_MAX_RUN_MEMORY"]),
+    (["scenario.n_readings=2000000000"], ["scenario.n_readings=2000000000", "MAGEXP_MAX_RUN_MEMORY"]),
+    (["estimator.n_iterations=10000000"], ["estimator.n_iterations=10000000", "reading-evaluations",
+                                           "MAGEXP_MAX_RUN_WORK"]),
+    (["estimator=lm", "estimator.max_nfev=100000000"], ["estimator.max_nfev=100000000", "MAGEXP_MAX_RUN_WORK"]),
+    (["estimator=de", "estimator.max_evaluations=1000000000"], ["estimator.max_evaluations=1000000000",
+                                                                 "MAGEXP_MAX_RUN_WORK"]),
+]
+
+
+@pytest.mark.parametrize("args, words", RUN_CASES, ids=[" ".join(a) for a, _ in RUN_CASES])
+def test_a_run_over_a_limit_is_refused_before_it_starts(cli, work, started, args, words):
+    result = cli(*args, cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, *words)
+    assert started["runs"] == 0 and tree(work) == []
+
+
+def test_a_sweep_is_counted_before_it_is_expanded(cli, work, started, monkeypatch):
+    import magexp.cli_checks
+
+    def no_product(*axes):  # expanding 10^8 jobs is itself the work to refuse
+        raise AssertionError("the sweep was expanded before its size was checked")
+
+    monkeypatch.setattr(magexp.cli_checks.itertools, "product", no_product)
+    result = cli("-m", "seed=range(0,100000000)", "estimator=pso,ipso", cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, "seed=range(0,100000000)", "200000000 runs", "200000 runs", "MAGEXP_MAX_RUNS")
+    assert started["runs"] == 0 and tree(work) == []
+
+
+def test_a_sweep_over_the_total_work_is_refused(cli, work, started, monkeypatch):
+    monkeypatch.setenv("MAGEXP_MAX_WORK", "1e9")  # each ipso run: 50 x 801 x 300 = 1.2e7
+    result = cli("-m", "seed=range(0,100)", cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, "the sweep", "reading-evaluations", "MAGEXP_MAX_WORK")
+    assert started["runs"] == 0 and tree(work) == []
+
+
+@pytest.mark.parametrize("env, value, allowed", [("MAGEXP_MAX_RUNS", "6", True), ("MAGEXP_MAX_RUNS", "5", False),
+                                                 ("MAGEXP_MAX_RUNS", "1e1", True)])
+def test_the_limits_are_configured_by_the_environment(monkeypatch, env, value, allowed):
+    monkeypatch.setenv(env, value)
+    parsed = parse_overrides(["seed=range(3)", "estimator=ipso,pso"])  # 6 jobs
+    if allowed:
+        assert budget.check_sweep(parsed, options) == 6
+    else:
+        with pytest.raises(MagexpError, match="seed=range.*6 runs.*5 runs.*MAGEXP_MAX_RUNS"):
+            budget.check_sweep(parsed, options)
+
+
+@pytest.mark.parametrize("value", ["abc", "-3", "0", "nan", "4 parsecs"])
+def test_a_bad_limit_is_one_line(cli, work, monkeypatch, value):
+    monkeypatch.setenv("MAGEXP_MAX_RUN_MEMORY", value)
+    result = cli("seed=1", cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, "MAGEXP_MAX_RUN_MEMORY", repr(value), "GiB")
+
+
+def test_amounts_read_with_units():
+    assert budget.parse_amount("4GiB") == 4 * 2 ** 30
+    assert budget.parse_amount("2e5") == 200000
+    assert budget.parse_amount("10M") == 1e7
+    assert budget.parse_amount("1.5 TiB") == 1.5 * 2 ** 40
+    assert budget.parse_amount("twelve") is None
+
+
+def test_the_sweep_size_is_counted_without_listing_it():
+    sizes = [budget.sweep_axis_size(ov, options("estimator")) for ov in parse_overrides(
+        ["seed=range(0,100000000)", "a=1,2,3", "b=choice(1,2)", "c=range(0,1,0.25)", "d=5", "e=range(10,0,-3)",
+         "estimator=glob(*)"])]
+    assert sizes == [100000000, 3, 2, 4, 1, 4, len(options("estimator"))]
+
+
+def test_the_estimate_follows_the_equations():
+    """E = P (T + 1) for a swarm, M = 8 [N (64 + 3 P) + 2 (T + 1)] bytes."""
+    plain = resolved(compose_config(["estimator=ipso", "scenario=ding2024_exp1"]))
+    est = budget.estimate_run(plain)
+    assert est.evaluations == 50 * 801 and est.work == 50 * 801 * 300
+    assert est.memory == 8 * (300 * (64 + 3 * 50) + 801 * 2)
+    lm = budget.estimate_run(resolved(compose_config(["estimator=lm"])))
+    assert lm.evaluations == 12 * 2000 and lm.particles == 1
+    kf = budget.estimate_run(resolved(compose_config(["estimator=kf", "scenario=yan2022_sim"])))
+    assert kf.memory == 8 * (12 * (64 + 3) + 601 * (2 + 12))
+
+
+def test_every_papers_reproduction_is_within_the_runs_limit():
+    from magexp.reproduce import available_papers, select
+
+    selected = select(available_papers(), None)
+    runs = budget.check_reproduction(selected, None)
+    assert 10000 < runs < budget.limit("runs") / 10  # make reproduce: about 14000 runs, far from the limit
+
+
+def test_reproduce_seeds_is_refused_before_planning(work, started, capsys):
+    from magexp.reproduce import main
+
+    assert main(["yan2022", "--seeds", "100000000", "--out", str(work / "out")]) == 2
+    one_line(capsys.readouterr().err, "--seeds 100000000", "MAGEXP_MAX_RUNS")
+    assert started["plans"] == 0 and started["runs"] == 0 and tree(work) == []
+
+
+def test_run_many_refuses_before_any_run(started):
+    from magexp.executor import run_many
+
+    plain = resolved(compose_config(["estimator.n_iterations=100000000"]))
+    with pytest.raises(MagexpError, match="estimator.n_iterations=100000000.*MAGEXP_MAX_RUN_WORK"):
+        run_many([plain, {**plain, "seed": 1}], jobs=1)
+    assert started["runs"] == 0
+
+
+CALIBRATE_CASES = [  # (overrides, words)
+    (["folds=1000000000"], ["folds=1000000000", "at most 40"]),
+    (["estimator=ipso", "estimator.n_particles=10000000000"], ["estimator.n_particles=10000000000", "TiB",
+                                                                "MAGEXP_MAX_RUN_MEMORY"]),
+    (["estimator=ipso", "estimator.n_iterations=100000000"], ["estimator.n_iterations=100000000",
+                                                               "MAGEXP_MAX_RUN_WORK"]),
+]
+
+
+@pytest.mark.parametrize("args, words", CALIBRATE_CASES, ids=[" ".join(a) for a, _ in CALIBRATE_CASES])
+def test_a_calibration_over_a_limit_is_refused_before_a_fit(cli, work, started, args, words):
+    data = recording(work / "rec.csv", 40)
+    before = tree(work)
+    result = cli("calibrate", f"data.path={data}", f"out={work / 'cal'}", *args, cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, *words)
+    assert started["fits"] == 0 and tree(work) == before
+
+
+def test_folds_times_fits_over_the_work_limit_is_refused(work, started, monkeypatch):
+    from magexp.calibration import calibrate
+
+    monkeypatch.setenv("MAGEXP_MAX_WORK", "1e9")
+    data = recording(work / "rec.csv", 2000)
+    with pytest.raises(MagexpError, match=r"folds=1000 is not allowed: 1001 fits .*MAGEXP_MAX_WORK"):
+        calibrate(data, estimator="ipso", folds=1000)
+    with pytest.raises(MagexpError, match="folds=10000000 is not allowed: at most 2000"):
+        calibrate(data, folds=10 ** 7)  # the Python API: refused, not 15 minutes of fits
+    assert started["fits"] == 0
+
+
+def test_a_recording_too_big_is_refused_before_it_is_read(cli, work, started, monkeypatch):
+    monkeypatch.setenv("MAGEXP_MAX_READINGS", "1000")
+    data = work / "big.txt"
+    data.write_text("".join(f"{i}.5 {i % 7}.25 {i % 11}.125\n" for i in range(5000)))
+    before = tree(work)
+    result = cli("calibrate", f"data.path={data}", "data.unit=uT", f"out={work / 'cal'}", cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, f"data.path='{data}'", "hold about 5", "1000 readings", "MAGEXP_MAX_READINGS")
+    assert started["reads"] == 0 and started["fits"] == 0 and tree(work) == before
+
+
+def test_a_recording_whose_calibration_would_not_fit_in_memory_is_refused_unread(cli, work, started, monkeypatch):
+    monkeypatch.setenv("MAGEXP_MAX_RUN_MEMORY", "100KiB")
+    data = work / "big.txt"
+    data.write_text("".join(f"{i}.5 {i % 7}.25 {i % 11}.125\n" for i in range(5000)))
+    result = cli("calibrate", f"data.path={data}", "data.unit=uT", f"out={work / 'cal'}", cwd=work)
+    assert result.returncode == 2
+    one_line(result.stderr, f"data.path='{data}'", "need to calibrate", "100 KiB", "MAGEXP_MAX_RUN_MEMORY")
+    assert started["reads"] == 0 and started["fits"] == 0
