@@ -19,6 +19,7 @@ from pathlib import Path
 from magexp.config import (GROUPS, check_choice, compose_config, options, parse_overrides,  # noqa: F401
                            resolved, target_class, yaml_value)
 from magexp.errors import MagexpError, check
+from magexp.guard import check_run_values
 
 #: float64 numbers per reading a run keeps (readings, reference field, attitude, calibrated
 #: readings, problem features); and per reading and particle in a swarm's cost evaluation
@@ -133,6 +134,7 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
         cfg = compose_config(job)
         check_seed(cfg.seed)
         plain = resolved(cfg)
+        check_run_values(plain)
         s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
         e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
         if e_key not in seen:
@@ -151,8 +153,13 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
     return configs
 
 
-def check_output_folder(folder: Path | str, what: str = "output folder") -> Path:
-    """Fail unless ``folder`` is (or can be created as) a writable directory; create nothing."""
+def check_output_folder(folder: Path | str, what: str = "output folder", *, canonical: bool = False) -> Path:
+    """Fail unless ``folder`` is (or can be created as) a writable directory a command may write
+    (:func:`magexp.guard.check_destination`: not empty, not a root, not inside ``results/`` unless
+    ``canonical``); create nothing."""
+    from magexp.guard import check_destination
+
+    check_destination(folder, what, canonical=canonical)
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise MagexpError(f"{what} {str(folder)!r} is a file, not a folder: name a folder")

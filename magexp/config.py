@@ -362,17 +362,31 @@ def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
     except Exception:  # absent, unreadable or from another version: compose again
         pass
     cfg = hydra_compose(tuple(f"{g}={c}" for g, c in choices.items()), config_name)
+    _PENDING.append((path, pickle.dumps(cfg, protocol=pickle.HIGHEST_PROTOCOL)))  # kept once the overrides pass
+    return cfg
+
+
+_PENDING: list = []  # (path, pickled config) composed by Hydra, not yet kept on disk
+
+
+def _keep_composed() -> None:
+    """Keep the configs Hydra composed on disk (:func:`_stored_compose`), after the overrides of the
+    command were applied without error: a refused command writes no composed config."""
+    while _PENDING:
+        _write_composed(*_PENDING.pop())
+
+
+def _write_composed(path: Path, data: bytes) -> None:
     try:
         import tempfile
 
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
         with os.fdopen(fd, "wb") as fh:
-            pickle.dump(cfg, fh, protocol=pickle.HIGHEST_PROTOCOL)
+            fh.write(data)
         os.replace(tmp, path)
     except OSError:  # a read-only cache: compose every time
         pass
-    return cfg
 
 
 @functools.cache
@@ -422,6 +436,7 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
                 OmegaConf.update(cfg, key, int(typed), merge=False)
             except Exception:
                 raise _bad_value(key, value, exc) from None
+    _keep_composed()
     return cfg
 
 
