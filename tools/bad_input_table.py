@@ -5,8 +5,8 @@
 Runs the table's cases (in-process, one pytest process) against the magexp of ``CHECKOUT``
 (default: this one) and prints how many are clean (one line, exit 2, nothing written), not one
 line, wrote something, or a wrong result (accepted), and the cases that are not clean. Anything
-the cases wrote into ``/`` is removed again afterwards, and the checkout's ``results/`` restored
-from git (an old checkout lets exploration write there).
+the cases wrote into ``/`` is removed again afterwards, and another checkout's ``results/``
+restored from git (an old checkout lets exploration write there).
 """
 
 from __future__ import annotations
@@ -37,8 +37,9 @@ def main(argv: list[str]) -> int:
     for name in set(os.listdir("/")) - root_before:  # what a case wrote into the root folder
         path = Path("/") / name
         shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
-    subprocess.run(["git", "-C", str(checkout), "checkout", "-q", "--", "results"], check=False)
-    subprocess.run(["git", "-C", str(checkout), "clean", "-fdq", "--", "results"], check=False)
+    if checkout != HERE:  # another checkout's results/, as exploration left it: restored (here, it is reported)
+        subprocess.run(["git", "-C", str(checkout), "checkout", "-q", "--", "results"], check=False)
+        subprocess.run(["git", "-C", str(checkout), "clean", "-fdq", "--", "results"], check=False)
     counts = collections.Counter(category for category, *_ in rows)
     for category, case, detail in rows:
         if category != "clean":
