@@ -187,6 +187,8 @@ TABLE = [
     row("run", [f"hydra.run.dir={R('yan2022')}"], ["yan2022", "inside results/"]),
     row("run", [f"hydra.run.dir={R('..', 'results', 'x')}"], ["inside results/"]),
     row("run", ["hydra.run.dir=results_link/x"], ["results_link/x", "inside results/"]),  # a link into results/
+    row("run", ["hydra.run.dir=results/myrun"], ["results/myrun", "inside results/"]),
+    row("run", ["estimator=ellipsoid", "hydra.run.dir=results"], ["inside results/"]),
     # ---- run: the command line itself
     row("run", ["--bogus"], ["'--bogus'"]),
     row("run", ["--cfg", "foo"], ["--cfg", "'foo'", "job"]),
@@ -228,6 +230,7 @@ TABLE = [
     row("sweep", ["-m", f"hydra.sweep.dir={R('mysweep')}", "seed=1,2"], ["mysweep", "inside results/"]),
     row("sweep", ["-m", f"hydra.sweep.dir={R()}", "seed=1,2"], ["inside results/"]),
     row("sweep", ["-m", "hydra.sweep.dir=results_link/s", "seed=1,2"], ["inside results/"]),
+    row("sweep", ["-m", "hydra.sweep.dir=results/mysweep", "seed=1,2"], ["results/mysweep", "inside results/"]),
     row("sweep", ["-m", "hydra.sweep.subdir=../../../escaped_${hydra.job.num}", "seed=1,2"],
         ["hydra.sweep.subdir", "'..'"]),
     row("sweep", ["-m", "hydra.sweep.subdir=/tmp/escaped_${hydra.job.num}", "seed=1,2"], ["hydra.sweep.subdir"]),
@@ -291,6 +294,7 @@ TABLE = [
     row("calibrate", ["data.path=good.csv", "out=/"], ["out='/'", "root folder"]),
     row("calibrate", ["data.path=good.csv", "out="], ["out=''", "name a folder"]),
     row("calibrate", ["data.path=good.csv", "out=results_link/c"], ["results/"]),
+    row("calibrate", ["data.path=good.csv", "out=results/calibration"], ["results/"]),
     # ---- reproduce
     row("reproduce", ["nopaper"], ["'nopaper'", "ding2024"]),
     row("reproduce", [], ["paper"]),
@@ -319,6 +323,11 @@ TABLE = [
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--out", R("yan2022")], ["yan2022", "inside results/"]),
     row("reproduce", ["yan2022", "--redraw", "--out", R("yan2022")], ["yan2022", "inside results/"]),
     row("reproduce", ["yan2022", "--tiny", "--out", R("..", "results")], ["--tiny", "results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "results/yan2022"],
+        ["results/yan2022", "inside results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--seeds", "2", "--out", "results/explore"],
+        ["results/explore", "inside results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--seeds", "2", "--out", "results"], ["--seeds", "results/"]),
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "results_link"], ["--tiny", "results/"]),
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "/"], ["'/'", "root folder"]),
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", ""], ["--out=''", "name a folder"]),
@@ -388,6 +397,7 @@ def make_workdir(folder: Path) -> Path:
     (folder / "taken").mkdir()
     (folder / "taken" / "calibration.json").write_text("{}\n")
     (folder / "results_link").symlink_to(RESULTS, target_is_directory=True)
+    (folder / "results").symlink_to(RESULTS, target_is_directory=True)  # the commands of issue 19, as typed
     return folder
 
 
@@ -569,9 +579,8 @@ def test_valid_edges_are_accepted(workdir, cli):
 
 
 @pytest.mark.parametrize("args", [
-    ["-m", "magexp", "--cfg", "foo"],
-    ["-m", "magexp.reproduce", "ding2024", "--jobs", "abc"],
     ["-m", "magexp", "calibrate", "data.path=good.csv", "folds=abc"],
+    ["-m", "magexp.reproduce", "ding2024", "--jobs", "abc"],
 ], ids=lambda a: " ".join(a[1:]))
 def test_bad_input_in_a_process(workdir, args):
     """The process boundary: the same one line, exit 2, from a real ``python -m ...``."""
