@@ -302,7 +302,7 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
 
 
 def run_command(args: list[str]) -> None:
-    from magexp.guard import check_flags, check_override_values
+    from magexp.guard import check_destination, check_flags, check_override_values
 
     user, hyd, flags = split_args(args)
     user = check_override_values(user)
@@ -331,9 +331,7 @@ def run_command(args: list[str]) -> None:
     if multirun:
         return sweep(user, hyd)
     run_dirs = [o.partition("=")[2] for o in hyd if o.startswith("hydra.run.dir=")]
-    for run_dir in run_dirs:
-        from magexp.guard import check_destination
-
+    for run_dir in run_dirs:  # not empty, not a root, not inside results/
         check_destination(run_dir, "hydra.run.dir")
     if len(run_dirs) != len(hyd):
         rest = [o for o in hyd if not o.startswith("hydra.run.dir=")]

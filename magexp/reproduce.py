@@ -280,7 +280,8 @@ def _main(args) -> int:
     args.out = check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
     from magexp.cli_checks import check_output_folder
 
-    check_output_folder(args.out, "--out", canonical=True)  # a file, or under one: one line, nothing created
+    # a file, or under one: one line, nothing created (results/ itself: check_canonical decided)
+    check_output_folder(args.out, "--out", canonical=True)
     selected = select(papers, args.only)
     with removed_on_failure(args.out):  # a failed or interrupted reproduction leaves nothing behind
         return _write(args, selected)
