@@ -216,24 +216,32 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
 
     from magexp.cli_checks import check_output_folder, create_unique, expand_sweep, validate_runs
     from magexp.config import register_schemas
+    from magexp.guard import check_jobs, check_subdir, removed_on_failure
     from magexp.paths import CONF
 
     check_launcher(hydra_overrides)
     from magexp.sweep import check_hydra_settings
 
+    for ov in hydra_overrides:  # each job's folder inside the sweep's
+        if ov.startswith("hydra.sweep.subdir="):
+            check_subdir(ov.partition("=")[2])
     check_hydra_settings([o for o in hydra_overrides if not o.startswith("hydra.sweep.dir=")])
-    validate_runs(expand_sweep(user), keep=False)
+    jobs = expand_sweep(user)
+    check_jobs(user, jobs)
+    validate_runs(jobs, keep=False)
     explicit = [o for o in hydra_overrides if o.startswith("hydra.sweep.dir=")]
     if explicit:
-        check_output_folder(explicit[-1].partition("=")[2], "sweep folder")
+        folder, created = check_output_folder(explicit[-1].partition("=")[2], "hydra.sweep.dir"), None
     else:
         folder = Path(time.strftime(SWEEP_DIR))
         check_output_folder(folder, "sweep folder")
-        hydra_overrides = [*hydra_overrides, f"hydra.sweep.dir={create_unique(folder)[0]}"]
+        folder, created = create_unique(folder)
+        hydra_overrides = [*hydra_overrides, f"hydra.sweep.dir={folder}"]
     register_schemas()
     app = hydra.main(version_base=None, config_path=str(CONF), config_name="config")(sweep_job)
     sys.argv = [sys.argv[0], "-m", *user, *hydra_overrides]
-    app()
+    with removed_on_failure(folder, created):  # a failed or interrupted sweep leaves nothing behind
+        app()
 
 
 def hand_to_hydra(args: list[str]) -> None:
@@ -298,7 +306,11 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
 
 
 def run_command(args: list[str]) -> None:
+    from magexp.guard import check_destination, check_flags, check_override_values
+
     user, hyd, flags = split_args(args)
+    user = check_override_values(user)
+    check_flags(flags)
     if flags.get("-h") or flags.get("--help"):
         return print_help()
     if flags.get("--version"):
@@ -323,6 +335,8 @@ def run_command(args: list[str]) -> None:
     if multirun:
         return sweep(user, hyd)
     run_dirs = [o.partition("=")[2] for o in hyd if o.startswith("hydra.run.dir=")]
+    for run_dir in run_dirs:  # not empty, not a root, not inside results/
+        check_destination(run_dir, "hydra.run.dir")
     if len(run_dirs) != len(hyd):
         rest = [o for o in hyd if not o.startswith("hydra.run.dir=")]
         check_launcher(rest)

@@ -50,7 +50,8 @@ import numpy as np
 from magexp import quality as q
 from magexp.budget import check_calibration, check_recording_file
 from magexp.dataset import Dataset
-from magexp.errors import MagexpError
+from magexp.errors import LARGEST, MagexpError, check_positive_int
+from magexp.guard import check_destination, check_folds, check_override_values, readings_array
 from magexp.estimators.result import FitResult
 from magexp.recordings import Recording
 from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box  # noqa: F401
@@ -127,8 +128,9 @@ def reference_of(rec: Recording, override=None) -> Reference:
             value = float(override)
         except (TypeError, ValueError):
             value = float("nan")
-        if not (np.isfinite(value) and value > 0):
-            raise MagexpError(f"data.reference_total={override!r} is not allowed: it must be a number > 0")
+        if not (np.isfinite(value) and 0 < value <= LARGEST):
+            raise MagexpError(f"data.reference_total={override!r} is not allowed: it must be a number > 0 and "
+                              f"<= {LARGEST:g}")
         return Reference(np.full(n, value), "data.reference_total")
     if rec.total is not None:
         return Reference(np.asarray(rec.total, float), "the total column")
@@ -299,6 +301,9 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         metrics and the quality report.
     """
     check_size(rec)
+    folds = check_folds(folds)
+    if objective not in OBJECTIVES:
+        raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
     check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.budget's limits
     if model not in MODELS or (model == "sphere" and objective != "scalar"):
         raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or sphere "
@@ -346,7 +351,7 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
             raise MagexpError(f"readings with columns {list(readings.columns)} are not allowed: give bx, by, bz "
                               "(or x, y, z), or exactly three numeric columns")
         readings = frame.to_numpy(float)
-    values = np.asarray(readings, float)
+    values = readings_array(readings)
     if values.ndim != 2 or values.shape[1] != 3:
         raise MagexpError(f"readings of shape {values.shape} are not allowed: give an (N, 3) array")
     if not np.all(np.isfinite(values)):
@@ -368,7 +373,13 @@ def estimator_named(name: str, **overrides):
     if not path.is_file():
         known = sorted(p.stem for p in (CONF / "estimator").glob("*.yaml"))
         raise MagexpError(f"estimator={name!r} is not allowed: choose one of {', '.join(known)}")
-    return build(OmegaConf.merge(OmegaConf.load(path), overrides), f"estimator {name!r}")
+    node = OmegaConf.load(path)
+    unknown = [key for key in overrides if key not in node]
+    if unknown:
+        options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")
+        raise MagexpError(f"{unknown[0]}={overrides[unknown[0]]!r} is not allowed: estimator {name!r} has no option "
+                          f"{unknown[0]!r} (options: {options})")
+    return build(OmegaConf.merge(node, overrides), f"estimator {name!r}")
 
 
 def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objective: str = "scalar",
@@ -400,8 +411,13 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
     from magexp.seeding import run_generators
 
     rec = as_recording(readings, unit=unit)
+    if not isinstance(estimator, str) and not callable(getattr(estimator, "fit", None)):
+        from magexp.config import options
+
+        raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
+                          f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
-    _, rng = run_generators(seed)
+    _, rng = run_generators(check_positive_int(seed, "seed", minimum=0))
     return calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
                                rng=rng, checks=checks, model=model)
 
@@ -418,6 +434,12 @@ def compose(argv: list[str]):
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
                           "(e.g. data.path=mine.csv data.unit=uT estimator=lm)")
+    argv = check_override_values(argv)
+    from magexp.config import GROUPS, check_choice
+
+    for arg in argv:
+        if arg.partition("=")[0] in GROUPS:
+            check_choice(*arg.split("=", 1))
     try:
         if GlobalHydra.instance().is_initialized():
             return hydra_compose("calibrate", overrides=list(argv))
@@ -452,20 +474,22 @@ def run(cfg) -> Calibration:
     from magexp.seeding import run_generators
 
     data = cfg.data
-    if data.get("path") is None:
-        raise MagexpError("data.path=None is not allowed: give data.path=<recording file>")
+    if data.get("path") is None or not str(data.path).strip():
+        raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
     check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
     rec = load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
                          mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"))
-    out_dir = Path(cfg.out) if cfg.get("out") else Path(f"calibration_{rec.path.stem}")
+    out = cfg.get("out")
+    out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
+    check_destination(out_dir if out is None else out, "out")
     check_out(out_dir)
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    _, est_rng = run_generators(cfg.seed)
+    _, est_rng = run_generators(check_positive_int(cfg.seed, "seed", minimum=0))
     reference = data.get("reference_total")
     if reference is None:
         reference = reference_from_igrf(cfg, rec)
     cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
-                              folds=int(cfg.folds), rng=est_rng, model=cfg.model)
+                              folds=cfg.folds, rng=est_rng, model=cfg.model)
     paths = write(cal, out_dir, seed=cfg.seed)
     print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())})
     return cal

@@ -21,6 +21,7 @@ from magexp.budget import Tally, check_run, check_sweep
 from magexp.config import (GROUPS, check_choice, compose_config, options, parse_overrides,  # noqa: F401
                            resolved, target_class, yaml_value)
 from magexp.errors import MagexpError, check
+from magexp.guard import check_run_values
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
     """The jobs of a sweep: the cartesian product of every override's values, first key slowest
@@ -109,6 +110,7 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
         cfg = compose_config(job)
         check_seed(cfg.seed)
         plain = resolved(cfg)
+        check_run_values(plain)
         s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
         e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
         if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
@@ -127,8 +129,13 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
     return configs
 
 
-def check_output_folder(folder: Path | str, what: str = "output folder") -> Path:
-    """Fail unless ``folder`` is (or can be created as) a writable directory; create nothing."""
+def check_output_folder(folder: Path | str, what: str = "output folder", *, canonical: bool = False) -> Path:
+    """Fail unless ``folder`` is (or can be created as) a writable directory a command may write
+    (:func:`magexp.guard.check_destination`: not empty, not a root, not inside ``results/`` unless
+    ``canonical``); create nothing."""
+    from magexp.guard import check_destination
+
+    check_destination(folder, what, canonical=canonical)
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise MagexpError(f"{what} {str(folder)!r} is a file, not a folder: name a folder")

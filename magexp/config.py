@@ -373,10 +373,26 @@ def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
              "schemas": {name: schema for name in cfg if (schema := _schema_of(cfg[name]))}}
     try:
         if OmegaConf.to_yaml(_config_from(entry)) == OmegaConf.to_yaml(cfg):
-            cache.write(path, cache.pack(key, "config", entry), root)
-    except OSError:  # a read-only cache: compose every time
+            _PENDING.append((path, cache.pack(key, "config", entry), root))  # kept once the overrides pass
+    except cache.InvalidEntry:  # a config this format cannot hold exactly: composed every time
         pass
     return cfg
+
+
+_PENDING: list = []  # (path, packed entry, cache folder) composed by Hydra, not yet kept on disk
+
+
+def _keep_composed() -> None:
+    """Keep the configs Hydra composed on disk (:func:`_stored_compose`), after the overrides of the
+    command were applied without error: a refused command writes no composed config."""
+    from magexp import cache
+
+    while _PENDING:
+        path, data, root = _PENDING.pop()
+        try:
+            cache.write(path, data, root)
+        except OSError:  # a read-only cache: compose every time
+            pass
 
 
 def _schema_of(node) -> str | None:
@@ -460,6 +476,7 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
                 OmegaConf.update(cfg, key, int(typed), merge=False)
             except Exception:
                 raise _bad_value(key, value, exc) from None
+    _keep_composed()
     return cfg
 
 

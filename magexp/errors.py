@@ -50,3 +50,16 @@ def check_magnitude(value, name: str) -> float:
     if not abs(v) <= LARGEST:
         raise MagexpError(f"{name}={value!r} is not allowed: it must be a finite number of magnitude <= {LARGEST:g}")
     return v
+
+
+#: the most characters of a file's content an error message shows (:func:`excerpt`)
+EXCERPT = 40
+
+
+def excerpt(text) -> str:
+    """``text`` read from a file, quoted for an error message: at most :data:`EXCERPT` characters,
+    each one not printable shown as ``?`` (a message never prints a file's content beyond a short,
+    printable excerpt)."""
+    text = str(text).strip()
+    shown = "".join(c if c.isprintable() else "?" for c in text[:EXCERPT])
+    return repr(shown + ("..." if len(text) > EXCERPT else ""))

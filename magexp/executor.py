@@ -50,6 +50,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from magexp import cache
 from magexp.budget import check_runs
 from magexp.errors import MagexpError
+from magexp.guard import check_scheduler_address
 
 EXECUTORS = ("local", "dask")
 
@@ -242,6 +243,7 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
         raise MagexpError(f"--jobs {jobs!r} is not allowed: it must be an integer >= 0 (0: all cores)")
     if scheduler is not None and kind != "dask":
         raise MagexpError(f"--scheduler {scheduler!r} needs --executor dask")
+    check_scheduler_address(scheduler)
 
 
 def jobqueue_cluster(system: str):

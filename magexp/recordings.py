@@ -92,7 +92,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.errors import LARGEST, MagexpError
+from magexp.errors import LARGEST, MagexpError, excerpt
 from magexp.paths import DATA
 
 VERSION_LINE = "# magexp-recording v1"
@@ -208,9 +208,9 @@ def _number(text: str, where: str, what: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise MagexpError(f"{where}: {what}={text.strip()!r} is not a number") from None
+        raise MagexpError(f"{where}: {what}={excerpt(text)} is not a number") from None
     if not abs(value) <= LARGEST:
-        raise MagexpError(f"{where}: {what}={text.strip()!r} is not allowed: it must be a finite number "
+        raise MagexpError(f"{where}: {what}={excerpt(text)} is not allowed: it must be a finite number "
                           f"of magnitude <= {LARGEST:g}")
     return value
 
@@ -218,7 +218,7 @@ def _number(text: str, where: str, what: str) -> float:
 def _header(lines: list[str], name: str) -> tuple[dict, int]:
     if not lines or lines[0].strip() != VERSION_LINE:
         first = lines[0].strip() if lines else ""
-        raise MagexpError(f"{name}: first line {first!r} is not allowed: it must be {VERSION_LINE!r} "
+        raise MagexpError(f"{name}: first line {excerpt(first)} is not allowed: it must be {VERSION_LINE!r} "
                           "(or the file must be plain numbers in three columns)")
     meta, i = {}, 1
     while i < len(lines) and lines[i].lstrip().startswith("#"):
@@ -330,7 +330,7 @@ def _csv_table(lines: list[str], name: str, first_line: int) -> tuple[list[str],
     missing = [c for c in FIELDS if c not in header]
     if missing:
         raise MagexpError(f"{name}: missing column {', '.join(missing)}: the header must name "
-                          f"{', '.join(FIELDS)} (has {', '.join(header)})")
+                          f"{', '.join(FIELDS)} (has {excerpt(', '.join(header))})")
     values = []
     for k, row in enumerate(rows[1:], start=first_line + 1):
         if not any(cell.strip() for cell in row):
@@ -417,10 +417,14 @@ _RATE_SUFFIX = {"dps": "deg/s", "rps": "rad/s"}
 def _read_lines(path: Path) -> list[str]:
     """The file's lines; a UTF-8 byte-order mark is accepted, a binary file refused in one line."""
     try:
-        return path.read_text(encoding="utf-8-sig").splitlines()
+        text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
         raise MagexpError(f"{path.name}: byte {exc.start} is not UTF-8 text: a recording must be a text file "
                           "(CSV or 3 numeric columns)") from None
+    if "\x00" in text:
+        raise MagexpError(f"{path.name}: character {text.index(chr(0))} is a NUL byte, so this is not a text file: a "
+                          "recording must be a text file (CSV or 3 numeric columns)")
+    return text.splitlines()
 
 
 def _stream(path: Path, prefix: str, suffixes: dict) -> tuple[np.ndarray, np.ndarray, str]:
@@ -430,7 +434,7 @@ def _stream(path: Path, prefix: str, suffixes: dict) -> tuple[np.ndarray, np.nda
     check_unique(header, path.name)
     cols = [next((c for c in header if c.startswith(f"{prefix}{a}_")), None) for a in "xyz"]
     if not header or header[0] != "t_s" or None in cols:
-        raise MagexpError(f"{path.name}: header {','.join(header)!r} is not allowed: it must start with t_s and "
+        raise MagexpError(f"{path.name}: header {excerpt(','.join(header))} is not allowed: it must start with t_s and "
                           f"name {prefix}x_<unit>, {prefix}y_<unit>, {prefix}z_<unit>")
     units = {c.split("_", 1)[1] for c in cols}
     if len(units) != 1 or next(iter(units)) not in suffixes:
@@ -578,7 +582,7 @@ def detect(path: Path) -> str:
     """The format key of ``path`` (see the module docstring)."""
     if str(path).endswith(("_mag.csv", "_imu.csv")) or (not path.is_file() and Path(f"{path}_mag.csv").is_file()):
         return "two-stream"
-    with open(path, errors="replace") as fh:
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
         head = [fh.readline() for _ in range(3)]
     first = head[0].strip()
     if first == VERSION_LINE:

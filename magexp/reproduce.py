@@ -27,6 +27,7 @@ import pandas as pd
 
 from magexp.artifacts import ArtifactRuns, collect, paper_specs, plan_artifact
 from magexp.errors import MagexpError
+from magexp.guard import OneLineParser, check_destination, removed_on_failure
 from magexp.paths import RESULTS
 from magexp.plots import kind_module
 from magexp.report import write_csv
@@ -52,12 +53,16 @@ def select(papers: list[str], only: str | None) -> dict[str, list]:
     return found
 
 
-def check_canonical(out: Path, *, seeds, tiny: bool) -> None:
-    """Exploration (``--seeds``, ``--tiny``) must not write into the canonical ``results/``."""
+def check_canonical(out, *, seeds, tiny: bool) -> Path:
+    """The folder ``--out`` names, if this reproduction may write there: exploration (``--seeds``,
+    ``--tiny``) never into the canonical ``results/``, and no reproduction into a folder inside it
+    (:func:`magexp.guard.check_destination`: resolved paths)."""
     flags = [f for f, on in (("--seeds", seeds is not None), ("--tiny", tiny)) if on]
-    if flags and out.resolve() == RESULTS.resolve():
+    if flags and str(out).strip() and Path(out).resolve() == RESULTS.resolve():
         raise MagexpError(f"{' '.join(flags)} explores: give --out DIR other than results/ "
                           "(results/ holds only canonical reproductions)")
+    check_destination(out, "--out", canonical=not flags)
+    return Path(out)
 
 
 def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
@@ -299,13 +304,13 @@ def record_timing(root: Path, target: str, seconds: float, counts: dict) -> None
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m magexp.reproduce", description=__doc__.splitlines()[0])
+    p = OneLineParser(prog="python -m magexp.reproduce", description=__doc__.splitlines()[0])
     p.add_argument("paper", help="all, or one of: " + ", ".join(available_papers()))
     p.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
     p.add_argument("--seeds", type=int, default=None, help="seeds per cell (exploration: needs --out)")
     p.add_argument("--only", default=None, help="one artifact stem (found in whichever paper has it)")
     p.add_argument("--tiny", action="store_true", help="tiny sizes, a smoke test (exploration: needs --out)")
-    p.add_argument("--out", type=Path, default=RESULTS, help="results folder (default: results/)")
+    p.add_argument("--out", default=str(RESULTS), help="results folder (default: results/)")
     p.add_argument("--force", action="store_true",
                    help="recompute every distinct run even if it is cached, and draw every figure")
     p.add_argument("--redraw", action="store_true", help="rebuild figures, summary and report from the CSVs; no run")
@@ -328,7 +333,7 @@ def main(argv=None) -> int:
 
 
 def _main(args) -> int:
-    from magexp.executor import check_executor, make_executor
+    from magexp.executor import check_executor
 
     papers = available_papers() if args.paper == "all" else [args.paper]
     for paper in papers:
@@ -337,15 +342,24 @@ def _main(args) -> int:
     check_executor(args.executor, args.jobs, args.scheduler)
     if args.seeds is not None and args.seeds < 1:
         raise MagexpError(f"--seeds {args.seeds} is not allowed: it must be an integer >= 1")
-    check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
+    args.out = check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
     from magexp.cli_checks import check_output_folder
 
-    check_output_folder(args.out, "--out")  # a file, or under one: one line, nothing created
+    # a file, or under one: one line, nothing created (results/ itself: check_canonical decided)
+    check_output_folder(args.out, "--out", canonical=True)
     selected = select(papers, args.only)
     if not args.redraw:
         from magexp.budget import check_reproduction
 
         check_reproduction(selected, args.seeds)  # cells x seeds within the runs limit, before planning
+    with removed_on_failure(args.out):  # a failed or interrupted reproduction leaves nothing behind
+        return _write(args, selected)
+
+
+def _write(args, selected) -> int:
+    """Run and write (or redraw) the ``selected`` artifacts into ``args.out`` (checked by :func:`_main`)."""
+    from magexp.executor import make_executor
+
     args.out.mkdir(parents=True, exist_ok=True)
     from magexp.report import build
 

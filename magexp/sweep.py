@@ -187,6 +187,7 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     from magexp import cache
     from magexp.__main__ import to_yaml, write_outputs
     from magexp.executor import make_executor, run_many
+    from magexp.guard import check_job_folders
     from magexp.progress import Progress
 
     check_settings(settings)
@@ -194,6 +195,8 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     plains = _configs(jobs)
     cached = [cache.exists(key) for key in cache.run_keys(plains)]
     sweep_dir = Path(str(config.hydra.sweep.dir))
+    folders = [sweep_dir / job_subdir(config, initial_job_idx + n, job) for n, job in enumerate(jobs)]
+    check_job_folders(folders, sweep_dir)  # before the first run
     progress = Progress(len(plains), "sweep")
     if settings["executor"] == "local":
         outputs = run_many(plains, jobs=settings["jobs"], progress=progress)
@@ -202,8 +205,7 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
         with make_executor(settings["executor"], jobs=settings["jobs"], scheduler=settings["scheduler"]) as ex:
             outputs = run_many(plains, executor=ex, progress=progress)
     returns = []
-    for n, (job, plain) in enumerate(zip(jobs, plains)):
-        folder = sweep_dir / job_subdir(config, initial_job_idx + n, job)
+    for n, (job, plain, folder) in enumerate(zip(jobs, plains, folders)):
         metrics = write_outputs(outputs[n], plain, folder, cached=cached[n])
         (folder / ".hydra").mkdir(exist_ok=True)
         write_text(folder / ".hydra" / "overrides.yaml", to_yaml(job))

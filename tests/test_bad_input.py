@@ -1,23 +1,45 @@
-"""Bad input, table-driven: one line naming the value, a non-zero exit, no traceback, nothing written.
+"""Bad input, table-driven: one line naming the value, exit 2, nothing written, through every entry point.
 
-Every case runs the command line in-process (:func:`magexp.__main__.main`, the same code as
-``magexp ...``) from an empty working folder; after it, the folder holds only the input files
-(no Hydra folder, no partial output) and ``results/`` is untouched. The process boundary itself
-(``python -m magexp`` exits with the code) is tested in ``test_cli.py``.
+Each row of :data:`TABLE` is a bad input to one entry point:
+
+* ``run`` / ``sweep``: ``magexp ARGS`` (:func:`magexp.__main__.main`, the code of ``python -m magexp``);
+* ``calibrate``: ``magexp calibrate ARGS``;
+* ``reproduce``: ``python -m magexp.reproduce ARGS`` (:func:`magexp.reproduce.main`);
+* ``api``: a call of the Python API, which must raise :class:`~magexp.errors.MagexpError` of one line.
+
+The command lines run in-process, from an empty working folder holding only the input files; a
+handful more run as real processes at the end of this file. Every row asserts one line on stderr
+(warnings count as lines), the exit code (2; 130 for Ctrl-C), the words the line must contain (the
+bad value, what is allowed), and an unchanged file tree: the working folder, the
+checkout's tracked ``results/`` and the filesystem root ``/``. :func:`outcome` is what
+``tools/bad_input_table.py`` runs to count the table's outcomes on any checkout.
 """
 
-import os
+from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
 import pytest
 
-from magexp.__main__ import main as magexp_main
+from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 
 MOCKUP_HEADER = "# magexp-recording v1\n# unit: nT\n# angles: rad\n# field: 34425, 1961, 35898\nbx,by,bz,heading,roll,trim\n"
 ROWS = "".join(f"{1000 + 37 * i},{-500 + 11 * i * i % 700},{200 + 53 * i % 900},{0.1 * i},0.01,-0.02\n"
                for i in range(12))
+CALIB_HEADER = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
+_T = np.linspace(0, 20, 60)
+SPHERE = np.column_stack([40 * np.cos(_T) * np.sin(_T / 7 + 0.3), 40 * np.sin(_T) * np.sin(_T / 7 + 0.3),
+                          40 * np.cos(_T / 7 + 0.3)]) + [3.0, -2.0, 1.0]  # readings all around a sphere (uT)
+PLAIN = "".join(f"{x:.4f} {y:.4f} {z:.4f}\n" for x, y, z in SPHERE)
 
-FILES = {  # recordings read by scenario=yan2022_mockup scenario.path=<file>
+FILES = {
+    # recordings read by scenario=yan2022_mockup scenario.path=<file>
     "missing_column.csv": "# magexp-recording v1\n# unit: nT\nbx,by\n1,2\n",
     "text.csv": MOCKUP_HEADER + ROWS + "1,abc,3,0,0,0\n",
     "nan.csv": MOCKUP_HEADER + ROWS + "1,nan,3,0,0,0\n",
@@ -26,209 +48,542 @@ FILES = {  # recordings read by scenario=yan2022_mockup scenario.path=<file>
     "row_length.csv": MOCKUP_HEADER + ROWS + "1,2\n",
     "no_angles.csv": "# magexp-recording v1\n# unit: nT\nbx,by,bz\n" + "".join(
         ",".join(row.split(",")[:3]) + "\n" for row in ROWS.splitlines()),
-}
-CALIB_HEADER = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
-FILES.update({  # recordings read by magexp calibrate data.path=<file>
+    # recordings read by magexp calibrate data.path=<file>
     "short.csv": CALIB_HEADER + "1,2,3\n4,5,6\n7,8,10\n",
-    "good.csv": CALIB_HEADER + "".join(f"{1000 + 37 * i},{-500 + 11 * i * i % 700},{200 + 53 * i % 900}\n"
-                                       for i in range(30)),
-})
+    "good.csv": CALIB_HEADER + PLAIN.replace(" ", ","),  # calibrates: its refusals are the overrides'
+    "plain.txt": PLAIN,
+    "secret.txt": "PASSWORD=hunter2 TOKEN=abcdef\n",  # a text file that is no recording: not echoed whole
+    "wrong_version.csv": "# magexp-recording v9\n# unit: nT\nbx,by,bz\n1,2,3\n",
+    "empty.csv": "",
+    "header_only.csv": CALIB_HEADER,
+    "dup_column.csv": "# magexp-recording v1\n# unit: nT\nbx,by,bz,bx\n1,2,3,4\n",
+    "bad_field.csv": "# magexp-recording v1\n# unit: nT\n# field: 1,2\nbx,by,bz\n1,2,3\n",
+    "neg_reference.csv": "# magexp-recording v1\n# unit: nT\n# reference_total: -5\nbx,by,bz\n1,2,3\n",
+}
 BINARY = bytes(range(256)) * 4  # not UTF-8 text
+ENVIRON = b"SECRET_KEY=swordfish\x00HOME=/root\x00PATH=/usr/bin\x00"  # like /proc/self/environ
 
 MOCKUP = ["scenario=yan2022_mockup", "estimator=ls"]
+DASK = ["hydra.launcher.executor=dask"]
 
-CASES = [  # (arguments, words the one line must contain)
-    # config groups and keys
-    (["estimator=foo"], ["'foo'", "ipso"]),
-    (["scenario=nope"], ["'nope'", "ding2024_exp1"]),
-    (["scenario.nosie=2"], ["scenario.nosie", "'nosie'", "noise", "n_readings"]),  # a typo names the keys
-    (["scenario.search.offsett=[0,1]"], ["offsett", "offdiag"]),
-    (["estimator.n_particle=3"], ["n_particle", "n_particles"]),
-    (["sed=3"], ["sed", "seed"]),
-    (["objective=bogus"], ["'bogus'", "scalar"]),
-    # the simulation command has no calibration keys (the silently-wrong-job cases)
-    (["task=calibrate"], ["task=calibrate", "magexp calibrate"]),
-    (["task=bogus"], ["task=bogus", "magexp calibrate"]),
-    (["data.path=mine.txt", "data.unit=uT", "estimator=lm"], ["data.path", "magexp calibrate"]),
-    (["out=scratch/"], ["out=scratch/", "magexp calibrate"]),
-    # values
-    (["scenario.noise=-1"], ["-1", ">= 0"]),
-    (["scenario.noise=nan"], ["nan"]),
-    (["scenario.noise=inf"], ["inf"]),
-    (["scenario.noise=abc"], ["scenario.noise=abc"]),
-    (["scenario.noise=1e300"], ["1e+300", "1e+15"]),
-    (["scenario.search.offset=[-1e300,1e300]"], ["search.offset", "1e+15"]),
-    (["scenario.search.diag=[2,1]"], ["search.diag", "low < high"]),
-    (["scenario.search.offset=[0,inf]"], ["search.offset"]),
-    (["estimator.n_particles=0"], ["n_particles=0", ">= 1"]),
-    (["estimator.n_particles=-3"], ["n_particles=-3"]),
-    (["estimator.n_iterations=0"], ["n_iterations=0"]),
-    (["estimator.n_particles=2.5"], ["2.5"]),
-    (["estimator.velocity_clamp=-0.1"], ["velocity_clamp=-0.1"]),
-    (["estimator.init.form=weird"], ["'weird'", "printed"]),
-    (["scenario.n_readings=0"], ["n_readings=0"]),
-    (["scenario.n_readings=100000000"], ["n_readings=100000000", "GiB"]),  # refused up front: memory
-    (["scenario.n_readings=1e8"], ["n_readings=100000000", "GiB"]),
-    (["scenario.n_readings=1.5"], ["n_readings=1.5", "an integer"]),
-    (["estimator=lm", "scenario.n_readings=5"], ["n_readings=5", "12 parameters"]),  # fewer readings than parameters
-    (["estimator=ellipsoid", "scenario.n_readings=11"], ["n_readings=11"]),
-    (["scenario=yuan2018_mode1", "estimator=lm", "scenario.n_readings=3"], ["n_readings=3"]),
-    (["scenario=yan2022_sim", "estimator=kf", "estimator.sigma2=0"], ["sigma2=0", "> 0"]),
-    (["scenario=yan2022_sim", "estimator=kf", "estimator.sigma2=-5"], ["sigma2=-5"]),
-    (["seed=-1"], ["seed=-1"]),
-    (["seed=abc"], ["abc"]),
-    (["seed=1.5"], ["seed=1.5"]),
-    # recordings read by a scenario
-    ([*MOCKUP, "scenario.path=missing.csv"], ["missing.csv", "does not exist"]),
-    ([*MOCKUP, "scenario.path=a_folder"], ["a_folder", "is a directory"]),
-    ([*MOCKUP, "scenario.path=binary.csv"], ["binary.csv", "not UTF-8"]),
-    ([*MOCKUP, "scenario.path=huge.csv"], ["1e308", "1e+15"]),
-    ([*MOCKUP, "scenario.path=missing_column.csv"], ["bz"]),
-    ([*MOCKUP, "scenario.path=text.csv"], ["abc"]),
-    ([*MOCKUP, "scenario.path=nan.csv"], ["nan"]),
-    ([*MOCKUP, "scenario.path=unit.csv"], ["furlong"]),
-    ([*MOCKUP, "scenario.path=row_length.csv"], ["row_length.csv"]),
-    ([*MOCKUP, "scenario.path=no_angles.csv"], ["heading"]),
-    # output folders, checked before any computation
-    (["hydra.run.dir=a_file"], ["a_file", "is a file"]),
-    (["hydra.run.dir=a_file/run"], ["a_file", "is a file"]),
-    (["hydra.run.dir=/proc/magexp-run"], ["/proc/magexp-run", "not writable"]),
-    # the command line itself
-    (["--bogus"], ["'--bogus'"]),
-    (["scenario.noise=1,2"], ["needs -m"]),
-    (["hydra.job.chdir=true"], ["hydra.job.chdir"]),
-    (["scenario.noise=[1"], ["could not parse"]),
-    # sweeps: every value checked before the first job (and no multirun folder)
-    (["-m", "estimator=pso,bogus"], ["'bogus'"]),
-    (["-m", "scenario.noise=2,-1", "seed=range(3)"], ["scenario.noise=-1"]),
-    (["-m", "scenario.noise=1,2", "seed=0,1,-4"], ["seed=-4"]),  # a bad seed among many
-    (["-m", "estimator=lm,ellipsoid", "scenario.n_readings=300,6"], ["n_readings=6"]),
-    (["-m", "seed=range(2)", "scenario.nosie=1,2"], ["'nosie'"]),
-    (["-m", "hydra/launcher=nope", "seed=1,2"], ["'nope'", "joblib"]),
-    (["-m", "hydra.launcher.foo=1", "seed=1,2"], ["hydra.launcher.foo"]),
-    (["-m", "hydra.launcher.jobs=abc", "seed=1,2"], ["hydra.launcher.jobs", "abc"]),
-    (["-m", "hydra.launcher.executor=nope", "seed=1,2"], ["hydra.launcher.executor", "'nope'", "dask"]),
-    (["-m", "hydra.launcher.scheduler=slurm", "seed=1,2"], ["hydra.launcher.scheduler", "executor=dask"]),
-    (["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
-    (["task=calibrate"], ["magexp calibrate"]),  # moved to its own command
-    (["calibrate", "data.path=missing.csv", "data.unit=nT"], ["missing.csv"]),
-    (["calibrate", "data.path=missing_column.csv"], ["bz"]),
-    (["calibrate", "data.path=text.csv"], ["abc"]),
-    (["calibrate", "data.path=nan.csv"], ["nan"]),
-    (["calibrate", "data.path=short.csv", "estimator=lm"], ["3"]),
-    (["calibrate", "data.path=unit.csv"], ["furlong"]),
-    (["calibrate", "data.path=row_length.csv"], ["row_length.csv"]),
-    (["calibrate", "data.path=good.csv", "out=a_file"], ["a_file"]),  # an output "folder" that is a file
+
+def R(*parts) -> str:
+    """A path inside the checkout's tracked ``results/``."""
+    return str(RESULTS.joinpath(*parts))
+
+
+def api(**options):
+    """A bad call of ``magexp.calibrate``: good readings unless ``readings`` is given."""
+    import magexp
+
+    readings = options.pop("readings", SPHERE)
+    options.setdefault("unit", "uT")
+    return lambda: magexp.calibrate(readings, **options)
+
+
+def load(path, **options):
+    from magexp.recordings import load_recording
+
+    return lambda: load_recording(path, **options)
+
+
+def interrupt(*args, **kwargs):
+    raise KeyboardInterrupt
+
+
+def no_scheduler(*args, **kwargs):
+    raise MagexpError("--scheduler 'tcp://127.0.0.1:1': no Dask scheduler answers there (timed out)")
+
+
+GOOD3 = np.ones((20, 3))
+
+
+def row(entry, args, words, code=2, patch=None):
+    return (entry, args, words, code, patch)
+
+
+TABLE = [
+    # ---- run: config groups and keys
+    row("run", ["estimator=foo"], ["'foo'", "ipso"]),
+    row("run", ["scenario=nope"], ["'nope'", "ding2024_exp1"]),
+    row("run", ["scenario="], ["scenario=''"]),
+    row("run", ["estimator="], ["estimator=''"]),
+    row("run", ["scenario.nosie=2"], ["scenario.nosie", "'nosie'", "noise", "n_readings"]),  # a typo names the keys
+    row("run", ["scenario.search.offsett=[0,1]"], ["offsett", "offdiag"]),
+    row("run", ["estimator.n_particle=3"], ["n_particle", "n_particles"]),
+    row("run", ["sed=3"], ["sed", "seed"]),
+    row("run", ["objective=bogus"], ["'bogus'", "scalar"]),
+    row("run", ["+foo=1"], ["foo"]),
+    row("run", ["=3"], ["=3"]),
+    # the simulation command has no calibration keys
+    row("run", ["task=calibrate"], ["task=calibrate", "magexp calibrate"]),
+    row("run", ["task=bogus"], ["task=bogus", "magexp calibrate"]),
+    row("run", ["data.path=mine.txt", "data.unit=uT", "estimator=lm"], ["data.path", "magexp calibrate"]),
+    row("run", ["out=scratch/"], ["out=scratch/", "magexp calibrate"]),
+    # ---- run: values
+    row("run", ["scenario.noise=-1"], ["-1", ">= 0"]),
+    row("run", ["scenario.noise=nan"], ["nan"]),
+    row("run", ["scenario.noise=inf"], ["inf"]),
+    row("run", ["scenario.noise=abc"], ["scenario.noise=abc"]),
+    row("run", ["scenario.noise=true"], ["scenario.noise"]),
+    row("run", ["scenario.noise=1e300"], ["1e+300", "1e+15"]),
+    row("run", ["scenario.noise=${nosuch}"], ["scenario.noise=${nosuch}", "interpolation"]),
+    row("run", ["scenario.noise=${oc.env:HOME}"], ["scenario.noise=${oc.env:HOME}", "interpolation"]),
+    row("run", ["seed=${oc.env:HOME}"], ["seed=${oc.env:HOME}", "interpolation"]),
+    row("run", ["scenario.noise_kind=pink"], ["'pink'"]),
+    row("run", ["scenario.field.total=-51500"], ["scenario.field.total=-51500", "> 0"]),
+    row("run", ["scenario.field.total=0"], ["scenario.field.total=0", "> 0"]),
+    row("run", ["scenario.field.inclination=1000"], ["inclination=1000", "[-90, 90]"]),
+    row("run", ["scenario.field.inclination=-91"], ["inclination=-91", "[-90, 90]"]),
+    row("run", ["scenario.field.declination=1000"], ["declination=1000", "[-180, 360]"]),
+    row("run", ["scenario.errors.hard_iron=[1e308,0,0]"], ["hard_iron", "1e+308", "1e+15"]),
+    row("run", ["scenario.errors.bias=[0,0,inf]"], ["bias", "inf"]),
+    row("run", ["scenario.errors.soft_iron=[[0,0,0],[0,0,0],[0,0,1e300]]"], ["soft_iron", "1e+300"]),
+    row("run", ["write_history=maybe"], ["write_history='maybe'", "true or false"]),
+    row("run", ["write_history=2"], ["write_history=2", "true or false"]),
+    row("run", ["scenario.search.offset=[-1e300,1e300]"], ["search.offset", "1e+15"]),
+    row("run", ["scenario.search.diag=[2,1]"], ["search.diag", "low < high"]),
+    row("run", ["scenario.search.offset=[0,inf]"], ["search.offset"]),
+    row("run", ["estimator.n_particles=0"], ["n_particles=0", ">= 1"]),
+    row("run", ["estimator.n_particles=-3"], ["n_particles=-3"]),
+    row("run", ["estimator.n_iterations=0"], ["n_iterations=0"]),
+    row("run", ["estimator.n_iterations=abc"], ["n_iterations='abc'", "integer"]),
+    row("run", ["estimator.n_particles=2.5"], ["2.5"]),
+    row("run", ["estimator.velocity_clamp=-0.1"], ["velocity_clamp=-0.1"]),
+    row("run", ["estimator.init.form=weird"], ["'weird'", "printed"]),
+    row("run", ["scenario.n_readings=0"], ["n_readings=0"]),
+    row("run", ["scenario.n_readings=-5"], ["n_readings=-5"]),
+    row("run", ["scenario.n_readings=100000000"], ["n_readings=100000000", "GiB"]),  # refused up front: memory
+    row("run", ["scenario.n_readings=1e8"], ["n_readings=100000000", "GiB"]),
+    row("run", ["scenario.n_readings=1.5"], ["n_readings=1.5", "an integer"]),
+    row("run", ["estimator=lm", "scenario.n_readings=5"], ["n_readings=5", "12 parameters"]),
+    row("run", ["estimator=ellipsoid", "scenario.n_readings=11"], ["n_readings=11"]),
+    row("run", ["scenario=yuan2018_mode1", "estimator=lm", "scenario.n_readings=3"], ["n_readings=3"]),
+    row("run", ["scenario=yan2022_sim", "estimator=kf", "estimator.sigma2=0"], ["sigma2=0", "> 0"]),
+    row("run", ["scenario=yan2022_sim", "estimator=kf", "estimator.sigma2=-5"], ["sigma2=-5"]),
+    row("run", ["seed=-1"], ["seed=-1"]),
+    row("run", ["seed=abc"], ["abc"]),
+    row("run", ["seed=1.5"], ["seed=1.5"]),
+    # ---- run: recordings read by a scenario
+    row("run", [*MOCKUP, "scenario.path=missing.csv"], ["missing.csv", "does not exist"]),
+    row("run", [*MOCKUP, "scenario.path=a_folder"], ["a_folder", "is a directory"]),
+    row("run", [*MOCKUP, "scenario.path=binary.csv"], ["binary.csv", "not UTF-8"]),
+    row("run", [*MOCKUP, "scenario.path=environ"], ["environ", "not a text file"]),
+    row("run", [*MOCKUP, "scenario.path=huge.csv"], ["1e308", "1e+15"]),
+    row("run", [*MOCKUP, "scenario.path=missing_column.csv"], ["bz"]),
+    row("run", [*MOCKUP, "scenario.path=text.csv"], ["abc"]),
+    row("run", [*MOCKUP, "scenario.path=nan.csv"], ["nan"]),
+    row("run", [*MOCKUP, "scenario.path=unit.csv"], ["furlong"]),
+    row("run", [*MOCKUP, "scenario.path=row_length.csv"], ["row_length.csv"]),
+    row("run", [*MOCKUP, "scenario.path=no_angles.csv"], ["heading"]),
+    # ---- run: output folders, checked before any computation
+    row("run", ["hydra.run.dir=a_file"], ["a_file", "is a file"]),
+    row("run", ["hydra.run.dir=a_file/run"], ["a_file", "is a file"]),
+    row("run", ["hydra.run.dir=/proc/magexp-run"], ["/proc/magexp-run", "not writable"]),
+    row("run", ["hydra.run.dir=/"], ["hydra.run.dir='/'", "root folder"]),
+    row("run", ["hydra.run.dir="], ["hydra.run.dir=''", "name a folder"]),
+    row("run", [f"hydra.run.dir={R('myrun')}"], ["myrun", "inside results/"]),
+    row("run", [f"hydra.run.dir={R()}"], ["inside results/"]),
+    row("run", [f"hydra.run.dir={R('yan2022')}"], ["yan2022", "inside results/"]),
+    row("run", [f"hydra.run.dir={R('..', 'results', 'x')}"], ["inside results/"]),
+    row("run", ["hydra.run.dir=results_link/x"], ["results_link/x", "inside results/"]),  # a link into results/
+    row("run", ["hydra.run.dir=results/myrun"], ["results/myrun", "inside results/"]),
+    row("run", ["estimator=ellipsoid", "hydra.run.dir=results"], ["inside results/"]),
+    # ---- run: the command line itself
+    row("run", ["--bogus"], ["'--bogus'"]),
+    row("run", ["--cfg", "foo"], ["--cfg", "'foo'", "job"]),
+    row("run", ["--cfg"], ["--cfg needs a value"]),
+    row("run", ["--config-name", "nosuch"], ["--config-name", "'nosuch'", "config"]),
+    row("run", ["-cn", "nosuch"], ["'nosuch'"]),
+    row("run", ["--config-dir", "no_such_dir"], ["no_such_dir"]),
+    row("run", ["--cfg", "job", "scenario.nosie=1"], ["'nosie'"]),
+    row("run", ["scenario.noise=1,2"], ["needs -m"]),
+    row("run", ["hydra.job.chdir=true"], ["hydra.job.chdir"]),
+    row("run", ["scenario.noise=[1"], ["could not parse"]),
+    # ---- sweeps: every value checked before the first job (and no multirun folder)
+    row("sweep", ["-m", "estimator=pso,bogus"], ["'bogus'"]),
+    row("sweep", ["-m", "scenario.noise=2,-1", "seed=range(3)"], ["scenario.noise=-1"]),
+    row("sweep", ["-m", "scenario.noise=1,2", "seed=0,1,-4"], ["seed=-4"]),
+    row("sweep", ["-m", "estimator=lm,ellipsoid", "scenario.n_readings=300,6"], ["n_readings=6"]),
+    row("sweep", ["-m", "seed=range(2)", "scenario.nosie=1,2"], ["'nosie'"]),
+    row("sweep", ["-m", "scenario.field.inclination=0,1000"], ["inclination=1000"]),
+    row("sweep", ["-m", "scenario.noise=1,${nosuch}"], ["${nosuch}", "interpolation"]),
+    row("sweep", ["-m", "write_history=true,maybe"], ["write_history='maybe'"]),
+    row("sweep", ["-m", "estimator=glob(zzz*)"], ["estimator=glob(zzz*)", "no job", "ipso"]),
+    row("sweep", ["-m", "seed=range(0,0)"], ["seed=range(0,0)", "no job"]),
+    row("sweep", ["-m", "hydra/launcher=nope", "seed=1,2"], ["'nope'", "joblib"]),
+    row("sweep", ["-m", "hydra.launcher.foo=1", "seed=1,2"], ["hydra.launcher.foo"]),
+    row("sweep", ["-m", "hydra.launcher.jobs=abc", "seed=1,2"], ["hydra.launcher.jobs", "abc"]),
+    row("sweep", ["-m", "hydra.launcher.jobs=-2", "seed=1,2"], ["hydra.launcher.jobs", "-2"]),
+    row("sweep", ["-m", "hydra.launcher.executor=nope", "seed=1,2"], ["hydra.launcher.executor", "'nope'", "dask"]),
+    row("sweep", ["-m", "hydra.launcher.scheduler=slurm", "seed=1,2"], ["hydra.launcher.scheduler", "executor=dask"]),
+    row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=localhost", "seed=1,2"], ["'localhost'", "PORT"]),
+    row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1", "seed=1,2"], ["'tcp://node1'", "PORT"]),
+    row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1:99999", "seed=1,2"], ["99999", "PORT"]),
+    row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://127.0.0.1:1", "seed=1,2"], ["no Dask scheduler"],
+        patch=[("magexp.sweep._quiet_dask", lambda: None), ("magexp.executor.DaskExecutor.__init__", no_scheduler)]),
+    row("sweep", ["-m", "estimator=ellipsoid", "seed=1,2"], ["interrupted"], code=130,
+        patch=[("magexp.executor.run_many", interrupt)]),
+    row("sweep", ["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
+    row("sweep", ["-m", "hydra.sweep.dir=", "seed=1,2"], ["hydra.sweep.dir=''", "name a folder"]),
+    row("sweep", ["-m", "hydra.sweep.dir=/", "seed=1,2"], ["'/'", "root folder"]),
+    row("sweep", ["-m", f"hydra.sweep.dir={R('mysweep')}", "seed=1,2"], ["mysweep", "inside results/"]),
+    row("sweep", ["-m", f"hydra.sweep.dir={R()}", "seed=1,2"], ["inside results/"]),
+    row("sweep", ["-m", "hydra.sweep.dir=results_link/s", "seed=1,2"], ["inside results/"]),
+    row("sweep", ["-m", "hydra.sweep.dir=results/mysweep", "seed=1,2"], ["results/mysweep", "inside results/"]),
+    row("sweep", ["-m", "hydra.sweep.subdir=../../../escaped_${hydra.job.num}", "seed=1,2"],
+        ["hydra.sweep.subdir", "'..'"]),
+    row("sweep", ["-m", "hydra.sweep.subdir=/tmp/escaped_${hydra.job.num}", "seed=1,2"], ["hydra.sweep.subdir"]),
+    row("sweep", ["-m", "hydra.sweep.subdir=", "seed=1,2"], ["hydra.sweep.subdir=''"]),
+    row("sweep", ["-m", "hydra.sweep.subdir=same", "seed=1,2", "hydra.launcher.jobs=1"],
+        ["hydra.sweep.subdir='same'", "share a folder"]),
+    row("sweep", ["-m", "hydra.sweep.subdir=${hydra.job.override_dirname}", "scenario.name=../../../up,x",
+                  "hydra.launcher.jobs=1"], ["hydra.sweep.subdir", "inside the sweep's folder"]),
+    # ---- calibrate
+    row("calibrate", [], ["data.path=None", "data.path=<recording file>"]),
+    row("calibrate", ["mine.csv"], ["'mine.csv'", "KEY=VALUE"]),
+    row("calibrate", ["data.path=missing.csv", "data.unit=nT"], ["missing.csv"]),
+    row("calibrate", ["data.path="], ["data.path"]),
+    row("calibrate", ["data.path=a_folder"], ["a_folder", "directory"]),
+    row("calibrate", ["data.path=missing_column.csv"], ["bz"]),
+    row("calibrate", ["data.path=text.csv"], ["abc"]),
+    row("calibrate", ["data.path=nan.csv"], ["nan"]),
+    row("calibrate", ["data.path=short.csv", "estimator=lm"], ["3"]),
+    row("calibrate", ["data.path=unit.csv"], ["furlong"]),
+    row("calibrate", ["data.path=row_length.csv"], ["row_length.csv"]),
+    row("calibrate", ["data.path=binary.csv"], ["binary.csv", "not UTF-8"]),
+    row("calibrate", ["data.path=environ"], ["environ", "not a text file"]),
+    row("calibrate", ["data.path=secret.txt"], ["secret.txt", "magexp-recording v1"]),
+    row("calibrate", ["data.path=wrong_version.csv"], ["wrong_version.csv", "magexp-recording v1"]),
+    row("calibrate", ["data.path=empty.csv"], ["empty.csv"]),
+    row("calibrate", ["data.path=header_only.csv"], ["header_only.csv"]),
+    row("calibrate", ["data.path=dup_column.csv"], ["bx"]),
+    row("calibrate", ["data.path=bad_field.csv"], ["field"]),
+    row("calibrate", ["data.path=neg_reference.csv"], ["reference_total"]),
+    row("calibrate", ["data.path=plain.txt"], ["data.unit=None", "give data.unit"]),
+    row("calibrate", ["data.path=plain.txt", "data.unit=furlong"], ["'furlong'", "uT"]),
+    row("calibrate", ["data.path=good.csv", "data.unit=uT"], ["data.unit='uT'", "nT"]),
+    row("calibrate", ["data.path=plain.txt", "data.unit=µT", "data.format=nope"], ["data.format='nope'"]),
+    row("calibrate", ["data.path=good.csv", "data.mag_axes=q,r,s"], ["mag_axes"]),
+    row("calibrate", ["data.path=good.csv", "data.reference_total=abc"], ["reference_total='abc'", "> 0"]),
+    row("calibrate", ["data.path=good.csv", "data.reference_total=-1"], ["reference_total=-1", "> 0"]),
+    row("calibrate", ["data.path=good.csv", "data.reference_total=1e308"], ["reference_total=1e+308", "1e+15"]),
+    row("calibrate", ["data.path=good.csv", "folds=abc"], ["folds='abc'", "integer >= 0"]),
+    row("calibrate", ["data.path=good.csv", "folds=-1"], ["folds=-1", "integer >= 0"]),
+    row("calibrate", ["data.path=good.csv", "folds=2.5"], ["folds=2.5", "integer >= 0"]),
+    row("calibrate", ["data.path=good.csv", "folds=${nosuch}"], ["folds=${nosuch}", "interpolation"]),
+    row("calibrate", ["data.path=${oc.env:HOME}"], ["data.path=${oc.env:HOME}", "interpolation"]),
+    row("calibrate", ["data.path=good.csv", "seed=-1"], ["seed=-1"]),
+    row("calibrate", ["data.path=good.csv", "seed=abc"], ["seed='abc'"]),
+    row("calibrate", ["data.path=good.csv", "objective=nope"], ["objective='nope'", "scalar"]),
+    row("calibrate", ["data.path=good.csv", "objective=vector"], ["'vector'", "choose one of"]),
+    row("calibrate", ["data.path=good.csv", "model=nope"], ["model='nope'", "full"]),
+    row("calibrate", ["data.path=good.csv", "estimator=nope"], ["nope", "ellipsoid"]),
+    row("calibrate", ["data.path=good.csv", "estimator=kf"], ["estimator='kf'", "ellipsoid"]),
+    row("calibrate", ["data.path=good.csv", "estimator=ipso", "estimator.n_particles=0"], ["n_particles=0"]),
+    row("calibrate", ["data.path=good.csv", "foo=1"], ["foo"]),
+    row("calibrate", ["data.path=good.csv", "igrf.latitude=100", "igrf.longitude=0", "igrf.date=2020-01-01"],
+        ["latitude"]),
+    row("calibrate", ["data.path=good.csv", "igrf.latitude=10", "igrf.longitude=0", "igrf.date=someday"],
+        ["someday"]),
+    row("calibrate", ["data.path=good.csv", "out=a_file"], ["a_file"]),
+    row("calibrate", ["data.path=good.csv", "out=a_file/sub"], ["a_file"]),
+    row("calibrate", ["data.path=good.csv", "out=taken"], ["taken", "already holds"]),
+    row("calibrate", ["data.path=good.csv", f"out={R('mine')}"], ["results/"]),
+    row("calibrate", ["data.path=good.csv", f"out={R()}"], ["results/"]),
+    row("calibrate", ["data.path=good.csv", "out=/"], ["out='/'", "root folder"]),
+    row("calibrate", ["data.path=good.csv", "out="], ["out=''", "name a folder"]),
+    row("calibrate", ["data.path=good.csv", "out=results_link/c"], ["results/"]),
+    row("calibrate", ["data.path=good.csv", "out=results/calibration"], ["results/"]),
+    # ---- reproduce
+    row("reproduce", ["nopaper"], ["'nopaper'", "ding2024"]),
+    row("reproduce", [], ["paper"]),
+    row("reproduce", ["ding2024", "--bogus"], ["--bogus"]),
+    row("reproduce", ["ding2024", "--jobs", "-1"], ["--jobs -1"]),
+    row("reproduce", ["ding2024", "--jobs", "abc"], ["--jobs", "'abc'"]),
+    row("reproduce", ["ding2024", "--jobs", "1.5"], ["--jobs", "'1.5'"]),
+    row("reproduce", ["ding2024", "--seeds", "0", "--out", "res"], ["--seeds 0"]),
+    row("reproduce", ["ding2024", "--seeds", "-3", "--out", "res"], ["--seeds -3"]),
+    row("reproduce", ["ding2024", "--seeds", "abc", "--out", "res"], ["--seeds", "'abc'"]),
+    row("reproduce", ["ding2024", "--only"], ["--only"]),
+    row("reproduce", ["ding2024", "--only", "nothing"], ["'nothing'"]),
+    row("reproduce", ["ding2024", "--executor", "nope"], ["--executor 'nope'", "dask"]),
+    row("reproduce", ["ding2024", "--scheduler", "tcp://h:1"], ["--scheduler", "needs --executor dask"]),
+    row("reproduce", ["ding2024", "--executor", "dask", "--scheduler", "localhost"], ["'localhost'", "PORT"]),
+    row("reproduce", ["ding2024", "--only", "ding2024_fig3", "--out", "a_file"], ["a_file", "is a file"]),
+    row("reproduce", ["ding2024", "--only", "ding2024_fig3", "--out", "/proc/magexp-results"],
+        ["/proc/magexp-results", "not writable"]),
+    row("reproduce", ["all", "--out", "a_file/results"], ["a_file", "is a file"]),
+    row("reproduce", ["ding2024", "--tiny"], ["--tiny", "results/"]),
+    row("reproduce", ["ding2024", "--seeds", "2"], ["--seeds", "results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", R("yan2022")],
+        ["--out", "yan2022", "inside results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--seeds", "2", "--out", R("explore")],
+        ["explore", "inside results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--out", R("yan2022")], ["yan2022", "inside results/"]),
+    row("reproduce", ["yan2022", "--redraw", "--out", R("yan2022")], ["yan2022", "inside results/"]),
+    row("reproduce", ["yan2022", "--tiny", "--out", R("..", "results")], ["--tiny", "results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "results/yan2022"],
+        ["results/yan2022", "inside results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--seeds", "2", "--out", "results/explore"],
+        ["results/explore", "inside results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--seeds", "2", "--out", "results"], ["--seeds", "results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "results_link"], ["--tiny", "results/"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "/"], ["'/'", "root folder"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", ""], ["--out=''", "name a folder"]),
+    row("reproduce", ["yan2022", "--redraw", "--out", "fresh"], ["--redraw", "does not exist"]),
+    row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "fresh"], ["interrupted"], code=130,
+        patch=[("magexp.executor.run_many", interrupt)]),
+    # ---- the Python API
+    row("api", api(readings=np.ones((20, 3)) + 1j), ["complex"]),
+    row("api", api(readings=np.ma.masked_array(np.ones((20, 3)), mask=np.zeros((20, 3)))), ["masked"]),
+    row("api", api(readings=[["a", "b", "c"]] * 20), ["readings", "number"]),
+    row("api", api(readings=[[None, 1, 2]] * 20), ["readings", "finite"]),
+    row("api", api(readings=[[1, 2, 3], [1, 2]]), ["readings"]),
+    row("api", api(readings=object()), ["readings"]),
+    row("api", api(readings=np.ones(20)), ["shape (20,)"]),
+    row("api", api(readings=np.ones((20, 2))), ["shape (20, 2)"]),
+    row("api", api(readings=np.full((20, 3), np.nan)), ["NaN"]),
+    row("api", api(readings=np.full((20, 3), 1e308)), ["1e+15"]),
+    row("api", api(readings=np.ones((5, 3))), ["5 readings", "at least 12"]),
+    row("api", api(readings=GOOD3), ["readings"]),  # identical readings: degenerate
+    row("api", api(unit=None), ["unit=None"]),
+    row("api", api(unit="furlong"), ["'furlong'", "uT"]),
+    row("api", api(estimator="nope"), ["estimator='nope'", "ellipsoid"]),
+    row("api", api(estimator=42), ["estimator=42", "ellipsoid"]),
+    row("api", api(estimator="kf"), ["estimator='kf'"]),
+    row("api", api(estimator="lm", nosuch_option=1), ["nosuch_option", "max_nfev"]),
+    row("api", api(estimator="ipso", n_particles=0), ["n_particles=0"]),
+    row("api", api(objective="nope"), ["objective='nope'", "scalar"]),
+    row("api", api(objective="vector"), ["'vector'", "choose one of"]),
+    row("api", api(model="nope"), ["model='nope'", "full"]),
+    row("api", api(folds=-1), ["folds=-1", "integer >= 0"]),
+    row("api", api(folds=2.5), ["folds=2.5", "integer >= 0"]),
+    row("api", api(folds="abc"), ["folds='abc'", "integer >= 0"]),
+    row("api", api(seed=-1), ["seed=-1"]),
+    row("api", api(seed="abc"), ["seed='abc'"]),
+    row("api", api(seed=1.5), ["seed=1.5"]),
+    row("api", api(reference_total=-1), ["reference_total=-1", "> 0"]),
+    row("api", api(reference_total="abc"), ["reference_total='abc'"]),
+    row("api", api(reference_total=1e308), ["reference_total=1e+308", "1e+15"]),
+    row("api", api(readings="missing.csv"), ["missing.csv", "does not exist"]),
+    row("api", api(readings="environ"), ["environ", "not a text file"]),
+    row("api", api(readings="secret.txt"), ["secret.txt"]),
+    row("api", load("binary.csv"), ["binary.csv", "not UTF-8"]),
+    row("api", load("plain.txt", unit="µ"), ["unit='µ'"]),
+    row("api", load("good.csv", format="nope"), ["data.format='nope'"]),
 ]
 
-REPRODUCE_CASES = [
-    (["nopaper"], ["'nopaper'", "ding2024"]),
-    (["ding2024", "--jobs", "-1"], ["--jobs -1"]),
-    (["ding2024", "--only", "nothing"], ["'nothing'"]),
-    (["ding2024", "--only", "ding2024_fig3", "--out", "a_file"], ["a_file", "is a file"]),
-    (["ding2024", "--only", "ding2024_fig3", "--out", "/proc/magexp-results"], ["/proc/magexp-results", "not writable"]),
-    (["all", "--out", "a_file/results"], ["a_file", "is a file"]),
-]
+CATEGORIES = ("clean", "not one line", "wrote something", "wrong result")
 
 
-def snapshot(folder):
-    return {p: p.stat().st_mtime_ns for p in folder.rglob("*")} if folder.exists() else {}
+def case_id(case) -> str:
+    entry, args, *_ = case
+    if entry == "api":
+        return f"api-{TABLE.index(case)}"
+    return f"{entry}: " + " ".join(map(str, args)).replace(str(RESULTS), "<results>")
+
+
+def make_workdir(folder: Path) -> Path:
+    """The working folder of a case: the input files, a file, a folder, an output folder that holds
+    a calibration already, and a link into ``results/``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in FILES.items():
+        (folder / name).write_text(text)
+    (folder / "binary.csv").write_bytes(BINARY)
+    (folder / "environ").write_bytes(ENVIRON)
+    (folder / "a_file").write_text("not a folder\n")
+    (folder / "a_folder").mkdir()
+    (folder / "taken").mkdir()
+    (folder / "taken" / "calibration.json").write_text("{}\n")
+    (folder / "results_link").symlink_to(RESULTS, target_is_directory=True)
+    (folder / "results").symlink_to(RESULTS, target_is_directory=True)  # the commands of issue 19, as typed
+    return folder
+
+
+def snapshot(*folders) -> dict:
+    """Every file and folder under ``folders`` (links not followed) with its size and time."""
+    seen = {}
+    for folder in folders:
+        folder = Path(folder)
+        if not folder.exists():
+            continue
+        for top, dirs, files in os.walk(folder):
+            for name in dirs + files:
+                path = Path(top, name)
+                st = path.lstat()
+                seen[str(path)] = (st.st_size, st.st_mtime_ns)
+    seen["/"] = tuple(sorted(os.listdir("/")))
+    return seen
+
+
+def attempt(entry, args):
+    """Run one case; returns ``(code, message)``: an exit code, or for the API the exception's
+    name (``MagexpError``) and message, ``0`` when it returned."""
+    from magexp.__main__ import main as magexp_main
+    from magexp.reproduce import main as reproduce_main
+
+    try:
+        if entry == "api":
+            args()
+            return 0, ""
+        if entry == "reproduce":
+            return reproduce_main(list(args)), ""
+        magexp_main(["calibrate", *args] if entry == "calibrate" else list(args))
+        return 0, ""
+    except SystemExit as exc:
+        return (exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 1), ""
+    except Exception as exc:  # noqa: BLE001 (an API error, or a command line that raised)
+        return type(exc).__name__, str(exc)
+
+
+def outcome(case, watched, capsys, monkeypatch) -> tuple[str, str]:
+    """``(category, what happened)`` of one case (:data:`CATEGORIES`); ``watched``: the folders
+    whose tree must not change."""
+    entry, args, words, code, patch = case
+    before = snapshot(*watched)
+    capsys.readouterr()
+    with monkeypatch.context() as m, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for target, replacement in patch or ():
+            m.setattr(target, replacement)
+        got, message = attempt(entry, args)
+    out, err = capsys.readouterr()
+    after = snapshot(*watched)
+    if entry == "api":
+        lines = [ln for ln in message.splitlines() if ln.strip()] + [str(w.message) for w in caught]
+        expected = "MagexpError"
+    else:
+        lines = [ln for ln in err.splitlines() if ln.strip()] + [str(w.message) for w in caught]
+        expected = code
+    text = "\n".join(lines)
+    changed = sorted(set(before.items()) ^ set(after.items()))
+    if any(p.startswith(str(RESULTS)) for p, _ in changed):
+        changed.insert(0, ("results/ changed", None))
+    if got == 0:
+        wrote = f", wrote {[p for p, _ in changed][:3]}" if changed else ""
+        return "wrong result", f"accepted (exit 0){wrote}{': ' + text if text else ''}"
+    if changed:
+        return "wrote something", f"{got}: changed {[p for p, _ in changed][:3]}; {text[:200]}"
+    if got != expected or len(lines) != 1 or "Traceback" in out + err or "error: unexpected" in text:
+        return "not one line", f"{got}, {len(lines)} lines: {text[:300]}"
+    if any(w not in lines[0] for w in words) or "swordfish" in out + err + message:
+        return "not one line", f"{got}: the line lacks {[w for w in words if w not in lines[0]]}: {lines[0]}"
+    return "clean", lines[0]
 
 
 @pytest.fixture
 def workdir(tmp_path, monkeypatch):
-    tmp_path = tmp_path / "work"  # beside the test's own run cache (tmp_path/cache)
-    tmp_path.mkdir()
-    for name, text in FILES.items():
-        (tmp_path / name).write_text(text)
-    (tmp_path / "binary.csv").write_bytes(BINARY)
-    (tmp_path / "a_file").write_text("not a folder\n")
-    (tmp_path / "a_folder").mkdir()
-    monkeypatch.chdir(tmp_path)
-    return tmp_path
-
-
-@pytest.fixture(scope="module", autouse=True)
-def results_untouched():
-    before = snapshot(RESULTS)
-    yield
-    assert snapshot(RESULTS) == before, "a bad input wrote into results/"
-
-
-def one_line_failure(call, capsys, words):
-    with pytest.raises(SystemExit) as info:
-        call()
-    assert info.value.code not in (0, None)
-    out, err = capsys.readouterr()
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert len(lines) == 1, err
-    assert "Traceback" not in out + err and "unexpected" not in err, err
-    for w in words:
-        assert w in lines[0], (w, lines[0])
+    folder = make_workdir(tmp_path / "work")  # beside the test's own run cache (tmp_path/cache)
+    monkeypatch.chdir(folder)
+    return folder
 
 
 def test_table_has_every_case():
-    assert len(CASES) + len(REPRODUCE_CASES) >= 60
+    assert len(TABLE) >= 150
+    assert {entry for entry, *_ in TABLE} == {"run", "sweep", "calibrate", "reproduce", "api"}
 
 
-@pytest.mark.parametrize("args, words", CASES, ids=[" ".join(a) for a, _ in CASES])
-def test_bad_run_input(workdir, capsys, args, words):
-    before = snapshot(workdir)
-    one_line_failure(lambda: magexp_main(args), capsys, words)
-    assert snapshot(workdir) == before, "a bad input wrote into the working folder"
+@pytest.mark.parametrize("case", TABLE, ids=[case_id(c) for c in TABLE])
+def test_bad_input(case, workdir, tmp_path, capsys, monkeypatch):
+    category, detail = outcome(case, [workdir, RESULTS], capsys, monkeypatch)
+    if os.environ.get("MAGEXP_TABLE_LOG"):  # tools/bad_input_table.py counts the outcomes
+        with open(os.environ["MAGEXP_TABLE_LOG"], "a") as fh:
+            fh.write("\t".join([category, case_id(case), detail.replace("\n", " ")]) + "\n")
+    assert category == "clean", detail
 
 
-@pytest.mark.parametrize("args, words", REPRODUCE_CASES, ids=[" ".join(a) for a, _ in REPRODUCE_CASES])
-def test_bad_reproduce_input(workdir, capsys, args, words):
-    from magexp.reproduce import main as reproduce_main
+# ---------------------------------------------------------------------------------------------
+# what is not a bad input, and what must still hold beside the table
 
-    before = snapshot(workdir)
-    args = args if "--out" in args else [*args, "--out", str(workdir / "res")]
+def test_a_typo_writes_no_composed_config(workdir, cli, tmp_path, monkeypatch):
+    """The composed-config cache is written only once a command's overrides pass (a cold cache here)."""
+    from magexp import config, paths
 
-    def call():
-        raise SystemExit(reproduce_main(args))
+    for name in ("_SKELETONS", "_NODES"):
+        monkeypatch.setattr(config, name, {})
+    monkeypatch.setattr(config, "_SEEN", set())
+    proc = cli("scenario=ding2024_exp2", "scenario.nosie=2")
+    assert proc.returncode == 2 and not paths.composed_configs().exists(), proc.stderr
+    proc = cli("--cfg", "job", "scenario=ding2024_exp2", "scenario.noise=3")
+    assert proc.returncode == 0 and len(list(paths.composed_configs().glob("*.pkl"))) == 1
 
-    one_line_failure(call, capsys, words)
-    assert snapshot(workdir) == before
 
-
-def test_missing_launcher_extra_names_the_pip_install(workdir, capsys, monkeypatch):
+def test_missing_launcher_extra_names_the_pip_install(workdir, cli, monkeypatch):
     import importlib.util
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",
                         lambda name, *a: None if "submitit" in name else real(name, *a))
-    one_line_failure(lambda: magexp_main(["-m", "hydra/launcher=slurm", "seed=1,2"]), capsys,
-                     ["hydra/launcher=slurm", "pip install 'magexp[cluster]'"])
-    assert not (workdir / "multirun").exists()
+    proc = cli("-m", "hydra/launcher=slurm", "seed=1,2")
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert "pip install 'magexp[cluster]'" in proc.stderr and not (workdir / "multirun").exists()
 
 
-def test_ctrl_c_is_one_line_and_leaves_no_folder(workdir, capsys, monkeypatch):
-    def interrupted(cfg):
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr("magexp.runner.run", interrupted)
+def test_ctrl_c_of_a_run_leaves_no_folder(workdir, cli, monkeypatch):
+    monkeypatch.setattr("magexp.runner.run", interrupt)
     before = snapshot(workdir)
-    one_line_failure(lambda: magexp_main(["estimator=ellipsoid"]), capsys, ["interrupted"])
-    assert snapshot(workdir) == before  # the run's folder (and outputs/<date>/) removed again
-    one_line_failure(lambda: magexp_main(["estimator=ellipsoid", "hydra.run.dir=mine/run"]), capsys, ["interrupted"])
-    assert snapshot(workdir) == before  # a named folder made for the run, too
+    for args in (["estimator=ellipsoid"], ["estimator=ellipsoid", "hydra.run.dir=mine/run"]):
+        proc = cli(*args)
+        assert proc.returncode == 130 and proc.stderr.count("\n") == 1 and "interrupted" in proc.stderr
+        assert snapshot(workdir) == before  # the run's folder (and outputs/<date>/, mine/) removed again
 
 
-def test_unexpected_error_is_still_one_line(workdir, capsys, monkeypatch):
+def test_a_failed_sweep_keeps_what_its_existing_folder_held(workdir, cli, monkeypatch):
+    (workdir / "mine").mkdir()
+    (workdir / "mine" / "notes.txt").write_text("mine\n")
+    monkeypatch.setattr("magexp.executor.run_many", interrupt)
+    proc = cli("-m", "estimator=ellipsoid", "seed=1,2", "hydra.sweep.dir=mine")
+    assert proc.returncode == 130
+    assert sorted(p.name for p in (workdir / "mine").iterdir()) == ["notes.txt"]  # multirun.yaml removed, notes kept
+
+
+def test_unexpected_error_is_still_one_line(workdir, cli, monkeypatch):
     def broken(cfg):
         raise RuntimeError("a bug\nsecond line")
 
     monkeypatch.setattr("magexp.runner.run", broken)
-    with pytest.raises(SystemExit) as info:
-        magexp_main(["estimator=ellipsoid"])
-    assert info.value.code == 3
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "RuntimeError: a bug" in err and "MAGEXP_DEBUG" in err
+    proc = cli("estimator=ellipsoid")
+    assert proc.returncode == 3 and proc.stderr.count("\n") == 1
+    assert "RuntimeError: a bug" in proc.stderr and "MAGEXP_DEBUG" in proc.stderr
 
 
-def test_utf8_byte_order_mark_is_accepted(workdir, capsys):
-    good = MOCKUP_HEADER + ROWS
-    (workdir / "bom.csv").write_bytes(b"\xef\xbb\xbf" + good.encode())
-    magexp_main([*MOCKUP, "scenario.path=bom.csv", f"hydra.run.dir={workdir / 'run'}"])
+def test_utf8_byte_order_mark_is_accepted(workdir, cli):
+    (workdir / "bom.csv").write_bytes(b"\xef\xbb\xbf" + (MOCKUP_HEADER + ROWS).encode())
+    proc = cli(*MOCKUP, "scenario.path=bom.csv", f"hydra.run.dir={workdir / 'run'}")
+    assert proc.returncode == 0, proc.stderr
     assert "fit_rms" in (workdir / "run" / "metrics.csv").read_text()
+    (workdir / "bom.txt").write_bytes(b"\xef\xbb\xbf" + PLAIN.encode())  # plain numbers, with a BOM
+    from magexp.calibration import compose
+    from magexp.recordings import load_recording
+
+    rec = load_recording("bom.txt", unit=compose(["data.unit=µT"]).data.unit)  # µT: the alias of uT
+    assert rec.unit == "uT" and rec.readings.shape == (60, 3) and rec.meta["format"] == "plain 3 columns"
+
+
+def test_valid_edges_are_accepted(workdir, cli):
+    """The guards refuse only what they name: a folder beside results/ whose name starts the same,
+    an inclination of exactly 90 degrees, folds=0 and a sweep sub-folder with no '..'."""
+    beside = RESULTS.parent / f"{RESULTS.name}_not_inside"
+    from magexp.guard import check_destination
+
+    assert check_destination(beside, "--out") == beside.resolve()
+    assert check_destination(RESULTS, "--out", canonical=True) == RESULTS.resolve()
+    proc = cli("estimator=ellipsoid", "scenario.field.inclination=90", "write_history=false", "hydra.run.dir=r")
+    assert proc.returncode == 0, proc.stderr
+    assert not (workdir / "r" / "history.csv").exists()
+    proc = cli("-m", "estimator=ellipsoid", "seed=1,2", "hydra.sweep.dir=s", "hydra.sweep.subdir=job_${hydra.job.num}",
+               "hydra.launcher.jobs=1")
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(p.name for p in (workdir / "s").iterdir() if p.is_dir()) == ["job_0", "job_1"]
+
+
+@pytest.mark.parametrize("args", [
+    ["-m", "magexp", "calibrate", "data.path=good.csv", "folds=abc"],
+    ["-m", "magexp.reproduce", "ding2024", "--jobs", "abc"],
+], ids=lambda a: " ".join(a[1:]))
+def test_bad_input_in_a_process(workdir, args):
+    """The process boundary: the same one line, exit 2, from a real ``python -m ...``."""
+    proc = subprocess.run([sys.executable, *args], cwd=workdir, capture_output=True, text=True,
+                          env={**os.environ, "MAGEXP_CACHE": str(workdir.parent / "cache")})
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and proc.stderr.startswith("error: "), proc.stderr
