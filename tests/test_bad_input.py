@@ -506,7 +506,7 @@ def test_a_typo_writes_no_composed_config(workdir, cli, tmp_path, monkeypatch):
     proc = cli("scenario=ding2024_exp2", "scenario.nosie=2")
     assert proc.returncode == 2 and not paths.composed_configs().exists(), proc.stderr
     proc = cli("--cfg", "job", "scenario=ding2024_exp2", "scenario.noise=3")
-    assert proc.returncode == 0 and len(list(paths.composed_configs().glob("*.pkl"))) == 1
+    assert proc.returncode == 0 and len(list(paths.composed_configs().glob("*.json"))) == 1
 
 
 def test_missing_launcher_extra_names_the_pip_install(workdir, cli, monkeypatch):
