@@ -78,9 +78,15 @@ class Claim:
     value: float | None = None
     cells: list = field(default_factory=list)
     better: str = "lower"
+    # the issue-18 schema (ISSUE18_INTERFACE.md), read here and implemented by the claims engine
+    section: str = ""
+    role: str = "finding"
+    figure: str = ""
+    test: str = "auto"
 
     def __post_init__(self):
         checks = [("kind", self.kind, KINDS), ("by", self.by, ("magexp", "paper")), ("stat", self.stat, tuple(STATS)),
+                  ("role", self.role, ("finding", "sanity")), ("test", self.test, ("auto", "fisher", "paired", "intervals")),
                   ("op", self.op, tuple(OPS)), ("better", self.better, ("lower", "higher"))]
         for key, value, allowed in checks:
             if value not in allowed:
