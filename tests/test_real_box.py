@@ -1,6 +1,8 @@
 """The search box of a recording comes from the data and holds the optimum, axis flips included;
 success and intervals without a truth (magexp.scenarios.search, magexp.artifacts.BEST, magexp.quality)."""
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -101,3 +103,36 @@ def test_block_bootstrap_interval_holds_the_spread_and_widens_with_noise():
     nlo, nhi = block_bootstrap_spread(noisy)
     assert hi < nlo  # separated: a winner can be named
     assert all(np.isnan(block_bootstrap_spread(calm[:5])))
+
+
+def _recording_frame():
+    from magexp.plots.real import ESTIMATE_PANELS, RUN_QUANTITIES
+
+    rows = []
+    for k, est in enumerate(["lm", "rdpso"]):
+        head = {"label": est, "estimator": est, "scenario": "real_x", "n_seeds": 2, "n_success": 2 - k,
+                "success_rate": 1 - k / 2}
+        for seed in range(2):
+            for q in RUN_QUANTITIES:
+                rows.append({**head, "row": "run", "quantity": q, "seed": seed, "value": 1.0 + k * seed * 20,
+                             "se": np.nan, "succeeded": float(not (k and seed))})
+        for _, names in ESTIMATE_PANELS:
+            for j, name in enumerate(names):
+                rows.append({**head, "row": "estimate", "quantity": name, "seed": np.nan, "value": 0.1 * j - k,
+                             "se": [0.01, np.inf][j % 2], "succeeded": np.nan})
+    return pd.DataFrame(rows)
+
+
+def test_recording_figure_draws_every_panel_without_a_truth():
+    from magexp.plots import kind_module
+    from magexp.spec import parse
+
+    spec = parse({"title": "t", "kind": "recording", "plot": {"metric": "fg"},
+                  "success": {"metric": "fg", "reference": "best"}}, Path("real_x.yaml"))
+    fig = kind_module("recording").draw(_recording_frame(), spec)
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(shown) == 6 and all(ax.lines or ax.collections for ax in shown)
+    texts = " ".join(ax.get_title() + ax.get_ylabel() for ax in shown)
+    assert "truth" not in texts and "F_g" in texts
+    ticks = [t.get_text() for t in shown[0].get_xticklabels()]
+    assert ticks == ["lm\n2/2 ok", "rdpso\n1/2 ok"]  # the success count under each estimator

@@ -69,14 +69,16 @@ def canonical_sign(names: list[str], x: np.ndarray) -> np.ndarray:
 
 def _hue_labels(runs) -> list[str]:
     """One readable label per cell: the estimator where one recording is fitted, the recording where
-    one estimator is, both otherwise."""
+    one estimator is, both otherwise; an estimator setting the cell sets (e.g. its boundary rule) in
+    brackets."""
     firsts = runs.table.drop_duplicates("cell").sort_values("cell")
     one_scenario, one_estimator = firsts.scenario.nunique() == 1, firsts.estimator.nunique() == 1
     out = []
-    for _, r in firsts.iterrows():
+    for (_, r), cell in zip(firsts.iterrows(), runs.cells):
         parts = ([] if one_scenario else [short_name(r.scenario)]) + ([] if one_estimator and not one_scenario
                                                                         else [r.estimator])
-        out.append(", ".join(parts))
+        own = [str(v) for k, v in cell.items() if k.startswith("estimator.")]
+        out.append(", ".join(parts) + (f" ({', '.join(own)})" if own else ""))
     return out
 
 
@@ -152,7 +154,8 @@ def _estimates(ax, frame: pd.DataFrame, title: str, names: list[str], labels: li
             ax.legend(loc="best", fontsize=7)
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xticks(np.arange(len(names)), names, fontsize=7)
-    ax.set_title(f"{title}: median, bar ± 1 SE", fontsize=8)
+    ax.set_xlim(-0.6, len(names) - 0.4)
+    ax.set_title(f"{title}\nmedian over the successful seeds, bar ± 1 SE", fontsize=8)
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
