@@ -54,12 +54,24 @@ def cells(spec) -> list[dict[str, str]]:
     return [{**dict(str(o).split("=", 1) for o in case), **cell} for case in cases for cell in product]
 
 
+#: ``success.reference`` of data without a truth (recordings): the lowest ``success.metric`` that any
+#: run of the artifact reached on the same scenario and objective (the best optimum found by any method)
+BEST = "best"
+
+
+def best_of(table: pd.DataFrame, metric: str) -> pd.Series:
+    """Per run, the lowest ``metric`` over the runs of the same scenario and objective."""
+    return table[metric].astype(float).groupby([table.scenario, table.objective]).transform("min")
+
+
 def succeeded(table: pd.DataFrame, success) -> pd.Series:
     """Per run: ``metric <= factor * reference + floor`` (:class:`magexp.spec.Success`); NaN where the
-    reference (the true calibration's value) is unknown."""
-    if success.metric not in table or success.reference not in table:
+    reference (the true calibration's value) is unknown. ``reference: best`` (:data:`BEST`): the lowest
+    value of ``metric`` over the artifact's runs of the same scenario and objective."""
+    if success.metric not in table or (success.reference not in table and success.reference != BEST):
         return pd.Series(np.nan, index=table.index)
-    metric, ref = table[success.metric].astype(float), table[success.reference].astype(float)
+    metric = table[success.metric].astype(float)
+    ref = best_of(table, success.metric) if success.reference == BEST else table[success.reference].astype(float)
     ok = (metric <= success.factor * ref + success.floor).astype(float)  # a diverged (NaN) metric fails
     return ok.where(ref.notna())
 
@@ -243,7 +255,10 @@ def collect(plan: ArtifactPlan, outputs) -> ArtifactRuns:
         at_face = offset_at_face(table, plan.configs)
         if at_face is not None:
             table["offset_at_face"] = at_face
-        table["succeeded"] = succeeded(table, plan.spec.success)
+        success = plan.spec.success
+        if success is not None and success.reference == BEST and success.metric in table:
+            table[f"best_{success.metric}"] = best_of(table, success.metric)  # for claims: metric / best_metric
+        table["succeeded"] = succeeded(table, success)
     return ArtifactRuns(spec=plan.spec, cells=plan.cells, table=table,
                         outputs=_ByRun(plan.index, outputs), overrides=plan.overrides)
 

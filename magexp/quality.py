@@ -204,5 +204,30 @@ def recording_metrics(problem, theta) -> dict:
     out = {"spread_before": spread_of(extra["all_readings"]), "spread_after": spread_of(calibrated),
            "coverage_cells": coverage(calibrated)["coverage_cells"]}  # ~0: the fit collapsed the directions
     if len(extra.get("heldout", ())):
-        out["heldout_spread"] = spread_of(problem.calibrate(theta, extra["heldout"]))
+        mags = np.linalg.norm(problem.calibrate(theta, extra["heldout"]), axis=1)
+        out["heldout_spread"] = spread(mags)
+        out["heldout_spread_lo"], out["heldout_spread_hi"] = block_bootstrap_spread(mags)
     return out
+
+
+#: contiguous blocks and resamples of :func:`block_bootstrap_spread`
+SPREAD_BLOCKS, SPREAD_RESAMPLES = 20, 1000
+
+
+def block_bootstrap_spread(magnitudes, level: float = 0.95) -> tuple[float, float]:
+    """Percentile interval of :func:`spread` under a block bootstrap: the magnitudes, in time order,
+    are cut into :data:`SPREAD_BLOCKS` contiguous blocks (consecutive readings are correlated, so
+    single readings are not resampled) and the blocks drawn with replacement :data:`SPREAD_RESAMPLES`
+    times, from a fixed generator (the interval describes the data, it is the same on every run;
+    as :func:`magexp.claims.ci`). NaN for fewer readings than blocks."""
+    mags = np.asarray(magnitudes, float)
+    if mags.size < SPREAD_BLOCKS:
+        return float("nan"), float("nan")
+    blocks = np.array_split(mags, SPREAD_BLOCKS)
+    sums = np.array([[b.size, b.sum(), (b * b).sum()] for b in blocks])
+    draw = np.random.default_rng(0).integers(0, SPREAD_BLOCKS, size=(SPREAD_RESAMPLES, SPREAD_BLOCKS))
+    n, s1, s2 = sums[draw].sum(axis=1).T  # each resample's count, sum and sum of squares
+    mean = s1 / n
+    boot = np.sqrt(np.maximum(s2 / n - mean**2, 0.0)) / mean
+    a = (1 - level) / 2
+    return float(np.quantile(boot, a)), float(np.quantile(boot, 1 - a))

@@ -421,14 +421,19 @@ def _artifact_table(spec, path: Path) -> str:
     if not len(frame) or not cols:
         return ""
     text = markdown_table(frame, cols, tex=path.with_name(f"{spec.name}_table.tex"))
-    if "case" in frame and "bound_ratio_hi" in frame:
-        best = winners(frame)
+    by = "bound_ratio" if "bound_ratio_hi" in frame and frame.bound_ratio_hi.notna().any() else spec.plot.get("metric")
+    if "case" in frame and by and f"{by}_hi" in frame:  # recordings: no bound, the held-out spread
+        simulated = by == "bound_ratio"
+        what = "RMS offset error / sqrt(tr CRB)" if simulated else str(by).replace("_", " ")
+        among = "" if simulated else "; among the estimators that succeed on at least half the runs"
+        ranked = frame if simulated else frame[frame.success_rate >= 0.5]
+        best = winners(ranked, by)
         if not len(best):
-            return text + "\nNo case has a winner: every case's estimators lack a bound ratio.\n"
-        text += ("\n**Winner per case** (lowest RMS offset error / sqrt(tr CRB); declared only where its 95 % CI "
-                 "lies below every other estimator's; else the estimators whose CIs overlap the best):\n\n"
-                 + markdown_table(best, ["case", "winner", "bound_ratio", "bound_ratio_lo", "bound_ratio_hi",
-                                         "success_rate", "tied"], tex=path.with_name(f"{spec.name}_winners.tex")))
+            return text + f"\nNo case has a winner: no estimator has an interval of its {what}{among}.\n"
+        text += (f"\n**Winner per case** (lowest {what}; declared only where its 95 % interval lies below every "
+                 f"other estimator's; else no winner, and the estimators whose intervals overlap the best{among}):\n\n"
+                 + markdown_table(best, ["case", "winner", by, f"{by}_lo", f"{by}_hi", "success_rate",
+                                         "tied"], tex=path.with_name(f"{spec.name}_winners.tex")))
     return text
 
 

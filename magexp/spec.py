@@ -70,6 +70,8 @@ PLOT_KEYS = {
     "heatmap": _COMMON | {"metric"},
     "speed": _COMMON | {"metric"},
     "tuning": _COMMON | {"metric", "label", "default"},
+    "recording": _COMMON | {"metric"},
+    "recording_spread": _COMMON | {"metric"},
 }
 #: old plot keys, still read: each becomes its canonical key at load
 _PLOT_ALIASES = {"value": "metric", "metrics": "metric"}

@@ -25,6 +25,8 @@ KINDS = {
     "estimates": "magexp.plots.estimates",  # table of fitted values per estimator vs truth (Yan & Zhou 2022)
     "sweep": "magexp.plots.final",  # the old name of `final` with several metrics (one kind)
     "tuning": "magexp.plots.tuning",  # settings of a method as a distribution beside its default
+    "recording": "magexp.plots.real",  # gyro-aided fits of a recording: objective, spread, estimates ± SE
+    "recording_spread": "magexp.plots.real_spread",  # every estimator on every recording: spread, held out
 }
 
 

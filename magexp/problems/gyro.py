@@ -142,7 +142,8 @@ class GyroAidedCalibration(CalibrationProblem):
         and ``gyro_bias_difference`` (deg/s, norm) from the estimate; the field direction (also as
         ``field_azimuth_deg``/``field_elevation_deg`` on their principal branches); the gyro bias;
         ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
-        Jacobian (:func:`magexp.quality.identifiability`)."""
+        Jacobian, and ``se_<parameter>``, each parameter's standard error from it (``inf`` where the data
+        leave it undetermined; :func:`magexp.quality.identifiability`)."""
         from magexp.quality import spread
 
         theta = np.asarray(theta, float)
@@ -164,6 +165,7 @@ class GyroAidedCalibration(CalibrationProblem):
         ident = identifiability(lambda t: self.residual_swarm(t).reshape(len(np.atleast_2d(t)), -1), theta,
                                 self.parameter_names())
         weakest = ident["weakest_combinations"][0]
+        out.update({f"se_{name}": v for name, v in ident["standard_errors"].items()})
         out.update({"condition_number": ident["condition_number"],
                     "weakest_relative_sv": weakest["relative_singular_value"],
                     "weakest_combination": weakest["combination"]})

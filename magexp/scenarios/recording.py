@@ -12,7 +12,10 @@ time ``window``, and gives the :class:`~magexp.dataset.Dataset` of one objective
 
 There is no truth: the reference total is the radius of the sphere fitted to the readings
 (:func:`magexp.scenarios.search.centroid_radius`), the search box comes from the data
-(:func:`magexp.scenarios.search.search_box`). A seed changes nothing in the data (a recording is
+(:func:`magexp.scenarios.search.search_box`): ``box: auto`` is ``aligned`` for the scalar objective
+and ``signed`` (Yuan 2018's widths about zero for ``S`` and about the sphere centre for ``b``) for the
+gyro-aided one, whose ``S`` holds the unknown rotation or axis flip between the magnetometer's and
+the gyroscope's axes. A seed changes nothing in the data (a recording is
 what it is); it seeds the estimator only.
 """
 
@@ -23,8 +26,13 @@ import numpy as np
 from magexp.dataset import Dataset
 from magexp.errors import MagexpError, check_positive_int
 from magexp.paths import SHARED_DATA
+from magexp.scenarios.search import BOXES, centroid_radius, search_box
 
 OBJECTIVES = ("scalar", "gyro")
+#: the box of ``box: auto`` per objective: the scalar objective leaves W's orientation
+#: free (the aligned box holds the symmetric member of the optimum's orbit); the gyro-aided one fixes
+#: it to the gyroscope's axes, which may be rotated or flipped against the magnetometer's
+AUTO_BOX = {"scalar": "aligned", "gyro": "signed"}
 
 
 class RecordingScenario:
@@ -40,11 +48,16 @@ class RecordingScenario:
     bias_bound_deg_s : half-width of the gyro-bias search interval (gyro).
     rest_file : a recording of the same gyroscope at rest (gyro): its mean rate, in the same axes,
         is reported beside the estimated bias (``gyro_bias_rest_*``, ``gyro_bias_difference``).
+    box : ``aligned``, ``signed`` or ``auto`` (:data:`AUTO_BOX`: ``signed`` for ``gyro``, ``aligned``
+        for ``scalar``); the shapes are those of :func:`magexp.scenarios.search.search_box`.
+    matrix_bound, offset_width : the widths of the ``signed`` box (Yuan 2018 Table 1: 3, and
+        100 mG of a 527 mG field, 0.19, relative to the radius of the readings' sphere).
     """
 
     def __init__(self, *, name: str, file: str, objective: str = "scalar", unit=None, format: str = "auto",
                  mag_axes=None, gyro_axes=None, window=None, n_readings=None, folds: int = 5,
-                 heldout_fold: int = 0, bias_bound_deg_s: float = 10.0, rest_file=None):
+                 heldout_fold: int = 0, bias_bound_deg_s: float = 10.0, rest_file=None, box: str = "auto",
+                 matrix_bound: float = 3.0, offset_width: float = 0.19):
         if objective not in OBJECTIVES:
             raise MagexpError(f"scenario.objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
         self.name, self.file, self.objective = name, file, objective
@@ -56,6 +69,10 @@ class RecordingScenario:
         self.heldout_fold = int(heldout_fold)
         if self.folds and not 0 <= self.heldout_fold < self.folds:
             raise MagexpError(f"scenario.heldout_fold={heldout_fold!r} is not allowed: choose 0 to {self.folds - 1}")
+        if box not in ("auto", *BOXES):
+            raise MagexpError(f"scenario.box={box!r} is not allowed: choose one of auto, {', '.join(BOXES)}")
+        self.box_options = {"shape": AUTO_BOX[objective] if box == "auto" else box,
+                            "matrix_bound": matrix_bound, "offset_width": offset_width}
         self.problem_options = {"bias_bound_deg_s": float(bias_bound_deg_s)} if objective == "gyro" else {}
         self._data = None
 
@@ -81,8 +98,6 @@ class RecordingScenario:
         return rec
 
     def _prepare(self):
-        from magexp.scenarios.search import centroid_radius, search_box
-
         rec = self.recording()
         n = rec.n
         heldout = np.zeros(n, bool)
@@ -104,7 +119,7 @@ class RecordingScenario:
             if self.rest_file:
                 rest = self.recording(self.rest_file).gyro_rates()
                 extra["rest_gyro_bias_deg_s"] = np.rad2deg(rest[1].mean(axis=0))
-        self.search = search_box(rec.readings[fit], radius, forward=True)
+        self.search = search_box(rec.readings[fit], radius, forward=True, **self.box_options)
         self._data = Dataset(readings=rec.readings[fit], reference_norm=np.full(len(fit), radius), unit=rec.unit,
                              meta={"scenario": self.name, "recording": rec.name}, extra=extra)
 

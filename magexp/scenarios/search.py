@@ -1,4 +1,26 @@
-"""The search box of the 12-parameter calibration problems."""
+"""The search box of the 12-parameter calibration problems.
+
+A box derived from a recording (:func:`search_box`) scales the matrix entries by ``s``, the ratio of
+the reference total to the radius ``R0`` of the sphere fitted to the readings (:func:`fit_sphere`).
+It has one of two shapes (:data:`BOXES`):
+
+* ``aligned``: diagonal in ``[0.5 s, 1.5 s]``, off-diagonal in ``[-0.5 s, 0.5 s]``, every offset
+  within the range of the readings. Right when the objective leaves the orientation of ``W`` free
+  (the scalar objective: ``|Q W (B - o)|`` is the same for every orthogonal ``Q``, and the orbit of
+  the optimum holds its symmetric positive-definite member, whose diagonal is positive), or when the
+  magnetometer's axes are known to match the reference's;
+* ``signed``: Yuan 2018's widths (Table 1: ``S`` in ``[-3, 3]``, ``b`` in ``[-100, 100]`` mG for a
+  field of 527 mG), taken relative to the data: every matrix entry in ``[-m s, m s]``
+  (``m = matrix_bound``, 3) and the offset within ``offset_width`` (0.19 = 100/527) times ``R0`` of the
+  closed-form sphere centre (one interval for the three axes: from the lowest centre coordinate
+  less the width to the highest plus it). Needed when the objective fixes the orientation and the
+  magnetometer's axes may point anywhere relative to the reference's (a gyro-aided fit: ``S`` holds
+  the rotation, and any axis flip, between the magnetometer's and the gyroscope's axes): a scaled
+  orthogonal matrix ``k Q`` has every entry in ``[-k, k]``, so the box holds every rotation and
+  reflection with scale errors up to ``m``, and both members of the pair ``(S, h)``, ``(-S, -h)``
+  that the gyro-aided objective cannot tell apart. The matrix part is centred on zero, not on an
+  estimate: the sign and rotation of ``S`` are what the swarm must find.
+"""
 
 from __future__ import annotations
 
@@ -73,15 +95,31 @@ def centroid_radius(readings: np.ndarray) -> float:
     return fit_sphere(readings)[1]
 
 
-def search_box(readings: np.ndarray, reference: float, *, forward: bool = False) -> SearchBox:
+#: shapes of a box from the data (module docstring)
+BOXES = ("aligned", "signed")
+
+
+def search_box(readings: np.ndarray, reference: float, *, forward: bool = False, shape: str = "aligned",
+               matrix_bound: float = 3.0, offset_width: float = 0.19) -> SearchBox:
     """The parameter box of swarm estimators, derived from the data (module docstring).
 
     ``forward``: the matrix parameters are ``S = W^-1`` (the vector problem's parameterisation,
-    which the ``ekf`` state uses), so their scale is ``1 / s``.
+    which the ``ekf`` state uses), so their scale is ``1 / s``. ``shape``: ``aligned`` or ``signed``;
+    ``matrix_bound`` (``m``) and ``offset_width`` (relative to ``R0``): the widths of ``signed``.
     """
+    if shape not in BOXES:
+        raise MagexpError(f"box={shape!r} is not allowed: choose one of {', '.join(BOXES)}")
+    for name, value, low, allowed in (("matrix_bound", matrix_bound, 1.0, "[1, "), ("offset_width", offset_width, 0.0, "(0, ")):
+        ok = isinstance(value, (int, float)) and np.isfinite(value) and value <= LARGEST
+        if not ok or value < low or (low == 0.0 and value == 0.0):
+            raise MagexpError(f"{name}={value!r} is not allowed: it must be a number in {allowed}{LARGEST:g}]")
+    centre, radius = fit_sphere(readings)
+    s = reference / (radius or 1.0)
+    s = 1.0 / s if forward else s
+    if shape == "signed":
+        m, w = float(matrix_bound) * s, float(offset_width) * radius
+        return SearchBox(diag=(-m, m), offdiag=(-m, m), offset=(float(centre.min()) - w, float(centre.max()) + w))
     lo, hi = float(readings.min()), float(readings.max())
     if hi <= lo:
         hi = lo + 1.0
-    s = reference / (centroid_radius(readings) or 1.0)
-    s = 1.0 / s if forward else s
     return SearchBox(diag=(0.5 * s, 1.5 * s), offdiag=(-0.5 * s, 0.5 * s), offset=(lo, hi))
