@@ -36,7 +36,9 @@ def test_signed_box_holds_flipped_axes_and_the_aligned_box_does_not():
     signed = search_box(readings, 0.5, forward=True, shape="signed")
     assert _inside(signed, truth) and _inside(signed, twin)
     assert not _inside(search_box(readings, 0.5, forward=True), truth)  # the old rule excludes the optimum
-    assert signed.offset[1] - signed.offset[0] < np.ptp(readings)  # centred on the sphere, narrower than the data
+    assert signed.offset == (readings.min(), readings.max())  # the offset as in aligned: the readings' range
+    narrow = search_box(readings, 0.5, forward=True, shape="signed", offset_width=0.19)
+    assert narrow.offset[1] - narrow.offset[0] < np.ptp(readings)  # offset_width: centred on the sphere, narrower
 
 
 @pytest.mark.parametrize("kwargs", [{"shape": "tilted"}, {"shape": "signed", "matrix_bound": 0.5},

@@ -50,14 +50,15 @@ class RecordingScenario:
         is reported beside the estimated bias (``gyro_bias_rest_*``, ``gyro_bias_difference``).
     box : ``aligned``, ``signed`` or ``auto`` (:data:`AUTO_BOX`: ``signed`` for ``gyro``, ``aligned``
         for ``scalar``); the shapes are those of :func:`magexp.scenarios.search.search_box`.
-    matrix_bound, offset_width : the widths of the ``signed`` box (Yuan 2018 Table 1: 3, and
-        100 mG of a 527 mG field, 0.19, relative to the radius of the readings' sphere).
+    matrix_bound, offset_width : the widths of the ``signed`` box (Yuan 2018 Table 1: 3; the offset
+        within the readings' range when ``offset_width`` is None, else within that fraction of the
+        readings' sphere radius of its centre, Yuan's 100 mG of 527 mG being 0.19).
     """
 
     def __init__(self, *, name: str, file: str, objective: str = "scalar", unit=None, format: str = "auto",
                  mag_axes=None, gyro_axes=None, window=None, n_readings=None, folds: int = 5,
                  heldout_fold: int = 0, bias_bound_deg_s: float = 10.0, rest_file=None, box: str = "auto",
-                 matrix_bound: float = 3.0, offset_width: float = 0.19):
+                 matrix_bound: float = 3.0, offset_width: float | None = None):
         if objective not in OBJECTIVES:
             raise MagexpError(f"scenario.objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
         self.name, self.file, self.objective = name, file, objective

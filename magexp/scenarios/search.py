@@ -9,11 +9,13 @@ It has one of two shapes (:data:`BOXES`):
   (the scalar objective: ``|Q W (B - o)|`` is the same for every orthogonal ``Q``, and the orbit of
   the optimum holds its symmetric positive-definite member, whose diagonal is positive), or when the
   magnetometer's axes are known to match the reference's;
-* ``signed``: Yuan 2018's widths (Table 1: ``S`` in ``[-3, 3]``, ``b`` in ``[-100, 100]`` mG for a
-  field of 527 mG), taken relative to the data: every matrix entry in ``[-m s, m s]``
-  (``m = matrix_bound``, 3) and the offset within ``offset_width`` (0.19 = 100/527) times ``R0`` of the
-  closed-form sphere centre (one interval for the three axes: from the lowest centre coordinate
-  less the width to the highest plus it). Needed when the objective fixes the orientation and the
+* ``signed``: Yuan 2018's matrix width (Table 1: ``S`` in ``[-3, 3]``), taken relative to the data:
+  every matrix entry in ``[-m s, m s]`` (``m = matrix_bound``, 3); the offset as in ``aligned``
+  (within the range of the readings: the box of every shape holds every offset the data allow), or,
+  with ``offset_width`` set, within ``offset_width`` times ``R0`` of the closed-form sphere centre
+  (one interval for the three axes; Yuan's own ``b`` in ``[-100, 100]`` mG of a 527 mG field is
+  0.19: on the HMC5883L full sphere that narrow box leaves the swarms stranded on the faces of
+  ``S``, 0 of 5 RDPSO seeds within 1.1x the best F_g, measured 2026-11-24). Needed when the objective fixes the orientation and the
   magnetometer's axes may point anywhere relative to the reference's (a gyro-aided fit: ``S`` holds
   the rotation, and any axis flip, between the magnetometer's and the gyroscope's axes): a scaled
   orthogonal matrix ``k Q`` has every entry in ``[-k, k]``, so the box holds every rotation and
@@ -100,26 +102,31 @@ BOXES = ("aligned", "signed")
 
 
 def search_box(readings: np.ndarray, reference: float, *, forward: bool = False, shape: str = "aligned",
-               matrix_bound: float = 3.0, offset_width: float = 0.19) -> SearchBox:
+               matrix_bound: float = 3.0, offset_width: float | None = None) -> SearchBox:
     """The parameter box of swarm estimators, derived from the data (module docstring).
 
     ``forward``: the matrix parameters are ``S = W^-1`` (the vector problem's parameterisation,
     which the ``ekf`` state uses), so their scale is ``1 / s``. ``shape``: ``aligned`` or ``signed``;
-    ``matrix_bound`` (``m``) and ``offset_width`` (relative to ``R0``): the widths of ``signed``.
+    ``matrix_bound`` (``m``) and ``offset_width`` (relative to ``R0``; None: the readings' range):
+    the widths of ``signed``.
     """
     if shape not in BOXES:
         raise MagexpError(f"box={shape!r} is not allowed: choose one of {', '.join(BOXES)}")
-    for name, value, low, allowed in (("matrix_bound", matrix_bound, 1.0, "[1, "), ("offset_width", offset_width, 0.0, "(0, ")):
+    widths = [("matrix_bound", matrix_bound, 1.0, "[1, ")] + ([] if offset_width is None else [("offset_width", offset_width, 0.0, "(0, ")])
+    for name, value, low, allowed in widths:
         ok = isinstance(value, (int, float)) and np.isfinite(value) and value <= LARGEST
         if not ok or value < low or (low == 0.0 and value == 0.0):
             raise MagexpError(f"{name}={value!r} is not allowed: it must be a number in {allowed}{LARGEST:g}]")
     centre, radius = fit_sphere(readings)
     s = reference / (radius or 1.0)
     s = 1.0 / s if forward else s
-    if shape == "signed":
-        m, w = float(matrix_bound) * s, float(offset_width) * radius
-        return SearchBox(diag=(-m, m), offdiag=(-m, m), offset=(float(centre.min()) - w, float(centre.max()) + w))
     lo, hi = float(readings.min()), float(readings.max())
     if hi <= lo:
         hi = lo + 1.0
+    if shape == "signed":
+        m = float(matrix_bound) * s
+        if offset_width is not None:
+            w = float(offset_width) * radius
+            lo, hi = float(centre.min()) - w, float(centre.max()) + w
+        return SearchBox(diag=(-m, m), offdiag=(-m, m), offset=(lo, hi))
     return SearchBox(diag=(0.5 * s, 1.5 * s), offdiag=(-0.5 * s, 0.5 * s), offset=(lo, hi))
