@@ -89,6 +89,26 @@ def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, ax
 
 
 
+#: attribute naming the data column a colour bar (and the image it belongs to) shows
+COLUMN_ATTR = "magexp_column"
+
+
+def drawn_from(image, column: str):
+    """Record on ``image`` the data column its cells were filled from; returns ``image``."""
+    setattr(image, COLUMN_ATTR, column)
+    return image
+
+
+def colorbar(image, ax, *, column: str, label: str, **kwargs):
+    """A colour bar of ``image`` labelled ``label``, recording the column it says it shows
+    (:data:`COLUMN_ATTR`): a check compares it with the label and with the column the image was
+    filled from (:func:`drawn_from`; :func:`magexp.plots.check.colorbar_mismatch`)."""
+    bar = ax.figure.colorbar(image, ax=ax, **kwargs)
+    setattr(bar, COLUMN_ATTR, column)
+    bar.set_label(label)
+    return bar
+
+
 def save(fig, path: Path) -> list[Path]:
     """Write the figure as a PNG and its vector twin (PDF), both without time stamps or
     producer strings, so the same figure gives the same bytes; return both paths."""
