@@ -51,11 +51,12 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             cells.append(_cell(row.iloc[0]) if len(row) else "")
         body.append(cells)
     tall = frame.n_seeds.max() > 1
-    fig, (ax,) = panels(1, width=1.2 + 1.7 * len(columns), height=0.6 + (0.42 if tall else 0.25) * len(quantities), axes=axes)
+    row_height = 0.42 if tall else 0.24  # inches: two lines (median, IQR) or one
+    fig, (ax,) = panels(1, width=1.2 + 1.7 * len(columns), height=0.5 + row_height * (len(quantities) + 1), axes=axes)
     ax.axis("off")
-    table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, loc="center", cellLoc="center")
+    # the table fills its axes (bbox), so the layout keeps the title clear of it
+    table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, cellLoc="center", bbox=[0, 0, 1, 1])
     table.auto_set_font_size(False)
     table.set_fontsize(7.5)
-    table.scale(1, 2.2 if tall else 1.3)
     fig.suptitle(spec.title, fontsize=9)
     return fig
