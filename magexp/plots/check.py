@@ -18,7 +18,6 @@ figure of every artifact, drawn from its committed CSV.
 
 from __future__ import annotations
 
-import itertools
 import re
 
 import numpy as np
@@ -43,15 +42,22 @@ def _finite(values) -> bool:
     return a.size > 0 and bool(np.isfinite(a).any())
 
 
+def _both_finite(x, y) -> bool:
+    """Whether some point ``(x_i, y_i)`` has both coordinates finite."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    return x.shape == y.shape and x.size > 0 and bool((np.isfinite(x) & np.isfinite(y)).any())
+
+
 def _draws_data(artist, ax: Axes) -> bool:
     """Whether ``artist`` shows data (not a reference line spanning the axes)."""
     if not artist.get_visible():
         return False
     if isinstance(artist, Line2D):
-        if artist.get_transform() != ax.transData and not hasattr(ax, "get_zlim"):
-            return False  # axhline / axvline: in axes coordinates along one direction
+        spans = (ax.get_xaxis_transform(which="grid"), ax.get_yaxis_transform(which="grid"))
+        if any(artist.get_transform() is t for t in spans):
+            return False  # axhline / axvline: a reference across the axes, not data
         x, y = artist.get_data()
-        return _finite(x) and _finite(y) and np.isfinite(np.asarray(x, float) * np.asarray(y, float)).any()
+        return _both_finite(x, y)
     if isinstance(artist, Collection):
         offsets = artist.get_offsets()
         if len(offsets) and np.isfinite(np.asarray(offsets, float)).all(axis=-1).any() and len(offsets) > 1:
@@ -161,8 +167,14 @@ def overlapping_text(fig) -> list[str]:
     fig.draw_without_rendering()
     renderer = fig.canvas.get_renderer()
     items = _texts(fig, renderer)
+    if len(items) < 2:
+        return []
+    corners = np.stack([c for _, _, c in items])  # (n, 4, 2)
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    near = ((np.minimum(hi[:, None], hi[None]) - np.maximum(lo[:, None], lo[None])) > OVERLAP_PX).all(axis=2)
     found = []
-    for (na, oa, a), (nb, ob, b) in itertools.combinations(items, 2):
+    for i, j in zip(*np.nonzero(np.triu(near, 1))):  # the extents meet: test the (rotated) shapes
+        (na, oa, a), (nb, ob, b) = items[i], items[j]
         if oa is not ob and _overlap(a, b):
             found.append(f"{na} overlaps {nb}")
     return found
@@ -206,7 +218,7 @@ def _has_data(artist) -> bool:
         return any(_has_data(a) for a in artist if a is not None and not isinstance(a, tuple))
     if isinstance(artist, Line2D):
         x, y = artist.get_data()
-        return bool(np.isfinite(np.asarray(x, float) * np.asarray(y, float)).any()) if len(x) else False
+        return _both_finite(x, y)
     if isinstance(artist, Collection):
         return len(artist.get_offsets()) > 0 or any(len(p.vertices) for p in artist.get_paths())
     return True

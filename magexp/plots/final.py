@@ -203,7 +203,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             if spec.plot.get("ylog", True):
                 ax.set_yscale("log")
             ax.set_xlabel(label(spec, x_key))
-            ax.set_ylabel(ylabels.get(metric, default_ylabel if len(metrics) == 1 else metric))
+            ax.set_ylabel(ylabels.get(metric, default_ylabel if len(metrics) == 1 else metric.replace("_", " ")))
             if pv is not None:
                 ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))
     unique = {}
