@@ -62,7 +62,9 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             line = sub if hv is None else sub[sub[hue_key] == hv]
             lab = line.estimator.iloc[0] if hue_key in (None, "estimator") else label(spec, hue_key, hv)
             ok = int(line.succeeded.iloc[0]) if "succeeded" in line else -1
-            if ok >= 0:
+            if ok >= 0 and len(panel_vals) == 1:  # one panel: the counts in the legend
+                lab += f" ({ok}/{line.n_seeds.iloc[0]} ok)"
+            elif ok >= 0:  # several: in each panel's title (the legend is shared)
                 counts.append(f"{lab} {ok}/{line.n_seeds.iloc[0]}")
             floor_pos = line[["median", "q25", "q75"]].clip(lower=1e-14)
             (ln,) = ax.plot(line.iteration, floor_pos["median"], lw=1.2, label=lab, color=colours[hv])
