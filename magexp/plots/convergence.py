@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.plots.style import group_values, label, panels, plt
+from magexp.plots.style import group_values, label, panels, plt, shared_legend
 
 
 def _stack(histories: list[np.ndarray]) -> np.ndarray:
@@ -88,14 +88,6 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         head = "" if pv is None else label(spec, panel_key, pv)
         ok = f"succeeded: {', '.join(counts)}" if counts else ""
         ax.set_title("\n".join(t for t in (head, ok) if t), fontsize=9)
-    unique = {}
-    for ax in axes:
-        for handle, name in zip(*ax.get_legend_handles_labels()):
-            unique.setdefault(name, handle)
-    constrained = type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine"
-    if constrained:
-        fig.legend(unique.values(), unique.keys(), loc="outside lower center", ncols=min(3, len(unique)))
-    else:
-        axes[0].legend(unique.values(), unique.keys(), loc="upper right")
+    shared_legend(fig, axes, ncols=3)
     fig.suptitle(spec.title, fontsize=10)
     return fig

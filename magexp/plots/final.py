@@ -23,7 +23,7 @@ import pandas as pd
 
 from magexp.artifacts import quantiles
 from magexp.claims import matches
-from magexp.plots.style import group_values, label, panels, plt
+from magexp.plots.style import group_values, label, legend_entries, panels, plt, shared_legend
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
 
@@ -206,14 +206,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             ax.set_ylabel(ylabels.get(metric, default_ylabel if len(metrics) == 1 else metric.replace("_", " ")))
             if pv is not None:
                 ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))
-    unique = {}
-    for ax in axes:  # one legend: every entry once (markers of later panels included)
-        for handle, name in zip(*ax.get_legend_handles_labels()):
-            unique.setdefault(name, handle)
-    constrained = type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine"
-    if constrained and (len(axes) > 1 or len(unique) > 6):
-        fig.legend(unique.values(), unique.keys(), loc="outside lower center", ncols=min(4, len(unique)))
-    else:
-        axes[0].legend(unique.values(), unique.keys())
+    entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
+    shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)
     fig.suptitle(spec.title, fontsize=10)
     return fig

@@ -11,7 +11,7 @@ import pandas as pd
 
 from magexp.artifacts import quantiles
 from magexp.plots.style import label as key_label
-from magexp.plots.style import panels
+from magexp.plots.style import panels, shared_legend
 from magexp.summary import cell_settings, parameter_values, reported_value
 
 
@@ -119,12 +119,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         ax.set_ylabel("estimate - truth")
     if fit:
         _fit_panel(axes[2], frame, labels, colours)
-    handles, texts = axes[0].get_legend_handles_labels()
-    constrained = type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine"
-    if constrained:
-        fig.legend(handles, texts, loc="outside lower center", ncols=min(4, len(texts)), fontsize=7)
-    else:
-        axes[0].legend(loc="best", fontsize=7)
+    shared_legend(fig, axes[:1], fontsize=7)
     axes[1].set_title("open: paper's value - truth", fontsize=8)
     fig.suptitle(spec.title, fontsize=10)
     return fig

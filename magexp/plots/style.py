@@ -89,6 +89,28 @@ def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, ax
 
 
 
+def legend_entries(axes) -> dict:
+    """``{label: handle}`` of every labelled artist of ``axes``, each label once (first seen)."""
+    unique = {}
+    for ax in axes:
+        for handle, name in zip(*ax.get_legend_handles_labels()):
+            unique.setdefault(name, handle)
+    return unique
+
+
+def shared_legend(fig, axes, entries: dict | None = None, *, ncols: int = 4, inside: bool = False, **kwargs):
+    """One legend for the panels ``axes``: below them, outside, where the figure has constrained
+    layout (its own figures) and not ``inside``; else in the first panel (a caller's axes).
+    ``entries``: ``{label: handle}`` (default: :func:`legend_entries`); nothing is drawn without any."""
+    entries = legend_entries(axes) if entries is None else entries
+    if not entries:
+        return None
+    if not inside and type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine":
+        return fig.legend(entries.values(), entries.keys(), loc="outside lower center",
+                          ncols=min(ncols, len(entries)), **kwargs)
+    return axes[0].legend(entries.values(), entries.keys(), **kwargs)
+
+
 #: attribute naming the data column a colour bar (and the image it belongs to) shows
 COLUMN_ATTR = "magexp_column"
 

@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts import quantiles
-from magexp.plots.style import panels, plt
+from magexp.plots.style import legend_entries, panels, plt, shared_legend
 
 #: families with at most this many settings show each setting by name (else best / median / worst)
 FEW = 4
@@ -134,17 +134,9 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         top.set_title(sc, fontsize=9)
         bottom.set_ylim(0, 1.05)
         bottom.set_ylabel("success rate")
-    unique = {}
-    for ax in axes:
-        for handle, name in zip(*ax.get_legend_handles_labels()):
-            unique.setdefault(name, handle)
+    entries = legend_entries(axes)
     if few and frame.default.any():
-        unique["star: default"] = plt.Line2D([], [], ls="", marker="*", color="0.3", ms=9)
-    constrained = type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine"
-    if unique:
-        if constrained:
-            fig.legend(unique.values(), unique.keys(), loc="outside lower center", ncols=min(3, len(unique)), fontsize=7)
-        else:
-            axes[0].legend(unique.values(), unique.keys(), fontsize=7)
+        entries["star: default"] = plt.Line2D([], [], ls="", marker="*", color="0.3", ms=9)
+    shared_legend(fig, axes, entries, ncols=3, fontsize=7)
     fig.suptitle(spec.title, fontsize=10)
     return fig
