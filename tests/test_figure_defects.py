@@ -140,3 +140,17 @@ def test_final_draws_the_papers_values_and_ratios():
     assert sorted(float(ln.get_ydata()[0]) for ln in diamonds) == [8.35, 14.4]
     assert ratio.get_ylabel() == "improvement ratio" and defects(fig) == []
     plt.close(fig)
+
+
+def test_a_calibration_figure_shows_a_successful_run_and_says_so():
+    from types import SimpleNamespace
+
+    from magexp.plots.field import shown_seed
+
+    table = pd.DataFrame({"cell": [0, 0, 0, 1, 1], "seed": [0, 1, 2, 0, 1],
+                          "succeeded": [0.0, 1.0, 1.0, 0.0, 0.0]})
+    runs = SimpleNamespace(table=table, outputs={(c, s): None for c, s in zip(table.cell, table.seed)})
+    assert shown_seed(runs, 0) == (1, "succeeded")  # seed 0 failed: not shown as "a calibration"
+    assert shown_seed(runs, 1) == (0, "failed")  # none succeeded: the first, named as failed
+    runs.table = table.assign(succeeded=np.nan)
+    assert shown_seed(runs, 0) == (0, "not judged")
