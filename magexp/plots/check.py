@@ -5,6 +5,7 @@
 * :func:`overlapping_text`: two texts printed over each other (suptitle, titles, axis labels,
   tick labels, legends as a whole, annotations, colour-bar labels, tables), measured by the
   renderer's window extents.
+* :func:`overflowing_cells`: a table cell whose text runs out of the cell.
 * :func:`raw_legends`: a legend entry made of raw override strings (``window=null``).
 * :func:`legend_defects`: a legend entry whose series is not drawn, or two entries that look
   the same (one colour, marker and line style for two series).
@@ -76,6 +77,23 @@ def _draws_data(artist, ax: Axes) -> bool:
 
 def _is_colorbar(ax: Axes) -> bool:
     return getattr(ax, "_colorbar", None) is not None
+
+
+def overflowing_cells(fig) -> list[str]:
+    """Table cells whose text is wider or taller than the cell (it runs into its neighbours);
+    call after a layout pass (:func:`overlapping_text` makes one)."""
+    renderer = fig.canvas.get_renderer()
+    found = []
+    for ax in fig.axes:
+        for table in ax.tables:
+            for (row, col), cell in table.get_celld().items():
+                text = cell.get_text()
+                if not text.get_text().strip():
+                    continue
+                inner, box = text.get_window_extent(renderer), cell.get_window_extent(renderer)
+                if inner.width > box.width + OVERLAP_PX or inner.height > box.height + OVERLAP_PX:
+                    found.append(f"table cell ({row}, {col}) {text.get_text()[:20]!r} does not fit its cell")
+    return found
 
 
 def empty_axes(fig) -> list[str]:
@@ -268,5 +286,5 @@ def legend_defects(fig) -> list[str]:
 
 def defects(fig) -> list[str]:
     """Every defect of ``fig`` found by the checks of this module."""
-    return (overlapping_text(fig) + empty_axes(fig) + colorbar_mismatch(fig) + raw_legends(fig)
-            + legend_defects(fig))
+    return (overlapping_text(fig) + overflowing_cells(fig) + empty_axes(fig) + colorbar_mismatch(fig)
+            + raw_legends(fig) + legend_defects(fig))

@@ -23,7 +23,7 @@ import pandas as pd
 
 from magexp.artifacts import quantiles
 from magexp.claims import matches
-from magexp.plots.style import group_values, label, legend_entries, panels, plt, shared_legend
+from magexp.plots.style import group_values, label, legend_entries, panels, paper_values, plt, shared_legend
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
 
@@ -93,12 +93,6 @@ def _colours(frame, hue_key) -> dict:
     return {hv: cycle[k % len(cycle)] for k, hv in enumerate(group_values(frame, hue_key))}
 
 
-def quantities_of(spec, metric: str) -> set[str]:
-    """The summary quantities computed from ``metric`` (a ratio's quantity is its own)."""
-    names = {s.quantity for s in spec.summarise if getattr(s, "metric", None) == metric and s.quantity}
-    return names | {r.quantity for r in spec.ratios if r.quantity == metric}
-
-
 def _spread(x, k: int, n: int, scale: str) -> np.ndarray:
     """Lines side by side: a few per cent apart (in ratio on log-like axes, in the range on linear)."""
     offset = k - (n - 1) / 2
@@ -139,8 +133,7 @@ def _lines(ax, sub, spec, x_key, hue_key, colours):
 def _paper(ax, spec, placed, metric, colours):
     """The paper's values of the quantities summarised from ``metric``: an open diamond at the cell
     (in its line's colour) whose settings the ``reported:`` entry matches."""
-    names = quantities_of(spec, metric)
-    for entry in (e for e in spec.reported if e.quantity in names):
+    for entry in paper_values(spec, metric):
         for hv, (line, x) in placed.items():
             for xi, (_, row) in zip(x, line.iterrows()):
                 if matches(dict(entry.match), row.to_dict()):
@@ -167,7 +160,7 @@ def _references(ax, sub, spec, x_key, metric):
     targets = dict(spec.plot.get("targets", {}) or {})
     if metric in targets:
         ax.axhline(float(targets[metric]), color="k", ls="--", lw=0.9, label="paper's stated level")
-    if metric in {r.quantity for r in spec.ratios}:
+    if metric in {r.quantity for r in spec.get("ratios", [])}:
         ax.axhline(1.0, color="0.3", ls="-", lw=0.8, label="ratio 1 (equal)")
 
 
@@ -177,7 +170,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         keys = list(hue_key)
         frame = frame.assign(_hue=frame[keys].astype(str).agg(" / ".join, axis=1))
         hue_key = "_hue"
-    metrics = metric_list(spec) + [r.quantity for r in spec.ratios if (frame.get("metric") == r.quantity).any()]
+    metrics = metric_list(spec) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
     columns = group_values(frame, panel_key)
     ylabels = dict(spec.plot.get("ylabels", {}) or {})
     colours = _colours(frame, hue_key)

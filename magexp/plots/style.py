@@ -89,6 +89,19 @@ def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, ax
 
 
 
+def quantities_of(spec, metric: str) -> set[str]:
+    """The summary quantities computed from the runs column ``metric`` (a ratio's quantity is its
+    own): the ``reported:`` entries of these are the paper's values of what a figure draws."""
+    names = {s.quantity for s in spec.get("summarise", []) if getattr(s, "metric", None) == metric and s.quantity}
+    return names | {r.quantity for r in spec.get("ratios", []) if r.quantity == metric}
+
+
+def paper_values(spec, metric: str) -> list:
+    """The artifact's ``reported:`` entries of ``metric`` (by name, or by a quantity summarised from it)."""
+    names = quantities_of(spec, metric) | {metric}
+    return [e for e in spec.get("reported", []) if e.quantity in names]
+
+
 def legend_entries(axes) -> dict:
     """``{label: handle}`` of every labelled artist of ``axes``, each label once (first seen)."""
     unique = {}
