@@ -2,8 +2,9 @@
 
 Rows are the run's ``parameter_names`` followed by ``plot.rows`` (extra metrics, e.g. ``fit_rms``);
 columns are ``truth`` (if the runs know it) and one per cell (its estimator, median over seeds,
-with the interquartile range when there are several seeds). The CSV is long: one row per
-(quantity, cell). The figure renders the table.
+with the interquartile range when there are several seeds), and ``paper states``: the artifact's
+``reported:`` values of the row (with the estimator they are stated for). The CSV is long: one row
+per (quantity, cell). The figure renders the table.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts import quantiles
-from magexp.plots.style import panels
+from magexp.plots.style import panels, paper_values, plt
 
 
 def tabulate(runs) -> pd.DataFrame:
@@ -42,20 +43,33 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     quantities = list(dict.fromkeys(frame.quantity))
     estimators = list(dict.fromkeys(frame.estimator))
     truth = frame.groupby("quantity", sort=False).truth.first()
-    columns = (["truth"] if truth.notna().any() else []) + estimators
+    paper = {q: "\n".join(f"{e.value:g}" + (f" ({e.match['estimator']})" if "estimator" in e.match else "")
+                           for e in paper_values(spec, q)) for q in quantities}
+    columns = (["truth"] if truth.notna().any() else []) + estimators + (["paper states"] if any(paper.values()) else [])
     body = []
     for q in quantities:
         cells = [f"{truth[q]:.6g}" if np.isfinite(truth[q]) else ""] if columns[0] == "truth" else []
         for est in estimators:
             row = frame[(frame.quantity == q) & (frame.estimator == est)]
             cells.append(_cell(row.iloc[0]) if len(row) else "")
-        body.append(cells)
-    tall = frame.n_seeds.max() > 1
-    fig, (ax,) = panels(1, width=1.2 + 1.7 * len(columns), height=0.6 + (0.42 if tall else 0.25) * len(quantities), axes=axes)
+        body.append(cells + ([paper[q]] if columns[-1] == "paper states" else []))
+    tall = frame.n_seeds.max() > 1 or any("\n" in c for cells in body for c in cells)
+    row_height = 0.42 if tall else 0.24  # inches: two lines (median, IQR) or one
+    # inches per column: its longest line at 7.5 pt (about 0.062 in a character) and a margin
+    longest = [max(len(line) for text in [name, *(cells[k] for cells in body)] for line in text.split("\n"))
+               for k, name in enumerate(columns)]
+    widths = [0.25 + 0.062 * n for n in longest]
+    label_width = 0.25 + 0.062 * max(len(q) for q in quantities)
+    if axes is None:  # sized to the table (panels() gives one panel a fixed size)
+        fig, ax = plt.subplots(figsize=(label_width + sum(widths), 0.5 + row_height * (len(quantities) + 1)),
+                               layout="constrained")
+    else:
+        fig, (ax,) = panels(1, axes=axes)
     ax.axis("off")
-    table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, loc="center", cellLoc="center")
+    # the table fills its axes (bbox), so the layout keeps the title clear of it
+    table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, cellLoc="center", bbox=[0, 0, 1, 1],
+                     colWidths=[w / sum(widths) for w in widths])
     table.auto_set_font_size(False)
     table.set_fontsize(7.5)
-    table.scale(1, 2.2 if tall else 1.3)
     fig.suptitle(spec.title, fontsize=9)
     return fig

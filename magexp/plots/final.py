@@ -9,7 +9,11 @@ one line per combination); ``plot.panels``: one column of panels per value; ``pl
 bound column of the metric drawn per objective (e.g. ``offset_bound``); ``plot.targets``:
 ``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy). Against the objective ``fun`` the
 noise floor and the Cramér-Rao RMS floor are drawn. A cell where fewer than half the runs succeeded
-is ringed in red.
+is ringed in red. A cell without a value is marked by a cross at the top of its panel (legend text:
+``plot.labels.missing``, e.g. "never within 600 steps"). The paper's values (the artifact's
+``reported:`` entries of the quantities summarised from the metric) are open diamonds in the colour of
+their line. Each of the artifact's ``ratios:`` (per seed, numerator over denominator cell) adds a row
+of panels: its median and quartiles over seeds, with the paper's ratios and the line of equality.
 """
 
 from __future__ import annotations
@@ -18,7 +22,8 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts import quantiles
-from magexp.plots.style import group_values, label, panels
+from magexp.claims import matches
+from magexp.plots.style import group_values, label, legend_entries, panels, paper_values, plt, shared_legend
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
 
@@ -27,6 +32,35 @@ def metric_list(spec) -> list[str]:
     """The metric columns drawn (``plot.metric``: one name or a list)."""
     metric = spec.plot.get("metric", "fun")
     return [metric] if isinstance(metric, str) else list(metric)
+
+
+def ratio_name(item) -> str:
+    """The line name of a ratio: numerator over denominator (their distinguishing values)."""
+    return " / ".join(", ".join(str(v) for v in side.values()) for side in (item.numerator, item.denominator))
+
+
+def _ratio_rows(runs) -> list[dict]:
+    """Per ``ratios:`` item and denominator cell: median and quartiles of the per-seed ratio
+    (seeds share readings, so the ratio is paired), the fraction of seeds where both runs succeeded."""
+    table, rows = runs.table, []
+    for item in runs.spec.ratios:
+        for ci, cell in enumerate(runs.cells):
+            if not matches(item.denominator, cell):
+                continue
+            partner = {**cell, **{k: str(v) for k, v in item.numerator.items()}}
+            nj = [cj for cj, other in enumerate(runs.cells) if all(matches({k: v}, other) for k, v in partner.items())]
+            if not nj:
+                continue
+            den = table[table.cell == ci].set_index("seed")
+            num = table[table.cell == nj[0]].set_index("seed")
+            ratio = (num[item.metric].astype(float) / den[item.metric].astype(float)).dropna()
+            med, q25, q75 = quantiles(ratio)
+            row = {**cell, "estimator": ratio_name(item), "objective": den.objective.iloc[0], "metric": item.quantity,
+                   "median": med, "q25": q25, "q75": q75, "n_seeds": len(ratio)}
+            if "succeeded" in den and den.succeeded.notna().any():
+                row["success_rate"] = float((num.succeeded * den.succeeded).reindex(ratio.index).mean())
+            rows.append(row)
+    return rows
 
 
 def tabulate(runs) -> pd.DataFrame:
@@ -50,24 +84,61 @@ def tabulate(runs) -> pd.DataFrame:
             if "succeeded" in sub and sub.succeeded.notna().any():
                 row["success_rate"] = float(sub.succeeded.dropna().mean())
             rows.append(row)
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows + _ratio_rows(runs))
 
 
-def _lines(ax, sub, spec, x_key, hue_key):
-    """One errorbar line per hue value (slightly spread on the x axis), failed majorities ringed."""
+def _colours(frame, hue_key) -> dict:
+    """One colour per line, fixed over panels (markers drawn beside never take a line's colour)."""
+    cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    return {hv: cycle[k % len(cycle)] for k, hv in enumerate(group_values(frame, hue_key))}
+
+
+def _spread(x, k: int, n: int, scale: str) -> np.ndarray:
+    """Lines side by side: a few per cent apart (in ratio on log-like axes, in the range on linear)."""
+    offset = k - (n - 1) / 2
+    if scale == "linear":
+        span = float(np.ptp(x)) if len(x) > 1 else 1.0
+        return x + 0.012 * span * offset
+    return x * (1 + 0.03 * offset)
+
+
+def _lines(ax, sub, spec, x_key, hue_key, colours):
+    """One errorbar line per hue value (slightly spread on the x axis), failed majorities ringed,
+    cells without a value crossed at the top of the panel; returns the x of every line's cells."""
     hues = group_values(sub, hue_key)
+    scale = spec.plot.get("xscale", "linear")
+    placed = {}
     for k, hv in enumerate(hues):
         line = sub[sub[hue_key] == hv].sort_values(x_key, key=lambda c: c.astype(float))
-        x = line[x_key].astype(float).to_numpy() * (1 + 0.03 * (k - (len(hues) - 1) / 2))
+        x = _spread(line[x_key].astype(float).to_numpy(), k, len(hues), scale)
+        placed[hv] = (line, x)
         y = line["median"].to_numpy(float)
         err = np.vstack([y - line.q25.to_numpy(float), line.q75.to_numpy(float) - y])
         name = label(spec, hue_key, hv) if hue_key not in ("estimator", "_hue") else str(hv)
+        colour = colours[hv]
         ax.errorbar(x, np.maximum(y, TINY), yerr=np.where(np.isfinite(err), np.maximum(err, 0), 0), marker="o",
-                    ms=3.5, capsize=2, lw=1, label=name)
+                    ms=3.5, capsize=2, lw=1, label=name, color=colour)
+        missing = ~np.isfinite(y)
+        if missing.any():
+            ax.plot(x[missing], np.full(missing.sum(), 0.96), "x", color=colour, ms=6, mew=1.4,
+                    transform=ax.get_xaxis_transform(), label=f"x at the top: {label(spec, 'missing')}")
         if "success_rate" in line:
             bad = (line.success_rate < 0.5).to_numpy()
-            ax.plot(x[bad], np.maximum(y[bad], TINY), "o", mfc="none", mec="r", ms=9, mew=1.2,
-                    label="fewer than half succeeded" if bad.any() else None)
+            if bad.any():
+                ax.plot(x[bad], np.maximum(y[bad], TINY), "o", mfc="none", mec="r", ms=9, mew=1.2,
+                        label="fewer than half succeeded")
+    return placed
+
+
+def _paper(ax, spec, placed, metric, colours):
+    """The paper's values of the quantities summarised from ``metric``: an open diamond at the cell
+    (in its line's colour) whose settings the ``reported:`` entry matches."""
+    for entry in paper_values(spec, metric):
+        for hv, (line, x) in placed.items():
+            for xi, (_, row) in zip(x, line.iterrows()):
+                if matches(dict(entry.match), row.to_dict()):
+                    ax.plot([xi], [max(float(entry.value), TINY)], "D", mfc="none", mec=colours[hv], ms=7,
+                            mew=1.3, zorder=4, label="paper's value (open diamond)")
 
 
 def _references(ax, sub, spec, x_key, metric):
@@ -76,6 +147,8 @@ def _references(ax, sub, spec, x_key, metric):
         objectives = list(dict.fromkeys(sub.objective))
         for j, obj in enumerate(objectives):
             fl = sub[sub.objective == obj].drop_duplicates(x_key).sort_values(x_key, key=lambda c: c.astype(float))
+            if not np.isfinite(fl.bound.astype(float)).any():  # not identified: nothing to draw, no legend
+                continue
             name = "Cramér-Rao bound (Gaussian)" + (f" ({obj})" if len(objectives) > 1 else "")
             ax.plot(fl[x_key].astype(float), fl.bound.clip(lower=TINY), ["k--", "k-."][j % 2], lw=0.9, label=name)
     fl = sub.drop_duplicates(x_key).sort_values(x_key, key=lambda c: c.astype(float))
@@ -87,6 +160,8 @@ def _references(ax, sub, spec, x_key, metric):
     targets = dict(spec.plot.get("targets", {}) or {})
     if metric in targets:
         ax.axhline(float(targets[metric]), color="k", ls="--", lw=0.9, label="paper's stated level")
+    if metric in {r.quantity for r in spec.get("ratios", [])}:
+        ax.axhline(1.0, color="0.3", ls="-", lw=0.8, label="ratio 1 (equal)")
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
@@ -95,8 +170,10 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         keys = list(hue_key)
         frame = frame.assign(_hue=frame[keys].astype(str).agg(" / ".join, axis=1))
         hue_key = "_hue"
-    metrics, columns = metric_list(spec), group_values(frame, panel_key)
+    metrics = metric_list(spec) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
+    columns = group_values(frame, panel_key)
     ylabels = dict(spec.plot.get("ylabels", {}) or {})
+    colours = _colours(frame, hue_key)
     default_ylabel = spec.plot.get("ylabel", "final total-field RMS (nT)")
     fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1,
                        width=3.8 if len(metrics) > 1 else 3.4, axes=axes)
@@ -105,8 +182,13 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             ax = axes[i * len(columns) + j]
             sub = frame[frame.metric == metric] if "metric" in frame else frame
             sub = sub if pv is None else sub[sub[panel_key] == pv]
-            _lines(ax, sub, spec, x_key, hue_key)
+            placed = _lines(ax, sub, spec, x_key, hue_key, colours)
+            _paper(ax, spec, placed, metric, colours)
             _references(ax, sub, spec, x_key, metric)
+            if sub["median"].isna().any():  # room above the values for the crosses of the missing ones
+                ax.set_yscale("log" if spec.plot.get("ylog", True) else "linear")
+                lo, hi = ax.get_ylim()
+                ax.set_ylim(lo, hi * (hi / lo) ** 0.25 if ax.get_yscale() == "log" else hi + 0.25 * (hi - lo))
             scale = spec.plot.get("xscale", "linear")
             ax.set_xscale(scale, **({"linthresh": float(spec.plot.get("linthresh", 1.0))} if scale == "symlog" else {}))
             if scale == "symlog" and (frame[x_key].astype(float) >= 0).all():
@@ -114,11 +196,10 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             if spec.plot.get("ylog", True):
                 ax.set_yscale("log")
             ax.set_xlabel(label(spec, x_key))
-            ax.set_ylabel(ylabels.get(metric, default_ylabel if len(metrics) == 1 else metric))
+            ax.set_ylabel(ylabels.get(metric, default_ylabel if len(metrics) == 1 else metric.replace("_", " ")))
             if pv is not None:
                 ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))
-    handles, names = axes[0].get_legend_handles_labels()
-    unique = dict(zip(names, handles))
-    axes[0].legend(unique.values(), unique.keys())
+    entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
+    shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)
     fig.suptitle(spec.title, fontsize=10)
     return fig

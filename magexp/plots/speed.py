@@ -1,10 +1,11 @@
-"""Accuracy vs wall time: the bound ratio (RMS error over seeds / sqrt(tr CRB)) against the median fit time."""
+"""Accuracy vs wall time: the bound ratio (RMS over the successful runs of error / sqrt(tr CRB)) against the
+median fit time."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from magexp.plots.benchmark_table import tabulate  # noqa: F401  (the kind's table)
+from magexp.plots.benchmark_table import column_label, tabulate  # noqa: F401  (the kind's table)
 from magexp.plots.style import plt
 
 MARKERS = "osD^v<>PX*hp"
@@ -24,7 +25,7 @@ def draw(frame, spec, ax=None):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("median fit wall time (s)")
-    ax.set_ylabel("RMS offset error / sqrt(tr CRB)" if value == "bound_ratio" else value.replace("_", " "))
+    ax.set_ylabel(column_label(value))
     handles, labels = ax.get_legend_handles_labels()
     for p in papers:
         handles.append(plt.Line2D([], [], ls="", marker="s", color=colours[p]))

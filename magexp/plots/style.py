@@ -90,6 +90,61 @@ def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, ax
 
 
 
+def quantities_of(spec, metric: str) -> set[str]:
+    """The summary quantities computed from the runs column ``metric`` (a ratio's quantity is its
+    own): the ``reported:`` entries of these are the paper's values of what a figure draws."""
+    names = {s.quantity for s in spec.get("summarise", []) if getattr(s, "metric", None) == metric and s.quantity}
+    return names | {r.quantity for r in spec.get("ratios", []) if r.quantity == metric}
+
+
+def paper_values(spec, metric: str) -> list:
+    """The artifact's ``reported:`` entries of ``metric`` (by name, or by a quantity summarised from it)."""
+    names = quantities_of(spec, metric) | {metric}
+    return [e for e in spec.get("reported", []) if e.quantity in names]
+
+
+def legend_entries(axes) -> dict:
+    """``{label: handle}`` of every labelled artist of ``axes``, each label once (first seen)."""
+    unique = {}
+    for ax in axes:
+        for handle, name in zip(*ax.get_legend_handles_labels()):
+            unique.setdefault(name, handle)
+    return unique
+
+
+def shared_legend(fig, axes, entries: dict | None = None, *, ncols: int = 4, inside: bool = False, **kwargs):
+    """One legend for the panels ``axes``: below them, outside, where the figure has constrained
+    layout (its own figures) and not ``inside``; else in the first panel (a caller's axes).
+    ``entries``: ``{label: handle}`` (default: :func:`legend_entries`); nothing is drawn without any."""
+    entries = legend_entries(axes) if entries is None else entries
+    if not entries:
+        return None
+    if not inside and type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine":
+        return fig.legend(entries.values(), entries.keys(), loc="outside lower center",
+                          ncols=min(ncols, len(entries)), **kwargs)
+    return axes[0].legend(entries.values(), entries.keys(), **kwargs)
+
+
+#: attribute naming the data column a colour bar (and the image it belongs to) shows
+COLUMN_ATTR = "magexp_column"
+
+
+def drawn_from(image, column: str):
+    """Record on ``image`` the data column its cells were filled from; returns ``image``."""
+    setattr(image, COLUMN_ATTR, column)
+    return image
+
+
+def colorbar(image, ax, *, column: str, label: str, **kwargs):
+    """A colour bar of ``image`` labelled ``label``, recording the column it says it shows
+    (:data:`COLUMN_ATTR`): a check compares it with the label and with the column the image was
+    filled from (:func:`drawn_from`; :func:`magexp.plots.check.colorbar_mismatch`)."""
+    bar = ax.figure.colorbar(image, ax=ax, **kwargs)
+    setattr(bar, COLUMN_ATTR, column)
+    bar.set_label(label)
+    return bar
+
+
 def save(fig, path: Path) -> list[Path]:
     """Write the figure as a PNG and its vector twin (PDF), both without time stamps or
     producer strings, so the same figure gives the same bytes; return both paths."""

@@ -1,0 +1,156 @@
+"""Every artifact's figure, drawn from its committed CSV under ``results/`` (no run), is free of the
+defects a reader sees: an empty panel, text printed over text, a colour bar naming another column
+than the one drawn, a legend of raw override strings (:mod:`magexp.plots.check`)."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from magexp.artifacts import paper_specs
+from magexp.paths import RESULTS
+from magexp.plots import kind_module
+from magexp.plots.benchmark_table import bound_ratio
+from magexp.plots.check import colorbar_mismatch, defects, empty_axes, legend_defects, overlapping_text, raw_legends
+from magexp.plots.style import colorbar, drawn_from, plt
+from magexp.spec import papers
+
+
+#: figures another branch of issue 18 redraws (real data has no truth to draw "estimate - truth"
+#: against): expected to fail on the CSVs committed here; remove an entry once its fix is merged
+REDRAWN_ELSEWHERE = {
+    "real_table7": "empty estimate - truth panels: redrawn by the real-data branch (issue 18, item 6)",
+    "real_modes": "empty estimate - truth panels: redrawn by the real-data branch (issue 18, item 6)",
+}
+
+
+def committed():
+    """Every artifact whose CSV is committed (recordings' artifacts: when they were drawn)."""
+    return [pytest.param(spec, id=spec.name,
+                         marks=[pytest.mark.xfail(reason=REDRAWN_ELSEWHERE[spec.name], strict=False)]
+                         if spec.name in REDRAWN_ELSEWHERE else [])
+            for paper in papers() for spec in paper_specs(paper) if (RESULTS / paper / f"{spec.name}.csv").is_file()]
+
+
+@pytest.mark.parametrize("spec", committed())
+def test_figure_has_no_visible_defect(spec):
+    frame = pd.read_csv(RESULTS / spec.paper / f"{spec.name}.csv")
+    fig = kind_module(spec.kind).draw(frame, spec)
+    try:
+        assert defects(fig) == []
+    finally:
+        plt.close(fig)
+
+
+def test_every_artifact_with_results_is_checked():
+    names = {p.id for p in committed()}
+    assert {"ding2024_table_rms", "yuan2018_fig8", "yan2022_table_sim", "benchmark_heatmap"} <= names
+
+
+# the checks themselves, on figures built to have (or not have) each defect
+
+def test_an_axes_with_only_reference_lines_is_empty():
+    fig, (a, b, c) = plt.subplots(1, 3)
+    a.axhline(0.0)
+    a.plot([0, 1], [float("nan")] * 2)
+    b.plot([0, 1], [1, 2])
+    c.set_visible(False)  # deliberately hidden: not a defect
+    assert len(empty_axes(fig)) == 1 and "axes 0" in empty_axes(fig)[0]
+    plt.close(fig)
+
+
+def test_a_title_over_a_label_overlaps_and_apart_does_not():
+    fig, ax = plt.subplots(figsize=(4, 3), layout="constrained")
+    ax.plot([0, 1], [0, 1])
+    ax.set_title("a title")
+    ax.set_ylabel("a label")
+    assert overlapping_text(fig) == []
+    ax.text(0.5, 1.02, "printed over the title", transform=ax.transAxes, ha="center")
+    assert any("title" in d for d in overlapping_text(fig))
+    plt.close(fig)
+
+
+def test_a_colour_bar_must_name_the_column_it_is_drawn_from():
+    fig, ax = plt.subplots()
+    image = drawn_from(ax.imshow([[1.0, 2.0]]), "gram_error_ratio")
+    colorbar(image, ax, column="offset_error_ratio", label="log10 offset error / sqrt(tr CRB) (median over seeds)")
+    assert any("drawn from 'gram_error_ratio'" in d for d in colorbar_mismatch(fig))
+    fig, ax = plt.subplots()
+    image = drawn_from(ax.imshow([[1.0, 2.0]]), "bound_ratio")
+    colorbar(image, ax, column="bound_ratio", label="log10 RMS over seeds")  # not the column's words
+    assert any("does not name" in d for d in colorbar_mismatch(fig))
+    fig, ax = plt.subplots()
+    fig.colorbar(ax.imshow([[1.0, 2.0]]), ax=ax).set_label("anything")  # records nothing
+    assert any("does not record" in d for d in colorbar_mismatch(fig))
+    plt.close("all")
+
+
+def test_raw_override_strings_in_a_legend_are_found():
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], label="lm, scenario=real_hmc5883l_full_sphere, window=null")
+    ax.plot([0, 1], label="lm, A = 2 nT")
+    ax.legend()
+    assert len(raw_legends(fig)) == 1
+    plt.close(fig)
+
+
+def test_two_series_in_one_colour_and_an_undrawn_entry_are_found():
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [1, 2], color="C0", label="a")
+    ax.plot([0, 1], [2, 3], color="C0", label="b")
+    ax.plot([0, 1], [float("inf")] * 2, color="C1", label="bound")
+    ax.legend()
+    found = legend_defects(fig)
+    assert any("'a' and 'b' look the same" in d for d in found)
+    assert any("'bound': nothing of it is drawn" in d for d in found)
+    plt.close(fig)
+
+
+# what the figures draw
+
+def test_the_bound_ratio_is_over_the_successful_runs_only():
+    """Two failed runs of 40 with huge errors must not move the accuracy (issue 18: 1518 vs 0.983)."""
+    ratios = np.r_[np.full(38, 0.98), 7000.0, 8000.0]
+    runs = pd.DataFrame({"offset_error_ratio": ratios, "succeeded": np.r_[np.ones(38), 0.0, 0.0]})
+    value, lo, hi = bound_ratio(runs)
+    assert value == pytest.approx(0.98) and lo <= 0.98 <= hi
+    unjudged = runs.assign(succeeded=np.nan)  # no truth: every run counts
+    assert bound_ratio(unjudged)[0] > 1000
+
+
+def test_final_draws_the_papers_values_and_ratios():
+    spec = OmegaConf.create({"title": "t", "kind": "final", "plot": {"x": "scenario.noise", "hue": "estimator"},
+                             "summarise": [{"quantity": "final_rms", "metric": "fun"}],
+                             "ratios": [{"quantity": "improvement_ratio", "metric": "fun",
+                                         "numerator": {"estimator": "pso"}, "denominator": {"estimator": "ipso"}}],
+                             "reported": [{"quantity": "final_rms", "match": {"estimator": "pso", "scenario.noise": 2},
+                                           "value": 8.35},
+                                          {"quantity": "improvement_ratio", "match": {"scenario.noise": 2},
+                                           "value": 14.4}]})
+    rows = [{"scenario.noise": a, "estimator": e, "objective": "scalar", "metric": "fun", "median": 0.6 * a,
+             "q25": 0.5 * a, "q75": 0.7 * a} for a in (2, 5) for e in ("pso", "ipso")]
+    rows += [{"scenario.noise": a, "estimator": "pso / ipso", "objective": "scalar", "metric": "improvement_ratio",
+              "median": 1.0, "q25": 0.9, "q75": 1.1} for a in (2, 5)]
+    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    rms, ratio = fig.axes[:2]
+    diamonds = [ln for ax in (rms, ratio) for ln in ax.lines if ln.get_marker() == "D"]
+    assert sorted(float(ln.get_ydata()[0]) for ln in diamonds) == [8.35, 14.4]
+    assert ratio.get_ylabel() == "improvement ratio" and defects(fig) == []
+    plt.close(fig)
+
+
+def test_a_calibration_figure_shows_a_successful_run_and_says_so():
+    from types import SimpleNamespace
+
+    from magexp.plots.field import shown_seed
+
+    table = pd.DataFrame({"cell": [0, 0, 0, 1, 1], "seed": [0, 1, 2, 0, 1],
+                          "succeeded": [0.0, 1.0, 1.0, 0.0, 0.0]})
+    runs = SimpleNamespace(table=table, outputs={(c, s): None for c, s in zip(table.cell, table.seed)})
+    assert shown_seed(runs, 0) == (1, "succeeded")  # seed 0 failed: not shown as "a calibration"
+    assert shown_seed(runs, 1) == (0, "failed")  # none succeeded: the first, named as failed
+    runs.table = table.assign(succeeded=np.nan)
+    assert shown_seed(runs, 0) == (0, "not judged")
