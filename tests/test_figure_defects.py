@@ -21,10 +21,7 @@ from magexp.spec import papers
 
 #: figures another branch of issue 18 redraws (real data has no truth to draw "estimate - truth"
 #: against): expected to fail on the CSVs committed here; remove an entry once its fix is merged
-REDRAWN_ELSEWHERE = {
-    "real_table7": "empty estimate - truth panels: redrawn by the real-data branch (issue 18, item 6)",
-    "real_modes": "empty estimate - truth panels: redrawn by the real-data branch (issue 18, item 6)",
-}
+REDRAWN_ELSEWHERE: dict[str, str] = {}  # artifact -> why its figure is expected to fail (none today)
 
 
 def committed():

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.plots.style import group_values, label, panels, plt, shared_legend
+from magexp.plots.style import group_values, label, panels, plt, shared_legend, tidy_log_axes
 
 
 def _stack(histories: list[np.ndarray]) -> np.ndarray:
@@ -90,4 +90,4 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         ax.set_title("\n".join(t for t in (head, ok) if t), fontsize=9)
     shared_legend(fig, axes, ncols=3)
     fig.suptitle(spec.title, fontsize=10)
-    return fig
+    return tidy_log_axes(fig)

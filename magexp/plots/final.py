@@ -23,7 +23,7 @@ import pandas as pd
 
 from magexp.artifacts import quantiles
 from magexp.claims import matches
-from magexp.plots.style import group_values, label, legend_entries, panels, paper_values, plt, shared_legend
+from magexp.plots.style import group_values, label, legend_entries, panels, paper_values, plt, shared_legend, tidy_log_axes
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
 
@@ -202,4 +202,4 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
     shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)
     fig.suptitle(spec.title, fontsize=10)
-    return fig
+    return tidy_log_axes(fig)

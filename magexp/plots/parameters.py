@@ -11,7 +11,7 @@ import pandas as pd
 
 from magexp.artifacts import quantiles
 from magexp.plots.style import label as key_label
-from magexp.plots.style import panels, shared_legend
+from magexp.plots.style import panels, shared_legend, tidy_log_axes
 from magexp.summary import cell_settings, parameter_values, reported_value
 
 
@@ -122,4 +122,4 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     shared_legend(fig, axes[:1], fontsize=7)
     axes[1].set_title("open: paper's value - truth", fontsize=8)
     fig.suptitle(spec.title, fontsize=10)
-    return fig
+    return tidy_log_axes(fig)

@@ -32,7 +32,7 @@ import pandas as pd
 from matplotlib.lines import Line2D
 
 from magexp.artifacts import quantiles
-from magexp.plots.style import panels
+from magexp.plots.style import panels, tidy_log_axes
 from magexp.summary import parameter_values
 
 #: per-run quantities of the ``recording`` table (one row per seed)
@@ -197,4 +197,4 @@ def draw(frame: pd.DataFrame, spec, axes=None):
                           label=f"open estimate: SE undetermined or > {SE_SHOWN:g} x the panel's span"))
     fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 4), fontsize=7)
     fig.suptitle(spec.title, fontsize=10)
-    return fig
+    return tidy_log_axes(fig)

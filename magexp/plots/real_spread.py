@@ -20,7 +20,7 @@ from matplotlib.lines import Line2D
 
 from magexp.artifacts import quantiles
 from magexp.plots.real import short_name
-from magexp.plots.style import panels
+from magexp.plots.style import panels, tidy_log_axes
 
 COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_cells", "wall_time")
 
@@ -69,4 +69,4 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     labels.append("red: fewer than half the runs succeeded")
     fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=7)
     fig.suptitle(spec.title, fontsize=10)
-    return fig
+    return tidy_log_axes(fig)

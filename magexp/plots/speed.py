@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.plots.benchmark_table import column_label, tabulate  # noqa: F401  (the kind's table)
-from magexp.plots.style import plt
+from magexp.plots.style import plt, tidy_log_axes
 
 MARKERS = "osD^v<>PX*hp"
 
@@ -32,4 +32,4 @@ def draw(frame, spec, ax=None):
         labels.append(p)
     ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set_title(spec.title, fontsize=10)
-    return fig
+    return tidy_log_axes(fig)

@@ -12,6 +12,7 @@ from magexp.plots import VECTOR
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 
 STYLE = {
     "figure.dpi": 110,
@@ -159,6 +160,28 @@ def save(fig, path: Path) -> list[Path]:
     finally:
         plt.close(fig)
     return [path, twin]
+
+
+class _LogMinorLabels(matplotlib.ticker.LogFormatterSciNotation):
+    """Minor tick labels of a log axis only while its view spans less than a decade: over a decade or
+    more its decades are labelled, and matplotlib's labels of a subset of minor ticks (2, 3, 4, 6 x
+    10^k) collide on a short axis. Decided when the figure is drawn, after every limit is set."""
+
+    def __call__(self, x, pos=None):
+        lo, hi = sorted(self.axis.get_view_interval())
+        if lo > 0 and hi / lo >= 10:
+            return ""
+        return super().__call__(x, pos)
+
+
+def tidy_log_axes(fig):
+    """Give every log-scaled axis of ``fig`` the minor labels of :class:`_LogMinorLabels`; returns ``fig``
+    (call it last in a kind's ``draw``)."""
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            if axis.get_scale() == "log":
+                axis.set_minor_formatter(_LogMinorLabels(labelOnlyBase=False))
+    return fig
 
 
 def group_values(frame, key):

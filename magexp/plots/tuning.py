@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts import quantiles
-from magexp.plots.style import legend_entries, panels, plt, shared_legend
+from magexp.plots.style import legend_entries, panels, plt, shared_legend, tidy_log_axes
 
 #: families with at most this many settings show each setting by name (else best / median / worst)
 FEW = 4
@@ -139,4 +139,4 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         entries["star: default"] = plt.Line2D([], [], ls="", marker="*", color="0.3", ms=9)
     shared_legend(fig, axes, entries, ncols=3, fontsize=7)
     fig.suptitle(spec.title, fontsize=10)
-    return fig
+    return tidy_log_axes(fig)
