@@ -23,7 +23,7 @@ DATA = RESOURCES / "data"
 RESULTS = ROOT / "results" if SOURCE_CHECKOUT else Path.cwd() / "results"
 _default_cache = (ROOT / ".cache" / "runs" if SOURCE_CHECKOUT
                   else Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "magexp" / "runs")
-CACHE = Path(os.environ.get("MAGEXP_CACHE", _default_cache))  # finished runs, keyed by config
+CACHE = Path(os.environ.get("MAGEXP_CACHE") or _default_cache)  # finished runs, keyed by config (empty: unset)
 # recorded data of others (never copied into the project): $MAGEXP_DATA, else ../shared/data beside
 # the checkout (or beside its parent folder, for a git worktree)
 SHARED_DATA = Path(os.environ["MAGEXP_DATA"]) if os.environ.get("MAGEXP_DATA") else next(

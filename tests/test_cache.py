@@ -273,3 +273,14 @@ def test_two_reproductions_on_one_cache_compute_each_run_once(clean, tmp_path):
     assert len(computed) == RUNS and len(set(computed)) == RUNS, computed  # each run once, by one of them
     assert files(tmp_path / "a") == files(tmp_path / "b") == clean_files
     assert all(err == "" for _, err in done)
+
+
+def test_an_empty_cache_variable_means_the_default_folder():
+    """``MAGEXP_CACHE=`` (set but empty) is the default cache, never the working folder."""
+    import subprocess
+    import sys
+
+    code = "from magexp import paths; print(paths.CACHE, paths.composed_configs())"
+    env = {**os.environ, "MAGEXP_CACHE": ""}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout.split()
+    assert out[0] != "." and not out[1].startswith("-") and out[0].endswith("runs"), out
