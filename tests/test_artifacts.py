@@ -35,6 +35,22 @@ def check_artifact(spec, out, summary, seeds=2):
         assert (summary.verdict != "n/a").any()
 
 
+@pytest.fixture(autouse=True)
+def _png_only(monkeypatch):
+    """The smoke runs draw each figure once, as a small PNG: the PDF twin and the full-resolution
+    drawing of every figure are checked by tests/test_figures.py and tests/test_figure_defects.py."""
+    from magexp.plots import style
+
+    def save(fig, path):
+        try:
+            fig.savefig(path, dpi=40)
+        finally:
+            style.plt.close(fig)
+        return [path]
+
+    monkeypatch.setattr(style, "save", save)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("path", ARTIFACTS, ids=lambda p: p.stem)
 def test_artifact_runs_tiny(tmp_path, path):
