@@ -168,7 +168,9 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     x_key, panel_key, hue_key = spec.plot.x, spec.plot.get("panels"), spec.plot.get("hue", "estimator")
     if not isinstance(hue_key, str):  # several keys: one line per combination
         keys = list(hue_key)
-        frame = frame.assign(_hue=frame[keys].astype(str).agg(" / ".join, axis=1))
+        first, rest = keys[0], keys[1:]  # "pso, c1 = c2 = 2.0": the first key's value, then the others named
+        named = [frame[k].astype(str).map(lambda v, k=k: label(spec, k, v)) for k in rest]
+        frame = frame.assign(_hue=pd.concat([frame[first].astype(str), *named], axis=1).agg(", ".join, axis=1))
         hue_key = "_hue"
     metrics = metric_list(spec) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
     columns = group_values(frame, panel_key)
