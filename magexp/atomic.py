@@ -35,14 +35,15 @@ def _mode() -> int:
 
 
 @contextmanager
-def atomic_path(path: Path | str) -> Iterator[Path]:
-    """A temporary path beside ``path``: renamed onto ``path`` when the block ends, removed if it raises."""
+def atomic_path(path: Path | str, *, mode: int | None = None) -> Iterator[Path]:
+    """A temporary path beside ``path``: renamed onto ``path`` when the block ends, removed if it raises.
+    ``mode``: the file's permissions (default: ``0666`` less the umask)."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
     try:
         yield Path(tmp)
-        os.chmod(tmp, _mode())
+        os.chmod(tmp, _mode() if mode is None else mode)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
@@ -63,8 +64,8 @@ def write_text(path: Path | str, text: str, encoding: str = "utf-8") -> Path:
     return Path(path)
 
 
-def write_bytes(path: Path | str, data: bytes) -> Path:
-    """``Path.write_bytes``, atomically; returns ``path``."""
-    with atomic_open(path, "wb") as fh:
-        fh.write(data)
+def write_bytes(path: Path | str, data: bytes, *, mode: int | None = None) -> Path:
+    """``Path.write_bytes``, atomically (``mode``: as :func:`atomic_path`); returns ``path``."""
+    with atomic_path(path, mode=mode) as tmp:
+        Path(tmp).write_bytes(data)
     return Path(path)

@@ -38,13 +38,13 @@ import os
 import re
 import stat
 import sys
-import tempfile
 import types
 import typing
 from collections import Counter
 from functools import lru_cache
 from pathlib import Path
 
+from magexp.atomic import write_bytes
 from magexp.datafiles import data_files
 from magexp.paths import CACHE, ROOT
 
@@ -373,18 +373,10 @@ def _folder(path: Path, root: Path) -> None:
 
 
 def write(path: Path, data: bytes, root: Path) -> None:
-    """Write ``data`` to ``path`` (inside the cache folder ``root``) atomically (a temporary file,
-    then ``os.replace``), with the permissions of :func:`_modes`. Raises ``OSError``."""
+    """Write ``data`` to ``path`` (inside the cache folder ``root``) atomically
+    (:func:`magexp.atomic.write_bytes`), with the permissions of :func:`_modes`. Raises ``OSError``."""
     _folder(path.parent, root)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            os.fchmod(fh.fileno(), _modes(root)[0])
-            fh.write(data)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    write_bytes(path, data, mode=_modes(root)[0])
 
 
 # ---------------------------------------------------------------------------------------------
