@@ -105,11 +105,11 @@ def _ranked(top, bottom, sub, families):
         if len(f) == 1:  # one setting (an ablation variant): its success rate
             bottom.bar(k, float(f.success_rate.iloc[0]), width=0.5, color="C0")
             continue
-        bottom.bar(k - 0.2, f.success_rate.median(), width=0.2, color="C0", label="median over settings")
+        bottom.bar(k - 0.2, f.success_rate.median(), width=0.2, color="C0", label="success rate: median over settings")
         best = f[f.role == "best"] if (f.role == "best").any() else f
-        bottom.bar(k, float(best.success_rate.iloc[0]), width=0.2, color="C2", label="best setting")
+        bottom.bar(k, float(best.success_rate.iloc[0]), width=0.2, color="C2", label="success rate: best setting")
         if f.default.any():
-            bottom.bar(k + 0.2, float(f[f.default].success_rate.iloc[0]), width=0.2, color="C3", label="default")
+            bottom.bar(k + 0.2, float(f[f.default].success_rate.iloc[0]), width=0.2, color="C3", label="success rate: default")
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
