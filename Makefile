@@ -23,25 +23,25 @@ $(STAMP): pyproject.toml requirements.lock
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -r requirements.lock
 	$(PY) -m pip install --quiet --no-deps -e .
-	$(PY) -m magexp.warmup
+	$(PY) -m magexp.perf.warmup
 	@touch $(STAMP)
 
 venv: $(STAMP) ## create .venv and install magexp with its test extras
 
 reproduce: $(STAMP) ## regenerate every figure, table and the report into results/
-	$(PY) -m magexp.reproduce all $(RUN_ON)
+	$(PY) -m magexp.artifacts.reproduce all $(RUN_ON)
 
 redraw: $(STAMP) ## rebuild every figure, results/summary.csv and REPORT.md from the CSVs (no run)
-	$(PY) -m magexp.reproduce all --redraw
+	$(PY) -m magexp.artifacts.reproduce all --redraw
 
 reproduce-%: $(STAMP) ## regenerate one paper (a folder of experiments/: ding2024, yuan2018, yan2022, benchmark, real) and the report
-	$(PY) -m magexp.reproduce $* $(RUN_ON)
+	$(PY) -m magexp.artifacts.reproduce $* $(RUN_ON)
 
 report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the artifact CSVs
-	$(PY) -m magexp.report
+	$(PY) -m magexp.artifacts.report
 
 bench: $(STAMP) ## speed benchmark; writes results/bench.csv
-	$(PY) -m magexp.bench
+	$(PY) -m magexp.perf.bench
 
 test: $(STAMP) ## run the test suite in TEST_JOBS=2 processes (without the `full` end-to-end cases: make test-full)
 	$(PYTEST) -m "not full"

@@ -17,7 +17,7 @@ __version__ = "0.1.0"
 
 
 def calibrate(readings, **options):
-    """Calibrate readings: see :func:`magexp.calibration.calibrate` (imported on first use)."""
-    from magexp.calibration import calibrate as _calibrate
+    """Calibrate readings: see :func:`magexp.calibration.fit.calibrate` (imported on first use)."""
+    from magexp.calibration.fit import calibrate as _calibrate
 
     return _calibrate(readings, **options)

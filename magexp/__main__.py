@@ -4,14 +4,14 @@
   writes ``metrics.csv``, ``estimate.csv``, ``history.csv`` and ``config.yaml`` into a folder of
   its own (``outputs/<date>/<time>[-k]/``, or ``hydra.run.dir=<folder>``);
 * ``magexp -m key=a,b other='range(3)' ...``: a sweep, expanded by Hydra's sweeper and run by
-  magexp's launcher through :mod:`magexp.executor` (:func:`magexp.sweep.launch`: local processes,
+  magexp's launcher through :mod:`magexp.run.executor` (:func:`magexp.run.sweep.launch`: local processes,
   or a Dask cluster with ``hydra.launcher.executor=dask``). Every job is composed and checked
   before the first starts, every job goes through the run cache of ``make reproduce`` (a killed
   sweep resumes), and the sweep ends with ``<sweep dir>/sweep.csv``;
-* ``magexp calibrate KEY=VALUE ...``: calibrate a recording (:mod:`magexp.calibration`);
+* ``magexp calibrate KEY=VALUE ...``: calibrate a recording (:mod:`magexp.calibration.fit`);
 * ``magexp --help``, ``--version``, ``--cfg job`` (the composed config, not run).
 
-A single run is composed once (:func:`magexp.config.compose_config`) and run without Hydra's
+A single run is composed once (:func:`magexp.run.compose.compose_config`) and run without Hydra's
 application machinery; a sweep is handed to Hydra (its sweeper, then magexp's launcher) after
 every job and the launcher's settings have been checked. Every
 user mistake ends in one line on stderr and a non-zero exit, with nothing written.
@@ -99,7 +99,7 @@ def print_table(rows: dict) -> None:
 def _write_csv(path: Path, header: list[str], rows) -> None:
     import csv
 
-    from magexp.atomic import atomic_open
+    from magexp.core.atomic import atomic_open
 
     with atomic_open(path, "w", newline="") as fh:
         writer = csv.writer(fh)
@@ -111,15 +111,15 @@ def execute(cfg, out_dir: Path, *, use_cache: bool = True) -> dict:
     """Run ``cfg`` through the run cache and write its outputs into ``out_dir`` (:func:`write_outputs`)."""
     from omegaconf import OmegaConf
 
-    from magexp import cache
-    from magexp.config import resolved
+    from magexp.run import cache
+    from magexp.run.compose import resolved
 
     plain = resolved(cfg)
     key = cache.run_key(plain)
     out = cache.load(key, root=cache.CACHE) if use_cache else None
     cached = out is not None
     if out is None:
-        from magexp.runner import run
+        from magexp.run.runner import run
 
         out = run(OmegaConf.create(plain))
         cache.store(key, out, root=cache.CACHE)  # if it cannot be kept, it is noted and written all the same
@@ -141,11 +141,11 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
     """Write a run's folder: ``metrics.csv``, ``estimate.csv``, ``history.csv``, ``config.yaml``.
 
     ``metrics.csv`` is one row: the run's metrics, ``cached`` (whether the result came from the
-    cache) and the provenance (:func:`magexp.provenance.provenance`); ``config.yaml`` is the
+    cache) and the provenance (:func:`magexp.run.provenance.provenance`); ``config.yaml`` is the
     resolved config ``plain`` the run read. Returns the metrics with ``cached``.
     """
-    from magexp.atomic import write_text
-    from magexp.provenance import provenance
+    from magexp.core.atomic import write_text
+    from magexp.run.provenance import provenance
 
     out_dir.mkdir(parents=True, exist_ok=True)
     metrics = {**out.metrics, "cached": cached, **provenance(plain)}
@@ -160,7 +160,7 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
 
 def single_run(overrides: list[str], run_dir: str | None) -> None:
     """Compose once, check, create the run's own folder, run, write, print."""
-    from magexp.cli_checks import check_output_folder, create_unique, first_missing, validate_runs
+    from magexp.run.preflight import check_output_folder, create_unique, first_missing, validate_runs
 
     (cfg,) = validate_runs([overrides])
     folder = Path(run_dir) if run_dir else Path(time.strftime(RUN_DIR))
@@ -214,13 +214,13 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
     """Check every job, create the sweep's own folder, then hand the sweep to Hydra."""
     import hydra
 
-    from magexp.cli_checks import check_output_folder, create_unique, expand_sweep, validate_runs
-    from magexp.config import register_schemas
-    from magexp.guard import check_jobs, check_subdir, removed_on_failure
+    from magexp.run.preflight import check_output_folder, create_unique, expand_sweep, validate_runs
+    from magexp.run.compose import register_schemas
+    from magexp.run.guard import check_jobs, check_subdir, removed_on_failure
     from magexp.paths import CONF
 
     check_launcher(hydra_overrides)
-    from magexp.sweep import check_hydra_settings
+    from magexp.run.sweep import check_hydra_settings
 
     for ov in hydra_overrides:  # each job's folder inside the sweep's
         if ov.startswith("hydra.sweep.subdir="):
@@ -248,7 +248,7 @@ def hand_to_hydra(args: list[str]) -> None:
     """Anything this CLI does not handle itself (``--cfg hydra``, ``--info``...): Hydra's app."""
     import hydra
 
-    from magexp.config import register_schemas
+    from magexp.run.compose import register_schemas
     from magexp.paths import CONF
 
     register_schemas()
@@ -260,7 +260,7 @@ def hand_to_hydra(args: list[str]) -> None:
 # ---------------------------------------------------------------------------------------------
 
 def print_help() -> None:
-    from magexp.config import GROUPS, options
+    from magexp.run.compose import GROUPS, options
 
     lines = [USAGE]
     for group in GROUPS:
@@ -271,13 +271,13 @@ def print_help() -> None:
 
 
 def calibrate(argv: list[str]) -> None:
-    """``magexp calibrate ...``: :func:`magexp.calibration.main`."""
+    """``magexp calibrate ...``: :func:`magexp.calibration.fit.main`."""
     try:
-        from magexp.calibration import main as calibration_main
+        from magexp.calibration.fit import main as calibration_main
     except ModuleNotFoundError as exc:
-        if exc.name != "magexp.calibration":
+        if exc.name != "magexp.calibration.fit":
             raise
-        raise MagexpError("the calibrate command is not available in this build: magexp.calibration is missing") \
+        raise MagexpError("the calibrate command is not available in this build: magexp.calibration.fit is missing") \
             from None
     code = calibration_main(argv)
     sys.exit(code or 0)
@@ -306,7 +306,7 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
 
 
 def run_command(args: list[str]) -> None:
-    from magexp.guard import check_destination, check_flags, check_override_values
+    from magexp.run.guard import check_destination, check_flags, check_override_values
 
     user, hyd, flags = split_args(args)
     user = check_override_values(user)
@@ -314,7 +314,7 @@ def run_command(args: list[str]) -> None:
     if flags.get("-h") or flags.get("--help"):
         return print_help()
     if flags.get("--version"):
-        from magexp.provenance import version_line
+        from magexp.run.provenance import version_line
 
         return print(version_line())
     cfg_flag = flags.get("--cfg") or flags.get("-c")
@@ -323,12 +323,12 @@ def run_command(args: list[str]) -> None:
     if cfg_flag == "job" and not others and not multirun:
         from omegaconf import OmegaConf
 
-        from magexp.config import compose_config
+        from magexp.run.compose import compose_config
 
         cfg = compose_config(user)
         return print(OmegaConf.to_yaml(cfg, resolve=bool(flags.get("--resolve"))), end="")
     if cfg_flag or others:
-        from magexp.cli_checks import expand_sweep, validate_runs
+        from magexp.run.preflight import expand_sweep, validate_runs
 
         validate_runs(expand_sweep(user)[:1], keep=False)
         return hand_to_hydra(args)
@@ -342,7 +342,7 @@ def run_command(args: list[str]) -> None:
         check_launcher(rest)
         raise MagexpError(f"{rest[0]} is not allowed for a single run: hydra.* settings other than hydra.run.dir "
                           "apply to -m sweeps")
-    from magexp.cli_checks import expand_sweep
+    from magexp.run.preflight import expand_sweep
 
     plain = all(_PLAIN.fullmatch(ov.partition("=")[2]) for ov in user)  # nothing Hydra's parser must read
     if not plain and len(expand_sweep(user)) > 1:

@@ -7,12 +7,12 @@ import subprocess
 
 import pytest
 
-from magexp.config import compose_config
+from magexp.run.compose import compose_config
 
 
 @pytest.fixture
 def make_cfg():
-    """``make_cfg(*overrides)`` -> the composed run config (:func:`magexp.config.compose_config`)."""
+    """``make_cfg(*overrides)`` -> the composed run config (:func:`magexp.run.compose.compose_config`)."""
 
     def _make(*overrides):
         return compose_config(list(overrides))
@@ -50,7 +50,7 @@ def cli(capsys, monkeypatch):
 def _isolated_cache(tmp_path, monkeypatch):
     """Each test gets its own run cache, so nothing is read from or left in .cache/."""
     monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "cache")
-    monkeypatch.setattr("magexp.cache.CACHE", tmp_path / "cache")
+    monkeypatch.setattr("magexp.run.cache.CACHE", tmp_path / "cache")
 
 
 def _missing_recording(value) -> str | None:

@@ -5,10 +5,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.report import build
-from magexp.reproduce import reproduce_artifact
-from magexp.spec import artifact_paths, load, papers
-from magexp.summary import COLUMNS, VERDICTS
+from magexp.artifacts.report import build
+from magexp.artifacts.reproduce import reproduce_artifact
+from magexp.artifacts.spec import artifact_paths, load, papers
+from magexp.artifacts.summary import COLUMNS, VERDICTS
 
 WHOLE_PAPER = "yan2022"  # its artifacts run once, together, through reproduce_paper (test_whole_paper_runs_tiny)
 ARTIFACTS = [p for paper in papers() if paper != WHOLE_PAPER for p in artifact_paths(paper)]
@@ -39,7 +39,7 @@ def check_artifact(spec, out, summary, seeds=2):
 def _png_only(monkeypatch):
     """The smoke runs draw each figure once, as a small PNG: the PDF twin and the full-resolution
     drawing of every figure are checked by tests/test_figures.py and tests/test_figure_defects.py."""
-    from magexp.plots import style
+    from magexp.artifacts.plots import style
 
     def save(fig, path):
         try:
@@ -64,7 +64,7 @@ def test_artifact_runs_tiny(tmp_path, path):
 def test_whole_paper_runs_tiny(tmp_path):
     """Every artifact of one paper in one reproduction (one pass over all their runs), each keeping
     the contract; the paper's summary, and its report with the LaTeX (booktabs) twin of every table."""
-    from magexp.reproduce import reproduce_paper
+    from magexp.artifacts.reproduce import reproduce_paper
 
     summary = reproduce_paper(WHOLE_PAPER, root=tmp_path, seeds=2, jobs=1, tiny=True, log=lambda *_: None)
     specs = [load(p) for p in artifact_paths(WHOLE_PAPER)]

@@ -1,4 +1,4 @@
-"""Every output file written atomically (:mod:`magexp.atomic`): a write interrupted midway leaves the
+"""Every output file written atomically (:mod:`magexp.core.atomic`): a write interrupted midway leaves the
 previous file intact and no partial or temporary file."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from magexp.atomic import atomic_open, atomic_path, write_text
+from magexp.core.atomic import atomic_open, atomic_path, write_text
 
 
 class Interrupted(Exception):
@@ -41,7 +41,7 @@ def test_a_new_file_appears_only_complete_with_the_usual_permissions(tmp_path):
 
 
 def test_a_figure_killed_while_drawing_keeps_the_previous_one(tmp_path, monkeypatch):
-    from magexp.plots.style import plt, save
+    from magexp.artifacts.plots.style import plt, save
 
     fig, ax = plt.subplots()
     ax.plot([0, 1], [0, 1])
@@ -65,8 +65,8 @@ def test_a_figure_killed_while_drawing_keeps_the_previous_one(tmp_path, monkeypa
 
 
 def test_a_calibration_interrupted_while_writing_leaves_no_file(tmp_path, monkeypatch):
-    import magexp.calibrate_output as output
-    from magexp.calibration import calibrate
+    import magexp.calibration.write as output
+    from magexp.calibration.fit import calibrate
 
     rng = np.random.default_rng(0)
     u = rng.normal(size=(200, 3))
@@ -87,8 +87,8 @@ def test_a_calibration_interrupted_while_writing_leaves_no_file(tmp_path, monkey
 def test_the_calibrated_table_is_written_in_blocks_as_one(tmp_path, monkeypatch):
     import io
 
-    import magexp.calibrate_output as output
-    from magexp.calibration import calibrate
+    import magexp.calibration.write as output
+    from magexp.calibration.fit import calibrate
 
     rng = np.random.default_rng(1)
     u = rng.normal(size=(301, 3))

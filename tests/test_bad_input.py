@@ -4,15 +4,14 @@ Each row of :data:`TABLE` is a bad input to one entry point:
 
 * ``run`` / ``sweep``: ``magexp ARGS`` (:func:`magexp.__main__.main`, the code of ``python -m magexp``);
 * ``calibrate``: ``magexp calibrate ARGS``;
-* ``reproduce``: ``python -m magexp.reproduce ARGS`` (:func:`magexp.reproduce.main`);
+* ``reproduce``: ``python -m magexp.artifacts.reproduce ARGS`` (:func:`magexp.artifacts.reproduce.main`);
 * ``api``: a call of the Python API, which must raise :class:`~magexp.errors.MagexpError` of one line.
 
 The command lines run in-process, from an empty working folder holding only the input files; a
 handful more run as real processes at the end of this file. Every row asserts one line on stderr
 (warnings count as lines), the exit code (2; 130 for Ctrl-C), the words the line must contain (the
 bad value, what is allowed), and an unchanged file tree: the working folder, the
-checkout's tracked ``results/`` and the filesystem root ``/``. :func:`outcome` is what
-``tools/bad_input_table.py`` runs to count the table's outcomes on any checkout.
+checkout's tracked ``results/`` and the filesystem root ``/``.
 """
 
 from __future__ import annotations
@@ -82,7 +81,7 @@ def api(**options):
 
 
 def load(path, **options):
-    from magexp.recordings import load_recording
+    from magexp.core.recordings import load_recording
 
     return lambda: load_recording(path, **options)
 
@@ -221,9 +220,9 @@ TABLE = [
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1", "seed=1,2"], ["'tcp://node1'", "PORT"]),
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1:99999", "seed=1,2"], ["99999", "PORT"]),
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://127.0.0.1:1", "seed=1,2"], ["no Dask scheduler"],
-        patch=[("magexp.sweep._quiet_dask", lambda: None), ("magexp.executor.DaskExecutor.__init__", no_scheduler)]),
+        patch=[("magexp.run.sweep._quiet_dask", lambda: None), ("magexp.run.executor.DaskExecutor.__init__", no_scheduler)]),
     row("sweep", ["-m", "estimator=ellipsoid", "seed=1,2"], ["interrupted"], code=130,
-        patch=[("magexp.executor.run_many", interrupt)]),
+        patch=[("magexp.run.executor.run_many", interrupt)]),
     row("sweep", ["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
     row("sweep", ["-m", "hydra.sweep.dir=", "seed=1,2"], ["hydra.sweep.dir=''", "name a folder"]),
     row("sweep", ["-m", "hydra.sweep.dir=/", "seed=1,2"], ["'/'", "root folder"]),
@@ -333,7 +332,7 @@ TABLE = [
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", ""], ["--out=''", "name a folder"]),
     row("reproduce", ["yan2022", "--redraw", "--out", "fresh"], ["--redraw", "does not exist"]),
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "fresh"], ["interrupted"], code=130,
-        patch=[("magexp.executor.run_many", interrupt)]),
+        patch=[("magexp.run.executor.run_many", interrupt)]),
     # ---- the Python API
     row("api", api(readings=np.ones((20, 3)) + 1j), ["complex"]),
     row("api", api(readings=np.ma.masked_array(np.ones((20, 3)), mask=np.zeros((20, 3)))), ["masked"]),
@@ -421,7 +420,7 @@ def attempt(entry, args):
     """Run one case; returns ``(code, message)``: an exit code, or for the API the exception's
     name (``MagexpError``) and message, ``0`` when it returned."""
     from magexp.__main__ import main as magexp_main
-    from magexp.reproduce import main as reproduce_main
+    from magexp.artifacts.reproduce import main as reproduce_main
 
     try:
         if entry == "api":
@@ -487,9 +486,6 @@ def test_table_has_every_case():
 @pytest.mark.parametrize("case", TABLE, ids=[case_id(c) for c in TABLE])
 def test_bad_input(case, workdir, tmp_path, capsys, monkeypatch):
     category, detail = outcome(case, [workdir, RESULTS], capsys, monkeypatch)
-    if os.environ.get("MAGEXP_TABLE_LOG"):  # tools/bad_input_table.py counts the outcomes
-        with open(os.environ["MAGEXP_TABLE_LOG"], "a") as fh:
-            fh.write("\t".join([category, case_id(case), detail.replace("\n", " ")]) + "\n")
     assert category == "clean", detail
 
 
@@ -498,7 +494,8 @@ def test_bad_input(case, workdir, tmp_path, capsys, monkeypatch):
 
 def test_a_typo_writes_no_composed_config(workdir, cli, tmp_path, monkeypatch):
     """The composed-config cache is written only once a command's overrides pass (a cold cache here)."""
-    from magexp import config, paths
+    from magexp import paths
+    from magexp.run import compose as config
 
     for name in ("_SKELETONS", "_NODES"):
         monkeypatch.setattr(config, name, {})
@@ -521,7 +518,7 @@ def test_missing_launcher_extra_names_the_pip_install(workdir, cli, monkeypatch)
 
 
 def test_ctrl_c_of_a_run_leaves_no_folder(workdir, cli, monkeypatch):
-    monkeypatch.setattr("magexp.runner.run", interrupt)
+    monkeypatch.setattr("magexp.run.runner.run", interrupt)
     before = snapshot(workdir)
     for args in (["estimator=ellipsoid"], ["estimator=ellipsoid", "hydra.run.dir=mine/run"]):
         proc = cli(*args)
@@ -532,7 +529,7 @@ def test_ctrl_c_of_a_run_leaves_no_folder(workdir, cli, monkeypatch):
 def test_a_failed_sweep_keeps_what_its_existing_folder_held(workdir, cli, monkeypatch):
     (workdir / "mine").mkdir()
     (workdir / "mine" / "notes.txt").write_text("mine\n")
-    monkeypatch.setattr("magexp.executor.run_many", interrupt)
+    monkeypatch.setattr("magexp.run.executor.run_many", interrupt)
     proc = cli("-m", "estimator=ellipsoid", "seed=1,2", "hydra.sweep.dir=mine")
     assert proc.returncode == 130
     assert sorted(p.name for p in (workdir / "mine").iterdir()) == ["notes.txt"]  # multirun.yaml removed, notes kept
@@ -542,7 +539,7 @@ def test_unexpected_error_is_still_one_line(workdir, cli, monkeypatch):
     def broken(cfg):
         raise RuntimeError("a bug\nsecond line")
 
-    monkeypatch.setattr("magexp.runner.run", broken)
+    monkeypatch.setattr("magexp.run.runner.run", broken)
     proc = cli("estimator=ellipsoid")
     assert proc.returncode == 3 and proc.stderr.count("\n") == 1
     assert "RuntimeError: a bug" in proc.stderr and "MAGEXP_DEBUG" in proc.stderr
@@ -554,8 +551,8 @@ def test_utf8_byte_order_mark_is_accepted(workdir, cli):
     assert proc.returncode == 0, proc.stderr
     assert "fit_rms" in (workdir / "run" / "metrics.csv").read_text()
     (workdir / "bom.txt").write_bytes(b"\xef\xbb\xbf" + PLAIN.encode())  # plain numbers, with a BOM
-    from magexp.calibration import compose
-    from magexp.recordings import load_recording
+    from magexp.calibration.fit import compose
+    from magexp.core.recordings import load_recording
 
     rec = load_recording("bom.txt", unit=compose(["data.unit=µT"]).data.unit)  # µT: the alias of uT
     assert rec.unit == "uT" and rec.readings.shape == (60, 3) and rec.meta["format"] == "plain 3 columns"
@@ -565,7 +562,7 @@ def test_valid_edges_are_accepted(workdir, cli):
     """The guards refuse only what they name: a folder beside results/ whose name starts the same,
     an inclination of exactly 90 degrees, folds=0 and a sweep sub-folder with no '..'."""
     beside = RESULTS.parent / f"{RESULTS.name}_not_inside"
-    from magexp.guard import check_destination
+    from magexp.run.guard import check_destination
 
     assert check_destination(beside, "--out") == beside.resolve()
     assert check_destination(RESULTS, "--out", canonical=True) == RESULTS.resolve()
@@ -580,7 +577,7 @@ def test_valid_edges_are_accepted(workdir, cli):
 
 @pytest.mark.parametrize("args", [
     ["-m", "magexp", "calibrate", "data.path=good.csv", "folds=abc"],
-    ["-m", "magexp.reproduce", "ding2024", "--jobs", "abc"],
+    ["-m", "magexp.artifacts.reproduce", "ding2024", "--jobs", "abc"],
 ], ids=lambda a: " ".join(a[1:]))
 def test_bad_input_in_a_process(workdir, args):
     """The process boundary: the same one line, exit 2, from a real ``python -m ...``."""

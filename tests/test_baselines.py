@@ -5,14 +5,14 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.dataset import Dataset, Truth
+from magexp.core.dataset import Dataset, Truth
 from magexp.estimators import twostep as ts
 from magexp.estimators.boundaries import clip, random_reentry, reflect
 from magexp.estimators.ellipsoid import constraint_matrix, fit_ellipsoid, fit_ellipsoid_specific
 from magexp.estimators.reduced import expand
 from magexp.estimators.triangular import (MaximumLikelihoodScalar, TriangularCalibration, merayo_matrix,
                                           merayo_parameters)
-from magexp.metrics import evaluate
+from magexp.core.metrics import evaluate
 from magexp.problems import make_problem
 from magexp.scenarios.search import SearchBox
 
@@ -217,7 +217,7 @@ def test_boundary_strategies_by_hand():
 
 def test_boundary_is_a_checked_setting_and_reflect_keeps_the_swarm_inside(make_cfg):
     from magexp.errors import MagexpError
-    from magexp.runner import build
+    from magexp.run.runner import build
 
     with pytest.raises(MagexpError, match="estimator.boundary='wall' is not allowed: choose one of clip, reflect"):
         build(make_cfg("estimator=pso", "estimator.boundary=wall").estimator, "pso")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from magexp.bench import reach, row, wilson
+from magexp.perf.bench import reach, row, wilson
 
 
 def test_wilson_interval_of_all_and_none():

@@ -9,7 +9,7 @@ from magexp.estimators.cmaes import CMAES
 from magexp.estimators.de import DifferentialEvolution
 from magexp.estimators.lm import LevenbergMarquardt
 from magexp.problems import make_problem
-from magexp.runner import build
+from magexp.run.runner import build
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp import bounds
-from magexp.bounds import cramer_rao
+from magexp.core import bounds
+from magexp.core.bounds import cramer_rao
 from magexp.estimators.lm import LevenbergMarquardt
 from magexp.paths import CONF
 from magexp.problems import make_problem, problem_class

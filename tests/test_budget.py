@@ -1,4 +1,4 @@
-"""Bounded work (:mod:`magexp.budget`): every command refuses work over a limit in one line naming the
+"""Bounded work (:mod:`magexp.run.budget`): every command refuses work over a limit in one line naming the
 value and the limit, exit 2, before anything runs or is written.
 
 "Before anything runs" is asserted by counting: the fit, the run and the planning functions are
@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from magexp import budget
-from magexp.config import compose_config, options, parse_overrides, resolved
+from magexp.run import budget
+from magexp.run.compose import compose_config, options, parse_overrides, resolved
 from magexp.errors import MagexpError
 
 CALIB = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
@@ -20,10 +20,10 @@ CALIB = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
 def started(monkeypatch):
     """Counts of what a command started: runs (``runner.run_batch``), fits of a calibration
     (``calibration._fit``), reproduction plans (``artifacts.plan_artifact``), recordings read."""
-    import magexp.artifacts
-    import magexp.calibration
-    import magexp.recordings
-    import magexp.runner
+    import magexp.artifacts.plan
+    import magexp.calibration.fit
+    import magexp.core.recordings
+    import magexp.run.runner
 
     counts = {"runs": 0, "fits": 0, "plans": 0, "reads": 0}
 
@@ -36,10 +36,10 @@ def started(monkeypatch):
 
         monkeypatch.setattr(module, name, wrapper)
 
-    counted(magexp.runner, "run_batch", "runs")
-    counted(magexp.calibration, "_fit", "fits")
-    counted(magexp.artifacts, "plan_artifact", "plans")
-    counted(magexp.recordings, "load_recording", "reads")
+    counted(magexp.run.runner, "run_batch", "runs")
+    counted(magexp.calibration.fit, "_fit", "fits")
+    counted(magexp.artifacts.plan, "plan_artifact", "plans")
+    counted(magexp.core.recordings, "load_recording", "reads")
     return counts
 
 
@@ -93,12 +93,12 @@ def test_a_run_over_a_limit_is_refused_before_it_starts(cli, work, started, args
 
 
 def test_a_sweep_is_counted_before_it_is_expanded(cli, work, started, monkeypatch):
-    import magexp.cli_checks
+    import magexp.run.preflight
 
     def no_product(*axes):  # expanding 10^8 jobs is itself the work to refuse
         raise AssertionError("the sweep was expanded before its size was checked")
 
-    monkeypatch.setattr(magexp.cli_checks.itertools, "product", no_product)
+    monkeypatch.setattr(magexp.run.preflight.itertools, "product", no_product)
     result = cli("-m", "seed=range(0,100000000)", "estimator=pso,ipso", cwd=work)
     assert result.returncode == 2
     one_line(result.stderr, "seed=range(0,100000000)", "200000000 runs", "200000 runs", "MAGEXP_MAX_RUNS")
@@ -161,7 +161,7 @@ def test_the_estimate_follows_the_equations():
 
 
 def test_every_papers_reproduction_is_within_the_runs_limit():
-    from magexp.reproduce import available_papers, select
+    from magexp.artifacts.reproduce import available_papers, select
 
     selected = select(available_papers(), None)
     runs = budget.check_reproduction(selected, None)
@@ -169,7 +169,7 @@ def test_every_papers_reproduction_is_within_the_runs_limit():
 
 
 def test_reproduce_seeds_is_refused_before_planning(work, started, capsys):
-    from magexp.reproduce import main
+    from magexp.artifacts.reproduce import main
 
     assert main(["yan2022", "--seeds", "100000000", "--out", str(work / "out")]) == 2
     one_line(capsys.readouterr().err, "--seeds 100000000", "MAGEXP_MAX_RUNS")
@@ -177,7 +177,7 @@ def test_reproduce_seeds_is_refused_before_planning(work, started, capsys):
 
 
 def test_run_many_refuses_before_any_run(started):
-    from magexp.executor import run_many
+    from magexp.run.executor import run_many
 
     plain = resolved(compose_config(["estimator.n_iterations=100000000"]))
     with pytest.raises(MagexpError, match="estimator.n_iterations=100000000.*MAGEXP_MAX_RUN_WORK"):
@@ -205,7 +205,7 @@ def test_a_calibration_over_a_limit_is_refused_before_a_fit(cli, work, started, 
 
 
 def test_folds_times_fits_over_the_work_limit_is_refused(work, started, monkeypatch):
-    from magexp.calibration import calibrate
+    from magexp.calibration.fit import calibrate
 
     monkeypatch.setenv("MAGEXP_MAX_WORK", "1e9")
     data = recording(work / "rec.csv", 2000)

@@ -13,15 +13,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from magexp import cache, paths, reproduce
-from magexp.runner import RunOutput
+from magexp import paths
+
+from magexp.run import cache
+
+from magexp.artifacts import reproduce
+from magexp.run.runner import RunOutput
 
 ARTIFACT = ["yan2022", "--only", "yan2022_table_mockup", "--seeds", "2", "--tiny", "--jobs", "1"]  # 6 runs, 2 tasks
 RUNS = 6
 
 
 def reproduce_into(out: Path, cache_dir: Path) -> int:
-    """``python -m magexp.reproduce ARTIFACT --out out`` in this process, on the run cache ``cache_dir``."""
+    """``python -m magexp.artifacts.reproduce ARTIFACT --out out`` in this process, on the run cache ``cache_dir``."""
     saved = cache.CACHE, paths.CACHE
     cache.CACHE = paths.CACHE = cache_dir
     try:
@@ -50,7 +54,7 @@ def clean(tmp_path_factory):
 
 def forge(data: bytes, old: bytes, new: bytes) -> bytes:
     """An entry with ``old`` replaced by ``new`` in its body and the digest made to match (as a forger
-    would: the layout is documented in :func:`magexp.cache.pack`)."""
+    would: the layout is documented in :func:`magexp.run.cache.pack`)."""
     first, _, body = data.partition(b"\n")
     body = body.replace(old, new)
     magic, _, m, n = first.split()
@@ -235,8 +239,9 @@ def test_entries_are_shared_with_the_group_of_a_shared_folder(tmp_path):
 CONCURRENT = """
 import sys, time
 from pathlib import Path
-from magexp import executor, runner
-from magexp.reproduce import main
+from magexp.run import executor
+from magexp.run import runner
+from magexp.artifacts.reproduce import main
 log, me, other = Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3])
 real_batch, real_many = runner.run_batch, executor.run_many
 def run_batch(configs):

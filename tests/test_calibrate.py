@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.calibration import MIN_READINGS, attitude_of, calibrate_recording, search_box
-from magexp.calibrate_output import FILES, check_out
+from magexp.calibration.fit import MIN_READINGS, attitude_of, calibrate_recording, search_box
+from magexp.calibration.write import FILES, check_out
 from magexp.errors import MagexpError
 from magexp.paths import CONF, RESULTS, SHARED_DATA
-from magexp.recordings import UNITS, load_recording
-from magexp.runner import build
+from magexp.core.recordings import UNITS, load_recording
+from magexp.run.runner import build
 from magexp.scenarios.ship import ship_attitude
 
 FXOS = SHARED_DATA / "fxos8700_mag_readings.txt"
@@ -33,8 +33,8 @@ def magexp(cli):
     """``magexp(*args, cwd=...)``: ``magexp calibrate ARGS`` in-process (the ``cli`` fixture of conftest.py)."""
     import importlib.util
 
-    if importlib.util.find_spec("magexp.calibration") is None:
-        pytest.skip("the calibrate command (magexp.calibration) is not in this build")
+    if importlib.util.find_spec("magexp.calibration.fit") is None:
+        pytest.skip("the calibrate command (magexp.calibration.fit) is not in this build")
     return lambda *args, cwd: cli("calibrate", *args, cwd=cwd)
 
 
@@ -129,7 +129,7 @@ def test_gyro_rates_integrate_to_attitudes(tmp_path):
 
 def test_search_box_from_data():
     r = np.array([[-10.0, 0, 5], [30, 2, -4], [0, 1, 1]])
-    from magexp.calibration import centroid_radius
+    from magexp.calibration.fit import centroid_radius
 
     box = search_box(r, 2 * centroid_radius(r))
     assert box.offset == (-10.0, 30.0)
@@ -203,7 +203,7 @@ def test_units_are_carried():
 
 
 def test_reference_order_and_unit_agreement(tmp_path):
-    from magexp.calibration import reference_of
+    from magexp.calibration.fit import reference_of
 
     rows = np.column_stack([np.ones((12, 3)), np.arange(50.0, 62.0)])
     body = "\n".join(",".join(map(str, r)) for r in rows) + "\n"

@@ -8,11 +8,11 @@ import pandas as pd
 import pytest
 
 import magexp
-from magexp.calibration import main
+from magexp.calibration.fit import main
 from magexp.errors import MagexpError
-from magexp.geometry import random_rotations
+from magexp.core.geometry import random_rotations
 from magexp.paths import SHARED_DATA
-from magexp.quality import canonical, coverage
+from magexp.core.quality import canonical, coverage
 
 FXOS = SHARED_DATA / "fxos8700_mag_readings.txt"
 needs_fxos = pytest.mark.skipif(not FXOS.is_file(), reason=f"{FXOS} is not present")

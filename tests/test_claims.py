@@ -4,11 +4,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, Claim, ci, evaluate, fisher_greater,
+from magexp.artifacts.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, Claim, ci, evaluate, fisher_greater,
                            interpolate, wilcoxon_less)
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.report import claim_outcomes
+from magexp.artifacts.report import claim_outcomes
 
 
 def _table(groups: dict) -> pd.DataFrame:
@@ -97,7 +97,7 @@ def test_no_claim_the_report_states_is_false():
 def test_cell_settings_are_each_cells_first_row():
     import pandas as pd
 
-    from magexp.claims import cell_settings
+    from magexp.artifacts.claims import cell_settings
 
     def by_groupby(table):  # the reference: a groupby over cells, each cell's first row
         out = {}

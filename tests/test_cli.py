@@ -36,7 +36,7 @@ def test_single_run_prints_metrics_and_writes_rows_with_provenance(tmp_path, cap
     (metrics,) = read_csv(out / "metrics.csv")
     assert metrics["estimator"] == "ipso" and metrics["seed"] == "3" and metrics["cached"] == "False"
     from magexp import __version__
-    from magexp.provenance import config_hash
+    from magexp.run.provenance import config_hash
 
     config = yaml.safe_load((out / "config.yaml").read_text())
     assert config["estimator"]["n_iterations"] == 100 and config["seed"] == 3
@@ -91,7 +91,7 @@ def test_help_lists_the_groups_and_version_names_the_commit(capsys):
     assert "ding2024_exp1" in text and "ellipsoid" in text and "-m" in text and "calibrate" in text
     magexp_main(["--version"])
     from magexp import __version__
-    from magexp.provenance import commit
+    from magexp.run.provenance import commit
 
     assert capsys.readouterr().out.startswith(f"magexp {__version__} (commit {commit()}")
 
@@ -107,13 +107,13 @@ def test_exit_codes_across_the_process_boundary(tmp_path):
 
 
 def test_calibrate_is_its_own_command(capsys, monkeypatch):
-    """``magexp calibrate ARGS`` is ``magexp.calibration.main(ARGS)``, before any composing."""
+    """``magexp calibrate ARGS`` is ``magexp.calibration.fit.main(ARGS)``, before any composing."""
     import types
 
     seen = []
-    fake = types.ModuleType("magexp.calibration")
+    fake = types.ModuleType("magexp.calibration.fit")
     fake.main = lambda argv: seen.append(argv) or 0
-    monkeypatch.setitem(sys.modules, "magexp.calibration", fake)
+    monkeypatch.setitem(sys.modules, "magexp.calibration.fit", fake)
     with pytest.raises(SystemExit) as info:
         magexp_main(["calibrate", "data.path=x.csv", "estimator=lm"])
     assert info.value.code == 0 and seen == [["data.path=x.csv", "estimator=lm"]]
@@ -124,11 +124,11 @@ def test_calibrate_is_its_own_command(capsys, monkeypatch):
 
 
 def test_calibrate_without_its_module_is_one_line(capsys, monkeypatch):
-    monkeypatch.setitem(sys.modules, "magexp.calibration", None)  # as if absent
+    monkeypatch.setitem(sys.modules, "magexp.calibration.fit", None)  # as if absent
     with pytest.raises(SystemExit) as info:
         magexp_main(["calibrate", "data.path=x.csv"])
     err = capsys.readouterr().err
-    assert info.value.code == 2 and err.count("\n") == 1 and "magexp.calibration" in err
+    assert info.value.code == 2 and err.count("\n") == 1 and "magexp.calibration.fit" in err
 
 
 def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):
@@ -143,7 +143,7 @@ def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):
 
 def test_provenance_names_the_commit_and_hashes_the_resolved_config():
     from magexp.paths import ROOT
-    from magexp.provenance import commit, config_hash, provenance
+    from magexp.run.provenance import commit, config_hash, provenance
 
     head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True)
     if head.returncode == 0:

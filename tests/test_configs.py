@@ -5,11 +5,11 @@ import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from magexp.artifacts import cells, load_spec, overrides_of
-from magexp.config import options
+from magexp.artifacts.plan import cells, load_spec, overrides_of
+from magexp.run.compose import options
 from magexp.paths import EXPERIMENTS
-from magexp.plots import kind_module
-from magexp.summary import matches, reported_entries
+from magexp.artifacts.plots import kind_module
+from magexp.artifacts.summary import matches, reported_entries
 
 SCENARIOS = options("scenario")
 ARTIFACTS = sorted(EXPERIMENTS.glob("*/*_*.yaml"))
@@ -26,7 +26,7 @@ def test_scenario_composes_generates_and_names_itself(make_cfg, name):
 
 
 def test_run_seed_reproducibility(make_cfg):
-    from magexp.runner import run
+    from magexp.run.runner import run
 
     a = run(make_cfg("estimator=ipso", "seed=4", "estimator.n_iterations=50"))
     b = run(make_cfg("estimator=ipso", "seed=4", "estimator.n_iterations=50"))
@@ -56,12 +56,12 @@ def test_artifact_spec_is_well_formed(make_cfg, path):
         assert any(matches(entry.get("match", {}), s) for s in settings), entry
 
 
-# --- the one composer (magexp.config) -------------------------------------------------------
+# --- the one composer (magexp.run.compose) -------------------------------------------------------
 
 @pytest.mark.parametrize("text", ["2", "-3", "+4", "007", "0", "1.5", "1e-06", "1E5", ".5", "5.", "05e1", "abc", "a_b",
                                   "True", "null", "inf", "nan", "[1,2]", "1_000", "0x10", "'quoted'"])
 def test_yaml_value_types_as_hydras_grammar(text):
-    from magexp.config import parse_overrides, yaml_value
+    from magexp.run.compose import parse_overrides, yaml_value
 
     ours, hydra = yaml_value(text), parse_overrides([f"k={text}"])[0].value()
     assert type(ours) is type(hydra) and (ours == hydra or ours != ours and hydra != hydra)
@@ -71,7 +71,7 @@ def test_yaml_value_types_as_hydras_grammar(text):
                                        ["scenario=yan2022_mockup", "estimator=ls", "seed=4"],
                                        ["scenario=ding2024_exp2", "scenario.noise=5", "estimator.n_particles=7"]])
 def test_compose_config_equals_hydras_compose(overrides):
-    from magexp.config import compose_config, hydra_compose
+    from magexp.run.compose import compose_config, hydra_compose
 
     expected = OmegaConf.to_container(hydra_compose(tuple(overrides)), resolve=True)
     for _ in range(3):  # first compose, then from disk / grafted in memory
@@ -79,7 +79,7 @@ def test_compose_config_equals_hydras_compose(overrides):
 
 
 def test_a_composed_config_from_disk_keeps_its_schema(tmp_path, monkeypatch):
-    import magexp.config as config
+    import magexp.run.compose as config
     from magexp.errors import MagexpError
 
     monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "fresh")
@@ -95,7 +95,7 @@ def test_a_composed_config_from_disk_keeps_its_schema(tmp_path, monkeypatch):
 
 
 def test_a_typo_names_the_key_and_the_keys_that_exist():
-    from magexp.config import compose_config
+    from magexp.run.compose import compose_config
     from magexp.errors import MagexpError
 
     with pytest.raises(MagexpError) as info:
@@ -107,7 +107,7 @@ def test_a_typo_names_the_key_and_the_keys_that_exist():
 
 def test_schema_types_are_checked_at_compose_time():
     """The schema refuses a value of the wrong type before any constructor runs."""
-    from magexp.config import compose_config
+    from magexp.run.compose import compose_config
     from magexp.errors import MagexpError
 
     with pytest.raises(MagexpError, match="scenario.n_readings=many"):
@@ -117,7 +117,7 @@ def test_schema_types_are_checked_at_compose_time():
 
 
 def test_yuan_scenarios_inherit_one_base():
-    from magexp.config import YuanScenarioConf, compose_config
+    from magexp.run.compose import YuanScenarioConf, compose_config
     from magexp.paths import CONF
 
     names = [n for n in SCENARIOS if n.startswith("yuan2018_")]
@@ -135,7 +135,7 @@ def test_yuan_scenarios_inherit_one_base():
 
 
 def test_calibration_keys_are_unknown_to_a_simulation_run():
-    from magexp.config import compose_config
+    from magexp.run.compose import compose_config
     from magexp.errors import MagexpError
 
     for override in ("task=calibrate", "data.path=x.csv", "out=folder"):

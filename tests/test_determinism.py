@@ -18,8 +18,8 @@ import pytest
 
 from magexp.estimators.lm import LevenbergMarquardt
 from magexp.problems import make_problem
-from magexp.runner import build
-from magexp.seeding import run_generators, scenario_stream
+from magexp.run.runner import build
+from magexp.core.seeding import run_generators, scenario_stream
 
 #: turns about two axes only: the offset is undetermined, the rotation of W too (the worst case)
 PARTIAL_ARC = ["scenario=yuan2018_mode3", "scenario.rotation.partial_arc_deg=60", "objective=scalar", "estimator=lm"]
@@ -43,7 +43,7 @@ def dirty_heap(fill: float) -> None:
 @pytest.fixture(scope="module")
 def partial_arc():
     """The dataset, scenario of one benchmark_coverage cell (seed 1)."""
-    from magexp.config import compose_config
+    from magexp.run.compose import compose_config
 
     cfg = compose_config(PARTIAL_ARC + ["seed=1"])
     scenario = build(cfg["scenario"], "scenario")
@@ -90,11 +90,11 @@ def dataset_with(dataset, readings):
 #: the address layout: one try may repeat another, twelve have not all agreed in 18 processes)
 CHURN = """
 import numpy as np
-from magexp.config import compose_config
+from magexp.run.compose import compose_config
 from magexp.estimators.lm import LevenbergMarquardt
 from magexp.problems import make_problem
-from magexp.runner import build
-from magexp.seeding import run_generators, scenario_stream
+from magexp.run.runner import build
+from magexp.core.seeding import run_generators, scenario_stream
 cfg = compose_config(%r + ["seed=1"])
 scenario = build(cfg["scenario"], "scenario")
 dataset = scenario.generate(rng=run_generators(1, stream=scenario_stream(cfg["scenario"]))[0])
@@ -154,9 +154,9 @@ def test_an_undetermined_offset_is_flagged(partial_arc):
 SCRIPT = """
 import dataclasses, sys
 import numpy as np
-from magexp.artifacts import run_artifact
+from magexp.artifacts.plan import run_artifact
 from magexp.paths import EXPERIMENTS
-from magexp.spec import load
+from magexp.artifacts.spec import load
 busy, out = sys.argv[1] == "busy", sys.argv[2]
 if busy:
     from magexp.estimators.lm import LevenbergMarquardt

@@ -5,9 +5,9 @@ import pytest
 from hydra.utils import instantiate
 
 from magexp.errors import MagexpError
-from magexp.geometry import field_ned, random_rotations
+from magexp.core.geometry import field_ned, random_rotations
 from magexp.problems import make_problem
-from magexp.runner import run
+from magexp.run.runner import run
 from magexp.scenarios.ding import DingScenario, error_model, nonorthogonality
 
 

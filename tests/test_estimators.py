@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.cli_checks import options
+from magexp.run.preflight import options
 from magexp.errors import MagexpError
 from magexp.estimators.base import Estimator, applies_to
 from magexp.estimators.result import FitResult
 from magexp.problems import make_problem, problem_class
 from magexp.problems.base import LinearProblem, Problem
-from magexp.runner import run
+from magexp.run.runner import run
 
 SCENARIOS = options("scenario")
 ESTIMATORS = options("estimator")

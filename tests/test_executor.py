@@ -9,8 +9,12 @@ import time
 import pytest
 from omegaconf import OmegaConf
 
-from magexp import cache, executor, runner
-from magexp.artifacts import compose_config
+from magexp.run import cache
+
+from magexp.run import executor
+
+from magexp.run import runner
+from magexp.artifacts.plan import compose_config
 
 
 def configs(*overrides, seeds=(0, 1)):
@@ -120,7 +124,7 @@ def _kill_a_worker_once_busy(client, done: threading.Event):
 def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, monkeypatch):
     """A LocalCluster of two workers runs a tiny reproduction and a sweep; one worker is killed
     midway; the scheduler reruns its task elsewhere and every output file is byte-identical."""
-    from magexp.reproduce import reproduce, select
+    from magexp.artifacts.reproduce import reproduce, select
 
     selected = select(["ding2024"], "ding2024_fig5")
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_local")
@@ -178,7 +182,7 @@ class _RemoteLike(executor.InlineExecutor):
 
 
 def test_workers_store_their_runs_and_the_counts_split_the_cpu(tmp_path, monkeypatch):
-    from magexp.reproduce import cpu_line
+    from magexp.artifacts.reproduce import cpu_line
 
     batch = configs(*DING, "estimator=ellipsoid", seeds=range(3)) + configs(*DING, "estimator=pso", seeds=range(3))
     keys = cache.run_keys(batch)
@@ -218,7 +222,7 @@ def test_workers_store_their_runs_and_the_counts_split_the_cpu(tmp_path, monkeyp
 def test_a_batch_gives_each_estimator_the_generator_run_generators_gives():
     import numpy as np
 
-    from magexp.seeding import run_generators, run_sequences
+    from magexp.core.seeding import run_generators, run_sequences
 
     stream = {"name": "ding2024_exp1", "noise": 2}
     data, est = run_generators(7, stream=stream)
@@ -234,7 +238,7 @@ def test_a_batch_gives_each_estimator_the_generator_run_generators_gives():
 def test_truth_cost_is_computed_once_per_problem_and_equals_the_direct_cost(scenario, estimators, monkeypatch):
     import numpy as np
 
-    from magexp import metrics
+    from magexp.core import metrics
 
     batch = [c for e in estimators for c in configs(f"scenario={scenario}", f"estimator={e}", seeds=(0,))]
     alone = [runner.run(OmegaConf.create(c)) for c in batch]
@@ -275,7 +279,7 @@ def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
         memo.write_text(json.dumps({cache._source_stamp(): "kept"}))
         cache.code_version.cache_clear()
         assert cache.code_version() == "kept"  # read back, not recomputed
-        with (copy / "magexp/bounds.py").open("a") as fh:
+        with (copy / "magexp/core/bounds.py").open("a") as fh:
             fh.write("\n# an edit\n")
         cache.code_version.cache_clear()
         assert cache.code_version() == cache._closure_hash() not in ("kept", version)  # a new stamp: recomputed
@@ -287,7 +291,7 @@ def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
 def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, monkeypatch):
     import numpy as np
 
-    from magexp import bounds
+    from magexp.core import bounds
 
     problems = [runner._Shared().problem(c, runner.build(c["scenario"], "scenario"), c["seed"])[2]
                 for c in configs(f"scenario={scenario}", seeds=(0, 1))]

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from magexp.problems import make_problem
-from magexp.runner import build
+from magexp.run.runner import build
 
 CASES = [  # (scenario, objective, problem options, noise values: paper's and noise-free)
     ("yuan2018_table2", "vector", {"parameterisation": "forward"}, ["0.45", "0"]),

@@ -1,6 +1,6 @@
 """Every artifact's figure, drawn from its committed CSV under ``results/`` (no run), is free of the
 defects a reader sees: an empty panel, text printed over text, a colour bar naming another column
-than the one drawn, a legend of raw override strings (:mod:`magexp.plots.check`)."""
+than the one drawn, a legend of raw override strings (:mod:`magexp.artifacts.plots.check`)."""
 
 from __future__ import annotations
 
@@ -10,13 +10,13 @@ import pytest
 import numpy as np
 from omegaconf import OmegaConf
 
-from magexp.artifacts import paper_specs
+from magexp.artifacts.plan import paper_specs
 from magexp.paths import RESULTS
-from magexp.plots import kind_module
-from magexp.plots.benchmark_table import bound_ratio
-from magexp.plots.check import colorbar_mismatch, defects, empty_axes, legend_defects, overlapping_text, raw_legends
-from magexp.plots.style import colorbar, drawn_from, plt
-from magexp.spec import papers
+from magexp.artifacts.plots import kind_module
+from magexp.artifacts.plots.benchmark_table import bound_ratio
+from magexp.artifacts.plots.check import colorbar_mismatch, defects, empty_axes, legend_defects, overlapping_text, raw_legends
+from magexp.artifacts.plots.style import colorbar, drawn_from, plt
+from magexp.artifacts.spec import papers
 
 
 #: figures another branch of issue 18 redraws (real data has no truth to draw "estimate - truth"
@@ -142,7 +142,7 @@ def test_final_draws_the_papers_values_and_ratios():
 def test_a_calibration_figure_shows_a_successful_run_and_says_so():
     from types import SimpleNamespace
 
-    from magexp.plots.field import shown_seed
+    from magexp.artifacts.plots.field import shown_seed
 
     table = pd.DataFrame({"cell": [0, 0, 0, 1, 1], "seed": [0, 1, 2, 0, 1],
                           "succeeded": [0.0, 1.0, 1.0, 0.0, 0.0]})

@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 from omegaconf import OmegaConf
 
-from magexp.plots import kind_module
-from magexp.plots.style import panels, save
+from magexp.artifacts.plots import kind_module
+from magexp.artifacts.plots.style import panels, save
 
 
 def frame():
@@ -64,7 +64,7 @@ def test_math_text_parsed_once_for_every_figure_gives_the_same_bytes(tmp_path, m
     from matplotlib import mathtext
 
     shared = mathtext.MathTextParser._parse_cached
-    assert shared.shared  # in place once magexp.plots.style is imported
+    assert shared.shared  # in place once magexp.artifacts.plots.style is imported
     draw = kind_module("convergence").draw  # log axes: math text tick labels
     hits = shared.cache_info().hits
     save(draw(frame(), SPEC), tmp_path / "shared.png")

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from magexp.dataset import Dataset
+from magexp.core.dataset import Dataset
 from magexp.estimators.lm import LevenbergMarquardt
-from magexp.geometry import attitude_at, preintegrate
+from magexp.core.geometry import attitude_at, preintegrate
 from magexp.paths import SHARED_DATA
 from magexp.problems import make_problem
 from magexp.scenarios.search import SearchBox
@@ -67,7 +67,7 @@ def test_turns_about_one_axis_leave_a_combination_undetermined():
 
 @pytest.mark.skipif(not (SHARED_DATA / "hmc5883l_full-sphere_mag.csv").is_file(), reason="recordings absent")
 def test_real_full_sphere_gyro_bias_agrees_with_rest_recording():
-    from magexp.recordings import load_recording
+    from magexp.core.recordings import load_recording
     from magexp.scenarios.recording import RecordingScenario
 
     sc = RecordingScenario(name="t", file="hmc5883l_full-sphere", objective="gyro", window=(0, 30), n_readings=300)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from magexp.errors import MagexpError
-from magexp.igrf import field_at
+from magexp.core.igrf import field_at
 
 # NOAA NCEI Geomagnetic Calculator (https://www.ngdc.noaa.gov/geomag/calculators/magcalc.shtml),
 # model IGRF2020, calculator version 0.5.1.11, date 2022.75890 (2022-10-05), 5 km above the WGS84

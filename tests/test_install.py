@@ -56,7 +56,7 @@ def test_wheel_installs_and_runs_from_another_folder(tmp_path):
     assert (work / "one" / "metrics.csv").exists()
     run([magexp, "-m", "estimator=ellipsoid,lm", "hydra.sweep.dir=sweep", "hydra.launcher.jobs=1"], cwd=work, env=env)
     assert len((work / "sweep" / "sweep.csv").read_text().splitlines()) == 3
-    run([str(python), "-m", "magexp.reproduce", "yan2022", "--only", "yan2022_table_mockup", "--tiny", "--jobs", "1",
+    run([str(python), "-m", "magexp.artifacts.reproduce", "yan2022", "--only", "yan2022_table_mockup", "--tiny", "--jobs", "1",
          "--out", "scratch"], cwd=work, env=env)
     assert (work / "scratch" / "yan2022" / "yan2022_table_mockup.csv").exists()
     assert sorted(p.name for p in work.iterdir()) == ["one", "scratch", "sweep"]  # nothing else written

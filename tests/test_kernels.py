@@ -111,7 +111,7 @@ def test_the_lean_swarm_cost_gives_the_kernels_bits(objective):
     """``problem.cost`` through the prepared compiled entry (:func:`kernels.swarm_cost`) equals the
     kernels called on ``W``, ``o`` bit for bit, a non-finite particle included; a forward
     parameterisation and a subclass that changes the cost get no compiled entry."""
-    from magexp.dataset import Dataset
+    from magexp.core.dataset import Dataset
     from magexp.problems import make_problem
     from magexp.problems.base import swarm_kernel
     from magexp.scenarios.search import SearchBox

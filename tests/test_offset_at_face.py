@@ -1,9 +1,9 @@
-"""The per-run count of offset estimates on the search box's face (magexp.artifacts.offset_at_face)."""
+"""The per-run count of offset estimates on the search box's face (magexp.artifacts.plan.offset_at_face)."""
 
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts import offset_at_face
+from magexp.artifacts.plan import offset_at_face
 
 
 def _configs(*boxes):

@@ -1,4 +1,4 @@
-"""Workers end with their parent (:func:`magexp.executor.watch_parent`): a reproduction whose parent
+"""Workers end with their parent (:func:`magexp.run.executor.watch_parent`): a reproduction whose parent
 is killed (``kill -9``) leaves no worker running."""
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def wait_gone(processes, seconds: float) -> list[int]:
 
 def test_killing_a_reproductions_parent_ends_its_workers(tmp_path):
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}  # nothing cached: the workers compute
-    parent = subprocess.Popen([sys.executable, "-m", "magexp.reproduce", "ding2024", "--only", "ding2024_fig3",
+    parent = subprocess.Popen([sys.executable, "-m", "magexp.artifacts.reproduce", "ding2024", "--only", "ding2024_fig3",
                                "--jobs", "2", "--out", str(tmp_path / "out")],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:
@@ -63,7 +63,7 @@ def test_the_portable_fallback_alone_ends_an_orphan(tmp_path):
     """Without ``prctl`` (another system): the thread that looks at ``os.getppid()`` ends the worker."""
     script = textwrap.dedent("""
         import os, sys, time
-        from magexp import executor
+        from magexp.run import executor
         pid = os.fork()
         if pid == 0:
             sys.platform = "darwin"  # no prctl: the polling thread only

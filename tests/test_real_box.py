@@ -1,5 +1,5 @@
 """The search box of a recording comes from the data and holds the optimum, axis flips included;
-success and intervals without a truth (magexp.scenarios.search, magexp.artifacts.BEST, magexp.quality)."""
+success and intervals without a truth (magexp.scenarios.search, magexp.artifacts.plan.BEST, magexp.core.quality)."""
 
 from pathlib import Path
 
@@ -52,7 +52,7 @@ def test_bad_box_settings_are_one_line_errors(kwargs):
 def test_real_table7_box_holds_the_lm_optimum_and_its_twin():
     from hydra.utils import instantiate
 
-    from magexp.config import compose_config
+    from magexp.run.compose import compose_config
     from magexp.estimators.lm import LevenbergMarquardt
     from magexp.problems import make_problem
 
@@ -71,7 +71,7 @@ def test_real_table7_box_holds_the_lm_optimum_and_its_twin():
 def test_canonical_sign_returns_the_member_with_positive_determinant():
     names = [f"S{i}{j}" for i in range(1, 4) for j in range(1, 4)] + ["b1", "b2", "b3", "field_azimuth",
                                                                        "field_elevation", "gx", "gy", "gz"]
-    from magexp.plots.real import canonical_sign
+    from magexp.artifacts.plots.real import canonical_sign
 
     x = np.concatenate([np.diag([-1.0, 1.0, 1.0]).ravel(), [0.1, 0.2, 0.3], [2.5, 0.4], [1.0, 2.0, 3.0]])
     y = canonical_sign(names, x)
@@ -85,8 +85,8 @@ def test_canonical_sign_returns_the_member_with_positive_determinant():
 
 
 def test_success_against_the_best_run_of_the_same_recording():
-    from magexp.artifacts import best_of, succeeded
-    from magexp.spec import Success
+    from magexp.artifacts.plan import best_of, succeeded
+    from magexp.artifacts.spec import Success
 
     table = pd.DataFrame({"scenario": ["a", "a", "a", "b", "b"], "objective": ["gyro"] * 5,
                           "fg": [2.6, 2.7, 68.6, 10.0, 10.5]})
@@ -96,7 +96,7 @@ def test_success_against_the_best_run_of_the_same_recording():
 
 
 def test_block_bootstrap_interval_holds_the_spread_and_widens_with_noise():
-    from magexp.quality import block_bootstrap_spread, spread
+    from magexp.core.quality import block_bootstrap_spread, spread
 
     rng = np.random.default_rng(0)
     calm, noisy = 1 + 0.01 * rng.normal(size=600), 1 + 0.05 * rng.normal(size=600)
@@ -108,7 +108,7 @@ def test_block_bootstrap_interval_holds_the_spread_and_widens_with_noise():
 
 
 def _recording_frame():
-    from magexp.plots.real import ESTIMATE_PANELS, RUN_QUANTITIES
+    from magexp.artifacts.plots.real import ESTIMATE_PANELS, RUN_QUANTITIES
 
     rows = []
     for k, est in enumerate(["lm", "rdpso"]):
@@ -126,8 +126,8 @@ def _recording_frame():
 
 
 def test_recording_figure_draws_every_panel_without_a_truth():
-    from magexp.plots import kind_module
-    from magexp.spec import parse
+    from magexp.artifacts.plots import kind_module
+    from magexp.artifacts.spec import parse
 
     spec = parse({"title": "t", "kind": "recording", "plot": {"metric": "fg"},
                   "success": {"metric": "fg", "reference": "best"}}, Path("real_x.yaml"))

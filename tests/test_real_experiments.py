@@ -4,7 +4,7 @@ import pandas as pd
 import pytest
 
 from magexp import paths
-from magexp.artifacts import paper_specs
+from magexp.artifacts.plan import paper_specs
 
 
 def test_every_real_artifact_names_the_recordings_it_needs():
@@ -14,7 +14,7 @@ def test_every_real_artifact_names_the_recordings_it_needs():
 
 
 def test_absent_recordings_skip_each_artifact_in_one_line(tmp_path, monkeypatch):
-    from magexp.reproduce import reproduce_paper
+    from magexp.artifacts.reproduce import reproduce_paper
 
     monkeypatch.setattr(paths, "SHARED_DATA", tmp_path / "nothing")
     lines = []
@@ -26,7 +26,7 @@ def test_absent_recordings_skip_each_artifact_in_one_line(tmp_path, monkeypatch)
 @pytest.mark.skipif(not (paths.SHARED_DATA / "hmc5883l_rotate-ccw-around-z_mag.csv").is_file(), reason="recordings absent")
 @pytest.mark.slow
 def test_modes_artifact_runs_on_the_recordings(tmp_path):
-    from magexp.reproduce import reproduce_paper
+    from magexp.artifacts.reproduce import reproduce_paper
 
     summary = reproduce_paper("real", root=tmp_path, seeds=1, jobs=1, tiny=True, only="real_modes", force=True,
                               log=lambda *_: None)

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from magexp.errors import MagexpError
-from magexp.geometry import (attitude_at, attitude_with_bias, axis_map, cumulative_product, exp_so3,
+from magexp.core.geometry import (attitude_at, attitude_with_bias, axis_map, cumulative_product, exp_so3,
                              integrate_rates, preintegrate)
 from magexp.paths import SHARED_DATA
-from magexp.recordings import READERS, detect, load_recording
+from magexp.core.recordings import READERS, detect, load_recording
 
 needs_data = pytest.mark.skipif(not SHARED_DATA.is_dir(), reason=f"{SHARED_DATA} is not present")
 

@@ -5,11 +5,11 @@ import re
 import pandas as pd
 import pytest
 
-from magexp.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS
+from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.report import MAX_CELL, MAX_CHARS, MAX_LINES, compared_rows, headline_verdict, markdown_table
-from magexp.spec import Headline, build
+from magexp.artifacts.report import MAX_CELL, MAX_CHARS, MAX_LINES, compared_rows, headline_verdict, markdown_table
+from magexp.artifacts.spec import Headline, build
 
 
 def test_headline_verdict_aggregates_its_parts():
@@ -94,9 +94,9 @@ def test_each_paper_section_opens_with_its_headline_claims():
 def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypatch):
     from types import SimpleNamespace
 
-    from magexp import report
-    from magexp.claims import Claim, evaluate
-    from magexp.spec import Paper
+    from magexp.artifacts import report
+    from magexp.artifacts.claims import Claim, evaluate
+    from magexp.artifacts.spec import Paper
 
     table = pd.DataFrame({"cell": [0, 0, 1, 1], "seed": [0, 1, 0, 1], "estimator": ["a", "a", "b", "b"],
                           "setting": ["scenario=x"] * 4, "fun": [1.0, 1.2, 5.0, 6.0], "succeeded": [1.0] * 4})

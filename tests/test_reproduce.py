@@ -10,8 +10,14 @@ import pandas as pd
 import pytest
 from omegaconf import OmegaConf
 
-from magexp import cache, executor, reproduce, runner
-from magexp.artifacts import compose_config
+from magexp.run import cache
+
+from magexp.run import executor
+
+from magexp.artifacts import reproduce
+
+from magexp.run import runner
+from magexp.artifacts.plan import compose_config
 from magexp.paths import DATA, RESULTS, ROOT
 
 
@@ -82,8 +88,8 @@ def test_a_data_edit_reruns_exactly_the_runs_that_read_it(tmp_path, monkeypatch)
     data = tmp_path / "data"
     data.mkdir()
     shutil.copy(DATA / "yan2022_mockup.csv", data / "yan2022_mockup.csv")
-    monkeypatch.setattr("magexp.datafiles.DATA", data)  # looked up where recordings are
-    monkeypatch.setattr("magexp.recordings.DATA", data)
+    monkeypatch.setattr("magexp.core.datafiles.DATA", data)  # looked up where recordings are
+    monkeypatch.setattr("magexp.core.recordings.DATA", data)
     mockup = run_configs("scenario=yan2022_mockup", "estimator=ls")
     ding = run_configs("scenario=ding2024_exp1", "scenario.n_readings=40", "estimator=ellipsoid", seeds=(0, 1))
     counts = {}
@@ -105,12 +111,12 @@ def test_a_data_edit_reruns_exactly_the_runs_that_read_it(tmp_path, monkeypatch)
 
 def test_upstream_code_is_the_runs_import_closure():
     files = {p.relative_to(ROOT).as_posix() for p in cache.upstream_files()}
-    for needed in ("magexp/runner.py", "magexp/metrics.py", "magexp/bounds.py", "magexp/seeding.py",
+    for needed in ("magexp/run/runner.py", "magexp/core/metrics.py", "magexp/core/bounds.py", "magexp/core/seeding.py",
                    "magexp/problems/scalar.py", "magexp/scenarios/ding.py", "magexp/estimators/swarm.py",
-                   "magexp/recordings.py", "magexp/__init__.py"):
+                   "magexp/core/recordings.py", "magexp/__init__.py"):
         assert needed in files, needed
-    for downstream in ("magexp/reproduce.py", "magexp/report.py", "magexp/summary.py", "magexp/executor.py",
-                       "magexp/progress.py", "magexp/plots/style.py", "magexp/plots/convergence.py"):
+    for downstream in ("magexp/artifacts/reproduce.py", "magexp/artifacts/report.py", "magexp/artifacts/summary.py", "magexp/run/executor.py",
+                       "magexp/run/progress.py", "magexp/artifacts/plots/style.py", "magexp/artifacts/plots/convergence.py"):
         assert downstream not in files, downstream
 
 
@@ -121,13 +127,13 @@ def test_a_plot_edit_reruns_nothing_and_a_bound_edit_reruns_all(tmp_path, monkey
     cache.code_version.cache_clear()
     try:
         before = cache.code_version()
-        with (copy / "magexp/plots/convergence.py").open("a") as fh:
+        with (copy / "magexp/artifacts/plots/convergence.py").open("a") as fh:
             fh.write("\n# a new label\n")
-        with (copy / "magexp/report.py").open("a") as fh:
+        with (copy / "magexp/artifacts/report.py").open("a") as fh:
             fh.write("\n# new wording\n")
         cache.code_version.cache_clear()
         assert cache.code_version() == before
-        with (copy / "magexp/bounds.py").open("a") as fh:
+        with (copy / "magexp/core/bounds.py").open("a") as fh:
             fh.write("\n# a change upstream of every run\n")
         cache.code_version.cache_clear()
         assert cache.code_version() != before
@@ -158,8 +164,8 @@ def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monk
 CTRL_C = """
 import os, signal, sys
 signal.signal(signal.SIGINT, signal.default_int_handler)
-from magexp import progress
-from magexp.reproduce import main
+from magexp.run import progress
+from magexp.artifacts.reproduce import main
 count = progress.Progress.__call__
 def count_then_interrupt(self, n=1):
     count(self, n)
@@ -187,7 +193,7 @@ def test_ctrl_c_ends_in_one_line_and_a_clean_state(tmp_path):
 
 @pytest.mark.slow
 def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypatch, capsys):
-    from magexp.plots import memo, style
+    from magexp.artifacts.plots import memo, style
 
     out = tmp_path / "res"
     argv = ["ding2024", "--only", "ding2024_fig2", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
@@ -218,8 +224,8 @@ def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypat
 
 
 def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
-    from magexp.plots import memo
-    from magexp.spec import load
+    from magexp.artifacts.plots import memo
+    from magexp.artifacts.spec import load
 
     spec = load(next(p for p in (ROOT / "experiments" / "ding2024").glob("ding2024_fig2.yaml")))
     other = load(next(p for p in (ROOT / "experiments" / "ding2024").glob("ding2024_fig3.yaml")))
@@ -238,7 +244,7 @@ def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
     try:
         assert memo.key(spec, b"a,b\n1,2\n") == k
         memo.code_version.cache_clear()
-        with (copy / "plots" / "style.py").open("a") as fh:
+        with (copy / "artifacts" / "plots" / "style.py").open("a") as fh:
             fh.write("\n# a style edit\n")
         assert memo.key(spec, b"a,b\n1,2\n") != k
     finally:
@@ -246,9 +252,9 @@ def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
 
 
 def test_mockup_summary_builds_each_cells_problem_once_with_the_same_rows(tmp_path, monkeypatch):
-    from magexp import summary
-    from magexp.artifacts import run_artifact
-    from magexp.spec import load
+    from magexp.artifacts import summary
+    from magexp.artifacts.plan import run_artifact
+    from magexp.artifacts.spec import load
 
     spec = load(ROOT / "experiments" / "yan2022" / "yan2022_table_mockup.yaml")
     runs = run_artifact(spec, seeds=1, jobs=1, tiny=True)

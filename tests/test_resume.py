@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from magexp import cache
+from magexp.run import cache
 
 
 ARGS = ["ding2024", "--only", "ding2024_table_rms", "--seeds", "2", "--tiny", "--jobs", "1"]  # 64 runs
@@ -15,8 +15,8 @@ KILL_AFTER = 10
 # a real process, killed by SIGKILL at a fixed point: right after its KILL_AFTER-th run reached the cache
 KILLED = f"""
 import os, signal, sys
-from magexp import cache
-from magexp.reproduce import main
+from magexp.run import cache
+from magexp.artifacts.reproduce import main
 store, stored = cache.store, []
 def store_then_die(*args, **kw):
     kept = store(*args, **kw)
@@ -35,7 +35,7 @@ def results(cache_dir):
 
 def reproduce_in_process(out, cache_dir, monkeypatch):
     from magexp import paths
-    from magexp.reproduce import main
+    from magexp.artifacts.reproduce import main
 
     monkeypatch.setattr(cache, "CACHE", cache_dir)
     monkeypatch.setattr(paths, "CACHE", cache_dir)

@@ -1,9 +1,9 @@
-"""``-m`` sweeps through magexp's launcher and :mod:`magexp.executor`: the same table and job folders
+"""``-m`` sweeps through magexp's launcher and :mod:`magexp.run.executor`: the same table and job folders
 on local processes and on a Dask cluster, a killed sweep resumed from the run cache, jobs run in
 parallel when asked, the sweep folder layout, and the launcher's settings checked before any run.
 
 Subprocesses where the process boundary is what is tested (a whole command, a kill); the
-launcher's :func:`magexp.sweep.launch` in-process otherwise.
+launcher's :func:`magexp.run.sweep.launch` in-process otherwise.
 """
 
 import csv
@@ -17,7 +17,7 @@ import time
 import pytest
 import yaml
 
-from magexp import cache
+from magexp.run import cache
 from magexp.__main__ import main as magexp_main
 
 IPSO = ["estimator=ipso", "estimator.n_particles=20", "estimator.n_iterations=300"]
@@ -111,7 +111,7 @@ def test_killed_sweep_resumes_from_the_cache_with_the_same_table(tmp_path):
 
 
 def _hydra_config(sweep_dir, *settings):
-    from magexp.config import hydra_compose
+    from magexp.run.compose import hydra_compose
 
     return hydra_compose((f"hydra.sweep.dir={sweep_dir}", *settings), with_hydra=True)
 
@@ -122,10 +122,10 @@ def _settings(config):
 
 def test_jobs_run_in_two_processes_at_once_when_asked(tmp_path, monkeypatch):
     """``hydra.launcher.jobs=2``: the runs execute in two worker processes, overlapping in time."""
-    import magexp.runner
-    from magexp.sweep import launch
+    import magexp.run.runner
+    from magexp.run.sweep import launch
 
-    real, log = magexp.runner.run_batch, tmp_path / "tasks.log"
+    real, log = magexp.run.runner.run_batch, tmp_path / "tasks.log"
 
     def recorded(configs):  # inherited by the forked workers
         start = time.time()
@@ -135,7 +135,7 @@ def test_jobs_run_in_two_processes_at_once_when_asked(tmp_path, monkeypatch):
             fh.write(f"{os.getpid()} {start} {time.time()}\n")
         return iter(outs)
 
-    monkeypatch.setattr(magexp.runner, "run_batch", recorded)
+    monkeypatch.setattr(magexp.run.runner, "run_batch", recorded)
     config = _hydra_config(tmp_path / "sweep", "hydra.launcher.jobs=2")
     jobs = [["estimator=ellipsoid", f"seed={s}"] for s in range(6)]
     returns = launch(config, jobs, 0, _settings(config))
@@ -151,7 +151,7 @@ def test_jobs_run_in_two_processes_at_once_when_asked(tmp_path, monkeypatch):
 
 def test_launch_numbers_jobs_from_the_batch_start_and_honours_a_subdir(tmp_path):
     """A second batch of Hydra's sweeper starts at ``initial_job_idx``; ``hydra.sweep.subdir`` names folders."""
-    from magexp.sweep import launch
+    from magexp.run.sweep import launch
 
     config = _hydra_config(tmp_path / "s", "hydra.launcher.jobs=1")
     launch(config, [["estimator=ellipsoid", "seed=7"]], 4, _settings(config))
@@ -163,11 +163,11 @@ def test_launch_numbers_jobs_from_the_batch_start_and_honours_a_subdir(tmp_path)
 
 
 def test_sweep_runs_share_the_run_cache_with_reproduce(tmp_path):
-    """A run computed by :func:`magexp.executor.run_many` (``make reproduce``'s layer) is a cached job of a
+    """A run computed by :func:`magexp.run.executor.run_many` (``make reproduce``'s layer) is a cached job of a
     sweep, with the same metrics."""
-    from magexp.config import compose_config, resolved
-    from magexp.executor import run_many
-    from magexp.sweep import launch
+    from magexp.run.compose import compose_config, resolved
+    from magexp.run.executor import run_many
+    from magexp.run.sweep import launch
 
     done = run_many([resolved(compose_config(["estimator=ellipsoid", "seed=2"]))], jobs=1)
     config = _hydra_config(tmp_path / "s", "hydra.launcher.jobs=1")
@@ -195,7 +195,7 @@ def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path,
 @pytest.mark.slow
 def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path):
     """``a,b``, ``range()`` and a group's ``glob()``: the jobs magexp checks are the jobs Hydra launches."""
-    from magexp.cli_checks import expand_sweep
+    from magexp.run.preflight import expand_sweep
 
     jobs = expand_sweep(["estimator=glob(*pso,exclude=pso)", "scenario.noise=0,5", "seed=range(1,3)"])
     assert jobs == [[f"estimator={e}", f"scenario.noise={n}", f"seed={s}"]
@@ -213,7 +213,7 @@ def test_job_yaml_is_omegaconfs_text(make_cfg):
     from omegaconf import OmegaConf
 
     from magexp.__main__ import to_yaml
-    from magexp.config import resolved
+    from magexp.run.compose import resolved
 
     plain = resolved(make_cfg("scenario=yuan2018_mode1", "estimator=rdpso", "seed=4"))
     odd = {**plain, "strings": ["null", "true", "1e-3", "a: b", "'q'", "ünï", ""], "none": None, "nested": [[1, 2.5]]}
@@ -222,7 +222,7 @@ def test_job_yaml_is_omegaconfs_text(make_cfg):
 
 
 def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path):
-    from magexp.sweep import gather
+    from magexp.run.sweep import gather
 
     for num, (est, noise, metrics) in enumerate([("lm", "0", {"fun": "1.5", "nfev": "40"}),
                                                   ("ellipsoid", "5", {"fun": "2.5", "gram_error": "0.1"})]):
@@ -237,22 +237,3 @@ def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path)
                     {"estimator": "ellipsoid", "scenario.noise": "5", "job": "1", "fun": "2.5", "nfev": "",
                      "gram_error": "0.1"}]
 
-
-def test_sweep_bench_alternates_variants_and_reports_per_job_medians():
-    """``python -m magexp.sweep_bench``: each round runs every variant once, in turn; CPU time counts the
-    command's own processes; the table gives per-job medians and ratios to the first variant."""
-    from magexp.sweep_bench import measure, table
-
-    order = []
-
-    def env(name, k):
-        order.append((name, k))
-        return dict(os.environ)
-
-    idle, busy = [sys.executable, "-c", "pass"], [sys.executable, "-c", "sum(range(3 * 10 ** 7))"]
-    times = measure({"idle": idle, "busy": busy}, 2, env)
-    assert order == [("idle", 0), ("busy", 0), ("idle", 1), ("busy", 1)]
-    assert all(b[1] > i[1] + 0.1 for i, b in zip(times["idle"], times["busy"]))  # CPU of the child process
-    lines = table({"a": [(2.0, 1.0), (4.0, 3.0), (3.0, 2.0)], "b": [(1.0, 1.0), (1.5, 0.5), (9.0, 0.25)]}, n_jobs=10)
-    assert lines[1].split() == ["a", "300.0", "200.0", "1.000", "1.000"]
-    assert lines[2].split() == ["b", "150.0", "50.0", "0.500", "0.250"]

@@ -4,10 +4,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts import succeeded
-from magexp.report import tidy
-from magexp.spec import Success, Tolerance
-from magexp.summary import interval, judge
+from magexp.artifacts.plan import succeeded
+from magexp.artifacts.report import tidy
+from magexp.artifacts.spec import Success, Tolerance
+from magexp.artifacts.summary import interval, judge
 
 
 def test_interval_is_the_central_95_percent_of_runs():
@@ -54,7 +54,7 @@ def test_tidy_keeps_six_digits_and_floors_round_off():
 
 
 def test_each_scenario_setting_draws_its_own_stream(make_cfg):
-    from magexp.runner import run
+    from magexp.run.runner import run
 
     a = run(make_cfg("scenario=ding2024_exp1", "estimator=ellipsoid", "scenario.noise=2", "seed=0"))
     b = run(make_cfg("scenario=ding2024_exp1", "estimator=ellipsoid", "scenario.noise=5", "seed=0"))
@@ -70,8 +70,8 @@ def test_each_scenario_setting_draws_its_own_stream(make_cfg):
 
 from types import SimpleNamespace  # noqa: E402
 
-from magexp.spec import Reported  # noqa: E402
-from magexp.summary import _row, block_scales, label_of, uninformative  # noqa: E402
+from magexp.artifacts.spec import Reported  # noqa: E402
+from magexp.artifacts.summary import _row, block_scales, label_of, uninformative  # noqa: E402
 
 
 def test_rows_that_pin_a_value_down_stay_informative():

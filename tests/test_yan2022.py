@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.cli_checks import options
+from magexp.run.preflight import options
 from magexp.errors import MagexpError
 from magexp.estimators.kalman import kalman_update, settled_since
 from magexp.problems import make_problem
 from magexp.problems.ship import state_to_theta, theta_to_state
-from magexp.recordings import load_recording
-from magexp.runner import build
+from magexp.core.recordings import load_recording
+from magexp.run.runner import build
 from magexp.scenarios.ship import ship_attitude
-from magexp.spec import Tolerance
+from magexp.artifacts.spec import Tolerance
 
 PAPER_MOCKUP = [0.98575, 0.08153, 0.06221, -0.06233, 0.83517, -0.02987, -0.02999, -0.07748, 1.06615,
                 2011.1, -2886.8, 2054.6]
@@ -153,7 +153,7 @@ def test_every_yan_estimator_fits_the_mockup(make_cfg, name):
 
 
 def test_field_kalman_analysis_recomputes_the_field(make_cfg):
-    from magexp.runner import run
+    from magexp.run.runner import run
 
     out = run(make_cfg("scenario=yan2022_mockup", "estimator=kf", "+analysis=field_kalman"))
     assert out.trace["be"].shape == (601, 3)

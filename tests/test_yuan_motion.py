@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from magexp.errors import MagexpError
-from magexp.geometry import rot_x, rotation_angle
+from magexp.core.geometry import rot_x, rotation_angle
 from magexp.scenarios.motion import Gyro, Trajectory, even_subsample, exp_so3, integrate_rates
 
 

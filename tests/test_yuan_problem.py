@@ -7,8 +7,8 @@ from magexp.errors import MagexpError
 from magexp.estimators.ekf import ExtendedKalmanFilter
 from magexp.estimators.rdpso import RandomDriftVelocity, ThermalCoefficient, drift_sign_log, random_drift_velocity
 from magexp.problems import make_problem
-from magexp.runner import build, run
-from magexp.seeding import run_generators
+from magexp.run.runner import build, run
+from magexp.core.seeding import run_generators
 
 YUAN_SCENARIOS = ["yuan2018_table2", "yuan2018_mode1", "yuan2018_mode2", "yuan2018_mode3", "yuan2018_mode4",
                   "yuan2018_changing_field", "yuan2018_drift", "yuan2018_adis16488"]

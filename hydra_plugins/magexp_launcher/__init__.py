@@ -1,1 +1,1 @@
-"""magexp's Hydra launcher: ``-m`` sweeps through :mod:`magexp.executor` (see :mod:`.magexp_launcher`)."""
+"""magexp's Hydra launcher: ``-m`` sweeps through :mod:`magexp.run.executor` (see :mod:`.magexp_launcher`)."""

@@ -1,9 +1,9 @@
-"""The Hydra launcher of ``magexp -m`` sweeps: every job through :mod:`magexp.executor`.
+"""The Hydra launcher of ``magexp -m`` sweeps: every job through :mod:`magexp.run.executor`.
 
 Hydra's sweeper expands the sweep (``a,b``, ``range()``, globs, ``hydra.sweeper.params``) and
 hands each batch of jobs to :meth:`MagexpLauncher.launch`, which runs it with
-:func:`magexp.sweep.launch`: each job composed by magexp's composer, the batch run by
-:func:`magexp.executor.run_many` (the run cache and the executors of ``make reproduce``), each
+:func:`magexp.run.sweep.launch`: each job composed by magexp's composer, the batch run by
+:func:`magexp.run.executor.run_many` (the run cache and the executors of ``make reproduce``), each
 job's folder written. Its settings (``conf/hydra/launcher/magexp.yaml``)::
 
     hydra.launcher.executor=local|dask   # where the runs execute
@@ -21,7 +21,7 @@ from hydra.plugins.launcher import Launcher
 
 
 class MagexpLauncher(Launcher):
-    """Runs a batch of sweep jobs through :func:`magexp.sweep.launch`."""
+    """Runs a batch of sweep jobs through :func:`magexp.run.sweep.launch`."""
 
     def __init__(self, executor: str = "local", jobs: int = 0, scheduler: str | None = None) -> None:
         super().__init__()
@@ -33,7 +33,7 @@ class MagexpLauncher(Launcher):
 
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int):
         from magexp.__main__ import guarded
-        from magexp.sweep import launch
+        from magexp.run.sweep import launch
 
         return guarded(launch, self.config, job_overrides, initial_job_idx,
                        {"executor": self.executor, "jobs": self.jobs, "scheduler": self.scheduler})

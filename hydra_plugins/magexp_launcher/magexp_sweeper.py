@@ -4,7 +4,7 @@ Hydra's :class:`BasicSweeper` expands the sweep (``a,b``, ``range()``, globs,
 ``hydra.sweeper.params``, ``hydra.sweeper.max_batch_size``) and, before launching each batch,
 composes every job with Hydra's config loader only to find composition errors early: a full
 Hydra compose per job, most of a closed-form sweep's time. magexp has already composed and
-checked every job before Hydra started (:func:`magexp.cli_checks.validate_runs`, one line on the
+checked every job before Hydra started (:func:`magexp.run.preflight.validate_runs`, one line on the
 first bad value, nothing written), and magexp's launcher composes each job again with magexp's
 composer before the first run; so this sweeper only skips that step.
 """

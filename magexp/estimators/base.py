@@ -3,8 +3,8 @@
 An estimator declares what it needs from a problem as ``needs``, a tuple of capability names of
 :data:`magexp.problems.base.CAPABILITIES` (``cost``, ``residuals``, ``linear_design``,
 ``total_field``); a problem declares what it offers as ``capabilities``. :func:`applies_to`
-compares the two and is the one answer used by ``task=run`` (:mod:`magexp.runner`), the
-artifacts (:func:`magexp.artifacts.applicable`), ``calibrate`` and the contract test. It works on
+compares the two and is the one answer used by ``task=run`` (:mod:`magexp.run.runner`), the
+artifacts (:func:`magexp.artifacts.plan.applicable`), ``calibrate`` and the contract test. It works on
 classes as well as instances, so an artifact can skip a cell before simulating anything.
 
 An iterative estimator (``iterative = True``) calls ``callback(t, x, fun)`` after every

@@ -19,7 +19,7 @@ estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits
 (``M`` the matrix part of the problem's parameters: ``W``, or ``S = W^{-1}`` in the forward form;
 :mod:`magexp.estimators.reduced`), whose Jacobian has full rank wherever the data determine
 ``W^T W`` and ``o``. A symmetric positive-definite ``W`` is the polar factor ``P = (W^T W)^{1/2}``
-of every ``W = Q P`` (:func:`magexp.quality.canonical`, the form ``magexp calibrate`` reports),
+of every ``W = Q P`` (:func:`magexp.core.quality.canonical`, the form ``magexp calibrate`` reports),
 so the fit returns that unique member of the valley: the same numbers in every process, and
 parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
 parameters as before (kept to compare; ``tests/test_determinism.py`` shows its fit changing with
@@ -120,7 +120,7 @@ def offset_check(problem, q: np.ndarray) -> dict:
     """Whether the data determine the offset of the gauge-fixed fit ``q`` of a total-field problem.
 
     ``offset_standard_error``: ``sqrt(tr Cov(o))`` of the fit's own Gauss-Newton covariance
-    ``σ² (J^T J)^{-1}`` over ``q`` (:func:`magexp.quality.identifiability`: ``σ²`` from the
+    ``σ² (J^T J)^{-1}`` over ``q`` (:func:`magexp.core.quality.identifiability`: ``σ²`` from the
     residuals, ``J`` by central differences, undetermined directions infinite). Readings on two
     planar rings (turns about two axes only) lie on a one-parameter family of ellipsoids, so a
     total-field fit cannot place the centre and this error exceeds the size of the data.
@@ -130,7 +130,7 @@ def offset_check(problem, q: np.ndarray) -> dict:
     """
     from magexp.estimators.reduced import expand
     from magexp.problems.scalar import normalise
-    from magexp.quality import identifiability
+    from magexp.core.quality import identifiability
 
     def fun(qs):  # identifiability evaluates a stack of 2 x 9 perturbed vectors
         return np.array([problem.residuals(expand(one)[0]) for one in np.atleast_2d(qs)])
@@ -144,10 +144,10 @@ def offset_check(problem, q: np.ndarray) -> dict:
 
 def polar(problem, x: np.ndarray) -> np.ndarray:
     """``x`` with its ``W`` replaced by the symmetric positive-definite polar factor
-    ``(W^T W)^{1/2}`` (:func:`magexp.quality.canonical`): the same total field, no rotation.
+    ``(W^T W)^{1/2}`` (:func:`magexp.core.quality.canonical`): the same total field, no rotation.
     A symmetric positive-definite matrix part is kept bit for bit (it is already that factor), and so
     is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of)."""
-    from magexp.quality import canonical
+    from magexp.core.quality import canonical
 
     x = np.asarray(x, float)
     mat = x[:9].reshape(3, 3)

@@ -41,7 +41,7 @@ class Problem(Protocol):
     objective : its name in :data:`magexp.problems.OBJECTIVES`.
     capabilities : the subset of :data:`CAPABILITIES` it offers.
     n_params, lower, upper : parameter count and the search box.
-    dataset : the :class:`~magexp.dataset.Dataset` it was built on.
+    dataset : the :class:`~magexp.core.dataset.Dataset` it was built on.
     """
 
     objective: str
@@ -115,7 +115,7 @@ class CalibrationProblem:
 
     Parameters
     ----------
-    dataset : :class:`magexp.dataset.Dataset`.
+    dataset : :class:`magexp.core.dataset.Dataset`.
     search : :class:`magexp.scenarios.search.SearchBox` (bounds of the parameters).
     parameterisation : ``"inverse"``: ``theta = [vec(W), o]`` (Ding 2024: ``W = M^-1``, ``o = I``);
         ``"forward"``: ``theta = [vec(S), b]`` with ``W = S^-1`` (Yuan 2018).
@@ -206,7 +206,7 @@ class CalibrationProblem:
         out.update({"param_matrix_error": float(err[:9].max()), "param_offset_error": float(err[9:].max())})
         return out
 
-    # -- derivatives (analytic; see magexp.bounds) ---------------------------------------------
+    # -- derivatives (analytic; see magexp.core.bounds) ---------------------------------------------
     def _dr_db(self, b: np.ndarray) -> np.ndarray | None:
         """``D_i = ∂r_i/∂b_i`` of the residuals at the calibrated readings ``b`` (N, 3), shape
         ``(N, m, 3)``; None (the default) when a problem has no analytic form."""
@@ -245,7 +245,7 @@ class CalibrationProblem:
         np.negative(np.moveaxis(g, 2, 0), out=rows[9:])
         return rows.reshape(12, n * m).T, g
 
-    # -- what the data can identify (see magexp.bounds) ----------------------------------------
+    # -- what the data can identify (see magexp.core.bounds) ----------------------------------------
     def invariants(self, theta: np.ndarray) -> np.ndarray:
         """The identifiable functions of ``theta``: here every parameter, as ``[vec(W), o]``."""
         w, o = self.unpack(theta)

@@ -8,7 +8,7 @@ in the starting frame unknown:
           \\big\\lVert R_j(\\mathbf b_g)^\\top \\mathbf h - S^{-1}(\\mathbf B_j - \\mathbf b)\\big\\rVert
 
 * ``R_j(b_g)`` (body -> start frame at reading ``j``) is the gyro stream, less the bias ``b_g``,
-  integrated at the magnetometer's times (:func:`magexp.geometry.preintegrate`: one
+  integrated at the magnetometer's times (:func:`magexp.core.geometry.preintegrate`: one
   preintegrated increment and its first-order bias Jacobian per pair of readings, so a new
   bias costs a prefix scan over the ``M`` readings, not a re-integration of the gyro stream);
 * ``h`` is the field in the starting frame (the body frame at the first reading),
@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.geometry import attitude_with_bias
+from magexp.core.geometry import attitude_with_bias
 from magexp.problems.base import CalibrationProblem
 
 EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro_bias_z")
@@ -38,7 +38,7 @@ EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro
 class GyroAidedCalibration(CalibrationProblem):
     """Yuan 2018 eq 8 over ``[vec(S), b, field direction, gyro bias]`` (module docstring).
 
-    ``dataset.extra["preintegration"]`` holds ``(ΔR, J)`` of :func:`magexp.geometry.preintegrate` at
+    ``dataset.extra["preintegration"]`` holds ``(ΔR, J)`` of :func:`magexp.core.geometry.preintegrate` at
     the readings' times; ``dataset.reference_norm`` the field magnitude ``F`` (fixed).
     ``search`` bounds ``S`` and ``b``; the field direction spans the sphere and the gyro bias
     ``±bias_bound_deg_s``.
@@ -110,7 +110,7 @@ class GyroAidedCalibration(CalibrationProblem):
         problem starts from there."""
         from scipy.optimize import least_squares
 
-        from magexp.geometry import exp_so3
+        from magexp.core.geometry import exp_so3
 
         base = self._ellipsoid_start()
         w0, o0 = (a[0] for a in self.unpack(base))
@@ -124,7 +124,7 @@ class GyroAidedCalibration(CalibrationProblem):
 
     def _ellipsoid_start(self) -> np.ndarray:
         from magexp.estimators.ellipsoid import fit_ellipsoid
-        from magexp.quality import canonical
+        from magexp.core.quality import canonical
 
         r = self.dataset.readings
         fitted = fit_ellipsoid(r, self.total)
@@ -143,8 +143,8 @@ class GyroAidedCalibration(CalibrationProblem):
         ``field_azimuth_deg``/``field_elevation_deg`` on their principal branches); the gyro bias;
         ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
         Jacobian, and ``se_<parameter>``, each parameter's standard error from it (``inf`` where the data
-        leave it undetermined; :func:`magexp.quality.identifiability`)."""
-        from magexp.quality import spread
+        leave it undetermined; :func:`magexp.core.quality.identifiability`)."""
+        from magexp.core.quality import spread
 
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
@@ -160,7 +160,7 @@ class GyroAidedCalibration(CalibrationProblem):
         h = self.field(theta)[0] / self.total  # the direction, whatever the angles' branch
         out.update({"field_azimuth_deg": float(np.rad2deg(np.arctan2(h[1], h[0]))),
                     "field_elevation_deg": float(np.rad2deg(np.arcsin(np.clip(h[2], -1, 1))))})
-        from magexp.quality import identifiability
+        from magexp.core.quality import identifiability
 
         ident = identifiability(lambda t: self.residual_swarm(t).reshape(len(np.atleast_2d(t)), -1), theta,
                                 self.parameter_names())

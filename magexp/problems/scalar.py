@@ -51,7 +51,7 @@ class ScalarCalibration(CalibrationProblem):
     @cached_property
     def _normalised(self) -> tuple[np.ndarray, float, np.ndarray]:
         """:func:`normalise` of the readings, on the first :meth:`cost` call (a problem built only
-        for its residuals, e.g. by :mod:`magexp.bounds`, never pays for it)."""
+        for its residuals, e.g. by :mod:`magexp.core.bounds`, never pays for it)."""
         return normalise(self.dataset.readings)
 
     @cached_property

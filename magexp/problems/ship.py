@@ -44,7 +44,7 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
     ``||Y||^2 ~ 1e12`` nT²: relative error ~1e-10 with 100 nT noise and an RMS of ~1e-3 nT
     (instead of ~1e-11) at a noise-free truth.
 
-    Measured (``python -m magexp.bench``, population 50, 300 readings, one BLAS thread):
+    Measured (``python -m magexp.perf.bench``, population 50, 300 readings, one BLAS thread):
     1.4e9 to 2.5e9 particle-readings/s against 1.9e7 to 2.4e7 for the batched ``einsum`` of
     :meth:`predict` (65x to 130x; at the paper's 12 readings about 4x, call overhead then
     dominates);

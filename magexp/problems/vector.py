@@ -139,7 +139,7 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         return self.least_squares()
 
     def metrics(self, theta: np.ndarray) -> dict:
-        from magexp.metrics import truth_cost
+        from magexp.core.metrics import truth_cost
 
         out = super().metrics(theta)
         floor = truth_cost(self)  # F at the truth, once per problem

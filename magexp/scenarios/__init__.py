@@ -1,4 +1,4 @@
-"""Scenarios: configs that produce a :class:`magexp.dataset.Dataset`.
+"""Scenarios: configs that produce a :class:`magexp.core.dataset.Dataset`.
 
 A scenario is built from ``conf/scenario/<name>.yaml`` by ``_target_`` and
 exposes ``generate(rng=...) -> Dataset``, ``objective`` (the problem it is

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.dataset import Dataset, Truth
+from magexp.core.dataset import Dataset, Truth
 from magexp.errors import check_positive_int, MagexpError
-from magexp.geometry import field_ned, random_rotations
+from magexp.core.geometry import field_ned, random_rotations
 from magexp.scenarios.noise import Noise
 from magexp.scenarios.search import SearchBox
 

@@ -1,14 +1,14 @@
 """A recording as a scenario like any other: ``scenario=real_<recording>`` (``conf/scenario/real_*.yaml``).
 
-:class:`RecordingScenario` loads a file of :data:`magexp.recordings.READERS` (from
+:class:`RecordingScenario` loads a file of :data:`magexp.core.recordings.READERS` (from
 :data:`magexp.paths.SHARED_DATA`, i.e. ``$MAGEXP_DATA`` or ``../shared/data``), optionally cuts a
-time ``window``, and gives the :class:`~magexp.dataset.Dataset` of one objective:
+time ``window``, and gives the :class:`~magexp.core.dataset.Dataset` of one objective:
 
 * ``scalar``: the readings, ``n_readings`` evenly spaced ones for the fit; the block of fold
   ``heldout_fold`` of ``folds`` contiguous blocks is held out (``dataset.extra["heldout"]``) and
-  the metrics report its spread under the fitted calibration (:func:`magexp.quality.recording_metrics`);
+  the metrics report its spread under the fitted calibration (:func:`magexp.core.quality.recording_metrics`);
 * ``gyro``: ``n_readings`` evenly spaced readings of the window and the gyroscope preintegrated
-  between them (:func:`magexp.geometry.preintegrate`) for :class:`magexp.problems.gyro.GyroAidedCalibration`.
+  between them (:func:`magexp.core.geometry.preintegrate`) for :class:`magexp.problems.gyro.GyroAidedCalibration`.
 
 There is no truth: the reference total is the radius of the sphere fitted to the readings
 (:func:`magexp.scenarios.search.centroid_radius`), the search box comes from the data
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.dataset import Dataset
+from magexp.core.dataset import Dataset
 from magexp.errors import MagexpError, check_positive_int
 from magexp.paths import SHARED_DATA
 from magexp.scenarios.search import BOXES, centroid_radius, search_box
@@ -41,7 +41,7 @@ class RecordingScenario:
     name : scenario name.
     file : the recording, relative to the shared data folder (or absolute).
     objective : ``scalar`` or ``gyro``.
-    unit, format, mag_axes, gyro_axes : as :func:`magexp.recordings.load_recording`.
+    unit, format, mag_axes, gyro_axes : as :func:`magexp.core.recordings.load_recording`.
     window : ``[start, end]`` seconds from the first reading (null: all).
     n_readings : readings used by the fit (evenly spaced; null: all).
     folds, heldout_fold : contiguous blocks, and the one held out of the fit (scalar; folds 0: none).
@@ -81,7 +81,7 @@ class RecordingScenario:
         """The loaded recording (``file``, default the scenario's), cut to the window."""
         from pathlib import Path
 
-        from magexp.recordings import load_recording
+        from magexp.core.recordings import load_recording
 
         file = file or self.file
         path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
@@ -111,7 +111,7 @@ class RecordingScenario:
         radius = centroid_radius(rec.readings[fit])
         extra = {"heldout": rec.readings[heldout], "all_readings": rec.readings}
         if self.objective == "gyro":
-            from magexp.geometry import preintegrate
+            from magexp.core.geometry import preintegrate
 
             stream = rec.gyro_rates()
             if stream is None:

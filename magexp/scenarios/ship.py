@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.dataset import Dataset, Truth
+from magexp.core.dataset import Dataset, Truth
 from magexp.errors import MagexpError, check_nonnegative, check_positive_int
-from magexp.geometry import ship_attitude  # noqa: F401  (eq 2 lives in geometry)
-from magexp.recordings import load_recording
+from magexp.core.geometry import ship_attitude  # noqa: F401  (eq 2 lives in geometry)
+from magexp.core.recordings import load_recording
 from magexp.scenarios.noise import Noise
 from magexp.scenarios.search import SearchBox
 
@@ -126,7 +126,7 @@ class ShipRecording:
     Parameters
     ----------
     name : config name (``yan2022_mockup``).
-    path : a ``magexp-recording v1`` CSV (see :mod:`magexp.recordings`), relative to ``data/``.
+    path : a ``magexp-recording v1`` CSV (see :mod:`magexp.core.recordings`), relative to ``data/``.
     field : ``Be`` (nT); ``null`` to take the file's ``# field:`` line.
     search : box of ``[vec(K), Bp]`` (for swarm estimators).
 

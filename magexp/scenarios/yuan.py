@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.dataset import Dataset, Truth
+from magexp.core.dataset import Dataset, Truth
 from magexp.errors import MagexpError, check, check_nonnegative
 from magexp.scenarios.motion import Gyro, Trajectory, even_subsample, integrate_rates
 from magexp.scenarios.noise import Noise

@@ -1,0 +1,11 @@
+"""The artifact language: a paper's figures and tables declared as YAML specs
+(``experiments/<paper>/*.yaml``), planned into runs, run through :mod:`magexp.run`, summarised into
+verdicts and claims, drawn, and written up in ``results/REPORT.md``.
+
+Lives here: :mod:`~magexp.artifacts.spec` (the typed spec), :mod:`~magexp.artifacts.plan` (spec → runs →
+tidy rows), :mod:`~magexp.artifacts.reproduce` (``magexp reproduce``), :mod:`~magexp.artifacts.summary`
+(verdicts), :mod:`~magexp.artifacts.claims`, :mod:`~magexp.artifacts.report`, and :mod:`~magexp.artifacts.plots`
+(one module per figure kind).
+
+May import: ``core``, ``run`` and (for the problem facts a verdict needs) ``problems``; never ``calibration``.
+"""

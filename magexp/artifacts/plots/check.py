@@ -1,0 +1,290 @@
+"""Defects a reader sees in a drawn figure, found from the figure's artists after a layout pass.
+
+* :func:`empty_axes`: a visible axes with nothing drawn from data (no finite line, marker,
+  collection, bar, image or table; reference lines such as ``axhline`` do not count).
+* :func:`overlapping_text`: two texts printed over each other (suptitle, titles, axis labels,
+  tick labels, legends as a whole, annotations, colour-bar labels, tables), measured by the
+  renderer's window extents.
+* :func:`overflowing_cells`: a table cell whose text runs out of the cell.
+* :func:`raw_legends`: a legend entry made of raw override strings (``window=null``).
+* :func:`legend_defects`: a legend entry whose series is not drawn, or two entries that look
+  the same (one colour, marker and line style for two series).
+* :func:`colorbar_mismatch`: a colour bar that does not say which column it shows, or whose
+  label names another column than the one its image was drawn from (the plotting code records
+  both with :func:`magexp.artifacts.plots.style.colorbar`).
+
+:func:`defects` lists all three for one figure; ``tests/test_figure_defects.py`` runs it on the
+figure of every artifact, drawn from its committed CSV.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.collections import Collection
+from matplotlib.image import AxesImage
+from matplotlib.legend import Legend
+from matplotlib.lines import Line2D
+from matplotlib.patches import Rectangle
+from matplotlib.table import Table
+from matplotlib.text import Text
+
+from magexp.artifacts.plots.benchmark_table import column_label
+from magexp.artifacts.plots.style import COLUMN_ATTR
+
+#: two texts overlap when their window extents share more than this many pixels in each direction
+OVERLAP_PX = 1.0
+
+
+def _finite(values) -> bool:
+    a = np.asarray(values, dtype=float)
+    return a.size > 0 and bool(np.isfinite(a).any())
+
+
+def _both_finite(x, y) -> bool:
+    """Whether some point ``(x_i, y_i)`` has both coordinates finite."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    return x.shape == y.shape and x.size > 0 and bool((np.isfinite(x) & np.isfinite(y)).any())
+
+
+def _draws_data(artist, ax: Axes) -> bool:
+    """Whether ``artist`` shows data (not a reference line spanning the axes)."""
+    if not artist.get_visible():
+        return False
+    if isinstance(artist, Line2D):
+        spans = (ax.get_xaxis_transform(which="grid"), ax.get_yaxis_transform(which="grid"))
+        if any(artist.get_transform() is t for t in spans):
+            return False  # axhline / axvline: a reference across the axes, not data
+        x, y = artist.get_data()
+        return _both_finite(x, y)
+    if isinstance(artist, Collection):
+        offsets = artist.get_offsets()
+        if len(offsets) and np.isfinite(np.asarray(offsets, float)).all(axis=-1).any() and len(offsets) > 1:
+            return True
+        if hasattr(artist, "_offsets3d"):
+            return any(_finite(v) for v in artist._offsets3d)
+        return any(len(p.vertices) and np.isfinite(p.vertices).all(axis=1).any() for p in artist.get_paths())
+    if isinstance(artist, AxesImage):
+        return _finite(np.ma.filled(np.ma.asarray(artist.get_array(), dtype=float), np.nan))
+    if isinstance(artist, Rectangle):
+        return bool(np.isfinite([artist.get_height(), artist.get_width()]).all() and artist.get_height() != 0)
+    if isinstance(artist, Table):
+        return True
+    return False
+
+
+def _is_colorbar(ax: Axes) -> bool:
+    return getattr(ax, "_colorbar", None) is not None
+
+
+def overflowing_cells(fig) -> list[str]:
+    """Table cells whose text is wider or taller than the cell (it runs into its neighbours);
+    call after a layout pass (:func:`overlapping_text` makes one)."""
+    renderer = fig.canvas.get_renderer()
+    found = []
+    for ax in fig.axes:
+        for table in ax.tables:
+            for (row, col), cell in table.get_celld().items():
+                text = cell.get_text()
+                if not text.get_text().strip():
+                    continue
+                inner, box = text.get_window_extent(renderer), cell.get_window_extent(renderer)
+                if inner.width > box.width + OVERLAP_PX or inner.height > box.height + OVERLAP_PX:
+                    found.append(f"table cell ({row}, {col}) {text.get_text()[:20]!r} does not fit its cell")
+    return found
+
+
+def empty_axes(fig) -> list[str]:
+    """Visible data axes (not colour bars) on which nothing is drawn from data."""
+    found = []
+    for k, ax in enumerate(fig.axes):
+        if not ax.get_visible() or _is_colorbar(ax):
+            continue
+        artists = [*ax.lines, *ax.collections, *ax.images, *ax.patches, *ax.tables]
+        if not any(_draws_data(a, ax) for a in artists):
+            found.append(f"axes {k} ({ax.get_title() or 'untitled'!r}) has nothing drawn")
+    return found
+
+
+def _texts(fig, renderer) -> list[tuple[str, object, object]]:
+    """``(name, owner, bbox)`` of every visible text of ``fig``; texts of one owner (one legend,
+    one table) are one item."""
+    items = []
+
+    def add(name, owner, artist):
+        if artist is None or not artist.get_visible():
+            return
+        if isinstance(artist, Text) and not artist.get_text().strip():
+            return
+        box = artist.get_window_extent(renderer)
+        if box.width > 0 and box.height > 0 and np.isfinite(box.get_points()).all():
+            items.append((name, owner, _corners(artist, box, renderer)))
+
+    if fig._suptitle is not None:
+        add("suptitle", "suptitle", fig._suptitle)
+    for legend in fig.legends:
+        add("figure legend", legend, legend)
+    for k, ax in enumerate(fig.axes):
+        if not ax.get_visible():
+            continue
+        where = f"axes {k}"
+        for loc, title in (("left", ax._left_title), ("center", ax.title), ("right", ax._right_title)):
+            add(f"{where} {loc} title", (ax, "title", loc), title)
+        if ax.axison and not hasattr(ax, "get_zlim"):  # 3-D axes place labels and ticks by projection
+            for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+                add(f"{where} {name}label", (ax, name, "label"), axis.label)
+                for j, tick in enumerate(axis._update_ticks()):  # the ticks drawn (inside the view)
+                    for side, text in ((1, tick.label1), (2, tick.label2)):
+                        if getattr(tick, f"label{side}").get_visible():
+                            add(f"{where} {name} tick {text.get_text()!r}", (ax, name, "tick", j, side), text)
+        legend = ax.get_legend()
+        if legend is not None:
+            add(f"{where} legend", legend, legend)
+        for j, text in enumerate(ax.texts):
+            add(f"{where} text {text.get_text()[:20]!r}", (ax, "text", j), text)
+        for table in ax.tables:
+            add(f"{where} table", table, table)
+    return items
+
+
+def _corners(artist, box, renderer) -> np.ndarray:
+    """The four corners (display pixels) of what ``artist`` covers: its window extent, or for a
+    rotated text the rotated rectangle of its glyphs (its extent's centre is the rectangle's)."""
+    angle = artist.get_rotation() % 90 if isinstance(artist, Text) else 0.0
+    if not angle:
+        return np.array([[box.x0, box.y0], [box.x1, box.y0], [box.x1, box.y1], [box.x0, box.y1]])
+    rotation = artist.get_rotation()
+    artist.set_rotation(0)
+    flat = artist.get_window_extent(renderer)
+    artist.set_rotation(rotation)
+    t = np.deg2rad(rotation)
+    half = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * [flat.width / 2, flat.height / 2]
+    turn = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+    return half @ turn.T + [(box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2]
+
+
+def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two convex quadrilaterals share more than :data:`OVERLAP_PX` along every separating
+    direction (the separating axis theorem over both shapes' edge normals)."""
+    for quad in (a, b):
+        edges = np.roll(quad, -1, axis=0) - quad
+        for nx, ny in np.column_stack([-edges[:, 1], edges[:, 0]]):
+            norm = np.hypot(nx, ny)
+            if norm == 0:
+                continue
+            pa, pb = a @ [nx, ny] / norm, b @ [nx, ny] / norm
+            if min(pa.max(), pb.max()) - max(pa.min(), pb.min()) <= OVERLAP_PX:
+                return False
+    return True
+
+
+def overlapping_text(fig) -> list[str]:
+    """Pairs of texts whose window extents overlap (after a layout pass without rendering)."""
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    items = _texts(fig, renderer)
+    if len(items) < 2:
+        return []
+    corners = np.stack([c for _, _, c in items])  # (n, 4, 2)
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    near = ((np.minimum(hi[:, None], hi[None]) - np.maximum(lo[:, None], lo[None])) > OVERLAP_PX).all(axis=2)
+    found = []
+    for i, j in zip(*np.nonzero(np.triu(near, 1))):  # the extents meet: test the (rotated) shapes
+        (na, oa, a), (nb, ob, b) = items[i], items[j]
+        if oa is not ob and _overlap(a, b):
+            found.append(f"{na} overlaps {nb}")
+    return found
+
+
+def colorbar_mismatch(fig) -> list[str]:
+    """Colour bars without a recorded column, or whose label is not that column's label, or whose
+    image was drawn from another column than the bar records."""
+    found = []
+    for ax in fig.axes:
+        bar = getattr(ax, "_colorbar", None)
+        if bar is None:
+            continue
+        label = ax.get_ylabel() or ax.get_xlabel()
+        column = getattr(bar, COLUMN_ATTR, None)
+        drawn = getattr(bar.mappable, COLUMN_ATTR, None)
+        if column is None:
+            found.append(f"colour bar {label!r} does not record the column it shows")
+            continue
+        if drawn != column:
+            found.append(f"colour bar {label!r} says {column!r}, its cells are drawn from {drawn!r}")
+        if column_label(column) not in label:
+            found.append(f"colour bar {label!r} does not name its column {column!r} ({column_label(column)!r})")
+    return found
+
+
+#: a raw override string: ``key=value`` with no space (readable labels read ``A = 2 nT``)
+RAW_OVERRIDE = re.compile(r"[A-Za-z_][\w.]*=\S")
+
+
+def raw_legends(fig) -> list[str]:
+    """Legend entries made of raw override strings (``lm, scenario=real_x, window=null``)."""
+    legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes)]
+    texts = [t.get_text() for lg in legends if isinstance(lg, Legend) for t in lg.get_texts()]
+    return [f"legend entry {t!r} is a raw override string" for t in texts if RAW_OVERRIDE.search(t)]
+
+
+def _has_data(artist) -> bool:
+    """Whether a legend's artist (a line, a collection, a patch, an errorbar) shows a finite value."""
+    if hasattr(artist, "lines") and isinstance(getattr(artist, "lines"), tuple):  # a container (errorbar)
+        return any(_has_data(a) for a in artist if a is not None and not isinstance(a, tuple))
+    if isinstance(artist, Line2D):
+        x, y = artist.get_data()
+        return _both_finite(x, y)
+    if isinstance(artist, Collection):
+        return len(artist.get_offsets()) > 0 or any(len(p.vertices) for p in artist.get_paths())
+    return True
+
+
+def _look(handle) -> tuple:
+    """What a reader tells a legend entry by: colours, marker, line and hatch of its handle."""
+    from matplotlib.colors import to_hex
+
+    if isinstance(handle, Line2D):
+        return ("line", to_hex(handle.get_color()), handle.get_marker(), handle.get_linestyle(),
+                to_hex(handle.get_markerfacecolor(), keep_alpha=True), to_hex(handle.get_markeredgecolor()))
+    if isinstance(handle, Collection):
+        face = handle.get_facecolor()
+        edge = handle.get_edgecolor()
+        paths = handle.get_paths()
+        shape = tuple(np.round(paths[0].vertices, 3).ravel()) if len(paths) else ()
+        return ("collection", to_hex(face[0], keep_alpha=True) if len(face) else None,
+                to_hex(edge[0]) if len(edge) else None, handle.get_hatch(), shape)
+    if hasattr(handle, "get_facecolor"):
+        return ("patch", to_hex(handle.get_facecolor(), keep_alpha=True), to_hex(handle.get_edgecolor()),
+                handle.get_hatch())
+    return ("other", id(handle))
+
+
+def legend_defects(fig) -> list[str]:
+    """Legend entries whose series has nothing drawn (all of its values missing), and entries of
+    one legend a reader cannot tell apart (same colour, marker, line style)."""
+    drawn: dict[str, list] = {}
+    for ax in fig.axes:
+        for handle, text in zip(*ax.get_legend_handles_labels()):
+            drawn.setdefault(text, []).append(handle)
+    found = []
+    for legend in [*fig.legends, *(ax.get_legend() for ax in fig.axes)]:
+        if legend is None:
+            continue
+        seen: dict[tuple, str] = {}
+        for handle, text in zip(legend.legend_handles, (t.get_text() for t in legend.get_texts())):
+            if text in drawn and not any(_has_data(a) for a in drawn[text]):
+                found.append(f"legend entry {text!r}: nothing of it is drawn")
+            look = _look(handle)
+            if look in seen:
+                found.append(f"legend entries {seen[look]!r} and {text!r} look the same")
+            seen[look] = text
+    return found
+
+
+def defects(fig) -> list[str]:
+    """Every defect of ``fig`` found by the checks of this module."""
+    return (overlapping_text(fig) + overflowing_cells(fig) + empty_axes(fig) + colorbar_mismatch(fig)
+            + raw_legends(fig) + legend_defects(fig))

@@ -1,0 +1,93 @@
+"""RMS (objective) of the best particle vs iteration: median over seeds with an interquartile band.
+
+A triangle on each curve marks the median, over the successful runs, of the iterations a run took to
+come within 1.1 x its own final value (``iterations_to_1.1``): how fast it converged, whatever the
+level it converged to."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plots.style import group_values, label, panels, plt, shared_legend, tidy_log_axes
+
+
+def _stack(histories: list[np.ndarray]) -> np.ndarray:
+    n = max(len(h) for h in histories)
+    return np.vstack([np.pad(h, (0, n - len(h)), mode="edge") for h in histories])
+
+
+def _speed(sub: pd.DataFrame) -> float:
+    """Median iterations to 1.1 x the final value over the successful runs (every run if none is judged)."""
+    if "iterations_to_1.1" not in sub:
+        return np.nan
+    if "succeeded" in sub and sub.succeeded.notna().any():
+        sub = sub[sub.succeeded == 1]
+    values = sub["iterations_to_1.1"].astype(float).dropna()
+    return float(values.median()) if len(values) else np.nan
+
+
+def tabulate(runs) -> pd.DataFrame:
+    frames = []
+    for ci, cell in enumerate(runs.cells):
+        seeds = sorted(s for (c, s) in runs.outputs if c == ci)
+        hist = _stack([runs.outputs[(ci, s)].history for s in seeds])
+        nfev = _stack([runs.outputs[(ci, s)].history_nfev for s in seeds])
+        q25, q50, q75 = np.quantile(hist, [0.25, 0.5, 0.75], axis=0)
+        sub = runs.table[runs.table.cell == ci]
+        frames.append(pd.DataFrame({
+            **{k: v for k, v in cell.items()}, "estimator": sub.estimator.iloc[0],
+            "iteration": np.arange(hist.shape[1]), "nfev": np.median(nfev, axis=0),
+            "median": q50, "q25": q25, "q75": q75,
+            "noise_floor": float(sub.noise_floor.median()) if "noise_floor" in sub else np.nan,
+            "rms_bound": float(sub.rms_bound.median()) if "rms_bound" in sub else np.nan,
+            "n_seeds": len(seeds),
+            "converged": int(sub.converged.sum()) if "converged" in sub else -1,
+            "succeeded": int(sub.succeeded.sum()) if "succeeded" in sub and sub.succeeded.notna().any() else -1,
+            "iterations_to_1.1": _speed(sub),
+        }))
+    return pd.concat(frames, ignore_index=True)
+
+
+def draw(frame: pd.DataFrame, spec, axes=None):
+    panel_key, hue_key = spec.plot.get("panels"), spec.plot.get("hue")
+    panel_vals = group_values(frame, panel_key)
+    fig, axes = panels(len(panel_vals), axes=axes)
+    cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colours = {hv: cycle[k % len(cycle)] for k, hv in enumerate(group_values(frame, hue_key))}
+    for ax, pv in zip(axes, panel_vals):
+        sub = frame if pv is None else frame[frame[panel_key] == pv]
+        counts = []
+        for hv in group_values(sub, hue_key):
+            line = sub if hv is None else sub[sub[hue_key] == hv]
+            lab = line.estimator.iloc[0] if hue_key in (None, "estimator") else label(spec, hue_key, hv)
+            ok = int(line.succeeded.iloc[0]) if "succeeded" in line else -1
+            if ok >= 0 and len(panel_vals) == 1:  # one panel: the counts in the legend
+                lab += f" ({ok}/{line.n_seeds.iloc[0]} ok)"
+            elif ok >= 0:  # several: in each panel's title (the legend is shared)
+                counts.append(f"{lab} {ok}/{line.n_seeds.iloc[0]}")
+            floor_pos = line[["median", "q25", "q75"]].clip(lower=1e-14)
+            (ln,) = ax.plot(line.iteration, floor_pos["median"], lw=1.2, label=lab, color=colours[hv])
+            ax.fill_between(line.iteration, floor_pos["q25"], floor_pos["q75"], color=ln.get_color(), alpha=0.2, lw=0)
+            speed = float(line["iterations_to_1.1"].iloc[0]) if "iterations_to_1.1" in line else np.nan
+            if np.isfinite(speed):
+                at = floor_pos["median"].to_numpy()[min(int(round(speed)), len(line) - 1)]
+                ax.plot([speed], [at], "v", color=ln.get_color(), mec="k", mew=0.6, ms=7, zorder=4,
+                        label="median iterations to 1.1 x final (successful runs)")
+            if sub.noise_floor.nunique() > 1 and line.noise_floor.iloc[0] > 0:  # one floor per line
+                ax.axhline(line.noise_floor.iloc[0], color=ln.get_color(), ls=":", lw=0.9)
+        floor = float(sub.noise_floor.median())
+        if sub.noise_floor.nunique() == 1 and np.isfinite(floor) and floor > 0:
+            ax.axhline(floor, color="k", ls="--", lw=0.9, label="noise floor")
+        bound = float(sub.rms_bound.median()) if "rms_bound" in sub else np.nan
+        if sub.rms_bound.nunique() <= 1 and np.isfinite(bound) and bound > 0:
+            ax.axhline(bound, color="0.4", ls=":", lw=1.1, label="Cramér-Rao floor")
+        ax.set_yscale("log")
+        ax.set_xlabel("iteration")
+        ax.set_ylabel(spec.plot.get("ylabel", "total-field RMS (nT)"))
+        head = "" if pv is None else label(spec, panel_key, pv)
+        ok = f"succeeded: {', '.join(counts)}" if counts else ""
+        ax.set_title("\n".join(t for t in (head, ok) if t), fontsize=9)
+    shared_legend(fig, axes, ncols=3)
+    fig.suptitle(spec.title, fontsize=10)
+    return tidy_log_axes(fig)

@@ -1,0 +1,126 @@
+"""The readings of the first seed of each cell before and after calibration (the kinds ``field`` and
+``sphere``, one kind): ``plot.quantity`` is ``magnitude`` (the total field per reading, before and
+after; Ding 2024 fig 2), ``error`` (the calibrated total field minus the reference; fig 6) or
+``sphere`` (a 3-D scatter against the sphere of radius the median reference; Yuan 2018 figs 2-4).
+The default is ``sphere`` for the kind ``sphere``, else ``magnitude``.
+
+The seed shown is the first whose run succeeded (the artifact's ``success:`` rule); where none
+did, or none is judged, the first seed. The CSV's ``seed`` and ``outcome`` columns and each panel's
+title say which.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plots.style import group_values, label, panels, plt
+
+
+def tabulate(runs) -> pd.DataFrame:
+    """Per reading of the first seed of each cell: raw and calibrated vectors and total fields,
+    the reference total field and the error of the calibrated one."""
+    frames = []
+    for ci, cell in enumerate(runs.cells):
+        seed, outcome = shown_seed(runs, ci)
+        out = runs.outputs[(ci, seed)]
+        raw, cal = np.asarray(out.readings), np.asarray(out.calibrated)
+        calibrated = np.linalg.norm(cal, axis=1)
+        frames.append(pd.DataFrame({
+            **cell, "seed": seed, "outcome": outcome, "reading": np.arange(len(raw)),
+            "raw_x": raw[:, 0], "raw_y": raw[:, 1], "raw_z": raw[:, 2],
+            "cal_x": cal[:, 0], "cal_y": cal[:, 1], "cal_z": cal[:, 2],
+            "raw": np.linalg.norm(raw, axis=1), "calibrated": calibrated,
+            "reference": out.reference_norm, "error": calibrated - out.reference_norm,
+        }))
+    return pd.concat(frames, ignore_index=True)
+
+
+def shown_seed(runs, ci: int) -> tuple[int, str]:
+    """The seed of cell ``ci`` whose readings are drawn and its outcome (``succeeded``, ``failed``
+    or ``not judged``): the first successful seed, else the first seed."""
+    seeds = sorted(s for (c, s) in runs.outputs if c == ci)
+    sub = runs.table[runs.table.cell == ci]
+    if "succeeded" not in sub or sub.succeeded.isna().all():
+        return seeds[0], "not judged"
+    ok = sub.set_index("seed").succeeded
+    good = [s for s in seeds if ok.get(s) == 1]
+    return (good[0], "succeeded") if good else (seeds[0], "failed")
+
+
+def _which(sub) -> str:
+    """``seed k, outcome`` of the drawn run (older CSVs without the columns: empty)."""
+    if "seed" not in sub:
+        return ""
+    outcome = f", {sub.outcome.iloc[0]}" if "outcome" in sub and sub.outcome.iloc[0] != "not judged" else ""
+    return f"seed {sub.seed.iloc[0]}{outcome}"
+
+
+def _lines(*parts: str) -> str:
+    return "\n".join(p for p in parts if p)
+
+
+def draw(frame: pd.DataFrame, spec, axes=None):
+    quantity = spec.plot.get("quantity", "sphere" if spec.kind == "sphere" else "magnitude")
+    if quantity == "sphere":
+        return _draw_sphere(frame, spec, axes=axes)
+    return _draw_field(frame, spec, show_raw=quantity == "magnitude", axes=axes)
+
+
+def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
+    key = spec.plot.get("panels")
+    values = group_values(frame, key)
+    fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
+    n = len(values)
+    for i, v in enumerate(values):
+        sub = frame if v is None else frame[frame[key] == v]
+        title = "" if v is None else label(spec, key, v)
+        rms = float(np.sqrt(np.mean(sub.error**2)))
+        if show_raw:
+            ax = axes[i]
+            ax.plot(sub.reading, sub.raw, ".", ms=2.5, color="0.5", label="before")
+            ax.plot(sub.reading, sub.reference, "k--", lw=0.8, label="reference")
+            ax.set_title(_lines(title, f"before calibration ({_which(sub)})"))
+            ax.set_ylabel("total field (nT)")
+            ax = axes[n + i]
+            ax.plot(sub.reading, sub.calibrated, ".", ms=2.5, label="after")
+            ax.plot(sub.reading, sub.reference, "k--", lw=0.8)
+            ax.set_title(f"after (RMS {rms:.3g} nT)")
+            ax.set_ylabel("total field (nT)")
+            ax.ticklabel_format(axis="y", useOffset=True, style="plain")
+        else:
+            ax = axes[i]
+            ax.plot(sub.reading, sub.error, ".", ms=2.5)
+            ax.axhline(0, color="k", lw=0.8)
+            ax.set_title(_lines(title, f"RMS {rms:.3g} nT ({_which(sub)})"))
+            ax.set_ylabel("total-field error (nT)")
+        ax.set_xlabel("reading")
+    fig.suptitle(spec.title, fontsize=10)
+    return fig
+
+
+def _draw_sphere(frame: pd.DataFrame, spec, axes=None):
+    """One 3-D panel per value of ``panels``; ``axes`` (3-D Axes of the caller's figure) draws there."""
+    key = spec.plot.get("panels")
+    values = group_values(frame, key)
+    fig, given = (plt.figure(figsize=(4.2 * len(values), 4.2)), None) if axes is None else panels(len(values), axes=axes)
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
+    for i, val in enumerate(values):
+        sub = frame if val is None else frame[frame[key] == val]
+        ax = fig.add_subplot(1, len(values), i + 1, projection="3d") if given is None else given[i]
+        r = float(sub.reference.median())
+        ax.plot_wireframe(r * np.cos(u) * np.sin(v), r * np.sin(u) * np.sin(v), r * np.cos(v),
+                          color="0.8", lw=0.4)
+        ax.scatter(sub.raw_x, sub.raw_y, sub.raw_z, s=6, color="0.45", label="before")
+        ax.scatter(sub.cal_x, sub.cal_y, sub.cal_z, s=8, color="C0", label="after")
+        rms = float(np.sqrt(np.mean(sub.error**2)))
+        title = "" if val is None else label(spec, key, val)
+        ax.set_title(_lines(title, f"{_which(sub)}: RMS of |B| - |H| after {rms:.3g}"), fontsize=8)
+        ax.set_box_aspect((1, 1, 1))
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.set_zlabel("z")
+        if i == 0:
+            ax.legend(loc="upper left", fontsize=7)
+    fig.suptitle(spec.title, fontsize=10)
+    return fig

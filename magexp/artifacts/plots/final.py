@@ -1,0 +1,207 @@
+"""Final values per cell against a swept key: median and interquartile bars over seeds (the kinds
+``final`` and ``sweep``, one kind).
+
+``plot.x``: the swept grid key; ``plot.metric``: one runs column or a list of them (one row of
+panels each; default ``fun``); ``plot.hue``: one line per value (default ``estimator``; a list of keys:
+one line per combination); ``plot.panels``: one column of panels per value; ``plot.xscale``:
+``linear``, ``log`` or ``symlog`` (with ``plot.linthresh``, for sweeps that include 0);
+``plot.ylog`` (default true); ``plot.ylabel`` / ``plot.ylabels`` (per metric); ``plot.bound``: a
+bound column of the metric drawn per objective (e.g. ``offset_bound``); ``plot.targets``:
+``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy). Against the objective ``fun`` the
+noise floor and the Cramér-Rao RMS floor are drawn. A cell where fewer than half the runs succeeded
+is ringed in red. A cell without a value is marked by a cross at the top of its panel (legend text:
+``plot.labels.missing``, e.g. "never within 600 steps"). The paper's values (the artifact's
+``reported:`` entries of the quantities summarised from the metric) are open diamonds in the colour of
+their line. Each of the artifact's ``ratios:`` (per seed, numerator over denominator cell) adds a row
+of panels: its median and quartiles over seeds, with the paper's ratios and the line of equality.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plan import quantiles
+from magexp.artifacts.claims import matches
+from magexp.artifacts.plots.style import group_values, label, legend_entries, panels, paper_values, plt, shared_legend, tidy_log_axes
+
+TINY = 1e-14  # log axes: values at or below zero are drawn here
+
+
+def metric_list(spec) -> list[str]:
+    """The metric columns drawn (``plot.metric``: one name or a list)."""
+    metric = spec.plot.get("metric", "fun")
+    return [metric] if isinstance(metric, str) else list(metric)
+
+
+def ratio_name(item) -> str:
+    """The line name of a ratio: numerator over denominator (their distinguishing values)."""
+    return " / ".join(", ".join(str(v) for v in side.values()) for side in (item.numerator, item.denominator))
+
+
+def _ratio_rows(runs) -> list[dict]:
+    """Per ``ratios:`` item and denominator cell: median and quartiles of the per-seed ratio
+    (seeds share readings, so the ratio is paired), the fraction of seeds where both runs succeeded."""
+    table, rows = runs.table, []
+    for item in runs.spec.ratios:
+        for ci, cell in enumerate(runs.cells):
+            if not matches(item.denominator, cell):
+                continue
+            partner = {**cell, **{k: str(v) for k, v in item.numerator.items()}}
+            nj = [cj for cj, other in enumerate(runs.cells) if all(matches({k: v}, other) for k, v in partner.items())]
+            if not nj:
+                continue
+            den = table[table.cell == ci].set_index("seed")
+            num = table[table.cell == nj[0]].set_index("seed")
+            ratio = (num[item.metric].astype(float) / den[item.metric].astype(float)).dropna()
+            med, q25, q75 = quantiles(ratio)
+            row = {**cell, "estimator": ratio_name(item), "objective": den.objective.iloc[0], "metric": item.quantity,
+                   "median": med, "q25": q25, "q75": q75, "n_seeds": len(ratio)}
+            if "succeeded" in den and den.succeeded.notna().any():
+                row["success_rate"] = float((num.succeeded * den.succeeded).reindex(ratio.index).mean())
+            rows.append(row)
+    return rows
+
+
+def tabulate(runs) -> pd.DataFrame:
+    """Per cell and metric: median and quartiles, the success rate and converged fraction, the
+    floors (``noise_floor``, ``truth_fun``, ``rms_bound``) and the median of ``plot.bound``."""
+    bound = runs.spec.plot.get("bound")
+    rows = []
+    for ci, cell in enumerate(runs.cells):
+        sub = runs.table[runs.table.cell == ci]
+        for metric in metric_list(runs.spec):
+            med, q25, q75 = quantiles(sub[metric]) if metric in sub else (np.nan,) * 3
+            row = {**cell, "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],
+                   "metric": metric, "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub)}
+            if bound and bound in sub:
+                row["bound"] = quantiles(sub[bound])[0]
+            for extra in ("noise_floor", "truth_fun", "rms_bound"):
+                if extra in sub:
+                    row[extra] = float(sub[extra].median())
+            if "converged" in sub:
+                row["converged_fraction"] = float(sub.converged.astype(float).mean())
+            if "succeeded" in sub and sub.succeeded.notna().any():
+                row["success_rate"] = float(sub.succeeded.dropna().mean())
+            rows.append(row)
+    return pd.DataFrame(rows + _ratio_rows(runs))
+
+
+def _colours(frame, hue_key) -> dict:
+    """One colour per line, fixed over panels (markers drawn beside never take a line's colour)."""
+    cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    return {hv: cycle[k % len(cycle)] for k, hv in enumerate(group_values(frame, hue_key))}
+
+
+def _spread(x, k: int, n: int, scale: str) -> np.ndarray:
+    """Lines side by side: a few per cent apart (in ratio on log-like axes, in the range on linear)."""
+    offset = k - (n - 1) / 2
+    if scale == "linear":
+        span = float(np.ptp(x)) if len(x) > 1 else 1.0
+        return x + 0.012 * span * offset
+    return x * (1 + 0.03 * offset)
+
+
+def _lines(ax, sub, spec, x_key, hue_key, colours):
+    """One errorbar line per hue value (slightly spread on the x axis), failed majorities ringed,
+    cells without a value crossed at the top of the panel; returns the x of every line's cells."""
+    hues = group_values(sub, hue_key)
+    scale = spec.plot.get("xscale", "linear")
+    placed = {}
+    for k, hv in enumerate(hues):
+        line = sub[sub[hue_key] == hv].sort_values(x_key, key=lambda c: c.astype(float))
+        x = _spread(line[x_key].astype(float).to_numpy(), k, len(hues), scale)
+        placed[hv] = (line, x)
+        y = line["median"].to_numpy(float)
+        err = np.vstack([y - line.q25.to_numpy(float), line.q75.to_numpy(float) - y])
+        name = label(spec, hue_key, hv) if hue_key not in ("estimator", "_hue") else str(hv)
+        colour = colours[hv]
+        ax.errorbar(x, np.maximum(y, TINY), yerr=np.where(np.isfinite(err), np.maximum(err, 0), 0), marker="o",
+                    ms=3.5, capsize=2, lw=1, label=name, color=colour)
+        missing = ~np.isfinite(y)
+        if missing.any():
+            ax.plot(x[missing], np.full(missing.sum(), 0.96), "x", color=colour, ms=6, mew=1.4,
+                    transform=ax.get_xaxis_transform(), label=f"x at the top: {label(spec, 'missing')}")
+        if "success_rate" in line:
+            bad = (line.success_rate < 0.5).to_numpy()
+            if bad.any():
+                ax.plot(x[bad], np.maximum(y[bad], TINY), "o", mfc="none", mec="r", ms=9, mew=1.2,
+                        label="fewer than half succeeded")
+    return placed
+
+
+def _paper(ax, spec, placed, metric, colours):
+    """The paper's values of the quantities summarised from ``metric``: an open diamond at the cell
+    (in its line's colour) whose settings the ``reported:`` entry matches."""
+    for entry in paper_values(spec, metric):
+        for hv, (line, x) in placed.items():
+            for xi, (_, row) in zip(x, line.iterrows()):
+                if matches(dict(entry.match), row.to_dict()):
+                    ax.plot([xi], [max(float(entry.value), TINY)], "D", mfc="none", mec=colours[hv], ms=7,
+                            mew=1.3, zorder=4, label="paper's value (open diamond)")
+
+
+def _references(ax, sub, spec, x_key, metric):
+    """The bound per objective, the floors (against ``fun``) and the paper's target."""
+    if "bound" in sub and sub.bound.notna().any():  # the bound belongs to the problem: one per objective
+        objectives = list(dict.fromkeys(sub.objective))
+        for j, obj in enumerate(objectives):
+            fl = sub[sub.objective == obj].drop_duplicates(x_key).sort_values(x_key, key=lambda c: c.astype(float))
+            if not np.isfinite(fl.bound.astype(float)).any():  # not identified: nothing to draw, no legend
+                continue
+            name = "Cramér-Rao bound (Gaussian)" + (f" ({obj})" if len(objectives) > 1 else "")
+            ax.plot(fl[x_key].astype(float), fl.bound.clip(lower=TINY), ["k--", "k-."][j % 2], lw=0.9, label=name)
+    fl = sub.drop_duplicates(x_key).sort_values(x_key, key=lambda c: c.astype(float))
+    if metric == "fun" and "noise_floor" in sub:
+        ax.plot(fl[x_key].astype(float), fl.noise_floor.clip(lower=TINY), "k--", lw=0.9, label="noise floor")
+    if metric == "fun" and "rms_bound" in sub:
+        ax.plot(fl[x_key].astype(float), fl.rms_bound.clip(lower=TINY), ":", color="0.4", lw=1.1,
+                label="Cramér-Rao floor (Gaussian)")
+    targets = dict(spec.plot.get("targets", {}) or {})
+    if metric in targets:
+        ax.axhline(float(targets[metric]), color="k", ls="--", lw=0.9, label="paper's stated level")
+    if metric in {r.quantity for r in spec.get("ratios", [])}:
+        ax.axhline(1.0, color="0.3", ls="-", lw=0.8, label="ratio 1 (equal)")
+
+
+def draw(frame: pd.DataFrame, spec, axes=None):
+    x_key, panel_key, hue_key = spec.plot.x, spec.plot.get("panels"), spec.plot.get("hue", "estimator")
+    if not isinstance(hue_key, str):  # several keys: one line per combination
+        keys = list(hue_key)
+        first, rest = keys[0], keys[1:]  # "pso, c1 = c2 = 2.0": the first key's value, then the others named
+        named = [frame[k].astype(str).map(lambda v, k=k: label(spec, k, v)) for k in rest]
+        frame = frame.assign(_hue=pd.concat([frame[first].astype(str), *named], axis=1).agg(", ".join, axis=1))
+        hue_key = "_hue"
+    metrics = metric_list(spec) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
+    columns = group_values(frame, panel_key)
+    ylabels = dict(spec.plot.get("ylabels", {}) or {})
+    colours = _colours(frame, hue_key)
+    default_ylabel = spec.plot.get("ylabel", "final total-field RMS (nT)")
+    fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1,
+                       width=3.8 if len(metrics) > 1 else 3.4, axes=axes)
+    for i, metric in enumerate(metrics):
+        for j, pv in enumerate(columns):
+            ax = axes[i * len(columns) + j]
+            sub = frame[frame.metric == metric] if "metric" in frame else frame
+            sub = sub if pv is None else sub[sub[panel_key] == pv]
+            placed = _lines(ax, sub, spec, x_key, hue_key, colours)
+            _paper(ax, spec, placed, metric, colours)
+            _references(ax, sub, spec, x_key, metric)
+            if sub["median"].isna().any():  # room above the values for the crosses of the missing ones
+                ax.set_yscale("log" if spec.plot.get("ylog", True) else "linear")
+                lo, hi = ax.get_ylim()
+                ax.set_ylim(lo, hi * (hi / lo) ** 0.25 if ax.get_yscale() == "log" else hi + 0.25 * (hi - lo))
+            scale = spec.plot.get("xscale", "linear")
+            ax.set_xscale(scale, **({"linthresh": float(spec.plot.get("linthresh", 1.0))} if scale == "symlog" else {}))
+            if scale == "symlog" and (frame[x_key].astype(float) >= 0).all():
+                ax.set_xlim(left=0)
+            if spec.plot.get("ylog", True):
+                ax.set_yscale("log")
+            ax.set_xlabel(label(spec, x_key))
+            ax.set_ylabel(ylabels.get(metric, default_ylabel if len(metrics) == 1 else metric.replace("_", " ")))
+            if pv is not None:
+                ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))
+    entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
+    shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)
+    fig.suptitle(spec.title, fontsize=10)
+    return tidy_log_axes(fig)

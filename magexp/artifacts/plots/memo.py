@@ -1,0 +1,88 @@
+"""Figures drawn once per content: a figure is drawn again only when what it is drawn from changes.
+
+Drawing a figure (:func:`magexp.artifacts.plots.style.save`: a PNG and its PDF twin, each laid out and drawn
+twice by matplotlib) is most of the CPU a reproduction spends outside its fits once the runs are
+cached. The drawing is deterministic: the same CSV, artifact spec, code and libraries give the same
+bytes. So a figure is keyed by
+
+* the bytes of the CSV it is drawn from,
+* its artifact spec (``repr`` of the validated :class:`magexp.artifacts.spec.Artifact`),
+* magexp's source (every ``magexp/**/*.py``: a plot, style or spec edit redraws every figure),
+* the versions of matplotlib, numpy and pandas, and matplotlib's settings (``rcParams``),
+
+and the cache keeps, under that key, the SHA-256 digests of the PNG and PDF the draw wrote. A figure
+whose two files are still in place with those digests is not drawn again; otherwise it is drawn and
+its digests recorded. Any change (a new CSV, a deleted or edited figure, a code edit) draws it.
+``--force`` draws every figure. The cache lives beside the run cache
+(``<run cache>-figures``, like the composed configs), never in ``results/``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from functools import lru_cache
+from pathlib import Path
+
+from magexp import paths
+from magexp.run.cache import files_digest, write
+
+
+def root() -> Path:
+    """The figure cache: beside the run cache (:data:`magexp.paths.CACHE`), never inside it."""
+    return paths.CACHE.parent / f"{paths.CACHE.name}-figures"
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """Hash of magexp's source and of the drawing libraries' versions."""
+    import matplotlib
+    import numpy
+    import pandas
+
+    h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
+    h.update(f"{matplotlib.__version__} {numpy.__version__} {pandas.__version__}".encode())
+    return h.hexdigest()
+
+
+def key(spec, csv_bytes: bytes) -> str:
+    """The key of the figure of ``spec`` drawn from a CSV holding ``csv_bytes`` (module docstring),
+    with matplotlib's settings as they are now (a user's ``matplotlibrc`` draws otherwise)."""
+    from magexp.artifacts.plots.style import plt  # the settings the draw uses: magexp's style on the user's
+
+    h = hashlib.sha256(code_version().encode())
+    h.update(repr(sorted(plt.rcParams.items())).encode())
+    h.update(repr(spec).encode())
+    h.update(hashlib.sha256(csv_bytes).digest())
+    return h.hexdigest()[:32]
+
+
+def digests(files: list[Path]) -> list[str] | None:
+    """SHA-256 of each file (None if one is missing)."""
+    try:
+        return [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files]
+    except FileNotFoundError:
+        return None
+
+
+def _stamp(k: str) -> Path:
+    return root() / k[:2] / f"{k}.json"
+
+
+def current(k: str, files: list[Path]) -> bool:
+    """Whether ``files`` are what the draw of key ``k`` wrote (their recorded digests)."""
+    try:
+        recorded = json.loads(_stamp(k).read_text())
+    except (OSError, ValueError):
+        return False
+    return recorded == digests(files)
+
+
+def record(k: str, files: list[Path]) -> None:
+    """Keep the digests of the ``files`` just drawn under key ``k`` (atomically, readable by whom the
+    cache folder is: :func:`magexp.run.cache.write`; where the cache cannot be written, nothing is kept
+    and the figure is drawn again next time)."""
+    try:
+        write(_stamp(k), json.dumps(digests(files)).encode(), root())
+    except OSError:
+        pass

@@ -1,0 +1,125 @@
+"""Every parameter estimate per cell: median and interquartile range over the successful seeds (the
+failed ones counted in ``n_failed``), beside the truth and the paper's value (the tables of Yuan 2018).
+Where the runs measure F_g (eq 8 at the estimate, the ``fg`` column), one more row per cell holds
+its median and quartiles over every seed (parameter ``F_g``). The figure shows errors against the
+truth, and F_g in a third panel with the paper's F_g; the legend gives each cell's success rate."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plan import quantiles
+from magexp.artifacts.plots.style import label as key_label
+from magexp.artifacts.plots.style import panels, shared_legend, tidy_log_axes
+from magexp.artifacts.summary import cell_settings, parameter_values, reported_value
+
+
+#: the fit-quality row a cell gets where its runs measure it: (parameter name, runs column)
+FIT = ("F_g", "fg")
+
+
+def cell_label(cell: dict, estimator: str, spec) -> str:
+    """A short legend text of a cell: the estimator, then its other swept values (a scenario by its
+    name, other keys as ``name = value`` with ``plot.labels``)."""
+    rest = [str(v) if k == "scenario" else key_label(spec, k, v) for k, v in cell.items() if k != "estimator"]
+    return ", ".join([estimator] + rest)
+
+
+def tabulate(runs) -> pd.DataFrame:
+    rows = []
+    for ci, cell in enumerate(runs.cells):
+        sub = runs.table[runs.table.cell == ci]
+        names, values, truth = parameter_values(runs, ci)
+        settings = cell_settings(runs, ci)
+        ok = sub.sort_values("seed")["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(values), np.nan)
+        judged = np.isfinite(ok)
+        kept = values[ok == 1] if judged.any() else values  # over the successful runs; failures counted beside
+        for k, name in enumerate(names):
+            med, q25, q75 = quantiles(kept[:, k])
+            paper, _ = reported_value(runs.spec, name, settings)
+            rows.append({**cell, "label": cell_label(cell, sub.estimator.iloc[0], runs.spec),
+                         "estimator": sub.estimator.iloc[0],
+                         "objective": sub.objective.iloc[0], "parameter": name,
+                         "truth": np.nan if truth is None else float(truth[k]), "median": med, "q25": q25,
+                         "q75": q75, "paper_value": np.nan if paper is None else paper, "n_seeds": len(values),
+                         "n_failed": int((ok[judged] == 0).sum()),
+                         "success_rate": float(ok[judged].mean()) if judged.any() else np.nan})
+        name, column = FIT
+        if column in sub and sub[column].notna().any():  # over every seed, as the summary's F_g row
+            med, q25, q75 = quantiles(sub[column])
+            paper, _ = reported_value(runs.spec, name, settings)
+            rows.append({**rows[-1], "parameter": name, "truth": np.nan, "median": med, "q25": q25, "q75": q75,
+                         "paper_value": np.nan if paper is None else paper})
+    return pd.DataFrame(rows)
+
+
+def _fit_panel(ax, frame, labels, colours):
+    """F_g per cell (median, IQR over seeds; log axis) and the paper's F_g (open marker)."""
+    for j, lab in enumerate(labels):
+        row = frame[(frame.label == lab) & (frame.parameter == FIT[0])]
+        if row.empty:
+            continue
+        r = row.iloc[0]
+        ax.errorbar([j], [r["median"]], yerr=[[r["median"] - r.q25], [r.q75 - r["median"]]], fmt="o", ms=4,
+                    capsize=2, lw=1, color=colours[lab])
+        if np.isfinite(r.paper_value):
+            ax.plot([j], [r.paper_value], "o", mfc="none", ms=7, mew=1.2, color=colours[lab])
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(labels)), [lab.replace("objective = ", "") for lab in labels], rotation=30, ha="right",
+                  fontsize=7)
+    ax.set_xlim(-0.6, len(labels) - 0.4)
+    ax.set_ylabel("F_g, eq 8 at the estimate")
+    ax.set_title("F_g (open: paper's)", fontsize=8)
+
+
+def _room(ax, values, linthresh: float):
+    """Limits of a symlog axis that hold every value with a margin (a marker at the edge is cut)."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return
+    t = np.arcsinh(v / linthresh)  # symlog-like, smooth through 0
+    lo, hi = t.min(), t.max()
+    pad = 0.08 * max(hi - lo, 1.0)
+    ax.set_ylim(linthresh * np.sinh(lo - pad), linthresh * np.sinh(hi + pad))
+
+
+def draw(frame: pd.DataFrame, spec, axes=None):
+    """Two panels (matrix entries, offsets): estimate minus truth, symlog axis; filled marker and
+    bar: median and IQR over seeds; open marker: the paper's value minus the truth. A third panel
+    shows F_g where the runs measure it."""
+    names = [n for n in dict.fromkeys(frame.parameter) if n != FIT[0]]
+    groups = [names[:9], names[9:]]
+    labels = list(dict.fromkeys(frame.label))
+    fit = (frame.parameter == FIT[0]).any()
+    fig, axes = panels(3 if fit else 2, width=4.6 if fit else 5.2, height=3.4, axes=axes)
+    colours = {}
+    for ax, group, linthresh in zip(axes, groups, (1e-3, 0.1)):
+        width = 0.8 / max(len(labels), 1)
+        drawn = []
+        for j, lab in enumerate(labels):
+            sub = frame[(frame.label == lab) & frame.parameter.isin(group)].set_index("parameter").loc[group]
+            x = np.arange(len(group)) - 0.4 + width * (j + 0.5)
+            err = sub["median"] - sub.truth
+            yerr = np.vstack([sub["median"] - sub.q25, sub.q75 - sub["median"]])
+            rate = sub.success_rate.iloc[0] if "success_rate" in sub else np.nan
+            line = ax.errorbar(x, err, yerr=yerr, fmt="o", ms=3.5, capsize=2, lw=1,
+                               label=lab + (f" ({rate:.0%} ok)" if np.isfinite(rate) else ""),
+                               color=colours.get(lab))
+            colours[lab] = line[0].get_color()
+            drawn += [err, sub.q25 - sub.truth, sub.q75 - sub.truth]
+            if sub.paper_value.notna().any():
+                ax.plot(x, sub.paper_value - sub.truth, "o", mfc="none", ms=6, color=colours[lab])
+                drawn.append(sub.paper_value - sub.truth)
+        ax.axhline(0, color="k", lw=0.8)
+        ax.set_yscale("symlog", linthresh=linthresh)
+        _room(ax, np.concatenate([np.asarray(d, float) for d in drawn]) if drawn else [], linthresh)
+        ax.set_xticks(np.arange(len(group)), group)
+        ax.set_ylabel("estimate - truth")
+    if fit:
+        _fit_panel(axes[2], frame, labels, colours)
+    shared_legend(fig, axes[:1], fontsize=7)
+    axes[1].set_title("open: paper's value - truth", fontsize=8)
+    fig.suptitle(spec.title, fontsize=10)
+    return tidy_log_axes(fig)

@@ -1,0 +1,72 @@
+"""Every estimator on every recording (kind ``recording_spread``, ``real_benchmark``): the spread of
+the total field, the one thing a recording without a reference has to judge a calibration by.
+
+One row per (recording, estimator): the spread ``std/mean`` of the raw readings, of the calibrated
+readings the fit saw, and of the calibrated held-out block (a contiguous part of the recording
+left out of the fit), each the median over seeds; the held-out spread's 95 % interval is the widest
+of the seeds' block-bootstrap intervals (:func:`magexp.core.quality.block_bootstrap_spread`: it covers
+the data's own uncertainty, which one recording cannot average away, and the seeds' differences).
+``success_rate``: the share of runs where the estimator reports success and the calibrated spread
+is below the raw one (as :func:`magexp.artifacts.plots.benchmark_table.tabulate`). The winner per recording
+(:func:`magexp.artifacts.plots.benchmark_table.winners` on ``heldout_spread``) is named only where its interval
+lies below every other estimator's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.lines import Line2D
+
+from magexp.artifacts.plan import quantiles
+from magexp.artifacts.plots.real import short_name
+from magexp.artifacts.plots.style import panels, tidy_log_axes
+
+COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_cells", "wall_time")
+
+
+def tabulate(runs) -> pd.DataFrame:
+    rows = []
+    for ci in range(len(runs.cells)):
+        sub = runs.table[runs.table.cell == ci]
+        row = {"case": short_name(sub.scenario.iloc[0]), "scenario": sub.scenario.iloc[0],
+               "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],
+               "setting": sub.setting.iloc[0], "n_seeds": len(sub)}
+        row.update({c: quantiles(sub[c])[0] if c in sub else np.nan for c in COLUMNS})
+        lo, hi = (sub[c].to_numpy(float) if c in sub else np.array([np.nan])
+                  for c in ("heldout_spread_lo", "heldout_spread_hi"))
+        row["heldout_spread_lo"] = float(np.min(lo)) if np.isfinite(lo).all() else np.nan
+        row["heldout_spread_hi"] = float(np.max(hi)) if np.isfinite(hi).all() else np.nan
+        ok = sub["success"].astype(bool) & (sub["spread_after"] < sub["spread_before"])
+        row["success_rate"] = float(ok.mean())
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def draw(frame: pd.DataFrame, spec, axes=None):
+    """One panel per recording: per estimator, the calibrated spread on the fitted readings (dot)
+    and on the held-out block (diamond, with its interval), the raw spread as a dashed line; an
+    estimator whose runs mostly failed is drawn in red."""
+    cases = list(dict.fromkeys(frame.case))
+    fig, axes = panels(len(cases), width=3.6, height=3.0, rows=2 if len(cases) > 2 else 1, axes=axes)
+    for ax, case in zip(axes, cases):
+        sub = frame[frame.case == case].reset_index(drop=True)
+        x = np.arange(len(sub))
+        failed = (sub.success_rate < 0.5).to_numpy()
+        colour = np.where(failed, "tab:red", "tab:blue")
+        ax.axhline(sub.spread_before.iloc[0], color="0.4", ls="--", lw=1, label="raw readings")
+        ax.scatter(x - 0.12, sub.spread_after, marker="o", s=18, c=colour, label="calibrated, fitted readings")
+        err = np.vstack([sub.heldout_spread - sub.heldout_spread_lo, sub.heldout_spread_hi - sub.heldout_spread])
+        for k in x:
+            ax.errorbar([k + 0.12], [sub.heldout_spread[k]], yerr=err[:, k:k + 1], fmt="D", ms=4, capsize=2,
+                        color=colour[k], label="calibrated, held-out block (95 % interval)" if k == 0 else None)
+        ax.set_yscale("log")
+        ax.set_xticks(x, [f"{e}\n{r:.0%} ok" for e, r in zip(sub.estimator, sub.success_rate)], fontsize=7)
+        ax.set_title(case, fontsize=9)
+        ax.set_ylabel("spread std/mean of |B|")
+    handles, labels = axes[0].get_legend_handles_labels()
+    handles.append(Line2D([], [], marker="o", ls="", color="tab:red"))
+    labels.append("red: fewer than half the runs succeeded")
+    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=7)
+    fig.suptitle(spec.title, fontsize=10)
+    return tidy_log_axes(fig)

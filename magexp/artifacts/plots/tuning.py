@@ -1,0 +1,142 @@
+"""Settings of one method as a distribution: every setting's median beside the default.
+
+One row per cell: ``family`` (the run's estimator name: settings of one method share it),
+``label`` (the cell's ``plot.label`` keys, short names from ``plot.labels``), ``scenario``, the
+median and quartiles of ``plot.metric`` (default ``fun``), ``success_rate`` (fraction of seeds that
+succeeded by the artifact's ``success:`` rule, :func:`magexp.artifacts.plan.succeeded`: the objective at
+most 1.1 x the true calibration's on the same readings; ``converged``, the 1 % rule, where no run is
+judged), ``bound_success_rate`` (offset error within 2x its Cramér-Rao bound), ``on_boundary_rate``
+(fraction of seeds whose best has a coordinate on the search box's faces), median wall time and
+evaluations to 1.1x the final value. Per (family, scenario) ``role`` marks the ``best``,
+``median`` and ``worst`` setting by the median metric, and ``default`` the cell whose overrides
+match ``plot.default`` (``{family: {key: value}}``; a family without one: no default).
+
+The figure: one column of two panels per scenario. Where every family has at most
+:data:`FEW` settings, each setting has its own colour (legend: its label, e.g. ``boundary = clip``)
+in both panels: on top its median metric, below its success rate. With more settings, the top
+panel shows every setting's median as a dot, the best / median / worst ones with their own markers
+and the default as a star; below, the success rates of the median and best settings and the default
+(of the one setting where a family has only one).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plan import quantiles
+from magexp.artifacts.plots.style import legend_entries, panels, plt, shared_legend, tidy_log_axes
+
+#: families with at most this many settings show each setting by name (else best / median / worst)
+FEW = 4
+ROLE_MARKERS = {"best": "^", "median": "D", "worst": "v"}
+
+
+def _median(sub, col):
+    return quantiles(sub[col])[0] if col in sub else np.nan
+
+
+def _rate(values) -> float:
+    v = pd.Series(values).dropna()
+    return float(v.astype(float).mean()) if len(v) else np.nan
+
+
+def tabulate(runs) -> pd.DataFrame:
+    spec = runs.spec
+    metric = spec.plot.get("metric", "fun")
+    keys = list(spec.plot.get("label", []))
+    short = dict(spec.plot.get("labels", {}) or {})
+    defaults = {k: {kk: str(vv) for kk, vv in v.items()} for k, v in (spec.plot.get("default", {}) or {}).items()}
+    rows = []
+    for ci, cell in enumerate(runs.cells):
+        sub = runs.table[runs.table.cell == ci]
+        family = str(sub.estimator.iloc[0])
+        settings = dict(o.split("=", 1) for o in runs.overrides[ci])
+        label = ", ".join(f"{short.get(k, k.split('.')[-1])} = {settings[k]}" for k in keys if k in settings) or family
+        med, q25, q75 = quantiles(sub[metric])
+        default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
+        rows.append({"family": family, "label": label, "scenario": str(sub.scenario.iloc[0]), "metric": metric,
+                     "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub),
+                     "success_rate": _rate(sub["succeeded"]) if "succeeded" in sub and sub.succeeded.notna().any()
+                     else _rate(sub["converged"]) if "converged" in sub else np.nan,
+                     "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub
+                     else np.nan,
+                     "on_boundary_rate": _rate(sub["on_boundary"] > 0) if "on_boundary" in sub else np.nan,
+                     "offset_error_ratio": _median(sub, "offset_error_ratio"),
+                     "wall_time": _median(sub, "wall_time"), "nfev_to_1.1": _median(sub, "nfev_to_1.1"),
+                     "default": default, "setting": sub.setting.iloc[0]})
+    frame = pd.DataFrame(rows)
+    frame["role"] = ""
+    for _, idx in frame.groupby(["family", "scenario"], sort=False).groups.items():
+        group = frame.loc[idx].sort_values("median", kind="stable")
+        if len(group) >= 3:
+            frame.loc[group.index[0], "role"] = "best"
+            frame.loc[group.index[len(group) // 2], "role"] = "median"
+            frame.loc[group.index[-1], "role"] = "worst"
+    return frame
+
+
+def _named(top, bottom, sub, families, colours):
+    """Few settings per family: one colour per setting label, in both panels."""
+    width = 0.8 / max(sub.groupby("family").size().max(), 1)
+    for k, fam in enumerate(families):
+        f = sub[sub.family == fam]
+        for j, (_, r) in enumerate(f.iterrows()):
+            x = k - width * (len(f) - 1) / 2 + width * j
+            top.scatter([x], [max(r["median"], 1e-14)], s=90 if r.default else 30, color=colours[r.label], zorder=3,
+                        marker="*" if r.default else "o", label=r.label)
+            top.plot([x, x], [max(r.q25, 1e-14), max(r.q75, 1e-14)], color=colours[r.label], lw=1)
+            bottom.bar(x, float(r.success_rate), width=width * 0.9, color=colours[r.label])
+
+
+def _ranked(top, bottom, sub, families):
+    """Many settings per family: every median as a dot, the best / median / worst and the default marked."""
+    for k, fam in enumerate(families):
+        f = sub[sub.family == fam]
+        jitter = np.linspace(-0.2, 0.2, len(f)) if len(f) > 1 else np.zeros(1)
+        top.scatter(k + jitter, f["median"].clip(lower=1e-14), s=12, color="C0", alpha=0.7,
+                    label="one setting (median over seeds)")
+        for x, (_, r) in zip(k + jitter, f.iterrows()):
+            if r.default:
+                top.scatter([x], [max(r["median"], 1e-14)], marker="*", s=120, color="C3", zorder=3, label="default")
+            if r.role in ROLE_MARKERS:
+                top.scatter([x], [max(r["median"], 1e-14)], marker=ROLE_MARKERS[r.role], s=40, facecolors="none",
+                            edgecolors="k", zorder=4, label=f"{r.role} setting")
+        if len(f) == 1:  # one setting (an ablation variant): its success rate
+            bottom.bar(k, float(f.success_rate.iloc[0]), width=0.5, color="C0")
+            continue
+        bottom.bar(k - 0.2, f.success_rate.median(), width=0.2, color="C0", label="success rate: median over settings")
+        best = f[f.role == "best"] if (f.role == "best").any() else f
+        bottom.bar(k, float(best.success_rate.iloc[0]), width=0.2, color="C2", label="success rate: best setting")
+        if f.default.any():
+            bottom.bar(k + 0.2, float(f[f.default].success_rate.iloc[0]), width=0.2, color="C3", label="success rate: default")
+
+
+def draw(frame: pd.DataFrame, spec, axes=None):
+    scenarios = list(dict.fromkeys(frame.scenario))
+    families = list(dict.fromkeys(frame.family))
+    few = frame.groupby(["family", "scenario"]).size().max() <= FEW and frame.label.nunique() <= 2 * FEW
+    cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colours = {lab: cycle[j % len(cycle)] for j, lab in enumerate(dict.fromkeys(frame.label))}
+    width = max(3.6, 0.9 * len(families) + 1.5, 7.0 / len(scenarios))  # room for the title
+    fig, axes = panels(2 * len(scenarios), rows=2, width=width, height=2.9, axes=axes)
+    for j, sc in enumerate(scenarios):
+        top, bottom = axes[j], axes[len(scenarios) + j]
+        sub = frame[frame.scenario == sc]
+        if few:
+            _named(top, bottom, sub, families, colours)
+        else:
+            _ranked(top, bottom, sub, families)
+        for ax in (top, bottom):
+            ax.set_xticks(range(len(families)), families, rotation=30, ha="right", fontsize=7)
+        top.set_yscale("log")
+        top.set_ylabel(spec.plot.get("ylabel", f"median {frame.metric.iloc[0]} per setting"))
+        top.set_title(sc, fontsize=9)
+        bottom.set_ylim(0, 1.05)
+        bottom.set_ylabel("success rate")
+    entries = legend_entries(axes)
+    if few and frame.default.any():
+        entries["star: default"] = plt.Line2D([], [], ls="", marker="*", color="0.3", ms=9)
+    shared_legend(fig, axes, entries, ncols=3, fontsize=7)
+    fig.suptitle(spec.title, fontsize=10)
+    return tidy_log_axes(fig)

@@ -1,0 +1,497 @@
+"""Assemble ``results/summary.csv``, ``results/claims.csv``, ``results/versions.csv``,
+``results/REPORT.md`` and ``results/APPENDIX.md`` from the papers' parts.
+
+``REPORT.md`` is claims first (at most :data:`MAX_LINES` lines and :data:`MAX_CHARS` characters,
+no table cell over :data:`MAX_CELL`): per paper, (1) its headline claims with their verdicts
+(:func:`headline_verdict`), reasons and figures, (2) magexp's own findings, (3) the compared
+numbers (rows with a paper value), (4) the deviations. ``APPENDIX.md`` holds the rest: per
+artifact its figure, caption, full summary table (``n/a`` rows too), table and notes (measured
+values interpolated from the runs, :func:`magexp.artifacts.claims.interpolate`), the sanity checks and the
+speed of the core. ``claims.csv`` has every claim (headline, finding, sanity) with its full evidence."""
+
+from __future__ import annotations
+
+import functools
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from magexp.core.atomic import atomic_path, write_text
+from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, _shorten, evaluate, interpolate
+from magexp.errors import MagexpError
+from magexp.paths import RESULTS, ROOT
+from magexp.artifacts.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
+from magexp.artifacts.summary import COLUMNS, VERDICTS
+
+#: significant digits of every float written to a results CSV (round-off must not churn files)
+DIGITS = 6
+SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "value", "lo", "hi", "success_rate",
+                 "n_seeds", "truth_in_interval", "verdict"]
+#: limits of REPORT.md (the appendix holds the rest)
+MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
+#: verdicts of a headline claim
+HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here")
+CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence"]
+
+
+def _floats(column: pd.Series) -> np.ndarray | None:
+    """The column as floats if it holds floats: a float column, or an object column whose values are
+    floats and missing values (e.g. a truth that some rows lack); else None (text, integers, flags)."""
+    if pd.api.types.is_float_dtype(column):
+        return column.to_numpy(float)
+    if column.dtype == object:
+        present = [v for v in column if v is not None and not (isinstance(v, float) and np.isnan(v))]
+        if present and all(isinstance(v, (float, np.floating)) for v in present):
+            return np.array([np.nan if v is None else float(v) for v in column])
+    return None
+
+
+def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
+    """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
+    written as ``±floor``; every float then rounded to :data:`DIGITS` significant digits."""
+    out = frame.copy()
+    for col in out.columns:
+        v = _floats(out[col])
+        if v is not None:
+            small = np.isfinite(v) & (v != 0) & (np.abs(v) < floor)
+            v = np.where(small, np.sign(v) * floor, v)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                mag = np.where(np.isfinite(v) & (v != 0), np.floor(np.log10(np.abs(np.where(v == 0, 1, v)))), 0)
+            scale = 10.0 ** (DIGITS - 1 - mag)
+            out[col] = np.where(np.isfinite(v), np.round(v * scale) / scale, v)
+    return out
+
+
+def write_csv(frame: pd.DataFrame, path: Path) -> None:
+    """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
+    when only round-off differs)."""
+    with atomic_path(path) as tmp:  # an interrupt leaves the old file or the new one
+        tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
+
+
+def versions() -> dict:
+    """The versions behind the results: python and the libraries (:mod:`magexp.run.provenance`) and
+    ``magexp_commit``, the last commit that changed anything outside ``results/`` (so committing the
+    regenerated results does not change the record, and a fresh clone writes the same bytes)."""
+    from magexp.run import provenance
+
+    try:
+        commit = subprocess.run(["git", "log", "-1", "--format=%h", "--abbrev=12", "--", ".", ":(exclude)results"],
+                                capture_output=True, text=True, check=True,
+                                cwd=ROOT).stdout.strip() or provenance.commit()
+    except (OSError, subprocess.CalledProcessError):
+        commit = provenance.commit()
+    libs = provenance.provenance()
+    return {**{k: v for k, v in libs.items() if k not in ("magexp_commit", "config_hash", "commit")},
+            "magexp_commit": commit}
+
+
+def _fmt(v) -> str:
+    if v is None or (isinstance(v, float) and not np.isfinite(v)):
+        return ""
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    if isinstance(v, (float, np.floating)):
+        return f"{v:.4g}"
+    return str(v)
+
+
+_LATEX = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_", "{": r"\{",
+          "}": r"\}", "~": r"\textasciitilde{}", "^": r"\textasciicircum{}"}
+
+
+def _tex(text: str) -> str:
+    return "".join(_LATEX.get(ch, ch) for ch in str(text))
+
+
+def latex_table(frame: pd.DataFrame, columns: list[str]) -> str:
+    """The same table as :func:`markdown_table`, as a LaTeX ``tabular`` with ``booktabs`` rules
+    (``\\usepackage{booktabs}``), ready to ``\\input`` into a paper."""
+    lines = [r"\begin{tabular}{" + "l" * len(columns) + "}", r"\toprule",
+             " & ".join(_tex(c) for c in columns) + r" \\", r"\midrule"]
+    lines += [" & ".join(_tex(_fmt(r[c])) for c in columns) + r" \\" for _, r in frame.iterrows()]
+    return "\n".join(lines + [r"\bottomrule", r"\end{tabular}", ""])
+
+
+def _cell(v) -> str:
+    """A Markdown table cell: :func:`_fmt`, with ``|`` escaped and line breaks flattened."""
+    return " ".join(_fmt(v).split()).replace("|", "\\|")
+
+
+def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = None, names: list[str] | None = None) -> str:
+    """A Markdown table of ``columns`` (headed ``names``, default the columns); with ``tex``, its
+    LaTeX twin (:func:`latex_table`) is written there. A table without rows is an error: the
+    caller says in words that there is nothing to show."""
+    if not len(frame):
+        raise MagexpError(f"an empty table ({', '.join(columns)}) would be printed: say so in words instead")
+    if tex is not None:
+        write_text(tex, latex_table(frame, columns))
+    head = "| " + " | ".join(names or columns) + " |\n|" + "---|" * len(columns) + "\n"
+    return head + "".join("| " + " | ".join(_cell(r[c]) for c in columns) + " |\n" for _, r in frame.iterrows())
+
+
+def collect(root: Path = RESULTS) -> pd.DataFrame:
+    """Every paper's summary part, in the papers' order."""
+    parts = []
+    for paper in papers():
+        path = root / paper / "summary.csv"
+        if path.exists() and path.stat().st_size > 0:
+            part = pd.read_csv(path, keep_default_na=False, na_values=[""])
+            parts.append(part.reindex(columns=COLUMNS))
+    if not parts:
+        return pd.DataFrame(columns=COLUMNS)
+    return pd.concat(parts, ignore_index=True)[COLUMNS]
+
+
+def _runs(root: Path, paper: str, name: str) -> pd.DataFrame | None:
+    path = root / paper / f"{name}_runs.csv"
+    return pd.read_csv(path) if path.exists() else None
+
+
+def _runs_reader(root: Path, paper: str):
+    """``name -> runs table`` of ``paper``: each runs CSV read once, however many sections use it."""
+    return functools.cache(lambda name: _runs(root, paper, name))
+
+
+def _outcomes(specs: list, runs) -> list[tuple[str, object]]:
+    """``(artifact, Outcome)`` of every claim of ``specs`` whose runs table (``runs(name)``) has rows."""
+    out = []
+    for spec in specs:
+        table = runs(spec.name) if spec.claims else None
+        if table is not None and len(table):
+            out += [(spec.name, evaluate(c, table)) for c in spec.claims]
+    return out
+
+
+def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple[str, object]]:
+    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``."""
+    return [o for p in ([paper] if paper else papers())
+            for o in _outcomes([load(path) for path in artifact_paths(p)], _runs_reader(root, p))]
+
+
+def headline_verdict(results: list[str | None]) -> str:
+    """The verdict of a headline claim from its parts' outcomes (None: the part's artifact has no
+    runs here): ``supported`` (every part holds), ``contradicted`` (none holds), ``partly``
+    (some hold), ``not testable here`` (no part could be evaluated)."""
+    known = [r for r in results if r is not None]
+    if not known:
+        return "not testable here"
+    held = sum(r == HOLDS for r in known)
+    if held == len(results):
+        return "supported"
+    return "contradicted" if held == 0 else "partly"
+
+
+def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
+    """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure.
+    ``outcomes``: ``{"artifact.id": Outcome}``; a part naming no claim of the paper is an error."""
+    meta = load_paper(paper)
+    declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
+    rows = []
+    for h in meta.headline:
+        unknown = [p for p in h.parts if p not in declared]
+        if unknown:
+            raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {unknown[0]!r} names no claim of {paper} "
+                              "(write <artifact>.<claim id>)")
+        parts = [outcomes.get(p) for p in h.parts]
+        if h.untestable:
+            verdict, reason = "not testable here", str(h.untestable).strip()
+        else:
+            verdict = headline_verdict([o.result if o is not None else None for o in parts])
+            if h.reason and parts[0] is not None:
+                reason = interpolate(str(h.reason).strip(), runs(h.parts[0].split(".")[0]))
+            else:
+                reason = "; ".join(f"{p.split('.')[1]}: {o.result if o else 'no runs here'}"
+                                   + (f" ({o.short})" if o else "") for p, o in zip(h.parts, parts))
+        figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
+        rows.append({"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline",
+                     "section": h.section, "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
+                     "reason": _shorten(reason), "evidence": reason})
+    return rows
+
+
+def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
+    """One ``claims.csv`` row per evaluated claim of ``paper``."""
+    own = {s.name: s for s in specs}
+    return [{"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
+             "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
+             "text": o.claim.text, "verdict": o.result, "reason": _shorten(o.short), "evidence": o.evidence}
+            for name, o in outcomes]
+
+
+def _link(figure: str, root: Path) -> str:
+    """A Markdown link to a figure ``<paper>/<artifact>`` (its PNG), or '' if it was not drawn."""
+    if not figure:
+        return ""
+    name = figure.split("/")[-1]
+    return f"[{name}]({figure}.png)" if (root / f"{figure}.png").exists() else name
+
+
+def _bold(verdict: str) -> str:
+    return f"**{verdict}**" if verdict in ("contradicted", "partly", FAILS, CONTRADICTED, "differs") else verdict
+
+
+def _counts(rows: pd.DataFrame) -> str:
+    counts = rows.verdict.value_counts()
+    return ", ".join(f"{k} {int(counts.get(k, 0))}" for k in VERDICTS)
+
+
+class Paper:
+    """One paper's parts, each read once: meta, specs, runs, summary rows, claim outcomes."""
+
+    def __init__(self, paper: str, summary: pd.DataFrame, root: Path):
+        self.paper, self.root = paper, root
+        self.meta = load_paper(paper)
+        self.specs = [load(path) for path in artifact_paths(paper)]
+        self.runs = _runs_reader(root, paper)
+        self.rows = summary[summary.paper == paper]
+        self.outcomes = _outcomes(self.specs, self.runs)
+        by_id = {f"{name}.{o.claim.id}": o for name, o in self.outcomes}
+        self.headlines = headlines(paper, self.specs, by_id, self.runs)
+        self.claims = claim_rows(paper, self.specs, self.outcomes)
+
+
+def _headline_table(p: Paper) -> str:
+    if not p.headlines:
+        return "No headline claim of this section is declared (`headline:` in its `paper.yaml`).\n"
+    frame = pd.DataFrame(p.headlines)
+    frame["claim"] = frame.text
+    frame["verdict"] = frame.verdict.map(_bold)
+    frame["figure"] = frame.figure.map(lambda f: _link(f, p.root))
+    return markdown_table(frame, ["claim", "section", "verdict", "reason", "figure"])
+
+
+def _findings_table(p: Paper) -> str:
+    found = [c for c in p.claims if c["role"] == "finding"]
+    if not found:
+        return ""
+    frame = pd.DataFrame(found)
+    frame["claim"] = [f"{t} ({s})" if s else t for t, s in zip(frame.text, frame.section)]
+    frame["result"] = frame.verdict.map(_bold)
+    frame["evidence"] = frame.reason.map(lambda r: _shorten(r, 160))
+    held = sum(c["verdict"] == HOLDS for c in found)
+    return (f"### Findings\n\n{held} of {len(found)} hold (*magexp*: stated by this report, a test fails if one "
+            "does not hold; *paper*: the paper's statement, checked). Comparisons hold only where a test "
+            "separates the two sides (alpha 0.05); full evidence: [`claims.csv`](claims.csv).\n\n"
+            + markdown_table(frame, ["by", "claim", "result", "evidence"]))
+
+
+#: a cell with more compared numbers than this (a parameter table) is one line of the report
+COLLAPSE = 4
+
+
+def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
+    """The report's rows of compared numbers (``label``, ``paper``, ``ours``, ``verdict``, ``reason``):
+    one per summary row with a paper value, except that a cell with more than :data:`COLLAPSE` of
+    them (a parameter table) becomes one line: its verdict counts, and the rows not reproduced
+    (every row stays in the appendix and ``summary.csv``)."""
+    out = []
+    rows = rows[rows.verdict != "n/a"]
+    for _, cell in rows.groupby(["artifact", "estimator", "setting"], sort=False):
+        if len(cell) <= COLLAPSE:
+            out += [{"label": r.label, "paper": _fmt(r.paper_value), "ours": f"{_fmt(r.value)} [{_fmt(r.lo)}, {_fmt(r.hi)}]",
+                     "verdict": _bold(r.verdict), "reason": r.reason} for r in cell.itertuples()]
+            continue
+        first = cell.iloc[0]
+        head = str(first.label).split(",", 1)
+        name = head[0].rsplit(" ", 1)[0] if " " in head[0] else head[0]  # "RDPSO S11" -> "RDPSO"
+        label = ", ".join([f"{name} ({len(cell)} values: {', '.join(cell.quantity.astype(str))})", *head[1:]])
+        counts = cell.verdict.value_counts()
+        verdict = ", ".join(_bold(f"{k} {int(counts[k])}") if k != "reproduced" else f"{k} {int(counts[k])}"
+                            for k in VERDICTS if k in counts)
+        others = cell[cell.verdict != "reproduced"]
+        reason = "; ".join(f"{r.quantity} {r.verdict}: paper {_fmt(r.paper_value)}, ours {_fmt(r.value)}" for r in others.itertuples())
+        out.append({"label": label, "paper": f"{len(cell)} values", "ours": "see appendix", "verdict": verdict,
+                    "reason": _shorten(reason or "every value reproduced", MAX_CELL)})
+    return pd.DataFrame(out, columns=["label", "paper", "ours", "verdict", "reason"])
+
+
+def _compared_table(p: Paper) -> str:
+    rows = p.rows[p.rows.verdict != "n/a"]
+    if not len(rows):
+        return ""
+    counts = rows.verdict.value_counts()
+    return ("### Compared numbers\n\n" + ", ".join(f"{k} {int(counts.get(k, 0))}" for k in VERDICTS if k != "n/a")
+            + " (`uninformative` is not counted as reproduced). *ours*: median [2.5-97.5 % over all seeds]; the reason "
+            f"names the interval the paper's run is judged against; a parameter table is one line (all its rows: "
+            f"[appendix](APPENDIX.md#{p.paper})). The {int((p.rows.verdict == 'n/a').sum())} rows without a paper "
+            "value are in the appendix and [`summary.csv`](summary.csv).\n\n"
+            + markdown_table(compared_rows(rows), ["label", "paper", "ours", "verdict", "reason"],
+                             names=["quantity", "paper", "ours", "verdict", "reason"]))
+
+
+def _deviations_section(meta, paper: str, root: Path, *, full: bool = False) -> str:
+    """The deviations from the paper's text; in the report each cell is cut at :data:`MAX_CELL`
+    characters (``full``: the appendix's whole text, with the LaTeX twin)."""
+    if not meta.deviations:
+        return ""
+    cut = (lambda t: " ".join(t.split())) if full else (lambda t: _shorten(" ".join(t.split()), MAX_CELL))
+    frame = pd.DataFrame([{"what": cut(d.text), "why": cut(d.reason)} for d in meta.deviations])
+    return "### Deviations from the paper's text\n\n" + markdown_table(
+        frame, ["what", "why"], tex=root / paper / "deviations.tex" if full else None)
+
+
+def _winners_section(p: Paper) -> str:
+    """magexp's "which method to pick": the winner per case of each artifact with a winners table."""
+    from magexp.artifacts.plots.benchmark_table import winners
+
+    parts = []
+    for spec in p.specs:
+        path = p.root / p.paper / f"{spec.name}.csv"
+        if not spec.report_table or not path.exists():
+            continue
+        frame = pd.read_csv(path)
+        if "case" not in frame or "bound_ratio_hi" not in frame:
+            continue
+        best = winners(frame)
+        if not len(best):
+            continue
+        parts.append(f"**{spec.title}** ({_link(f'{p.paper}/{spec.name}', p.root)}): lowest RMS offset error / "
+                     "sqrt(tr CRB), a winner only where its 95 % CI lies below every other's, else the tied set.\n\n"
+                     + markdown_table(best, ["case", "winner", "bound_ratio", "success_rate", "tied"]))
+    return "### Which method to pick\n\n" + "\n".join(parts) if parts else ""
+
+
+def _report_section(p: Paper) -> str:
+    intro = " ".join(str(p.meta.intro).split())
+    lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n", _headline_table(p)]
+    lines += [_findings_table(p), _winners_section(p), _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
+              f"Figures, notes, full tables and sanity checks: [appendix](APPENDIX.md#{p.paper}).\n"]
+    return "\n".join(x for x in lines if x)
+
+
+def _appendix_section(p: Paper) -> str:
+    """A paper's appendix: sanity checks, then every artifact with its figure, caption, tables, notes."""
+    lines = [f'<a id="{p.paper}"></a>\n', f"## {p.meta.title}\n", f"{str(p.meta.intro).strip()}\n",
+             _deviations_section(p.meta, p.paper, p.root, full=True)]
+    frame = pd.DataFrame(p.claims) if p.claims else pd.DataFrame(columns=CLAIM_COLUMNS)
+    sanity = frame[frame.role == "sanity"]
+    if len(sanity):
+        lines.append("### Sanity checks\n\nStatements that hold by construction or check magexp's implementation; "
+                     "never counted as findings.\n\n" + markdown_table(sanity, ["artifact", "text", "verdict", "reason"],
+                                                                        names=["artifact", "check", "result", "evidence"]))
+    if len(frame):
+        write_text(p.root / p.paper / "claims.tex", latex_table(frame, ["artifact", "by", "role", "text", "verdict"]))
+    for spec in p.specs:
+        if not (p.root / p.paper / f"{spec.name}.png").exists():
+            continue
+        table = p.runs(spec.name)
+        lines.append(f"### {spec.name}: {spec.title}\n")
+        lines.append(f"![{spec.name}]({p.paper}/{spec.name}.png)\n")
+        if spec.caption:
+            lines.append(f"{_prose(spec, spec.caption, table)}\n")
+        timing = (f", wall times on this machine: [`timing/{spec.name}.csv`](timing/{spec.name}.csv)"
+                  if (p.root / "timing" / f"{spec.name}.csv").exists() else "")
+        lines.append(f"Data: [`{p.paper}/{spec.name}.csv`]({p.paper}/{spec.name}.csv), "
+                     f"runs: [`{p.paper}/{spec.name}_runs.csv`]({p.paper}/{spec.name}_runs.csv){timing}.\n")
+        art = p.rows[p.rows.artifact == spec.name]
+        if len(art):
+            lines.append(markdown_table(art, SUMMARY_SHOWN, tex=p.root / p.paper / f"{spec.name}_summary.tex"))
+        if spec.report_table:
+            lines.append(_artifact_table(spec, p.root / p.paper / f"{spec.name}.csv"))
+        if spec.notes:
+            lines.append(f"\n{_prose(spec, spec.notes, table)}\n")
+    return "\n".join(lines)
+
+
+def _prose(spec, text: str, table: pd.DataFrame | None) -> str:
+    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs)
+    and every ``{stat:metric@selection:format}`` field (:func:`magexp.artifacts.claims.interpolate`; a field
+    whose selection has no value fails the build, naming the artifact and the field)."""
+    seeds = table.seed.nunique() if table is not None and "seed" in table else spec.seeds
+    text = str(text).strip().replace("{seeds}", str(seeds))
+    if table is None:
+        return text
+    try:
+        return interpolate(text, table)
+    except MagexpError as exc:
+        raise MagexpError(f"{spec.name}: {exc}") from None
+
+
+def _artifact_table(spec, path: Path) -> str:
+    """The artifact's own CSV as a table (columns ``report_table``), and the winner per case."""
+    from magexp.artifacts.plots.benchmark_table import winners
+
+    frame = pd.read_csv(path)
+    cols = [c for c in spec.report_table if c in frame]
+    if not len(frame) or not cols:
+        return ""
+    text = markdown_table(frame, cols, tex=path.with_name(f"{spec.name}_table.tex"))
+    by = "bound_ratio" if "bound_ratio_hi" in frame and frame.bound_ratio_hi.notna().any() else spec.plot.get("metric")
+    if "case" in frame and by and f"{by}_hi" in frame:  # recordings: no bound, the held-out spread
+        simulated = by == "bound_ratio"
+        what = "RMS offset error / sqrt(tr CRB)" if simulated else str(by).replace("_", " ")
+        among = "" if simulated else "; among the estimators that succeed on at least half the runs"
+        ranked = frame if simulated else frame[frame.success_rate >= 0.5]
+        best = winners(ranked, by)
+        if not len(best):
+            return text + f"\nNo case has a winner: no estimator has an interval of its {what}{among}.\n"
+        text += (f"\n**Winner per case** (lowest {what}; declared only where its 95 % interval lies below every "
+                 f"other estimator's; else no winner, and the estimators whose intervals overlap the best{among}):\n\n"
+                 + markdown_table(best, ["case", "winner", by, f"{by}_lo", f"{by}_hi", "success_rate",
+                                         "tied"], tex=path.with_name(f"{spec.name}_winners.tex")))
+    return text
+
+
+def _speed_section(root: Path) -> str:
+    path = root / "bench.csv"
+    if not path.exists():
+        return ""
+    frame = pd.read_csv(path)
+    cols = [c for c in ("measure", "estimator", "value", "unit", "lo", "hi") if c in frame]
+    return ("## Speed of the core (`make bench`)\n\nMeasured by `make bench` on this machine, side by side in one "
+            "run (variants alternating, one BLAS thread): medians with the interquartile range (`lo`-`hi`), or a "
+            "95 % interval for success rates ([`bench.csv`](bench.csv); the sections are described in the README)."
+            "\n\n" + markdown_table(frame, cols, tex=root / "bench.tex"))
+
+
+RULE = ("Verdict `reproduced`: the paper's value lies in the interval of our runs (2.5-97.5 % over seeds; "
+        "a paper run that succeeded or failed is judged against our runs of the same outcome), widened only by "
+        "its printing precision, and at least half the runs succeeded. `uninformative`: inside, but the interval "
+        "cannot exclude values far from the paper's: a ratio matched only by ratios with a failed run on one side, "
+        "a parameter whose interval spans half its search range or more than 15 % of its block's scale (the RMS "
+        "of S's entries, of b's components), any other value whose interval is wider than the value itself, or "
+        "an entry the artifact marks `informative: false`. `differs`: outside, or a failed majority.")
+
+
+def build(root: Path = RESULTS) -> None:
+    """Write ``root/summary.csv``, ``root/claims.csv``, ``root/versions.csv``, ``root/REPORT.md``
+    and ``root/APPENDIX.md``."""
+    summary = collect(root)
+    write_csv(summary, root / "summary.csv")
+    record = versions()
+    with atomic_path(root / "versions.csv") as tmp:
+        pd.DataFrame([{"package": k, "version": v} for k, v in record.items()]).to_csv(tmp, index=False)
+    parts = [Paper(p, summary, root) for p in papers() if (summary.paper == p).any() or (root / p).is_dir()]
+    claims = pd.DataFrame([r for p in parts for r in p.headlines + p.claims], columns=CLAIM_COLUMNS)
+    write_csv(claims, root / "claims.csv")
+    heads = claims[claims.role == "headline"].verdict.value_counts()
+    found = claims[claims.role == "finding"]
+    compared = summary[summary.verdict != "n/a"]
+    text = [
+        "# magexp report\n",
+        "Every number below is regenerated by `make reproduce` (one paper: `make reproduce-<paper>`). Per paper: "
+        "its headline claims and whether our runs support them, magexp's findings, the paper's numbers beside ours, "
+        "and where we depart from its text. " + RULE + " Figures, notes, full tables and sanity checks: "
+        "[APPENDIX.md](APPENDIX.md); every row: [`summary.csv`](summary.csv); every claim with its full evidence: "
+        "[`claims.csv`](claims.csv); versions: [`versions.csv`](versions.csv).\n",
+        f"**Overall.** Headline claims: " + ", ".join(f"{k} {int(heads.get(k, 0))}" for k in HEADLINE_VERDICTS)
+        + f". Findings: {int((found.verdict == HOLDS).sum())} of {len(found)} hold. Compared numbers ("
+        f"{len(compared)} of {len(summary)} summary rows have a paper value): {_counts(compared)}.\n",
+    ]
+    text += [_report_section(p) for p in parts]
+    write_text(root / "REPORT.md", "\n".join(text))
+    appendix = ["# magexp report: appendix\n", "Everything [REPORT.md](REPORT.md) leaves out: per artifact its figure, "
+                "caption, every summary row (`n/a` rows too), its table and notes; per paper its sanity checks. "
+                "Columns of the tables: see the README (`results/summary.csv`).\n"]
+    appendix += [_appendix_section(p) for p in parts]
+    appendix.append(_speed_section(root))
+    write_text(root / "APPENDIX.md", "\n".join(appendix))
+
+
+if __name__ == "__main__":
+    build(Path(sys.argv[1]) if len(sys.argv) > 1 else RESULTS)

@@ -1,0 +1,388 @@
+"""Regenerate the papers' artifacts into ``results/<paper>/`` and rebuild the report.
+
+    python -m magexp.artifacts.reproduce all|ding2024|yuan2018|yan2022|benchmark [--jobs N] [--only STEM] [--force]
+        [--seeds N] [--tiny] [--out DIR] [--redraw] [--executor local|dask] [--scheduler ADDRESS]
+
+The canonical ``results/`` folder is written only by a canonical reproduction (each artifact's own
+seeds and sizes); ``--seeds`` and ``--tiny`` explore, and need ``--out`` naming another folder.
+Every run of every selected artifact is planned first and run in one pass through
+:func:`magexp.run.executor.run_many` (identical runs of different artifacts run once), then each
+artifact's CSVs and figure are written. ``--redraw`` rebuilds the figures, ``summary.csv`` and
+``REPORT.md`` from the CSVs already in ``--out``, without a run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import os
+import sys
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plan import ArtifactRuns, collect, paper_specs, plan_artifact
+from magexp.errors import MagexpError
+from magexp.run.guard import OneLineParser, check_destination, removed_on_failure
+from magexp.paths import RESULTS
+from magexp.artifacts.plots import kind_module
+from magexp.artifacts.report import write_csv
+from magexp.artifacts.summary import COLUMNS, summarise
+
+def available_papers() -> list[str]:
+    """The folders of ``experiments/`` (:func:`magexp.artifacts.spec.papers`)."""
+    from magexp.artifacts.spec import papers
+
+    return papers()
+
+
+def select(papers: list[str], only: str | None) -> dict[str, list]:
+    """``{paper: [spec, ...]}`` of ``papers``; with ``only``, just that artifact, in whichever paper has it."""
+    chosen = {paper: paper_specs(paper) for paper in papers}
+    if only is None:
+        return chosen
+    found = {paper: [s for s in specs if s.name == only] for paper, specs in chosen.items()}
+    found = {paper: specs for paper, specs in found.items() if specs}
+    if not found:
+        where = papers[0] if len(papers) == 1 else "any paper"
+        raise MagexpError(f"--only {only!r} is not an artifact of {where}: see experiments/<paper>/*.yaml")
+    return found
+
+
+def check_canonical(out, *, seeds, tiny: bool) -> Path:
+    """The folder ``--out`` names, if this reproduction may write there: exploration (``--seeds``,
+    ``--tiny``) never into the canonical ``results/``, and no reproduction into a folder inside it
+    (:func:`magexp.run.guard.check_destination`: resolved paths)."""
+    flags = [f for f, on in (("--seeds", seeds is not None), ("--tiny", tiny)) if on]
+    if flags and str(out).strip() and Path(out).resolve() == RESULTS.resolve():
+        raise MagexpError(f"{' '.join(flags)} explores: give --out DIR other than results/ "
+                          "(results/ holds only canonical reproductions)")
+    check_destination(out, "--out", canonical=not flags)
+    return Path(out)
+
+
+def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
+    """The figure of ``spec`` (PNG and PDF twin) into ``out``, drawn from its CSV ``csv`` as written
+    (the figure ``--redraw`` gives, to the byte); not drawn again when the figure cache
+    (:mod:`magexp.artifacts.plots.memo`) says the files in ``out`` are that drawing already, unless ``force``.
+    Returns whether it drew."""
+    from magexp.artifacts.plots import VECTOR, memo
+
+    png = out / f"{spec.name}.png"
+    files = [png, png.with_suffix(VECTOR)]
+    key = memo.key(spec, Path(csv).read_bytes())
+    if not force and memo.current(key, files):
+        return False
+    from magexp.artifacts.plots.style import save
+
+    save(kind_module(spec.kind).draw(pd.read_csv(csv), spec), png)
+    memo.record(key, files)
+    return True
+
+
+#: columns that identify a row of an artifact's table (kept beside its wall times in the timing file)
+ROW_KEYS = ("case", "family", "label", "scenario", "estimator", "objective", "setting")
+
+
+def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
+    """Move the wall-time columns of ``frame`` into the timing file ``path`` (with the row keys):
+    the results' CSVs then hold only what a fresh clone computes to the same bytes, and
+    ``results/timing/`` and ``results/timing.csv`` what this machine measured."""
+    timed = [c for c in frame.columns if "wall_time" in c]
+    if not timed:
+        return frame
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_csv(frame[[c for c in ROW_KEYS if c in frame] + timed], path)
+    return frame.drop(columns=timed)
+
+
+class StoredOutputs(Mapping):
+    """``(cell, seed) -> `` the parts of a run's output the summary reads (``x``, ``parameter_names``,
+    ``truth_x``), from the runs CSV as written: the estimates are its parameter columns, the names
+    and the truth those of the cell's problem (``facts(cell) -> (names, truth)``)."""
+
+    def __init__(self, table: pd.DataFrame, facts):
+        self._table = table.set_index(["cell", "seed"], drop=False)
+        self._facts = functools.cache(facts)
+
+    def __getitem__(self, key):
+        names, truth = self._facts(int(key[0]))
+        row = self._table.loc[key]
+        x = np.array([float(row[n]) if n in row.index else np.nan for n in names])
+        return SimpleNamespace(x=x, parameter_names=names, truth_x=truth)
+
+    def __iter__(self):
+        return iter(zip(self._table.cell.astype(int), self._table.seed.astype(int)))
+
+    def __len__(self) -> int:
+        return len(self._table)
+
+
+def stored_runs(spec, table: pd.DataFrame, cells: list, overrides: list, facts) -> ArtifactRuns:
+    """The :class:`ArtifactRuns` the summary reads, from the runs CSV ``table`` as written (a
+    reproduction and a ``--redraw`` summarise the same bytes)."""
+    return ArtifactRuns(spec=spec, cells=cells, table=table, outputs=StoredOutputs(table, facts), overrides=overrides)
+
+
+def _problem_facts(overrides: list[list[str]], table: pd.DataFrame):
+    """``cell -> (parameter names, true vector)`` of the cell's problem, rebuilt without a run."""
+    from magexp.artifacts.summary import _problem_of
+
+    def facts(ci: int):
+        problem = _problem_of(tuple(overrides[ci]), int(table[table.cell == ci].seed.min()))
+        return list(problem.parameter_names()), problem.truth_theta()
+
+    return facts
+
+
+def summarise_stored(spec, root: Path) -> pd.DataFrame:
+    """The summary rows of ``spec`` from its runs CSV under ``root`` (``--redraw``: no run)."""
+    from magexp.artifacts.plan import plan_artifact
+
+    plan = plan_artifact(spec)
+    table = pd.read_csv(root / spec.paper / f"{spec.name}_runs.csv")
+    return summarise(stored_runs(spec, table, plan.cells, plan.overrides, _problem_facts(plan.overrides, table)))
+
+
+def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
+    """An artifact's CSVs and figure into ``out`` (``force``: draw it even if unchanged); returns its
+    summary rows, computed from the runs CSV as written (:func:`stored_runs`)."""
+    path = out / f"{runs.spec.name}.csv"
+    frame = kind_module(runs.spec.kind).tabulate(runs)
+    if runs.spec.kind != "speed":  # wall times measure this machine today: kept beside timing.csv
+        frame = split_timing(frame, out.parent / "timing" / f"{runs.spec.name}.csv")
+    write_csv(frame, path)
+    runs_csv = out / f"{runs.spec.name}_runs.csv"
+    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), runs_csv)
+    draw(runs.spec, path, out, force=force)
+    table = pd.read_csv(runs_csv)
+
+    def facts(ci: int):
+        first = runs.outputs[(ci, int(table[table.cell == ci].seed.min()))]
+        return list(first.parameter_names), getattr(first, "truth_x", None)
+
+    return summarise(stored_runs(runs.spec, table, runs.cells, runs.overrides, facts))
+
+
+def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False,
+                       force: bool = False) -> pd.DataFrame:
+    """Run one artifact and write its CSVs and figure into ``out``; returns its summary rows."""
+    from magexp.artifacts.plan import run_artifact
+
+    out.mkdir(parents=True, exist_ok=True)
+    return write_artifact(run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force), out,
+                          force=force)
+
+
+def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
+    """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows."""
+    summary = pd.concat(list(parts.values()), ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
+    path = out / "summary.csv"
+    if path.exists() and path.stat().st_size > 0:
+        old = pd.read_csv(path, keep_default_na=False, na_values=[""])
+        summary = pd.concat([old[~old.artifact.isin(list(parts))], summary], ignore_index=True)
+    order = {s.name: i for i, s in enumerate(paper_specs(paper))}
+    summary = summary.sort_values("artifact", key=lambda c: c.map(order), kind="stable")
+    write_csv(summary, path)
+    return summary
+
+
+def skipped_for_data(spec, log=print) -> bool:
+    """Whether ``spec`` reads a recording that is not in :data:`magexp.paths.SHARED_DATA` (the
+    recordings of others are never shipped): then it is skipped, with one line."""
+    from magexp.paths import SHARED_DATA
+
+    missing = [f for f in spec.get("requires_data") or [] if not (SHARED_DATA / f).is_file()]
+    if missing:
+        log(f"{spec.name}: skipped, {missing[0]} is not in {SHARED_DATA} (set MAGEXP_DATA)")
+    return bool(missing)
+
+
+def slice_outputs(outputs, start: int, n: int):
+    """Runs ``start .. start + n`` of :class:`magexp.run.executor.Outputs`, as an ``Outputs`` of their own
+    (metrics at hand, outputs read from the same run cache on access)."""
+    from magexp.run.executor import Outputs
+
+    keys = outputs.keys[start:start + n]
+    return Outputs(keys, {key: outputs.metrics(start + j) for j, key in enumerate(keys)}, outputs.root,
+                   held=outputs.held)
+
+
+def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jobs: int = 0, tiny: bool = False,
+              force: bool = False, executor=None, log=print) -> dict:
+    """Plan every run of the ``selected`` artifacts, run them in one pass, write each artifact.
+
+    Returns ``{"requested", "distinct", "computed", "cached", "paper summaries": {...}}``.
+    """
+    from magexp.run.executor import run_many
+    from magexp.run.progress import Progress
+
+    plans = [(paper, plan_artifact(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
+             for spec in specs if not skipped_for_data(spec, log)]
+    configs = [c for _, plan in plans for c in plan.configs]
+    counts: dict = {}
+    outputs = run_many(configs, jobs=jobs, use_cache=not force, executor=executor, counts=counts,
+                       progress=Progress(len(configs), "reproduce"))
+    if configs:
+        log(f"{counts['requested']} runs requested, {counts['distinct']} distinct: "
+            f"{counts['computed']} computed, {counts['cached']} from the cache")
+    start, parts = 0, {paper: {} for paper, _ in plans}
+    for paper, plan in plans:
+        out = root / paper
+        out.mkdir(parents=True, exist_ok=True)
+        n = len(plan.configs)
+        parts[paper][plan.spec.name] = write_artifact(collect(plan, slice_outputs(outputs, start, n)), out,
+                                                      force=force)
+        start += n
+    counts["paper summaries"] = {paper: write_summary(paper, parts[paper], root / paper) for paper in parts}
+    return counts
+
+
+def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int = 0, tiny: bool = False,
+                    only: str | None = None, force: bool = False, log=print) -> pd.DataFrame:
+    """Every artifact of ``paper`` (or just ``only``); writes ``root/<paper>/`` and returns its summary."""
+    counts = reproduce(select([paper], only), root, seeds=seeds, jobs=jobs, tiny=tiny, force=force, log=log)
+    return counts["paper summaries"].get(paper, pd.DataFrame(columns=COLUMNS))
+
+
+def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tuple[int, int]:
+    """Each selected artifact's figure from its CSV in ``root`` (unchanged ones are kept, unless
+    ``force``: :func:`draw`) and its summary rows from its runs CSV (:func:`summarise_stored`, into
+    ``root/<paper>/summary.csv``); returns how many figures were drawn and how many were unchanged."""
+    drawn = kept = 0
+    for paper, specs in selected.items():
+        parts = {}
+        for spec in specs:
+            if skipped_for_data(spec):
+                continue
+            path = root / paper / f"{spec.name}.csv"
+            if not path.is_file() or not (root / paper / f"{spec.name}_runs.csv").is_file():
+                raise MagexpError(f"--redraw: {path} or its runs CSV does not exist: reproduce {spec.name} first")
+            if draw(spec, path, root / paper, force=force):
+                drawn += 1
+            else:
+                kept += 1
+            parts[spec.name] = summarise_stored(spec, root)
+        if parts:
+            write_summary(paper, parts, root / paper)
+    return drawn, kept
+
+
+def cpu_seconds() -> float:
+    """CPU seconds of this process and of its finished (waited-for) worker processes."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def cpu_line(cpu: float, counts: dict) -> str:
+    """Where the CPU went: inside the computed runs' fits; the workers' CPU outside them per computed
+    run (``task_cpu - fit_cpu``, measured inside the workers); the parent's (all the rest)."""
+    fit, n, task = counts.get("fit_cpu", 0.0), counts["computed"], counts.get("task_cpu", 0.0)
+    split = f"; worker: {(task - fit) / n * 1e3:.1f} ms per run outside fits; parent: {cpu - task:.1f} s" if n else ""
+    return f"CPU {cpu:.1f} s: {fit:.1f} s inside fits ({fit / cpu:.0%}){split}"
+
+
+def record_timing(root: Path, target: str, seconds: float, counts: dict) -> None:
+    """Keep the wall time of the last reproduction of ``target`` in ``root/timing.csv``, with how
+    many runs it computed and how many came from the cache (``source``: computed, cached or mixed)."""
+    path = root / "timing.csv"
+    columns = ["target", "seconds", "cores", "source", "runs", "distinct", "computed", "cached"]
+    rows = pd.read_csv(path) if path.exists() else pd.DataFrame(columns=columns)
+    rows = rows[rows.target != target].reindex(columns=columns)
+    computed, cached = counts["computed"], counts["cached"]
+    source = "computed" if cached == 0 else "cached" if computed == 0 else "mixed"
+    new = pd.DataFrame([{"target": target, "seconds": round(seconds, 1), "cores": os.cpu_count(), "source": source,
+                         "runs": counts["requested"], "distinct": counts["distinct"], "computed": computed,
+                         "cached": cached}])
+    write_csv(pd.concat([rows, new], ignore_index=True) if len(rows) else new, path)
+
+
+def parser() -> argparse.ArgumentParser:
+    p = OneLineParser(prog="python -m magexp.artifacts.reproduce", description=__doc__.splitlines()[0])
+    p.add_argument("paper", help="all, or one of: " + ", ".join(available_papers()))
+    p.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
+    p.add_argument("--seeds", type=int, default=None, help="seeds per cell (exploration: needs --out)")
+    p.add_argument("--only", default=None, help="one artifact stem (found in whichever paper has it)")
+    p.add_argument("--tiny", action="store_true", help="tiny sizes, a smoke test (exploration: needs --out)")
+    p.add_argument("--out", default=str(RESULTS), help="results folder (default: results/)")
+    p.add_argument("--force", action="store_true",
+                   help="recompute every distinct run even if it is cached, and draw every figure")
+    p.add_argument("--redraw", action="store_true", help="rebuild figures, summary and report from the CSVs; no run")
+    p.add_argument("--executor", default="local", help="local (processes on this machine) or dask")
+    p.add_argument("--scheduler", default=None, help="a Dask scheduler address (default: a local cluster)")
+    return p
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return _main(args)
+    except MagexpError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("error: interrupted (Ctrl-C); finished runs are cached, rerun the same command to resume",
+              file=sys.stderr)
+        return 130
+
+
+def _main(args) -> int:
+    from magexp.run.executor import check_executor
+
+    papers = available_papers() if args.paper == "all" else [args.paper]
+    for paper in papers:
+        if paper not in available_papers():
+            raise MagexpError(f"paper={paper!r} is not allowed: choose all or one of {', '.join(available_papers())}")
+    check_executor(args.executor, args.jobs, args.scheduler)
+    if args.seeds is not None and args.seeds < 1:
+        raise MagexpError(f"--seeds {args.seeds} is not allowed: it must be an integer >= 1")
+    args.out = check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
+    from magexp.run.preflight import check_output_folder
+
+    # a file, or under one: one line, nothing created (results/ itself: check_canonical decided)
+    check_output_folder(args.out, "--out", canonical=True)
+    selected = select(papers, args.only)
+    if not args.redraw:
+        from magexp.run.budget import check_reproduction
+
+        check_reproduction(selected, args.seeds)  # cells x seeds within the runs limit, before planning
+    with removed_on_failure(args.out):  # a failed or interrupted reproduction leaves nothing behind
+        return _write(args, selected)
+
+
+def _write(args, selected) -> int:
+    """Run and write (or redraw) the ``selected`` artifacts into ``args.out`` (checked by :func:`_main`)."""
+    from magexp.run.executor import make_executor
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    from magexp.artifacts.report import build
+
+    start = time.perf_counter()
+    if args.redraw:
+        drawn, kept = redraw(selected, args.out, force=args.force)
+        build(args.out)
+        print(f"redrew {drawn} figures ({kept} unchanged, kept), summary and report in "
+              f"{time.perf_counter() - start:.1f} s: {args.out / 'REPORT.md'}")
+        return 0
+    cpu = cpu_seconds()
+    with make_executor(args.executor, jobs=args.jobs, scheduler=args.scheduler) as executor:
+        counts = reproduce(selected, args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, force=args.force,
+                           executor=executor)
+    build(args.out)
+    seconds = time.perf_counter() - start
+    if args.executor == "local":  # remote workers' CPU is not seen here
+        print(cpu_line(cpu_seconds() - cpu, counts))
+    if args.only is None and args.seeds is None and not args.tiny:
+        record_timing(args.out, args.paper, seconds, counts)
+    print(f"done in {seconds:.1f} s; report: {args.out / 'REPORT.md'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

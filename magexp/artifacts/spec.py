@@ -1,0 +1,449 @@
+"""The artifact language: typed, validated specs of ``experiments/<paper>/<stem>.yaml`` and ``paper.yaml``.
+
+An artifact is a paper's figure or table as data::
+
+    name: ding2024_fig5          # <firstauthor><year>_<fig|table><N> (default: the file stem)
+    paper: ding2024              # the folder (default)
+    title: ...
+    kind: convergence            # a plot kind of magexp.artifacts.plots.KINDS
+    seeds: 30
+    base: [scenario=ding2024_exp1, "?estimator.n_iterations=800"]   # overrides of every run ("?": if the key exists)
+    cases: [[scenario=yuan2018_mode1], [scenario=yuan2018_mode3]]     # override lists, each crossed with the grid
+    grid: {estimator: [pso, ipso], scenario.noise: [0, 2, 5, 10]}   # cartesian product
+    skip_inapplicable: false     # drop cells whose estimator does not apply to the objective
+    plot: {x: scenario.noise, hue: estimator, metric: fun, xscale: log}   # keys of the kind (PLOT_KEYS)
+    summarise: [{quantity: final_rms, metric: fun}, {mode: parameters}]  # summary rows per cell
+    ratios: [{quantity: improvement_ratio, metric: fun, numerator: {estimator: pso}, denominator: {estimator: ipso}}]
+    success: {metric: fun, reference: truth_fun, factor: 1.1, floor: 1.0e-9}   # a run succeeds if metric <= factor reference + floor
+    floor: 1.0e-9                # values below it (round-off) are compared and written as the floor
+    reported:                    # the paper's numbers (printed precision: decimals, else inferred from the value)
+      - {quantity: final_rms, match: {estimator: ipso, scenario.noise: 2}, value: 0.58}
+      - {quantities: [S11, S12], match: {estimator: rdpso}, values: [-1.6013, 0.4010], decimals: 4}
+      - {quantity: b1, match: {scenario: yuan2018_mode4}, value: -42.87, informative: false, reason: "..."}  # forced
+    tolerance: {rel: 0.15, reason: ...}   # only where the paper gives no run to compare with
+    claims: [...]                # magexp.artifacts.claims.Claim: conditions on the results (by, section, role, figure, test)
+    notes: ...                   # prose; {median:fun@estimator=ipso:.3g} interpolates a measured value
+    caption: ...
+
+A typo fails at load with one line naming the key and the allowed ones. The papers are the
+folders of ``experiments/`` that hold an artifact (:func:`papers`); each has a ``paper.yaml``
+(:class:`Paper`: title, intro, order, deviations and its ``headline:`` claims, :class:`Headline`).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import decimal
+import functools
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+from omegaconf import DictConfig, OmegaConf
+
+from magexp.errors import MagexpError
+from magexp.paths import EXPERIMENTS
+
+#: a run succeeds when ``metric <= SUCCESS_FACTOR * reference + floor`` (``reference``: the same
+#: metric of the true calibration on the same readings, the optimum the truth gives)
+SUCCESS_FACTOR = 1.1
+#: round-off floor of the objectives (nT or mG): values below it are written and compared as the floor
+ROUNDOFF_FLOOR = 1.0e-9
+#: minimum number of seeds of a cell whose interval is compared with a paper number
+MIN_SEEDS_COMPARED = 30
+
+#: plot keys each kind understands (one vocabulary: ``metric`` names the column(s) drawn,
+#: ``xscale`` the x scale; ``labels``/``ylabel`` the axis texts)
+_COMMON = {"labels", "ylabel", "panels", "hue"}
+PLOT_KEYS = {
+    "convergence": _COMMON,
+    "field": _COMMON | {"quantity"},
+    "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog"},
+    "sweep": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog"},
+    "sphere": _COMMON,
+    "parameters": _COMMON,
+    "trace": _COMMON | {"groups", "trace", "start"},
+    "estimates": _COMMON | {"rows"},
+    "heatmap": _COMMON | {"metric"},
+    "speed": _COMMON | {"metric"},
+    "tuning": _COMMON | {"metric", "label", "default"},
+    "recording": _COMMON | {"metric"},
+    "recording_spread": _COMMON | {"metric"},
+}
+#: old plot keys, still read: each becomes its canonical key at load
+_PLOT_ALIASES = {"value": "metric", "metrics": "metric"}
+
+
+def _allowed(cls) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls) if f.init and not f.name.startswith("_")]
+
+
+def _check_type(value, hint, where: str):
+    """``value`` against a simple type hint (str, int, float, bool, list, dict, Any, unions of them)."""
+    origin = typing.get_origin(hint)
+    if hint is Any:
+        return value
+    if origin is typing.Union or str(origin) == "<class 'types.UnionType'>":
+        for arg in typing.get_args(hint):
+            if arg is type(None) and value is None:
+                return None
+        hint = next(a for a in typing.get_args(hint) if a is not type(None))
+        origin = typing.get_origin(hint)
+    if value is None:
+        raise MagexpError(f"{where}=None is not allowed: give a {getattr(hint, '__name__', hint)}")
+    base = origin or hint
+    if base is float and isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    if base is float and isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            pass
+    if base is str and isinstance(value, (int, float)) and not isinstance(value, bool):
+        return str(value)
+    if not isinstance(value, base) or (base is int and isinstance(value, bool)):
+        raise MagexpError(f"{where}={value!r} is not allowed: it must be a {base.__name__}")
+    return value
+
+
+def build(cls, data, where: str):
+    """A dataclass ``cls`` from a mapping; unknown keys and wrong types fail with one line."""
+    if isinstance(data, DictConfig):
+        data = OmegaConf.to_container(data, resolve=True)
+    if not isinstance(data, dict):
+        raise MagexpError(f"{where}={data!r} is not allowed: it must be a mapping with keys {', '.join(_allowed(cls))}")
+    allowed = _allowed(cls)
+    for key in data:
+        if key not in allowed:
+            raise MagexpError(f"{where}: unknown key {key!r}: allowed keys are {', '.join(allowed)}")
+    hints = typing.get_type_hints(cls)
+    kwargs = {k: _check_type(v, hints[k], f"{where}.{k}") for k, v in data.items()}
+    try:
+        return cls(**kwargs)
+    except TypeError as exc:  # a required key is missing
+        missing = [f.name for f in dataclasses.fields(cls) if f.name not in kwargs
+                   and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+        raise MagexpError(f"{where}: missing key {', '.join(map(repr, missing))}") from exc
+
+
+@dataclass(frozen=True)
+class Summarise:
+    """One summary row per cell of ``metric`` (``mode: parameters``: one row per estimated parameter,
+    ``only`` restricting it to some estimators; ``mode: ftest``: per axis the p-value of the F-test of
+    the cell's estimate against the least-squares fit, :func:`magexp.artifacts.summary.f_test`). ``aggregate: mean`` for 0/1 outcomes; ``interval``
+    (see :mod:`magexp.artifacts.summary`)."""
+
+    quantity: str = ""
+    metric: str = ""
+    mode: str = "value"
+    aggregate: str = "median"
+    truth_metric: str | None = None
+    only: list | None = None
+    interval: str = "seeds"  # seeds: 2.5-97.5 % over seeds; ls: least-squares t-interval (one run on recorded data)
+
+    def __post_init__(self):
+        if self.interval not in ("seeds", "ls"):
+            raise MagexpError(f"summarise.interval={self.interval!r} is not allowed: choose one of seeds, ls")
+        if self.mode not in ("value", "parameters", "ftest"):
+            raise MagexpError(f"summarise.mode={self.mode!r} is not allowed: choose one of value, parameters, ftest")
+        if self.aggregate not in ("median", "mean"):
+            raise MagexpError(f"summarise.aggregate={self.aggregate!r} is not allowed: choose one of median, mean")
+        if self.mode != "parameters" and not self.quantity or self.mode == "value" and not self.metric:
+            raise MagexpError("summarise: an entry needs quantity and metric (or mode: parameters)")
+
+
+@dataclass(frozen=True)
+class Ratio:
+    """Per seed ``metric`` of the ``numerator`` cell over that of the ``denominator`` cell."""
+
+    quantity: str
+    metric: str
+    numerator: dict
+    denominator: dict
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """A fixed tolerance: only where the paper gives no run to compare with (``reason`` says why).
+
+    ``rel`` (``|v - p| <= rel |p|``), ``abs`` (``|v - p| <= abs``), ``factor`` (``p/f <= v <= p f``)
+    or ``below`` (both below it); exactly one."""
+
+    rel: float | None = None
+    abs: float | None = None
+    factor: float | None = None
+    below: float | None = None
+    reason: str = ""
+
+    def __post_init__(self):
+        given = [k for k in ("rel", "abs", "factor", "below") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise MagexpError(f"tolerance {given or 'empty'} is not allowed: give exactly one of rel, abs, factor, below")
+
+    @property
+    def kind(self) -> str:
+        return next(k for k in ("below", "abs", "factor", "rel") if getattr(self, k) is not None)
+
+    def text(self) -> str:
+        return f"{self.kind} {getattr(self, self.kind):g}"
+
+    def holds(self, value: float, paper: float) -> bool:
+        t = getattr(self, self.kind)
+        return {"abs": lambda: abs(value - paper) <= t, "below": lambda: value < t and paper < t,
+                "factor": lambda: paper / t <= value <= paper * t,
+                "rel": lambda: abs(value - paper) <= t * abs(paper)}[self.kind]()
+
+
+@dataclass(frozen=True)
+class Reported:
+    """One number the paper prints. ``decimals``: its printed decimal places (trailing zeros are lost
+    in YAML floats); without it the precision is that of the shortest text of ``value``."""
+
+    quantity: str
+    value: float
+    match: dict = field(default_factory=dict)
+    decimals: int | None = None
+    tolerance: Tolerance | None = None
+    informative: bool = True  # false: the row's verdict is ``uninformative`` whatever its interval (``reason`` says why)
+    reason: str = ""
+
+    def __post_init__(self):
+        if not self.informative and not str(self.reason).strip():
+            raise MagexpError(f"reported {self.quantity}: informative: false needs a reason (why the runs cannot pin it down)")
+
+    def half_unit(self) -> float:
+        """Half a unit of the last printed digit: the paper's printing precision."""
+        if self.decimals is not None:
+            return 0.5 * 10.0 ** (-self.decimals)
+        exponent = decimal.Decimal(repr(float(self.value))).normalize().as_tuple().exponent
+        return 0.5 * 10.0 ** int(exponent)
+
+
+@dataclass(frozen=True)
+class Success:
+    """A run succeeds when ``metric <= factor * reference + floor`` (``reference``: the metric of the
+    true calibration on the same readings). Runs without the reference column are not judged."""
+
+    metric: str = "fun"
+    reference: str = "truth_fun"
+    factor: float = SUCCESS_FACTOR
+    floor: float = ROUNDOFF_FLOOR
+
+
+@dataclass
+class Artifact:
+    """A validated artifact spec (see the module docstring). ``plot`` stays an OmegaConf node
+    (its keys are checked against :data:`PLOT_KEYS` of the kind)."""
+
+    name: str
+    paper: str
+    title: str
+    kind: str
+    seeds: int = 10
+    base: list = field(default_factory=list)
+    grid: dict = field(default_factory=dict)
+    cases: list = field(default_factory=list)
+    skip_inapplicable: bool = False
+    plot: Any = None
+    summarise: list = field(default_factory=list)
+    ratios: list = field(default_factory=list)
+    reported: list = field(default_factory=list)
+    tolerance: Any = None
+    success: Any = None
+    floor: float = ROUNDOFF_FLOOR
+    claims: list = field(default_factory=list)
+    notes: str = ""
+    caption: str = ""
+    report_table: list = field(default_factory=list)
+    requires_data: list = field(default_factory=list)  # recordings read from magexp.paths.SHARED_DATA
+    path: Any = None
+
+    def get(self, key: str, default=None):
+        """Mapping-style access (``spec.get("caption")``), for code written against the old node."""
+        value = getattr(self, key, default)
+        return default if value is None else value
+
+
+def _expand_reported(entry: dict, where: str) -> list[dict]:
+    """A vector entry ``{quantities: [...], values: [...]}`` as one entry per quantity."""
+    if "quantities" not in entry and "values" not in entry:
+        return [entry]
+    qs, vs = entry.get("quantities"), entry.get("values")
+    if not isinstance(qs, list) or not isinstance(vs, list) or len(qs) != len(vs):
+        raise MagexpError(f"{where}: quantities and values must be lists of the same length")
+    rest = {k: v for k, v in entry.items() if k not in ("quantities", "values")}
+    return [{**rest, "quantity": q, "value": v} for q, v in zip(qs, vs)]
+
+
+def _plot(kind: str, data, where: str) -> DictConfig:
+    data = dict(data or {})
+    for old, new in _PLOT_ALIASES.items():
+        if old in data:
+            data[new] = data.pop(old)
+    if data.pop("logx", False):
+        data["xscale"] = "log"
+    allowed = PLOT_KEYS[kind]
+    for key in data:
+        if key not in allowed:
+            raise MagexpError(f"{where}: unknown key {key!r} for kind {kind}: allowed keys are {', '.join(sorted(allowed))}")
+    return OmegaConf.create(data)
+
+
+def parse(data: dict, path: Path) -> Artifact:
+    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults)."""
+    from magexp.artifacts.claims import Claim
+    from magexp.artifacts.plots import KINDS
+
+    where = path.stem
+    if not isinstance(data, dict):
+        raise MagexpError(f"artifact {str(path)!r} is not a mapping of keys {', '.join(_allowed(Artifact))}")
+    data = dict(data)
+    allowed = [k for k in _allowed(Artifact) if k != "path"]
+    for key in data:
+        if key not in allowed:
+            raise MagexpError(f"{where}: unknown key {key!r}: allowed keys are {', '.join(allowed)}")
+    data.setdefault("name", path.stem)
+    data.setdefault("paper", path.parent.name)
+    kind = data.get("kind")
+    if kind not in KINDS:
+        raise MagexpError(f"{where}.kind={kind!r} is not allowed: choose one of {', '.join(sorted(KINDS))}")
+    hints = typing.get_type_hints(Artifact)
+    plain = {k: _check_type(v, hints[k], f"{where}.{k}") for k, v in data.items()
+             if k not in ("plot", "summarise", "ratios", "reported", "tolerance", "success", "claims")}
+    for key in ("grid",):
+        for k, v in plain.get(key, {}).items():
+            if not isinstance(v, list):
+                raise MagexpError(f"{where}.grid.{k}={v!r} is not allowed: it must be a list of values")
+    art = Artifact(**plain, path=path)
+    art.plot = _plot(kind, data.get("plot"), f"{where}.plot")
+    art.summarise = [build(Summarise, s, f"{where}.summarise[{i}]") for i, s in enumerate(data.get("summarise") or [])]
+    art.ratios = [build(Ratio, r, f"{where}.ratios[{i}]") for i, r in enumerate(data.get("ratios") or [])]
+    art.tolerance = build(Tolerance, data["tolerance"], f"{where}.tolerance") if data.get("tolerance") else None
+    art.success = build(Success, data.get("success") or {}, f"{where}.success")
+    reported = []
+    for i, entry in enumerate(data.get("reported") or []):
+        if not isinstance(entry, dict):
+            raise MagexpError(f"{where}.reported[{i}]={entry!r} is not allowed: it must be a mapping")
+        for e in _expand_reported(entry, f"{where}.reported[{i}]"):
+            if e.get("tolerance") is not None:
+                e = {**e, "tolerance": build(Tolerance, e["tolerance"], f"{where}.reported[{i}].tolerance")}
+            reported.append(build(Reported, e, f"{where}.reported[{i}]"))
+    art.reported = reported
+    for tol in [art.tolerance] + [r.tolerance for r in reported]:
+        if tol is not None and not tol.reason.strip():
+            raise MagexpError(f"{where}: a fixed tolerance needs a reason (why the paper gives no run to compare with)")
+    ls_items = {s.quantity for s in art.summarise if s.interval == "ls"}
+    loose = [r.quantity for r in reported if r.quantity not in ls_items and (r.tolerance or art.tolerance) is None]
+    if loose and art.seeds < MIN_SEEDS_COMPARED:
+        raise MagexpError(f"{where}.seeds={art.seeds} is not allowed: a cell compared with a paper number "
+                          f"({loose[0]}) needs at least {MIN_SEEDS_COMPARED} seeds")
+    art.claims = [build(Claim, c, f"{where}.claims[{i}]") for i, c in enumerate(data.get("claims") or [])]
+    ids = [c.id for c in art.claims]
+    if len(set(ids)) != len(ids):
+        raise MagexpError(f"{where}.claims: ids must be unique, got {ids}")
+    return art
+
+
+@functools.lru_cache(maxsize=256)
+def _parsed(text: str):
+    return yaml.safe_load(text)
+
+
+def read_yaml(path: Path):
+    """``yaml.safe_load`` of the file ``path``, parsed once per distinct content (a process lists the
+    papers and reads every spec many times: planning, summary, claims, report); a fresh copy each call."""
+    return copy.deepcopy(_parsed(Path(path).read_text()))
+
+
+def load(path: Path | str) -> Artifact:
+    """Read and validate an artifact YAML."""
+    path = Path(path)
+    if not path.exists():
+        raise MagexpError(f"artifact {str(path)!r} does not exist")
+    try:
+        data = read_yaml(path)
+    except yaml.YAMLError as exc:
+        raise MagexpError(f"artifact {str(path)!r} is not valid YAML: {str(exc).splitlines()[0]}") from None
+    return parse(data or {}, path)
+
+
+@dataclass(frozen=True)
+class Deviation:
+    """Where magexp departs from (or has to read) the paper's text, and why."""
+
+    text: str
+    reason: str
+
+
+@dataclass(frozen=True)
+class Headline:
+    """A headline claim of the paper (``headline:`` of ``paper.yaml``), in the paper's own words.
+
+    ``parts``: the artifact claims (``<artifact>.<claim id>``) that test it; its verdict is
+    ``supported`` (every part holds), ``contradicted`` (none holds), ``partly`` (some hold), or
+    ``not testable here`` when ``untestable`` (why) is given instead of parts. ``reason``: an
+    optional template interpolated with the runs of the first part's artifact
+    (:func:`magexp.artifacts.claims.interpolate`). ``figure``: ``<paper folder>/<artifact>`` whose figure shows it."""
+
+    id: str
+    text: str
+    section: str
+    figure: str = ""
+    parts: list = field(default_factory=list)
+    reason: str = ""
+    untestable: str = ""
+
+    def __post_init__(self):
+        if bool(self.parts) == bool(str(self.untestable).strip()):
+            raise MagexpError(f"headline {self.id!r}: give either parts (artifact.claim ids) or untestable (why), not both or neither")
+        for part in self.parts:
+            if not isinstance(part, str) or part.count(".") != 1:
+                raise MagexpError(f"headline {self.id!r}: part {part!r} is not allowed: write <artifact>.<claim id>")
+        if self.figure and str(self.figure).count("/") != 1:
+            raise MagexpError(f"headline {self.id!r}: figure={self.figure!r} is not allowed: write <paper folder>/<artifact>")
+
+
+@dataclass(frozen=True)
+class Paper:
+    """``experiments/<paper>/paper.yaml``: the report section's title, intro, order, headline claims
+    (:class:`Headline`) and deviations."""
+
+    title: str
+    intro: str = ""
+    order: int = 100
+    deviations: list = field(default_factory=list)
+    requires_data: list = field(default_factory=list)  # recordings its artifacts read (skipped when absent)
+    headline: list = field(default_factory=list)
+
+
+def load_paper(paper: str, root: Path | None = None) -> Paper:
+    """The validated ``paper.yaml`` of ``paper``."""
+    path = (root or EXPERIMENTS) / paper / "paper.yaml"
+    data = (read_yaml(path) or {}) if path.exists() else {"title": paper}
+    meta = build(Paper, data, f"{paper}/paper.yaml")
+    devs = [build(Deviation, d, f"{paper}/paper.yaml.deviations[{i}]") for i, d in enumerate(meta.deviations)]
+    heads = [build(Headline, h, f"{paper}/paper.yaml.headline[{i}]") for i, h in enumerate(meta.headline)]
+    ids = [h.id for h in heads]
+    if len(set(ids)) != len(ids):
+        raise MagexpError(f"{paper}/paper.yaml.headline: ids must be unique, got {ids}")
+    return dataclasses.replace(meta, deviations=devs, headline=heads)
+
+
+def papers(root: Path | None = None) -> list[str]:
+    """Every folder of ``experiments/`` that holds an artifact YAML, in the papers' ``order``
+    (``paper.yaml``, optional: title, intro, order, deviations)."""
+    root = root or EXPERIMENTS
+    names = [p.name for p in root.iterdir() if p.is_dir() and any(q.name != "paper.yaml" for q in p.glob("*.yaml"))]
+    return sorted(names, key=lambda n: (load_paper(n, root).order, n))
+
+
+def artifact_paths(paper: str, root: Path | None = None) -> list[Path]:
+    """The artifact files of ``paper``, in file-name order."""
+    root = root or EXPERIMENTS
+    folder = root / paper
+    if not folder.is_dir() or paper not in papers(root):
+        raise MagexpError(f"paper={paper!r} is not allowed: choose one of {', '.join(papers(root))}")
+    return sorted(p for p in folder.glob("*.yaml") if p.name != "paper.yaml")

@@ -1,0 +1,473 @@
+"""Reproduced numbers beside the paper's: the rows of ``results/summary.csv``.
+
+A paper reports one run; magexp reproduces the distribution of runs. Each row gives, over the
+seeds of a cell, the median (``value``), the quartiles, and the **interval a single run falls in**
+(``lo``, ``hi``: the 2.5 % and 97.5 % quantiles over **all** seeds). Where the paper's run has an
+outcome, it is compared with our runs of the same outcome, whose interval is ``lo_same``-``hi_same``:
+
+* a paper value of the success metric (a final RMS, a ratio of two such runs) is classified as a
+  successful or a failed run by the artifact's success rule, and compared with our successful or
+  our failed runs;
+* a parameter row (``mode: parameters``) is compared with our successful runs (the paper published
+  a calibration that worked); ``value`` is then their median (``success_rate`` counts the others).
+
+Elsewhere ``lo_same``/``hi_same`` are empty and the paper's value is judged against ``lo``-``hi``.
+The judged interval is widened only by the paper's printing precision (half a unit of its last
+printed digit). ``verdict``:
+
+* ``reproduced``: inside, at least half the runs succeeded, and the interval is informative;
+* ``uninformative``: inside, but the interval cannot exclude values far from the paper's
+  (:func:`uninformative`): not counted as reproduced;
+* ``differs``: outside, or a failed majority;
+* ``n/a``: the paper gives no number.
+
+``label`` names the row for a reader ("IPSO final RMS, exp1, A = 2 nT"); ``reason`` says in a
+line why the verdict is what it is. ``truth_in_interval`` says whether the true calibration's value
+is in the interval too: then the row shows that the method converged to the noise floor, not more.
+A fixed tolerance is used only where the paper gives no run to compare with
+(``reported[].tolerance`` with its ``reason``). For a single deterministic run on recorded data
+(``interval: ls``), the interval is the least-squares estimate ± t(0.975, dof) standard errors.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plan import ArtifactRuns, quantiles
+from magexp.artifacts.claims import matches, same  # noqa: F401  (matches: imported from here too)
+from magexp.errors import MagexpError
+
+COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
+           "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval",
+           "label", "reason", "lo_same", "hi_same"]
+VERDICTS = ("reproduced", "differs", "uninformative", "n/a")
+#: the interval of a single run: these quantiles over seeds
+INTERVAL = (0.025, 0.975)
+#: a parameter's interval spanning at least this fraction of its search range is uninformative
+SEARCH_FRACTION = 0.5
+#: a parameter's interval wider than this fraction of its block's scale (the RMS of the medians of the
+#: parameters sharing its name's letters: S's nine entries, b's three components) is uninformative
+BLOCK_FRACTION = 0.15
+#: readable names of estimators and quantities in row labels (others are shown as they are)
+ESTIMATOR_NAMES = {"pso": "PSO", "ipso": "IPSO", "rdpso": "RDPSO", "ekf": "EKF", "kf": "KF", "lm": "lm",
+                   "ellipsoid": "ellipsoid fit", "pso9": "PSO (9-parameter)", "ls": "least squares"}
+QUANTITY_NAMES = {"final_rms": "final RMS", "converged_fraction": "converged fraction",
+                  "improvement_ratio": "final RMS ratio", "fit_rms": "fit RMS"}
+
+
+
+
+def interval(values, floor: float = 0.0) -> tuple[float, float]:
+    """The 2.5-97.5 % quantiles of the finite ``values`` (non-negative values below ``floor`` count as it)."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return (np.nan, np.nan)
+    v = np.where((v >= 0) & (v < floor), floor, v)
+    lo, hi = np.quantile(v, INTERVAL)
+    return float(lo), float(hi)
+
+
+def judge(paper: float | None, lo: float, hi: float, width: float, success_rate: float, *, floor: float = 0.0,
+          tolerance=None, value: float = np.nan) -> str:
+    """The verdict of one row (module docstring). ``tolerance``: a fixed
+    :class:`magexp.artifacts.spec.Tolerance` against ``value`` instead of the interval."""
+    if paper is None or not np.isfinite(paper):
+        return "n/a"
+    if np.isfinite(success_rate) and success_rate < 0.5:
+        return "differs"
+    if tolerance is not None:
+        return "reproduced" if np.isfinite(value) and tolerance.holds(value, paper) else "differs"
+    p = max(paper, floor) if 0 <= paper < floor else paper
+    inside = np.isfinite(lo) and lo - width <= p <= hi + width
+    return "reproduced" if inside else "differs"
+
+
+def cell_settings(runs: ArtifactRuns, ci: int) -> dict:
+    """The ``{key: value}`` overrides of cell ``ci`` (base and grid)."""
+    return dict(o.split("=", 1) for o in runs.overrides[ci])
+
+
+def reported_entry(spec, quantity: str, settings: dict):
+    """The paper's :class:`magexp.artifacts.spec.Reported` entry of ``quantity`` for a cell (None if absent)."""
+    for entry in spec.reported:
+        if entry.quantity == quantity and matches(entry.match, settings):
+            return entry
+    return None
+
+
+def reported_entries(spec) -> list[dict]:
+    """The paper's numbers as plain ``{quantity, match, value}`` mappings."""
+    return [{"quantity": e.quantity, "match": dict(e.match), "value": e.value} for e in spec.reported]
+
+
+def reported_value(spec, quantity: str, settings: dict):
+    """The paper's value of ``quantity`` for a cell and its entry (``(None, None)`` if absent)."""
+    entry = reported_entry(spec, quantity, settings)
+    return (None, None) if entry is None else (float(entry.value), entry)
+
+
+def uninformative(paper: float, lo: float, hi: float, *, kind: str = "value", search_range: float | None = None,
+                  block_scale: float | None = None, mixed_outcome: bool = False, median: float = np.nan) -> str:
+    """Why an interval that holds the paper's value cannot exclude values far from it ('' if it can).
+
+    The rule, in order (``kind``: ``value``, ``parameter`` or ``ratio``):
+
+    1. a ratio (``ratios:``) whose paper value is matched only by ratios with a failed run on one
+       side (``mixed_outcome``): it measures the size of a failure, not the accuracy of a method;
+    2. a parameter whose interval spans at least :data:`SEARCH_FRACTION` of its search range
+       (``search_range``: upper - lower of the box): the runs do not identify it;
+    3. a parameter whose interval is wider than :data:`BLOCK_FRACTION` of its block's scale
+       (``block_scale``: the RMS of the medians of S's entries, of b's components, ...): it cannot
+       tell the entry from values that change the calibration by that much (entries near zero are
+       judged on the block's scale, not on their own);
+    4. any other row whose interval is wider than the magnitude of the paper's value.
+    """
+    width = hi - lo
+    if not np.isfinite(width):
+        return ""
+    if kind == "ratio" and mixed_outcome:
+        return (f"the paper's ratio is matched only by ratios with a failed run on one side ({lo:.3g}-{hi:.3g}); "
+                f"our median ratio is {median:.3g}")
+    if kind == "parameter":
+        if search_range is not None and np.isfinite(search_range) and search_range > 0 \
+                and width >= SEARCH_FRACTION * search_range:
+            return f"the interval spans {width / search_range:.0%} of the search range: not identified by the runs"
+        if block_scale is not None and np.isfinite(block_scale) and block_scale > 0 and width > BLOCK_FRACTION * block_scale:
+            return (f"the interval ({lo:.3g} to {hi:.3g}) is {width / block_scale:.0%} of its block's scale "
+                    f"({block_scale:.3g}): not pinned down")
+        return ""
+    if width > abs(paper):
+        return f"the interval ({lo:.3g} to {hi:.3g}) is wider than the paper's value itself"
+    return ""
+
+
+def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None, parameters: bool = False,
+         extra_setting: str = "", aggregate: str = "median", success_threshold: float | None = None, ls=None,
+         label: str = "", search_range: float | None = None, block_scale: float | None = None,
+         ratio: bool = False) -> dict:
+    """One summary row (module docstring). ``ok``: per-value success (1/0/NaN); ``parameters``:
+    compared with the successful runs; ``success_threshold``: a paper value at or below it is a
+    successful run, and is compared with our successful runs (else with our failed ones);
+    ``ls``: ``(estimate, half width)`` of a least-squares interval (recorded data, one run);
+    ``search_range``, ``block_scale``, ``ratio``: what :func:`uninformative` needs."""
+    v = np.asarray(values, float)
+    ok = np.full(v.shape, np.nan) if ok is None else np.asarray(ok, float)
+    judged = np.isfinite(ok)
+    success_rate = float(ok[judged].mean()) if judged.any() else np.nan
+    entry = reported_entry(spec, quantity, settings)
+    paper = None if entry is None else float(entry.value)
+    floor = float(spec.floor)
+    basis, same, outcome = v, None, ""
+    if parameters and judged.any():
+        basis = same = v[ok == 1]
+        outcome = "successful"
+    if aggregate == "mean":  # fractions: the mean of 0/1 outcomes, no quantiles
+        med, q25, q75 = float(np.nanmean(v)), np.nan, np.nan
+    else:
+        med, q25, q75 = quantiles(basis)
+    if success_threshold is not None and paper is not None and judged.any():
+        succeeded = paper <= success_threshold  # the paper's run classified by our rule
+        chosen = v[ok == (1 if succeeded else 0)]
+        same, outcome = (chosen, "successful" if succeeded else "failed") if chosen.size else (None, "")
+    lo, hi = interval(v, floor)
+    lo_same, hi_same = interval(same, floor) if same is not None else (np.nan, np.nan)
+    if ls is not None:
+        lo, hi = ls[0] - ls[1], ls[0] + ls[1]
+    jlo, jhi = (lo_same, hi_same) if same is not None else (lo, hi)
+    width = entry.half_unit() if entry is not None else 0.0
+    tol = None if entry is None else (entry.tolerance or spec.tolerance)
+    verdict = judge(paper, jlo, jhi, width, success_rate, floor=floor, tolerance=tol, value=med)
+    reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, outcome, ls is not None)
+    if verdict != "n/a" and entry is not None and not entry.informative:
+        verdict, reason = "uninformative", str(entry.reason).strip()
+    elif verdict == "reproduced" and tol is None:
+        why = uninformative(paper, jlo, jhi, kind="ratio" if ratio else "parameter" if parameters else "value",
+                            search_range=search_range, block_scale=block_scale, median=med,
+                            mixed_outcome=ratio and outcome == "failed")
+        if why:
+            verdict, reason = "uninformative", why
+    in_interval = np.nan
+    if truth is not None and np.isfinite(lo):
+        t = max(truth, floor) if 0 <= truth < floor else truth
+        in_interval = bool(jlo - width <= t <= jhi + width)
+    if entry is None:
+        tol_text = ""
+    elif tol is not None:
+        tol_text = tol.text()
+    else:
+        tol_text = ("ls t-interval" if ls is not None else "95 % of runs") + (f" ± {width:.2g}" if width else "")
+    return {
+        "paper": spec.paper, "artifact": spec.name, "quantity": quantity, "estimator": estimator,
+        "setting": setting + extra_setting, "truth": truth, "paper_value": paper, "value": med,
+        "q25": q25, "q75": q75, "n_seeds": int(np.isfinite(v).sum()), "tolerance": tol_text, "verdict": verdict,
+        "lo": lo, "hi": hi, "success_rate": success_rate, "truth_in_interval": in_interval,
+        "label": label or quantity, "reason": reason, "lo_same": lo_same, "hi_same": hi_same,
+    }
+
+
+def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol, med: float, outcome: str,
+            ls: bool) -> str:
+    """A short line: why ``verdict`` (numbers from the row)."""
+    if verdict == "n/a":
+        return ""
+    if np.isfinite(success_rate) and success_rate < 0.5:
+        return f"our runs succeed on {success_rate:.0%} of seeds (a failed majority)"
+    if tol is not None:
+        return f"median {med:.4g} vs paper {paper:.4g} ({tol.text()})"
+    against = "the least-squares t-interval" if ls else f"our {outcome} runs" if outcome else "our runs"
+    where = "inside" if verdict == "reproduced" else "outside"
+    return f"paper {paper:.4g} {where} {against} ({lo:.4g} to {hi:.4g})"
+
+
+def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, prefix: str = "") -> str:
+    """A readable row label: estimator, quantity and the settings that tell this cell from the
+    artifact's others (``plot.labels`` names a key; a trailing ``(unit)`` moves after the value;
+    scenario names lose their paper prefix), e.g. ``IPSO final RMS, exp1, A = 2 nT``."""
+    cell = cells[ci] if ci < len(cells) else {}
+    varying = [k for k in cell if k != "estimator" and len({str(c.get(k)) for c in cells}) > 1]
+    names = dict(spec.plot.get("labels", {}) or {}) if spec.plot is not None else {}
+    parts = []
+    for key in varying:
+        value = str(cell[key])
+        if key == "scenario":
+            parts.append(re.sub(r"^[a-z]+\d{4}_", "", value).replace("_", " "))
+            continue
+        name = str(names.get(key, key.split(".")[-1].replace("_", " ")))
+        unit = ""
+        m = re.match(r"^(.*?)\s*\(([^()]*)\)$", name)
+        if m and len(m.group(2)) <= 6:
+            name, unit = m.group(1), m.group(2)
+        words = name.split()
+        if words and len(words[-1]) <= 2 and len(words) > 1:  # "noise amplitude A" -> "A"
+            name = words[-1]
+        parts.append(f"{name} = {value}" + (f" {unit}" if unit else ""))
+    head = " ".join(p for p in (prefix or ESTIMATOR_NAMES.get(estimator, estimator),
+                                QUANTITY_NAMES.get(quantity, quantity)) if p)
+    return ", ".join([head, *parts])
+
+
+def block_of(name: str) -> str:
+    """The block a parameter belongs to: its name's leading letters (``S13`` -> ``S``, ``Bp1`` -> ``Bp``)."""
+    m = re.match(r"^[A-Za-z_]*[A-Za-z]", name)
+    return m.group(0) if m else name
+
+
+def block_scales(names: list[str], medians: np.ndarray) -> dict[str, float]:
+    """``{block: RMS of its parameters' medians}`` (:func:`block_of`)."""
+    groups: dict[str, list] = {}
+    for name, m in zip(names, medians):
+        groups.setdefault(block_of(name), []).append(m)
+    return {b: float(np.sqrt(np.nanmean(np.square(v)))) if np.isfinite(v).any() else np.nan
+            for b, v in ((b, np.asarray(v, float)) for b, v in groups.items())}
+
+
+def parameter_values(runs: ArtifactRuns, ci: int) -> tuple[list[str], np.ndarray, np.ndarray | None]:
+    """Parameter names, estimates ``(seeds, p)`` and the true vector of cell ``ci``."""
+    outs = [runs.outputs[k] for k in sorted(runs.outputs) if k[0] == ci]
+    truth = getattr(outs[0], "truth_x", None)
+    return list(outs[0].parameter_names), np.array([o.x for o in outs]), truth
+
+
+def _cell_ok(runs: ArtifactRuns, ci: int) -> np.ndarray:
+    sub = runs.table[runs.table.cell == ci].sort_values("seed")
+    return sub["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(sub), np.nan)
+
+
+def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
+    """``mode: parameters``: one row per (cell, parameter), compared with the successful runs;
+    ``only`` (optional) restricts to those estimators."""
+    rows = []
+    for ci in range(len(runs.cells)):
+        sub = runs.table[runs.table.cell == ci]
+        if item.only and sub.estimator.iloc[0] not in item.only:
+            continue
+        names, values, truth = parameter_values(runs, ci)
+        ok = _cell_ok(runs, ci)
+        kept = values[ok == 1] if np.isfinite(ok).any() and (ok == 1).any() else values
+        scales = block_scales(names, np.nanmedian(kept, axis=0) if len(kept) else np.full(len(names), np.nan))
+        ranges = search_ranges(runs, ci)
+        for k, name in enumerate(names):
+            rows.append(_row(runs.spec, name, sub.estimator.iloc[0], sub.setting.iloc[0],
+                             None if truth is None else float(truth[k]), values[:, k], cell_settings(runs, ci),
+                             ok=ok, parameters=True, label=label_of(runs.spec, runs.cells, ci, name, sub.estimator.iloc[0]),
+                             search_range=ranges.get(name), block_scale=scales[block_of(name)]))
+    return rows
+
+
+def search_ranges(runs: ArtifactRuns, ci: int) -> dict[str, float]:
+    """``{parameter: upper - lower}`` of cell ``ci``'s search box (the problem rebuilt from the
+    cell's overrides, :func:`_problem_of`; no run); empty where the problem cannot be rebuilt here
+    (e.g. a recording that is absent)."""
+    try:
+        names, lower, upper = _box(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
+    except (MagexpError, OSError):  # e.g. a recording that is absent: the other rules still apply
+        return {}
+    return {n: float(u - lo) for n, lo, u in zip(names, lower, upper)}
+
+
+@functools.lru_cache(maxsize=64)
+def _box(overrides: tuple[str, ...], seed: int) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Parameter names and search box of a cell's problem (:func:`_problem_of`)."""
+    problem = _problem_of(overrides, seed)
+    return list(problem.parameter_names()), np.asarray(problem.lower, float), np.asarray(problem.upper, float)
+
+
+def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> dict:
+    """``{parameter: (estimate, half width)}`` of the least-squares fit of a linear ship model
+    (Yan & Zhou 2022, eq 1: per axis ``B_i = [A_i Be, 1] [K_i, Bp_i]^T``, 4 parameters).
+
+    Per axis ``s^2 = RSS / (N - 4)`` and ``Cov = s^2 (C^T C)^{-1}``; the half width is
+    ``t(1 - (1 - level)/2, N - 4)`` standard errors (12 readings: 8 degrees of freedom), the quantile
+    from ``scipy.special.stdtrit`` (what ``scipy.stats.t.ppf`` evaluates, without importing
+    ``scipy.stats``).
+    """
+    from scipy.special import stdtrit
+
+    c, y, names = _design_of(runs, ci)
+    n, p = c.shape
+    coef, *_ = np.linalg.lstsq(c, y, rcond=None)  # (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
+    rss = np.sum((y - c @ coef) ** 2, axis=0)
+    dof = n - p
+    cov = np.linalg.inv(c.T @ c)
+    se = np.sqrt(np.outer(np.diag(cov), rss / dof))  # (4, 3)
+    t = stdtrit(dof, 0.5 + level / 2)
+    out = {}
+    for a in range(3):
+        for j in range(3):
+            out[names[3 * a + j]] = (float(coef[j, a]), float(t * se[j, a]))
+        out[names[9 + a]] = (float(coef[3, a]), float(t * se[3, a]))
+    return out
+
+
+def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
+    """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
+    parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
+    p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates)."""
+    from scipy.special import fdtrc
+
+    c, y, _ = _design_of(runs, ci)
+    n, p = c.shape
+    coef, *_ = np.linalg.lstsq(c, y, rcond=None)
+    k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
+    out = []
+    for a in range(3):
+        d = np.append(k[a], bp[a]) - coef[:, a]
+        s2 = np.sum((y[:, a] - c @ coef[:, a]) ** 2) / (n - p)
+        f = float(d @ c.T @ c @ d / p / s2)
+        out.append({"axis": a + 1, "F": f, "dof": (p, n - p), "p_value": float(fdtrc(p, n - p, f))})
+    return out
+
+
+def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
+    """``mode: ftest``: per cell (of ``only``) and axis, the p-value of :func:`f_test` of its estimate."""
+    rows = []
+    for ci in range(len(runs.cells)):
+        sub = runs.table[runs.table.cell == ci]
+        if item.only and sub.estimator.iloc[0] not in item.only:
+            continue
+        theta = runs.outputs[(ci, int(sub.seed.min()))].x
+        for test in f_test(runs, ci, theta):
+            quantity = f"{item.quantity}_axis{test['axis']}"
+            rows.append(_row(runs.spec, quantity, sub.estimator.iloc[0],
+                             sub.setting.iloc[0] + f";F={test['F']:.4g};dof={test['dof'][0]},{test['dof'][1]}",
+                             None, [test["p_value"]], cell_settings(runs, ci),
+                             label=label_of(runs.spec, runs.cells, ci, quantity, sub.estimator.iloc[0])))
+    return rows
+
+
+def _design_of(runs: ArtifactRuns, ci: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``(C, y, parameter names)`` of the linear problem of cell ``ci``'s first seed
+    (``problem.design()``, :func:`_design`): built once per cell and seed, however many summary rows
+    and tests read it (the mock-up's interval rows and F-tests share one)."""
+    return _design(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
+
+
+@functools.lru_cache(maxsize=64)
+def _design(overrides: tuple[str, ...], seed: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The design of :func:`_problem_of` (read-only arrays: one copy is shared by every caller);
+    :func:`summarise` empties this cache when it returns (a data file edited later is read again)."""
+    problem = _problem_of(overrides, seed)
+    c, y = (np.array(a, float) for a in problem.design())
+    c.setflags(write=False), y.setflags(write=False)
+    return c, y, list(problem.parameter_names())
+
+
+def _problem_of(overrides, seed: int):
+    """The problem of a cell's run ``seed``, rebuilt from the cell's overrides (deterministic data)."""
+    from magexp.artifacts.plan import compose_config
+    from magexp.problems import make_problem
+    from magexp.run.runner import build
+    from magexp.core.seeding import run_generators, scenario_stream
+
+    cfg = compose_config(list(overrides))
+    scenario = build(cfg.scenario, "scenario")
+    dataset = scenario.generate(rng=run_generators(seed, stream=scenario_stream(cfg.scenario))[0])
+    objective = cfg.get("objective") or scenario.objective
+    return make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
+
+
+def summarise(runs: ArtifactRuns) -> pd.DataFrame:
+    """One row per (summarised quantity, cell) and per ratio group."""
+    try:
+        return _summarise(runs)
+    finally:
+        _design.cache_clear()
+        _box.cache_clear()
+
+
+def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
+    spec, table = runs.spec, runs.table
+    rows = []
+    for item in spec.summarise:
+        if item.mode == "parameters":
+            rows += _parameter_rows(runs, item)
+            continue
+        if item.mode == "ftest":
+            rows += _ftest_rows(runs, item)
+            continue
+        metric = item.metric
+        truth_metric = item.truth_metric or f"truth_{metric}"
+        for ci in range(len(runs.cells)):
+            sub = table[table.cell == ci].sort_values("seed")
+            if metric not in sub or sub[metric].isna().all():
+                continue
+            truth = float(np.median(sub[truth_metric])) if truth_metric in sub and sub[truth_metric].notna().all() else None
+            ls, scale = None, None
+            if item.interval == "ls" and item.quantity in (fits := least_squares_interval(runs, ci)):
+                ls = fits[item.quantity]  # a parameter of the linear model: judged on its block's scale
+                scale = block_scales(list(fits), np.array([e for e, _ in fits.values()]))[block_of(item.quantity)]
+            rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
+                             sub[metric].astype(float).to_numpy(), cell_settings(runs, ci), ok=_cell_ok(runs, ci),
+                             aggregate=item.aggregate, ls=ls, success_threshold=None if truth is None or
+                             metric != spec.success.metric else spec.success.factor * truth + spec.success.floor,
+                             label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0]),
+                             parameters=scale is not None, block_scale=scale))
+    for item in spec.ratios:
+        num_sel, den_sel, metric = item.numerator, item.denominator, item.metric
+        for ci in range(len(runs.cells)):
+            settings = cell_settings(runs, ci)
+            if not matches(den_sel, settings):
+                continue
+            partner = {**settings, **num_sel}
+            nj = [cj for cj in range(len(runs.cells)) if cell_settings(runs, cj) == partner]
+            if not nj:
+                continue
+            den = table[table.cell == ci].set_index("seed")
+            num = table[table.cell == nj[0]].set_index("seed")
+            ratio = (num[metric].astype(float) / den[metric].astype(float)).dropna()
+            both = (num["succeeded"] * den["succeeded"]).reindex(ratio.index) if "succeeded" in den else None
+            sub = table[table.cell == ci]
+            ref = ",".join(f"{k}={v}" for k, v in num_sel.items())
+            # a ratio of two successful runs is within the success factor of 1
+            threshold = spec.success.factor if item.metric == spec.success.metric else None
+            over = "/".join(ESTIMATOR_NAMES.get(str(e), str(e)) for e in (num_sel.get("estimator"), sub.estimator.iloc[0]) if e)
+            rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio.to_numpy(),
+                             settings, extra_setting=f";reference={ref}", success_threshold=threshold,
+                             ok=None if both is None else both.to_numpy(float), ratio=True,
+                             label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0], prefix=over)))
+    return pd.DataFrame(rows, columns=COLUMNS)

@@ -1,0 +1,65 @@
+"""Before/after figure of a calibrated recording: the raw ellipsoid becoming a sphere.
+
+A recording of more than :data:`MAX_POINTS` readings is drawn thinned: the projections and the
+magnitude trace show :data:`MAX_POINTS` evenly spaced readings (every k-th, in time order, the
+first and the last included; the trace's axis says how many of how many), the histogram counts
+every reading. A figure of 8 million points would take minutes and hundreds of MB to draw and
+show nothing more."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.artifacts.plots.style import plt
+
+PAIRS = ((0, 1, "x", "y"), (0, 2, "x", "z"), (1, 2, "y", "z"))
+#: most readings drawn as points (module docstring)
+MAX_POINTS = 20_000
+
+
+def drawn(n: int, most: int = MAX_POINTS) -> np.ndarray:
+    """Indices of the readings drawn out of ``n``: all, or ``most`` evenly spaced ones."""
+    return np.arange(n) if n <= most else np.unique(np.linspace(0, n - 1, most).round().astype(int))
+
+
+def projections(axes, raw: np.ndarray, calibrated: np.ndarray, radius: float, unit: str) -> None:
+    """Three plane projections: raw and calibrated readings, and the reference circle."""
+    t = np.linspace(0, 2 * np.pi, 200)
+    for ax, (i, j, a, b) in zip(axes, PAIRS):
+        ax.scatter(raw[:, i], raw[:, j], s=4, color="0.6", label="raw")
+        ax.scatter(calibrated[:, i], calibrated[:, j], s=4, color="C0", label="calibrated")
+        ax.plot(radius * np.cos(t), radius * np.sin(t), "k--", lw=0.8, label="reference")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(f"{a} ({unit})")
+        ax.set_ylabel(f"{b} ({unit})")
+    axes[0].legend(loc="upper right", markerscale=2)
+
+
+def magnitudes(ax_trace, ax_hist, raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, unit: str) -> None:
+    """Total field per reading, and its histogram, before and after."""
+    before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
+    k = drawn(len(before))
+    ax_trace.plot(k, before[k], ".", ms=3, color="0.6", label="raw")
+    ax_trace.plot(k, after[k], ".", ms=3, color="C0", label="calibrated")
+    ax_trace.plot(k, reference[k], "k--", lw=0.8, label="reference")
+    ax_trace.set_xlabel("reading" if len(k) == len(before) else
+                        f"reading ({len(k)} of {len(before)} drawn, evenly spaced)")
+    ax_trace.set_ylabel(f"total field ({unit})")
+    ax_trace.legend(loc="best")
+    bins = np.linspace(min(before.min(), after.min()), max(before.max(), after.max()), 50)
+    ax_hist.hist(before, bins=bins, color="0.6", label="raw")
+    ax_hist.hist(after, bins=bins, color="C0", alpha=0.8, label="calibrated")
+    ax_hist.set_xlabel(f"total field ({unit})")
+    ax_hist.set_ylabel("readings")
+
+
+def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, *, unit: str, title: str):
+    """The whole figure: projections on top, magnitude trace and histogram below; returns it."""
+    fig = plt.figure(figsize=(10.5, 6.6), layout="constrained")
+    grid = fig.add_gridspec(2, 3)
+    k = drawn(len(raw))
+    projections([fig.add_subplot(grid[0, j]) for j in range(3)], raw[k], calibrated[k], float(np.mean(reference)),
+                unit)
+    magnitudes(fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2]), raw, calibrated, reference, unit)
+    fig.suptitle(title)
+    return fig

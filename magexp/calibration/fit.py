@@ -1,0 +1,530 @@
+"""Calibrate a recording or an array of readings, and say how good the calibration is.
+
+Command line (its own primary config, ``conf/calibrate.yaml``)::
+
+    magexp calibrate data.path=mine.csv [data.unit=uT] [estimator=lm] [out=folder] [KEY=VALUE ...]
+
+Python::
+
+    import magexp
+    cal = magexp.calibrate(readings, unit="uT", estimator="ellipsoid")   # (N, 3) array or DataFrame
+    cal.w, cal.offset, cal.report                                         # B = W (reading - offset)
+
+Flow (the same as a simulated run, with a recording instead of a scenario)::
+
+    recording (magexp.core.recordings) ──► dataset: readings, reference total, attitudes (if any)
+    dataset + objective (scalar | vector) + search box from the data ──► problem
+    estimator.fit(problem, rng=...) ──► W, o ──► canonical form, quality (magexp.core.quality), k-fold
+
+Reference total field, first found of: ``data.reference_total`` (command line), the ``total``
+column, ``# reference_total:``, the norm of ``# field:``, the IGRF total at ``igrf.latitude``,
+``igrf.longitude``, ``igrf.altitude_km``, ``igrf.date`` (:mod:`magexp.core.igrf`; unit-bearing
+recordings only). With none, the reference is *estimated*: the fit uses ``R0``, the radius of
+the sphere fitted to the raw readings (:func:`centroid_radius`), as the radius, then ``W`` is rescaled so that
+the mean calibrated magnitude equals ``R0``. The shape of the calibration (and the spread
+std/mean) does not depend on this choice; the absolute scale does, and the output says so.
+
+Search box of swarm estimators (:func:`search_box`), derived from the data: each offset
+within the range of the readings, ``[min, max]`` over all three axes; matrix entries scaled
+by ``s = reference / R0``: diagonal in ``[0.5 s, 1.5 s]``, off-diagonal in ``[-0.5 s, 0.5 s]``
+(``1 / s`` instead of ``s`` for the vector objective, whose parameters are ``S = W^-1``: Yuan 2018).
+
+Degenerate data (identical readings, a plane, one attitude, too few distinct directions) and an
+estimator reporting failure raise one :class:`~magexp.errors.MagexpError` line that says why and
+what to record instead (:mod:`magexp.core.quality`); the command then writes nothing.
+
+Held-out check: the readings, in time order, are cut into ``folds`` contiguous blocks; each block
+is calibrated by the estimator fitted on the others, and ``heldout_spread`` is the spread of the
+pooled held-out magnitudes (a block taken in one part of the motion tests the calibration on
+orientations the fit may not have seen: a stricter test than interleaved folds).
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from magexp.core import quality as q
+from magexp.run.budget import check_calibration, check_recording_file
+from magexp.core.dataset import Dataset
+from magexp.errors import LARGEST, MagexpError, check_positive_int
+from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
+from magexp.estimators.result import FitResult
+from magexp.core.recordings import Recording
+from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box  # noqa: F401
+
+#: Objectives a recording can be calibrated with.
+OBJECTIVES = ("scalar", "vector")
+#: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
+MIN_READINGS = 12
+#: Calibration models: ``full`` (``W`` and offset, 9 numbers a scalar fit determines) or ``sphere``
+#: (offset and one scale, ``W = s I``: the closed-form :func:`fit_sphere`, no estimator; what readings
+#: covering part of the sphere can still determine).
+MODELS = ("full", "sphere")
+#: How each objective's ``W`` is reported.
+FORMS = {"scalar": "symmetric positive-definite polar factor (W = Q P, reported P = (W^T W)^(1/2)): a total-field "
+                   "fit cannot see a rotation of W",
+         "vector": "as fitted (the vector objective determines the rotation)",
+         "sphere": "s I (model=sphere: offset and one scale only)"}
+
+
+@dataclass
+class Reference:
+    """The reference total field of a calibration.
+
+    Attributes
+    ----------
+    total : (N,) reference total per reading (in the recording's unit).
+    source : where it comes from (``data.reference_total``, ``total column``, ...).
+    estimated : True when no reference was given and the scale was fixed from the data.
+    """
+
+    total: np.ndarray
+    source: str
+    estimated: bool = False
+
+    def describe(self) -> str:
+        mean = float(np.mean(self.total))
+        if self.estimated:
+            return (f"none given: estimated as the mean calibrated magnitude, scale fixed to the radius of the "
+                    f"sphere fitted to the raw readings, {mean:.6g}")
+        return f"{mean:.6g} from {self.source}"
+
+
+@dataclass
+class Calibration:
+    """A fitted calibration ``B = W (reading - offset)`` of a recording, and how good it is.
+
+    ``w`` is in the canonical form of :data:`FORMS` (``report["w_form"]``); ``metrics`` holds the
+    spreads before, after and held out; ``report`` the standard errors, conditioning, the
+    undetermined combinations and the direction coverage (:mod:`magexp.core.quality`).
+    """
+
+    recording: Recording
+    estimator: str
+    objective: str
+    w: np.ndarray
+    offset: np.ndarray
+    reference: Reference
+    search: SearchBox
+    fit: FitResult
+    calibrated: np.ndarray
+    metrics: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
+
+    @property
+    def unit(self) -> str:
+        return self.recording.unit
+
+
+def reference_of(rec: Recording, override=None) -> Reference:
+    """The reference total field of ``rec`` (see the module docstring for the order)."""
+    n = rec.n
+    if override is not None:
+        try:
+            value = float(override)
+        except (TypeError, ValueError):
+            value = float("nan")
+        if not (np.isfinite(value) and 0 < value <= LARGEST):
+            raise MagexpError(f"data.reference_total={override!r} is not allowed: it must be a number > 0 and "
+                              f"<= {LARGEST:g}")
+        return Reference(np.full(n, value), "data.reference_total")
+    if rec.total is not None:
+        return Reference(np.asarray(rec.total, float), "the total column")
+    if rec.reference_total is not None:
+        return Reference(np.full(n, rec.reference_total), "'# reference_total:'")
+    if rec.field is not None:
+        return Reference(np.full(n, float(np.linalg.norm(rec.field))), "the norm of '# field:'")
+    return Reference(np.full(n, centroid_radius(rec.readings)), "estimated", estimated=True)
+
+
+def attitude_of(rec: Recording) -> np.ndarray | None:
+    """Navigation -> sensor rotations ``(N, 3, 3)`` (:meth:`Recording.attitude`), or None."""
+    return rec.attitude()
+
+
+def recording_dataset(rec: Recording, reference: Reference, objective: str) -> Dataset:
+    """The :class:`Dataset` of ``rec`` for ``objective`` (attitudes and field for ``vector``)."""
+    if objective not in OBJECTIVES:
+        raise MagexpError(f"objective={objective!r} is not allowed for magexp calibrate: choose one of "
+                          f"{', '.join(OBJECTIVES)}")
+    attitude, field_nav = None, None
+    if objective == "vector":
+        attitude = attitude_of(rec)
+        if attitude is None or rec.field is None:
+            raise MagexpError(f"objective='vector' is not allowed for {rec.name}: it needs attitudes "
+                              "(heading, roll, trim or gx, gy, gz columns) and a '# field:' line; use objective=scalar")
+        field_nav = np.broadcast_to(rec.field, (rec.n, 3)).copy()
+    return Dataset(readings=rec.readings, reference_norm=reference.total, field_nav=field_nav, attitude=attitude,
+                   unit=rec.unit, meta={"recording": str(rec.path), **rec.meta})
+
+
+def check_size(rec: Recording) -> None:
+    """At least :data:`MIN_READINGS` readings."""
+    if rec.n < MIN_READINGS:
+        raise MagexpError(f"{rec.name}: {rec.n} readings is not allowed: a calibration needs at least "
+                          f"{MIN_READINGS} (the 12 parameters of W and the offset)")
+
+
+def check_applies(estimator, objective: str) -> None:
+    """Fail in one line unless ``estimator`` applies to the ``objective`` problem
+    (:func:`magexp.estimators.base.applies_to`), naming the estimators that do."""
+    from magexp.run.compose import options, target_class
+    from magexp.estimators.base import applies_to
+    from magexp.problems import problem_class
+
+    problem = problem_class(objective)
+    ok, reason = applies_to(estimator, problem)
+    if ok:
+        return
+    fits = [n for n in options("estimator") if applies_to(target_class("estimator", n), problem)[0]]
+    raise MagexpError(f"estimator={estimator.name!r} is not allowed for objective {objective!r}: choose one of "
+                      f"{', '.join(fits)} ({reason})")
+
+
+spread = q.spread  # noqa: E305  (its home is magexp.core.quality; importable from here too)
+
+
+def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> dict:
+    """Magnitude statistics before and after, and the RMS against the reference."""
+    before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
+    return {"mean_before": float(before.mean()), "std_before": float(before.std()), "spread_before": spread(before),
+            "rms_before": float(np.sqrt(np.mean((before - reference) ** 2))),
+            "mean_after": float(after.mean()), "std_after": float(after.std()), "spread_after": spread(after),
+            "rms_after": float(np.sqrt(np.mean((after - reference) ** 2)))}
+
+
+def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",
+         dataset: Dataset | None = None) -> tuple:
+    """``(W, o, calibrated, problem, result, box)`` of one fit (W canonical for a scalar objective);
+    ``dataset``: the recording's :func:`recording_dataset`, when the caller has it already."""
+    from magexp.problems import make_problem
+
+    dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
+    box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
+    if model == "sphere":
+        centre, radius = fit_sphere(rec.readings)
+        w = np.eye(3) * np.mean(reference.total) / radius
+        result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
+                           history=np.zeros(1), history_nfev=np.ones(1), success=True,
+                           message="closed-form sphere fit (offset and one scale; no estimator)")
+        return w, centre, (rec.readings - centre) @ w.T, None, result, box
+    problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
+    result = estimator.fit(problem, rng=rng)
+    w, o = (a[0] for a in problem.unpack(result.x))
+    if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
+        raise MagexpError(f"{rec.name}: estimator={estimator.name!r} gave a non-finite calibration, nothing written: "
+                          "try estimator=ellipsoid or estimator=lm")
+    if objective == "scalar":
+        w = q.canonical(w)
+    calibrated = (rec.readings - o) @ w.T
+    if reference.estimated:  # the scale is free: the mean calibrated magnitude is the reference
+        w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
+        calibrated = (rec.readings - o) @ w.T
+    return w, o, calibrated, problem, result, box
+
+
+def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
+            model: str = "full") -> dict:
+    """Spread of each contiguous block calibrated by the fit on the others (module docstring)."""
+    if folds < 2:
+        return {}
+    edges = np.linspace(0, rec.n, folds + 1).astype(int)
+    pooled, per_fold = [], []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        keep = np.r_[0:lo, hi:rec.n]
+        train = rec.subset(keep)
+        ref = Reference(reference.total[keep], reference.source, reference.estimated)
+        try:
+            w, o, *_ = _fit(train, estimator, objective, ref, rng, model)
+        except MagexpError:
+            return {"heldout_spread": float("nan"), "heldout_folds": folds}
+        mags = np.linalg.norm((rec.readings[lo:hi] - o) @ w.T, axis=1)
+        pooled.append(mags)
+        per_fold.append(spread(mags))
+    return {"heldout_spread": spread(np.concatenate(pooled)), "heldout_spread_max_fold": float(np.max(per_fold)),
+            "heldout_folds": folds}
+
+
+def report_of(rec: Recording, objective: str, w, o, reference: Reference, problem, model: str = "full") -> dict:
+    """Standard errors, conditioning, undetermined combinations (:func:`magexp.core.quality.identifiability`)."""
+    if model == "sphere":
+        theta = np.concatenate([[w[0, 0]], o])
+        names = ["s", "o1", "o2", "o3"]
+        fun = q.sphere_residuals(rec.readings, reference.total)
+    elif objective == "scalar":
+        from magexp.estimators.reduced import UPPER
+
+        theta = np.concatenate([w.ravel()[UPPER], o])  # the 6 upper entries of the symmetric W, then o
+        names = [f"W{k // 3 + 1}{k % 3 + 1}" for k in UPPER] + ["o1", "o2", "o3"]
+        fun = q.scalar_residuals(rec.readings, reference.total)
+    else:
+        theta = np.concatenate([w.ravel(), o])
+        names = [f"W{i + 1}{j + 1}" for i in range(3) for j in range(3)] + ["o1", "o2", "o3"]
+        fun = q.vector_residuals(rec.readings, problem.reference)
+    out = q.identifiability(fun, theta, names)
+    se = out["standard_errors"]
+    if model == "sphere":
+        out["W_standard_errors"] = (np.eye(3) * se["s"]).tolist()
+    else:
+        out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar"
+                                     else se[f"W{i + 1}{j + 1}"] for j in range(3)] for i in range(3)]
+    out["offset_standard_errors"] = [se["o1"], se["o2"], se["o3"]]
+    out["w_form"] = FORMS["sphere" if model == "sphere" else objective]
+    out["model"] = model
+    return out
+
+
+def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
+                        folds: int = 5, rng: np.random.Generator, checks: bool = True,
+                        model: str = "full") -> Calibration:
+    """Fit ``estimator`` to the recording ``rec`` and measure how good the fit is.
+
+    Parameters
+    ----------
+    rec : a loaded :class:`~magexp.core.recordings.Recording`.
+    estimator : any estimator object (``fit(problem, *, rng)``) that applies to ``objective``.
+    objective : ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
+    reference_total : overrides the recording's reference total field (its unit).
+    folds : blocks of the held-out check (0 or 1: none).
+    rng : the estimator's random generator.
+    checks : refuse degenerate data and failed fits (:mod:`magexp.core.quality`); False measures them anyway.
+    model : ``full`` or ``sphere`` (:data:`MODELS`; ``sphere`` needs the scalar objective).
+
+    Returns
+    -------
+    Calibration
+        ``W`` (canonical form), offset, calibrated readings, the reference used, the spread
+        metrics and the quality report.
+    """
+    check_size(rec)
+    folds = check_folds(folds)
+    if objective not in OBJECTIVES:
+        raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
+    check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.run.budget's limits
+    if model not in MODELS or (model == "sphere" and objective != "scalar"):
+        raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or sphere "
+                          "with the scalar objective")
+    check_applies(estimator, objective)
+    reference = reference_of(rec, reference_total)
+    dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
+    if checks:
+        q.check_readings(rec.readings, rec.name)
+    w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
+    cover = q.coverage(calibrated)
+    name = "sphere fit" if model == "sphere" else estimator.name
+    if checks:
+        q.check_fit(rec.name, name, bool(result.success), result.message, cover,
+                    q.coverage(rec.readings - fit_sphere(rec.readings)[0]))
+    metrics = {**quality(rec.readings, calibrated, reference.total), **cover}
+    if objective == "vector":
+        metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
+    metrics.update(heldout(rec, estimator, objective, reference, folds, rng, model))
+    report = report_of(rec, objective, w, o, reference, problem, model)
+    return Calibration(recording=rec, estimator=name, objective=objective, w=w, offset=o,
+                       reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
+                       report=report)
+
+
+# -- the Python API --------------------------------------------------------------------------------
+def as_recording(readings, *, unit: str | None = None) -> Recording:
+    """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
+    ``x, y, z``, else its three numeric columns), a path or a Recording."""
+    import pandas as pd
+
+    from magexp.core.recordings import check_unit, check_unique, load_recording
+
+    if isinstance(readings, Recording):
+        return readings
+    if isinstance(readings, (str, Path)):
+        return load_recording(readings, unit=unit)
+    if isinstance(readings, pd.DataFrame):
+        cols = [str(c).strip().lower() for c in readings.columns]
+        check_unique(cols, "readings")
+        pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
+                     if all(n in cols for n in names)), None)
+        frame = readings.iloc[:, [cols.index(n) for n in pick]] if pick else readings.select_dtypes("number")
+        if frame.shape[1] != 3:
+            raise MagexpError(f"readings with columns {list(readings.columns)} are not allowed: give bx, by, bz "
+                              "(or x, y, z), or exactly three numeric columns")
+        readings = frame.to_numpy(float)
+    values = readings_array(readings)
+    if values.ndim != 2 or values.shape[1] != 3:
+        raise MagexpError(f"readings of shape {values.shape} are not allowed: give an (N, 3) array")
+    if not np.all(np.isfinite(values)):
+        raise MagexpError("readings with NaN or infinite values are not allowed: every value must be finite")
+    if unit is None:
+        raise MagexpError("unit=None is not allowed: name the unit of the readings (nT, uT, mG, G, T or counts)")
+    return Recording(readings=values, angles=None, field=None, unit=check_unit(unit, "unit"),
+                     meta={"format": "array", "name": "readings"})
+
+
+def estimator_named(name: str, **overrides):
+    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``."""
+    from omegaconf import OmegaConf
+
+    from magexp.paths import CONF
+    from magexp.run.runner import build
+
+    path = CONF / "estimator" / f"{name}.yaml"
+    if not path.is_file():
+        known = sorted(p.stem for p in (CONF / "estimator").glob("*.yaml"))
+        raise MagexpError(f"estimator={name!r} is not allowed: choose one of {', '.join(known)}")
+    node = OmegaConf.load(path)
+    unknown = [key for key in overrides if key not in node]
+    if unknown:
+        options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")
+        raise MagexpError(f"{unknown[0]}={overrides[unknown[0]]!r} is not allowed: estimator {name!r} has no option "
+                          f"{unknown[0]!r} (options: {options})")
+    return build(OmegaConf.merge(node, overrides), f"estimator {name!r}")
+
+
+def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objective: str = "scalar",
+              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "full",
+              **estimator_options) -> Calibration:
+    """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
+
+    Parameters
+    ----------
+    readings : ``(N, 3)`` array, DataFrame (``bx, by, bz`` / ``x, y, z`` columns), a recording's path,
+        or a :class:`~magexp.core.recordings.Recording`.
+    unit : unit of an array or DataFrame (``nT, uT, mG, G, T, counts``).
+    estimator : a name of ``conf/estimator/*.yaml`` (``ellipsoid``, ``lm``, ``ipso``, ...) or an estimator object.
+    objective, reference_total, folds, checks, model : as :func:`calibrate_recording`.
+    seed : the estimator's random generator derives from it (:func:`magexp.core.seeding.run_generators`).
+    estimator_options : overrides of the estimator config (e.g. ``n_iterations=200``).
+
+    Returns
+    -------
+    Calibration
+        ``.w`` (canonical form), ``.offset``, ``.calibrated``, ``.metrics`` (spread before, after,
+        held out; coverage), ``.report`` (standard errors, conditioning, undetermined combinations).
+
+    Raises
+    ------
+    MagexpError
+        One line for degenerate data, a failed estimator or bad input.
+    """
+    from magexp.core.seeding import run_generators
+
+    rec = as_recording(readings, unit=unit)
+    if not isinstance(estimator, str) and not callable(getattr(estimator, "fit", None)):
+        from magexp.run.compose import options
+
+        raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
+                          f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
+    est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
+    _, rng = run_generators(check_positive_int(seed, "seed", minimum=0))
+    return calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
+                               rng=rng, checks=checks, model=model)
+
+
+# -- the command -----------------------------------------------------------------------------------
+def compose(argv: list[str]):
+    """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``."""
+    from hydra import compose as hydra_compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    from magexp.paths import CONF
+
+    bad = [a for a in argv if "=" not in a]
+    if bad:
+        raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
+                          "(e.g. data.path=mine.csv data.unit=uT estimator=lm)")
+    argv = check_override_values(argv)
+    from magexp.run.compose import GROUPS, check_choice
+
+    for arg in argv:
+        if arg.partition("=")[0] in GROUPS:
+            check_choice(*arg.split("=", 1))
+    try:
+        if GlobalHydra.instance().is_initialized():
+            return hydra_compose("calibrate", overrides=list(argv))
+        with initialize_config_dir(config_dir=str(CONF), version_base=None):
+            return hydra_compose("calibrate", overrides=list(argv))
+    except MagexpError:
+        raise
+    except Exception as exc:  # Hydra's override and missing-key errors, as one line
+        raise MagexpError(f"bad override: {str(exc).splitlines()[0]}") from None
+
+
+def reference_from_igrf(cfg, rec: Recording):
+    """The IGRF total at ``cfg.igrf`` in the recording's unit, or None when no place is given."""
+    place = cfg.get("igrf") or {}
+    if place.get("latitude") is None:
+        return None
+    from magexp.core.igrf import field_at
+    from magexp.core.recordings import UNITS
+
+    if rec.unit not in UNITS:
+        raise MagexpError(f"igrf.latitude={place.latitude} is not allowed for {rec.name}: its unit {rec.unit!r} "
+                          "has no known factor to nT")
+    total_nt = field_at(place.latitude, place.longitude, place.get("altitude_km", 0.0), place.date).total
+    return total_nt / UNITS[rec.unit]
+
+
+def run(cfg) -> Calibration:
+    """Load, calibrate, check and write as ``cfg`` says; print the summary."""
+    from magexp.calibration.write import check_out, summary, write
+    from magexp.core.recordings import load_recording, resolve
+    from magexp.run.runner import build
+    from magexp.core.seeding import run_generators
+
+    data = cfg.data
+    if data.get("path") is None or not str(data.path).strip():
+        raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
+    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
+    rec = load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
+                         mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"))
+    out = cfg.get("out")
+    out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
+    check_destination(out_dir if out is None else out, "out")
+    check_out(out_dir)
+    estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
+    _, est_rng = run_generators(check_positive_int(cfg.seed, "seed", minimum=0))
+    reference = data.get("reference_total")
+    if reference is None:
+        reference = reference_from_igrf(cfg, rec)
+    cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
+                              folds=cfg.folds, rng=est_rng, model=cfg.model)
+    paths = write(cal, out_dir, seed=cfg.seed)
+    print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())})
+    return cal
+
+
+def print_table(rows: dict) -> None:
+    """``key  value`` lines, keys aligned."""
+    width = max(len(k) for k in rows)
+    for key, value in rows.items():
+        print(f"{key:<{width}}  {value}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``magexp calibrate KEY=VALUE ...``: 0 on success; one line on stderr and 2 on bad input or
+    degenerate data (nothing written); 3 on an unexpected error (``MAGEXP_DEBUG=1``: traceback)."""
+    import os
+
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        run(compose(argv))
+        return 0
+    except MagexpError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:  # a bug: still one line
+        if os.environ.get("MAGEXP_DEBUG"):
+            raise
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        print(f"error: unexpected {type(exc).__name__}: {first} (rerun with MAGEXP_DEBUG=1 for details)",
+              file=sys.stderr)
+        return 3
+
+
+if __name__ == "__main__":
+    sys.exit(main())

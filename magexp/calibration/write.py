@@ -1,0 +1,168 @@
+"""What ``magexp calibrate`` writes: parameters (JSON), calibrated readings (CSV), a before/after figure.
+
+Files, in the output folder (``out=...``, default Hydra's run folder):
+
+* ``calibration.json``: ``W`` and ``offset`` of ``B = W (reading - offset)``, unit, estimator,
+  objective, the form ``W`` is given in, the reference used and how it was obtained, the search
+  box, the spread metrics (before, after, held out), the quality report (standard errors,
+  conditioning, undetermined combinations, direction coverage) and the fit's outcome
+  (format ``magexp-calibration v2``);
+* ``calibrated.csv``: a ``magexp-recording v1`` file with the calibrated ``bx, by, bz``, their
+  ``magnitude``, and the raw ``raw_bx, raw_by, raw_bz, raw_magnitude``;
+* ``calibration.png``: plane projections of the raw and calibrated readings with the reference
+  circle, and the total field per reading and its histogram, before and after.
+
+An existing file is never overwritten, and nothing is written under ``results/``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from magexp.core.atomic import atomic_open, write_text
+from magexp.errors import MagexpError
+from magexp.paths import RESULTS
+from magexp.core.recordings import VERSION_LINE
+
+FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png",
+         "figure_vector": "calibration.pdf"}  # the figure and its vector twin (magexp.artifacts.plots.style.save)
+
+
+def check_out(out_dir: Path) -> None:
+    """Refuse, in one line, an output folder under ``results/`` or one that holds an output file."""
+    out_dir = Path(out_dir).resolve()
+    if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: results/ holds the reproduced papers only, "
+                          "choose another folder")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: it is a file, not a folder")
+    existing = next(p for p in (out_dir, *out_dir.parents) if p.exists())  # checked, nothing created yet
+    if not existing.is_dir():
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is a file, not a folder")
+    if not os.access(existing, os.W_OK):
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is not writable")
+    taken = [name for name in FILES.values() if (out_dir / name).exists()]
+    if taken:
+        raise MagexpError(f"out={str(out_dir)!r} is not allowed: it already holds {', '.join(taken)} "
+                          "(never overwritten), choose another folder")
+
+
+def parameters(cal, *, seed: int) -> dict:
+    """The JSON content of a :class:`~magexp.calibration.fit.Calibration`."""
+    rec, box = cal.recording, cal.search
+    return {
+        "format": "magexp-calibration v2",
+        "model": "B = W (reading - offset)",
+        "recording": str(rec.path or rec.name),
+        "n_readings": rec.n,
+        "unit": cal.unit,
+        "estimator": cal.estimator,
+        "objective": cal.objective,
+        "seed": int(seed),
+        "W": cal.w.tolist(),
+        "W_form": cal.report.get("w_form", ""),
+        "offset": cal.offset.tolist(),
+        "reference": {"total": float(np.mean(cal.reference.total)),
+                      "per_reading": bool(np.ptp(cal.reference.total) > 0), "source": cal.reference.source, "estimated": cal.reference.estimated,
+                      "how": cal.reference.describe()},
+        "search": {"diag": list(box.diag), "offdiag": list(box.offdiag), "offset": list(box.offset)},
+        "metrics": cal.metrics,
+        "quality": _finite(cal.report),
+        "fit": {"fun": float(cal.fit.fun), "nit": int(cal.fit.nit), "nfev": int(cal.fit.nfev),
+                "success": bool(cal.fit.success), "message": cal.fit.message},
+    }
+
+
+def _finite(value):
+    """``value`` with infinities as the string ``"inf"`` (JSON has no infinity)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return str(value)
+    return value
+
+
+#: rows of the calibrated readings formatted at a time (:func:`write_readings`)
+ROWS_PER_BLOCK = 1 << 16
+
+
+def write_readings(cal, fh) -> None:
+    """The calibrated readings as a ``magexp-recording v1`` CSV, into the text file ``fh``: a block of
+    :data:`ROWS_PER_BLOCK` rows at a time, each block one ``%``-format in C (``%.10g`` per value)."""
+    raw, cal_b = cal.recording.readings, cal.calibrated
+    head = [VERSION_LINE, f"# source: {cal.recording.name} calibrated by magexp "
+                          f"(estimator {cal.estimator}, objective {cal.objective})",
+            f"# unit: {cal.unit}", "bx,by,bz,magnitude,raw_bx,raw_by,raw_bz,raw_magnitude"]
+    fh.write("\n".join(head) + "\n")
+    row = ",".join(["%.10g"] * 8) + "\n"
+    for lo in range(0, len(raw), ROWS_PER_BLOCK):
+        b, r = cal_b[lo:lo + ROWS_PER_BLOCK], raw[lo:lo + ROWS_PER_BLOCK]
+        table = np.column_stack([b, np.linalg.norm(b, axis=1), r, np.linalg.norm(r, axis=1)])
+        fh.write(row * len(table) % tuple(table.ravel().tolist()))
+
+
+def write(cal, out_dir: Path, *, seed: int) -> dict:
+    """Write the three files into ``out_dir`` (checked by :func:`check_out`); return their paths.
+
+    Each file is written atomically (:mod:`magexp.core.atomic`): a command killed midway leaves no
+    truncated file; the figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
+    from magexp.run.preflight import first_missing
+    from magexp.calibration.figure import calibration_figure
+    from magexp.artifacts.plots.style import save
+
+    out_dir = Path(out_dir)
+    check_out(out_dir)
+    created = first_missing(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {key: out_dir / name for key, name in FILES.items()}
+    try:
+        write_text(paths["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
+        with atomic_open(paths["readings"], "w") as fh:
+            write_readings(cal, fh)
+        title = f"{cal.recording.name}: {cal.estimator} ({cal.objective}), spread " \
+                f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
+        save(calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.unit,
+                                title=title), paths["figure"])
+    except BaseException:  # interrupted or failed: none of this command's files stays (none existed: check_out)
+        for path in paths.values():
+            path.unlink(missing_ok=True)
+        if created is not None:
+            shutil.rmtree(created, ignore_errors=True)
+        raise
+    return paths
+
+
+def summary(cal) -> dict:
+    """The key numbers to print, in order."""
+    from magexp.core.quality import CELLS
+
+    m, u, r = cal.metrics, cal.unit, cal.report
+    return {
+        "recording": f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})",
+        "estimator": f"{cal.estimator} ({cal.objective} objective)",
+        "reference": cal.reference.describe(),
+        "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
+        "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
+        "rms before": f"{m['rms_before']:.6g} {u} (|raw| - reference)",
+        "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)",
+        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} contiguous blocks, each "
+                            "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
+        "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
+        "W std errors": "[" + "; ".join(", ".join(f"{v:.2g}" for v in row) for row in r["W_standard_errors"]) + "]",
+        "offset": "[" + ", ".join(f"{v:.6g}" for v in cal.offset) + f"] {u}",
+        "offset std errors": "[" + ", ".join(f"{v:.2g}" for v in r["offset_standard_errors"]) + f"] {u}",
+        "conditioning": f"{r['condition_number']:.3g} (column-scaled Jacobian); weakest combination "
+                        f"{r['weakest_combinations'][0]['combination']} "
+                        f"(relative singular value {r['weakest_combinations'][0]['relative_singular_value']:.2g})",
+        "undetermined": ", ".join(r["undetermined"]) or "none",
+        "coverage": f"{100 * m['coverage_cells']:.0f} % of {CELLS} sphere cells; smallest direction-scatter "
+                    f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
+        "fit": f"{'success' if cal.fit.success else 'FAILED'}: {cal.fit.message}",
+    }

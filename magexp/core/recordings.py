@@ -1,0 +1,634 @@
+"""Recorded magnetometer data: one reader per file format, in one registry (:data:`READERS`).
+
+Formats (``data.format=<key>``; ``auto``, the default, detects the format from the file):
+
+================== ========================================================================
+key                file
+================== ========================================================================
+``magexp-v1``      the ``magexp-recording v1`` CSV below (the project's own format)
+``plain``          headerless ``x y z`` numbers (tabs, commas or spaces), unit given by the
+                   caller (e.g. the FXOS8700 file, µT)
+``two-stream``     a magnetometer file ``<stem>_mag.csv`` (``t_s, mx_<unit>, ...``) and an IMU
+                   file ``<stem>_imu.csv`` (``t_s, gx_dps, ...``) with their own timestamps
+                   and rates (the HMC5883L + MPU6050 recordings); name either file or the stem
+``named-columns``  one CSV with named, unit-bearing columns ``Time (s)``,
+                   ``Gyroscope X (deg/s)``, ``Magnetometer X (uT)``, ... (the x-io Fusion file);
+                   a magnetometer slower than the row rate repeats its value: only the rows
+                   where it changes are readings, the gyroscope keeps every row
+``header-counts``  ``Fs,<Hz>`` and ``Initialization time,<s>`` lines, then ``mx,my,mz`` and raw
+                   counts (the QMC5883L file); unit ``counts``
+================== ========================================================================
+
+Streams with their own times: the gyroscope is *integrated* at the magnetometer's times, not
+resampled (:func:`magexp.core.geometry.attitude_at`: each gyro sample held until the next one and
+propagated exactly over the merged time grid). Axes: ``mag_axes`` / ``gyro_axes`` (e.g.
+``"-x,y,z"``, :func:`magexp.core.geometry.axis_map`) map each sensor onto the common body axes
+(default: as recorded). For the HMC5883L + MPU6050 files the data decide: a gyro-aided fit
+(:mod:`magexp.problems.gyro`) with the gyroscope as recorded leaves about 2 % of the field as
+vector residual, with its x axis flipped (``-x,y,z``, the authors' note on the gyroscope alone)
+over 50 %: the magnetometer's unstated x convention evidently matches the gyroscope's.
+
+The ``magexp-recording v1`` format:
+
+A recording is a text file: comment lines with metadata, then a CSV header and one
+row per reading::
+
+    # magexp-recording v1
+    # source: Yan & Zhou 2022, Table 1
+    # unit: nT
+    # angles: rad
+    # field: 34425, 1961, 35898
+    bx,by,bz,heading,roll,trim
+    4206,25290,36913,4.71239,0.02522,-0.00426
+    ...
+
+* The first line must be ``# magexp-recording v1`` (the format version).
+* Metadata lines ``# key: value`` (all optional):
+
+  - ``unit``: unit of ``bx, by, bz``, ``total``, ``reference_total`` and ``field``, one of
+    ``nT, uT, mG, G, T`` (default ``nT``; ``µT`` is read as ``uT``). Values are kept in this
+    unit and the unit is carried along (:attr:`Recording.unit`; :data:`UNITS` gives the
+    factor to nT); a calibration reports its numbers in the same unit.
+  - ``reference_total``: the local total field, one number (for a scalar calibration).
+  - ``field``: the ambient field vector in the navigation frame, three numbers separated by
+    commas (needed by vector models: Yan & Zhou's ``B = K A Be + Bp``, the ``vector``
+    objective). Its norm also serves as the reference total field when neither
+    ``reference_total`` nor a ``total`` column is given.
+  - ``angles``: ``rad`` (default) or ``deg``, unit of ``heading, roll, trim``.
+  - ``gyro``: ``rad/s`` (default) or ``deg/s``, unit of ``gx, gy, gz``; ``sample_time``: the
+    time between readings in seconds (required with gyro columns).
+  - any other key (``source``, ...) is kept as free text in :attr:`Recording.meta`.
+
+* Columns, in any order (header names are case-insensitive):
+
+  - required: ``bx, by, bz`` (sensor axes x, y, z);
+  - optional ``total``: reference total field per reading;
+  - optional attitude angles ``heading`` (psi), ``roll`` (theta), ``trim`` (phi), all three
+    or none: the attitude ``A = Ry(trim) Rx(roll) Rz(heading)`` of Yan & Zhou's eq 2,
+    navigation -> sensor frame. The ship scenario requires them;
+  - optional gyro rates ``gx, gy, gz`` (sensor frame), all three or none: the attitude of
+    reading ``k`` is the rates integrated over the ``k`` preceding sample intervals, the
+    sensor frame at the first reading being the navigation frame (``field`` is then given
+    in that frame);
+  - extra columns are kept in :attr:`Recording.columns`.
+
+* Every value must be a finite number; every row must have as many fields as the header.
+
+A plain numeric file without header or metadata, exactly three columns ``x y z``
+separated by tabs, commas or spaces, is read as readings only; its unit is not in the file,
+so it must be given by the caller (``unit=``; on the command line ``data.unit=uT``).
+
+:func:`load_recording` refuses a malformed file with one :class:`~magexp.errors.MagexpError`
+line naming the file, the line and the fault.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from magexp.errors import LARGEST, MagexpError, excerpt
+from magexp.paths import DATA
+
+VERSION_LINE = "# magexp-recording v1"
+FIELDS = ("bx", "by", "bz")
+ANGLES = ("heading", "roll", "trim")
+GYRO = ("gx", "gy", "gz")
+ANGLE_UNITS = ("rad", "deg")
+GYRO_UNITS = ("rad/s", "deg/s")
+#: Allowed units of the readings and their factor to nT.
+UNITS = {"nT": 1.0, "uT": 1e3, "mG": 100.0, "G": 1e5, "T": 1e9}
+#: Raw sensor units without a known factor to nT (a calibration then reports in them).
+RAW_UNITS = ("counts",)
+_ALIASES = {"µt": "uT", "μt": "uT"}
+
+
+@dataclass
+class Recording:
+    """A loaded recording.
+
+    Attributes
+    ----------
+    readings : (N, 3) sensor readings ``[bx, by, bz]`` in ``unit``.
+    angles : (N, 3) ``[heading, roll, trim]`` in radians (converted if the file says ``deg``),
+        or None if the file has no attitude columns.
+    field : (3,) ambient field in the navigation frame, or None if the file gives none.
+    unit : unit of ``readings``, ``field`` and the reference totals (a key of :data:`UNITS`).
+    meta : every metadata line as ``{key: text}``.
+    columns : every column as ``{name: (N,) array}``.
+    total : (N,) reference total field per reading (``total`` column), or None.
+    reference_total : the ``# reference_total:`` value, or None.
+    gyro : (N, 3) gyro rates in rad/s per reading (``gx, gy, gz`` columns), or None.
+    sample_time : seconds between readings (with ``gyro``), or None.
+    times : (N,) time of every reading in seconds, or None.
+    gyro_stream : ``(times (K,), rates (K, 3) rad/s in the common axes)`` of a gyroscope with
+        its own timestamps, or None.
+    """
+
+    readings: np.ndarray
+    angles: np.ndarray | None
+    field: np.ndarray | None
+    unit: str
+    meta: dict = field(default_factory=dict)
+    columns: dict = field(default_factory=dict)
+    total: np.ndarray | None = None
+    reference_total: float | None = None
+    gyro: np.ndarray | None = None
+    sample_time: float | None = None
+    path: Path | None = None
+    times: np.ndarray | None = None
+    gyro_stream: tuple | None = None
+
+    @property
+    def n(self) -> int:
+        return int(self.readings.shape[0])
+
+    @property
+    def name(self) -> str:
+        return self.path.name if self.path is not None else self.meta.get("name", "readings")
+
+    def gyro_rates(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(times, rates)`` of the gyroscope and the reading times, or None without one."""
+        if self.gyro_stream is not None:
+            return self.gyro_stream
+        if self.gyro is not None:
+            return np.arange(self.n) * self.sample_time, self.gyro
+        return None
+
+    def reading_times(self) -> np.ndarray | None:
+        if self.times is not None:
+            return self.times
+        return None if self.sample_time is None else np.arange(self.n) * self.sample_time
+
+    def attitude(self, *, bias=None) -> np.ndarray | None:
+        """Navigation -> sensor rotations ``(N, 3, 3)`` from the angles, else from the gyroscope
+        integrated at the reading times (the sensor frame at the first reading is the navigation
+        frame; ``bias`` rad/s subtracted), else None."""
+        from magexp.core.geometry import attitude_at, ship_attitude
+
+        if self.angles is not None:
+            return ship_attitude(*self.angles.T)
+        stream = self.gyro_rates()
+        if stream is None:
+            return None
+        return np.transpose(attitude_at(*stream, self.reading_times(), bias=bias), (0, 2, 1))
+
+    def subset(self, index) -> "Recording":
+        """The readings ``index`` (a slice or index array), with their attitudes' sources."""
+        from dataclasses import replace
+
+        pick = lambda a: None if a is None else np.asarray(a)[index]  # noqa: E731
+        times = self.reading_times()
+        return replace(self, readings=self.readings[index], angles=pick(self.angles), total=pick(self.total),
+                       columns={k: v[index] for k, v in self.columns.items()}, gyro=None, sample_time=None,
+                       times=pick(times), gyro_stream=self.gyro_rates())
+
+
+def resolve(path: str | Path) -> Path:
+    """``path`` as given, or relative to the project's ``data/`` folder."""
+    path = Path(path)
+    return path if path.is_absolute() or path.exists() else DATA / path
+
+
+def check_unit(unit: str, what: str) -> str:
+    """``unit`` spelled as in :data:`UNITS`, or a one-line error naming ``what``."""
+    text = str(unit).strip()
+    text = _ALIASES.get(text.lower(), text)
+    if text not in UNITS and text not in RAW_UNITS:
+        raise MagexpError(f"{what}={unit!r} is not allowed: choose one of {', '.join((*UNITS, *RAW_UNITS))}")
+    return text
+
+
+def _number(text: str, where: str, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise MagexpError(f"{where}: {what}={excerpt(text)} is not a number") from None
+    if not abs(value) <= LARGEST:
+        raise MagexpError(f"{where}: {what}={excerpt(text)} is not allowed: it must be a finite number "
+                          f"of magnitude <= {LARGEST:g}")
+    return value
+
+
+def _header(lines: list[str], name: str) -> tuple[dict, int]:
+    if not lines or lines[0].strip() != VERSION_LINE:
+        first = lines[0].strip() if lines else ""
+        raise MagexpError(f"{name}: first line {excerpt(first)} is not allowed: it must be {VERSION_LINE!r} "
+                          "(or the file must be plain numbers in three columns)")
+    meta, i = {}, 1
+    while i < len(lines) and lines[i].lstrip().startswith("#"):
+        key, sep, value = lines[i].lstrip()[1:].partition(":")
+        if sep:
+            meta[key.strip().lower()] = value.strip()
+        i += 1
+    return meta, i
+
+
+def _field(meta: dict, name: str) -> np.ndarray | None:
+    if "field" not in meta:
+        return None
+    parts = meta["field"].split(",")
+    if len(parts) != 3:
+        raise MagexpError(f"{name}: field={meta['field']!r} is not allowed: it must be three numbers separated by commas")
+    return np.array([_number(p, name, "field") for p in parts])
+
+
+def _choice(meta: dict, key: str, allowed: tuple[str, ...], name: str) -> str:
+    value = meta.get(key, allowed[0])
+    if value not in allowed:
+        raise MagexpError(f"{name}: {key}={value!r} is not allowed: choose one of {', '.join(allowed)}")
+    return value
+
+
+def _group(columns: dict, names: tuple[str, ...], what: str, name: str) -> np.ndarray | None:
+    """The columns ``names`` stacked (N, len(names)), None if none is present; all or none."""
+    present = [c for c in names if c in columns]
+    if not present:
+        return None
+    missing = [c for c in names if c not in columns]
+    if missing:
+        raise MagexpError(f"{name}: missing column {', '.join(missing)}: {what} needs all of {', '.join(names)}")
+    return np.column_stack([columns[c] for c in names])
+
+
+def _split(line: str) -> list[str]:
+    return [cell for cell in re.split(r"[,\s]+", line.strip()) if cell]
+
+
+def _is_plain(lines: list[str]) -> bool:
+    """A headerless numeric file: the first non-blank line is numbers only."""
+    first = next((ln for ln in lines if ln.strip()), "")
+    try:
+        [float(cell) for cell in _split(first)]
+    except ValueError:
+        return False
+    return bool(_split(first))
+
+
+#: bytes of a plain file parsed at a time (:func:`_plain_values` reads the file block by block)
+PLAIN_BLOCK = 1 << 24
+_SEPARATORS = bytes.maketrans(b",\t\r", b"   ")
+_BOM = b"\xef\xbb\xbf"
+
+
+def _plain_values(path: Path) -> np.ndarray | None:
+    """The ``(N, 3)`` values of a plain file, read in blocks of :data:`PLAIN_BLOCK` bytes cut at line
+    ends and parsed by pandas' C reader (commas and tabs read as spaces; its numbers are Python's
+    ``float`` of each cell, to the bit); None as soon as a block is not three numbers of magnitude
+    <= LARGEST a line (:func:`_plain_table` then names the bad line). Memory: the values and one
+    block, never the whole text. Pandas is imported here, not at the top: a run that reads no plain
+    file never pays its import (0.3 s measured)."""
+    import pandas as pd
+
+    blocks, tail = [], b""
+    with open(path, "rb") as fh:
+        start = fh.read(len(_BOM))
+        tail = b"" if start == _BOM else start
+        while True:
+            chunk = fh.read(PLAIN_BLOCK)
+            data = tail + chunk
+            cut = len(data) if not chunk else data.rfind(b"\n") + 1
+            block, tail = data[:cut], data[cut:]
+            if block.strip():
+                try:
+                    values = pd.read_csv(io.BytesIO(block.translate(_SEPARATORS)), sep=r"\s+", header=None,
+                                         dtype=float, engine="c").to_numpy()
+                except (ValueError, pd.errors.ParserError):
+                    return None
+                if values.shape[1] != 3 or not np.all(np.abs(values) <= LARGEST):
+                    return None
+                blocks.append(values)
+            if not chunk:
+                return np.concatenate(blocks) if blocks else None
+
+
+def _plain_table(lines: list[str], name: str) -> np.ndarray:
+    values = []
+    for k, line in enumerate(lines, start=1):
+        cells = _split(line)
+        if not cells:
+            continue
+        if len(cells) != 3:
+            raise MagexpError(f"{name} line {k}: {len(cells)} values, but a file without header must have "
+                              "exactly 3 columns x y z")
+        values.append([_number(cell, f"{name} line {k}", axis) for cell, axis in zip(cells, "xyz")])
+    return np.array(values)
+
+
+def _csv_table(lines: list[str], name: str, first_line: int) -> tuple[list[str], np.ndarray]:
+    """Header and values of CSV ``lines``; ``first_line`` is the file line number of the header."""
+    rows = list(csv.reader(lines))
+    if not rows:
+        raise MagexpError(f"{name}: no header line: it must name the columns {', '.join(FIELDS)}")
+    header = [h.strip().lower() for h in rows[0]]
+    check_unique(header, name)
+    missing = [c for c in FIELDS if c not in header]
+    if missing:
+        raise MagexpError(f"{name}: missing column {', '.join(missing)}: the header must name "
+                          f"{', '.join(FIELDS)} (has {excerpt(', '.join(header))})")
+    values = []
+    for k, row in enumerate(rows[1:], start=first_line + 1):
+        if not any(cell.strip() for cell in row):
+            continue
+        if len(row) != len(header):
+            raise MagexpError(f"{name} line {k}: {len(row)} values, but the header has {len(header)} columns")
+        values.append([_number(cell, f"{name} line {k}", col) for cell, col in zip(row, header)])
+    if not values:
+        raise MagexpError(f"{name}: no data rows after the header")
+    return header, np.array(values)
+
+
+def _versioned(lines: list[str], name: str, unit: str | None) -> Recording:
+    meta, start = _header(lines, name)
+    file_unit = check_unit(meta.get("unit", "nT"), f"{name}: unit")
+    if unit is not None and check_unit(unit, "data.unit") != file_unit:
+        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file says '# unit: {file_unit}' "
+                          "(leave data.unit unset)")
+    angle_unit = _choice(meta, "angles", ANGLE_UNITS, name)
+    gyro_unit = _choice(meta, "gyro", GYRO_UNITS, name)
+    header, table = _csv_table(lines[start:], name, start + 1)
+    columns = {col: table[:, j] for j, col in enumerate(header)}
+    angles = _group(columns, ANGLES, "an attitude", name)
+    gyro = _group(columns, GYRO, "a gyro", name)
+    sample_time = None
+    if gyro is not None:
+        if "sample_time" not in meta:
+            raise MagexpError(f"{name}: gyro columns gx, gy, gz need a '# sample_time: <seconds>' line")
+        sample_time = _number(meta["sample_time"], name, "sample_time")
+        if sample_time <= 0:
+            raise MagexpError(f"{name}: sample_time={meta['sample_time']!r} is not allowed: it must be > 0")
+    reference = _number(meta["reference_total"], name, "reference_total") if "reference_total" in meta else None
+    if reference is not None and reference <= 0:
+        raise MagexpError(f"{name}: reference_total={meta['reference_total']!r} is not allowed: it must be > 0")
+    if "total" in columns and np.any(columns["total"] <= 0):
+        k = int(np.argmax(columns["total"] <= 0))
+        raise MagexpError(f"{name} line {start + 2 + k}: total={columns['total'][k]:g} is not allowed: it must be > 0")
+    return Recording(
+        readings=np.column_stack([columns[c] for c in FIELDS]),
+        angles=None if angles is None else (np.deg2rad(angles) if angle_unit == "deg" else angles),
+        field=_field(meta, name),
+        unit=file_unit,
+        meta=meta,
+        columns=columns,
+        total=columns.get("total"),
+        reference_total=reference,
+        gyro=None if gyro is None else (np.deg2rad(gyro) if gyro_unit == "deg/s" else gyro),
+        sample_time=sample_time,
+    )
+
+
+def check_unique(header: list[str], name: str) -> None:
+    """Fail in one line if a column name appears twice."""
+    seen = set()
+    for col in header:
+        if col in seen:
+            raise MagexpError(f"{name}: column {col!r} is duplicated: each column must appear once")
+        seen.add(col)
+
+
+def _numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> np.ndarray:
+    """Comma-separated numbers, ``ncols`` per row, every value finite (one-line errors)."""
+    try:
+        table = np.loadtxt(lines, delimiter=",", ndmin=2)
+    except ValueError:
+        table = None
+    if table is None or table.shape[1] != ncols or not np.all(np.isfinite(table)):
+        for k, line in enumerate(lines, start=first_line):  # find the bad line for the message
+            cells = line.split(",")
+            if not line.strip():
+                continue
+            if len(cells) != ncols:
+                raise MagexpError(f"{name} line {k}: {len(cells)} values, but the header has {ncols} columns")
+            for j, cell in enumerate(cells):
+                _number(cell, f"{name} line {k}", f"column {j + 1}")
+        raise MagexpError(f"{name}: no data rows")
+    return table
+
+
+_UNIT_SUFFIX = {"g": "G", "ut": "uT", "nt": "nT", "mg": "mG", "t": "T"}
+_RATE_SUFFIX = {"dps": "deg/s", "rps": "rad/s"}
+
+
+def _read_lines(path: Path) -> list[str]:
+    """The file's lines; a UTF-8 byte-order mark is accepted, a binary file refused in one line."""
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise MagexpError(f"{path.name}: byte {exc.start} is not UTF-8 text: a recording must be a text file "
+                          "(CSV or 3 numeric columns)") from None
+    if "\x00" in text:
+        raise MagexpError(f"{path.name}: character {text.index(chr(0))} is a NUL byte, so this is not a text file: a "
+                          "recording must be a text file (CSV or 3 numeric columns)")
+    return text.splitlines()
+
+
+def _stream(path: Path, prefix: str, suffixes: dict) -> tuple[np.ndarray, np.ndarray, str]:
+    """``(times, xyz, unit)`` of a ``t_s, <p>x_<u>, <p>y_<u>, <p>z_<u>[, ...]`` CSV."""
+    lines = _read_lines(path)
+    header = [h.strip().lower() for h in lines[0].split(",")] if lines else []
+    check_unique(header, path.name)
+    cols = [next((c for c in header if c.startswith(f"{prefix}{a}_")), None) for a in "xyz"]
+    if not header or header[0] != "t_s" or None in cols:
+        raise MagexpError(f"{path.name}: header {excerpt(','.join(header))} is not allowed: it must start with t_s and "
+                          f"name {prefix}x_<unit>, {prefix}y_<unit>, {prefix}z_<unit>")
+    units = {c.split("_", 1)[1] for c in cols}
+    if len(units) != 1 or next(iter(units)) not in suffixes:
+        raise MagexpError(f"{path.name}: unit suffix {'/'.join(sorted(units))!r} is not allowed: choose one of "
+                          f"{', '.join(suffixes)}")
+    table = _numeric_table(lines[1:], path.name, 2, len(header))
+    t = table[:, 0]
+    if np.any(np.diff(t) <= 0):
+        k = int(np.argmax(np.diff(t) <= 0)) + 3
+        raise MagexpError(f"{path.name} line {k}: t_s={t[k - 2]:g} is not allowed: times must increase")
+    return t, table[:, [header.index(c) for c in cols]], suffixes[next(iter(units))]
+
+
+def _rates(values: np.ndarray, unit: str) -> np.ndarray:
+    return np.deg2rad(values) if unit == "deg/s" else values
+
+
+def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """``<stem>_mag.csv`` + ``<stem>_imu.csv``: readings at the magnetometer's times, the gyroscope
+    stream at its own (integrated at the readings' times by :meth:`Recording.attitude`)."""
+    from magexp.core.geometry import axis_map
+
+    stem = str(path)
+    for tail in ("_mag.csv", "_imu.csv"):
+        stem = stem[: -len(tail)] if stem.endswith(tail) else stem
+    mag_path, imu_path = Path(stem + "_mag.csv"), Path(stem + "_imu.csv")
+    for p in (mag_path, imu_path):
+        if not p.is_file():
+            raise MagexpError(f"recording {str(p)!r} does not exist: a two-stream recording needs both "
+                              f"{mag_path.name} and {imu_path.name}")
+    t_mag, mag, mag_unit = _stream(mag_path, "m", _UNIT_SUFFIX)
+    t_imu, gyro, rate_unit = _stream(imu_path, "g", _RATE_SUFFIX)
+    _same_unit(unit, mag_unit, mag_path.name)
+    rates = _rates(gyro, rate_unit) @ axis_map(gyro_axes, "data.gyro_axes").T
+    return Recording(readings=mag @ axis_map(mag_axes, "data.mag_axes").T, angles=None, field=None,
+                     unit=mag_unit, meta={"format": "two-stream", "gyro_axes": str(gyro_axes)},
+                     times=t_mag, gyro_stream=(t_imu, rates), path=mag_path)
+
+
+_NAMED = re.compile(r"^\s*(\w+)\s+([xyz])\s*\((.+)\)\s*$", re.IGNORECASE)
+
+
+def read_named_columns(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """One CSV with ``Time (s)``, ``Gyroscope X (deg/s)``, ``Magnetometer X (uT)``, ... columns.
+
+    The magnetometer's value repeats while it has not updated: only the rows where any axis
+    changes are readings (at their row times); the gyroscope stream keeps every row.
+    """
+    from magexp.core.geometry import axis_map
+
+    lines = _read_lines(path)
+    header = [h.strip() for h in lines[0].split(",")]
+    check_unique([h.lower() for h in header], path.name)
+    groups: dict[str, dict[str, tuple[int, str]]] = {}
+    for j, h in enumerate(header):
+        m = _NAMED.match(h)
+        if m:
+            groups.setdefault(m.group(1).lower(), {})[m.group(2).lower()] = (j, m.group(3).strip())
+    time_col = next((j for j, h in enumerate(header) if h.lower().startswith("time")), None)
+    mag = groups.get("magnetometer", {})
+    if time_col is None or sorted(mag) != ["x", "y", "z"]:
+        raise MagexpError(f"{path.name}: columns must include 'Time (s)' and 'Magnetometer X/Y/Z (<unit>)'")
+    table = _numeric_table(lines[1:], path.name, 2, len(header))
+    mag_unit = check_unit({mag[a][1] for a in "xyz"}.pop(), f"{path.name}: magnetometer unit")
+    _same_unit(unit, mag_unit, path.name)
+    values = table[:, [mag[a][0] for a in "xyz"]]
+    fresh = np.concatenate([[True], np.any(np.diff(values, axis=0) != 0, axis=1)])
+    rec = Recording(readings=values[fresh] @ axis_map(mag_axes, "data.mag_axes").T, angles=None, field=None,
+                    unit=mag_unit, meta={"format": "named-columns", "rows": str(len(table))},
+                    times=table[fresh, time_col], path=path,
+                    columns={h: table[fresh, j] for j, h in enumerate(header)})
+    gyro = groups.get("gyroscope", {})
+    if sorted(gyro) == ["x", "y", "z"]:
+        rate_unit = {gyro[a][1] for a in "xyz"}.pop()
+        if rate_unit not in GYRO_UNITS:
+            raise MagexpError(f"{path.name}: gyroscope unit {rate_unit!r} is not allowed: choose one of "
+                              f"{', '.join(GYRO_UNITS)}")
+        rates = _rates(table[:, [gyro[a][0] for a in "xyz"]], rate_unit)
+        rec.gyro_stream = (table[:, time_col], rates @ axis_map(gyro_axes, "data.gyro_axes").T)
+    return rec
+
+
+def read_header_counts(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """``Fs,<Hz>``, ``Initialization time,<s>`` (kept as metadata; every reading is kept),
+    ``mx,my,mz``, then raw counts."""
+    from magexp.core.geometry import axis_map
+
+    lines = _read_lines(path)
+    meta = {"format": "header-counts"}
+    k = 0
+    while k < len(lines) and not lines[k].strip().lower().startswith("mx"):
+        key, _, value = lines[k].partition(",")
+        meta[key.strip().lower()] = value.strip()
+        k += 1
+    if k == len(lines):
+        raise MagexpError(f"{path.name}: no 'mx,my,mz' header line after the metadata lines")
+    header = [h.strip().lower() for h in lines[k].split(",")]
+    check_unique(header, path.name)
+    rate = _number(meta.get("fs", "nan"), path.name, "Fs")
+    if rate <= 0:
+        raise MagexpError(f"{path.name}: Fs={meta['fs']!r} is not allowed: it must be > 0")
+    table = _numeric_table(lines[k + 1:], path.name, k + 2, len(header))
+    file_unit = check_unit(unit, "data.unit") if unit is not None else "counts"
+    return Recording(readings=table[:, [header.index(c) for c in ("mx", "my", "mz")]] @ axis_map(mag_axes).T,
+                     angles=None, field=None, unit=file_unit, meta=meta, sample_time=None,
+                     times=np.arange(len(table)) / rate, path=path)
+
+
+def read_versioned(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """The ``magexp-recording v1`` CSV (module docstring)."""
+    return _versioned(_read_lines(path), path.name, unit)
+
+
+def read_plain(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """Headerless ``x y z`` numbers; the unit must be given."""
+    from magexp.core.geometry import axis_map
+
+    if unit is None:
+        raise MagexpError(f"data.unit=None is not allowed for {path.name}: a file without header does not name "
+                          f"its unit, give data.unit=<{'|'.join(UNITS)}>")
+    table = _plain_values(path)
+    if table is None:  # the slow reader, line by line: it names the first bad line
+        table = _plain_table(_read_lines(path), path.name)
+    return Recording(readings=table @ axis_map(mag_axes).T,
+                     angles=None, field=None, unit=check_unit(unit, "data.unit"), meta={"format": "plain 3 columns"})
+
+
+def _same_unit(unit, file_unit: str, name: str) -> None:
+    if unit is not None and check_unit(unit, "data.unit") != file_unit:
+        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file's columns say {file_unit} "
+                          "(leave data.unit unset)")
+
+
+#: The readers, keyed by format (``data.format``).
+READERS = {
+    "magexp-v1": read_versioned,
+    "plain": read_plain,
+    "two-stream": read_two_stream,
+    "named-columns": read_named_columns,
+    "header-counts": read_header_counts,
+}
+
+
+def detect(path: Path) -> str:
+    """The format key of ``path`` (see the module docstring)."""
+    if str(path).endswith(("_mag.csv", "_imu.csv")) or (not path.is_file() and Path(f"{path}_mag.csv").is_file()):
+        return "two-stream"
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        head = [fh.readline() for _ in range(3)]
+    first = head[0].strip()
+    if first == VERSION_LINE:
+        return "magexp-v1"
+    if first.lower().startswith("fs,"):
+        return "header-counts"
+    if _NAMED.match(first.split(",")[-1] if "," in first else ""):
+        return "named-columns"
+    return "plain" if _is_plain(head) else "magexp-v1"
+
+
+def load_recording(path: str | Path, *, unit: str | None = None, format: str = "auto",
+                   mag_axes: str | None = None, gyro_axes: str | None = None) -> Recording:
+    """Read a recording in any format of :data:`READERS` (see the module docstring).
+
+    Parameters
+    ----------
+    path : the file (for ``two-stream``, either file or their common stem); a relative path not
+        found from the working folder is looked up in ``data/``.
+    unit : unit of a plain file's readings (required for one); for a file that names its unit it
+        may be left None and must otherwise agree with it.
+    format : a key of :data:`READERS`, or ``auto`` (:func:`detect`).
+    mag_axes, gyro_axes : signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`);
+        None keeps the format's default.
+
+    Raises
+    ------
+    MagexpError
+        One line for a missing file, an unknown format, a wrong version line, a missing or
+        duplicated column, a row of the wrong length, a value that is not a number, NaN or
+        infinite, an unknown unit, or a bad metadata value (e.g. ``reference_total <= 0``).
+    """
+    file = resolve(path)
+    if file.is_dir():
+        raise MagexpError(f"recording {str(path)!r} is a directory: give a file")
+    if not file.is_file() and not Path(f"{file}_mag.csv").is_file():
+        raise MagexpError(f"recording {str(path)!r} does not exist (looked in the working folder and {DATA})")
+    key = detect(file) if format in (None, "auto") else format
+    if key not in READERS:
+        raise MagexpError(f"data.format={format!r} is not allowed: choose one of auto, {', '.join(READERS)}")
+    options = {"unit": unit}
+    if mag_axes is not None:
+        options["mag_axes"] = mag_axes
+    if gyro_axes is not None:
+        options["gyro_axes"] = gyro_axes
+    rec = READERS[key](file, **options)
+    rec.meta.setdefault("format", key)
+    rec.path = rec.path or file
+    return rec

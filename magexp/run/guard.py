@@ -1,0 +1,312 @@
+"""Guards of every entry point: where a command may write, and which values it refuses before it starts.
+
+* :func:`check_destination`: an output folder a command may write into. Never an empty path
+  (it would mean the working folder), never a filesystem root, and never inside ``results/``
+  (:data:`magexp.paths.RESULTS`, compared as resolved paths, so ``results/x``, ``./results``
+  and a symbolic link into it are all inside) unless the command is a canonical reproduction
+  writing ``results/`` itself;
+* :func:`check_subdir`, :func:`check_job_folders`: each sweep job's folder is its own, inside the sweep's folder;
+* :func:`removed_on_failure`: what a command created is removed again when it fails
+  (a refused or interrupted command leaves nothing behind);
+* :func:`check_override_values`: command-line values are values (no ``${...}`` interpolation,
+  which would read other keys, the environment or files), and a value Hydra's lexer cannot read
+  (``data.unit=µT``) is quoted for it;
+* :func:`check_run_values`: the values of a run config that no constructor checks
+  (every number finite and of magnitude <= :data:`magexp.errors.LARGEST`, the geomagnetic field's
+  ranges, ``write_history`` a boolean);
+* :func:`readings_array`: an API caller's readings as an ``(N, 3)`` float array, refusing
+  complex and masked input and anything that is not numbers;
+* :class:`OneLineParser`: ``argparse`` whose errors are one line and exit 2 (not its usage).
+
+Every refusal is a :class:`~magexp.errors.MagexpError` of one line that names the value and what
+is allowed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import re
+import shutil
+import sys
+from pathlib import Path, PurePosixPath
+
+from magexp.errors import LARGEST, MagexpError, check_magnitude
+
+#: The geomagnetic field's ranges (degrees): inclination from the horizontal, declination from north.
+INCLINATION = (-90.0, 90.0)
+DECLINATION = (-180.0, 360.0)
+#: Dask scheduler addresses that name a cluster system instead of a host (:data:`magexp.run.executor.JOBQUEUES`).
+CLUSTER_SYSTEMS = ("slurm", "pbs", "sge")
+_ADDRESS = re.compile(r"(?:(?:tcp|tls|ucx|ws|wss)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):([0-9]{1,5})/?")
+
+
+# ---------------------------------------------------------------------------------------------
+# where a command may write
+
+def _results() -> Path:
+    from magexp import paths
+
+    return paths.RESULTS.resolve()
+
+
+def check_destination(folder, what: str, *, canonical: bool = False) -> Path:
+    """The resolved output folder ``folder``, or one line saying why a command may not write there.
+
+    Parameters
+    ----------
+    folder : the folder as the user gave it (a string or a path).
+    what : the option or key that named it (``--out``, ``hydra.run.dir``...), for the message.
+    canonical : the command is a canonical reproduction: it may write ``results/`` itself (but
+        no folder inside it: the canonical layout is ``results/<paper>/``, made by the command).
+    """
+    text = "" if folder is None else str(folder)
+    if not text.strip():
+        raise MagexpError(f"{what}={text!r} is not allowed: name a folder (an empty path would write into the "
+                          "working folder)")
+    path = Path(text).expanduser().resolve()
+    if path == Path(path.anchor):
+        raise MagexpError(f"{what}={text!r} is not allowed: it is the root folder {path.anchor!r}; name a folder "
+                          "of its own")
+    results = _results()
+    if path == results and canonical:
+        return path
+    if path == results or results in path.parents:
+        raise MagexpError(f"{what}={text!r} is not allowed: it is inside results/ ({results}), which only a "
+                          "canonical reproduction writes; name a folder outside it")
+    return path
+
+
+def check_subdir(subdir: str, what: str = "hydra.sweep.subdir") -> None:
+    """A sweep job's folder name: relative, not empty, and with no ``..``, so that every job's
+    folder is a folder of its own inside the sweep's folder."""
+    text = str(subdir)
+    parts = PurePosixPath(text.replace("\\", "/")).parts
+    if not text.strip() or text.startswith(("/", "~")) or ".." in parts or all(p == "." for p in parts):
+        raise MagexpError(f"{what}={text!r} is not allowed: it must be a relative folder name without '..' "
+                          "(each job's folder inside the sweep's folder), e.g. ${{hydra.job.num}}")
+
+
+def check_job_folders(folders: list[Path], sweep_dir: Path) -> None:
+    """Each job's folder (``hydra.sweep.subdir`` resolved for it, whose overrides may hold a ``/``)
+    strictly inside the sweep's folder, and no two jobs sharing one (the second would overwrite
+    the first's files)."""
+    outer = Path(sweep_dir).resolve()
+    seen: dict = {}
+    for n, folder in enumerate(folders):
+        inner = Path(folder).resolve()
+        if outer not in inner.parents:
+            raise MagexpError(f"hydra.sweep.subdir={str(folder.relative_to(sweep_dir))!r} is not allowed: job {n}'s "
+                              f"folder must be inside the sweep's folder {str(outer)!r}")
+        if inner in seen:
+            raise MagexpError(f"hydra.sweep.subdir={str(folder.relative_to(sweep_dir))!r} is not allowed: jobs "
+                              f"{seen[inner]} and {n} would share a folder; include ${{hydra.job.num}}")
+        seen[inner] = n
+
+
+@contextlib.contextmanager
+def removed_on_failure(folder: Path, created: Path | None = None):
+    """Undo what the block creates in ``folder`` if it fails (an exception, a non-zero exit, Ctrl-C).
+
+    A folder that did not exist (or ``created``, the highest folder the caller made for it) is
+    removed with every parent made for it; in a folder that existed, only the entries the block
+    added are removed (what the user had is kept).
+    """
+    from magexp.run.preflight import first_missing
+
+    folder = Path(folder).absolute()
+    top = created if created is not None else first_missing(folder)
+    before = set() if top is not None or not folder.is_dir() else {p.name for p in folder.iterdir()}
+    try:
+        yield
+    except SystemExit as exc:
+        if exc.code not in (0, None):
+            _undo(folder, top, before)
+        raise
+    except BaseException:
+        _undo(folder, top, before)
+        raise
+
+
+def _undo(folder: Path, top: Path | None, before: set) -> None:
+    """Remove ``top`` (a folder made for the failed command), else the entries of ``folder`` not in ``before``."""
+    if top is not None:
+        shutil.rmtree(top, ignore_errors=True)
+    elif folder.is_dir():
+        for entry in folder.iterdir():
+            if entry.name not in before:
+                if entry.is_dir() and not entry.is_symlink():
+                    shutil.rmtree(entry, ignore_errors=True)
+                else:
+                    entry.unlink(missing_ok=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# command-line values
+
+def check_override_values(overrides: list[str]) -> list[str]:
+    """The ``KEY=VALUE`` overrides, checked and ready for Hydra's parser.
+
+    A key is set, never added (``+key=``) or deleted (``~key``): the objects a config builds take
+    the keys it has. A value holding ``${`` is refused (an interpolation reads other keys, the environment or
+    files: a command-line value must be the value itself); ``hydra.*`` settings keep theirs
+    (``hydra.sweep.subdir=${hydra.job.num}``). A plain value with characters outside ASCII
+    (``data.unit=µT``), which Hydra's lexer cannot read, is quoted for it.
+    """
+    out = []
+    for ov in overrides:
+        key, sep, value = ov.partition("=")
+        if key.startswith(("+", "~")) and not key.lstrip("+~").startswith("hydra"):
+            raise MagexpError(f"{ov} is not allowed: an override sets a key the config has (magexp --cfg job lists "
+                              f"them); adding (+) or deleting (~) a key would be ignored or break the run")
+        if sep and "${" in value and not key.lstrip("+~").startswith("hydra"):
+            raise MagexpError(f"{ov} is not allowed: interpolations (${{...}}) are not read from the command line; "
+                              f"give the value itself, e.g. {key}=2")
+        if sep and not value.isascii() and not any(c in value for c in "'\"[]{}(),\\ "):
+            ov = f"{key}='{value}'"
+        out.append(ov)
+    return out
+
+
+#: what ``--cfg`` may show (Hydra's choices)
+CFG_CHOICES = ("job", "hydra", "all")
+
+
+def check_flags(flags: dict) -> None:
+    """The options of ``magexp`` that Hydra would read, checked before Hydra sees them (whose own
+    errors are its usage text, or exit 1): ``--cfg job|hydra|all``, ``--config-name`` naming a
+    primary config of ``conf/``, ``--config-dir`` / ``--config-path`` an existing folder."""
+    from magexp.paths import CONF
+
+    for flag in ("--cfg", "-c"):
+        if flag in flags and flags[flag] not in CFG_CHOICES:
+            raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: choose one of {', '.join(CFG_CHOICES)}")
+    names = sorted(p.stem for p in CONF.glob("*.yaml"))
+    for flag in ("--config-name", "-cn"):
+        if flag in flags and flags[flag] not in names:
+            raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: choose one of {', '.join(names)}")
+    for flag in ("--config-dir", "-cd", "--config-path", "-cp"):
+        if flag in flags and not Path(flags[flag]).expanduser().is_dir():
+            raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: it is not a folder; name a folder of configs")
+
+
+def check_jobs(overrides: list[str], jobs: list) -> None:
+    """A sweep with no job (``estimator=glob(zzz*)``, ``seed=range(0,0)``) is refused, naming the
+    override that selects nothing (and, for a config group, the options there are)."""
+    if jobs:
+        return
+    from magexp.run.preflight import expand_sweep
+    from magexp.run.compose import GROUPS, options
+
+    empty = next((ov for ov in overrides if not expand_sweep([ov])), " ".join(overrides))
+    key = empty.partition("=")[0]
+    hint = f" (options: {', '.join(options(key))})" if key in GROUPS else ""
+    raise MagexpError(f"{empty} is not allowed: it selects no value, so the sweep has no job{hint}")
+
+
+def _numbers(node, where: str):
+    """``(dotted key, number)`` of every number in a plain config container."""
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _numbers(v, f"{where}.{k}" if where else str(k))
+    elif isinstance(node, (list, tuple)):
+        for i, v in enumerate(node):
+            yield from _numbers(v, f"{where}[{i}]")
+    elif isinstance(node, (int, float)) and not isinstance(node, bool):
+        yield where, node
+
+
+def check_run_values(plain: dict) -> None:
+    """Values of a resolved run config that no constructor checks, refused in one line.
+
+    * every number of ``scenario`` and ``estimator`` finite, of magnitude <= :data:`LARGEST`
+      (``hard_iron=[1e308,0,0]`` would overflow the simulation into a singular matrix);
+    * ``scenario.field``: ``total`` > 0, ``inclination`` in :data:`INCLINATION`,
+      ``declination`` in :data:`DECLINATION` (degrees);
+    * ``write_history``: true or false.
+    """
+    for group in ("scenario", "estimator"):
+        for key, value in _numbers(plain.get(group) or {}, group):
+            if isinstance(value, float) and not math.isfinite(value):
+                raise MagexpError(f"{key}={value!r} is not allowed: it must be a finite number")
+            check_magnitude(value, key)
+    field = (plain.get("scenario") or {}).get("field")
+    if isinstance(field, dict):
+        total = field.get("total")
+        if isinstance(total, (int, float)) and not total > 0:
+            raise MagexpError(f"scenario.field.total={total!r} is not allowed: the field's total intensity must be "
+                              "a number > 0 (nT)")
+        for name, (lo, hi) in (("inclination", INCLINATION), ("declination", DECLINATION)):
+            value = field.get(name)
+            if isinstance(value, (int, float)) and not lo <= value <= hi:
+                raise MagexpError(f"scenario.field.{name}={value!r} is not allowed: it must be in [{lo:g}, {hi:g}] "
+                                  "degrees")
+    history = plain.get("write_history", True)
+    if not isinstance(history, bool):
+        raise MagexpError(f"write_history={history!r} is not allowed: choose true or false")
+
+
+def check_scheduler_address(scheduler) -> None:
+    """A Dask scheduler: None (a local cluster), a cluster system (slurm, pbs, sge) or an address
+    with a port (``tcp://host:8786``, ``host:8786``)."""
+    if scheduler is None or scheduler in CLUSTER_SYSTEMS:
+        return
+    match = _ADDRESS.fullmatch(str(scheduler))
+    if not match or not 0 < int(match.group(2)) < 65536:
+        raise MagexpError(f"--scheduler {scheduler!r} is not allowed: give tcp://HOST:PORT (e.g. tcp://node1:8786), "
+                          f"or one of {', '.join(CLUSTER_SYSTEMS)}")
+
+
+def check_folds(folds) -> int:
+    """The held-out check's folds: an integer >= 0 (0 or 1: no held-out check)."""
+    from magexp.errors import check_positive_int
+
+    if isinstance(folds, str):
+        raise MagexpError(f"folds={folds!r} is not allowed: it must be an integer >= 0 (0: no held-out check)")
+    return check_positive_int(folds, "folds", minimum=0)
+
+
+# ---------------------------------------------------------------------------------------------
+# readings given to the Python API
+
+def readings_array(readings):
+    """``readings`` as a float array, or one line: complex numbers and masked arrays are refused
+    (their imaginary part and their mask would be dropped silently), as is anything that is not
+    numbers."""
+    import numpy as np
+
+    if np.ma.isMaskedArray(readings):
+        raise MagexpError("masked readings are not allowed: a masked array's hidden values would be used; give "
+                          "only the valid readings (readings[~readings.mask.any(axis=1)].data)")
+    if readings is None or isinstance(readings, (bytes, dict, set)):
+        raise MagexpError(f"readings of type {type(readings).__name__} are not allowed: give an (N, 3) array, "
+                          "a DataFrame or a recording's path")
+    try:
+        raw = np.asarray(readings)
+    except (TypeError, ValueError) as exc:
+        raise MagexpError(f"readings are not allowed: they are not an array of numbers ({str(exc)[:80]})") from None
+    if np.iscomplexobj(raw):
+        raise MagexpError("complex readings are not allowed: a magnetometer reading is real; give the real (N, 3) "
+                          "array")
+    if raw.dtype.kind not in "biuf":
+        try:
+            raw = raw.astype(float)
+        except (TypeError, ValueError):
+            raise MagexpError(f"readings of type {raw.dtype} are not allowed: every value must be a number") from None
+        if np.iscomplexobj(raw):
+            raise MagexpError("complex readings are not allowed: a magnetometer reading is real")
+    values = raw.astype(float)
+    if values.size and not np.all(np.abs(values[np.isfinite(values)]) <= LARGEST):
+        raise MagexpError(f"readings larger than {LARGEST:g} in magnitude are not allowed")
+    return values
+
+
+# ---------------------------------------------------------------------------------------------
+
+class OneLineParser(argparse.ArgumentParser):
+    """``argparse`` whose every error is one line on stderr and exit 2 (``--help`` still prints the usage)."""
+
+    def error(self, message: str):
+        print(f"error: {message.splitlines()[0]} (see {self.prog} --help)", file=sys.stderr)
+        sys.exit(2)

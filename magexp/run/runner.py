@@ -1,0 +1,161 @@
+"""Run one configuration: scenario x estimator x seed -> metrics and history."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import OrderedDict
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from magexp.core.datafiles import data_files
+from magexp.errors import MagexpError
+from magexp.estimators.base import check_applies
+from magexp.core.metrics import evaluate, problem_bound
+from magexp.problems import make_problem, problem_class
+from magexp.core.seeding import run_sequences, scenario_stream
+
+
+@dataclass
+class RunOutput:
+    """What one run produced: flat metrics, the convergence history and the estimate."""
+
+    metrics: dict
+    history: np.ndarray
+    history_nfev: np.ndarray
+    x: np.ndarray
+    parameter_names: list[str] = field(default_factory=list)
+    trace: dict = field(default_factory=dict)
+    readings: np.ndarray | None = None
+    calibrated: np.ndarray | None = None
+    reference_norm: np.ndarray | None = None
+    truth_x: np.ndarray | None = None  # the true parameter vector (simulations)
+    fit_cpu: float = 0.0  # CPU seconds of this process inside ``estimator.fit`` (not a metric: it varies)
+
+
+def build(node, what: str):
+    """Instantiate a ``_target_`` node with plain-Python arguments, one-line errors."""
+    try:
+        return instantiate(node, _convert_="all")
+    except MagexpError:
+        raise
+    except Exception as exc:  # hydra wraps constructor errors
+        cause = exc
+        while cause.__cause__ is not None:
+            cause = cause.__cause__
+        if isinstance(cause, MagexpError):
+            raise cause from None
+        raise MagexpError(f"{what} could not be built: {str(cause).splitlines()[0]}") from None
+
+
+def run(cfg: DictConfig) -> RunOutput:
+    """Simulate (or load) the scenario, fit the estimator, evaluate the result."""
+    return next(run_batch([cfg]))
+
+
+def _plain(node):
+    return OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node
+
+
+def _text(node) -> str:
+    return json.dumps(_plain(node), sort_keys=True, default=str)
+
+
+#: scenario and estimator objects built in this process, by config node and the data files it names
+#: (objects are stateless between fits: a worker builds each once for all its tasks)
+_BUILT: OrderedDict = OrderedDict()
+
+
+def _build_key(plain: dict, what: str) -> tuple:
+    """What a built object depends on: its kind, its node's content and its data files' content."""
+    return what.split()[0], _text(plain), tuple(sorted(data_files(plain).values()))
+
+
+def build_once(node, what: str, keep: int = 256, key: tuple | None = None):
+    """:func:`build`, memoised in this process by the node's content and its data files' content
+    (``key``: its :func:`_build_key`, when the caller has it)."""
+    key = _build_key(_plain(node), what) if key is None else key
+    if key in _BUILT:
+        _BUILT.move_to_end(key)
+    else:
+        _BUILT[key] = build(node, what)
+        if len(_BUILT) > keep:
+            _BUILT.popitem(last=False)
+    return _BUILT[key]
+
+
+class _Shared:
+    """What the runs of one batch share, each built once: scenario and estimator objects
+    (:func:`build_once`, the key of a config node worked out once per node in the batch), and per
+    (scenario, objective, seed) the dataset, the problem, its Cramér-Rao bound and the seed
+    sequences (the data depend on the seed only, so every estimator of a seed sees the same
+    readings, and each estimator gets a fresh generator of the same estimator stream)."""
+
+    def __init__(self, keep: int = 64):
+        self.problems, self.keep = OrderedDict(), keep
+        self._nodes: dict = {}  # id(node) -> (node, key): the node is held, so its id is not reused
+        self._keys: dict = {}  # (kind, node text) -> key, for nodes equal but not the same object
+
+    def key(self, node, what: str) -> tuple:
+        """:func:`_build_key` of ``node``, worked out once per node object and once per content."""
+        entry = self._nodes.get(id(node))
+        if entry is None or entry[0] is not node:
+            plain = _plain(node)
+            text = (what.split()[0], _text(plain))
+            if text not in self._keys:
+                self._keys[text] = _build_key(plain, what)
+            entry = self._nodes[id(node)] = (node, self._keys[text])
+        return entry[1]
+
+    def build(self, node, what: str):
+        return build_once(node, what, key=self.key(node, what))
+
+    def problem(self, cfg, scenario, seed: int):
+        """``(objective, dataset, problem, bound, estimator sequence)`` of the run's scenario and seed;
+        ``bound`` is a list that holds the problem's :func:`problem_bound` once it is computed."""
+        objective = cfg.get("objective") or scenario.objective
+        key = (self.key(cfg["scenario"], "scenario")[1], objective, seed)
+        if key not in self.problems:
+            data_seq, est_seq = run_sequences(seed, stream=scenario_stream(cfg["scenario"]))
+            dataset = scenario.generate(rng=np.random.default_rng(data_seq))
+            problem = make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
+            self.problems[key] = (objective, dataset, problem, [], est_seq)
+            if len(self.problems) > self.keep:  # bounded memory on long batches
+                self.problems.popitem(last=False)
+        return self.problems[key]
+
+
+def run_batch(configs) -> Iterator[RunOutput]:
+    """Run resolved configs (dicts or DictConfigs) one after the other, yielding each output.
+
+    Equal to ``run`` on each config, but what the runs share is built once (:class:`_Shared`):
+    a batch of one scenario's seeds over several estimators builds the scenario once, each seed's
+    dataset and problem once, and computes each seed's Cramér-Rao bound once.
+    """
+    shared = _Shared()
+    for cfg in configs:
+        seed = cfg["seed"]
+        scenario = shared.build(cfg["scenario"], f"scenario {cfg['scenario'].get('name')!r}")
+        estimator = shared.build(cfg["estimator"], f"estimator {cfg['estimator'].get('name')!r}")
+        objective = cfg.get("objective") or scenario.objective
+        check_applies(estimator, problem_class(objective), f"scenario {scenario.name!r}")  # before any data
+        objective, dataset, problem, bound, est_seq = shared.problem(cfg, scenario, seed)
+        est_rng = np.random.default_rng(est_seq)
+        start, cpu = time.perf_counter(), time.process_time()
+        result = estimator.fit(problem, rng=est_rng)
+        wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+        if cfg.get("analysis"):  # an analysis step on the fitted result (conf/analysis/*.yaml)
+            result = shared.build(cfg["analysis"], f"analysis {cfg['analysis'].get('name')!r}")(problem, result)
+        if not bound:
+            bound.append(problem_bound(problem))
+        metrics = {"scenario": scenario.name, "estimator": estimator.name, "objective": objective,
+                   "seed": int(seed), **evaluate(problem, result, bound[0]), "wall_time": wall}
+        yield RunOutput(metrics=metrics, history=np.asarray(result.history),
+                        history_nfev=np.asarray(result.history_nfev), x=np.asarray(result.x),
+                        parameter_names=problem.parameter_names(), trace=result.trace, readings=dataset.readings,
+                        calibrated=problem.calibrate(result.x), reference_norm=np.asarray(dataset.reference_norm),
+                        truth_x=problem.truth_theta(), fit_cpu=cpu)
