@@ -14,7 +14,7 @@ order as before. A test runs both paths from one seed and compares ``x`` and ``f
 
 :func:`run` goes further: a block of iterations in one call, each with the problem's compiled
 cost (:func:`magexp.problems._compiled.swarm_cost`). :func:`circle_sequence` compiles the
-Circle-map initialiser's own step functions (:mod:`magexp.estimators.initialisers`). numba's
+Circle-map initialiser's own step functions (:mod:`magexp.estimators.circle`). numba's
 on-disk cache keys a function by its own file and bytecode, not by the functions it calls (and
 inlines) from other modules: :func:`_keyed_on` adds those modules' sources to the key, so an edit
 there recompiles these two instead of loading stale machine code.
@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from magexp.estimators import initialisers
-from magexp.estimators.initialisers import printed_step, usual_step
+from magexp.estimators import circle
+from magexp.estimators.circle import printed_step, usual_step
 from magexp.problems import _compiled as costs
 from magexp.problems import kernels
 from magexp.problems._compiled import swarm_cost
@@ -180,4 +180,4 @@ def circle_sequence(z0, n, burn_in, printed):
 
 
 run = _keyed_on(run, costs, kernels)
-circle_sequence = _keyed_on(circle_sequence, initialisers)
+circle_sequence = _keyed_on(circle_sequence, circle)

@@ -9,7 +9,8 @@ from functools import cache
 
 import numpy as np
 
-from magexp.errors import MagexpError
+from magexp.estimators.circle import FORMS, circle_map
+from magexp.problems import kernels
 
 
 class Uniform:
@@ -17,35 +18,6 @@ class Uniform:
 
     def __call__(self, n: int, lower: np.ndarray, upper: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
         return lower + rng.random((n, lower.size)) * (upper - lower)
-
-
-def printed_step(z):
-    """Ding 2024 eq 15 as printed, on a float or an array (see :func:`circle_map`)."""
-    return np.mod(2.0 * z + 0.2 - 0.7 / (2 * np.pi) * np.cos(2 * np.pi * z + 0.5 * np.pi), 1.0)
-
-
-def usual_step(z):
-    """The standard Circle map, on a float or an array (see :func:`circle_map`)."""
-    return np.mod(z + 0.2 - 0.5 / (2 * np.pi) * np.sin(2 * np.pi * z), 1.0)
-
-
-FORMS = {"printed": printed_step, "usual": usual_step}
-
-
-def circle_map(z: np.ndarray, form: str = "printed") -> np.ndarray:
-    """One step of the Circle chaotic map, element-wise on ``z`` in [0, 1).
-
-    ``printed`` (Ding 2024, eq 15, as printed):
-
-    .. math:: z_{k+1} = \\mathrm{mod}\\big(2 z_k + 0.2 - \\tfrac{0.7}{2\\pi}\\cos(2\\pi z_k + 0.5\\pi),\\ 1\\big)
-
-    ``usual`` (the standard Circle map):
-
-    .. math:: z_{k+1} = \\mathrm{mod}\\big(z_k + 0.2 - \\tfrac{0.5}{2\\pi}\\sin(2\\pi z_k),\\ 1\\big)
-    """
-    if form not in FORMS:
-        raise MagexpError(f"circle map form={form!r} is not allowed: choose printed or usual")
-    return FORMS[form](z)
 
 
 def _numpy_sequence(z0: np.ndarray, n: int, burn_in: int, form: str) -> np.ndarray:
@@ -65,11 +37,10 @@ def _compiled_sequence():
     """The compiled sequence (:func:`magexp.estimators._compiled.circle_sequence`) if numba is on
     and it gives numpy's bits on a probe of both forms (``cos``, ``sin`` and ``mod`` come from
     libraries that could differ between numba and numpy on some machine), else None."""
-    from magexp.estimators.swarm import compiled
-
-    nb = compiled()
-    if nb is None:
+    if kernels.compiled() is None:  # numba off or absent
         return None
+    from magexp.estimators import _compiled as nb  # numba: imported on first use (magexp.problems.kernels)
+
     z0 = (np.arange(64) + 0.5) / 64
     same = all(np.array_equal(nb.circle_sequence(z0, 40, 3, form == "printed"), _numpy_sequence(z0, 40, 3, form))
                for form in FORMS)

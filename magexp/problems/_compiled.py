@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from magexp.problems.kernels import SCALAR
+from magexp.problems.base import SCALAR
 
 _jit = njit(cache=True, nogil=True, error_model="numpy")
 

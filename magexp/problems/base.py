@@ -21,6 +21,8 @@ import numpy as np
 
 from magexp.errors import MagexpError
 
+SCALAR, VECTOR = 0, 1  # the kinds of compiled swarm cost (:func:`magexp.problems._compiled.swarm_cost`)
+
 PARAMETERISATIONS = ("inverse", "forward")
 
 #: Every capability a problem may offer, with the words used in a refusal.

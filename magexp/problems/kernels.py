@@ -57,7 +57,6 @@ def compiled():
     return _compiled
 
 
-SCALAR, VECTOR = 0, 1  # the kinds of compiled swarm cost (:func:`magexp.problems._compiled.swarm_cost`)
 
 
 def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 
 from magexp.problems import kernels
-from magexp.problems.base import CalibrationProblem
+from magexp.problems.base import SCALAR, CalibrationProblem
 from magexp.problems.kernels import quadratic_features
 
 __all__ = ["ScalarCalibration", "normalise", "quadratic_features"]
@@ -59,7 +59,7 @@ class ScalarCalibration(CalibrationProblem):
         if self.parameterisation != "inverse" or kernels.compiled() is None:
             return None  # W = S^-1 is inverted by numpy in unpack
         c, s, u = self._normalised
-        return kernels.SCALAR, u, self._reference.reshape(-1, 1), np.append(c, s)
+        return SCALAR, u, self._reference.reshape(-1, 1), np.append(c, s)
 
     def swarm_kernel(self) -> tuple | None:
         """``(SCALAR, u, B_a (N, 1), [c, s])`` in the inverse parameterisation with numba, else None."""

@@ -18,7 +18,7 @@ from functools import cached_property
 import numpy as np
 
 from magexp.problems import kernels
-from magexp.problems.base import CalibrationProblem, inverse, reference_vectors
+from magexp.problems.base import VECTOR, CalibrationProblem, inverse, reference_vectors
 
 
 def state_to_theta(x: np.ndarray) -> np.ndarray:
@@ -105,7 +105,7 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
     def _swarm_kernel(self) -> tuple | None:
         if self.parameterisation != "inverse" or kernels.compiled() is None:
             return None  # W = S^-1 is inverted by numpy in unpack
-        return kernels.VECTOR, self._readings, np.ascontiguousarray(self.reference, float), np.zeros(4)
+        return VECTOR, self._readings, np.ascontiguousarray(self.reference, float), np.zeros(4)
 
     def swarm_kernel(self) -> tuple | None:
         """``(VECTOR, readings, v_i (N, 3), ·)`` in the inverse parameterisation with numba, else None."""
