@@ -29,13 +29,13 @@ $(STAMP): pyproject.toml requirements.lock
 venv: $(STAMP) ## create .venv and install magexp with its test extras
 
 reproduce: $(STAMP) ## regenerate every figure, table and the report into results/
-	$(PY) -m magexp.artifacts.reproduce all $(RUN_ON)
+	$(PY) -m magexp reproduce all $(RUN_ON)
 
 redraw: $(STAMP) ## rebuild every figure, results/summary.csv and REPORT.md from the CSVs (no run)
-	$(PY) -m magexp.artifacts.reproduce all --redraw
+	$(PY) -m magexp reproduce all --redraw
 
 reproduce-%: $(STAMP) ## regenerate one paper (a folder of experiments/: ding2024, yuan2018, yan2022, benchmark, real) and the report
-	$(PY) -m magexp.artifacts.reproduce $* $(RUN_ON)
+	$(PY) -m magexp reproduce $* $(RUN_ON)
 
 report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the artifact CSVs
 	$(PY) -m magexp.artifacts.report

@@ -1,4 +1,8 @@
-"""The one exception type a user should ever see, as one line."""
+"""The one exception type a user should ever see, as one line, and the one path (:func:`guarded`) that
+turns any error into that line and an exit code, for every command."""
+
+import os
+import sys
 
 #: the largest magnitude a reading, noise amplitude or search bound may have: squares and
 #: products of a few such numbers stay far from float64 overflow (1.8e308)
@@ -63,3 +67,51 @@ def excerpt(text) -> str:
     text = str(text).strip()
     shown = "".join(c if c.isprintable() else "?" for c in text[:EXCERPT])
     return repr(shown + ("..." if len(text) > EXCERPT else ""))
+
+
+# ---------------------------------------------------------------------------------------------
+# the one error path of every command
+
+EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 2, 3, 130
+INTERRUPTED = "interrupted (Ctrl-C); finished runs are cached, rerun the same command to resume"
+
+
+def fail(message: str, code: int = EXIT_BAD_INPUT) -> None:
+    """One line on stderr (``error: ...``), then exit with ``code``."""
+    print(f"error: {message}", file=sys.stderr)
+    sys.exit(code)
+
+
+def guarded(func, *args):
+    """Call ``func(*args)`` turning every error into one line on stderr and a non-zero exit.
+
+    The one error path of every command (``magexp``, ``magexp calibrate``, ``magexp reproduce``, a
+    sweep's launcher): :class:`MagexpError` and ``OSError`` (a file or folder the user named) exit
+    :data:`EXIT_BAD_INPUT`; Ctrl-C exits :data:`EXIT_INTERRUPTED` with one line; anything else is a
+    bug: one line and :data:`EXIT_BUG` (``MAGEXP_DEBUG=1`` shows the traceback).
+    """
+    try:
+        return func(*args)
+    except MagexpError as exc:
+        fail(str(exc).splitlines()[0] if str(exc) else "bad input")
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, EXIT_INTERRUPTED)
+    except OSError as exc:
+        fail(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": "))
+    except SystemExit:
+        raise
+    except Exception as exc:
+        if os.environ.get("MAGEXP_DEBUG"):
+            raise
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        fail(f"unexpected {type(exc).__name__}: {first} (rerun with MAGEXP_DEBUG=1 for details)", EXIT_BUG)
+
+
+def exit_code(func, *args) -> int:
+    """:func:`guarded` ``func(*args)``, returning its exit code (0 when it returns) instead of exiting: the
+    ``main(argv) -> int`` of a command that a caller (a test, a script) runs in its own process."""
+    try:
+        guarded(func, *args)
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    return 0

@@ -222,7 +222,7 @@ TABLE = [
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://127.0.0.1:1", "seed=1,2"], ["no Dask scheduler"],
         patch=[("magexp.run.sweep._quiet_dask", lambda: None), ("magexp.run.executor.DaskExecutor.__init__", no_scheduler)]),
     row("sweep", ["-m", "estimator=ellipsoid", "seed=1,2"], ["interrupted"], code=130,
-        patch=[("magexp.run.executor.run_many", interrupt)]),
+        patch=[("magexp.run.sweep.run_many", interrupt)]),
     row("sweep", ["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
     row("sweep", ["-m", "hydra.sweep.dir=", "seed=1,2"], ["hydra.sweep.dir=''", "name a folder"]),
     row("sweep", ["-m", "hydra.sweep.dir=/", "seed=1,2"], ["'/'", "root folder"]),
@@ -518,7 +518,7 @@ def test_missing_launcher_extra_names_the_pip_install(workdir, cli, monkeypatch)
 
 
 def test_ctrl_c_of_a_run_leaves_no_folder(workdir, cli, monkeypatch):
-    monkeypatch.setattr("magexp.run.runner.run", interrupt)
+    monkeypatch.setattr("magexp.run.executor.run_batch", interrupt)
     before = snapshot(workdir)
     for args in (["estimator=ellipsoid"], ["estimator=ellipsoid", "hydra.run.dir=mine/run"]):
         proc = cli(*args)
@@ -529,7 +529,7 @@ def test_ctrl_c_of_a_run_leaves_no_folder(workdir, cli, monkeypatch):
 def test_a_failed_sweep_keeps_what_its_existing_folder_held(workdir, cli, monkeypatch):
     (workdir / "mine").mkdir()
     (workdir / "mine" / "notes.txt").write_text("mine\n")
-    monkeypatch.setattr("magexp.run.executor.run_many", interrupt)
+    monkeypatch.setattr("magexp.run.sweep.run_many", interrupt)
     proc = cli("-m", "estimator=ellipsoid", "seed=1,2", "hydra.sweep.dir=mine")
     assert proc.returncode == 130
     assert sorted(p.name for p in (workdir / "mine").iterdir()) == ["notes.txt"]  # multirun.yaml removed, notes kept
@@ -539,7 +539,7 @@ def test_unexpected_error_is_still_one_line(workdir, cli, monkeypatch):
     def broken(cfg):
         raise RuntimeError("a bug\nsecond line")
 
-    monkeypatch.setattr("magexp.run.runner.run", broken)
+    monkeypatch.setattr("magexp.run.executor.run_batch", broken)
     proc = cli("estimator=ellipsoid")
     assert proc.returncode == 3 and proc.stderr.count("\n") == 1
     assert "RuntimeError: a bug" in proc.stderr and "MAGEXP_DEBUG" in proc.stderr

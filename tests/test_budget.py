@@ -18,12 +18,12 @@ CALIB = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
 
 @pytest.fixture
 def started(monkeypatch):
-    """Counts of what a command started: runs (``runner.run_batch``), fits of a calibration
+    """Counts of what a command started: runs (``executor.run_batch``), fits of a calibration
     (``calibration._fit``), reproduction plans (``artifacts.plan_artifact``), recordings read."""
     import magexp.artifacts.plan
     import magexp.calibration.fit
     import magexp.core.recordings
-    import magexp.run.runner
+    import magexp.run.executor
 
     counts = {"runs": 0, "fits": 0, "plans": 0, "reads": 0}
 
@@ -36,7 +36,7 @@ def started(monkeypatch):
 
         monkeypatch.setattr(module, name, wrapper)
 
-    counted(magexp.run.runner, "run_batch", "runs")
+    counted(magexp.run.executor, "run_batch", "runs")
     counted(magexp.calibration.fit, "_fit", "fits")
     counted(magexp.artifacts.plan, "plan_artifact", "plans")
     counted(magexp.core.recordings, "load_recording", "reads")
@@ -161,10 +161,10 @@ def test_the_estimate_follows_the_equations():
 
 
 def test_every_papers_reproduction_is_within_the_runs_limit():
-    from magexp.artifacts.reproduce import available_papers, select
+    from magexp.artifacts.reproduce import available_papers, check_reproduction, select
 
     selected = select(available_papers(), None)
-    runs = budget.check_reproduction(selected, None)
+    runs = check_reproduction(selected, None)
     assert 10000 < runs < budget.limit("runs") / 10  # make reproduce: about 14000 runs, far from the limit
 
 

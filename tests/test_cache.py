@@ -240,10 +240,9 @@ CONCURRENT = """
 import sys, time
 from pathlib import Path
 from magexp.run import executor
-from magexp.run import runner
 from magexp.artifacts.reproduce import main
 log, me, other = Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3])
-real_batch, real_many = runner.run_batch, executor.run_many
+real_batch, real_many = executor.run_batch, executor.run_many
 def run_batch(configs):
     for out in real_batch(configs):
         with log.open("a") as fh:
@@ -257,7 +256,7 @@ def run_many(*args, **kw):
             break
         time.sleep(0.05)
     return real_many(*args, **kw)
-runner.run_batch, executor.run_many = run_batch, run_many
+executor.run_batch, executor.run_many = run_batch, run_many
 sys.exit(main(sys.argv[4:]))
 """
 

@@ -106,30 +106,16 @@ def test_exit_codes_across_the_process_boundary(tmp_path):
     assert {p.name for p in tmp_path.iterdir()} == {"cache", "cache-configs", "r"}  # caches and the run only
 
 
-def test_calibrate_is_its_own_command(capsys, monkeypatch):
-    """``magexp calibrate ARGS`` is ``magexp.calibration.fit.main(ARGS)``, before any composing."""
-    import types
-
-    seen = []
-    fake = types.ModuleType("magexp.calibration.fit")
-    fake.main = lambda argv: seen.append(argv) or 0
-    monkeypatch.setitem(sys.modules, "magexp.calibration.fit", fake)
-    with pytest.raises(SystemExit) as info:
-        magexp_main(["calibrate", "data.path=x.csv", "estimator=lm"])
-    assert info.value.code == 0 and seen == [["data.path=x.csv", "estimator=lm"]]
-    fake.main = lambda argv: 2
-    with pytest.raises(SystemExit) as info:
-        magexp_main(["calibrate"])
-    assert info.value.code == 2
-
-
-def test_calibrate_without_its_module_is_one_line(capsys, monkeypatch):
-    monkeypatch.setitem(sys.modules, "magexp.calibration.fit", None)  # as if absent
-    with pytest.raises(SystemExit) as info:
-        magexp_main(["calibrate", "data.path=x.csv"])
-    err = capsys.readouterr().err
-    assert info.value.code == 2 and err.count("\n") == 1 and "magexp.calibration.fit" in err
-
+def test_each_subcommand_goes_through_the_one_error_path(cli, tmp_path):
+    """``magexp calibrate`` and ``magexp reproduce`` are subcommands of the one entry point: their bad
+    input is one line and exit 2, as a run's is; their ``--help`` exits 0."""
+    bad = cli("calibrate", f"data.path={tmp_path / 'missing.csv'}", cwd=tmp_path)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "missing.csv" in bad.stderr
+    bad = cli("reproduce", "nopaper", cwd=tmp_path)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "nopaper" in bad.stderr and "ding2024" in bad.stderr
+    ok = cli("reproduce", "--help", cwd=tmp_path)
+    assert ok.returncode == 0 and "--redraw" in ok.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):
     """Fast start: a one-run command loads only what the run needs (a fresh interpreter)."""

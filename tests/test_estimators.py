@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.run.preflight import options
+from magexp.run.compose import options
 from magexp.errors import MagexpError
 from magexp.estimators.base import Estimator, applies_to
 from magexp.estimators.result import FitResult

@@ -122,10 +122,10 @@ def _settings(config):
 
 def test_jobs_run_in_two_processes_at_once_when_asked(tmp_path, monkeypatch):
     """``hydra.launcher.jobs=2``: the runs execute in two worker processes, overlapping in time."""
-    import magexp.run.runner
+    import magexp.run.executor
     from magexp.run.sweep import launch
 
-    real, log = magexp.run.runner.run_batch, tmp_path / "tasks.log"
+    real, log = magexp.run.executor.run_batch, tmp_path / "tasks.log"
 
     def recorded(configs):  # inherited by the forked workers
         start = time.time()
@@ -135,7 +135,7 @@ def test_jobs_run_in_two_processes_at_once_when_asked(tmp_path, monkeypatch):
             fh.write(f"{os.getpid()} {start} {time.time()}\n")
         return iter(outs)
 
-    monkeypatch.setattr(magexp.run.runner, "run_batch", recorded)
+    monkeypatch.setattr(magexp.run.executor, "run_batch", recorded)
     config = _hydra_config(tmp_path / "sweep", "hydra.launcher.jobs=2")
     jobs = [["estimator=ellipsoid", f"seed={s}"] for s in range(6)]
     returns = launch(config, jobs, 0, _settings(config))
@@ -212,7 +212,7 @@ def test_job_yaml_is_omegaconfs_text(make_cfg):
     """A job's ``config.yaml`` and ``overrides.yaml`` are written without building a config; the same bytes."""
     from omegaconf import OmegaConf
 
-    from magexp.__main__ import to_yaml
+    from magexp.run.outputs import to_yaml
     from magexp.run.compose import resolved
 
     plain = resolved(make_cfg("scenario=yuan2018_mode1", "estimator=rdpso", "seed=4"))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.run.preflight import options
+from magexp.run.compose import options
 from magexp.errors import MagexpError
 from magexp.estimators.kalman import kalman_update, settled_since
 from magexp.problems import make_problem

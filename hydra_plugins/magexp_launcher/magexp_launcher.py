@@ -19,6 +19,8 @@ from collections.abc import Sequence
 
 from hydra.plugins.launcher import Launcher
 
+from magexp.errors import guarded
+
 
 class MagexpLauncher(Launcher):
     """Runs a batch of sweep jobs through :func:`magexp.run.sweep.launch`."""
@@ -32,7 +34,7 @@ class MagexpLauncher(Launcher):
         self.config = config
 
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int):
-        from magexp.__main__ import guarded
+        # imported on launch: Hydra imports every plugin whenever it composes a config
         from magexp.run.sweep import launch
 
         return guarded(launch, self.config, job_overrides, initial_job_idx,

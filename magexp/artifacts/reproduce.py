@@ -25,8 +25,10 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.plan import ArtifactRuns, collect, paper_specs, plan_artifact
-from magexp.errors import MagexpError
+from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact
+from magexp.artifacts.spec import papers
+from magexp.run.budget import LIMITS, estimate_run, refuse_over, show
+from magexp.errors import MagexpError, exit_code
 from magexp.run.guard import OneLineParser, check_destination, removed_on_failure
 from magexp.paths import RESULTS
 from magexp.artifacts.plots import kind_module
@@ -303,9 +305,50 @@ def record_timing(root: Path, target: str, seconds: float, counts: dict) -> None
     write_csv(pd.concat([rows, new], ignore_index=True) if len(rows) else new, path)
 
 
+# ---------------------------------------------------------------------------------------------
+# the work a reproduction asks for, against the limits of magexp.run.budget
+
+def check_reproduction(selected: Mapping, seeds: int | None) -> int:
+    """Refuse a reproduction of more runs than the runs limit (cells times seeds of each selected
+    artifact, counted before any is planned); returns that count."""
+    runs = sum(len(cells(spec)) * int(seeds if seeds is not None else spec.seeds)
+               for specs in selected.values() for spec in specs)
+    refuse_over(runs, "runs", f"--seeds {seeds}" if seeds is not None else "the reproduction", "it makes")
+    return runs
+
+
+def canonical_needs() -> dict:
+    """The estimates of every canonical reproduction's runs: ``runs``, the largest run's ``memory``
+    and ``run_work`` (each with its artifact), the ``work`` of all (keys of :data:`magexp.run.budget.LIMITS`)."""
+    out = {"runs": 0, "work": 0, "run_memory": (0, ""), "run_work": (0, "")}
+    for paper in papers():
+        for spec in paper_specs(paper):
+            for cfg in plan_artifact(spec).configs:
+                est = estimate_run(cfg)
+                out["runs"] += 1
+                out["work"] += est.work
+                out["run_memory"] = max(out["run_memory"], (est.memory, spec.name))
+                out["run_work"] = max(out["run_work"], (est.work, spec.name))
+    return out
+
+
+def print_limits() -> None:
+    """``magexp reproduce --limits``: the limits in force beside what ``make reproduce`` needs of each."""
+    need = canonical_needs()
+    for name, lim in LIMITS.items():
+        value = need.get(name, None)
+        if isinstance(value, tuple):
+            shown = f"{show(value[0], lim.unit)} ({value[1]})"
+        elif value is not None:
+            shown = show(value, lim.unit)
+        else:
+            shown = "none (no recording)"
+        print(f"{name}: {show(lim.value(), lim.unit)} in force ({lim.env}); make reproduce needs {shown}")
+
+
 def parser() -> argparse.ArgumentParser:
-    p = OneLineParser(prog="python -m magexp.artifacts.reproduce", description=__doc__.splitlines()[0])
-    p.add_argument("paper", help="all, or one of: " + ", ".join(available_papers()))
+    p = OneLineParser(prog="magexp reproduce", description=__doc__.splitlines()[0])
+    p.add_argument("paper", nargs="?", help="all, or one of: " + ", ".join(available_papers()))
     p.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
     p.add_argument("--seeds", type=int, default=None, help="seeds per cell (exploration: needs --out)")
     p.add_argument("--only", default=None, help="one artifact stem (found in whichever paper has it)")
@@ -316,23 +359,29 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--redraw", action="store_true", help="rebuild figures, summary and report from the CSVs; no run")
     p.add_argument("--executor", default="local", help="local (processes on this machine) or dask")
     p.add_argument("--scheduler", default=None, help="a Dask scheduler address (default: a local cluster)")
+    p.add_argument("--limits", action="store_true",
+                   help="print the work limits in force beside what the canonical reproduction needs; no run")
     return p
 
 
+def command(argv: list[str]) -> int:
+    """``magexp reproduce PAPER [OPTIONS]``: errors are raised (the one error path,
+    :func:`magexp.errors.guarded`, turns them into one line and an exit code)."""
+    return _main(parser().parse_args(argv))
+
+
 def main(argv=None) -> int:
-    args = parser().parse_args(argv)
-    try:
-        return _main(args)
-    except MagexpError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("error: interrupted (Ctrl-C); finished runs are cached, rerun the same command to resume",
-              file=sys.stderr)
-        return 130
+    """``magexp reproduce ...`` (also ``python -m magexp.artifacts.reproduce``, what ``make reproduce``
+    runs): 0 on success; one line on stderr and exit 2 on bad input, 130 on Ctrl-C."""
+    return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 
 def _main(args) -> int:
+    if args.limits:
+        print_limits()
+        return 0
+    if args.paper is None:
+        raise MagexpError("a paper is needed: magexp reproduce all, or one of " + ", ".join(available_papers()))
     from magexp.run.executor import check_executor
 
     papers = available_papers() if args.paper == "all" else [args.paper]
@@ -343,14 +392,12 @@ def _main(args) -> int:
     if args.seeds is not None and args.seeds < 1:
         raise MagexpError(f"--seeds {args.seeds} is not allowed: it must be an integer >= 1")
     args.out = check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
-    from magexp.run.preflight import check_output_folder
+    from magexp.run.guard import check_output_folder
 
     # a file, or under one: one line, nothing created (results/ itself: check_canonical decided)
     check_output_folder(args.out, "--out", canonical=True)
     selected = select(papers, args.only)
     if not args.redraw:
-        from magexp.run.budget import check_reproduction
-
         check_reproduction(selected, args.seeds)  # cells x seeds within the runs limit, before planning
     with removed_on_failure(args.out):  # a failed or interrupted reproduction leaves nothing behind
         return _write(args, selected)

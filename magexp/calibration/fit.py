@@ -50,7 +50,7 @@ import numpy as np
 from magexp.core import quality as q
 from magexp.run.budget import check_calibration, check_recording_file
 from magexp.core.dataset import Dataset
-from magexp.errors import LARGEST, MagexpError, check_positive_int
+from magexp.errors import LARGEST, MagexpError, check_positive_int, exit_code
 from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
 from magexp.estimators.result import FitResult
 from magexp.core.recordings import Recording
@@ -502,28 +502,16 @@ def print_table(rows: dict) -> None:
         print(f"{key:<{width}}  {value}")
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``magexp calibrate KEY=VALUE ...``: 0 on success; one line on stderr and 2 on bad input or
-    degenerate data (nothing written); 3 on an unexpected error (``MAGEXP_DEBUG=1``: traceback)."""
-    import os
+def command(argv: list[str]) -> None:
+    """``magexp calibrate KEY=VALUE ...``: compose, check, calibrate, write; errors are raised (the
+    one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code)."""
+    run(compose(argv))
 
-    argv = sys.argv[1:] if argv is None else list(argv)
-    try:
-        run(compose(argv))
-        return 0
-    except MagexpError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    except Exception as exc:  # a bug: still one line
-        if os.environ.get("MAGEXP_DEBUG"):
-            raise
-        first = str(exc).splitlines()[0] if str(exc) else ""
-        print(f"error: unexpected {type(exc).__name__}: {first} (rerun with MAGEXP_DEBUG=1 for details)",
-              file=sys.stderr)
-        return 3
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m magexp.calibration.fit KEY=VALUE ...`` (= ``magexp calibrate``): 0 on success; one
+    line on stderr and exit 2 on bad input or degenerate data (nothing written), 3 on a bug."""
+    return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 
 if __name__ == "__main__":

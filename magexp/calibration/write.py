@@ -113,7 +113,7 @@ def write(cal, out_dir: Path, *, seed: int) -> dict:
 
     Each file is written atomically (:mod:`magexp.core.atomic`): a command killed midway leaves no
     truncated file; the figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
-    from magexp.run.preflight import first_missing
+    from magexp.run.guard import first_missing
     from magexp.calibration.figure import calibration_figure
     from magexp.artifacts.plots.style import save
 

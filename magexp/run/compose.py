@@ -16,6 +16,9 @@ from __future__ import annotations
 
 import copy
 import functools
+import hashlib
+import importlib
+import importlib.util
 import json
 import re
 import sys
@@ -25,8 +28,10 @@ from typing import Any, List, Optional
 
 from omegaconf import MISSING, DictConfig, OmegaConf
 
+from magexp import paths
 from magexp.errors import MagexpError
 from magexp.paths import CONF
+from magexp.run import cache
 
 GROUPS = ("scenario", "estimator")
 PRIMARY = "config"
@@ -215,8 +220,6 @@ def options(group: str) -> list[str]:
 
 def target_class(group: str, name: str):
     """The class named by ``_target_`` in ``conf/<group>/<name>.yaml`` (imported, not built)."""
-    import importlib
-
     module, _, cls = str(OmegaConf.load(CONF / group / f"{name}.yaml")["_target_"]).rpartition(".")
     return getattr(importlib.import_module(module), cls)
 
@@ -330,9 +333,6 @@ def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
 def _compose_key(config_name: str, choices: dict[str, str]) -> str:
     """Key of a composed config on disk: the choices, and the size and time of every config file,
     of this module (the schemas) and of the Hydra and OmegaConf installed."""
-    import hashlib
-    import importlib.util
-
     h = hashlib.sha256(json.dumps([config_name, sorted(choices.items()), OmegaConf.__module__]).encode())
     files = sorted(CONF.rglob("*.yaml")) + [Path(__file__)]
     for name in ("hydra", "omegaconf"):
@@ -357,9 +357,6 @@ def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
     container and the schema of each node that has one (:data:`SCHEMAS`), checked when read (its
     key, kind and digest); it is kept only when it gives back the very config Hydra composed. An
     invalid entry is composed again (said once)."""
-    from magexp import paths
-    from magexp.run import cache
-
     root = paths.composed_configs()
     key = _compose_key(config_name, choices)
     path = root / f"{key}.json"
@@ -386,8 +383,6 @@ _PENDING: list = []  # (path, packed entry, cache folder) composed by Hydra, not
 def _keep_composed() -> None:
     """Keep the configs Hydra composed on disk (:func:`_stored_compose`), after the overrides of the
     command were applied without error: a refused command writes no composed config."""
-    from magexp.run import cache
-
     while _PENDING:
         path, data, root = _PENDING.pop()
         try:
@@ -405,17 +400,15 @@ def _schema_of(node) -> str | None:
 def _config_from(entry) -> DictConfig:
     """The config an entry of :func:`_stored_compose` holds: its container, each typed node merged
     onto its schema (so its keys and value types are checked as Hydra's are), in struct mode."""
-    from magexp.run.cache import InvalidEntry
-
     if not (isinstance(entry, dict) and isinstance(entry.get("config"), dict) and isinstance(entry.get("schemas"), dict)
             and all(name in entry["config"] and schema in SCHEMAS for name, schema in entry["schemas"].items())):
-        raise InvalidEntry("not a composed config")
+        raise cache.InvalidEntry("not a composed config")
     try:
         cfg = OmegaConf.create(entry["config"])
         for name, schema in entry["schemas"].items():
             cfg[name] = OmegaConf.merge(OmegaConf.structured(SCHEMAS[schema]), entry["config"][name])
     except Exception as exc:  # OmegaConf refuses what its schema does not allow
-        raise InvalidEntry(f"not a composed config: {type(exc).__name__}") from None
+        raise cache.InvalidEntry(f"not a composed config: {type(exc).__name__}") from None
     OmegaConf.set_struct(cfg, True)
     return cfg
 

@@ -39,18 +39,29 @@ The executor API, for callers other than :func:`run_many` (e.g. sweeps)::
 
 from __future__ import annotations
 
+import ctypes
+import importlib
 import json
 import math
+import multiprocessing
 import os
+import pkgutil
 import signal
+import sys
+import threading
 import time
 from collections import OrderedDict, defaultdict
 from collections.abc import Iterable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import as_completed as futures_as_completed
+
+import numpy as np
 
 from magexp.run import cache
 from magexp.run.budget import check_runs
 from magexp.errors import MagexpError
 from magexp.run.guard import check_scheduler_address
+from magexp.run.runner import run_batch
 
 EXECUTORS = ("local", "dask")
 
@@ -58,9 +69,6 @@ EXECUTORS = ("local", "dask")
 def preload() -> None:
     """Import what a run executes (runner, bounds, every scenario, problem and estimator module)
     in this process, so that forked workers start with it instead of importing it each."""
-    import importlib
-    import pkgutil
-
     for name in ("magexp.run.runner", "magexp.core.bounds"):
         importlib.import_module(name)
     for package in ("magexp.scenarios", "magexp.problems", "magexp.estimators"):
@@ -85,12 +93,7 @@ def watch_parent(parent: int, poll: float = PARENT_POLL) -> None:
     The kernel's "parent" is the *thread* that forked the worker: :class:`LocalExecutor` forks its
     workers at the first ``submit``, from the calling thread (the command's main thread).
     """
-    import sys
-    import threading
-
     if sys.platform.startswith("linux"):
-        import ctypes
-
         try:
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
         except (OSError, AttributeError):  # no prctl in this libc: the thread below is enough
@@ -155,9 +158,6 @@ class LocalExecutor(InlineExecutor):
     @property
     def pool(self):
         if self._pool is None:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-
             method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
             if method == "fork":
                 preload()
@@ -169,9 +169,7 @@ class LocalExecutor(InlineExecutor):
         return self.pool.submit(fn, *args)
 
     def as_completed(self, futures: Iterable) -> Iterator:
-        from concurrent.futures import as_completed
-
-        return as_completed(list(futures))
+        return futures_as_completed(list(futures))
 
     def close(self) -> None:
         if self._pool is not None:
@@ -201,7 +199,7 @@ class DaskExecutor(InlineExecutor):
     """
 
     def __init__(self, jobs: int = 0, scheduler: str | None = None):
-        try:
+        try:  # distributed: 2 s of import, only for --executor dask
             from distributed import Client, LocalCluster
         except ImportError:  # pragma: no cover - distributed is a dependency
             raise MagexpError("--executor dask needs the 'distributed' package: pip install distributed") from None
@@ -225,7 +223,7 @@ class DaskExecutor(InlineExecutor):
         return self.client.submit(fn, *args, pure=False)
 
     def as_completed(self, futures: Iterable) -> Iterator:
-        from distributed import as_completed
+        from distributed import as_completed  # as in __init__
 
         return iter(as_completed(list(futures)))
 
@@ -280,8 +278,6 @@ def _run_task(configs: list[dict], keys: list[str], root=None, reuse: bool = Tru
     (without ``wait``): nothing large goes back to the parent otherwise. Without ``root``,
     ``results`` holds the outputs.
     """
-    from magexp.run.runner import run_batch
-
     start = time.process_time()
     if root is None:
         return list(run_batch(configs)), time.process_time() - start, []
@@ -350,8 +346,6 @@ def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
 def run_row(out) -> dict:
     """A run's row of the runs table: its metrics and its parameter estimates (one column per
     parameter name that is not already a metric)."""
-    import numpy as np
-
     estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
     return {**out.metrics, **estimate}
 

@@ -26,13 +26,19 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import itertools
 import math
+import os
 import re
 import shutil
 import sys
+import tempfile
 from pathlib import Path, PurePosixPath
 
-from magexp.errors import LARGEST, MagexpError, check_magnitude
+import numpy as np
+
+from magexp import paths
+from magexp.errors import LARGEST, MagexpError, check_magnitude, check_positive_int
 
 #: The geomagnetic field's ranges (degrees): inclination from the horizontal, declination from north.
 INCLINATION = (-90.0, 90.0)
@@ -46,8 +52,6 @@ _ADDRESS = re.compile(r"(?:(?:tcp|tls|ucx|ws|wss)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z
 # where a command may write
 
 def _results() -> Path:
-    from magexp import paths
-
     return paths.RESULTS.resolve()
 
 
@@ -113,8 +117,6 @@ def removed_on_failure(folder: Path, created: Path | None = None):
     removed with every parent made for it; in a folder that existed, only the entries the block
     added are removed (what the user had is kept).
     """
-    from magexp.run.preflight import first_missing
-
     folder = Path(folder).absolute()
     top = created if created is not None else first_missing(folder)
     before = set() if top is not None or not folder.is_dir() else {p.name for p in folder.iterdir()}
@@ -177,32 +179,17 @@ def check_flags(flags: dict) -> None:
     """The options of ``magexp`` that Hydra would read, checked before Hydra sees them (whose own
     errors are its usage text, or exit 1): ``--cfg job|hydra|all``, ``--config-name`` naming a
     primary config of ``conf/``, ``--config-dir`` / ``--config-path`` an existing folder."""
-    from magexp.paths import CONF
 
     for flag in ("--cfg", "-c"):
         if flag in flags and flags[flag] not in CFG_CHOICES:
             raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: choose one of {', '.join(CFG_CHOICES)}")
-    names = sorted(p.stem for p in CONF.glob("*.yaml"))
+    names = sorted(p.stem for p in paths.CONF.glob("*.yaml"))
     for flag in ("--config-name", "-cn"):
         if flag in flags and flags[flag] not in names:
             raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: choose one of {', '.join(names)}")
     for flag in ("--config-dir", "-cd", "--config-path", "-cp"):
         if flag in flags and not Path(flags[flag]).expanduser().is_dir():
             raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: it is not a folder; name a folder of configs")
-
-
-def check_jobs(overrides: list[str], jobs: list) -> None:
-    """A sweep with no job (``estimator=glob(zzz*)``, ``seed=range(0,0)``) is refused, naming the
-    override that selects nothing (and, for a config group, the options there are)."""
-    if jobs:
-        return
-    from magexp.run.preflight import expand_sweep
-    from magexp.run.compose import GROUPS, options
-
-    empty = next((ov for ov in overrides if not expand_sweep([ov])), " ".join(overrides))
-    key = empty.partition("=")[0]
-    hint = f" (options: {', '.join(options(key))})" if key in GROUPS else ""
-    raise MagexpError(f"{empty} is not allowed: it selects no value, so the sweep has no job{hint}")
 
 
 def _numbers(node, where: str):
@@ -260,8 +247,6 @@ def check_scheduler_address(scheduler) -> None:
 
 def check_folds(folds) -> int:
     """The held-out check's folds: an integer >= 0 (0 or 1: no held-out check)."""
-    from magexp.errors import check_positive_int
-
     if isinstance(folds, str):
         raise MagexpError(f"folds={folds!r} is not allowed: it must be an integer >= 0 (0: no held-out check)")
     return check_positive_int(folds, "folds", minimum=0)
@@ -274,8 +259,6 @@ def readings_array(readings):
     """``readings`` as a float array, or one line: complex numbers and masked arrays are refused
     (their imaginary part and their mask would be dropped silently), as is anything that is not
     numbers."""
-    import numpy as np
-
     if np.ma.isMaskedArray(readings):
         raise MagexpError("masked readings are not allowed: a masked array's hidden values would be used; give "
                           "only the valid readings (readings[~readings.mask.any(axis=1)].data)")
@@ -310,3 +293,54 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str):
         print(f"error: {message.splitlines()[0]} (see {self.prog} --help)", file=sys.stderr)
         sys.exit(2)
+
+
+def check_output_folder(folder: Path | str, what: str = "output folder", *, canonical: bool = False) -> Path:
+    """Fail unless ``folder`` is (or can be created as) a writable directory a command may write
+    (:func:`magexp.run.guard.check_destination`: not empty, not a root, not inside ``results/`` unless
+    ``canonical``); create nothing."""
+    check_destination(folder, what, canonical=canonical)
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise MagexpError(f"{what} {str(folder)!r} is a file, not a folder: name a folder")
+    probe = folder
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        raise MagexpError(f"{what} {str(folder)!r} cannot be created: {str(probe)!r} is a file")
+    try:  # a real probe (permissions alone say nothing for root or a read-only mount)
+        fd, tmp = tempfile.mkstemp(dir=probe, prefix=".magexp-probe-")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise MagexpError(f"{what} {str(folder)!r} is not writable: {str(probe)!r}: {exc.strerror}") from None
+    return folder
+
+
+def first_missing(folder: Path) -> Path | None:
+    """The highest of ``folder`` and its parents that does not exist yet (None if ``folder`` exists):
+    removing it after a failure leaves no trace of the folders made for it."""
+    if folder.exists():
+        return None
+    top = folder
+    while not top.parent.exists():
+        top = top.parent
+    return top
+
+
+def create_unique(folder: Path | str) -> tuple[Path, Path]:
+    """Create ``folder`` exclusively; if it exists, ``folder-2``, ``folder-3``...: two runs started
+    in the same second never share a folder. Returns ``(folder, top)``, ``top`` the highest
+    folder this call created (remove it to leave no trace)."""
+    folder = Path(folder)
+    top = first_missing(folder)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    for k in itertools.count(1):
+        candidate = folder if k == 1 else folder.with_name(f"{folder.name}-{k}")
+        try:
+            candidate.mkdir()
+            return candidate, (top if top != folder else candidate)
+        except FileExistsError:
+            continue

@@ -6,22 +6,24 @@
   before the first job starts; the data of each distinct scenario is checked against the
   problem's parameter count, and each run's and the whole sweep's memory and work against
   the limits of :mod:`magexp.run.budget`;
-* :func:`check_output_folder`: an output folder that can be created and written.
+* :func:`check_jobs`: a sweep that selects no job is refused, naming the override.
 """
 
 from __future__ import annotations
 
 import itertools
 import json
-import os
-import tempfile
-from pathlib import Path
 
+import numpy as np
+from hydra.core.override_parser.types import Glob
+
+from magexp.core.seeding import run_generators
+from magexp.errors import MagexpError, check, check_positive_int
+from magexp.problems import make_problem
 from magexp.run.budget import Tally, check_run, check_sweep
-from magexp.run.compose import (GROUPS, check_choice, compose_config, options, parse_overrides,  # noqa: F401
-                           resolved, target_class, yaml_value)
-from magexp.errors import MagexpError, check
+from magexp.run.compose import GROUPS, check_choice, compose_config, options, parse_overrides, resolved, yaml_value
 from magexp.run.guard import check_run_values
+from magexp.run.runner import build
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
     """The jobs of a sweep: the cartesian product of every override's values, first key slowest
@@ -33,8 +35,6 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
     for ov in parsed:
         key = ov.get_key_element()
         if ov.is_sweep_override():
-            from hydra.core.override_parser.types import Glob
-
             try:
                 glob = ov.value() if key in GROUPS and isinstance(ov.value(), Glob) else None
                 values = glob.filter(options(key)) if glob else [str(v) for v in ov.sweep_string_iterator()]
@@ -53,18 +53,12 @@ def swept_keys(overrides: list[str]) -> list[str]:
 
 
 def _build(node, what):
-    from magexp.run.runner import build
-
     return build(node, what)
 
 
 def check_problem(cfg, scenario) -> None:
     """The scenario's data (seed ``cfg.seed``) give at least as many residuals as the problem has
     parameters: fewer readings than parameters is refused for every estimator."""
-    import numpy as np
-
-    from magexp.problems import make_problem
-    from magexp.core.seeding import run_generators
 
     data_rng, _ = run_generators(cfg.seed)
     dataset = scenario.generate(rng=data_rng)
@@ -79,8 +73,6 @@ def check_problem(cfg, scenario) -> None:
 
 
 def check_seed(seed) -> None:
-    from magexp.errors import check_positive_int
-
     check_positive_int(seed, "seed", minimum=0)
 
 
@@ -129,54 +121,13 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
     return configs
 
 
-def check_output_folder(folder: Path | str, what: str = "output folder", *, canonical: bool = False) -> Path:
-    """Fail unless ``folder`` is (or can be created as) a writable directory a command may write
-    (:func:`magexp.run.guard.check_destination`: not empty, not a root, not inside ``results/`` unless
-    ``canonical``); create nothing."""
-    from magexp.run.guard import check_destination
+def check_jobs(overrides: list[str], jobs: list) -> None:
+    """A sweep with no job (``estimator=glob(zzz*)``, ``seed=range(0,0)``) is refused, naming the
+    override that selects nothing (and, for a config group, the options there are)."""
+    if jobs:
+        return
 
-    check_destination(folder, what, canonical=canonical)
-    folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise MagexpError(f"{what} {str(folder)!r} is a file, not a folder: name a folder")
-    probe = folder
-    while not probe.exists():
-        if probe.parent == probe:
-            break
-        probe = probe.parent
-    if not probe.is_dir():
-        raise MagexpError(f"{what} {str(folder)!r} cannot be created: {str(probe)!r} is a file")
-    try:  # a real probe (permissions alone say nothing for root or a read-only mount)
-        fd, tmp = tempfile.mkstemp(dir=probe, prefix=".magexp-probe-")
-        os.close(fd)
-        os.unlink(tmp)
-    except OSError as exc:
-        raise MagexpError(f"{what} {str(folder)!r} is not writable: {str(probe)!r}: {exc.strerror}") from None
-    return folder
-
-
-def first_missing(folder: Path) -> Path | None:
-    """The highest of ``folder`` and its parents that does not exist yet (None if ``folder`` exists):
-    removing it after a failure leaves no trace of the folders made for it."""
-    if folder.exists():
-        return None
-    top = folder
-    while not top.parent.exists():
-        top = top.parent
-    return top
-
-
-def create_unique(folder: Path | str) -> tuple[Path, Path]:
-    """Create ``folder`` exclusively; if it exists, ``folder-2``, ``folder-3``...: two runs started
-    in the same second never share a folder. Returns ``(folder, top)``, ``top`` the highest
-    folder this call created (remove it to leave no trace)."""
-    folder = Path(folder)
-    top = first_missing(folder)
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    for k in itertools.count(1):
-        candidate = folder if k == 1 else folder.with_name(f"{folder.name}-{k}")
-        try:
-            candidate.mkdir()
-            return candidate, (top if top != folder else candidate)
-        except FileExistsError:
-            continue
+    empty = next((ov for ov in overrides if not expand_sweep([ov])), " ".join(overrides))
+    key = empty.partition("=")[0]
+    hint = f" (options: {', '.join(options(key))})" if key in GROUPS else ""
+    raise MagexpError(f"{empty} is not allowed: it selects no value, so the sweep has no job{hint}")

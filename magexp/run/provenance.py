@@ -13,12 +13,15 @@ config is written beside the output (``config.yaml``).
 from __future__ import annotations
 
 import functools
+import importlib.util
 import hashlib
 import json
 import platform
 import subprocess
+import sys
 from pathlib import Path
 
+from magexp import __version__
 from magexp.paths import PACKAGE, ROOT, SOURCE_CHECKOUT
 
 LIBRARIES = ("numpy", "scipy", "hydra", "omegaconf")
@@ -27,8 +30,6 @@ COMMIT_FILE = PACKAGE / "_resources" / "commit.txt"  # written into a wheel at b
 
 def version() -> str:
     """magexp's version (``magexp.__version__``, the one home of it; ``pyproject.toml`` reads it)."""
-    from magexp import __version__
-
     return __version__
 
 
@@ -105,9 +106,6 @@ def config_hash(config: dict | None) -> str:
 def _library_version(name: str) -> str:
     """``name``'s version without importing it if it is not loaded yet: its ``__version__``, else the
     ``<name>-<version>.dist-info`` folder beside it (``importlib.metadata`` costs 0.1 s to import)."""
-    import importlib.util
-    import sys
-
     if name in sys.modules:
         return str(getattr(sys.modules[name], "__version__", ""))
     spec = importlib.util.find_spec(name)

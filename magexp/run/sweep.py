@@ -11,32 +11,43 @@ Hydra's sweeper expands a sweep into jobs; magexp's launcher (the default,
    (``hydra.launcher.executor=dask``, ``hydra.launcher.scheduler=...``);
 3. writes each job's folder ``<sweep dir>/<hydra.sweep.subdir>/`` (by default the job number):
    the run's ``metrics.csv``, ``estimate.csv``, ``history.csv`` and ``config.yaml``
-   (:func:`magexp.__main__.write_outputs`) and ``.hydra/overrides.yaml``.
+   (:func:`magexp.run.outputs.write_outputs`) and ``.hydra/overrides.yaml``.
 
 :class:`SweepTable` (a Hydra callback, see ``conf/config.yaml``) then gathers the job folders into
 ``<sweep dir>/sweep.csv``: one row per job, the swept keys first as columns (their values as typed
 on the command line), then ``job`` and the union of the jobs' metric columns (a metric a job lacks
 is left empty). magexp's launcher does not call Hydra's per-job callbacks (``on_job_start``,
 ``on_job_end``) or set up a job's logging: no Hydra job runs. Hydra's other launchers (``hydra/launcher=basic|joblib|slurm``) still work, one
-Hydra job at a time (:func:`magexp.__main__.sweep_job`), with the same run cache.
+Hydra job at a time (:func:`magexp.run.command.sweep_job`), with the same run cache.
 """
 
 from __future__ import annotations
 
 import csv
+import logging
 from collections.abc import Sequence
 from pathlib import Path
 
+import yaml
+from hydra.core.utils import JobReturn, JobStatus, filter_overrides
 from hydra.experimental.callback import Callback
+from omegaconf import OmegaConf, open_dict
 
 from magexp.core.atomic import atomic_open, write_text
+from magexp.errors import MagexpError
+from magexp.paths import CONF
+from magexp.run import cache
+from magexp.run.compose import GROUPS, compose_config, hydra_compose, resolved, yaml_value
+from magexp.run.executor import check_executor, make_executor, run_many
+from magexp.run.guard import check_job_folders
+from magexp.run.outputs import to_yaml, write_outputs
+from magexp.run.preflight import swept_keys
+from magexp.run.progress import Progress
 
 TABLE = "sweep.csv"
 
 
 def _job_overrides(job_dir: Path) -> dict[str, str]:
-    import yaml
-
     path = job_dir / ".hydra" / "overrides.yaml"
     if not path.exists():
         return {}
@@ -70,8 +81,6 @@ class SweepTable(Callback):
     """Hydra callback: after a multirun, write ``sweep.csv`` into the sweep folder."""
 
     def on_multirun_end(self, config, **kwargs) -> None:
-        from magexp.run.preflight import swept_keys
-
         overrides = [str(o) for o in config.hydra.overrides.task]
         path = gather(config.hydra.sweep.dir, swept_keys(overrides))
         print(f"sweep table: {path}")
@@ -83,8 +92,6 @@ SETTINGS = {"executor": "--executor", "jobs": "--jobs", "scheduler": "--schedule
 
 def check_settings(settings: dict) -> None:
     """Refuse bad ``hydra.launcher.*`` settings in one line naming the setting (the executor's rules)."""
-    from magexp.errors import MagexpError
-    from magexp.run.executor import check_executor
 
     try:
         check_executor(settings["executor"], settings["jobs"], settings["scheduler"])
@@ -102,10 +109,6 @@ def check_hydra_settings(settings: list[str]) -> None:
     against its config file; anything else (another launcher, other ``hydra.*`` keys) by composing
     Hydra's own node (a full Hydra compose), then magexp's launcher settings if it is the one chosen.
     """
-    from omegaconf import OmegaConf
-
-    from magexp.run.compose import hydra_compose, yaml_value
-    from magexp.paths import CONF
 
     own = {f"hydra.launcher.{key}" for key in SETTINGS}
     if all(o.partition("=")[0] in own for o in settings):
@@ -122,12 +125,10 @@ def check_hydra_settings(settings: list[str]) -> None:
 
 def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
     """The folder name of job ``num``: ``hydra.sweep.subdir`` resolved for it (by default ``num``)."""
-    from omegaconf import OmegaConf, open_dict
 
     raw = OmegaConf.to_container(config.hydra.sweep, resolve=False)["subdir"]
     if raw == "${hydra.job.num}":
         return str(num)
-    from hydra.core.utils import filter_overrides
 
     node = OmegaConf.create({"hydra": OmegaConf.to_container(config.hydra, resolve=False)})
     with open_dict(node):
@@ -144,9 +145,6 @@ def _configs(jobs: list[list[str]]) -> list[dict]:
     Keys in Hydra's order (the config groups, then the primary config's own keys), whichever way
     the composer built the config, so that every job's ``config.yaml`` reads the same.
     """
-    from omegaconf import OmegaConf
-
-    from magexp.run.compose import GROUPS, compose_config, resolved, yaml_value
 
     composed: dict[tuple, object] = {}
     plains = []
@@ -166,9 +164,8 @@ def _configs(jobs: list[list[str]]) -> list[dict]:
 def _quiet_dask() -> None:
     """Dask's cluster messages (INFO, set per logger when ``distributed`` is imported) would print through
     Hydra's log handler on every sweep: warnings and errors only."""
-    import logging
 
-    import distributed  # noqa: F401  (configures its loggers first)
+    import distributed  # noqa: F401  (configures its loggers first; imported only for a Dask sweep: 1 s)
 
     for name in list(logging.root.manager.loggerDict):
         if name.split(".")[0] == "distributed":
@@ -182,14 +179,6 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     (:func:`magexp.run.executor.make_executor`). A job's ``cached`` column says whether its result
     was in the run cache when the batch started.
     """
-    from hydra.core.utils import JobReturn, JobStatus
-
-    from magexp.run import cache
-    from magexp.__main__ import to_yaml, write_outputs
-    from magexp.run.executor import make_executor, run_many
-    from magexp.run.guard import check_job_folders
-    from magexp.run.progress import Progress
-
     check_settings(settings)
     jobs = [list(o) for o in job_overrides]
     plains = _configs(jobs)
