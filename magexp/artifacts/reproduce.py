@@ -76,8 +76,8 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     (the figure ``--redraw`` gives, to the byte); not drawn again when the figure cache
     (:mod:`magexp.artifacts.plots.memo`) says the files in ``out`` are that drawing already, unless ``force``.
     Returns whether it drew."""
-    # matplotlib (memo, style) only here, where a figure is checked or drawn: importing this module
-    # (magexp reproduce --help, a refused command) never pays for it (MEASURED_DRAW)
+    # lazy: matplotlib (memo, style) only here, where a figure is checked or drawn; importing this
+    # module (--help, a refused command) never pays for it (493 ms CPU after this module, min of 5)
     from magexp.artifacts.plots import memo
     from magexp.artifacts.plots.style import save
 

@@ -6,7 +6,7 @@ time ``window``, and gives the :class:`~magexp.core.dataset.Dataset` of one obje
 
 * ``scalar``: the readings, ``n_readings`` evenly spaced ones for the fit; the block of fold
   ``heldout_fold`` of ``folds`` contiguous blocks is held out (``dataset.extra["heldout"]``) and
-  the metrics report its spread under the fitted calibration (:func:`magexp.core.quality.recording_metrics`);
+  the metrics report its spread under the fitted calibration (:func:`magexp.core.identifiability.recording_metrics`);
 * ``gyro``: ``n_readings`` evenly spaced readings of the window and the gyroscope preintegrated
   between them (:func:`magexp.core.geometry.preintegrate`) for :class:`magexp.problems.gyro.GyroAidedCalibration`.
 
