@@ -332,7 +332,7 @@ TABLE = [
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", ""], ["--out=''", "name a folder"]),
     row("reproduce", ["yan2022", "--redraw", "--out", "fresh"], ["--redraw", "does not exist"]),
     row("reproduce", ["yan2022", "--only", "yan2022_fig3", "--tiny", "--out", "fresh"], ["interrupted"], code=130,
-        patch=[("magexp.run.executor.run_many", interrupt)]),
+        patch=[("magexp.artifacts.reproduce.run_many", interrupt)]),
     # ---- the Python API
     row("api", api(readings=np.ones((20, 3)) + 1j), ["complex"]),
     row("api", api(readings=np.ma.masked_array(np.ones((20, 3)), mask=np.zeros((20, 3)))), ["masked"]),
@@ -551,10 +551,10 @@ def test_utf8_byte_order_mark_is_accepted(workdir, cli):
     assert proc.returncode == 0, proc.stderr
     assert "fit_rms" in (workdir / "run" / "metrics.csv").read_text()
     (workdir / "bom.txt").write_bytes(b"\xef\xbb\xbf" + PLAIN.encode())  # plain numbers, with a BOM
-    from magexp.calibration.fit import compose
+    from magexp.calibration.fit import calibrate_config
     from magexp.core.recordings import load_recording
 
-    rec = load_recording("bom.txt", unit=compose(["data.unit=µT"]).data.unit)  # µT: the alias of uT
+    rec = load_recording("bom.txt", unit=calibrate_config(["data.unit=µT"]).data.unit)  # µT: the alias of uT
     assert rec.unit == "uT" and rec.readings.shape == (60, 3) and rec.meta["format"] == "plain 3 columns"
 
 

@@ -8,7 +8,7 @@ from hydra.utils import instantiate
 from magexp.core.dataset import Dataset, Truth
 from magexp.estimators import twostep as ts
 from magexp.estimators.boundaries import clip, random_reentry, reflect
-from magexp.estimators.ellipsoid import constraint_matrix, fit_ellipsoid, fit_ellipsoid_specific
+from magexp.core.ellipsoid import constraint_matrix, fit_ellipsoid, fit_ellipsoid_specific
 from magexp.estimators.reduced import expand
 from magexp.estimators.triangular import (MaximumLikelihoodScalar, TriangularCalibration, merayo_matrix,
                                           merayo_parameters)

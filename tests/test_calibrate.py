@@ -5,13 +5,14 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.calibration.fit import MIN_READINGS, attitude_of, calibrate_recording, search_box
+from magexp.calibration.fit import MIN_READINGS, attitude_of, calibrate_recording
+from magexp.scenarios.search import search_box
 from magexp.calibration.write import FILES, check_out
 from magexp.errors import MagexpError
 from magexp.paths import CONF, RESULTS, SHARED_DATA
 from magexp.core.recordings import UNITS, load_recording
 from magexp.run.runner import build
-from magexp.scenarios.ship import ship_attitude
+from magexp.core.geometry import ship_attitude
 
 FXOS = SHARED_DATA / "fxos8700_mag_readings.txt"
 needs_fxos = pytest.mark.skipif(not FXOS.is_file(), reason=f"{FXOS} is not present")
@@ -129,7 +130,7 @@ def test_gyro_rates_integrate_to_attitudes(tmp_path):
 
 def test_search_box_from_data():
     r = np.array([[-10.0, 0, 5], [30, 2, -4], [0, 1, 1]])
-    from magexp.calibration.fit import centroid_radius
+    from magexp.scenarios.search import centroid_radius
 
     box = search_box(r, 2 * centroid_radius(r))
     assert box.offset == (-10.0, 30.0)

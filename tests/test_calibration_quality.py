@@ -12,7 +12,7 @@ from magexp.calibration.fit import main
 from magexp.errors import MagexpError
 from magexp.core.geometry import random_rotations
 from magexp.paths import SHARED_DATA
-from magexp.core.quality import canonical, coverage
+from magexp.core.identifiability import canonical, coverage
 
 FXOS = SHARED_DATA / "fxos8700_mag_readings.txt"
 needs_fxos = pytest.mark.skipif(not FXOS.is_file(), reason=f"{FXOS} is not present")

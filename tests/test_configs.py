@@ -9,7 +9,8 @@ from magexp.artifacts.plan import cells, load_spec, overrides_of
 from magexp.run.compose import options
 from magexp.paths import EXPERIMENTS
 from magexp.artifacts.plots import kind_module
-from magexp.artifacts.summary import matches, reported_entries
+from magexp.artifacts.claims import matches
+from magexp.artifacts.summary import reported_entries
 
 SCENARIOS = options("scenario")
 ARTIFACTS = sorted(EXPERIMENTS.glob("*/*_*.yaml"))

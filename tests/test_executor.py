@@ -14,7 +14,7 @@ from magexp.run import cache
 from magexp.run import executor
 
 from magexp.run import runner
-from magexp.artifacts.plan import compose_config
+from magexp.run.compose import compose_config
 
 
 def configs(*overrides, seeds=(0, 1)):

@@ -27,7 +27,7 @@ def swarm(n_readings, n_particles, seed=0):
 def test_scalar_kernels_agree_with_the_direct_formula(n_readings, n_particles):
     readings, w, o = swarm(n_readings, n_particles)
     reference = np.linalg.norm(readings - [30.0, -20.0, 10.0], axis=1)
-    from magexp.problems.scalar import normalise
+    from magexp.core.ellipsoid import normalise
 
     c, s, u = normalise(readings)
     direct = np.array([np.sqrt(np.mean((np.linalg.norm((readings - oi) @ wi.T, axis=1) - reference) ** 2))
@@ -54,7 +54,7 @@ def test_chunking_does_not_change_the_fallback(monkeypatch):
     """A chunk of 7 particle-readings (many chunks, a ragged last one) gives the unchunked value."""
     readings, w, o = swarm(101, 5)
     reference = np.linalg.norm(readings, axis=1)
-    from magexp.problems.scalar import normalise
+    from magexp.core.ellipsoid import normalise
 
     c, s, u = normalise(readings)
     whole = kernels.scalar_cost_numpy(w, o, c, s, u, reference), kernels.vector_cost_numpy(w, o, readings, readings)

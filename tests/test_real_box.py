@@ -1,5 +1,5 @@
 """The search box of a recording comes from the data and holds the optimum, axis flips included;
-success and intervals without a truth (magexp.scenarios.search, magexp.artifacts.plan.BEST, magexp.core.quality)."""
+success and intervals without a truth (magexp.scenarios.search, magexp.artifacts.plan.BEST, magexp.core.identifiability)."""
 
 from pathlib import Path
 
@@ -96,7 +96,7 @@ def test_success_against_the_best_run_of_the_same_recording():
 
 
 def test_block_bootstrap_interval_holds_the_spread_and_widens_with_noise():
-    from magexp.core.quality import block_bootstrap_spread, spread
+    from magexp.core.identifiability import block_bootstrap_spread, spread
 
     rng = np.random.default_rng(0)
     calm, noisy = 1 + 0.01 * rng.normal(size=600), 1 + 0.05 * rng.normal(size=600)

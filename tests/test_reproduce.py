@@ -17,7 +17,7 @@ from magexp.run import executor
 from magexp.artifacts import reproduce
 
 from magexp.run import runner
-from magexp.artifacts.plan import compose_config
+from magexp.run.compose import compose_config
 from magexp.paths import DATA, RESULTS, ROOT
 
 
@@ -237,30 +237,32 @@ def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
     with matplotlib.rc_context({"font.size": 11}):  # e.g. a user's matplotlibrc
         assert memo.key(spec, b"a,b\n1,2\n") != k
     assert memo.key(spec, b"a,b\n1,2\n") == k
-    memo.code_version.cache_clear()
+    memo.figure_code_version.cache_clear()
     copy = tmp_path / "pkg"
     shutil.copytree(ROOT / "magexp", copy, ignore=shutil.ignore_patterns("__pycache__"))
     monkeypatch.setattr("magexp.paths.PACKAGE", copy)
     try:
         assert memo.key(spec, b"a,b\n1,2\n") == k
-        memo.code_version.cache_clear()
+        memo.figure_code_version.cache_clear()
         with (copy / "artifacts" / "plots" / "style.py").open("a") as fh:
             fh.write("\n# a style edit\n")
         assert memo.key(spec, b"a,b\n1,2\n") != k
     finally:
-        memo.code_version.cache_clear()
+        memo.figure_code_version.cache_clear()
 
 
 def test_mockup_summary_builds_each_cells_problem_once_with_the_same_rows(tmp_path, monkeypatch):
     from magexp.artifacts import summary
-    from magexp.artifacts.plan import run_artifact
+    from magexp.artifacts.plan import collect, plan_artifact
     from magexp.artifacts.spec import load
+    from magexp.run.executor import run_many
 
     spec = load(ROOT / "experiments" / "yan2022" / "yan2022_table_mockup.yaml")
-    runs = run_artifact(spec, seeds=1, jobs=1, tiny=True)
+    plan = plan_artifact(spec, seeds=1, tiny=True)
+    runs = collect(plan, run_many(plan.configs, jobs=1))
     built = []
-    real = summary._problem_of
-    monkeypatch.setattr(summary, "_problem_of", lambda *a: built.append(a) or real(*a))
+    real = summary.rebuild_problem
+    monkeypatch.setattr(summary, "rebuild_problem", lambda *a: built.append(a) or real(*a))
     rows = summary.summarise(runs)
     ls_rows = sum(1 for item in spec.summarise if item.interval == "ls") * len(runs.cells)
     assert len(built) == len(runs.cells) < ls_rows  # once per cell, not once per row

@@ -10,10 +10,10 @@ from magexp.run.compose import options
 from magexp.errors import MagexpError
 from magexp.estimators.kalman import kalman_update, settled_since
 from magexp.problems import make_problem
-from magexp.problems.ship import state_to_theta, theta_to_state
+from magexp.problems.vector import state_to_theta, theta_to_state
 from magexp.core.recordings import load_recording
 from magexp.run.runner import build
-from magexp.scenarios.ship import ship_attitude
+from magexp.core.geometry import ship_attitude
 from magexp.artifacts.spec import Tolerance
 
 PAPER_MOCKUP = [0.98575, 0.08153, 0.06221, -0.06233, 0.83517, -0.02987, -0.02999, -0.07748, 1.06615,

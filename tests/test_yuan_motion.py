@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from magexp.errors import MagexpError
-from magexp.core.geometry import rot_x, rotation_angle
-from magexp.scenarios.motion import Gyro, Trajectory, even_subsample, exp_so3, integrate_rates
+from magexp.core.geometry import exp_so3, integrate_rates, rot_x, rotation_angle
+from magexp.scenarios.motion import Gyro, Trajectory, even_subsample
 
 
 def test_constant_rate_integration_is_exact_without_drift():

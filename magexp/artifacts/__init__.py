@@ -7,5 +7,7 @@ tidy rows), :mod:`~magexp.artifacts.reproduce` (``magexp reproduce``), :mod:`~ma
 (verdicts), :mod:`~magexp.artifacts.claims`, :mod:`~magexp.artifacts.report`, and :mod:`~magexp.artifacts.plots`
 (one module per figure kind).
 
-May import: ``core``, ``run`` and (for the problem facts a verdict needs) ``problems``; never ``calibration``.
+May import: ``core``, ``run``, ``problems`` (the problem facts a verdict needs, rebuilt in one place:
+:func:`magexp.artifacts.plan.rebuild_problem`) and :mod:`magexp.estimators.base` (whether an estimator
+applies, by class); never ``calibration``.
 """

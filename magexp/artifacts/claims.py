@@ -58,6 +58,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from scipy.stats import wilcoxon
 
 from magexp.errors import MagexpError
 
@@ -248,14 +249,11 @@ def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
 
 def wilcoxon_less(d: np.ndarray) -> float:
     """One-sided p-value of the Wilcoxon signed-rank test that the paired differences ``d`` lie
-    below zero (zero differences dropped; 1 when none is left). ``scipy.stats`` is imported here
-    only: it costs seconds to import on a busy machine, and only paired comparisons need it."""
+    below zero (zero differences dropped; 1 when none is left)."""
     d = np.asarray(d, float)
     d = d[np.isfinite(d) & (d != 0)]
     if d.size == 0:
         return 1.0
-    from scipy.stats import wilcoxon
-
     return float(wilcoxon(d, alternative="less").pvalue)
 
 

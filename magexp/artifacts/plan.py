@@ -15,12 +15,18 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from hydra.utils import get_class
 from omegaconf import DictConfig, OmegaConf
 
+from magexp.artifacts.spec import artifact_paths, load
+from magexp.core.seeding import run_generators, scenario_stream
 from magexp.errors import MagexpError
-from magexp.run.compose import compose_config, yaml_value  # noqa: F401  (compose_config: re-exported)
-from magexp.run.executor import run_many, run_row  # run_many's home is magexp.run.executor; importable from here too
+from magexp.estimators.base import applies_to
 from magexp.paths import EXPERIMENTS
+from magexp.problems import make_problem, problem_class
+from magexp.run.compose import compose_config, yaml_value
+from magexp.run.executor import run_row
+from magexp.run.runner import build
 
 # tiny sizes (--tiny, the smoke tests); black-box budgets (cmaes, de) at least de's two generations of 10 x 12
 SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50,
@@ -29,15 +35,11 @@ SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_
 
 def load_spec(path: Path | str):
     """Read and validate an artifact YAML (:func:`magexp.artifacts.spec.load`)."""
-    from magexp.artifacts.spec import load
-
     return load(path)
 
 
 def paper_specs(paper: str) -> list:
     """Every artifact of ``paper``, in file-name order."""
-    from magexp.artifacts.spec import artifact_paths
-
     return [load_spec(p) for p in artifact_paths(paper)]
 
 
@@ -119,11 +121,6 @@ def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None
 def applicable(cfg: DictConfig) -> bool:
     """Whether the run's estimator applies to its problem: :func:`magexp.estimators.base.applies_to`
     on the classes named by the config (nothing is built or simulated)."""
-    from hydra.utils import get_class
-
-    from magexp.estimators.base import applies_to
-    from magexp.problems import problem_class
-
     objective = cfg.get("objective") or cfg.scenario.get("objective")
     if objective is None:  # the scenario class fixes it
         objective = getattr(get_class(cfg.scenario._target_), "objective", None)
@@ -263,15 +260,16 @@ def collect(plan: ArtifactPlan, outputs) -> ArtifactRuns:
                         outputs=_ByRun(plan.index, outputs), overrides=plan.overrides)
 
 
-def run_artifact(spec, *, seeds: int | None = None, jobs: int = 0, tiny: bool = False,
-                 use_cache: bool = True, executor=None) -> ArtifactRuns:
-    """Run every cell of ``spec`` over its seeds."""
-    from magexp.run.progress import Progress
-
-    plan = plan_artifact(spec, seeds=seeds, tiny=tiny)
-    outputs = run_many(plan.configs, jobs=jobs, use_cache=use_cache, executor=executor,
-                       progress=Progress(len(plan.configs), spec.name))
-    return collect(plan, outputs)
+def rebuild_problem(overrides, seed: int):
+    """The problem of a cell's run ``seed``, rebuilt from the cell's overrides without a fit (its data
+    are deterministic): what the summary reads that a run does not store (the search box, the true
+    parameters, the linear design of a ship problem). The one place above the run layer that builds
+    simulation data (a cleaner design stores these facts with each run's outputs)."""
+    cfg = compose_config(list(overrides))
+    scenario = build(cfg.scenario, "scenario")
+    dataset = scenario.generate(rng=run_generators(seed, stream=scenario_stream(cfg.scenario))[0])
+    objective = cfg.get("objective") or scenario.objective
+    return make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
 
 
 def quantiles(values) -> tuple[float, float, float]:

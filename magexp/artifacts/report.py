@@ -20,12 +20,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.core.atomic import atomic_path, write_text
 from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, _shorten, evaluate, interpolate
-from magexp.errors import MagexpError
-from magexp.paths import RESULTS, ROOT
+from magexp.artifacts.plots.benchmark_table import winners
 from magexp.artifacts.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, VERDICTS
+from magexp.core.atomic import atomic_path, write_text
+from magexp.errors import MagexpError
+from magexp.paths import RESULTS, ROOT
+from magexp.run import provenance
 
 #: significant digits of every float written to a results CSV (round-off must not churn files)
 DIGITS = 6
@@ -77,8 +79,6 @@ def versions() -> dict:
     """The versions behind the results: python and the libraries (:mod:`magexp.run.provenance`) and
     ``magexp_commit``, the last commit that changed anything outside ``results/`` (so committing the
     regenerated results does not change the record, and a fresh clone writes the same bytes)."""
-    from magexp.run import provenance
-
     try:
         commit = subprocess.run(["git", "log", "-1", "--format=%h", "--abbrev=12", "--", ".", ":(exclude)results"],
                                 capture_output=True, text=True, check=True,
@@ -337,8 +337,6 @@ def _deviations_section(meta, paper: str, root: Path, *, full: bool = False) -> 
 
 def _winners_section(p: Paper) -> str:
     """magexp's "which method to pick": the winner per case of each artifact with a winners table."""
-    from magexp.artifacts.plots.benchmark_table import winners
-
     parts = []
     for spec in p.specs:
         path = p.root / p.paper / f"{spec.name}.csv"
@@ -414,8 +412,6 @@ def _prose(spec, text: str, table: pd.DataFrame | None) -> str:
 
 def _artifact_table(spec, path: Path) -> str:
     """The artifact's own CSV as a table (columns ``report_table``), and the winner per case."""
-    from magexp.artifacts.plots.benchmark_table import winners
-
     frame = pd.read_csv(path)
     cols = [c for c in spec.report_table if c in frame]
     if not len(frame) or not cols:

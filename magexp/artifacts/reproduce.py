@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import functools
 import os
+import resource
 import sys
 import time
 from collections.abc import Mapping
@@ -25,20 +26,22 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact
+from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact, rebuild_problem
+from magexp.artifacts.plots import VECTOR, kind_module
+from magexp.artifacts.report import build, write_csv
 from magexp.artifacts.spec import papers
-from magexp.run.budget import LIMITS, estimate_run, refuse_over, show
-from magexp.errors import MagexpError, exit_code
-from magexp.run.guard import OneLineParser, check_destination, removed_on_failure
-from magexp.paths import RESULTS
-from magexp.artifacts.plots import kind_module
-from magexp.artifacts.report import write_csv
 from magexp.artifacts.summary import COLUMNS, summarise
+from magexp import paths
+from magexp.errors import MagexpError, exit_code
+from magexp.paths import RESULTS
+from magexp.run.budget import LIMITS, estimate_run, refuse_over, show
+from magexp.run.executor import Outputs, check_executor, make_executor, run_many
+from magexp.run.guard import OneLineParser, check_destination, check_output_folder, removed_on_failure
+from magexp.run.progress import Progress
+
 
 def available_papers() -> list[str]:
     """The folders of ``experiments/`` (:func:`magexp.artifacts.spec.papers`)."""
-    from magexp.artifacts.spec import papers
-
     return papers()
 
 
@@ -72,15 +75,16 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     (the figure ``--redraw`` gives, to the byte); not drawn again when the figure cache
     (:mod:`magexp.artifacts.plots.memo`) says the files in ``out`` are that drawing already, unless ``force``.
     Returns whether it drew."""
-    from magexp.artifacts.plots import VECTOR, memo
+    # lazy: matplotlib (memo, style) only here, where a figure is checked or drawn; importing this
+    # module (--help, a refused command) never pays for it (493 ms CPU after this module, min of 5)
+    from magexp.artifacts.plots import memo
+    from magexp.artifacts.plots.style import save
 
     png = out / f"{spec.name}.png"
     files = [png, png.with_suffix(VECTOR)]
     key = memo.key(spec, Path(csv).read_bytes())
     if not force and memo.current(key, files):
         return False
-    from magexp.artifacts.plots.style import save
-
     save(kind_module(spec.kind).draw(pd.read_csv(csv), spec), png)
     memo.record(key, files)
     return True
@@ -131,11 +135,11 @@ def stored_runs(spec, table: pd.DataFrame, cells: list, overrides: list, facts) 
 
 
 def _problem_facts(overrides: list[list[str]], table: pd.DataFrame):
-    """``cell -> (parameter names, true vector)`` of the cell's problem, rebuilt without a run."""
-    from magexp.artifacts.summary import _problem_of
+    """``cell -> (parameter names, true vector)`` of the cell's problem, rebuilt without a run
+    (:func:`magexp.artifacts.plan.rebuild_problem`)."""
 
     def facts(ci: int):
-        problem = _problem_of(tuple(overrides[ci]), int(table[table.cell == ci].seed.min()))
+        problem = rebuild_problem(tuple(overrides[ci]), int(table[table.cell == ci].seed.min()))
         return list(problem.parameter_names()), problem.truth_theta()
 
     return facts
@@ -143,8 +147,6 @@ def _problem_facts(overrides: list[list[str]], table: pd.DataFrame):
 
 def summarise_stored(spec, root: Path) -> pd.DataFrame:
     """The summary rows of ``spec`` from its runs CSV under ``root`` (``--redraw``: no run)."""
-    from magexp.artifacts.plan import plan_artifact
-
     plan = plan_artifact(spec)
     table = pd.read_csv(root / spec.paper / f"{spec.name}_runs.csv")
     return summarise(stored_runs(spec, table, plan.cells, plan.overrides, _problem_facts(plan.overrides, table)))
@@ -170,16 +172,6 @@ def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     return summarise(stored_runs(runs.spec, table, runs.cells, runs.overrides, facts))
 
 
-def reproduce_artifact(spec, out: Path, *, seeds=None, jobs: int = 0, tiny: bool = False,
-                       force: bool = False) -> pd.DataFrame:
-    """Run one artifact and write its CSVs and figure into ``out``; returns its summary rows."""
-    from magexp.artifacts.plan import run_artifact
-
-    out.mkdir(parents=True, exist_ok=True)
-    return write_artifact(run_artifact(spec, seeds=seeds, jobs=jobs, tiny=tiny, use_cache=not force), out,
-                          force=force)
-
-
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
     """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows."""
     summary = pd.concat(list(parts.values()), ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
@@ -196,19 +188,15 @@ def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.D
 def skipped_for_data(spec, log=print) -> bool:
     """Whether ``spec`` reads a recording that is not in :data:`magexp.paths.SHARED_DATA` (the
     recordings of others are never shipped): then it is skipped, with one line."""
-    from magexp.paths import SHARED_DATA
-
-    missing = [f for f in spec.get("requires_data") or [] if not (SHARED_DATA / f).is_file()]
+    missing = [f for f in spec.get("requires_data") or [] if not (paths.SHARED_DATA / f).is_file()]
     if missing:
-        log(f"{spec.name}: skipped, {missing[0]} is not in {SHARED_DATA} (set MAGEXP_DATA)")
+        log(f"{spec.name}: skipped, {missing[0]} is not in {paths.SHARED_DATA} (set MAGEXP_DATA)")
     return bool(missing)
 
 
 def slice_outputs(outputs, start: int, n: int):
     """Runs ``start .. start + n`` of :class:`magexp.run.executor.Outputs`, as an ``Outputs`` of their own
     (metrics at hand, outputs read from the same run cache on access)."""
-    from magexp.run.executor import Outputs
-
     keys = outputs.keys[start:start + n]
     return Outputs(keys, {key: outputs.metrics(start + j) for j, key in enumerate(keys)}, outputs.root,
                    held=outputs.held)
@@ -220,9 +208,6 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
 
     Returns ``{"requested", "distinct", "computed", "cached", "paper summaries": {...}}``.
     """
-    from magexp.run.executor import run_many
-    from magexp.run.progress import Progress
-
     plans = [(paper, plan_artifact(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
              for spec in specs if not skipped_for_data(spec, log)]
     configs = [c for _, plan in plans for c in plan.configs]
@@ -276,8 +261,6 @@ def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tup
 
 def cpu_seconds() -> float:
     """CPU seconds of this process and of its finished (waited-for) worker processes."""
-    import resource
-
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
@@ -382,8 +365,6 @@ def _main(args) -> int:
         return 0
     if args.paper is None:
         raise MagexpError("a paper is needed: magexp reproduce all, or one of " + ", ".join(available_papers()))
-    from magexp.run.executor import check_executor
-
     papers = available_papers() if args.paper == "all" else [args.paper]
     for paper in papers:
         if paper not in available_papers():
@@ -392,8 +373,6 @@ def _main(args) -> int:
     if args.seeds is not None and args.seeds < 1:
         raise MagexpError(f"--seeds {args.seeds} is not allowed: it must be an integer >= 1")
     args.out = check_canonical(args.out, seeds=args.seeds, tiny=args.tiny)
-    from magexp.run.guard import check_output_folder
-
     # a file, or under one: one line, nothing created (results/ itself: check_canonical decided)
     check_output_folder(args.out, "--out", canonical=True)
     selected = select(papers, args.only)
@@ -405,11 +384,7 @@ def _main(args) -> int:
 
 def _write(args, selected) -> int:
     """Run and write (or redraw) the ``selected`` artifacts into ``args.out`` (checked by :func:`_main`)."""
-    from magexp.run.executor import make_executor
-
     args.out.mkdir(parents=True, exist_ok=True)
-    from magexp.artifacts.report import build
-
     start = time.perf_counter()
     if args.redraw:
         drawn, kept = redraw(selected, args.out, force=args.force)

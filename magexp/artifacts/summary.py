@@ -36,9 +36,10 @@ import re
 
 import numpy as np
 import pandas as pd
+from scipy.special import fdtrc, stdtrit
 
-from magexp.artifacts.plan import ArtifactRuns, quantiles
-from magexp.artifacts.claims import matches, same  # noqa: F401  (matches: imported from here too)
+from magexp.artifacts.claims import matches
+from magexp.artifacts.plan import ArtifactRuns, quantiles, rebuild_problem
 from magexp.errors import MagexpError
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
@@ -87,8 +88,11 @@ def judge(paper: float | None, lo: float, hi: float, width: float, success_rate:
     return "reproduced" if inside else "differs"
 
 
-def cell_settings(runs: ArtifactRuns, ci: int) -> dict:
-    """The ``{key: value}`` overrides of cell ``ci`` (base and grid)."""
+def cell_overrides(runs: ArtifactRuns, ci: int) -> dict:
+    """The ``{key: value}`` overrides of cell ``ci`` (base and grid), as requested: what a paper's
+    ``reported[].match`` is matched against. Not :func:`magexp.artifacts.claims.cell_settings`, the
+    settings a runs table records (there ``estimator`` is the name of the estimator that ran, e.g.
+    ``ipso_w`` for the overrides ``estimator=pso`` with its options)."""
     return dict(o.split("=", 1) for o in runs.overrides[ci])
 
 
@@ -293,7 +297,7 @@ def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
         ranges = search_ranges(runs, ci)
         for k, name in enumerate(names):
             rows.append(_row(runs.spec, name, sub.estimator.iloc[0], sub.setting.iloc[0],
-                             None if truth is None else float(truth[k]), values[:, k], cell_settings(runs, ci),
+                             None if truth is None else float(truth[k]), values[:, k], cell_overrides(runs, ci),
                              ok=ok, parameters=True, label=label_of(runs.spec, runs.cells, ci, name, sub.estimator.iloc[0]),
                              search_range=ranges.get(name), block_scale=scales[block_of(name)]))
     return rows
@@ -301,7 +305,7 @@ def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
 
 def search_ranges(runs: ArtifactRuns, ci: int) -> dict[str, float]:
     """``{parameter: upper - lower}`` of cell ``ci``'s search box (the problem rebuilt from the
-    cell's overrides, :func:`_problem_of`; no run); empty where the problem cannot be rebuilt here
+    cell's overrides, :func:`magexp.artifacts.plan.rebuild_problem`; no run); empty where the problem cannot be rebuilt here
     (e.g. a recording that is absent)."""
     try:
         names, lower, upper = _box(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
@@ -312,8 +316,8 @@ def search_ranges(runs: ArtifactRuns, ci: int) -> dict[str, float]:
 
 @functools.lru_cache(maxsize=64)
 def _box(overrides: tuple[str, ...], seed: int) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Parameter names and search box of a cell's problem (:func:`_problem_of`)."""
-    problem = _problem_of(overrides, seed)
+    """Parameter names and search box of a cell's problem (:func:`magexp.artifacts.plan.rebuild_problem`)."""
+    problem = rebuild_problem(overrides, seed)
     return list(problem.parameter_names()), np.asarray(problem.lower, float), np.asarray(problem.upper, float)
 
 
@@ -326,8 +330,6 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     from ``scipy.special.stdtrit`` (what ``scipy.stats.t.ppf`` evaluates, without importing
     ``scipy.stats``).
     """
-    from scipy.special import stdtrit
-
     c, y, names = _design_of(runs, ci)
     n, p = c.shape
     coef, *_ = np.linalg.lstsq(c, y, rcond=None)  # (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
@@ -348,8 +350,6 @@ def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
     """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
     parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
     p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates)."""
-    from scipy.special import fdtrc
-
     c, y, _ = _design_of(runs, ci)
     n, p = c.shape
     coef, *_ = np.linalg.lstsq(c, y, rcond=None)
@@ -375,7 +375,7 @@ def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
             quantity = f"{item.quantity}_axis{test['axis']}"
             rows.append(_row(runs.spec, quantity, sub.estimator.iloc[0],
                              sub.setting.iloc[0] + f";F={test['F']:.4g};dof={test['dof'][0]},{test['dof'][1]}",
-                             None, [test["p_value"]], cell_settings(runs, ci),
+                             None, [test["p_value"]], cell_overrides(runs, ci),
                              label=label_of(runs.spec, runs.cells, ci, quantity, sub.estimator.iloc[0])))
     return rows
 
@@ -389,26 +389,13 @@ def _design_of(runs: ArtifactRuns, ci: int) -> tuple[np.ndarray, np.ndarray, lis
 
 @functools.lru_cache(maxsize=64)
 def _design(overrides: tuple[str, ...], seed: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """The design of :func:`_problem_of` (read-only arrays: one copy is shared by every caller);
-    :func:`summarise` empties this cache when it returns (a data file edited later is read again)."""
-    problem = _problem_of(overrides, seed)
+    """The design of the cell's problem (:func:`magexp.artifacts.plan.rebuild_problem`; read-only arrays:
+    one copy is shared by every caller); :func:`summarise` empties this cache when it returns (a data
+    file edited later is read again)."""
+    problem = rebuild_problem(overrides, seed)
     c, y = (np.array(a, float) for a in problem.design())
     c.setflags(write=False), y.setflags(write=False)
     return c, y, list(problem.parameter_names())
-
-
-def _problem_of(overrides, seed: int):
-    """The problem of a cell's run ``seed``, rebuilt from the cell's overrides (deterministic data)."""
-    from magexp.artifacts.plan import compose_config
-    from magexp.problems import make_problem
-    from magexp.run.runner import build
-    from magexp.core.seeding import run_generators, scenario_stream
-
-    cfg = compose_config(list(overrides))
-    scenario = build(cfg.scenario, "scenario")
-    dataset = scenario.generate(rng=run_generators(seed, stream=scenario_stream(cfg.scenario))[0])
-    objective = cfg.get("objective") or scenario.objective
-    return make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
 
 
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
@@ -442,7 +429,7 @@ def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
                 ls = fits[item.quantity]  # a parameter of the linear model: judged on its block's scale
                 scale = block_scales(list(fits), np.array([e for e, _ in fits.values()]))[block_of(item.quantity)]
             rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
-                             sub[metric].astype(float).to_numpy(), cell_settings(runs, ci), ok=_cell_ok(runs, ci),
+                             sub[metric].astype(float).to_numpy(), cell_overrides(runs, ci), ok=_cell_ok(runs, ci),
                              aggregate=item.aggregate, ls=ls, success_threshold=None if truth is None or
                              metric != spec.success.metric else spec.success.factor * truth + spec.success.floor,
                              label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0]),
@@ -450,11 +437,11 @@ def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
     for item in spec.ratios:
         num_sel, den_sel, metric = item.numerator, item.denominator, item.metric
         for ci in range(len(runs.cells)):
-            settings = cell_settings(runs, ci)
+            settings = cell_overrides(runs, ci)
             if not matches(den_sel, settings):
                 continue
             partner = {**settings, **num_sel}
-            nj = [cj for cj in range(len(runs.cells)) if cell_settings(runs, cj) == partner]
+            nj = [cj for cj in range(len(runs.cells)) if cell_overrides(runs, cj) == partner]
             if not nj:
                 continue
             den = table[table.cell == ci].set_index("seed")

@@ -14,7 +14,7 @@ Flow (the same as a simulated run, with a recording instead of a scenario)::
 
     recording (magexp.core.recordings) ──► dataset: readings, reference total, attitudes (if any)
     dataset + objective (scalar | vector) + search box from the data ──► problem
-    estimator.fit(problem, rng=...) ──► W, o ──► canonical form, quality (magexp.core.quality), k-fold
+    estimator.fit(problem, rng=...) ──► W, o ──► canonical form, quality (magexp.core.identifiability), k-fold
 
 Reference total field, first found of: ``data.reference_total`` (command line), the ``total``
 column, ``# reference_total:``, the norm of ``# field:``, the IGRF total at ``igrf.latitude``,
@@ -31,7 +31,7 @@ by ``s = reference / R0``: diagonal in ``[0.5 s, 1.5 s]``, off-diagonal in ``[-0
 
 Degenerate data (identical readings, a plane, one attitude, too few distinct directions) and an
 estimator reporting failure raise one :class:`~magexp.errors.MagexpError` line that says why and
-what to record instead (:mod:`magexp.core.quality`); the command then writes nothing.
+what to record instead (:mod:`magexp.calibration.checks`); the command then writes nothing.
 
 Held-out check: the readings, in time order, are cut into ``folds`` contiguous blocks; each block
 is calibrated by the estimator fitted on the others, and ``heldout_spread`` is the spread of the
@@ -46,15 +46,27 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
+from omegaconf import OmegaConf
 
-from magexp.core import quality as q
-from magexp.run.budget import check_calibration, check_recording_file
+from magexp.calibration.checks import check_fit, check_readings
+from magexp.calibration.write import check_out, print_table, summary, write
 from magexp.core.dataset import Dataset
+from magexp.core.identifiability import canonical, coverage, identifiability, spread
+from magexp.core.igrf import field_at
+from magexp.core.recordings import UNITS, Recording, check_unique, check_unit, load_recording, resolve
+from magexp.core.seeding import run_generators
 from magexp.errors import LARGEST, MagexpError, check_positive_int, exit_code
-from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
+from magexp.estimators.base import check_applies
+from magexp.estimators.reduced import UPPER, expand
 from magexp.estimators.result import FitResult
-from magexp.core.recordings import Recording
-from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box  # noqa: F401
+from magexp.paths import CONF
+from magexp.problems import make_problem, problem_class
+from magexp.run.budget import check_calibration, check_recording_file
+from magexp.run.compose import GROUPS, check_choice, hydra_compose, options, target_class
+from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
+from magexp.run.runner import build
+from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box
 
 #: Objectives a recording can be calibrated with.
 OBJECTIVES = ("scalar", "vector")
@@ -100,7 +112,7 @@ class Calibration:
 
     ``w`` is in the canonical form of :data:`FORMS` (``report["w_form"]``); ``metrics`` holds the
     spreads before, after and held out; ``report`` the standard errors, conditioning, the
-    undetermined combinations and the direction coverage (:mod:`magexp.core.quality`).
+    undetermined combinations and the direction coverage (:mod:`magexp.core.identifiability`).
     """
 
     recording: Recording
@@ -169,25 +181,6 @@ def check_size(rec: Recording) -> None:
                           f"{MIN_READINGS} (the 12 parameters of W and the offset)")
 
 
-def check_applies(estimator, objective: str) -> None:
-    """Fail in one line unless ``estimator`` applies to the ``objective`` problem
-    (:func:`magexp.estimators.base.applies_to`), naming the estimators that do."""
-    from magexp.run.compose import options, target_class
-    from magexp.estimators.base import applies_to
-    from magexp.problems import problem_class
-
-    problem = problem_class(objective)
-    ok, reason = applies_to(estimator, problem)
-    if ok:
-        return
-    fits = [n for n in options("estimator") if applies_to(target_class("estimator", n), problem)[0]]
-    raise MagexpError(f"estimator={estimator.name!r} is not allowed for objective {objective!r}: choose one of "
-                      f"{', '.join(fits)} ({reason})")
-
-
-spread = q.spread  # noqa: E305  (its home is magexp.core.quality; importable from here too)
-
-
 def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> dict:
     """Magnitude statistics before and after, and the RMS against the reference."""
     before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
@@ -200,26 +193,26 @@ def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> d
 def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",
          dataset: Dataset | None = None) -> tuple:
     """``(W, o, calibrated, problem, result, box)`` of one fit (W canonical for a scalar objective);
-    ``dataset``: the recording's :func:`recording_dataset`, when the caller has it already."""
-    from magexp.problems import make_problem
-
+    ``dataset``: the recording's :func:`recording_dataset`, when the caller has it already. ``problem``
+    is the objective's, in its own parameterisation (the sphere model's residuals are the scalar
+    problem's at ``W = s I``)."""
     dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
     box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
+    problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
     if model == "sphere":
         centre, radius = fit_sphere(rec.readings)
         w = np.eye(3) * np.mean(reference.total) / radius
         result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
                            history=np.zeros(1), history_nfev=np.ones(1), success=True,
                            message="closed-form sphere fit (offset and one scale; no estimator)")
-        return w, centre, (rec.readings - centre) @ w.T, None, result, box
-    problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
+        return w, centre, (rec.readings - centre) @ w.T, problem, result, box
     result = estimator.fit(problem, rng=rng)
     w, o = (a[0] for a in problem.unpack(result.x))
     if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
         raise MagexpError(f"{rec.name}: estimator={estimator.name!r} gave a non-finite calibration, nothing written: "
                           "try estimator=ellipsoid or estimator=lm")
     if objective == "scalar":
-        w = q.canonical(w)
+        w = canonical(w)
     calibrated = (rec.readings - o) @ w.T
     if reference.estimated:  # the scale is free: the mean calibrated magnitude is the reference
         w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
@@ -249,23 +242,25 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
             "heldout_folds": folds}
 
 
-def report_of(rec: Recording, objective: str, w, o, reference: Reference, problem, model: str = "full") -> dict:
-    """Standard errors, conditioning, undetermined combinations (:func:`magexp.core.quality.identifiability`)."""
+def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
+    """Standard errors, conditioning, undetermined combinations (:func:`magexp.core.identifiability.identifiability`)
+    of the reported parameters, over the residuals of the fit's own ``problem``
+    (:meth:`~magexp.problems.base.CalibrationProblem.residual_stack`): ``[s, o]`` (``W = s I``) for the
+    sphere model, the 6 upper entries of the symmetric ``W`` and ``o`` for the scalar objective,
+    ``[vec W, o]`` for the vector one."""
     if model == "sphere":
         theta = np.concatenate([[w[0, 0]], o])
         names = ["s", "o1", "o2", "o3"]
-        fun = q.sphere_residuals(rec.readings, reference.total)
+        to_problem = lambda t: problem.pack(t[0] * np.eye(3), t[1:])  # noqa: E731
     elif objective == "scalar":
-        from magexp.estimators.reduced import UPPER
-
         theta = np.concatenate([w.ravel()[UPPER], o])  # the 6 upper entries of the symmetric W, then o
         names = [f"W{k // 3 + 1}{k % 3 + 1}" for k in UPPER] + ["o1", "o2", "o3"]
-        fun = q.scalar_residuals(rec.readings, reference.total)
+        to_problem = lambda t: problem.pack(expand(t)[0, :9].reshape(3, 3), t[6:])  # noqa: E731
     else:
         theta = np.concatenate([w.ravel(), o])
         names = [f"W{i + 1}{j + 1}" for i in range(3) for j in range(3)] + ["o1", "o2", "o3"]
-        fun = q.vector_residuals(rec.readings, problem.reference)
-    out = q.identifiability(fun, theta, names)
+        to_problem = lambda t: problem.pack(t[:9].reshape(3, 3), t[9:])  # noqa: E731
+    out = identifiability(lambda thetas: problem.residual_stack(thetas, of=to_problem), theta, names)
     se = out["standard_errors"]
     if model == "sphere":
         out["W_standard_errors"] = (np.eye(3) * se["s"]).tolist()
@@ -291,7 +286,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     reference_total : overrides the recording's reference total field (its unit).
     folds : blocks of the held-out check (0 or 1: none).
     rng : the estimator's random generator.
-    checks : refuse degenerate data and failed fits (:mod:`magexp.core.quality`); False measures them anyway.
+    checks : refuse degenerate data and failed fits (:mod:`magexp.calibration.checks`); False measures them anyway.
     model : ``full`` or ``sphere`` (:data:`MODELS`; ``sphere`` needs the scalar objective).
 
     Returns
@@ -308,22 +303,23 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if model not in MODELS or (model == "sphere" and objective != "scalar"):
         raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or sphere "
                           "with the scalar objective")
-    check_applies(estimator, objective)
+    check_applies(estimator, problem_class(objective),
+                  alternatives=lambda: {n: target_class("estimator", n) for n in options("estimator")})
     reference = reference_of(rec, reference_total)
     dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
-        q.check_readings(rec.readings, rec.name)
+        check_readings(rec.readings, rec.name)
     w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
-    cover = q.coverage(calibrated)
+    cover = coverage(calibrated)
     name = "sphere fit" if model == "sphere" else estimator.name
     if checks:
-        q.check_fit(rec.name, name, bool(result.success), result.message, cover,
-                    q.coverage(rec.readings - fit_sphere(rec.readings)[0]))
+        check_fit(rec.name, name, bool(result.success), result.message, cover,
+                  coverage(rec.readings - fit_sphere(rec.readings)[0]))
     metrics = {**quality(rec.readings, calibrated, reference.total), **cover}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(heldout(rec, estimator, objective, reference, folds, rng, model))
-    report = report_of(rec, objective, w, o, reference, problem, model)
+    report = report_of(objective, w, o, problem, model)
     return Calibration(recording=rec, estimator=name, objective=objective, w=w, offset=o,
                        reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
                        report=report)
@@ -333,10 +329,6 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
 def as_recording(readings, *, unit: str | None = None) -> Recording:
     """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
     ``x, y, z``, else its three numeric columns), a path or a Recording."""
-    import pandas as pd
-
-    from magexp.core.recordings import check_unit, check_unique, load_recording
-
     if isinstance(readings, Recording):
         return readings
     if isinstance(readings, (str, Path)):
@@ -364,11 +356,6 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
 
 def estimator_named(name: str, **overrides):
     """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``."""
-    from omegaconf import OmegaConf
-
-    from magexp.paths import CONF
-    from magexp.run.runner import build
-
     path = CONF / "estimator" / f"{name}.yaml"
     if not path.is_file():
         known = sorted(p.stem for p in (CONF / "estimator").glob("*.yaml"))
@@ -408,12 +395,8 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
     MagexpError
         One line for degenerate data, a failed estimator or bad input.
     """
-    from magexp.core.seeding import run_generators
-
     rec = as_recording(readings, unit=unit)
     if not isinstance(estimator, str) and not callable(getattr(estimator, "fit", None)):
-        from magexp.run.compose import options
-
         raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
                           f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
@@ -423,32 +406,18 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
 
 
 # -- the command -----------------------------------------------------------------------------------
-def compose(argv: list[str]):
-    """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``."""
-    from hydra import compose as hydra_compose, initialize_config_dir
-    from hydra.core.global_hydra import GlobalHydra
-
-    from magexp.paths import CONF
-
+def calibrate_config(argv: list[str]):
+    """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed by
+    :func:`magexp.run.compose.hydra_compose` (the one place that composes with Hydra)."""
     bad = [a for a in argv if "=" not in a]
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
                           "(e.g. data.path=mine.csv data.unit=uT estimator=lm)")
     argv = check_override_values(argv)
-    from magexp.run.compose import GROUPS, check_choice
-
     for arg in argv:
         if arg.partition("=")[0] in GROUPS:
             check_choice(*arg.split("=", 1))
-    try:
-        if GlobalHydra.instance().is_initialized():
-            return hydra_compose("calibrate", overrides=list(argv))
-        with initialize_config_dir(config_dir=str(CONF), version_base=None):
-            return hydra_compose("calibrate", overrides=list(argv))
-    except MagexpError:
-        raise
-    except Exception as exc:  # Hydra's override and missing-key errors, as one line
-        raise MagexpError(f"bad override: {str(exc).splitlines()[0]}") from None
+    return hydra_compose(tuple(argv), "calibrate")
 
 
 def reference_from_igrf(cfg, rec: Recording):
@@ -456,9 +425,6 @@ def reference_from_igrf(cfg, rec: Recording):
     place = cfg.get("igrf") or {}
     if place.get("latitude") is None:
         return None
-    from magexp.core.igrf import field_at
-    from magexp.core.recordings import UNITS
-
     if rec.unit not in UNITS:
         raise MagexpError(f"igrf.latitude={place.latitude} is not allowed for {rec.name}: its unit {rec.unit!r} "
                           "has no known factor to nT")
@@ -468,11 +434,6 @@ def reference_from_igrf(cfg, rec: Recording):
 
 def run(cfg) -> Calibration:
     """Load, calibrate, check and write as ``cfg`` says; print the summary."""
-    from magexp.calibration.write import check_out, summary, write
-    from magexp.core.recordings import load_recording, resolve
-    from magexp.run.runner import build
-    from magexp.core.seeding import run_generators
-
     data = cfg.data
     if data.get("path") is None or not str(data.path).strip():
         raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
@@ -495,17 +456,10 @@ def run(cfg) -> Calibration:
     return cal
 
 
-def print_table(rows: dict) -> None:
-    """``key  value`` lines, keys aligned."""
-    width = max(len(k) for k in rows)
-    for key, value in rows.items():
-        print(f"{key:<{width}}  {value}")
-
-
 def command(argv: list[str]) -> None:
     """``magexp calibrate KEY=VALUE ...``: compose, check, calibrate, write; errors are raised (the
     one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code)."""
-    run(compose(argv))
+    run(calibrate_config(argv))
 
 
 def main(argv: list[str] | None = None) -> int:

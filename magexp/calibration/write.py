@@ -25,9 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.atomic import atomic_open, write_text
+from magexp.core.identifiability import CELLS
+from magexp.core.recordings import VERSION_LINE
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.core.recordings import VERSION_LINE
+from magexp.run.guard import first_missing
 
 FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png",
          "figure_vector": "calibration.pdf"}  # the figure and its vector twin (magexp.artifacts.plots.style.save)
@@ -113,9 +115,10 @@ def write(cal, out_dir: Path, *, seed: int) -> dict:
 
     Each file is written atomically (:mod:`magexp.core.atomic`): a command killed midway leaves no
     truncated file; the figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
-    from magexp.run.guard import first_missing
-    from magexp.calibration.figure import calibration_figure
+    # lazy: matplotlib only when a figure is drawn; the Python API (magexp.calibrate) never pays for
+    # it (these two cost 478 ms CPU to import after magexp.calibration.fit, min of 5)
     from magexp.artifacts.plots.style import save
+    from magexp.calibration.figure import calibration_figure
 
     out_dir = Path(out_dir)
     check_out(out_dir)
@@ -141,8 +144,6 @@ def write(cal, out_dir: Path, *, seed: int) -> dict:
 
 def summary(cal) -> dict:
     """The key numbers to print, in order."""
-    from magexp.core.quality import CELLS
-
     m, u, r = cal.metrics, cal.unit, cal.report
     return {
         "recording": f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})",
@@ -166,3 +167,10 @@ def summary(cal) -> dict:
                     f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
         "fit": f"{'success' if cal.fit.success else 'FAILED'}: {cal.fit.message}",
     }
+
+
+def print_table(rows: dict) -> None:
+    """``key  value`` lines, keys aligned (the summary ``magexp calibrate`` prints)."""
+    width = max(len(k) for k in rows)
+    for key, value in rows.items():
+        print(f"{key:<{width}}  {value}")

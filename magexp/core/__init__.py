@@ -4,9 +4,11 @@ the readers of recorded data.
 Lives here: :mod:`~magexp.core.dataset` (the ``Dataset`` every scenario produces),
 :mod:`~magexp.core.geometry` (rotations, attitudes), :mod:`~magexp.core.igrf` (reference field),
 :mod:`~magexp.core.seeding` (every random draw from the run's seed), :mod:`~magexp.core.metrics`,
-:mod:`~magexp.core.bounds` (Cramér-Rao bounds), :mod:`~magexp.core.quality` (identifiability and spread),
+:mod:`~magexp.core.bounds` (Cramér-Rao bounds), :mod:`~magexp.core.identifiability` (canonical form,
+standard errors, coverage, spread), :mod:`~magexp.core.ellipsoid` (the algebraic ellipsoid fit),
 :mod:`~magexp.core.recordings` (one reader per recording format), :mod:`~magexp.core.datafiles`,
 :mod:`~magexp.core.atomic` (atomic file writes).
 
-May import: numpy, scipy, :mod:`magexp.errors`, :mod:`magexp.paths` and other ``core`` modules only.
+May import: numpy, scipy, omegaconf (a scenario's config node, :mod:`~magexp.core.seeding`), pandas and
+ppigrf (lazily, measured), :mod:`magexp.errors`, :mod:`magexp.paths` and other ``core`` modules only.
 """

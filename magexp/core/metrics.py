@@ -6,6 +6,9 @@ import weakref
 
 import numpy as np
 
+from magexp.core.bounds import cramer_rao
+from magexp.core.identifiability import recording_metrics
+
 #: :func:`truth_cost` of each live problem (a problem's data and truth do not change)
 _TRUTH_COST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -64,8 +67,6 @@ def _evaluate(problem, result, crb) -> dict:
         reached = 1.01 * out["truth_fun"] + 1e-9
         out["converged"] = bool(out["fun"] <= reached)
     out.update(problem.metrics(result.x))
-    from magexp.core.quality import recording_metrics
-
     out.update(recording_metrics(problem, result.x))  # recorded data: spread before, after, held out
     out.update(result.metrics)
     out.update(time_to_reach(result, factor=1.1))
@@ -97,8 +98,6 @@ def time_to_reach(result, factor: float = 1.1) -> dict:
 def problem_bound(problem) -> dict | bool:
     """The Cramér-Rao bound of ``problem`` at its truth (:func:`magexp.core.bounds.cramer_rao`), or False
     when it has none. It depends on the dataset and the truth only, not on the estimator."""
-    from magexp.core.bounds import cramer_rao
-
     if not hasattr(problem, "invariants") or not hasattr(problem, "options"):
         return False
     return cramer_rao(problem) or False

@@ -6,6 +6,7 @@ import json
 import zlib
 
 import numpy as np
+from omegaconf import DictConfig, OmegaConf
 
 from magexp.errors import MagexpError
 
@@ -20,8 +21,6 @@ def stream_key(stream) -> int:
 def scenario_stream(scenario_cfg) -> dict:
     """The stream of a run: its scenario's whole resolved config (name and settings), so two
     scenarios, or one scenario at two settings (e.g. two noise levels), never share their draws."""
-    from omegaconf import DictConfig, OmegaConf
-
     if isinstance(scenario_cfg, DictConfig):
         return OmegaConf.to_container(scenario_cfg, resolve=True)
     return dict(scenario_cfg)

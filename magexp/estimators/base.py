@@ -51,8 +51,7 @@ def applies_to(estimator, problem) -> tuple[bool, str]:
     needs and what the problem offers. An estimator may also be bound to one objective
     (``only_objective``, e.g. a paper's printed solution of one model).
     """
-    name = getattr(estimator, "name", None)
-    name = name if isinstance(name, str) else getattr(estimator, "__name__", type(estimator).__name__)
+    name = name_of(estimator)
     objective = getattr(problem, "objective", "?")
     needs = tuple(getattr(estimator, "needs", ("cost",)))
     unknown = [c for c in needs if c not in CAPABILITIES]
@@ -70,11 +69,26 @@ def applies_to(estimator, problem) -> tuple[bool, str]:
     return True, ""
 
 
-def check_applies(estimator, problem, where: str = "") -> None:
-    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes."""
+def name_of(estimator) -> str:
+    """The config name of ``estimator`` (class or instance): its ``name``, else its class's name."""
+    name = getattr(estimator, "name", None)
+    return name if isinstance(name, str) else getattr(estimator, "__name__", type(estimator).__name__)
+
+
+def check_applies(estimator, problem, where: str = "", alternatives=None) -> None:
+    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes: it names the
+    estimator, the problem's objective, ``where`` (e.g. the scenario) and the reason, and, given
+    ``alternatives`` (a callable returning ``{name: estimator class}``, called only on failure),
+    the estimators that do apply (``magexp calibrate``: every ``conf/estimator/*.yaml``)."""
     ok, reason = applies_to(estimator, problem)
-    if not ok:
-        raise MagexpError(f"{reason}{f' ({where})' if where else ''}")
+    if ok:
+        return
+    at = f" ({where})" if where else ""
+    if alternatives is not None:
+        fits = [name for name, cls in alternatives().items() if applies_to(cls, problem)[0]]
+        reason = f"choose one of {', '.join(fits)} ({reason})"
+    raise MagexpError(f"estimator={name_of(estimator)!r} is not allowed for objective "
+                      f"{getattr(problem, 'objective', '?')!r}{at}: {reason}")
 
 
 class Stop(Exception):

@@ -24,6 +24,7 @@ References: Storn & Price (1997), J. Global Optimization 11:341-359; SciPy's
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import Bounds, differential_evolution
 
 from magexp.errors import check, check_nonnegative, check_positive_int
 from magexp.estimators.blackbox import RecordedCost, child_seed
@@ -70,8 +71,6 @@ class DifferentialEvolution:
         ``callback(t, best_x, best_cost)`` is called after every generation; a true return value
         stops the run.
         """
-        from scipy.optimize import Bounds, differential_evolution
-
         cost = RecordedCost(problem)
         size = self.popsize * len(problem.lower)
         maxiter = self.max_evaluations // size - 1

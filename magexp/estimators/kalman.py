@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check, check_nonnegative, check_positive_int
+from magexp.estimators.base import check_applies
 from magexp.estimators.result import FitResult
 
 
@@ -184,8 +185,6 @@ class FieldKalmanFilter:
         self.settle = min(check_nonnegative(settle, "analysis.settle"), 1.0)
 
     def __call__(self, problem, result: FitResult) -> FitResult:
-        from magexp.estimators.base import check_applies
-
         check_applies(self, problem)
         w, bp = (a[0] for a in problem.unpack(result.x))  # B = K u + Bp  <=>  u = K^-1 (B - Bp)
         k = np.linalg.inv(w)

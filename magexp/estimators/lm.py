@@ -19,7 +19,7 @@ estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits
 (``M`` the matrix part of the problem's parameters: ``W``, or ``S = W^{-1}`` in the forward form;
 :mod:`magexp.estimators.reduced`), whose Jacobian has full rank wherever the data determine
 ``W^T W`` and ``o``. A symmetric positive-definite ``W`` is the polar factor ``P = (W^T W)^{1/2}``
-of every ``W = Q P`` (:func:`magexp.core.quality.canonical`, the form ``magexp calibrate`` reports),
+of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form ``magexp calibrate`` reports),
 so the fit returns that unique member of the valley: the same numbers in every process, and
 parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
 parameters as before (kept to compare; ``tests/test_determinism.py`` shows its fit changing with
@@ -31,9 +31,12 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
+from magexp.core.ellipsoid import normalise
+from magexp.core.identifiability import canonical, identifiability
 from magexp.errors import check, check_positive_int
 from magexp.estimators.base import Stop, applies_to, stopper
 from magexp.estimators.ellipsoid import EllipsoidFit
+from magexp.estimators.reduced import UPPER, expand
 from magexp.estimators.result import FitResult
 
 STARTS = ("ellipsoid", "centre", "problem")
@@ -93,8 +96,6 @@ class LevenbergMarquardt:
         """The gauge-fixed fit of a total-field problem (module docstring): LM over ``q`` from the polar
         factor of the start; the result is returned in the problem's 12 parameters, with the metrics
         of :func:`offset_check` (a fit whose offset the data leave undetermined is not a success)."""
-        from magexp.estimators.reduced import UPPER, expand
-
         x0 = polar(problem, self.initial(problem))
         relay = None if callback is None else (lambda k, q, fun: callback(k, expand(q)[0], fun))
         q, status, message, history = minimise_residuals(lambda q: problem.residuals(expand(q)[0]),
@@ -120,20 +121,16 @@ def offset_check(problem, q: np.ndarray) -> dict:
     """Whether the data determine the offset of the gauge-fixed fit ``q`` of a total-field problem.
 
     ``offset_standard_error``: ``sqrt(tr Cov(o))`` of the fit's own Gauss-Newton covariance
-    ``σ² (J^T J)^{-1}`` over ``q`` (:func:`magexp.core.quality.identifiability`: ``σ²`` from the
+    ``σ² (J^T J)^{-1}`` over ``q`` (:func:`magexp.core.identifiability.identifiability`: ``σ²`` from the
     residuals, ``J`` by central differences, undetermined directions infinite). Readings on two
     planar rings (turns about two axes only) lie on a one-parameter family of ellipsoids, so a
     total-field fit cannot place the centre and this error exceeds the size of the data.
     ``offset_determined``: it is below the RMS distance of the readings from their centroid
-    (:func:`magexp.problems.scalar.normalise`): the data locate the centre of the readings'
+    (:func:`magexp.core.ellipsoid.normalise`): the data locate the centre of the readings'
     ellipsoid to better than the ellipsoid's own size.
     """
-    from magexp.estimators.reduced import expand
-    from magexp.problems.scalar import normalise
-    from magexp.core.quality import identifiability
-
     def fun(qs):  # identifiability evaluates a stack of 2 x 9 perturbed vectors
-        return np.array([problem.residuals(expand(one)[0]) for one in np.atleast_2d(qs)])
+        return problem.residual_stack(qs, of=lambda q: expand(q)[0])
 
     names = ["M11", "M12", "M13", "M22", "M23", "M33", "o1", "o2", "o3"]
     with np.errstate(all="ignore"):  # a fit stuck at a singular W is measured (inf), not warned about
@@ -144,11 +141,9 @@ def offset_check(problem, q: np.ndarray) -> dict:
 
 def polar(problem, x: np.ndarray) -> np.ndarray:
     """``x`` with its ``W`` replaced by the symmetric positive-definite polar factor
-    ``(W^T W)^{1/2}`` (:func:`magexp.core.quality.canonical`): the same total field, no rotation.
+    ``(W^T W)^{1/2}`` (:func:`magexp.core.identifiability.canonical`): the same total field, no rotation.
     A symmetric positive-definite matrix part is kept bit for bit (it is already that factor), and so
     is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of)."""
-    from magexp.core.quality import canonical
-
     x = np.asarray(x, float)
     mat = x[:9].reshape(3, 3)
     if np.array_equal(mat, mat.T) and np.all(np.linalg.eigvalsh(mat) > 0):

@@ -39,8 +39,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.core.ellipsoid import fit_ellipsoid
 from magexp.errors import check
-from magexp.estimators.ellipsoid import fit_ellipsoid
 from magexp.estimators.lm import LevenbergMarquardt, minimise_residuals
 from magexp.estimators.result import FitResult
 

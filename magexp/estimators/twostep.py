@@ -46,9 +46,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.core.ellipsoid import quadratic_features
 from magexp.errors import check_nonnegative, check_positive_int
 from magexp.estimators.result import FitResult
-from magexp.problems.kernels import quadratic_features
 
 UPPER = (np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2]))  # E11 E22 E33 E12 E13 E23
 

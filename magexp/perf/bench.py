@@ -159,6 +159,7 @@ def _sqrt_pass():
 
 
 def cost_rows(rounds: int) -> list[dict]:
+    from magexp.core.ellipsoid import quadratic_features
     from magexp.problems import kernels
 
     sqrt_pass = _sqrt_pass()
@@ -170,7 +171,7 @@ def cost_rows(rounds: int) -> list[dict]:
         w, o = scalar.unpack(x)
         c, s, u = scalar._normalised
         ref = scalar._reference
-        features = kernels.quadratic_features(u)
+        features = quadratic_features(u)
         coef = kernels.scalar_coefficients(w, o, c, s).T.copy()
         vfeat = np.column_stack([vector._readings, np.ones(n), vector.reference]).T.copy()
         vcoef = np.random.default_rng(1).random((3 * n_p, 7))

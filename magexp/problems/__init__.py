@@ -14,6 +14,8 @@ Problems are made with :func:`make_problem` from a dataset and an objective name
 
 from __future__ import annotations
 
+import importlib
+
 from magexp.errors import MagexpError
 
 OBJECTIVES: dict[str, str] = {
@@ -35,8 +37,6 @@ def problem_class(objective: str):
     estimators apply before any data is simulated."""
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(sorted(OBJECTIVES))}")
-    import importlib
-
     module, cls = OBJECTIVES[objective].split(":")
     return getattr(importlib.import_module(module), cls)
 

@@ -168,6 +168,14 @@ class CalibrationProblem:
         readings = self.dataset.readings if readings is None else readings
         return (readings - o[0]) @ w[0].T
 
+    def residual_stack(self, thetas: np.ndarray, of=None) -> np.ndarray:
+        """:meth:`residuals` of each parameter vector of a stack, ``(n, p) -> (n, m)``: the residual
+        function :func:`magexp.core.identifiability.identifiability` takes. ``of`` maps a row of the
+        stack, in another parameterisation, to this problem's vector (e.g. the 9 parameters of a
+        symmetric matrix part, :func:`magexp.estimators.reduced.expand`; ``magexp calibrate``'s
+        ``[vec W, o]`` or ``[s, o]``)."""
+        return np.array([self.residuals(row if of is None else of(row)) for row in np.atleast_2d(thetas)])
+
     def parameter_names(self) -> list[str]:
         m = "S" if self.parameterisation == "forward" else "Minv"
         o = "b" if self.parameterisation == "forward" else "I"

@@ -28,8 +28,11 @@ trades against the field direction.
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import least_squares
 
-from magexp.core.geometry import attitude_with_bias
+from magexp.core.ellipsoid import fit_ellipsoid
+from magexp.core.geometry import attitude_with_bias, exp_so3
+from magexp.core.identifiability import canonical, identifiability, spread
 from magexp.problems.base import CalibrationProblem
 
 EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro_bias_z")
@@ -108,10 +111,6 @@ class GyroAidedCalibration(CalibrationProblem):
         (rotation vector), the field direction and the gyro bias (from zero, and the field direction
         of the first calibrated reading, ``R_0 = I``) fits ``R_jᵀ h = Q P (B_j - b)``; the full
         problem starts from there."""
-        from scipy.optimize import least_squares
-
-        from magexp.core.geometry import exp_so3
-
         base = self._ellipsoid_start()
         w0, o0 = (a[0] for a in self.unpack(base))
 
@@ -123,9 +122,6 @@ class GyroAidedCalibration(CalibrationProblem):
         return full(sol.x)
 
     def _ellipsoid_start(self) -> np.ndarray:
-        from magexp.estimators.ellipsoid import fit_ellipsoid
-        from magexp.core.quality import canonical
-
         r = self.dataset.readings
         fitted = fit_ellipsoid(r, self.total)
         w, o = fitted if fitted is not None else (np.eye(3) * self.total / np.linalg.norm(r - r.mean(0), axis=1).mean(),
@@ -143,9 +139,7 @@ class GyroAidedCalibration(CalibrationProblem):
         ``field_azimuth_deg``/``field_elevation_deg`` on their principal branches); the gyro bias;
         ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
         Jacobian, and ``se_<parameter>``, each parameter's standard error from it (``inf`` where the data
-        leave it undetermined; :func:`magexp.core.quality.identifiability`)."""
-        from magexp.core.quality import spread
-
+        leave it undetermined; :func:`magexp.core.identifiability.identifiability`)."""
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
         mags = np.linalg.norm(self.calibrate(theta), axis=1)
@@ -160,8 +154,6 @@ class GyroAidedCalibration(CalibrationProblem):
         h = self.field(theta)[0] / self.total  # the direction, whatever the angles' branch
         out.update({"field_azimuth_deg": float(np.rad2deg(np.arctan2(h[1], h[0]))),
                     "field_elevation_deg": float(np.rad2deg(np.arcsin(np.clip(h[2], -1, 1))))})
-        from magexp.core.quality import identifiability
-
         ident = identifiability(lambda t: self.residual_swarm(t).reshape(len(np.atleast_2d(t)), -1), theta,
                                 self.parameter_names())
         weakest = ident["weakest_combinations"][0]

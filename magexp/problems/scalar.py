@@ -14,19 +14,9 @@ from functools import cached_property
 
 import numpy as np
 
+from magexp.core.ellipsoid import normalise
 from magexp.problems import kernels
 from magexp.problems.base import SCALAR, CalibrationProblem
-from magexp.problems.kernels import quadratic_features
-
-__all__ = ["ScalarCalibration", "normalise", "quadratic_features"]
-
-
-def normalise(readings: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-    """``(c, s, u)``: the readings' mean ``c``, RMS distance ``s`` from it, and ``u = (r - c)/s``
-    (well-conditioned quadratic features, whatever the reading units)."""
-    c = readings.mean(axis=0)
-    s = float(np.sqrt(((readings - c) ** 2).sum(axis=1).mean())) or 1.0
-    return c, s, (readings - c) / s
 
 
 class ScalarCalibration(CalibrationProblem):

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.problems.base import CalibrationProblem
-from magexp.problems.vector import LinearVectorModel, state_to_theta, theta_to_state  # noqa: F401 (re-exported)
+from magexp.problems.vector import LinearVectorModel, theta_to_state
 
 
 class ShipMagnetization(LinearVectorModel, CalibrationProblem):

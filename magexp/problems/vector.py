@@ -17,6 +17,7 @@ from functools import cached_property
 
 import numpy as np
 
+from magexp.core.metrics import truth_cost
 from magexp.problems import kernels
 from magexp.problems.base import VECTOR, CalibrationProblem, inverse, reference_vectors
 
@@ -139,14 +140,11 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         return self.least_squares()
 
     def metrics(self, theta: np.ndarray) -> dict:
-        from magexp.core.metrics import truth_cost
-
         out = super().metrics(theta)
         floor = truth_cost(self)  # F at the truth, once per problem
         if floor is not None:
             out["noise_floor"] = floor
         return out
-
 
 
 class VectorLeastSquares(VectorCalibration):

@@ -23,7 +23,6 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import MagexpError, check, check_nonnegative, check_positive_int
-from magexp.core.geometry import exp_so3, integrate_rates, skew  # noqa: F401  (attitude maths live in geometry)
 
 AXES = {"x": 0, "y": 1, "z": 2}
 FULL = 360.0

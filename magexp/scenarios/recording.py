@@ -6,7 +6,7 @@ time ``window``, and gives the :class:`~magexp.core.dataset.Dataset` of one obje
 
 * ``scalar``: the readings, ``n_readings`` evenly spaced ones for the fit; the block of fold
   ``heldout_fold`` of ``folds`` contiguous blocks is held out (``dataset.extra["heldout"]``) and
-  the metrics report its spread under the fitted calibration (:func:`magexp.core.quality.recording_metrics`);
+  the metrics report its spread under the fitted calibration (:func:`magexp.core.identifiability.recording_metrics`);
 * ``gyro``: ``n_readings`` evenly spaced readings of the window and the gyroscope preintegrated
   between them (:func:`magexp.core.geometry.preintegrate`) for :class:`magexp.problems.gyro.GyroAidedCalibration`.
 
@@ -21,9 +21,13 @@ what it is); it seeds the estimator only.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from magexp.core.dataset import Dataset
+from magexp.core.geometry import preintegrate
+from magexp.core.recordings import load_recording
 from magexp.errors import MagexpError, check_positive_int
 from magexp.paths import SHARED_DATA
 from magexp.scenarios.search import BOXES, centroid_radius, search_box
@@ -79,10 +83,6 @@ class RecordingScenario:
 
     def recording(self, file=None):
         """The loaded recording (``file``, default the scenario's), cut to the window."""
-        from pathlib import Path
-
-        from magexp.core.recordings import load_recording
-
         file = file or self.file
         path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
         if not path.exists() and not Path(f"{path}_mag.csv").exists():
@@ -111,8 +111,6 @@ class RecordingScenario:
         radius = centroid_radius(rec.readings[fit])
         extra = {"heldout": rec.readings[heldout], "all_readings": rec.readings}
         if self.objective == "gyro":
-            from magexp.core.geometry import preintegrate
-
             stream = rec.gyro_rates()
             if stream is None:
                 raise MagexpError(f"scenario {self.name!r}: objective 'gyro' needs a gyroscope, {rec.name} has none")

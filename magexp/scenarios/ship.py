@@ -25,7 +25,7 @@ import numpy as np
 
 from magexp.core.dataset import Dataset, Truth
 from magexp.errors import MagexpError, check_nonnegative, check_positive_int
-from magexp.core.geometry import ship_attitude  # noqa: F401  (eq 2 lives in geometry)
+from magexp.core.geometry import ship_attitude
 from magexp.core.recordings import load_recording
 from magexp.scenarios.noise import Noise
 from magexp.scenarios.search import SearchBox

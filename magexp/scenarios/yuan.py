@@ -22,8 +22,9 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.core.dataset import Dataset, Truth
+from magexp.core.geometry import integrate_rates
 from magexp.errors import MagexpError, check, check_nonnegative
-from magexp.scenarios.motion import Gyro, Trajectory, even_subsample, integrate_rates
+from magexp.scenarios.motion import Gyro, Trajectory, even_subsample
 from magexp.scenarios.noise import Noise
 from magexp.scenarios.search import SearchBox
 

@@ -24,6 +24,7 @@ import re
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.collections import Collection
+from matplotlib.colors import to_hex
 from matplotlib.image import AxesImage
 from matplotlib.legend import Legend
 from matplotlib.lines import Line2D
@@ -244,8 +245,6 @@ def _has_data(artist) -> bool:
 
 def _look(handle) -> tuple:
     """What a reader tells a legend entry by: colours, marker, line and hatch of its handle."""
-    from matplotlib.colors import to_hex
-
     if isinstance(handle, Line2D):
         return ("line", to_hex(handle.get_color()), handle.get_marker(), handle.get_linestyle(),
                 to_hex(handle.get_markerfacecolor(), keep_alpha=True), to_hex(handle.get_markeredgecolor()))

@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.patches import Rectangle
 
-from magexp.artifacts.plots.benchmark_table import column_label, tabulate  # noqa: F401  (the kind's table)
+from magexp.artifacts.plots.benchmark_table import column_label, tabulate  # noqa: F401  (tabulate: the kind's interface, kind_module(kind).tabulate)
 from magexp.artifacts.plots.style import colorbar, drawn_from, plt
 
 

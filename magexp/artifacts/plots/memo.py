@@ -10,6 +10,11 @@ bytes. So a figure is keyed by
 * magexp's source (every ``magexp/**/*.py``: a plot, style or spec edit redraws every figure),
 * the versions of matplotlib, numpy and pandas, and matplotlib's settings (``rcParams``),
 
+(:func:`figure_code_version` is not the run cache's :func:`magexp.run.cache.code_version`, though both
+digest source files with :func:`magexp.run.cache.files_digest`: a run is keyed by the code upstream of
+it only, so that a plot edit keeps every run; a figure by all of magexp's source and the drawing
+libraries, since the artifact, summary, style and plot code all shape it)
+
 and the cache keeps, under that key, the SHA-256 digests of the PNG and PDF the draw wrote. A figure
 whose two files are still in place with those digests is not drawn again; otherwise it is drawn and
 its digests recorded. Any change (a new CSV, a deleted or edited figure, a code edit) draws it.
@@ -24,7 +29,12 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
+import matplotlib
+import numpy
+import pandas
+
 from magexp import paths
+from magexp.artifacts.plots.style import plt
 from magexp.run.cache import files_digest, write
 
 
@@ -34,12 +44,8 @@ def root() -> Path:
 
 
 @lru_cache(maxsize=1)
-def code_version() -> str:
-    """Hash of magexp's source and of the drawing libraries' versions."""
-    import matplotlib
-    import numpy
-    import pandas
-
+def figure_code_version() -> str:
+    """Hash of all of magexp's source and of the drawing libraries' versions (module docstring)."""
     h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
     h.update(f"{matplotlib.__version__} {numpy.__version__} {pandas.__version__}".encode())
     return h.hexdigest()
@@ -48,10 +54,8 @@ def code_version() -> str:
 def key(spec, csv_bytes: bytes) -> str:
     """The key of the figure of ``spec`` drawn from a CSV holding ``csv_bytes`` (module docstring),
     with matplotlib's settings as they are now (a user's ``matplotlibrc`` draws otherwise)."""
-    from magexp.artifacts.plots.style import plt  # the settings the draw uses: magexp's style on the user's
-
-    h = hashlib.sha256(code_version().encode())
-    h.update(repr(sorted(plt.rcParams.items())).encode())
+    h = hashlib.sha256(figure_code_version().encode())
+    h.update(repr(sorted(plt.rcParams.items())).encode())  # the settings the draw uses: magexp's style on the user's
     h.update(repr(spec).encode())
     h.update(hashlib.sha256(csv_bytes).digest())
     return h.hexdigest()[:32]

@@ -12,7 +12,7 @@ import pandas as pd
 from magexp.artifacts.plan import quantiles
 from magexp.artifacts.plots.style import label as key_label
 from magexp.artifacts.plots.style import panels, shared_legend, tidy_log_axes
-from magexp.artifacts.summary import cell_settings, parameter_values, reported_value
+from magexp.artifacts.summary import cell_overrides, parameter_values, reported_value
 
 
 #: the fit-quality row a cell gets where its runs measure it: (parameter name, runs column)
@@ -31,7 +31,7 @@ def tabulate(runs) -> pd.DataFrame:
     for ci, cell in enumerate(runs.cells):
         sub = runs.table[runs.table.cell == ci]
         names, values, truth = parameter_values(runs, ci)
-        settings = cell_settings(runs, ci)
+        settings = cell_overrides(runs, ci)
         ok = sub.sort_values("seed")["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(values), np.nan)
         judged = np.isfinite(ok)
         kept = values[ok == 1] if judged.any() else values  # over the successful runs; failures counted beside

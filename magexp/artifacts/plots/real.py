@@ -11,7 +11,7 @@ recording (the hue):
 * the spread ``std/mean`` of the total field before (raw) and after the calibration;
 * the estimates of ``S``, ``b`` and the gyroscope bias, each the median over the successful seeds
   with its standard error from the Jacobian at the estimate (``se_*``,
-  :func:`magexp.core.quality.identifiability`); the rest recording's mean rate beside the bias;
+  :func:`magexp.core.identifiability.identifiability`); the rest recording's mean rate beside the bias;
 * the smallest relative singular value of the scaled Jacobian (what the motion leaves undetermined).
 
 The gyro-aided objective cannot tell ``(S, b, h)`` from ``(-S, b, -h)`` (both give the same residual
@@ -20,7 +20,7 @@ norm), so each estimate is shown as the member of the pair with ``det S > 0`` (:
 Kind ``recording_spread`` (``real_benchmark``, scalar objective on every recording) draws per
 recording the spread of the raw readings, of the calibrated fitted readings and of the calibrated
 held-out block, with the held-out spread's 95 % block-bootstrap interval
-(:func:`magexp.core.quality.block_bootstrap_spread`), per estimator.
+(:func:`magexp.core.identifiability.block_bootstrap_spread`), per estimator.
 """
 
 from __future__ import annotations

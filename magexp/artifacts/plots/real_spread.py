@@ -4,7 +4,7 @@ the total field, the one thing a recording without a reference has to judge a ca
 One row per (recording, estimator): the spread ``std/mean`` of the raw readings, of the calibrated
 readings the fit saw, and of the calibrated held-out block (a contiguous part of the recording
 left out of the fit), each the median over seeds; the held-out spread's 95 % interval is the widest
-of the seeds' block-bootstrap intervals (:func:`magexp.core.quality.block_bootstrap_spread`: it covers
+of the seeds' block-bootstrap intervals (:func:`magexp.core.identifiability.block_bootstrap_spread`: it covers
 the data's own uncertainty, which one recording cannot average away, and the seeds' differences).
 ``success_rate``: the share of runs where the estimator reports success and the calibrated spread
 is below the raw one (as :func:`magexp.artifacts.plots.benchmark_table.tabulate`). The winner per recording

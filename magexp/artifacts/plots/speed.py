@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.artifacts.plots.benchmark_table import column_label, tabulate  # noqa: F401  (the kind's table)
+from magexp.artifacts.plots.benchmark_table import column_label, tabulate  # noqa: F401  (tabulate: the kind's interface, kind_module(kind).tabulate)
 from magexp.artifacts.plots.style import plt, tidy_log_axes
 
 MARKERS = "osD^v<>PX*hp"

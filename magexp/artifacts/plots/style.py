@@ -7,12 +7,14 @@ from pathlib import Path
 
 import matplotlib
 
-from magexp.core.atomic import atomic_path
 from magexp.artifacts.plots import VECTOR
+from magexp.core.atomic import atomic_path
+from magexp.errors import MagexpError
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
+from matplotlib import mathtext  # noqa: E402
 
 STYLE = {
     "figure.dpi": 110,
@@ -38,8 +40,6 @@ def share_mathtext_parses() -> bool:
     compares the bytes of figures drawn with and without it). Returns whether it is in place (it is
     skipped if this matplotlib lays ``parse`` out otherwise).
     """
-    from matplotlib import mathtext
-
     cached = getattr(mathtext.MathTextParser, "_parse_cached", None)
     if getattr(cached, "shared", False):
         return True
@@ -76,8 +76,6 @@ def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, ax
     if axes is not None:
         axes = [axes] if hasattr(axes, "plot") else list(axes)
         if len(axes) != n:
-            from magexp.errors import MagexpError
-
             raise MagexpError(f"axes: {len(axes)} given, this figure draws {n} panels")
         return axes[0].figure, axes
     cols = -(-n // rows)

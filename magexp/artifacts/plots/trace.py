@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.plots.style import panels
+from magexp.artifacts.plots.style import panels, plt
 
 REFERENCE_STYLES = {":": "dotted", "-.": "dash-dot", (0, (5, 1, 1, 1, 1, 1)): "dash-dot-dot"}
 
@@ -65,8 +65,6 @@ def tabulate(runs) -> pd.DataFrame:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    import matplotlib.pyplot as plt
-
     traces = frame[(frame.kind == "trace") & (frame.step >= float(spec.plot.get("start", 0)))]
     groups = [list(g) for g in spec.plot.get("groups", [])] or [[p] for p in dict.fromkeys(traces.parameter)]
     fig, axes = panels(len(groups), width=3.6, rows=-(-len(groups) // 2) if len(groups) > 2 else 1, axes=axes)

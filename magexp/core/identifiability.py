@@ -1,7 +1,9 @@
-"""How good a calibration is on its own data: canonical form, standard errors, conditioning,
-what the data cannot determine, direction coverage, and the degenerate cases.
+"""How well a fitted calibration is determined by its own data: canonical form, standard errors,
+conditioning, what the data cannot determine, direction coverage, and the spread of magnitudes.
 
-Every function takes the raw readings ``r_i`` (N, 3) and a fitted ``B = W (r - o)``.
+The model core uses it (:mod:`magexp.core.metrics`, the problems' and estimators' own metrics) and so
+does ``magexp calibrate`` (:mod:`magexp.calibration.fit`, whose degenerate-data checks live in
+:mod:`magexp.calibration.checks`). It imports only numpy and the core.
 
 * **Canonical form** (:func:`canonical`). A total-field (scalar) objective sees only
   ``|W (r - o)|``, so ``Q W`` fits as well as ``W`` for every orthogonal ``Q``: the fit
@@ -10,8 +12,9 @@ Every function takes the raw readings ``r_i`` (N, 3) and a fitted ``B = W (r - o
   factor ``P`` of ``W = Q P`` (``P = (WᵀW)^{1/2}``), the unique member of the family without a
   rotation. A vector objective sees the rotation and keeps its ``W``.
 * **Standard errors and conditioning** (:func:`identifiability`). With the residuals ``e(θ)`` of
-  the fit at its estimate (scalar: ``|W(r_i - o)| - B_i`` over ``θ = [P_11, P_12, P_13, P_22,
-  P_23, P_33, o]``; vector: the 3N components over ``[vec W, o]``), the Jacobian ``J`` (central
+  the fit at its estimate (a problem's own residuals, :meth:`magexp.problems.base.CalibrationProblem.residual_stack`:
+  e.g. scalar ``|W(r_i - o)| - B_i`` over ``θ = [P_11, P_12, P_13, P_22, P_23, P_33, o]``; vector the 3N
+  components over ``[vec W, o]``), the Jacobian ``J`` (central
   differences), ``σ² = ‖e‖² / (m - p)`` and the Gauss-Newton covariance
   ``Cov θ = σ² (JᵀJ)^{-1}`` (inverted with columns scaled to unit norm; a direction whose scaled
   singular value is below ``1e-8`` of the largest is reported as undetermined, not inverted).
@@ -28,19 +31,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.errors import MagexpError
+from magexp.core.bounds import central_differences
 
 #: Equal-area cells of the sphere for the coverage measure.
 CELLS = 32
 #: A scaled singular value below this fraction of the largest: a combination the data cannot determine.
 UNDETERMINED = 1e-8
-#: Degenerate-data thresholds (see :func:`check_readings` and :func:`check_fit`).
-MIN_DISTINCT = 12
-PLANE_RATIO = 0.02   # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane
-MIN_CELLS = 8        # fewer occupied cells (a quarter of the sphere): too few distinct directions
-PARTIAL = 0.75       # fewer occupied cells after a failed fit: say the coverage is partial
-ONE_ATTITUDE_DEG = 20.0
-STILL = 0.05         # RMS distance of the raw readings from their centroid below this fraction of their magnitude: one attitude  # every calibrated direction within this angle of their mean: one attitude
 
 def canonical(w: np.ndarray) -> np.ndarray:
     """The symmetric positive-definite polar factor ``P = V Σ Vᵀ`` of ``W = U Σ Vᵀ`` (``W = (U Vᵀ) P``)."""
@@ -71,45 +67,8 @@ def coverage(calibrated: np.ndarray) -> dict:
 def _jacobian(fun, theta: np.ndarray) -> np.ndarray:
     """Central differences (:func:`magexp.core.bounds.central_differences`) of ``fun`` (which takes a
     stack ``(n, p)``) at ``theta``, with steps relative to each parameter's size."""
-    from magexp.core.bounds import central_differences
-
     step = 1e-6 * np.maximum(np.abs(theta), 1e-3 * max(float(np.abs(theta).max()), 1e-12))
     return central_differences(lambda t: fun(t[None])[0], theta, step)
-
-
-def scalar_residuals(readings: np.ndarray, reference: np.ndarray):
-    """``θ = [P (6 upper entries), o] -> |P (r_i - o)| - B_i`` for a stack of ``θ`` (n, 9)."""
-    from magexp.estimators.reduced import expand
-
-    def fun(thetas):
-        thetas = np.atleast_2d(thetas)
-        p = expand(thetas)[:, :9].reshape(-1, 3, 3)  # symmetric P from its upper entries
-        c = np.einsum("nij,nkj->nki", p, readings[None] - thetas[:, None, 6:])
-        return np.linalg.norm(c, axis=2) - reference
-
-    return fun
-
-
-def sphere_residuals(readings: np.ndarray, reference: np.ndarray):
-    """``θ = [s, o] -> s |r_i - o| - B_i`` for a stack of ``θ`` (n, 4)."""
-
-    def fun(thetas):
-        thetas = np.atleast_2d(thetas)
-        return thetas[:, :1] * np.linalg.norm(readings[None] - thetas[:, None, 1:], axis=2) - reference
-
-    return fun
-
-
-def vector_residuals(readings: np.ndarray, reference_vectors: np.ndarray):
-    """``θ = [vec W, o] -> (C_i H_i - W (r_i - o))`` stacked (3N), for a stack of ``θ`` (n, 12)."""
-
-    def fun(thetas):
-        thetas = np.atleast_2d(thetas)
-        w = thetas[:, :9].reshape(-1, 3, 3)
-        c = np.einsum("nij,nkj->nki", w, readings[None] - thetas[:, None, 9:])
-        return (reference_vectors[None] - c).reshape(len(thetas), -1)
-
-    return fun
 
 
 def identifiability(fun, theta: np.ndarray, names: list[str]) -> dict:
@@ -136,51 +95,6 @@ def identifiability(fun, theta: np.ndarray, names: list[str]) -> dict:
             "condition_number": float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf"),
             "undetermined": [w["combination"] for w, s in zip(weak, np.sort(sv)[:3]) if s <= UNDETERMINED * sv[0]],
             "weakest_combinations": weak}
-
-
-# -- degenerate data ---------------------------------------------------------------------------------
-RECORD = "record again while turning the sensor slowly through as many orientations as you can (a full sphere)"
-
-
-def check_readings(readings: np.ndarray, name: str) -> None:
-    """Fail in one line if the raw readings cannot determine a calibration: too few distinct
-    readings, readings that barely move (one attitude; an offset over ~20 times the field would
-    look the same), or readings in one plane."""
-    distinct = len(np.unique(readings, axis=0))
-    if distinct < MIN_DISTINCT:
-        raise MagexpError(f"{name}: only {distinct} distinct readings, a calibration needs at least {MIN_DISTINCT}: "
-                          f"{RECORD}")
-    centred = readings - readings.mean(axis=0)
-    moved = float(np.sqrt((centred**2).sum(axis=1).mean()) / max(np.linalg.norm(readings, axis=1).mean(), 1e-300))
-    if moved < STILL:
-        raise MagexpError(f"{name}: the readings barely move (RMS distance from their centroid {100 * moved:.2g} % of "
-                          f"their magnitude): one attitude cannot determine a calibration: {RECORD}")
-    ev = np.linalg.eigvalsh(centred.T @ centred / len(readings))
-    if ev[0] <= (PLANE_RATIO**2) * ev[-1]:
-        raise MagexpError(f"{name}: the readings lie in one plane (thickness {np.sqrt(max(ev[0], 0) / ev[-1]):.2g} of "
-                          "their width: turns about one axis only), which cannot determine the offset along its "
-                          "normal nor the scale across it: also turn the sensor about a second axis")
-
-
-def check_fit(name: str, estimator: str, success: bool, message: str, cover: dict, raw_cover: dict) -> None:
-    """Fail in one line if the estimator failed or the calibrated directions show one attitude
-    or too few distinct directions. ``raw_cover``: the coverage of the raw readings about the
-    centre of their fitted sphere (what a failed fit's message quotes)."""
-    if not success:
-        why = message.splitlines()[0] if message else "no message"
-        if raw_cover["coverage_cells"] < PARTIAL:
-            raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({why}), nothing written: the readings "
-                              f"cover {100 * raw_cover['coverage_cells']:.0f} % of the sphere, too little for W: record the "
-                              "missing orientations, or fit model=sphere (offset and one scale)")
-        raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({why}), nothing written: "
-                          "try another estimator (ellipsoid, lm), or record more orientations")
-    if cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG:
-        raise MagexpError(f"{name}: every calibrated direction lies within {cover['direction_max_angle_deg']:.1f} deg "
-                          f"of one (a single attitude): {RECORD}")
-    cells = round(cover["coverage_cells"] * CELLS)
-    if cells < MIN_CELLS:
-        raise MagexpError(f"{name}: the readings point into only {cells} of {CELLS} sphere cells (too few distinct "
-                          f"directions): {RECORD}")
 
 
 def spread(magnitudes) -> float:
