@@ -49,6 +49,7 @@ test: $(STAMP) ## run the test suite in TEST_JOBS=2 processes (without the `full
 test-full: $(STAMP) ## the test suite and the `full` end-to-end cases (the wheel installed and run elsewhere)
 	$(PYTEST)
 
+# NO_MKDOCS_2_WARNING: without the banner Material for MkDocs prints on every build (its end of life, May 2027)
 docs: $(STAMP) ## build the documentation site (docs/, mkdocs.yml) strictly into site/
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --site-dir site
 
