@@ -13,7 +13,7 @@ TEST_JOBS ?= 2
 PYTEST := $(PY) -m pytest $(if $(filter-out 0,$(TEST_JOBS)),-n $(TEST_JOBS) --dist worksteal) --durations=15
 
 .DEFAULT_GOAL := help
-.PHONY: help venv lock bench reproduce redraw report test test-full clean
+.PHONY: help venv lock bench reproduce redraw report test test-full docs clean
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_%-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
@@ -49,13 +49,17 @@ test: $(STAMP) ## run the test suite in TEST_JOBS=2 processes (without the `full
 test-full: $(STAMP) ## the test suite and the `full` end-to-end cases (the wheel installed and run elsewhere)
 	$(PYTEST)
 
+# NO_MKDOCS_2_WARNING: without the banner Material for MkDocs prints on every build (its end of life, May 2027)
+docs: $(STAMP) ## build the documentation site (docs/, mkdocs.yml) strictly into site/
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --site-dir site
+
 lock: ## refresh requirements.lock from the newest releases allowed by pyproject.toml (then commit it)
 	rm -rf .lockenv && $(PYTHON) -m venv .lockenv
 	.lockenv/bin/python -m pip install --quiet --upgrade pip
-	.lockenv/bin/python -m pip install --quiet '.[test,bench]'
+	.lockenv/bin/python -m pip install --quiet '.[test,bench,docs]'
 	(echo "# Pinned environment for make venv / make test / make reproduce (Python 3.11). Refresh: make lock"; \
 	 .lockenv/bin/python -m pip freeze --exclude magexp) > requirements.lock
 	rm -rf .lockenv
 
 clean: ## remove the environment, caches and Hydra run folders (never results/)
-	rm -rf $(VENV) .cache outputs multirun .pytest_cache *.egg-info build dist magexp/_resources
+	rm -rf $(VENV) .cache outputs multirun .pytest_cache *.egg-info build dist site magexp/_resources
