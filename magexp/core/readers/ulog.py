@@ -1,0 +1,230 @@
+"""PX4 ULog (``.ulg``) logs: magnetometer, gyroscope, attitude, GPS position and date on the log's clock.
+
+Needs ``pip install 'magexp[ulog]'`` (``pyulog``). ``data.format=ulog`` (``auto`` for ``*.ulg``)::
+
+    magexp calibrate data.path=../shared/data/px4_sample.ulg
+
+Topics read (the first present, in this order):
+
+================== ==================================================================================
+what               topics and fields (units)
+================== ==================================================================================
+magnetometer       the one with most samples of ``vehicle_magnetometer.magnetometer_ga[0..2]``,
+                   ``sensor_combined.magnetometer_ga[0..2]`` (older logs; a reading only where
+                   ``timestamp + magnetometer_timestamp_relative`` changes) and ``sensor_mag.x/y/z`` of
+                   the prime magnetometer (``CAL_MAG_PRIME``); gauss -> unit ``G``
+gyroscope          ``sensor_combined.gyro_rad[0..2]`` (rad/s, body frame), else
+                   ``vehicle_angular_velocity.xyz[0..2]``
+attitude           ``vehicle_attitude.q[0..3]`` (``w, x, y, z``, body FRD -> NED), interpolated at the
+                   readings (:func:`magexp.core.readers.attitude_at`)
+position, date     ``vehicle_gps_position`` or ``sensor_gps``: ``lat``/``lon`` (1e-7 degrees) or
+                   ``latitude_deg``/``longitude_deg``; ``alt`` (mm) or ``altitude_msl_m``; the fixes
+                   with ``fix_type >= 3``; the date from ``time_utc_usec``
+time               ``timestamp`` (microseconds since boot), in seconds from the log's start
+================== ==================================================================================
+
+**Already corrected.** PX4 publishes ``vehicle_magnetometer`` and ``sensor_combined``'s
+magnetometer *after* its onboard calibration ``CAL_MAGn_*`` (``n`` the calibration slot whose
+``CAL_MAGn_ID`` is the magnetometer's device id, or ``CAL_MAG_PRIME``); so does ``sensor_mag`` up
+to PX4 1.11 (the drivers applied the calibration). The reader undoes it with the parameters the
+log holds, so that the readings are what the calibration parameters apply to (and a new
+calibration can replace them, :mod:`magexp.calibrate.export`):
+
+* PX4 < 1.12 (``ver_sw_release``, or none logged): the driver rotated the raw sample into the board
+  frame, then ``B = (r - OFF) ⊙ SCALE`` per axis (gauss); undone as ``r = B ⊘ SCALE + OFF``
+  (readings in the board frame, where those offsets apply);
+* PX4 >= 1.12 (``src/lib/sensor_calibration/Magnetometer.hpp``, ``Correct``):
+  ``B = R S (r - OFF)``, ``S`` symmetric from ``SCALE`` (diagonal) and ``ODIAG`` (off-diagonal),
+  ``R`` the board or ``CAL_MAGn_ROT`` rotation; undone as ``r = S⁻¹ Rᵀ B + OFF`` (readings in the
+  sensor frame) when ``R`` is the identity; a rotated magnetometer is refused in one line (its
+  ``sensor_mag`` is raw from 1.12 on: log that topic instead).
+
+Parameters that change while the magnetometer is logged, or a slot that cannot be found, are
+refused in one line; ``undo=False`` keeps the readings as logged (``meta['corrected']`` says so).
+Power compensation ``CAL_MAGn_COMP`` (``CAL_MAG_COMP_TYP > 0``) is not undone (``meta`` says so).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+from pathlib import Path
+
+import numpy as np
+
+from magexp.core.readers import check_count, log_recording, navigation_angles, need, place
+from magexp.errors import MagexpError
+from magexp.recordings import Recording
+
+#: the topics read (pyulog loads only these)
+TOPICS = ("vehicle_magnetometer", "sensor_combined", "sensor_mag", "vehicle_attitude", "vehicle_angular_velocity",
+          "vehicle_gps_position", "sensor_gps")
+#: ``timestamp_relative`` of a sample that did not update (``uORB``'s RELATIVE_TIMESTAMP_INVALID)
+RELATIVE_INVALID = 0x7FFFFFFF
+#: the first PX4 release whose ``sensor_mag`` is raw and whose calibration is ``R S (r - OFF)``
+NEW_CALIBRATION = (1, 12)
+
+
+def _columns(data: dict, names: list[str]) -> np.ndarray:
+    return np.column_stack([np.asarray(data[n], float) for n in names])
+
+
+def _version(ulog) -> tuple[int, int] | None:
+    """``(major, minor)`` of ``ver_sw_release`` (``0xAABBCCTT``), or None when not logged."""
+    release = ulog.msg_info_dict.get("ver_sw_release")
+    if not release:
+        return None
+    return (int(release) >> 24) & 0xFF, (int(release) >> 16) & 0xFF
+
+
+def _dataset(ulog, name: str, multi_id: int = 0):
+    return next((d for d in ulog.data_list if d.name == name and d.multi_id == multi_id), None)
+
+
+def _candidates(ulog, prime: int | None) -> list[tuple[str, np.ndarray, np.ndarray, int | None]]:
+    """``(topic, times µs, readings G, device id)`` of each magnetometer source in the log."""
+    out = []
+    vm = _dataset(ulog, "vehicle_magnetometer")
+    if vm is not None:
+        device = int(vm.data["device_id"][0]) if "device_id" in vm.data else prime
+        out.append(("vehicle_magnetometer", vm.data["timestamp"],
+                    _columns(vm.data, [f"magnetometer_ga[{i}]" for i in range(3)]), device))
+    sc = _dataset(ulog, "sensor_combined")
+    if sc is not None and "magnetometer_ga[0]" in sc.data:
+        rel = np.asarray(sc.data["magnetometer_timestamp_relative"], np.int64)
+        t = np.asarray(sc.data["timestamp"], np.int64) + rel
+        fresh = (rel != RELATIVE_INVALID) & np.concatenate([[True], np.diff(t) != 0])
+        out.append(("sensor_combined", t[fresh],
+                    _columns(sc.data, [f"magnetometer_ga[{i}]" for i in range(3)])[fresh], prime))
+    for d in ulog.data_list:
+        if d.name == "sensor_mag" and prime is not None and int(d.data["device_id"][0]) == prime:
+            out.append((f"sensor_mag[{d.multi_id}]", d.data["timestamp"], _columns(d.data, ["x", "y", "z"]), prime))
+    return out
+
+
+def _slot(params: dict, device: int | None, name: str) -> int:
+    slots = [n for n in range(4) if device is not None and params.get(f"CAL_MAG{n}_ID") == device]
+    if not slots:
+        raise MagexpError(f"{name}: the magnetometer (device id {device}) has no CAL_MAGn_ID in the log's parameters: "
+                          "its onboard calibration cannot be undone (read it with undo=False to keep it)")
+    return slots[0]
+
+
+def _calibration(params: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(S, OFF)`` of slot ``n``: ``S`` symmetric from ``SCALE`` and ``ODIAG`` (0 when not logged)."""
+    p = lambda key, default: float(params.get(f"CAL_MAG{n}_{key}", default))  # noqa: E731
+    d = [p(f"{a}SCALE", 1.0) for a in "XYZ"]
+    o = [p(f"{a}ODIAG", 0.0) for a in "XYZ"]
+    s = np.array([[d[0], o[0], o[1]], [o[0], d[1], o[2]], [o[1], o[2], d[2]]])
+    return s, np.array([p(f"{a}OFF", 0.0) for a in "XYZ"])
+
+
+def _changed(ulog, n: int, t0: float, t1: float) -> str | None:
+    keys = {f"CAL_MAG{n}_{k}" for k in ("XOFF", "YOFF", "ZOFF", "XSCALE", "YSCALE", "ZSCALE", "XODIAG",
+                                         "YODIAG", "ZODIAG", "ROT")}
+    hit = next(((t, k) for t, k, _ in ulog.changed_parameters if k in keys and t0 <= t <= t1), None)
+    return None if hit is None else f"{hit[1]} changes at {hit[0] / 1e6:.3f} s"
+
+
+def undo_calibration(ulog, topic: str, device: int | None, readings: np.ndarray, times_us: np.ndarray,
+                     name: str) -> tuple[np.ndarray, dict]:
+    """The readings before PX4's onboard calibration (module docstring), and what was undone."""
+    version = _version(ulog)
+    new = version is not None and version >= NEW_CALIBRATION
+    if topic.startswith("sensor_mag") and new:
+        return readings, {"corrected": "no: sensor_mag is raw from PX4 1.12 on"}
+    params = ulog.initial_parameters
+    n = _slot(params, device, name)
+    changed = _changed(ulog, n, float(times_us.min()), float(times_us.max()))
+    if changed:
+        raise MagexpError(f"{name}: the onboard calibration {changed}, while the magnetometer is logged: it cannot "
+                          "be undone with one set of parameters (log a calibration with fixed parameters)")
+    s, off = _calibration(params, n)
+    meta = {"calibration_slot": str(n), "onboard_offset_G": ", ".join(f"{v:.9g}" for v in off),
+            "onboard_scale": "; ".join(", ".join(f"{v:.9g}" for v in row) for row in s)}
+    if float(params.get("CAL_MAG_COMP_TYP", 0)) > 0:
+        meta["power_compensation"] = "CAL_MAG_COMP_TYP > 0: the power compensation is not undone"
+    if not new:
+        meta["corrected"] = ("undone: PX4 < 1.12 driver calibration B = (r - OFF) * SCALE, r = B / SCALE + OFF "
+                             "(board frame)")
+        return readings / np.diag(s) + off, meta
+    rotation = int(params.get(f"CAL_MAG{n}_ROT", -1))
+    board = int(params.get("SENS_BOARD_ROT", 0))
+    tilt = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
+    if rotation > 0 or (rotation < 0 and (board != 0 or any(tilt))):
+        raise MagexpError(f"{name}: CAL_MAG{n}_ROT={rotation}, SENS_BOARD_ROT={board}: the onboard rotation of "
+                          f"{topic} is not undone by magexp; log sensor_mag (raw from PX4 1.12 on) instead")
+    meta["corrected"] = "undone: PX4 >= 1.12 calibration B = R S (r - OFF) with R = I, r = S^-1 B + OFF (sensor frame)"
+    return np.linalg.solve(s, readings.T).T + off, meta
+
+
+def _gps(ulog) -> dict:
+    d = _dataset(ulog, "vehicle_gps_position") or _dataset(ulog, "sensor_gps")
+    if d is None:
+        return {}
+    data = d.data
+    fix = np.asarray(data.get("fix_type", np.full(len(data["timestamp"]), 3))) >= 3
+    if "lat" in data:
+        lat, lon = np.asarray(data["lat"], float) * 1e-7, np.asarray(data["lon"], float) * 1e-7
+    else:
+        lat, lon = np.asarray(data["latitude_deg"], float), np.asarray(data["longitude_deg"], float)
+    alt = np.asarray(data["alt"], float) / 1e3 if "alt" in data else np.asarray(data.get("altitude_msl_m", 0.0 * lat))
+    utc = np.asarray(data.get("time_utc_usec", np.zeros(len(lat))), np.int64)[fix]
+    when = _dt.datetime.fromtimestamp(int(np.median(utc[utc > 0])) / 1e6, _dt.timezone.utc) if np.any(utc > 0) else None
+    return place(lat[fix], lon[fix], alt[fix], when)
+
+
+def _gyro(ulog, t0: int) -> tuple | None:
+    sc = _dataset(ulog, "sensor_combined")
+    if sc is not None and "gyro_rad[0]" in sc.data:
+        return (np.asarray(sc.data["timestamp"], np.int64) - t0) / 1e6, _columns(sc.data, [f"gyro_rad[{i}]" for i in range(3)])
+    av = _dataset(ulog, "vehicle_angular_velocity")
+    if av is not None:
+        return (np.asarray(av.data["timestamp"], np.int64) - t0) / 1e6, _columns(av.data, [f"xyz[{i}]" for i in range(3)])
+    return None
+
+
+def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: bool = True) -> Recording:
+    """The :class:`~magexp.recordings.Recording` of a PX4 ULog file (module docstring).
+
+    Parameters
+    ----------
+    path : the ``.ulg`` file.
+    unit : must be None or ``G`` (ULog magnetometer topics are in gauss).
+    mag_axes, gyro_axes : signed axis maps (:func:`magexp.geometry.axis_map`).
+    undo : undo the onboard calibration (default); False keeps the readings as logged.
+    """
+    core = need("pyulog.core", f"{Path(path).name} (a PX4 ULog)")
+    name = Path(path).name
+    if unit is not None and unit != "G":
+        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: a ULog's magnetometer is in gauss (leave "
+                          "data.unit unset)")
+    try:
+        ulog = core.ULog(str(path), list(TOPICS))
+    except (core.ULogException, ValueError, IndexError, KeyError, UnicodeDecodeError) as exc:
+        raise MagexpError(f"{name}: not a readable ULog file ({type(exc).__name__}: "
+                          f"{str(exc).splitlines()[0] if str(exc) else 'no detail'})") from None
+    prime = ulog.initial_parameters.get("CAL_MAG_PRIME")
+    sources = _candidates(ulog, None if prime is None else int(prime))
+    if not sources:
+        raise MagexpError(f"{name}: no magnetometer topic (vehicle_magnetometer, sensor_combined.magnetometer_ga, "
+                          "sensor_mag) in the log: nothing to calibrate")
+    topic, times_us, readings, device = max(sources, key=lambda s: len(s[1]))
+    check_count(len(readings), f"data.path={name!r}")
+    meta = {"format": "ulog", "source": topic, "firmware": ".".join(map(str, _version(ulog) or ("< 1.12 (not logged)",))),
+            "hardware": str(ulog.msg_info_dict.get("ver_hw", "")), "device_id": str(device)}
+    if undo:
+        readings, undone = undo_calibration(ulog, topic, device, readings, np.asarray(times_us, float), name)
+        meta.update(undone)
+    else:
+        meta["corrected"] = "kept as logged (undo=False)"
+    t0 = int(ulog.start_timestamp)
+    times = (np.asarray(times_us, np.int64) - t0) / 1e6
+    att = _dataset(ulog, "vehicle_attitude")
+    angles = None
+    if att is not None:
+        angles = navigation_angles((np.asarray(att.data["timestamp"], np.int64) - t0) / 1e6,
+                                   _columns(att.data, [f"q[{i}]" for i in range(4)]), times)
+        meta["attitude"] = "vehicle_attitude (body FRD -> NED)"
+    meta.update(_gps(ulog))
+    return log_recording(Path(path), readings=readings, unit="G", times=times, angles=angles, gyro=_gyro(ulog, t0),
+                         meta=meta, mag_axes=mag_axes, gyro_axes=gyro_axes)

@@ -1,0 +1,230 @@
+"""The log readers (magexp.core.readers): the real PX4 and ArduPilot samples, ROS bags written by
+rosbags' own writer, the attitude conversions, and the one-line refusals."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from magexp.calibration import main as calibrate_main
+from magexp.core.readers import NED_TO_ENU, angles_from_attitude, attitude_at, euler_quaternions
+from magexp.errors import MagexpError
+from magexp.geometry import quat_to_matrix, random_rotations, rotation_angle, ship_attitude
+from magexp.paths import SHARED_DATA
+from magexp.recordings import detect, load_recording
+
+ULOG, ULOG_SMALL, DATAFLASH = (SHARED_DATA / n for n in ("px4_sample.ulg", "px4_sample_log_small.ulg",
+                                                         "ardupilot_test.bin"))
+needs = lambda path: pytest.mark.skipif(not path.is_file(), reason=f"{path} is not present")  # noqa: E731
+
+
+# -- attitude conversions ------------------------------------------------------------------------
+def test_angles_reproduce_every_rotation():
+    a = random_rotations(500, rng=np.random.default_rng(1))
+    back = ship_attitude(*angles_from_attitude(a).T)
+    assert np.max(np.abs(back - a)) < 1e-12
+
+
+def test_slerp_is_exact_at_samples_and_halfway_between():
+    q = np.array([[1.0, 0, 0, 0], [np.cos(0.5), 0, 0, np.sin(0.5)]])  # 0 and 1 rad about z
+    r = attitude_at(np.array([0.0, 2.0]), q, np.array([0.0, 1.0, 2.0, 3.0]))
+    assert np.allclose(rotation_angle(r), [0.0, 0.5, 1.0, 1.0], atol=1e-12)  # held after the last sample
+    assert r[1][1, 0] == pytest.approx(np.sin(0.5))  # about +z
+
+
+def test_euler_quaternions_are_zyx():
+    roll, pitch, yaw = 0.3, -0.2, 1.1
+    rz = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1]])
+    ry = np.array([[np.cos(pitch), 0, np.sin(pitch)], [0, 1, 0], [-np.sin(pitch), 0, np.cos(pitch)]])
+    rx = np.array([[1, 0, 0], [0, np.cos(roll), -np.sin(roll)], [0, np.sin(roll), np.cos(roll)]])
+    assert np.allclose(quat_to_matrix(euler_quaternions([roll], [pitch], [yaw]))[0], rz @ ry @ rx, atol=1e-12)
+
+
+@pytest.mark.parametrize("name, key", [("a.ulg", "ulog"), ("a.bin", "dataflash"), ("a.bag", "rosbag"),
+                                       ("a.mcap", "rosbag"), ("a.db3", "rosbag")])
+def test_auto_detects_the_logs(tmp_path, name, key):
+    assert detect(tmp_path / name) == key
+
+
+def test_a_missing_extra_names_the_pip_install(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "pyulog", None)  # import pyulog fails
+    path = tmp_path / "flight.ulg"
+    path.write_bytes(b"ULog\x01\x12\x35")
+    with pytest.raises(MagexpError, match=r"pip install 'magexp\[ulog\]'") as err:
+        load_recording(path)
+    assert "\n" not in str(err.value)
+    assert calibrate_main([f"data.path={path}", f"out={tmp_path / 'out'}"]) == 2
+    assert "magexp[ulog]" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name", ["junk.ulg", "junk.bin", "junk.mcap"])
+def test_a_damaged_log_is_one_line(tmp_path, name):
+    path = tmp_path / name
+    path.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(MagexpError) as err:
+        load_recording(path)
+    assert name in str(err.value) and "\n" not in str(err.value)
+
+
+# -- PX4 ULog -------------------------------------------------------------------------------------
+@needs(ULOG)
+def test_px4_sample_undoes_the_onboard_offsets():
+    from pyulog import ULog
+
+    rec = load_recording(ULOG)
+    ulog = ULog(str(ULOG), ["sensor_combined", "vehicle_attitude"])
+    d = ulog.get_dataset("sensor_combined").data
+    t = d["timestamp"].astype(np.int64) + d["magnetometer_timestamp_relative"]
+    fresh = np.concatenate([[True], np.diff(t) != 0])
+    logged = np.column_stack([d[f"magnetometer_ga[{i}]"] for i in range(3)])[fresh]
+    off = np.array([ulog.initial_parameters[f"CAL_MAG0_{a}OFF"] for a in "XYZ"])
+    print(f"px4_sample: {rec.n} readings at {1 / np.median(np.diff(rec.times)):.0f} Hz, meta {rec.meta}")
+    assert (rec.n, rec.unit, rec.meta["source"]) == (6759, "G", "sensor_combined")
+    np.testing.assert_allclose(rec.readings - off, logged, rtol=0, atol=1e-7)  # SCALE = 1: r = B + OFF
+    assert np.all(np.diff(rec.times) > 0) and rec.gyro_stream[1].shape == (17070, 3)
+    a = ulog.get_dataset("vehicle_attitude").data  # the sample nearest each reading, from pyulog directly
+    t_att = (a["timestamp"].astype(np.int64) - ulog.start_timestamp) / 1e6
+    k = np.clip(np.searchsorted(t_att, rec.times), 1, len(t_att) - 1)
+    k -= rec.times - t_att[k - 1] < t_att[k] - rec.times
+    body_to_ned = quat_to_matrix(np.column_stack([a[f"q[{i}]"] for i in range(4)])[k])
+    error = np.rad2deg(rotation_angle(rec.attitude() @ body_to_ned))  # nav->body @ body->nav = I
+    assert np.median(error) < 0.01 and np.max(error) < 2.0  # interpolated between samples ~10 ms apart
+
+
+@needs(ULOG_SMALL)
+def test_px4_small_log_has_gps():
+    rec = load_recording(ULOG_SMALL)
+    assert (rec.n, rec.meta["source"], rec.meta["calibration_slot"]) == (319, "vehicle_magnetometer", "1")
+    assert float(rec.meta["latitude"]) == pytest.approx(63.41705, abs=1e-4)
+    assert float(rec.meta["longitude"]) == pytest.approx(10.40822, abs=1e-4)
+    assert rec.meta["date"] == "2021-04-21"
+
+
+@pytest.mark.parametrize("path, reason", [
+    (ULOG, "cover 66 % of the sphere"),  # ±22° of roll, 28° of heading: too little for W
+    (ULOG_SMALL, "barely move"),  # on the ground: one attitude
+    (DATAFLASH, "8 readings is not allowed"),  # one second of log
+])
+def test_the_samples_are_refused_in_one_line(path, reason):
+    if not path.is_file():
+        pytest.skip(f"{path} is not present")
+    from magexp.calibration import calibrate_recording
+    from magexp.estimators.ellipsoid import EllipsoidFit  # magexp calibrate's default estimator
+
+    with pytest.raises(MagexpError, match=reason) as err:
+        calibrate_recording(load_recording(path), EllipsoidFit(name="ellipsoid"), folds=0,
+                            rng=np.random.default_rng(0))
+    assert path.name in str(err.value) and "\n" not in str(err.value)
+
+
+# -- ArduPilot DataFlash ------------------------------------------------------------------------
+@needs(DATAFLASH)
+def test_ardupilot_raw_reproduces_the_logged_field_through_correct_field():
+    """ArduPilot's correct_field (AP_Compass_Backend.cpp), written here from the source, applied to
+    the reader's raw readings with the log's PARM values gives MAG back (logged as whole mGauss)."""
+    from pymavlink import DFReader
+
+    rec = load_recording(DATAFLASH)
+    reader = DFReader.DFReader_binary(str(DATAFLASH), zero_time_base=False)
+    params, logged = {}, []
+    while (m := reader.recv_match(type=["PARM", "MAG"])) is not None:
+        if m.get_type() == "PARM":
+            params[m.Name] = m.Value
+        else:
+            logged.append([m.MagX, m.MagY, m.MagZ])
+    dia = [params[f"COMPASS_DIA_{a}"] for a in "XYZ"]
+    odi = [params[f"COMPASS_ODI_{a}"] for a in "XYZ"]
+    mat = np.array([[dia[0], odi[0], odi[1]], [odi[0], dia[1], odi[2]], [odi[1], odi[2], dia[2]]])
+    ofs = np.array([params[f"COMPASS_OFS_{a}"] for a in "XYZ"])
+    field = (rec.readings + ofs) @ mat.T  # no COMPASS_SCALE in ArduPlane 3.8, no motor compensation
+    print(f"ardupilot_test: {rec.n} readings over {np.ptp(rec.times):.2f} s, |raw| {np.linalg.norm(rec.readings, axis=1)}")
+    assert rec.n == 8 and rec.unit == "mG"
+    np.testing.assert_allclose(field, logged, atol=1e-6)
+    assert rec.meta["date"] == "2017-10-29" and float(rec.meta["latitude"]) == pytest.approx(-35.36263, abs=1e-4)
+    assert rec.angles is not None and rec.gyro_stream[1].shape == (45, 3)
+
+
+# -- ROS bags written by rosbags' own writer ------------------------------------------------------
+LAT, LON, ALT = 47.3977, 8.5456, 488.0
+STAMP = 1_750_000_000  # 2025-06-15
+
+
+def write_bag(path, kind: str, rotations: np.ndarray, field_ned: np.ndarray) -> np.ndarray:
+    """A bag of MagneticField (T) + Imu (orientation body -> ENU) + NavSatFix at the same stamps, the
+    sensor at ``rotations`` (body -> NED); returns the readings in µT."""
+    from magexp.core.readers.rosbag import typestore
+
+    ros1 = kind == "ros1"
+    ts = typestore(ros1)
+    t = ts.types
+    readings_ut = np.einsum("nji,j->ni", rotations, field_ned) / 1e3  # nav -> body = R^T, nT -> µT
+    body_to_enu = NED_TO_ENU @ rotations
+    from scipy.spatial.transform import Rotation
+
+    q = Rotation.from_matrix(body_to_enu).as_quat()  # x, y, z, w
+    if ros1:
+        from rosbags.rosbag1 import Writer
+        writer, serialize = Writer(path), ts.serialize_ros1
+    else:
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
+        writer, serialize = Writer(path, version=9, storage_plugin=plugin), ts.serialize_cdr
+    with writer:
+        conns = {name: writer.add_connection(topic, name, typestore=ts) for name, topic in (
+            ("sensor_msgs/msg/MagneticField", "/imu/mag"), ("sensor_msgs/msg/Imu", "/imu/data"),
+            ("sensor_msgs/msg/NavSatFix", "/gps/fix"))}
+        for k in range(len(rotations)):
+            ns = STAMP * 10**9 + k * 10**7
+            header = t["std_msgs/msg/Header"](seq=k, stamp=t["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9),
+                                              frame_id="imu") if ros1 else \
+                t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9),
+                                         frame_id="imu")
+            v3 = lambda x: t["geometry_msgs/msg/Vector3"](x=float(x[0]), y=float(x[1]), z=float(x[2]))  # noqa: E731
+            mag = t["sensor_msgs/msg/MagneticField"](header=header, magnetic_field=v3(readings_ut[k] * 1e-6),
+                                                     magnetic_field_covariance=np.zeros(9))
+            imu = t["sensor_msgs/msg/Imu"](
+                header=header, orientation=t["geometry_msgs/msg/Quaternion"](x=q[k, 0], y=q[k, 1], z=q[k, 2], w=q[k, 3]),
+                orientation_covariance=np.zeros(9), angular_velocity=v3([0.01, -0.02, 0.03]),
+                angular_velocity_covariance=np.zeros(9), linear_acceleration=v3([0, 0, 9.81]),
+                linear_acceleration_covariance=np.zeros(9))
+            fix = t["sensor_msgs/msg/NavSatFix"](header=header, status=t["sensor_msgs/msg/NavSatStatus"](status=0, service=1),
+                                                 latitude=LAT, longitude=LON, altitude=ALT, position_covariance=np.zeros(9),
+                                                 position_covariance_type=0)
+            for name, msg in (("sensor_msgs/msg/MagneticField", mag), ("sensor_msgs/msg/Imu", imu),
+                              ("sensor_msgs/msg/NavSatFix", fix)):
+                writer.write(conns[name], ns, serialize(msg, name))
+    return readings_ut
+
+
+@pytest.mark.parametrize("kind, name", [("ros2", "bag2"), ("mcap", "bag_mcap"), ("ros1", "flight.bag")])
+def test_ros_bags_round_trip(tmp_path, kind, name):
+    rotations = random_rotations(40, rng=np.random.default_rng(7))
+    field_ned = np.array([21000.0, 1500.0, 43000.0])
+    path = tmp_path / name
+    readings = write_bag(path, kind, rotations, field_ned)
+    target = path if kind != "mcap" else next(path.glob("*.mcap"))  # the bare .mcap file opens too
+    rec = load_recording(target)
+    assert rec.meta["format"] == "rosbag" and rec.unit == "uT" and rec.n == 40
+    np.testing.assert_allclose(rec.readings, readings, rtol=1e-12)
+    # the attitude read back (NED) turns the NED field into the readings: the ENU -> NED conversion holds
+    np.testing.assert_allclose(np.einsum("nij,j->ni", rec.attitude(), field_ned) / 1e3, readings, atol=1e-9)
+    np.testing.assert_allclose(rec.times, np.arange(40) * 0.01, atol=1e-6)
+    assert rec.gyro_stream[1][0].tolist() == pytest.approx([0.01, -0.02, 0.03])
+    assert float(rec.meta["latitude"]) == LAT and float(rec.meta["altitude_km"]) == ALT / 1e3
+    assert rec.meta["date"] == "2025-06-15"
+
+
+def test_ros_bag_without_magnetometer_is_one_line(tmp_path):
+    from rosbags.rosbag2 import Writer
+
+    from magexp.core.readers.rosbag import typestore
+
+    ts = typestore(False)
+    with Writer(tmp_path / "empty", version=9) as writer:
+        writer.add_connection("/gps/fix", "sensor_msgs/msg/NavSatFix", typestore=ts)
+    with pytest.raises(MagexpError, match="no sensor_msgs/msg/MagneticField messages") as err:
+        load_recording(tmp_path / "empty")
+    assert "\n" not in str(err.value)
