@@ -52,7 +52,7 @@ test-full: $(STAMP) ## the test suite and the `full` end-to-end cases (the wheel
 lock: ## refresh requirements.lock from the newest releases allowed by pyproject.toml (then commit it)
 	rm -rf .lockenv && $(PYTHON) -m venv .lockenv
 	.lockenv/bin/python -m pip install --quiet --upgrade pip
-	.lockenv/bin/python -m pip install --quiet '.[test,bench]'
+	.lockenv/bin/python -m pip install --quiet '.[test,bench,ulog,dataflash,ros]'
 	(echo "# Pinned environment for make venv / make test / make reproduce (Python 3.11). Refresh: make lock"; \
 	 .lockenv/bin/python -m pip freeze --exclude magexp) > requirements.lock
 	rm -rf .lockenv
