@@ -8,7 +8,7 @@ import datetime as dt
 import numpy as np
 import pytest
 
-from magexp.core.field_model import field_of_recording, reference_field, total_in
+from magexp.core.field_model import field_in, field_of_recording, reference_field, total_in
 from magexp.errors import MagexpError
 from magexp.recordings import Recording
 
@@ -61,6 +61,7 @@ def test_the_log_gps_gives_place_and_date_and_explicit_values_win():
     f = field_of_recording(rec, model="igrf")
     assert f.inputs["sources"] == {k: "log GPS" for k in ("latitude", "longitude", "altitude_km", "date")}
     assert total_in(f, "mG") == pytest.approx(f.total / 100)
+    np.testing.assert_allclose(field_in(f, "uT"), f.ned / 1000)
     g = field_of_recording(rec, model="igrf", date="2020-01-01")
     assert g.inputs["date"] == "2020-01-01" and g.inputs["sources"]["date"] == "given" and g.total != f.total
     h = field_of_recording(log({}), latitude=10, longitude=20, date="2020-01-01")

@@ -122,6 +122,12 @@ def test_the_samples_are_refused_in_one_line(path, reason):
 
 # -- ArduPilot DataFlash ------------------------------------------------------------------------
 @needs(DATAFLASH)
+def test_a_unit_other_than_the_logs_is_one_line():
+    with pytest.raises(MagexpError, match=r"data.unit='uT' is not allowed for ardupilot_test.bin: DataFlash MAG is in mG"):
+        load_recording(DATAFLASH, unit="uT")
+
+
+@needs(DATAFLASH)
 def test_ardupilot_raw_reproduces_the_logged_field_through_correct_field():
     """ArduPilot's correct_field (AP_Compass_Backend.cpp), written here from the source, applied to
     the reader's raw readings with the log's PARM values gives MAG back (logged as whole mGauss)."""

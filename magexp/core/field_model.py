@@ -182,10 +182,16 @@ def field_of_recording(rec: Recording, *, model: str = "igrf", latitude=None, lo
                            model=model, sources=sources, prefix=prefix)
 
 
-def total_in(reference: ReferenceField, unit: str) -> float:
-    """The model's total in ``unit`` (a key of :data:`magexp.recordings.UNITS`); a raw unit
-    (``counts``) has no factor: one line saying to calibrate to the total in nT instead."""
+def field_in(reference: ReferenceField, unit: str) -> np.ndarray:
+    """The model's NED vector in ``unit`` (a key of :data:`magexp.recordings.UNITS`): a log's
+    ``Recording.field`` for the vector objective (its attitudes are NED). A raw unit (``counts``)
+    has no factor: one line saying to calibrate to the model's field in nT instead."""
     if unit in RAW_UNITS or unit not in UNITS:
         raise MagexpError(f"unit {unit!r} has no known factor to nT: calibrate to the model's total "
                           f"{reference.total:.1f} nT itself (W then maps {unit} to nT)")
-    return reference.total / UNITS[unit]
+    return reference.ned / UNITS[unit]
+
+
+def total_in(reference: ReferenceField, unit: str) -> float:
+    """The model's total in ``unit`` (:func:`field_in`'s norm; the same refusal for ``counts``)."""
+    return float(np.linalg.norm(field_in(reference, unit)))

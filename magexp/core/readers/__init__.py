@@ -58,6 +58,14 @@ def need(module: str, what: str):
                           f"pip install 'magexp[{EXTRAS[package]}]'") from None
 
 
+def log_unit(unit, fixed: str, name: str, what: str) -> str:
+    """``fixed``, the unit a log format defines; one line if ``data.unit`` (``unit``) names another."""
+    if unit is not None and unit != fixed:
+        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: {what} is in {fixed} (leave data.unit "
+                          "unset)")
+    return fixed
+
+
 def angles_from_attitude(a: np.ndarray) -> np.ndarray:
     """``(N, 3)`` ``[heading, roll, trim]`` (radians) with ``ship_attitude(*angles.T) == a``.
 

@@ -48,7 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import check_count, euler_quaternions, log_recording, navigation_angles, need, place
+from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, navigation_angles, need,
+                                 place)
 from magexp.errors import MagexpError
 from magexp.recordings import Recording
 
@@ -166,11 +167,9 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
     instance : the compass and IMU instance (0: the first).
     undo : undo the onboard correction (default); False keeps ``MagX/Y/Z`` as logged.
     """
-    df = need("pymavlink.DFReader", f"{Path(path).name} (an ArduPilot DataFlash log)")
     name = Path(path).name
-    if unit is not None and unit != "mG":
-        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: DataFlash MAG is in mGauss (leave "
-                          "data.unit unset)")
+    df = need("pymavlink.DFReader", f"{name} (an ArduPilot DataFlash log)")
+    log_unit(unit, "mG", name, "DataFlash MAG")
     try:
         reader = df.DFReader_binary(str(path), zero_time_base=False)
     except Exception as exc:  # pymavlink raises bare exceptions of many kinds on a damaged file

@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import check_count, log_recording, navigation_angles, need, place
+from magexp.core.readers import check_count, log_recording, log_unit, navigation_angles, need, place
 from magexp.errors import MagexpError
 from magexp.recordings import Recording
 
@@ -117,9 +117,7 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
     """
     path = Path(path)
     name = path.name
-    if unit is not None and unit != "uT":
-        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: MagneticField is read as uT (leave "
-                          "data.unit unset)")
+    log_unit(unit, "uT", name, "MagneticField, read from tesla,")
     reader, deserialize = _open(path)
     from rosbags.rosbag1 import ReaderError as Error1
     from rosbags.rosbag2 import ReaderError as Error2

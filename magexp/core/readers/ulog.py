@@ -51,7 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import check_count, log_recording, navigation_angles, need, place
+from magexp.core.readers import check_count, log_recording, log_unit, navigation_angles, need, place
 from magexp.errors import MagexpError
 from magexp.recordings import Recording
 
@@ -193,11 +193,9 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
     mag_axes, gyro_axes : signed axis maps (:func:`magexp.geometry.axis_map`).
     undo : undo the onboard calibration (default); False keeps the readings as logged.
     """
-    core = need("pyulog.core", f"{Path(path).name} (a PX4 ULog)")
     name = Path(path).name
-    if unit is not None and unit != "G":
-        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: a ULog's magnetometer is in gauss (leave "
-                          "data.unit unset)")
+    core = need("pyulog.core", f"{name} (a PX4 ULog)")
+    log_unit(unit, "G", name, "a ULog's magnetometer")
     try:
         ulog = core.ULog(str(path), list(TOPICS))
     except (core.ULogException, ValueError, IndexError, KeyError, UnicodeDecodeError) as exc:
