@@ -50,13 +50,13 @@ def parse_px4(text: str) -> dict:
     return {r[2]: float(r[3]) for r in rows}
 
 
-def px4_correct(raw_g: np.ndarray, p: dict, n: int = 0) -> np.ndarray:
-    """calibration::Magnetometer::Correct with R = I: _scale * (data - _offset), _scale from SCALE and ODIAG."""
+def px4_correct(raw_g: np.ndarray, p: dict, n: int = 0, rotation=np.eye(3)) -> np.ndarray:
+    """calibration::Magnetometer::Correct: _rotation * (_scale * (data - _offset)), _scale from SCALE and ODIAG."""
     g = lambda k: p[f"CAL_MAG{n}_{k}"]  # noqa: E731
     scale = np.array([[g("XSCALE"), g("XODIAG"), g("YODIAG")], [g("XODIAG"), g("YSCALE"), g("ZODIAG")],
                       [g("YODIAG"), g("ZODIAG"), g("ZSCALE")]])
     off = np.array([g("XOFF"), g("YOFF"), g("ZOFF")])
-    return (raw_g - off) @ scale.T
+    return (raw_g - off) @ scale.T @ np.asarray(rotation).T
 
 
 def relative(a: np.ndarray, b: np.ndarray) -> float:
@@ -131,6 +131,21 @@ def test_a_rotation_in_w_is_refused_or_exported_as_s():
     mirrored = np.diag([1.0, 1.0, -1.0]) @ w
     with pytest.raises(MagexpError, match="mirrors an axis"):
         ex.render("px4", mirrored, offset, "uT")
+
+
+def test_px4_takes_its_own_rotation_out_of_w():
+    """A vector calibration of readings PX4 rotates after S (board yaw 180°, 2° level adjustment):
+    W = R S; exported with rotation=R, Correct (with that R) gives magexp's field back."""
+    from magexp.core.readers.ulog import onboard_rotation
+
+    r = onboard_rotation({"CAL_MAG1_ROT": -1, "SENS_BOARD_ROT": 4, "SENS_BOARD_X_OFF": 2.0}, 1)
+    w, offset, raw = synthetic("G")
+    out = ex.render("px4", r @ w, offset, "G", instance=1, rotation=r)
+    err = relative(px4_correct(raw, parse_px4(out.text), 1, r), (raw - offset) @ (r @ w).T)
+    print(f"PX4 with its rotation: {err:.2g}")
+    assert err < RTOL
+    with pytest.raises(MagexpError, match="W turns the field by"):
+        ex.render("px4", r @ w, offset, "G")  # without it, R is far from the identity
 
 
 @pytest.mark.parametrize("options, message", [

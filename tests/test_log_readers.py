@@ -80,10 +80,16 @@ def test_px4_sample_undoes_the_onboard_offsets():
     t = d["timestamp"].astype(np.int64) + d["magnetometer_timestamp_relative"]
     fresh = np.concatenate([[True], np.diff(t) != 0])
     logged = np.column_stack([d[f"magnetometer_ga[{i}]"] for i in range(3)])[fresh]
-    off = np.array([ulog.initial_parameters[f"CAL_MAG0_{a}OFF"] for a in "XYZ"])
+    p = ulog.initial_parameters
+    off = np.array([p[f"CAL_MAG0_{a}OFF"] for a in "XYZ"])
+    # B = R S (r - OFF): S = I (SCALE 1), R the board's level adjustment Rz(z) Ry(y) Rx(x) (SENS_BOARD_ROT = 0)
+    x, y, z = np.deg2rad([p["SENS_BOARD_X_OFF"], p["SENS_BOARD_Y_OFF"], p["SENS_BOARD_Z_OFF"]])
+    rx = np.array([[1, 0, 0], [0, np.cos(x), -np.sin(x)], [0, np.sin(x), np.cos(x)]])
+    ry = np.array([[np.cos(y), 0, np.sin(y)], [0, 1, 0], [-np.sin(y), 0, np.cos(y)]])
+    rz = np.array([[np.cos(z), -np.sin(z), 0], [np.sin(z), np.cos(z), 0], [0, 0, 1]])
     print(f"px4_sample: {rec.n} readings at {1 / np.median(np.diff(rec.times)):.0f} Hz, meta {rec.meta}")
-    assert (rec.n, rec.unit, rec.meta["source"]) == (6759, "G", "sensor_combined")
-    np.testing.assert_allclose(rec.readings - off, logged, rtol=0, atol=1e-7)  # SCALE = 1: r = B + OFF
+    assert (rec.n, rec.unit, rec.meta["source"], p["SENS_BOARD_ROT"]) == (6759, "G", "sensor_combined", 0)
+    np.testing.assert_allclose((rec.readings - off) @ (rz @ ry @ rx).T, logged, rtol=0, atol=1e-6)
     assert np.all(np.diff(rec.times) > 0) and rec.gyro_stream[1].shape == (17070, 3)
     a = ulog.get_dataset("vehicle_attitude").data  # the sample nearest each reading, from pyulog directly
     t_att = (a["timestamp"].astype(np.int64) - ulog.start_timestamp) / 1e6
@@ -158,15 +164,16 @@ LAT, LON, ALT = 47.3977, 8.5456, 488.0
 STAMP = 1_750_000_000  # 2025-06-15
 
 
-def write_bag(path, kind: str, rotations: np.ndarray, field_ned: np.ndarray) -> np.ndarray:
+def write_bag(path, kind: str, rotations: np.ndarray, field_ned: np.ndarray, w=np.eye(3), offset=np.zeros(3)) -> np.ndarray:
     """A bag of MagneticField (T) + Imu (orientation body -> ENU) + NavSatFix at the same stamps, the
-    sensor at ``rotations`` (body -> NED); returns the readings in µT."""
+    sensor at ``rotations`` (body -> NED) reading ``r = W⁻¹ B + o`` (µT); returns the readings."""
     from magexp.core.readers.rosbag import typestore
 
     ros1 = kind == "ros1"
     ts = typestore(ros1)
     t = ts.types
-    readings_ut = np.einsum("nji,j->ni", rotations, field_ned) / 1e3  # nav -> body = R^T, nT -> µT
+    body = np.einsum("nji,j->ni", rotations, field_ned) / 1e3  # nav -> body = R^T, nT -> µT
+    readings_ut = np.linalg.solve(w, body.T).T + offset
     body_to_enu = NED_TO_ENU @ rotations
     from scipy.spatial.transform import Rotation
 

@@ -212,17 +212,25 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     return Export("ardupilot", text, values, tuple(warnings))
 
 
-def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0,
+def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0, rotation=None,
         max_rotation_deg: float = MAX_ROTATION_DEG, notes: dict | None = None) -> Export:
     """PX4 parameters (a QGroundControl ``.params`` file: ``vehicle component name value type``).
 
     Convention (``Magnetometer::Correct``): ``B = R S (r − OFF)``, gauss; ``S`` from ``SCALE`` and
     ``ODIAG``, ``R`` the board or ``CAL_MAGn_ROT`` rotation (kept: set it as before). From
-    ``B = S' (r − o')`` (:func:`to_firmware`, gauss): ``OFF = o'``, ``S = S'``. ``instance``: the
-    calibration slot ``n`` of ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``).
+    ``Rᵀ B = S' (r − o')`` (:func:`to_firmware` of ``Rᵀ W``, gauss): ``OFF = o'``, ``S = S'``.
+    ``rotation``: that ``R`` when ``W`` maps the readings into the body frame (a vector calibration
+    of a ULog's readings, :func:`magexp.core.readers.onboard_rotation_of`); None: the identity (a
+    total-field calibration, or readings in the body frame). ``instance``: the slot ``n`` of
+    ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``).
     """
     if instance not in (0, 1, 2, 3):
         raise MagexpError(f"instance={instance!r} is not allowed for px4: choose 0, 1, 2 or 3 (CAL_MAGn)")
+    if rotation is not None:
+        rotation = np.asarray(rotation, float)
+        if rotation.shape != (3, 3) or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6):
+            raise MagexpError("rotation is not allowed: it must be a 3 x 3 rotation matrix (PX4's R)")
+        w = rotation.T @ np.asarray(w, float)
     c = to_firmware(w, offset, unit, "G", field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
                     max_rotation_deg=max_rotation_deg)
     n, m = instance, c.matrix

@@ -166,6 +166,22 @@ def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, a
     return rec
 
 
+def matrix_text(m: np.ndarray) -> str:
+    """A 3 x 3 matrix as ``meta`` text, rows separated by ``;`` (:func:`matrix_of` reads it back)."""
+    return "; ".join(", ".join(f"{v!r}" for v in np.asarray(row, float).tolist()) for row in m)
+
+
+def matrix_of(text: str) -> np.ndarray:
+    """The matrix of :func:`matrix_text`."""
+    return np.array([[float(v) for v in row.split(",")] for row in text.split(";")])
+
+
+def onboard_rotation_of(rec: Recording) -> np.ndarray:
+    """The rotation the firmware applies after its calibration (``meta['onboard_rotation']`` of a
+    PX4 log), else the identity: what :func:`magexp.calibrate.export.px4` takes as ``rotation``."""
+    return matrix_of(rec.meta["onboard_rotation"]) if "onboard_rotation" in rec.meta else np.eye(3)
+
+
 def check_count(count: int, subject: str) -> None:
     """Refuse, before decoding, a log holding more readings than :mod:`magexp.budget` allows."""
     refuse_over(count, "readings", subject, "its magnetometer messages hold")

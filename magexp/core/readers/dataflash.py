@@ -48,8 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, navigation_angles, need,
-                                 place)
+from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
+                                 navigation_angles, need, place)
 from magexp.errors import MagexpError
 from magexp.recordings import Recording
 
@@ -137,8 +137,8 @@ def undo_correction(mag: dict, params: dict, instance: int) -> tuple[np.ndarray,
     offsets = np.where(agree, ofs, logged)
     raw = np.linalg.solve(m, (b - motor).T).T / scale - offsets
     meta = {"corrected": "undone: ArduPilot B = M (s (r + OFS)) + MOFS, r = M^-1 (B - MOFS) / s - OFS (body frame)",
-            "onboard_offset_mG": ", ".join(f"{v:.9g}" for v in ofs), "onboard_scale": f"{scale:.9g}",
-            "onboard_matrix": "; ".join(", ".join(f"{v:.9g}" for v in row) for row in m)}
+            "onboard_offset_mG": ", ".join(f"{v!r}" for v in ofs.tolist()), "onboard_scale": repr(scale),
+            "onboard_matrix": matrix_text(m)}
     if not np.all(agree):
         meta["offsets"] = f"{int(np.sum(~agree))} readings use their logged OfsX/Y/Z (offsets changed in the log)"
     return raw, meta

@@ -12,7 +12,8 @@ what               topics and fields (units)
 magnetometer       the one with most samples of ``vehicle_magnetometer.magnetometer_ga[0..2]``,
                    ``sensor_combined.magnetometer_ga[0..2]`` (older logs; a reading only where
                    ``timestamp + magnetometer_timestamp_relative`` changes) and ``sensor_mag.x/y/z`` of
-                   the prime magnetometer (``CAL_MAG_PRIME``); gauss -> unit ``G``
+                   the prime magnetometer (``CAL_MAG_PRIME``, else ``vehicle_magnetometer.device_id``);
+                   gauss -> unit ``G``
 gyroscope          ``sensor_combined.gyro_rad[0..2]`` (rad/s, body frame), else
                    ``vehicle_angular_velocity.xyz[0..2]``
 attitude           ``vehicle_attitude.q[0..3]`` (``w, x, y, z``, body FRD -> NED), interpolated at the
@@ -25,19 +26,22 @@ time               ``timestamp`` (microseconds since boot), in seconds from the 
 
 **Already corrected.** PX4 publishes ``vehicle_magnetometer`` and ``sensor_combined``'s
 magnetometer *after* its onboard calibration ``CAL_MAGn_*`` (``n`` the calibration slot whose
-``CAL_MAGn_ID`` is the magnetometer's device id, or ``CAL_MAG_PRIME``); so does ``sensor_mag`` up
-to PX4 1.11 (the drivers applied the calibration). The reader undoes it with the parameters the
-log holds, so that the readings are what the calibration parameters apply to (and a new
-calibration can replace them, :mod:`magexp.calibrate.export`):
+``CAL_MAGn_ID`` is the magnetometer's device id, ``CAL_MAG_PRIME`` in older logs), and ``sensor_mag``
+too up to PX4 1.11 (the drivers applied offsets and scales; the sensors module rotated). In every
+version (``Magnetometer::Correct`` from 1.12 on, ``src/lib/sensor_calibration/Magnetometer.hpp``;
+the drivers and ``VotedSensorsUpdate`` before)
 
-* PX4 < 1.12 (``ver_sw_release``, or none logged): the driver rotated the raw sample into the board
-  frame, then ``B = (r - OFF) ⊙ SCALE`` per axis (gauss); undone as ``r = B ⊘ SCALE + OFF``
-  (readings in the board frame, where those offsets apply);
-* PX4 >= 1.12 (``src/lib/sensor_calibration/Magnetometer.hpp``, ``Correct``):
-  ``B = R S (r - OFF)``, ``S`` symmetric from ``SCALE`` (diagonal) and ``ODIAG`` (off-diagonal),
-  ``R`` the board or ``CAL_MAGn_ROT`` rotation; undone as ``r = S⁻¹ Rᵀ B + OFF`` (readings in the
-  sensor frame) when ``R`` is the identity; a rotated magnetometer is refused in one line (its
-  ``sensor_mag`` is raw from 1.12 on: log that topic instead).
+.. math:: B = R\\,S\\,(r - \\mathrm{OFF}),
+
+gauss, ``S`` symmetric with ``CAL_MAGn_XSCALE/YSCALE/ZSCALE`` on its diagonal and
+``CAL_MAGn_XODIAG/YODIAG/ZODIAG`` (``xy, xz, yz``; 1.12 on, else 0) off it, ``R`` the rotation to the
+body frame: ``get_rot_matrix(CAL_MAGn_ROT)`` for an external magnetometer, the board's
+``Euler(SENS_BOARD_X/Y/Z_OFF) · get_rot_matrix(SENS_BOARD_ROT)`` for an internal one
+(:func:`onboard_rotation`; ``sensor_mag`` before 1.12 was not yet rotated: ``R = I``). The reader
+undoes it with the parameters the log holds, ``r = S⁻¹ Rᵀ B + OFF``: the readings are in the frame
+the offsets apply in, so that a new calibration can replace them (:mod:`magexp.calibrate.export`,
+whose ``px4`` target takes ``R`` back out of a vector calibration's ``W``). ``sensor_mag`` from 1.12 on
+is raw and read as it is.
 
 Parameters that change while the magnetometer is logged, or a slot that cannot be found, are
 refused in one line; ``undo=False`` keeps the readings as logged (``meta['corrected']`` says so).
@@ -51,8 +55,10 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import check_count, log_recording, log_unit, navigation_angles, need, place
+from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
+                                 navigation_angles, need, place)
 from magexp.errors import MagexpError
+from magexp.geometry import quat_to_matrix
 from magexp.recordings import Recording
 
 #: the topics read (pyulog loads only these)
@@ -60,8 +66,16 @@ TOPICS = ("vehicle_magnetometer", "sensor_combined", "sensor_mag", "vehicle_atti
           "vehicle_gps_position", "sensor_gps")
 #: ``timestamp_relative`` of a sample that did not update (``uORB``'s RELATIVE_TIMESTAMP_INVALID)
 RELATIVE_INVALID = 0x7FFFFFFF
-#: the first PX4 release whose ``sensor_mag`` is raw and whose calibration is ``R S (r - OFF)``
+#: the first PX4 release whose ``sensor_mag`` is raw (the calibration moved from the drivers to the sensors module)
 NEW_CALIBRATION = (1, 12)
+#: PX4's rotations (``enum Rotation``, ``src/lib/conversion/rotation.h``): roll, pitch, yaw in degrees
+ROTATIONS = ((0, 0, 0), (0, 0, 45), (0, 0, 90), (0, 0, 135), (0, 0, 180), (0, 0, 225), (0, 0, 270), (0, 0, 315),
+             (180, 0, 0), (180, 0, 45), (180, 0, 90), (180, 0, 135), (0, 180, 0), (180, 0, 225), (180, 0, 270),
+             (180, 0, 315), (90, 0, 0), (90, 0, 45), (90, 0, 90), (90, 0, 135), (270, 0, 0), (270, 0, 45),
+             (270, 0, 90), (270, 0, 135), (0, 90, 0), (0, 270, 0), (0, 180, 90), (0, 180, 270), (90, 90, 0),
+             (180, 90, 0), (270, 90, 0), (90, 180, 0), (270, 180, 0), (90, 270, 0), (180, 270, 0), (270, 270, 0),
+             (90, 180, 90), (90, 0, 270), (90, 68, 293), (0, 315, 0), (90, 315, 0), (270, 0, 180), (270, 0, 270),
+             (0, 90, 180), (0, 9, 180), (0, 45, 0), (270, 0, 225), (270, 0, 315))
 
 
 def _columns(data: dict, names: list[str]) -> np.ndarray:
@@ -88,6 +102,7 @@ def _candidates(ulog, prime: int | None) -> list[tuple[str, np.ndarray, np.ndarr
         device = int(vm.data["device_id"][0]) if "device_id" in vm.data else prime
         out.append(("vehicle_magnetometer", vm.data["timestamp"],
                     _columns(vm.data, [f"magnetometer_ga[{i}]" for i in range(3)]), device))
+        prime = device if prime is None else prime  # newer logs have no CAL_MAG_PRIME
     sc = _dataset(ulog, "sensor_combined")
     if sc is not None and "magnetometer_ga[0]" in sc.data:
         rel = np.asarray(sc.data["magnetometer_timestamp_relative"], np.int64)
@@ -125,9 +140,29 @@ def _changed(ulog, n: int, t0: float, t1: float) -> str | None:
     return None if hit is None else f"{hit[1]} changes at {hit[0] / 1e6:.3f} s"
 
 
+def rotation_matrix(enum: int) -> np.ndarray:
+    """PX4's ``get_rot_matrix`` (``src/lib/conversion/rotation.cpp``): the ``Z-Y-X`` Euler angles of
+    :data:`ROTATIONS` as a board -> body matrix."""
+    if not 0 <= enum < len(ROTATIONS):
+        raise MagexpError(f"rotation {enum} is not allowed: PX4's rotations are 0 to {len(ROTATIONS) - 1}")
+    return quat_to_matrix(euler_quaternions(*np.deg2rad(np.array(ROTATIONS[enum], float)[:, None])))[0]
+
+
+def onboard_rotation(params: dict, n: int) -> np.ndarray:
+    """``R`` PX4 applies after the calibration of slot ``n``: ``get_rot_matrix(CAL_MAGn_ROT)`` for an
+    external magnetometer (``ROT >= 0``), else the board's: ``Euler(SENS_BOARD_X/Y/Z_OFF) ·
+    get_rot_matrix(SENS_BOARD_ROT)`` (``GetBoardRotation``)."""
+    rot = int(params.get(f"CAL_MAG{n}_ROT", -1))
+    if rot >= 0:
+        return rotation_matrix(rot)
+    level = np.deg2rad([float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"])
+    return quat_to_matrix(euler_quaternions(*level[:, None]))[0] @ rotation_matrix(int(params.get("SENS_BOARD_ROT", 0)))
+
+
 def undo_calibration(ulog, topic: str, device: int | None, readings: np.ndarray, times_us: np.ndarray,
                      name: str) -> tuple[np.ndarray, dict]:
-    """The readings before PX4's onboard calibration (module docstring), and what was undone."""
+    """The readings before PX4's onboard calibration, ``r = S⁻¹ Rᵀ B + OFF`` (module docstring),
+    and what was undone."""
     version = _version(ulog)
     new = version is not None and version >= NEW_CALIBRATION
     if topic.startswith("sensor_mag") and new:
@@ -139,22 +174,13 @@ def undo_calibration(ulog, topic: str, device: int | None, readings: np.ndarray,
         raise MagexpError(f"{name}: the onboard calibration {changed}, while the magnetometer is logged: it cannot "
                           "be undone with one set of parameters (log a calibration with fixed parameters)")
     s, off = _calibration(params, n)
-    meta = {"calibration_slot": str(n), "onboard_offset_G": ", ".join(f"{v:.9g}" for v in off),
-            "onboard_scale": "; ".join(", ".join(f"{v:.9g}" for v in row) for row in s)}
+    rotation = np.eye(3) if topic.startswith("sensor_mag") else onboard_rotation(params, n)  # < 1.12: not rotated
+    meta = {"calibration_slot": str(n), "onboard_offset_G": ", ".join(f"{v!r}" for v in off.tolist()),
+            "onboard_scale": matrix_text(s), "onboard_rotation": matrix_text(rotation),
+            "corrected": "undone: PX4 B = R S (r - OFF), r = S^-1 R^T B + OFF (the frame the offsets apply in)"}
     if float(params.get("CAL_MAG_COMP_TYP", 0)) > 0:
         meta["power_compensation"] = "CAL_MAG_COMP_TYP > 0: the power compensation is not undone"
-    if not new:
-        meta["corrected"] = ("undone: PX4 < 1.12 driver calibration B = (r - OFF) * SCALE, r = B / SCALE + OFF "
-                             "(board frame)")
-        return readings / np.diag(s) + off, meta
-    rotation = int(params.get(f"CAL_MAG{n}_ROT", -1))
-    board = int(params.get("SENS_BOARD_ROT", 0))
-    tilt = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
-    if rotation > 0 or (rotation < 0 and (board != 0 or any(tilt))):
-        raise MagexpError(f"{name}: CAL_MAG{n}_ROT={rotation}, SENS_BOARD_ROT={board}: the onboard rotation of "
-                          f"{topic} is not undone by magexp; log sensor_mag (raw from PX4 1.12 on) instead")
-    meta["corrected"] = "undone: PX4 >= 1.12 calibration B = R S (r - OFF) with R = I, r = S^-1 B + OFF (sensor frame)"
-    return np.linalg.solve(s, readings.T).T + off, meta
+    return np.linalg.solve(s, (readings @ rotation).T).T + off, meta
 
 
 def _gps(ulog) -> dict:
