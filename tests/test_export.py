@@ -150,7 +150,7 @@ def test_px4_takes_its_own_rotation_out_of_w():
 
 @pytest.mark.parametrize("options, message", [
     ({"unit": "counts"}, "counts_nt=<nT per count"),
-    ({"unit": "uT", "instance": 4}, "instance=4 is not allowed"),
+    ({"unit": "uT", "instance": 3}, "instance=3 is not allowed"),
     ({"unit": "uT", "counts_nt": -1, "field_unit": "counts"}, "counts_nt=-1 is not allowed"),
 ])
 def test_bad_export_options_are_one_line(options, message):
@@ -162,10 +162,12 @@ def test_bad_export_options_are_one_line(options, message):
         ex.render("qgc", w, offset, "uT")
 
 
-def test_ardupilot_warns_outside_its_ranges():
+def test_ardupilot_warns_outside_its_ranges_and_names_the_instance():
     w, offset, _ = synthetic("G")
     out = ex.render("ardupilot", w * 8, offset, "G")  # diagonals near 8 > 5; offsets up to 300 mG
     assert any("COMPASS_DIA_X" in text for text in out.warnings) and "# WARNING" in out.text
+    third = ex.render("ardupilot", w, offset, "G", instance=2).values
+    assert "COMPASS_OFS3_X" in third and "COMPASS_SCALE3" in third and "COMPASS_OFS_X" not in third
 
 
 def test_ros_yaml_parses_and_applies_in_tesla():

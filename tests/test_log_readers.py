@@ -127,6 +127,21 @@ def test_the_samples_are_refused_in_one_line(path, reason):
 
 
 # -- ArduPilot DataFlash ------------------------------------------------------------------------
+def test_a_dataflash_log_without_mag_is_one_line(tmp_path):
+    """A DataFlash log written here (FMT records, then IMU messages), with no MAG: refused in one line."""
+    import struct
+
+    fmt = lambda t, n, f, c: b"\xa3\x95\x80" + struct.pack("<BB4s16s64s", t, 3 + struct.calcsize("<" + {  # noqa: E731
+        "BBnNZ": "BB4s16s64s", "Qfff": "Qfff"}[f]), n, f.encode(), c.encode())
+    data = fmt(128, b"FMT", "BBnNZ", "Type,Length,Name,Format,Columns") + fmt(129, b"IMU", "Qfff", "TimeUS,GyrX,GyrY,GyrZ")
+    data += b"".join(b"\xa3\x95\x81" + struct.pack("<Qfff", 1000 * k, 0.1, 0.2, 0.3) for k in range(50))
+    path = tmp_path / "imu_only.bin"
+    path.write_bytes(data)
+    with pytest.raises(MagexpError, match="imu_only.bin: no MAG messages of compass instance 0") as err:
+        load_recording(path)
+    assert "\n" not in str(err.value)
+
+
 @needs(DATAFLASH)
 def test_a_unit_other_than_the_logs_is_one_line():
     with pytest.raises(MagexpError, match=r"data.unit='uT' is not allowed for ardupilot_test.bin: DataFlash MAG is in mG"):

@@ -4,21 +4,21 @@ magexp's calibration is ``B = W (r − o)`` in the recording's unit (:mod:`magex
 ``r`` a raw reading, ``o`` the offset, ``B`` the calibrated field. Each target holds it in its
 own convention and unit:
 
-=============== ============================================================ ========== ================
-target          the firmware's correction (source)                           unit       holds
-=============== ============================================================ ========== ================
-``ardupilot``   ``B = M (s (r + OFS))`` (``AP_Compass_Backend::correct_field``; mGauss     ``S`` only
-                ``M`` symmetric: ``COMPASS_DIA_X/Y/Z`` diagonal,
-                ``COMPASS_ODI_X/Y/Z`` = ``M_xy, M_xz, M_yz``; ``s`` =
-                ``COMPASS_SCALE``)
-``px4``         ``B = R S (r − OFF)`` (``sensor_calibration/Magnetometer.hpp``,  gauss      ``S`` only
-                ``Correct``; ``S`` symmetric: ``CAL_MAGn_XSCALE/YSCALE/ZSCALE``
-                diagonal, ``CAL_MAGn_XODIAG/YODIAG/ZODIAG`` = ``S_xy, S_xz,
-                S_yz``; ``R`` the board / ``CAL_MAGn_ROT`` rotation, kept)
-``ros``         ``B = W (r − o)``, ROS 2 parameter YAML (``/**: ros__parameters``) tesla      ``W``
-``c``           ``B = W (r − o)``, ``static const float`` arrays and an inline   recording's ``W``
-                function                                                     unit
-=============== ============================================================ ========== ================
+``ardupilot`` (a ``.param`` file, mGauss)
+    ``B = M (s (r + OFS))`` (``AP_Compass_Backend::correct_field``): ``M`` symmetric with
+    ``COMPASS_DIA_X/Y/Z`` on its diagonal and ``COMPASS_ODI_X/Y/Z`` = ``M_xy, M_xz, M_yz`` off it,
+    ``s = COMPASS_SCALE``, ``r`` the body-frame raw field; holds a symmetric ``S`` only.
+``px4`` (a QGroundControl ``.params`` file, gauss)
+    ``B = R S (r − OFF)`` (``Magnetometer::Correct``, ``src/lib/sensor_calibration/Magnetometer.hpp``):
+    ``S`` symmetric with ``CAL_MAGn_XSCALE/YSCALE/ZSCALE`` on its diagonal and
+    ``CAL_MAGn_XODIAG/YODIAG/ZODIAG`` = ``S_xy, S_xz, S_yz`` off it, ``R`` the board or
+    ``CAL_MAGn_ROT`` rotation (kept as set); holds a symmetric ``S`` only.
+``ros`` (a ROS 2 parameter YAML, ``<node>: ros__parameters: magnetometer_calibration:``, tesla)
+    ``B = W (r − o)``, ``matrix`` the full ``W`` row-major, ``offset`` 3 numbers (tesla, the unit
+    of ``sensor_msgs/MagneticField``).
+``c`` (a C header, the recording's units)
+    ``B = W (r − o)``: ``static const float`` arrays ``<NAME>_OFFSET[3]``, ``<NAME>_MATRIX[3][3]``
+    and ``<name>_apply(raw, out)``.
 
 **Units.** The raw readings the firmware sees are the recording's readings times
 ``k_in`` (firmware unit per recording unit, from :data:`magexp.recordings.UNITS`), and its
@@ -34,7 +34,8 @@ positive definite) and the firmware gets ``S``; its calibrated field is then ``R
 field turned by ``Rᵀ``. A total-field (scalar) calibration cannot see ``R`` at all (magexp reports
 ``W`` as ``S``: ``R = I``); a vector (attitude-aided) calibration finds ``R``, the misalignment
 between the magnetometer and the attitude's body frame, which belongs in the firmware's
-orientation parameter (``COMPASS_ORIENT``, ``CAL_MAGn_ROT``), not in the matrix. The export
+orientation parameter (``COMPASS_ORIENT``, ``CAL_MAGn_ROT``), not in the matrix (for PX4, whose
+``R`` is known from a log, ``px4(..., rotation=R)`` takes it out of ``W`` first). The export
 refuses, in one line, an ``R`` turning by more than ``max_rotation_deg`` (default
 :data:`MAX_ROTATION_DEG`, a documented default: 1° of heading error is what a good compass
 calibration is expected to leave) and a ``W`` with a negative determinant (a mirrored axis).
@@ -177,20 +178,21 @@ def _comments(notes: dict | None, convention: str, correction: Correction, marke
     return lines
 
 
-def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 1,
+def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0,
               max_rotation_deg: float = MAX_ROTATION_DEG, notes: dict | None = None) -> Export:
     """ArduPilot parameters (a Mission Planner / MAVProxy ``.param`` file, ``NAME,VALUE`` lines).
 
     Convention (``AP_Compass_Backend::correct_field``): ``B = M (s (r + OFS))``, mGauss, ``r`` the
     body-frame raw field (after ``COMPASS_ORIENT``). From ``B = S' (r − o')`` (:func:`to_firmware`,
-    mGauss): ``COMPASS_OFS = −o'``, ``M = S'``, ``COMPASS_SCALE = 1``. ``instance`` 1, 2, 3: the
-    names ``COMPASS_OFS_X``, ``COMPASS_OFS2_X``, ``COMPASS_OFS3_X`` (``DIA``, ``ODI``, ``SCALE`` alike).
+    mGauss): ``COMPASS_OFS = −o'``, ``M = S'``, ``COMPASS_SCALE = 1``. ``instance`` 0, 1, 2 (as the
+    log's ``MAG`` instance, :func:`magexp.core.readers.dataflash.read_dataflash`): the names
+    ``COMPASS_OFS_X``, ``COMPASS_OFS2_X``, ``COMPASS_OFS3_X`` (``DIA``, ``ODI``, ``SCALE`` alike).
     """
-    if instance not in (1, 2, 3):
-        raise MagexpError(f"instance={instance!r} is not allowed for ardupilot: choose 1, 2 or 3")
-    c = to_firmware(w, offset, unit, "mG", field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
+    if instance not in (0, 1, 2):
+        raise MagexpError(f"instance={instance!r} is not allowed for ardupilot: choose 0, 1 or 2 (the compass)")
+    c = to_firmware(w, offset, unit, TARGET_UNITS["ardupilot"], field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
                     max_rotation_deg=max_rotation_deg)
-    n = "" if instance == 1 else str(instance)
+    n = "" if instance == 0 else str(instance + 1)
     m = c.matrix
     values = {**{f"COMPASS_OFS{n}_{a}": float(-c.offset[i]) for i, a in enumerate("XYZ")},
               **{f"COMPASS_DIA{n}_{a}": float(m[i, i]) for i, a in enumerate("XYZ")},
@@ -231,7 +233,7 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
         if rotation.shape != (3, 3) or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6):
             raise MagexpError("rotation is not allowed: it must be a 3 x 3 rotation matrix (PX4's R)")
         w = rotation.T @ np.asarray(w, float)
-    c = to_firmware(w, offset, unit, "G", field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
+    c = to_firmware(w, offset, unit, TARGET_UNITS["px4"], field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
                     max_rotation_deg=max_rotation_deg)
     n, m = instance, c.matrix
     values = {**{f"CAL_MAG{n}_{a}OFF": float(c.offset[i]) for i, a in enumerate("XYZ")},
@@ -249,7 +251,7 @@ def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/
     """A ROS 2 parameter file: ``<node>: ros__parameters: <namespace>: {convention, unit, offset,
     matrix}``; ``B = W (r − o)`` in tesla (``sensor_msgs/MagneticField``'s unit), ``matrix`` the
     full ``W`` row-major (9 numbers), ``offset`` 3 numbers."""
-    c = to_firmware(w, offset, unit, "T", field_unit=field_unit, counts_nt=counts_nt)
+    c = to_firmware(w, offset, unit, TARGET_UNITS["ros"], field_unit=field_unit, counts_nt=counts_nt)
     values = {"convention": "B = W (r - o), W row-major", "unit": "T",
               "offset": [float(v) for v in c.offset], "matrix": [float(v) for v in c.matrix.ravel()]}
     head = _comments(notes, "ROS: B = W (r - o), tesla (sensor_msgs/MagneticField), matrix row-major", c, "#")
@@ -266,7 +268,7 @@ def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", no
     in the recording's units (the raw unit in, ``field_unit`` out), float32 literals (``%.9g``)."""
     if not _IDENTIFIER.match(str(name)):
         raise MagexpError(f"name={name!r} is not allowed: it must be a C identifier (letters, digits, _)")
-    c = to_firmware(w, offset, unit, None, field_unit=field_unit)
+    c = to_firmware(w, offset, unit, TARGET_UNITS["c"], field_unit=field_unit)
     up, low = str(name).upper(), str(name).lower()
     lit = lambda v: f"{v:.9g}f" if "." in f"{v:.9g}" or "e" in f"{v:.9g}" else f"{v:.9g}.0f"  # noqa: E731
     head = _comments(notes, f"B = W (r - o): r raw ({c.unit}), o offset ({c.unit}), B calibrated ({c.field_unit}); "

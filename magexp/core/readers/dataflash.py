@@ -94,6 +94,15 @@ def table(reader, name: str) -> dict | None:
     return out
 
 
+#: the ``MAG`` fields the reader needs (ArduPilot 3.3 on: ``TimeUS``; older logs' ``TimeMS`` is not read)
+MAG_FIELDS = ("TimeUS", "MagX", "MagY", "MagZ", "OfsX", "OfsY", "OfsZ")
+
+
+def _with(rows: dict | None, fields) -> dict | None:
+    """``rows`` if it holds a message and every one of ``fields``, else None."""
+    return rows if rows is not None and all(f in rows for f in fields) and len(rows[fields[0]]) else None
+
+
 def _instance(reader, name: str, instance: int) -> dict | None:
     """The messages of ``instance``: field ``I`` when present, else ``<name><k+1>`` for ``k > 0``."""
     rows = table(reader, name)
@@ -145,7 +154,7 @@ def undo_correction(mag: dict, params: dict, instance: int) -> tuple[np.ndarray,
 
 
 def _gps(gps: dict | None) -> dict:
-    if gps is None or "Lat" not in gps:
+    if gps is None:
         return {}
     fix = np.asarray(gps.get("Status", np.full(len(gps["Lat"]), 3))) >= 3
     when = None
@@ -174,14 +183,17 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
         reader = df.DFReader_binary(str(path), zero_time_base=False)
     except Exception as exc:  # pymavlink raises bare exceptions of many kinds on a damaged file
         raise MagexpError(f"{name}: not a readable DataFlash log ({type(exc).__name__})") from None
-    mag = _instance(reader, "MAG", instance)
+    mag = _with(_instance(reader, "MAG", instance), MAG_FIELDS)
     if mag is None or len(mag["TimeUS"]) == 0:
-        raise MagexpError(f"{name}: no MAG messages of compass instance {instance}: nothing to calibrate")
+        raise MagexpError(f"{name}: no MAG messages of compass instance {instance} with {', '.join(MAG_FIELDS)}: "
+                          "nothing to calibrate")
     check_count(len(mag["TimeUS"]), f"data.path={name!r}")
+    att = _with(table(reader, "ATT"), ("TimeUS", "Roll", "Pitch", "Yaw"))
+    imu = _with(_instance(reader, "IMU", instance), ("TimeUS", "GyrX", "GyrY", "GyrZ"))
+    gps = _with(table(reader, "GPS"), ("Lat", "Lng", "Alt"))
     t_mag = mag["TimeUS"].astype(np.int64)
-    firsts = [int(rows["TimeUS"].min()) for rows in (table(reader, n) for n in ("MAG", "IMU", "ATT", "GPS", "PARM"))
-              if rows is not None and "TimeUS" in rows and len(rows["TimeUS"])]
-    t0 = min(firsts)
+    t0 = min(int(rows["TimeUS"].min()) for rows in (mag, att, imu, gps) if rows is not None and "TimeUS" in rows)
+    clock = lambda rows: (rows["TimeUS"].astype(np.int64) - t0) / 1e6  # noqa: E731
     meta = {"format": "dataflash", "source": "MAG" if instance == 0 else f"MAG instance {instance}"}
     if undo:
         raw, undone = undo_correction(mag, parameters(reader, float(t_mag.min())), instance)
@@ -189,18 +201,14 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
     else:
         raw = np.column_stack([mag[f"Mag{a}"] for a in "XYZ"]).astype(float)
         meta["corrected"] = "kept as logged (undo=False)"
-    times = (t_mag - t0) / 1e6
-    att = table(reader, "ATT")
-    angles = None
-    if att is not None and len(att["TimeUS"]):
+    times = clock(mag)
+    angles, gyro = None, None
+    if att is not None:
         quats = euler_quaternions(*(np.deg2rad(att[k].astype(float)) for k in ("Roll", "Pitch", "Yaw")))
-        angles = navigation_angles((att["TimeUS"].astype(np.int64) - t0) / 1e6, quats, times)
+        angles = navigation_angles(clock(att), quats, times)
         meta["attitude"] = "ATT Roll, Pitch, Yaw (body -> NED)"
-    imu = _instance(reader, "IMU", instance)
-    gyro = None
-    if imu is not None and "GyrX" in imu:
-        gyro = ((imu["TimeUS"].astype(np.int64) - t0) / 1e6,
-                np.column_stack([imu[f"Gyr{a}"] for a in "XYZ"]).astype(float))
-    meta.update(_gps(table(reader, "GPS")))
+    if imu is not None:
+        gyro = clock(imu), np.column_stack([imu[f"Gyr{a}"] for a in "XYZ"]).astype(float)
+    meta.update(_gps(gps))
     return log_recording(Path(path), readings=raw, unit="mG", times=times, angles=angles, gyro=gyro, meta=meta,
                          mag_axes=mag_axes, gyro_axes=gyro_axes)
