@@ -109,11 +109,39 @@ def test_px4_small_log_has_gps():
     assert rec.meta["date"] == "2021-04-21"
 
 
+@needs(ULOG_SMALL)
+@pytest.mark.parametrize("edit, message", [
+    ("drop", "has no CAL_MAGn_ID in the log's parameters: its onboard calibration cannot be undone"),
+    ("change", "CAL_MAG1_XOFF changes at 2.982 s, while the magnetometer is logged"),
+], ids=["dropped", "changed"])
+def test_an_onboard_calibration_that_cannot_be_undone_is_one_line(tmp_path, edit, message):
+    """The small log rewritten by pyulog without its CAL_MAG parameters, or with one changed mid-log."""
+    from pyulog import ULog
+
+    from magexp.core.readers.ulog import read_ulog
+
+    ulog = ULog(str(ULOG_SMALL), ["vehicle_magnetometer"])
+    if edit == "drop":
+        for key in [k for k in ulog.initial_parameters if k.startswith("CAL_MAG")]:
+            del ulog.initial_parameters[key]
+    else:
+        ulog.changed_parameters.append((ulog.start_timestamp + 3_000_000, "CAL_MAG1_XOFF", 0.05))
+    path = tmp_path / "edited.ulg"
+    ulog.write_ulog(str(path))
+    with pytest.raises(MagexpError, match=message) as err:
+        load_recording(path)
+    assert "\n" not in str(err.value)
+    kept = read_ulog(path, undo=False)  # the readings as logged
+    logged = ulog.get_dataset("vehicle_magnetometer").data
+    np.testing.assert_array_equal(kept.readings[:, 0], logged["magnetometer_ga[0]"])
+    assert kept.meta["corrected"] == "kept as logged (undo=False)"
+
+
 @pytest.mark.parametrize("path, reason", [
     (ULOG, "cover 66 % of the sphere"),  # ±22° of roll, 28° of heading: too little for W
     (ULOG_SMALL, "barely move"),  # on the ground: one attitude
     (DATAFLASH, "8 readings is not allowed"),  # one second of log
-])
+], ids=["px4_sample", "px4_small", "ardupilot"])
 def test_the_samples_are_refused_in_one_line(path, reason):
     if not path.is_file():
         pytest.skip(f"{path} is not present")

@@ -119,8 +119,9 @@ def _candidates(ulog, prime: int | None) -> list[tuple[str, np.ndarray, np.ndarr
 def _slot(params: dict, device: int | None, name: str) -> int:
     slots = [n for n in range(4) if device is not None and params.get(f"CAL_MAG{n}_ID") == device]
     if not slots:
-        raise MagexpError(f"{name}: the magnetometer (device id {device}) has no CAL_MAGn_ID in the log's parameters: "
-                          "its onboard calibration cannot be undone (read it with undo=False to keep it)")
+        raise MagexpError(f"{name}: the magnetometer (device id {'unknown' if device is None else device}) has no CAL_MAGn_ID in the log's parameters: "
+                          "its onboard calibration cannot be undone; log sensor_mag (raw from PX4 1.12 on), or keep "
+                          "the corrected readings with magexp.core.readers.ulog.read_ulog(path, undo=False)")
     return slots[0]
 
 
@@ -134,10 +135,11 @@ def _calibration(params: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _changed(ulog, n: int, t0: float, t1: float) -> str | None:
+    """The first ``CAL_MAGn_*`` change logged within ``[t0, t1]`` (µs), as text, or None."""
     keys = {f"CAL_MAG{n}_{k}" for k in ("XOFF", "YOFF", "ZOFF", "XSCALE", "YSCALE", "ZSCALE", "XODIAG",
                                          "YODIAG", "ZODIAG", "ROT")}
     hit = next(((t, k) for t, k, _ in ulog.changed_parameters if k in keys and t0 <= t <= t1), None)
-    return None if hit is None else f"{hit[1]} changes at {hit[0] / 1e6:.3f} s"
+    return None if hit is None else f"{hit[1]} changes at {(hit[0] - ulog.start_timestamp) / 1e6:.3f} s"
 
 
 def rotation_matrix(enum: int) -> np.ndarray:
