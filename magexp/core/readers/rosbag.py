@@ -27,15 +27,15 @@ seconds from the earliest message read.
 driver published is read as the raw reading (``meta['corrected']`` says so); a driver that
 publishes calibrated values should be recorded with its calibration switched off.
 
-Safety: messages are decoded with the message definitions built into rosbags (``ROS2_HUMBLE``
-for CDR, ``ROS1_NOETIC`` for ROS 1), never with the definitions a bag carries (rosbags generates
-code from those), and only the three types above.
+Safety and speed: a message is decoded by the fixed layout of its type (:data:`LAYOUTS`, ROS 2
+Humble and ROS 1 Noetic definitions), every message of a topic at once by numpy gathers
+(:class:`Messages`), never with the message definitions a bag carries (rosbags would generate
+code from those); a message whose length does not fit the layout is refused in one line.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import functools
 from pathlib import Path
 
 import numpy as np
@@ -49,36 +49,96 @@ MAG, IMU, FIX = "sensor_msgs/msg/MagneticField", "sensor_msgs/msg/Imu", "sensor_
 TESLA_TO_UT = 1e6
 
 
-def is_bag(path: Path) -> bool:
-    """A ROS bag by its name: ``*.bag``, ``*.mcap``, ``*.db3``, or a folder holding ``metadata.yaml``."""
-    path = Path(path)
-    return path.suffix in (".bag", ".mcap", ".db3") or (path.is_dir() and (path / "metadata.yaml").is_file())
+#: each type's fields after its header, in order, as ``(name, dtype, count)`` (``None``: read past);
+#: the whole message, so that a message of another layout is caught by its length
+LAYOUTS = {
+    MAG: (("field", "<f8", 3), (None, "<f8", 9)),
+    IMU: (("orientation", "<f8", 4), ("orientation_covariance", "<f8", 9), ("angular_velocity", "<f8", 3),
+          (None, "<f8", 9), (None, "<f8", 3), (None, "<f8", 9)),
+    FIX: (("status", "i1", 1), (None, "<u2", 1), ("position", "<f8", 3), (None, "<f8", 9), (None, "u1", 1)),
+}
+#: the CDR encapsulation of little-endian plain CDR (ROS 2's serialisation)
+CDR_LE = (0, 1)
 
 
-@functools.lru_cache(maxsize=2)
-def typestore(ros1: bool):
-    """rosbags' built-in message definitions (ROS 1 Noetic or ROS 2 Humble); built once a process
-    (0.2-0.3 s each, measured)."""
-    from rosbags.typesys import Stores, get_typestore
+class LayoutError(ValueError):
+    """A message shorter or longer than its type's layout."""
 
-    return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+
+class Messages:
+    """Serialised messages of one type decoded field by field for all of them at once (numpy
+    gathers): ROS 2's CDR (a 4-byte encapsulation header, then each value aligned to its size
+    from the body's start) or ROS 1's packed serialisation."""
+
+    def __init__(self, raws: list[bytes], *, cdr: bool):
+        lengths = np.fromiter(map(len, raws), np.int64, len(raws))
+        self.buf = np.frombuffer(b"".join(raws), np.uint8)
+        first = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+        self.cdr, self.end = cdr, first + lengths
+        self.start = first + (4 if cdr else 0)
+        if cdr and len(raws) and (np.any(lengths < 4) or np.any(self.buf[first] != CDR_LE[0])
+                                  or np.any(self.buf[first + 1] != CDR_LE[1])):
+            raise LayoutError("not little-endian CDR")
+        self.pos = np.zeros(len(raws), np.int64)  # from each body's start
+
+    def read(self, dtype, count: int = 1) -> np.ndarray:
+        """The next ``count`` values of ``dtype`` of every message, ``(n, count)``."""
+        dt = np.dtype(dtype)
+        if self.cdr:
+            self.pos = -(-self.pos // dt.itemsize) * dt.itemsize
+        at = self.start + self.pos
+        if np.any(at + dt.itemsize * count > self.end):
+            raise LayoutError("shorter than its type")
+        self.pos = self.pos + dt.itemsize * count
+        return self.buf[at[:, None] + np.arange(dt.itemsize * count)].view(dt)
+
+    def skip_string(self) -> None:
+        n = self.read("<u4")[:, 0].astype(np.int64)
+        if np.any(self.start + self.pos + n > self.end):
+            raise LayoutError("a string longer than the message")
+        self.pos = self.pos + n
+
+    def header(self) -> tuple[np.ndarray, np.ndarray]:
+        """``std_msgs/Header``: ``(sec, nanosec)`` (ROS 1: ``seq`` first, read past)."""
+        if not self.cdr:
+            self.read("<u4")
+        sec, nsec = self.read("<i4")[:, 0], self.read("<u4")[:, 0]
+        self.skip_string()  # frame_id
+        return sec, nsec
+
+    def finish(self) -> None:
+        """Every byte read; CDR may pad the end to a multiple of 4 bytes (the DDS serialised payload)."""
+        left = self.end - (self.start + self.pos)
+        pad = -self.pos % 4 if self.cdr else 0
+        if np.any((left != 0) & (left != pad)):
+            raise LayoutError("longer than its type")
 
 
 def _open(path: Path):
-    """``(reader, deserialize)`` of the bag at ``path`` (a ROS 2 storage file inside a bag folder opens the folder)."""
+    """``(reader, cdr)`` of the bag at ``path`` (a ROS 2 storage file inside a bag folder opens the folder)."""
     need("rosbags", f"{path.name} (a ROS bag)")
     from rosbags.rosbag1 import Reader as Reader1
     from rosbags.rosbag2 import Reader as Reader2
 
     if path.suffix == ".bag":
-        return Reader1(path), typestore(True).deserialize_ros1
+        return Reader1(path), False
     folder = path.parent if path.is_file() and (path.parent / "metadata.yaml").is_file() else path
-    return Reader2(folder), typestore(False).deserialize_cdr
+    return Reader2(folder), True
 
 
-def _stamp(msg, received: int) -> float:
-    sec, nsec = int(msg.header.stamp.sec), int(msg.header.stamp.nanosec)
-    return sec + nsec * 1e-9 if (sec or nsec) else received * 1e-9
+def decode(raws: list[bytes], received: np.ndarray, msgtype: str, *, cdr: bool) -> tuple[np.ndarray, dict]:
+    """``(times s, {field: (n, k) array})`` of serialised ``msgtype`` messages (:data:`LAYOUTS`);
+    a time is the header stamp, else (a zero stamp) the bag's receive time ``received`` (ns)."""
+    rows = Messages(raws, cdr=cdr)
+    sec, nsec = rows.header()
+    fields = {}
+    for field, dtype, count in LAYOUTS[msgtype]:
+        values = rows.read(dtype, count)
+        if field is not None:
+            fields[field] = values.astype(float)
+    rows.finish()
+    stamped = (sec != 0) | (nsec != 0)
+    return np.where(stamped, sec + nsec * 1e-9, np.asarray(received, float) * 1e-9), fields
 
 
 def _pick(connections, msgtype: str, topic: str | None, name: str):
@@ -95,14 +155,18 @@ def _pick(connections, msgtype: str, topic: str | None, name: str):
     return [c for c in of_type if c.topic == best]
 
 
-def _messages(reader, connections, deserialize, msgtype: str, fields) -> tuple[np.ndarray, np.ndarray]:
-    """``(times s, values (n, k))`` of the messages of ``connections``; ``fields(msg)``: the k values."""
-    times, values = [], []
-    for connection, received, raw in reader.messages(connections=connections):
-        msg = deserialize(raw, msgtype)
-        times.append(_stamp(msg, received))
-        values.append(fields(msg))
-    return np.asarray(times, float), np.asarray(values, float).reshape(len(times), -1)
+def _messages(reader, connections, msgtype: str, cdr: bool, name: str) -> tuple[np.ndarray, dict]:
+    """:func:`decode` of every message of ``connections``, one line naming the topic if one does
+    not have ``msgtype``'s layout."""
+    received, raws = [], []
+    for _, stamp, raw in reader.messages(connections=connections):
+        received.append(stamp)
+        raws.append(bytes(raw))
+    try:
+        return decode(raws, np.asarray(received, np.int64), msgtype, cdr=cdr)
+    except LayoutError as exc:
+        raise MagexpError(f"{name}: topic {connections[0].topic}: a message is {exc}, not a {msgtype} as magexp "
+                          "reads it (ROS 2 Humble / ROS 1 Noetic definition)") from None
 
 
 def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: str | None = None) -> Recording:
@@ -118,10 +182,9 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
     path = Path(path)
     name = path.name
     log_unit(unit, "uT", name, "MagneticField, read from tesla,")
-    reader, deserialize = _open(path)
+    reader, cdr = _open(path)
     from rosbags.rosbag1 import ReaderError as Error1
     from rosbags.rosbag2 import ReaderError as Error2
-    from rosbags.serde import SerdeError
 
     try:
         with reader:
@@ -129,35 +192,31 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
             if not mags:
                 raise MagexpError(f"{name}: no {MAG} messages: nothing to calibrate")
             check_count(sum(c.msgcount for c in mags), f"data.path={name!r}")
-            t_mag, mag = _messages(reader, mags, deserialize, MAG, lambda m: (
-                m.magnetic_field.x, m.magnetic_field.y, m.magnetic_field.z))
+            t_mag, mag = _messages(reader, mags, MAG, cdr, name)
             imus = _pick(reader.connections, IMU, None, name)
-            imu = _messages(reader, imus, deserialize, IMU, lambda m: (
-                m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z, m.orientation_covariance[0],
-                m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z)) if imus else None
+            imu = _messages(reader, imus, IMU, cdr, name) if imus else None
             fixes = _pick(reader.connections, FIX, None, name)
-            fix = _messages(reader, fixes, deserialize, FIX, lambda m: (
-                m.latitude, m.longitude, m.altitude, m.status.status)) if fixes else None
-    except (Error1, Error2, SerdeError, KeyError, ValueError) as exc:
+            fix = _messages(reader, fixes, FIX, cdr, name) if fixes else None
+    except (Error1, Error2, KeyError, ValueError) as exc:
         if isinstance(exc, MagexpError):
             raise
         raise MagexpError(f"{name}: not a readable ROS bag ({type(exc).__name__}: "
                           f"{str(exc).splitlines()[0] if str(exc) else 'no detail'})") from None
-    streams = [t for t in (t_mag, None if imu is None else imu[0], None if fix is None else fix[0]) if t is not None]
-    t0 = min(float(t.min()) for t in streams if t.size)
+    t0 = min(float(t.min()) for t in (t_mag, *(s[0] for s in (imu, fix) if s is not None)) if t.size)
     times = t_mag - t0
     meta = {"format": "rosbag", "source": mags[0].topic, "corrected": "as published (MagneticField records no "
             "calibration)", "clock_origin_s": repr(t0)}
     angles, gyro = None, None
     if imu is not None and len(imu[0]):
-        has_orientation = imu[1][:, 4] != -1
+        has_orientation = imu[1]["orientation_covariance"][:, 0] != -1
         if np.any(has_orientation):
-            angles = navigation_angles(imu[0][has_orientation] - t0, imu[1][has_orientation, :4], times, enu=True)
+            xyzw = imu[1]["orientation"][has_orientation]
+            angles = navigation_angles(imu[0][has_orientation] - t0, xyzw[:, [3, 0, 1, 2]], times, enu=True)
             meta["attitude"] = f"{imus[0].topic} orientation (body -> ENU, converted to NED)"
-        gyro = (imu[0] - t0, imu[1][:, 5:8])
+        gyro = (imu[0] - t0, imu[1]["angular_velocity"])
     if fix is not None and len(fix[0]):
-        ok = fix[1][:, 3] >= 0
+        ok = fix[1]["status"][:, 0] >= 0
         when = _dt.datetime.fromtimestamp(float(np.median(fix[0][ok])), _dt.timezone.utc) if np.any(ok) else None
-        meta.update(place(fix[1][ok, 0], fix[1][ok, 1], fix[1][ok, 2], when))
-    return log_recording(path, readings=mag * TESLA_TO_UT, unit="uT", times=times, angles=angles, gyro=gyro,
+        meta.update(place(*fix[1]["position"][ok].T, when))
+    return log_recording(path, readings=mag["field"] * TESLA_TO_UT, unit="uT", times=times, angles=angles, gyro=gyro,
                          meta=meta, mag_axes=mag_axes, gyro_axes=gyro_axes)
