@@ -13,7 +13,7 @@ from magexp.estimators.lm import LevenbergMarquardt
 from magexp.geometry import random_rotations, rot_x
 from magexp.recordings import load_recording
 from tests.test_export import ardupilot_correct_field, parse_ardupilot, relative
-from tests.test_log_readers import ALT, LAT, LON, write_bag
+from tests.test_rosbag_reader import ALT, LAT, LON, write_bag
 
 _api = magexp.calibrate
 from magexp.calibrate import export as ex  # noqa: E402
