@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from magexp.core import limits
 from magexp.run import budget
 from magexp.run.compose import compose_config, options, parse_overrides, resolved
 from magexp.errors import MagexpError
@@ -134,11 +135,11 @@ def test_a_bad_limit_is_one_line(cli, work, monkeypatch, value):
 
 
 def test_amounts_read_with_units():
-    assert budget.parse_amount("4GiB") == 4 * 2 ** 30
-    assert budget.parse_amount("2e5") == 200000
-    assert budget.parse_amount("10M") == 1e7
-    assert budget.parse_amount("1.5 TiB") == 1.5 * 2 ** 40
-    assert budget.parse_amount("twelve") is None
+    assert limits.parse_amount("4GiB") == 4 * 2 ** 30
+    assert limits.parse_amount("2e5") == 200000
+    assert limits.parse_amount("10M") == 1e7
+    assert limits.parse_amount("1.5 TiB") == 1.5 * 2 ** 40
+    assert limits.parse_amount("twelve") is None
 
 
 def test_the_sweep_size_is_counted_without_listing_it():
@@ -165,7 +166,7 @@ def test_every_papers_reproduction_is_within_the_runs_limit():
 
     selected = select(available_papers(), None)
     runs = check_reproduction(selected, None)
-    assert 10000 < runs < budget.limit("runs") / 10  # make reproduce: about 14000 runs, far from the limit
+    assert 10000 < runs < limits.limit("runs") / 10  # make reproduce: about 14000 runs, far from the limit
 
 
 def test_reproduce_seeds_is_refused_before_planning(work, started, capsys):

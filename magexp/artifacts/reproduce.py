@@ -34,7 +34,8 @@ from magexp.artifacts.summary import COLUMNS, summarise
 from magexp import paths
 from magexp.errors import MagexpError, exit_code
 from magexp.paths import RESULTS
-from magexp.run.budget import LIMITS, estimate_run, refuse_over, show
+from magexp.core.limits import LIMITS, refuse_over, show
+from magexp.run.budget import estimate_run
 from magexp.run.executor import Outputs, check_executor, make_executor, run_many
 from magexp.run.guard import OneLineParser, check_destination, check_output_folder, removed_on_failure
 from magexp.run.progress import Progress
@@ -302,7 +303,7 @@ def check_reproduction(selected: Mapping, seeds: int | None) -> int:
 
 def canonical_needs() -> dict:
     """The estimates of every canonical reproduction's runs: ``runs``, the largest run's ``memory``
-    and ``run_work`` (each with its artifact), the ``work`` of all (keys of :data:`magexp.run.budget.LIMITS`)."""
+    and ``run_work`` (each with its artifact), the ``work`` of all (keys of :data:`magexp.core.limits.LIMITS`)."""
     out = {"runs": 0, "work": 0, "run_memory": (0, ""), "run_work": (0, "")}
     for paper in papers():
         for spec in paper_specs(paper):

@@ -56,7 +56,7 @@ class Field:
         return frames[str(frame).upper()]
 
 
-def _date(date) -> _dt.datetime:
+def _date(date, prefix: str = "igrf") -> _dt.datetime:
     if isinstance(date, _dt.datetime):
         return date
     if isinstance(date, _dt.date):
@@ -64,20 +64,12 @@ def _date(date) -> _dt.datetime:
     try:
         return _dt.datetime.fromisoformat(str(date))
     except ValueError:
-        raise MagexpError(f"igrf.date={date!r} is not allowed: give a date YYYY-MM-DD") from None
+        raise MagexpError(f"{prefix}.date={date!r} is not allowed: give a date YYYY-MM-DD") from None
 
 
-def field_at(latitude, longitude, altitude_km=0.0, date=None) -> Field:
-    """IGRF field at a geodetic ``latitude``, ``longitude`` (degrees), ``altitude_km`` above the
-    WGS84 ellipsoid, on ``date`` (``YYYY-MM-DD``, a date or datetime; within the model's 1900-2030 span).
-
-    Raises
-    ------
-    MagexpError
-        One line for a latitude outside [-90, 90], a non-finite value or a bad date.
-    """
-    import ppigrf  # lazy: 280 ms CPU to import (min of 5, after numpy), paid only where a place is given
-
+def check_place(latitude, longitude, altitude_km=0.0, date=None, *, prefix: str = "igrf"):
+    """``(latitude, longitude, altitude_km, datetime)`` checked: finite numbers, ``|latitude| <= 90``,
+    a date ``YYYY-MM-DD`` (a date or datetime); one line naming ``<prefix>.<key>`` otherwise."""
     values = {}
     for name, value in (("latitude", latitude), ("longitude", longitude), ("altitude_km", altitude_km)):
         try:
@@ -85,12 +77,26 @@ def field_at(latitude, longitude, altitude_km=0.0, date=None) -> Field:
         except (TypeError, ValueError):
             values[name] = float("nan")
         if not np.isfinite(values[name]):
-            raise MagexpError(f"igrf.{name}={value!r} is not allowed: it must be a finite number")
+            raise MagexpError(f"{prefix}.{name}={value!r} is not allowed: it must be a finite number")
     if abs(values["latitude"]) > 90:
-        raise MagexpError(f"igrf.latitude={latitude!r} is not allowed: it must be within [-90, 90]")
-    when = _date(date)
+        raise MagexpError(f"{prefix}.latitude={latitude!r} is not allowed: it must be within [-90, 90]")
+    return values["latitude"], values["longitude"], values["altitude_km"], _date(date, prefix)
+
+
+def field_at(latitude, longitude, altitude_km=0.0, date=None, *, prefix: str = "igrf") -> Field:
+    """IGRF field at a geodetic ``latitude``, ``longitude`` (degrees), ``altitude_km`` above the
+    WGS84 ellipsoid, on ``date`` (``YYYY-MM-DD``, a date or datetime; within the model's 1900-2030 span).
+
+    Raises
+    ------
+    MagexpError
+        One line for a latitude outside [-90, 90], a non-finite value or a bad date (naming
+        ``<prefix>.<key>``).
+    """
+    import ppigrf  # lazy: 280 ms CPU to import (min of 5, after numpy), paid only where a place is given
+
+    lat, lon, alt, when = check_place(latitude, longitude, altitude_km, date, prefix=prefix)
     if not 1900 <= when.year <= 2030:
-        raise MagexpError(f"igrf.date={date!r} is not allowed: the IGRF covers 1900 to 2030")
-    east, north, up = (float(np.ravel(c)[0]) for c in
-                       ppigrf.igrf(values["longitude"], values["latitude"], values["altitude_km"], when))
+        raise MagexpError(f"{prefix}.date={date!r} is not allowed: the IGRF covers 1900 to 2030")
+    east, north, up = (float(np.ravel(c)[0]) for c in ppigrf.igrf(lon, lat, alt, when))
     return Field(north=north, east=east, down=-up)

@@ -17,7 +17,15 @@ key                file
                    where it changes are readings, the gyroscope keeps every row
 ``header-counts``  ``Fs,<Hz>`` and ``Initialization time,<s>`` lines, then ``mx,my,mz`` and raw
                    counts (the QMC5883L file); unit ``counts``
+``ulog``           a PX4 ULog ``*.ulg`` (:mod:`magexp.core.readers.ulog`; ``pip install 'magexp[ulog]'``)
+``dataflash``      an ArduPilot DataFlash ``*.bin`` (:mod:`magexp.core.readers.dataflash`;
+                   ``magexp[dataflash]``)
+``rosbag``         a ROS 1 ``*.bag``, a ROS 2 bag folder or its ``*.db3``/``*.mcap``, an MCAP file
+                   (:mod:`magexp.core.readers.rosbag`; ``magexp[ros]``)
 ================== ========================================================================
+
+The logs' readers give the magnetometer before the onboard calibration, the attitude, the
+gyroscope, the GPS position and date, on the log's clock (:mod:`magexp.core.readers`).
 
 Streams with their own times: the gyroscope is *integrated* at the magnetometer's times, not
 resampled (:func:`magexp.core.geometry.attitude_at`: each gyro sample held until the next one and
@@ -559,18 +567,39 @@ def _same_unit(unit, file_unit: str, name: str) -> None:
                           "(leave data.unit unset)")
 
 
-#: The readers, keyed by format (``data.format``).
+def _log_reader(module: str, function: str):
+    """The reader ``magexp.core.readers.<module>.<function>``, imported when a log is read: those
+    modules import this one (its :class:`Recording`), so importing them here at the top would be a cycle."""
+    def read(path: Path, **options) -> Recording:
+        from importlib import import_module
+
+        return getattr(import_module(f"magexp.core.readers.{module}"), function)(path, **options)
+
+    read.__doc__ = f"See :func:`magexp.core.readers.{module}.{function}`."
+    return read
+
+
+#: The readers, keyed by format (``data.format``); the logs' readers need their optional extras.
 READERS = {
     "magexp-v1": read_versioned,
     "plain": read_plain,
     "two-stream": read_two_stream,
     "named-columns": read_named_columns,
     "header-counts": read_header_counts,
+    "ulog": _log_reader("ulog", "read_ulog"),
+    "dataflash": _log_reader("dataflash", "read_dataflash"),
+    "rosbag": _log_reader("rosbag", "read_rosbag"),
 }
+#: file name endings of the binary logs (:func:`detect`); a ROS 2 bag folder (``metadata.yaml``) is ``rosbag`` too
+LOG_SUFFIXES = {".ulg": "ulog", ".bin": "dataflash", ".bag": "rosbag", ".mcap": "rosbag", ".db3": "rosbag"}
 
 
 def detect(path: Path) -> str:
     """The format key of ``path`` (see the module docstring)."""
+    if path.suffix.lower() in LOG_SUFFIXES:
+        return LOG_SUFFIXES[path.suffix.lower()]
+    if path.is_dir() and (path / "metadata.yaml").is_file():
+        return "rosbag"
     if str(path).endswith(("_mag.csv", "_imu.csv")) or (not path.is_file() and Path(f"{path}_mag.csv").is_file()):
         return "two-stream"
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
@@ -607,9 +636,9 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
         infinite, an unknown unit, or a bad metadata value (e.g. ``reference_total <= 0``).
     """
     file = resolve(path)
-    if file.is_dir():
+    if file.is_dir() and not (file / "metadata.yaml").is_file():  # a ROS 2 bag is a folder with metadata.yaml
         raise MagexpError(f"recording {str(path)!r} is a directory: give a file")
-    if not file.is_file() and not Path(f"{file}_mag.csv").is_file():
+    if not file.is_file() and not file.is_dir() and not Path(f"{file}_mag.csv").is_file():
         raise MagexpError(f"recording {str(path)!r} does not exist (looked in the working folder and {DATA})")
     key = detect(file) if format in (None, "auto") else format
     if key not in READERS:

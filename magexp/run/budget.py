@@ -43,13 +43,12 @@ reproduction stays two orders of magnitude below them.
 from __future__ import annotations
 
 import math
-import os
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from magexp.core.datafiles import data_files
+from magexp.core.limits import refuse_over, show
 from magexp.errors import MagexpError
 
 #: float64 numbers a run keeps per reading (readings, reference field, attitude, calibrated
@@ -62,86 +61,6 @@ FLOATS_PER_ITERATION = 2
 PARAMETERS = 12
 #: bytes of the shortest line of a plain recording (``1 2 3`` and its newline)
 SHORTEST_LINE = 6
-
-
-@dataclass(frozen=True)
-class Limit:
-    """A documented, configurable bound: ``env`` overrides ``default``."""
-
-    name: str
-    env: str
-    default: float
-    unit: str  # "bytes" or a count's noun
-    what: str
-
-    def value(self) -> float:
-        """The limit in force: the environment variable, else the default."""
-        text = os.environ.get(self.env)
-        if text is None or not text.strip():
-            return self.default
-        value = parse_amount(text)
-        if value is None or not value > 0:
-            raise MagexpError(f"{self.env}={text!r} is not allowed: give a number > 0 "
-                              f"(e.g. {show(self.default, self.unit)})")
-        return value
-
-
-#: The limits, by name (README "Limits" lists them).
-LIMITS = {limit.name: limit for limit in (
-    Limit("run_memory", "MAGEXP_MAX_RUN_MEMORY", 8 * 2 ** 30, "bytes",
-          "estimated memory of one run or one calibration fit"),
-    Limit("run_work", "MAGEXP_MAX_RUN_WORK", 1e11, "reading-evaluations",
-          "work of one run or one calibration fit"),
-    Limit("runs", "MAGEXP_MAX_RUNS", 200_000, "runs",
-          "runs of one command (the jobs of a sweep, the runs of a reproduction)"),
-    Limit("work", "MAGEXP_MAX_WORK", 1e13, "reading-evaluations",
-          "work of one command (every run of a sweep or reproduction, every fit of a calibration)"),
-    Limit("readings", "MAGEXP_MAX_READINGS", 5e7, "readings",
-          "readings of a calibrated recording (counted from the file size before it is read)"),
-)}
-
-_AMOUNT = re.compile(r"\s*([0-9.eE+-]+)\s*([KMGT]i?B?|[kMG]|B)?\s*")
-_FACTORS = {"": 1, "B": 1, "k": 1e3, "K": 1e3, "M": 1e6, "G": 1e9, "T": 1e12,
-            "KB": 1e3, "MB": 1e6, "GB": 1e9, "TB": 1e12,
-            "KiB": 2 ** 10, "MiB": 2 ** 20, "GiB": 2 ** 30, "TiB": 2 ** 40, "Ki": 2 ** 10, "Mi": 2 ** 20,
-            "Gi": 2 ** 30, "Ti": 2 ** 40}
-
-
-def parse_amount(text: str) -> float | None:
-    """``"4GiB"`` -> 4294967296, ``"2e5"`` -> 200000.0, ``"10M"`` -> 1e7; None if not an amount."""
-    m = _AMOUNT.fullmatch(str(text))
-    if not m:
-        return None
-    try:
-        number = float(m.group(1))
-    except ValueError:
-        return None
-    return number * _FACTORS[m.group(2) or ""] if math.isfinite(number) else None
-
-
-def show(value: float, unit: str) -> str:
-    """``value`` for a message: bytes in KiB..TiB, counts as integers or in ``e`` notation."""
-    if unit == "bytes":
-        for name, factor in (("TiB", 2 ** 40), ("GiB", 2 ** 30), ("MiB", 2 ** 20), ("KiB", 2 ** 10)):
-            if value >= factor:
-                return f"{value / factor:.3g} {name}"
-        return f"{value:.0f} bytes"
-    return f"{value:.0f} {unit}" if value < 1e9 else f"{value:.3g} {unit}"
-
-
-def limit(name: str) -> float:
-    """The value in force of the limit ``name`` (:data:`LIMITS`)."""
-    return LIMITS[name].value()
-
-
-def refuse_over(value: float, name: str, subject: str, need: str) -> None:
-    """Raise ``"<subject> is not allowed: <need> about X, over the limit L (ENV)"`` if ``value``
-    exceeds the limit ``name``."""
-    lim = LIMITS[name]
-    bound = lim.value()
-    if value > bound:
-        raise MagexpError(f"{subject} is not allowed: {need} about {show(value, lim.unit)}, over the limit "
-                          f"{show(bound, lim.unit)} ({lim.env}=... raises it)")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,0 +1,327 @@
+"""Export a calibration where users put it: ArduPilot and PX4 parameter files, a ROS parameter file, a C header.
+
+magexp's calibration is ``B = W (r − o)`` in the recording's unit (:mod:`magexp.calibration.fit`):
+``r`` a raw reading, ``o`` the offset, ``B`` the calibrated field. Each target holds it in its
+own convention and unit:
+
+``ardupilot`` (a ``.param`` file, mGauss)
+    ``B = M (s (r + OFS))`` (``AP_Compass_Backend::correct_field``): ``M`` symmetric with
+    ``COMPASS_DIA_X/Y/Z`` on its diagonal and ``COMPASS_ODI_X/Y/Z`` = ``M_xy, M_xz, M_yz`` off it,
+    ``s = COMPASS_SCALE``, ``r`` the body-frame raw field; holds a symmetric ``S`` only.
+``px4`` (a QGroundControl ``.params`` file, gauss)
+    ``B = R S (r − OFF)`` (``Magnetometer::Correct``, ``src/lib/sensor_calibration/Magnetometer.hpp``):
+    ``S`` symmetric with ``CAL_MAGn_XSCALE/YSCALE/ZSCALE`` on its diagonal and
+    ``CAL_MAGn_XODIAG/YODIAG/ZODIAG`` = ``S_xy, S_xz, S_yz`` off it, ``R`` the board or
+    ``CAL_MAGn_ROT`` rotation (kept as set); holds a symmetric ``S`` only.
+``ros`` (a ROS 2 parameter YAML, ``<node>: ros__parameters: magnetometer_calibration:``, tesla)
+    ``B = W (r − o)``, ``matrix`` the full ``W`` row-major, ``offset`` 3 numbers (tesla, the unit
+    of ``sensor_msgs/MagneticField``).
+``c`` (a C header, the recording's units)
+    ``B = W (r − o)``: ``static const float`` arrays ``<NAME>_OFFSET[3]``, ``<NAME>_MATRIX[3][3]``
+    and ``<name>_apply(raw, out)``.
+
+**Units.** The raw readings the firmware sees are the recording's readings times
+``k_in`` (firmware unit per recording unit, from :data:`magexp.core.recordings.UNITS`), and its
+calibrated field is ``B`` times ``k_out`` (the field's unit, the recording's unless
+``field_unit`` says otherwise: a raw-count recording calibrated to a field model's total in nT).
+A reading in ``counts`` has no factor: ``counts_nt`` gives the nanotesla per count of the
+firmware's driver. Then ``B_fw = (k_out / k_in) W (r_fw − k_in o)``: the matrix is scaled by
+``k_out / k_in``, the offset by ``k_in`` (:func:`to_firmware`).
+
+**Symmetrising W (ArduPilot, PX4).** Their matrix is symmetric. magexp's ``W`` is factored by the
+polar decomposition ``W = R S`` (``W = U Σ Vᵀ``: ``R = U Vᵀ`` a rotation, ``S = V Σ Vᵀ`` symmetric
+positive definite) and the firmware gets ``S``; its calibrated field is then ``Rᵀ B``: magexp's
+field turned by ``Rᵀ``. A total-field (scalar) calibration cannot see ``R`` at all (magexp reports
+``W`` as ``S``: ``R = I``); a vector (attitude-aided) calibration finds ``R``, the misalignment
+between the magnetometer and the attitude's body frame, which belongs in the firmware's
+orientation parameter (``COMPASS_ORIENT``, ``CAL_MAGn_ROT``), not in the matrix (for PX4, whose
+``R`` is known from a log, ``px4(..., rotation=R)`` takes it out of ``W`` first). The export
+refuses, in one line, an ``R`` turning by more than ``max_rotation_deg`` (default
+:data:`MAX_ROTATION_DEG`, a documented default: 1° of heading error is what a good compass
+calibration is expected to leave) and a ``W`` with a negative determinant (a mirrored axis).
+
+**ArduPilot's scale.** ``COMPASS_SCALE`` is written as 1 (ArduPilot applies a scale only within
+``[0.85, 1.4]``; the whole of ``S`` sits in ``DIA/ODI``, exact for any scale), and written
+explicitly so that an earlier value on the vehicle does not rescale the new calibration. ArduPilot's
+own calibrator accepts diagonals within ``[0.2, 5]``, off-diagonals within ``[-1, 1]`` and offsets
+up to ``COMPASS_OFFS_MAX`` (default 1800 mGauss, a pre-arm check): values outside are reported in
+:attr:`Export.warnings` and in the file's comments.
+
+Values are written with Python's shortest round-trip ``repr`` (``%.9g`` in the C header's float
+literals): the firmware rounds them to float32 when it loads them.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from magexp.core.atomic import write_text
+from magexp.errors import MagexpError
+from magexp.core.geometry import rotation_angle
+from magexp.core.recordings import RAW_UNITS, UNITS
+
+#: the export targets
+TARGETS = ("ardupilot", "px4", "ros", "c")
+#: each target's unit (``None``: the recording's own)
+TARGET_UNITS = {"ardupilot": "mG", "px4": "G", "ros": "T", "c": None}
+#: the file name each target is written to by default
+FILE_NAMES = {"ardupilot": "magexp_compass.param", "px4": "magexp_mag.params", "ros": "magexp_mag_calibration.yaml",
+              "c": "magexp_mag_calibration.h"}
+#: the largest rotation ``R`` of ``W = R S`` a symmetric-only target accepts (degrees; a config value)
+MAX_ROTATION_DEG = 1.0
+#: ArduPilot's calibrator's accepted ranges (``CompassCalibrator``) and ``COMPASS_OFFS_MAX``'s default (mGauss)
+ARDUPILOT_DIAGONAL, ARDUPILOT_OFFDIAGONAL, ARDUPILOT_OFFSET_MAX = (0.2, 5.0), (-1.0, 1.0), 1800.0
+#: MAVLink's ``MAV_PARAM_TYPE_REAL32``, the type column of a QGroundControl ``.params`` file
+REAL32 = 9
+
+
+@dataclass(frozen=True)
+class Correction:
+    """A calibration in a target's unit: ``B = matrix (r − offset)``; ``rotation`` the ``R`` of
+    ``W = R S`` taken out of a symmetrised matrix (identity otherwise)."""
+
+    matrix: np.ndarray
+    offset: np.ndarray
+    unit: str
+    field_unit: str
+    rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+
+    @property
+    def rotation_deg(self) -> float:
+        return float(np.rad2deg(rotation_angle(self.rotation)))
+
+
+@dataclass(frozen=True)
+class Export:
+    """A rendered export: its ``target``, file ``text``, the ``values`` written (name -> number
+    for the parameter targets) and ``warnings`` (values outside the firmware's accepted ranges)."""
+
+    target: str
+    text: str
+    values: dict
+    warnings: tuple = ()
+
+
+def polar(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(R, S)`` with ``W = R S``, ``R`` orthogonal, ``S`` symmetric positive semi-definite (SVD)."""
+    u, sigma, vt = np.linalg.svd(np.asarray(w, float))
+    s = vt.T @ np.diag(sigma) @ vt
+    return u @ vt, (s + s.T) / 2
+
+
+def _factor(unit: str, target_unit: str, counts_nt, what: str) -> float:
+    """Target units per ``unit``: from :data:`UNITS`, or ``counts_nt`` for a raw unit."""
+    if unit in RAW_UNITS:
+        if counts_nt is None:
+            raise MagexpError(f"{what} {unit!r} has no known factor to nT: give counts_nt=<nT per count of the "
+                              "firmware's magnetometer driver> to export it")
+        value = float(counts_nt)
+        if not (np.isfinite(value) and value > 0):
+            raise MagexpError(f"counts_nt={counts_nt!r} is not allowed: it must be a number > 0 (nT per count)")
+        return value / UNITS[target_unit]
+    if unit not in UNITS:
+        raise MagexpError(f"{what} {unit!r} is not allowed: choose one of {', '.join((*UNITS, *RAW_UNITS))}")
+    return UNITS[unit] / UNITS[target_unit]
+
+
+def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: str | None = None, counts_nt=None,
+                symmetric: bool = False, max_rotation_deg: float = MAX_ROTATION_DEG) -> Correction:
+    """magexp's ``B = W (r − o)`` (``r`` in ``unit``, ``B`` in ``field_unit``, default ``unit``) as
+    ``B_t = matrix (r_t − offset)`` in ``target_unit`` (None: unchanged), symmetrised if ``symmetric``
+    (module docstring: ``matrix = (k_out / k_in) S``, ``offset = k_in o``).
+
+    Raises
+    ------
+    MagexpError
+        One line for a non-finite calibration, a unit without a factor, a mirrored ``W``, or (with
+        ``symmetric``) a rotation part over ``max_rotation_deg``.
+    """
+    w, offset = np.asarray(w, float), np.asarray(offset, float)
+    if w.shape != (3, 3) or offset.shape != (3,) or not (np.all(np.isfinite(w)) and np.all(np.isfinite(offset))):
+        raise MagexpError(f"a calibration with W of shape {w.shape} and offset of shape {offset.shape} is not allowed: "
+                          "W must be 3 x 3 and the offset 3 numbers, all finite")
+    field_unit = unit if field_unit is None else field_unit
+    if target_unit is None:
+        k_in = k_out = 1.0
+    else:
+        k_in = _factor(unit, target_unit, counts_nt, "unit")
+        k_out = _factor(field_unit, target_unit, counts_nt, "field_unit")
+    rotation = np.eye(3)
+    if symmetric:
+        if np.linalg.det(w) <= 0:
+            raise MagexpError(f"W with determinant {np.linalg.det(w):.3g} is not allowed for a firmware's symmetric "
+                              "matrix: it mirrors an axis; set the magnetometer's orientation in the firmware first")
+        rotation, w = polar(w)
+        angle = float(np.rad2deg(rotation_angle(rotation)))
+        if angle > max_rotation_deg:
+            raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation): the firmware's symmetric "
+                              f"matrix holds S only, so its heading would be off by up to that much; set the "
+                              f"magnetometer's orientation to R in the firmware, or allow it with "
+                              f"max_rotation_deg={np.ceil(angle * 10) / 10:g} to export S alone")
+    return Correction(matrix=(k_out / k_in) * w, offset=k_in * offset,
+                      unit=target_unit or unit, field_unit=target_unit or field_unit, rotation=rotation)
+
+
+def _comments(notes: dict | None, convention: str, correction: Correction, marker: str) -> list[str]:
+    lines = [f"{marker} magexp magnetometer calibration", f"{marker} {convention}"]
+    if correction.rotation_deg > 0:
+        lines.append(f"{marker} W = R S (polar decomposition): S exported, R turns by "
+                     f"{correction.rotation_deg:.3g} deg (the firmware's field is R^T times magexp's)")
+    for key, value in (notes or {}).items():
+        text = " ".join(str(value).split())  # one line
+        lines.append(f"{marker} {key}: {text}")
+    return lines
+
+
+def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0,
+              max_rotation_deg: float = MAX_ROTATION_DEG, notes: dict | None = None) -> Export:
+    """ArduPilot parameters (a Mission Planner / MAVProxy ``.param`` file, ``NAME,VALUE`` lines).
+
+    Convention (``AP_Compass_Backend::correct_field``): ``B = M (s (r + OFS))``, mGauss, ``r`` the
+    body-frame raw field (after ``COMPASS_ORIENT``). From ``B = S' (r − o')`` (:func:`to_firmware`,
+    mGauss): ``COMPASS_OFS = −o'``, ``M = S'``, ``COMPASS_SCALE = 1``. ``instance`` 0, 1, 2 (as the
+    log's ``MAG`` instance, :func:`magexp.core.readers.dataflash.read_dataflash`): the names
+    ``COMPASS_OFS_X``, ``COMPASS_OFS2_X``, ``COMPASS_OFS3_X`` (``DIA``, ``ODI``, ``SCALE`` alike).
+    """
+    if instance not in (0, 1, 2):
+        raise MagexpError(f"instance={instance!r} is not allowed for ardupilot: choose 0, 1 or 2 (the compass)")
+    c = to_firmware(w, offset, unit, TARGET_UNITS["ardupilot"], field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
+                    max_rotation_deg=max_rotation_deg)
+    n = "" if instance == 0 else str(instance + 1)
+    m = c.matrix
+    values = {**{f"COMPASS_OFS{n}_{a}": float(-c.offset[i]) for i, a in enumerate("XYZ")},
+              **{f"COMPASS_DIA{n}_{a}": float(m[i, i]) for i, a in enumerate("XYZ")},
+              **{f"COMPASS_ODI{n}_{a}": float(v) for a, v in zip("XYZ", (m[0, 1], m[0, 2], m[1, 2]))},
+              f"COMPASS_SCALE{n}": 1.0}
+    warnings = []
+    for key, value in values.items():
+        if "_DIA" in key and not ARDUPILOT_DIAGONAL[0] <= value <= ARDUPILOT_DIAGONAL[1]:
+            warnings.append(f"{key}={value:.6g} is outside ArduPilot's calibrator range {list(ARDUPILOT_DIAGONAL)}")
+        if "_ODI" in key and not ARDUPILOT_OFFDIAGONAL[0] <= value <= ARDUPILOT_OFFDIAGONAL[1]:
+            warnings.append(f"{key}={value:.6g} is outside ArduPilot's calibrator range {list(ARDUPILOT_OFFDIAGONAL)}")
+    if np.max(np.abs(c.offset)) > ARDUPILOT_OFFSET_MAX:
+        warnings.append(f"an offset of {np.max(np.abs(c.offset)):.6g} mGauss exceeds COMPASS_OFFS_MAX's default "
+                        f"{ARDUPILOT_OFFSET_MAX:g} (a pre-arm check)")
+    head = _comments(notes, "ArduPilot: B = M (COMPASS_SCALE (raw + COMPASS_OFS)), M = [[DIA_X, ODI_X, ODI_Y], "
+                            "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#")
+    head += [f"# WARNING: {text}" for text in warnings]
+    text = "\n".join(head + [f"{k},{v!r}" for k, v in values.items()]) + "\n"
+    return Export("ardupilot", text, values, tuple(warnings))
+
+
+def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0, rotation=None,
+        max_rotation_deg: float = MAX_ROTATION_DEG, notes: dict | None = None) -> Export:
+    """PX4 parameters (a QGroundControl ``.params`` file: ``vehicle component name value type``).
+
+    Convention (``Magnetometer::Correct``): ``B = R S (r − OFF)``, gauss; ``S`` from ``SCALE`` and
+    ``ODIAG``, ``R`` the board or ``CAL_MAGn_ROT`` rotation (kept: set it as before). From
+    ``Rᵀ B = S' (r − o')`` (:func:`to_firmware` of ``Rᵀ W``, gauss): ``OFF = o'``, ``S = S'``.
+    ``rotation``: that ``R`` when ``W`` maps the readings into the body frame (a vector calibration
+    of a ULog's readings, :func:`magexp.core.readers.onboard_rotation_of`); None: the identity (a
+    total-field calibration, or readings in the body frame). ``instance``: the slot ``n`` of
+    ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``).
+    """
+    if instance not in (0, 1, 2, 3):
+        raise MagexpError(f"instance={instance!r} is not allowed for px4: choose 0, 1, 2 or 3 (CAL_MAGn)")
+    if rotation is not None:
+        rotation = np.asarray(rotation, float)
+        if rotation.shape != (3, 3) or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6):
+            raise MagexpError("rotation is not allowed: it must be a 3 x 3 rotation matrix (PX4's R)")
+        w = rotation.T @ np.asarray(w, float)
+    c = to_firmware(w, offset, unit, TARGET_UNITS["px4"], field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
+                    max_rotation_deg=max_rotation_deg)
+    n, m = instance, c.matrix
+    values = {**{f"CAL_MAG{n}_{a}OFF": float(c.offset[i]) for i, a in enumerate("XYZ")},
+              **{f"CAL_MAG{n}_{a}SCALE": float(m[i, i]) for i, a in enumerate("XYZ")},
+              **{f"CAL_MAG{n}_{a}ODIAG": float(v) for a, v in zip("XYZ", (m[0, 1], m[0, 2], m[1, 2]))}}
+    head = _comments(notes, "PX4: B = R S (raw - CAL_MAGn_OFF), S = [[XSCALE, XODIAG, YODIAG], [XODIAG, YSCALE, "
+                            "ZODIAG], [YODIAG, ZODIAG, ZSCALE]]; gauss; keep CAL_MAGn_ID and CAL_MAGn_ROT", c, "#")
+    head.append("# Vehicle-Id Component-Id Name Value Type")
+    text = "\n".join(head + [f"1\t1\t{k}\t{v!r}\t{REAL32}" for k, v in values.items()]) + "\n"
+    return Export("px4", text, values)
+
+
+def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/**",
+        namespace: str = "magnetometer_calibration", notes: dict | None = None) -> Export:
+    """A ROS 2 parameter file: ``<node>: ros__parameters: <namespace>: {convention, unit, offset,
+    matrix}``; ``B = W (r − o)`` in tesla (``sensor_msgs/MagneticField``'s unit), ``matrix`` the
+    full ``W`` row-major (9 numbers), ``offset`` 3 numbers."""
+    c = to_firmware(w, offset, unit, TARGET_UNITS["ros"], field_unit=field_unit, counts_nt=counts_nt)
+    values = {"convention": "B = W (r - o), W row-major", "unit": "T",
+              "offset": [float(v) for v in c.offset], "matrix": [float(v) for v in c.matrix.ravel()]}
+    head = _comments(notes, "ROS: B = W (r - o), tesla (sensor_msgs/MagneticField), matrix row-major", c, "#")
+    body = yaml.safe_dump({node: {"ros__parameters": {namespace: values}}}, sort_keys=False, width=200)
+    return Export("ros", "\n".join(head) + "\n" + body, values)
+
+
+_IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", notes: dict | None = None) -> Export:
+    """A C header: ``static const float <NAME>_OFFSET[3]``, ``<NAME>_MATRIX[3][3]`` (row-major) and
+    ``static inline void <name>_apply(const float raw[3], float out[3])`` computing ``out = W (raw − o)``,
+    in the recording's units (the raw unit in, ``field_unit`` out), float32 literals (``%.9g``)."""
+    if not _IDENTIFIER.match(str(name)):
+        raise MagexpError(f"name={name!r} is not allowed: it must be a C identifier (letters, digits, _)")
+    c = to_firmware(w, offset, unit, TARGET_UNITS["c"], field_unit=field_unit)
+    up, low = str(name).upper(), str(name).lower()
+    lit = lambda v: f"{v:.9g}f" if "." in f"{v:.9g}" or "e" in f"{v:.9g}" else f"{v:.9g}.0f"  # noqa: E731
+    head = _comments(notes, f"B = W (r - o): r raw ({c.unit}), o offset ({c.unit}), B calibrated ({c.field_unit}); "
+                            "W row-major: B[i] = sum_j W[i][j] (r[j] - o[j])", c, " *")
+    rows = ",\n    ".join("{" + ", ".join(lit(v) for v in row) + "}" for row in c.matrix)
+    text = "\n".join([
+        "/*", *head, " */", f"#ifndef {up}_H", f"#define {up}_H", "",
+        f"static const float {up}_OFFSET[3] = {{{', '.join(lit(v) for v in c.offset)}}};",
+        f"static const float {up}_MATRIX[3][3] = {{\n    {rows}\n}};", "",
+        f"static inline void {low}_apply(const float raw[3], float out[3])", "{",
+        "    int i, j;",
+        "    for (i = 0; i < 3; ++i) {",
+        "        out[i] = 0.0f;",
+        "        for (j = 0; j < 3; ++j) {",
+        f"            out[i] += {up}_MATRIX[i][j] * (raw[j] - {up}_OFFSET[j]);",
+        "        }", "    }", "}", "", f"#endif /* {up}_H */", ""])
+    return Export("c", text, {"offset": c.offset.tolist(), "matrix": c.matrix.tolist()})
+
+
+#: each target's renderer
+RENDERERS = {"ardupilot": ardupilot, "px4": px4, "ros": ros, "c": c_header}
+
+
+def render(target: str, w, offset, unit: str, **options) -> Export:
+    """The :class:`Export` of ``target`` (:data:`TARGETS`) for ``B = W (r − o)`` in ``unit``;
+    ``options``: the target function's keywords (``field_unit``, ``counts_nt``, ``instance``,
+    ``max_rotation_deg``, ``notes``, ...)."""
+    if target not in RENDERERS:
+        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
+    return RENDERERS[target](w, offset, unit, **options)
+
+
+def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
+    """Write ``target``'s file for the :class:`~magexp.calibration.Calibration` ``cal`` to ``path``
+    (a folder: :data:`FILE_NAMES` inside it; None: the working folder); never overwrites a file.
+
+    Returns the path written. ``options`` as :func:`render`; ``notes`` defaults to the recording,
+    estimator and unit."""
+    notes = options.pop("notes", None) or {"recording": cal.recording.name, "estimator": cal.estimator,
+                                             "objective": cal.objective, "magexp unit": cal.unit}
+    out = render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
+    return write(out, path)
+
+
+def write(out: Export, path: str | Path | None = None) -> Path:
+    """Write the rendered ``out`` to ``path`` (a folder: its default name inside; None: the working
+    folder), atomically; refuse, in one line, a file that exists already (never overwritten)."""
+    path = Path(".") if path is None else Path(path)
+    if path.is_dir():
+        path = path / FILE_NAMES[out.target]
+    if path.exists():
+        raise MagexpError(f"export path {str(path)!r} is not allowed: it exists already (never overwritten), "
+                          "choose another")
+    if not path.parent.is_dir():
+        raise MagexpError(f"export path {str(path)!r} is not allowed: its folder {str(path.parent)!r} does not exist")
+    return write_text(path, out.text)
