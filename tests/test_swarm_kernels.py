@@ -326,7 +326,7 @@ def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
     nb = swarm.compiled()
     if nb is None:
         pytest.skip("numba not installed")
-    from magexp.estimators import initialisers
+    from magexp.estimators import circle
     from magexp.problems import _compiled as costs
     from magexp.problems import kernels
 
@@ -335,4 +335,4 @@ def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
 
     codegen = nb.run.targetctx.codegen()
     assert nb.run._cache._index_key((), codegen)[-1] == digest(costs, kernels)
-    assert nb.circle_sequence._cache._index_key((), codegen)[-1] == digest(initialisers)
+    assert nb.circle_sequence._cache._index_key((), codegen)[-1] == digest(circle)  # the Circle map's home
