@@ -335,4 +335,4 @@ def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
 
     codegen = nb.run.targetctx.codegen()
     assert nb.run._cache._index_key((), codegen)[-1] == digest(costs, kernels)
-    assert nb.circle_sequence._cache._index_key((), codegen)[-1] == digest(circle)
+    assert nb.circle_sequence._cache._index_key((), codegen)[-1] == digest(circle)  # the Circle map's home

@@ -22,7 +22,6 @@ from magexp.artifacts.spec import artifact_paths, load
 from magexp.core.seeding import run_generators, scenario_stream
 from magexp.errors import MagexpError
 from magexp.estimators.base import applies_to
-from magexp.paths import EXPERIMENTS
 from magexp.problems import make_problem, problem_class
 from magexp.run.compose import compose_config, yaml_value
 from magexp.run.executor import run_row

@@ -57,6 +57,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.atomic import atomic_path
+from magexp.core.ellipsoid import quadratic_features
 from magexp.paths import RESULTS
 
 SIZES = [(300, 50), (30_000, 500)]  # (readings, particles)
@@ -159,7 +160,6 @@ def _sqrt_pass():
 
 
 def cost_rows(rounds: int) -> list[dict]:
-    from magexp.core.ellipsoid import quadratic_features
     from magexp.problems import kernels
 
     sqrt_pass = _sqrt_pass()
