@@ -59,6 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from magexp.artifacts.schema import Float, typed
 from magexp.errors import MagexpError
 
 #: a statistic over the seeds of a selection
@@ -89,6 +90,7 @@ HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE = "holds", "does not hold", "contradic
 ESTIMATOR_SIDE = ("estimator", "objective")
 
 
+@typed
 @dataclass(frozen=True)
 class Claim:
     """A statement and the condition on the runs that makes it true (see the module docstring)."""
@@ -101,7 +103,7 @@ class Claim:
     stat: str = "median"
     where: dict = field(default_factory=dict)
     op: str = "<="
-    value: float | None = None
+    value: Float | None = None
     cells: list = field(default_factory=list)
     better: str = "lower"
     section: str = ""
