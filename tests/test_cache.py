@@ -18,7 +18,7 @@ from magexp import paths
 from magexp.run import cache
 
 from magexp.artifacts import reproduce
-from magexp.run.runner import RunOutput
+from magexp.estimators.result import RunOutput
 
 ARTIFACT = ["yan2022", "--only", "yan2022_table_mockup", "--seeds", "2", "--tiny", "--jobs", "1"]  # 6 runs, 2 tasks
 RUNS = 6

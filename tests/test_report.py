@@ -9,7 +9,8 @@ from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, N
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.artifacts.report import MAX_CELL, MAX_CHARS, MAX_LINES, compared_rows, headline_verdict, markdown_table
-from magexp.artifacts.spec import Headline, build
+from magexp.artifacts.schema import build
+from magexp.artifacts.spec import Headline
 
 
 def test_headline_verdict_aggregates_its_parts():

@@ -46,6 +46,12 @@ BASE = {"title": "t", "kind": "final", "grid": {"estimator": ["lm"]}, "plot": {"
     ({"tolerance": {"rel": 0.1, "abs": 1.0}}, ["exactly one"]),
     ({"tolerance": {"rel": 0.1}, "reported": [{"quantity": "q", "value": 1.0}]}, ["needs a reason"]),
     ({"seeds": 10, "reported": [{"quantity": "q", "value": 1.0}]}, ["seeds=10", "at least 30 seeds"]),
+    ({"seeds": True}, ["seeds=True", "int"]),  # a flag is no number
+    ({"floor": True}, ["floor=True", "float"]),
+    ({"skip_inapplicable": "yes"}, ["skip_inapplicable='yes'", "bool"]),
+    ({"reported": [{"quantity": "q"}]}, ["reported[0]", "missing key 'value'"]),
+    ({"tolerance": {"rell": 0.1}}, ["tolerance", "'rell'", "rel, abs, factor, below"]),
+    ({"summarise": [{"quantity": "q", "metric": "fun", "interval": "bootstrap"}]}, ["interval='bootstrap'", "seeds, ls"]),
 ])
 def test_a_typo_fails_with_one_line(tmp_path, change, words):
     with pytest.raises(MagexpError) as info:
@@ -54,6 +60,11 @@ def test_a_typo_fails_with_one_line(tmp_path, change, words):
     assert "\n" not in message
     for w in words:
         assert w in message, (w, message)
+
+
+def test_numbers_given_as_text_and_texts_given_as_numbers_are_converted(tmp_path):
+    spec = load(_write(tmp_path, {**BASE, "floor": "1e-9", "title": 3}))  # YAML reads 1e-9 as text
+    assert spec.floor == 1e-9 and isinstance(spec.floor, float) and spec.title == "3"
 
 
 def test_old_plot_keys_still_load_as_the_canonical_ones(tmp_path):

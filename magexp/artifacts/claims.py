@@ -60,6 +60,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import wilcoxon
 
+from magexp.artifacts.schema import Float, typed
 from magexp.errors import MagexpError
 
 #: a statistic over the seeds of a selection
@@ -90,6 +91,7 @@ HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE = "holds", "does not hold", "contradic
 ESTIMATOR_SIDE = ("estimator", "objective")
 
 
+@typed
 @dataclass(frozen=True)
 class Claim:
     """A statement and the condition on the runs that makes it true (see the module docstring)."""
@@ -102,7 +104,7 @@ class Claim:
     stat: str = "median"
     where: dict = field(default_factory=dict)
     op: str = "<="
-    value: float | None = None
+    value: Float | None = None
     cells: list = field(default_factory=list)
     better: str = "lower"
     section: str = ""
@@ -284,42 +286,62 @@ def _column(runs: pd.DataFrame, metric: str) -> np.ndarray:
 
 def compare(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, stats: tuple, cis: tuple) -> tuple[str, str]:
     """Whether the cells ``better`` beat the cells ``worse`` by the claim's test: ``(outcome, text)``."""
-    sign = 1 if claim.better == "lower" else -1
-    test = claim.test
-    pair = None
-    if test == "auto":
-        if claim.stat == "success_rate":
-            test = "fisher"
-        else:
-            pair = _paired(table, better, worse, claim.metric)
-            test = "paired" if pair is not None else "intervals"
+    test, pair = _test_of(claim, table, better, worse)
     if test == "fisher":
-        ka, kb = (values(select(table, w), claim.metric, "success_rate") for w in (better, worse))
-        if claim.better == "lower":  # fewer successes is better: swap the roles
-            ka, kb = kb, ka
-        p_hold = fisher_greater(int(ka.sum()), len(ka), int(kb.sum()), len(kb))
-        p_contra = fisher_greater(int(kb.sum()), len(kb), int(ka.sum()), len(ka))
-        text = f"Fisher p = {p_hold:.3g} ({int(ka.sum())}/{len(ka)} vs {int(kb.sum())}/{len(kb)})"
+        p_hold, p_contra, text = _fisher_test(claim, table, better, worse)
     elif test == "paired":
-        pair = pair or _paired(table, better, worse, claim.metric)
-        if pair is None:
-            raise MagexpError(f"claim {claim.id!r}: test: paired needs two single cells with the same seeds and scenario")
-        d = sign * (pair[0] - pair[1])  # below zero: the first is better
-        d = d[np.isfinite(d)]
-        p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
-        wins, losses = int((d < 0).sum()), int((d > 0).sum())
-        text = (f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
-                f"equal on {d.size - wins - losses} of {d.size} seeds)")
+        p_hold, p_contra, text = _paired_test(claim, pair or _paired(table, better, worse, claim.metric))
     else:
-        (alo, ahi), (blo, bhi) = cis
-        p_hold = 0.0 if (ahi < blo if sign > 0 else alo > bhi) else 1.0
-        p_contra = 0.0 if (bhi < alo if sign > 0 else blo > ahi) else 1.0
-        text = "95 % CIs " + ("separate" if min(p_hold, p_contra) == 0 else "overlap")
+        p_hold, p_contra, text = _interval_test(claim, cis)
     if p_hold < ALPHA:
         return HOLDS, text
     if p_contra < ALPHA:
         return CONTRADICTED, text
     return NO_DIFFERENCE, text
+
+
+def _test_of(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> tuple[str, tuple | None]:
+    """The test of a comparison and the paired values ``test: auto`` found: ``fisher`` for success
+    rates, ``paired`` for two single cells with the same seeds and scenario, else ``intervals``."""
+    if claim.test != "auto":
+        return claim.test, None
+    if claim.stat == "success_rate":
+        return "fisher", None
+    pair = _paired(table, better, worse, claim.metric)
+    return ("paired" if pair is not None else "intervals"), pair
+
+
+def _fisher_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> tuple[float, float, str]:
+    """Fisher's exact test of the success counts: ``(p of the claim, p of its converse, text)``."""
+    ka, kb = (values(select(table, w), claim.metric, "success_rate") for w in (better, worse))
+    if claim.better == "lower":  # fewer successes is better: swap the roles
+        ka, kb = kb, ka
+    p_hold = fisher_greater(int(ka.sum()), len(ka), int(kb.sum()), len(kb))
+    p_contra = fisher_greater(int(kb.sum()), len(kb), int(ka.sum()), len(ka))
+    return p_hold, p_contra, f"Fisher p = {p_hold:.3g} ({int(ka.sum())}/{len(ka)} vs {int(kb.sum())}/{len(kb)})"
+
+
+def _paired_test(claim: Claim, pair: tuple | None) -> tuple[float, float, str]:
+    """The one-sided Wilcoxon signed-rank test of the per-seed differences of ``pair`` (the two
+    cells' values on the same seeds): ``(p of the claim, p of its converse, text)``."""
+    if pair is None:
+        raise MagexpError(f"claim {claim.id!r}: test: paired needs two single cells with the same seeds and scenario")
+    sign = 1 if claim.better == "lower" else -1
+    d = sign * (pair[0] - pair[1])  # below zero: the first is better
+    d = d[np.isfinite(d)]
+    p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
+    wins, losses = int((d < 0).sum()), int((d > 0).sum())
+    return p_hold, p_contra, (f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
+                              f"equal on {d.size - wins - losses} of {d.size} seeds)")
+
+
+def _interval_test(claim: Claim, cis: tuple) -> tuple[float, float, str]:
+    """Whether the two 95 % intervals ``cis`` separate (p 0 for the side that is better, else 1)."""
+    sign = 1 if claim.better == "lower" else -1
+    (alo, ahi), (blo, bhi) = cis
+    p_hold = 0.0 if (ahi < blo if sign > 0 else alo > bhi) else 1.0
+    p_contra = 0.0 if (bhi < alo if sign > 0 else blo > ahi) else 1.0
+    return p_hold, p_contra, "95 % CIs " + ("separate" if min(p_hold, p_contra) == 0 else "overlap")
 
 
 def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
@@ -334,21 +356,32 @@ def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
 def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
     stat = "success_rate" if claim.kind == "success" else claim.stat
     if claim.kind in ("threshold", "success"):
-        table, where = _restrict(table, claim.where)
-        cells = cell_settings(table)
-        chosen = [ci for ci, s in cells.items() if matches(where, s)]
-        if not chosen:
-            return Outcome(claim, False, f"no runs match {_name(claim.where)}")
-        parts, ok = [], True
-        for ci in chosen:
-            v = values(table[table.cell == ci], claim.metric, stat)
-            s, _, text = _describe({k: cells[ci][k] for k in cells[ci] if k not in where} or where, v, stat)
-            ok &= bool(np.isfinite(s) and OPS[claim.op](s, float(claim.value)))
-            parts.append(text)
-        evidence = f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts)
-        got = ", ".join(_short_value(statistic(values(table[table.cell == ci], claim.metric, stat), stat)) for ci in chosen)
-        return Outcome(claim, ok, evidence, short=f"required {stat} {claim.op} {claim.value:g}; "
-                       f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {_shorten(got, 200)}")
+        return _evaluate_threshold(claim, table, stat)
+    return _evaluate_comparison(claim, table, stat)
+
+
+def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
+    """``kind: threshold | success``: ``stat`` of every selected cell against ``op value``."""
+    table, where = _restrict(table, claim.where)
+    cells = cell_settings(table)
+    chosen = [ci for ci, s in cells.items() if matches(where, s)]
+    if not chosen:
+        return Outcome(claim, False, f"no runs match {_name(claim.where)}")
+    parts, ok = [], True
+    for ci in chosen:
+        v = values(table[table.cell == ci], claim.metric, stat)
+        s, _, text = _describe({k: cells[ci][k] for k in cells[ci] if k not in where} or where, v, stat)
+        ok &= bool(np.isfinite(s) and OPS[claim.op](s, float(claim.value)))
+        parts.append(text)
+    evidence = f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts)
+    got = ", ".join(_short_value(statistic(values(table[table.cell == ci], claim.metric, stat), stat)) for ci in chosen)
+    return Outcome(claim, ok, evidence, short=f"required {stat} {claim.op} {claim.value:g}; "
+                   f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {_shorten(got, 200)}")
+
+
+def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
+    """``kind: ordering | winner``: each cell against the next (ordering) or the first against every
+    other (winner), by :func:`compare`."""
     stats, cis, parts = [], [], []
     for where in claim.cells:
         v = values(select(table, where), claim.metric, stat)

@@ -189,29 +189,32 @@ def headline_verdict(results: list[str | None]) -> str:
 def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
     """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure.
     ``outcomes``: ``{"artifact.id": Outcome}``; a part naming no claim of the paper is an error."""
-    meta = load_paper(paper)
     declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
     rows = []
-    for h in meta.headline:
+    for h in load_paper(paper).headline:
         unknown = [p for p in h.parts if p not in declared]
         if unknown:
             raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {unknown[0]!r} names no claim of {paper} "
                               "(write <artifact>.<claim id>)")
-        parts = [outcomes.get(p) for p in h.parts]
-        if h.untestable:
-            verdict, reason = "not testable here", str(h.untestable).strip()
-        else:
-            verdict = headline_verdict([o.result if o is not None else None for o in parts])
-            if h.reason and parts[0] is not None:
-                reason = interpolate(str(h.reason).strip(), runs(h.parts[0].split(".")[0]))
-            else:
-                reason = "; ".join(f"{p.split('.')[1]}: {o.result if o else 'no runs here'}"
-                                   + (f" ({o.short})" if o else "") for p, o in zip(h.parts, parts))
+        verdict, reason = _headline_verdict(h, [outcomes.get(p) for p in h.parts], runs)
         figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
         rows.append({"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline",
                      "section": h.section, "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
                      "reason": _shorten(reason), "evidence": reason})
     return rows
+
+
+def _headline_verdict(h, parts: list, runs) -> tuple[str, str]:
+    """The verdict of headline ``h`` and its reason, from the outcomes ``parts`` of its parts (None:
+    no runs here): its ``reason:`` template read on the runs of the first part's artifact, else each
+    part's result and numbers; an untestable headline says why."""
+    if h.untestable:
+        return "not testable here", str(h.untestable).strip()
+    verdict = headline_verdict([o.result if o is not None else None for o in parts])
+    if h.reason and parts[0] is not None:
+        return verdict, interpolate(str(h.reason).strip(), runs(h.parts[0].split(".")[0]))
+    return verdict, "; ".join(f"{p.split('.')[1]}: {o.result if o else 'no runs here'}"
+                              + (f" ({o.short})" if o else "") for p, o in zip(h.parts, parts))
 
 
 def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:

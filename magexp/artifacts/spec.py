@@ -25,7 +25,9 @@ An artifact is a paper's figure or table as data::
     notes: ...                   # prose; {median:fun@estimator=ipso:.3g} interpolates a measured value
     caption: ...
 
-A typo fails at load with one line naming the key and the allowed ones. The papers are the
+The schema is the type hints of the dataclasses below, validated by pydantic
+(:func:`magexp.artifacts.schema.build`; that module says why pydantic): a typo fails at load with
+one line naming the key and the allowed ones, a wrong value with one naming the type it must have. The papers are the
 folders of ``experiments/`` that hold an artifact (:func:`papers`); each has a ``paper.yaml``
 (:class:`Paper`: title, intro, order, deviations and its ``headline:`` claims, :class:`Headline`).
 """
@@ -33,10 +35,8 @@ folders of ``experiments/`` that hold an artifact (:func:`papers`); each has a `
 from __future__ import annotations
 
 import copy
-import dataclasses
 import decimal
 import functools
-import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -44,6 +44,9 @@ from typing import Any
 import yaml
 from omegaconf import DictConfig, OmegaConf
 
+from magexp.artifacts.claims import Claim
+from magexp.artifacts.plots import KINDS
+from magexp.artifacts.schema import Bool, Float, Int, allowed, build, typed, unknown
 from magexp.errors import MagexpError
 from magexp.paths import EXPERIMENTS
 
@@ -75,60 +78,13 @@ PLOT_KEYS = {
 }
 #: old plot keys, still read: each becomes its canonical key at load
 _PLOT_ALIASES = {"value": "metric", "metrics": "metric"}
+#: sections of an artifact that an empty value (``success:``, ``reported: []``...) leaves at their default
+_DEFAULTED_WHEN_EMPTY = ("success", "tolerance", "summarise", "ratios", "reported", "claims")
 
 
-def _allowed(cls) -> list[str]:
-    return [f.name for f in dataclasses.fields(cls) if f.init and not f.name.startswith("_")]
+# -- the schema (validated by :func:`magexp.artifacts.schema.build`) -------------------------------------
 
-
-def _check_type(value, hint, where: str):
-    """``value`` against a simple type hint (str, int, float, bool, list, dict, Any, unions of them)."""
-    origin = typing.get_origin(hint)
-    if hint is Any:
-        return value
-    if origin is typing.Union or str(origin) == "<class 'types.UnionType'>":
-        for arg in typing.get_args(hint):
-            if arg is type(None) and value is None:
-                return None
-        hint = next(a for a in typing.get_args(hint) if a is not type(None))
-        origin = typing.get_origin(hint)
-    if value is None:
-        raise MagexpError(f"{where}=None is not allowed: give a {getattr(hint, '__name__', hint)}")
-    base = origin or hint
-    if base is float and isinstance(value, (int, float)) and not isinstance(value, bool):
-        return float(value)
-    if base is float and isinstance(value, str):
-        try:
-            return float(value)
-        except ValueError:
-            pass
-    if base is str and isinstance(value, (int, float)) and not isinstance(value, bool):
-        return str(value)
-    if not isinstance(value, base) or (base is int and isinstance(value, bool)):
-        raise MagexpError(f"{where}={value!r} is not allowed: it must be a {base.__name__}")
-    return value
-
-
-def build(cls, data, where: str):
-    """A dataclass ``cls`` from a mapping; unknown keys and wrong types fail with one line."""
-    if isinstance(data, DictConfig):
-        data = OmegaConf.to_container(data, resolve=True)
-    if not isinstance(data, dict):
-        raise MagexpError(f"{where}={data!r} is not allowed: it must be a mapping with keys {', '.join(_allowed(cls))}")
-    allowed = _allowed(cls)
-    for key in data:
-        if key not in allowed:
-            raise MagexpError(f"{where}: unknown key {key!r}: allowed keys are {', '.join(allowed)}")
-    hints = typing.get_type_hints(cls)
-    kwargs = {k: _check_type(v, hints[k], f"{where}.{k}") for k, v in data.items()}
-    try:
-        return cls(**kwargs)
-    except TypeError as exc:  # a required key is missing
-        missing = [f.name for f in dataclasses.fields(cls) if f.name not in kwargs
-                   and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
-        raise MagexpError(f"{where}: missing key {', '.join(map(repr, missing))}") from exc
-
-
+@typed
 @dataclass(frozen=True)
 class Summarise:
     """One summary row per cell of ``metric`` (``mode: parameters``: one row per estimated parameter,
@@ -141,7 +97,7 @@ class Summarise:
     mode: str = "value"
     aggregate: str = "median"
     truth_metric: str | None = None
-    only: list | None = None
+    only: list[str] | None = None
     interval: str = "seeds"  # seeds: 2.5-97.5 % over seeds; ls: least-squares t-interval (one run on recorded data)
 
     def __post_init__(self):
@@ -155,16 +111,18 @@ class Summarise:
             raise MagexpError("summarise: an entry needs quantity and metric (or mode: parameters)")
 
 
+@typed
 @dataclass(frozen=True)
 class Ratio:
     """Per seed ``metric`` of the ``numerator`` cell over that of the ``denominator`` cell."""
 
     quantity: str
     metric: str
-    numerator: dict
-    denominator: dict
+    numerator: dict[str, Any]
+    denominator: dict[str, Any]
 
 
+@typed
 @dataclass(frozen=True)
 class Tolerance:
     """A fixed tolerance: only where the paper gives no run to compare with (``reason`` says why).
@@ -172,10 +130,10 @@ class Tolerance:
     ``rel`` (``|v - p| <= rel |p|``), ``abs`` (``|v - p| <= abs``), ``factor`` (``p/f <= v <= p f``)
     or ``below`` (both below it); exactly one."""
 
-    rel: float | None = None
-    abs: float | None = None
-    factor: float | None = None
-    below: float | None = None
+    rel: Float | None = None
+    abs: Float | None = None
+    factor: Float | None = None
+    below: Float | None = None
     reason: str = ""
 
     def __post_init__(self):
@@ -197,17 +155,18 @@ class Tolerance:
                 "rel": lambda: abs(value - paper) <= t * abs(paper)}[self.kind]()
 
 
+@typed
 @dataclass(frozen=True)
 class Reported:
     """One number the paper prints. ``decimals``: its printed decimal places (trailing zeros are lost
     in YAML floats); without it the precision is that of the shortest text of ``value``."""
 
     quantity: str
-    value: float
-    match: dict = field(default_factory=dict)
-    decimals: int | None = None
+    value: Float
+    match: dict[str, Any] = field(default_factory=dict)
+    decimals: Int | None = None
     tolerance: Tolerance | None = None
-    informative: bool = True  # false: the row's verdict is ``uninformative`` whatever its interval (``reason`` says why)
+    informative: Bool = True  # false: the row's verdict is ``uninformative`` whatever its interval (``reason`` says why)
     reason: str = ""
 
     def __post_init__(self):
@@ -222,6 +181,7 @@ class Reported:
         return 0.5 * 10.0 ** int(exponent)
 
 
+@typed
 @dataclass(frozen=True)
 class Success:
     """A run succeeds when ``metric <= factor * reference + floor`` (``reference``: the metric of the
@@ -229,10 +189,11 @@ class Success:
 
     metric: str = "fun"
     reference: str = "truth_fun"
-    factor: float = SUCCESS_FACTOR
-    floor: float = ROUNDOFF_FLOOR
+    factor: Float = SUCCESS_FACTOR
+    floor: Float = ROUNDOFF_FLOOR
 
 
+@typed
 @dataclass
 class Artifact:
     """A validated artifact spec (see the module docstring). ``plot`` stays an OmegaConf node
@@ -242,24 +203,24 @@ class Artifact:
     paper: str
     title: str
     kind: str
-    seeds: int = 10
-    base: list = field(default_factory=list)
-    grid: dict = field(default_factory=dict)
-    cases: list = field(default_factory=list)
-    skip_inapplicable: bool = False
+    seeds: Int = 10
+    base: list[str] = field(default_factory=list)
+    grid: dict[str, list[Any]] = field(default_factory=dict)
+    cases: list[list[str]] = field(default_factory=list)
+    skip_inapplicable: Bool = False
     plot: Any = None
-    summarise: list = field(default_factory=list)
-    ratios: list = field(default_factory=list)
-    reported: list = field(default_factory=list)
-    tolerance: Any = None
-    success: Any = None
-    floor: float = ROUNDOFF_FLOOR
-    claims: list = field(default_factory=list)
+    summarise: list[Summarise] = field(default_factory=list)
+    ratios: list[Ratio] = field(default_factory=list)
+    reported: list[Reported] = field(default_factory=list)
+    tolerance: Tolerance | None = None
+    success: Success = field(default_factory=Success)
+    floor: Float = ROUNDOFF_FLOOR
+    claims: list[Claim] = field(default_factory=list)
     notes: str = ""
     caption: str = ""
-    report_table: list = field(default_factory=list)
-    requires_data: list = field(default_factory=list)  # recordings read from magexp.paths.SHARED_DATA
-    path: Any = None
+    report_table: list[str] = field(default_factory=list)
+    requires_data: list[str] = field(default_factory=list)  # recordings read from magexp.paths.SHARED_DATA
+    path: Any = field(default=None, metadata={"yaml": False})  # the file it was read from (set by the loader)
 
     def get(self, key: str, default=None):
         """Mapping-style access (``spec.get("caption")``), for code written against the old node."""
@@ -267,9 +228,11 @@ class Artifact:
         return default if value is None else value
 
 
-def _expand_reported(entry: dict, where: str) -> list[dict]:
+# -- reading an artifact ---------------------------------------------------------------------------------
+
+def _expand_reported(entry, where: str) -> list:
     """A vector entry ``{quantities: [...], values: [...]}`` as one entry per quantity."""
-    if "quantities" not in entry and "values" not in entry:
+    if not isinstance(entry, dict) or "quantities" not in entry and "values" not in entry:
         return [entry]
     qs, vs = entry.get("quantities"), entry.get("values")
     if not isinstance(qs, list) or not isinstance(vs, list) or len(qs) != len(vs):
@@ -278,7 +241,22 @@ def _expand_reported(entry: dict, where: str) -> list[dict]:
     return [{**rest, "quantity": q, "value": v} for q, v in zip(qs, vs)]
 
 
+def _normalised(data: dict, path: Path) -> dict:
+    """The artifact mapping as :class:`Artifact` reads it: ``name`` and ``paper`` default to the file
+    stem and folder, an empty section is left at its default, vector ``reported`` entries are expanded
+    (an error in one names its index among the expanded entries)."""
+    data = {"name": path.stem, "paper": path.parent.name, **data}
+    for key in _DEFAULTED_WHEN_EMPTY:
+        if not data.get(key, True):
+            del data[key]
+    if isinstance(data.get("reported"), list):
+        data["reported"] = [e for i, entry in enumerate(data["reported"])
+                            for e in _expand_reported(entry, f"{path.stem}.reported[{i}]")]
+    return data
+
+
 def _plot(kind: str, data, where: str) -> DictConfig:
+    """The ``plot:`` mapping with its old keys renamed, its keys checked against :data:`PLOT_KEYS` of ``kind``."""
     data = dict(data or {})
     for old, new in _PLOT_ALIASES.items():
         if old in data:
@@ -292,58 +270,42 @@ def _plot(kind: str, data, where: str) -> DictConfig:
     return OmegaConf.create(data)
 
 
-def parse(data: dict, path: Path) -> Artifact:
-    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults)."""
-    from magexp.artifacts.claims import Claim
-    from magexp.artifacts.plots import KINDS
-
-    where = path.stem
-    if not isinstance(data, dict):
-        raise MagexpError(f"artifact {str(path)!r} is not a mapping of keys {', '.join(_allowed(Artifact))}")
-    data = dict(data)
-    allowed = [k for k in _allowed(Artifact) if k != "path"]
-    for key in data:
-        if key not in allowed:
-            raise MagexpError(f"{where}: unknown key {key!r}: allowed keys are {', '.join(allowed)}")
-    data.setdefault("name", path.stem)
-    data.setdefault("paper", path.parent.name)
-    kind = data.get("kind")
-    if kind not in KINDS:
-        raise MagexpError(f"{where}.kind={kind!r} is not allowed: choose one of {', '.join(sorted(KINDS))}")
-    hints = typing.get_type_hints(Artifact)
-    plain = {k: _check_type(v, hints[k], f"{where}.{k}") for k, v in data.items()
-             if k not in ("plot", "summarise", "ratios", "reported", "tolerance", "success", "claims")}
-    for key in ("grid",):
-        for k, v in plain.get(key, {}).items():
-            if not isinstance(v, list):
-                raise MagexpError(f"{where}.grid.{k}={v!r} is not allowed: it must be a list of values")
-    art = Artifact(**plain, path=path)
-    art.plot = _plot(kind, data.get("plot"), f"{where}.plot")
-    art.summarise = [build(Summarise, s, f"{where}.summarise[{i}]") for i, s in enumerate(data.get("summarise") or [])]
-    art.ratios = [build(Ratio, r, f"{where}.ratios[{i}]") for i, r in enumerate(data.get("ratios") or [])]
-    art.tolerance = build(Tolerance, data["tolerance"], f"{where}.tolerance") if data.get("tolerance") else None
-    art.success = build(Success, data.get("success") or {}, f"{where}.success")
-    reported = []
-    for i, entry in enumerate(data.get("reported") or []):
-        if not isinstance(entry, dict):
-            raise MagexpError(f"{where}.reported[{i}]={entry!r} is not allowed: it must be a mapping")
-        for e in _expand_reported(entry, f"{where}.reported[{i}]"):
-            if e.get("tolerance") is not None:
-                e = {**e, "tolerance": build(Tolerance, e["tolerance"], f"{where}.reported[{i}].tolerance")}
-            reported.append(build(Reported, e, f"{where}.reported[{i}]"))
-    art.reported = reported
-    for tol in [art.tolerance] + [r.tolerance for r in reported]:
+def _check_fixed_tolerances(art: Artifact, where: str) -> None:
+    """Every fixed tolerance says why; every reported number without one is compared over
+    :data:`MIN_SEEDS_COMPARED` seeds at least (a least-squares interval, ``interval: ls``, needs no seeds)."""
+    for tol in [art.tolerance] + [r.tolerance for r in art.reported]:
         if tol is not None and not tol.reason.strip():
             raise MagexpError(f"{where}: a fixed tolerance needs a reason (why the paper gives no run to compare with)")
     ls_items = {s.quantity for s in art.summarise if s.interval == "ls"}
-    loose = [r.quantity for r in reported if r.quantity not in ls_items and (r.tolerance or art.tolerance) is None]
+    loose = [r.quantity for r in art.reported if r.quantity not in ls_items and (r.tolerance or art.tolerance) is None]
     if loose and art.seeds < MIN_SEEDS_COMPARED:
         raise MagexpError(f"{where}.seeds={art.seeds} is not allowed: a cell compared with a paper number "
                           f"({loose[0]}) needs at least {MIN_SEEDS_COMPARED} seeds")
-    art.claims = [build(Claim, c, f"{where}.claims[{i}]") for i, c in enumerate(data.get("claims") or [])]
-    ids = [c.id for c in art.claims]
+
+
+def _check_unique_ids(items: list, where: str) -> None:
+    """The ``id`` of every item of ``items`` differs from the others."""
+    ids = [item.id for item in items]
     if len(set(ids)) != len(ids):
-        raise MagexpError(f"{where}.claims: ids must be unique, got {ids}")
+        raise MagexpError(f"{where}: ids must be unique, got {ids}")
+
+
+def parse(data: dict, path: Path) -> Artifact:
+    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults)."""
+    where = path.stem
+    if not isinstance(data, dict):
+        raise MagexpError(f"artifact {str(path)!r} is not a mapping of keys {', '.join(allowed(Artifact))}")
+    data = _normalised(data, path)
+    if "path" in data:
+        raise MagexpError(unknown(where, "path", Artifact))
+    if data.get("kind") not in KINDS:
+        raise MagexpError(f"{where}.kind={data.get('kind')!r} is not allowed: choose one of {', '.join(sorted(KINDS))}")
+    plot = data.pop("plot", None)
+    art = build(Artifact, data, where)
+    art.path = path
+    art.plot = _plot(art.kind, plot, f"{where}.plot")
+    _check_fixed_tolerances(art, where)
+    _check_unique_ids(art.claims, f"{where}.claims")
     return art
 
 
@@ -370,6 +332,7 @@ def load(path: Path | str) -> Artifact:
     return parse(data or {}, path)
 
 
+@typed
 @dataclass(frozen=True)
 class Deviation:
     """Where magexp departs from (or has to read) the paper's text, and why."""
@@ -378,6 +341,7 @@ class Deviation:
     reason: str
 
 
+@typed
 @dataclass(frozen=True)
 class Headline:
     """A headline claim of the paper (``headline:`` of ``paper.yaml``), in the paper's own words.
@@ -392,7 +356,7 @@ class Headline:
     text: str
     section: str
     figure: str = ""
-    parts: list = field(default_factory=list)
+    parts: list[str] = field(default_factory=list)
     reason: str = ""
     untestable: str = ""
 
@@ -406,6 +370,7 @@ class Headline:
             raise MagexpError(f"headline {self.id!r}: figure={self.figure!r} is not allowed: write <paper folder>/<artifact>")
 
 
+@typed
 @dataclass(frozen=True)
 class Paper:
     """``experiments/<paper>/paper.yaml``: the report section's title, intro, order, headline claims
@@ -413,10 +378,10 @@ class Paper:
 
     title: str
     intro: str = ""
-    order: int = 100
-    deviations: list = field(default_factory=list)
-    requires_data: list = field(default_factory=list)  # recordings its artifacts read (skipped when absent)
-    headline: list = field(default_factory=list)
+    order: Int = 100
+    deviations: list[Deviation] = field(default_factory=list)
+    requires_data: list[str] = field(default_factory=list)  # recordings its artifacts read (skipped when absent)
+    headline: list[Headline] = field(default_factory=list)
 
 
 def load_paper(paper: str, root: Path | None = None) -> Paper:
@@ -424,12 +389,8 @@ def load_paper(paper: str, root: Path | None = None) -> Paper:
     path = (root or EXPERIMENTS) / paper / "paper.yaml"
     data = (read_yaml(path) or {}) if path.exists() else {"title": paper}
     meta = build(Paper, data, f"{paper}/paper.yaml")
-    devs = [build(Deviation, d, f"{paper}/paper.yaml.deviations[{i}]") for i, d in enumerate(meta.deviations)]
-    heads = [build(Headline, h, f"{paper}/paper.yaml.headline[{i}]") for i, h in enumerate(meta.headline)]
-    ids = [h.id for h in heads]
-    if len(set(ids)) != len(ids):
-        raise MagexpError(f"{paper}/paper.yaml.headline: ids must be unique, got {ids}")
-    return dataclasses.replace(meta, deviations=devs, headline=heads)
+    _check_unique_ids(meta.headline, f"{paper}/paper.yaml.headline")
+    return meta
 
 
 def papers(root: Path | None = None) -> list[str]:

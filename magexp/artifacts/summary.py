@@ -161,57 +161,103 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     ``search_range``, ``block_scale``, ``ratio``: what :func:`uninformative` needs."""
     v = np.asarray(values, float)
     ok = np.full(v.shape, np.nan) if ok is None else np.asarray(ok, float)
-    judged = np.isfinite(ok)
-    success_rate = float(ok[judged].mean()) if judged.any() else np.nan
+    success_rate = _success_rate(ok)
     entry = reported_entry(spec, quantity, settings)
     paper = None if entry is None else float(entry.value)
     floor = float(spec.floor)
-    basis, same, outcome = v, None, ""
-    if parameters and judged.any():
-        basis = same = v[ok == 1]
-        outcome = "successful"
-    if aggregate == "mean":  # fractions: the mean of 0/1 outcomes, no quantiles
-        med, q25, q75 = float(np.nanmean(v)), np.nan, np.nan
-    else:
-        med, q25, q75 = quantiles(basis)
-    if success_threshold is not None and paper is not None and judged.any():
-        succeeded = paper <= success_threshold  # the paper's run classified by our rule
-        chosen = v[ok == (1 if succeeded else 0)]
-        same, outcome = (chosen, "successful" if succeeded else "failed") if chosen.size else (None, "")
-    lo, hi = interval(v, floor)
-    lo_same, hi_same = interval(same, floor) if same is not None else (np.nan, np.nan)
-    if ls is not None:
-        lo, hi = ls[0] - ls[1], ls[0] + ls[1]
+    basis, same, outcome = _compared_runs(v, ok, paper, parameters=parameters, success_threshold=success_threshold)
+    med, q25, q75 = _centre(v, basis, aggregate)
+    lo, hi, lo_same, hi_same = _intervals(v, same, floor, ls)
     jlo, jhi = (lo_same, hi_same) if same is not None else (lo, hi)
     width = entry.half_unit() if entry is not None else 0.0
     tol = None if entry is None else (entry.tolerance or spec.tolerance)
     verdict = judge(paper, jlo, jhi, width, success_rate, floor=floor, tolerance=tol, value=med)
     reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, outcome, ls is not None)
-    if verdict != "n/a" and entry is not None and not entry.informative:
-        verdict, reason = "uninformative", str(entry.reason).strip()
-    elif verdict == "reproduced" and tol is None:
-        why = uninformative(paper, jlo, jhi, kind="ratio" if ratio else "parameter" if parameters else "value",
-                            search_range=search_range, block_scale=block_scale, median=med,
-                            mixed_outcome=ratio and outcome == "failed")
-        if why:
-            verdict, reason = "uninformative", why
-    in_interval = np.nan
-    if truth is not None and np.isfinite(lo):
-        t = max(truth, floor) if 0 <= truth < floor else truth
-        in_interval = bool(jlo - width <= t <= jhi + width)
-    if entry is None:
-        tol_text = ""
-    elif tol is not None:
-        tol_text = tol.text()
-    else:
-        tol_text = ("ls t-interval" if ls is not None else "95 % of runs") + (f" ± {width:.2g}" if width else "")
+    kind = "ratio" if ratio else "parameter" if parameters else "value"
+    verdict, reason = _informative(verdict, reason, entry, tol, lambda: uninformative(
+        paper, jlo, jhi, kind=kind, search_range=search_range, block_scale=block_scale, median=med,
+        mixed_outcome=ratio and outcome == "failed"))
     return {
         "paper": spec.paper, "artifact": spec.name, "quantity": quantity, "estimator": estimator,
         "setting": setting + extra_setting, "truth": truth, "paper_value": paper, "value": med,
-        "q25": q25, "q75": q75, "n_seeds": int(np.isfinite(v).sum()), "tolerance": tol_text, "verdict": verdict,
-        "lo": lo, "hi": hi, "success_rate": success_rate, "truth_in_interval": in_interval,
+        "q25": q25, "q75": q75, "n_seeds": int(np.isfinite(v).sum()), "tolerance": _tolerance_text(entry, tol, ls, width),
+        "verdict": verdict, "lo": lo, "hi": hi, "success_rate": success_rate,
+        "truth_in_interval": _truth_inside(truth, lo, jlo, jhi, width, floor),
         "label": label or quantity, "reason": reason, "lo_same": lo_same, "hi_same": hi_same,
     }
+
+
+def _success_rate(ok: np.ndarray) -> float:
+    """The fraction of the judged runs (``ok`` 1 or 0, NaN: not judged) that succeeded (NaN if none is judged)."""
+    judged = np.isfinite(ok)
+    return float(ok[judged].mean()) if judged.any() else np.nan
+
+
+def _compared_runs(v: np.ndarray, ok: np.ndarray, paper, *, parameters: bool, success_threshold):
+    """``(basis, same, outcome)``: the values whose quantiles a row reports (``basis``), those the
+    paper's value is compared with (``same``; None: all of ``v``) and which runs they are (``outcome``,
+    "successful", "failed" or ""). A parameter is read from the successful runs; with a
+    ``success_threshold`` the paper's run is classified by our success rule and compared with our
+    runs of the same outcome (with all of them if we have none)."""
+    judged = np.isfinite(ok).any()
+    basis, same, outcome = v, None, ""
+    if parameters and judged:
+        basis = same = v[ok == 1]
+        outcome = "successful"
+    if success_threshold is not None and paper is not None and judged:
+        succeeded = paper <= success_threshold  # the paper's run classified by our rule
+        chosen = v[ok == (1 if succeeded else 0)]
+        same, outcome = (chosen, "successful" if succeeded else "failed") if chosen.size else (None, "")
+    return basis, same, outcome
+
+
+def _centre(v: np.ndarray, basis: np.ndarray, aggregate: str) -> tuple[float, float, float]:
+    """The row's value and quartiles: the median and quartiles of ``basis``, or for ``aggregate:
+    mean`` (fractions) the mean of 0/1 outcomes ``v`` without quartiles."""
+    if aggregate == "mean":
+        return float(np.nanmean(v)), np.nan, np.nan
+    return quantiles(basis)
+
+
+def _intervals(v: np.ndarray, same, floor: float, ls) -> tuple[float, float, float, float]:
+    """``(lo, hi, lo_same, hi_same)``: the interval of all runs (:func:`interval`, or the
+    least-squares ``ls = (estimate, half width)`` when given) and that of the compared runs ``same``."""
+    lo, hi = interval(v, floor)
+    lo_same, hi_same = interval(same, floor) if same is not None else (np.nan, np.nan)
+    if ls is not None:
+        lo, hi = ls[0] - ls[1], ls[0] + ls[1]
+    return lo, hi, lo_same, hi_same
+
+
+def _informative(verdict: str, reason: str, entry, tol, why) -> tuple[str, str]:
+    """The verdict and reason once the informativeness rules are applied: a row whose reported entry
+    says ``informative: false`` is uninformative for its own reason; a ``reproduced`` without a fixed
+    tolerance is uninformative when ``why()`` (:func:`uninformative`) gives a reason."""
+    if verdict != "n/a" and entry is not None and not entry.informative:
+        return "uninformative", str(entry.reason).strip()
+    if verdict == "reproduced" and tol is None:
+        text = why()
+        if text:
+            return "uninformative", text
+    return verdict, reason
+
+
+def _truth_inside(truth, lo: float, jlo: float, jhi: float, width: float, floor: float):
+    """Whether the true value lies in the compared interval widened by the printing precision
+    ``width`` (NaN without a truth or an interval; a truth below the round-off ``floor`` counts as it)."""
+    if truth is None or not np.isfinite(lo):
+        return np.nan
+    t = max(truth, floor) if 0 <= truth < floor else truth
+    return bool(jlo - width <= t <= jhi + width)
+
+
+def _tolerance_text(entry, tol, ls, width: float) -> str:
+    """The ``tolerance`` column: how the paper's value was compared ('' when the paper gives none)."""
+    if entry is None:
+        return ""
+    if tol is not None:
+        return tol.text()
+    return ("ls t-interval" if ls is not None else "95 % of runs") + (f" ± {width:.2g}" if width else "")
 
 
 def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol, med: float, outcome: str,
@@ -235,24 +281,32 @@ def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, pr
     cell = cells[ci] if ci < len(cells) else {}
     varying = [k for k in cell if k != "estimator" and len({str(c.get(k)) for c in cells}) > 1]
     names = dict(spec.plot.get("labels", {}) or {}) if spec.plot is not None else {}
-    parts = []
-    for key in varying:
-        value = str(cell[key])
-        if key == "scenario":
-            parts.append(re.sub(r"^[a-z]+\d{4}_", "", value).replace("_", " "))
-            continue
-        name = str(names.get(key, key.split(".")[-1].replace("_", " ")))
-        unit = ""
-        m = re.match(r"^(.*?)\s*\(([^()]*)\)$", name)
-        if m and len(m.group(2)) <= 6:
-            name, unit = m.group(1), m.group(2)
-        words = name.split()
-        if words and len(words[-1]) <= 2 and len(words) > 1:  # "noise amplitude A" -> "A"
-            name = words[-1]
-        parts.append(f"{name} = {value}" + (f" {unit}" if unit else ""))
+    parts = [_setting_text(key, str(cell[key]), names) for key in varying]
     head = " ".join(p for p in (prefix or ESTIMATOR_NAMES.get(estimator, estimator),
                                 QUANTITY_NAMES.get(quantity, quantity)) if p)
     return ", ".join([head, *parts])
+
+
+def _setting_text(key: str, value: str, names: dict) -> str:
+    """One setting of a row label: a scenario by its name without the paper prefix
+    (``yuan2018_mode1`` -> ``mode1``), any other key as ``name = value unit`` (:func:`_name_and_unit`)."""
+    if key == "scenario":
+        return re.sub(r"^[a-z]+\d{4}_", "", value).replace("_", " ")
+    name, unit = _name_and_unit(str(names.get(key, key.split(".")[-1].replace("_", " "))))
+    return f"{name} = {value}" + (f" {unit}" if unit else "")
+
+
+def _name_and_unit(name: str) -> tuple[str, str]:
+    """A setting's name split from a trailing ``(unit)`` of at most 6 characters; a name of several
+    words ending in a symbol of at most 2 letters becomes the symbol (``noise amplitude A`` -> ``A``)."""
+    unit = ""
+    m = re.match(r"^(.*?)\s*\(([^()]*)\)$", name)
+    if m and len(m.group(2)) <= 6:
+        name, unit = m.group(1), m.group(2)
+    words = name.split()
+    if words and len(words[-1]) <= 2 and len(words) > 1:  # "noise amplitude A" -> "A"
+        name = words[-1]
+    return name, unit
 
 
 def block_of(name: str) -> str:
@@ -408,53 +462,95 @@ def summarise(runs: ArtifactRuns) -> pd.DataFrame:
 
 
 def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
-    spec, table = runs.spec, runs.table
     rows = []
-    for item in spec.summarise:
-        if item.mode == "parameters":
-            rows += _parameter_rows(runs, item)
-            continue
-        if item.mode == "ftest":
-            rows += _ftest_rows(runs, item)
-            continue
-        metric = item.metric
-        truth_metric = item.truth_metric or f"truth_{metric}"
-        for ci in range(len(runs.cells)):
-            sub = table[table.cell == ci].sort_values("seed")
-            if metric not in sub or sub[metric].isna().all():
-                continue
-            truth = float(np.median(sub[truth_metric])) if truth_metric in sub and sub[truth_metric].notna().all() else None
-            ls, scale = None, None
-            if item.interval == "ls" and item.quantity in (fits := least_squares_interval(runs, ci)):
-                ls = fits[item.quantity]  # a parameter of the linear model: judged on its block's scale
-                scale = block_scales(list(fits), np.array([e for e, _ in fits.values()]))[block_of(item.quantity)]
-            rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
-                             sub[metric].astype(float).to_numpy(), cell_overrides(runs, ci), ok=_cell_ok(runs, ci),
-                             aggregate=item.aggregate, ls=ls, success_threshold=None if truth is None or
-                             metric != spec.success.metric else spec.success.factor * truth + spec.success.floor,
-                             label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0]),
-                             parameters=scale is not None, block_scale=scale))
-    for item in spec.ratios:
-        num_sel, den_sel, metric = item.numerator, item.denominator, item.metric
-        for ci in range(len(runs.cells)):
-            settings = cell_overrides(runs, ci)
-            if not matches(den_sel, settings):
-                continue
-            partner = {**settings, **num_sel}
-            nj = [cj for cj in range(len(runs.cells)) if cell_overrides(runs, cj) == partner]
-            if not nj:
-                continue
-            den = table[table.cell == ci].set_index("seed")
-            num = table[table.cell == nj[0]].set_index("seed")
-            ratio = (num[metric].astype(float) / den[metric].astype(float)).dropna()
-            both = (num["succeeded"] * den["succeeded"]).reindex(ratio.index) if "succeeded" in den else None
-            sub = table[table.cell == ci]
-            ref = ",".join(f"{k}={v}" for k, v in num_sel.items())
-            # a ratio of two successful runs is within the success factor of 1
-            threshold = spec.success.factor if item.metric == spec.success.metric else None
-            over = "/".join(ESTIMATOR_NAMES.get(str(e), str(e)) for e in (num_sel.get("estimator"), sub.estimator.iloc[0]) if e)
-            rows.append(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio.to_numpy(),
-                             settings, extra_setting=f";reference={ref}", success_threshold=threshold,
-                             ok=None if both is None else both.to_numpy(float), ratio=True,
-                             label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0], prefix=over)))
+    for item in runs.spec.summarise:
+        rows += _item_rows(runs, item)
+    for item in runs.spec.ratios:
+        rows += _ratio_rows(runs, item)
     return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def _item_rows(runs: ArtifactRuns, item) -> list[dict]:
+    """The rows of one ``summarise:`` entry (:class:`magexp.artifacts.spec.Summarise`), by its ``mode``."""
+    if item.mode == "parameters":
+        return _parameter_rows(runs, item)
+    if item.mode == "ftest":
+        return _ftest_rows(runs, item)
+    return _value_rows(runs, item)
+
+
+def _value_rows(runs: ArtifactRuns, item) -> list[dict]:
+    """``mode: value``: one row per cell whose runs hold ``metric``."""
+    rows = []
+    for ci in range(len(runs.cells)):
+        sub = runs.table[runs.table.cell == ci].sort_values("seed")
+        if item.metric in sub and not sub[item.metric].isna().all():
+            rows.append(_value_row(runs, item, ci, sub))
+    return rows
+
+
+def _value_row(runs: ArtifactRuns, item, ci: int, sub: pd.DataFrame) -> dict:
+    """The row of ``item`` for cell ``ci`` (``sub``: its runs by seed). A run of a metric that
+    decides success is compared with our runs of the same outcome as the paper's value."""
+    spec, metric = runs.spec, item.metric
+    truth = _cell_truth(sub, item.truth_metric or f"truth_{metric}")
+    ls, scale = _least_squares_item(runs, item, ci)
+    threshold = None if truth is None or metric != spec.success.metric else spec.success.factor * truth + spec.success.floor
+    return _row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
+                sub[metric].astype(float).to_numpy(), cell_overrides(runs, ci), ok=_cell_ok(runs, ci),
+                aggregate=item.aggregate, ls=ls, success_threshold=threshold,
+                label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0]),
+                parameters=scale is not None, block_scale=scale)
+
+
+def _cell_truth(sub: pd.DataFrame, column: str) -> float | None:
+    """The median of the true value ``column`` over a cell's runs (None unless every run has it)."""
+    return float(np.median(sub[column])) if column in sub and sub[column].notna().all() else None
+
+
+def _least_squares_item(runs: ArtifactRuns, item, ci: int) -> tuple:
+    """``interval: ls``: the least-squares ``(estimate, half width)`` of the item's parameter in cell
+    ``ci`` and its block's scale (it is judged on that scale); ``(None, None)`` otherwise."""
+    if item.interval != "ls" or item.quantity not in (fits := least_squares_interval(runs, ci)):
+        return None, None
+    scale = block_scales(list(fits), np.array([e for e, _ in fits.values()]))[block_of(item.quantity)]
+    return fits[item.quantity], scale
+
+
+def _ratio_rows(runs: ArtifactRuns, item) -> list[dict]:
+    """One row per denominator cell of a ``ratios:`` entry (:class:`magexp.artifacts.spec.Ratio`)
+    that has a numerator cell."""
+    rows = []
+    for ci in range(len(runs.cells)):
+        settings = cell_overrides(runs, ci)
+        nj = _numerator_cell(runs, item, settings)
+        if nj is not None:
+            rows.append(_ratio_row(runs, item, ci, nj, settings))
+    return rows
+
+
+def _numerator_cell(runs: ArtifactRuns, item, settings: dict) -> int | None:
+    """The cell whose settings are ``settings`` with the numerator's selection applied (None if
+    ``settings`` do not match the denominator's selection or no cell has them)."""
+    if not matches(item.denominator, settings):
+        return None
+    partner = {**settings, **item.numerator}
+    return next((cj for cj in range(len(runs.cells)) if cell_overrides(runs, cj) == partner), None)
+
+
+def _ratio_row(runs: ArtifactRuns, item, ci: int, nj: int, settings: dict) -> dict:
+    """The row of the per-seed ratio of ``metric`` of cell ``nj`` over cell ``ci``; a ratio of two
+    successful runs is within the success factor of 1 (``success_threshold``)."""
+    spec, table, metric, num_sel = runs.spec, runs.table, item.metric, item.numerator
+    den = table[table.cell == ci].set_index("seed")
+    num = table[table.cell == nj].set_index("seed")
+    ratio = (num[metric].astype(float) / den[metric].astype(float)).dropna()
+    both = (num["succeeded"] * den["succeeded"]).reindex(ratio.index) if "succeeded" in den else None
+    sub = table[table.cell == ci]
+    ref = ",".join(f"{k}={v}" for k, v in num_sel.items())
+    threshold = spec.success.factor if item.metric == spec.success.metric else None
+    over = "/".join(ESTIMATOR_NAMES.get(str(e), str(e)) for e in (num_sel.get("estimator"), sub.estimator.iloc[0]) if e)
+    return _row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio.to_numpy(),
+                settings, extra_setting=f";reference={ref}", success_threshold=threshold,
+                ok=None if both is None else both.to_numpy(float), ratio=True,
+                label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0], prefix=over))

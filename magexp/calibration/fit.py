@@ -50,7 +50,7 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from magexp.calibration.checks import check_fit, check_readings
-from magexp.calibration.write import check_out, print_table, summary, write
+from magexp.calibration.write import check_out, summary, write
 from magexp.core.dataset import Dataset
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
 from magexp.core.igrf import field_at
@@ -64,6 +64,7 @@ from magexp.paths import CONF
 from magexp.problems import make_problem, problem_class
 from magexp.run.budget import check_calibration, check_recording_file
 from magexp.run.compose import GROUPS, check_choice, hydra_compose, options, target_class
+from magexp.run.outputs import print_table
 from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
 from magexp.run.runner import build
 from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box

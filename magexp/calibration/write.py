@@ -167,10 +167,3 @@ def summary(cal) -> dict:
                     f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
         "fit": f"{'success' if cal.fit.success else 'FAILED'}: {cal.fit.message}",
     }
-
-
-def print_table(rows: dict) -> None:
-    """``key  value`` lines, keys aligned (the summary ``magexp calibrate`` prints)."""
-    width = max(len(k) for k in rows)
-    for key, value in rows.items():
-        print(f"{key:<{width}}  {value}")

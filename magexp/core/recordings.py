@@ -350,26 +350,15 @@ def _csv_table(lines: list[str], name: str, first_line: int) -> tuple[list[str],
 
 def _versioned(lines: list[str], name: str, unit: str | None) -> Recording:
     meta, start = _header(lines, name)
-    file_unit = check_unit(meta.get("unit", "nT"), f"{name}: unit")
-    if unit is not None and check_unit(unit, "data.unit") != file_unit:
-        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file says '# unit: {file_unit}' "
-                          "(leave data.unit unset)")
+    file_unit = _file_unit(meta, name, unit)
     angle_unit = _choice(meta, "angles", ANGLE_UNITS, name)
     gyro_unit = _choice(meta, "gyro", GYRO_UNITS, name)
     header, table = _csv_table(lines[start:], name, start + 1)
     columns = {col: table[:, j] for j, col in enumerate(header)}
     angles = _group(columns, ANGLES, "an attitude", name)
     gyro = _group(columns, GYRO, "a gyro", name)
-    sample_time = None
-    if gyro is not None:
-        if "sample_time" not in meta:
-            raise MagexpError(f"{name}: gyro columns gx, gy, gz need a '# sample_time: <seconds>' line")
-        sample_time = _number(meta["sample_time"], name, "sample_time")
-        if sample_time <= 0:
-            raise MagexpError(f"{name}: sample_time={meta['sample_time']!r} is not allowed: it must be > 0")
-    reference = _number(meta["reference_total"], name, "reference_total") if "reference_total" in meta else None
-    if reference is not None and reference <= 0:
-        raise MagexpError(f"{name}: reference_total={meta['reference_total']!r} is not allowed: it must be > 0")
+    sample_time = None if gyro is None else _sample_time(meta, name)
+    reference = _positive_meta(meta, "reference_total", name)
     if "total" in columns and np.any(columns["total"] <= 0):
         k = int(np.argmax(columns["total"] <= 0))
         raise MagexpError(f"{name} line {start + 2 + k}: total={columns['total'][k]:g} is not allowed: it must be > 0")
@@ -385,6 +374,32 @@ def _versioned(lines: list[str], name: str, unit: str | None) -> Recording:
         gyro=None if gyro is None else (np.deg2rad(gyro) if gyro_unit == "deg/s" else gyro),
         sample_time=sample_time,
     )
+
+
+def _file_unit(meta: dict, name: str, unit: str | None) -> str:
+    """The unit the file's ``# unit:`` line gives (nT without one); a ``data.unit`` given as well must agree."""
+    file_unit = check_unit(meta.get("unit", "nT"), f"{name}: unit")
+    if unit is not None and check_unit(unit, "data.unit") != file_unit:
+        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file says '# unit: {file_unit}' "
+                          "(leave data.unit unset)")
+    return file_unit
+
+
+def _sample_time(meta: dict, name: str) -> float:
+    """The ``# sample_time:`` (seconds, > 0) that gyro columns need."""
+    if "sample_time" not in meta:
+        raise MagexpError(f"{name}: gyro columns gx, gy, gz need a '# sample_time: <seconds>' line")
+    return _positive_meta(meta, "sample_time", name)
+
+
+def _positive_meta(meta: dict, key: str, name: str) -> float | None:
+    """The number of the ``# <key>:`` line, which must be > 0 (None without the line)."""
+    if key not in meta:
+        return None
+    value = _number(meta[key], name, key)
+    if value <= 0:
+        raise MagexpError(f"{name}: {key}={meta[key]!r} is not allowed: it must be > 0")
+    return value
 
 
 def check_unique(header: list[str], name: str) -> None:
@@ -491,11 +506,7 @@ def read_named_columns(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) 
     lines = _read_lines(path)
     header = [h.strip() for h in lines[0].split(",")]
     check_unique([h.lower() for h in header], path.name)
-    groups: dict[str, dict[str, tuple[int, str]]] = {}
-    for j, h in enumerate(header):
-        m = _NAMED.match(h)
-        if m:
-            groups.setdefault(m.group(1).lower(), {})[m.group(2).lower()] = (j, m.group(3).strip())
+    groups = _named_groups(header)
     time_col = next((j for j, h in enumerate(header) if h.lower().startswith("time")), None)
     mag = groups.get("magnetometer", {})
     if time_col is None or sorted(mag) != ["x", "y", "z"]:
@@ -511,13 +522,28 @@ def read_named_columns(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) 
                     columns={h: table[fresh, j] for j, h in enumerate(header)})
     gyro = groups.get("gyroscope", {})
     if sorted(gyro) == ["x", "y", "z"]:
-        rate_unit = {gyro[a][1] for a in "xyz"}.pop()
-        if rate_unit not in GYRO_UNITS:
-            raise MagexpError(f"{path.name}: gyroscope unit {rate_unit!r} is not allowed: choose one of "
-                              f"{', '.join(GYRO_UNITS)}")
-        rates = _rates(table[:, [gyro[a][0] for a in "xyz"]], rate_unit)
+        rates = _named_rates(table, gyro, path.name)
         rec.gyro_stream = (table[:, time_col], rates @ axis_map(gyro_axes, "data.gyro_axes").T)
     return rec
+
+
+def _named_groups(header: list[str]) -> dict[str, dict[str, tuple[int, str]]]:
+    """``{sensor: {axis: (column, unit)}}`` of the ``<Sensor> <X|Y|Z> (<unit>)`` columns of ``header``."""
+    groups: dict[str, dict[str, tuple[int, str]]] = {}
+    for j, h in enumerate(header):
+        m = _NAMED.match(h)
+        if m:
+            groups.setdefault(m.group(1).lower(), {})[m.group(2).lower()] = (j, m.group(3).strip())
+    return groups
+
+
+def _named_rates(table: np.ndarray, gyro: dict[str, tuple[int, str]], name: str) -> np.ndarray:
+    """The gyroscope columns ``gyro`` (:func:`_named_groups`) of ``table`` in rad/s."""
+    rate_unit = {gyro[a][1] for a in "xyz"}.pop()
+    if rate_unit not in GYRO_UNITS:
+        raise MagexpError(f"{name}: gyroscope unit {rate_unit!r} is not allowed: choose one of "
+                          f"{', '.join(GYRO_UNITS)}")
+    return _rates(table[:, [gyro[a][0] for a in "xyz"]], rate_unit)
 
 
 def read_header_counts(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:

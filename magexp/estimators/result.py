@@ -1,4 +1,4 @@
-"""The one result type every estimator returns."""
+"""The result types: what every estimator returns (:class:`FitResult`) and what a run produces (:class:`RunOutput`)."""
 
 from __future__ import annotations
 
@@ -34,3 +34,20 @@ class FitResult:
     message: str = ""
     trace: dict = field(default_factory=dict)
     metrics: dict = field(default_factory=dict)
+
+
+@dataclass
+class RunOutput:
+    """What one run produced: flat metrics, the convergence history and the estimate."""
+
+    metrics: dict
+    history: np.ndarray
+    history_nfev: np.ndarray
+    x: np.ndarray
+    parameter_names: list[str] = field(default_factory=list)
+    trace: dict = field(default_factory=dict)
+    readings: np.ndarray | None = None
+    calibrated: np.ndarray | None = None
+    reference_norm: np.ndarray | None = None
+    truth_x: np.ndarray | None = None  # the true parameter vector (simulations)
+    fit_cpu: float = 0.0  # CPU seconds of this process inside ``estimator.fit`` (not a metric: it varies)

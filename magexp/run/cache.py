@@ -454,17 +454,15 @@ def _checker(hint):
 
 @lru_cache(maxsize=1)
 def _run_checks() -> dict:
-    """The fields of :class:`magexp.run.runner.RunOutput`, each with the :func:`_checker` of its type."""
-    # the model (runner, scenarios, problems, estimators: 0.8 s) only when a run entry is read: every
-    # command imports this module through the composer, `magexp --cfg job` runs nothing
-    from magexp.run.runner import RunOutput
+    """The fields of :class:`magexp.estimators.result.RunOutput`, each with the :func:`_checker` of its type."""
+    from magexp.estimators.result import RunOutput  # numpy: as in _tree
 
     return {name: _checker(hint) for name, hint in typing.get_type_hints(RunOutput).items()}
 
 
 def _run_output(value):
-    """The :class:`magexp.run.runner.RunOutput` of an entry's value, or :class:`InvalidEntry`."""
-    from magexp.run.runner import RunOutput  # as in _run_checks
+    """The :class:`magexp.estimators.result.RunOutput` of an entry's value, or :class:`InvalidEntry`."""
+    from magexp.estimators.result import RunOutput  # as in _tree
 
     checks = _run_checks()
     if type(value) is not dict or value.keys() != checks.keys():
@@ -476,7 +474,7 @@ def _run_output(value):
 
 
 def load(key: str, root: Path | None = None):
-    """The stored run of ``key`` (a :class:`magexp.run.runner.RunOutput`), or None: absent, or not a
+    """The stored run of ``key`` (a :class:`magexp.estimators.result.RunOutput`), or None: absent, or not a
     valid entry of ``key`` (a miss noted for :func:`say_notes`; the entry is left in place, the
     recomputed run replaces it), or not readable by this user (noted, never replaced)."""
     root = CACHE if root is None else Path(root)

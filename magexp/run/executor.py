@@ -402,14 +402,8 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     first = {}
     for i, key in enumerate(keys):
         first.setdefault(key, i)
-    metrics: dict[str, dict] = {}
-    todo = []
-    for key, i in first.items():
-        out = cache.load(key) if use_cache else None
-        if out is None:
-            todo.append(i)
-        else:
-            metrics[key] = run_row(out)
+    metrics = _cached_rows(first, use_cache)
+    todo = [i for key, i in first.items() if key not in metrics]
     if counts is not None:
         counts.update(requested=len(configs), distinct=len(first), computed=len(todo), cached=len(first) - len(todo))
     multiplicity = defaultdict(int)
@@ -417,43 +411,12 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
         multiplicity[key] += 1
     if progress:
         progress(len(configs) - sum(multiplicity[keys[i]] for i in todo))
-    fit_cpu = task_cpu = 0.0
-    shared, held = 0, {}
+    done = _Done(metrics, multiplicity, progress)
     if todo:
         own = executor is None
         ex = executor if executor is not None else make_executor("local", jobs=jobs)
         try:
-            tasks = [[todo[j] for j in t] for t in plan_tasks([configs[i] for i in todo], ex.workers)]
-            if len(tasks) == 1 and own:
-                ex.close()
-                ex = InlineExecutor()
-            root = cache.CACHE if getattr(ex, "shares_files", False) else None
-            waiting: list[list[int]] = []  # runs another process was computing, per task
-            for wait in (False, True):  # then wait for them (their results are read, not computed)
-                futures = {ex.submit(_run_task, [configs[i] for i in task], [keys[i] for i in task], root,
-                                     use_cache, wait): task for task in (waiting if wait else tasks)}
-                waiting = []
-                for future in ex.as_completed(futures):
-                    results, cpu, notes = future.result()
-                    task_cpu += cpu
-                    cache.add_notes(notes)
-                    task = futures.pop(future)
-                    waiting.append([i for i, result in zip(task, results) if result is None])
-                    for i, result in zip(task, results):
-                        if result is None:
-                            continue
-                        if not isinstance(result, tuple):  # the output itself: store it here, or hold it
-                            if not cache.store(keys[i], result):
-                                held[keys[i]] = result
-                            result = run_row(result), result.fit_cpu
-                        metrics[keys[i]], fit = result
-                        if fit is None:  # another process computed it
-                            shared += 1
-                        else:
-                            fit_cpu += fit
-                        if progress:
-                            progress(multiplicity[keys[i]])
-                waiting = [task for task in waiting if task]
+            ex = _run_todo(configs, keys, todo, ex, own, use_cache, done)
         except BaseException:
             if own:
                 ex.__exit__(KeyboardInterrupt, None, None)
@@ -462,6 +425,74 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
             ex.close()
     cache.say_notes()
     if counts is not None:
-        counts.update(fit_cpu=fit_cpu, task_cpu=task_cpu, computed=counts["computed"] - shared,
-                      cached=counts["cached"] + shared)
-    return Outputs(keys, metrics, held=held)
+        counts.update(fit_cpu=done.fit_cpu, task_cpu=done.task_cpu, computed=counts["computed"] - done.shared,
+                      cached=counts["cached"] + done.shared)
+    return Outputs(keys, metrics, held=done.held)
+
+
+def _cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:
+    """The rows (:func:`run_row`) of the distinct runs ``first`` (key -> index) already in the run cache."""
+    rows = {}
+    for key in first:
+        out = cache.load(key) if use_cache else None
+        if out is not None:
+            rows[key] = run_row(out)
+    return rows
+
+
+class _Done:
+    """What :func:`run_many` gathers as results arrive: rows by key, outputs the cache could not keep
+    (``held``), CPU seconds inside fits and tasks, runs another process computed (``shared``)."""
+
+    def __init__(self, metrics: dict, multiplicity: dict, progress):
+        self.metrics, self.multiplicity, self.progress = metrics, multiplicity, progress
+        self.held: dict = {}
+        self.fit_cpu = self.task_cpu = 0.0
+        self.shared = 0
+
+    def add(self, key: str, result) -> None:
+        """One run's result from a task: ``(row, fit_cpu)`` (``fit_cpu`` None: read, not computed), or
+        the output itself (a remote worker's), stored here or held."""
+        if not isinstance(result, tuple):  # the output itself: store it here, or hold it
+            if not cache.store(key, result):
+                self.held[key] = result
+            result = run_row(result), result.fit_cpu
+        self.metrics[key], fit = result
+        if fit is None:  # another process computed it
+            self.shared += 1
+        else:
+            self.fit_cpu += fit
+        if self.progress:
+            self.progress(self.multiplicity[key])
+
+
+def _run_todo(configs, keys, todo: list[int], ex, own: bool, use_cache: bool, done: _Done):
+    """Run the configs ``todo`` in tasks on ``ex`` (inline when one task and the executor is ours),
+    then wait for the runs another process was computing; returns the executor used."""
+    tasks = [[todo[j] for j in t] for t in plan_tasks([configs[i] for i in todo], ex.workers)]
+    if len(tasks) == 1 and own:
+        ex.close()
+        ex = InlineExecutor()
+    root = cache.CACHE if getattr(ex, "shares_files", False) else None
+    waiting: list[list[int]] = []  # runs another process was computing, per task
+    for wait in (False, True):  # then wait for them (their results are read, not computed)
+        futures = {ex.submit(_run_task, [configs[i] for i in task], [keys[i] for i in task], root,
+                             use_cache, wait): task for task in (waiting if wait else tasks)}
+        waiting = _collect(ex, futures, keys, done)
+    return ex
+
+
+def _collect(ex, futures: dict, keys: list[str], done: _Done) -> list[list[int]]:
+    """Gather the tasks' results as they finish into ``done``; returns, per task, the runs another
+    process was computing (to wait for)."""
+    waiting = []
+    for future in ex.as_completed(futures):
+        results, cpu, notes = future.result()
+        done.task_cpu += cpu
+        cache.add_notes(notes)
+        task = futures.pop(future)
+        waiting.append([i for i, result in zip(task, results) if result is None])
+        for i, result in zip(task, results):
+            if result is not None:
+                done.add(keys[i], result)
+    return [task for task in waiting if task]

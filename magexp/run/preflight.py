@@ -84,11 +84,7 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
     itself), jobs that differ only in ``seed`` are composed once and their seeds checked
     alone, so a sweep over many seeds costs almost nothing to check.
     """
-    for job in jobs:  # group choices first: the cheapest and most common mistake
-        for ov in job:
-            key, _, value = ov.partition("=")
-            if key in GROUPS:
-                check_choice(key, value)
+    _check_choices(jobs)
     configs, seen, composed, estimates = [], set(), {}, {}
     tally = Tally("the sweep" if len(jobs) > 1 else "the run")  # memory and work: magexp.run.budget
     for job in jobs:
@@ -100,25 +96,41 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
             tally.add(composed[rest])
             continue
         cfg = compose_config(job)
-        check_seed(cfg.seed)
-        plain = resolved(cfg)
-        check_run_values(plain)
-        s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
-        e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
-        if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
-            estimates[s_key, e_key] = check_run(plain)
-        composed[rest] = estimates[s_key, e_key]
+        composed[rest] = _check_config(cfg, seen, estimates)
         tally.add(composed[rest])
-        if e_key not in seen:
-            _build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-            seen.add(e_key)
-        if s_key not in seen:
-            scenario = _build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
-            check_problem(cfg, scenario)
-            seen.add(s_key)
         if keep:
             configs.append(cfg)
     return configs
+
+
+def _check_choices(jobs: list[list[str]]) -> None:
+    """Every config-group choice of every job exists (the cheapest and most common mistake, first)."""
+    for job in jobs:
+        for ov in job:
+            key, _, value = ov.partition("=")
+            if key in GROUPS:
+                check_choice(key, value)
+
+
+def _check_config(cfg, seen: set, estimates: dict):
+    """Check one composed job: its seed and values, its memory and work (once per scenario and
+    estimator), and build its estimator and scenario the first time each is ``seen``; returns the
+    run's estimate (:func:`magexp.run.budget.check_run`)."""
+    check_seed(cfg.seed)
+    plain = resolved(cfg)
+    check_run_values(plain)
+    s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
+    e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
+    if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
+        estimates[s_key, e_key] = check_run(plain)
+    if e_key not in seen:
+        _build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
+        seen.add(e_key)
+    if s_key not in seen:
+        scenario = _build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
+        check_problem(cfg, scenario)
+        seen.add(s_key)
+    return estimates[s_key, e_key]
 
 
 def check_jobs(overrides: list[str], jobs: list) -> None:

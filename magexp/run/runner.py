@@ -6,7 +6,6 @@ import json
 import time
 from collections import OrderedDict
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 
 import numpy as np
 from hydra.utils import instantiate
@@ -15,26 +14,10 @@ from omegaconf import DictConfig, OmegaConf
 from magexp.core.datafiles import data_files
 from magexp.errors import MagexpError
 from magexp.estimators.base import check_applies
+from magexp.estimators.result import RunOutput
 from magexp.core.metrics import evaluate, problem_bound
 from magexp.problems import make_problem, problem_class
 from magexp.core.seeding import run_sequences, scenario_stream
-
-
-@dataclass
-class RunOutput:
-    """What one run produced: flat metrics, the convergence history and the estimate."""
-
-    metrics: dict
-    history: np.ndarray
-    history_nfev: np.ndarray
-    x: np.ndarray
-    parameter_names: list[str] = field(default_factory=list)
-    trace: dict = field(default_factory=dict)
-    readings: np.ndarray | None = None
-    calibrated: np.ndarray | None = None
-    reference_norm: np.ndarray | None = None
-    truth_x: np.ndarray | None = None  # the true parameter vector (simulations)
-    fit_cpu: float = 0.0  # CPU seconds of this process inside ``estimator.fit`` (not a metric: it varies)
 
 
 def build(node, what: str):

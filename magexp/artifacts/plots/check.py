@@ -55,25 +55,34 @@ def _draws_data(artist, ax: Axes) -> bool:
     if not artist.get_visible():
         return False
     if isinstance(artist, Line2D):
-        spans = (ax.get_xaxis_transform(which="grid"), ax.get_yaxis_transform(which="grid"))
-        if any(artist.get_transform() is t for t in spans):
-            return False  # axhline / axvline: a reference across the axes, not data
-        x, y = artist.get_data()
-        return _both_finite(x, y)
+        return _line_draws_data(artist, ax)
     if isinstance(artist, Collection):
-        offsets = artist.get_offsets()
-        if len(offsets) and np.isfinite(np.asarray(offsets, float)).all(axis=-1).any() and len(offsets) > 1:
-            return True
-        if hasattr(artist, "_offsets3d"):
-            return any(_finite(v) for v in artist._offsets3d)
-        return any(len(p.vertices) and np.isfinite(p.vertices).all(axis=1).any() for p in artist.get_paths())
+        return _collection_draws_data(artist)
     if isinstance(artist, AxesImage):
         return _finite(np.ma.filled(np.ma.asarray(artist.get_array(), dtype=float), np.nan))
     if isinstance(artist, Rectangle):
         return bool(np.isfinite([artist.get_height(), artist.get_width()]).all() and artist.get_height() != 0)
-    if isinstance(artist, Table):
+    return isinstance(artist, Table)
+
+
+def _line_draws_data(line: Line2D, ax: Axes) -> bool:
+    """A line with a finite point, unless it is an ``axhline`` / ``axvline`` (a reference across the axes)."""
+    spans = (ax.get_xaxis_transform(which="grid"), ax.get_yaxis_transform(which="grid"))
+    if any(line.get_transform() is t for t in spans):
+        return False
+    x, y = line.get_data()
+    return _both_finite(x, y)
+
+
+def _collection_draws_data(artist: Collection) -> bool:
+    """A collection with several finite offsets (a scatter), finite 3-D offsets or a path with a
+    finite vertex (a band, a bar set)."""
+    offsets = artist.get_offsets()
+    if len(offsets) and np.isfinite(np.asarray(offsets, float)).all(axis=-1).any() and len(offsets) > 1:
         return True
-    return False
+    if hasattr(artist, "_offsets3d"):
+        return any(_finite(v) for v in artist._offsets3d)
+    return any(len(p.vertices) and np.isfinite(p.vertices).all(axis=1).any() for p in artist.get_paths())
 
 
 def _is_colorbar(ax: Axes) -> bool:

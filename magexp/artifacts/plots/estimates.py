@@ -40,6 +40,22 @@ def _cell(row) -> str:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    quantities, columns, body = _table(frame, spec)
+    widths = _column_widths(columns, body)
+    fig, ax = _figure(frame, quantities, body, widths, axes)
+    ax.axis("off")
+    # the table fills its axes (bbox), so the layout keeps the title clear of it
+    table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, cellLoc="center", bbox=[0, 0, 1, 1],
+                     colWidths=[w / sum(widths) for w in widths])
+    table.auto_set_font_size(False)
+    table.set_fontsize(7.5)
+    fig.suptitle(spec.title, fontsize=9)
+    return fig
+
+
+def _table(frame: pd.DataFrame, spec) -> tuple[list[str], list[str], list[list[str]]]:
+    """The table's row labels (quantities), column labels (``truth`` if known, one per estimator,
+    ``paper states`` if the spec reports a row) and cell texts."""
     quantities = list(dict.fromkeys(frame.quantity))
     estimators = list(dict.fromkeys(frame.estimator))
     truth = frame.groupby("quantity", sort=False).truth.first()
@@ -53,23 +69,24 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             row = frame[(frame.quantity == q) & (frame.estimator == est)]
             cells.append(_cell(row.iloc[0]) if len(row) else "")
         body.append(cells + ([paper[q]] if columns[-1] == "paper states" else []))
-    tall = frame.n_seeds.max() > 1 or any("\n" in c for cells in body for c in cells)
-    row_height = 0.42 if tall else 0.24  # inches: two lines (median, IQR) or one
-    # inches per column: its longest line at 7.5 pt (about 0.062 in a character) and a margin
+    return quantities, columns, body
+
+
+def _column_widths(columns: list[str], body: list[list[str]]) -> list[float]:
+    """Inches per column: its longest line at 7.5 pt (about 0.062 in a character) and a margin."""
     longest = [max(len(line) for text in [name, *(cells[k] for cells in body)] for line in text.split("\n"))
                for k, name in enumerate(columns)]
-    widths = [0.25 + 0.062 * n for n in longest]
-    label_width = 0.25 + 0.062 * max(len(q) for q in quantities)
-    if axes is None:  # sized to the table (panels() gives one panel a fixed size)
-        fig, ax = plt.subplots(figsize=(label_width + sum(widths), 0.5 + row_height * (len(quantities) + 1)),
-                               layout="constrained")
-    else:
+    return [0.25 + 0.062 * n for n in longest]
+
+
+def _figure(frame: pd.DataFrame, quantities: list[str], body: list[list[str]], widths: list[float], axes):
+    """The figure and axes of the table: the given ``axes``, else a figure sized to the table
+    (:func:`panels` gives one panel a fixed size) with rows of two lines (median, IQR) or one."""
+    if axes is not None:
         fig, (ax,) = panels(1, axes=axes)
-    ax.axis("off")
-    # the table fills its axes (bbox), so the layout keeps the title clear of it
-    table = ax.table(cellText=body, rowLabels=quantities, colLabels=columns, cellLoc="center", bbox=[0, 0, 1, 1],
-                     colWidths=[w / sum(widths) for w in widths])
-    table.auto_set_font_size(False)
-    table.set_fontsize(7.5)
-    fig.suptitle(spec.title, fontsize=9)
-    return fig
+        return fig, ax
+    tall = frame.n_seeds.max() > 1 or any("\n" in c for cells in body for c in cells)
+    row_height = 0.42 if tall else 0.24  # inches: two lines (median, IQR) or one
+    label_width = 0.25 + 0.062 * max(len(q) for q in quantities)
+    return plt.subplots(figsize=(label_width + sum(widths), 0.5 + row_height * (len(quantities) + 1)),
+                        layout="constrained")

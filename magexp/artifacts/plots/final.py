@@ -165,18 +165,11 @@ def _references(ax, sub, spec, x_key, metric):
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    x_key, panel_key, hue_key = spec.plot.x, spec.plot.get("panels"), spec.plot.get("hue", "estimator")
-    if not isinstance(hue_key, str):  # several keys: one line per combination
-        keys = list(hue_key)
-        first, rest = keys[0], keys[1:]  # "pso, c1 = c2 = 2.0": the first key's value, then the others named
-        named = [frame[k].astype(str).map(lambda v, k=k: label(spec, k, v)) for k in rest]
-        frame = frame.assign(_hue=pd.concat([frame[first].astype(str), *named], axis=1).agg(", ".join, axis=1))
-        hue_key = "_hue"
+    x_key, panel_key = spec.plot.x, spec.plot.get("panels")
+    frame, hue_key = _with_hue(frame, spec, spec.plot.get("hue", "estimator"))
     metrics = metric_list(spec) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
     columns = group_values(frame, panel_key)
-    ylabels = dict(spec.plot.get("ylabels", {}) or {})
     colours = _colours(frame, hue_key)
-    default_ylabel = spec.plot.get("ylabel", "final total-field RMS (nT)")
     fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1,
                        width=3.8 if len(metrics) > 1 else 3.4, axes=axes)
     for i, metric in enumerate(metrics):
@@ -187,21 +180,45 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             placed = _lines(ax, sub, spec, x_key, hue_key, colours)
             _paper(ax, spec, placed, metric, colours)
             _references(ax, sub, spec, x_key, metric)
-            if sub["median"].isna().any():  # room above the values for the crosses of the missing ones
-                ax.set_yscale("log" if spec.plot.get("ylog", True) else "linear")
-                lo, hi = ax.get_ylim()
-                ax.set_ylim(lo, hi * (hi / lo) ** 0.25 if ax.get_yscale() == "log" else hi + 0.25 * (hi - lo))
-            scale = spec.plot.get("xscale", "linear")
-            ax.set_xscale(scale, **({"linthresh": float(spec.plot.get("linthresh", 1.0))} if scale == "symlog" else {}))
-            if scale == "symlog" and (frame[x_key].astype(float) >= 0).all():
-                ax.set_xlim(left=0)
-            if spec.plot.get("ylog", True):
-                ax.set_yscale("log")
-            ax.set_xlabel(label(spec, x_key))
-            ax.set_ylabel(ylabels.get(metric, default_ylabel if len(metrics) == 1 else metric.replace("_", " ")))
-            if pv is not None:
-                ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))
+            _scale_axes(ax, spec, sub, frame[x_key])
+            _label_panel(ax, spec, metric, len(metrics), panel_key, pv)
     entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
     shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)
     fig.suptitle(spec.title, fontsize=10)
     return tidy_log_axes(fig)
+
+
+def _with_hue(frame: pd.DataFrame, spec, hue_key) -> tuple[pd.DataFrame, str]:
+    """The frame and the column naming its lines: ``hue_key`` itself, or for several keys a column
+    ``_hue`` of one label per combination (``pso, c1 = c2 = 2.0``: the first key's value, then the
+    others named)."""
+    if isinstance(hue_key, str):
+        return frame, hue_key
+    first, *rest = list(hue_key)
+    named = [frame[k].astype(str).map(lambda v, k=k: label(spec, k, v)) for k in rest]
+    return frame.assign(_hue=pd.concat([frame[first].astype(str), *named], axis=1).agg(", ".join, axis=1)), "_hue"
+
+
+def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series) -> None:
+    """The panel's scales: room above the values for the crosses of missing ones, ``xscale`` (a
+    ``symlog`` axis of non-negative ``xs`` starts at 0) and a log y axis unless ``ylog: false``."""
+    if sub["median"].isna().any():  # room above the values for the crosses of the missing ones
+        ax.set_yscale("log" if spec.plot.get("ylog", True) else "linear")
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi * (hi / lo) ** 0.25 if ax.get_yscale() == "log" else hi + 0.25 * (hi - lo))
+    scale = spec.plot.get("xscale", "linear")
+    ax.set_xscale(scale, **({"linthresh": float(spec.plot.get("linthresh", 1.0))} if scale == "symlog" else {}))
+    if scale == "symlog" and (xs.astype(float) >= 0).all():
+        ax.set_xlim(left=0)
+    if spec.plot.get("ylog", True):
+        ax.set_yscale("log")
+
+
+def _label_panel(ax, spec, metric: str, n_metrics: int, panel_key, pv) -> None:
+    """Axis labels (``ylabels`` per metric, else ``ylabel`` for a single metric) and the panel's title."""
+    default_ylabel = spec.plot.get("ylabel", "final total-field RMS (nT)")
+    ylabels = dict(spec.plot.get("ylabels", {}) or {})
+    ax.set_xlabel(label(spec, spec.plot.x))
+    ax.set_ylabel(ylabels.get(metric, default_ylabel if n_metrics == 1 else metric.replace("_", " ")))
+    if pv is not None:
+        ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))

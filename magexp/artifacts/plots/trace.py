@@ -73,15 +73,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, group in zip(axes, groups):
         for k, (name, est) in enumerate((p, e) for e in dict.fromkeys(traces.estimator) for p in group):
-            colour = colours[k % len(colours)]
-            line = traces[(traces.parameter == name) & (traces.estimator == est)]
-            ax.plot(line.step, line["median"], lw=1.1, color=colour, label=f"{name} ({est})" if several else name)
-            ax.fill_between(line.step, line.q25, line.q75, color=colour, alpha=0.2, lw=0)
-            for _, row in frame[(frame.kind == "truth") & (frame.parameter == name)].iterrows():
-                ax.axhline(row["median"], color="k" if several else colour, ls="--", lw=0.9)
-            for ref, style in zip(refs, REFERENCE_STYLES):
-                for _, row in frame[(frame.kind == "reference") & (frame.parameter == name) & (frame.estimator == ref)].iterrows():
-                    ax.axhline(row["median"], color=colour, ls=style, lw=0.9)
+            _draw_parameter(ax, frame, traces, name, est, colours[k % len(colours)], several=several, refs=refs)
         ax.set_xlabel("filter step")
         ax.set_ylabel(spec.plot.get("ylabel", "estimate"))
         ax.legend(loc="best", ncol=len(group) if not several else 1)
@@ -90,3 +82,18 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     note = "; ".join(lines)
     fig.suptitle(f"{spec.title}\n{note}".strip(), fontsize=9)
     return fig
+
+
+def _draw_parameter(ax, frame: pd.DataFrame, traces: pd.DataFrame, name: str, est: str, colour, *,
+                    several: bool, refs: list) -> None:
+    """The trace of parameter ``name`` by estimator ``est`` (median over seeds, interquartile band),
+    its true value (dashed; black when several estimators share the panel) and the final values of
+    the reference estimators ``refs`` (one line style each, :data:`REFERENCE_STYLES`)."""
+    line = traces[(traces.parameter == name) & (traces.estimator == est)]
+    ax.plot(line.step, line["median"], lw=1.1, color=colour, label=f"{name} ({est})" if several else name)
+    ax.fill_between(line.step, line.q25, line.q75, color=colour, alpha=0.2, lw=0)
+    for _, row in frame[(frame.kind == "truth") & (frame.parameter == name)].iterrows():
+        ax.axhline(row["median"], color="k" if several else colour, ls="--", lw=0.9)
+    for ref, style in zip(refs, REFERENCE_STYLES):
+        for _, row in frame[(frame.kind == "reference") & (frame.parameter == name) & (frame.estimator == ref)].iterrows():
+            ax.axhline(row["median"], color=colour, ls=style, lw=0.9)

@@ -43,29 +43,8 @@ def _rate(values) -> float:
 
 def tabulate(runs) -> pd.DataFrame:
     spec = runs.spec
-    metric = spec.plot.get("metric", "fun")
-    keys = list(spec.plot.get("label", []))
-    short = dict(spec.plot.get("labels", {}) or {})
     defaults = {k: {kk: str(vv) for kk, vv in v.items()} for k, v in (spec.plot.get("default", {}) or {}).items()}
-    rows = []
-    for ci, cell in enumerate(runs.cells):
-        sub = runs.table[runs.table.cell == ci]
-        family = str(sub.estimator.iloc[0])
-        settings = dict(o.split("=", 1) for o in runs.overrides[ci])
-        label = ", ".join(f"{short.get(k, k.split('.')[-1])} = {settings[k]}" for k in keys if k in settings) or family
-        med, q25, q75 = quantiles(sub[metric])
-        default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
-        rows.append({"family": family, "label": label, "scenario": str(sub.scenario.iloc[0]), "metric": metric,
-                     "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub),
-                     "success_rate": _rate(sub["succeeded"]) if "succeeded" in sub and sub.succeeded.notna().any()
-                     else _rate(sub["converged"]) if "converged" in sub else np.nan,
-                     "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub
-                     else np.nan,
-                     "on_boundary_rate": _rate(sub["on_boundary"] > 0) if "on_boundary" in sub else np.nan,
-                     "offset_error_ratio": _median(sub, "offset_error_ratio"),
-                     "wall_time": _median(sub, "wall_time"), "nfev_to_1.1": _median(sub, "nfev_to_1.1"),
-                     "default": default, "setting": sub.setting.iloc[0]})
-    frame = pd.DataFrame(rows)
+    frame = pd.DataFrame([_setting_row(runs, ci, defaults) for ci in range(len(runs.cells))])
     frame["role"] = ""
     for _, idx in frame.groupby(["family", "scenario"], sort=False).groups.items():
         group = frame.loc[idx].sort_values("median", kind="stable")
@@ -74,6 +53,34 @@ def tabulate(runs) -> pd.DataFrame:
             frame.loc[group.index[len(group) // 2], "role"] = "median"
             frame.loc[group.index[-1], "role"] = "worst"
     return frame
+
+
+def _setting_row(runs, ci: int, defaults: dict) -> dict:
+    """The row of cell ``ci`` (module docstring); ``defaults``: ``plot.default`` with text values."""
+    spec = runs.spec
+    metric = spec.plot.get("metric", "fun")
+    short = dict(spec.plot.get("labels", {}) or {})
+    sub = runs.table[runs.table.cell == ci]
+    family = str(sub.estimator.iloc[0])
+    settings = dict(o.split("=", 1) for o in runs.overrides[ci])
+    label = ", ".join(f"{short.get(k, k.split('.')[-1])} = {settings[k]}"
+                      for k in list(spec.plot.get("label", [])) if k in settings) or family
+    med, q25, q75 = quantiles(sub[metric])
+    default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
+    return {"family": family, "label": label, "scenario": str(sub.scenario.iloc[0]), "metric": metric,
+            "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub), "success_rate": _success_rate(sub),
+            "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub else np.nan,
+            "on_boundary_rate": _rate(sub["on_boundary"] > 0) if "on_boundary" in sub else np.nan,
+            "offset_error_ratio": _median(sub, "offset_error_ratio"),
+            "wall_time": _median(sub, "wall_time"), "nfev_to_1.1": _median(sub, "nfev_to_1.1"),
+            "default": default, "setting": sub.setting.iloc[0]}
+
+
+def _success_rate(sub: pd.DataFrame) -> float:
+    """The fraction of a cell's seeds that succeeded (``succeeded``), else converged (``converged``)."""
+    if "succeeded" in sub and sub.succeeded.notna().any():
+        return _rate(sub["succeeded"])
+    return _rate(sub["converged"]) if "converged" in sub else np.nan
 
 
 def _named(top, bottom, sub, families, colours):

@@ -206,17 +206,25 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
     times = t_mag - t0
     meta = {"format": "rosbag", "source": mags[0].topic, "corrected": "as published (MagneticField records no "
             "calibration)", "clock_origin_s": repr(t0)}
-    angles, gyro = None, None
-    if imu is not None and len(imu[0]):
-        has_orientation = imu[1]["orientation_covariance"][:, 0] != -1
-        if np.any(has_orientation):
-            xyzw = imu[1]["orientation"][has_orientation]
-            angles = navigation_angles(imu[0][has_orientation] - t0, xyzw[:, [3, 0, 1, 2]], times, enu=True)
-            meta["attitude"] = f"{imus[0].topic} orientation (body -> ENU, converted to NED)"
-        gyro = (imu[0] - t0, imu[1]["angular_velocity"])
+    angles, gyro = _imu_streams(imu, imus, t0, times, meta)
     if fix is not None and len(fix[0]):
         ok = fix[1]["status"][:, 0] >= 0
         when = _dt.datetime.fromtimestamp(float(np.median(fix[0][ok])), _dt.timezone.utc) if np.any(ok) else None
         meta.update(place(*fix[1]["position"][ok].T, when))
     return log_recording(path, readings=mag["field"] * TESLA_TO_UT, unit="uT", times=times, angles=angles, gyro=gyro,
                          meta=meta, mag_axes=mag_axes, gyro_axes=gyro_axes)
+
+
+def _imu_streams(imu, imus, t0: float, times: np.ndarray, meta: dict):
+    """``(angles, gyro)`` of the bag's ``Imu`` messages: the orientation where it is given (body to ENU,
+    converted to NED, at the magnetometer's ``times``; noted in ``meta``) and the angular rate on the
+    common clock (origin ``t0``); ``(None, None)`` without ``Imu`` messages."""
+    if imu is None or not len(imu[0]):
+        return None, None
+    angles = None
+    has_orientation = imu[1]["orientation_covariance"][:, 0] != -1
+    if np.any(has_orientation):
+        xyzw = imu[1]["orientation"][has_orientation]
+        angles = navigation_angles(imu[0][has_orientation] - t0, xyzw[:, [3, 0, 1, 2]], times, enu=True)
+        meta["attitude"] = f"{imus[0].topic} orientation (body -> ENU, converted to NED)"
+    return angles, (imu[0] - t0, imu[1]["angular_velocity"])

@@ -1,0 +1,135 @@
+"""The shape of the code: rules of the house that a reviewer would otherwise check by eye."""
+
+import ast
+import functools
+from pathlib import Path
+
+from radon.complexity import cc_visit
+
+import magexp
+
+ROOT = Path(magexp.__file__).resolve().parent.parent
+PACKAGES = (ROOT / "magexp", ROOT / "hydra_plugins")
+#: the most branches a function may have (radon's cyclomatic complexity)
+MAX_COMPLEXITY = 15
+
+
+def _functions(blocks):
+    """Every function and method among radon's ``blocks``, nested ones included."""
+    for block in blocks:
+        inner = getattr(block, "methods", None)  # a class: its methods and the classes inside it
+        if inner is None:
+            yield block
+            yield from _functions(block.closures)
+        else:
+            yield from _functions(inner + block.inner_classes)
+
+
+def _complexities() -> dict[str, int]:
+    """``{"<file>:<function>": cyclomatic complexity}`` of every function of the packages."""
+    out = {}
+    for package in PACKAGES:
+        for path in sorted(package.rglob("*.py")):
+            for fn in _functions(cc_visit(path.read_text())):
+                key = f"{path.relative_to(ROOT).as_posix()}:{fn.fullname}"
+                out[key] = max(fn.complexity, out.get(key, 0))  # a name defined twice: the worse
+    return out
+
+
+def test_no_function_is_too_complex():
+    found = _complexities()
+    assert len(found) > 500  # the walk saw the package
+    over = {name: c for name, c in found.items() if c > MAX_COMPLEXITY}
+    assert not over, "cyclomatic complexity above %d (radon): %s" % (
+        MAX_COMPLEXITY, ", ".join(f"{name} ({c})" for name, c in sorted(over.items())))
+
+
+# ---------------------------------------------------------------------------------------------
+# the import graph: every import of one magexp module by another, at module top or inside a
+# function (a lazy import is still a dependency)
+
+#: the modules allowed directly in magexp/ beside the packages
+TOP_MODULES = {"__init__", "__main__", "errors", "paths"}
+#: the longest chain of imports from the entry point down to a leaf, in modules (issue 20)
+MAX_DEPTH = 10
+#: what each package may import (besides magexp.errors, magexp.paths and itself): data flows one way
+MAY_IMPORT = {
+    "core": set(),
+    "problems": {"core"},
+    "scenarios": {"core"},
+    "estimators": {"core", "problems"},
+    "run": {"core", "problems", "scenarios", "estimators"},
+    "artifacts": {"core", "problems", "scenarios", "estimators", "run"},
+    "calibration": {"core", "problems", "scenarios", "estimators", "run", "artifacts"},
+    "perf": {"core", "problems", "scenarios", "estimators", "run", "artifacts", "calibration"},
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _resolve(node, here: str, is_package: bool, modules: set) -> list[str]:
+    """The magexp modules an ``import`` / ``from ... import`` node names (its deepest known module)."""
+    if isinstance(node, ast.Import):
+        names = [a.name for a in node.names]
+    else:
+        base = node.module or ""
+        if node.level:
+            parts = here.split(".")[: len(here.split(".")) - (0 if is_package else 1) - (node.level - 1)]
+            base = ".".join([*parts, base] if base else parts)
+        names = [f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names]
+    out = []
+    for name in names:
+        while name not in modules and "." in name:
+            name = name.rsplit(".", 1)[0]
+        if name in modules and name.startswith("magexp"):
+            out.append(name)
+    return out
+
+
+@functools.cache
+def import_graph() -> dict[str, set[str]]:
+    """``{module: {magexp modules it imports}}`` over the whole package. An import of the root package
+    ``magexp`` itself (``from magexp import __version__``) is not an edge: Python imports a module's
+    parent package before the module, whatever the module says."""
+    paths = {_module_name(p): p for p in (ROOT / "magexp").rglob("*.py")}
+    graph = {}
+    for name, path in paths.items():
+        tree = ast.parse(path.read_text())
+        graph[name] = {target for node in ast.walk(tree) if isinstance(node, (ast.Import, ast.ImportFrom))
+                       for target in _resolve(node, name, path.name == "__init__.py", set(paths))
+                       if target not in (name, "magexp")}
+    return graph
+
+
+def _depth(graph, module, seen=()) -> int:
+    assert module not in seen, "import cycle: " + " -> ".join([*seen, module])
+    return 1 + max((_depth(graph, m, (*seen, module)) for m in graph[module]), default=0)
+
+
+def test_at_most_four_modules_sit_beside_the_packages():
+    top = {p.stem for p in (ROOT / "magexp").glob("*.py")}
+    assert top <= TOP_MODULES, f"modules directly in magexp/: {sorted(top - TOP_MODULES)}"
+
+
+def test_the_import_graph_has_no_cycle_and_is_shallow():
+    graph = import_graph()
+    depth = _depth(graph, "magexp.__main__")  # fails on the first cycle it meets, naming it
+    for module in graph:
+        _depth(graph, module)
+    assert depth <= MAX_DEPTH, f"{depth} modules deep from magexp.__main__ (at most {MAX_DEPTH})"
+
+
+def test_packages_import_only_the_layers_below_them():
+    wrong = []
+    for module, targets in import_graph().items():
+        parts = module.split(".")
+        if len(parts) < 2 or parts[1] not in MAY_IMPORT:
+            continue
+        for target in targets:
+            package = target.split(".")[1] if target.count(".") else None
+            if package and package not in (parts[1], "errors", "paths") and package not in MAY_IMPORT[parts[1]]:
+                wrong.append(f"{module} -> {target}")
+    assert not wrong, "imports against the layers: " + ", ".join(sorted(wrong))
