@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.errors import MagexpError
-from magexp.perf.peers import data, exchange, magexp_side, measures
+from magexp.perf.peers import bound, data, exchange, magexp_side, measures
 from magexp.perf.peers.magyc_side import METHODS as PEER_METHODS
 
 #: the peer's methods run by default: all but SAR-KF (30 s per 10,000 readings, a per-reading Python loop) and
@@ -39,6 +39,8 @@ from magexp.perf.peers.magyc_side import METHODS as PEER_METHODS
 PEER_DEFAULT = tuple(m for m in PEER_METHODS if m != "sar_kf")
 #: the readings of all datasets together, at most (each is fitted by about ten methods, three times on a recording)
 MAX_READINGS = 2_000_000
+#: datasets per peer process (each process compiles MAGYC's jax functions once)
+CHUNK = 10
 COLUMNS = ("kind", "dataset", "seed", "fit_on", "axis_map", "side", "method", "metric", "value")
 FULL_SPHERE_MAPS = ("aligned", "recorded", "authors")
 
@@ -107,13 +109,24 @@ def run(args, work: Path) -> list[dict]:
         raise MagexpError(f"{total} readings in all is not allowed: at most {MAX_READINGS} (fewer seeds or samples)")
     peer_methods = args.peer.split(",")
     jobs = [(ds, None, "all", None) for ds in sims] + [(f, h, label, f.side.get("axis_map")) for f, h, label in fits]
-    pairs = []
+    pairs, digests = [], []
     for k, (ds, _, label, _) in enumerate(jobs):
         ds.side["methods"] = peer_methods
         pairs.append((exchange.write(ds, work / "in" / f"{k:03d}_{ds.name}"), work / "out" / f"{k:03d}.json"))
+        digests.append(exchange.digest(ds))
     (work / "out").mkdir(parents=True, exist_ok=True)
-    print(f"peers: MAGYC on {len(pairs)} datasets ({total} readings) in one process", file=sys.stderr)
-    answers = exchange.run_peer(pairs)
+    # a kept work folder (--work) keeps the peer's answers: one whose input is unchanged is not recomputed
+    todo = [k for k, (_, out) in enumerate(pairs)
+            if not (out.exists() and out.with_suffix(".input").exists()
+                    and out.with_suffix(".input").read_text() == digests[k])]
+    print(f"peers: MAGYC on {len(todo)} of {len(pairs)} datasets ({total} readings in all) in processes of {CHUNK}",
+          file=sys.stderr)
+    for start in range(0, len(todo), CHUNK):  # chunks: a stopped bench keeps what is done
+        chunk = todo[start:start + CHUNK]
+        exchange.run_peer([pairs[k] for k in chunk])
+        for k in chunk:
+            pairs[k][1].with_suffix(".input").write_text(digests[k])
+    answers = [exchange.read_answer(out) for _, out in pairs]
     rests = {m: data.rest_bias(m) for m in {j[3] for j in jobs if j[3]}}
     rows = []
     for (ds, held, label, axis_map), answer in zip(jobs, answers):
@@ -125,6 +138,10 @@ def run(args, work: Path) -> list[dict]:
         if axis_map and label == "all":
             rows.append({**base, "side": "none", "method": "raw", "metric": "spread_in_sample",
                          "value": measures.spread(np.linalg.norm(ds.mag, axis=1))})
+        if not axis_map:  # the Cramér-Rao floor of the gyro-aided problem on magexp's readings and on all
+            for name, n in (("crb_fit", args.n_fit), ("crb_all", len(ds.t))):
+                rows += [{**base, "side": "bound", "method": name, "metric": k, "value": v}
+                         for k, v in bound.gyro_floor(ds, n).items()]
         for side_name, est in estimates:
             values = (measures.recorded(est, ds, held, rests[axis_map]) if axis_map
                       else measures.simulated(est, ds))

@@ -101,7 +101,7 @@ def yuan_stream(scenario: str, seed: int) -> NeutralDataset:
                 alignment="gyro[k]: the simulated gyro sample held over [t[k-1], t[k]]",
                 source=f"conf/scenario/{scenario}.yaml at {1 / dt:g} Hz, {n} readings")
     truth = {"truth_soft_iron": scen.s, "truth_hard_iron": scen.b, "truth_gyro_bias": scen.gyro.drift,
-             "truth_field": scen.field * scen.field_scale[0]}
+             "truth_field": scen.field * scen.field_scale[0], "truth_field_start": body[0]}
     return NeutralDataset(np.arange(n) * dt, readings, gyro, meta, truth)
 
 

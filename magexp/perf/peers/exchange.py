@@ -7,7 +7,8 @@ A dataset is two files with one stem:
     rad/s *at the magnetometer's times*: ``gyro[k]`` is the rate over ``[t[k-1], t[k]]`` (the interval that the
     backward difference ``(m[k] - m[k-1]) / (t[k] - t[k-1])`` spans; ``gyro[0]`` repeats ``gyro[1]``); both in the
     one body frame of :data:`AXES_NOTE`. Simulations add the truth: ``truth_soft_iron`` (3, 3) and
-    ``truth_hard_iron`` (3,) of ``m = D m_true + h``, ``truth_gyro_bias`` (3,) rad/s, ``truth_field`` (3,).
+    ``truth_hard_iron`` (3,) of ``m = D m_true + h``, ``truth_gyro_bias`` (3,) rad/s, ``truth_field`` (3,) and
+    ``truth_field_start`` (3,), the noise-free field in the body frame at ``t[0]``.
 ``<stem>.json``
     ``format`` (:data:`FORMAT`), ``name``, ``kind``, ``seed``, ``mag_unit``, ``gyro_unit`` (``rad/s``),
     ``time_unit`` (``s``), ``mag_noise_std``, ``reference_total`` (the field magnitude every method that needs
@@ -19,6 +20,7 @@ The peer's answer (``<out>.json``): ``{"format", "peer", "version", "results": [
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import subprocess
@@ -35,7 +37,7 @@ FORMAT = "magexp-peer-exchange v1"
 PEER_VENV = Path(os.environ.get("MAGEXP_PEERS", ROOT / ".peers" / "venv"))
 PEER_SCRIPT = Path(__file__).with_name("magyc_side.py")
 ARRAYS = ("t", "mag", "gyro")
-TRUTH = ("truth_soft_iron", "truth_hard_iron", "truth_gyro_bias", "truth_field")
+TRUTH = ("truth_soft_iron", "truth_hard_iron", "truth_gyro_bias", "truth_field", "truth_field_start")
 
 
 @dataclass
@@ -97,6 +99,15 @@ def read(path: Path) -> NeutralDataset:
                                 {k: arrays[k] for k in TRUTH if k in arrays}))
 
 
+def digest(ds: NeutralDataset) -> str:
+    """What the peer's answer depends on: the arrays it reads and the methods asked for (sha256)."""
+    h = hashlib.sha256()
+    for arr in (ds.t, ds.mag, ds.gyro):
+        h.update(np.ascontiguousarray(arr, float).tobytes())
+    h.update(json.dumps([ds.side.get("methods"), ds.side.get("reference_total"), ds.side.get("mag_noise_std")]).encode())
+    return h.hexdigest()
+
+
 def available() -> str | None:
     """None when the peer's environment is there, else the one line saying why not."""
     python = PEER_VENV / "bin" / "python"
@@ -117,17 +128,19 @@ def _peer(args: list[str], what: str, timeout: float) -> None:
         raise MagexpError(f"the peer failed on {what} (exit {proc.returncode}): {tail}")
 
 
-def run_peer(pairs: list[tuple[Path, Path]], *, timeout: float = 1800.0) -> list[dict]:
+def read_answer(out: Path) -> dict:
+    """The peer's answer in ``out`` (module docstring)."""
+    answer = json.loads(Path(out).read_text())
+    if answer.get("format") != FORMAT:
+        raise MagexpError(f"{out}: format={answer.get('format')!r} is not allowed: expected {FORMAT!r}")
+    return answer
+
+
+def run_peer(pairs: list[tuple[Path, Path]], *, timeout: float = 3600.0) -> list[dict]:
     """Run :mod:`.magyc_side` on every ``(npz, out)`` of ``pairs`` in one process of the peer's interpreter;
     its answers (module docstring), in order."""
     _peer([str(p) for pair in pairs for p in pair], f"{len(pairs)} datasets", timeout)
-    answers = []
-    for _, out in pairs:
-        answer = json.loads(Path(out).read_text())
-        if answer.get("format") != FORMAT:
-            raise MagexpError(f"{out}: format={answer.get('format')!r} is not allowed: expected {FORMAT!r}")
-        answers.append(answer)
-    return answers
+    return [read_answer(out) for _, out in pairs]
 
 
 def synthesise(out_dir: Path, seed: int, nsamples: int, *, timeout: float = 600.0) -> list[Path]:

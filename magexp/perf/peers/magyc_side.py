@@ -135,7 +135,7 @@ def synth(out_dir: str, seed: str, nsamples: str) -> None:
         stem = out / f"magyc_{level}_s{seed}"
         np.savez(stem.with_suffix(".npz"), t=d["t"][0].ravel(), mag=d["mmt"][0], gyro=d["wmt"][0],
                  truth_soft_iron=d["si"][0], truth_hard_iron=d["hi"][0].ravel(), truth_gyro_bias=d["wb"][0].ravel(),
-                 truth_field=d["m0"][0].ravel())
+                 truth_field=d["m0"][0].ravel(), truth_field_start=d["m"][0][0])
         side = {"format": FORMAT, "name": f"magyc_{level}", "kind": "magyc_synthetic", "seed": int(seed),
                 "source": "magyc.create_synthetic_dataset (magyc 1.0.0), motion level " + level,
                 "mag_unit": "G", "gyro_unit": "rad/s", "time_unit": "s", "mag_noise_std": mag_noise,
