@@ -14,6 +14,11 @@ the rotation of ``D`` (``D Q`` for any orthogonal ``Q`` fits as well); what ever
 ``|b̂ - b|`` in deg/s. Spread of the calibrated total field ``|D^{-1}(r - h)|``: std / mean
 (:func:`magexp.quality.spread`), scale-free.
 
+Consistency with the gyroscope (recordings, no truth): each calibrated direction ``u_k`` is carried ``HORIZON_S``
+forward by the gyroscope (less the method's bias, or the rest recording's mean rate for a method that estimates
+none), ``û_{k+n} = R_{k+n}ᵀ R_k u_k``, and compared with the calibrated ``u_{k+n}``: the median angle (°). A
+calibration whose directions turn as the gyroscope says scores near the noise; a wrong soft iron or axis map does not.
+
 A run *succeeds* on simulated data when its soft-iron error is at most :data:`SOFT_TOL`, its hard-iron error at
 most :data:`HARD_TOL` of the field and, where it estimates one, its gyro-bias error at most :data:`BIAS_TOL`
 (documented defaults: a calibration off by more leaves heading errors of degrees).
@@ -23,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.geometry import attitude_at
 from magexp.perf.peers.exchange import NeutralDataset
 from magexp.perf.peers.magexp_side import Estimate
 from magexp.quality import spread
@@ -30,6 +36,7 @@ from magexp.quality import spread
 SOFT_TOL = 0.05  # log-Euclidean distance of the unit-determinant shapes (about 5 %)
 HARD_TOL = 0.05  # fraction of the field
 BIAS_TOL = 0.1  # deg/s
+HORIZON_S = 1.0  # s, the gyro-consistency horizon
 
 
 def log_shape(d: np.ndarray) -> np.ndarray:
@@ -57,6 +64,21 @@ def field_spread(est: Estimate, mag: np.ndarray) -> float:
     return spread(np.linalg.norm(calibrated(est, mag), axis=1))
 
 
+def gyro_consistency(est: Estimate, ds: NeutralDataset, bias: np.ndarray) -> float:
+    """Median angle (°) between the calibrated directions and the gyroscope's prediction ``HORIZON_S`` ahead
+    (module docstring); ``bias`` (rad/s) is subtracted from the rates."""
+    rot = attitude_at(ds.t[:-1], ds.gyro[1:] - bias, ds.t)  # body -> start frame at every reading
+    n = int(np.searchsorted(ds.t, ds.t[0] + HORIZON_S))
+    if n < 1 or n >= len(ds.t):
+        return float("nan")
+    u = calibrated(est, ds.mag)
+    u = u / np.linalg.norm(u, axis=1, keepdims=True)
+    start = np.einsum("kij,kj->ki", rot[:-n], u[:-n])  # in the start frame
+    predicted = np.einsum("kji,kj->ki", rot[n:], start)
+    cos = np.clip(np.einsum("ki,ki->k", predicted, u[n:]), -1.0, 1.0)
+    return float(np.rad2deg(np.median(np.arccos(cos))))
+
+
 def simulated(est: Estimate, ds: NeutralDataset) -> dict:
     """Errors against the truth, the success flag, the in-sample spread and the time."""
     if est.error:
@@ -79,7 +101,8 @@ def recorded(est: Estimate, fit_on: NeutralDataset, held_out: NeutralDataset | N
     """Spread in sample and on ``held_out``, the gyro bias (deg/s) and its distance from the rest recording's."""
     if est.error:
         return {"failed": 1.0}
-    out = {"spread_in_sample": field_spread(est, fit_on.mag), "seconds": est.seconds, "failed": 0.0}
+    out = {"spread_in_sample": field_spread(est, fit_on.mag), "seconds": est.seconds, "failed": 0.0,
+           "gyro_consistency": gyro_consistency(est, fit_on, rest if est.gyro_bias is None else est.gyro_bias)}
     if held_out is not None:
         out["spread_held_out"] = field_spread(est, held_out.mag)
     if est.gyro_bias is not None:

@@ -14,6 +14,7 @@ LABELS = {
     "magyc_ls": "MAGYC-LS", "magyc_nls": "MAGYC-NLS", "magyc_bfg": "MAGYC-BFG", "magyc_ifg": "MAGYC-IFG",
     "ellipsoid_fit": "MAGYC's ellipsoid fit", "sphere_fit": "MAGYC's sphere fit", "twostep_hsi": "MAGYC's TWOSTEP",
     "sar_ls": "SAR-LS", "sar_kf": "SAR-KF", "sar_aid": "SAR-AID",
+    "crb_fit": "Cramér-Rao floor (magexp's readings)", "crb_all": "Cramér-Rao floor (every reading)",
 }
 LEVELS = {"magyc_high": "WAM (high)", "magyc_mid": "MAM (mid)", "magyc_low": "LAM (low)",
           "magyc_tiny": "tiny", "magyc_cross": "cross"}
@@ -29,7 +30,7 @@ def one(summary, **match) -> dict | None:
 
 
 def methods_of(summary) -> list[str]:
-    present = {r["method"] for r in summary if r["side"] != "none"}
+    present = {r["method"] for r in summary if r["side"] not in ("none", "bound")}
     return [m for m in LABELS if m in present]
 
 
@@ -64,8 +65,12 @@ def figure(summary, path) -> None:
             lo = np.array([r["lo"] if r else np.nan for r in rows])
             hi = np.array([r["hi"] if r else np.nan for r in rows])
             shift = (k - (len(levels) - 1) / 2) * 0.22
-            ax.errorbar(x + shift, med, yerr=[np.maximum(med - lo, 0), np.maximum(hi - med, 0)], fmt="o", ms=4,
-                        capsize=2, label=LEVELS[level])
+            bar = ax.errorbar(x + shift, med, yerr=[np.maximum(med - lo, 0), np.maximum(hi - med, 0)], fmt="o",
+                              ms=4, capsize=2, label=LEVELS[level])
+            floor = one(summary, dataset=level, method="crb_all", metric=metric)
+            if floor is not None and np.isfinite(floor["median"]):
+                ax.axhline(floor["median"], color=bar[0].get_color(), ls="--", lw=0.8,
+                           label=f"{LEVELS[level]}: Cramér-Rao floor")
         tol = 0.05
         ax.axhline(tol, color="0.4", ls=":", lw=1, label="success threshold")
         ax.set_yscale("log")
@@ -124,6 +129,7 @@ def section(summary, args) -> str:
                    ("seconds", "time (s)", ({}, {"digits": 2, "interval": False}))]
     real_metrics = [("spread_in_sample", "spread, in sample", ({"fit_on": "all"}, {"percent": True, "interval": False})),
                     ("spread_held_out", "spread, held out [two halves]", ({"fit_on": "halves"}, {"percent": True})),
+                    ("gyro_consistency", "gyro consistency (°, 1 s)", ({"fit_on": "all"}, {"interval": False})),
                     ("gyro_bias_x", "bias x (°/s)", ({"fit_on": "all"}, {"interval": False})),
                     ("gyro_bias_y", "bias y", ({"fit_on": "all"}, {"interval": False})),
                     ("gyro_bias_z", "bias z", ({"fit_on": "all"}, {"interval": False})),
@@ -142,8 +148,14 @@ def section(summary, args) -> str:
            "where it estimates one, within 0.1 °/s.", "",
            "### MAGYC's synthetic data (its generator, its paper's settings)", ""]
     out += _table(summary, levels, sim_metrics, methods, kind="magyc_synthetic")
-    out += ["", "### Yuan 2018's scenarios as 100 Hz streams", ""]
-    out += _table(summary, yuan, sim_metrics, methods, kind="yuan_stream")
+    out += ["", "The Cramér-Rao floor of the gyro-aided problem (magexp.bounds at the truth, Gaussian magnetometer noise, "
+            "a noise-free gyroscope: a floor below the real one), median over seeds:", ""]
+    out += _table(summary, levels, sim_metrics[:3], ["crb_fit", "crb_all"], kind="magyc_synthetic")
+    if yuan:
+        out += ["", "### Yuan 2018's scenarios as 100 Hz streams", ""]
+        out += _table(summary, yuan, sim_metrics, methods, kind="yuan_stream")
+        out += ["", "Cramér-Rao floor (every reading):", ""]
+        out += _table(summary, yuan, sim_metrics[:3], ["crb_all"], kind="yuan_stream")
     out += ["", "### The HMC5883L + MPU6050 recordings", "",
             "Axis maps (magnetometer; gyroscope): " + "; ".join(
                 f"`{k}` = {v[0]}; {v[1]}" for k, v in AXIS_MAPS.items())
