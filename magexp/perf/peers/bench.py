@@ -57,6 +57,8 @@ def parse(argv) -> argparse.Namespace:
                    help=f"magexp's methods (of {', '.join(magexp_side.METHODS)})")
     p.add_argument("--peer", default=",".join(PEER_DEFAULT), help=f"MAGYC's methods (of {', '.join(PEER_METHODS)})")
     p.add_argument("--no-real", action="store_true", help="skip the recordings")
+    p.add_argument("--no-notebook", action="store_true",
+                   help="skip the second run of the peer on MAGYC's data with its example notebook's preprocessing")
     p.add_argument("--work", type=Path, default=None,
                    help="keep the neutral files and the peer's answers here (default: a temporary folder)")
     args = p.parse_args(argv)
@@ -69,6 +71,20 @@ def parse(argv) -> argparse.Namespace:
         if getattr(args, name) < (0 if "seeds" in name else 100):
             raise MagexpError(f"--{name.replace('_', '-')}={getattr(args, name)} is not allowed: too small")
     return args
+
+
+#: the peer's example notebook (``example/20241107_sim_calibration.ipynb`` of its repository): a Savitzky-Golay filter
+#: (50 samples, order 2) on the magnetometer and the gyroscope before every method. Run for MAGYC-LS and -NLS only:
+#: the notebook also gives MAGYC-BFG and -IFG a measurements window of the sample rate (10 instead of 25), with which
+#: one BFG fit of 6,000 readings took 768 s (wall, shared machine): beyond the bench's budget
+NOTEBOOK = {"savgol_window": 50, "savgol_order": 2}
+NOTEBOOK_METHODS = ("magyc_ls", "magyc_nls")
+
+
+def notebook_side(ds: exchange.NeutralDataset) -> exchange.NeutralDataset:
+    """``ds`` with the sidecar of the peer's example-notebook recipe (:data:`NOTEBOOK`)."""
+    side = dict(ds.side, **NOTEBOOK, methods=[m for m in NOTEBOOK_METHODS if m in ds.side["methods"]])
+    return exchange.NeutralDataset(ds.t, ds.mag, ds.gyro, side, ds.truth)
 
 
 def simulated_sets(args, work: Path) -> list[exchange.NeutralDataset]:
@@ -109,10 +125,17 @@ def run(args, work: Path) -> list[dict]:
         raise MagexpError(f"{total} readings in all is not allowed: at most {MAX_READINGS} (fewer seeds or samples)")
     peer_methods = args.peer.split(",")
     jobs = [(ds, None, "all", None) for ds in sims] + [(f, h, label, f.side.get("axis_map")) for f, h, label in fits]
+    for ds, *_ in jobs:
+        ds.side["methods"] = peer_methods
+    # the peer once more on its own data as its example notebook calls it (NOTEBOOK), its methods named *_sg
+    notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, *_) in enumerate(jobs)
+                                            if ds.side["kind"] == "magyc_synthetic"]
     pairs, digests = [], []
     for k, (ds, _, label, _) in enumerate(jobs):
-        ds.side["methods"] = peer_methods
         pairs.append((exchange.write(ds, work / "in" / f"{k:03d}_{ds.name}"), work / "out" / f"{k:03d}.json"))
+        digests.append(exchange.digest(ds))
+    for k, ds in notebook:
+        pairs.append((exchange.write(ds, work / "in" / f"{k:03d}_{ds.name}_sg"), work / "out" / f"{k:03d}_sg.json"))
         digests.append(exchange.digest(ds))
     (work / "out").mkdir(parents=True, exist_ok=True)
     # a kept work folder (--work) keeps the peer's answers: one whose input is unchanged is not recomputed
@@ -127,6 +150,8 @@ def run(args, work: Path) -> list[dict]:
         for k in chunk:
             pairs[k][1].with_suffix(".input").write_text(digests[k])
     answers = [exchange.read_answer(out) for _, out in pairs]
+    for (k, _), answer in zip(notebook, answers[len(jobs):]):
+        answers[k]["results"] += [dict(r, method=r["method"] + "_sg") for r in answer["results"]]
     rests = {m: data.rest_bias(m) for m in {j[3] for j in jobs if j[3]}}
     rows = []
     for (ds, held, label, axis_map), answer in zip(jobs, answers):

@@ -104,7 +104,9 @@ def digest(ds: NeutralDataset) -> str:
     h = hashlib.sha256()
     for arr in (ds.t, ds.mag, ds.gyro):
         h.update(np.ascontiguousarray(arr, float).tobytes())
-    h.update(json.dumps([ds.side.get("methods"), ds.side.get("reference_total"), ds.side.get("mag_noise_std")]).encode())
+    recipe = [ds.side[k] for k in ("savgol_window", "savgol_order", "measurements_window") if ds.side.get(k)]
+    h.update(json.dumps([ds.side.get("methods"), ds.side.get("reference_total"), ds.side.get("mag_noise_std"),
+                         *recipe]).encode())
     return h.hexdigest()
 
 

@@ -67,15 +67,32 @@ def _spread(vectors) -> float:
     return float(mags.std() / mags.mean()) if mags.size else float("nan")
 
 
+def prepare(data: dict, side: dict) -> dict:
+    """The peer's own preprocessing, as its example notebook (``example/20241107_sim_calibration.ipynb``) does
+    before every method: a Savitzky-Golay filter of ``savgol_window`` samples and order ``savgol_order`` on the
+    magnetometer and the gyroscope (none when the sidecar sets no window)."""
+    window = side.get("savgol_window")
+    if not window:
+        return data
+    from scipy.signal import savgol_filter
+
+    order = int(side.get("savgol_order", 2))
+    return {"t": data["t"], "mag": savgol_filter(data["mag"], int(window), order, axis=0),
+            "gyro": savgol_filter(data["gyro"], int(window), order, axis=0)}
+
+
 def call(method: str, data, side: dict) -> dict:
-    """One MAGYC method on ``data`` (``t``, ``mag``, ``gyro``) -> its estimates as plain lists."""
+    """One MAGYC method on ``data`` (``t``, ``mag``, ``gyro``) -> its estimates as plain lists. MAGYC-BFG and
+    -IFG take the sidecar's ``measurements_window`` (their example notebook: the sample rate in Hz)."""
     import magyc
 
     needs, returns = METHODS[method]
     mag, gyro, t = data["mag"], data["gyro"], data["t"]
     fun = getattr(magyc, method)
     start = time.perf_counter()
-    if needs == "gyro":
+    if method in ("magyc_bfg", "magyc_ifg") and side.get("measurements_window"):
+        out = fun(mag, gyro, t, int(side["measurements_window"]))
+    elif needs == "gyro":
         out = fun(mag, gyro, t)
     elif needs == "reference":  # TWOSTEP needs the field's magnitude (only its norm enters) and the noise
         out = fun(mag, np.array([0.0, 0.0, float(side["reference_total"])]),
@@ -102,7 +119,7 @@ def run(path_in: str, path_out: str) -> None:
     if side.get("format") != FORMAT:
         raise SystemExit(f"{path_in}: format {side.get('format')!r} is not allowed: expected {FORMAT!r}")
     with np.load(path_in, allow_pickle=False) as npz:
-        data = {k: np.asarray(npz[k], float) for k in ("t", "mag", "gyro")}
+        data = prepare({k: np.asarray(npz[k], float) for k in ("t", "mag", "gyro")}, side)
     results = []
     for method in side.get("methods") or list(METHODS):
         if method not in METHODS:
