@@ -127,9 +127,10 @@ def run(args, work: Path) -> list[dict]:
     jobs = [(ds, None, "all", None) for ds in sims] + [(f, h, label, f.side.get("axis_map")) for f, h, label in fits]
     for ds, *_ in jobs:
         ds.side["methods"] = peer_methods
-    # the peer once more on its own data as its example notebook calls it (NOTEBOOK), its methods named *_sg
+    # the peer once more on its own data and the recordings as its example notebook calls it (NOTEBOOK), its
+    # methods named *_sg
     notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, *_) in enumerate(jobs)
-                                            if ds.side["kind"] == "magyc_synthetic"]
+                                            if ds.side["kind"] in ("magyc_synthetic", "recording")]
     pairs, digests = [], []
     for k, (ds, _, label, _) in enumerate(jobs):
         pairs.append((exchange.write(ds, work / "in" / f"{k:03d}_{ds.name}"), work / "out" / f"{k:03d}.json"))

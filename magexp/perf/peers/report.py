@@ -57,7 +57,7 @@ def figure(summary, path) -> None:
 
     methods = methods_of(summary)
     levels = [d for d in LEVELS if pick(summary, dataset=d)]
-    fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.6), constrained_layout=True)
+    fig, axes = plt.subplots(1, 3, figsize=(13.5, 5.6), constrained_layout=True)
     x = np.arange(len(methods))
     for ax, metric, title in ((axes[0], "soft_iron_error", "soft-iron error (log-shape distance)"),
                               (axes[1], "hard_iron_error", "hard-iron error / field")):
@@ -78,7 +78,9 @@ def figure(summary, path) -> None:
         ax.set_yscale("log")
         ax.set_title(f"MAGYC's synthetic data: {title}", fontsize=9)
         ax.set_xticks(x, [LABELS[m] for m in methods], rotation=60, ha="right", fontsize=7)
-        ax.legend(fontsize=7, title="median over seeds, 95 % CI", title_fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower left", ncols=4, fontsize=7,
+               title="MAGYC's data: median over seeds and 95 % CI of the median", title_fontsize=7)
     ax = axes[2]
     raw = one(summary, dataset="hmc5883l_full-sphere", axis_map="aligned", method="raw", metric="spread_in_sample")
     for metric, marker, label in (("spread_in_sample", "s", "in sample (fit on all)"),
@@ -100,7 +102,7 @@ def figure(summary, path) -> None:
     ax.set_ylabel("spread of |calibrated field| (std / mean, %)")
     ax.set_title("HMC5883L full sphere (magnetometer -x,-y,z)", fontsize=9)
     ax.set_xticks(x, [LABELS[m] for m in methods], rotation=60, ha="right", fontsize=7)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left")
     fig.savefig(path, dpi=130)
     plt.close(fig)
 
@@ -145,19 +147,19 @@ def findings(summary) -> list[str]:
                    f"applied to the readings {fmt(applied, percent=True, interval=False)} (magyc 1.0.0 reshapes the "
                    "N x 3 readings to 3 x N before applying them); the bench applies every method's estimates itself.")
     held = {m: one(summary, method=m, metric="spread_held_out", fit_on="halves", **real)
-            for m in ("magexp_lm_gyro", "magexp_ellipsoid", "magyc_nls", "magyc_ifg", "ellipsoid_fit")}
+            for m in ("magexp_lm_gyro", "magexp_ellipsoid", "magyc_nls", "magyc_nls_sg", "magyc_ifg", "twostep_hsi")}
     raw = one(summary, method="raw", metric="spread_in_sample", **real)
     if raw and all(held.values()):
         out.append("* Full sphere, held out (fit on one half, spread on the other): " + "; ".join(
             f"{LABELS[m]} {fmt(r, percent=True)}" for m, r in held.items())
             + f"; raw {fmt(raw, percent=True, interval=False)}.")
-    maps = {m: one(summary, dataset="hmc5883l_full-sphere", axis_map=m, fit_on="all", method="magyc_nls",
-                   metric="gyro_consistency") for m in AXIS_MAPS}
-    if all(maps.values()):
-        out.append("* The axis map decides for the peer: MAGYC-NLS's calibrated directions turn as the gyroscope says "
-                   "to within " + ", ".join(f"{fmt(r, interval=False)}° with `{m}`" for m, r in maps.items())
-                   + " (median over 1 s); magexp's gyro-aided S absorbs a rotation between the sensors, the peer's "
-                   "symmetric soft iron cannot.")
+    for method in ("magexp_ellipsoid", "magyc_nls_sg"):
+        maps = {m: one(summary, dataset="hmc5883l_full-sphere", axis_map=m, fit_on="all", method=method,
+                       metric="gyro_consistency") for m in AXIS_MAPS}
+        if all(maps.values()):
+            out.append(f"* Axis map, full sphere: {LABELS[method]}'s calibrated directions turn as the gyroscope says "
+                       "to within " + ", ".join(f"{fmt(r, interval=False)}° with `{m}`" for m, r in maps.items())
+                       + " (median angle over 1 s).")
     return out
 
 
