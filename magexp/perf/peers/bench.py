@@ -13,7 +13,8 @@ The data (:mod:`.data`), each written to a neutral file and read by both sides:
 * the HMC5883L + MPU6050 sequences (:data:`.data.SEQUENCES`) with the axis map ``aligned``: each method fitted
   on every reading (spread in sample) and on each contiguous half (spread on the other half: held out), its gyro
   bias against the rest recording's mean rate; the full sphere also with the maps ``recorded`` and ``authors``,
-  fitted on every reading (a sensitivity check of the axis map).
+  fitted on every reading (a sensitivity check of the axis map); every sequence also *retimed*
+  (:func:`.data.recording`: the recorded timestamps are the arrival times of buffered bursts).
 
 The peer runs in one subprocess for all datasets (:func:`.exchange.run_peer`); magexp's methods in this process
 (:mod:`.magexp_side`). Work is bounded before it starts: the readings of every dataset are counted and the bench
@@ -104,9 +105,10 @@ def simulated_sets(args, work: Path) -> list[exchange.NeutralDataset]:
 def recorded_fits(args) -> list[tuple[exchange.NeutralDataset, exchange.NeutralDataset | None, str]]:
     """``(fit on, held out, fit_on label)`` of every recording, axis map and part."""
     fits = []
+    variants = [(m, False) for m in FULL_SPHERE_MAPS] + [(FULL_SPHERE_MAPS[0], True)]
     for seq in data.SEQUENCES:
-        for axis_map in FULL_SPHERE_MAPS if seq == "full-sphere" else FULL_SPHERE_MAPS[:1]:
-            full = data.recording(seq, axis_map)
+        for axis_map, retime in variants if seq == "full-sphere" else variants[::3]:
+            full = data.recording(seq, axis_map, retime=retime)
             fits.append((full, None, "all"))
             if axis_map != FULL_SPHERE_MAPS[0]:  # the other maps: a sensitivity check, in sample only
                 continue
@@ -131,25 +133,19 @@ def run(args, work: Path) -> list[dict]:
     # methods named *_sg
     notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, *_) in enumerate(jobs)
                                             if ds.side["kind"] in ("magyc_synthetic", "recording")]
-    pairs, digests = [], []
-    for k, (ds, _, label, _) in enumerate(jobs):
-        pairs.append((exchange.write(ds, work / "in" / f"{k:03d}_{ds.name}"), work / "out" / f"{k:03d}.json"))
-        digests.append(exchange.digest(ds))
-    for k, ds in notebook:
-        pairs.append((exchange.write(ds, work / "in" / f"{k:03d}_{ds.name}_sg"), work / "out" / f"{k:03d}_sg.json"))
-        digests.append(exchange.digest(ds))
+    # files named by what the peer's answer depends on: a kept work folder (--work) keeps the answers, and one
+    # whose input is unchanged is not recomputed
+    datasets = [ds for ds, *_ in jobs] + [ds for _, ds in notebook]
+    digests = [exchange.digest(ds) for ds in datasets]
+    pairs = [(work / "in" / f"{d[:20]}.npz", work / "out" / f"{d[:20]}.json") for d in digests]
+    todo = [k for k, (_, out) in enumerate(pairs) if not out.exists()]
     (work / "out").mkdir(parents=True, exist_ok=True)
-    # a kept work folder (--work) keeps the peer's answers: one whose input is unchanged is not recomputed
-    todo = [k for k, (_, out) in enumerate(pairs)
-            if not (out.exists() and out.with_suffix(".input").exists()
-                    and out.with_suffix(".input").read_text() == digests[k])]
+    for k in todo:
+        exchange.write(datasets[k], pairs[k][0].with_suffix(""))
     print(f"peers: MAGYC on {len(todo)} of {len(pairs)} datasets ({total} readings in all) in processes of {CHUNK}",
           file=sys.stderr)
     for start in range(0, len(todo), CHUNK):  # chunks: a stopped bench keeps what is done
-        chunk = todo[start:start + CHUNK]
-        exchange.run_peer([pairs[k] for k in chunk])
-        for k in chunk:
-            pairs[k][1].with_suffix(".input").write_text(digests[k])
+        exchange.run_peer([pairs[k] for k in todo[start:start + CHUNK]])
     answers = [exchange.read_answer(out) for _, out in pairs]
     for (k, _), answer in zip(notebook, answers[len(jobs):]):
         answers[k]["results"] += [dict(r, method=r["method"] + "_sg") for r in answer["results"]]

@@ -83,26 +83,24 @@ def figure(summary, path) -> None:
                title="MAGYC's data: median over seeds and 95 % CI of the median", title_fontsize=7)
     ax = axes[2]
     raw = one(summary, dataset="hmc5883l_full-sphere", axis_map="aligned", method="raw", metric="spread_in_sample")
-    for metric, marker, label in (("spread_in_sample", "s", "in sample (fit on all)"),
-                                  ("spread_held_out", "o", "held out (fit on one half, other half)")):
-        fit_on = "all" if metric == "spread_in_sample" else "halves"
-        rows = [one(summary, dataset="hmc5883l_full-sphere", axis_map="aligned", fit_on=fit_on, method=m,
-                    metric=metric) for m in methods]
+    for k, (dataset, marker, label) in enumerate((("hmc5883l_full-sphere", "o", "timestamps as recorded"),
+                                                  ("hmc5883l_full-sphere_retimed", "s", "retimed (constant-rate clocks)"))):
+        rows = [one(summary, dataset=dataset, axis_map="aligned", fit_on="halves", method=m, metric="spread_held_out")
+                for m in methods]
         med = np.array([r["median"] if r else np.nan for r in rows]) * 100
-        ax.plot(x, med, marker, mfc="none" if marker == "s" else None, ms=5, ls="none", label=label)
-        if metric == "spread_held_out":  # the two halves
-            for k, m in enumerate(methods):
-                r = one(summary, dataset="hmc5883l_full-sphere", axis_map="aligned", fit_on="halves", method=m,
-                        metric=metric)
-                if r is not None:
-                    ax.vlines(k, r["lo"] * 100, r["hi"] * 100, color="C1", lw=1)
+        lo = np.array([r["lo"] if r else np.nan for r in rows]) * 100
+        hi = np.array([r["hi"] if r else np.nan for r in rows]) * 100
+        ax.errorbar(x + (k - 0.5) * 0.25, med, yerr=[np.maximum(med - lo, 0), np.maximum(hi - med, 0)], fmt=marker,
+                    ms=4, capsize=2, color=f"C{k + 3}", label=label)
     if raw:
         ax.axhline(raw["median"] * 100, color="0.3", ls="--", lw=1, label="raw readings")
     ax.set_yscale("log")
-    ax.set_ylabel("spread of |calibrated field| (std / mean, %)")
-    ax.set_title("HMC5883L full sphere (magnetometer -x,-y,z)", fontsize=9)
+    ax.set_ylabel("held-out spread of |calibrated field| (std / mean, %)")
+    ax.set_title("HMC5883L full sphere, magnetometer -x,-y,z: fit on one half,\nspread on the other (median of the two)",
+                 fontsize=9)
     ax.set_xticks(x, [LABELS[m] for m in methods], rotation=60, ha="right", fontsize=7)
-    ax.legend(fontsize=7, loc="upper left")
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower right", ncols=3, fontsize=7,
+               title="the recording: median of the two halves and their range", title_fontsize=7)
     fig.savefig(path, dpi=130)
     plt.close(fig)
 
@@ -146,13 +144,19 @@ def findings(summary) -> list[str]:
                    f"`calibrated_magnetic_field` spreads {fmt(own, percent=True, interval=False)}, its estimates "
                    f"applied to the readings {fmt(applied, percent=True, interval=False)} (magyc 1.0.0 reshapes the "
                    "N x 3 readings to 3 x N before applying them); the bench applies every method's estimates itself.")
-    held = {m: one(summary, method=m, metric="spread_held_out", fit_on="halves", **real)
-            for m in ("magexp_lm_gyro", "magexp_ellipsoid", "magyc_nls", "magyc_nls_sg", "magyc_ifg", "twostep_hsi")}
-    raw = one(summary, method="raw", metric="spread_in_sample", **real)
-    if raw and all(held.values()):
-        out.append("* Full sphere, held out (fit on one half, spread on the other): " + "; ".join(
-            f"{LABELS[m]} {fmt(r, percent=True)}" for m, r in held.items())
-            + f"; raw {fmt(raw, percent=True, interval=False)}.")
+    for dataset, clock in (("hmc5883l_full-sphere", "timestamps as recorded"),
+                           ("hmc5883l_full-sphere_retimed", "retimed: constant-rate clocks")):
+        where = dict(real, dataset=dataset)
+        held = {m: one(summary, method=m, metric="spread_held_out", fit_on="halves", **where)
+                for m in ("magexp_lm_gyro", "magexp_ellipsoid", "magyc_nls", "magyc_nls_sg", "magyc_ifg",
+                          "twostep_hsi")}
+        turn = {m: one(summary, method=m, metric="gyro_consistency", fit_on="all", **where) for m in held}
+        raw = one(summary, method="raw", metric="spread_in_sample", **where)
+        if raw and all(held.values()):
+            out.append(f"* Full sphere, {clock}; spread held out (fit on one half, the other half) and, fitted on all, "
+                       "the median angle between calibrated directions and the gyroscope's 1 s ahead: " + "; ".join(
+                           f"{LABELS[m]} {fmt(r, percent=True)}, {fmt(turn[m], interval=False)}°"
+                           for m, r in held.items()) + f"; raw {fmt(raw, percent=True, interval=False)}.")
     for method in ("magexp_ellipsoid", "magyc_nls_sg"):
         maps = {m: one(summary, dataset="hmc5883l_full-sphere", axis_map=m, fit_on="all", method=method,
                        metric="gyro_consistency") for m in AXIS_MAPS}
