@@ -3,6 +3,9 @@ PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+# the peer MAGYC (magexp/perf/peers): an environment of its own, from requirements-peers.lock
+PEERS  ?= .peers/venv
+PEERS_STAMP := $(PEERS)/.installed
 JOBS   ?= 0
 # EXECUTOR=dask runs on a Dask cluster: a local one, or SCHEDULER=tcp://host:8786 | slurm | pbs | sge
 EXECUTOR ?= local
@@ -13,7 +16,7 @@ TEST_JOBS ?= 2
 PYTEST := $(PY) -m pytest $(if $(filter-out 0,$(TEST_JOBS)),-n $(TEST_JOBS) --dist worksteal) --durations=15
 
 .DEFAULT_GOAL := help
-.PHONY: help venv lock bench reproduce redraw report test test-full docs clean
+.PHONY: help venv lock bench reproduce redraw report test test-full docs clean peers peers-lock peers-bench
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_%-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
@@ -61,5 +64,25 @@ lock: ## refresh requirements.lock from the newest releases allowed by pyproject
 	 .lockenv/bin/python -m pip freeze --exclude magexp) > requirements.lock
 	rm -rf .lockenv
 
+$(PEERS_STAMP): requirements-peers.lock
+	rm -rf $(PEERS) && $(PYTHON) -m venv $(PEERS)
+	$(PEERS)/bin/python -m pip install --quiet --upgrade pip
+	$(PEERS)/bin/python -m pip install --quiet --no-deps -r requirements-peers.lock
+	$(PEERS)/bin/python -c "import magyc"
+	@touch $(PEERS_STAMP)
+
+peers: $(PEERS_STAMP) ## build the peer MAGYC's own environment .peers/venv from requirements-peers.lock
+
+peers-bench: $(STAMP) $(PEERS_STAMP) ## magexp beside MAGYC on the same data; writes results/peers/ (minutes)
+	nice $(PY) -m magexp.perf.peers.bench --out results/peers
+
+peers-lock: ## refresh requirements-peers.lock from the newest magyc release (then commit it)
+	rm -rf .lockenv && $(PYTHON) -m venv .lockenv
+	.lockenv/bin/python -m pip install --quiet --upgrade pip
+	.lockenv/bin/python -m pip install --quiet magyc
+	(head -3 requirements-peers.lock; .lockenv/bin/python -m pip freeze) > requirements-peers.lock.new
+	mv requirements-peers.lock.new requirements-peers.lock
+	rm -rf .lockenv
+
 clean: ## remove the environment, caches and Hydra run folders (never results/)
-	rm -rf $(VENV) .cache outputs multirun .pytest_cache *.egg-info build dist site magexp/_resources
+	rm -rf $(VENV) .peers .cache outputs multirun .pytest_cache *.egg-info build dist site magexp/_resources

@@ -1,0 +1,80 @@
+"""magexp beside MAGYC (magexp.perf.peers): the neutral files, the time alignment, the measures, and the round
+trip through the peer's environment (skipped without ``make peers``). The bench itself is not run here."""
+
+import json
+
+import numpy as np
+import pytest
+
+from magexp.errors import MagexpError
+from magexp.perf.peers import data, exchange, measures
+from magexp.perf.peers.magexp_side import Estimate
+
+
+def dataset(n=400, *, soft=None, hard=(0.02, 0.12, 0.09)):
+    """Readings on an exact ellipsoid ``D u + h`` (u on the unit sphere, radius 0.5 G) with a turning gyro."""
+    rng = np.random.default_rng(3)
+    u = rng.normal(size=(n, 3))
+    u = 0.5 * u / np.linalg.norm(u, axis=1, keepdims=True)
+    d = np.eye(3) if soft is None else np.asarray(soft)
+    t = np.arange(n) * 0.1
+    side = data.side("unit_test", "test", seed=0, mag_unit="G", mag_noise_std=1e-3, reference_total=0.5,
+                     axes="one frame", alignment="none")
+    return exchange.NeutralDataset(t, u @ d.T + np.asarray(hard), rng.normal(size=(n, 3)) * 0.1, side,
+                                   {"truth_soft_iron": d, "truth_hard_iron": np.asarray(hard, float)})
+
+
+def test_neutral_file_round_trip(tmp_path):
+    ds = dataset()
+    back = exchange.read(exchange.write(ds, tmp_path / "x"))
+    for key in ("t", "mag", "gyro"):
+        np.testing.assert_array_equal(getattr(back, key), getattr(ds, key))
+    np.testing.assert_array_equal(back.truth["truth_hard_iron"], ds.truth["truth_hard_iron"])
+    assert back.side == json.loads(json.dumps(ds.side))
+
+
+def test_bad_dataset_is_refused_in_one_line(tmp_path):
+    ds = dataset()
+    ds.gyro = ds.gyro[:-1]
+    with pytest.raises(MagexpError, match="gyro of shape"):
+        exchange.write(ds, tmp_path / "bad")
+    assert not (tmp_path / "bad.npz").exists()
+
+
+def test_rates_at_averages_the_held_gyro_over_each_interval():
+    gyro_t = np.array([0.0, 1.0, 2.0, 3.0])
+    rates = np.array([[1.0, 0, 0], [3.0, 0, 0], [5.0, 0, 0], [7.0, 0, 0]])
+    out = data.rates_at(gyro_t, rates, np.array([0.5, 1.5, 3.0]))
+    # [0.5, 1.5]: half at 1, half at 3 -> 2; [1.5, 3]: 0.5 s at 3 and 1 s at 5 -> 13/3; the first row repeats
+    np.testing.assert_allclose(out[:, 0], [2.0, 2.0, 13 / 3])
+    bias = np.array([0.1, -0.2, 0.3])  # a constant bias passes through unchanged
+    np.testing.assert_allclose(data.rates_at(gyro_t, rates + bias, np.array([0.5, 1.5, 3.0])) - out,
+                               np.tile(bias, (3, 1)))
+
+
+def test_soft_iron_error_ignores_scale_and_rotation_not_shape():
+    truth = np.array([[1.10, 0.10, 0.04], [0.10, 0.88, 0.02], [0.04, 0.02, 1.22]])
+    angle = 0.7
+    rot = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]])
+    assert measures.soft_iron_error(2.5 * truth @ rot, truth) < 1e-12
+    assert measures.soft_iron_error(-truth, truth) < 1e-12  # the gyro objective's (S, h) -> (-S, -h) member
+    assert measures.soft_iron_error(None, truth) == pytest.approx(measures.soft_iron_error(np.eye(3), truth))
+    stretched = truth @ np.diag([1.05, 1.0, 1.0])
+    assert 0.02 < measures.soft_iron_error(stretched, truth) < 0.05
+
+
+@pytest.mark.skipif(exchange.available() is not None, reason="the peer's environment is absent (make peers)")
+def test_peer_round_trip_recovers_an_exact_ellipsoid(tmp_path):
+    soft = np.array([[1.10, 0.10, 0.04], [0.10, 0.88, 0.02], [0.04, 0.02, 1.22]])
+    soft = soft / np.cbrt(np.linalg.det(soft))  # the peer's scale: det 1
+    ds = dataset(soft=soft)
+    ds.side["methods"] = ["ellipsoid_fit", "sphere_fit"]
+    (answer,) = exchange.run_peer([(exchange.write(ds, tmp_path / "in"), tmp_path / "out.json")])
+    ellipsoid, sphere = (Estimate.from_peer(r) for r in answer["results"])
+    assert answer["peer"] == "magyc" and ellipsoid.error is None
+    # the ellipsoid fit returns the correction SI^-1, read back as the distortion D: its eigenvalues are exact
+    # (its axes are not: magyc 1.0.0 transposes the eigenvector matrix, magyc_side's docstring)
+    np.testing.assert_allclose(np.linalg.eigvalsh(ellipsoid.soft_iron), np.linalg.eigvalsh(soft), atol=1e-8)
+    np.testing.assert_allclose(ellipsoid.hard_iron, ds.truth["truth_hard_iron"], atol=1e-8)
+    assert sphere.soft_iron is None and sphere.gyro_bias is None
+    assert np.linalg.norm(sphere.hard_iron - ds.truth["truth_hard_iron"]) > 1e-3  # a sphere cannot fit the ellipsoid
