@@ -106,29 +106,15 @@ def test_exit_codes_across_the_process_boundary(tmp_path):
     assert {p.name for p in tmp_path.iterdir()} == {"cache", "cache-configs", "r"}  # caches and the run only
 
 
-def test_calibrate_is_its_own_command(capsys, monkeypatch):
-    """``magexp calibrate ARGS`` is ``magexp.calibration.fit.main(ARGS)``, before any composing."""
-    import types
-
-    seen = []
-    fake = types.ModuleType("magexp.calibration.fit")
-    fake.main = lambda argv: seen.append(argv) or 0
-    monkeypatch.setitem(sys.modules, "magexp.calibration.fit", fake)
-    with pytest.raises(SystemExit) as info:
-        magexp_main(["calibrate", "data.path=x.csv", "estimator=lm"])
-    assert info.value.code == 0 and seen == [["data.path=x.csv", "estimator=lm"]]
-    fake.main = lambda argv: 2
-    with pytest.raises(SystemExit) as info:
-        magexp_main(["calibrate"])
-    assert info.value.code == 2
-
-
-def test_calibrate_without_its_module_is_one_line(capsys, monkeypatch):
-    monkeypatch.setitem(sys.modules, "magexp.calibration.fit", None)  # as if absent
-    with pytest.raises(SystemExit) as info:
-        magexp_main(["calibrate", "data.path=x.csv"])
-    err = capsys.readouterr().err
-    assert info.value.code == 2 and err.count("\n") == 1 and "magexp.calibration.fit" in err
+def test_calibrate_is_its_own_command(tmp_path, cli):
+    """``magexp calibrate ARGS`` hands ARGS to the calibrate command before any run config is composed
+    (the end to end calibration: tests/test_calibrate.py::test_cli_end_to_end)."""
+    calibrate = cli("calibrate", "data.path=x.csv", "estimator=lm", cwd=tmp_path)
+    assert calibrate.returncode == 2 and calibrate.stderr.count("\n") == 1, calibrate.stderr
+    assert "x.csv" in calibrate.stderr and "magexp calibrate" not in calibrate.stderr  # the recording is looked for
+    run = cli("data.path=x.csv", "estimator=lm", cwd=tmp_path)  # the same keys to a run: pointed to calibrate
+    assert run.returncode == 2 and run.stderr.count("\n") == 1 and "magexp calibrate" in run.stderr, run.stderr
+    assert not list(tmp_path.iterdir())
 
 
 def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):

@@ -75,8 +75,8 @@ def test_task_plan_keeps_each_seed_of_a_scenario_together():
              + configs("scenario=ding2024_exp2", "estimator=ellipsoid", seeds=range(3)))
     tasks = executor.plan_tasks(batch, workers=2)
     assert sorted(i for t in tasks for i in t) == list(range(len(batch)))
-    for task in tasks:
-        assert len({executor._group_key(batch[i]) for i in task}) == 1  # one scenario per task
+    for task in tasks:  # one scenario (its data: the scenario node and the objective) per task
+        assert len({repr((batch[i]["scenario"], batch[i].get("objective"))) for i in task}) == 1
     where = {i: k for k, t in enumerate(tasks) for i in t}
     for i in range(6):  # both estimators of a seed share a task (and so its dataset and bound)
         assert where[i] == where[6 + i]
@@ -181,27 +181,41 @@ class _RemoteLike(executor.InlineExecutor):
     shares_files = False
 
 
+class _Recording(executor.InlineExecutor):
+    """The in-process executor, keeping what each task sends back to the parent and which runs the
+    cache held when the task was done."""
+
+    def __init__(self, stored):
+        super().__init__()
+        self.stored, self.sent = stored, []
+
+    def as_completed(self, futures):
+        for future in super().as_completed(futures):
+            value = future.result()  # the task runs here (in this process, when asked)
+            self.sent.append((value, list(self.stored)))
+            future.result = lambda value=value: value  # run once: the parent reads the same value
+            yield future
+
+
 def test_workers_store_their_runs_and_the_counts_split_the_cpu(tmp_path, monkeypatch):
     from magexp.artifacts.reproduce import cpu_line
 
     batch = configs(*DING, "estimator=ellipsoid", seeds=range(3)) + configs(*DING, "estimator=pso", seeds=range(3))
     keys = cache.run_keys(batch)
     monkeypatch.setattr(cache, "CACHE", tmp_path / "shared")
-    stored, sent = [], []
-    real_store, real_task = cache.store, executor._run_task
+    stored = []
+    real_store = cache.store
     monkeypatch.setattr(cache, "store", lambda *a, **k: stored.append(a[0]) or real_store(*a, **k))
-
-    def task(configs, keys, root, *options):
-        results, cpu, notes = real_task(configs, keys, root, *options)
-        sent.append((list(keys), list(stored), results))
-        return results, cpu, notes
-
-    monkeypatch.setattr(executor, "_run_task", task)
     counts = {}
-    here = executor.run_many(batch, jobs=1, counts=counts)
-    for task_keys, stored_by_then, results in sent:  # each run stored inside its task; only rows sent back
-        assert set(task_keys) <= set(stored_by_then)
+    recording = _Recording(stored)
+    here = executor.run_many(batch, executor=recording, counts=counts)
+    assert recording.sent
+    returned = 0
+    for (results, *_), stored_by_then in recording.sent:  # each run stored inside its task; only rows sent back
         assert all(isinstance(row, dict) and isinstance(fit, float) for row, fit in results)
+        returned += len(results)
+        assert len(stored_by_then) == returned
+    assert returned == len(batch)
     assert sorted(stored) == sorted(keys) and all(cache.exists(k) for k in keys)
     assert pickle.dumps(here.metrics(3)) == pickle.dumps(executor.run_row(here[3]))  # the stored run's row
     assert counts["task_cpu"] >= counts["fit_cpu"] > 0
@@ -275,37 +289,51 @@ def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
     try:
         version = cache.code_version()
         memo = tmp_path / "cache" / "runs" / "code-version.json"
-        assert json.loads(memo.read_text()) == {cache._source_stamp(): version} and version == cache._closure_hash()
-        memo.write_text(json.dumps({cache._source_stamp(): "kept"}))
+        (stamp, kept), = json.loads(memo.read_text()).items()  # the version, under the sources' stamp
+        assert kept == version
+        memo.write_text(json.dumps({stamp: "kept"}))
         cache.code_version.cache_clear()
         assert cache.code_version() == "kept"  # read back, not recomputed
         with (copy / "magexp/core/bounds.py").open("a") as fh:
             fh.write("\n# an edit\n")
         cache.code_version.cache_clear()
-        assert cache.code_version() == cache._closure_hash() not in ("kept", version)  # a new stamp: recomputed
+        new = cache.code_version()
+        assert new not in ("kept", version)  # a new stamp: recomputed
+        assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == new
+        with (copy / "magexp/core/bounds.py").open("a") as fh:
+            fh.write("\n# an edit\n")
+        cache.code_version.cache_clear()
+        assert cache.code_version() not in (new, version)  # each edit changes the version
     finally:
         cache.code_version.cache_clear()
 
 
-@pytest.mark.parametrize("scenario", ["ding2024_exp1", "yuan2018_mode1", "yan2022_sim"])
-def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, monkeypatch):
+@pytest.mark.parametrize("scenario, offset", [("ding2024_exp1", "scenario.errors.hard_iron"),
+                                              ("yuan2018_mode1", "scenario.b"), ("yan2022_sim", "scenario.Bp")])
+def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, offset, monkeypatch):
     import numpy as np
 
     from magexp.core import bounds
+    from magexp.core.seeding import run_generators, scenario_stream
+    from magexp.problems import make_problem
 
-    problems = [runner._Shared().problem(c, runner.build(c["scenario"], "scenario"), c["seed"])[2]
-                for c in configs(f"scenario={scenario}", seeds=(0, 1))]
-    fresh = []
-    for problem in problems:  # each bound from scratch: nothing kept
-        monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
-        fresh.append(pickle.dumps(bounds.cramer_rao(problem)))
-    monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
+    # a truth of its own (an offset no other test uses): nothing kept from earlier work in this process
+    unique = [round(v, 9) for v in np.random.default_rng().uniform(1, 2, 3)]
+    problems = []
+    for cfg in configs(f"scenario={scenario}", f"{offset}=[{unique[0]},{unique[1]},{unique[2]}]", seeds=(0, 1)):
+        sc = runner.build(cfg["scenario"], "scenario")
+        data = sc.generate(rng=run_generators(cfg["seed"], stream=scenario_stream(cfg["scenario"]))[0])
+        problems.append(make_problem(cfg.get("objective") or sc.objective, data, sc.search,
+                                     **getattr(sc, "problem_options", {})))
+    assert np.array_equal(problems[0].truth_theta(), problems[1].truth_theta())
     calls = []
     real = bounds.central_differences
     monkeypatch.setattr(bounds, "central_differences", lambda fun, *a: calls.append(fun) or real(fun, *a))
-    kept = [pickle.dumps(bounds.cramer_rao(problem)) for problem in problems]
-    assert kept == fresh  # the same bits
-    assert len(bounds._INVARIANT_JACOBIANS) == 1  # one truth: H computed once for both seeds
-    assert sum(getattr(f, "__name__", "") == "invariants" for f in calls) == 1
-    (h,) = bounds._INVARIANT_JACOBIANS.values()
-    assert not h.flags.writeable and np.isfinite(h).all()
+    kept = [bounds.cramer_rao(problem) for problem in problems]
+    assert sum(getattr(f, "__name__", "") == "invariants" for f in calls) == 1  # one truth: H once for both seeds
+    monkeypatch.setattr(bounds, "central_differences", real)
+    # from scratch: H = ∂h/∂θ by central differences for every problem, nothing kept
+    monkeypatch.setattr(bounds, "invariant_jacobian", lambda problem, theta, steps, keep=0:
+                        real(problem.invariants, theta, steps))
+    fresh = [bounds.cramer_rao(problem) for problem in problems]
+    assert pickle.dumps(kept) == pickle.dumps(fresh)  # the same bits

@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pandas as pd
 import pytest
 from omegaconf import OmegaConf
@@ -97,13 +98,7 @@ def test_a_data_edit_reruns_exactly_the_runs_that_read_it(tmp_path, monkeypatch)
     assert counts["computed"] == 3
     executor.run_many(mockup + ding, jobs=1, counts=counts)
     assert counts["computed"] == 0
-    path = data / "yan2022_mockup.csv"
-    lines = path.read_text().splitlines(keepends=True)
-    row = next(i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#") and ln[0] in "-0123456789")
-    values = lines[row].split(",")
-    values[2] = str(int(values[2]) + 50)  # bz of the first attitude, +50 nT
-    lines[row] = ",".join(values)
-    path.write_text("".join(lines))
+    edit_first_reading(data / "yan2022_mockup.csv")  # bz of the first attitude, +50 nT
     again = executor.run_many(mockup + ding, jobs=1, counts=counts)
     assert counts["computed"] == 1 and counts["cached"] == 2  # the mock-up run only
     assert again.metrics(0)["fit_rms"] != first.metrics(0)["fit_rms"]
@@ -251,34 +246,71 @@ def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
         memo.code_version.cache_clear()
 
 
-def test_mockup_summary_builds_each_cells_problem_once_with_the_same_rows(tmp_path, monkeypatch):
+#: t(0.975, 8): the two-sided 95 % quantile of Student's t with 8 degrees of freedom (printed tables: 2.306)
+T_975_8 = 2.3060041350333704
+
+
+def edit_first_reading(path, delta=50):
+    """Add ``delta`` nT to bz of the first reading of a recording file."""
+    lines = path.read_text().splitlines(keepends=True)
+    row = next(i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#") and ln[0] in "-0123456789")
+    values = lines[row].split(",")
+    values[2] = str(int(values[2]) + delta)
+    lines[row] = ",".join(values)
+    path.write_text("".join(lines))
+
+
+def test_mockup_summary_is_the_least_squares_t_interval_and_f_test_built_once_per_cell(tmp_path, monkeypatch, make_cfg):
+    """The mock-up's rows judged against least squares: ``lo``, ``hi`` are the estimate -+ t(0.975, 8)
+    standard errors (per axis, 12 readings, 4 parameters), the F-test rows give the p-value of the
+    paper's solution; the problem is built once per cell, and a data file edited afterwards is read again."""
+    from scipy import stats
+
     from magexp.artifacts import summary
     from magexp.artifacts.plan import run_artifact
     from magexp.artifacts.spec import load
+    from magexp.problems import make_problem
+    from magexp.scenarios.ship import ShipRecording
 
+    data = tmp_path / "data"
+    data.mkdir()
+    shutil.copy(DATA / "yan2022_mockup.csv", data / "yan2022_mockup.csv")
+    monkeypatch.setattr("magexp.core.datafiles.DATA", data)
+    monkeypatch.setattr("magexp.core.recordings.DATA", data)
     spec = load(ROOT / "experiments" / "yan2022" / "yan2022_table_mockup.yaml")
     runs = run_artifact(spec, seeds=1, jobs=1, tiny=True)
     built = []
-    real = summary._problem_of
-    monkeypatch.setattr(summary, "_problem_of", lambda *a: built.append(a) or real(*a))
+    real = ShipRecording.generate
+    monkeypatch.setattr(ShipRecording, "generate", lambda self, **k: built.append(1) or real(self, **k))
     rows = summary.summarise(runs)
-    ls_rows = sum(1 for item in spec.summarise if item.interval == "ls") * len(runs.cells)
-    assert len(built) == len(runs.cells) < ls_rows  # once per cell, not once per row
-    assert summary._design.cache_info().currsize == 0  # emptied when summarise returns
-
-    def rebuilt(runs, ci):  # the old path: the problem rebuilt for every row
-        problem = real(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
-        return (*problem.design(), problem.parameter_names())
-
-    monkeypatch.setattr(summary, "_design_of", rebuilt)
+    assert len(built) == len(runs.cells)  # once per cell, not once per row
     pd.testing.assert_frame_equal(rows, summary.summarise(runs), check_exact=True)
 
+    scenario = runner.build(make_cfg("scenario=yan2022_mockup").scenario, "scenario")
+    c, y = (np.asarray(a, float) for a in make_problem("ship", scenario.generate(), scenario.search).design())
+    coef = np.linalg.solve(c.T @ c, c.T @ y)  # (4, 3): per axis [K_a1, K_a2, K_a3, Bp_a]
+    s2 = ((y - c @ coef) ** 2).sum(axis=0) / (12 - 4)
+    se = np.sqrt(np.outer(np.diag(np.linalg.inv(c.T @ c)), s2))
+    kf = rows[rows.estimator == "kf"].set_index("quantity")
+    for a in range(3):
+        for name, j in [*((f"K{a + 1}{k + 1}", k) for k in range(3)), (f"Bp{a + 1}", 3)]:
+            lo, hi = coef[j, a] - T_975_8 * se[j, a], coef[j, a] + T_975_8 * se[j, a]
+            assert kf.loc[name, "lo"] == pytest.approx(lo, rel=1e-9, abs=1e-9), name
+            assert kf.loc[name, "hi"] == pytest.approx(hi, rel=1e-9, abs=1e-9), name
+    ci = next(i for i, cell in enumerate(runs.cells) if cell["estimator"] == "yan2022_paper_mockup")
+    theta = runs.outputs[(ci, 0)].x
+    k, bp = np.asarray(theta[:9]).reshape(3, 3), np.asarray(theta[9:])
+    ftest = rows[rows.quantity.str.startswith("paper_solution_F_p")].set_index("quantity")
+    assert len(ftest) == 3
+    for a in range(3):
+        d = np.append(k[a], bp[a]) - coef[:, a]
+        f = d @ c.T @ c @ d / 4 / s2[a]
+        row = ftest.loc[f"paper_solution_F_p_axis{a + 1}"]
+        assert f"F={f:.4g};dof=4,8" in row.setting
+        assert row.value == pytest.approx(stats.f.sf(f, 4, 8), rel=1e-6)
+    assert stats.f.sf(3.838, 4, 8) == pytest.approx(0.05, abs=2e-4)  # the table's 5 % point: the p-value's scale
 
-def test_the_special_functions_are_scipy_stats_quantile_and_tail():
-    from scipy import special, stats
-
-    for dof in (2, 8, 11, 40):
-        for level in (0.9, 0.95, 0.99):
-            assert special.stdtrit(dof, 0.5 + level / 2) == stats.t.ppf(0.5 + level / 2, dof)
-        for f in (0.01, 0.7, 3.0, 40.0):
-            assert special.fdtrc(4, dof, f) == stats.f.sf(f, 4, dof)
+    edit_first_reading(data / "yan2022_mockup.csv")  # read again: nothing of the first summary is kept
+    again = summary.summarise(runs)
+    assert (again.set_index(["quantity", "estimator"]).loc["Bp3", "lo"]
+            != rows.set_index(["quantity", "estimator"]).loc["Bp3", "lo"]).all()
