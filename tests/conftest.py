@@ -87,3 +87,36 @@ def pytest_collection_modifyitems(config, items):
             if missing:
                 item.add_marker(pytest.mark.skip(reason=f"{missing} is not in the recordings folder (MAGEXP_DATA)"))
                 break
+
+
+#: a small whole reproduction (6 runs of the mock-up: ls, kf and the paper's values, 2 seeds; 2 tasks)
+MOCKUP_ARGS = ("yan2022", "--only", "yan2022_table_mockup", "--seeds", "2", "--tiny", "--jobs", "1")
+
+
+def reproduce_into(out, cache_dir, args=MOCKUP_ARGS) -> int:
+    """``python -m magexp.artifacts.reproduce ARGS --out out`` in this process, on the run cache ``cache_dir``."""
+    from magexp import paths
+    from magexp.artifacts.reproduce import main
+    from magexp.run import cache
+
+    saved = cache.CACHE, paths.CACHE
+    cache.CACHE = paths.CACHE = cache_dir
+    try:
+        return main([*args, "--out", str(out)])
+    finally:
+        cache.CACHE, paths.CACHE = saved
+
+
+@pytest.fixture(scope="session")
+def mockup_reproduction(tmp_path_factory):
+    """One clean reproduction of :data:`MOCKUP_ARGS` shared by the tests that compare with it or start
+    from it (copy before changing anything): ``args``, ``runs`` (its run cache), ``out`` (its output
+    folder), ``files`` (every file it wrote, by relative path, with its bytes) and ``reproduce_into``."""
+    from types import SimpleNamespace
+
+    root = tmp_path_factory.mktemp("mockup")
+    assert reproduce_into(root / "out", root / "runs") == 0
+    files = {p.relative_to(root / "out").as_posix(): p.read_bytes()
+             for p in sorted((root / "out").rglob("*")) if p.is_file()}
+    return SimpleNamespace(args=list(MOCKUP_ARGS), runs=root / "runs", out=root / "out", files=files,
+                           reproduce_into=reproduce_into)

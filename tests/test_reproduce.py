@@ -136,22 +136,21 @@ def test_a_plot_edit_reruns_nothing_and_a_bound_edit_reruns_all(tmp_path, monkey
         cache.code_version.cache_clear()
 
 
-def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monkeypatch, capsys):
+def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monkeypatch, capsys, mockup_reproduction):
     out = tmp_path / "res"
-    argv = ["yuan2018", "--only", "yuan2018_fig6", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
-    assert reproduce.main(argv) == 0
-    capsys.readouterr()
-    png, csv = out / "yuan2018" / "yuan2018_fig6.png", out / "yuan2018" / "yuan2018_fig6.csv"
-    data = csv.read_bytes()
+    shutil.copytree(mockup_reproduction.out, out)
+    name = "yan2022_table_mockup"
+    png, csv = out / "yan2022" / f"{name}.png", out / "yan2022" / f"{name}.csv"
     png.unlink()
     (out / "REPORT.md").unlink()
     (out / "summary.csv").unlink()
     monkeypatch.setattr(runner, "run_batch", lambda *a: pytest.fail("--redraw ran something"))
     monkeypatch.setattr(executor, "run_many", lambda *a, **k: pytest.fail("--redraw ran something"))
-    assert reproduce.main(["all", "--only", "yuan2018_fig6", "--redraw", "--out", str(out)]) == 0
-    assert png.stat().st_size > 0 and (out / "REPORT.md").exists() and (out / "summary.csv").exists()
-    assert csv.read_bytes() == data
+    capsys.readouterr()
+    assert reproduce.main(["all", "--only", name, "--redraw", "--out", str(out)]) == 0
     assert "redrew 1 figures" in capsys.readouterr().out
+    for path in (png, out / "REPORT.md", out / "summary.csv", csv):  # as the reproduction wrote them
+        assert path.read_bytes() == mockup_reproduction.files[path.relative_to(out).as_posix()], path
 
 
 # Ctrl-C at a fixed point: SIGINT to the process as its first run is counted, while its workers are busy
@@ -175,47 +174,53 @@ sys.exit(main(sys.argv[1:]))
 def test_ctrl_c_ends_in_one_line_and_a_clean_state(tmp_path):
     out = tmp_path / "res"
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}
-    proc = subprocess.Popen([sys.executable, "-c", CTRL_C, "ding2024", "--only", "ding2024_table_rms",
-                             "--seeds", "3", "--jobs", "2", "--out", str(out)],
+    proc = subprocess.Popen([sys.executable, "-c", CTRL_C, "yan2022", "--only", "yan2022_table_mockup",
+                             "--seeds", "2", "--jobs", "2", "--out", str(out)],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 130
     lines = [ln for ln in err.splitlines() if ln.strip() and "Warning" not in ln and not ln.startswith("  ")]
     assert len(lines) == 1 and "interrupted" in lines[0] and "Traceback" not in err, err
     assert not list(tmp_path.rglob("*.tmp")), "a half-written file was left behind"
-    assert not (out / "ding2024" / "ding2024_table_rms.csv").exists()
+    assert not (out / "yan2022" / "yan2022_table_mockup.csv").exists()
 
 
 @pytest.mark.slow
-def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypatch, capsys):
+def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypatch, capsys, mockup_reproduction):
+    """The figure cache (beside the run cache): a reproduction or a redraw draws a figure only when its
+    CSV, spec or code changed, or its files are not what was drawn; ``--force`` draws every figure."""
     from magexp.artifacts.plots import memo, style
 
     out = tmp_path / "res"
-    argv = ["ding2024", "--only", "ding2024_fig2", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
-    assert reproduce.main(argv) == 0
-    png, pdf = out / "ding2024" / "ding2024_fig2.png", out / "ding2024" / "ding2024_fig2.pdf"
-    csv = out / "ding2024" / "ding2024_fig2.csv"
+    shutil.copytree(mockup_reproduction.out, out)
+    shutil.copytree(mockup_reproduction.runs, cache.CACHE)  # its runs: the reproduction reads them
+    name = "yan2022_table_mockup"
+    png, pdf, csv = (out / "yan2022" / f"{name}.{ext}" for ext in ("png", "pdf", "csv"))
     first = png.read_bytes(), pdf.read_bytes()
-    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
     drawn = []
     real_save = style.save
     monkeypatch.setattr(style, "save", lambda fig, path: drawn.append(path) or real_save(fig, path))
-    redraw = ["all", "--only", "ding2024_fig2", "--redraw", "--out", str(out)]
+    argv = [*mockup_reproduction.args, "--out", str(out)]
+    redraw = ["all", "--only", name, "--redraw", "--out", str(out)]
 
-    assert reproduce.main(redraw) == 0 and drawn == []  # unchanged: kept
+    assert reproduce.main(argv) == 0 and len(drawn) == 1  # this figure cache is empty: drawn, the same bytes
+    assert "0 computed, 6 from the cache" in capsys.readouterr().out
+    assert (png.read_bytes(), pdf.read_bytes()) == first
+    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
+    assert reproduce.main(redraw) == 0 and len(drawn) == 1  # unchanged: kept
     assert "redrew 0 figures (1 unchanged" in capsys.readouterr().out
-    assert reproduce.main(argv) == 0 and drawn == []  # a cached reproduction keeps it too
+    assert reproduce.main(argv) == 0 and len(drawn) == 1  # a cached reproduction keeps it too
 
     pdf.write_bytes(b"%PDF edited")  # a figure file that is not what was drawn: drawn again, same bytes
-    assert reproduce.main(redraw) == 0 and len(drawn) == 1
+    assert reproduce.main(redraw) == 0 and len(drawn) == 2
     assert (png.read_bytes(), pdf.read_bytes()) == first
-    assert reproduce.main(redraw + ["--force"]) == 0 and len(drawn) == 2  # --force draws every figure
+    assert reproduce.main(redraw + ["--force"]) == 0 and len(drawn) == 3  # --force draws every figure
     assert (png.read_bytes(), pdf.read_bytes()) == first
 
     frame = pd.read_csv(csv)  # a new CSV: drawn again from it
-    frame.loc[0, "error"] = frame["error"].abs().max() * 3
+    frame.loc[frame.quantity == "fit_rms", "median"] *= 3
     frame.to_csv(csv, index=False)
-    assert reproduce.main(redraw) == 0 and len(drawn) == 3 and png.read_bytes() != first[0]
+    assert reproduce.main(redraw) == 0 and len(drawn) == 4 and png.read_bytes() != first[0]
 
 
 def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
