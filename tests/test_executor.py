@@ -122,34 +122,31 @@ def _kill_a_worker_once_busy(client, done: threading.Event):
 
 @pytest.mark.slow
 def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, monkeypatch):
-    """A LocalCluster of two workers runs a tiny reproduction and a sweep; one worker is killed
-    midway; the scheduler reruns its task elsewhere and every output file is byte-identical."""
+    """A LocalCluster of one worker runs a tiny reproduction; the worker is killed midway; the scheduler
+    reruns its task on the worker that replaces it and every output file is byte-identical (a sweep on a Dask
+    cluster: tests/test_sweep.py::test_local_processes_and_a_dask_cluster_give_the_same_sweep)."""
+    from magexp.artifacts.plots import style
     from magexp.artifacts.reproduce import reproduce, select
 
+    monkeypatch.setattr(style, "save", lambda fig, path: style.plt.close(fig) or [])  # the figure is not compared
     selected = select(["ding2024"], "ding2024_fig5")
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_local")
     reproduce(selected, tmp_path / "local", seeds=2, jobs=1, tiny=True, log=lambda *_: None)
-    sweep = [c for noise in (0, 2, 5) for c in configs(*DING, "estimator=ipso", f"scenario.noise={noise}",
-                                                         "estimator.n_particles=30", "estimator.n_iterations=150",
-                                                         seeds=range(4))]
-    local_sweep = executor.run_many(sweep, jobs=1)
 
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_dask")
-    with executor.make_executor("dask", jobs=2) as ex:
+    with executor.make_executor("dask", jobs=1) as ex:  # its nanny restarts it and the task runs again
         done = threading.Event()
         killer = threading.Thread(target=lambda: killed.append(_kill_a_worker_once_busy(ex.client, done)))
         killed: list = []
         killer.start()
         try:
             reproduce(selected, tmp_path / "dask", seeds=2, tiny=True, executor=ex, log=lambda *_: None)
-            dask_sweep = executor.run_many(sweep, executor=ex)
         finally:
             done.set()
             killer.join()
     assert killed and killed[0] is not None, "no worker was killed midway"
     for name in ("ding2024/summary.csv", "ding2024/ding2024_fig5.csv", "ding2024/ding2024_fig5_runs.csv"):
         assert (tmp_path / "local" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes(), name
-    assert all(same(a, b) for a, b in zip(local_sweep, dask_sweep))
 
 
 def test_jobqueue_submits_single_threaded_one_worker_jobs():
