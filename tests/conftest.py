@@ -46,11 +46,22 @@ def cli(capsys, monkeypatch):
     return _run
 
 
+@pytest.fixture(scope="session")
+def _composed_configs(tmp_path_factory):
+    """One composed-config cache for the whole test session, shared by the xdist workers (a config
+    is composed by Hydra once per session, not once per test: most of an artifact's smoke run)."""
+    root = tmp_path_factory.getbasetemp()
+    root = root.parent if root.name.startswith("popen-gw") else root  # the workers' common folder
+    return root / "composed-configs"
+
+
 @pytest.fixture(autouse=True)
-def _isolated_cache(tmp_path, monkeypatch):
-    """Each test gets its own run cache, so nothing is read from or left in .cache/."""
+def _isolated_cache(tmp_path, monkeypatch, _composed_configs):
+    """Each test gets its own run cache, so nothing is read from or left in .cache/; composed configs
+    come from the session's own cache (the tests of that cache use fresh processes: test_configs.py)."""
     monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "cache")
     monkeypatch.setattr("magexp.run.cache.CACHE", tmp_path / "cache")
+    monkeypatch.setattr("magexp.paths.composed_configs", lambda: _composed_configs)
 
 
 def _missing_recording(value) -> str | None:

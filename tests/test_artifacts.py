@@ -37,12 +37,14 @@ def check_artifact(spec, out, summary, seeds=2):
 
 @pytest.fixture(autouse=True)
 def _png_only(monkeypatch):
-    """The smoke runs draw each figure once, as a small PNG: the PDF twin and the full-resolution
-    drawing of every figure are checked by tests/test_figures.py and tests/test_figure_defects.py."""
+    """The smoke runs draw each figure once, as a small PNG without its layout pass: the PDF twin, the
+    layout and the full-resolution drawing of every figure are checked by tests/test_figures.py and
+    tests/test_figure_defects.py."""
     from magexp.artifacts.plots import style
 
     def save(fig, path):
         try:
+            fig.set_layout_engine("none")
             fig.savefig(path, dpi=40)
         finally:
             style.plt.close(fig)
