@@ -47,13 +47,17 @@ def cli(capsys, monkeypatch):
     return _run
 
 
+def _session_root(tmp_path_factory):
+    """The test session's folder, common to its xdist workers."""
+    root = tmp_path_factory.getbasetemp()
+    return root.parent if root.name.startswith("popen-gw") else root
+
+
 @pytest.fixture(scope="session")
 def _composed_configs(tmp_path_factory):
     """One composed-config cache for the whole test session, shared by the xdist workers (a config
     is composed by Hydra once per session, not once per test: most of an artifact's smoke run)."""
-    root = tmp_path_factory.getbasetemp()
-    root = root.parent if root.name.startswith("popen-gw") else root  # the workers' common folder
-    return root / "composed-configs"
+    return _session_root(tmp_path_factory) / "composed-configs"
 
 
 @pytest.fixture(autouse=True)
@@ -126,12 +130,19 @@ def reproduce_into(out, cache_dir, args=MOCKUP_ARGS) -> int:
 @pytest.fixture(scope="session")
 def mockup_reproduction(tmp_path_factory):
     """One clean reproduction of :data:`MOCKUP_ARGS` shared by the tests that compare with it or start
-    from it (copy before changing anything): ``args``, ``runs`` (its run cache), ``out`` (its output
-    folder), ``files`` (every file it wrote, by relative path, with its bytes) and ``reproduce_into``."""
+    from it, made once for all xdist workers (read-only: copy before changing anything): ``args``,
+    ``runs`` (its run cache), ``out`` (its output folder), ``files`` (every file it wrote, by relative
+    path, with its bytes) and ``reproduce_into``."""
+    import fcntl
     from types import SimpleNamespace
 
-    root = tmp_path_factory.mktemp("mockup")
-    assert reproduce_into(root / "out", root / "runs") == 0
+    root = _session_root(tmp_path_factory) / "mockup"  # one for every xdist worker: the first makes it
+    root.mkdir(exist_ok=True)
+    with open(root / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (root / "done").exists():
+            assert reproduce_into(root / "out", root / "runs") == 0
+            (root / "done").touch()
     files = {p.relative_to(root / "out").as_posix(): p.read_bytes()
              for p in sorted((root / "out").rglob("*")) if p.is_file()}
     return SimpleNamespace(args=list(MOCKUP_ARGS), runs=root / "runs", out=root / "out", files=files,

@@ -107,7 +107,8 @@ def test_a_composed_config_is_kept_once_its_overrides_pass_and_comes_back_with_i
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "c" / "runs")}
 
     def python(*args):
-        return subprocess.run([sys.executable, *args], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+        return subprocess.run([sys.executable, *args], cwd=tmp_path, env=env, capture_output=True, text=True,
+                              timeout=120)
 
     typo = python("-m", "magexp", "scenario=yuan2018_drift", "scenario.nosie=2")
     assert typo.returncode == 2 and "nosie" in typo.stderr and not list(tmp_path.rglob("*.json")), typo.stderr

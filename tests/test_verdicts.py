@@ -105,7 +105,8 @@ def summary_of(reported, values: dict, ok: dict, truth: dict):
     from magexp.artifacts.plan import ArtifactRuns
     from magexp.artifacts.spec import parse
 
-    spec = parse({"kind": "final", "title": "t", "seeds": 30, "summarise": [{"quantity": "q", "metric": "q"}], "reported": reported,
+    spec = parse({"kind": "final", "title": "t", "seeds": 30, "summarise": [{"quantity": "q", "metric": "q"}],
+                  "reported": reported,
                   "success": {"metric": "q", "reference": "truth_q", "factor": 1.2, "floor": 0.0}},
                  Path("p") / "a.yaml")
     cells = [{"estimator": name} for name in values]
