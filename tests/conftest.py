@@ -56,7 +56,7 @@ def _session_root(tmp_path_factory):
 @pytest.fixture(scope="session")
 def _composed_configs(tmp_path_factory):
     """One composed-config cache for the whole test session, shared by the xdist workers (a config
-    is composed by Hydra once per session, not once per test: most of an artifact's smoke run)."""
+    is composed by Hydra once per session, not once per test: a large part of an artifact's smoke run)."""
     return _session_root(tmp_path_factory) / "composed-configs"
 
 
@@ -66,7 +66,7 @@ def _isolated_cache(tmp_path, monkeypatch, _composed_configs):
     come from the session's own cache (the tests of that cache use fresh processes: test_configs.py)."""
     monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "cache")
     monkeypatch.setattr("magexp.run.cache.CACHE", tmp_path / "cache")
-    monkeypatch.setattr("magexp.paths.composed_configs", lambda: _composed_configs)
+    monkeypatch.setattr("magexp.paths.composed_configs", lambda: _composed_configs, raising=False)
 
 
 @functools.lru_cache(maxsize=None)
