@@ -3,6 +3,7 @@ command line run in-process (the process boundary itself is tested in ``test_cli
 
 from __future__ import annotations
 
+import functools
 import subprocess
 
 import pytest
@@ -46,13 +47,29 @@ def cli(capsys, monkeypatch):
     return _run
 
 
+def _session_root(tmp_path_factory):
+    """The test session's folder, common to its xdist workers."""
+    root = tmp_path_factory.getbasetemp()
+    return root.parent if root.name.startswith("popen-gw") else root
+
+
+@pytest.fixture(scope="session")
+def _composed_configs(tmp_path_factory):
+    """One composed-config cache for the whole test session, shared by the xdist workers (a config
+    is composed by Hydra once per session, not once per test: a large part of an artifact's smoke run)."""
+    return _session_root(tmp_path_factory) / "composed-configs"
+
+
 @pytest.fixture(autouse=True)
-def _isolated_cache(tmp_path, monkeypatch):
-    """Each test gets its own run cache, so nothing is read from or left in .cache/."""
+def _isolated_cache(tmp_path, monkeypatch, _composed_configs):
+    """Each test gets its own run cache, so nothing is read from or left in .cache/; composed configs
+    come from the session's own cache (the tests of that cache use fresh processes: test_configs.py)."""
     monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "cache")
     monkeypatch.setattr("magexp.run.cache.CACHE", tmp_path / "cache")
+    monkeypatch.setattr("magexp.paths.composed_configs", lambda: _composed_configs, raising=False)
 
 
+@functools.lru_cache(maxsize=None)
 def _missing_recording(value) -> str | None:
     """The recording a parametrised scenario or artifact reads, when it is absent from
     :data:`magexp.paths.SHARED_DATA` (the recordings of others are never shipped), else None."""
@@ -83,7 +100,50 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         params = getattr(getattr(item, "callspec", None), "params", {})
         for value in params.values():
-            missing = _missing_recording(value)
+            try:
+                missing = _missing_recording(value)  # each value's files read once, not once per test
+            except TypeError:  # a value that is not hashable: no recording named by it
+                missing = None
             if missing:
                 item.add_marker(pytest.mark.skip(reason=f"{missing} is not in the recordings folder (MAGEXP_DATA)"))
                 break
+
+
+#: a small whole reproduction (6 runs of the mock-up: ls, kf and the paper's values, 2 seeds; 2 tasks)
+MOCKUP_ARGS = ("yan2022", "--only", "yan2022_table_mockup", "--seeds", "2", "--tiny", "--jobs", "1")
+
+
+def reproduce_into(out, cache_dir, args=MOCKUP_ARGS) -> int:
+    """``python -m magexp.artifacts.reproduce ARGS --out out`` in this process, on the run cache ``cache_dir``."""
+    from magexp import paths
+    from magexp.artifacts.reproduce import main
+    from magexp.run import cache
+
+    saved = cache.CACHE, paths.CACHE
+    cache.CACHE = paths.CACHE = cache_dir
+    try:
+        return main([*args, "--out", str(out)])
+    finally:
+        cache.CACHE, paths.CACHE = saved
+
+
+@pytest.fixture(scope="session")
+def mockup_reproduction(tmp_path_factory):
+    """One clean reproduction of :data:`MOCKUP_ARGS` shared by the tests that compare with it or start
+    from it, made once for all xdist workers (read-only: copy before changing anything): ``args``,
+    ``runs`` (its run cache), ``out`` (its output folder), ``files`` (every file it wrote, by relative
+    path, with its bytes) and ``reproduce_into``."""
+    import fcntl
+    from types import SimpleNamespace
+
+    root = _session_root(tmp_path_factory) / "mockup"  # one for every xdist worker: the first makes it
+    root.mkdir(exist_ok=True)
+    with open(root / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (root / "done").exists():
+            assert reproduce_into(root / "out", root / "runs") == 0
+            (root / "done").touch()
+    files = {p.relative_to(root / "out").as_posix(): p.read_bytes()
+             for p in sorted((root / "out").rglob("*")) if p.is_file()}
+    return SimpleNamespace(args=list(MOCKUP_ARGS), runs=root / "runs", out=root / "out", files=files,
+                           reproduce_into=reproduce_into)

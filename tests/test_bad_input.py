@@ -220,7 +220,7 @@ TABLE = [
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1", "seed=1,2"], ["'tcp://node1'", "PORT"]),
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1:99999", "seed=1,2"], ["99999", "PORT"]),
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://127.0.0.1:1", "seed=1,2"], ["no Dask scheduler"],
-        patch=[("magexp.run.sweep._quiet_dask", lambda: None), ("magexp.run.executor.DaskExecutor.__init__", no_scheduler)]),
+        patch=[("magexp.run.executor.DaskExecutor.__init__", no_scheduler)]),
     row("sweep", ["-m", "estimator=ellipsoid", "seed=1,2"], ["interrupted"], code=130,
         patch=[("magexp.run.sweep.run_many", interrupt)]),
     row("sweep", ["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),
@@ -491,20 +491,6 @@ def test_bad_input(case, workdir, tmp_path, capsys, monkeypatch):
 
 # ---------------------------------------------------------------------------------------------
 # what is not a bad input, and what must still hold beside the table
-
-def test_a_typo_writes_no_composed_config(workdir, cli, tmp_path, monkeypatch):
-    """The composed-config cache is written only once a command's overrides pass (a cold cache here)."""
-    from magexp import paths
-    from magexp.run import compose as config
-
-    for name in ("_SKELETONS", "_NODES"):
-        monkeypatch.setattr(config, name, {})
-    monkeypatch.setattr(config, "_SEEN", set())
-    proc = cli("scenario=ding2024_exp2", "scenario.nosie=2")
-    assert proc.returncode == 2 and not paths.composed_configs().exists(), proc.stderr
-    proc = cli("--cfg", "job", "scenario=ding2024_exp2", "scenario.noise=3")
-    assert proc.returncode == 0 and len(list(paths.composed_configs().glob("*.json"))) == 1
-
 
 def test_missing_launcher_extra_names_the_pip_install(workdir, cli, monkeypatch):
     import importlib.util

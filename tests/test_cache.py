@@ -13,25 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from magexp import paths
-
 from magexp.run import cache
 
 from magexp.artifacts import reproduce
 from magexp.estimators.result import RunOutput
 
-ARTIFACT = ["yan2022", "--only", "yan2022_table_mockup", "--seeds", "2", "--tiny", "--jobs", "1"]  # 6 runs, 2 tasks
 RUNS = 6
-
-
-def reproduce_into(out: Path, cache_dir: Path) -> int:
-    """``python -m magexp.artifacts.reproduce ARTIFACT --out out`` in this process, on the run cache ``cache_dir``."""
-    saved = cache.CACHE, paths.CACHE
-    cache.CACHE = paths.CACHE = cache_dir
-    try:
-        return reproduce.main([*ARTIFACT, "--out", str(out)])
-    finally:
-        cache.CACHE, paths.CACHE = saved
 
 
 def files(out: Path) -> dict:
@@ -43,13 +30,22 @@ def entries(cache_dir: Path) -> list[Path]:
     return sorted(cache_dir.rglob(f"*{cache.SUFFIX}"))
 
 
-@pytest.fixture(scope="module")
-def clean(tmp_path_factory):
-    """A clean reproduction: its run cache and its files."""
-    root = tmp_path_factory.mktemp("clean")
-    assert reproduce_into(root / "out", root / "runs") == 0
-    assert len(entries(root / "runs")) == RUNS
-    return root / "runs", files(root / "out")
+@pytest.fixture
+def clean(mockup_reproduction):
+    """A clean reproduction (conftest.py's, shared): its run cache and its files."""
+    assert len(entries(mockup_reproduction.runs)) == RUNS
+    return mockup_reproduction.runs, mockup_reproduction.files
+
+
+@pytest.fixture
+def reproduce_into(mockup_reproduction):
+    """``reproduce_into(out, cache_dir)``: the clean reproduction's command again, into ``out``."""
+    return mockup_reproduction.reproduce_into
+
+
+@pytest.fixture
+def artifact(mockup_reproduction):
+    return mockup_reproduction.args
 
 
 def forge(data: bytes, old: bytes, new: bytes) -> bytes:
@@ -132,7 +128,7 @@ def test_only_one_process_claims_a_run():
 
 
 @pytest.mark.slow
-def test_swapped_and_crafted_entries_are_recomputed_and_run_no_code(clean, tmp_path, capsys):
+def test_swapped_and_crafted_entries_are_recomputed_and_run_no_code(clean, reproduce_into, tmp_path, capsys):
     """A swapped pair of entries, a pickle that would run ``touch`` under the former loader, and a forged
     entry of the current format with a valid digest: recomputed, one line, the clean run's files."""
     clean_cache, clean_files = clean
@@ -160,7 +156,7 @@ def test_swapped_and_crafted_entries_are_recomputed_and_run_no_code(clean, tmp_p
 
 
 @pytest.mark.slow
-def test_a_cache_that_cannot_be_written_gives_one_line_and_the_results(clean, tmp_path, capsys, cli):
+def test_a_cache_that_cannot_be_written_gives_one_line_and_the_results(clean, reproduce_into, tmp_path, capsys, cli):
     """Every write into the cache folder fails (it lies under a file: for root as for anyone): the
     reproduction computes, says so in one line and writes the clean run's files; a single run too."""
     _, clean_files = clean
@@ -179,7 +175,7 @@ def test_a_cache_that_cannot_be_written_gives_one_line_and_the_results(clean, tm
 
 @pytest.mark.slow
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only folder")
-def test_a_read_only_cache_gives_one_line_and_the_results(clean, tmp_path, capsys):
+def test_a_read_only_cache_gives_one_line_and_the_results(clean, reproduce_into, tmp_path, capsys):
     clean_cache, clean_files = clean
     runs = tmp_path / "runs"
     shutil.copytree(clean_cache, runs)
@@ -235,12 +231,20 @@ def test_entries_are_shared_with_the_group_of_a_shared_folder(tmp_path):
 
 
 # a reproduction that logs each run it computes (one line per run) and starts computing only once
-# both processes have planned (so that they race for the same runs)
+# both processes have planned (so that they race for the same runs); its figure is not drawn (what
+# is shared is the run cache: the figure cache is tested in test_reproduce.py)
 CONCURRENT = """
 import sys, time
 from pathlib import Path
+from magexp.artifacts.plots import style
 from magexp.run import executor
 from magexp.artifacts.reproduce import main
+def save(fig, path):  # empty files where the figure goes
+    style.plt.close(fig)
+    for twin in (path, path.with_suffix(".pdf")):
+        twin.write_bytes(b"")
+    return [path, path.with_suffix(".pdf")]
+style.save = save
 log, me, other = Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3])
 real_batch, real_many = executor.run_batch, executor.run_many
 def run_batch(configs):
@@ -262,11 +266,11 @@ sys.exit(main(sys.argv[4:]))
 
 
 @pytest.mark.slow
-def test_two_reproductions_on_one_cache_compute_each_run_once(clean, tmp_path):
+def test_two_reproductions_on_one_cache_compute_each_run_once(clean, artifact, tmp_path):
     _, clean_files = clean
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "runs")}
     procs = [subprocess.Popen([sys.executable, "-c", CONCURRENT, str(tmp_path / f"{name}.log"),
-                               str(tmp_path / f"{name}.ready"), str(tmp_path / f"{other}.ready"), *ARTIFACT,
+                               str(tmp_path / f"{name}.ready"), str(tmp_path / f"{other}.ready"), *artifact,
                                "--out", str(tmp_path / name)], env=env, stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True)
              for name, other in (("a", "b"), ("b", "a"))]
@@ -275,7 +279,8 @@ def test_two_reproductions_on_one_cache_compute_each_run_once(clean, tmp_path):
     computed = [line for name in "ab" if (tmp_path / f"{name}.log").exists()
                 for line in (tmp_path / f"{name}.log").read_text().splitlines()]
     assert len(computed) == RUNS and len(set(computed)) == RUNS, computed  # each run once, by one of them
-    assert files(tmp_path / "a") == files(tmp_path / "b") == clean_files
+    drawn = {name for name in clean_files if name.endswith((".png", ".pdf"))}
+    assert files(tmp_path / "a") == files(tmp_path / "b") == {**clean_files, **dict.fromkeys(drawn, b"")}
     assert all(err == "" for _, err in done)
 
 

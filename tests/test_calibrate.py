@@ -200,7 +200,23 @@ def test_estimator_that_does_not_apply_is_one_line(tmp_path):
 
 
 def test_units_are_carried():
-    assert set(UNITS) == {"nT", "uT", "mG", "G", "T"}  # and raw "counts", without a factor and UNITS["uT"] == 1000 and UNITS["mG"] == 100
+    """A calibration is in its readings' unit: the same readings in uT, in mG (x10) and in raw counts
+    give the same offset in each unit; the factors to nT are the SI ones."""
+    from magexp.calibration.fit import calibrate as calibrate_api
+    from magexp.core.recordings import RAW_UNITS
+
+    assert UNITS == {"nT": 1.0, "uT": 1e3, "mG": 100.0, "G": 1e5, "T": 1e9} and "counts" in RAW_UNITS
+    t = np.linspace(0, 20, 80)
+    sphere = np.column_stack([np.cos(t) * np.sin(t / 7 + 0.3), np.sin(t) * np.sin(t / 7 + 0.3), np.cos(t / 7 + 0.3)])
+    readings = 40 * sphere * [1.02, 0.98, 1.0] + [3.0, -2.0, 1.0]  # uT
+    offsets = {}
+    for unit, factor in (("uT", 1.0), ("mG", 10.0), ("counts", 1.0)):
+        cal = calibrate_api(readings * factor, unit=unit, estimator="ellipsoid")
+        assert cal.unit == unit
+        offsets[unit] = cal.offset / factor
+    np.testing.assert_allclose(offsets["uT"], [3.0, -2.0, 1.0], atol=1e-6)
+    np.testing.assert_allclose(offsets["mG"], offsets["uT"], rtol=1e-9)
+    np.testing.assert_allclose(offsets["counts"], offsets["uT"], rtol=1e-9)
 
 
 def test_reference_order_and_unit_agreement(tmp_path):

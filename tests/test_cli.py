@@ -10,7 +10,6 @@ import subprocess
 import sys
 import time
 
-import pytest
 import yaml
 
 from magexp.__main__ import main as magexp_main
@@ -116,6 +115,18 @@ def test_each_subcommand_goes_through_the_one_error_path(cli, tmp_path):
     ok = cli("reproduce", "--help", cwd=tmp_path)
     assert ok.returncode == 0 and "--redraw" in ok.stdout
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_calibrate_is_its_own_command(tmp_path, cli):
+    """``magexp calibrate ARGS`` hands ARGS to the calibrate command before any run config is composed
+    (the end to end calibration: tests/test_calibrate.py::test_cli_end_to_end)."""
+    calibrate = cli("calibrate", "data.path=x.csv", "estimator=lm", cwd=tmp_path)
+    assert calibrate.returncode == 2 and calibrate.stderr.count("\n") == 1, calibrate.stderr
+    assert "x.csv" in calibrate.stderr and "magexp calibrate" not in calibrate.stderr  # the recording is looked for
+    run = cli("data.path=x.csv", "estimator=lm", cwd=tmp_path)  # the same keys to a run: pointed to calibrate
+    assert run.returncode == 2 and run.stderr.count("\n") == 1 and "magexp calibrate" in run.stderr, run.stderr
+    assert not list(tmp_path.iterdir())
+
 
 def test_a_closed_form_run_imports_no_pandas_matplotlib_or_scipy(tmp_path):
     """Fast start: a one-run command loads only what the run needs (a fresh interpreter)."""

@@ -41,14 +41,14 @@ def test_run_seed_reproducibility(make_cfg):
 
 
 @pytest.mark.parametrize("path", ARTIFACTS, ids=lambda p: p.stem)
-def test_artifact_spec_is_well_formed(make_cfg, path):
+def test_artifact_spec_is_well_formed(path):
+    """Its name, paper, kind and cells; every paper number lands on a cell (that every cell composes
+    and runs: tests/test_artifacts.py, whose smoke runs plan every cell of every artifact)."""
     spec = load_spec(path)
     assert spec.name == path.stem and spec.paper == path.parent.name
     kind_module(spec.kind)
     grid = cells(spec)
     assert grid, "an artifact needs at least one cell"
-    for cell in grid:  # every cell composes
-        make_cfg(*overrides_of(spec, cell))
     settings = [dict(o.split("=", 1) for o in overrides_of(spec, cell)) for cell in grid]
     per_parameter = any(s.mode == "parameters" for s in spec.summarise)
     quantities = {s.quantity for s in spec.summarise if s.quantity} | {r.quantity for r in spec.ratios}
@@ -79,20 +79,48 @@ def test_compose_config_equals_hydras_compose(overrides):
         assert OmegaConf.to_container(compose_config(overrides), resolve=True) == expected
 
 
-def test_a_composed_config_from_disk_keeps_its_schema(tmp_path, monkeypatch):
-    import magexp.run.compose as config
-    from magexp.errors import MagexpError
+#: a fresh process composing from the composed-config cache on disk: no Hydra compose, the schema kept
+FROM_DISK = """
+from omegaconf import OmegaConf
+from magexp.errors import MagexpError
+from magexp.run import compose
+def no_hydra(*args, **kwargs):
+    raise AssertionError("composed by Hydra: the entry on disk was not read")
+compose.hydra_compose = no_hydra
+first = compose.compose_config(["scenario=yuan2018_drift"])
+again = compose.compose_config(["scenario=yuan2018_drift"])
+assert again == first and again is not first
+assert OmegaConf.get_type(again.scenario) is compose.YuanScenarioConf
+try:
+    compose.compose_config(["scenario=yuan2018_drift", "scenario.noise=abc"])
+except MagexpError as exc:
+    print(exc)
+"""
 
-    monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "fresh")
-    monkeypatch.setattr(config, "_SEEN", set())  # as in a new process
-    monkeypatch.setattr(config, "_SKELETONS", {})
-    first = config.compose_config(["scenario=yuan2018_drift"])
-    assert list((tmp_path / "fresh-configs").glob("*.json"))
-    again = config.compose_config(["scenario=yuan2018_drift"])  # from disk
-    assert again == first and again is not first
-    assert OmegaConf.get_type(again.scenario) is config.YuanScenarioConf
-    with pytest.raises(MagexpError, match="scenario.noise=abc"):
-        config.compose_config(["scenario=yuan2018_drift", "scenario.noise=abc"])
+
+def test_a_composed_config_is_kept_once_its_overrides_pass_and_comes_back_with_its_schema(tmp_path):
+    """Three fresh processes on one cold cache: a typo writes no composed config; a passing command
+    keeps one; a third process composes from it without Hydra, typed by its schema."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "c" / "runs")}
+
+    def python(*args):
+        return subprocess.run([sys.executable, *args], cwd=tmp_path, env=env, capture_output=True, text=True,
+                              timeout=120)
+
+    typo = python("-m", "magexp", "scenario=yuan2018_drift", "scenario.nosie=2")
+    assert typo.returncode == 2 and "nosie" in typo.stderr and not list(tmp_path.rglob("*.json")), typo.stderr
+    kept = python("-m", "magexp", "--cfg", "job", "scenario=yuan2018_drift")
+    assert kept.returncode == 0, kept.stderr
+    (entry,) = tmp_path.rglob("*.json")
+    stamp = entry.stat().st_mtime_ns
+    read = python("-c", FROM_DISK)
+    assert read.returncode == 0, read.stderr
+    assert "scenario.noise=abc" in read.stdout
+    assert list(tmp_path.rglob("*.json")) == [entry] and entry.stat().st_mtime_ns == stamp
 
 
 def test_a_typo_names_the_key_and_the_keys_that_exist():

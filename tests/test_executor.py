@@ -75,8 +75,8 @@ def test_task_plan_keeps_each_seed_of_a_scenario_together():
              + configs("scenario=ding2024_exp2", "estimator=ellipsoid", seeds=range(3)))
     tasks = executor.plan_tasks(batch, workers=2)
     assert sorted(i for t in tasks for i in t) == list(range(len(batch)))
-    for task in tasks:
-        assert len({executor._group_key(batch[i]) for i in task}) == 1  # one scenario per task
+    for task in tasks:  # one scenario (its data: the scenario node and the objective) per task
+        assert len({repr((batch[i]["scenario"], batch[i].get("objective"))) for i in task}) == 1
     where = {i: k for k, t in enumerate(tasks) for i in t}
     for i in range(6):  # both estimators of a seed share a task (and so its dataset and bound)
         assert where[i] == where[6 + i]
@@ -122,34 +122,31 @@ def _kill_a_worker_once_busy(client, done: threading.Event):
 
 @pytest.mark.slow
 def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, monkeypatch):
-    """A LocalCluster of two workers runs a tiny reproduction and a sweep; one worker is killed
-    midway; the scheduler reruns its task elsewhere and every output file is byte-identical."""
+    """A LocalCluster of one worker runs a tiny reproduction; the worker is killed midway; the scheduler
+    reruns its task on the worker that replaces it and every output file is byte-identical (a sweep on a Dask
+    cluster: tests/test_sweep.py::test_local_processes_and_a_dask_cluster_give_the_same_sweep)."""
+    from magexp.artifacts.plots import style
     from magexp.artifacts.reproduce import reproduce, select
 
+    monkeypatch.setattr(style, "save", lambda fig, path: style.plt.close(fig) or [])  # the figure is not compared
     selected = select(["ding2024"], "ding2024_fig5")
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_local")
     reproduce(selected, tmp_path / "local", seeds=2, jobs=1, tiny=True, log=lambda *_: None)
-    sweep = [c for noise in (0, 2, 5) for c in configs(*DING, "estimator=ipso", f"scenario.noise={noise}",
-                                                         "estimator.n_particles=30", "estimator.n_iterations=150",
-                                                         seeds=range(4))]
-    local_sweep = executor.run_many(sweep, jobs=1)
 
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_dask")
-    with executor.make_executor("dask", jobs=2) as ex:
+    with executor.make_executor("dask", jobs=1) as ex:  # its nanny restarts it and the task runs again
         done = threading.Event()
         killer = threading.Thread(target=lambda: killed.append(_kill_a_worker_once_busy(ex.client, done)))
         killed: list = []
         killer.start()
         try:
             reproduce(selected, tmp_path / "dask", seeds=2, tiny=True, executor=ex, log=lambda *_: None)
-            dask_sweep = executor.run_many(sweep, executor=ex)
         finally:
             done.set()
             killer.join()
     assert killed and killed[0] is not None, "no worker was killed midway"
     for name in ("ding2024/summary.csv", "ding2024/ding2024_fig5.csv", "ding2024/ding2024_fig5_runs.csv"):
         assert (tmp_path / "local" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes(), name
-    assert all(same(a, b) for a, b in zip(local_sweep, dask_sweep))
 
 
 def test_jobqueue_submits_single_threaded_one_worker_jobs():
@@ -181,27 +178,41 @@ class _RemoteLike(executor.InlineExecutor):
     shares_files = False
 
 
+class _Recording(executor.InlineExecutor):
+    """The in-process executor, keeping what each task sends back to the parent and which runs the
+    cache held when the task was done."""
+
+    def __init__(self, stored):
+        super().__init__()
+        self.stored, self.sent = stored, []
+
+    def as_completed(self, futures):
+        for future in super().as_completed(futures):
+            value = future.result()  # the task runs here (in this process, when asked)
+            self.sent.append((value, list(self.stored)))
+            future.result = lambda value=value: value  # run once: the parent reads the same value
+            yield future
+
+
 def test_workers_store_their_runs_and_the_counts_split_the_cpu(tmp_path, monkeypatch):
     from magexp.artifacts.reproduce import cpu_line
 
     batch = configs(*DING, "estimator=ellipsoid", seeds=range(3)) + configs(*DING, "estimator=pso", seeds=range(3))
     keys = cache.run_keys(batch)
     monkeypatch.setattr(cache, "CACHE", tmp_path / "shared")
-    stored, sent = [], []
-    real_store, real_task = cache.store, executor._run_task
+    stored = []
+    real_store = cache.store
     monkeypatch.setattr(cache, "store", lambda *a, **k: stored.append(a[0]) or real_store(*a, **k))
-
-    def task(configs, keys, root, *options):
-        results, cpu, notes = real_task(configs, keys, root, *options)
-        sent.append((list(keys), list(stored), results))
-        return results, cpu, notes
-
-    monkeypatch.setattr(executor, "_run_task", task)
     counts = {}
-    here = executor.run_many(batch, jobs=1, counts=counts)
-    for task_keys, stored_by_then, results in sent:  # each run stored inside its task; only rows sent back
-        assert set(task_keys) <= set(stored_by_then)
+    recording = _Recording(stored)
+    here = executor.run_many(batch, executor=recording, counts=counts)
+    assert recording.sent
+    returned = 0
+    for (results, *_), stored_by_then in recording.sent:  # each run stored inside its task; only rows sent back
         assert all(isinstance(row, dict) and isinstance(fit, float) for row, fit in results)
+        returned += len(results)
+        assert len(stored_by_then) == returned
+    assert returned == len(batch)
     assert sorted(stored) == sorted(keys) and all(cache.exists(k) for k in keys)
     assert pickle.dumps(here.metrics(3)) == pickle.dumps(executor.run_row(here[3]))  # the stored run's row
     assert counts["task_cpu"] >= counts["fit_cpu"] > 0
@@ -275,37 +286,51 @@ def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
     try:
         version = cache.code_version()
         memo = tmp_path / "cache" / "runs" / "code-version.json"
-        assert json.loads(memo.read_text()) == {cache._source_stamp(): version} and version == cache._closure_hash()
-        memo.write_text(json.dumps({cache._source_stamp(): "kept"}))
+        (stamp, kept), = json.loads(memo.read_text()).items()  # the version, under the sources' stamp
+        assert kept == version
+        memo.write_text(json.dumps({stamp: "kept"}))
         cache.code_version.cache_clear()
         assert cache.code_version() == "kept"  # read back, not recomputed
         with (copy / "magexp/core/bounds.py").open("a") as fh:
             fh.write("\n# an edit\n")
         cache.code_version.cache_clear()
-        assert cache.code_version() == cache._closure_hash() not in ("kept", version)  # a new stamp: recomputed
+        new = cache.code_version()
+        assert new not in ("kept", version)  # a new stamp: recomputed
+        assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == new
+        with (copy / "magexp/core/bounds.py").open("a") as fh:
+            fh.write("\n# an edit\n")
+        cache.code_version.cache_clear()
+        assert cache.code_version() not in (new, version)  # each edit changes the version
     finally:
         cache.code_version.cache_clear()
 
 
-@pytest.mark.parametrize("scenario", ["ding2024_exp1", "yuan2018_mode1", "yan2022_sim"])
-def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, monkeypatch):
+@pytest.mark.parametrize("scenario, offset", [("ding2024_exp1", "scenario.errors.hard_iron"),
+                                              ("yuan2018_mode1", "scenario.b"), ("yan2022_sim", "scenario.Bp")])
+def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, offset, monkeypatch):
     import numpy as np
 
     from magexp.core import bounds
+    from magexp.core.seeding import run_generators, scenario_stream
+    from magexp.problems import make_problem
 
-    problems = [runner._Shared().problem(c, runner.build(c["scenario"], "scenario"), c["seed"])[2]
-                for c in configs(f"scenario={scenario}", seeds=(0, 1))]
-    fresh = []
-    for problem in problems:  # each bound from scratch: nothing kept
-        monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
-        fresh.append(pickle.dumps(bounds.cramer_rao(problem)))
-    monkeypatch.setattr(bounds, "_INVARIANT_JACOBIANS", bounds.OrderedDict())
+    # a truth of its own (an offset no other test uses): nothing kept from earlier work in this process
+    unique = [round(v, 9) for v in np.random.default_rng().uniform(1, 2, 3)]
+    problems = []
+    for cfg in configs(f"scenario={scenario}", f"{offset}=[{unique[0]},{unique[1]},{unique[2]}]", seeds=(0, 1)):
+        sc = runner.build(cfg["scenario"], "scenario")
+        data = sc.generate(rng=run_generators(cfg["seed"], stream=scenario_stream(cfg["scenario"]))[0])
+        problems.append(make_problem(cfg.get("objective") or sc.objective, data, sc.search,
+                                     **getattr(sc, "problem_options", {})))
+    assert np.array_equal(problems[0].truth_theta(), problems[1].truth_theta())
     calls = []
     real = bounds.central_differences
     monkeypatch.setattr(bounds, "central_differences", lambda fun, *a: calls.append(fun) or real(fun, *a))
-    kept = [pickle.dumps(bounds.cramer_rao(problem)) for problem in problems]
-    assert kept == fresh  # the same bits
-    assert len(bounds._INVARIANT_JACOBIANS) == 1  # one truth: H computed once for both seeds
-    assert sum(getattr(f, "__name__", "") == "invariants" for f in calls) == 1
-    (h,) = bounds._INVARIANT_JACOBIANS.values()
-    assert not h.flags.writeable and np.isfinite(h).all()
+    kept = [bounds.cramer_rao(problem) for problem in problems]
+    assert sum(getattr(f, "__name__", "") == "invariants" for f in calls) == 1  # one truth: H once for both seeds
+    monkeypatch.setattr(bounds, "central_differences", real)
+    # from scratch: H = ∂h/∂θ by central differences for every problem, nothing kept
+    monkeypatch.setattr(bounds, "invariant_jacobian", lambda problem, theta, steps, keep=0:
+                        real(problem.invariants, theta, steps))
+    fresh = [bounds.cramer_rao(problem) for problem in problems]
+    assert pickle.dumps(kept) == pickle.dumps(fresh)  # the same bits

@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pandas as pd
 import pytest
 from omegaconf import OmegaConf
@@ -97,13 +98,7 @@ def test_a_data_edit_reruns_exactly_the_runs_that_read_it(tmp_path, monkeypatch)
     assert counts["computed"] == 3
     executor.run_many(mockup + ding, jobs=1, counts=counts)
     assert counts["computed"] == 0
-    path = data / "yan2022_mockup.csv"
-    lines = path.read_text().splitlines(keepends=True)
-    row = next(i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#") and ln[0] in "-0123456789")
-    values = lines[row].split(",")
-    values[2] = str(int(values[2]) + 50)  # bz of the first attitude, +50 nT
-    lines[row] = ",".join(values)
-    path.write_text("".join(lines))
+    edit_first_reading(data / "yan2022_mockup.csv")  # bz of the first attitude, +50 nT
     again = executor.run_many(mockup + ding, jobs=1, counts=counts)
     assert counts["computed"] == 1 and counts["cached"] == 2  # the mock-up run only
     assert again.metrics(0)["fit_rms"] != first.metrics(0)["fit_rms"]
@@ -141,22 +136,21 @@ def test_a_plot_edit_reruns_nothing_and_a_bound_edit_reruns_all(tmp_path, monkey
         cache.code_version.cache_clear()
 
 
-def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monkeypatch, capsys):
+def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monkeypatch, capsys, mockup_reproduction):
     out = tmp_path / "res"
-    argv = ["yuan2018", "--only", "yuan2018_fig6", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
-    assert reproduce.main(argv) == 0
-    capsys.readouterr()
-    png, csv = out / "yuan2018" / "yuan2018_fig6.png", out / "yuan2018" / "yuan2018_fig6.csv"
-    data = csv.read_bytes()
+    shutil.copytree(mockup_reproduction.out, out)
+    name = "yan2022_table_mockup"
+    png, csv = out / "yan2022" / f"{name}.png", out / "yan2022" / f"{name}.csv"
     png.unlink()
     (out / "REPORT.md").unlink()
     (out / "summary.csv").unlink()
     monkeypatch.setattr(runner, "run_batch", lambda *a: pytest.fail("--redraw ran something"))
     monkeypatch.setattr(executor, "run_many", lambda *a, **k: pytest.fail("--redraw ran something"))
-    assert reproduce.main(["all", "--only", "yuan2018_fig6", "--redraw", "--out", str(out)]) == 0
-    assert png.stat().st_size > 0 and (out / "REPORT.md").exists() and (out / "summary.csv").exists()
-    assert csv.read_bytes() == data
+    capsys.readouterr()
+    assert reproduce.main(["all", "--only", name, "--redraw", "--out", str(out)]) == 0
     assert "redrew 1 figures" in capsys.readouterr().out
+    for path in (png, out / "REPORT.md", out / "summary.csv", csv):  # as the reproduction wrote them
+        assert path.read_bytes() == mockup_reproduction.files[path.relative_to(out).as_posix()], path
 
 
 # Ctrl-C at a fixed point: SIGINT to the process as its first run is counted, while its workers are busy
@@ -180,47 +174,53 @@ sys.exit(main(sys.argv[1:]))
 def test_ctrl_c_ends_in_one_line_and_a_clean_state(tmp_path):
     out = tmp_path / "res"
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}
-    proc = subprocess.Popen([sys.executable, "-c", CTRL_C, "ding2024", "--only", "ding2024_table_rms",
-                             "--seeds", "3", "--jobs", "2", "--out", str(out)],
+    proc = subprocess.Popen([sys.executable, "-c", CTRL_C, "yan2022", "--only", "yan2022_table_mockup",
+                             "--seeds", "2", "--jobs", "2", "--out", str(out)],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 130
     lines = [ln for ln in err.splitlines() if ln.strip() and "Warning" not in ln and not ln.startswith("  ")]
     assert len(lines) == 1 and "interrupted" in lines[0] and "Traceback" not in err, err
     assert not list(tmp_path.rglob("*.tmp")), "a half-written file was left behind"
-    assert not (out / "ding2024" / "ding2024_table_rms.csv").exists()
+    assert not (out / "yan2022" / "yan2022_table_mockup.csv").exists()
 
 
 @pytest.mark.slow
-def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypatch, capsys):
+def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypatch, capsys, mockup_reproduction):
+    """The figure cache (beside the run cache): a reproduction or a redraw draws a figure only when its
+    CSV, spec or code changed, or its files are not what was drawn; ``--force`` draws every figure."""
     from magexp.artifacts.plots import memo, style
 
     out = tmp_path / "res"
-    argv = ["ding2024", "--only", "ding2024_fig2", "--seeds", "2", "--tiny", "--jobs", "1", "--out", str(out)]
-    assert reproduce.main(argv) == 0
-    png, pdf = out / "ding2024" / "ding2024_fig2.png", out / "ding2024" / "ding2024_fig2.pdf"
-    csv = out / "ding2024" / "ding2024_fig2.csv"
+    shutil.copytree(mockup_reproduction.out, out)
+    shutil.copytree(mockup_reproduction.runs, cache.CACHE)  # its runs: the reproduction reads them
+    name = "yan2022_table_mockup"
+    png, pdf, csv = (out / "yan2022" / f"{name}.{ext}" for ext in ("png", "pdf", "csv"))
     first = png.read_bytes(), pdf.read_bytes()
-    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
     drawn = []
     real_save = style.save
     monkeypatch.setattr(style, "save", lambda fig, path: drawn.append(path) or real_save(fig, path))
-    redraw = ["all", "--only", "ding2024_fig2", "--redraw", "--out", str(out)]
+    argv = [*mockup_reproduction.args, "--out", str(out)]
+    redraw = ["all", "--only", name, "--redraw", "--out", str(out)]
 
-    assert reproduce.main(redraw) == 0 and drawn == []  # unchanged: kept
+    assert reproduce.main(argv) == 0 and len(drawn) == 1  # this figure cache is empty: drawn, the same bytes
+    assert "0 computed, 6 from the cache" in capsys.readouterr().out
+    assert (png.read_bytes(), pdf.read_bytes()) == first
+    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
+    assert reproduce.main(redraw) == 0 and len(drawn) == 1  # unchanged: kept
     assert "redrew 0 figures (1 unchanged" in capsys.readouterr().out
-    assert reproduce.main(argv) == 0 and drawn == []  # a cached reproduction keeps it too
+    assert reproduce.main(argv) == 0 and len(drawn) == 1  # a cached reproduction keeps it too
 
     pdf.write_bytes(b"%PDF edited")  # a figure file that is not what was drawn: drawn again, same bytes
-    assert reproduce.main(redraw) == 0 and len(drawn) == 1
+    assert reproduce.main(redraw) == 0 and len(drawn) == 2
     assert (png.read_bytes(), pdf.read_bytes()) == first
-    assert reproduce.main(redraw + ["--force"]) == 0 and len(drawn) == 2  # --force draws every figure
+    assert reproduce.main(redraw + ["--force"]) == 0 and len(drawn) == 3  # --force draws every figure
     assert (png.read_bytes(), pdf.read_bytes()) == first
 
     frame = pd.read_csv(csv)  # a new CSV: drawn again from it
-    frame.loc[0, "error"] = frame["error"].abs().max() * 3
+    frame.loc[frame.quantity == "fit_rms", "median"] *= 3
     frame.to_csv(csv, index=False)
-    assert reproduce.main(redraw) == 0 and len(drawn) == 3 and png.read_bytes() != first[0]
+    assert reproduce.main(redraw) == 0 and len(drawn) == 4 and png.read_bytes() != first[0]
 
 
 def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
@@ -251,36 +251,73 @@ def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
         memo.figure_code_version.cache_clear()
 
 
-def test_mockup_summary_builds_each_cells_problem_once_with_the_same_rows(tmp_path, monkeypatch):
+#: t(0.975, 8): the two-sided 95 % quantile of Student's t with 8 degrees of freedom (printed tables: 2.306)
+T_975_8 = 2.3060041350333704
+
+
+def edit_first_reading(path, delta=50):
+    """Add ``delta`` nT to bz of the first reading of a recording file."""
+    lines = path.read_text().splitlines(keepends=True)
+    row = next(i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#") and ln[0] in "-0123456789")
+    values = lines[row].split(",")
+    values[2] = str(int(values[2]) + delta)
+    lines[row] = ",".join(values)
+    path.write_text("".join(lines))
+
+
+def test_mockup_summary_is_the_least_squares_t_interval_and_f_test_built_once_per_cell(tmp_path, monkeypatch, make_cfg):
+    """The mock-up's rows judged against least squares: ``lo``, ``hi`` are the estimate -+ t(0.975, 8)
+    standard errors (per axis, 12 readings, 4 parameters), the F-test rows give the p-value of the
+    paper's solution; the problem is built once per cell, and a data file edited afterwards is read again."""
+    from scipy import stats
+
     from magexp.artifacts import summary
     from magexp.artifacts.plan import collect, plan_artifact
     from magexp.artifacts.spec import load
+    from magexp.problems import make_problem
     from magexp.run.executor import run_many
+    from magexp.scenarios.ship import ShipRecording
 
+    data = tmp_path / "data"
+    data.mkdir()
+    shutil.copy(DATA / "yan2022_mockup.csv", data / "yan2022_mockup.csv")
+    monkeypatch.setattr("magexp.core.datafiles.DATA", data)
+    monkeypatch.setattr("magexp.core.recordings.DATA", data)
     spec = load(ROOT / "experiments" / "yan2022" / "yan2022_table_mockup.yaml")
     plan = plan_artifact(spec, seeds=1, tiny=True)
     runs = collect(plan, run_many(plan.configs, jobs=1))
     built = []
-    real = summary.rebuild_problem
-    monkeypatch.setattr(summary, "rebuild_problem", lambda *a: built.append(a) or real(*a))
+    real = ShipRecording.generate
+    monkeypatch.setattr(ShipRecording, "generate", lambda self, **k: built.append(1) or real(self, **k))
     rows = summary.summarise(runs)
-    ls_rows = sum(1 for item in spec.summarise if item.interval == "ls") * len(runs.cells)
-    assert len(built) == len(runs.cells) < ls_rows  # once per cell, not once per row
-    assert summary._design.cache_info().currsize == 0  # emptied when summarise returns
-
-    def rebuilt(runs, ci):  # the old path: the problem rebuilt for every row
-        problem = real(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
-        return (*problem.design(), problem.parameter_names())
-
-    monkeypatch.setattr(summary, "_design_of", rebuilt)
+    assert len(built) == len(runs.cells)  # once per cell, not once per row
     pd.testing.assert_frame_equal(rows, summary.summarise(runs), check_exact=True)
 
+    scenario = runner.build(make_cfg("scenario=yan2022_mockup").scenario, "scenario")
+    c, y = (np.asarray(a, float) for a in make_problem("ship", scenario.generate(), scenario.search).design())
+    coef = np.linalg.solve(c.T @ c, c.T @ y)  # (4, 3): per axis [K_a1, K_a2, K_a3, Bp_a]
+    s2 = ((y - c @ coef) ** 2).sum(axis=0) / (12 - 4)
+    se = np.sqrt(np.outer(np.diag(np.linalg.inv(c.T @ c)), s2))
+    kf = rows[rows.estimator == "kf"].set_index("quantity")
+    for a in range(3):
+        for name, j in [*((f"K{a + 1}{k + 1}", k) for k in range(3)), (f"Bp{a + 1}", 3)]:
+            lo, hi = coef[j, a] - T_975_8 * se[j, a], coef[j, a] + T_975_8 * se[j, a]
+            assert kf.loc[name, "lo"] == pytest.approx(lo, rel=1e-9, abs=1e-9), name
+            assert kf.loc[name, "hi"] == pytest.approx(hi, rel=1e-9, abs=1e-9), name
+    ci = next(i for i, cell in enumerate(runs.cells) if cell["estimator"] == "yan2022_paper_mockup")
+    theta = runs.outputs[(ci, 0)].x
+    k, bp = np.asarray(theta[:9]).reshape(3, 3), np.asarray(theta[9:])
+    ftest = rows[rows.quantity.str.startswith("paper_solution_F_p")].set_index("quantity")
+    assert len(ftest) == 3
+    for a in range(3):
+        d = np.append(k[a], bp[a]) - coef[:, a]
+        f = d @ c.T @ c @ d / 4 / s2[a]
+        row = ftest.loc[f"paper_solution_F_p_axis{a + 1}"]
+        assert f"F={f:.4g};dof=4,8" in row.setting
+        assert row.value == pytest.approx(stats.f.sf(f, 4, 8), rel=1e-6)
+    assert stats.f.sf(3.838, 4, 8) == pytest.approx(0.05, abs=2e-4)  # the table's 5 % point: the p-value's scale
 
-def test_the_special_functions_are_scipy_stats_quantile_and_tail():
-    from scipy import special, stats
-
-    for dof in (2, 8, 11, 40):
-        for level in (0.9, 0.95, 0.99):
-            assert special.stdtrit(dof, 0.5 + level / 2) == stats.t.ppf(0.5 + level / 2, dof)
-        for f in (0.01, 0.7, 3.0, 40.0):
-            assert special.fdtrc(4, dof, f) == stats.f.sf(f, 4, dof)
+    edit_first_reading(data / "yan2022_mockup.csv")  # read again: nothing of the first summary is kept
+    again = summary.summarise(runs)
+    assert (again.set_index(["quantity", "estimator"]).loc["Bp3", "lo"]
+            != rows.set_index(["quantity", "estimator"]).loc["Bp3", "lo"]).all()

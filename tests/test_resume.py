@@ -10,8 +10,7 @@ import pytest
 from magexp.run import cache
 
 
-ARGS = ["ding2024", "--only", "ding2024_table_rms", "--seeds", "2", "--tiny", "--jobs", "1"]  # 64 runs
-KILL_AFTER = 10
+KILL_AFTER = 2
 # a real process, killed by SIGKILL at a fixed point: right after its KILL_AFTER-th run reached the cache
 KILLED = f"""
 import os, signal, sys
@@ -33,33 +32,24 @@ def results(cache_dir):
     return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob(f"*{cache.SUFFIX}")}
 
 
-def reproduce_in_process(out, cache_dir, monkeypatch):
-    from magexp import paths
-    from magexp.artifacts.reproduce import main
-
-    monkeypatch.setattr(cache, "CACHE", cache_dir)
-    monkeypatch.setattr(paths, "CACHE", cache_dir)
-    return main([*ARGS, "--out", str(out)])
-
-
 @pytest.mark.slow
-def test_kill_midway_then_resume(tmp_path, monkeypatch):
-    """A reproduction killed (SIGKILL, no clean-up) after its 10th finished run resumes: the finished
-    runs are not rerun, and the outputs are byte-identical to an uninterrupted reproduction's."""
-    cache_dir = tmp_path / "cache"
-    killed = subprocess.run([sys.executable, "-c", KILLED, *ARGS, "--out", str(tmp_path / "a")],
+def test_kill_midway_then_resume(tmp_path, mockup_reproduction):
+    """A reproduction killed (SIGKILL, no clean-up) after its 2nd finished run of 6 resumes: the finished
+    runs are not rerun, and every file is byte-identical to an uninterrupted reproduction's."""
+    cache_dir, args = tmp_path / "cache", mockup_reproduction.args
+    killed = subprocess.run([sys.executable, "-c", KILLED, *args, "--out", str(tmp_path / "a")],
                             env={**os.environ, "MAGEXP_CACHE": str(cache_dir)}, capture_output=True, text=True,
                             timeout=300)
     assert killed.returncode == -signal.SIGKILL, killed.stderr
     finished = results(cache_dir)
     assert len(finished) == KILL_AFTER, "the kill must land midway"
-    assert reproduce_in_process(tmp_path / "a", cache_dir, monkeypatch) == 0
+    assert mockup_reproduction.reproduce_into(tmp_path / "a", cache_dir) == 0
     after = results(cache_dir)
-    assert len(after) == 64
+    assert len(after) == len(results(mockup_reproduction.runs)) == 6
     assert {k: after[k] for k in finished} == finished  # finished runs were not rerun
-    assert reproduce_in_process(tmp_path / "b", tmp_path / "cache2", monkeypatch) == 0
-    for name in ("summary.csv", "ding2024/ding2024_table_rms.csv", "ding2024/ding2024_table_rms_runs.csv"):
-        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
+    written = {p.relative_to(tmp_path / "a").as_posix(): p.read_bytes()
+               for p in sorted((tmp_path / "a").rglob("*")) if p.is_file()}
+    assert written == mockup_reproduction.files
 
 
 def test_run_key_depends_on_every_config_value():

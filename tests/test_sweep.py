@@ -20,7 +20,7 @@ import yaml
 from magexp.run import cache
 from magexp.__main__ import main as magexp_main
 
-IPSO = ["estimator=ipso", "estimator.n_particles=20", "estimator.n_iterations=300"]
+IPSO = ["estimator=ipso", "estimator.n_particles=20", "estimator.n_iterations=100"]
 SWEEP = ["-m", *IPSO, "scenario.noise=0,5", "seed=range(3)"]  # 6 jobs, a stochastic estimator
 JOB_FILES = ("estimate.csv", "history.csv", "config.yaml", ".hydra/overrides.yaml")
 VARYING = ("wall_time", "cached")  # the only columns that may differ between two computations of a run
@@ -62,11 +62,12 @@ def assert_same_sweeps(a, b):
 
 
 @pytest.mark.slow
-def test_local_processes_and_a_dask_cluster_give_the_same_sweep(tmp_path):
-    """The same sweep on 2 local processes and on a Dask LocalCluster of 2 workers, each with its own
-    empty cache (every run computed twice): the same table and job folders, byte for byte."""
-    local = magexp(*SWEEP, "hydra.launcher.jobs=2", f"hydra.sweep.dir={tmp_path / 'local'}", cwd=tmp_path,
-                   cache=tmp_path / "cache_local")
+def test_local_processes_and_a_dask_cluster_give_the_same_sweep(tmp_path, cli, monkeypatch):
+    """The same sweep on 2 local processes (in this process's command) and on a Dask LocalCluster of 2
+    workers (a real command: its output is checked for cluster chatter), each with its own empty
+    cache (every run computed twice): the same table and job folders, byte for byte."""
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_local")
+    local = cli(*SWEEP, "hydra.launcher.jobs=2", f"hydra.sweep.dir={tmp_path / 'local'}", cwd=tmp_path)
     assert local.returncode == 0, local.stderr
     dask = magexp(*SWEEP, "hydra.launcher.executor=dask", "hydra.launcher.jobs=2",
                   f"hydra.sweep.dir={tmp_path / 'dask'}", cwd=tmp_path, cache=tmp_path / "cache_dask")
@@ -82,22 +83,36 @@ def test_local_processes_and_a_dask_cluster_give_the_same_sweep(tmp_path):
     assert overrides == [*IPSO, "scenario.noise=5", "seed=1"]
 
 
+# a real sweep process killed (SIGKILL to its process group, its workers too) at a fixed point:
+# right after its second run reached the cache
+KILLED = """
+import os, signal, sys
+from magexp.run import cache
+from magexp.__main__ import main
+store, stored = cache.store, []
+def store_then_die(*args, **kw):
+    kept = store(*args, **kw)
+    stored.append(1)
+    if len(stored) == 2:
+        os.killpg(0, signal.SIGKILL)
+    return kept
+cache.store = store_then_die
+main(sys.argv[1:])
+"""
+
+
 @pytest.mark.slow
-def test_killed_sweep_resumes_from_the_cache_with_the_same_table(tmp_path):
+def test_killed_sweep_resumes_from_the_cache_with_the_same_table(tmp_path, cli, monkeypatch):
     cache_dir = tmp_path / "cache"
-    first = subprocess.Popen([sys.executable, "-m", "magexp", *SWEEP, "hydra.launcher.jobs=1",
-                              f"hydra.sweep.dir={tmp_path / 'a'}"], cwd=tmp_path,
-                             env={**os.environ, "MAGEXP_CACHE": str(cache_dir)}, stdout=subprocess.DEVNULL,
-                             stderr=subprocess.PIPE, start_new_session=True)
-    deadline = time.time() + 240
-    while len(cached_runs(cache_dir)) < 2 and time.time() < deadline and first.poll() is None:
-        time.sleep(0.02)
-    os.killpg(first.pid, signal.SIGKILL)
-    first.wait()
+    first = subprocess.run([sys.executable, "-c", KILLED, *SWEEP, "hydra.launcher.jobs=1",
+                            f"hydra.sweep.dir={tmp_path / 'a'}"], cwd=tmp_path,
+                           env={**os.environ, "MAGEXP_CACHE": str(cache_dir)}, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.PIPE, start_new_session=True, timeout=300)
+    assert first.returncode == -signal.SIGKILL, first.stderr
     finished = cached_runs(cache_dir)
-    assert 0 < len(finished) < 6, "the kill must land midway"
-    resumed = magexp(*SWEEP, "hydra.launcher.jobs=2", f"hydra.sweep.dir={tmp_path / 'b'}", cwd=tmp_path,
-                     cache=cache_dir)
+    assert len(finished) == 2, "the kill must land midway"
+    monkeypatch.setattr(cache, "CACHE", cache_dir)
+    resumed = cli(*SWEEP, "hydra.launcher.jobs=2", f"hydra.sweep.dir={tmp_path / 'b'}", cwd=tmp_path)
     assert resumed.returncode == 0, resumed.stderr
     after = cached_runs(cache_dir)
     assert len(after) == 6
@@ -105,7 +120,8 @@ def test_killed_sweep_resumes_from_the_cache_with_the_same_table(tmp_path):
     rows = read_csv(tmp_path / "b" / "sweep.csv")  # the tidy table: swept keys first, one row per job
     assert list(rows[0])[:3] == ["scenario.noise", "seed", "job"]
     assert sum(r["cached"] == "True" for r in rows) == len(finished)
-    whole = magexp(*SWEEP, f"hydra.sweep.dir={tmp_path / 'c'}", cwd=tmp_path, cache=tmp_path / "cache2")
+    monkeypatch.setattr(cache, "CACHE", tmp_path / "cache2")
+    whole = cli(*SWEEP, f"hydra.sweep.dir={tmp_path / 'c'}", cwd=tmp_path)
     assert whole.returncode == 0, whole.stderr
     assert_same_sweeps(tmp_path / "b", tmp_path / "c")  # as an uninterrupted sweep
 
@@ -192,17 +208,15 @@ def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path,
     assert list(tmp_path.iterdir()) == [tmp_path / "cache"] or not list(tmp_path.iterdir())
 
 
-@pytest.mark.slow
-def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path):
+def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path, cli):
     """``a,b``, ``range()`` and a group's ``glob()``: the jobs magexp checks are the jobs Hydra launches."""
     from magexp.run.preflight import expand_sweep
 
     jobs = expand_sweep(["estimator=glob(*pso,exclude=pso)", "scenario.noise=0,5", "seed=range(1,3)"])
     assert jobs == [[f"estimator={e}", f"scenario.noise={n}", f"seed={s}"]
                     for e in ("ipso", "rdpso") for n in (0, 5) for s in (1, 2)]
-    proc = subprocess.run([sys.executable, "-m", "magexp", "-m", "estimator=glob(ellips*,exclude=*specific)",
-                           "seed=range(2)", f"hydra.sweep.dir={tmp_path / 's'}"], cwd=tmp_path, capture_output=True,
-                          text=True, timeout=300, env={**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")})
+    proc = cli("-m", "estimator=glob(ellips*,exclude=*specific)", "seed=range(2)", f"hydra.sweep.dir={tmp_path / 's'}",
+               cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert [(r["estimator"], r["seed"]) for r in read_csv(tmp_path / "s" / "sweep.csv")] == \
         [("ellipsoid", "0"), ("ellipsoid", "1")]

@@ -68,10 +68,11 @@ def test_each_scenario_setting_draws_its_own_stream(make_cfg):
 
 # -- uninformative: the interval must be able to exclude something --------------------------------
 
+from pathlib import Path  # noqa: E402
 from types import SimpleNamespace  # noqa: E402
 
 from magexp.artifacts.spec import Reported  # noqa: E402
-from magexp.artifacts.summary import _row, block_scales, label_of, uninformative  # noqa: E402
+from magexp.artifacts.summary import block_scales, label_of, summarise, uninformative  # noqa: E402
 
 
 def test_rows_that_pin_a_value_down_stay_informative():
@@ -95,29 +96,54 @@ def test_rows_that_cannot_exclude_anything_are_uninformative():
     assert "wider than" in uninformative(2011.0, -1856.0, 6202.0)
 
 
-def _spec(**entry):
-    return SimpleNamespace(paper="p", name="a", floor=1e-9, tolerance=None,
-                           reported=[Reported(quantity="q", value=entry.pop("value", 1.0), **entry)])
+def summary_of(reported, values: dict, ok: dict, truth: dict):
+    """The summary rows of a hand-made artifact: one cell per estimator of ``values`` (its 30 seeds of
+    metric ``q``), ``ok`` its successes (absent: not judged), ``truth`` the metric of the true
+    calibration (a run succeeds at ``q <= 1.2 truth``); ``reported`` the paper's entries."""
+    import pandas as pd
+
+    from magexp.artifacts.plan import ArtifactRuns
+    from magexp.artifacts.spec import parse
+
+    spec = parse({"kind": "final", "title": "t", "seeds": 30, "summarise": [{"quantity": "q", "metric": "q"}],
+                  "reported": reported,
+                  "success": {"metric": "q", "reference": "truth_q", "factor": 1.2, "floor": 0.0}},
+                 Path("p") / "a.yaml")
+    cells = [{"estimator": name} for name in values]
+    table = pd.DataFrame([{"cell": ci, "seed": seed, "estimator": name, "setting": "s", "q": v,
+                           "truth_q": truth.get(name, np.nan), "succeeded": ok[name][seed] if name in ok else np.nan}
+                          for ci, (name, vs) in enumerate(values.items()) for seed, v in enumerate(vs)])
+    runs = ArtifactRuns(spec=spec, cells=cells, table=table, outputs={},
+                        overrides=[[f"estimator={c['estimator']}"] for c in cells])
+    return summarise(runs).set_index("estimator")
 
 
 def test_lo_hi_are_over_all_seeds_and_the_same_outcome_interval_is_its_own_column():
     ok = np.r_[np.ones(27), np.zeros(3)]
     v = np.r_[np.linspace(0.9, 1.1, 27), [300.0, 400.0, 500.0]]
+    rows = summary_of([{"quantity": "q", "match": {"estimator": "pso"}, "value": 350.0},
+                       {"quantity": "q", "match": {"estimator": "ipso"}, "value": 1.0},
+                       {"quantity": "q", "match": {"estimator": "lm"}, "value": 1.0}],
+                      {"pso": v, "ipso": v, "lm": np.linspace(0.9, 1.1, 30)}, {"pso": ok, "ipso": ok},
+                      {"pso": 1.0, "ipso": 1.0})
     # the paper's 350 is a failed run (threshold 1.2): judged against our failed runs only
-    row = _row(_spec(value=350.0), "q", "pso", "s", 1.0, v, {}, ok=ok, success_threshold=1.2, label="PSO q")
+    row = rows.loc["pso"]
     assert row["hi"] > 300 and row["lo"] < 1  # over every seed
     assert row["lo_same"] >= 300 and row["hi_same"] <= 500 and row["verdict"] == "reproduced"
     assert "failed runs" in row["reason"] and row["label"] == "PSO q"
-    good = _row(_spec(value=1.0), "q", "ipso", "s", 1.0, v, {}, ok=ok, success_threshold=1.2)
+    good = rows.loc["ipso"]
     assert good["verdict"] == "reproduced" and good["hi_same"] <= 1.1
-    plain = _row(_spec(value=1.0), "q", "lm", "s", None, np.linspace(0.9, 1.1, 30), {})
+    plain = rows.loc["lm"]
     assert np.isnan(plain["lo_same"]) and plain["verdict"] == "reproduced"
 
 
 def test_an_entry_can_be_marked_uninformative_with_its_reason():
-    row = _row(_spec(value=1.0, informative=False, reason="unidentified: mode 4 turns about one axis"), "q", "lm", "s",
-               None, np.linspace(0.9, 1.1, 30), {})
-    assert row["verdict"] == "uninformative" and row["reason"].startswith("unidentified")
+    rows = summary_of([{"quantity": "q", "match": {"estimator": "lm"}, "value": 1.0, "informative": False,
+                        "reason": "unidentified: mode 4 turns about one axis"},
+                       {"quantity": "q", "match": {"estimator": "ekf"}, "value": 1.0}],
+                      {"lm": np.linspace(0.9, 1.1, 30), "ekf": np.linspace(0.9, 1.1, 30)}, {}, {})
+    assert rows.loc["lm", "verdict"] == "uninformative" and rows.loc["lm", "reason"].startswith("unidentified")
+    assert rows.loc["ekf", "verdict"] == "reproduced"  # the same interval, informative
     with pytest.raises(Exception, match="needs a reason"):
         Reported(quantity="q", value=1.0, informative=False)
 
