@@ -63,7 +63,7 @@ from magexp.estimators.result import FitResult
 from magexp.paths import CONF
 from magexp.problems import make_problem, problem_class
 from magexp.run.budget import check_calibration, check_recording_file
-from magexp.run.compose import GROUPS, check_choice, hydra_compose, options, target_class
+from magexp.run.compose import GROUPS, check_choice, compose_config, options, target_class
 from magexp.run.outputs import print_table
 from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
 from magexp.run.runner import build
@@ -408,8 +408,9 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
 
 # -- the command -----------------------------------------------------------------------------------
 def calibrate_config(argv: list[str]):
-    """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed by
-    :func:`magexp.run.compose.hydra_compose` (the one place that composes with Hydra)."""
+    """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed as every
+    command's config is (:func:`magexp.run.compose.compose_config`: Hydra once per estimator choice,
+    kept on disk)."""
     bad = [a for a in argv if "=" not in a]
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
@@ -418,7 +419,7 @@ def calibrate_config(argv: list[str]):
     for arg in argv:
         if arg.partition("=")[0] in GROUPS:
             check_choice(*arg.split("=", 1))
-    return hydra_compose(tuple(argv), "calibrate")
+    return compose_config(argv, config_name="calibrate")
 
 
 def reference_from_igrf(cfg, rec: Recording):
