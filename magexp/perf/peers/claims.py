@@ -72,6 +72,8 @@ def compare(better: pd.Series, worse: pd.Series) -> tuple[str, str]:
         return HOLDS, f"paired p = {p_hold:.2g}, n = {len(d)}" if p_hold < ALPHA else "intervals separate"
     if p_contra < ALPHA or bhi < alo:
         return CONTRADICTED, f"paired p = {p_contra:.2g} the other way" if p_contra < ALPHA else "intervals separate"
+    if len(d) <= 2:
+        return NO_DIFFERENCE, f"intervals overlap ({len(d)} pairs: too few for the paired test)"
     return NO_DIFFERENCE, f"paired p = {min(p_hold, p_contra):.2g}, n = {len(d)}; intervals overlap"
 
 

@@ -280,12 +280,15 @@ def notes(frame, summary) -> list[str]:
                 metric="gyro_bias_vs_rest") for d in (FULL, RETIMED)]
     turn = [one(summary, dataset=d, axis_map="aligned", fit_on="all", method="magexp_lm_gyro",
                 metric="gyro_consistency") for d in (FULL, RETIMED)]
-    if all(bias) and all(turn):
+    fit = [one(summary, dataset=d, axis_map="aligned", fit_on="all", method="magexp_lm_gyro",
+               metric="spread_in_sample") for d in (FULL, RETIMED)]
+    if all(bias) and all(turn) and all(fit):
         out.append("* What magexp should learn: the recording's timestamps are the arrival times of buffered bursts, "
                    "and magexp's `real_*` scenarios integrate the gyroscope over them. Retimed to constant-rate "
                    f"clocks, magexp lm (gyro)'s gyro bias against the rest recording goes {_cell(bias[0])} → "
                    f"{_cell(bias[1])} °/s and its calibrated directions follow the gyroscope to "
-                   f"{_cell(turn[0])}° → {_cell(turn[1])}° (median over 1 s): the `real_*` scenarios should retime "
+                   f"{_cell(turn[0])}° → {_cell(turn[1])}° (median over 1 s); fitted on every reading, its spread goes "
+                   f"{_cell(fit[0], percent=True)} → {_cell(fit[1], percent=True)} (one fit each): the `real_*` scenarios should retime "
                    "bursty timestamps before integrating. What the peer can take: it differentiates the readings, so "
                    "it needs its prefilter and regular timestamps; its symmetric soft iron needs the axes aligned.")
     return out
