@@ -63,6 +63,7 @@ def test_soft_iron_error_ignores_scale_and_rotation_not_shape():
     assert 0.02 < measures.soft_iron_error(stretched, truth) < 0.05
 
 
+@pytest.mark.slow  # a subprocess in the peer's environment: about 4 s, most of it importing magyc (jax, gtsam)
 @pytest.mark.skipif(exchange.available() is not None, reason="the peer's environment is absent (make peers)")
 def test_peer_round_trip_recovers_an_exact_ellipsoid(tmp_path):
     soft = np.array([[1.10, 0.10, 0.04], [0.10, 0.88, 0.02], [0.04, 0.02, 1.22]])
@@ -78,3 +79,39 @@ def test_peer_round_trip_recovers_an_exact_ellipsoid(tmp_path):
     np.testing.assert_allclose(ellipsoid.hard_iron, ds.truth["truth_hard_iron"], atol=1e-8)
     assert sphere.soft_iron is None and sphere.gyro_bias is None
     assert np.linalg.norm(sphere.hard_iron - ds.truth["truth_hard_iron"]) > 1e-3  # a sphere cannot fit the ellipsoid
+
+
+def test_compare_and_winner_use_the_report_vocabulary():
+    import pandas as pd
+
+    from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE
+    from magexp.perf.peers import claims
+
+    idx = pd.MultiIndex.from_arrays([[str(s) for s in range(5)], ["all"] * 5])
+    low, high = pd.Series([1.0, 1.1, 0.9, 1.2, 1.0], idx), pd.Series([2.0, 2.2, 1.9, 2.4, 2.1], idx)
+    assert claims.compare(low, high)[0] == HOLDS
+    assert claims.compare(high, low)[0] == CONTRADICTED
+    assert claims.compare(low, low + pd.Series([0.1, -0.1, 0.05, -0.05, 0.0], idx))[0] == NO_DIFFERENCE
+    rows = [{"kind": "magyc_synthetic", "dataset": "magyc_high", "seed": s, "fit_on": "all", "axis_map": "",
+             "side": "x", "method": m, "metric": metric, "value": v.iloc[s] * (1.0 if metric == "soft_iron_error" else 0.5)}
+            for m, v in (("a", low), ("b", high), ("c", low + pd.Series([0.1, -0.1, 0.05, -0.05, 0.02], idx))) for s in range(5)
+            for metric in ("soft_iron_error", "hard_iron_error")]
+    frame = claims.frame_of(rows)
+    np.testing.assert_allclose(claims.values(frame, claims.ERROR, method="b"), high.to_numpy())  # the worse error
+    assert claims.winner(frame, claims.ERROR, ["a", "b"]) == ("a", HOLDS, [])
+    assert claims.winner(frame, claims.ERROR, ["a", "b", "c"]) == ("a", NO_DIFFERENCE, ["c"])
+
+
+def test_report_includes_the_peers_section_and_never_writes_it(tmp_path):
+    from magexp.artifacts import report
+
+    assert "Skipped" in report._peers_section(tmp_path) and len(report._peers_section(tmp_path).splitlines()) == 3
+    peers = tmp_path / "peers"
+    peers.mkdir()
+    text = f"## magexp beside MAGYC\n\n### Headline claims\n\n**Headline.** shown\n\n{report.PEERS_MARK}\n\nnot shown\n"
+    (peers / "peers.md").write_text(text)
+    (peers / "peers.png").write_bytes(b"png")
+    report.build(tmp_path)
+    out = (tmp_path / "REPORT.md").read_text()
+    assert "**Headline.** shown" in out and "not shown" not in out and "(peers/peers.png)" in out
+    assert (peers / "peers.md").read_text() == text and sorted(p.name for p in peers.iterdir()) == ["peers.md", "peers.png"]

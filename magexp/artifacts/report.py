@@ -33,10 +33,13 @@ from magexp.run import provenance
 DIGITS = 6
 SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "value", "lo", "hi", "success_rate",
                  "n_seeds", "truth_in_interval", "verdict"]
-#: limits of REPORT.md (the appendix holds the rest)
-MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
+#: limits of REPORT.md (the appendix holds the rest); the section "magexp beside MAGYC" (:func:`_peers_section`)
+#: takes about 50 lines and 7,000 characters of them
+MAX_LINES, MAX_CHARS, MAX_CELL = 450, 70_000, 300
 #: verdicts of a headline claim
 HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here")
+#: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
+PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence"]
 
 
@@ -436,6 +439,20 @@ def _artifact_table(spec, path: Path) -> str:
     return text
 
 
+def _peers_section(root: Path) -> str:
+    """The section "magexp beside MAGYC": the text of ``root/peers/peers.md`` above :data:`PEERS_MARK` (its claims
+    are computed by :mod:`magexp.perf.peers`, which ``make peers-bench`` runs; ``make reproduce`` never writes
+    ``results/peers``), or one line when the bench has not been run."""
+    path = root / "peers" / "peers.md"
+    if not path.exists():
+        return ("## magexp beside MAGYC\n\nSkipped: `results/peers/peers.md` is absent (`make peers` builds the "
+                "peer's environment, `make peers-bench` runs the bench).\n")
+    text = path.read_text().split(PEERS_MARK)[0].rstrip()
+    figure = "![peers](peers/peers.png)\n\n" if (root / "peers" / "peers.png").exists() else ""
+    return (f"{text}\n\n{figure}Every table, the Yuan 2018 streams and the single-axis recordings: "
+            "[`peers/peers.md`](peers/peers.md); every run: [`peers/peers.csv`](peers/peers.csv).\n")
+
+
 def _speed_section(root: Path) -> str:
     path = root / "bench.csv"
     if not path.exists():
@@ -483,6 +500,7 @@ def build(root: Path = RESULTS) -> None:
         f"{len(compared)} of {len(summary)} summary rows have a paper value): {_counts(compared)}.\n",
     ]
     text += [_report_section(p) for p in parts]
+    text.append(_peers_section(root))
     write_text(root / "REPORT.md", "\n".join(text))
     appendix = ["# magexp report: appendix\n", "Everything [REPORT.md](REPORT.md) leaves out: per artifact its figure, "
                 "caption, every summary row (`n/a` rows too), its table and notes; per paper its sanity checks. "

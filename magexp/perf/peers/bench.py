@@ -34,6 +34,7 @@ import numpy as np
 from magexp.errors import MagexpError
 from magexp.perf.peers import bound, data, exchange, magexp_side, measures
 from magexp.perf.peers.magyc_side import METHODS as PEER_METHODS
+from magexp.perf.peers.report import figure, section
 
 #: the peer's methods run by default: all but SAR-KF (30 s per 10,000 readings, a per-reading Python loop) and
 #: magFactor3 (it needs attitudes and a reference field: not gyro-aided)
@@ -60,6 +61,8 @@ def parse(argv) -> argparse.Namespace:
     p.add_argument("--no-real", action="store_true", help="skip the recordings")
     p.add_argument("--no-notebook", action="store_true",
                    help="skip the second run of the peer on MAGYC's data with its example notebook's preprocessing")
+    p.add_argument("--redraw", action="store_true",
+                   help="no fits: the summary, figure and text again from OUT/peers.csv (pass the run's --nsamples)")
     p.add_argument("--work", type=Path, default=None,
                    help="keep the neutral files and the peer's answers here (default: a temporary folder)")
     args = p.parse_args(argv)
@@ -118,58 +121,77 @@ def recorded_fits(args) -> list[tuple[exchange.NeutralDataset, exchange.NeutralD
     return fits
 
 
-def run(args, work: Path) -> list[dict]:
-    """Every dataset, both sides: the long-format rows."""
+def jobs_of(args, work: Path) -> list[tuple]:
+    """``(dataset, held out, fit_on label, axis map)`` of every fit, each dataset naming the peer's methods; the
+    work is counted and bounded (:data:`MAX_READINGS`) first."""
     sims = simulated_sets(args, work)
     fits = [] if args.no_real else recorded_fits(args)
     total = sum(len(d.t) for d in sims) + sum(len(f.t) for f, _, _ in fits)
     if total > MAX_READINGS:
         raise MagexpError(f"{total} readings in all is not allowed: at most {MAX_READINGS} (fewer seeds or samples)")
-    peer_methods = args.peer.split(",")
     jobs = [(ds, None, "all", None) for ds in sims] + [(f, h, label, f.side.get("axis_map")) for f, h, label in fits]
     for ds, *_ in jobs:
-        ds.side["methods"] = peer_methods
-    # the peer once more on its own data and the recordings as its example notebook calls it (NOTEBOOK), its
-    # methods named *_sg
-    notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, *_) in enumerate(jobs)
-                                            if ds.side["kind"] in ("magyc_synthetic", "recording")]
-    # files named by what the peer's answer depends on: a kept work folder (--work) keeps the answers, and one
-    # whose input is unchanged is not recomputed
-    datasets = [ds for ds, *_ in jobs] + [ds for _, ds in notebook]
-    digests = [exchange.digest(ds) for ds in datasets]
-    pairs = [(work / "in" / f"{d[:20]}.npz", work / "out" / f"{d[:20]}.json") for d in digests]
+        ds.side["methods"] = args.peer.split(",")
+    return jobs
+
+
+def answered(datasets: list[exchange.NeutralDataset], work: Path) -> list[dict]:
+    """The peer's answer to each of ``datasets``. Files are named by what the answer depends on
+    (:func:`.exchange.digest`): a kept work folder (``--work``) keeps the answers, and a dataset whose answer is
+    there is not sent again."""
+    pairs = [(work / "in" / f"{d[:20]}.npz", work / "out" / f"{d[:20]}.json")
+             for d in map(exchange.digest, datasets)]
     todo = [k for k, (_, out) in enumerate(pairs) if not out.exists()]
     (work / "out").mkdir(parents=True, exist_ok=True)
     for k in todo:
         exchange.write(datasets[k], pairs[k][0].with_suffix(""))
-    print(f"peers: MAGYC on {len(todo)} of {len(pairs)} datasets ({total} readings in all) in processes of {CHUNK}",
-          file=sys.stderr)
+    print(f"peers: MAGYC on {len(todo)} of {len(pairs)} datasets in processes of {CHUNK}", file=sys.stderr)
     for start in range(0, len(todo), CHUNK):  # chunks: a stopped bench keeps what is done
         exchange.run_peer([pairs[k] for k in todo[start:start + CHUNK]])
-    answers = [exchange.read_answer(out) for _, out in pairs]
+    return [exchange.read_answer(out) for _, out in pairs]
+
+
+def peer_answers(args, jobs: list[tuple], work: Path) -> list[dict]:
+    """The peer's answer for every job, computed where ``work`` does not hold it yet; with the example notebook's
+    recipe (:data:`NOTEBOOK`) the peer runs once more on its own data and the recordings, those methods named
+    ``*_sg``."""
+    notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, *_) in enumerate(jobs)
+                                            if ds.side["kind"] in ("magyc_synthetic", "recording")]
+    answers = answered([ds for ds, *_ in jobs] + [ds for _, ds in notebook], work)
     for (k, _), answer in zip(notebook, answers[len(jobs):]):
         answers[k]["results"] += [dict(r, method=r["method"] + "_sg") for r in answer["results"]]
-    rests = {m: data.rest_bias(m) for m in {j[3] for j in jobs if j[3]}}
+    return answers[:len(jobs)]
+
+
+def job_rows(args, job: tuple, answer: dict, rests: dict) -> list[dict]:
+    """The long rows of one fit: both sides' measures, the raw spread (recordings) or the Cramér-Rao floor
+    (simulations)."""
+    ds, held, label, axis_map = job
+    estimates = [("magyc", magexp_side.Estimate.from_peer(r)) for r in answer["results"]]
+    estimates += [("magexp", magexp_side.fit(m, ds, seed=int(ds.side["seed"]), n_fit=args.n_fit))
+                  for m in args.magexp.split(",")]
+    base = {"kind": ds.side["kind"], "dataset": ds.name.removesuffix("_first").removesuffix("_second"),
+            "seed": ds.side["seed"], "fit_on": label, "axis_map": axis_map or ""}
     rows = []
-    for (ds, held, label, axis_map), answer in zip(jobs, answers):
-        estimates = [("magyc", magexp_side.Estimate.from_peer(r)) for r in answer["results"]]
-        estimates += [("magexp", magexp_side.fit(m, ds, seed=int(ds.side["seed"]), n_fit=args.n_fit))
-                      for m in args.magexp.split(",")]
-        base = {"kind": ds.side["kind"], "dataset": ds.name.removesuffix("_first").removesuffix("_second"),
-                "seed": ds.side["seed"], "fit_on": label, "axis_map": axis_map or ""}
-        if axis_map and label == "all":
-            rows.append({**base, "side": "none", "method": "raw", "metric": "spread_in_sample",
-                         "value": measures.spread(np.linalg.norm(ds.mag, axis=1))})
-        if not axis_map:  # the Cramér-Rao floor of the gyro-aided problem on magexp's readings and on all
-            for name, n in (("crb_fit", args.n_fit), ("crb_all", len(ds.t))):
-                rows += [{**base, "side": "bound", "method": name, "metric": k, "value": v}
-                         for k, v in bound.gyro_floor(ds, n).items()]
-        for side_name, est in estimates:
-            values = (measures.recorded(est, ds, held, rests[axis_map]) if axis_map
-                      else measures.simulated(est, ds))
-            rows += [{**base, "side": side_name, "method": est.method, "metric": k, "value": v}
-                     for k, v in values.items()]
+    if axis_map and label == "all":
+        rows.append({**base, "side": "none", "method": "raw", "metric": "spread_in_sample",
+                     "value": measures.spread(np.linalg.norm(ds.mag, axis=1))})
+    if not axis_map:  # the Cramér-Rao floor of the gyro-aided problem on magexp's readings and on all
+        for name, n in (("crb_fit", args.n_fit), ("crb_all", len(ds.t))):
+            rows += [{**base, "side": "bound", "method": name, "metric": k, "value": v}
+                     for k, v in bound.gyro_floor(ds, n).items()]
+    for side_name, est in estimates:
+        values = measures.recorded(est, ds, held, rests[axis_map]) if axis_map else measures.simulated(est, ds)
+        rows += [{**base, "side": side_name, "method": est.method, "metric": k, "value": v} for k, v in values.items()]
     return rows
+
+
+def run(args, work: Path) -> list[dict]:
+    """Every dataset, both sides: the long-format rows."""
+    jobs = jobs_of(args, work)
+    answers = peer_answers(args, jobs, work)
+    rests = {m: data.rest_bias(m) for m in {j[3] for j in jobs if j[3]}}
+    return [row for job, answer in zip(jobs, answers) for row in job_rows(args, job, answer, rests)]
 
 
 def summarise(rows: list[dict]) -> list[dict]:
@@ -201,29 +223,50 @@ def write_csv(path: Path, rows: list[dict], columns) -> None:
             writer.writerow({k: (f"{r[k]:.6g}" if isinstance(r[k], float) else r[k]) for k in columns})
 
 
+def read_rows(path: Path) -> list[dict]:
+    """The long rows of a bench's ``peers.csv``."""
+    if not path.is_file():
+        raise MagexpError(f"--redraw needs {path}: run `make peers-bench` first")
+    with open(path, newline="") as fh:
+        return [dict(r, value=float(r["value"])) for r in csv.DictReader(fh)]
+
+
+def measured(args) -> list[dict]:
+    """The rows of a bench run, its neutral files and the peer's answers in ``--work`` or a temporary folder."""
+    if args.work is not None:
+        return run(args, args.work)
+    with tempfile.TemporaryDirectory(prefix="magexp-peers-") as tmp:
+        return run(args, Path(tmp))
+
+
+def write(args, rows: list[dict]) -> None:
+    """``peers.csv``, ``peers_summary.csv``, ``peers.png`` and ``peers.md`` in ``args.out``; everything after
+    ``peers.csv`` is drawn from it as written (rounded), so that ``--redraw`` writes the same bytes."""
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_csv(args.out / "peers.csv", rows, COLUMNS)
+    rows = read_rows(args.out / "peers.csv")
+    summary = summarise(rows)
+    write_csv(args.out / "peers_summary.csv", summary,
+              ("kind", "dataset", "axis_map", "fit_on", "side", "method", "metric", "n", "mean", "median", "lo", "hi"))
+    figure(summary, args.out / "peers.png")
+    (args.out / "peers.md").write_text(section(rows, summary, args))
+    print(f"peers: wrote {args.out}/peers.csv, peers_summary.csv, peers.png, peers.md")
+
+
 def main(argv=None) -> int:
     try:
         args = parse(argv)
-        reason = exchange.available()
-        if reason:
-            print(reason)
-            return 0
-        if args.work is not None:
-            rows = run(args, args.work)
+        if args.redraw:
+            rows = read_rows(args.out / "peers.csv")
+            for name, kind in (("seeds", "magyc_synthetic"), ("yuan_seeds", "yuan_stream")):
+                setattr(args, name, len({r["seed"] for r in rows if r["kind"] == kind}))
         else:
-            with tempfile.TemporaryDirectory(prefix="magexp-peers-") as tmp:
-                rows = run(args, Path(tmp))
-        summary = summarise(rows)
-        args.out.mkdir(parents=True, exist_ok=True)
-        write_csv(args.out / "peers.csv", rows, COLUMNS)
-        write_csv(args.out / "peers_summary.csv", summary,
-                  ("kind", "dataset", "axis_map", "fit_on", "side", "method", "metric", "n", "mean", "median", "lo",
-                   "hi"))
-        from magexp.perf.peers.report import figure, section
-
-        figure(summary, args.out / "peers.png")
-        (args.out / "peers.md").write_text(section(summary, args))
-        print(f"peers: wrote {args.out}/peers.csv, peers_summary.csv, peers.png, peers.md")
+            reason = exchange.available()
+            if reason:
+                print(reason)
+                return 0
+            rows = measured(args)
+        write(args, rows)
         return 0
     except MagexpError as exc:
         print(f"error: {exc}", file=sys.stderr)

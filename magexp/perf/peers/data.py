@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import MagexpError
-from magexp.core.geometry import merged_steps
+from magexp.core.geometry import integrate_rates, merged_steps
 from magexp.paths import SHARED_DATA
 from magexp.perf.peers.exchange import FORMAT, NeutralDataset
 from magexp.scenarios.search import centroid_radius
@@ -81,7 +81,6 @@ def yuan_stream(scenario: str, seed: int) -> NeutralDataset:
     """
     from magexp.run.compose import compose_config
     from magexp.run.runner import build
-    from magexp.scenarios.motion import integrate_rates
     from magexp.core.seeding import run_generators
 
     cfg = compose_config([f"scenario={scenario}"])
