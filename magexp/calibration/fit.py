@@ -49,7 +49,8 @@ import numpy as np
 import pandas as pd
 from omegaconf import OmegaConf
 
-from magexp.calibration.checks import check_fit, check_readings
+from magexp.calibration import models as models_
+from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, summary, write
 from magexp.core.dataset import Dataset
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
@@ -73,15 +74,14 @@ from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, sear
 OBJECTIVES = ("scalar", "vector")
 #: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
 MIN_READINGS = 12
-#: Calibration models: ``full`` (``W`` and offset, 9 numbers a scalar fit determines) or ``sphere``
-#: (offset and one scale, ``W = s I``: the closed-form :func:`fit_sphere`, no estimator; what readings
-#: covering part of the sphere can still determine).
-MODELS = ("full", "sphere")
+#: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full`` and ``auto``.
+MODELS = models_.MODELS
 #: How each objective's ``W`` is reported.
 FORMS = {"scalar": "symmetric positive-definite polar factor (W = Q P, reported P = (W^T W)^(1/2)): a total-field "
                    "fit cannot see a rotation of W",
          "vector": "as fitted (the vector objective determines the rotation)",
-         "sphere": "s I (model=sphere: offset and one scale only)"}
+         "sphere": "s I (model=sphere: offset and one scale only)",
+         "diagonal": "diag(w1, w2, w3) (model=diagonal: offset and one scale per axis)"}
 
 
 @dataclass
@@ -200,13 +200,9 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
     dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
     box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
     problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
-    if model == "sphere":
-        centre, radius = fit_sphere(rec.readings)
-        w = np.eye(3) * np.mean(reference.total) / radius
-        result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
-                           history=np.zeros(1), history_nfev=np.ones(1), success=True,
-                           message="closed-form sphere fit (offset and one scale; no estimator)")
-        return w, centre, (rec.readings - centre) @ w.T, problem, result, box
+    if model in models_.CLOSED_FORM:
+        w, o, calibrated, result = _closed_form(rec, model, reference)
+        return w, o, calibrated, problem, result, box
     result = estimator.fit(problem, rng=rng)
     w, o = (a[0] for a in problem.unpack(result.x))
     if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
@@ -219,6 +215,24 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
         w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
         calibrated = (rec.readings - o) @ w.T
     return w, o, calibrated, problem, result, box
+
+
+def _closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
+    """``(W, o, calibrated, result)`` of a closed-form model (:data:`magexp.calibration.models.CLOSED_FORM`)."""
+    radius = float(np.mean(reference.total))
+    fitted = models_.CLOSED_FORM[model](rec.readings, radius)
+    if fitted is None:
+        raise MagexpError(f"{rec.name}: model={model!r}: the readings do not lie on an axis-aligned ellipsoid, "
+                          "nothing written: try model=sphere, or record more orientations")
+    w, centre = fitted
+    result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
+                       history=np.zeros(1), history_nfev=np.ones(1), success=True,
+                       message=f"closed-form {model} fit (no estimator)")
+    calibrated = (rec.readings - centre) @ w.T
+    if reference.estimated and model != "sphere":  # the scale is free: the mean calibrated magnitude is the reference
+        w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
+        calibrated = (rec.readings - centre) @ w.T
+    return w, centre, calibrated, result
 
 
 def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
@@ -253,6 +267,10 @@ def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
         theta = np.concatenate([[w[0, 0]], o])
         names = ["s", "o1", "o2", "o3"]
         to_problem = lambda t: problem.pack(t[0] * np.eye(3), t[1:])  # noqa: E731
+    elif model == "diagonal":
+        theta = np.concatenate([np.diag(w), o])
+        names = ["W11", "W22", "W33", "o1", "o2", "o3"]
+        to_problem = lambda t: problem.pack(np.diag(t[:3]), t[3:])  # noqa: E731
     elif objective == "scalar":
         theta = np.concatenate([w.ravel()[UPPER], o])  # the 6 upper entries of the symmetric W, then o
         names = [f"W{k // 3 + 1}{k % 3 + 1}" for k in UPPER] + ["o1", "o2", "o3"]
@@ -265,65 +283,104 @@ def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
     se = out["standard_errors"]
     if model == "sphere":
         out["W_standard_errors"] = (np.eye(3) * se["s"]).tolist()
+    elif model == "diagonal":
+        out["W_standard_errors"] = np.diag([se["W11"], se["W22"], se["W33"]]).tolist()
     else:
         out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar"
                                      else se[f"W{i + 1}{j + 1}"] for j in range(3)] for i in range(3)]
     out["offset_standard_errors"] = [se["o1"], se["o2"], se["o3"]]
-    out["w_form"] = FORMS["sphere" if model == "sphere" else objective]
+    out["w_form"] = FORMS[model if model in FORMS else objective]
     out["model"] = model
     return out
 
 
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
                         folds: int = 5, rng: np.random.Generator, checks: bool = True,
-                        model: str = "full") -> Calibration:
-    """Fit ``estimator`` to the recording ``rec`` and measure how good the fit is.
+                        model: str = "full", accept: bool = False, gate_overrides=None,
+                        auto_margin: float = models_.MARGIN) -> Calibration:
+    """Fit ``estimator`` to the recording ``rec``, measure how good the fit is and gate it.
 
     Parameters
     ----------
     rec : a loaded :class:`~magexp.core.recordings.Recording`.
     estimator : any estimator object (``fit(problem, *, rng)``) that applies to ``objective``.
     objective : ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
-    reference_total : overrides the recording's reference total field (its unit).
+    reference_total : overrides the recording's reference total field (its unit), a number or a
+        :class:`Reference` (with its source).
     folds : blocks of the held-out check (0 or 1: none).
     rng : the estimator's random generator.
-    checks : refuse degenerate data and failed fits (:mod:`magexp.calibration.checks`); False measures them anyway.
-    model : ``full`` or ``sphere`` (:data:`MODELS`; ``sphere`` needs the scalar objective).
+    checks : refuse degenerate data, failed fits and calibrations failing the acceptance gate
+        (:mod:`magexp.calibration.checks`); False measures them anyway.
+    model : ``sphere``, ``diagonal``, ``full`` or ``auto`` (:mod:`magexp.calibration.models`;
+        all but ``full`` need the scalar objective).
+    accept : keep a calibration that fails the acceptance gate, its failures recorded in
+        ``report["gate"]``.
+    gate_overrides : ``gate.*`` thresholds (:func:`magexp.calibration.checks.gate_thresholds`).
+    auto_margin : the parsimony margin of ``model=auto``.
 
     Returns
     -------
     Calibration
         ``W`` (canonical form), offset, calibrated readings, the reference used, the spread
-        metrics and the quality report.
+        metrics, the quality report, the gate's outcome and (``auto``) the model selection.
+
+    Raises
+    ------
+    MagexpError
+        One line: bad input, degenerate data, a failed fit, or (unless ``accept``) every failed check of the gate.
     """
     check_size(rec)
     folds = check_folds(folds)
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
     check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.run.budget's limits
-    if model not in MODELS or (model == "sphere" and objective != "scalar"):
-        raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or sphere "
-                          "with the scalar objective")
+    model = models_.check_model(model, objective)
+    thresholds = gate_thresholds(gate_overrides)
     check_applies(estimator, problem_class(objective),
                   alternatives=lambda: {n: target_class("estimator", n) for n in options("estimator")})
-    reference = reference_of(rec, reference_total)
+    reference = reference_total if isinstance(reference_total, Reference) else reference_of(rec, reference_total)
     dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
         check_readings(rec.readings, rec.name)
+    selection, held = None, {}
+    if model == "auto" and folds < 2:  # nothing held out to choose by: the richest model, and say so
+        model, selection = "full", {"chosen": "full", "why": f"full: folds={folds}, no held-out check to choose by",
+                                    "margin": auto_margin, "heldout_spread": {}}
+    if model == "auto":
+        held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
+                for m in (models_.ORDER if objective == "scalar" else ("full",))}
+        model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
+                                          models_.check_margin(auto_margin))
     w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
-    cover = coverage(calibrated)
-    name = "sphere fit" if model == "sphere" else estimator.name
+    cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
+    name = f"{model} fit" if model in models_.CLOSED_FORM else estimator.name
     if checks:
         check_fit(rec.name, name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
     metrics = {**quality(rec.readings, calibrated, reference.total), **cover}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
-    metrics.update(heldout(rec, estimator, objective, reference, folds, rng, model))
+    metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
     report = report_of(objective, w, o, problem, model)
+    if selection is not None:
+        report["model_selection"] = selection
+    report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
     return Calibration(recording=rec, estimator=name, objective=objective, w=w, offset=o,
                        reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
                        report=report)
+
+
+def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: dict, *, checks: bool,
+            accept: bool) -> dict:
+    """The acceptance gate's outcome (:func:`magexp.calibration.checks.gate`): refused in one line
+    unless ``accept`` (or ``checks`` is False); ``{passed, failed, accepted_anyway, thresholds}``."""
+    failed = gate(w, metrics, raw_radius=centroid_radius(rec.readings), reference=float(np.mean(reference.total)),
+                  estimated=reference.estimated, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
+                  thresholds=thresholds)
+    if failed and checks and not accept:
+        refuse(rec.name, failed)
+    return {"passed": not failed, "failed": failed, "accepted_anyway": bool(failed) and accept,
+            "thresholds": {k: list(v) if isinstance(v, tuple) else v for k, v in thresholds.items()}}
 
 
 # -- the Python API --------------------------------------------------------------------------------
@@ -371,7 +428,8 @@ def estimator_named(name: str, **overrides):
 
 
 def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objective: str = "scalar",
-              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "full",
+              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "auto",
+              accept: bool = False, gate=None, auto_margin: float = models_.MARGIN,
               **estimator_options) -> Calibration:
     """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
 
@@ -381,7 +439,8 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
         or a :class:`~magexp.core.recordings.Recording`.
     unit : unit of an array or DataFrame (``nT, uT, mG, G, T, counts``).
     estimator : a name of ``conf/estimator/*.yaml`` (``ellipsoid``, ``lm``, ``ipso``, ...) or an estimator object.
-    objective, reference_total, folds, checks, model : as :func:`calibrate_recording`.
+    objective, reference_total, folds, checks, model, accept, auto_margin : as :func:`calibrate_recording`.
+    gate : ``gate.*`` thresholds overriding :data:`magexp.calibration.checks.GATE` (a dict).
     seed : the estimator's random generator derives from it (:func:`magexp.core.seeding.run_generators`).
     estimator_options : overrides of the estimator config (e.g. ``n_iterations=200``).
 
@@ -403,7 +462,8 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
     _, rng = run_generators(check_positive_int(seed, "seed", minimum=0))
     return calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
-                               rng=rng, checks=checks, model=model)
+                               rng=rng, checks=checks, model=model, accept=accept, gate_overrides=gate,
+                               auto_margin=auto_margin)
 
 
 # -- the command -----------------------------------------------------------------------------------
@@ -451,7 +511,8 @@ def run(cfg) -> Calibration:
     if reference is None:
         reference = reference_from_igrf(cfg, rec)
     cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
-                              folds=cfg.folds, rng=est_rng, model=cfg.model)
+                              folds=cfg.folds, rng=est_rng, model=cfg.model, accept=bool(cfg.get("accept", False)),
+                              gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
     paths = write(cal, out_dir, seed=cfg.seed)
     print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())})
     return cal

@@ -142,12 +142,23 @@ def write(cal, out_dir: Path, *, seed: int) -> dict:
     return paths
 
 
+def _gate_line(record: dict) -> str:
+    """The acceptance gate's outcome in one line."""
+    if not record:
+        return "not checked"
+    if record["passed"]:
+        return "passed (held out beats raw; W's shape, the radius and the residual RMS plausible)"
+    return "FAILED, written because accept=true: " + "; ".join(f["line"].split(":")[0] for f in record["failed"])
+
+
 def summary(cal) -> dict:
     """The key numbers to print, in order."""
     m, u, r = cal.metrics, cal.unit, cal.report
     return {
         "recording": f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})",
         "estimator": f"{cal.estimator} ({cal.objective} objective)",
+        "model": (r.get("model_selection") or {}).get("why") or r.get("model", ""),
+        "gate": _gate_line(r.get("gate") or {}),
         "reference": cal.reference.describe(),
         "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
         "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
