@@ -17,9 +17,10 @@ Flow (the same as a simulated run, with a recording instead of a scenario)::
     estimator.fit(problem, rng=...) ──► W, o ──► canonical form, quality (magexp.core.identifiability), k-fold
 
 Reference total field, first found of: ``data.reference_total`` (command line), the ``total``
-column, ``# reference_total:``, the norm of ``# field:``, the IGRF total at ``igrf.latitude``,
-``igrf.longitude``, ``igrf.altitude_km``, ``igrf.date`` (:mod:`magexp.core.igrf`; unit-bearing
-recordings only). With none, the reference is *estimated*: the fit uses ``R0``, the radius of
+column, ``# reference_total:``, the norm of ``# field:``, the ``field.model`` (``igrf`` or ``wmm``) total
+at ``field.latitude``, ``field.longitude``, ``field.altitude_km``, ``field.date``, each taken from
+the log's GPS when not given (:mod:`magexp.core.field_model`; ``igrf.*``: the older names of these
+keys with ``field.model=igrf``); a raw-count recording is then calibrated to the model's total in nT. With none, the reference is *estimated*: the fit uses ``R0``, the radius of
 the sphere fitted to the raw readings (:func:`centroid_radius`), as the radius, then ``W`` is rescaled so that
 the mean calibrated magnitude equals ``R0``. The shape of the calibration (and the spread
 std/mean) does not depend on this choice; the absolute scale does, and the output says so.
@@ -50,11 +51,12 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
+from magexp.calibration.export import TARGETS as EXPORT_TARGETS
 from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
-from magexp.calibration.write import check_out, summary, write
+from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, write
 from magexp.core.dataset import Dataset
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
-from magexp.core.igrf import field_at
+from magexp.core.field_model import field_of_recording, place_of
 from magexp.core.recordings import UNITS, Recording, check_unique, check_unit, load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import LARGEST, MagexpError, check_positive_int, exit_code
@@ -91,13 +93,18 @@ class Reference:
     Attributes
     ----------
     total : (N,) reference total per reading (in the recording's unit).
-    source : where it comes from (``data.reference_total``, ``total column``, ...).
+    source : where it comes from (``data.reference_total``, ``total column``, ``IGRF-14 at ...``).
     estimated : True when no reference was given and the scale was fixed from the data.
+    unit : the reference's unit when it differs from the recording's (a raw-count recording
+        calibrated to a field model's total in nT); None: the recording's.
+    record : the field model, generation and inputs it came from, or None.
     """
 
     total: np.ndarray
     source: str
     estimated: bool = False
+    unit: str | None = None  # the reference's unit when it is not the recording's (counts calibrated to nT)
+    record: dict | None = None  # a field model's name, generation and inputs (:meth:`ReferenceField.record`)
 
     def describe(self) -> str:
         mean = float(np.mean(self.total))
@@ -113,24 +120,100 @@ class Calibration:
 
     ``w`` is in the canonical form of :data:`FORMS` (``report["w_form"]``); ``metrics`` holds the
     spreads before, after and held out; ``report`` the standard errors, conditioning, the
-    undetermined combinations and the direction coverage (:mod:`magexp.core.identifiability`).
+    undetermined combinations, the direction coverage (:mod:`magexp.core.identifiability`), the
+    acceptance gate's outcome and the model selection. A calibration read back by :meth:`load`
+    has no recording (``recording`` None): it applies, exports and summarises, but has no
+    readings to plot.
     """
 
-    recording: Recording
+    recording: Recording | None
     estimator: str
     objective: str
     w: np.ndarray
     offset: np.ndarray
     reference: Reference
-    search: SearchBox
-    fit: FitResult
+    search: SearchBox | None
+    fit: FitResult | None
     calibrated: np.ndarray
     metrics: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
+    seed: int = 0
+    config: dict = field(default_factory=dict)  # the settings it was made with (the command's config, the call's)
+    saved: dict | None = None  # the JSON it was loaded from (:meth:`load`)
 
     @property
     def unit(self) -> str:
-        return self.recording.unit
+        """Unit of the raw readings."""
+        return self.recording.unit if self.recording is not None else self.saved["unit"]
+
+    @property
+    def field_unit(self) -> str:
+        """Unit of the calibrated field (the recording's, or the field model's nT for raw counts)."""
+        return self.reference.unit or self.unit
+
+    @property
+    def name(self) -> str:
+        return self.recording.name if self.recording is not None else Path(self.saved["recording"]).name
+
+    @property
+    def model(self) -> str:
+        return self.report.get("model", "full")
+
+    def apply(self, readings) -> np.ndarray:
+        """``B = W (r - o)`` of raw ``readings`` (``(N, 3)`` or ``(3,)``, the recording's unit)."""
+        r = readings_array(readings)
+        if r.shape[-1:] != (3,) or r.ndim > 2:
+            raise MagexpError(f"readings of shape {r.shape} are not allowed: give (N, 3) or (3,) raw readings")
+        return (r - self.offset) @ self.w.T
+
+    def save(self, path, *, overwrite: bool = False) -> Path:
+        """Write ``calibration.json`` content (versioned, with provenance) to ``path``; an existing
+        file is refused in one line unless ``overwrite``. :meth:`load` reads it back exactly."""
+        return save_parameters(self, path, overwrite=overwrite)
+
+    @classmethod
+    def load(cls, path) -> "Calibration":
+        """A :class:`Calibration` from a ``calibration.json`` (:meth:`save`, ``magexp calibrate``)."""
+        data = read_parameters(path)
+        ref = data["reference"]
+        reference = Reference(np.array([ref["total"]]), ref["source"], ref["estimated"], ref.get("unit"),
+                              ref.get("field_model"))
+        quality = data.get("quality", {})
+        return cls(recording=None, estimator=data["estimator"], objective=data["objective"],
+                   w=np.array(data["W"], float), offset=np.array(data["offset"], float), reference=reference,
+                   search=None, fit=None, calibrated=np.zeros((0, 3)), metrics=data.get("metrics", {}),
+                   report=quality, seed=data.get("seed", 0), config=data.get("config", {}), saved=data)
+
+    def __repr__(self) -> str:
+        m = self.metrics
+        held = f", held out {100 * m['heldout_spread']:.3g} %" if "heldout_spread" in m else ""
+        gate = self.report.get("gate") or {}
+        state = "" if not gate else (", gate passed" if gate.get("passed") else ", gate FAILED (accepted)")
+        return (f"<Calibration {self.name}: {self.model} model by {self.estimator}, spread "
+                f"{100 * m.get('spread_before', float('nan')):.3g} % -> {100 * m.get('spread_after', float('nan')):.3g} %"
+                f"{held}{state}; B = W (r - o), r in {self.unit}, B in {self.field_unit}>")
+
+    def summary(self) -> str:
+        """The printed summary of ``magexp calibrate`` (the key numbers, one per line)."""
+        rows = summary(self)
+        width = max(map(len, rows))
+        return "\n".join(f"{k:<{width}}  {v}" for k, v in rows.items())
+
+    def plot(self):
+        """The before/after figure (:mod:`magexp.calibration.figure`); returns the matplotlib Figure."""
+        if self.recording is None:
+            raise MagexpError("plot() is not allowed for a loaded calibration: it has no readings; calibrate the "
+                              "recording again, or plot cal.apply(readings) yourself")
+        from magexp.calibration.write import figure  # lazy: matplotlib only when a figure is drawn
+
+        return figure(self)
+
+    def export(self, target: str, path=None, **options) -> Path:
+        """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`)."""
+        from magexp.calibration.export import export  # lazy: yaml and the targets only when exporting
+
+        options.setdefault("field_unit", self.field_unit)
+        return export(self, target, path, **options)
 
 
 def reference_of(rec: Recording, override=None) -> Reference:
@@ -375,7 +458,7 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
     """The acceptance gate's outcome (:func:`magexp.calibration.checks.gate`): refused in one line
     unless ``accept`` (or ``checks`` is False); ``{passed, failed, accepted_anyway, thresholds}``."""
     failed = gate(w, metrics, raw_radius=centroid_radius(rec.readings), reference=float(np.mean(reference.total)),
-                  estimated=reference.estimated, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
+                  estimated=reference.estimated or reference.unit is not None, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
                   thresholds=thresholds)
     if failed and checks and not accept:
         refuse(rec.name, failed)
@@ -460,10 +543,18 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
         raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
                           f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
-    _, rng = run_generators(check_positive_int(seed, "seed", minimum=0))
-    return calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
-                               rng=rng, checks=checks, model=model, accept=accept, gate_overrides=gate,
-                               auto_margin=auto_margin)
+    seed = check_positive_int(seed, "seed", minimum=0)
+    _, rng = run_generators(seed)
+    cal = calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
+                              rng=rng, checks=checks, model=model, accept=accept, gate_overrides=gate,
+                              auto_margin=auto_margin)
+    cal.seed = seed
+    cal.config = {"readings": str(readings) if isinstance(readings, (str, Path)) else type(readings).__name__,
+                  "unit": unit, "estimator": est.name if hasattr(est, "name") else str(estimator),
+                  "objective": objective, "reference_total": None if reference_total is None else
+                  float(np.mean(cal.reference.total)), "folds": folds, "seed": seed, "checks": checks, "model": model,
+                  "accept": accept, "gate": dict(gate or {}), "auto_margin": auto_margin, **estimator_options}
+    return cal
 
 
 # -- the command -----------------------------------------------------------------------------------
@@ -481,16 +572,34 @@ def calibrate_config(argv: list[str]):
     return hydra_compose(tuple(argv), "calibrate")
 
 
-def reference_from_igrf(cfg, rec: Recording):
-    """The IGRF total at ``cfg.igrf`` in the recording's unit, or None when no place is given."""
-    place = cfg.get("igrf") or {}
-    if place.get("latitude") is None:
+def field_keys(cfg) -> dict:
+    """``field.*`` of ``cfg``, with the older ``igrf.*`` keys as aliases (``field.model=igrf``)."""
+    place = {k: v for k, v in dict(cfg.get("field") or {}).items()}
+    old = {k: v for k, v in dict(cfg.get("igrf") or {}).items() if v is not None and k != "altitude_km"}
+    if old:
+        if place.get("latitude") is not None:
+            raise MagexpError(f"igrf.latitude={old.get('latitude')!r} is not allowed with field.latitude: igrf.* is "
+                              "the older name of field.* (with field.model=igrf), give field.* only")
+        place.update(dict(cfg.igrf), model="igrf")
+    return place
+
+
+def reference_from_field(cfg, rec: Recording) -> Reference | None:
+    """The field model's total where and when ``rec`` was recorded (:mod:`magexp.core.field_model`):
+    ``field.latitude/longitude/altitude_km/date`` (each, if not given, from the log's GPS), or None
+    when neither the command line nor the log gives a place. In the recording's unit; a raw-count
+    recording is calibrated to the model's total in nT (``W`` then maps counts to nT)."""
+    place = field_keys(cfg)
+    if place.get("latitude") is None and not {"latitude", "date"} <= set(place_of(rec)):
         return None
-    if rec.unit not in UNITS:
-        raise MagexpError(f"igrf.latitude={place.latitude} is not allowed for {rec.name}: its unit {rec.unit!r} "
-                          "has no known factor to nT")
-    total_nt = field_at(place.latitude, place.longitude, place.get("altitude_km", 0.0), place.date).total
-    return total_nt / UNITS[rec.unit]
+    ref = field_of_recording(rec, model=place.get("model") or "igrf", latitude=place.get("latitude"),
+                             longitude=place.get("longitude"), altitude_km=place.get("altitude_km"),
+                             date=place.get("date"), prefix="field")
+    unit = rec.unit if rec.unit in UNITS else "nT"
+    inputs = ref.record()
+    where = f"{ref.generation} at {inputs['latitude']:g}, {inputs['longitude']:g}, {inputs['date']}"
+    return Reference(np.full(rec.n, ref.total / UNITS[unit]), where, unit=None if unit == rec.unit else unit,
+                     record=inputs)
 
 
 def run(cfg) -> Calibration:
@@ -504,18 +613,33 @@ def run(cfg) -> Calibration:
     out = cfg.get("out")
     out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
     check_destination(out_dir if out is None else out, "out")
-    check_out(out_dir)
+    overwrite, draw, target = (flag(cfg, "overwrite"), flag(cfg, "figure"), cfg.get("export"))
+    check_out(out_dir, overwrite=overwrite)
+    if target is not None and str(target) not in EXPORT_TARGETS:
+        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    _, est_rng = run_generators(check_positive_int(cfg.seed, "seed", minimum=0))
+    seed = check_positive_int(cfg.seed, "seed", minimum=0)
+    _, est_rng = run_generators(seed)
     reference = data.get("reference_total")
     if reference is None:
-        reference = reference_from_igrf(cfg, rec)
+        reference = reference_from_field(cfg, rec)
     cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
-                              folds=cfg.folds, rng=est_rng, model=cfg.model, accept=bool(cfg.get("accept", False)),
+                              folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
                               gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
-    paths = write(cal, out_dir, seed=cfg.seed)
-    print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())})
+    cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
+    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target))
+    print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
+                 + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
+                 + ("" if draw else "; no figure (figure=true draws it)")})
     return cal
+
+
+def flag(cfg, key: str) -> bool:
+    """A true/false key of ``cfg`` (default false), else one line."""
+    value = cfg.get(key, False)
+    if not isinstance(value, bool):
+        raise MagexpError(f"{key}={value!r} is not allowed: give {key}=true or {key}=false")
+    return value
 
 
 def command(argv: list[str]) -> None:
