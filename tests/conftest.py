@@ -3,11 +3,15 @@ command line run in-process (the process boundary itself is tested in ``test_cli
 
 from __future__ import annotations
 
-import subprocess
+from magexp.run.threads import one_blas_thread
 
-import pytest
+one_blas_thread()  # as magexp's commands do, before numpy is imported: deterministic numbers
 
-from magexp.run.compose import compose_config
+import subprocess  # noqa: E402
+
+import pytest  # noqa: E402
+
+from magexp.run.compose import compose_config  # noqa: E402
 
 
 @pytest.fixture

@@ -90,3 +90,31 @@ def test_raw_counts_are_calibrated_to_the_model_field_in_nt(tmp_path):
     saved = json.loads((out / "calibration.json").read_text())
     assert (saved["unit"], saved["field_unit"], saved["reference"]["unit"]) == ("counts", "nT", "nT")
     assert abs(saved["metrics"]["mean_after"] / saved["reference"]["total"] - 1) < 0.01
+
+
+def test_import_magexp_sets_no_thread_variables():
+    """``import magexp`` (and the calibration API) leave the user's process environment alone."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    code = ("import os, magexp, magexp.calibration.fit; "
+            "print(sorted(k for k in os.environ if k.endswith('_NUM_THREADS')))")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_calibrate_help_lists_every_key_with_a_sentence(capsys):
+    from omegaconf import OmegaConf
+
+    from magexp.paths import CONF
+
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    cfg = OmegaConf.load(CONF / "calibrate.yaml")
+    keys = [f"{k}.{sub}" if sub else k for k, v in cfg.items() if k != "defaults"
+            for sub in (v.keys() if OmegaConf.is_dict(v) else [None])]
+    for key in keys:
+        line = next(line for line in out.splitlines() if line.split() and line.split()[0] == key)
+        assert len(line.split(":", 1)[1].strip()) > 3, line  # a sentence, not only the default

@@ -42,18 +42,19 @@ orientations the fit may not have seen: a stricter test than interleaved folds).
 
 from __future__ import annotations
 
+import os
+import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
 from magexp.calibration.export import TARGETS as EXPORT_TARGETS
 from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
-from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, write
+from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
 from magexp.core.field_model import field_of_recording, place_of
@@ -67,7 +68,6 @@ from magexp.paths import CONF
 from magexp.problems import make_problem, problem_class
 from magexp.run.budget import check_calibration, check_recording_file
 from magexp.run.compose import GROUPS, check_choice, hydra_compose, options, target_class
-from magexp.run.outputs import print_table
 from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
 from magexp.run.runner import build
 from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box
@@ -195,9 +195,7 @@ class Calibration:
 
     def summary(self) -> str:
         """The printed summary of ``magexp calibrate`` (the key numbers, one per line)."""
-        rows = summary(self)
-        width = max(map(len, rows))
-        return "\n".join(f"{k:<{width}}  {v}" for k, v in rows.items())
+        return table(summary(self))
 
     def plot(self):
         """The before/after figure (:mod:`magexp.calibration.figure`); returns the matplotlib Figure."""
@@ -474,7 +472,8 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
         return readings
     if isinstance(readings, (str, Path)):
         return load_recording(readings, unit=unit)
-    if isinstance(readings, pd.DataFrame):
+    pandas = sys.modules.get("pandas")  # a DataFrame exists only if pandas is loaded: not importing it saves
+    if pandas is not None and isinstance(readings, pandas.DataFrame):  # 240 ms (-X importtime) per calibration
         cols = [str(c).strip().lower() for c in readings.columns]
         check_unique(cols, "readings")
         pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
@@ -618,6 +617,11 @@ def run(cfg) -> Calibration:
     if target is not None and str(target) not in EXPORT_TARGETS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
+    if not getattr(estimator, "iterative", True):
+        # a closed-form fit evaluates a few residual vectors, which numpy computes in milliseconds: loading
+        # the compiled kernels for them costs 0.75 s (numba import and cache load; cProfile, QMC5883L
+        # recording); this command's own process only, unless MAGEXP_NUMBA is set
+        os.environ.setdefault("MAGEXP_NUMBA", "0")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
     reference = data.get("reference_total")
@@ -628,9 +632,9 @@ def run(cfg) -> Calibration:
                               gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
     cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
     paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target))
-    print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
+    print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
                  + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
-                 + ("" if draw else "; no figure (figure=true draws it)")})
+                 + ("" if draw else "; no figure (figure=true draws it)")}))
     return cal
 
 
@@ -642,9 +646,44 @@ def flag(cfg, key: str) -> bool:
     return value
 
 
+_KEY_LINE = re.compile(r"^(?P<indent> *)(?P<key>[A-Za-z_]\w*):\s*(?P<value>[^#]*?)\s*(#\s*(?P<text>.*))?$")
+
+
+def help_text(path: Path = CONF / "calibrate.yaml") -> str:
+    """``magexp calibrate --help``: every key of ``conf/calibrate.yaml`` (dotted), its default and the
+    sentence its comment gives (the one home of both), then the estimators to choose from."""
+    rows, parents, last = [], [], None
+    for line in path.read_text().splitlines():
+        match = _KEY_LINE.match(line)
+        if match is None:
+            comment = line.strip()
+            if last is not None and comment.startswith("#") and line.startswith("   "):
+                last[2] += " " + comment.lstrip("# ")  # a comment continued on the next line
+            continue
+        depth = len(match["indent"]) // 2
+        parents[depth:] = [match["key"]]
+        if match["key"] == "defaults" or not match["value"] and not match["text"]:
+            last = None
+            continue
+        last = [".".join(parents), match["value"] or "(group)", match["text"] or ""]
+        rows.append(last)
+    width = max(len(k) for k, *_ in rows)
+    lines = ["magexp calibrate KEY=VALUE ...: calibrate a recording (docs/calibrate.md)", "",
+             "e.g. magexp calibrate data.path=mine.csv data.unit=uT", "",
+             f"{'key':<{width}}  default: meaning"]
+    lines += [f"{k:<{width}}  {v}: {t}" for k, v, t in rows]
+    lines += ["", f"estimator: one of {', '.join(options('estimator'))} (conf/estimator/*.yaml; "
+              "estimator.<option>=... sets its options)"]
+    return "\n".join(lines)
+
+
 def command(argv: list[str]) -> None:
     """``magexp calibrate KEY=VALUE ...``: compose, check, calibrate, write; errors are raised (the
-    one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code)."""
+    one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code).
+    ``--help`` (``-h``) prints :func:`help_text`."""
+    if any(a in ("--help", "-h") for a in argv):
+        print(help_text())
+        return
     run(calibrate_config(argv))
 
 

@@ -218,6 +218,12 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
     return paths
 
 
+def table(rows: dict) -> str:
+    """``key  value`` lines, keys aligned (the printed summary)."""
+    width = max(len(k) for k in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows.items())
+
+
 def _fit_line(fit, saved) -> str:
     """The fit's outcome in one line (of a loaded calibration: as saved)."""
     success, message = (fit.success, fit.message) if fit is not None else (saved["fit"]["success"],
