@@ -465,6 +465,20 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
 
 
 # -- the Python API --------------------------------------------------------------------------------
+def frame_readings(frame) -> np.ndarray:
+    """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``x, y, z``, ``mx, my, mz``)
+    columns, else its three numeric columns."""
+    cols = [str(c).strip().lower() for c in frame.columns]
+    check_unique(cols, "readings")
+    pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
+                 if all(n in cols for n in names)), None)
+    chosen = frame.iloc[:, [cols.index(n) for n in pick]] if pick else frame.select_dtypes("number")
+    if chosen.shape[1] != 3:
+        raise MagexpError(f"readings with columns {list(frame.columns)} are not allowed: give bx, by, bz "
+                          "(or x, y, z), or exactly three numeric columns")
+    return chosen.to_numpy(float)
+
+
 def as_recording(readings, *, unit: str | None = None) -> Recording:
     """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
     ``x, y, z``, else its three numeric columns), a path or a Recording."""
@@ -474,15 +488,7 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
         return load_recording(readings, unit=unit)
     pandas = sys.modules.get("pandas")  # a DataFrame exists only if pandas is loaded: not importing it saves
     if pandas is not None and isinstance(readings, pandas.DataFrame):  # 240 ms (-X importtime) per calibration
-        cols = [str(c).strip().lower() for c in readings.columns]
-        check_unique(cols, "readings")
-        pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
-                     if all(n in cols for n in names)), None)
-        frame = readings.iloc[:, [cols.index(n) for n in pick]] if pick else readings.select_dtypes("number")
-        if frame.shape[1] != 3:
-            raise MagexpError(f"readings with columns {list(readings.columns)} are not allowed: give bx, by, bz "
-                              "(or x, y, z), or exactly three numeric columns")
-        readings = frame.to_numpy(float)
+        readings = frame_readings(readings)
     values = readings_array(readings)
     if values.ndim != 2 or values.shape[1] != 3:
         raise MagexpError(f"readings of shape {values.shape} are not allowed: give an (N, 3) array")
