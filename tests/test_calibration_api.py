@@ -118,3 +118,16 @@ def test_calibrate_help_lists_every_key_with_a_sentence(capsys):
     for key in keys:
         line = next(line for line in out.splitlines() if line.split() and line.split()[0] == key)
         assert len(line.split(":", 1)[1].strip()) > 3, line  # a sentence, not only the default
+
+
+@pytest.mark.parametrize("missing, extra, code", [("cma", "cmaes", 2), ("distributed.client", "dask", 2),
+                                                  ("pyulog", "ulog", 2), ("not_a_magexp_extra", None, 3)])
+def test_a_missing_optional_package_names_its_extra(capsys, missing, extra, code):
+    from magexp.errors import exit_code
+
+    def needs():
+        raise ModuleNotFoundError(f"No module named {missing!r}", name=missing)
+
+    assert exit_code(needs) == code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and (extra is None or f"pip install 'magexp[{extra}]'" in err[0])
