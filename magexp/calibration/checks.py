@@ -78,7 +78,7 @@ GATE = {
 #: what to record instead, by failed check
 ADVICE = {
     "heldout": "the calibration does not hold on readings it was not fitted to: record more orientations "
-               "(turn about every axis), or try model=auto",
+               "(turn about every axis)",
     "anisotropy": "W stretches one direction far more than another: the readings do not cover the directions "
                   "it stretches; record turns about every axis",
     "scale": "W's scale is implausible for a magnetometer: record turns about every axis",
