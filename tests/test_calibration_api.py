@@ -131,3 +131,18 @@ def test_a_missing_optional_package_names_its_extra(capsys, missing, extra, code
     assert exit_code(needs) == code
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and (extra is None or f"pip install 'magexp[{extra}]'" in err[0])
+
+
+@pytest.mark.skipif(not FXOS.is_file(), reason=f"{FXOS} is not present")
+@pytest.mark.parametrize("args, message", [
+    (["igrf.latitude=52.2", "field.latitude=52.2"], "igrf.latitude=52.2 is not allowed with field.latitude"),
+    (["field.latitude=52.2", "field.longitude=0.1"], "field.date=None is not allowed"),
+    (["field.model=xyz", "field.latitude=1", "field.longitude=1", "field.date=2024-01-01"], "field.model='xyz'"),
+    (["overwrite=yes"], "overwrite='yes' is not allowed"), (["export=betaflight"], "export='betaflight'"),
+    (["gate.max_anisotropy=0"], "gate.max_anisotropy=0"),
+])
+def test_bad_new_keys_are_one_line_nothing_written(tmp_path, capsys, args, message):
+    assert main([f"data.path={FXOS}", "data.unit=uT", *args, f"out={tmp_path / 'o'}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "o").exists()
