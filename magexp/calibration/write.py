@@ -11,7 +11,8 @@ Files, in the output folder (``out=...``, default Hydra's run folder):
   ``magnitude``, and the raw ``raw_bx, raw_by, raw_bz, raw_magnitude``;
 * ``calibration.png`` and ``calibration.pdf`` (only with ``figure=true``: drawing them takes longer
   than the calibration): plane projections of the raw and calibrated readings with the reference
-  circle, and the total field per reading and its histogram, before and after;
+  circle, the map of the sphere cells the raw directions reach about the fitted centre, and the
+  total field per reading and its histogram, before and after;
 * with ``export=<target>``, the firmware's file (:mod:`magexp.calibration.export`).
 
 An existing file is never overwritten (``overwrite=true`` replaces an earlier calibration's files,
@@ -174,7 +175,7 @@ def figure(cal):
     title = f"{cal.name}: {cal.model} by {cal.estimator} ({cal.objective}), spread " \
             f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
     return calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.field_unit,
-                              title=title)
+                              title=title, centre=cal.offset)
 
 
 def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, overwrite: bool = False,
