@@ -59,7 +59,7 @@ docs: $(STAMP) ## build the documentation site (docs/, mkdocs.yml) strictly into
 lock: ## refresh requirements.lock from the newest releases allowed by pyproject.toml (then commit it)
 	rm -rf .lockenv && $(PYTHON) -m venv .lockenv
 	.lockenv/bin/python -m pip install --quiet --upgrade pip
-	.lockenv/bin/python -m pip install --quiet '.[test,bench,docs,ulog,dataflash,ros]'
+	.lockenv/bin/python -m pip install --quiet '.[all,test,bench,docs]'
 	(echo "# Pinned environment for make venv / make test / make reproduce (Python 3.11). Refresh: make lock"; \
 	 .lockenv/bin/python -m pip freeze --exclude magexp) > requirements.lock
 	rm -rf .lockenv

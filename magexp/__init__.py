@@ -4,14 +4,10 @@ Data flows one way::
 
     scenario ──► Dataset ──► problem (vectorised cost) ──► estimator.fit ──► FitResult
              ──► metrics ──► tidy rows ──► results/<paper>/<artifact>.csv ──► figures, report
+
+Importing magexp changes nothing in the importing process (no environment variable, no thread
+setting): the commands set one BLAS thread for themselves (:mod:`magexp.run.threads`).
 """
-
-import os as _os
-
-# Deterministic numbers: one BLAS thread (the matrices here are small, so threads buy nothing,
-# and a threaded reduction order can move a flat direction of a fit in its last digits).
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    _os.environ.setdefault(_var, "1")
 
 __version__ = "0.1.0"
 

@@ -18,6 +18,7 @@ import signal
 import sys
 
 from magexp.errors import guarded
+from magexp.run.threads import one_blas_thread
 
 
 def command(name: str):
@@ -39,6 +40,7 @@ def main(argv: list[str] | None = None) -> None:
     if argv is None:  # a closed pipe (magexp --help | head) ends quietly, as for any Unix tool
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     name = args[0] if args and args[0] in ("calibrate", "reproduce") else "run"
+    one_blas_thread()  # this process and its workers; before the command imports numpy
     guarded(command(name), args[1:] if name != "run" else args)
 
 

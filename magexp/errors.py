@@ -82,12 +82,18 @@ def fail(message: str, code: int = EXIT_BAD_INPUT) -> None:
     sys.exit(code)
 
 
+#: optional packages and the ``pip install 'magexp[<extra>]'`` that brings each (pyproject.toml)
+EXTRAS = {"cma": "cmaes", "distributed": "dask", "dask": "dask", "dask_jobqueue": "cluster", "pyulog": "ulog",
+          "pymavlink": "dataflash", "rosbags": "ros", "pyswarms": "bench"}
+
+
 def guarded(func, *args):
     """Call ``func(*args)`` turning every error into one line on stderr and a non-zero exit.
 
     The one error path of every command (``magexp``, ``magexp calibrate``, ``magexp reproduce``, a
     sweep's launcher): :class:`MagexpError` and ``OSError`` (a file or folder the user named) exit
-    :data:`EXIT_BAD_INPUT`; Ctrl-C exits :data:`EXIT_INTERRUPTED` with one line; anything else is a
+    :data:`EXIT_BAD_INPUT`, and so does a missing optional package (the line names its extra,
+    :data:`EXTRAS`); Ctrl-C exits :data:`EXIT_INTERRUPTED` with one line; anything else is a
     bug: one line and :data:`EXIT_BUG` (``MAGEXP_DEBUG=1`` shows the traceback).
     """
     try:
@@ -100,11 +106,21 @@ def guarded(func, *args):
         fail(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": "))
     except SystemExit:
         raise
+    except ModuleNotFoundError as exc:  # an optional package: name its extra; any other missing module is a bug
+        root = (exc.name or "").split(".")[0]
+        if root not in EXTRAS:
+            _bug(exc)
+        fail(f"this needs the optional package {root!r}, not installed: pip install 'magexp[{EXTRAS[root]}]'")
     except Exception as exc:
-        if os.environ.get("MAGEXP_DEBUG"):
-            raise
-        first = str(exc).splitlines()[0] if str(exc) else ""
-        fail(f"unexpected {type(exc).__name__}: {first} (rerun with MAGEXP_DEBUG=1 for details)", EXIT_BUG)
+        _bug(exc)
+
+
+def _bug(exc: BaseException) -> None:
+    """A bug: one line and :data:`EXIT_BUG` (``MAGEXP_DEBUG=1``: the traceback)."""
+    if os.environ.get("MAGEXP_DEBUG"):
+        raise exc
+    first = str(exc).splitlines()[0] if str(exc) else ""
+    fail(f"unexpected {type(exc).__name__}: {first} (rerun with MAGEXP_DEBUG=1 for details)", EXIT_BUG)
 
 
 def exit_code(func, *args) -> int:

@@ -6,9 +6,14 @@ from __future__ import annotations
 import functools
 import subprocess
 
-import pytest
+from magexp.run.threads import one_blas_thread
 
-from magexp.run.compose import compose_config
+one_blas_thread()  # as magexp's commands do, before numpy is imported: deterministic numbers
+
+
+import pytest  # noqa: E402
+
+from magexp.run.compose import compose_config  # noqa: E402
 
 
 @pytest.fixture

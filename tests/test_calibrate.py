@@ -67,7 +67,7 @@ def test_fxos8700_spread_below_2_3_percent(name):
 def test_cli_end_to_end(tmp_path, magexp):
     results_before = sorted(p for p in RESULTS.rglob("*")) if RESULTS.exists() else []
     out = tmp_path / "calib"
-    proc = magexp(f"data.path={FXOS}", "data.unit=uT", "estimator=lm", f"out={out}", cwd=tmp_path)
+    proc = magexp(f"data.path={FXOS}", "data.unit=uT", "estimator=lm", f"out={out}", "figure=true", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "spread after" in proc.stdout and "estimated as the mean calibrated magnitude" in proc.stdout
     assert {p.name for p in out.iterdir()} == set(FILES.values())
@@ -82,6 +82,11 @@ def test_cli_end_to_end(tmp_path, magexp):
     # a second run into the same folder refuses to overwrite
     proc = magexp(f"data.path={FXOS}", "data.unit=uT", f"out={out}", cwd=tmp_path)
     assert proc.returncode != 0 and "already holds" in proc.stderr and "Traceback" not in proc.stderr
+    # unless told to: overwrite=true replaces them, and says so; without figure=true no figure is drawn
+    proc = magexp(f"data.path={FXOS}", "data.unit=uT", f"out={out}", "overwrite=true", "export=px4", cwd=tmp_path)
+    assert proc.returncode == 0 and "overwrite=true" in proc.stdout and "no figure" in proc.stdout, proc.stderr
+    assert {p.name for p in out.iterdir()} == {"calibration.json", "calibrated.csv", "magexp_mag.params"}
+    assert json.loads((out / "calibration.json").read_text())["estimator"] == "ellipsoid"
 
 
 # -- a synthetic recording with a known calibration ---------------------------------------------------

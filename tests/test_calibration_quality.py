@@ -162,7 +162,7 @@ def test_cli_writes_the_quality_report(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "held-out spread" in out and "polar factor" in out and "coverage" in out
     params = json.loads((tmp_path / "out" / "calibration.json").read_text())
-    assert params["format"] == "magexp-calibration v2" and "polar factor" in params["W_form"]
+    assert params["format"] == "magexp-calibration v3" and "polar factor" in params["W_form"]
     assert params["metrics"]["heldout_folds"] == 3 and params["metrics"]["heldout_spread"] > params["metrics"]["spread_after"]
     np.testing.assert_allclose(params["W"], np.transpose(params["W"]), atol=1e-12)
     assert len(params["quality"]["offset_standard_errors"]) == 3

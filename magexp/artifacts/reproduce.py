@@ -407,5 +407,5 @@ def _write(args, selected) -> int:
     return 0
 
 
-if __name__ == "__main__":
+if __name__ == "__main__":  # numpy is loaded by now: python -m magexp reproduce sets one BLAS thread first
     sys.exit(main())

@@ -62,3 +62,129 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
     if cells < MIN_CELLS:
         raise MagexpError(f"{name}: the readings point into only {cells} of {CELLS} sphere cells (too few distinct "
                           f"directions): {RECORD}")
+
+
+# -- the acceptance gate ---------------------------------------------------------------------------
+#: The gate's default thresholds (``gate.*`` in ``conf/calibrate.yaml``; :func:`gate`).
+GATE = {
+    "heldout_vs_raw": 1.0,   # the held-out spread must be below this times the raw spread
+    "max_anisotropy": 2.0,   # largest / smallest singular value of W
+    "scale_range": (0.2, 5.0),  # each singular value of W / (reference / raw radius): ArduPilot's diagonal range
+    "radius_mG": (150.0, 950.0),  # the raw readings' sphere radius (ArduPilot's accepted field radius)
+    "radius_vs_reference": (0.5, 2.0),  # the raw radius / the reference total, when a reference is given
+    "max_rms_mG": 16.0,      # RMS of |calibrated| - reference (ArduPilot's COMPASS_CAL_FIT default)
+    "max_rms_fraction": 0.032,  # the same, relative to the reference, for a raw-count unit (16 / 500 mG)
+}
+#: what to record instead, by failed check
+ADVICE = {
+    "heldout": "the calibration does not hold on readings it was not fitted to: record more orientations "
+               "(turn about every axis)",
+    "anisotropy": "W stretches one direction far more than another: the readings do not cover the directions "
+                  "it stretches; record turns about every axis",
+    "scale": "W's scale is implausible for a magnetometer: record turns about every axis",
+    "radius": "the readings' radius is not an Earth field: check data.unit and that the readings are raw",
+    "rms": "the calibrated total still varies too much: record slowly, away from iron and motors",
+}
+
+
+def _pair(value, key: str) -> tuple[float, float]:
+    try:
+        low, high = (float(v) for v in value)
+    except (TypeError, ValueError):
+        low, high = float("nan"), float("nan")
+    if not (0 <= low < high):
+        raise MagexpError(f"gate.{key}={value!r} is not allowed: give [low, high] with 0 <= low < high")
+    return low, high
+
+
+def gate_thresholds(overrides=None) -> dict:
+    """:data:`GATE` with ``overrides`` (a mapping of ``gate.*``), each checked; unknown keys refused."""
+    out = dict(GATE)
+    for key, value in dict(overrides or {}).items():
+        if key not in GATE:
+            raise MagexpError(f"gate.{key}={value!r} is not allowed: the gate's keys are {', '.join(GATE)}")
+        if isinstance(GATE[key], tuple):
+            out[key] = _pair(value, key)
+        else:
+            try:
+                out[key] = float(value)
+            except (TypeError, ValueError):
+                out[key] = float("nan")
+            if not out[key] > 0:
+                raise MagexpError(f"gate.{key}={value!r} is not allowed: it must be a number > 0")
+    return out
+
+
+def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, estimated: bool, to_mg,
+         thresholds: dict | None = None) -> list[dict]:
+    """The acceptance gate: the checks a calibration fails, each ``{check, value, threshold, line}``.
+
+    Parameters
+    ----------
+    w : the calibration's ``W``.
+    metrics : its spreads (``spread_before``, ``heldout_spread`` if measured, ``rms_after``).
+    raw_radius : radius of the sphere fitted to the raw readings (recording's unit).
+    reference : the mean reference total (recording's unit).
+    estimated : True when no reference was given (the radius-versus-reference check is skipped).
+    to_mg : mGauss per unit of the recording, or None for a raw-count unit (absolute checks skipped;
+        the RMS is checked relative to the reference).
+    thresholds : :func:`gate_thresholds` (default :data:`GATE`).
+
+    Checks (thresholds in :data:`GATE`): the held-out spread below ``heldout_vs_raw`` times the raw
+    spread; ``W``'s singular values ``σ`` with ``σ_max / σ_min <= max_anisotropy`` and each
+    ``σ / (reference / raw_radius)`` within ``scale_range``; the raw radius within ``radius_mG``
+    and, with a given reference, ``raw_radius / reference`` within ``radius_vs_reference``; the RMS of
+    ``|B| - reference`` at most ``max_rms_mG`` (or ``max_rms_fraction`` of the reference for counts).
+    """
+    t = GATE if thresholds is None else thresholds
+    failed = []
+
+    def fail(check, value, threshold, text):
+        failed.append({"check": check, "value": value, "threshold": threshold,
+                       "line": f"{text}: {ADVICE[check]}"})
+
+    held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
+    if held is not None and not (held < t["heldout_vs_raw"] * raw):
+        fail("heldout", held, t["heldout_vs_raw"] * raw,
+             f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %")
+    sigma = np.linalg.svd(w, compute_uv=False)
+    if sigma[0] > t["max_anisotropy"] * sigma[-1]:
+        fail("anisotropy", float(sigma[0] / sigma[-1]), t["max_anisotropy"],
+             f"W's singular values {sigma[0]:.3g}/{sigma[-1]:.3g} = {sigma[0] / sigma[-1]:.3g} exceed "
+             f"{t['max_anisotropy']:g}")
+    scaled = sigma * raw_radius / reference
+    low, high = t["scale_range"]
+    if scaled.min() < low or scaled.max() > high:
+        fail("scale", [float(v) for v in scaled], [low, high],
+             f"W's scale {scaled.min():.3g}..{scaled.max():.3g} leaves [{low:g}, {high:g}]")
+    if to_mg is not None:
+        low, high = t["radius_mG"]
+        if not low <= raw_radius * to_mg <= high:
+            fail("radius", raw_radius * to_mg, [low, high],
+                 f"radius {raw_radius * to_mg:.4g} mGauss outside [{low:g}, {high:g}]")
+    if not estimated:
+        low, high = t["radius_vs_reference"]
+        if not low <= raw_radius / reference <= high:
+            fail("radius", raw_radius / reference, [low, high],
+                 f"radius {raw_radius:.4g} is {raw_radius / reference:.3g} times the reference {reference:.4g} "
+                 f"(allowed [{low:g}, {high:g}])")
+    rms = _rms_check(metrics["rms_after"], reference, to_mg, t)
+    if rms:
+        fail(*rms)
+    return failed
+
+
+def _rms_check(rms: float, reference: float, to_mg, t: dict) -> tuple | None:
+    """``(check, value, threshold, text)`` when the residual RMS exceeds its threshold (:func:`gate`)."""
+    if to_mg is not None and rms * to_mg > t["max_rms_mG"]:
+        return "rms", rms * to_mg, t["max_rms_mG"], f"residual RMS {rms * to_mg:.3g} mGauss exceeds {t['max_rms_mG']:g}"
+    if to_mg is None and rms > t["max_rms_fraction"] * reference:
+        return ("rms", rms / reference, t["max_rms_fraction"],
+                f"residual RMS {100 * rms / reference:.3g} % of the reference exceeds {100 * t['max_rms_fraction']:g} %")
+    return None
+
+
+def refuse(name: str, failed: list[dict]) -> None:
+    """Raise the gate's one line: every failed check, then how to override."""
+    raise MagexpError(f"{name}: calibration refused, nothing written: " + "; ".join(f["line"] for f in failed)
+                      + " (accept=true writes it anyway, with these failures recorded)")

@@ -307,7 +307,7 @@ def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
 
     Returns the path written. ``options`` as :func:`render`; ``notes`` defaults to the recording,
     estimator and unit."""
-    notes = options.pop("notes", None) or {"recording": cal.recording.name, "estimator": cal.estimator,
+    notes = options.pop("notes", None) or {"recording": cal.name, "estimator": cal.estimator,
                                              "objective": cal.objective, "magexp unit": cal.unit}
     out = render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
     return write(out, path)

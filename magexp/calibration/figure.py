@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.artifacts.plots.style import plt
+from magexp.core.identifiability import CELLS, fibonacci_sphere
 
 PAIRS = ((0, 1, "x", "y"), (0, 2, "x", "z"), (1, 2, "y", "z"))
 #: most readings drawn as points (module docstring)
@@ -53,13 +54,40 @@ def magnitudes(ax_trace, ax_hist, raw: np.ndarray, calibrated: np.ndarray, refer
     ax_hist.set_ylabel("readings")
 
 
-def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, *, unit: str, title: str):
-    """The whole figure: projections on top, magnitude trace and histogram below; returns it."""
-    fig = plt.figure(figsize=(10.5, 6.6), layout="constrained")
-    grid = fig.add_gridspec(2, 3)
+def coverage_map(ax, raw: np.ndarray, centre: np.ndarray) -> None:
+    """The sphere's :data:`~magexp.core.identifiability.CELLS` equal-area cells (their centres, in
+    azimuth and ``z = sin(elevation)``, an equal-area map), filled where the raw directions about the
+    fitted centre reach: what the recording covered (the report's ``coverage_cells``)."""
+    u = raw - centre
+    u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
+    cells = fibonacci_sphere(CELLS)
+    hit = np.bincount(np.argmax(u @ cells.T, axis=1), minlength=CELLS) > 0
+    k = drawn(len(u), 2000)
+    ax.plot(np.degrees(np.arctan2(u[k, 1], u[k, 0])), u[k, 2], ".", ms=2, color="0.6", label="raw directions")
+    az, z = np.degrees(np.arctan2(cells[:, 1], cells[:, 0])), cells[:, 2]
+    ax.scatter(az[hit], z[hit], s=90, marker="s", color="C0", label="cell reached")
+    ax.scatter(az[~hit], z[~hit], s=90, marker="s", facecolors="none", edgecolors="C3", label="cell missed")
+    ax.set_xlim(-180, 180)
+    ax.set_ylim(-1.1, 1.1)
+    ax.set_xticks([-180, -90, 0, 90, 180])
+    ax.set_xlabel("azimuth about the centre (deg)")
+    ax.set_ylabel("z of the direction")
+    ax.set_title(f"coverage: {int(hit.sum())} of {CELLS} cells", fontsize="medium")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize="x-small", markerscale=0.6,
+              handletextpad=0.2, columnspacing=0.8, frameon=False)
+
+
+def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, *, unit: str, title: str,
+                       centre: np.ndarray | None = None):
+    """The whole figure: projections and (with the fitted ``centre``) the coverage map on top,
+    magnitude trace and histogram below; returns it."""
+    fig = plt.figure(figsize=(13.5 if centre is not None else 10.5, 6.6), layout="constrained")
+    grid = fig.add_gridspec(2, 4 if centre is not None else 3)
     k = drawn(len(raw))
     projections([fig.add_subplot(grid[0, j]) for j in range(3)], raw[k], calibrated[k], float(np.mean(reference)),
                 unit)
-    magnitudes(fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2]), raw, calibrated, reference, unit)
+    if centre is not None:
+        coverage_map(fig.add_subplot(grid[0, 3]), raw, centre)
+    magnitudes(fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2:]), raw, calibrated, reference, unit)
     fig.suptitle(title)
     return fig

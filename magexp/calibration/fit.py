@@ -17,9 +17,10 @@ Flow (the same as a simulated run, with a recording instead of a scenario)::
     estimator.fit(problem, rng=...) ──► W, o ──► canonical form, quality (magexp.core.identifiability), k-fold
 
 Reference total field, first found of: ``data.reference_total`` (command line), the ``total``
-column, ``# reference_total:``, the norm of ``# field:``, the IGRF total at ``igrf.latitude``,
-``igrf.longitude``, ``igrf.altitude_km``, ``igrf.date`` (:mod:`magexp.core.igrf`; unit-bearing
-recordings only). With none, the reference is *estimated*: the fit uses ``R0``, the radius of
+column, ``# reference_total:``, the norm of ``# field:``, the ``field.model`` (``igrf`` or ``wmm``) total
+at ``field.latitude``, ``field.longitude``, ``field.altitude_km``, ``field.date``, each taken from
+the log's GPS when not given (:mod:`magexp.core.field_model`; ``igrf.*``: the older names of these
+keys with ``field.model=igrf``); a raw-count recording is then calibrated to the model's total in nT. With none, the reference is *estimated*: the fit uses ``R0``, the radius of
 the sphere fitted to the raw readings (:func:`centroid_radius`), as the radius, then ``W`` is rescaled so that
 the mean calibrated magnitude equals ``R0``. The shape of the calibration (and the spread
 std/mean) does not depend on this choice; the absolute scale does, and the output says so.
@@ -41,19 +42,22 @@ orientations the fit may not have seen: a stricter test than interleaved folds).
 
 from __future__ import annotations
 
+import os
+import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 from omegaconf import OmegaConf
 
-from magexp.calibration.checks import check_fit, check_readings
-from magexp.calibration.write import check_out, summary, write
+from magexp.calibration import models as models_
+from magexp.calibration.export import TARGETS as EXPORT_TARGETS
+from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
+from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
-from magexp.core.igrf import field_at
+from magexp.core.field_model import field_of_recording, place_of
 from magexp.core.recordings import UNITS, Recording, check_unique, check_unit, load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import LARGEST, MagexpError, check_positive_int, exit_code
@@ -73,15 +77,14 @@ from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, sear
 OBJECTIVES = ("scalar", "vector")
 #: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
 MIN_READINGS = 12
-#: Calibration models: ``full`` (``W`` and offset, 9 numbers a scalar fit determines) or ``sphere``
-#: (offset and one scale, ``W = s I``: the closed-form :func:`fit_sphere`, no estimator; what readings
-#: covering part of the sphere can still determine).
-MODELS = ("full", "sphere")
+#: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full`` and ``auto``.
+MODELS = models_.MODELS
 #: How each objective's ``W`` is reported.
 FORMS = {"scalar": "symmetric positive-definite polar factor (W = Q P, reported P = (W^T W)^(1/2)): a total-field "
                    "fit cannot see a rotation of W",
          "vector": "as fitted (the vector objective determines the rotation)",
-         "sphere": "s I (model=sphere: offset and one scale only)"}
+         "sphere": "s I (model=sphere: offset and one scale only)",
+         "diagonal": "diag(w1, w2, w3) (model=diagonal: offset and one scale per axis)"}
 
 
 @dataclass
@@ -91,13 +94,18 @@ class Reference:
     Attributes
     ----------
     total : (N,) reference total per reading (in the recording's unit).
-    source : where it comes from (``data.reference_total``, ``total column``, ...).
+    source : where it comes from (``data.reference_total``, ``total column``, ``IGRF-14 at ...``).
     estimated : True when no reference was given and the scale was fixed from the data.
+    unit : the reference's unit when it differs from the recording's (a raw-count recording
+        calibrated to a field model's total in nT); None: the recording's.
+    record : the field model, generation and inputs it came from, or None.
     """
 
     total: np.ndarray
     source: str
     estimated: bool = False
+    unit: str | None = None  # the reference's unit when it is not the recording's (counts calibrated to nT)
+    record: dict | None = None  # a field model's name, generation and inputs (:meth:`ReferenceField.record`)
 
     def describe(self) -> str:
         mean = float(np.mean(self.total))
@@ -113,24 +121,98 @@ class Calibration:
 
     ``w`` is in the canonical form of :data:`FORMS` (``report["w_form"]``); ``metrics`` holds the
     spreads before, after and held out; ``report`` the standard errors, conditioning, the
-    undetermined combinations and the direction coverage (:mod:`magexp.core.identifiability`).
+    undetermined combinations, the direction coverage (:mod:`magexp.core.identifiability`), the
+    acceptance gate's outcome and the model selection. A calibration read back by :meth:`load`
+    has no recording (``recording`` None): it applies, exports and summarises, but has no
+    readings to plot.
     """
 
-    recording: Recording
+    recording: Recording | None
     estimator: str
     objective: str
     w: np.ndarray
     offset: np.ndarray
     reference: Reference
-    search: SearchBox
-    fit: FitResult
+    search: SearchBox | None
+    fit: FitResult | None
     calibrated: np.ndarray
     metrics: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
+    seed: int = 0
+    config: dict = field(default_factory=dict)  # the settings it was made with (the command's config, the call's)
+    saved: dict | None = None  # the JSON it was loaded from (:meth:`load`)
 
     @property
     def unit(self) -> str:
-        return self.recording.unit
+        """Unit of the raw readings."""
+        return self.recording.unit if self.recording is not None else self.saved["unit"]
+
+    @property
+    def field_unit(self) -> str:
+        """Unit of the calibrated field (the recording's, or the field model's nT for raw counts)."""
+        return self.reference.unit or self.unit
+
+    @property
+    def name(self) -> str:
+        return self.recording.name if self.recording is not None else Path(self.saved["recording"]).name
+
+    @property
+    def model(self) -> str:
+        return self.report.get("model", "full")
+
+    def apply(self, readings) -> np.ndarray:
+        """``B = W (r - o)`` of raw ``readings`` (``(N, 3)`` or ``(3,)``, the recording's unit)."""
+        r = readings_array(readings)
+        if r.shape[-1:] != (3,) or r.ndim > 2:
+            raise MagexpError(f"readings of shape {r.shape} are not allowed: give (N, 3) or (3,) raw readings")
+        return (r - self.offset) @ self.w.T
+
+    def save(self, path, *, overwrite: bool = False) -> Path:
+        """Write ``calibration.json`` content (versioned, with provenance) to ``path``; an existing
+        file is refused in one line unless ``overwrite``. :meth:`load` reads it back exactly."""
+        return save_parameters(self, path, overwrite=overwrite)
+
+    @classmethod
+    def load(cls, path) -> "Calibration":
+        """A :class:`Calibration` from a ``calibration.json`` (:meth:`save`, ``magexp calibrate``)."""
+        data = read_parameters(path)
+        ref = data["reference"]
+        reference = Reference(np.array([ref["total"]]), ref["source"], ref["estimated"], ref.get("unit"),
+                              ref.get("field_model"))
+        quality = data.get("quality", {})
+        return cls(recording=None, estimator=data["estimator"], objective=data["objective"],
+                   w=np.array(data["W"], float), offset=np.array(data["offset"], float), reference=reference,
+                   search=None, fit=None, calibrated=np.zeros((0, 3)), metrics=data.get("metrics", {}),
+                   report=quality, seed=data.get("seed", 0), config=data.get("config", {}), saved=data)
+
+    def __repr__(self) -> str:
+        m = self.metrics
+        held = f", held out {100 * m['heldout_spread']:.3g} %" if "heldout_spread" in m else ""
+        gate = self.report.get("gate") or {}
+        state = "" if not gate else (", gate passed" if gate.get("passed") else ", gate FAILED (accepted)")
+        return (f"<Calibration {self.name}: {self.model} model by {self.estimator}, spread "
+                f"{100 * m.get('spread_before', float('nan')):.3g} % -> {100 * m.get('spread_after', float('nan')):.3g} %"
+                f"{held}{state}; B = W (r - o), r in {self.unit}, B in {self.field_unit}>")
+
+    def summary(self) -> str:
+        """The printed summary of ``magexp calibrate`` (the key numbers, one per line)."""
+        return table(summary(self))
+
+    def plot(self):
+        """The before/after figure (:mod:`magexp.calibration.figure`); returns the matplotlib Figure."""
+        if self.recording is None:
+            raise MagexpError("plot() is not allowed for a loaded calibration: it has no readings; calibrate the "
+                              "recording again, or plot cal.apply(readings) yourself")
+        from magexp.calibration.write import figure  # lazy: matplotlib only when a figure is drawn
+
+        return figure(self)
+
+    def export(self, target: str, path=None, **options) -> Path:
+        """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`)."""
+        from magexp.calibration.export import export  # lazy: yaml and the targets only when exporting
+
+        options.setdefault("field_unit", self.field_unit)
+        return export(self, target, path, **options)
 
 
 def reference_of(rec: Recording, override=None) -> Reference:
@@ -200,13 +282,9 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
     dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
     box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
     problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
-    if model == "sphere":
-        centre, radius = fit_sphere(rec.readings)
-        w = np.eye(3) * np.mean(reference.total) / radius
-        result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
-                           history=np.zeros(1), history_nfev=np.ones(1), success=True,
-                           message="closed-form sphere fit (offset and one scale; no estimator)")
-        return w, centre, (rec.readings - centre) @ w.T, problem, result, box
+    if model in models_.CLOSED_FORM:
+        w, o, calibrated, result = _closed_form(rec, model, reference)
+        return w, o, calibrated, problem, result, box
     result = estimator.fit(problem, rng=rng)
     w, o = (a[0] for a in problem.unpack(result.x))
     if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
@@ -219,6 +297,24 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
         w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
         calibrated = (rec.readings - o) @ w.T
     return w, o, calibrated, problem, result, box
+
+
+def _closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
+    """``(W, o, calibrated, result)`` of a closed-form model (:data:`magexp.calibration.models.CLOSED_FORM`)."""
+    radius = float(np.mean(reference.total))
+    fitted = models_.CLOSED_FORM[model](rec.readings, radius)
+    if fitted is None:
+        raise MagexpError(f"{rec.name}: model={model!r}: the readings do not lie on an axis-aligned ellipsoid, "
+                          "nothing written: try model=sphere, or record more orientations")
+    w, centre = fitted
+    result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
+                       history=np.zeros(1), history_nfev=np.ones(1), success=True,
+                       message=f"closed-form {model} fit (no estimator)")
+    calibrated = (rec.readings - centre) @ w.T
+    if reference.estimated and model != "sphere":  # the scale is free: the mean calibrated magnitude is the reference
+        w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
+        calibrated = (rec.readings - centre) @ w.T
+    return w, centre, calibrated, result
 
 
 def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
@@ -253,6 +349,10 @@ def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
         theta = np.concatenate([[w[0, 0]], o])
         names = ["s", "o1", "o2", "o3"]
         to_problem = lambda t: problem.pack(t[0] * np.eye(3), t[1:])  # noqa: E731
+    elif model == "diagonal":
+        theta = np.concatenate([np.diag(w), o])
+        names = ["W11", "W22", "W33", "o1", "o2", "o3"]
+        to_problem = lambda t: problem.pack(np.diag(t[:3]), t[3:])  # noqa: E731
     elif objective == "scalar":
         theta = np.concatenate([w.ravel()[UPPER], o])  # the 6 upper entries of the symmetric W, then o
         names = [f"W{k // 3 + 1}{k % 3 + 1}" for k in UPPER] + ["o1", "o2", "o3"]
@@ -265,68 +365,121 @@ def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
     se = out["standard_errors"]
     if model == "sphere":
         out["W_standard_errors"] = (np.eye(3) * se["s"]).tolist()
+    elif model == "diagonal":
+        out["W_standard_errors"] = np.diag([se["W11"], se["W22"], se["W33"]]).tolist()
     else:
         out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar"
                                      else se[f"W{i + 1}{j + 1}"] for j in range(3)] for i in range(3)]
     out["offset_standard_errors"] = [se["o1"], se["o2"], se["o3"]]
-    out["w_form"] = FORMS["sphere" if model == "sphere" else objective]
+    out["w_form"] = FORMS[model if model in FORMS else objective]
     out["model"] = model
     return out
 
 
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
                         folds: int = 5, rng: np.random.Generator, checks: bool = True,
-                        model: str = "full") -> Calibration:
-    """Fit ``estimator`` to the recording ``rec`` and measure how good the fit is.
+                        model: str = "full", accept: bool = False, gate_overrides=None,
+                        auto_margin: float = models_.MARGIN) -> Calibration:
+    """Fit ``estimator`` to the recording ``rec``, measure how good the fit is and gate it.
 
     Parameters
     ----------
     rec : a loaded :class:`~magexp.core.recordings.Recording`.
     estimator : any estimator object (``fit(problem, *, rng)``) that applies to ``objective``.
     objective : ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
-    reference_total : overrides the recording's reference total field (its unit).
+    reference_total : overrides the recording's reference total field (its unit), a number or a
+        :class:`Reference` (with its source).
     folds : blocks of the held-out check (0 or 1: none).
     rng : the estimator's random generator.
-    checks : refuse degenerate data and failed fits (:mod:`magexp.calibration.checks`); False measures them anyway.
-    model : ``full`` or ``sphere`` (:data:`MODELS`; ``sphere`` needs the scalar objective).
+    checks : refuse degenerate data, failed fits and calibrations failing the acceptance gate
+        (:mod:`magexp.calibration.checks`); False measures them anyway.
+    model : ``sphere``, ``diagonal``, ``full`` or ``auto`` (:mod:`magexp.calibration.models`;
+        all but ``full`` need the scalar objective).
+    accept : keep a calibration that fails the acceptance gate, its failures recorded in
+        ``report["gate"]``.
+    gate_overrides : ``gate.*`` thresholds (:func:`magexp.calibration.checks.gate_thresholds`).
+    auto_margin : the parsimony margin of ``model=auto``.
 
     Returns
     -------
     Calibration
         ``W`` (canonical form), offset, calibrated readings, the reference used, the spread
-        metrics and the quality report.
+        metrics, the quality report, the gate's outcome and (``auto``) the model selection.
+
+    Raises
+    ------
+    MagexpError
+        One line: bad input, degenerate data, a failed fit, or (unless ``accept``) every failed check of the gate.
     """
     check_size(rec)
     folds = check_folds(folds)
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
     check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.run.budget's limits
-    if model not in MODELS or (model == "sphere" and objective != "scalar"):
-        raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or sphere "
-                          "with the scalar objective")
+    model = models_.check_model(model, objective)
+    thresholds = gate_thresholds(gate_overrides)
     check_applies(estimator, problem_class(objective),
                   alternatives=lambda: {n: target_class("estimator", n) for n in options("estimator")})
-    reference = reference_of(rec, reference_total)
+    reference = reference_total if isinstance(reference_total, Reference) else reference_of(rec, reference_total)
     dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
         check_readings(rec.readings, rec.name)
+    selection, held = None, {}
+    if model == "auto" and folds < 2:  # nothing held out to choose by: the richest model, and say so
+        model, selection = "full", {"chosen": "full", "why": f"full: folds={folds}, no held-out check to choose by",
+                                    "margin": auto_margin, "heldout_spread": {}}
+    if model == "auto":
+        held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
+                for m in (models_.ORDER if objective == "scalar" else ("full",))}
+        model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
+                                          models_.check_margin(auto_margin))
     w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
-    cover = coverage(calibrated)
-    name = "sphere fit" if model == "sphere" else estimator.name
+    cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
+    name = f"{model} fit" if model in models_.CLOSED_FORM else estimator.name
     if checks:
         check_fit(rec.name, name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
     metrics = {**quality(rec.readings, calibrated, reference.total), **cover}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
-    metrics.update(heldout(rec, estimator, objective, reference, folds, rng, model))
+    metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
     report = report_of(objective, w, o, problem, model)
+    if selection is not None:
+        report["model_selection"] = selection
+    report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
     return Calibration(recording=rec, estimator=name, objective=objective, w=w, offset=o,
                        reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
                        report=report)
 
 
+def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: dict, *, checks: bool,
+            accept: bool) -> dict:
+    """The acceptance gate's outcome (:func:`magexp.calibration.checks.gate`): refused in one line
+    unless ``accept`` (or ``checks`` is False); ``{passed, failed, accepted_anyway, thresholds}``."""
+    failed = gate(w, metrics, raw_radius=centroid_radius(rec.readings), reference=float(np.mean(reference.total)),
+                  estimated=reference.estimated or reference.unit is not None, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
+                  thresholds=thresholds)
+    if failed and checks and not accept:
+        refuse(rec.name, failed)
+    return {"passed": not failed, "failed": failed, "accepted_anyway": bool(failed) and accept,
+            "thresholds": {k: list(v) if isinstance(v, tuple) else v for k, v in thresholds.items()}}
+
+
 # -- the Python API --------------------------------------------------------------------------------
+def frame_readings(frame) -> np.ndarray:
+    """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``x, y, z``, ``mx, my, mz``)
+    columns, else its three numeric columns."""
+    cols = [str(c).strip().lower() for c in frame.columns]
+    check_unique(cols, "readings")
+    pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
+                 if all(n in cols for n in names)), None)
+    chosen = frame.iloc[:, [cols.index(n) for n in pick]] if pick else frame.select_dtypes("number")
+    if chosen.shape[1] != 3:
+        raise MagexpError(f"readings with columns {list(frame.columns)} are not allowed: give bx, by, bz "
+                          "(or x, y, z), or exactly three numeric columns")
+    return chosen.to_numpy(float)
+
+
 def as_recording(readings, *, unit: str | None = None) -> Recording:
     """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
     ``x, y, z``, else its three numeric columns), a path or a Recording."""
@@ -334,16 +487,9 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
         return readings
     if isinstance(readings, (str, Path)):
         return load_recording(readings, unit=unit)
-    if isinstance(readings, pd.DataFrame):
-        cols = [str(c).strip().lower() for c in readings.columns]
-        check_unique(cols, "readings")
-        pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
-                     if all(n in cols for n in names)), None)
-        frame = readings.iloc[:, [cols.index(n) for n in pick]] if pick else readings.select_dtypes("number")
-        if frame.shape[1] != 3:
-            raise MagexpError(f"readings with columns {list(readings.columns)} are not allowed: give bx, by, bz "
-                              "(or x, y, z), or exactly three numeric columns")
-        readings = frame.to_numpy(float)
+    pandas = sys.modules.get("pandas")  # a DataFrame exists only if pandas is loaded: not importing it saves
+    if pandas is not None and isinstance(readings, pandas.DataFrame):  # 240 ms (-X importtime) per calibration
+        readings = frame_readings(readings)
     values = readings_array(readings)
     if values.ndim != 2 or values.shape[1] != 3:
         raise MagexpError(f"readings of shape {values.shape} are not allowed: give an (N, 3) array")
@@ -371,7 +517,8 @@ def estimator_named(name: str, **overrides):
 
 
 def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objective: str = "scalar",
-              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "full",
+              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "auto",
+              accept: bool = False, gate=None, auto_margin: float = models_.MARGIN,
               **estimator_options) -> Calibration:
     """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
 
@@ -381,7 +528,8 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
         or a :class:`~magexp.core.recordings.Recording`.
     unit : unit of an array or DataFrame (``nT, uT, mG, G, T, counts``).
     estimator : a name of ``conf/estimator/*.yaml`` (``ellipsoid``, ``lm``, ``ipso``, ...) or an estimator object.
-    objective, reference_total, folds, checks, model : as :func:`calibrate_recording`.
+    objective, reference_total, folds, checks, model, accept, auto_margin : as :func:`calibrate_recording`.
+    gate : ``gate.*`` thresholds overriding :data:`magexp.calibration.checks.GATE` (a dict).
     seed : the estimator's random generator derives from it (:func:`magexp.core.seeding.run_generators`).
     estimator_options : overrides of the estimator config (e.g. ``n_iterations=200``).
 
@@ -401,9 +549,18 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
         raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
                           f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
-    _, rng = run_generators(check_positive_int(seed, "seed", minimum=0))
-    return calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
-                               rng=rng, checks=checks, model=model)
+    seed = check_positive_int(seed, "seed", minimum=0)
+    _, rng = run_generators(seed)
+    cal = calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
+                              rng=rng, checks=checks, model=model, accept=accept, gate_overrides=gate,
+                              auto_margin=auto_margin)
+    cal.seed = seed
+    cal.config = {"readings": str(readings) if isinstance(readings, (str, Path)) else type(readings).__name__,
+                  "unit": unit, "estimator": est.name if hasattr(est, "name") else str(estimator),
+                  "objective": objective, "reference_total": None if reference_total is None else
+                  float(np.mean(cal.reference.total)), "folds": folds, "seed": seed, "checks": checks, "model": model,
+                  "accept": accept, "gate": dict(gate or {}), "auto_margin": auto_margin, **estimator_options}
+    return cal
 
 
 # -- the command -----------------------------------------------------------------------------------
@@ -422,16 +579,34 @@ def calibrate_config(argv: list[str]):
     return compose_config(argv, config_name="calibrate")
 
 
-def reference_from_igrf(cfg, rec: Recording):
-    """The IGRF total at ``cfg.igrf`` in the recording's unit, or None when no place is given."""
-    place = cfg.get("igrf") or {}
-    if place.get("latitude") is None:
+def field_keys(cfg) -> dict:
+    """``field.*`` of ``cfg``, with the older ``igrf.*`` keys as aliases (``field.model=igrf``)."""
+    place = {k: v for k, v in dict(cfg.get("field") or {}).items()}
+    old = {k: v for k, v in dict(cfg.get("igrf") or {}).items() if v is not None and k != "altitude_km"}
+    if old:
+        if place.get("latitude") is not None:
+            raise MagexpError(f"igrf.latitude={old.get('latitude')!r} is not allowed with field.latitude: igrf.* is "
+                              "the older name of field.* (with field.model=igrf), give field.* only")
+        place.update(dict(cfg.igrf), model="igrf")
+    return place
+
+
+def reference_from_field(cfg, rec: Recording) -> Reference | None:
+    """The field model's total where and when ``rec`` was recorded (:mod:`magexp.core.field_model`):
+    ``field.latitude/longitude/altitude_km/date`` (each, if not given, from the log's GPS), or None
+    when neither the command line nor the log gives a place. In the recording's unit; a raw-count
+    recording is calibrated to the model's total in nT (``W`` then maps counts to nT)."""
+    place = field_keys(cfg)
+    if place.get("latitude") is None and not {"latitude", "date"} <= set(place_of(rec)):
         return None
-    if rec.unit not in UNITS:
-        raise MagexpError(f"igrf.latitude={place.latitude} is not allowed for {rec.name}: its unit {rec.unit!r} "
-                          "has no known factor to nT")
-    total_nt = field_at(place.latitude, place.longitude, place.get("altitude_km", 0.0), place.date).total
-    return total_nt / UNITS[rec.unit]
+    ref = field_of_recording(rec, model=place.get("model") or "igrf", latitude=place.get("latitude"),
+                             longitude=place.get("longitude"), altitude_km=place.get("altitude_km"),
+                             date=place.get("date"), prefix="field")
+    unit = rec.unit if rec.unit in UNITS else "nT"
+    inputs = ref.record()
+    where = f"{ref.generation} at {inputs['latitude']:g}, {inputs['longitude']:g}, {inputs['date']}"
+    return Reference(np.full(rec.n, ref.total / UNITS[unit]), where, unit=None if unit == rec.unit else unit,
+                     record=inputs)
 
 
 def run(cfg) -> Calibration:
@@ -445,22 +620,78 @@ def run(cfg) -> Calibration:
     out = cfg.get("out")
     out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
     check_destination(out_dir if out is None else out, "out")
-    check_out(out_dir)
+    overwrite, draw, target = (flag(cfg, "overwrite"), flag(cfg, "figure"), cfg.get("export"))
+    check_out(out_dir, overwrite=overwrite)
+    if target is not None and str(target) not in EXPORT_TARGETS:
+        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    _, est_rng = run_generators(check_positive_int(cfg.seed, "seed", minimum=0))
+    if not getattr(estimator, "iterative", True):
+        # a closed-form fit evaluates a few residual vectors, which numpy computes in milliseconds: loading
+        # the compiled kernels for them costs 0.75 s (numba import and cache load; cProfile, QMC5883L
+        # recording); this command's own process only, unless MAGEXP_NUMBA is set
+        os.environ.setdefault("MAGEXP_NUMBA", "0")
+    seed = check_positive_int(cfg.seed, "seed", minimum=0)
+    _, est_rng = run_generators(seed)
     reference = data.get("reference_total")
     if reference is None:
-        reference = reference_from_igrf(cfg, rec)
+        reference = reference_from_field(cfg, rec)
     cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
-                              folds=cfg.folds, rng=est_rng, model=cfg.model)
-    paths = write(cal, out_dir, seed=cfg.seed)
-    print_table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())})
+                              folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
+                              gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
+    cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
+    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target))
+    print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
+                 + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
+                 + ("" if draw else "; no figure (figure=true draws it)")}))
     return cal
+
+
+def flag(cfg, key: str) -> bool:
+    """A true/false key of ``cfg`` (default false), else one line."""
+    value = cfg.get(key, False)
+    if not isinstance(value, bool):
+        raise MagexpError(f"{key}={value!r} is not allowed: give {key}=true or {key}=false")
+    return value
+
+
+_KEY_LINE = re.compile(r"^(?P<indent> *)(?P<key>[A-Za-z_]\w*):\s*(?P<value>[^#]*?)\s*(#\s*(?P<text>.*))?$")
+
+
+def help_text(path: Path = CONF / "calibrate.yaml") -> str:
+    """``magexp calibrate --help``: every key of ``conf/calibrate.yaml`` (dotted), its default and the
+    sentence its comment gives (the one home of both), then the estimators to choose from."""
+    rows, parents, last = [], [], None
+    for line in path.read_text().splitlines():
+        match = _KEY_LINE.match(line)
+        if match is None:
+            comment = line.strip()
+            if last is not None and comment.startswith("#") and line.startswith("   "):
+                last[2] += " " + comment.lstrip("# ")  # a comment continued on the next line
+            continue
+        depth = len(match["indent"]) // 2
+        parents[depth:] = [match["key"]]
+        if match["key"] == "defaults" or not match["value"] and not match["text"]:
+            last = None
+            continue
+        last = [".".join(parents), match["value"] or "(group)", match["text"] or ""]
+        rows.append(last)
+    width = max(len(k) for k, *_ in rows)
+    lines = ["magexp calibrate KEY=VALUE ...: calibrate a recording (docs/calibrate.md)", "",
+             "e.g. magexp calibrate data.path=mine.csv data.unit=uT", "",
+             f"{'key':<{width}}  default: meaning"]
+    lines += [f"{k:<{width}}  {v}: {t}" for k, v, t in rows]
+    lines += ["", f"estimator: one of {', '.join(options('estimator'))} (conf/estimator/*.yaml; "
+              "estimator.<option>=... sets its options)"]
+    return "\n".join(lines)
 
 
 def command(argv: list[str]) -> None:
     """``magexp calibrate KEY=VALUE ...``: compose, check, calibrate, write; errors are raised (the
-    one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code)."""
+    one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code).
+    ``--help`` (``-h``) prints :func:`help_text`."""
+    if any(a in ("--help", "-h") for a in argv):
+        print(help_text())
+        return
     run(calibrate_config(argv))
 
 

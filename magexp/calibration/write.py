@@ -9,10 +9,14 @@ Files, in the output folder (``out=...``, default Hydra's run folder):
   (format ``magexp-calibration v2``);
 * ``calibrated.csv``: a ``magexp-recording v1`` file with the calibrated ``bx, by, bz``, their
   ``magnitude``, and the raw ``raw_bx, raw_by, raw_bz, raw_magnitude``;
-* ``calibration.png``: plane projections of the raw and calibrated readings with the reference
-  circle, and the total field per reading and its histogram, before and after.
+* ``calibration.png`` and ``calibration.pdf`` (only with ``figure=true``: drawing them takes longer
+  than the calibration): plane projections of the raw and calibrated readings with the reference
+  circle, the map of the sphere cells the raw directions reach about the fitted centre, and the
+  total field per reading and its histogram, before and after;
+* with ``export=<target>``, the firmware's file (:mod:`magexp.calibration.export`).
 
-An existing file is never overwritten, and nothing is written under ``results/``.
+An existing file is never overwritten (``overwrite=true`` replaces an earlier calibration's files,
+and says so), and nothing is written under ``results/``.
 """
 
 from __future__ import annotations
@@ -30,13 +34,15 @@ from magexp.core.recordings import VERSION_LINE
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.run.guard import first_missing
+from magexp.run.provenance import provenance
 
 FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png",
          "figure_vector": "calibration.pdf"}  # the figure and its vector twin (magexp.artifacts.plots.style.save)
 
 
-def check_out(out_dir: Path) -> None:
-    """Refuse, in one line, an output folder under ``results/`` or one that holds an output file."""
+def check_out(out_dir: Path, *, overwrite: bool = False) -> None:
+    """Refuse, in one line, an output folder under ``results/`` or one that holds an output file
+    (unless ``overwrite``: then the files of an earlier calibration are replaced)."""
     out_dir = Path(out_dir).resolve()
     if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: results/ holds the reproduced papers only, "
@@ -49,35 +55,83 @@ def check_out(out_dir: Path) -> None:
     if not os.access(existing, os.W_OK):
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is not writable")
     taken = [name for name in FILES.values() if (out_dir / name).exists()]
-    if taken:
+    if taken and not overwrite:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: it already holds {', '.join(taken)} "
-                          "(never overwritten), choose another folder")
+                          "(never overwritten unless overwrite=true), choose another folder")
 
 
-def parameters(cal, *, seed: int) -> dict:
-    """The JSON content of a :class:`~magexp.calibration.fit.Calibration`."""
+#: the format line of ``calibration.json`` (:func:`parameters`) and the ones :func:`read_parameters` reads
+FORMAT = "magexp-calibration v3"
+READABLE = ("magexp-calibration v2", FORMAT)
+
+
+def parameters(cal, *, seed: int | None = None) -> dict:
+    """The JSON content of a :class:`~magexp.calibration.fit.Calibration` (format :data:`FORMAT`):
+    ``W`` and the offset, the units, the reference and the field model it came from (generation,
+    latitude, longitude, altitude, date), the metrics, the quality report (with the acceptance
+    gate and the model selection), the fit's outcome, the config and the provenance (magexp
+    version, commit, libraries: :func:`magexp.run.provenance.provenance`). A loaded calibration
+    gives back the JSON it was read from."""
+    if cal.saved is not None:
+        return cal.saved
     rec, box = cal.recording, cal.search
     return {
-        "format": "magexp-calibration v2",
+        "format": FORMAT,
         "model": "B = W (reading - offset)",
         "recording": str(rec.path or rec.name),
         "n_readings": rec.n,
         "unit": cal.unit,
+        "field_unit": cal.field_unit,
         "estimator": cal.estimator,
         "objective": cal.objective,
-        "seed": int(seed),
+        "seed": int(cal.seed if seed is None else seed),
         "W": cal.w.tolist(),
         "W_form": cal.report.get("w_form", ""),
         "offset": cal.offset.tolist(),
         "reference": {"total": float(np.mean(cal.reference.total)),
-                      "per_reading": bool(np.ptp(cal.reference.total) > 0), "source": cal.reference.source, "estimated": cal.reference.estimated,
-                      "how": cal.reference.describe()},
+                      "per_reading": bool(np.ptp(cal.reference.total) > 0), "source": cal.reference.source,
+                      "estimated": cal.reference.estimated, "unit": cal.reference.unit,
+                      "field_model": cal.reference.record, "how": cal.reference.describe()},
         "search": {"diag": list(box.diag), "offdiag": list(box.offdiag), "offset": list(box.offset)},
         "metrics": cal.metrics,
         "quality": _finite(cal.report),
         "fit": {"fun": float(cal.fit.fun), "nit": int(cal.fit.nit), "nfev": int(cal.fit.nfev),
                 "success": bool(cal.fit.success), "message": cal.fit.message},
+        "config": _finite(cal.config),
+        "provenance": provenance(cal.config),
     }
+
+
+def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
+    """Write :func:`parameters` of ``cal`` to ``path`` atomically; an existing file is refused in one
+    line unless ``overwrite``."""
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise MagexpError(f"path {str(path)!r} is not allowed: it exists already (never overwritten unless "
+                          "overwrite=True)")
+    return write_text(path, json.dumps(parameters(cal), indent=2) + "\n")
+
+
+def read_parameters(path) -> dict:
+    """The content of a ``calibration.json``, checked: its format one of :data:`READABLE`, ``W`` 3 x 3
+    and the offset 3 finite numbers (JSON: nothing read can run code); else one line."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise MagexpError(f"{path.name}: not a calibration.json ({type(exc).__name__}): give a file written by "
+                          "magexp calibrate or Calibration.save") from None
+    if not isinstance(data, dict) or data.get("format") not in READABLE:
+        found = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise MagexpError(f"{path.name}: format {found!r} is not allowed: magexp reads {', '.join(READABLE)}")
+    try:
+        w, offset = np.array(data["W"], float), np.array(data["offset"], float)
+    except (KeyError, TypeError, ValueError):
+        w = offset = np.zeros(0)
+    if w.shape != (3, 3) or offset.shape != (3,) or not (np.isfinite(w).all() and np.isfinite(offset).all()):
+        raise MagexpError(f"{path.name}: its W and offset are not allowed: W must be 3 x 3 and the offset 3 "
+                          "numbers, all finite")
+    return data
 
 
 def _finite(value):
@@ -100,8 +154,10 @@ def write_readings(cal, fh) -> None:
     :data:`ROWS_PER_BLOCK` rows at a time, each block one ``%``-format in C (``%.10g`` per value)."""
     raw, cal_b = cal.recording.readings, cal.calibrated
     head = [VERSION_LINE, f"# source: {cal.recording.name} calibrated by magexp "
-                          f"(estimator {cal.estimator}, objective {cal.objective})",
-            f"# unit: {cal.unit}", "bx,by,bz,magnitude,raw_bx,raw_by,raw_bz,raw_magnitude"]
+                          f"(estimator {cal.estimator}, objective {cal.objective})", f"# unit: {cal.field_unit}"]
+    if cal.field_unit != cal.unit:
+        head.append(f"# raw_unit: {cal.unit}")
+    head.append("bx,by,bz,magnitude,raw_bx,raw_by,raw_bz,raw_magnitude")
     fh.write("\n".join(head) + "\n")
     row = ",".join(["%.10g"] * 8) + "\n"
     for lo in range(0, len(raw), ROWS_PER_BLOCK):
@@ -110,29 +166,50 @@ def write_readings(cal, fh) -> None:
         fh.write(row * len(table) % tuple(table.ravel().tolist()))
 
 
-def write(cal, out_dir: Path, *, seed: int) -> dict:
-    """Write the three files into ``out_dir`` (checked by :func:`check_out`); return their paths.
+def figure(cal):
+    """The before/after figure of ``cal`` (:func:`magexp.calibration.figure.calibration_figure`)."""
+    # lazy: matplotlib only when a figure is drawn; the Python API and magexp calibrate without
+    # figure=true never pay for it (these cost 478 ms CPU to import after magexp.calibration.fit, min of 5)
+    from magexp.calibration.figure import calibration_figure
+
+    title = f"{cal.name}: {cal.model} by {cal.estimator} ({cal.objective}), spread " \
+            f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
+    return calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.field_unit,
+                              title=title, centre=cal.offset)
+
+
+def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, overwrite: bool = False,
+          export: str | None = None) -> dict:
+    """Write ``calibration.json``, ``calibrated.csv`` and, with ``draw``, the figure into ``out_dir``
+    (checked by :func:`check_out`; ``overwrite`` replaces the files of an earlier calibration), and
+    with ``export`` the firmware file of that target beside them (:mod:`magexp.calibration.export`);
+    return their paths.
 
     Each file is written atomically (:mod:`magexp.core.atomic`): a command killed midway leaves no
     truncated file; the figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
-    # lazy: matplotlib only when a figure is drawn; the Python API (magexp.calibrate) never pays for
-    # it (these two cost 478 ms CPU to import after magexp.calibration.fit, min of 5)
-    from magexp.artifacts.plots.style import save
-    from magexp.calibration.figure import calibration_figure
-
     out_dir = Path(out_dir)
-    check_out(out_dir)
+    check_out(out_dir, overwrite=overwrite)
     created = first_missing(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    paths = {key: out_dir / name for key, name in FILES.items()}
+    keys = ("parameters", "readings", *(("figure", "figure_vector") if draw else ()))
+    paths = {key: out_dir / FILES[key] for key in keys}
+    if export:
+        from magexp.calibration.export import FILE_NAMES  # lazy: the export targets only when exporting
+
+        paths["export"] = out_dir / FILE_NAMES[export]
+    if overwrite:  # the earlier calibration's files go, a stale figure with them
+        for path in {*paths.values(), *(out_dir / name for name in FILES.values())}:
+            path.unlink(missing_ok=True)
     try:
         write_text(paths["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
         with atomic_open(paths["readings"], "w") as fh:
             write_readings(cal, fh)
-        title = f"{cal.recording.name}: {cal.estimator} ({cal.objective}), spread " \
-                f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
-        save(calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.unit,
-                                title=title), paths["figure"])
+        if draw:
+            from magexp.artifacts.plots.style import save  # lazy: matplotlib (see figure)
+
+            save(figure(cal), paths["figure"])
+        if export:
+            cal.export(export, paths["export"])
     except BaseException:  # interrupted or failed: none of this command's files stays (none existed: check_out)
         for path in paths.values():
             path.unlink(missing_ok=True)
@@ -142,12 +219,38 @@ def write(cal, out_dir: Path, *, seed: int) -> dict:
     return paths
 
 
+def table(rows: dict) -> str:
+    """``key  value`` lines, keys aligned (the printed summary)."""
+    width = max(len(k) for k in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows.items())
+
+
+def _fit_line(fit, saved) -> str:
+    """The fit's outcome in one line (of a loaded calibration: as saved)."""
+    success, message = (fit.success, fit.message) if fit is not None else (saved["fit"]["success"],
+                                                                              saved["fit"]["message"])
+    return f"{'success' if success else 'FAILED'}: {message}"
+
+
+def _gate_line(record: dict) -> str:
+    """The acceptance gate's outcome in one line."""
+    if not record:
+        return "not checked"
+    if record["passed"]:
+        return "passed (held out beats raw; W's shape, the radius and the residual RMS plausible)"
+    return "FAILED, written because accept=true: " + "; ".join(f["line"].split(":")[0] for f in record["failed"])
+
+
 def summary(cal) -> dict:
     """The key numbers to print, in order."""
     m, u, r = cal.metrics, cal.unit, cal.report
     return {
-        "recording": f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})",
+        "recording": (f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})"
+                      if cal.recording is not None else f"{cal.saved['recording']} ({cal.saved['n_readings']} "
+                                                        f"readings, {u}; loaded)"),
         "estimator": f"{cal.estimator} ({cal.objective} objective)",
+        "model": (r.get("model_selection") or {}).get("why") or r.get("model", ""),
+        "gate": _gate_line(r.get("gate") or {}),
         "reference": cal.reference.describe(),
         "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
         "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
@@ -156,14 +259,14 @@ def summary(cal) -> dict:
         "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} contiguous blocks, each "
                             "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
-        "W std errors": "[" + "; ".join(", ".join(f"{v:.2g}" for v in row) for row in r["W_standard_errors"]) + "]",
+        "W std errors": "[" + "; ".join(", ".join(f"{float(v):.2g}" for v in row) for row in r["W_standard_errors"]) + "]",
         "offset": "[" + ", ".join(f"{v:.6g}" for v in cal.offset) + f"] {u}",
-        "offset std errors": "[" + ", ".join(f"{v:.2g}" for v in r["offset_standard_errors"]) + f"] {u}",
-        "conditioning": f"{r['condition_number']:.3g} (column-scaled Jacobian); weakest combination "
+        "offset std errors": "[" + ", ".join(f"{float(v):.2g}" for v in r["offset_standard_errors"]) + f"] {u}",
+        "conditioning": f"{float(r['condition_number']):.3g} (column-scaled Jacobian); weakest combination "
                         f"{r['weakest_combinations'][0]['combination']} "
                         f"(relative singular value {r['weakest_combinations'][0]['relative_singular_value']:.2g})",
         "undetermined": ", ".join(r["undetermined"]) or "none",
         "coverage": f"{100 * m['coverage_cells']:.0f} % of {CELLS} sphere cells; smallest direction-scatter "
                     f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
-        "fit": f"{'success' if cal.fit.success else 'FAILED'}: {cal.fit.message}",
+        "fit": _fit_line(cal.fit, cal.saved),
     }

@@ -56,6 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.run import threads
 from magexp.core.atomic import atomic_path
 from magexp.core.ellipsoid import quadratic_features
 from magexp.paths import RESULTS
@@ -100,7 +101,7 @@ def side_by_side(variants: dict, rounds: int, target: float = 0.05, clock=time.p
     return {name: np.asarray(t) for name, t in times.items()}
 
 
-BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+BLAS_THREADS = threads.BLAS_THREADS
 
 
 def compose(overrides: list[str]):

@@ -202,7 +202,7 @@ class DaskExecutor(InlineExecutor):
         try:  # distributed: 2 s of import, only for --executor dask
             from distributed import Client, LocalCluster
         except ImportError:  # pragma: no cover - distributed is a dependency
-            raise MagexpError("--executor dask needs the 'distributed' package: pip install distributed") from None
+            raise MagexpError("--executor dask needs the 'distributed' package: pip install 'magexp[dask]'") from None
         self.cluster = None
         n = jobs if jobs > 0 else (os.cpu_count() or 1)
         self.shares_files = scheduler is None  # remote workers may not see this machine's files

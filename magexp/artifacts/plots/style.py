@@ -1,8 +1,12 @@
-"""Shared matplotlib style (Agg backend) and helpers used by every kind."""
+"""Shared matplotlib style (Agg backend) and helpers used by every kind.
+
+The Agg backend is chosen for magexp's own processes; inside a Jupyter kernel (``Calibration.plot()`` in
+a notebook) the kernel's inline backend is left as it is, so that the figure shows."""
 
 from __future__ import annotations
 
 import functools
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -11,7 +15,8 @@ from magexp.artifacts.plots import VECTOR
 from magexp.core.atomic import atomic_path
 from magexp.errors import MagexpError
 
-matplotlib.use("Agg")
+if "ipykernel" not in sys.modules:  # a notebook keeps its inline backend
+    matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 from matplotlib import mathtext  # noqa: E402

@@ -1,0 +1,127 @@
+"""The calibration models ``magexp calibrate`` fits, and ``model=auto``: the one the data support.
+
+Models of ``B = W (r - o)``, simplest first (:data:`ORDER`):
+
+``sphere``
+    ``W = s I``: the offset and one scale (4 numbers), closed form (:func:`magexp.scenarios.search.fit_sphere`,
+    Pratt 1987). What readings covering part of the sphere can still determine.
+``diagonal``
+    ``W = diag(w1, w2, w3)``: the offset and one scale per axis (6 numbers), closed form
+    (:func:`fit_diagonal`): the axis-aligned ellipsoid ``a x² + b y² + c z² + 2 (d x + e y + f z) + g = 0``
+    as the null vector of its design matrix, then :func:`magexp.core.ellipsoid.quadric_calibration`.
+    This is ``magcal``'s ``diag`` model.
+``full``
+    ``W`` symmetric (a scalar fit cannot see a rotation; 9 numbers) and the offset, fitted by the
+    configured estimator (``estimator=ellipsoid`` by default).
+
+``model=auto`` (:func:`select`) fits each model in turn and measures its held-out spread (the
+readings cut into ``folds`` contiguous blocks, each calibrated by the fit on the others: see
+:func:`magexp.calibration.fit.heldout`). The simplest model is the start; a richer one replaces the
+current choice only if its held-out spread is below the current one's times ``1 - margin``
+(``auto_margin``, default :data:`MARGIN` = 0.1: a richer model must cut the held-out spread by at
+least a tenth; a documented default, as ``magcal`` gives none). A model whose fit fails is skipped.
+The choice, the reason and every candidate's held-out spread go into the output
+(``quality.model_selection``).
+
+A vector (attitude-aided) objective fits ``full`` only: it determines the whole ``W``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.core.ellipsoid import LINEAR_TWICE, normalise, quadratic_features, quadric_calibration
+from magexp.errors import MagexpError
+from magexp.scenarios.search import fit_sphere
+
+#: the models, simplest first, and ``auto``
+ORDER = ("sphere", "diagonal", "full")
+MODELS = (*ORDER, "auto")
+#: default parsimony margin of ``model=auto`` (module docstring)
+MARGIN = 0.1
+#: the columns of :func:`magexp.core.ellipsoid.quadratic_features` an axis-aligned ellipsoid uses
+DIAGONAL_COLUMNS = [0, 1, 2, 6, 7, 8, 9]
+
+
+def fit_diagonal(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(W, o)`` of the axis-aligned ellipsoid through ``readings`` mapped onto the sphere of
+    ``radius`` (``W`` diagonal); None if the fit is not an ellipsoid (module docstring)."""
+    c, s, u = normalise(readings)
+    design = (quadratic_features(u) * LINEAR_TWICE)[:, DIAGONAL_COLUMNS]
+    p7 = np.linalg.svd(design, full_matrices=False)[2][-1]
+    p = np.concatenate([p7[:3], np.zeros(3), p7[3:]])
+    return quadric_calibration(p, c, s, radius)
+
+
+def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(s I, centre)`` of the sphere through ``readings`` scaled onto ``radius``."""
+    centre, fitted = fit_sphere(readings)
+    return np.eye(3) * radius / fitted, centre
+
+
+#: the closed-form models: ``readings, radius -> (W, o)`` or None
+CLOSED_FORM = {"sphere": fit_sphere_model, "diagonal": fit_diagonal}
+
+
+def check_model(model: str, objective: str) -> str:
+    """``model`` if it is one of :data:`MODELS` and fits ``objective``, else one line."""
+    if model not in MODELS:
+        raise MagexpError(f"model={model!r} is not allowed: choose one of {', '.join(MODELS)}")
+    if model in CLOSED_FORM and objective != "scalar":
+        raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or "
+                          f"{model} with the scalar objective")
+    return model
+
+
+def check_margin(margin) -> float:
+    """``auto_margin`` as a float in ``[0, 1)``, else one line."""
+    try:
+        value = float(margin)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not 0.0 <= value < 1.0:
+        raise MagexpError(f"auto_margin={margin!r} is not allowed: it must be a number in [0, 1) (the fraction of "
+                          "the simpler model's held-out spread a richer model must cut)")
+    return value
+
+
+def select(heldout_of, objective: str, margin: float = MARGIN) -> tuple[str, dict]:
+    """The model ``auto`` chooses, and the record of the choice.
+
+    Parameters
+    ----------
+    heldout_of : ``model -> held-out spread`` (NaN or a :class:`MagexpError` when the fit fails).
+    objective : ``scalar`` (all of :data:`ORDER`) or ``vector`` (``full`` only).
+    margin : a richer model must have a held-out spread below ``(1 - margin)`` times the current choice's.
+
+    Returns
+    -------
+    (model, record)
+        ``record``: ``chosen``, ``why``, ``margin`` and ``heldout_spread`` of each candidate (None: the fit failed).
+    """
+    candidates = ORDER if objective == "scalar" else ("full",)
+    spreads = {}
+    for name in candidates:
+        try:
+            value = float(heldout_of(name))
+        except MagexpError:
+            value = float("nan")
+        spreads[name] = value if np.isfinite(value) else None
+    chosen, why = None, ""
+    for name in candidates:
+        value = spreads[name]
+        if value is None:
+            continue
+        if chosen is None:
+            chosen, why = name, f"{name}: the simplest model that fits"
+        elif value < (1 - margin) * spreads[chosen]:
+            why = (f"{name}: held-out spread {100 * value:.3g} % beats {chosen}'s {100 * spreads[chosen]:.3g} % by "
+                   f"more than the margin {100 * margin:g} %")
+            chosen = name
+    if chosen is None:
+        raise MagexpError("model=auto: no model could be fitted to the held-out blocks (sphere, diagonal and full "
+                          "all failed): record again while turning the sensor through as many orientations as you can")
+    rejected = [f"{n} {100 * v:.3g} %" for n, v in spreads.items() if v is not None and n != chosen]
+    if rejected:
+        why += f" (held out: {chosen} {100 * spreads[chosen]:.3g} %, " + ", ".join(rejected) + ")"
+    return chosen, {"chosen": chosen, "why": why, "margin": margin, "heldout_spread": spreads}

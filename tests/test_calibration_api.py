@@ -1,0 +1,150 @@
+"""The notebook API: a Calibration applies, saves, loads (exactly), summarises, plots and exports; the
+reference from a field model is recorded as such (model, generation, place, date), with its provenance."""
+
+import json
+
+import numpy as np
+import pytest
+
+import magexp
+from magexp.calibration.fit import Calibration, main
+from magexp.core.geometry import random_rotations
+from magexp.errors import MagexpError
+from magexp.paths import SHARED_DATA
+
+M = np.array([[1.10, 0.05, -0.03], [0.05, 0.92, 0.04], [-0.03, 0.04, 1.05]])
+OFFSET = np.array([12.0, -7.0, 4.0])
+
+
+@pytest.fixture(scope="module")
+def cal():
+    rng = np.random.default_rng(3)
+    u = random_rotations(500, rng=rng)[:, :, 0]
+    return magexp.calibrate(50.0 * u @ M.T + OFFSET + rng.normal(0, 0.05, (500, 3)), unit="uT",
+                            reference_total=50.0)
+
+
+def test_load_of_save_applies_exactly(cal, tmp_path):
+    path = cal.save(tmp_path / "c.json")
+    back = Calibration.load(path)
+    probe = np.random.default_rng(0).normal(0, 60, (1000, 3))
+    assert np.array_equal(back.apply(probe), cal.apply(probe))  # bit for bit
+    assert np.array_equal(cal.apply(cal.recording.readings), cal.calibrated)
+    assert back.apply(probe[0]).shape == (3,)
+    saved = json.loads(path.read_text())
+    assert saved["format"] == "magexp-calibration v3" and saved["provenance"]["magexp_version"] == magexp.__version__
+    assert saved["config"]["model"] == "auto" and saved["quality"]["model_selection"]["chosen"] == cal.model
+    with pytest.raises(MagexpError, match="exists already"):
+        cal.save(path)
+    cal.save(path, overwrite=True)
+    assert back.summary().splitlines()[0].startswith("recording") and "loaded" in back.summary()
+
+
+def test_repr_is_short_and_summary_has_the_numbers(cal):
+    text = repr(cal)
+    assert len(text.splitlines()) == 1 and len(text) < 250 and "held out" in text and "gate passed" in text
+    assert "spread after" in cal.summary() and "gate" in cal.summary()
+
+
+def test_plot_returns_a_figure_and_export_writes_beside(cal, tmp_path):
+    fig = cal.plot()
+    assert type(fig).__name__ == "Figure" and len(fig.axes) == 6
+    cells = round(cal.metrics["coverage_cells"] * 32)  # the map shows the report's coverage of the raw directions
+    assert f"coverage: {cells} of 32 cells" in [ax.get_title() for ax in fig.axes]
+    path = cal.export("ros", tmp_path)
+    assert path.name == "magexp_mag_calibration.yaml" and "ros__parameters" in path.read_text()
+    with pytest.raises(MagexpError, match="plot\\(\\) is not allowed for a loaded calibration"):
+        Calibration.load(cal.save(tmp_path / "c.json")).plot()
+
+
+@pytest.mark.parametrize("text, message", [("[1, 2]", "format 'list' is not allowed"),
+                                           ('{"format": "magexp-calibration v3", "W": [1], "offset": [0]}',
+                                            "W must be 3 x 3"), ("not json", "not a calibration.json")])
+def test_load_refuses_bad_files_in_one_line(tmp_path, text, message):
+    (tmp_path / "bad.json").write_text(text)
+    with pytest.raises(MagexpError, match=message):
+        Calibration.load(tmp_path / "bad.json")
+
+
+FXOS = SHARED_DATA / "fxos8700_mag_readings.txt"
+QMC = SHARED_DATA / "qmc5883l_noisy_raw_data.csv"
+
+
+@pytest.mark.skipif(not FXOS.is_file(), reason=f"{FXOS} is not present")
+@pytest.mark.parametrize("keys, generation", [(["field.model=wmm", "field.latitude=52.2", "field.longitude=0.1",
+                                                "field.date=2024-05-01"], "WMM-2020"),
+                                               (["igrf.latitude=52.2", "igrf.longitude=0.1", "igrf.date=2024-05-01"],
+                                                "IGRF-14")])
+def test_a_field_model_reference_is_recorded_with_its_inputs(tmp_path, keys, generation):
+    out = tmp_path / "o"
+    assert main([f"data.path={FXOS}", "data.unit=uT", *keys, f"out={out}", "accept=true"]) == 0
+    ref = json.loads((out / "calibration.json").read_text())["reference"]
+    assert ref["source"].startswith(generation) and ref["field_model"]["generation"] == generation
+    assert ref["field_model"]["latitude"] == 52.2 and ref["field_model"]["date"] == "2024-05-01"
+    assert not ref["estimated"] and abs(ref["total"] - ref["field_model"]["total_nT"] / 1000) < 1e-9
+
+
+@pytest.mark.skipif(not QMC.is_file(), reason=f"{QMC} is not present")
+def test_raw_counts_are_calibrated_to_the_model_field_in_nt(tmp_path):
+    out = tmp_path / "o"
+    assert main([f"data.path={QMC}", "field.latitude=-34.6", "field.longitude=-58.4", "field.date=2024-01-01",
+                 f"out={out}", "accept=true"]) == 0
+    saved = json.loads((out / "calibration.json").read_text())
+    assert (saved["unit"], saved["field_unit"], saved["reference"]["unit"]) == ("counts", "nT", "nT")
+    assert abs(saved["metrics"]["mean_after"] / saved["reference"]["total"] - 1) < 0.01
+
+
+def test_import_magexp_sets_no_thread_variables():
+    """``import magexp`` (and the calibration API) leave the user's process environment alone."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    code = ("import os, magexp, magexp.calibration.fit; "
+            "print(sorted(k for k in os.environ if k.endswith('_NUM_THREADS')))")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_calibrate_help_lists_every_key_with_a_sentence(capsys):
+    from omegaconf import OmegaConf
+
+    from magexp.paths import CONF
+
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    cfg = OmegaConf.load(CONF / "calibrate.yaml")
+    keys = [f"{k}.{sub}" if sub else k for k, v in cfg.items() if k != "defaults"
+            for sub in (v.keys() if OmegaConf.is_dict(v) else [None])]
+    for key in keys:
+        line = next(line for line in out.splitlines() if line.split() and line.split()[0] == key)
+        assert len(line.split(":", 1)[1].strip()) > 3, line  # a sentence, not only the default
+
+
+@pytest.mark.parametrize("missing, extra, code", [("cma", "cmaes", 2), ("distributed.client", "dask", 2),
+                                                  ("pyulog", "ulog", 2), ("not_a_magexp_extra", None, 3)])
+def test_a_missing_optional_package_names_its_extra(capsys, missing, extra, code):
+    from magexp.errors import exit_code
+
+    def needs():
+        raise ModuleNotFoundError(f"No module named {missing!r}", name=missing)
+
+    assert exit_code(needs) == code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and (extra is None or f"pip install 'magexp[{extra}]'" in err[0])
+
+
+@pytest.mark.skipif(not FXOS.is_file(), reason=f"{FXOS} is not present")
+@pytest.mark.parametrize("args, message", [
+    (["igrf.latitude=52.2", "field.latitude=52.2"], "igrf.latitude=52.2 is not allowed with field.latitude"),
+    (["field.latitude=52.2", "field.longitude=0.1"], "field.date=None is not allowed"),
+    (["field.model=xyz", "field.latitude=1", "field.longitude=1", "field.date=2024-01-01"], "field.model='xyz'"),
+    (["overwrite=yes"], "overwrite='yes' is not allowed"), (["export=betaflight"], "export='betaflight'"),
+    (["gate.max_anisotropy=0"], "gate.max_anisotropy=0"),
+])
+def test_bad_new_keys_are_one_line_nothing_written(tmp_path, capsys, args, message):
+    assert main([f"data.path={FXOS}", "data.unit=uT", *args, f"out={tmp_path / 'o'}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "o").exists()
