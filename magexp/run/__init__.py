@@ -1,7 +1,9 @@
 """Running configurations: compose them with Hydra, check them before any work starts, run them through
 the run cache on one process, many, or a Dask cluster, and sweep them.
 
-Lives here: :mod:`~magexp.run.compose` (Hydra composition and the typed scenario schemas),
+Lives here: :mod:`~magexp.run.command` (``magexp [KEY=VALUE ...]``: one run, a sweep),
+:mod:`~magexp.run.outputs` (a run's folder and printed table), :mod:`~magexp.run.threads` (one BLAS
+thread, set by the entry point), :mod:`~magexp.run.compose` (Hydra composition and the typed scenario schemas),
 :mod:`~magexp.run.preflight` (checks before a command starts), :mod:`~magexp.run.guard` (what may be
 written where), :mod:`~magexp.run.budget` (work bounded before it starts), :mod:`~magexp.run.runner`
 (one config → one fit), :mod:`~magexp.run.executor` (many runs), :mod:`~magexp.run.cache` (finished
