@@ -33,9 +33,8 @@ from magexp.run import provenance
 DIGITS = 6
 SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "value", "lo", "hi", "success_rate",
                  "n_seeds", "truth_in_interval", "verdict"]
-#: limits of REPORT.md (the appendix holds the rest); the section "magexp beside MAGYC" (:func:`_peers_section`)
-#: takes about 50 lines and 7,000 characters of them
-MAX_LINES, MAX_CHARS, MAX_CELL = 450, 70_000, 300
+#: limits of REPORT.md (the appendix holds the rest; the section "magexp beside MAGYC" links its claims table)
+MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 #: verdicts of a headline claim
 HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here")
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
@@ -440,17 +439,22 @@ def _artifact_table(spec, path: Path) -> str:
 
 
 def _peers_section(root: Path) -> str:
-    """The section "magexp beside MAGYC": the text of ``root/peers/peers.md`` above :data:`PEERS_MARK` (its claims
-    are computed by :mod:`magexp.perf.peers`, which ``make peers-bench`` runs; ``make reproduce`` never writes
-    ``results/peers``), or one line when the bench has not been run."""
+    """The section "magexp beside MAGYC": the headline and the count of claims that hold from
+    ``root/peers/peers.md`` (the text above :data:`PEERS_MARK` up to its first table), the figure, and a link
+    to the claims table and the rest (its claims are computed by :mod:`magexp.perf.peers`, which
+    ``make peers-bench`` runs; ``make reproduce`` never writes ``results/peers``), or one line when the bench
+    has not been run."""
     path = root / "peers" / "peers.md"
     if not path.exists():
         return ("## magexp beside MAGYC\n\nSkipped: `results/peers/peers.md` is absent (`make peers` builds the "
                 "peer's environment, `make peers-bench` runs the bench).\n")
-    text = path.read_text().split(PEERS_MARK)[0].rstrip()
+    lines = path.read_text().split(PEERS_MARK)[0].rstrip().splitlines()
+    first_table = next((i for i, line in enumerate(lines) if line.startswith("|")), len(lines))
+    lines = [line.split(";")[0] + "; their table and rule: [`peers/peers.md`](peers/peers.md))."
+             if line.startswith("**Claims** (") else line for line in lines[:first_table]]
+    text = "\n".join(lines).rstrip()
     figure = "![peers](peers/peers.png)\n\n" if (root / "peers" / "peers.png").exists() else ""
-    return (f"{text}\n\n{figure}Every table, the Yuan 2018 streams and the single-axis recordings: "
-            "[`peers/peers.md`](peers/peers.md); every run: [`peers/peers.csv`](peers/peers.csv).\n")
+    return f"{text}\n\n{figure}Every table and note: [`peers/peers.md`](peers/peers.md); every run: [`peers/peers.csv`](peers/peers.csv).\n"
 
 
 def _speed_section(root: Path) -> str:
