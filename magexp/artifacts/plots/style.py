@@ -6,6 +6,7 @@ a notebook) the kernel's inline backend is left as it is, so that the figure sho
 from __future__ import annotations
 
 import functools
+import math
 import sys
 from pathlib import Path
 
@@ -166,13 +167,17 @@ def save(fig, path: Path) -> list[Path]:
 
 
 class _LogMinorLabels(matplotlib.ticker.LogFormatterSciNotation):
-    """Minor tick labels of a log axis only while its view spans less than a decade: over a decade or
-    more its decades are labelled, and matplotlib's labels of a subset of minor ticks (2, 3, 4, 6 x
-    10^k) collide on a short axis. Decided when the figure is drawn, after every limit is set."""
+    """Minor tick labels of a log axis only while its view holds fewer than two decade ticks: with two
+    or more, the decades are labelled and give the scale, and matplotlib's labels of a subset of minor
+    ticks (2, 3, 4, 6 x 10^k) would collide on a short axis; with one, that lone label cannot give the
+    scale, so the minor ticks are labelled (only 2 and 5 x 10^k when the view spans a decade or more). Decided when the figure is drawn, after every limit is set."""
 
     def __call__(self, x, pos=None):
         lo, hi = sorted(self.axis.get_view_interval())
-        if lo > 0 and hi / lo >= 10:
+        if lo > 0 and math.floor(math.log10(hi)) - math.ceil(math.log10(lo)) >= 1:  # two decade ticks or more
+            return ""
+        mantissa = round(x / 10 ** math.floor(math.log10(x))) if x > 0 else 0
+        if lo > 0 and hi / lo >= 10 and mantissa not in (2, 5):  # a decade or more: 2 and 5 x 10^k only
             return ""
         return super().__call__(x, pos)
 
