@@ -52,10 +52,6 @@ def swept_keys(overrides: list[str]) -> list[str]:
     return [ov.get_key_element() for ov in parse_overrides(overrides) if ov.is_sweep_override()]
 
 
-def _build(node, what):
-    return build(node, what)
-
-
 def check_problem(cfg, scenario) -> None:
     """The scenario's data (seed ``cfg.seed``) give at least as many residuals as the problem has
     parameters: fewer readings than parameters is refused for every estimator."""
@@ -124,10 +120,10 @@ def _check_config(cfg, seen: set, estimates: dict):
     if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
         estimates[s_key, e_key] = check_run(plain)
     if e_key not in seen:
-        _build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
+        build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         seen.add(e_key)
     if s_key not in seen:
-        scenario = _build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
+        scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
         check_problem(cfg, scenario)
         seen.add(s_key)
     return estimates[s_key, e_key]
