@@ -2,7 +2,7 @@
 
 Lives here: :mod:`~magexp.calibration.fit` (the fit, held-out folds, the quality report, the
 ``Calibration`` object and the command), :mod:`~magexp.calibration.models` (``model=auto``: sphere,
-diagonal or full, chosen by held-out spread), :mod:`~magexp.calibration.checks` (the acceptance gate:
+diagonal, full or, with a gyroscope, gyro-aided, chosen by held-out spread), :mod:`~magexp.calibration.checks` (the acceptance gate:
 degenerate data, failed fits and implausible calibrations, refused in one line),
 :mod:`~magexp.calibration.write` (the output folder and the printed summary),
 :mod:`~magexp.calibration.figure` (its figure) and :mod:`~magexp.calibration.export` (ArduPilot, PX4,

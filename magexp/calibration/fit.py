@@ -56,6 +56,7 @@ from magexp.calibration.export import TARGETS as EXPORT_TARGETS
 from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
+from magexp.core.geometry import preintegrate
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
 from magexp.core.field_model import field_of_recording, place_of
 from magexp.core.recordings import UNITS, Recording, check_unique, check_unit, load_recording, resolve
@@ -77,14 +78,29 @@ from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, sear
 OBJECTIVES = ("scalar", "vector")
 #: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
 MIN_READINGS = 12
-#: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full`` and ``auto``.
+#: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full``, ``gyro`` and ``auto``.
 MODELS = models_.MODELS
 #: How each objective's ``W`` is reported.
 FORMS = {"scalar": "symmetric positive-definite polar factor (W = Q P, reported P = (W^T W)^(1/2)): a total-field "
                    "fit cannot see a rotation of W",
          "vector": "as fitted (the vector objective determines the rotation)",
          "sphere": "s I (model=sphere: offset and one scale only)",
-         "diagonal": "diag(w1, w2, w3) (model=diagonal: offset and one scale per axis)"}
+         "diagonal": "diag(w1, w2, w3) (model=diagonal: offset and one scale per axis)",
+         "gyro": "as fitted (model=gyro: the gyro-aided fit determines the rotation into the gyroscope's axes)"}
+#: The estimator of ``model=gyro`` (:mod:`magexp.calibration.models`): Levenberg-Marquardt from the gyro-aided
+#: problem's two-stage start, whatever ``estimator`` is; at most 200 residual evaluations at a tolerance of
+#: 1e-10 (documented defaults: a good recording converges well within them; one whose gyroscope does not
+#: carry the attitude, e.g. a saturated one, stops there instead of running 2000 evaluations per fold).
+GYRO_ESTIMATOR = {"name": "lm", "max_nfev": 200, "tol": 1e-10}
+
+
+def gyro_estimator():
+    """The estimator of ``model=gyro``: ``conf/estimator/lm.yaml``'s class with :data:`GYRO_ESTIMATOR`."""
+    return target_class("estimator", "lm")(**GYRO_ESTIMATOR)
+#: ``model=gyro`` fits at most this many readings, evenly spaced in time (the gyroscope integrated between
+#: them), as the ``real_hmc5883l_*`` scenarios do (``n_readings: 300``): a documented default that bounds
+#: the work of its 17-parameter fit (each held-out fold and the final fit) whatever the recording's length.
+GYRO_READINGS = 300
 
 
 @dataclass
@@ -257,6 +273,19 @@ def recording_dataset(rec: Recording, reference: Reference, objective: str) -> D
                    unit=rec.unit, meta={"recording": str(rec.path), **rec.meta})
 
 
+def gyro_dataset(rec: Recording, reference: Reference) -> Dataset:
+    """The :class:`Dataset` of ``model=gyro`` (:class:`~magexp.problems.gyro.GyroAidedCalibration`): the
+    readings (at most :data:`GYRO_READINGS`, evenly spaced), the reference total (the field's magnitude ``F``)
+    and the gyroscope's rotation increments between their times (:func:`magexp.core.geometry.preintegrate`)."""
+    stream, times = rec.gyro_rates(), rec.reading_times()
+    if stream is None or times is None:
+        models_.check_model("gyro", "scalar", gyro=False)
+    keep = np.unique(np.round(np.linspace(0, rec.n - 1, min(rec.n, GYRO_READINGS))).astype(int))
+    return Dataset(readings=rec.readings[keep], reference_norm=reference.total[keep], unit=rec.unit,
+                   meta={"recording": str(rec.path), **rec.meta},
+                   extra={"preintegration": preintegrate(*stream, times[keep])})
+
+
 def check_size(rec: Recording) -> None:
     """At least :data:`MIN_READINGS` readings."""
     if rec.n < MIN_READINGS:
@@ -279,8 +308,10 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
     ``dataset``: the recording's :func:`recording_dataset`, when the caller has it already. ``problem``
     is the objective's, in its own parameterisation (the sphere model's residuals are the scalar
     problem's at ``W = s I``)."""
+    if model == "gyro":  # its own problem and estimator (magexp.calibration.models)
+        objective, dataset, estimator = "gyro", gyro_dataset(rec, reference), gyro_estimator()
     dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
-    box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective == "vector")
+    box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective != "scalar")
     problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
     if model in models_.CLOSED_FORM:
         w, o, calibrated, result = _closed_form(rec, model, reference)
@@ -339,12 +370,13 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
             "heldout_folds": folds}
 
 
-def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
+def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> dict:
     """Standard errors, conditioning, undetermined combinations (:func:`magexp.core.identifiability.identifiability`)
     of the reported parameters, over the residuals of the fit's own ``problem``
     (:meth:`~magexp.problems.base.CalibrationProblem.residual_stack`): ``[s, o]`` (``W = s I``) for the
     sphere model, the 6 upper entries of the symmetric ``W`` and ``o`` for the scalar objective,
-    ``[vec W, o]`` for the vector one."""
+    ``[vec W, o]`` for the vector one, ``[vec W, o]`` and ``extra`` (the field direction and gyro bias
+    of the fit) for the gyro-aided model."""
     if model == "sphere":
         theta = np.concatenate([[w[0, 0]], o])
         names = ["s", "o1", "o2", "o3"]
@@ -353,14 +385,15 @@ def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
         theta = np.concatenate([np.diag(w), o])
         names = ["W11", "W22", "W33", "o1", "o2", "o3"]
         to_problem = lambda t: problem.pack(np.diag(t[:3]), t[3:])  # noqa: E731
-    elif objective == "scalar":
+    elif objective == "scalar" and model != "gyro":
         theta = np.concatenate([w.ravel()[UPPER], o])  # the 6 upper entries of the symmetric W, then o
         names = [f"W{k // 3 + 1}{k % 3 + 1}" for k in UPPER] + ["o1", "o2", "o3"]
         to_problem = lambda t: problem.pack(expand(t)[0, :9].reshape(3, 3), t[6:])  # noqa: E731
     else:
-        theta = np.concatenate([w.ravel(), o])
-        names = [f"W{i + 1}{j + 1}" for i in range(3) for j in range(3)] + ["o1", "o2", "o3"]
-        to_problem = lambda t: problem.pack(t[:9].reshape(3, 3), t[9:])  # noqa: E731
+        theta = np.concatenate([w.ravel(), o, extra])
+        names = ([f"W{i + 1}{j + 1}" for i in range(3) for j in range(3)] + ["o1", "o2", "o3"]
+                 + problem.parameter_names()[12:])
+        to_problem = lambda t: np.concatenate([problem.pack(t[:9].reshape(3, 3), t[9:12]), t[12:]])  # noqa: E731
     out = identifiability(lambda thetas: problem.residual_stack(thetas, of=to_problem), theta, names)
     se = out["standard_errors"]
     if model == "sphere":
@@ -369,7 +402,8 @@ def report_of(objective: str, w, o, problem, model: str = "full") -> dict:
         out["W_standard_errors"] = np.diag([se["W11"], se["W22"], se["W33"]]).tolist()
     else:
         out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar"
-                                     else se[f"W{i + 1}{j + 1}"] for j in range(3)] for i in range(3)]
+                                     and model != "gyro" else se[f"W{i + 1}{j + 1}"] for j in range(3)]
+                                    for i in range(3)]
     out["offset_standard_errors"] = [se["o1"], se["o2"], se["o3"]]
     out["w_form"] = FORMS[model if model in FORMS else objective]
     out["model"] = model
@@ -416,7 +450,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
     check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.run.budget's limits
-    model = models_.check_model(model, objective)
+    model = models_.check_model(model, objective, gyro=rec.gyro_rates() is not None)
     thresholds = gate_thresholds(gate_overrides)
     check_applies(estimator, problem_class(objective),
                   alternatives=lambda: {n: target_class("estimator", n) for n in options("estimator")})
@@ -429,13 +463,15 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         model, selection = "full", {"chosen": "full", "why": f"full: folds={folds}, no held-out check to choose by",
                                     "margin": auto_margin, "heldout_spread": {}}
     if model == "auto":
+        has_gyro = rec.gyro_rates() is not None
         held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
-                for m in (models_.ORDER if objective == "scalar" else ("full",))}
+                for m in models_.candidates(objective, gyro=has_gyro)}
         model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
-                                          models_.check_margin(auto_margin))
+                                          models_.check_margin(auto_margin), gyro=has_gyro)
     w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
     cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
-    name = f"{model} fit" if model in models_.CLOSED_FORM else estimator.name
+    name = (f"{model} fit" if model in models_.CLOSED_FORM
+            else f"{GYRO_ESTIMATOR['name']} (gyro-aided)" if model == "gyro" else estimator.name)
     if checks:
         check_fit(rec.name, name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
@@ -443,13 +479,27 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
-    report = report_of(objective, w, o, problem, model)
+    report = {**report_of(objective, w, o, problem, model, extra=result.x[12:]), **gyro_extras(model, problem, result)}
     if selection is not None:
         report["model_selection"] = selection
     report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
     return Calibration(recording=rec, estimator=name, objective=objective, w=w, offset=o,
                        reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
                        report=report)
+
+
+def gyro_extras(model: str, problem, result) -> dict:
+    """What the gyro-aided model reports beside ``W`` and ``o`` (nothing for the others): the field
+    direction (rad) and the gyroscope's bias (deg/s) it fitted, and ``vector_rms``, the RMS of
+    ``R_jᵀ h - W (r_j - o)`` over the readings the fit used (against the field the gyroscope carries to
+    each reading; the recording's unit)."""
+    if model != "gyro":
+        return {}
+    x = result.x
+    residual = problem.residual_swarm(x[None])[0]
+    return {"field_azimuth": float(x[12]), "field_elevation": float(x[13]),
+            "gyro_bias_deg_s": [float(v) for v in x[14:17]],
+            "vector_rms": float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))}
 
 
 def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: dict, *, checks: bool,

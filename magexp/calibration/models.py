@@ -13,6 +13,17 @@ Models of ``B = W (r - o)``, simplest first (:data:`ORDER`):
 ``full``
     ``W`` symmetric (a scalar fit cannot see a rotation; 9 numbers) and the offset, fitted by the
     configured estimator (``estimator=ellipsoid`` by default).
+``gyro``
+    The gyro-aided vector model of Yuan 2018 (eq 8, :mod:`magexp.problems.gyro`): the whole ``W``
+    (9 numbers, its rotation into the gyroscope's axes included) and the offset, with the field
+    direction in the first reading's frame and the gyroscope's bias (5 more) fitted beside them,
+
+    .. math:: \\min \\sum_j \\lVert R_j(\\mathbf b_g)^\\top \\mathbf h - W(\\mathbf r_j - \\mathbf o)\\rVert^2,
+
+    ``R_j`` the gyroscope's rates (less the bias) integrated to reading ``j``. Only for a recording with
+    a gyroscope; fitted by Levenberg-Marquardt from the problem's two-stage start (the ellipsoid fit,
+    then the rotation, field direction and bias: :meth:`~magexp.problems.gyro.GyroAidedCalibration.initial_estimate`),
+    whatever ``estimator`` is (the swarm and ellipsoid estimators do not fit it).
 
 ``model=auto`` (:func:`select`) fits each model in turn and measures its held-out spread (the
 readings cut into ``folds`` contiguous blocks, each calibrated by the fit on the others: see
@@ -21,7 +32,10 @@ current choice only if its held-out spread is below the current one's times ``1 
 (``auto_margin``, default :data:`MARGIN` = 0.1: a richer model must cut the held-out spread by at
 least a tenth; a documented default, as ``magcal`` gives none). A model whose fit fails is skipped.
 The choice, the reason and every candidate's held-out spread go into the output
-(``quality.model_selection``).
+(``quality.model_selection``). ``gyro`` is a candidate where the recording has a gyroscope
+(:func:`candidates`): its held-out spread is measured the same way (magnitudes of held-out blocks, which
+no rotation changes), so it is chosen only where the attitude the gyroscope adds makes the magnitudes of
+readings the fit has not seen more consistent.
 
 A vector (attitude-aided) objective fits ``full`` only: it determines the whole ``W``.
 """
@@ -34,9 +48,11 @@ from magexp.core.ellipsoid import LINEAR_TWICE, normalise, quadratic_features, q
 from magexp.errors import MagexpError
 from magexp.scenarios.search import fit_sphere
 
-#: the models, simplest first, and ``auto``
-ORDER = ("sphere", "diagonal", "full")
+#: the models, simplest first (parameters of W and o: 4, 6, 9, 12), and ``auto``
+ORDER = ("sphere", "diagonal", "full", "gyro")
 MODELS = (*ORDER, "auto")
+#: the models only a recording with a gyroscope supports
+NEEDS_GYRO = ("gyro",)
 #: default parsimony margin of ``model=auto`` (module docstring)
 MARGIN = 0.1
 #: the columns of :func:`magexp.core.ellipsoid.quadratic_features` an axis-aligned ellipsoid uses
@@ -63,14 +79,26 @@ def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, n
 CLOSED_FORM = {"sphere": fit_sphere_model, "diagonal": fit_diagonal}
 
 
-def check_model(model: str, objective: str) -> str:
-    """``model`` if it is one of :data:`MODELS` and fits ``objective``, else one line."""
+def check_model(model: str, objective: str, *, gyro: bool = True) -> str:
+    """``model`` if it is one of :data:`MODELS`, fits ``objective`` and (``gyro``: the recording has a
+    gyroscope) the data, else one line."""
     if model not in MODELS:
         raise MagexpError(f"model={model!r} is not allowed: choose one of {', '.join(MODELS)}")
-    if model in CLOSED_FORM and objective != "scalar":
+    if (model in CLOSED_FORM or model in NEEDS_GYRO) and objective != "scalar":
         raise MagexpError(f"model={model!r} is not allowed with objective {objective!r}: choose full, or "
                           f"{model} with the scalar objective")
+    if model in NEEDS_GYRO and not gyro:
+        raise MagexpError(f"model={model!r} is not allowed: the recording has no gyroscope (gx, gy, gz columns "
+                          "with sample_time, or a log's gyro stream); choose auto, sphere, diagonal or full")
     return model
+
+
+def candidates(objective: str, *, gyro: bool = False) -> tuple[str, ...]:
+    """The models ``auto`` tries, simplest first: all of :data:`ORDER` for the scalar objective
+    (``gyro`` only with a gyroscope), ``full`` for the vector one (it determines the whole ``W``)."""
+    if objective != "scalar":
+        return ("full",)
+    return tuple(m for m in ORDER if gyro or m not in NEEDS_GYRO)
 
 
 def check_margin(margin) -> float:
@@ -85,30 +113,31 @@ def check_margin(margin) -> float:
     return value
 
 
-def select(heldout_of, objective: str, margin: float = MARGIN) -> tuple[str, dict]:
+def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = False) -> tuple[str, dict]:
     """The model ``auto`` chooses, and the record of the choice.
 
     Parameters
     ----------
     heldout_of : ``model -> held-out spread`` (NaN or a :class:`MagexpError` when the fit fails).
-    objective : ``scalar`` (all of :data:`ORDER`) or ``vector`` (``full`` only).
+    objective : ``scalar`` (all of :data:`ORDER`) or ``vector`` (``full`` only): :func:`candidates`.
     margin : a richer model must have a held-out spread below ``(1 - margin)`` times the current choice's.
+    gyro : the recording has a gyroscope (``gyro`` is a candidate).
 
     Returns
     -------
     (model, record)
         ``record``: ``chosen``, ``why``, ``margin`` and ``heldout_spread`` of each candidate (None: the fit failed).
     """
-    candidates = ORDER if objective == "scalar" else ("full",)
+    tried = candidates(objective, gyro=gyro)
     spreads = {}
-    for name in candidates:
+    for name in tried:
         try:
             value = float(heldout_of(name))
         except MagexpError:
             value = float("nan")
         spreads[name] = value if np.isfinite(value) else None
     chosen, why = None, ""
-    for name in candidates:
+    for name in tried:
         value = spreads[name]
         if value is None:
             continue
@@ -119,7 +148,7 @@ def select(heldout_of, objective: str, margin: float = MARGIN) -> tuple[str, dic
                    f"more than the margin {100 * margin:g} %")
             chosen = name
     if chosen is None:
-        raise MagexpError("model=auto: no model could be fitted to the held-out blocks (sphere, diagonal and full "
+        raise MagexpError("model=auto: no model could be fitted to the held-out blocks (" + ", ".join(tried) + " "
                           "all failed): record again while turning the sensor through as many orientations as you can")
     rejected = [f"{n} {100 * v:.3g} %" for n, v in spreads.items() if v is not None and n != chosen]
     if rejected:
