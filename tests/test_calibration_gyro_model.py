@@ -60,3 +60,25 @@ def test_the_gyro_model_without_a_gyroscope_is_one_line(objective):
     with pytest.raises(MagexpError, match="gyro") as err:
         magexp.calibrate(tumbling(gyro=False), model="gyro", objective=objective)
     assert "\n" not in str(err.value)
+
+
+def test_the_stacked_jacobian_is_scipys_forward_difference_from_one_call():
+    from scipy.optimize._numdiff import approx_derivative
+
+    from magexp.calibration.fit import Reference, gyro_dataset
+    from magexp.estimators.lm import LevenbergMarquardt, stacked_jacobian
+    from magexp.problems import make_problem
+    from magexp.scenarios.search import SearchBox
+
+    rec = tumbling(seconds=10.0)
+    problem = make_problem("gyro", gyro_dataset(rec, Reference(np.full(rec.n, 0.5), "test")),
+                           SearchBox((0.5, 1.5), (-0.5, 0.5), (-1.0, 1.0)))
+    theta = problem.initial_estimate()
+    calls = []
+    swarm = problem.residual_swarm
+    problem.residual_swarm = lambda t: calls.append(len(t)) or swarm(t)
+    jac = stacked_jacobian(problem)(theta)
+    assert calls == [18] and jac.shape == (problem.residuals(theta).size, 17)
+    np.testing.assert_allclose(jac, approx_derivative(problem.residuals, theta, method="2-point"), rtol=1e-6, atol=1e-6)
+    with pytest.raises(MagexpError, match="estimator.jacobian='3-point' is not allowed"):
+        LevenbergMarquardt(jacobian="3-point")

@@ -88,10 +88,11 @@ FORMS = {"scalar": "symmetric positive-definite polar factor (W = Q P, reported 
          "diagonal": "diag(w1, w2, w3) (model=diagonal: offset and one scale per axis)",
          "gyro": "as fitted (model=gyro: the gyro-aided fit determines the rotation into the gyroscope's axes)"}
 #: The estimator of ``model=gyro`` (:mod:`magexp.calibration.models`): Levenberg-Marquardt from the gyro-aided
-#: problem's two-stage start, whatever ``estimator`` is; at most 200 residual evaluations at a tolerance of
+#: problem's two-stage start, whatever ``estimator`` is, its Jacobian from one stacked evaluation
+#: (:func:`magexp.estimators.lm.stacked_jacobian`); at most 200 residual evaluations at a tolerance of
 #: 1e-10 (documented defaults: a good recording converges well within them; one whose gyroscope does not
 #: carry the attitude, e.g. a saturated one, stops there instead of running 2000 evaluations per fold).
-GYRO_ESTIMATOR = {"name": "lm", "max_nfev": 200, "tol": 1e-10}
+GYRO_ESTIMATOR = {"name": "lm", "max_nfev": 200, "tol": 1e-10, "jacobian": "stacked"}
 
 
 def gyro_estimator():
