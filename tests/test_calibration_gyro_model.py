@@ -82,3 +82,22 @@ def test_the_stacked_jacobian_is_scipys_forward_difference_from_one_call():
     np.testing.assert_allclose(jac, approx_derivative(problem.residuals, theta, method="2-point"), rtol=1e-6, atol=1e-6)
     with pytest.raises(MagexpError, match="estimator.jacobian='3-point' is not allowed"):
         LevenbergMarquardt(jacobian="3-point")
+
+
+def test_a_model_whose_fit_reports_failure_on_a_fold_is_skipped_by_auto():
+    """A fit that stops without converging (e.g. the gyro fit of a saturated gyroscope at its evaluation
+    cap) does not support its model: ``auto`` records it as not fitted, whatever its held-out spread."""
+    from magexp.estimators.ellipsoid import EllipsoidFit
+
+    class Unconverged(EllipsoidFit):
+        def fit(self, problem, **kwargs):
+            result = super().fit(problem, **kwargs)
+            result.success = problem.dataset.readings.shape[0] == rec.n  # fails on every fold, not on all
+            return result
+
+    rec = tumbling(gyro=False)
+    cal = magexp.calibrate(rec, estimator=Unconverged(), model="auto", accept=True)
+    spreads = cal.report["model_selection"]["heldout_spread"]
+    assert spreads["full"] is None and spreads["sphere"] is not None and cal.model != "full"
+    assert magexp.calibrate(rec, estimator=EllipsoidFit(), model="auto").report["model_selection"][
+        "heldout_spread"]["full"] is not None

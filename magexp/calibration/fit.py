@@ -361,8 +361,10 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
         train = rec.subset(keep)
         ref = Reference(reference.total[keep], reference.source, reference.estimated)
         try:
-            w, o, *_ = _fit(train, estimator, objective, ref, rng, model)
+            w, o, _, _, result, _ = _fit(train, estimator, objective, ref, rng, model)
         except MagexpError:
+            result = None
+        if result is None or not result.success:  # a fold the model cannot fit: the model is not supported
             return {"heldout_spread": float("nan"), "heldout_folds": folds}
         mags = np.linalg.norm((rec.readings[lo:hi] - o) @ w.T, axis=1)
         pooled.append(mags)
