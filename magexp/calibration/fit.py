@@ -474,7 +474,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
     cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
     name = (f"{model} fit" if model in models_.CLOSED_FORM
-            else f"{GYRO_ESTIMATOR['name']} (gyro-aided)" if model == "gyro" else estimator.name)
+            else GYRO_ESTIMATOR["name"] if model == "gyro" else estimator.name)
     if checks:
         check_fit(rec.name, name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
@@ -486,7 +486,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if selection is not None:
         report["model_selection"] = selection
     report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
-    return Calibration(recording=rec, estimator=name, objective=objective, w=w, offset=o,
+    return Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
                        reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
                        report=report)
 

@@ -241,6 +241,15 @@ def _gate_line(record: dict) -> str:
     return "FAILED, written because accept=true: " + "; ".join(f["line"].split(":")[0] for f in record["failed"])
 
 
+def _gyro_lines(report: dict, unit: str) -> dict:
+    """The gyro-aided model's own line (nothing for the other models)."""
+    if "gyro_bias_deg_s" not in report:
+        return {}
+    bias = ", ".join(f"{v:.3g}" for v in report["gyro_bias_deg_s"])
+    return {"gyro bias": f"[{bias}] deg/s, fitted with W and the field direction; vector RMS "
+                         f"{report['vector_rms']:.3g} {unit} (model=gyro)"}
+
+
 def summary(cal) -> dict:
     """The key numbers to print, in order."""
     m, u, r = cal.metrics, cal.unit, cal.report
@@ -262,6 +271,7 @@ def summary(cal) -> dict:
         "W std errors": "[" + "; ".join(", ".join(f"{float(v):.2g}" for v in row) for row in r["W_standard_errors"]) + "]",
         "offset": "[" + ", ".join(f"{v:.6g}" for v in cal.offset) + f"] {u}",
         "offset std errors": "[" + ", ".join(f"{float(v):.2g}" for v in r["offset_standard_errors"]) + f"] {u}",
+        **_gyro_lines(r, u),
         "conditioning": f"{float(r['condition_number']):.3g} (column-scaled Jacobian); weakest combination "
                         f"{r['weakest_combinations'][0]['combination']} "
                         f"(relative singular value {r['weakest_combinations'][0]['relative_singular_value']:.2g})",
