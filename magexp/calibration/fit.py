@@ -388,7 +388,7 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
         theta = np.concatenate([np.diag(w), o])
         names = ["W11", "W22", "W33", "o1", "o2", "o3"]
         to_problem = lambda t: problem.pack(np.diag(t[:3]), t[3:])  # noqa: E731
-    elif objective == "scalar" and model != "gyro":
+    elif objective == "scalar":
         theta = np.concatenate([w.ravel()[UPPER], o])  # the 6 upper entries of the symmetric W, then o
         names = [f"W{k // 3 + 1}{k % 3 + 1}" for k in UPPER] + ["o1", "o2", "o3"]
         to_problem = lambda t: problem.pack(expand(t)[0, :9].reshape(3, 3), t[6:])  # noqa: E731
@@ -405,8 +405,7 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
         out["W_standard_errors"] = np.diag([se["W11"], se["W22"], se["W33"]]).tolist()
     else:
         out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar"
-                                     and model != "gyro" else se[f"W{i + 1}{j + 1}"] for j in range(3)]
-                                    for i in range(3)]
+                                     else se[f"W{i + 1}{j + 1}"] for j in range(3)] for i in range(3)]
     out["offset_standard_errors"] = [se["o1"], se["o2"], se["o3"]]
     out["w_form"] = FORMS[model if model in FORMS else objective]
     out["model"] = model
@@ -453,7 +452,8 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
     check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.run.budget's limits
-    model = models_.check_model(model, objective, gyro=rec.gyro_rates() is not None)
+    has_gyro = rec.gyro_rates() is not None
+    model = models_.check_model(model, objective, gyro=has_gyro)
     thresholds = gate_thresholds(gate_overrides)
     check_applies(estimator, problem_class(objective),
                   alternatives=lambda: {n: target_class("estimator", n) for n in options("estimator")})
@@ -466,7 +466,6 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         model, selection = "full", {"chosen": "full", "why": f"full: folds={folds}, no held-out check to choose by",
                                     "margin": auto_margin, "heldout_spread": {}}
     if model == "auto":
-        has_gyro = rec.gyro_rates() is not None
         held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
                 for m in models_.candidates(objective, gyro=has_gyro)}
         model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
@@ -482,7 +481,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
-    report = {**report_of(objective, w, o, problem, model, extra=result.x[12:]), **gyro_extras(model, problem, result)}
+    report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]), **gyro_extras(model, problem, result)}
     if selection is not None:
         report["model_selection"] = selection
     report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
