@@ -5,13 +5,25 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from magexp.artifacts.plan import cells, overrides_of
 from magexp.artifacts.report import build
 from magexp.artifacts.reproduce import reproduce
 from magexp.artifacts.spec import artifact_paths, load, papers
 from magexp.artifacts.summary import COLUMNS, VERDICTS
+from magexp.run.compose import GROUPS, check_choice
 
 WHOLE_PAPER = "yan2022"  # its artifacts run once, together, through reproduce_paper (test_whole_paper_runs_tiny)
 ARTIFACTS = [p for paper in papers() if paper != WHOLE_PAPER for p in artifact_paths(paper)]
+
+#: the artifact whose smoke run stands for its plot kind in ``make test`` (the cheapest of the kind);
+#: every other artifact's smoke run is a ``full`` case (``make test-full``), its configs' names checked
+#: in ``make test`` by test_every_artifact_names_configs_that_exist and its figure, drawn from its
+#: committed CSV, by tests/test_figure_defects.py; the yan2022 kinds (estimates, trace) run in
+#: test_whole_paper_runs_tiny
+KIND_SMOKE = {"convergence": "ding2024_fig5", "field": "ding2024_fig2", "final": "benchmark_readings",
+              "heatmap": "benchmark_objective", "parameters": "yuan2018_table4", "recording": "real_table7",
+              "recording_spread": "real_benchmark", "speed": "benchmark_speed", "sphere": "yuan2018_fig4",
+              "tuning": "ding2024_ext_boundary"}
 
 
 def _consistent(row) -> bool:
@@ -72,8 +84,36 @@ def check_real_modes(out, summary):
 OWN_CHECKS = {"real_modes": check_real_modes}
 
 
+def _smoke(path):
+    """``path`` as a parameter: a ``full`` case unless it stands for its kind (:data:`KIND_SMOKE`)."""
+    return pytest.param(path, id=path.stem, marks=[] if path.stem in KIND_SMOKE.values() else [pytest.mark.full])
+
+
+def test_every_kind_has_a_smoke_run_in_make_test():
+    """A new plot kind needs its representative in :data:`KIND_SMOKE`; each one is of its kind."""
+    kind_of = {p.stem: load(p).kind for p in ARTIFACTS}
+    assert set(KIND_SMOKE) == set(kind_of.values())
+    assert all(kind_of[name] == kind for kind, name in KIND_SMOKE.items())
+
+
+def test_every_artifact_names_configs_that_exist():
+    """Each cell of every artifact chooses a scenario and an estimator that ``conf/`` has (the cheap half
+    of a smoke run: a misspelt name in an experiment file fails here, not at ``make reproduce``)."""
+    checked = 0
+    for paper in papers():
+        for path in artifact_paths(paper):
+            spec = load(path)
+            for cell in cells(spec):
+                for override in overrides_of(spec, cell):
+                    key, _, value = override.partition("=")
+                    if key in GROUPS:
+                        check_choice(key, value)
+                        checked += 1
+    assert checked > 500
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("path", ARTIFACTS, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", [_smoke(p) for p in ARTIFACTS])
 def test_artifact_runs_tiny(tmp_path, path):
     """Two seeds (one where the artifact itself has one: a deterministic fit of a recording)."""
     spec = load(path)

@@ -265,7 +265,7 @@ sys.exit(main(sys.argv[4:]))
 """
 
 
-@pytest.mark.slow
+@pytest.mark.full  # two reproductions in subprocesses (make test-full); the claim each relies on: test_only_one_process_claims_a_run
 def test_two_reproductions_on_one_cache_compute_each_run_once(clean, artifact, tmp_path):
     _, clean_files = clean
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "runs")}

@@ -19,16 +19,18 @@ from magexp.artifacts.plots.style import colorbar, drawn_from, plt
 from magexp.artifacts.spec import papers
 
 
-#: figures another branch of issue 18 redraws (real data has no truth to draw "estimate - truth"
-#: against): expected to fail on the CSVs committed here; remove an entry once its fix is merged
-REDRAWN_ELSEWHERE: dict[str, str] = {}  # artifact -> why its figure is expected to fail (none today)
+#: the figure that stands for its plot kind in ``make test`` (the quickest of the kind to lay out);
+#: every other figure is a ``full`` case (``make test-full``), and is checked whenever a reproduction
+#: draws it into ``results/`` (:func:`magexp.artifacts.reproduce.draw` prints each defect it finds)
+KIND_CHECK = {"convergence": "ding2024_fig3", "estimates": "yan2022_table_mockup", "field": "ding2024_fig6",
+              "final": "benchmark_noise", "heatmap": "benchmark_objective", "parameters": "yuan2018_table5",
+              "recording": "real_table7", "recording_spread": "real_benchmark", "speed": "benchmark_speed",
+              "sphere": "yuan2018_fig6", "trace": "yan2022_fig4", "tuning": "ding2024_ext_pso_tuning"}
 
 
 def committed():
     """Every artifact whose CSV is committed (recordings' artifacts: when they were drawn)."""
-    return [pytest.param(spec, id=spec.name,
-                         marks=[pytest.mark.xfail(reason=REDRAWN_ELSEWHERE[spec.name], strict=False)]
-                         if spec.name in REDRAWN_ELSEWHERE else [])
+    return [pytest.param(spec, id=spec.name, marks=[] if spec.name in KIND_CHECK.values() else [pytest.mark.full])
             for paper in papers() for spec in paper_specs(paper) if (RESULTS / paper / f"{spec.name}.csv").is_file()]
 
 
@@ -45,6 +47,37 @@ def test_figure_has_no_visible_defect(spec):
 def test_every_artifact_with_results_is_checked():
     names = {p.id for p in committed()}
     assert {"ding2024_table_rms", "yuan2018_fig8", "yan2022_table_sim", "benchmark_heatmap"} <= names
+    kind_of = {spec.name: spec.kind for paper in papers() for spec in paper_specs(paper)}
+    assert set(KIND_CHECK) == set(kind_of.values())  # a new kind needs its figure checked in make test
+    assert all(kind_of[name] == kind for kind, name in KIND_CHECK.items())
+
+
+def test_a_reproduction_into_results_names_each_defect_of_a_figure_it_draws(tmp_path, monkeypatch, capsys):
+    """The per-figure check where every figure is made: drawn into ``results/``, a figure's defects are
+    printed as warnings; drawn elsewhere (exploration, the smoke runs) it is not checked."""
+    from magexp.artifacts import reproduce
+    from magexp.artifacts.plots import memo, style
+
+    spec = next(s for s in paper_specs("yan2022") if s.name == "yan2022_table_mockup")
+    csv = RESULTS / spec.paper / f"{spec.name}.csv"
+    monkeypatch.setattr(reproduce, "RESULTS", tmp_path / "results")
+    monkeypatch.setattr(memo, "root", lambda: tmp_path / "figures-cache")
+    monkeypatch.setattr(style, "save", lambda fig, path: plt.close(fig) or [])
+    module = kind_module(spec.kind)
+    real_draw = module.draw
+
+    def with_a_defect(frame, spec):
+        fig = real_draw(frame, spec)
+        fig.add_axes((0.4, 0.4, 0.2, 0.2)).set_title("nothing here")
+        return fig
+
+    monkeypatch.setattr(module, "draw", with_a_defect)
+    for out in (tmp_path / "explore", tmp_path / "results" / "yan2022"):
+        out.mkdir(parents=True)
+        capsys.readouterr()
+        reproduce.draw(spec, csv, out, force=True)
+        warned = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning: figure yan2022_table_mockup")]
+        assert bool(warned) == (out.parent.name == "results") and (not warned or any("'nothing here'" in ln for ln in warned))
 
 
 # the checks themselves, on figures built to have (or not have) each defect

@@ -95,7 +95,7 @@ print(hashlib.sha256(nb.scalar_cost(w, o, c, s, u, ref).tobytes() + nb.vector_co
 """
 
 
-@pytest.mark.slow
+@pytest.mark.full  # two fresh processes (make test-full); the in-process bit tests: test_determinism.py
 def test_compiled_kernels_are_bitwise_reproducible_across_processes():
     """No fastmath, no threads: two fresh processes give the same bits (and so does this one)."""
     runs = [subprocess.run([sys.executable, "-c", SNIPPET], capture_output=True, text=True, check=True).stdout

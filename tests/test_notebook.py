@@ -13,6 +13,7 @@ nbclient = pytest.importorskip("nbclient")
 
 
 @pytest.mark.skipif(not (SHARED_DATA / "fxos8700_mag_readings.txt").is_file(), reason="shared recording absent")
+@pytest.mark.full  # the notebook in a kernel (make test-full); the API calls it makes: test_calibration_api.py
 def test_calibration_notebook_runs(tmp_path):
     nb = nbformat.read(NOTEBOOK, as_version=4)
     start = time.perf_counter()

@@ -34,6 +34,7 @@ def wait_gone(processes, seconds: float) -> list[int]:
     return alive(processes)
 
 
+@pytest.mark.full  # a whole reproduction killed (make test-full); the mechanism: test_the_portable_fallback_alone_ends_an_orphan
 def test_killing_a_reproductions_parent_ends_its_workers(tmp_path):
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}  # nothing cached: the workers compute
     parent = subprocess.Popen([sys.executable, "-m", "magexp.artifacts.reproduce", "ding2024", "--only", "ding2024_fig3",

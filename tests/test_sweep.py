@@ -61,7 +61,7 @@ def assert_same_sweeps(a, b):
             assert (a / job / name).read_bytes() == (b / job / name).read_bytes(), (job, name)
 
 
-@pytest.mark.slow
+@pytest.mark.full  # a sweep on a Dask cluster (make test-full); Dask's results in make test: test_executor.py's killed-worker test
 def test_local_processes_and_a_dask_cluster_give_the_same_sweep(tmp_path, cli, monkeypatch):
     """The same sweep on 2 local processes (in this process's command) and on a Dask LocalCluster of 2
     workers (a real command: its output is checked for cluster chatter), each with its own empty
@@ -101,7 +101,7 @@ main(sys.argv[1:])
 """
 
 
-@pytest.mark.slow
+@pytest.mark.full  # a killed sweep (make test-full); resuming from the cache after a kill: test_resume.py
 def test_killed_sweep_resumes_from_the_cache_with_the_same_table(tmp_path, cli, monkeypatch):
     cache_dir = tmp_path / "cache"
     first = subprocess.run([sys.executable, "-c", KILLED, *SWEEP, "hydra.launcher.jobs=1",

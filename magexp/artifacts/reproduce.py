@@ -75,10 +75,18 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     """The figure of ``spec`` (PNG and PDF twin) into ``out``, drawn from its CSV ``csv`` as written
     (the figure ``--redraw`` gives, to the byte); not drawn again when the figure cache
     (:mod:`magexp.artifacts.plots.memo`) says the files in ``out`` are that drawing already, unless ``force``.
-    Returns whether it drew."""
+    Returns whether it drew.
+
+    A figure drawn into the canonical ``results/`` is checked for the defects a reader sees
+    (:func:`magexp.artifacts.plots.check.defects`: text over text, an empty panel, a legend of raw
+    config names, ...); each one is printed as a ``warning:`` line to stderr. The check needs a
+    layout pass (about a third of a second a figure), so exploration folders and tests skip it;
+    ``tests/test_figure_defects.py`` checks one committed figure of each kind, and
+    ``make test-full`` all of them."""
     # lazy: matplotlib (memo, style) only here, where a figure is checked or drawn; importing this
     # module (--help, a refused command) never pays for it (493 ms CPU after this module, min of 5)
     from magexp.artifacts.plots import memo
+    from magexp.artifacts.plots.check import defects
     from magexp.artifacts.plots.style import save
 
     png = out / f"{spec.name}.png"
@@ -86,7 +94,11 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     key = memo.key(spec, Path(csv).read_bytes())
     if not force and memo.current(key, files):
         return False
-    save(kind_module(spec.kind).draw(pd.read_csv(csv), spec), png)
+    fig = kind_module(spec.kind).draw(pd.read_csv(csv), spec)
+    if Path(out).resolve().is_relative_to(RESULTS.resolve()):
+        for found in defects(fig):
+            print(f"warning: figure {spec.name}: {found}", file=sys.stderr)
+    save(fig, png)
     memo.record(key, files)
     return True
 

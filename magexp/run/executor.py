@@ -109,11 +109,22 @@ def watch_parent(parent: int, poll: float = PARENT_POLL) -> None:
     threading.Thread(target=look, name="magexp-watch-parent", daemon=True).start()
 
 
+#: seconds the parent waits for a stopped worker to clean up (its temporary files) before killing it
+STOP_GRACE = 10.0
+
+
+def _stopped(signum, frame) -> None:
+    """SIGTERM in a worker: leave through ``SystemExit``, so that every ``finally`` runs (an atomic
+    write being made removes its temporary file: :func:`magexp.core.atomic.atomic_path`)."""
+    raise SystemExit(128 + signum)
+
+
 def _init_worker(parent: int) -> None:
-    """A worker's start: it ends with its parent (:func:`watch_parent`) and leaves Ctrl-C to the
-    parent, which stops it (no traceback from every worker)."""
+    """A worker's start: it ends with its parent (:func:`watch_parent`), leaves Ctrl-C to the
+    parent, which stops it (no traceback from every worker), and cleans up when stopped (:func:`_stopped`)."""
     watch_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stopped)
 
 
 class _Deferred:
@@ -178,8 +189,14 @@ class LocalExecutor(InlineExecutor):
 
     def __exit__(self, kind, *exc) -> None:
         if kind is not None and self._pool is not None:  # interrupted or failed: stop the workers now
-            for process in list(getattr(self._pool, "_processes", {}).values()):
+            processes = list(getattr(self._pool, "_processes", {}).values())
+            for process in processes:
                 process.terminate()
+            deadline = time.monotonic() + STOP_GRACE
+            for process in processes:  # each one's cleanup done before the command says it stopped
+                process.join(max(0.0, deadline - time.monotonic()))
+                if process.is_alive():
+                    process.kill()
             self._pool.shutdown(wait=False, cancel_futures=True)
             self._pool = None
         self.close()
