@@ -119,6 +119,15 @@ def _stopped(signum, frame) -> None:
     raise SystemExit(128 + signum)
 
 
+def _in_worker(fn, *args):
+    """``fn(*args)`` in a worker process; stopped in the middle (:func:`_stopped`), the worker ends
+    once ``fn`` has unwound (the pool would otherwise catch the exit and wait for the next task)."""
+    try:
+        return fn(*args)
+    except SystemExit as stop:
+        os._exit(stop.code if isinstance(stop.code, int) else 1)
+
+
 def _init_worker(parent: int) -> None:
     """A worker's start: it ends with its parent (:func:`watch_parent`), leaves Ctrl-C to the
     parent, which stops it (no traceback from every worker), and cleans up when stopped (:func:`_stopped`)."""
@@ -177,7 +186,7 @@ class LocalExecutor(InlineExecutor):
         return self._pool
 
     def submit(self, fn, *args):
-        return self.pool.submit(fn, *args)
+        return self.pool.submit(_in_worker, fn, *args)
 
     def as_completed(self, futures: Iterable) -> Iterator:
         return futures_as_completed(list(futures))
