@@ -45,6 +45,7 @@ from __future__ import annotations
 import os
 import re
 import sys
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -56,6 +57,7 @@ from magexp.calibration.export import TARGETS as EXPORT_TARGETS
 from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
+from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
 from magexp.core.field_model import field_of_recording, place_of
@@ -490,6 +492,25 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
                        report=report)
 
 
+@contextmanager
+def numpy_kernels(on: bool):
+    """Within the block, numpy computes the residuals (``MAGEXP_NUMBA=0``) when ``on`` and the user
+    set no ``MAGEXP_NUMBA``; afterwards the process is as it was. A closed-form fit evaluates a few
+    residual vectors, which numpy computes in milliseconds: loading the compiled kernels for them
+    costs 0.75 s (numba import and cache load; cProfile, QMC5883L recording). Restoring matters when
+    the command runs inside a longer process (a notebook, the tests): it once left numba off there."""
+    if not on or "MAGEXP_NUMBA" in os.environ:
+        yield
+        return
+    os.environ["MAGEXP_NUMBA"] = "0"
+    kernels.compiled.cache_clear()
+    try:
+        yield
+    finally:
+        del os.environ["MAGEXP_NUMBA"]
+        kernels.compiled.cache_clear()
+
+
 def gyro_extras(model: str, problem, result) -> dict:
     """What the gyro-aided model reports beside ``W`` and ``o`` (nothing for the others): the field
     direction (rad) and the gyroscope's bias (deg/s) it fitted, and ``vector_rms``, the RMS of
@@ -677,19 +698,15 @@ def run(cfg) -> Calibration:
     if target is not None and str(target) not in EXPORT_TARGETS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    if not getattr(estimator, "iterative", True):
-        # a closed-form fit evaluates a few residual vectors, which numpy computes in milliseconds: loading
-        # the compiled kernels for them costs 0.75 s (numba import and cache load; cProfile, QMC5883L
-        # recording); this command's own process only, unless MAGEXP_NUMBA is set
-        os.environ.setdefault("MAGEXP_NUMBA", "0")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
     reference = data.get("reference_total")
     if reference is None:
         reference = reference_from_field(cfg, rec)
-    cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
-                              folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
-                              gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
+    with numpy_kernels(not getattr(estimator, "iterative", True)):
+        cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
+                                  folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
+                                  gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
     cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
     paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target))
     print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
