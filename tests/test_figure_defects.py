@@ -184,3 +184,37 @@ def test_a_calibration_figure_shows_a_successful_run_and_says_so():
     assert shown_seed(runs, 1) == (0, "failed")  # none succeeded: the first, named as failed
     runs.table = table.assign(succeeded=np.nan)
     assert shown_seed(runs, 0) == (0, "not judged")
+
+
+def test_scenario_names_are_readable_in_legends_and_ticks():
+    """yuan2018_table3 printed ``rdpso, yuan2018_mode1``: one readable name for every kind that labels
+    a scenario (the parameter tables and the recordings' figures)."""
+    from magexp.artifacts.plots.parameters import cell_label
+    from magexp.artifacts.plots.style import scenario_label
+
+    spec = OmegaConf.create({"plot": {}})
+    assert cell_label({"scenario": "yuan2018_mode1"}, "rdpso", spec) == "rdpso, mode 1"
+    assert [scenario_label(s) for s in ("ding2024_exp2", "yuan2018_adis16488", "real_hmc5883l_rotate_ccw_around_x",
+                                        "real_fxos8700")] == ["exp 2", "adis16488", "rotate ccw around x", "fxos8700"]
+
+
+def test_a_symlog_axis_from_zero_ticks_zero_then_the_decades_above_linthresh():
+    """yuan2018_ext_noise printed "0" and "10⁻²" side by side (a decade inside the linear part); the
+    legend names what a hue value means (``plot.names``), not its config name."""
+    from magexp.artifacts.plots.final import symlog_ticks
+
+    assert symlog_ticks(pd.Series([0, 0.05, 2.0]), 0.05) == [0.0, 0.1, 1.0]
+    assert symlog_ticks(pd.Series([0, 1e-12, 1e-6]), 1e-12) == [0.0] + [10.0 ** k for k in range(-12, -5)]
+    spec = OmegaConf.create({"title": "t", "kind": "final", "plot": {"x": "scenario.noise", "metric": "fg", "xscale": "symlog",
+                                                                     "linthresh": 0.05, "names": {"local": "eq 8 minimised"},
+                                                                     "targets": {"fg": 1.5}},
+                             "summarise": [{"quantity": "F_g", "metric": "fg"}]})
+    rows = [{"scenario.noise": a, "estimator": "local", "objective": "vector", "metric": "fg", "median": 1 + a,
+             "q25": 0.9 + a, "q75": 1.1 + a} for a in (0, 0.05, 0.1, 1, 2)]
+    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    ax = fig.axes[0]
+    assert list(ax.get_xticks()) == [0.0, 0.1, 1.0]
+    legends = [*fig.legends, *(a.get_legend() for a in fig.axes if a.get_legend() is not None)]
+    assert "eq 8 minimised" in [t.get_text() for legend in legends for t in legend.get_texts()]
+    assert defects(fig) == []
+    plt.close(fig)

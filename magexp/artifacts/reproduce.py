@@ -95,10 +95,10 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     if not force and memo.current(key, files):
         return False
     fig = kind_module(spec.kind).draw(pd.read_csv(csv), spec)
+    save(fig, png)  # first: the check's layout pass would move what is saved by a pixel
     if Path(out).resolve().is_relative_to(RESULTS.resolve()):
         for found in defects(fig):
             print(f"warning: figure {spec.name}: {found}", file=sys.stderr)
-    save(fig, png)
     memo.record(key, files)
     return True
 

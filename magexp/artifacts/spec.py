@@ -64,8 +64,8 @@ _COMMON = {"labels", "ylabel", "panels", "hue"}
 PLOT_KEYS = {
     "convergence": _COMMON,
     "field": _COMMON | {"quantity"},
-    "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog"},
-    "sweep": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog"},
+    "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names"},
+    "sweep": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names"},
     "sphere": _COMMON,
     "parameters": _COMMON,
     "trace": _COMMON | {"groups", "trace", "start"},

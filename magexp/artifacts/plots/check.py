@@ -23,6 +23,7 @@ import re
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import Collection
 from matplotlib.colors import to_hex
 from matplotlib.image import AxesImage
@@ -293,6 +294,9 @@ def legend_defects(fig) -> list[str]:
 
 
 def defects(fig) -> list[str]:
-    """Every defect of ``fig`` found by the checks of this module."""
+    """Every defect of ``fig`` found by the checks of this module (also of a figure already saved
+    and closed: it gets an Agg canvas to lay it out again)."""
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
     return (overlapping_text(fig) + overflowing_cells(fig) + empty_axes(fig) + colorbar_mismatch(fig)
             + raw_legends(fig) + legend_defects(fig))

@@ -3,8 +3,10 @@
 
 ``plot.x``: the swept grid key; ``plot.metric``: one runs column or a list of them (one row of
 panels each; default ``fun``); ``plot.hue``: one line per value (default ``estimator``; a list of keys:
-one line per combination); ``plot.panels``: one column of panels per value; ``plot.xscale``:
-``linear``, ``log`` or ``symlog`` (with ``plot.linthresh``, for sweeps that include 0);
+one line per combination; ``plot.names``: ``{value: legend text}``); ``plot.panels``: one column
+of panels per value; ``plot.xscale``:
+``linear``, ``log`` or ``symlog`` (with ``plot.linthresh``, for sweeps that include 0; its ticks are
+0 and the decades from ``linthresh`` up);
 ``plot.ylog`` (default true); ``plot.ylabel`` / ``plot.ylabels`` (per metric); ``plot.bound``: a
 bound column of the metric drawn per objective (e.g. ``offset_bound``); ``plot.targets``:
 ``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy). Against the objective ``fun`` the
@@ -18,8 +20,11 @@ of panels: its median and quartiles over seeds, with the paper's ratios and the 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import FixedLocator
 
 from magexp.artifacts.plan import quantiles
 from magexp.artifacts.claims import matches
@@ -115,6 +120,7 @@ def _lines(ax, sub, spec, x_key, hue_key, colours):
         y = line["median"].to_numpy(float)
         err = np.vstack([y - line.q25.to_numpy(float), line.q75.to_numpy(float) - y])
         name = label(spec, hue_key, hv) if hue_key not in ("estimator", "_hue") else str(hv)
+        name = dict(spec.plot.get("names", {}) or {}).get(str(hv), name)  # plot.names: a value's legend text
         colour = colours[hv]
         ax.errorbar(x, np.maximum(y, TINY), yerr=np.where(np.isfinite(err), np.maximum(err, 0), 0), marker="o",
                     ms=3.5, capsize=2, lw=1, label=name, color=colour)
@@ -210,8 +216,18 @@ def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series) -> None:
     ax.set_xscale(scale, **({"linthresh": float(spec.plot.get("linthresh", 1.0))} if scale == "symlog" else {}))
     if scale == "symlog" and (xs.astype(float) >= 0).all():
         ax.set_xlim(left=0)
+        ax.xaxis.set_major_locator(FixedLocator(symlog_ticks(xs, float(spec.plot.get("linthresh", 1.0)))))
     if spec.plot.get("ylog", True):
         ax.set_yscale("log")
+
+
+def symlog_ticks(xs: pd.Series, linthresh: float) -> list[float]:
+    """Major ticks of a ``symlog`` axis from 0: 0, then the decades from the first at or above
+    ``linthresh`` to the largest value's (a decade inside the linear part would be printed beside 0)."""
+    top = float(xs.astype(float).max())
+    first = math.ceil(math.log10(linthresh))
+    last = math.floor(math.log10(top)) if top > 0 else first
+    return [0.0] + [10.0 ** k for k in range(first, max(last, first) + 1)]
 
 
 def _label_panel(ax, spec, metric: str, n_metrics: int, panel_key, pv) -> None:

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.plan import quantiles
-from magexp.artifacts.plots.style import label as key_label
+from magexp.artifacts.plots.style import label as key_label, scenario_label
 from magexp.artifacts.plots.style import panels, shared_legend, tidy_log_axes
 from magexp.artifacts.summary import cell_overrides, parameter_values, reported_value
 
@@ -21,8 +21,9 @@ FIT = ("F_g", "fg")
 
 def cell_label(cell: dict, estimator: str, spec) -> str:
     """A short legend text of a cell: the estimator, then its other swept values (a scenario by its
-    name, other keys as ``name = value`` with ``plot.labels``)."""
-    rest = [str(v) if k == "scenario" else key_label(spec, k, v) for k, v in cell.items() if k != "estimator"]
+    name made readable by :func:`magexp.artifacts.plots.style.scenario_label`, other keys as
+    ``name = value`` with ``plot.labels``)."""
+    rest = [scenario_label(v) if k == "scenario" else key_label(spec, k, v) for k, v in cell.items() if k != "estimator"]
     return ", ".join([estimator] + rest)
 
 
@@ -55,7 +56,8 @@ def tabulate(runs) -> pd.DataFrame:
 
 
 def _fit_panel(ax, frame, labels, colours):
-    """F_g per cell (median, IQR over seeds; log axis) and the paper's F_g (open marker)."""
+    """F_g per cell (median, IQR over seeds; log axis) and the paper's F_g (open marker) where it gives one."""
+    papers = 0
     for j, lab in enumerate(labels):
         row = frame[(frame.label == lab) & (frame.parameter == FIT[0])]
         if row.empty:
@@ -65,12 +67,13 @@ def _fit_panel(ax, frame, labels, colours):
                     capsize=2, lw=1, color=colours[lab])
         if np.isfinite(r.paper_value):
             ax.plot([j], [r.paper_value], "o", mfc="none", ms=7, mew=1.2, color=colours[lab])
+            papers += 1
     ax.set_yscale("log")
     ax.set_xticks(range(len(labels)), [lab.replace("objective = ", "") for lab in labels], rotation=30, ha="right",
                   fontsize=7)
     ax.set_xlim(-0.6, len(labels) - 0.4)
     ax.set_ylabel("F_g, eq 8 at the estimate")
-    ax.set_title("F_g (open: paper's)", fontsize=8)
+    ax.set_title("F_g" + (" (open: paper's)" if papers else " (the paper gives none)"), fontsize=8)
 
 
 def _room(ax, values, linthresh: float):
@@ -120,6 +123,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     if fit:
         _fit_panel(axes[2], frame, labels, colours)
     shared_legend(fig, axes[:1], fontsize=7)
-    axes[1].set_title("open: paper's value - truth", fontsize=8)
+    if frame[frame.parameter != FIT[0]].paper_value.notna().any():
+        axes[1].set_title("open: paper's value - truth", fontsize=8)
     fig.suptitle(spec.title, fontsize=10)
     return tidy_log_axes(fig)

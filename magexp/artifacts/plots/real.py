@@ -32,7 +32,7 @@ import pandas as pd
 from matplotlib.lines import Line2D
 
 from magexp.artifacts.plan import quantiles
-from magexp.artifacts.plots.style import panels, tidy_log_axes
+from magexp.artifacts.plots.style import panels, scenario_label, tidy_log_axes
 from magexp.artifacts.summary import parameter_values
 
 #: per-run quantities of the ``recording`` table (one row per seed)
@@ -45,12 +45,6 @@ ESTIMATE_PANELS = (("matrix S (dimensionless)", ["S11", "S12", "S13", "S21", "S2
 #: a standard error larger than this many times the spread of the panel's estimates is drawn as
 #: "larger than the panel" (an open marker) instead of an error bar that would hide every other one
 SE_SHOWN = 3.0
-
-
-def short_name(scenario: str) -> str:
-    """``real_hmc5883l_rotate_ccw_around_x`` -> ``rotate ccw around x`` (the recording, readable)."""
-    name = str(scenario).removeprefix("real_").removeprefix("hmc5883l_")
-    return name.replace("_", " ")
 
 
 def canonical_sign(names: list[str], x: np.ndarray) -> np.ndarray:
@@ -75,7 +69,7 @@ def _hue_labels(runs) -> list[str]:
     one_scenario, one_estimator = firsts.scenario.nunique() == 1, firsts.estimator.nunique() == 1
     out = []
     for (_, r), cell in zip(firsts.iterrows(), runs.cells):
-        parts = ([] if one_scenario else [short_name(r.scenario)]) + ([] if one_estimator and not one_scenario
+        parts = ([] if one_scenario else [scenario_label(r.scenario)]) + ([] if one_estimator and not one_scenario
                                                                         else [r.estimator])
         own = [str(v) for k, v in cell.items() if k.startswith("estimator.")]
         out.append(", ".join(parts) + (f" ({', '.join(own)})" if own else ""))

@@ -19,8 +19,7 @@ import pandas as pd
 from matplotlib.lines import Line2D
 
 from magexp.artifacts.plan import quantiles
-from magexp.artifacts.plots.real import short_name
-from magexp.artifacts.plots.style import panels, tidy_log_axes
+from magexp.artifacts.plots.style import panels, scenario_label, tidy_log_axes
 
 COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_cells", "wall_time")
 
@@ -29,7 +28,7 @@ def tabulate(runs) -> pd.DataFrame:
     rows = []
     for ci in range(len(runs.cells)):
         sub = runs.table[runs.table.cell == ci]
-        row = {"case": short_name(sub.scenario.iloc[0]), "scenario": sub.scenario.iloc[0],
+        row = {"case": scenario_label(sub.scenario.iloc[0]), "scenario": sub.scenario.iloc[0],
                "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],
                "setting": sub.setting.iloc[0], "n_seeds": len(sub)}
         row.update({c: quantiles(sub[c])[0] if c in sub else np.nan for c in COLUMNS})

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -74,6 +75,19 @@ def label(spec, key: str, value=None) -> str:
     names = dict(spec.plot.get("labels", {}) or {})
     name = names.get(key, key.split(".")[-1].replace("_", " "))
     return name if value is None else f"{name} = {value}"
+
+
+def scenario_label(scenario: str) -> str:
+    """A scenario's name, readable in a legend or on a tick: without its paper's prefix, the rotation
+    mode or experiment numbered apart (``yuan2018_mode1`` -> ``mode 1``, ``ding2024_exp2`` -> ``exp 2``),
+    and a recording without ``real_`` and its sensor (``real_hmc5883l_rotate_ccw_around_x`` ->
+    ``rotate ccw around x``)."""
+    name = str(scenario)
+    if name.startswith("real_"):
+        name = name.removeprefix("real_").removeprefix("hmc5883l_")
+    elif (paper := re.match(r"[a-z]+\d{4}_", name)) is not None:
+        name = re.sub(r"(?<=[a-z])(?=\d{1,2}$)", " ", name[paper.end():])  # not a sensor's model number
+    return name.replace("_", " ")
 
 
 def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, axes=None):
