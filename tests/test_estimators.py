@@ -42,9 +42,11 @@ def test_estimator_contract(make_cfg, name):
     est = instantiate(make_cfg(f"estimator={name}").estimator, _convert_="all")
     assert est.name == name and isinstance(est, Estimator)
     sc = first_applicable(make_cfg, est)
-    for key in ("n_iterations", "n_particles", "n_steps", "max_nfev"):
+    # small budgets (a black-box budget: de's two generations of 10 x 12, as --tiny)
+    for key, cap in (("n_iterations", 30), ("n_particles", 30), ("n_steps", 30), ("max_nfev", 30),
+                     ("max_evaluations", 240)):
         if hasattr(est, key):
-            setattr(est, key, min(getattr(est, key), 30))
+            setattr(est, key, min(getattr(est, key), cap))
     prob = make_problem(sc.objective, sc.generate(rng=np.random.default_rng(0)), sc.search,
                         **getattr(sc, "problem_options", {}))
     assert isinstance(prob, Problem)

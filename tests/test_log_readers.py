@@ -49,7 +49,8 @@ def test_auto_detects_the_logs(tmp_path, name, key):
 
 
 def test_a_missing_extra_names_the_pip_install(monkeypatch, tmp_path, capsys):
-    monkeypatch.setitem(sys.modules, "pyulog", None)  # import pyulog fails
+    for module in ("pyulog", "pyulog.core"):  # import pyulog fails (even after an earlier test imported it)
+        monkeypatch.setitem(sys.modules, module, None)
     path = tmp_path / "flight.ulg"
     path.write_bytes(b"ULog\x01\x12\x35")
     with pytest.raises(MagexpError, match=r"pip install 'magexp\[ulog\]'") as err:

@@ -161,12 +161,13 @@ def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
     """``{cell: {key: value}}`` of a runs table: its ``setting`` pairs, estimator and objective."""
     if "cell" not in table or not len(table):
         return {}
-    firsts = table.drop_duplicates("cell")  # each cell's first row: its setting is the cell's
-    firsts = firsts[firsts.cell.notna()].sort_values("cell", kind="stable")
+    cell = table["cell"].to_numpy()
+    rows = np.flatnonzero(pd.notna(cell))
+    cells, first = np.unique(cell[rows], return_index=True)  # each cell's first row: its setting is the cell's
     named = [k for k in ("estimator", "objective", "scenario", "case") if k in table]
-    records = firsts[[c for c in ["setting", *named] if c in table]].to_dict("records")
+    records = table[[c for c in ["setting", *named] if c in table]].iloc[rows[first]].to_dict("records")
     out = {}
-    for ci, first in zip(firsts.cell.tolist(), records):
+    for ci, first in zip(cells.tolist(), records):
         pairs = dict(p.split("=", 1) for p in str(first.get("setting", "") or "").split(";") if "=" in p)
         for key in named:
             if key not in pairs:
@@ -175,25 +176,26 @@ def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
     return out
 
 
-def _restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict]:
-    """Apply the row filters of ``where`` and return the rest (the cell settings to match):
+def _restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict, dict]:
+    """Apply the row filters of ``where``; return the rows, the rest of ``where`` (the cell settings
+    to match) and the cells' settings (:func:`cell_settings`, the same for any of a cell's rows):
     ``seeds: n`` keeps the first ``n`` seeds (a conclusion at n and 2n seeds), ``succeeded: 1`` the
     successful runs (any runs column that is not a setting filters rows by its value)."""
     where = dict(where)
     if "seeds" in where:
         table = table[table.seed < int(where.pop("seeds"))]
-    keys = {k for s in cell_settings(table).values() for k in s}
+    settings = cell_settings(table)
+    keys = {k for s in settings.values() for k in s}
     for key in [k for k in where if k not in keys and k in table]:
         value = where.pop(key)
         table = table[[same(v, value) for v in table[key]]]
-    return table, where
+    return table, where, settings
 
 
 def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
     """The runs of every cell whose settings include every ``key: value`` of ``where`` (after the
     row filters of :func:`_restrict`)."""
-    table, where = _restrict(table, where)
-    settings = cell_settings(table)
+    table, where, settings = _restrict(table, where)
     keep = [ci for ci, s in settings.items() if matches(where, s)]
     return table[table.cell.isin(keep)]
 
@@ -366,9 +368,8 @@ def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
 
 def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
     """``kind: threshold | success``: ``stat`` of every selected cell against ``op value``."""
-    table, where = _restrict(table, claim.where)
-    cells = cell_settings(table)
-    chosen = [ci for ci, s in cells.items() if matches(where, s)]
+    table, where, cells = _restrict(table, claim.where)
+    chosen = [ci for ci, s in cells.items() if matches(where, s) and (table.cell == ci).any()]
     if not chosen:
         return Outcome(claim, False, f"no runs match {_name(claim.where)}")
     parts, ok = [], True
@@ -437,13 +438,13 @@ _FIELD = re.compile(r"\{(\w+):([^@{}]+)@([^:{}]*)(?::([^{}]+))?\}")
 
 def interpolate(text: str, table: pd.DataFrame) -> str:
     """Replace every ``{stat:metric@key=value,...:format}`` of ``text`` by its value on ``table``."""
+    settings = _setting_keys(table) if _FIELD.search(text) else set()  # the row filters are no setting
 
     def one(m: re.Match) -> str:
         stat, metric, where_text, fmt = m.group(1), m.group(2).strip(), m.group(3), m.group(4) or ".3g"
         if stat not in STATS:
             raise MagexpError(f"note field {m.group(0)!r}: stat {stat!r} is not allowed: choose one of {', '.join(STATS)}")
         where = dict(p.split("=", 1) for p in where_text.split(",") if "=" in p)
-        settings = _setting_keys(table)  # the row filters (runs columns that are no setting) are left out here
         if not len(select(table, {k: v for k, v in where.items() if k in settings or k not in table})):
             raise MagexpError(f"note field {m.group(0)!r}: its selection matches no cell of the runs: fix it")
         try:
