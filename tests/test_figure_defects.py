@@ -172,6 +172,26 @@ def test_final_draws_the_papers_values_and_ratios():
     plt.close(fig)
 
 
+def test_final_sets_log_axes_per_metric_and_draws_the_floors_over_the_lines():
+    """``plot.ylog: {rms_ratio: false}``: the RMS on a log axis, its ratio to the Cramér-Rao floor on a linear
+    one with the floor at 1; the floors are drawn over the lines that run on them (benchmark_noise)."""
+    spec = OmegaConf.create({"title": "t", "kind": "final",
+                             "plot": {"x": "scenario.noise", "hue": "estimator", "metric": ["fun", "rms_ratio"],
+                                      "ylog": {"rms_ratio": False}}})
+    rows = [{"scenario.noise": a, "estimator": e, "objective": "scalar", "metric": m, "noise_floor": 0.3 * a,
+             "rms_bound": 0.29 * a, "median": 0.3 * a if m == "fun" else 1.01, "q25": 0.29 * a if m == "fun" else 0.98,
+             "q75": 0.31 * a if m == "fun" else 1.03} for a in (2, 5, 10) for e in ("pso", "lm") for m in ("fun", "rms_ratio")]
+    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    rms, ratio = fig.axes[:2]
+    assert (rms.get_yscale(), ratio.get_yscale()) == ("log", "linear")
+    floor = [ln for ln in ratio.lines if ln.get_label() == "Cramér-Rao floor (Gaussian)"]
+    assert len(floor) == 1 and list(floor[0].get_ydata()) == [1.0, 1.0]
+    data_z = max(c.get_zorder() for c in rms.containers for c in [c.lines[0]])
+    assert all(ln.get_zorder() > data_z for ln in rms.lines if ln.get_label() in ("noise floor", "Cramér-Rao floor (Gaussian)"))
+    assert defects(fig) == []
+    plt.close(fig)
+
+
 def test_a_calibration_figure_shows_a_successful_run_and_says_so():
     from types import SimpleNamespace
 

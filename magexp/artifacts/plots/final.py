@@ -7,10 +7,12 @@ one line per combination; ``plot.names``: ``{value: legend text}``); ``plot.pane
 of panels per value; ``plot.xscale``:
 ``linear``, ``log`` or ``symlog`` (with ``plot.linthresh``, for sweeps that include 0; its ticks are
 0 and the decades from ``linthresh`` up);
-``plot.ylog`` (default true); ``plot.ylabel`` / ``plot.ylabels`` (per metric); ``plot.bound``: a
+``plot.ylog`` (default true; ``{metric: false}`` for a linear y axis of that metric's panels only);
+``plot.ylabel`` / ``plot.ylabels`` (per metric); ``plot.bound``: a
 bound column of the metric drawn per objective (e.g. ``offset_bound``); ``plot.targets``:
 ``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy). Against the objective ``fun`` the
-noise floor and the Cramér-Rao RMS floor are drawn. A cell where fewer than half the runs succeeded
+noise floor and the Cramér-Rao RMS floor are drawn (over the lines, which run close to them);
+against ``rms_ratio`` (the residual RMS over that floor) the floor is the line at 1. A cell where fewer than half the runs succeeded
 is ringed in red. A cell without a value is marked by a cross at the top of its panel (legend text:
 ``plot.labels.missing``, e.g. "never within 600 steps"). The paper's values (the artifact's
 ``reported:`` entries of the quantities summarised from the metric) are open diamonds in the colour of
@@ -21,6 +23,7 @@ of panels: its median and quartiles over seeds, with the paper's ratios and the 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
@@ -31,6 +34,14 @@ from magexp.artifacts.claims import matches
 from magexp.artifacts.plots.style import group_values, label, legend_entries, panels, paper_values, plt, shared_legend, tidy_log_axes
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
+CRB_FLOOR = "Cramér-Rao floor (Gaussian)"
+
+
+def ylog(spec, metric: str) -> bool:
+    """Whether ``metric``'s panels have a log y axis (``plot.ylog``: one flag, or ``{metric: flag}``,
+    default true)."""
+    flag = spec.plot.get("ylog", True)
+    return bool(flag.get(metric, True)) if isinstance(flag, Mapping) else bool(flag)
 
 
 def metric_list(spec) -> list[str]:
@@ -159,10 +170,12 @@ def _references(ax, sub, spec, x_key, metric):
             ax.plot(fl[x_key].astype(float), fl.bound.clip(lower=TINY), ["k--", "k-."][j % 2], lw=0.9, label=name)
     fl = sub.drop_duplicates(x_key).sort_values(x_key, key=lambda c: c.astype(float))
     if metric == "fun" and "noise_floor" in sub:
-        ax.plot(fl[x_key].astype(float), fl.noise_floor.clip(lower=TINY), "k--", lw=0.9, label="noise floor")
+        ax.plot(fl[x_key].astype(float), fl.noise_floor.clip(lower=TINY), "k--", lw=0.9, zorder=5, label="noise floor")
     if metric == "fun" and "rms_bound" in sub:
-        ax.plot(fl[x_key].astype(float), fl.rms_bound.clip(lower=TINY), ":", color="0.4", lw=1.1,
-                label="Cramér-Rao floor (Gaussian)")
+        ax.plot(fl[x_key].astype(float), fl.rms_bound.clip(lower=TINY), ":", color="0.4", lw=1.1, zorder=5,
+                label=CRB_FLOOR)
+    if metric == "rms_ratio":
+        ax.axhline(1.0, ls=":", color="0.4", lw=1.1, zorder=5, label=CRB_FLOOR)
     targets = dict(spec.plot.get("targets", {}) or {})
     if metric in targets:
         ax.axhline(float(targets[metric]), color="k", ls="--", lw=0.9, label="paper's stated level")
@@ -186,7 +199,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             placed = _lines(ax, sub, spec, x_key, hue_key, colours)
             _paper(ax, spec, placed, metric, colours)
             _references(ax, sub, spec, x_key, metric)
-            _scale_axes(ax, spec, sub, frame[x_key])
+            _scale_axes(ax, spec, sub, frame[x_key], ylog(spec, metric))
             _label_panel(ax, spec, metric, len(metrics), panel_key, pv)
     entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
     shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)
@@ -205,11 +218,11 @@ def _with_hue(frame: pd.DataFrame, spec, hue_key) -> tuple[pd.DataFrame, str]:
     return frame.assign(_hue=pd.concat([frame[first].astype(str), *named], axis=1).agg(", ".join, axis=1)), "_hue"
 
 
-def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series) -> None:
+def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None:
     """The panel's scales: room above the values for the crosses of missing ones, ``xscale`` (a
-    ``symlog`` axis of non-negative ``xs`` starts at 0) and a log y axis unless ``ylog: false``."""
+    ``symlog`` axis of non-negative ``xs`` starts at 0) and a log y axis if ``log_y``."""
     if sub["median"].isna().any():  # room above the values for the crosses of the missing ones
-        ax.set_yscale("log" if spec.plot.get("ylog", True) else "linear")
+        ax.set_yscale("log" if log_y else "linear")
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo, hi * (hi / lo) ** 0.25 if ax.get_yscale() == "log" else hi + 0.25 * (hi - lo))
     scale = spec.plot.get("xscale", "linear")
@@ -217,7 +230,7 @@ def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series) -> None:
     if scale == "symlog" and (xs.astype(float) >= 0).all():
         ax.set_xlim(left=0)
         ax.xaxis.set_major_locator(FixedLocator(symlog_ticks(xs, float(spec.plot.get("linthresh", 1.0)))))
-    if spec.plot.get("ylog", True):
+    if log_y:
         ax.set_yscale("log")
 
 
