@@ -63,10 +63,10 @@ MIN_SEEDS_COMPARED = 30
 _COMMON = {"labels", "ylabel", "panels", "hue"}
 PLOT_KEYS = {
     "convergence": _COMMON,
-    "field": _COMMON | {"quantity"},
+    "field": _COMMON | {"quantity", "unit"},
     "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names"},
     "sweep": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names"},
-    "sphere": _COMMON,
+    "sphere": _COMMON | {"unit"},
     "parameters": _COMMON,
     "trace": _COMMON | {"groups", "trace", "start"},
     "estimates": _COMMON | {"rows"},

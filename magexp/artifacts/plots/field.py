@@ -2,7 +2,8 @@
 ``sphere``, one kind): ``plot.quantity`` is ``magnitude`` (the total field per reading, before and
 after; Ding 2024 fig 2), ``error`` (the calibrated total field minus the reference; fig 6) or
 ``sphere`` (a 3-D scatter against the sphere of radius the median reference; Yuan 2018 figs 2-4).
-The default is ``sphere`` for the kind ``sphere``, else ``magnitude``.
+The default is ``sphere`` for the kind ``sphere``, else ``magnitude``. ``plot.unit``: the unit of the
+readings (their scenario's, default ``nT``), printed on the axes and with the RMS.
 
 The seed shown is the first whose run succeeded (the artifact's ``success:`` rule); where none
 did, or none is judged, the first seed. The CSV's ``seed`` and ``outcome`` columns and each panel's
@@ -11,8 +12,11 @@ title say which.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import FixedLocator
 
 from magexp.artifacts.plots.style import group_values, label, panels, plt
 
@@ -67,8 +71,13 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     return _draw_field(frame, spec, show_raw=quantity == "magnitude", axes=axes)
 
 
+def unit(spec) -> str:
+    """The unit of the readings drawn (``plot.unit``, default ``nT``)."""
+    return str(spec.plot.get("unit", "nT"))
+
+
 def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
-    key = spec.plot.get("panels")
+    key, u = spec.plot.get("panels"), unit(spec)
     values = group_values(frame, key)
     fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
     n = len(values)
@@ -81,19 +90,19 @@ def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
             ax.plot(sub.reading, sub.raw, ".", ms=2.5, color="0.5", label="before")
             ax.plot(sub.reading, sub.reference, "k--", lw=0.8, label="reference")
             ax.set_title(_lines(title, f"before calibration ({_which(sub)})"))
-            ax.set_ylabel("total field (nT)")
+            ax.set_ylabel(f"total field ({u})")
             ax = axes[n + i]
             ax.plot(sub.reading, sub.calibrated, ".", ms=2.5, label="after")
             ax.plot(sub.reading, sub.reference, "k--", lw=0.8)
-            ax.set_title(f"after (RMS {rms:.3g} nT)")
-            ax.set_ylabel("total field (nT)")
+            ax.set_title(f"after (RMS {rms:.3g} {u})")
+            ax.set_ylabel(f"total field ({u})")
             ax.ticklabel_format(axis="y", useOffset=True, style="plain")
         else:
             ax = axes[i]
             ax.plot(sub.reading, sub.error, ".", ms=2.5)
             ax.axhline(0, color="k", lw=0.8)
-            ax.set_title(_lines(title, f"RMS {rms:.3g} nT ({_which(sub)})"))
-            ax.set_ylabel("total-field error (nT)")
+            ax.set_title(_lines(title, f"RMS {rms:.3g} {u} ({_which(sub)})"))
+            ax.set_ylabel(f"total-field error ({u})")
         ax.set_xlabel("reading")
     fig.suptitle(spec.title, fontsize=10)
     return fig
@@ -101,7 +110,7 @@ def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
 
 def _draw_sphere(frame: pd.DataFrame, spec, axes=None):
     """One 3-D panel per value of ``panels``; ``axes`` (3-D Axes of the caller's figure) draws there."""
-    key = spec.plot.get("panels")
+    key, readings_unit = spec.plot.get("panels"), unit(spec)
     values = group_values(frame, key)
     fig, given = (plt.figure(figsize=(4.2 * len(values), 4.2)), None) if axes is None else panels(len(values), axes=axes)
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
@@ -115,11 +124,13 @@ def _draw_sphere(frame: pd.DataFrame, spec, axes=None):
         ax.scatter(sub.cal_x, sub.cal_y, sub.cal_z, s=8, color="C0", label="after")
         rms = float(np.sqrt(np.mean(sub.error**2)))
         title = "" if val is None else label(spec, key, val)
-        ax.set_title(_lines(title, f"{_which(sub)}: RMS of |B| - |H| after {rms:.3g}"), fontsize=8)
+        ax.set_title(_lines(title, f"{_which(sub)}: RMS of |B| - |H| after {rms:.3g} {readings_unit}"), fontsize=8)
         ax.set_box_aspect((1, 1, 1))
-        ax.set_xlabel("x")
-        ax.set_ylabel("y")
-        ax.set_zlabel("z")
+        step = 10 ** math.floor(math.log10(r)) if r > 0 else 1.0
+        ticks = [-(r // step) * step, 0.0, (r // step) * step] if r > 0 else [0.0]
+        for axis, name in zip((ax.xaxis, ax.yaxis, ax.zaxis), "xyz"):
+            axis.set_label_text(f"{name} ({readings_unit})")
+            axis.set_major_locator(FixedLocator(ticks))  # -R, 0, R (R: |H| rounded down): no labels meet at a corner
         if i == 0:
             ax.legend(loc="upper left", fontsize=7)
     fig.suptitle(spec.title, fontsize=10)

@@ -13,7 +13,8 @@ match ``plot.default`` (``{family: {key: value}}``; a family without one: no def
 
 The figure: one column of two panels per scenario. Where every family has at most
 :data:`FEW` settings, each setting has its own colour (legend: its label, e.g. ``boundary = clip``)
-in both panels: on top its median metric, below its success rate. With more settings, the top
+in both panels: on top its median metric, below its success rate (no legend where each family has one
+setting: the x axis names it already, e.g. an ablation's variants). With more settings, the top
 panel shows every setting's median as a dot, the best / median / worst ones with their own markers
 and the default as a star; below, the success rates of the median and best settings and the default
 (of the one setting where a family has only one).
@@ -83,15 +84,16 @@ def _success_rate(sub: pd.DataFrame) -> float:
     return _rate(sub["converged"]) if "converged" in sub else np.nan
 
 
-def _named(top, bottom, sub, families, colours):
-    """Few settings per family: one colour per setting label, in both panels."""
+def _named(top, bottom, sub, families, colours, legend: bool):
+    """Few settings per family: one colour per setting label, in both panels (named in the legend if
+    ``legend``)."""
     width = 0.8 / max(sub.groupby("family").size().max(), 1)
     for k, fam in enumerate(families):
         f = sub[sub.family == fam]
         for j, (_, r) in enumerate(f.iterrows()):
             x = k - width * (len(f) - 1) / 2 + width * j
             top.scatter([x], [max(r["median"], 1e-14)], s=90 if r.default else 30, color=colours[r.label], zorder=3,
-                        marker="*" if r.default else "o", label=r.label)
+                        marker="*" if r.default else "o", label=r.label if legend else "_nolegend_")
             top.plot([x, x], [max(r.q25, 1e-14), max(r.q75, 1e-14)], color=colours[r.label], lw=1)
             bottom.bar(x, float(r.success_rate), width=width * 0.9, color=colours[r.label])
 
@@ -131,7 +133,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         top, bottom = axes[j], axes[len(scenarios) + j]
         sub = frame[frame.scenario == sc]
         if few:
-            _named(top, bottom, sub, families, colours)
+            _named(top, bottom, sub, families, colours, legend=frame.groupby("family").label.nunique().max() > 1)
         else:
             _ranked(top, bottom, sub, families)
         for ax in (top, bottom):
