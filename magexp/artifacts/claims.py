@@ -165,7 +165,8 @@ def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
     rows = np.flatnonzero(pd.notna(cell))
     cells, first = np.unique(cell[rows], return_index=True)  # each cell's first row: its setting is the cell's
     named = [k for k in ("estimator", "objective", "scenario", "case") if k in table]
-    records = table[[c for c in ["setting", *named] if c in table]].iloc[rows[first]].to_dict("records")
+    columns = {c: table[c].to_numpy()[rows[first]].tolist() for c in ["setting", *named] if c in table}
+    records = [dict(zip(columns, values)) for values in zip(*columns.values())] if columns else [{}] * len(cells)
     out = {}
     for ci, first in zip(cells.tolist(), records):
         pairs = dict(p.split("=", 1) for p in str(first.get("setting", "") or "").split(";") if "=" in p)
