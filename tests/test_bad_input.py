@@ -402,16 +402,14 @@ def make_workdir(folder: Path) -> Path:
 
 def snapshot(*folders) -> dict:
     """Every file and folder under ``folders`` (links not followed) with its size and time."""
-    seen = {}
-    for folder in folders:
-        folder = Path(folder)
-        if not folder.exists():
-            continue
-        for top, dirs, files in os.walk(folder):
-            for name in dirs + files:
-                path = Path(top, name)
-                st = path.lstat()
-                seen[str(path)] = (st.st_size, st.st_mtime_ns)
+    seen, todo = {}, [str(f) for f in folders if os.path.isdir(f)]
+    while todo:
+        with os.scandir(todo.pop()) as entries:
+            for entry in entries:
+                st = entry.stat(follow_symlinks=False)
+                seen[entry.path] = (st.st_size, st.st_mtime_ns)
+                if entry.is_dir(follow_symlinks=False):
+                    todo.append(entry.path)
     seen["/"] = tuple(sorted(os.listdir("/")))
     return seen
 
