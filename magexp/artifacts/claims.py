@@ -370,7 +370,8 @@ def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
 def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
     """``kind: threshold | success``: ``stat`` of every selected cell against ``op value``."""
     table, where, cells = _restrict(table, claim.where)
-    chosen = [ci for ci, s in cells.items() if matches(where, s) and (table.cell == ci).any()]
+    present = set(table.cell.unique().tolist())  # cells with rows left after the row filters
+    chosen = [ci for ci, s in cells.items() if matches(where, s) and ci in present]
     if not chosen:
         return Outcome(claim, False, f"no runs match {_name(claim.where)}")
     parts, ok = [], True

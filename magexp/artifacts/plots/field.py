@@ -77,7 +77,7 @@ def unit(spec) -> str:
 
 
 def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
-    key, u = spec.plot.get("panels"), unit(spec)
+    key, readings_unit = spec.plot.get("panels"), unit(spec)
     values = group_values(frame, key)
     fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
     n = len(values)
@@ -90,19 +90,19 @@ def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
             ax.plot(sub.reading, sub.raw, ".", ms=2.5, color="0.5", label="before")
             ax.plot(sub.reading, sub.reference, "k--", lw=0.8, label="reference")
             ax.set_title(_lines(title, f"before calibration ({_which(sub)})"))
-            ax.set_ylabel(f"total field ({u})")
+            ax.set_ylabel(f"total field ({readings_unit})")
             ax = axes[n + i]
             ax.plot(sub.reading, sub.calibrated, ".", ms=2.5, label="after")
             ax.plot(sub.reading, sub.reference, "k--", lw=0.8)
-            ax.set_title(f"after (RMS {rms:.3g} {u})")
-            ax.set_ylabel(f"total field ({u})")
+            ax.set_title(f"after (RMS {rms:.3g} {readings_unit})")
+            ax.set_ylabel(f"total field ({readings_unit})")
             ax.ticklabel_format(axis="y", useOffset=True, style="plain")
         else:
             ax = axes[i]
             ax.plot(sub.reading, sub.error, ".", ms=2.5)
             ax.axhline(0, color="k", lw=0.8)
-            ax.set_title(_lines(title, f"RMS {rms:.3g} {u} ({_which(sub)})"))
-            ax.set_ylabel(f"total-field error ({u})")
+            ax.set_title(_lines(title, f"RMS {rms:.3g} {readings_unit} ({_which(sub)})"))
+            ax.set_ylabel(f"total-field error ({readings_unit})")
         ax.set_xlabel("reading")
     fig.suptitle(spec.title, fontsize=10)
     return fig
