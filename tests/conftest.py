@@ -76,6 +76,31 @@ def _isolated_cache(tmp_path, monkeypatch, _composed_configs):
     monkeypatch.setattr("magexp.paths.composed_configs", lambda: _composed_configs, raising=False)
 
 
+@pytest.fixture
+def figures_not_rendered(monkeypatch):
+    """Figures built (every artist, from their CSV) and not rendered: four fifths of a figure's cost is
+    matplotlib rendering text. Each PNG and PDF file holds a placeholder (the report links them);
+    returns ``{figure name: number of axes built}``. For the tests whose subject is not the drawing:
+    the rendering, the layout, the PDF twin and the defects of every figure are tests/test_figures.py's
+    and tests/test_figure_defects.py's, and the same CSV giving the same figure bytes is
+    tests/test_reproduce.py's."""
+    from magexp.artifacts.plots import style
+
+    built: dict[str, int] = {}
+
+    def save(fig, path):
+        try:
+            built[path.stem] = len(fig.axes)
+        finally:
+            style.plt.close(fig)
+        for twin in (path, path.with_suffix(".pdf")):
+            twin.write_bytes(b"built, not rendered")
+        return [path, path.with_suffix(".pdf")]
+
+    monkeypatch.setattr(style, "save", save)
+    return built
+
+
 LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's safe loader: 10x faster, the same objects
 
 

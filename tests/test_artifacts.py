@@ -33,9 +33,10 @@ def _consistent(row) -> bool:
     return not (row.verdict == "reproduced" and pd.notna(row.success_rate) and row.success_rate < 0.5)
 
 
-def check_artifact(spec, out, summary, seeds=2):
-    """The outputs of ``spec`` in ``out`` (its figure, table and runs) and its ``summary`` rows keep the contract."""
-    assert BUILT.get(spec.name, 0) >= 1 and (out / f"{spec.name}.png").exists()  # its figure, built
+def check_artifact(spec, out, summary, built, seeds=2):
+    """The outputs of ``spec`` in ``out`` (its figure, built: ``built``, table and runs) and its ``summary``
+    rows keep the contract."""
+    assert built.get(spec.name, 0) >= 1 and (out / f"{spec.name}.png").exists()  # its figure, built
     assert len(pd.read_csv(out / f"{spec.name}.csv")) > 0
     runs = pd.read_csv(out / f"{spec.name}_runs.csv")
     assert "succeeded" in runs and len(runs) == seeds * runs.cell.nunique()
@@ -47,29 +48,10 @@ def check_artifact(spec, out, summary, seeds=2):
         assert (summary.verdict != "n/a").any()
 
 
-#: figure name -> the number of axes of the figure built for it (by the stand-in for style.save below)
-BUILT: dict[str, int] = {}
-
-
 @pytest.fixture(autouse=True)
-def _figures_built_not_rendered(monkeypatch):
-    """The smoke runs build each figure from their tiny CSV (every artist of it) and do not render it
-    (four fifths of a figure's cost is matplotlib rendering text): the rendering, the layout, the PDF
-    twin and the defects of every figure are checked by tests/test_figures.py and
-    tests/test_figure_defects.py. The PNG and PDF files hold a placeholder (the report links them)."""
-    from magexp.artifacts.plots import style
-
-    def save(fig, path):
-        try:
-            BUILT[path.stem] = len(fig.axes)
-        finally:
-            style.plt.close(fig)
-        for twin in (path, path.with_suffix(".pdf")):
-            twin.write_bytes(b"built, not rendered")
-        return [path, path.with_suffix(".pdf")]
-
-    BUILT.clear()
-    monkeypatch.setattr(style, "save", save)
+def _built(figures_not_rendered):
+    """The smoke runs build each figure from their tiny CSV and do not render it (conftest.py)."""
+    return figures_not_rendered
 
 
 def check_real_modes(out, summary):
@@ -136,18 +118,18 @@ def test_the_readings_figures_print_their_scenarios_unit():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", [_smoke(p) for p in ARTIFACTS])
-def test_artifact_runs_tiny(tmp_path, path):
+def test_artifact_runs_tiny(tmp_path, path, _built):
     """Two seeds (one where the artifact itself has one: a deterministic fit of a recording)."""
     spec = load(path)
     seeds = min(spec.seeds, 2)
     counts = reproduce({spec.paper: [spec]}, tmp_path, seeds=seeds, jobs=1, tiny=True, log=lambda *_: None)
     out, summary = tmp_path / spec.paper, counts["paper summaries"][spec.paper]
-    check_artifact(spec, out, summary, seeds=seeds)
+    check_artifact(spec, out, summary, _built, seeds=seeds)
     OWN_CHECKS.get(spec.name, lambda *_: None)(out, summary)
 
 
 @pytest.mark.slow
-def test_whole_paper_runs_tiny(tmp_path):
+def test_whole_paper_runs_tiny(tmp_path, _built):
     """Every artifact of one paper in one reproduction (one pass over all their runs, one seed: the
     intervals over seeds are the other artifacts' smoke runs'), each keeping the contract; the paper's
     summary, and its report with the LaTeX (booktabs) twin of every table."""
@@ -159,7 +141,7 @@ def test_whole_paper_runs_tiny(tmp_path):
         "fig1", "fig3", "fig4", "fig_noise", "fig_tuning", "table_mockup", "table_sim")}
     assert set(summary.artifact) <= {spec.name for spec in specs}
     for spec in specs:
-        check_artifact(spec, tmp_path / WHOLE_PAPER, summary[summary.artifact == spec.name], seeds=1)
+        check_artifact(spec, tmp_path / WHOLE_PAPER, summary[summary.artifact == spec.name], _built, seeds=1)
     assert {"fit_rms", "be_rms", "k_error", "steps_to_ls"} <= set(summary.quantity)
     build(tmp_path)
     report, appendix = (tmp_path / "REPORT.md").read_text(), (tmp_path / "APPENDIX.md").read_text()
