@@ -95,16 +95,16 @@ def test_every_artifact_names_configs_that_exist():
 
 
 def test_the_readings_figures_print_their_scenarios_unit():
-    """A ``field`` or ``sphere`` figure labels its axes with ``plot.unit``: the unit of the readings its
-    scenarios generate (Yuan's mG, Ding's nT)."""
-    from magexp.artifacts.plots.field import unit
+    """A ``field``, ``sphere`` or ``parameters`` figure labels its axes with ``plot.unit``: the unit of the
+    readings its scenarios generate (Yuan's mG, Ding's nT)."""
+    from magexp.artifacts.plots.style import unit
     from magexp.core.seeding import run_generators, scenario_stream
     from magexp.run.compose import compose_config
     from magexp.run.runner import build as build_node
 
     units, checked = {}, set()  # scenario name -> the unit of its readings (one generation each)
     for spec in (load(p) for p in ARTIFACTS):
-        if spec.kind not in ("field", "sphere"):
+        if spec.kind not in ("field", "sphere", "parameters"):
             continue
         for cell in cells(spec):
             node = compose_config(overrides_of(spec, cell))["scenario"]
@@ -113,7 +113,7 @@ def test_the_readings_figures_print_their_scenarios_unit():
                 units[node.name] = build_node(node, "scenario").generate(rng=rng).unit
             assert units[node.name] == unit(spec), f"{spec.name}: readings in {units[node.name]}, figure says {unit(spec)}"
             checked.add(spec.name)
-    assert {"ding2024_fig2", "yuan2018_fig2"} <= checked
+    assert {"ding2024_fig2", "yuan2018_fig2", "yuan2018_table2", "yuan2018_table7"} <= checked
 
 
 @pytest.mark.slow

@@ -67,7 +67,7 @@ PLOT_KEYS = {
     "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names"},
     "sweep": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names"},
     "sphere": _COMMON | {"unit"},
-    "parameters": _COMMON,
+    "parameters": _COMMON | {"unit"},
     "trace": _COMMON | {"groups", "trace", "start"},
     "estimates": _COMMON | {"rows"},
     "heatmap": _COMMON | {"metric"},

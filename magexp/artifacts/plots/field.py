@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import FixedLocator
 
-from magexp.artifacts.plots.style import group_values, label, panels, plt
+from magexp.artifacts.plots.style import group_values, label, panels, plt, unit
 
 
 def tabulate(runs) -> pd.DataFrame:
@@ -69,11 +69,6 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     if quantity == "sphere":
         return _draw_sphere(frame, spec, axes=axes)
     return _draw_field(frame, spec, show_raw=quantity == "magnitude", axes=axes)
-
-
-def unit(spec) -> str:
-    """The unit of the readings drawn (``plot.unit``, default ``nT``)."""
-    return str(spec.plot.get("unit", "nT"))
 
 
 def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):

@@ -2,7 +2,9 @@
 failed ones counted in ``n_failed``), beside the truth and the paper's value (the tables of Yuan 2018).
 Where the runs measure F_g (eq 8 at the estimate, the ``fg`` column), one more row per cell holds
 its median and quartiles over every seed (parameter ``F_g``). The figure shows errors against the
-truth, and F_g in a third panel with the paper's F_g; the legend gives each cell's success rate."""
+truth, and F_g in a third panel with the paper's F_g; the legend gives each cell's success rate. The
+offsets and F_g are in the readings' unit (``plot.unit``, :func:`magexp.artifacts.plots.style.unit`);
+the matrix entries have none."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ import pandas as pd
 
 from magexp.artifacts.plan import quantiles
 from magexp.artifacts.plots.style import label as key_label, scenario_label
-from magexp.artifacts.plots.style import panels, shared_legend, tidy_log_axes
+from magexp.artifacts.plots.style import panels, shared_legend, tidy_log_axes, unit
 from magexp.artifacts.summary import cell_overrides, parameter_values, reported_value
 
 
@@ -55,7 +57,7 @@ def tabulate(runs) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _fit_panel(ax, frame, labels, colours):
+def _fit_panel(ax, frame, labels, colours, readings_unit: str):
     """F_g per cell (median, IQR over seeds; log axis) and the paper's F_g (open marker) where it gives one."""
     papers = 0
     for j, lab in enumerate(labels):
@@ -72,7 +74,7 @@ def _fit_panel(ax, frame, labels, colours):
     ax.set_xticks(range(len(labels)), [lab.replace("objective = ", "") for lab in labels], rotation=30, ha="right",
                   fontsize=7)
     ax.set_xlim(-0.6, len(labels) - 0.4)
-    ax.set_ylabel("F_g, eq 8 at the estimate")
+    ax.set_ylabel(f"F_g, eq 8 at the estimate ({readings_unit})")
     ax.set_title("F_g" + (" (open: paper's)" if papers else " (the paper gives none)"), fontsize=8)
 
 
@@ -119,9 +121,10 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         ax.set_yscale("symlog", linthresh=linthresh)
         _room(ax, np.concatenate([np.asarray(d, float) for d in drawn]) if drawn else [], linthresh)
         ax.set_xticks(np.arange(len(group)), group)
-        ax.set_ylabel("estimate - truth")
+    axes[0].set_ylabel("estimate - truth")
+    axes[1].set_ylabel(f"estimate - truth ({unit(spec)})")
     if fit:
-        _fit_panel(axes[2], frame, labels, colours)
+        _fit_panel(axes[2], frame, labels, colours, unit(spec))
     shared_legend(fig, axes[:1], fontsize=7)
     if frame[frame.parameter != FIT[0]].paper_value.notna().any():
         axes[1].set_title("open: paper's value - truth", fontsize=8)

@@ -77,6 +77,12 @@ def label(spec, key: str, value=None) -> str:
     return name if value is None else f"{name} = {value}"
 
 
+def unit(spec) -> str:
+    """The unit of the readings an artifact's scenarios generate (``plot.unit``, default ``nT``; Yuan's
+    scenarios: ``mG``), printed wherever a figure draws a field, an offset or an objective in it."""
+    return str(spec.plot.get("unit", "nT"))
+
+
 def scenario_label(scenario: str) -> str:
     """A scenario's name, readable in a legend or on a tick: without its paper's prefix, the rotation
     mode or experiment numbered apart (``yuan2018_mode1`` -> ``mode 1``, ``ding2024_exp2`` -> ``exp 2``),
