@@ -27,9 +27,10 @@ from magexp.run.compose import compose_config, yaml_value
 from magexp.run.executor import run_row
 from magexp.run.runner import build
 
-# tiny sizes (--tiny, the smoke tests); black-box budgets (cmaes, de) at least de's two generations of 10 x 12
+# tiny sizes (--tiny, the smoke tests): every iteration budget an estimator has; black-box budgets (cmaes, de)
+# at least de's two generations of 10 x 12; max_iter: local's BFGS and twostep's Gauss-Newton iterations
 SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50,
-          "estimator.max_evaluations": 240}
+          "estimator.max_evaluations": 240, "estimator.max_iter": 12}
 
 
 def load_spec(path: Path | str):
