@@ -198,19 +198,13 @@ def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypat
     shutil.copytree(mockup_reproduction.runs, cache.CACHE)  # its runs: the reproduction reads them
     name = "yan2022_table_mockup"
     png, pdf, csv = (out / "yan2022" / f"{name}.{ext}" for ext in ("png", "pdf", "csv"))
-    first = png.read_bytes(), pdf.read_bytes()
     drawn = []
-    real_save = style.save
-    monkeypatch.setattr(style, "save", lambda fig, path: drawn.append(path) or real_save(fig, path))
     argv = [*mockup_reproduction.args, "--out", str(out)]
     redraw = ["all", "--only", name, "--redraw", "--out", str(out)]
 
-    assert reproduce.main(argv) == 0 and len(drawn) == 1  # this figure cache is empty: drawn, the same bytes
-    assert "0 computed, 6 from the cache" in capsys.readouterr().out
-    assert (png.read_bytes(), pdf.read_bytes()) == first
-    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
-    # from here on a drawing writes what it drew in a few bytes (the same figure, the same bytes: that
-    # saving a figure gives the same bytes is test_figures.py's; here, only when the cache draws)
+    # a drawing writes what it drew in a few bytes (the same figure, the same bytes: that saving a figure
+    # gives the same bytes is test_figures.py's, that a redraw gives the reproduction's bytes
+    # test_redraw_rebuilds_figures_summary_and_report_without_a_run's; here, only when the cache draws)
     def save(fig, path):
         drawn.append(path)
         text = "\n".join(t.get_text() for t in fig.findobj(Text)).encode()  # its words
@@ -220,6 +214,11 @@ def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypat
         return [path, path.with_suffix(".pdf")]
 
     monkeypatch.setattr(style, "save", save)
+    assert reproduce.main(argv) == 0 and len(drawn) == 1  # this figure cache is empty: drawn
+    assert "0 computed, 6 from the cache" in capsys.readouterr().out
+    first = png.read_bytes(), pdf.read_bytes()
+    assert first[0] != mockup_reproduction.files[f"yan2022/{name}.png"]  # what this drawing wrote
+    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
     assert reproduce.main(redraw) == 0 and len(drawn) == 1  # unchanged: kept
     assert "redrew 0 figures (1 unchanged" in capsys.readouterr().out
     assert reproduce.main(argv) == 0 and len(drawn) == 1  # a cached reproduction keeps it too
