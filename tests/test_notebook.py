@@ -8,13 +8,14 @@ import pytest
 from magexp.paths import ROOT, SHARED_DATA
 
 NOTEBOOK = ROOT / "docs" / "calibrate.ipynb"
-nbformat = pytest.importorskip("nbformat")
-nbclient = pytest.importorskip("nbclient")
 
 
 @pytest.mark.skipif(not (SHARED_DATA / "fxos8700_mag_readings.txt").is_file(), reason="shared recording absent")
 @pytest.mark.full  # the notebook in a kernel (make test-full); the API calls it makes: test_calibration_api.py
 def test_calibration_notebook_runs(tmp_path):
+    # imported here, not at collection: Jupyter's client costs every make test worker 0.4 s to import
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
     nb = nbformat.read(NOTEBOOK, as_version=4)
     start = time.perf_counter()
     nbclient.NotebookClient(nb, timeout=60, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}).execute()
