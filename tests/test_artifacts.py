@@ -40,8 +40,8 @@ def _consistent(row) -> bool:
 
 
 def check_artifact(spec, out, summary, built, seeds=2):
-    """The outputs of ``spec`` in ``out`` (its figure, built: ``built``, table and runs) and its ``summary``
-    rows keep the contract."""
+    """The outputs of ``spec`` in ``out`` (its figure, built and not rendered: ``built`` is conftest.py's
+    ``figures_not_rendered``; its table and runs) and its ``summary`` rows keep the contract."""
     assert built.get(spec.name, 0) >= 1 and (out / f"{spec.name}.png").exists()  # its figure, built
     assert len(pd.read_csv(out / f"{spec.name}.csv")) > 0
     runs = pd.read_csv(out / f"{spec.name}_runs.csv")
@@ -52,12 +52,6 @@ def check_artifact(spec, out, summary, built, seeds=2):
     assert (summary.lo.dropna() <= summary.hi.dropna() + 1e-12).all()
     if spec.reported:
         assert (summary.verdict != "n/a").any()
-
-
-@pytest.fixture(autouse=True)
-def _built(figures_not_rendered):
-    """The smoke runs build each figure from their tiny CSV and do not render it (conftest.py)."""
-    return figures_not_rendered
 
 
 def check_real_modes(out, summary):
@@ -124,7 +118,7 @@ def test_the_readings_figures_print_their_scenarios_unit():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", [_smoke(p) for p in ARTIFACTS])
-def test_artifact_runs_tiny(tmp_path, path, _built):
+def test_artifact_runs_tiny(tmp_path, path, figures_not_rendered):
     """Two seeds (one where the artifact itself has one: a deterministic fit of a recording)."""
     spec = load(path)
     if spec.name in SMOKE_CASES:
@@ -133,12 +127,12 @@ def test_artifact_runs_tiny(tmp_path, path, _built):
     seeds = min(spec.seeds, 2)
     counts = reproduce({spec.paper: [spec]}, tmp_path, seeds=seeds, jobs=1, tiny=True, log=lambda *_: None)
     out, summary = tmp_path / spec.paper, counts["paper summaries"][spec.paper]
-    check_artifact(spec, out, summary, _built, seeds=seeds)
+    check_artifact(spec, out, summary, figures_not_rendered, seeds=seeds)
     OWN_CHECKS.get(spec.name, lambda *_: None)(out, summary)
 
 
 @pytest.mark.slow
-def test_whole_paper_runs_tiny(tmp_path, _built):
+def test_whole_paper_runs_tiny(tmp_path, figures_not_rendered):
     """Every artifact of one paper in one reproduction (one pass over all their runs, one seed: the
     intervals over seeds are the other artifacts' smoke runs'), each keeping the contract; the paper's
     summary, and its report with the LaTeX (booktabs) twin of every table."""
@@ -150,7 +144,8 @@ def test_whole_paper_runs_tiny(tmp_path, _built):
         "fig1", "fig3", "fig4", "fig_noise", "fig_tuning", "table_mockup", "table_sim")}
     assert set(summary.artifact) <= {spec.name for spec in specs}
     for spec in specs:
-        check_artifact(spec, tmp_path / WHOLE_PAPER, summary[summary.artifact == spec.name], _built, seeds=1)
+        check_artifact(spec, tmp_path / WHOLE_PAPER, summary[summary.artifact == spec.name], figures_not_rendered,
+                       seeds=1)
     assert {"fit_rms", "be_rms", "k_error", "steps_to_ls"} <= set(summary.quantity)
     build(tmp_path)
     report, appendix = (tmp_path / "REPORT.md").read_text(), (tmp_path / "APPENDIX.md").read_text()
