@@ -4,6 +4,7 @@ command line run in-process (the process boundary itself is tested in ``test_cli
 from __future__ import annotations
 
 import functools
+import itertools
 import subprocess
 from pathlib import Path
 
@@ -67,12 +68,27 @@ def _composed_configs(tmp_path_factory):
     return _session_root(tmp_path_factory) / "composed-configs"
 
 
+@pytest.fixture(scope="session")
+def _caches(tmp_path_factory):
+    """The folder of the run caches of the tests that have no ``tmp_path`` of their own."""
+    return tmp_path_factory.getbasetemp() / "caches"
+
+
+_TESTS = itertools.count()
+
+
 @pytest.fixture(autouse=True)
-def _isolated_cache(tmp_path, monkeypatch, _composed_configs):
-    """Each test gets its own run cache, so nothing is read from or left in .cache/; composed configs
-    come from the session's own cache (the tests of that cache use fresh processes: test_configs.py)."""
-    monkeypatch.setattr("magexp.paths.CACHE", tmp_path / "cache")
-    monkeypatch.setattr("magexp.run.cache.CACHE", tmp_path / "cache")
+def _isolated_cache(request, monkeypatch, _composed_configs, _caches):
+    """Each test gets its own run cache, so nothing is read from or left in .cache/: ``tmp_path / "cache"``
+    for a test with a ``tmp_path``, else a folder of its own that the cache creates if it writes (most
+    tests never do: a ``tmp_path`` for each would cost a folder per test). Composed configs come from the
+    session's own cache (the tests of that cache use fresh processes: test_configs.py)."""
+    if "tmp_path" in request.fixturenames:
+        folder = request.getfixturevalue("tmp_path") / "cache"
+    else:
+        folder = _caches / str(next(_TESTS)) / "cache"  # what lives beside it (the figure cache) its own too
+    monkeypatch.setattr("magexp.paths.CACHE", folder)
+    monkeypatch.setattr("magexp.run.cache.CACHE", folder)
     monkeypatch.setattr("magexp.paths.composed_configs", lambda: _composed_configs, raising=False)
 
 
