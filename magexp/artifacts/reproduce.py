@@ -28,7 +28,7 @@ import pandas as pd
 
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact, rebuild_problem
 from magexp.artifacts.plots import VECTOR, kind_module
-from magexp.artifacts.report import build, write_csv
+from magexp.artifacts.report import build, read_runs, write_csv
 from magexp.artifacts.spec import papers
 from magexp.artifacts.summary import COLUMNS, summarise
 from magexp import paths
@@ -161,7 +161,7 @@ def _problem_facts(overrides: list[list[str]], table: pd.DataFrame):
 def summarise_stored(spec, root: Path) -> pd.DataFrame:
     """The summary rows of ``spec`` from its runs CSV under ``root`` (``--redraw``: no run)."""
     plan = plan_artifact(spec)
-    table = pd.read_csv(root / spec.paper / f"{spec.name}_runs.csv")
+    table = read_runs(root / spec.paper / f"{spec.name}_runs.csv")
     return summarise(stored_runs(spec, table, plan.cells, plan.overrides, _problem_facts(plan.overrides, table)))
 
 
@@ -176,7 +176,7 @@ def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     runs_csv = out / f"{runs.spec.name}_runs.csv"
     write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), runs_csv)
     draw(runs.spec, path, out, force=force)
-    table = pd.read_csv(runs_csv)
+    table = read_runs(runs_csv)
 
     def facts(ci: int):
         first = runs.outputs[(ci, int(table[table.cell == ci].seed.min()))]
