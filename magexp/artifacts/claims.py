@@ -374,14 +374,14 @@ def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome
     chosen = [ci for ci, s in cells.items() if matches(where, s) and ci in present]
     if not chosen:
         return Outcome(claim, False, f"no runs match {_name(claim.where)}")
-    parts, ok = [], True
+    parts, stats, ok = [], [], True
     for ci in chosen:
         v = values(table[table.cell == ci], claim.metric, stat)
         s, _, text = _describe({k: cells[ci][k] for k in cells[ci] if k not in where} or where, v, stat)
         ok &= bool(np.isfinite(s) and OPS[claim.op](s, float(claim.value)))
-        parts.append(text)
+        parts.append(text), stats.append(s)
     evidence = f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts)
-    got = ", ".join(_short_value(statistic(values(table[table.cell == ci], claim.metric, stat), stat)) for ci in chosen)
+    got = ", ".join(_short_value(s) for s in stats)
     return Outcome(claim, ok, evidence, short=f"required {stat} {claim.op} {claim.value:g}; "
                    f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {_shorten(got, 200)}")
 

@@ -121,10 +121,11 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         ax.set_yscale("symlog", linthresh=linthresh)
         _room(ax, np.concatenate([np.asarray(d, float) for d in drawn]) if drawn else [], linthresh)
         ax.set_xticks(np.arange(len(group)), group)
+    readings_unit = unit(spec)
     axes[0].set_ylabel("estimate - truth")
-    axes[1].set_ylabel(f"estimate - truth ({unit(spec)})")
+    axes[1].set_ylabel(f"estimate - truth ({readings_unit})")
     if fit:
-        _fit_panel(axes[2], frame, labels, colours, unit(spec))
+        _fit_panel(axes[2], frame, labels, colours, readings_unit)
     shared_legend(fig, axes[:1], fontsize=7)
     if frame[frame.parameter != FIT[0]].paper_value.notna().any():
         axes[1].set_title("open: paper's value - truth", fontsize=8)
