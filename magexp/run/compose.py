@@ -20,13 +20,14 @@ import hashlib
 import importlib
 import importlib.util
 import json
+import pickle
 import re
 import sys
 from dataclasses import dataclass, field as _field
 from pathlib import Path
 from typing import Any, List, Optional
 
-from omegaconf import MISSING, DictConfig, OmegaConf
+from omegaconf import MISSING, DictConfig, OmegaConf, flag_override
 
 from magexp import paths
 from magexp.errors import MagexpError
@@ -292,8 +293,8 @@ def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *
         raise MagexpError(f"bad override: {detail}") from None
 
 
-_SKELETONS: dict = {}  # config name -> the composed primary config without its group nodes
-_NODES: dict = {}  # (config name, group, choice) -> that choice's composed node
+_SKELETONS: dict = {}  # config name -> the pickled primary config without its group nodes
+_NODES: dict = {}  # (config name, group, choice) -> that choice's composed node, pickled
 _SEEN: set = set()  # config names composed at least once in this process
 
 
@@ -303,17 +304,21 @@ def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
     A process's first config is Hydra's compose itself (a one-run command composes once and
     copies nothing). From the second on, every new choice is composed by Hydra once and kept
     (the primary config's skeleton and each group's node); configs of known choices are
-    then grafted from copies without Hydra.
+    then grafted without Hydra from fresh copies of the pieces. The pieces are kept as this
+    process's own pickles (never written anywhere): a copy is then an unpickling, 1.3 ms for a
+    whole run config where ``copy.deepcopy`` of its pieces took 5 ms (OmegaConf copies node by
+    node in Python), and the grafted nodes, fresh already, are set without OmegaConf's copy.
     """
     for group, choice in choices.items():
         check_choice(group, choice)
     wanted = {g: choices.get(g) or _default_choice(config_name, g) for g in GROUPS}
     if config_name in _SKELETONS and all((config_name, g, c) in _NODES for g, c in wanted.items() if c):
-        cfg = copy.deepcopy(_SKELETONS[config_name])
+        cfg = pickle.loads(_SKELETONS[config_name])
         OmegaConf.set_struct(cfg, False)
-        for group, choice in wanted.items():
-            if choice:
-                cfg[group] = _NODES[(config_name, group, choice)]  # OmegaConf assigns a copy
+        with flag_override(cfg, "no_deepcopy_set_nodes", True):
+            for group, choice in wanted.items():
+                if choice:
+                    cfg[group] = pickle.loads(_NODES[(config_name, group, choice)])
         OmegaConf.set_struct(cfg, True)
         return cfg
     cfg = _stored_compose(config_name, choices)
@@ -322,10 +327,10 @@ def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
         OmegaConf.set_struct(kept, False)
         for group, choice in wanted.items():
             if choice and group in kept:
-                _NODES.setdefault((config_name, group, choice), kept[group])
+                _NODES.setdefault((config_name, group, choice), pickle.dumps(kept[group]))
                 del kept[group]
         OmegaConf.set_struct(kept, True)
-        _SKELETONS.setdefault(config_name, kept)
+        _SKELETONS.setdefault(config_name, pickle.dumps(kept))
     _SEEN.add(config_name)
     return cfg
 
