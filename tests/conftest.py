@@ -4,6 +4,7 @@ command line run in-process (the process boundary itself is tested in ``test_cli
 from __future__ import annotations
 
 import functools
+import gc
 import itertools
 import subprocess
 from pathlib import Path
@@ -154,6 +155,16 @@ def pytest_collection_modifyitems(config, items):
             if missing:
                 item.add_marker(pytest.mark.skip(reason=f"{missing} is not in the recordings folder (MAGEXP_DATA)"))
                 break
+
+
+def pytest_collection_finish(session):
+    """The objects every test shares (the modules imported, the items collected) frozen out of the garbage
+    collector's passes, and its youngest generation collected every 20 000 allocations instead of 700: the
+    collector took 5.5 s of the suite's CPU time in two processes, 2.4 s so (measured with ``gc.callbacks``).
+    Only when collection is due changes: what a test keeps alive or frees is the same."""
+    gc.collect()
+    gc.freeze()
+    gc.set_threshold(20_000, 10, 10)
 
 
 #: a small whole reproduction (6 runs of the mock-up: ls, kf and the paper's values, 2 seeds; 2 tasks)
