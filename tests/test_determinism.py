@@ -4,9 +4,10 @@ any memory layout and any process history.
 
 The source of the churn: on a total-field problem the 12 parameters ``[vec W, o]`` have an exact
 rotation valley, so the Jacobian MINPACK factorises is exactly rank-deficient, and with bit-identical
-residuals at every evaluation its iterates still depend on the contents of memory left by earlier
-work (:mod:`magexp.estimators.lm`). The residuals themselves do not depend on the address of their
-inputs (checked here too).
+residuals at every evaluation its iterates could still depend on the contents of memory left by earlier
+work (:mod:`magexp.estimators.lm`; seen in each of 18 processes when the gauge was fixed, in one of four
+processes tried since). The residuals themselves do not depend on the address of their inputs (checked
+here too).
 """
 
 import dataclasses
@@ -88,9 +89,9 @@ def dataset_with(dataset, readings):
     return dataclasses.replace(dataset, readings=readings)
 
 
-#: the 12-parameter fit of one cell, 12 times, each after memory was left holding 0, NaN, 1e300 or -1 in
-#: blocks of other sizes, in a fresh process (which blocks MINPACK is handed, and where, also depends on
-#: the address layout: one try may repeat another, twelve have not all agreed in 18 processes)
+#: the fit of one cell, 12 times, each after memory was left holding 0, NaN, 1e300 or -1 in blocks of
+#: other sizes, in a fresh process (which blocks MINPACK is handed, and where, also depends on the address
+#: layout); prints each fit's parameters as hex
 CHURN = """
 import numpy as np
 from magexp.run.compose import compose_config
@@ -107,16 +108,17 @@ for k, fill in enumerate((0.0, np.nan, 1e300, -1.0) * 3):
     keep.append(np.empty(17 * k + 1))  # and shift what the allocator hands out next
     del blocks
     problem = make_problem("scalar", dataset, scenario.search, **getattr(scenario, "problem_options", {}))
-    print(LevenbergMarquardt(gauge="free").fit(problem).x.tobytes().hex())
-""" % PARTIAL_ARC
+    print(LevenbergMarquardt(max_nfev=%d).fit(problem).x.tobytes().hex())
+""" % (PARTIAL_ARC, BUDGET)
 
 
-@pytest.mark.full  # end to end in subprocesses (make test-full); the in-process bit test stays in make test
-def test_the_free_gauge_fit_depends_on_process_memory():
-    """The churn itself: the 12-parameter fit, bit-identical data, different leftovers in memory."""
+@pytest.mark.full  # end to end in a subprocess (make test-full); the in-process bit test stays in make test
+def test_the_gauge_fixed_fit_gives_one_answer_under_every_memory_churn_of_a_fresh_process():
+    """The churn that moved the 12-parameter fit (in every process once, in some processes now: an
+    assertion that it still does would fail at random), and the gauge-fixed fit's answer through it: the
+    same bits twelve times, in a process that has not run a test before."""
     out = subprocess.run([sys.executable, "-c", CHURN], check=True, capture_output=True, text=True).stdout.split()
-    assert len(out) == 12
-    assert len(set(out)) > 1, "scipy's MINPACK no longer depends on memory contents: the gauge may be free again"
+    assert len(out) == 12 and len(set(out)) == 1
 
 
 @pytest.mark.slow
@@ -126,7 +128,7 @@ def test_the_gauge_fixed_fit_flags_the_undetermined_offset_and_gives_the_same_bi
     budget: :data:`BUDGET` here, about 4,000 residual evaluations, a quarter of the configured lm's and
     the same iterates up to there); and again after memory was left holding NaN, then 1e300, and with the
     readings 8 and 24 bytes past a 64-byte boundary, it gives the same bits (the free-gauge fit differs in
-    such states: test_the_free_gauge_fit_depends_on_process_memory)."""
+    such states in some processes)."""
     dataset, scenario = partial_arc
     first = fit(dataset, scenario, max_nfev=BUDGET)
     assert first.nfev > 2000

@@ -8,10 +8,10 @@ problem the residuals are ``|W(r_i - o)| - B_a``: the maximum-likelihood fit und
 ``Q`` (Ding 2024, eq 17 sees only ``W^T W`` and ``o``), so over the 12 entries of ``[vec W, o]``
 the residuals have an exact 3-dimensional valley and their Jacobian has three exactly dependent
 columns. MINPACK's pivoted QR then works on an exactly rank-deficient matrix, and where along the
-valley it ends depends on more than the data: with bit-identical residuals at every evaluation,
-its iterates differ in the last bits with the contents of memory left by earlier work in the
-process, and the difference grows along the valley to the 3rd-4th significant digit of ``W`` (and
-of ``o`` when the data also leave the offset weakly determined). On a total-field problem this
+valley it ends can depend on more than the data: with bit-identical residuals at every evaluation,
+its iterates have been seen to differ in the last bits with the contents of memory left by earlier
+work in the process, and the difference to grow along the valley to the 3rd-4th significant digit of
+``W`` (and of ``o`` when the data also leave the offset weakly determined). On a total-field problem this
 estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits the 9 parameters
 
 .. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad M = M^T
@@ -22,8 +22,8 @@ estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits
 of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form ``magexp calibrate`` reports),
 so the fit returns that unique member of the valley: the same numbers in every process, and
 parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
-parameters as before (kept to compare; ``tests/test_determinism.py`` shows its fit changing with
-the memory a process leaves behind, and the gauge-fixed one not).
+parameters as before (kept to compare; ``tests/test_determinism.py`` churns the memory of a fresh
+process and checks that the gauge-fixed fit gives the same bits through it).
 """
 
 from __future__ import annotations
