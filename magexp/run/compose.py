@@ -327,8 +327,10 @@ def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
         OmegaConf.set_struct(kept, False)
         for group, choice in wanted.items():
             if choice and group in kept:
-                _NODES.setdefault((config_name, group, choice), pickle.dumps(kept[group]))
+                node = kept[group]
                 del kept[group]
+                node._set_parent(None)  # pickled alone: a node keeps its parent, the whole config, after del
+                _NODES.setdefault((config_name, group, choice), pickle.dumps(node))
         OmegaConf.set_struct(kept, True)
         _SKELETONS.setdefault(config_name, pickle.dumps(kept))
     _SEEN.add(config_name)
