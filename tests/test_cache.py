@@ -1,6 +1,7 @@
 """The run cache proves what it returns and runs no code: entries swapped between keys, crafted
 entries (a pickle that would run a shell command, forged entries of the current format), a cache
-that cannot be written, entries of another user, and two reproductions sharing one cache."""
+that cannot be written, entries of another user, and two reproductions sharing one cache; and what a
+run's key holds: the code of the classes it builds and what they import, and the core every run executes."""
 
 import hashlib
 import os
@@ -12,11 +13,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
 from magexp.run import cache
 
 from magexp.artifacts import reproduce
 from magexp.estimators.result import RunOutput
+from magexp.paths import ROOT
+from magexp.run.compose import compose_config
 
 RUNS = 6
 
@@ -299,3 +303,139 @@ def test_an_empty_cache_variable_means_the_default_folder():
     env = {**os.environ, "MAGEXP_CACHE": ""}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout.split()
     assert out[0] != "." and not out[1].startswith("-") and out[0].endswith("runs"), out
+
+
+# ---------------------------------------------------------------------------------------------
+# what a run's key holds: the code of the classes it builds and what they import, and the core
+
+#: runs keyed in these tests, each composed once: (scenario, estimator)
+KEYED = [("yuan2018_mode1", e) for e in ("lm", "local", "pso", "ipso", "kf", "ekf", "ls")] + [
+    ("ding2024_exp1", "pso"), ("ding2024_exp1", "ellipsoid"), ("yan2022_sim", "kf")]
+
+
+@pytest.fixture(scope="module")
+def keyed() -> dict:
+    """``{(scenario, estimator): resolved config}`` of :data:`KEYED`."""
+    return {(s, e): OmegaConf.to_container(compose_config([f"scenario={s}", f"estimator={e}"]), resolve=True)
+            for s, e in KEYED}
+
+
+@pytest.fixture
+def sources(tmp_path, monkeypatch):
+    """A copy of magexp's sources that run keys are worked out from (``cache.ROOT``), to edit; what
+    the process found of the sources is forgotten before and after."""
+    copy = tmp_path / "repo"
+    shutil.copytree(ROOT / "magexp", copy / "magexp", ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(cache, "ROOT", copy)
+    cache.forget_code()
+    yield copy
+    cache.forget_code()
+
+
+def keys_of(configs: dict) -> dict:
+    return dict(zip(configs, cache.run_keys(list(configs.values()))))
+
+
+def edit(path: Path, old: str, new: str) -> None:
+    """Replace ``old`` (present once) by ``new`` in ``path``; this process then forgets what it read."""
+    text = path.read_text()
+    assert text.count(old) == 1, old
+    path.write_text(text.replace(old, new))
+    cache.forget_code()
+
+
+def changed(before: dict, after: dict) -> set:
+    return {run for run in before if before[run] != after[run]}
+
+
+def test_a_runs_code_is_the_closure_of_what_it_builds_and_of_the_core(keyed):
+    files = set(cache.code_files(cache.run_targets(keyed["ding2024_exp1", "pso"])))
+    for needed in ("magexp.run.runner", "magexp.core.metrics", "magexp.core.bounds", "magexp.core.seeding", "magexp",
+                   "magexp.scenarios.ding", "magexp.problems.scalar", "magexp.estimators.swarm",
+                   "magexp.estimators.velocity", "magexp.estimators.schedules", "magexp.estimators.initialisers"):
+        assert needed in files, needed  # the core, the scenario, its objective's problem, the nested strategies
+    for other in ("magexp.artifacts.reproduce", "magexp.artifacts.report", "magexp.run.executor", "magexp.run.cache",
+                  "magexp.artifacts.plots.style", "magexp.estimators.lm", "magexp.estimators.kalman",
+                  "magexp.scenarios.yuan", "magexp.problems.vector", "magexp.problems.ship"):
+        assert other not in files, other  # downstream code, and other runs' classes
+    # a ship scenario's config names no objective: its class fixes it (``objective = "ship"``)
+    assert [t for t in cache.run_targets(keyed["yan2022_sim", "kf"]) if t.startswith("magexp.problems.")] == [
+        "magexp.problems.ship.ShipMagnetization"]
+
+
+def test_an_unused_module_changes_no_key_and_a_plot_edit_none_either(sources, keyed):
+    before = keys_of(keyed)
+    (sources / "magexp/estimators/toy.py").write_text('"""A toy."""\n\n\nclass Toy:\n    """Empty."""\n')
+    with (sources / "magexp/artifacts/plots/convergence.py").open("a") as fh:
+        fh.write("\n# a new label\n")
+    cache.forget_code()
+    assert keys_of(keyed) == before
+
+
+def test_an_estimator_edit_changes_the_keys_of_its_runs_and_of_its_importers_only(sources, keyed):
+    before = keys_of(keyed)
+    edit(sources / "magexp/estimators/lm.py", '"""Levenberg-Marquardt refinement', '"""Levenberg-Marquardt (LM) refinement')
+    assert changed(before, keys_of(keyed)) == {("yuan2018_mode1", "lm"), ("yuan2018_mode1", "local")}  # local imports lm
+
+
+def test_a_core_edit_changes_every_key(sources, keyed):
+    before = keys_of(keyed)
+    with (sources / "magexp/core/bounds.py").open("a") as fh:
+        fh.write("\n# a change upstream of every run\n")
+    cache.forget_code()
+    assert changed(before, keys_of(keyed)) == set(keyed)
+
+
+TOY_INIT = '"""An estimator of another package."""\n\nfrom .methods import MyMethod\n'
+TOY_METHODS = '''"""MyMethod."""
+
+from magexp.estimators.lm import LevenbergMarquardt
+
+
+class MyMethod(LevenbergMarquardt):
+    """Levenberg-Marquardt under another name."""
+
+    name = "my_method"
+'''
+
+
+def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sources, keyed, tmp_path, monkeypatch):
+    package = tmp_path / "outside" / "toypkg"
+    package.mkdir(parents=True)
+    (package / "__init__.py").write_text(TOY_INIT)
+    (package / "methods.py").write_text(TOY_METHODS)
+    (package / "unused.py").write_text('"""Imported by nothing."""\n')
+    monkeypatch.syspath_prepend(str(package.parent))
+    cache.forget_code()
+    lm = keyed["yuan2018_mode1", "lm"]
+    runs = {"docs": {**lm, "estimator": {**lm["estimator"], "_target_": "toypkg.MyMethod"}},  # docs/extending.md's way
+            "module": {**lm, "estimator": {**lm["estimator"], "_target_": "toypkg.methods.MyMethod"}},
+            "pso": keyed["yuan2018_mode1", "pso"]}
+    before = keys_of(runs)
+    assert "toypkg" not in sys.modules  # found from its source, not imported
+    assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(cache.code_files(cache.run_targets(runs["docs"])))
+    edit(package / "methods.py", "under another name", "under a new name")
+    assert changed(before, keys_of(runs)) == {"docs", "module"}
+    again = keys_of(runs)
+    (package / "unused.py").write_text('"""Edited, still imported by nothing."""\n')
+    cache.forget_code()
+    assert keys_of(runs) == again
+    edit(sources / "magexp/estimators/lm.py", '"""Levenberg-Marquardt refinement', '"""Levenberg-Marquardt (LM) refinement')
+    assert changed(again, keys_of(runs)) == {"docs", "module"}  # magexp code it imports is its code too
+
+
+def test_code_versions_are_kept_under_the_sources_stamp(sources, keyed):
+    import json
+
+    targets = cache.run_targets(keyed["ding2024_exp1", "pso"])
+    version = cache.code_version(targets)
+    memo = cache.CACHE / "code-version.json"
+    (stamp, kept), = json.loads(memo.read_text()).items()  # the versions, under the sources' stamp
+    assert kept == {"|".join(targets): version}
+    memo.write_text(json.dumps({stamp: {"|".join(targets): "kept"}}))
+    assert cache.code_version(targets) == "kept"  # read back, not worked out
+    edit(sources / "magexp/estimators/swarm.py", '"""The one swarm', '"""An edit. The one swarm')
+    new = cache.code_version(targets)
+    assert new not in ("kept", version)  # a new stamp: worked out again
+    assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == {
+        "|".join(targets): new}

@@ -272,39 +272,6 @@ def test_truth_cost_is_computed_once_per_problem_and_equals_the_direct_cost(scen
     assert metrics.truth_cost(made[0]) == direct and sum(at_truth) == 2  # kept: only the direct call above
 
 
-def test_code_version_is_kept_under_the_sources_stamp(tmp_path, monkeypatch):
-    import json
-    import shutil
-
-    from magexp.paths import ROOT
-
-    copy = tmp_path / "repo"
-    shutil.copytree(ROOT / "magexp", copy / "magexp", ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(cache, "ROOT", copy)
-    monkeypatch.setattr(cache, "CACHE", tmp_path / "cache" / "runs")
-    cache.code_version.cache_clear()
-    try:
-        version = cache.code_version()
-        memo = tmp_path / "cache" / "runs" / "code-version.json"
-        (stamp, kept), = json.loads(memo.read_text()).items()  # the version, under the sources' stamp
-        assert kept == version
-        memo.write_text(json.dumps({stamp: "kept"}))
-        cache.code_version.cache_clear()
-        assert cache.code_version() == "kept"  # read back, not recomputed
-        with (copy / "magexp/core/bounds.py").open("a") as fh:
-            fh.write("\n# an edit\n")
-        cache.code_version.cache_clear()
-        new = cache.code_version()
-        assert new not in ("kept", version)  # a new stamp: recomputed
-        assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == new
-        with (copy / "magexp/core/bounds.py").open("a") as fh:
-            fh.write("\n# an edit\n")
-        cache.code_version.cache_clear()
-        assert cache.code_version() not in (new, version)  # each edit changes the version
-    finally:
-        cache.code_version.cache_clear()
-
-
 @pytest.mark.parametrize("scenario, offset", [("ding2024_exp1", "scenario.errors.hard_iron"),
                                               ("yuan2018_mode1", "scenario.b"), ("yan2022_sim", "scenario.Bp")])
 def test_the_invariants_jacobian_is_shared_across_seeds_and_the_bound_is_unchanged(scenario, offset, monkeypatch):

@@ -104,38 +104,6 @@ def test_a_data_edit_reruns_exactly_the_runs_that_read_it(tmp_path, monkeypatch)
     assert again.metrics(0)["fit_rms"] != first.metrics(0)["fit_rms"]
 
 
-def test_upstream_code_is_the_runs_import_closure():
-    files = {p.relative_to(ROOT).as_posix() for p in cache.upstream_files()}
-    for needed in ("magexp/run/runner.py", "magexp/core/metrics.py", "magexp/core/bounds.py", "magexp/core/seeding.py",
-                   "magexp/problems/scalar.py", "magexp/scenarios/ding.py", "magexp/estimators/swarm.py",
-                   "magexp/core/recordings.py", "magexp/__init__.py"):
-        assert needed in files, needed
-    for downstream in ("magexp/artifacts/reproduce.py", "magexp/artifacts/report.py", "magexp/artifacts/summary.py", "magexp/run/executor.py",
-                       "magexp/run/progress.py", "magexp/artifacts/plots/style.py", "magexp/artifacts/plots/convergence.py"):
-        assert downstream not in files, downstream
-
-
-def test_a_plot_edit_reruns_nothing_and_a_bound_edit_reruns_all(tmp_path, monkeypatch):
-    copy = tmp_path / "repo"
-    shutil.copytree(ROOT / "magexp", copy / "magexp", ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(cache, "ROOT", copy)
-    cache.code_version.cache_clear()
-    try:
-        before = cache.code_version()
-        with (copy / "magexp/artifacts/plots/convergence.py").open("a") as fh:
-            fh.write("\n# a new label\n")
-        with (copy / "magexp/artifacts/report.py").open("a") as fh:
-            fh.write("\n# new wording\n")
-        cache.code_version.cache_clear()
-        assert cache.code_version() == before
-        with (copy / "magexp/core/bounds.py").open("a") as fh:
-            fh.write("\n# a change upstream of every run\n")
-        cache.code_version.cache_clear()
-        assert cache.code_version() != before
-    finally:
-        cache.code_version.cache_clear()
-
-
 def test_redraw_rebuilds_figures_summary_and_report_without_a_run(tmp_path, monkeypatch, capsys, mockup_reproduction):
     out = tmp_path / "res"
     shutil.copytree(mockup_reproduction.out, out)

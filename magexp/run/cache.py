@@ -5,10 +5,17 @@ The key of a run (:func:`run_key`) hashes
 * its fully resolved config (every setting, the seed included),
 * the content of every data file the config names (:func:`magexp.core.datafiles.data_files`), so that editing a
   recording such as ``data/yan2022_mockup.csv`` reruns exactly the runs that read it,
-* the source of the code *upstream* of a run (:func:`code_version`): the static import closure of
-  :mod:`magexp.run.runner` and of the packages a config instantiates (scenarios, problems, estimators).
-  Code downstream of a run (``plots/``, ``summary``, ``report``, ``reproduce``, the executor) is
-  not part of it, so a figure or report edit costs no run.
+* the source of the code the run executes (:func:`code_version` of its :func:`run_targets`): the
+  modules of the classes its config names by ``_target_`` (scenario, estimator, their nested strategy
+  objects, an analysis step) and of its objective's problem class, with their static import closure
+  inside magexp (:func:`code_files`), and the core every run executes (:data:`CORE`: the runner and
+  its closure). A class of another package (``_target_: mypackage.MyMethod``) brings its module's
+  file and the modules it imports of its own package and of magexp. Modules are found from their
+  source, never imported. So an estimator edit reruns the runs of that estimator and of the
+  estimators importing its module, an unused new module reruns nothing, and code downstream of a run
+  (``plots/``, ``summary``, ``report``, ``reproduce``, the executor) is not part of any key: a figure
+  or report edit costs no run. A module imported by a computed name (``importlib``, as the
+  recording readers are) is not seen.
 
 An entry (:func:`pack`) is data, never code: a line with a SHA-256 digest, a JSON header (its key, its
 kind, the tree of its values) and the raw bytes of its numpy arrays. Reading one (:func:`load`)
@@ -32,6 +39,7 @@ import ast
 import dataclasses
 import fcntl
 import hashlib
+import importlib.util
 import json
 import math
 import os
@@ -47,76 +55,179 @@ from pathlib import Path
 from magexp.core.atomic import write_bytes
 from magexp.core.datafiles import data_files
 from magexp.paths import CACHE, ROOT
+from magexp.problems import OBJECTIVES
 
-#: where the import closure starts: the run itself and the packages its configs instantiate by name
-UPSTREAM_ROOTS = ("magexp/run/runner.py", "magexp/scenarios", "magexp/problems", "magexp/estimators")
+#: the modules every run executes whatever its config: the runner, which builds the config's objects,
+#: makes the problem, fits and evaluates (with its import closure: metrics, bounds, seeding, the bases)
+CORE = ("magexp.run.runner",)
 
 
-def _module_file(name: str) -> Path | None:
-    """The source file of module ``magexp.a.b`` (a module or a package), or None."""
-    parts = name.split(".")
-    if parts[0] != "magexp":
+@lru_cache(maxsize=None)
+def _top_spec(top: str):
+    """The import spec of the top-level module or package ``top``, or None. Finding the spec of a
+    top-level name executes nothing (that of a submodule would import its parent packages)."""
+    try:
+        return importlib.util.find_spec(top)
+    except (ImportError, ValueError):
         return None
-    base = ROOT.joinpath(*parts)
-    for path in (base.with_suffix(".py"), base / "__init__.py"):
-        if path.is_file():
-            return path
+
+
+@lru_cache(maxsize=None)
+def _source(name: str) -> Path | None:
+    """The source file of module ``name`` (a module's ``.py`` or a package's ``__init__.py``), or None.
+
+    Found without importing anything: magexp's under :data:`ROOT`, another package's in the folders
+    its top-level package's spec names (:func:`_top_spec`), as the import system finds a module of
+    plain source folders. A module found another way (a zip, a ``__path__`` its package extends
+    when imported) is not found here."""
+    top, *rest = name.split(".")
+    if top == "magexp":
+        folders = [ROOT / "magexp"]
+    else:
+        spec = _top_spec(top)
+        if spec is None:
+            return None
+        if not rest:
+            origin = Path(spec.origin) if spec.has_location and spec.origin else None
+            return origin if origin is not None and origin.is_file() else None
+        folders = [Path(p) for p in spec.submodule_search_locations or ()]
+    for folder in folders:
+        base = folder.joinpath(*rest)
+        for path in ((base.with_suffix(".py"),) if rest else ()) + (base / "__init__.py",):
+            if path.is_file():
+                return path
     return None
 
 
-def _package_name(path: Path) -> str:
-    rel = path.relative_to(ROOT).with_suffix("")
-    parts = list(rel.parts)
-    if parts[-1] == "__init__":
-        parts.pop()
-    return ".".join(parts)
+def _statements(nodes):
+    """Every statement of ``nodes`` and of the blocks inside them (an import is a statement: the
+    expressions, most of a module's nodes, are not visited)."""
+    for node in nodes:
+        yield node
+        for block in ("body", "orelse", "finalbody", "handlers", "cases"):
+            yield from _statements(getattr(node, block, ()))
 
 
-def _imports(path: Path) -> set[str]:
-    """Every ``magexp`` module that ``path`` imports anywhere (function bodies included)."""
-    own = _package_name(path)
-    package = own if path.name == "__init__.py" else own.rpartition(".")[0]
+@lru_cache(maxsize=None)
+def _imports(path: Path, name: str) -> frozenset[str]:
+    """Every module that ``path`` (module ``name``) imports anywhere (function bodies included),
+    relative imports made absolute; ``from pkg import x`` names ``pkg.x`` too (``x`` may be a module)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     names = set()
-    for node in ast.walk(ast.parse(path.read_bytes(), filename=str(path))):
+    for node in _statements(ast.parse(path.read_bytes(), filename=str(path)).body):
         if isinstance(node, ast.Import):
             names.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
             if node.level:
-                base = package.split(".")[: len(package.split(".")) - node.level + 1]
-                module = ".".join(base + ([node.module] if node.module else []))
+                parts = package.split(".")
+                module = ".".join(parts[: len(parts) - node.level + 1] + ([node.module] if node.module else []))
             else:
                 module = node.module or ""
             names.add(module)
-            names.update(f"{module}.{a.name}" for a in node.names)  # `from pkg import submodule`
-    return {n for n in names if n == "magexp" or n.startswith("magexp.")}
+            names.update(f"{module}.{a.name}" for a in node.names)
+    return frozenset(names)
 
 
-def upstream_files() -> list[Path]:
-    """The source files a run executes: the import closure of :data:`UPSTREAM_ROOTS`, with the
-    ``__init__.py`` of every package on the way. The top-level ``magexp/__init__.py`` is included
-    but its own imports are not followed (they serve the API, not a run)."""
-    todo = []
-    for root in UPSTREAM_ROOTS:
-        path = ROOT / root
-        todo.extend(sorted(path.rglob("*.py")) if path.is_dir() else [path])
-    seen: set[Path] = set()
-    top = ROOT / "magexp" / "__init__.py"
+@lru_cache(maxsize=None)
+def _deps(name: str) -> tuple[str, ...]:
+    """The modules executed with module ``name``: its parent packages, and those it imports of magexp
+    and of its own top-level package (the standard library, numpy, ... are not followed). The
+    top-level ``magexp/__init__.py``'s imports are not followed either (they serve the API, not a run)."""
+    parts = name.split(".")
+    parents = {".".join(parts[:i]) for i in range(1, len(parts))}
+    path = _source(name)
+    if path is None or name == "magexp":
+        return tuple(sorted(parents))
+    own = ("magexp", parts[0])
+    found = {n for n in _imports(path, name) if n.partition(".")[0] in own and _source(n) is not None}
+    return tuple(sorted(parents | found))
+
+
+def _target_module(target: str) -> str | None:
+    """The module a ``_target_`` (``package.module.Class``) is taken from: its longest prefix with a source."""
+    parts = target.split(".")
+    return next((m for m in (".".join(parts[:i]) for i in range(len(parts) - 1, 0, -1)) if _source(m)), None)
+
+
+def code_files(targets=()) -> dict[str, Path]:
+    """The source files a run executes, by module name: the import closure (:func:`_deps`) of
+    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`run_targets`)."""
+    todo = list(CORE) + [m for m in map(_target_module, targets) if m is not None]
+    found: dict[str, Path] = {}
     while todo:
-        path = todo.pop()
-        if path in seen:
+        name = todo.pop()
+        if name not in found and (path := _source(name)) is not None:
+            found[name] = path
+            todo.extend(_deps(name))
+    return dict(sorted(found.items()))
+
+
+def _fixed_objective(cls: ast.ClassDef) -> str | None:
+    """The objective a class body fixes: a class attribute ``objective = "..."``, or the default of
+    an ``objective`` argument of its ``__init__``; None if neither."""
+    for node in cls.body:
+        value = None
+        if isinstance(node, ast.FunctionDef) and node.name == "__init__":
+            a = node.args
+            pairs = [*zip([*a.posonlyargs, *a.args][::-1], a.defaults[::-1]), *zip(a.kwonlyargs, a.kw_defaults)]
+            value = next((default for arg, default in pairs if arg.arg == "objective"), None)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            names = node.targets if isinstance(node, ast.Assign) else [node.target]
+            value = node.value if any(getattr(n, "id", None) == "objective" for n in names) else None
+        if isinstance(value, ast.Constant) and isinstance(value.value, str):
+            return value.value
+    return None
+
+
+@lru_cache(maxsize=None)
+def _default_objective(target: str) -> str | None:
+    """The objective that the scenario class ``target`` fixes when its config names none, read from
+    its module's source (:func:`_fixed_objective` of the class, else of its base classes defined in the
+    same module); None if not found so."""
+    module = _target_module(target)
+    name = target[len(module) + 1:] if module is not None else ""
+    if not name or "." in name:
+        return None
+    classes = {n.name: n for n in ast.parse(_source(module).read_bytes()).body if isinstance(n, ast.ClassDef)}
+    todo, seen = [name], set()
+    while todo:
+        name = todo.pop(0)
+        if name in seen or name not in classes:
             continue
-        seen.add(path)
-        for parent in path.relative_to(ROOT).parents:  # packages on the way are executed too
-            init = ROOT / parent / "__init__.py"
-            if parent.parts and init.is_file() and init not in seen:
-                todo.append(init)
-        if path == top:
-            continue
-        for name in _imports(path):
-            found = _module_file(name)
-            if found is not None and found not in seen:
-                todo.append(found)
-    return sorted(seen)
+        seen.add(name)
+        found = _fixed_objective(classes[name])
+        if found is not None:
+            return found
+        todo.extend(b.id for b in classes[name].bases if isinstance(b, ast.Name))
+    return None
+
+
+def _targets_in(node, found: set) -> set:
+    """Every ``_target_`` string in a config tree (nested strategy objects included), added to ``found``."""
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if key == "_target_" and isinstance(value, str):
+                found.add(value)
+            else:
+                _targets_in(value, found)
+    elif isinstance(node, (list, tuple)):
+        for value in node:
+            _targets_in(value, found)
+    return found
+
+
+def run_targets(resolved: dict) -> tuple[str, ...]:
+    """What a run instantiates by name: every ``_target_`` of its resolved config, and the problem class
+    of its objective (``objective``, else its scenario's: in its config, else fixed by its class,
+    :func:`_default_objective`; one not found so: every registered problem class)."""
+    found = _targets_in(resolved, set())
+    scenario = resolved.get("scenario") if isinstance(resolved.get("scenario"), dict) else {}
+    objective = resolved.get("objective") or scenario.get("objective")
+    if objective is None and isinstance(scenario.get("_target_"), str):
+        objective = _default_objective(scenario["_target_"])
+    problems = [OBJECTIVES[objective]] if objective in OBJECTIVES else list(OBJECTIVES.values())
+    found.update(p.replace(":", ".") for p in problems)
+    return tuple(sorted(found))
 
 
 def files_digest(files, base: Path):
@@ -128,9 +239,17 @@ def files_digest(files, base: Path):
     return h
 
 
-def _closure_hash() -> str:
-    """Hash of the path and content of every file of :func:`upstream_files`."""
-    return files_digest(upstream_files(), ROOT).hexdigest()[:16]
+@lru_cache(maxsize=None)
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _version(targets: tuple[str, ...]) -> str:
+    """Hash of the name and content of each file of :func:`code_files`."""
+    h = hashlib.sha256()
+    for name, path in code_files(targets).items():
+        h.update(f"{name}\0{_digest(path)}\n".encode())
+    return h.hexdigest()[:16]
 
 
 def _source_stamp() -> str:
@@ -143,55 +262,77 @@ def _source_stamp() -> str:
     return h.hexdigest()[:32]
 
 
-@lru_cache(maxsize=1)
-def code_version() -> str:
-    """Hash of the code upstream of a run (:func:`upstream_files`): only such a change invalidates runs.
+def code_versions(target_sets) -> dict[tuple, str]:
+    """:func:`code_version` of each tuple of ``target_sets``, the memo read and written once.
 
-    Finding the import closure parses every module (about 0.1 s); the result is kept in the run
-    cache folder (``code-version.json``, beside the results' two-letter folders) under the sources'
-    :func:`_source_stamp`, so a later command with unchanged sources reads it instead (a changed
-    stamp only recomputes it: never a stale version)."""
-    memo = CACHE / "code-version.json"
-    stamp = _source_stamp()
+    Finding the code of a run parses the modules of its closure (about 20 ms for one run's, 60 ms
+    for every run of ``reproduce all``). The versions of targets that are all magexp's are kept in
+    the run cache folder (``code-version.json``, beside the results' two-letter folders) under the
+    sources' :func:`_source_stamp`, so a later command with unchanged sources reads them instead (a
+    changed stamp only recomputes them: never a stale version). A target of another package is
+    worked out each time: the stamp does not cover its files."""
+    memo, stamp = CACHE / "code-version.json", _source_stamp()
     try:
         known = json.loads(memo.read_text())
-        if not isinstance(known, dict):
-            known = {}
+        known = known if isinstance(known, dict) else {}
     except (OSError, ValueError):
         known = {}
-    if isinstance(known.get(stamp), str):
-        return known[stamp]
-    version = _closure_hash()
-    known = {**dict(list(known.items())[-7:]), stamp: version}  # the last few source trees
-    try:
-        write(memo, json.dumps(known).encode(), CACHE)
-    except OSError:  # a read-only cache folder: compute it each time
-        pass
-    return version
+    kept = known.get(stamp) if isinstance(known.get(stamp), dict) else {}
+    versions, new = {}, {}
+    for targets in dict.fromkeys(target_sets):
+        name = "|".join(targets)
+        if isinstance(kept.get(name), str):
+            versions[targets] = kept[name]
+            continue
+        versions[targets] = _version(targets)
+        if all(t.startswith("magexp.") for t in targets):
+            new[name] = versions[targets]
+    if new:
+        known = {**{k: v for k, v in list(known.items())[-7:] if k != stamp}, stamp: {**kept, **new}}  # the last few trees
+        try:
+            write(memo, json.dumps(known).encode(), CACHE)
+        except OSError:  # a read-only cache folder: worked out each time
+            pass
+    return versions
 
 
-def run_key(resolved: dict, files: dict[str, str] | None = None) -> str:
+def code_version(targets: tuple[str, ...] = ()) -> str:
+    """Hash of the code a run of ``targets`` (its :func:`run_targets`) executes: the name and content
+    of each file of :func:`code_files`. Only an edit of such a file invalidates the run."""
+    return code_versions([tuple(targets)])[tuple(targets)]
+
+
+def forget_code() -> None:
+    """Forget what this process found of the sources (files, imports, digests): for a process that
+    edits sources, or changes ``sys.path``, and keys runs again."""
+    for cached in (_top_spec, _source, _imports, _deps, _default_objective, _digest):
+        cached.cache_clear()
+
+
+def run_key(resolved: dict, files: dict[str, str] | None = None, code: str | None = None) -> str:
     """Key of a run: its resolved config, the content of the data files it names (``files``:
-    its :func:`data_files`, found here if None), the upstream code."""
+    its :func:`data_files`, found here if None), the code it executes (``code``: its
+    :func:`code_version`, found here if None)."""
     text = json.dumps(resolved, sort_keys=True, default=str)
     files = data_files(resolved) if files is None else files
     if files:
         text += json.dumps(sorted(files.values()))
-    text += code_version()
+    text += code_version(run_targets(resolved)) if code is None else code
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
 def run_keys(configs) -> list[str]:
-    """:func:`run_key` of each config; the data files are looked up once per config that differs
-    in more than its seed."""
-    files: dict[str, dict] = {}
-    keys = []
+    """:func:`run_key` of each config; its data files and code version are looked up once per config
+    that differs in more than its seed."""
+    known: dict[str, tuple] = {}
+    rests = []
     for cfg in configs:
         rest = json.dumps({k: v for k, v in cfg.items() if k != "seed"}, sort_keys=True, default=str)
-        if rest not in files:
-            files[rest] = data_files(cfg)
-        keys.append(run_key(cfg, files[rest]))
-    return keys
+        if rest not in known:
+            known[rest] = (data_files(cfg), run_targets(cfg))
+        rests.append(rest)
+    versions = code_versions(targets for _, targets in known.values())
+    return [run_key(cfg, known[rest][0], versions[known[rest][1]]) for cfg, rest in zip(configs, rests)]
 
 
 # ---------------------------------------------------------------------------------------------
