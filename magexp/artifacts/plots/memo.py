@@ -10,10 +10,10 @@ bytes. So a figure is keyed by
 * magexp's source (every ``magexp/**/*.py``: a plot, style or spec edit redraws every figure),
 * the versions of matplotlib, numpy and pandas, and matplotlib's settings (``rcParams``),
 
-(:func:`figure_code_version` is not the run cache's :func:`magexp.run.cache.code_version`, though both
-digest source files with :func:`magexp.run.cache.files_digest`: a run is keyed by the code upstream of
-it only, so that a plot edit keeps every run; a figure by all of magexp's source and the drawing
-libraries, since the artifact, summary, style and plot code all shape it)
+(:func:`figure_code_version` is not the run cache's :func:`magexp.run.cache.code_version`: a run is
+keyed by the code it executes only, so that a plot edit keeps every run; a figure by all of magexp's
+source (:func:`magexp.run.cache.files_digest`) and the drawing libraries, since the artifact,
+summary, style and plot code all shape it)
 
 and the cache keeps, under that key, the SHA-256 digests of the PNG and PDF the draw wrote. A figure
 whose two files are still in place with those digests is not drawn again; otherwise it is drawn and
