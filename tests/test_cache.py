@@ -422,6 +422,9 @@ def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sourc
     assert keys_of(runs) == again
     edit(sources / "magexp/estimators/lm.py", '"""Levenberg-Marquardt refinement', '"""Levenberg-Marquardt (LM) refinement')
     assert changed(again, keys_of(runs)) == {"docs", "module"}  # magexp code it imports is its code too
+    again = keys_of(runs)
+    edit(package / "methods.py", "class MyMethod(", "class MyMethod((")  # not Python: keyed all the same
+    assert changed(again, keys_of(runs)) == {"docs", "module"}  # (building it says what is wrong)
 
 
 def test_code_versions_are_kept_under_the_sources_stamp(sources, keyed):

@@ -109,12 +109,21 @@ def _statements(nodes):
 
 
 @lru_cache(maxsize=None)
+def _parse(path: Path) -> ast.Module:
+    """The syntax tree of the Python source ``path``; an empty module for a file that is not valid
+    Python source (a compiled module; a syntax error, which the run itself then reports)."""
+    try:
+        return ast.parse(path.read_bytes(), filename=str(path))
+    except (SyntaxError, ValueError):
+        return ast.Module(body=[], type_ignores=[])
+
+
 def _imports(path: Path, name: str) -> frozenset[str]:
     """Every module that ``path`` (module ``name``) imports anywhere (function bodies included),
     relative imports made absolute; ``from pkg import x`` names ``pkg.x`` too (``x`` may be a module)."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     names = set()
-    for node in _statements(ast.parse(path.read_bytes(), filename=str(path)).body):
+    for node in _statements(_parse(path).body):
         if isinstance(node, ast.Import):
             names.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -188,7 +197,7 @@ def _default_objective(target: str) -> str | None:
     name = target[len(module) + 1:] if module is not None else ""
     if not name or "." in name:
         return None
-    classes = {n.name: n for n in ast.parse(_source(module).read_bytes()).body if isinstance(n, ast.ClassDef)}
+    classes = {n.name: n for n in _parse(_source(module)).body if isinstance(n, ast.ClassDef)}
     todo, seen = [name], set()
     while todo:
         name = todo.pop(0)
@@ -305,7 +314,7 @@ def code_version(targets: tuple[str, ...] = ()) -> str:
 def forget_code() -> None:
     """Forget what this process found of the sources (files, imports, digests): for a process that
     edits sources, or changes ``sys.path``, and keys runs again."""
-    for cached in (_top_spec, _source, _imports, _deps, _default_objective, _digest):
+    for cached in (_top_spec, _source, _parse, _deps, _default_objective, _digest):
         cached.cache_clear()
 
 
