@@ -301,16 +301,22 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
     return RENDERERS[target](w, offset, unit, **options)
 
 
+def of_calibration(cal, target: str, **options) -> Export:
+    """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.Calibration` ``cal``:
+    ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``
+    to the calibration's. Refuses (one line) before anything is written: a caller renders first."""
+    options.setdefault("field_unit", cal.field_unit)
+    notes = options.pop("notes", None) or {"recording": cal.name, "estimator": cal.estimator,
+                                             "objective": cal.objective, "magexp unit": cal.unit}
+    return render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
+
+
 def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
     """Write ``target``'s file for the :class:`~magexp.calibration.Calibration` ``cal`` to ``path``
     (a folder: :data:`FILE_NAMES` inside it; None: the working folder); never overwrites a file.
 
-    Returns the path written. ``options`` as :func:`render`; ``notes`` defaults to the recording,
-    estimator and unit."""
-    notes = options.pop("notes", None) or {"recording": cal.name, "estimator": cal.estimator,
-                                             "objective": cal.objective, "magexp unit": cal.unit}
-    out = render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
-    return write(out, path)
+    Returns the path written. ``options`` as :func:`of_calibration`."""
+    return write(of_calibration(cal, target, **options), path)
 
 
 def write(out: Export, path: str | Path | None = None) -> Path:

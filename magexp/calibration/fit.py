@@ -230,7 +230,6 @@ class Calibration:
         """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`)."""
         from magexp.calibration.export import export  # lazy: yaml and the targets only when exporting
 
-        options.setdefault("field_unit", self.field_unit)
         return export(self, target, path, **options)
 
 
@@ -694,9 +693,9 @@ def run(cfg) -> Calibration:
     out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
     check_destination(out_dir if out is None else out, "out")
     overwrite, draw, target = (flag(cfg, "overwrite"), flag(cfg, "figure"), cfg.get("export"))
-    check_out(out_dir, overwrite=overwrite)
     if target is not None and str(target) not in EXPORT_TARGETS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
+    check_out(out_dir, overwrite=overwrite, export=None if target is None else str(target))
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
