@@ -64,3 +64,58 @@ def test_an_export_refused_after_the_fit_touches_nothing(tmp_path, calibrate, ta
         assert proc.returncode == 2 and "counts_nt=" in proc.stderr and proc.stderr.count("\n") == 1, proc.stderr
     assert snapshot(out) == before
     assert not (tmp_path / "new").exists()
+
+
+# -- a CSV whose first row names its columns (issue 33, item 5) ----------------------------------------
+def header_csv(path, header: str, readings, extra=None, sep=","):
+    """``readings`` (and ``extra`` columns before them) under the header row ``header``."""
+    table = readings if extra is None else np.column_stack([extra, readings])
+    path.write_text(header + "\n" + "\n".join(sep.join(f"{v:.12g}" for v in row) for row in table) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("header, extra_columns, sep, args", [
+    ("x,y,z", 0, ",", ["data.unit=uT"]),
+    ("mx,my,mz", 0, ",", ["data.unit=uT"]),
+    ("ax,ay,az,mx,my,mz", 3, ",", ["data.unit=uT"]),
+    ("t\tax\tay\taz\tgx_dps\tgy_dps\tgz_dps\tmx_uT\tmy_uT\tmz_uT", 7, "\t", []),
+    ("time;mx (uT);my (uT);mz (uT)", 1, ";", []),
+])
+def test_a_header_row_csv_calibrates_through_the_cli_and_the_api(tmp_path, calibrate, header, extra_columns, sep,
+                                                                   args):
+    import magexp
+    from magexp.core.recordings import load_recording
+
+    plain = sphere_recording(tmp_path / "plain.csv")
+    readings = load_recording(plain).readings
+    rng = np.random.default_rng(1)
+    extra = np.column_stack([np.arange(len(readings)) * 0.01, rng.normal(size=(len(readings), extra_columns - 1))]) \
+        if extra_columns else None
+    path = header_csv(tmp_path / "named.csv", header, readings, extra, sep)
+    rec = load_recording(path, unit=None if not args else "uT")
+    assert rec.meta["format"] == "header-row" and rec.unit == "uT"
+    np.testing.assert_array_equal(rec.readings, readings)
+    if "gx_dps" in header:  # the gyroscope in deg/s, on the time column
+        times, rates = rec.gyro_rates()
+        np.testing.assert_allclose(rates, np.deg2rad(extra[:, 4:7]), rtol=1e-10)  # %.12g in the file
+        np.testing.assert_allclose(times, extra[:, 0], rtol=1e-12)
+    proc = calibrate(f"data.path={path}", *args, f"out={tmp_path / 'out'}", "model=full", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    api = magexp.calibrate(str(path), unit=None if not args else "uT", model="full", folds=0)
+    reference = magexp.calibrate(readings, unit="uT", model="full", folds=0)  # the same numbers as an array
+    np.testing.assert_array_equal(api.w, reference.w)
+    assert api.metrics["spread_after"] < 0.1 * api.metrics["spread_before"]
+
+
+@pytest.mark.parametrize("header, args, message", [
+    ("mx,my,mz", [], "give data.unit="),
+    ("mx_uT,my_uT,mz_G", [], "give the three columns one unit"),
+    ("mx_uT,my_uT,mz_uT", ["data.unit=nT"], "the file's columns say uT"),
+    ("mx,my,mz,gx,gy,gz", ["data.unit=uT"], "need a time column"),
+])
+def test_a_header_row_csv_with_bad_metadata_is_one_line(tmp_path, calibrate, header, args, message):
+    values = np.random.default_rng(2).normal(size=(30, len(header.split(","))))
+    path = header_csv(tmp_path / "bad.csv", header, values)
+    proc = calibrate(f"data.path={path}", *args, f"out={tmp_path / 'out'}", cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and message in proc.stderr, proc.stderr
+    assert not (tmp_path / "out").exists()

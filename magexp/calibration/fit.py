@@ -61,7 +61,8 @@ from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
 from magexp.core.identifiability import canonical, coverage, identifiability, spread
 from magexp.core.field_model import field_of_recording, place_of
-from magexp.core.recordings import UNITS, Recording, check_unique, check_unit, load_recording, resolve
+from magexp.core.recordings import (MAG_COLUMNS, UNITS, Recording, check_unique, check_unit, load_recording,
+                                    resolve)
 from magexp.core.seeding import run_generators
 from magexp.errors import LARGEST, MagexpError, check_positive_int, exit_code
 from magexp.estimators.base import check_applies
@@ -539,12 +540,11 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
 
 # -- the Python API --------------------------------------------------------------------------------
 def frame_readings(frame) -> np.ndarray:
-    """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``x, y, z``, ``mx, my, mz``)
-    columns, else its three numeric columns."""
+    """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``mx, my, mz``, ``x, y, z``:
+    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns."""
     cols = [str(c).strip().lower() for c in frame.columns]
     check_unique(cols, "readings")
-    pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
-                 if all(n in cols for n in names)), None)
+    pick = next((names for names in MAG_COLUMNS if all(n in cols for n in names)), None)
     chosen = frame.iloc[:, [cols.index(n) for n in pick]] if pick else frame.select_dtypes("number")
     if chosen.shape[1] != 3:
         raise MagexpError(f"readings with columns {list(frame.columns)} are not allowed: give bx, by, bz "
