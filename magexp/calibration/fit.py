@@ -53,7 +53,7 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
-from magexp.calibration.export import TARGETS as EXPORT_TARGETS
+from magexp.calibration.export import TARGETS as EXPORT_TARGETS, options_of as export_options_of
 from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
@@ -687,8 +687,10 @@ def run(cfg) -> Calibration:
     if data.get("path") is None or not str(data.path).strip():
         raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
     check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
+    instance = cfg.get("instance")
+    instance = None if instance is None else check_positive_int(instance, "instance", minimum=0)
     rec = load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
-                         mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"))
+                         mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"), instance=instance)
     out = cfg.get("out")
     out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
     check_destination(out_dir if out is None else out, "out")
@@ -707,11 +709,22 @@ def run(cfg) -> Calibration:
                                   folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
                                   gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
     cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
-    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target))
+    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target),
+                  export_options=None if target is None else export_options(cfg, str(target), rec))
     print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
                  + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
                  + ("" if draw else "; no figure (figure=true draws it)")}))
     return cal
+
+
+def export_options(cfg, target: str, rec: Recording) -> dict:
+    """The options of ``export=<target>`` from the command line (those the target takes,
+    :func:`magexp.calibration.export.options_of`): ``counts_nt``, ``max_rotation_deg`` and ``instance``, the
+    parameter slot (null: a ULog's calibration slot, else 0; a DataFlash log's instance is the one read)."""
+    slot = cfg.get("instance")
+    given = {"counts_nt": cfg.get("counts_nt"), "max_rotation_deg": cfg.get("max_rotation_deg"),
+             "instance": int(rec.meta.get("calibration_slot", 0)) if slot is None else slot}
+    return {k: v for k, v in given.items() if v is not None and k in export_options_of(target)}
 
 
 def flag(cfg, key: str) -> bool:

@@ -728,7 +728,7 @@ def detect(path: Path) -> str:
 
 
 def load_recording(path: str | Path, *, unit: str | None = None, format: str = "auto",
-                   mag_axes: str | None = None, gyro_axes: str | None = None) -> Recording:
+                   mag_axes: str | None = None, gyro_axes: str | None = None, instance: int | None = None) -> Recording:
     """Read a recording in any format of :data:`READERS` (see the module docstring).
 
     Parameters
@@ -740,6 +740,8 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
     format : a key of :data:`READERS`, or ``auto`` (:func:`detect`).
     mag_axes, gyro_axes : signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`);
         None keeps the format's default.
+    instance : the compass (and IMU) instance of a DataFlash log (0: the first; None: 0); the other
+        formats hold one magnetometer and ignore it.
 
     Raises
     ------
@@ -761,6 +763,8 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
         options["mag_axes"] = mag_axes
     if gyro_axes is not None:
         options["gyro_axes"] = gyro_axes
+    if instance is not None and key == "dataflash":
+        options["instance"] = instance
     rec = READERS[key](file, **options)
     rec.meta.setdefault("format", key)
     rec.path = rec.path or file
