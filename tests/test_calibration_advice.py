@@ -24,7 +24,7 @@ def advised(message: str) -> list[str]:
 def rotated_vector_recording(path, degrees: float = 5.0, n: int = 200, seed: int = 4):
     """Attitudes and a field, readings ``W⁻¹ A f + o`` with ``W`` turning by ``degrees`` (a mounting error)."""
     rng = np.random.default_rng(seed)
-    angles = np.column_stack([rng.uniform(0, 2 * np.pi, n), rng.uniform(-1.2, 1.2, n), rng.uniform(-1.2, 1.2, n)])
+    angles = np.column_stack([rng.uniform(0, 2 * np.pi, n), rng.uniform(-np.pi, np.pi, n), rng.uniform(-1.5, 1.5, n)])
     field = np.array([20.0, 3.0, 45.0])
     q = random_rotations(1, rng=rng)[0]
     w = rot_z(np.deg2rad(degrees)) @ q @ np.diag([1.05, 0.97, 1.01]) @ q.T

@@ -15,7 +15,7 @@ from magexp.errors import MagexpError
 
 #: Degenerate-data thresholds (see :func:`check_readings` and :func:`check_fit`).
 MIN_DISTINCT = 12
-PLANE_RATIO = 0.02   # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane
+PLANE_RATIO = 0.2    # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane (docs/calibrate.md)
 MIN_CELLS = 8        # fewer occupied cells (a quarter of the sphere): too few distinct directions
 PARTIAL = 0.75       # fewer occupied cells after a failed fit: say the coverage is partial
 ONE_ATTITUDE_DEG = 20.0  # every calibrated direction within this angle of their mean: one attitude
@@ -74,6 +74,7 @@ GATE = {
     "radius_vs_reference": (0.5, 2.0),  # the raw radius / the reference total, when a reference is given
     "max_rms_mG": 16.0,      # RMS of |calibrated| - reference (ArduPilot's COMPASS_CAL_FIT default)
     "max_rms_fraction": 0.032,  # the same, relative to the reference, for a raw-count unit (16 / 500 mG)
+    "min_region": 0.005,     # each of the 6 regions of directions holds at least this fraction of the readings
 }
 #: what to record instead, by failed check
 ADVICE = {
@@ -84,6 +85,8 @@ ADVICE = {
     "scale": "W's scale is implausible for a magnetometer: record turns about every axis",
     "radius": "the readings' radius is not an Earth field: check data.unit and that the readings are raw",
     "rms": "the calibrated total still varies too much: record slowly, away from iron and motors",
+    "regions": "no held-out check could test the calibration on attitudes there, and it is untested where the data "
+               "stop: record turns that point the sensor so",
 }
 
 
@@ -134,7 +137,10 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     spread; ``W``'s singular values ``σ`` with ``σ_max / σ_min <= max_anisotropy`` and each
     ``σ / (reference / raw_radius)`` within ``scale_range``; the raw radius within ``radius_mG``
     and, with a given reference, ``raw_radius / reference`` within ``radius_vs_reference``; the RMS of
-    ``|B| - reference`` at most ``max_rms_mG`` (or ``max_rms_fraction`` of the reference for counts).
+    ``|B| - reference`` at most ``max_rms_mG`` (or ``max_rms_fraction`` of the reference for counts); each
+    of the six regions of directions (``metrics["direction_regions"]``, :func:`magexp.calibration.fit.regions`)
+    holding at least ``min_region`` of the readings: a region below it was never held out, so the
+    calibration is untested on attitudes there.
     """
     t = GATE if thresholds is None else thresholds
     failed = []
@@ -146,7 +152,8 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
     if held is not None and not (held < t["heldout_vs_raw"] * raw):
         fail("heldout", held, t["heldout_vs_raw"] * raw,
-             f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %")
+             f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %" if np.isfinite(held) else
+             "the fit on the other regions failed for a held-out region of directions, so no held-out spread")
     sigma = np.linalg.svd(w, compute_uv=False)
     if sigma[0] > t["max_anisotropy"] * sigma[-1]:
         fail("anisotropy", float(sigma[0] / sigma[-1]), t["max_anisotropy"],
@@ -168,6 +175,14 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
             fail("radius", raw_radius / reference, [low, high],
                  f"radius {raw_radius:.4g} is {raw_radius / reference:.3g} times the reference {reference:.4g} "
                  f"(allowed [{low:g}, {high:g}])")
+    regions = metrics.get("direction_regions")
+    if regions is not None and min(regions) < t["min_region"]:
+        empty = [k for k, f in enumerate(regions) if f < t["min_region"]]
+        where = " and ".join("[" + ", ".join(f"{v:.2f}" for v in metrics["region_axes"][k]) + "]" for k in empty)
+        failed.append({"check": "regions", "value": 6 - len(empty), "threshold": 6,
+                       "line": f"the readings' directions reach {6 - len(empty)} of the 6 regions about their principal "
+                               f"axes (under {100 * t['min_region']:g} % of them toward {where}, in the sensor's axes, "
+                               f"about the fitted centre): {ADVICE['regions']}"})
     rms = _rms_check(metrics["rms_after"], reference, to_mg, t)
     if rms:
         fail(*rms)

@@ -34,10 +34,14 @@ Degenerate data (identical readings, a plane, one attitude, too few distinct dir
 estimator reporting failure raise one :class:`~magexp.errors.MagexpError` line that says why and
 what to record instead (:mod:`magexp.calibration.checks`); the command then writes nothing.
 
-Held-out check: the readings, in time order, are cut into ``folds`` contiguous blocks; each block
-is calibrated by the estimator fitted on the others, and ``heldout_spread`` is the spread of the
-pooled held-out magnitudes (a block taken in one part of the motion tests the calibration on
-orientations the fit may not have seen: a stricter test than interleaved folds).
+Held-out check (:func:`heldout`): the readings' directions about the centre of the sphere fitted to them
+are cut into six regions, one about each half-axis ``±v_k`` of their principal axes
+(:func:`magexp.core.identifiability.direction_regions`); each region holding at least :data:`MIN_READINGS`
+readings is calibrated by the fit on the others, and ``heldout_spread`` is the spread of the pooled
+held-out magnitudes. Every region is thus tested on attitudes outside its fit (contiguous time blocks,
+the earlier folds, lie in the plane of the rest on a turn about one axis and passed a calibration that
+made the sensor's other recordings worse than raw). A region holding less than ``gate.min_region`` of
+the readings was never tested: the gate refuses the calibration (:func:`magexp.calibration.checks.gate`).
 """
 
 from __future__ import annotations
@@ -59,7 +63,7 @@ from magexp.calibration.write import check_out, read_parameters, save_parameters
 from magexp.core.dataset import Dataset
 from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
-from magexp.core.identifiability import canonical, coverage, identifiability, spread
+from magexp.core.identifiability import canonical, coverage, direction_regions, identifiability, spread
 from magexp.core.field_model import field_of_recording, place_of
 from magexp.core.recordings import (MAG_COLUMNS, UNITS, Recording, check_unique, check_unit, load_recording,
                                     resolve)
@@ -351,15 +355,32 @@ def _closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
     return w, centre, calibrated, result
 
 
+def regions(readings: np.ndarray) -> tuple[np.ndarray, dict]:
+    """``(labels, record)``: the region of directions of each reading
+    (:func:`magexp.core.identifiability.direction_regions` about the centre of the sphere fitted to them)
+    and ``{direction_regions: fraction of the readings in each, region_axes: each region's half-axis}``
+    (what the gate's ``min_region`` check reads)."""
+    labels, axes = direction_regions(readings - fit_sphere(readings)[0])
+    fractions = np.bincount(labels, minlength=6) / len(readings)
+    return labels, {"direction_regions": fractions.tolist(), "region_axes": axes.tolist()}
+
+
 def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
             model: str = "full") -> dict:
-    """Spread of each contiguous block calibrated by the fit on the others (module docstring)."""
+    """Spread of each region of directions calibrated by the fit on the others (module docstring): the
+    regions of :func:`regions` holding at least :data:`MIN_READINGS` readings are held out one at a time
+    (a smaller one's readings stay in every fit). ``folds`` < 2: no check. NaN when fewer than two
+    regions can be held out or a fold cannot be fitted."""
     if folds < 2:
         return {}
-    edges = np.linspace(0, rec.n, folds + 1).astype(int)
+    labels, _ = regions(rec.readings)
+    counts = np.bincount(labels, minlength=6)
+    tested = [k for k in range(6) if counts[k] >= MIN_READINGS]
+    if len(tested) < 2:
+        return {"heldout_spread": float("nan"), "heldout_folds": len(tested)}
     pooled, per_fold = [], []
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        keep = np.r_[0:lo, hi:rec.n]
+    for k in tested:
+        keep = np.flatnonzero(labels != k)
         train = rec.subset(keep)
         ref = Reference(reference.total[keep], reference.source, reference.estimated)
         try:
@@ -367,12 +388,12 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
         except MagexpError:
             result = None
         if result is None or not result.success:  # a fold the model cannot fit: the model is not supported
-            return {"heldout_spread": float("nan"), "heldout_folds": folds}
-        mags = np.linalg.norm((rec.readings[lo:hi] - o) @ w.T, axis=1)
+            return {"heldout_spread": float("nan"), "heldout_folds": len(tested)}
+        mags = np.linalg.norm((rec.readings[labels == k] - o) @ w.T, axis=1)
         pooled.append(mags)
         per_fold.append(spread(mags))
     return {"heldout_spread": spread(np.concatenate(pooled)), "heldout_spread_max_fold": float(np.max(per_fold)),
-            "heldout_folds": folds}
+            "heldout_folds": len(tested)}
 
 
 def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> dict:
@@ -415,7 +436,7 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
 
 
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
-                        folds: int = 5, rng: np.random.Generator, checks: bool = True,
+                        folds: int = 6, rng: np.random.Generator, checks: bool = True,
                         model: str = "full", accept: bool = False, gate_overrides=None,
                         auto_margin: float = models_.MARGIN) -> Calibration:
     """Fit ``estimator`` to the recording ``rec``, measure how good the fit is and gate it.
@@ -427,7 +448,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     objective : ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
     reference_total : overrides the recording's reference total field (its unit), a number or a
         :class:`Reference` (with its source).
-    folds : blocks of the held-out check (0 or 1: none).
+    folds : the held-out check: 0 or 1 none; 2 or more, by regions of directions (:func:`heldout`).
     rng : the estimator's random generator.
     checks : refuse degenerate data, failed fits and calibrations failing the acceptance gate
         (:mod:`magexp.calibration.checks`); False measures them anyway.
@@ -479,7 +500,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if checks:
         check_fit(rec.name, name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
-    metrics = {**quality(rec.readings, calibrated, reference.total), **cover}
+    metrics = {**quality(rec.readings, calibrated, reference.total), **cover, **regions(rec.readings)[1]}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
@@ -589,7 +610,7 @@ def estimator_named(name: str, **overrides):
 
 
 def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objective: str = "scalar",
-              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "auto",
+              reference_total=None, folds: int = 6, seed: int = 0, checks: bool = True, model: str = "auto",
               accept: bool = False, gate=None, auto_margin: float = models_.MARGIN,
               **estimator_options) -> Calibration:
     """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.

@@ -292,7 +292,7 @@ def summary(cal) -> dict:
         "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
         "rms before": f"{m['rms_before']:.6g} {u} (|raw| - reference)",
         "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)",
-        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} contiguous blocks, each "
+        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} regions of directions, each "
                             "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
         "W std errors": "[" + "; ".join(", ".join(f"{float(v):.2g}" for v in row) for row in r["W_standard_errors"]) + "]",
