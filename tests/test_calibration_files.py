@@ -51,8 +51,8 @@ def test_an_existing_export_file_survives_a_refused_run(tmp_path, calibrate, tar
 
 
 @pytest.mark.parametrize("target", ["ardupilot", "px4", "ros"])
-def test_an_export_refused_after_the_fit_touches_nothing(tmp_path, calibrate, target):
-    """A raw-count recording without counts_nt: the export refuses after the fit. The earlier
+def test_a_refused_export_touches_nothing(tmp_path, calibrate, target):
+    """A raw-count recording without counts_nt: the export refuses (before the fit). The earlier
     calibration in out (overwrite=true) stays byte for byte, a new folder is not created."""
     path = sphere_recording(tmp_path / "counts.csv", unit="counts")
     out = tmp_path / "out"

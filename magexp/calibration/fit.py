@@ -57,7 +57,8 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
-from magexp.calibration.export import TARGETS as EXPORT_TARGETS, options_of as export_options_of
+from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, options_of as export_options_of,
+                                      render as render_export)
 from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
@@ -719,6 +720,8 @@ def run(cfg) -> Calibration:
     if target is not None and str(target) not in EXPORT_TARGETS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
     check_out(out_dir, overwrite=overwrite, export=None if target is None else str(target))
+    if target is not None:  # the export's options (counts_nt for raw counts, the rotation limit) before the fit
+        render_export(str(target), np.eye(3), np.zeros(3), rec.unit, **export_options(cfg, str(target), rec))
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
