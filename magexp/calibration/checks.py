@@ -151,9 +151,7 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
 
     held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
     if held is not None and not (held < t["heldout_vs_raw"] * raw):
-        fail("heldout", held, t["heldout_vs_raw"] * raw,
-             f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %" if np.isfinite(held) else
-             "the fit on the other regions failed for a held-out region of directions, so no held-out spread")
+        fail("heldout", held, t["heldout_vs_raw"] * raw, _heldout_text(held, raw))
     sigma = np.linalg.svd(w, compute_uv=False)
     if sigma[0] > t["max_anisotropy"] * sigma[-1]:
         fail("anisotropy", float(sigma[0] / sigma[-1]), t["max_anisotropy"],
@@ -175,18 +173,30 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
             fail("radius", raw_radius / reference, [low, high],
                  f"radius {raw_radius:.4g} is {raw_radius / reference:.3g} times the reference {reference:.4g} "
                  f"(allowed [{low:g}, {high:g}])")
-    regions = metrics.get("direction_regions")
-    if regions is not None and min(regions) < t["min_region"]:
-        empty = [k for k, f in enumerate(regions) if f < t["min_region"]]
-        where = " and ".join("[" + ", ".join(f"{v:.2f}" for v in metrics["region_axes"][k]) + "]" for k in empty)
-        failed.append({"check": "regions", "value": 6 - len(empty), "threshold": 6,
-                       "line": f"the readings' directions reach {6 - len(empty)} of the 6 regions about their principal "
-                               f"axes (under {100 * t['min_region']:g} % of them toward {where}, in the sensor's axes, "
-                               f"about the fitted centre): {ADVICE['regions']}"})
-    rms = _rms_check(metrics["rms_after"], reference, to_mg, t)
-    if rms:
-        fail(*rms)
+    for check in (_rms_check(metrics["rms_after"], reference, to_mg, t), _region_check(metrics, t)):
+        if check:
+            fail(*check)
     return failed
+
+
+def _heldout_text(held: float, raw: float) -> str:
+    """Why the held-out check failed (:func:`gate`): its spread against the raw one, or no spread at all."""
+    if np.isfinite(held):
+        return f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %"
+    return "the fit on the other regions failed for a held-out region of directions, so no held-out spread"
+
+
+def _region_check(metrics: dict, t: dict) -> tuple | None:
+    """``(check, value, threshold, text)`` when a region of directions holds less than ``min_region`` of the
+    readings (:func:`gate`; the regions of :func:`magexp.calibration.fit.regions`), naming its half-axis."""
+    regions = metrics.get("direction_regions")
+    if regions is None or min(regions) >= t["min_region"]:
+        return None
+    empty = [k for k, f in enumerate(regions) if f < t["min_region"]]
+    where = " and ".join("[" + ", ".join(f"{v:.2f}" for v in metrics["region_axes"][k]) + "]" for k in empty)
+    return ("regions", 6 - len(empty), 6,
+            f"the readings' directions reach {6 - len(empty)} of the 6 regions about their principal axes (under "
+            f"{100 * t['min_region']:g} % of them toward {where}, in the sensor's axes, about the fitted centre)")
 
 
 def _rms_check(rms: float, reference: float, to_mg, t: dict) -> tuple | None:

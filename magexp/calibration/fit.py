@@ -706,22 +706,13 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
 def run(cfg) -> Calibration:
     """Load, calibrate, check and write as ``cfg`` says; print the summary."""
     data = cfg.data
-    if data.get("path") is None or not str(data.path).strip():
-        raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
-    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
-    instance = cfg.get("instance")
-    instance = None if instance is None else check_positive_int(instance, "instance", minimum=0)
-    rec = load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
-                         mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"), instance=instance)
+    rec = recording_of(cfg)
     out = cfg.get("out")
     out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
     check_destination(out_dir if out is None else out, "out")
-    overwrite, draw, target = (flag(cfg, "overwrite"), flag(cfg, "figure"), cfg.get("export"))
-    if target is not None and str(target) not in EXPORT_TARGETS:
-        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
-    check_out(out_dir, overwrite=overwrite, export=None if target is None else str(target))
-    if target is not None:  # the export's options (counts_nt for raw counts, the rotation limit) before the fit
-        render_export(str(target), np.eye(3), np.zeros(3), rec.unit, **export_options(cfg, str(target), rec))
+    overwrite, draw = flag(cfg, "overwrite"), flag(cfg, "figure")
+    target, options = export_of(cfg, rec)
+    check_out(out_dir, overwrite=overwrite, export=target)
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
@@ -733,12 +724,37 @@ def run(cfg) -> Calibration:
                                   folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
                                   gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
     cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
-    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target),
-                  export_options=None if target is None else export_options(cfg, str(target), rec))
+    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=target, export_options=options)
     print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
                  + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
                  + ("" if draw else "; no figure (figure=true draws it)")}))
     return cal
+
+
+def recording_of(cfg) -> Recording:
+    """The recording ``data.*`` names (its size checked before it is read; ``instance``: a DataFlash log's compass)."""
+    data = cfg.data
+    if data.get("path") is None or not str(data.path).strip():
+        raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
+    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
+    instance = cfg.get("instance")
+    instance = None if instance is None else check_positive_int(instance, "instance", minimum=0)
+    return load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
+                          mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"), instance=instance)
+
+
+def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
+    """``(target, options)`` of ``export=<target>`` (``(None, None)`` without one), checked before the fit:
+    the target's name, and its options on an identity calibration (``counts_nt`` for raw counts, the
+    rotation limit, the slot: :func:`export_options`)."""
+    target = cfg.get("export")
+    if target is None:
+        return None, None
+    if str(target) not in EXPORT_TARGETS:
+        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
+    options = export_options(cfg, str(target), rec)
+    render_export(str(target), np.eye(3), np.zeros(3), rec.unit, **options)
+    return str(target), options
 
 
 def export_options(cfg, target: str, rec: Recording) -> dict:

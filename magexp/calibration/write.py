@@ -216,22 +216,9 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
     out_dir.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(dir=out_dir, prefix=".magexp-calibrate."))
     try:
-        write_text(stage / FILES["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
-        with open(stage / FILES["readings"], "w") as fh:
-            write_readings(cal, fh)
-        if draw:
-            from magexp.artifacts.plots.style import save  # lazy: matplotlib (see figure)
-
-            save(figure(cal), stage / FILES["figure"])
-        if rendered is not None:
-            write_text(stage / paths["export"].name, rendered.text)
-        for path in paths.values():
-            existed = path.exists()
-            if existed and not overwrite:  # appeared since check_out: still never overwritten
-                raise MagexpError(f"out={str(out_dir)!r} is not allowed: {path.name} appeared in it while "
-                                  "calibrating (never overwritten unless overwrite=true)")
-            os.replace(stage / path.name, path)
-            placed += [] if existed else [path]
+        _stage(cal, stage, seed=seed, draw=draw, export=None if rendered is None else (paths["export"].name,
+                                                                                        rendered.text))
+        _place(stage, list(paths.values()), overwrite=overwrite, placed=placed)
     except BaseException:  # failed or interrupted: what this call made goes, nothing else
         for path in placed:
             path.unlink(missing_ok=True)
@@ -244,6 +231,31 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
         for name in set(FILES.values()) - {p.name for p in paths.values()}:
             (out_dir / name).unlink(missing_ok=True)
     return paths
+
+
+def _stage(cal, stage: Path, *, seed, draw: bool, export: tuple[str, str] | None) -> None:
+    """Write every file of :func:`write` into the folder ``stage``: ``export`` is ``(name, text)``."""
+    write_text(stage / FILES["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
+    with open(stage / FILES["readings"], "w") as fh:
+        write_readings(cal, fh)
+    if draw:
+        from magexp.artifacts.plots.style import save  # lazy: matplotlib (see figure)
+
+        save(figure(cal), stage / FILES["figure"])
+    if export is not None:
+        write_text(stage / export[0], export[1])
+
+
+def _place(stage: Path, paths: list[Path], *, overwrite: bool, placed: list[Path]) -> None:
+    """Move each staged file onto its path (``os.replace``); a file there is replaced only with ``overwrite``
+    (one that appeared since :func:`check_out` is refused). ``placed`` gets each path this call created."""
+    for path in paths:
+        existed = path.exists()
+        if existed and not overwrite:
+            raise MagexpError(f"out={str(path.parent)!r} is not allowed: {path.name} appeared in it while "
+                              "calibrating (never overwritten unless overwrite=true)")
+        os.replace(stage / path.name, path)
+        placed += [] if existed else [path]
 
 
 def table(rows: dict) -> str:
@@ -264,7 +276,8 @@ def _gate_line(record: dict) -> str:
     if not record:
         return "not checked"
     if record["passed"]:
-        return "passed (held out beats raw; W's shape, the radius and the residual RMS plausible)"
+        return ("passed (held out beats raw, every region of directions tested; W's shape, the radius and the residual "
+                "RMS plausible)")
     return "FAILED, written because accept=true: " + "; ".join(f["line"].split(":")[0] for f in record["failed"])
 
 

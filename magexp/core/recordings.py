@@ -619,39 +619,62 @@ def read_header_row(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> 
     rows = lines[1:] if "," in lines[0] else [",".join(_header_cells(ln)) for ln in lines[1:]]
     table = _numeric_table(rows, path.name, 2, len(header))
     mag = next(names for names in MAG_COLUMNS if all(c in columns for c in names))
-    units = {columns[c][1] for c in mag}
-    if len(units) != 1:
-        raise MagexpError(f"{path.name}: magnetometer units {sorted(map(str, units))} are not allowed: give the "
-                          "three columns one unit")
-    file_unit = units.pop()
-    if file_unit is None:
-        if unit is None:
-            raise MagexpError(f"data.unit=None is not allowed for {path.name}: its header does not name the unit "
-                              f"of {', '.join(mag)}, give data.unit=<{'|'.join((*UNITS, *RAW_UNITS))}>")
-        file_unit = check_unit(unit, "data.unit")
-    else:
-        file_unit = check_unit(_UNIT_SUFFIX.get(file_unit.lower(), file_unit), f"{path.name}: magnetometer unit")
-        _same_unit(unit, file_unit, path.name)
-    time = next((c for c in TIME_COLUMNS if c in columns), None)
-    times = None if time is None else table[:, columns[time][0]]
-    if times is not None and np.any(np.diff(times) <= 0):
-        k = int(np.argmax(np.diff(times) <= 0)) + 3
-        raise MagexpError(f"{path.name} line {k}: {time}={times[k - 2]:g} is not allowed: times must increase")
+    times = _header_times(columns, table, path.name)
     rec = Recording(readings=table[:, [columns[c][0] for c in mag]] @ axis_map(mag_axes, "data.mag_axes").T,
-                    angles=None, field=None, unit=file_unit, meta={"format": "header-row"}, times=times, path=path,
+                    angles=None, field=None, unit=_header_unit(columns, mag, unit, path.name),
+                    meta={"format": "header-row"}, times=times, path=path,
                     columns={name: table[:, j] for name, (j, _) in columns.items()})
     if all(c in columns for c in GYRO):
-        if times is None:
-            raise MagexpError(f"{path.name}: gyro columns gx, gy, gz need a time column (one of "
-                              f"{', '.join(TIME_COLUMNS)}, seconds) to be integrated")
-        rate = {columns[c][1] for c in GYRO}.pop()
-        rate_unit = _RATE_SUFFIX.get(rate, rate) if rate is not None else "rad/s"
-        if rate_unit not in GYRO_UNITS:
-            raise MagexpError(f"{path.name}: gyroscope unit {rate!r} is not allowed: choose one of "
-                              f"{', '.join(GYRO_UNITS)} (suffix _dps or _rps)")
-        rates = _rates(table[:, [columns[c][0] for c in GYRO]], rate_unit)
+        rates = _header_rates(columns, table, times, path.name)
         rec.gyro_stream = (times, rates @ axis_map(gyro_axes, "data.gyro_axes").T)
     return rec
+
+
+def _one_unit(columns: dict, names, what: str, name: str) -> str | None:
+    """The one unit the header gives the columns ``names`` (None: none), else one line."""
+    units = {columns[c][1] for c in names}
+    if len(units) != 1:
+        raise MagexpError(f"{name}: {what} units {sorted(map(str, units))} are not allowed: give the three columns "
+                          "one unit")
+    return units.pop()
+
+
+def _header_unit(columns: dict, mag, unit, name: str) -> str:
+    """The magnetometer's unit: its columns' suffix (which ``data.unit`` must agree with), else ``data.unit``."""
+    suffix = _one_unit(columns, mag, "magnetometer", name)
+    if suffix is None:
+        if unit is None:
+            raise MagexpError(f"data.unit=None is not allowed for {name}: its header does not name the unit "
+                              f"of {', '.join(mag)}, give data.unit=<{'|'.join((*UNITS, *RAW_UNITS))}>")
+        return check_unit(unit, "data.unit")
+    file_unit = check_unit(_UNIT_SUFFIX.get(suffix.lower(), suffix), f"{name}: magnetometer unit")
+    _same_unit(unit, file_unit, name)
+    return file_unit
+
+
+def _header_times(columns: dict, table: np.ndarray, name: str) -> np.ndarray | None:
+    """The time column (:data:`TIME_COLUMNS`, seconds, increasing), or None."""
+    time = next((c for c in TIME_COLUMNS if c in columns), None)
+    if time is None:
+        return None
+    times = table[:, columns[time][0]]
+    if np.any(np.diff(times) <= 0):
+        k = int(np.argmax(np.diff(times) <= 0)) + 3
+        raise MagexpError(f"{name} line {k}: {time}={times[k - 2]:g} is not allowed: times must increase")
+    return times
+
+
+def _header_rates(columns: dict, table: np.ndarray, times, name: str) -> np.ndarray:
+    """The gyroscope's ``gx, gy, gz`` in rad/s (their suffix: ``dps``, ``rps``, ``(deg/s)``; none: rad/s)."""
+    if times is None:
+        raise MagexpError(f"{name}: gyro columns gx, gy, gz need a time column (one of {', '.join(TIME_COLUMNS)}, "
+                          "seconds) to be integrated")
+    rate = _one_unit(columns, GYRO, "gyroscope", name)
+    rate_unit = "rad/s" if rate is None else _RATE_SUFFIX.get(rate, rate)
+    if rate_unit not in GYRO_UNITS:
+        raise MagexpError(f"{name}: gyroscope unit {rate!r} is not allowed: choose one of {', '.join(GYRO_UNITS)} "
+                          "(suffix _dps or _rps)")
+    return _rates(table[:, [columns[c][0] for c in GYRO]], rate_unit)
 
 
 def read_versioned(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
