@@ -33,19 +33,14 @@ def _refused(tmp_path, capsys, *args):
 
 # the silent cases of issue 21, each refused with its reasons -----------------------------------------
 @needs(HMC.format("z"))
-@pytest.mark.parametrize("model", [
-    # auto fits every candidate on every fold first (the gyro model's too: about 5 s), make test-full; the
-    # refusal for too few sphere cells in make test: test_calibration_quality.py's few_directions case
-    pytest.param("auto", marks=pytest.mark.full), "full"])
-def test_rotate_about_z_with_ellipsoid_is_refused(tmp_path, capsys, model):
-    """Was: exit 0, W33 = 37.9, spread 8.98 % -> 16.77 % (24.6 % held out). The raw directions about the
-    fitted centre fill a few cells of the sphere (a turn about one axis): refused."""
+@pytest.mark.parametrize("model", ["auto", "full", "sphere"])
+def test_rotate_about_z_is_refused_as_one_plane(tmp_path, capsys, model):
+    """Was: exit 0, W33 = 37.9, spread 8.98 % -> 16.77 % (24.6 % held out). A turn about one axis, by
+    hand: its raw readings' thickness is 0.051 of their width (the plane threshold, 0.2, sits between
+    the single-axis turns' 0.051-0.079 and the multi-axis recordings' 0.48-0.82: docs/calibrate.md)."""
     line = _refused(tmp_path, capsys, f"data.path={SHARED_DATA / HMC.format('z')}", "estimator=ellipsoid",
                     f"model={model}")
-    if model == "auto":  # the sphere, the simplest model: its centre shows the raw directions of one turn
-        assert "sphere cells" in line and "record again" in line
-    else:
-        assert "calibration refused" in line and "held-out spread 24.6 % is not below the raw 8.98 %" in line
+    assert "one plane (thickness 0.051" in line and "second axis" in line
 
 
 @needs(HMC.format("z"))
@@ -57,32 +52,25 @@ def test_rotate_about_z_gate_lists_every_failure_when_measured():
     assert cal.metrics["coverage_cells"] == raw["coverage_cells"] < coverage(cal.calibrated)["coverage_cells"]
 
 
-@needs(HMC.format("x"))
-def test_rotate_about_x_full_is_refused_for_its_anisotropy(tmp_path, capsys):
-    """Was: W11 = 4.16, spread 1.0 % in sample and 7.75 % held out, exit 0."""
-    line = _refused(tmp_path, capsys, f"data.path={SHARED_DATA / HMC.format('x')}", "model=full")
-    assert "calibration refused" in line and "singular values" in line and "accept=true" in line
-
-
-@needs(HMC.format("x"))
-def test_rotate_about_x_auto_chooses_the_gyro_model_and_names_what_it_leaves_undetermined():
-    """Of the total-field models the sphere wins (the full W overfits one plane); with the gyroscope's
-    attitude the gyro-aided model beats it by far, and the report names the combination a turn about x
-    leaves undetermined (Yuan's mode 4: the offset along x trades with the column of W along it)."""
-    cal = magexp.calibrate(SHARED_DATA / HMC.format("x"), accept=True)
-    sel = cal.report["model_selection"]
-    spreads = sel["heldout_spread"]
-    assert sel["chosen"] == "gyro" and cal.report["model"] == "gyro" and "gyro" in sel["why"]
-    assert spreads["full"] > spreads["sphere"] and spreads["gyro"] < 0.5 * spreads["sphere"]
-    assert cal.metrics["heldout_spread"] < cal.metrics["spread_before"]  # held out better than raw
-    assert "o1" in cal.report["weakest_combinations"][0]["combination"]
+@pytest.mark.parametrize("axis, thickness", [("x", "0.057"), ("y", "0.079")])
+def test_a_turn_about_one_axis_is_refused_whatever_the_model(tmp_path, capsys, axis, thickness):
+    """Was (issue 33): rotate-ccw-around-y accepted with model=full (held out 0.98 % in time blocks, YSCALE
+    1.52), making the sensor's full-sphere recording 20.8 % against 13.6 % raw; rotate-ccw-around-x
+    accepted with the gyro model (4.83 % on the full sphere, ten times the full-sphere calibration's)."""
+    if not (SHARED_DATA / f"{HMC.format(axis)}_mag.csv").is_file():
+        pytest.skip(f"{HMC.format(axis)} is not present")
+    for model in ("full", "gyro", "auto"):
+        line = _refused(tmp_path, capsys, f"data.path={SHARED_DATA / HMC.format(axis)}", f"model={model}",
+                        "accept=true")
+        assert f"one plane (thickness {thickness}" in line and "second axis" in line
 
 
 @needs("xio_fusion_sensor_data.csv")
 def test_xio_sphere_recipe_is_refused_heldout_worse_than_raw(tmp_path, capsys):
-    """Was: model=sphere, 5.64 % held out against 4.80 % raw, "success"."""
+    """Was: model=sphere, 5.64 % held out against 4.80 % raw, "success". Half a sphere: the region of
+    directions toward +z is empty, so the calibration is untested there."""
     line = _refused(tmp_path, capsys, f"data.path={SHARED_DATA / 'xio_fusion_sensor_data.csv'}", "model=sphere")
-    assert "held-out spread 5.64 % is not below the raw 4.8 %" in line
+    assert "is not below the raw 4.8 %" in line and "reach 5 of the 6 regions" in line  # z stays negative
 
 
 @needs("px4_sample.ulg")
@@ -100,7 +88,7 @@ def test_accept_writes_the_failures_into_calibration_json(tmp_path, capsys):
     assert code == 0
     record = json.loads((out / "calibration.json").read_text())["quality"]["gate"]
     assert record["accepted_anyway"] and not record["passed"]
-    assert [f["check"] for f in record["failed"]] == ["heldout"]
+    assert [f["check"] for f in record["failed"]] == ["heldout", "regions"]
 
 
 # the gate on synthetic readings ---------------------------------------------------------------------
@@ -157,3 +145,21 @@ def test_gate_radius_and_rms_in_physical_units():
 def test_bad_gate_keys_are_one_line(overrides, message):
     with pytest.raises(MagexpError, match=message):
         gate_thresholds(overrides)
+
+
+@pytest.mark.full  # 30 s: every model on every HMC5883L recording (make test-full)
+@needs("hmc5883l_full-sphere")
+def test_no_accepted_hmc5883l_calibration_makes_another_recording_worse_than_raw():
+    """Issue 33's cross-table (magexp.perf.crosstable): each calibration accepted from an HMC5883L recording,
+    applied to every other one; at rest (unmoved-10min) the spread is the sensor's noise, which a
+    calibration scales by W's gain along the field: allowed within 2 % of it."""
+    from magexp.perf.crosstable import recordings, rows
+
+    table = rows(recordings())
+    accepted = {(r["source"], r["model"], r["estimator"]) for r in table if r["calibrated"] is not None}
+    assert ("full-sphere", "auto", "ellipsoid") in accepted
+    assert not any(r["source"].startswith("rotate-ccw") for r in table if r["calibrated"] is not None)
+    for r in table:
+        if r["calibrated"] is not None:
+            limit = r["raw"] * (1.02 if r["target"] == "unmoved-10min" else 1.0)
+            assert r["calibrated"] < limit, r

@@ -163,7 +163,8 @@ def test_cli_writes_the_quality_report(tmp_path, capsys):
     assert "held-out spread" in out and "polar factor" in out and "coverage" in out
     params = json.loads((tmp_path / "out" / "calibration.json").read_text())
     assert params["format"] == "magexp-calibration v3" and "polar factor" in params["W_form"]
-    assert params["metrics"]["heldout_folds"] == 3 and params["metrics"]["heldout_spread"] > params["metrics"]["spread_after"]
+    assert params["metrics"]["heldout_folds"] == 6 and params["metrics"]["heldout_spread"] > params["metrics"]["spread_after"]
+    assert min(params["metrics"]["direction_regions"]) > 0.05  # the six regions of directions, each held out
     np.testing.assert_allclose(params["W"], np.transpose(params["W"]), atol=1e-12)
     assert len(params["quality"]["offset_standard_errors"]) == 3
 
@@ -181,7 +182,9 @@ def test_half_sphere_full_model_fails_and_sphere_model_fits():
     u = random_rotations(600, rng=np.random.default_rng(6))[:, :, 0]
     u = u[u[:, 2] < -0.3]  # less than half the sphere
     r = 50.0 * u * 1.02 + OFFSET + np.random.default_rng(7).normal(0, 0.05, (len(u), 3))  # one scale only
-    cal = magexp.calibrate(r, unit="uT", model="sphere", reference_total=50.0, folds=3)
+    with pytest.raises(MagexpError, match="reach 5 of the 6 regions"):  # untested toward +z: refused
+        magexp.calibrate(r, unit="uT", model="sphere", reference_total=50.0, folds=3)
+    cal = magexp.calibrate(r, unit="uT", model="sphere", reference_total=50.0, folds=3, accept=True)
     np.testing.assert_allclose(cal.offset, OFFSET, atol=0.1)
     np.testing.assert_allclose(cal.w, np.eye(3) / 1.02, atol=2e-3)
     assert "model=sphere" in cal.report["w_form"] and cal.metrics["heldout_spread"] < 0.005

@@ -15,7 +15,7 @@ from magexp.errors import MagexpError
 
 #: Degenerate-data thresholds (see :func:`check_readings` and :func:`check_fit`).
 MIN_DISTINCT = 12
-PLANE_RATIO = 0.02   # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane
+PLANE_RATIO = 0.2    # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane (docs/calibrate.md)
 MIN_CELLS = 8        # fewer occupied cells (a quarter of the sphere): too few distinct directions
 PARTIAL = 0.75       # fewer occupied cells after a failed fit: say the coverage is partial
 ONE_ATTITUDE_DEG = 20.0  # every calibrated direction within this angle of their mean: one attitude
@@ -74,6 +74,7 @@ GATE = {
     "radius_vs_reference": (0.5, 2.0),  # the raw radius / the reference total, when a reference is given
     "max_rms_mG": 16.0,      # RMS of |calibrated| - reference (ArduPilot's COMPASS_CAL_FIT default)
     "max_rms_fraction": 0.032,  # the same, relative to the reference, for a raw-count unit (16 / 500 mG)
+    "min_region": 0.005,     # each of the 6 regions of directions holds at least this fraction of the readings
 }
 #: what to record instead, by failed check
 ADVICE = {
@@ -84,6 +85,8 @@ ADVICE = {
     "scale": "W's scale is implausible for a magnetometer: record turns about every axis",
     "radius": "the readings' radius is not an Earth field: check data.unit and that the readings are raw",
     "rms": "the calibrated total still varies too much: record slowly, away from iron and motors",
+    "regions": "no held-out check could test the calibration on attitudes there, and it is untested where the data "
+               "stop: record turns that point the sensor so",
 }
 
 
@@ -134,7 +137,10 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     spread; ``W``'s singular values ``σ`` with ``σ_max / σ_min <= max_anisotropy`` and each
     ``σ / (reference / raw_radius)`` within ``scale_range``; the raw radius within ``radius_mG``
     and, with a given reference, ``raw_radius / reference`` within ``radius_vs_reference``; the RMS of
-    ``|B| - reference`` at most ``max_rms_mG`` (or ``max_rms_fraction`` of the reference for counts).
+    ``|B| - reference`` at most ``max_rms_mG`` (or ``max_rms_fraction`` of the reference for counts); each
+    of the six regions of directions (``metrics["direction_regions"]``, :func:`magexp.calibration.fit.regions`)
+    holding at least ``min_region`` of the readings: a region below it was never held out, so the
+    calibration is untested on attitudes there.
     """
     t = GATE if thresholds is None else thresholds
     failed = []
@@ -145,8 +151,7 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
 
     held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
     if held is not None and not (held < t["heldout_vs_raw"] * raw):
-        fail("heldout", held, t["heldout_vs_raw"] * raw,
-             f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %")
+        fail("heldout", held, t["heldout_vs_raw"] * raw, _heldout_text(held, raw))
     sigma = np.linalg.svd(w, compute_uv=False)
     if sigma[0] > t["max_anisotropy"] * sigma[-1]:
         fail("anisotropy", float(sigma[0] / sigma[-1]), t["max_anisotropy"],
@@ -168,10 +173,30 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
             fail("radius", raw_radius / reference, [low, high],
                  f"radius {raw_radius:.4g} is {raw_radius / reference:.3g} times the reference {reference:.4g} "
                  f"(allowed [{low:g}, {high:g}])")
-    rms = _rms_check(metrics["rms_after"], reference, to_mg, t)
-    if rms:
-        fail(*rms)
+    for check in (_rms_check(metrics["rms_after"], reference, to_mg, t), _region_check(metrics, t)):
+        if check:
+            fail(*check)
     return failed
+
+
+def _heldout_text(held: float, raw: float) -> str:
+    """Why the held-out check failed (:func:`gate`): its spread against the raw one, or no spread at all."""
+    if np.isfinite(held):
+        return f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %"
+    return "the fit on the other regions failed for a held-out region of directions, so no held-out spread"
+
+
+def _region_check(metrics: dict, t: dict) -> tuple | None:
+    """``(check, value, threshold, text)`` when a region of directions holds less than ``min_region`` of the
+    readings (:func:`gate`; the regions of :func:`magexp.calibration.fit.regions`), naming its half-axis."""
+    regions = metrics.get("direction_regions")
+    if regions is None or min(regions) >= t["min_region"]:
+        return None
+    empty = [k for k, f in enumerate(regions) if f < t["min_region"]]
+    where = " and ".join("[" + ", ".join(f"{v:.2f}" for v in metrics["region_axes"][k]) + "]" for k in empty)
+    return ("regions", 6 - len(empty), 6,
+            f"the readings' directions reach {6 - len(empty)} of the 6 regions about their principal axes (under "
+            f"{100 * t['min_region']:g} % of them toward {where}, in the sensor's axes, about the fitted centre)")
 
 
 def _rms_check(rms: float, reference: float, to_mg, t: dict) -> tuple | None:

@@ -53,6 +53,7 @@ literals): the firmware rounds them to float32 when it loads them.
 
 from __future__ import annotations
 
+import inspect
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -120,7 +121,10 @@ def _factor(unit: str, target_unit: str, counts_nt, what: str) -> float:
         if counts_nt is None:
             raise MagexpError(f"{what} {unit!r} has no known factor to nT: give counts_nt=<nT per count of the "
                               "firmware's magnetometer driver> to export it")
-        value = float(counts_nt)
+        try:
+            value = float(counts_nt)
+        except (TypeError, ValueError):
+            value = float("nan")
         if not (np.isfinite(value) and value > 0):
             raise MagexpError(f"counts_nt={counts_nt!r} is not allowed: it must be a number > 0 (nT per count)")
         return value / UNITS[target_unit]
@@ -151,6 +155,13 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
     else:
         k_in = _factor(unit, target_unit, counts_nt, "unit")
         k_out = _factor(field_unit, target_unit, counts_nt, "field_unit")
+    try:
+        limit = float(max_rotation_deg)
+    except (TypeError, ValueError):
+        limit = float("nan")
+    if not 0 <= limit <= 180:
+        raise MagexpError(f"max_rotation_deg={max_rotation_deg!r} is not allowed: it must be a number of degrees in "
+                          "[0, 180]")
     rotation = np.eye(3)
     if symmetric:
         if np.linalg.det(w) <= 0:
@@ -158,7 +169,7 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
                               "matrix: it mirrors an axis; set the magnetometer's orientation in the firmware first")
         rotation, w = polar(w)
         angle = float(np.rad2deg(rotation_angle(rotation)))
-        if angle > max_rotation_deg:
+        if angle > limit:
             raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation): the firmware's symmetric "
                               f"matrix holds S only, so its heading would be off by up to that much; set the "
                               f"magnetometer's orientation to R in the firmware, or allow it with "
@@ -292,6 +303,13 @@ def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", no
 RENDERERS = {"ardupilot": ardupilot, "px4": px4, "ros": ros, "c": c_header}
 
 
+def options_of(target: str) -> tuple[str, ...]:
+    """The keyword options ``target``'s renderer takes (:data:`RENDERERS`), e.g. ``counts_nt``, ``instance``."""
+    if target not in RENDERERS:
+        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
+    return tuple(p.name for p in inspect.signature(RENDERERS[target]).parameters.values() if p.kind == p.KEYWORD_ONLY)
+
+
 def render(target: str, w, offset, unit: str, **options) -> Export:
     """The :class:`Export` of ``target`` (:data:`TARGETS`) for ``B = W (r − o)`` in ``unit``;
     ``options``: the target function's keywords (``field_unit``, ``counts_nt``, ``instance``,
@@ -301,16 +319,22 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
     return RENDERERS[target](w, offset, unit, **options)
 
 
+def of_calibration(cal, target: str, **options) -> Export:
+    """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.Calibration` ``cal``:
+    ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``
+    to the calibration's. Refuses (one line) before anything is written: a caller renders first."""
+    options.setdefault("field_unit", cal.field_unit)
+    notes = options.pop("notes", None) or {"recording": cal.name, "estimator": cal.estimator,
+                                             "objective": cal.objective, "magexp unit": cal.unit}
+    return render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
+
+
 def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
     """Write ``target``'s file for the :class:`~magexp.calibration.Calibration` ``cal`` to ``path``
     (a folder: :data:`FILE_NAMES` inside it; None: the working folder); never overwrites a file.
 
-    Returns the path written. ``options`` as :func:`render`; ``notes`` defaults to the recording,
-    estimator and unit."""
-    notes = options.pop("notes", None) or {"recording": cal.name, "estimator": cal.estimator,
-                                             "objective": cal.objective, "magexp unit": cal.unit}
-    out = render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
-    return write(out, path)
+    Returns the path written. ``options`` as :func:`of_calibration`."""
+    return write(of_calibration(cal, target, **options), path)
 
 
 def write(out: Export, path: str | Path | None = None) -> Path:

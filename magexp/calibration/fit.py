@@ -34,10 +34,14 @@ Degenerate data (identical readings, a plane, one attitude, too few distinct dir
 estimator reporting failure raise one :class:`~magexp.errors.MagexpError` line that says why and
 what to record instead (:mod:`magexp.calibration.checks`); the command then writes nothing.
 
-Held-out check: the readings, in time order, are cut into ``folds`` contiguous blocks; each block
-is calibrated by the estimator fitted on the others, and ``heldout_spread`` is the spread of the
-pooled held-out magnitudes (a block taken in one part of the motion tests the calibration on
-orientations the fit may not have seen: a stricter test than interleaved folds).
+Held-out check (:func:`heldout`): the readings' directions about the centre of the sphere fitted to them
+are cut into six regions, one about each half-axis ``±v_k`` of their principal axes
+(:func:`magexp.core.identifiability.direction_regions`); each region holding at least :data:`MIN_READINGS`
+readings is calibrated by the fit on the others, and ``heldout_spread`` is the spread of the pooled
+held-out magnitudes. Every region is thus tested on attitudes outside its fit (contiguous time blocks,
+the earlier folds, lie in the plane of the rest on a turn about one axis and passed a calibration that
+made the sensor's other recordings worse than raw). A region holding less than ``gate.min_region`` of
+the readings was never tested: the gate refuses the calibration (:func:`magexp.calibration.checks.gate`).
 """
 
 from __future__ import annotations
@@ -53,15 +57,17 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
-from magexp.calibration.export import TARGETS as EXPORT_TARGETS
+from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, options_of as export_options_of,
+                                      render as render_export)
 from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
 from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
-from magexp.core.identifiability import canonical, coverage, identifiability, spread
+from magexp.core.identifiability import canonical, coverage, direction_regions, identifiability, spread
 from magexp.core.field_model import field_of_recording, place_of
-from magexp.core.recordings import UNITS, Recording, check_unique, check_unit, load_recording, resolve
+from magexp.core.recordings import (MAG_COLUMNS, UNITS, Recording, check_unique, check_unit, load_recording,
+                                    resolve)
 from magexp.core.seeding import run_generators
 from magexp.errors import LARGEST, MagexpError, check_positive_int, exit_code
 from magexp.estimators.base import check_applies
@@ -230,7 +236,6 @@ class Calibration:
         """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`)."""
         from magexp.calibration.export import export  # lazy: yaml and the targets only when exporting
 
-        options.setdefault("field_unit", self.field_unit)
         return export(self, target, path, **options)
 
 
@@ -351,15 +356,32 @@ def _closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
     return w, centre, calibrated, result
 
 
+def regions(readings: np.ndarray) -> tuple[np.ndarray, dict]:
+    """``(labels, record)``: the region of directions of each reading
+    (:func:`magexp.core.identifiability.direction_regions` about the centre of the sphere fitted to them)
+    and ``{direction_regions: fraction of the readings in each, region_axes: each region's half-axis}``
+    (what the gate's ``min_region`` check reads)."""
+    labels, axes = direction_regions(readings - fit_sphere(readings)[0])
+    fractions = np.bincount(labels, minlength=6) / len(readings)
+    return labels, {"direction_regions": fractions.tolist(), "region_axes": axes.tolist()}
+
+
 def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
             model: str = "full") -> dict:
-    """Spread of each contiguous block calibrated by the fit on the others (module docstring)."""
+    """Spread of each region of directions calibrated by the fit on the others (module docstring): the
+    regions of :func:`regions` holding at least :data:`MIN_READINGS` readings are held out one at a time
+    (a smaller one's readings stay in every fit). ``folds`` < 2: no check. NaN when fewer than two
+    regions can be held out or a fold cannot be fitted."""
     if folds < 2:
         return {}
-    edges = np.linspace(0, rec.n, folds + 1).astype(int)
+    labels, _ = regions(rec.readings)
+    counts = np.bincount(labels, minlength=6)
+    tested = [k for k in range(6) if counts[k] >= MIN_READINGS]
+    if len(tested) < 2:
+        return {"heldout_spread": float("nan"), "heldout_folds": len(tested)}
     pooled, per_fold = [], []
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        keep = np.r_[0:lo, hi:rec.n]
+    for k in tested:
+        keep = np.flatnonzero(labels != k)
         train = rec.subset(keep)
         ref = Reference(reference.total[keep], reference.source, reference.estimated)
         try:
@@ -367,12 +389,12 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
         except MagexpError:
             result = None
         if result is None or not result.success:  # a fold the model cannot fit: the model is not supported
-            return {"heldout_spread": float("nan"), "heldout_folds": folds}
-        mags = np.linalg.norm((rec.readings[lo:hi] - o) @ w.T, axis=1)
+            return {"heldout_spread": float("nan"), "heldout_folds": len(tested)}
+        mags = np.linalg.norm((rec.readings[labels == k] - o) @ w.T, axis=1)
         pooled.append(mags)
         per_fold.append(spread(mags))
     return {"heldout_spread": spread(np.concatenate(pooled)), "heldout_spread_max_fold": float(np.max(per_fold)),
-            "heldout_folds": folds}
+            "heldout_folds": len(tested)}
 
 
 def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> dict:
@@ -415,7 +437,7 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
 
 
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
-                        folds: int = 5, rng: np.random.Generator, checks: bool = True,
+                        folds: int = 6, rng: np.random.Generator, checks: bool = True,
                         model: str = "full", accept: bool = False, gate_overrides=None,
                         auto_margin: float = models_.MARGIN) -> Calibration:
     """Fit ``estimator`` to the recording ``rec``, measure how good the fit is and gate it.
@@ -427,7 +449,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     objective : ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
     reference_total : overrides the recording's reference total field (its unit), a number or a
         :class:`Reference` (with its source).
-    folds : blocks of the held-out check (0 or 1: none).
+    folds : the held-out check: 0 or 1 none; 2 or more, by regions of directions (:func:`heldout`).
     rng : the estimator's random generator.
     checks : refuse degenerate data, failed fits and calibrations failing the acceptance gate
         (:mod:`magexp.calibration.checks`); False measures them anyway.
@@ -479,7 +501,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if checks:
         check_fit(rec.name, name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
-    metrics = {**quality(rec.readings, calibrated, reference.total), **cover}
+    metrics = {**quality(rec.readings, calibrated, reference.total), **cover, **regions(rec.readings)[1]}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
@@ -540,12 +562,11 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
 
 # -- the Python API --------------------------------------------------------------------------------
 def frame_readings(frame) -> np.ndarray:
-    """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``x, y, z``, ``mx, my, mz``)
-    columns, else its three numeric columns."""
+    """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``mx, my, mz``, ``x, y, z``:
+    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns."""
     cols = [str(c).strip().lower() for c in frame.columns]
     check_unique(cols, "readings")
-    pick = next((names for names in (("bx", "by", "bz"), ("x", "y", "z"), ("mx", "my", "mz"))
-                 if all(n in cols for n in names)), None)
+    pick = next((names for names in MAG_COLUMNS if all(n in cols for n in names)), None)
     chosen = frame.iloc[:, [cols.index(n) for n in pick]] if pick else frame.select_dtypes("number")
     if chosen.shape[1] != 3:
         raise MagexpError(f"readings with columns {list(frame.columns)} are not allowed: give bx, by, bz "
@@ -590,7 +611,7 @@ def estimator_named(name: str, **overrides):
 
 
 def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objective: str = "scalar",
-              reference_total=None, folds: int = 5, seed: int = 0, checks: bool = True, model: str = "auto",
+              reference_total=None, folds: int = 6, seed: int = 0, checks: bool = True, model: str = "auto",
               accept: bool = False, gate=None, auto_margin: float = models_.MARGIN,
               **estimator_options) -> Calibration:
     """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
@@ -685,18 +706,13 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
 def run(cfg) -> Calibration:
     """Load, calibrate, check and write as ``cfg`` says; print the summary."""
     data = cfg.data
-    if data.get("path") is None or not str(data.path).strip():
-        raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
-    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
-    rec = load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
-                         mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"))
+    rec = recording_of(cfg)
     out = cfg.get("out")
     out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
     check_destination(out_dir if out is None else out, "out")
-    overwrite, draw, target = (flag(cfg, "overwrite"), flag(cfg, "figure"), cfg.get("export"))
-    check_out(out_dir, overwrite=overwrite)
-    if target is not None and str(target) not in EXPORT_TARGETS:
-        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
+    overwrite, draw = flag(cfg, "overwrite"), flag(cfg, "figure")
+    target, options = export_of(cfg, rec)
+    check_out(out_dir, overwrite=overwrite, export=target)
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
@@ -708,11 +724,47 @@ def run(cfg) -> Calibration:
                                   folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
                                   gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
     cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
-    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=None if target is None else str(target))
+    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=target, export_options=options)
     print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
                  + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
                  + ("" if draw else "; no figure (figure=true draws it)")}))
     return cal
+
+
+def recording_of(cfg) -> Recording:
+    """The recording ``data.*`` names (its size checked before it is read; ``instance``: a DataFlash log's compass)."""
+    data = cfg.data
+    if data.get("path") is None or not str(data.path).strip():
+        raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
+    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
+    instance = cfg.get("instance")
+    instance = None if instance is None else check_positive_int(instance, "instance", minimum=0)
+    return load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
+                          mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"), instance=instance)
+
+
+def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
+    """``(target, options)`` of ``export=<target>`` (``(None, None)`` without one), checked before the fit:
+    the target's name, and its options on an identity calibration (``counts_nt`` for raw counts, the
+    rotation limit, the slot: :func:`export_options`)."""
+    target = cfg.get("export")
+    if target is None:
+        return None, None
+    if str(target) not in EXPORT_TARGETS:
+        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
+    options = export_options(cfg, str(target), rec)
+    render_export(str(target), np.eye(3), np.zeros(3), rec.unit, **options)
+    return str(target), options
+
+
+def export_options(cfg, target: str, rec: Recording) -> dict:
+    """The options of ``export=<target>`` from the command line (those the target takes,
+    :func:`magexp.calibration.export.options_of`): ``counts_nt``, ``max_rotation_deg`` and ``instance``, the
+    parameter slot (null: a ULog's calibration slot, else 0; a DataFlash log's instance is the one read)."""
+    slot = cfg.get("instance")
+    given = {"counts_nt": cfg.get("counts_nt"), "max_rotation_deg": cfg.get("max_rotation_deg"),
+             "instance": int(rec.meta.get("calibration_slot", 0)) if slot is None else slot}
+    return {k: v for k, v in given.items() if v is not None and k in export_options_of(target)}
 
 
 def flag(cfg, key: str) -> bool:

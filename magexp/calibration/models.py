@@ -26,14 +26,14 @@ Models of ``B = W (r - o)``, simplest first (:data:`ORDER`):
     whatever ``estimator`` is (the swarm and ellipsoid estimators do not fit it).
 
 ``model=auto`` (:func:`select`) fits each model in turn and measures its held-out spread (the
-readings cut into ``folds`` contiguous blocks, each calibrated by the fit on the others: see
+readings cut into six regions of directions, each calibrated by the fit on the others: see
 :func:`magexp.calibration.fit.heldout`). The simplest model is the start; a richer one replaces the
 current choice only if its held-out spread is below the current one's times ``1 - margin``
 (``auto_margin``, default :data:`MARGIN` = 0.1: a richer model must cut the held-out spread by at
 least a tenth; a documented default, as ``magcal`` gives none). A model whose fit fails is skipped.
 The choice, the reason and every candidate's held-out spread go into the output
 (``quality.model_selection``). ``gyro`` is a candidate where the recording has a gyroscope
-(:func:`candidates`): its held-out spread is measured the same way (magnitudes of held-out blocks, which
+(:func:`candidates`): its held-out spread is measured the same way (magnitudes of held-out regions, which
 no rotation changes), so it is chosen only where the attitude the gyroscope adds makes the magnitudes of
 readings the fit has not seen more consistent.
 
@@ -148,7 +148,7 @@ def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = F
                    f"more than the margin {100 * margin:g} %")
             chosen = name
     if chosen is None:
-        raise MagexpError("model=auto: no model could be fitted to the held-out blocks (" + ", ".join(tried) + " "
+        raise MagexpError("model=auto: no model could be fitted with a region of directions held out (" + ", ".join(tried) + " "
                           "all failed): record again while turning the sensor through as many orientations as you can")
     rejected = [f"{n} {100 * v:.3g} %" for n, v in spreads.items() if v is not None and n != chosen]
     if rejected:

@@ -24,11 +24,12 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from magexp.core.atomic import atomic_open, write_text
+from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
 from magexp.core.recordings import VERSION_LINE
 from magexp.errors import MagexpError
@@ -40,9 +41,10 @@ FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure
          "figure_vector": "calibration.pdf"}  # the figure and its vector twin (magexp.artifacts.plots.style.save)
 
 
-def check_out(out_dir: Path, *, overwrite: bool = False) -> None:
+def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = None) -> None:
     """Refuse, in one line, an output folder under ``results/`` or one that holds an output file
-    (unless ``overwrite``: then the files of an earlier calibration are replaced)."""
+    (:data:`FILES`, and the file of the ``export`` target; unless ``overwrite``: then the files of an
+    earlier calibration are replaced)."""
     out_dir = Path(out_dir).resolve()
     if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: results/ holds the reproduced papers only, "
@@ -54,7 +56,8 @@ def check_out(out_dir: Path, *, overwrite: bool = False) -> None:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is a file, not a folder")
     if not os.access(existing, os.W_OK):
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is not writable")
-    taken = [name for name in FILES.values() if (out_dir / name).exists()]
+    names = [*FILES.values(), *([export_name(export)] if export else [])]
+    taken = [name for name in names if (out_dir / name).exists()]
     if taken and not overwrite:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: it already holds {', '.join(taken)} "
                           "(never overwritten unless overwrite=true), choose another folder")
@@ -178,45 +181,81 @@ def figure(cal):
                               title=title, centre=cal.offset)
 
 
+def export_name(target: str) -> str:
+    """The file name ``export=<target>`` writes (:data:`magexp.calibration.export.FILE_NAMES`)."""
+    from magexp.calibration.export import FILE_NAMES  # lazy: the export targets only when exporting
+
+    return FILE_NAMES[target]
+
+
 def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, overwrite: bool = False,
-          export: str | None = None) -> dict:
+          export: str | None = None, export_options: dict | None = None) -> dict:
     """Write ``calibration.json``, ``calibrated.csv`` and, with ``draw``, the figure into ``out_dir``
     (checked by :func:`check_out`; ``overwrite`` replaces the files of an earlier calibration), and
-    with ``export`` the firmware file of that target beside them (:mod:`magexp.calibration.export`);
-    return their paths.
+    with ``export`` the firmware file of that target beside them (:mod:`magexp.calibration.export`,
+    ``export_options`` as :func:`magexp.calibration.export.render`); return their paths.
 
-    Each file is written atomically (:mod:`magexp.core.atomic`): a command killed midway leaves no
-    truncated file; the figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
+    Never destroys: the export is rendered first (its refusals, e.g. a rotation or a raw unit without
+    ``counts_nt``, come before any file is touched); every file is written into a hidden staging folder
+    inside ``out_dir`` and moved into place only once all are complete, a file that exists being
+    replaced only with ``overwrite``. A failure or an interruption removes the staging folder and
+    whatever this call created (the folders made for ``out_dir``, a file already moved into place),
+    nothing else. The figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
     out_dir = Path(out_dir)
-    check_out(out_dir, overwrite=overwrite)
-    created = first_missing(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    check_out(out_dir, overwrite=overwrite, export=export)
+    rendered = None
+    if export:
+        from magexp.calibration.export import of_calibration  # lazy: see export_name
+
+        rendered = of_calibration(cal, export, **(export_options or {}))
     keys = ("parameters", "readings", *(("figure", "figure_vector") if draw else ()))
     paths = {key: out_dir / FILES[key] for key in keys}
     if export:
-        from magexp.calibration.export import FILE_NAMES  # lazy: the export targets only when exporting
-
-        paths["export"] = out_dir / FILE_NAMES[export]
-    if overwrite:  # the earlier calibration's files go, a stale figure with them
-        for path in {*paths.values(), *(out_dir / name for name in FILES.values())}:
-            path.unlink(missing_ok=True)
+        paths["export"] = out_dir / export_name(export)
+    created, placed = first_missing(out_dir), []
+    out_dir.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(dir=out_dir, prefix=".magexp-calibrate."))
     try:
-        write_text(paths["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
-        with atomic_open(paths["readings"], "w") as fh:
-            write_readings(cal, fh)
-        if draw:
-            from magexp.artifacts.plots.style import save  # lazy: matplotlib (see figure)
-
-            save(figure(cal), paths["figure"])
-        if export:
-            cal.export(export, paths["export"])
-    except BaseException:  # interrupted or failed: none of this command's files stays (none existed: check_out)
-        for path in paths.values():
+        _stage(cal, stage, seed=seed, draw=draw, export=None if rendered is None else (paths["export"].name,
+                                                                                        rendered.text))
+        _place(stage, list(paths.values()), overwrite=overwrite, placed=placed)
+    except BaseException:  # failed or interrupted: what this call made goes, nothing else
+        for path in placed:
             path.unlink(missing_ok=True)
         if created is not None:
             shutil.rmtree(created, ignore_errors=True)
         raise
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    if overwrite:  # an earlier calibration's file this one did not replace (a figure) would be stale
+        for name in set(FILES.values()) - {p.name for p in paths.values()}:
+            (out_dir / name).unlink(missing_ok=True)
     return paths
+
+
+def _stage(cal, stage: Path, *, seed, draw: bool, export: tuple[str, str] | None) -> None:
+    """Write every file of :func:`write` into the folder ``stage``: ``export`` is ``(name, text)``."""
+    write_text(stage / FILES["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
+    with open(stage / FILES["readings"], "w") as fh:
+        write_readings(cal, fh)
+    if draw:
+        from magexp.artifacts.plots.style import save  # lazy: matplotlib (see figure)
+
+        save(figure(cal), stage / FILES["figure"])
+    if export is not None:
+        write_text(stage / export[0], export[1])
+
+
+def _place(stage: Path, paths: list[Path], *, overwrite: bool, placed: list[Path]) -> None:
+    """Move each staged file onto its path (``os.replace``); a file there is replaced only with ``overwrite``
+    (one that appeared since :func:`check_out` is refused). ``placed`` gets each path this call created."""
+    for path in paths:
+        existed = path.exists()
+        if existed and not overwrite:
+            raise MagexpError(f"out={str(path.parent)!r} is not allowed: {path.name} appeared in it while "
+                              "calibrating (never overwritten unless overwrite=true)")
+        os.replace(stage / path.name, path)
+        placed += [] if existed else [path]
 
 
 def table(rows: dict) -> str:
@@ -237,7 +276,8 @@ def _gate_line(record: dict) -> str:
     if not record:
         return "not checked"
     if record["passed"]:
-        return "passed (held out beats raw; W's shape, the radius and the residual RMS plausible)"
+        return ("passed (held out beats raw, every region of directions tested; W's shape, the radius and the residual "
+                "RMS plausible)")
     return "FAILED, written because accept=true: " + "; ".join(f["line"].split(":")[0] for f in record["failed"])
 
 
@@ -265,7 +305,7 @@ def summary(cal) -> dict:
         "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
         "rms before": f"{m['rms_before']:.6g} {u} (|raw| - reference)",
         "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)",
-        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} contiguous blocks, each "
+        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} regions of directions, each "
                             "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
         "W std errors": "[" + "; ".join(", ".join(f"{float(v):.2g}" for v in row) for row in r["W_standard_errors"]) + "]",

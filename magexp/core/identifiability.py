@@ -25,6 +25,9 @@ does ``magexp calibrate`` (:mod:`magexp.calibration.fit`, whose degenerate-data 
   the fraction of :data:`CELLS` equal-area cells of the sphere that hold a reading (nearest of
   a Fibonacci lattice), and ``λ_min`` of the direction scatter ``(1/N) Σ u uᵀ`` (``1/3`` for
   a full sphere, 0 for a plane or one attitude).
+* **Regions of directions** (:func:`direction_regions`): each direction assigned to the nearest of
+  the six half-axes ``±v_k`` of the principal axes ``v_k`` of the direction scatter: the regions a
+  held-out check leaves out one at a time (:func:`magexp.calibration.fit.heldout`).
 """
 
 from __future__ import annotations
@@ -51,6 +54,20 @@ def fibonacci_sphere(n: int) -> np.ndarray:
     phi = np.pi * (1 + 5**0.5) * k
     rho = np.sqrt(1 - z * z)
     return np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z])
+
+
+def direction_regions(centred: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(labels, axes)``: the region ``0..5`` of each direction ``u`` of ``centred`` (readings less a
+    centre), ``2 k + (u·v_k > 0)`` for the principal axis ``v_k`` (eigenvectors of ``(1/N) Σ u uᵀ``,
+    ``k = 0`` the smallest) on which ``u`` has its largest component, and ``axes`` ``(6, 3)``, the
+    half-axis ``±v_k`` of each region. Independent of the sensor's axes: a turn about any one axis
+    fills the four regions around it, not the two along it."""
+    u = centred / np.maximum(np.linalg.norm(centred, axis=1, keepdims=True), 1e-300)
+    vectors = np.linalg.eigh(u.T @ u / len(u))[1]
+    proj = u @ vectors
+    k = np.argmax(np.abs(proj), axis=1)
+    axes = np.repeat(vectors.T, 2, axis=0) * np.tile([-1.0, 1.0], 3)[:, None]
+    return 2 * k + (proj[np.arange(len(u)), k] > 0), axes
 
 
 def coverage(calibrated: np.ndarray) -> dict:

@@ -17,6 +17,9 @@ key                file
                    where it changes are readings, the gyroscope keeps every row
 ``header-counts``  ``Fs,<Hz>`` and ``Initialization time,<s>`` lines, then ``mx,my,mz`` and raw
                    counts (the QMC5883L file); unit ``counts``
+``header-row``     a CSV whose first row names its columns: ``x,y,z``, ``mx,my,mz`` or ``bx,by,bz``,
+                   optionally ``t`` (s), ``gx,gy,gz`` (rad/s; ``gx_dps``: deg/s), ``ax,ay,az`` (kept)
+                   (:func:`read_header_row`); unit from a suffix (``mx_uT``) or ``data.unit``
 ``ulog``           a PX4 ULog ``*.ulg`` (:mod:`magexp.core.readers.ulog`; ``pip install 'magexp[ulog]'``)
 ``dataflash``      an ArduPilot DataFlash ``*.bin`` (:mod:`magexp.core.readers.dataflash`;
                    ``magexp[dataflash]``)
@@ -570,6 +573,110 @@ def read_header_counts(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) 
                      times=np.arange(len(table)) / rate, path=path)
 
 
+#: the magnetometer columns a header row may name, first found used (:func:`read_header_row`; a DataFrame's too)
+MAG_COLUMNS = (("bx", "by", "bz"), ("mx", "my", "mz"), ("x", "y", "z"))
+#: the names of a header row's time column (seconds)
+TIME_COLUMNS = ("t", "t_s", "time", "time_s", "timestamp")
+#: a header row's column: a name, then optionally its unit as ``_<suffix>`` or `` (<unit>)``
+_COLUMN = re.compile(r"^(?P<base>[a-z][a-z0-9]*?)(?:_(?P<suffix>[a-z]+)|\s*\((?P<unit>[^)]*)\))?$")
+
+
+def _header_cells(line: str) -> list[str]:
+    """The cells of a header row: separated by commas, semicolons or tabs if it has any, else by spaces."""
+    text = line.strip()
+    return [c.strip() for c in (re.split(r"[,;\t]", text) if re.search(r"[,;\t]", text) else text.split())]
+
+
+def header_columns(line: str) -> dict[str, tuple[int, str | None]] | None:
+    """``{name: (column, unit or None)}`` of a header row that names a magnetometer (:data:`MAG_COLUMNS`),
+    else None. A column's unit comes from its ``_<suffix>`` (``mx_ut``, ``gx_dps``) or ``(<unit>)``."""
+    columns = {}
+    for j, cell in enumerate(_header_cells(line)):
+        m = _COLUMN.match(cell.lower())
+        if m is None:
+            columns[cell.lower()] = (j, None)
+            continue
+        suffix = m["suffix"]
+        known = suffix in _UNIT_SUFFIX or suffix in _RATE_SUFFIX or suffix == "s"
+        base = m["base"] if suffix is None or known else f"{m['base']}_{suffix}"
+        columns[base] = (j, m["unit"] if m["unit"] is not None else suffix if known else None)
+    return columns if any(all(c in columns for c in names) for names in MAG_COLUMNS) else None
+
+
+def read_header_row(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """A CSV whose first row names its columns: the magnetometer ``x, y, z``, ``mx, my, mz`` or ``bx, by, bz``
+    (first found of :data:`MAG_COLUMNS`; unit from a suffix, ``mx_uT`` or ``mx (uT)``, else ``data.unit``),
+    optionally a time ``t`` (seconds; :data:`TIME_COLUMNS`) and a gyroscope ``gx, gy, gz`` (rad/s, or
+    ``gx_dps`` / ``gx (deg/s)``; it needs the time column); other columns (``ax, ay, az``, ...) are kept.
+    Separated by commas, semicolons, tabs or spaces."""
+    lines = _read_lines(path)
+    header = _header_cells(lines[0]) if lines else []
+    check_unique([h.lower() for h in header], path.name)
+    columns = header_columns(lines[0]) if lines else None
+    if columns is None:
+        raise MagexpError(f"{path.name}: header {excerpt(','.join(header))} is not allowed: it must name the "
+                          f"magnetometer's columns, one of {'; '.join(', '.join(n) for n in MAG_COLUMNS)}")
+    rows = lines[1:] if "," in lines[0] else [",".join(_header_cells(ln)) for ln in lines[1:]]
+    table = _numeric_table(rows, path.name, 2, len(header))
+    mag = next(names for names in MAG_COLUMNS if all(c in columns for c in names))
+    times = _header_times(columns, table, path.name)
+    rec = Recording(readings=table[:, [columns[c][0] for c in mag]] @ axis_map(mag_axes, "data.mag_axes").T,
+                    angles=None, field=None, unit=_header_unit(columns, mag, unit, path.name),
+                    meta={"format": "header-row"}, times=times, path=path,
+                    columns={name: table[:, j] for name, (j, _) in columns.items()})
+    if all(c in columns for c in GYRO):
+        rates = _header_rates(columns, table, times, path.name)
+        rec.gyro_stream = (times, rates @ axis_map(gyro_axes, "data.gyro_axes").T)
+    return rec
+
+
+def _one_unit(columns: dict, names, what: str, name: str) -> str | None:
+    """The one unit the header gives the columns ``names`` (None: none), else one line."""
+    units = {columns[c][1] for c in names}
+    if len(units) != 1:
+        raise MagexpError(f"{name}: {what} units {sorted(map(str, units))} are not allowed: give the three columns "
+                          "one unit")
+    return units.pop()
+
+
+def _header_unit(columns: dict, mag, unit, name: str) -> str:
+    """The magnetometer's unit: its columns' suffix (which ``data.unit`` must agree with), else ``data.unit``."""
+    suffix = _one_unit(columns, mag, "magnetometer", name)
+    if suffix is None:
+        if unit is None:
+            raise MagexpError(f"data.unit=None is not allowed for {name}: its header does not name the unit "
+                              f"of {', '.join(mag)}, give data.unit=<{'|'.join((*UNITS, *RAW_UNITS))}>")
+        return check_unit(unit, "data.unit")
+    file_unit = check_unit(_UNIT_SUFFIX.get(suffix.lower(), suffix), f"{name}: magnetometer unit")
+    _same_unit(unit, file_unit, name)
+    return file_unit
+
+
+def _header_times(columns: dict, table: np.ndarray, name: str) -> np.ndarray | None:
+    """The time column (:data:`TIME_COLUMNS`, seconds, increasing), or None."""
+    time = next((c for c in TIME_COLUMNS if c in columns), None)
+    if time is None:
+        return None
+    times = table[:, columns[time][0]]
+    if np.any(np.diff(times) <= 0):
+        k = int(np.argmax(np.diff(times) <= 0)) + 3
+        raise MagexpError(f"{name} line {k}: {time}={times[k - 2]:g} is not allowed: times must increase")
+    return times
+
+
+def _header_rates(columns: dict, table: np.ndarray, times, name: str) -> np.ndarray:
+    """The gyroscope's ``gx, gy, gz`` in rad/s (their suffix: ``dps``, ``rps``, ``(deg/s)``; none: rad/s)."""
+    if times is None:
+        raise MagexpError(f"{name}: gyro columns gx, gy, gz need a time column (one of {', '.join(TIME_COLUMNS)}, "
+                          "seconds) to be integrated")
+    rate = _one_unit(columns, GYRO, "gyroscope", name)
+    rate_unit = "rad/s" if rate is None else _RATE_SUFFIX.get(rate, rate)
+    if rate_unit not in GYRO_UNITS:
+        raise MagexpError(f"{name}: gyroscope unit {rate!r} is not allowed: choose one of {', '.join(GYRO_UNITS)} "
+                          "(suffix _dps or _rps)")
+    return _rates(table[:, [columns[c][0] for c in GYRO]], rate_unit)
+
+
 def read_versioned(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
     """The ``magexp-recording v1`` CSV (module docstring)."""
     return _versioned(_read_lines(path), path.name, unit)
@@ -612,6 +719,7 @@ READERS = {
     "two-stream": read_two_stream,
     "named-columns": read_named_columns,
     "header-counts": read_header_counts,
+    "header-row": read_header_row,
     "ulog": _log_reader("ulog", "read_ulog"),
     "dataflash": _log_reader("dataflash", "read_dataflash"),
     "rosbag": _log_reader("rosbag", "read_rosbag"),
@@ -637,11 +745,13 @@ def detect(path: Path) -> str:
         return "header-counts"
     if _NAMED.match(first.split(",")[-1] if "," in first else ""):
         return "named-columns"
+    if header_columns(first) is not None:
+        return "header-row"
     return "plain" if _is_plain(head) else "magexp-v1"
 
 
 def load_recording(path: str | Path, *, unit: str | None = None, format: str = "auto",
-                   mag_axes: str | None = None, gyro_axes: str | None = None) -> Recording:
+                   mag_axes: str | None = None, gyro_axes: str | None = None, instance: int | None = None) -> Recording:
     """Read a recording in any format of :data:`READERS` (see the module docstring).
 
     Parameters
@@ -653,6 +763,8 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
     format : a key of :data:`READERS`, or ``auto`` (:func:`detect`).
     mag_axes, gyro_axes : signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`);
         None keeps the format's default.
+    instance : the compass (and IMU) instance of a DataFlash log (0: the first; None: 0); the other
+        formats hold one magnetometer and ignore it.
 
     Raises
     ------
@@ -674,6 +786,8 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
         options["mag_axes"] = mag_axes
     if gyro_axes is not None:
         options["gyro_axes"] = gyro_axes
+    if instance is not None and key == "dataflash":
+        options["instance"] = instance
     rec = READERS[key](file, **options)
     rec.meta.setdefault("format", key)
     rec.path = rec.path or file
