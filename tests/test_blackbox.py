@@ -9,20 +9,14 @@ from magexp.estimators.cmaes import CMAES
 from magexp.estimators.de import DifferentialEvolution
 from magexp.estimators.lm import LevenbergMarquardt
 from magexp.problems import make_problem
+from magexp.run.compose import compose_config
 from magexp.run.runner import build
 
 
 @pytest.fixture(scope="module")
 def ding1():
     """Ding 2024 simulation 1 (A = 2 nT, 300 readings) and the least-squares optimum of its RMS."""
-    from hydra import compose, initialize_config_dir
-    from hydra.core.global_hydra import GlobalHydra
-
-    from magexp.paths import CONF
-
-    GlobalHydra.instance().clear()
-    with initialize_config_dir(config_dir=str(CONF), version_base=None):
-        cfg = compose("config", overrides=["scenario=ding2024_exp1", "scenario.noise=2"])
+    cfg = compose_config(["scenario=ding2024_exp1", "scenario.noise=2"])  # the scenario schemas registered
     sc = build(cfg.scenario, "scenario")
     problem = make_problem("scalar", sc.generate(rng=np.random.default_rng(0)), sc.search)
     return problem, LevenbergMarquardt().fit(problem).fun

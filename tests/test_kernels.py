@@ -1,5 +1,6 @@
-"""The fused costs: compiled and numpy kernels agree to 1e-9, chunking changes nothing, and the
-compiled kernels give the same bits in every call and every process."""
+"""The fused costs: compiled and numpy kernels agree to 1e-9, neither chunking nor the other particles
+evaluated alongside change a particle's bits, and the compiled kernels give the same bits in every
+call and every process."""
 
 import subprocess
 import sys
@@ -10,7 +11,7 @@ import pytest
 from magexp.errors import MagexpError
 from magexp.problems import kernels
 
-pytestmark = pytest.mark.skipif(kernels.compiled() is None, reason="numba not installed")
+needs_numba = pytest.mark.skipif(kernels.compiled() is None, reason="numba not installed or MAGEXP_NUMBA=0")
 
 
 def swarm(n_readings, n_particles, seed=0):
@@ -23,6 +24,7 @@ def swarm(n_readings, n_particles, seed=0):
     return readings, w, o
 
 
+@needs_numba
 @pytest.mark.parametrize("n_readings, n_particles", [(1, 1), (7, 3), (300, 50), (2000, 600)])
 def test_scalar_kernels_agree_with_the_direct_formula(n_readings, n_particles):
     readings, w, o = swarm(n_readings, n_particles)
@@ -40,6 +42,7 @@ def test_scalar_kernels_agree_with_the_direct_formula(n_readings, n_particles):
                                rtol=1e-12, atol=1e-9)
 
 
+@needs_numba
 @pytest.mark.parametrize("n_readings, n_particles", [(1, 1), (7, 3), (300, 50), (2000, 600)])
 def test_vector_kernels_agree_with_the_direct_formula(n_readings, n_particles):
     readings, w, o = swarm(n_readings, n_particles)
@@ -50,17 +53,44 @@ def test_vector_kernels_agree_with_the_direct_formula(n_readings, n_particles):
     np.testing.assert_allclose(fused, direct, rtol=1e-9)
 
 
-def test_chunking_does_not_change_the_fallback(monkeypatch):
-    """A chunk of 7 particle-readings (many chunks, a ragged last one) gives the unchunked value."""
-    readings, w, o = swarm(101, 5)
-    reference = np.linalg.norm(readings, axis=1)
+def fallback_costs(w, o, readings):
+    """The numpy fallback's scalar, vector and squared-vector costs of ``(w, o)`` on ``readings``."""
     from magexp.core.ellipsoid import normalise
 
     c, s, u = normalise(readings)
-    whole = kernels.scalar_cost_numpy(w, o, c, s, u, reference), kernels.vector_cost_numpy(w, o, readings, readings)
+    return np.concatenate([kernels.scalar_cost_numpy(w, o, c, s, u, np.linalg.norm(readings, axis=1)),
+                           kernels.vector_cost_numpy(w, o, readings, readings),
+                           kernels.vector_cost_numpy(w, o, readings, readings, squared=True)])
+
+
+def test_chunking_does_not_change_the_fallback(monkeypatch):
+    """A chunk of 7 particle-readings (many chunks, a ragged last one) gives the unchunked bits: the
+    sums run reading after reading across the chunks."""
+    readings, w, o = swarm(101, 5)
+    whole = fallback_costs(w, o, readings)
     monkeypatch.setattr(kernels, "CHUNK", 7)
-    np.testing.assert_allclose(kernels.scalar_cost_numpy(w, o, c, s, u, reference), whole[0], rtol=1e-12)
-    np.testing.assert_allclose(kernels.vector_cost_numpy(w, o, readings, readings), whole[1], rtol=1e-12)
+    np.testing.assert_array_equal(fallback_costs(w, o, readings), whole)
+
+
+@pytest.mark.parametrize("n_readings, n_particles", [(7, 3), (300, 50), (2000, 2)])
+def test_a_particles_cost_does_not_depend_on_the_particles_beside_it(n_readings, n_particles):
+    """Each particle alone, and the swarm in another order, give each particle the bits it has in
+    the whole swarm: in the numpy fallback and in the path in use (compiled unless MAGEXP_NUMBA=0).
+    So a fit's ``fun``, recorded from a whole population, is ``cost(x)`` of its ``x`` (the
+    black-box estimators' callbacks check that)."""
+    from magexp.core.ellipsoid import normalise
+
+    readings, w, o = swarm(n_readings, n_particles)
+    c, s, u = normalise(readings)
+    reference = np.linalg.norm(readings, axis=1)
+    order = np.random.default_rng(1).permutation(n_particles)
+    for cost in (lambda w, o: fallback_costs(w, o, readings).reshape(3, -1),
+                 lambda w, o: np.stack([kernels.scalar_cost(w, o, c, s, u, reference),
+                                        kernels.vector_cost(w, o, readings, readings)])):
+        whole = cost(w, o)
+        alone = np.column_stack([cost(w[k:k + 1], o[k:k + 1]) for k in range(n_particles)])
+        np.testing.assert_array_equal(alone, whole)
+        np.testing.assert_array_equal(cost(w[order], o[order]), whole[:, order])
 
 
 def test_fallback_is_used_without_numba(monkeypatch):
@@ -95,6 +125,7 @@ print(hashlib.sha256(nb.scalar_cost(w, o, c, s, u, ref).tobytes() + nb.vector_co
 """
 
 
+@needs_numba
 @pytest.mark.full  # two fresh processes (make test-full); the in-process bit tests: test_determinism.py
 def test_compiled_kernels_are_bitwise_reproducible_across_processes():
     """No fastmath, no threads: two fresh processes give the same bits (and so does this one)."""
@@ -106,6 +137,7 @@ def test_compiled_kernels_are_bitwise_reproducible_across_processes():
     assert namespace["namespace_out"] == runs[0].strip()
 
 
+@needs_numba
 @pytest.mark.parametrize("objective", ["scalar", "vector"])
 def test_the_lean_swarm_cost_gives_the_kernels_bits(objective):
     """``problem.cost`` through the prepared compiled entry (:func:`kernels.swarm_cost`) equals the

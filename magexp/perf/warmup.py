@@ -9,6 +9,10 @@ per-iteration path of a boundary that draws (``random``), and the compiled resid
 recording. Nothing is written outside the package's own ``__pycache__`` folders and the run
 cache is not used.
 
+numba keys the stored code by its target (CPU name and features, with the source): a process with
+another target (``NUMBA_CPU_NAME=generic``, or the folder copied to another machine) compiles and
+stores its own beside it and never loads code built for other instructions (a test checks the key).
+
 Usage: ``python -m magexp.perf.warmup`` (a no-op printing one line when numba is unavailable).
 """
 

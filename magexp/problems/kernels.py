@@ -8,7 +8,11 @@ compute the same numbers:
   loop vectorises without reassociating any sum: no ``fastmath``, no threads, the same bits in
   every process; ``cache=True`` stores the machine code beside this module);
 * a pure-numpy fallback, chunked over readings (at most :data:`CHUNK` particle-readings per
-  temporary), used when numba is missing or ``MAGEXP_NUMBA=0``; the tests compare both to 1e-9.
+  temporary), used when numba is missing or ``MAGEXP_NUMBA=0``: the compiled kernel's operations
+  in its order, element by element (no BLAS product, whose sums depend on the shape of the whole
+  swarm), so that in both a particle's cost does not depend on the particles evaluated with it nor
+  on the chunks (checked bit for bit; a fitted ``fun`` is ``cost(x)``); the tests compare the two
+  implementations to 1e-9 (they gave the same bits on the machines measured).
 
 numba is imported on the first swarm-cost call only: a closed-form run (``ellipsoid``, ``lm``) on
 fewer than :data:`COMPILE_MIN_READINGS` readings never pays for it; from that size on, the scalar
@@ -73,12 +77,14 @@ def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
 
 # -- scalar objective ----------------------------------------------------------------------------
 def scalar_coefficients(w: np.ndarray, o: np.ndarray, centre: np.ndarray, scale: float) -> np.ndarray:
-    """The ten quadratic-form coefficients of every particle, shape ``(P, 10)`` (module docstring)."""
-    a = scale**2 * np.einsum("nki,nkj->nij", w, w)
+    """The ten quadratic-form coefficients of every particle, shape ``(P, 10)`` (module docstring),
+    element by element in the compiled kernel's order (no sum left to a library)."""
+    a = scale * scale * (w[:, 0, :, None] * w[:, 0, None, :] + w[:, 1, :, None] * w[:, 1, None, :]
+                         + w[:, 2, :, None] * w[:, 2, None, :])
     op = (o - centre) / scale
-    ao = np.einsum("nij,nj->ni", a, op)
+    ao = a[:, :, 0] * op[:, None, 0] + a[:, :, 1] * op[:, None, 1] + a[:, :, 2] * op[:, None, 2]
     return np.column_stack([a[:, 0, 0], a[:, 1, 1], a[:, 2, 2], a[:, 0, 1], a[:, 0, 2], a[:, 1, 2],
-                            -2 * ao, np.einsum("ni,ni->n", ao, op)])
+                            -2 * ao, ao[:, 0] * op[:, 0] + ao[:, 1] * op[:, 1] + ao[:, 2] * op[:, 2]])
 
 
 def _chunks(n: int, n_particles: int):
@@ -86,13 +92,33 @@ def _chunks(n: int, n_particles: int):
     return (slice(k, min(k + step, n)) for k in range(0, n, step))
 
 
+def _add_rows(acc: np.ndarray, terms: np.ndarray) -> None:
+    """``acc += terms[0] + terms[1] + ...`` column by column, one row after another: the order of the
+    compiled kernels' accumulators (one reading after another), so a particle's sum depends neither on
+    the particles beside it nor on the chunks. ``terms`` (rows, P) is overwritten. numpy reduces the
+    rows of several columns one after another, but a lone column pairwise: that one is accumulated."""
+    terms[0] += acc
+    if terms.shape[1] == 1:
+        acc[0] = np.add.accumulate(terms[:, 0])[-1]
+    else:
+        np.add.reduce(terms, axis=0, out=acc)
+
+
 def scalar_cost_numpy(w, o, centre, scale, u, reference) -> np.ndarray:
-    """Total-field RMS of every particle: ``features @ coefficients`` chunk by chunk (fallback)."""
-    coef = scalar_coefficients(w, o, centre, scale).T  # (10, P)
+    """Total-field RMS of every particle (fallback), chunk by chunk: the compiled kernel's operations
+    in its order, element by element over (readings, particles) arrays (the ten products added left
+    to right, the squared errors summed reading after reading, :func:`_add_rows`). A particle's cost
+    does not depend on the particles evaluated with it (a BLAS product's would)."""
+    coef = scalar_coefficients(w, o, centre, scale).T.copy()  # (10, P), contiguous rows
     acc = np.zeros(coef.shape[1])
     for rows in _chunks(len(u), coef.shape[1]):
-        err = np.sqrt(np.maximum(quadratic_features(u[rows]) @ coef, 0.0)) - reference[rows, None]
-        acc += np.einsum("np,np->p", err, err)
+        f = quadratic_features(u[rows]).T[:, :, None]  # (10, rows, 1)
+        q, tmp = f[0] * coef[0], np.empty((rows.stop - rows.start, coef.shape[1]))
+        for k in range(1, 10):
+            q += np.multiply(f[k], coef[k], out=tmp)
+        err = np.sqrt(np.maximum(q, 0.0, out=q), out=q)
+        err -= reference[rows, None]
+        _add_rows(acc, np.multiply(err, err, out=err))
     return np.sqrt(acc / len(u))
 
 
@@ -116,20 +142,25 @@ def scalar_residuals(w, o, readings, reference) -> np.ndarray:
 
 # -- vector objective ----------------------------------------------------------------------------
 def vector_cost_numpy(w, o, readings, reference, *, squared: bool = False) -> np.ndarray:
-    """``F`` of every particle: residual components as one product per chunk (fallback).
-
-    ``e_ij = [r_i^T, 1, v_i^T] [-W_j., (W o)_j, u_j^T]^T`` (``u_j`` the j-th unit vector).
+    """``F`` of every particle (fallback), chunk by chunk: the compiled kernel's operations in its
+    order, element by element over (readings, particles) arrays (``d = r_i - o``,
+    ``e_j = v_ij - (W_j0 d_0 + W_j1 d_1 + W_j2 d_2)``, ``|e|`` summed reading after reading,
+    :func:`_add_rows`), so a particle's ``F`` does not depend on the particles evaluated with it.
     ``squared=True`` sums ``|e_i|^2`` instead of ``|e_i|`` (the least-squares form).
     """
-    n_p = len(w)
-    coef = np.concatenate([-w, np.einsum("nij,nj->ni", w, o)[:, :, None],
-                           np.broadcast_to(np.eye(3), (n_p, 3, 3))], axis=2).reshape(3 * n_p, 7)
-    acc = np.zeros(n_p)
-    for rows in _chunks(len(readings), 3 * n_p):
-        feat = np.column_stack([readings[rows], np.ones(rows.stop - rows.start), reference[rows]]).T
-        err = (coef @ feat).reshape(n_p, 3, -1)
-        sq = np.einsum("nkj,nkj->nj", err, err)
-        acc += (sq if squared else np.sqrt(sq)).sum(axis=1)
+    acc = np.zeros(len(w))
+    for rows in _chunks(len(readings), len(w)):
+        r, v = readings[rows], reference[rows]
+        d = [r[:, k, None] - o[:, k] for k in range(3)]  # (rows, P) each
+        tmp, sq = np.empty_like(d[0]), None
+        for j in range(3):
+            e = w[:, j, 0] * d[0]
+            e += np.multiply(w[:, j, 1], d[1], out=tmp)
+            e += np.multiply(w[:, j, 2], d[2], out=tmp)
+            e = np.subtract(v[:, j, None], e, out=e)
+            e *= e
+            sq = e if sq is None else np.add(sq, e, out=sq)
+        _add_rows(acc, sq if squared else np.sqrt(sq, out=sq))
     return acc
 
 
