@@ -119,3 +119,25 @@ def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypat
     monkeypatch.setattr(report, "load_paper", lambda paper: Paper(title="p", headline=typo))
     with pytest.raises(MagexpError, match="'art.nope' names no claim"):
         report.headlines("p", specs, outcomes, lambda name: table)
+
+
+def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
+    """ding2024_ext_boundary's caption said 30 seeds over 100-seed runs, ding2024_fig6's and yuan2018_fig2-4's
+    "10 seeds" (their own runs) for the 30-seed tables they point to: ``{seeds}`` counts an artifact's own
+    runs, ``{seeds:<artifact>}`` another's, and no caption types a count."""
+    from types import SimpleNamespace
+
+    from magexp.artifacts.plan import paper_specs
+    from magexp.artifacts.report import _prose
+    from magexp.artifacts.spec import papers
+
+    typed = [(s.name, m.group(0)) for p in papers() for s in paper_specs(p) if s.caption
+             for m in [re.search(r"\b\d+ (seeds|runs)\b", str(s.caption))] if m]
+    assert typed == []
+    spec = SimpleNamespace(name="fig", seeds=10)
+    own = pd.DataFrame({"seed": range(10)})
+    runs = {"table": pd.DataFrame({"seed": list(range(30)) * 2})}.get
+    text = "{seeds} runs drawn; the table over {seeds:table} seeds"
+    assert _prose(spec, text, own, runs) == "10 runs drawn; the table over 30 seeds"
+    with pytest.raises(MagexpError, match="no runs of 'other'"):
+        _prose(spec, "{seeds:other}", own, runs)
