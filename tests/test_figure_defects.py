@@ -253,3 +253,157 @@ def test_a_symlog_axis_from_zero_ticks_zero_then_the_decades_above_linthresh():
     assert "eq 8 minimised" in [t.get_text() for legend in legends for t in legend.get_texts()]
     assert defects(fig) == []
     plt.close(fig)
+
+
+# issue 32: the defects of the listed figures, each caught or prevented by what it is
+
+def test_a_config_name_in_a_legend_title_or_table_header_is_found():
+    """yan2022_fig3's legend read ``yan2022_paper_mockup``; a case's tick label may name its scenario."""
+    from magexp.artifacts.plots.check import raw_names
+
+    fig, (a, b) = plt.subplots(1, 2)
+    a.plot([0, 1], label="Be1 (yan2022_paper_mockup)")
+    a.plot([0, 1], [1, 0], label="Be1 (the paper's K, Bp)")
+    a.legend()
+    b.table(cellText=[["1"]], colLabels=["yan2022_paper_sim"], loc="center")
+    b.set_xticks([0], ["ding2024_exp1"])
+    found = raw_names(fig)
+    assert len(found) == 2 and all("yan2022_paper" in d for d in found)
+    plt.close(fig)
+
+
+def test_a_marker_cut_by_the_axes_edge_is_found_and_a_padded_symlog_axis_draws_it_whole():
+    """yan2022_fig_noise drew the paper's diamonds at x = 100, on the right edge, and the points at 0 on
+    the left one."""
+    from magexp.artifacts.plots.check import clipped_markers
+
+    fig, ax = plt.subplots()
+    ax.plot([0, 1, 2], [1, 2, 3], "o")
+    ax.plot([2], [2], "D", ms=8, label="paper's value")
+    ax.set_xlim(0, 2)
+    fig.draw_without_rendering()
+    found = clipped_markers(fig)
+    assert len(found) == 1 and "3 marker(s)" in found[0] and "paper's value" in found[0]
+    ax.set_xlim(-0.2, 2.2)
+    fig.draw_without_rendering()
+    assert clipped_markers(fig) == []
+    plt.close(fig)
+    spec = OmegaConf.create({"title": "t", "kind": "final", "plot": {"x": "scenario.noise", "metric": "k_error", "xscale": "symlog",
+                                                                     "linthresh": 1.0},
+                             "summarise": [{"quantity": "k_error", "metric": "k_error"}],
+                             "reported": [{"quantity": "k_error", "match": {"scenario.noise": 100}, "value": 1e-4}]})
+    rows = [{"scenario.noise": a, "estimator": "kf", "objective": "ship", "metric": "k_error", "median": 1e-6 * (1 + a),
+             "q25": 0.9e-6 * (1 + a), "q75": 1.1e-6 * (1 + a)} for a in (0, 0.3, 1, 10, 100)]
+    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    assert defects(fig) == [] and fig.axes[0].get_xlim()[0] < 0
+    plt.close(fig)
+
+
+def test_a_log_axis_labelled_at_one_decade_is_found_and_tidy_ticks_label_its_range():
+    """benchmark_speed labelled its ratio axis only at 0.9 and 1 while points reached 1.8."""
+    from magexp.artifacts.plots.check import unlabelled_log_range
+    from magexp.artifacts.plots.style import narrow_log_ticks, tidy_log_axes
+
+    fig, ax = plt.subplots()
+    ax.plot([1e-3, 1e-2], [0.88, 1.8], "o")
+    ax.set_yscale("log")
+    ax.set_ylim(0.85, 1.9)
+    fig.draw_without_rendering()
+    assert len(unlabelled_log_range(fig)) == 1
+    tidy_log_axes(fig)
+    fig.draw_without_rendering()
+    assert unlabelled_log_range(fig) == []
+    assert [t.get_text() for t in ax.get_yticklabels() if ax.get_ylim()[0] <= t.get_position()[1] <= 1.9] == ["0.9", "1", "1.2", "1.5"]
+    plt.close(fig)
+    assert narrow_log_ticks(0.5, 2.0) == [0.5, 1.0, 2.0]
+    assert narrow_log_ticks(0.5, 2.0, at_least=5) == [0.5, 0.7, 1.0, 1.5, 2.0]
+    assert len(narrow_log_ticks(0.56, 0.601)) >= 2  # too narrow for any mantissa set: round values
+
+
+def test_text_below_the_readable_size_is_found():
+    from magexp.artifacts.plots.check import small_text
+
+    fig, ax = plt.subplots()
+    ax.plot([0, 1])
+    ax.text(0.5, 0.5, "7 px", fontsize=6)
+    assert len(small_text(fig)) == 1
+    plt.close(fig)
+
+
+def _heatmap_frame():
+    rows = [{"case": c, "estimator": e, "bound_ratio": v, "bound_ratio_lo": 0.9 * v, "bound_ratio_hi": 1.1 * v,
+             "success_rate": 1.0, "n_seeds": 40, "n_failed": 0}
+            for c, e, v in (("a", "lm", 1.8), ("a", "pso", 0.8), ("b", "lm", 1.0), ("b", "pso", 1.2))]
+    rows += [{"case": "mockup", "estimator": e, "bound_ratio": np.nan, "bound_ratio_lo": np.nan, "bound_ratio_hi": np.nan,
+              "success_rate": 1.0, "n_seeds": 40, "n_failed": 0} for e in ("lm", "pso")]
+    return pd.DataFrame(rows)
+
+
+def test_a_heat_map_colours_each_cell_by_the_ratio_it_prints_on_a_bar_labelled_in_ratios():
+    """benchmark_heatmap coloured log10 of the ratio, printed the ratio in 6 pt and kept a column of "—"."""
+    spec = OmegaConf.create({"title": "t", "kind": "heatmap", "plot": {"metric": "bound_ratio"}})
+    fig = kind_module("heatmap").draw(_heatmap_frame(), spec)
+    ax, bar = fig.axes
+    image = ax.images[0]
+    printed = [float(t.get_text().split("\n")[0]) for t in ax.texts]
+    assert sorted(np.ma.compressed(image.get_array()).tolist()) == sorted(printed) == [0.8, 1.0, 1.2, 1.8]
+    assert image.norm(1.0) == pytest.approx(0.5) and image.norm(2.0) == pytest.approx(1.0)  # 1 at the centre
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["a", "b"]  # no column without a value
+    assert [t.get_text() for t in bar.get_yticklabels()] == ["0.5", "0.7", "1", "1.5", "2"]
+    assert min(t.get_fontsize() for t in ax.texts) >= 8 and defects(fig) == []
+    plt.close(fig)
+
+
+def test_a_panel_of_round_off_errors_draws_zero_and_says_so():
+    """ding2024_fig6's A = 0 panel drew the ±1e-9 the CSV writes for round-off, as if it were data."""
+    spec = OmegaConf.create({"title": "t", "kind": "field", "plot": {"panels": "scenario.noise", "quantity": "error"}})
+    frame = pd.DataFrame({"scenario.noise": [0] * 4 + [2] * 4, "reading": list(range(4)) * 2, "seed": 0,
+                          "outcome": "succeeded", "error": [1e-9, -1e-9, 0.0, 1e-9, 0.5, -1.2, 0.3, 0.9]})
+    fig = kind_module("field").draw(frame, spec)
+    exact, noisy = fig.axes
+    assert list(exact.lines[0].get_ydata()) == [0.0] * 4 and "round-off" in exact.get_title()
+    assert exact.get_ylim() == noisy.get_ylim() and "RMS" in noisy.get_title()
+    plt.close(fig)
+
+
+def test_a_table_prints_a_stated_value_in_the_estimators_cell_and_no_empty_column():
+    """yan2022_table_sim had a "paper states" column empty on 14 of its 16 rows."""
+    spec = OmegaConf.create({"title": "t", "kind": "estimates", "plot": {"names": {"paper_sim": "paper's estimate"}},
+                             "summarise": [{"quantity": "k_error", "metric": "k_error"}],
+                             "reported": [{"quantity": "k_error", "match": {"estimator": "kf"}, "value": 1e-4}]})
+    frame = pd.DataFrame([{"estimator": e, "quantity": q, "median": v, "q25": v, "q75": v, "truth": t, "n_seeds": 30}
+                          for e, q, v, t in (("paper_sim", "K11", 0.9499, 0.95), ("kf", "K11", 0.95, 0.95),
+                                             ("paper_sim", "k_error", 6e-4, np.nan), ("kf", "k_error", 4e-3, np.nan))])
+    fig = kind_module("estimates").draw(frame, spec)
+    cells = fig.axes[0].tables[0].get_celld()
+    header = [cells[(0, c)].get_text().get_text() for c in range(3)]
+    assert header == ["truth", "paper's estimate", "kf"]
+    assert cells[(2, 2)].get_text().get_text().endswith("paper: 0.0001") and defects(fig) == []
+    plt.close(fig)
+
+
+def test_final_draws_a_papers_levels_in_the_panels_they_match():
+    """ding2024_ext_pso_settings did not draw the paper's PSO values, the point of the figure."""
+    spec = OmegaConf.create({"title": "t", "kind": "final",
+                             "plot": {"x": "w", "panels": "scenario.noise",
+                                      "levels": [{"label": "paper's PSO value", "match": {"scenario.noise": 2}, "value": 8.35},
+                                                 {"label": "paper's PSO value", "match": {"scenario.noise": 5}, "value": 87.7}]}})
+    rows = [{"w": w, "scenario.noise": a, "estimator": "pso", "objective": "scalar", "metric": "fun", "median": a * w,
+             "q25": a * w, "q75": a * w} for a in (2, 5, 10) for w in (0.4, 0.9)]
+    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    drawn = [[ln.get_ydata()[0] for ln in ax.lines if ln.get_label() == "paper's PSO value"] for ax in fig.axes[:3]]
+    assert drawn == [[8.35], [87.7], []] and defects(fig) == []
+    plt.close(fig)
+
+
+def test_the_distances_from_least_squares_agree_with_the_runs():
+    """yan2022_fig3's lower row (|estimate - ls| per parameter) recomputes the runs' own k_vs_ls and
+    bp_vs_ls (largest distance of K and of Bp from least squares) for the filter's last step and for the
+    paper's values: what the caption discusses is drawn from the same numbers."""
+    frame = pd.read_csv(RESULTS / "yan2022" / "yan2022_fig3.csv")
+    runs = pd.read_csv(RESULTS / "yan2022" / "yan2022_fig3_runs.csv").set_index("estimator")
+    last = frame[(frame.kind == "distance") & (frame.step == frame.step.max())].set_index("parameter")["median"]
+    paper = frame[frame.kind == "distance_reference"].set_index("parameter")["median"]
+    for est, dist in (("kf", last), ("yan2022_paper_mockup", paper)):
+        assert dist.filter(like="K").max() == pytest.approx(runs.loc[est, "k_vs_ls"], rel=1e-4)
+        assert dist.filter(like="Bp").max() == pytest.approx(runs.loc[est, "bp_vs_ls"], rel=1e-4)

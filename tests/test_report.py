@@ -119,3 +119,23 @@ def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypat
     monkeypatch.setattr(report, "load_paper", lambda paper: Paper(title="p", headline=typo))
     with pytest.raises(MagexpError, match="'art.nope' names no claim"):
         report.headlines("p", specs, outcomes, lambda name: table)
+
+
+def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
+    """ding2024_ext_boundary's caption said 30 seeds over 100-seed runs, ding2024_fig6's and yuan2018_fig2-4's
+    "10 seeds" (their own runs) for the 30-seed tables they point to: ``{seeds}`` counts an artifact's own
+    runs, ``{seeds:<artifact>}`` another's (the appendix prints that artifact's count), and no caption
+    types a count."""
+    from magexp.artifacts.plan import paper_specs
+    from magexp.artifacts.spec import papers
+
+    specs = [s for p in papers() for s in paper_specs(p) if s.caption]
+    typed = [(s.name, m.group(0)) for s in specs for m in [re.search(r"\b\d+ (seeds|runs)\b", str(s.caption))] if m]
+    assert typed == []
+    appendix = " ".join((RESULTS / "APPENDIX.md").read_text().split())
+    cited = [(s, m) for s in specs for m in re.finditer(r"([^{}]{0,40})\{seeds:(\w+)\}([^{}]{0,20})", " ".join(str(s.caption).split()))]
+    assert {m.group(2) for _, m in cited} >= {"ding2024_table_rms", "yuan2018_table3"}
+    for spec, m in cited:
+        n = pd.read_csv(RESULTS / spec.paper / f"{m.group(2)}_runs.csv").seed.nunique()
+        own = pd.read_csv(RESULTS / spec.paper / f"{spec.name}_runs.csv").seed.nunique()
+        assert n != own and f"{m.group(1)}{n}{m.group(3)}" in appendix  # the other's count, not its own

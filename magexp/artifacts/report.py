@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import platform
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -393,7 +394,7 @@ def _appendix_section(p: Paper) -> str:
         lines.append(f"### {spec.name}: {spec.title}\n")
         lines.append(f"![{spec.name}]({p.paper}/{spec.name}.png)\n")
         if spec.caption:
-            lines.append(f"{_prose(spec, spec.caption, table)}\n")
+            lines.append(f"{_prose(spec, spec.caption, table, p.runs)}\n")
         timing = (f", wall times on this machine: [`timing/{spec.name}.csv`](timing/{spec.name}.csv)"
                   if (p.root / "timing" / f"{spec.name}.csv").exists() else "")
         lines.append(f"Data: [`{p.paper}/{spec.name}.csv`]({p.paper}/{spec.name}.csv), "
@@ -404,16 +405,30 @@ def _appendix_section(p: Paper) -> str:
         if spec.report_table:
             lines.append(_artifact_table(spec, p.root / p.paper / f"{spec.name}.csv"))
         if spec.notes:
-            lines.append(f"\n{_prose(spec, spec.notes, table)}\n")
+            lines.append(f"\n{_prose(spec, spec.notes, table, p.runs)}\n")
     return "\n".join(lines)
 
 
-def _prose(spec, text: str, table: pd.DataFrame | None) -> str:
-    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs)
-    and every ``{stat:metric@selection:format}`` field (:func:`magexp.artifacts.claims.interpolate`; a field
-    whose selection has no value fails the build, naming the artifact and the field)."""
+#: ``{seeds:<artifact>}`` in a caption: the seeds of another artifact's runs (of the same paper)
+_SEEDS_OF = re.compile(r"\{seeds:(\w+)\}")
+
+
+def _prose(spec, text: str, table: pd.DataFrame | None, runs=None) -> str:
+    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs),
+    ``{seeds:<artifact>}`` (the seeds of that artifact's runs, ``runs(name)``: a caption pointing to
+    another artifact's table) and every ``{stat:metric@selection:format}`` field
+    (:func:`magexp.artifacts.claims.interpolate`; a field whose selection has no value fails the build,
+    naming the artifact and the field)."""
     seeds = table.seed.nunique() if table is not None and "seed" in table else spec.seeds
     text = str(text).strip().replace("{seeds}", str(seeds))
+
+    def seeds_of(m: re.Match) -> str:
+        other = runs(m.group(1)) if runs is not None else None
+        if other is None or "seed" not in other:
+            raise MagexpError(f"{spec.name}: caption field {m.group(0)!r}: no runs of {m.group(1)!r} in this paper")
+        return str(other.seed.nunique())
+
+    text = _SEEDS_OF.sub(seeds_of, text)
     if table is None:
         return text
     try:

@@ -12,8 +12,15 @@
 * :func:`colorbar_mismatch`: a colour bar that does not say which column it shows, or whose
   label names another column than the one its image was drawn from (the plotting code records
   both with :func:`magexp.artifacts.plots.style.colorbar`).
+* :func:`raw_names`: a config name (``yan2022_paper_mockup``) in a legend, a title or a table's
+  header, where a reader wants words.
+* :func:`clipped_markers`: a marker cut by the edge of its axes (its centre inside the view, its
+  size over the edge): a paper's value drawn half.
+* :func:`unlabelled_log_range`: a log axis labelled at fewer than two decades whose labelled ticks
+  span less than half of its view (points at 1.8 on an axis labelled only at 0.9 and 1).
+* :func:`small_text`: text smaller than :data:`MIN_POINTS` at the saved size.
 
-:func:`defects` lists all three for one figure; ``tests/test_figure_defects.py`` runs it on the
+:func:`defects` lists them all for one figure; ``tests/test_figure_defects.py`` runs it on the
 figure of every artifact, drawn from its committed CSV.
 """
 
@@ -38,6 +45,10 @@ from magexp.artifacts.plots.style import COLUMN_ATTR
 
 #: two texts overlap when their window extents share more than this many pixels in each direction
 OVERLAP_PX = 1.0
+#: the smallest readable text (points at the saved size: figures are saved at their own size)
+MIN_POINTS = 7.0
+#: a log axis is labelled enough when its labelled ticks span at least this fraction of its view (in log)
+LABELLED_SPAN = 0.5
 
 
 def _finite(values) -> bool:
@@ -293,10 +304,126 @@ def legend_defects(fig) -> list[str]:
     return found
 
 
+#: a config name: a paper's prefix and an underscore (``yan2022_paper_mockup``, ``ding2024_exp1``)
+CONFIG_NAME = re.compile(r"\b[a-z]+\d{4}_\w+")
+
+
+def _worded_texts(fig) -> list[tuple[str, str]]:
+    """``(where, text)`` of the texts a reader reads as words: titles, legend entries, colour-bar
+    labels and table headers (tick labels name cases and are left to the kinds)."""
+    found = [("suptitle", fig._suptitle.get_text())] if fig._suptitle is not None else []
+    for legend in [*fig.legends, *(ax.get_legend() for ax in fig.axes)]:
+        if isinstance(legend, Legend):
+            found += [("legend entry", t.get_text()) for t in legend.get_texts()]
+    for k, ax in enumerate(fig.axes):
+        found += [(f"axes {k} title", t.get_text()) for t in (ax._left_title, ax.title, ax._right_title)]
+        if _is_colorbar(ax):
+            found.append((f"axes {k} colour-bar label", ax.get_ylabel() or ax.get_xlabel()))
+        for table in ax.tables:
+            found += [(f"axes {k} table header", cell.get_text().get_text())
+                      for (row, col), cell in table.get_celld().items() if row == 0 or col < 0]
+    return found
+
+
+def raw_names(fig) -> list[str]:
+    """Config names (:data:`CONFIG_NAME`) printed where a reader wants words: a legend entry, a
+    title, a colour-bar label or a table header (``plot.names`` gives them words)."""
+    return [f"{where} {text!r} prints the config name {m.group(0)!r}"
+            for where, text in _worded_texts(fig) for m in [CONFIG_NAME.search(text)] if m]
+
+
+def _marker_points(line: Line2D) -> np.ndarray:
+    """Display coordinates of the finite points of ``line`` that carry a marker."""
+    marker = line.get_marker()
+    if marker in (None, "", " ", "None", "none") or not line.get_visible() or not line.get_clip_on():
+        return np.empty((0, 2))
+    xy = np.asarray(line.get_xydata(), float)
+    xy = xy[np.isfinite(xy).all(axis=1)] if xy.ndim == 2 else np.empty((0, 2))
+    return line.get_transform().transform(xy) if len(xy) else np.empty((0, 2))
+
+
+def clipped_markers(fig) -> list[str]:
+    """Markers cut by the edge of their axes: the centre inside the view (edge included), the marker
+    (half its size plus half its edge) reaching more than :data:`OVERLAP_PX` over the edge. Call
+    after a layout pass (:func:`overlapping_text` makes one)."""
+    found = []
+    for k, ax in enumerate(fig.axes):
+        if not ax.get_visible() or _is_colorbar(ax) or hasattr(ax, "get_zlim"):
+            continue
+        box, cut, names = ax.bbox, 0, []
+        for line in ax.lines:
+            points = _marker_points(line)
+            if not len(points):
+                continue
+            r = (line.get_markersize() + line.get_markeredgewidth()) / 2 * fig.dpi / 72
+            x, y = points[:, 0], points[:, 1]
+            inside = (x >= box.x0 - 0.5) & (x <= box.x1 + 0.5) & (y >= box.y0 - 0.5) & (y <= box.y1 + 0.5)
+            over = ((x - r < box.x0 - OVERLAP_PX) | (x + r > box.x1 + OVERLAP_PX)
+                    | (y - r < box.y0 - OVERLAP_PX) | (y + r > box.y1 + OVERLAP_PX))
+            if (n := int((inside & over).sum())):
+                cut += n
+                names.append(line.get_label() if not line.get_label().startswith("_") else f"marker {line.get_marker()!r}")
+        if cut:
+            found.append(f"axes {k} ({ax.get_title() or 'untitled'!r}): {cut} marker(s) cut by the axes edge "
+                         f"({', '.join(dict.fromkeys(names))})")
+    return found
+
+
+def _log_axes(fig):
+    """``(k, ax, name, axis)`` of every visible log-scaled axis of a 2-D data axes of ``fig``."""
+    for k, ax in enumerate(fig.axes):
+        if ax.get_visible() and ax.axison and not hasattr(ax, "get_zlim"):
+            for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+                if axis.get_scale() == "log" and axis.get_visible():
+                    yield k, ax, name, axis
+
+
+def _labelled_ticks(axis) -> list[float]:
+    """Where ``axis`` prints a tick label (major or minor, either side, inside the view)."""
+    return [t.get_loc() for t in axis._update_ticks()
+            if any(lb.get_visible() and lb.get_text().strip() for lb in (t.label1, t.label2))]
+
+
+def unlabelled_log_range(fig) -> list[str]:
+    """Log axes labelled at fewer than two powers of ten whose labelled ticks (major and minor,
+    inside the view) span less than :data:`LABELLED_SPAN` of the view in log: a reader cannot read
+    the values beyond them (two labelled decades give the scale). Call after a layout pass."""
+    found = []
+    for k, ax, name, axis in _log_axes(fig):
+        lo, hi = sorted(axis.get_view_interval())
+        if lo <= 0 or hi <= lo:
+            continue
+        labelled = _labelled_ticks(axis)
+        span = (np.log10(max(labelled)) - np.log10(min(labelled))) if len(labelled) > 1 else 0.0
+        decades = sum(1 for v in labelled if v > 0 and abs(np.log10(v) - round(np.log10(v))) < 1e-9)
+        if decades < 2 and span < LABELLED_SPAN * np.log10(hi / lo):
+            found.append(f"axes {k} ({ax.get_title() or 'untitled'!r}): log {name} axis from {lo:.3g} to {hi:.3g} "
+                         f"labelled only at {', '.join(f'{v:g}' for v in labelled) or 'no tick'}")
+    return found
+
+
+def small_text(fig) -> list[str]:
+    """Visible texts of ``fig`` smaller than :data:`MIN_POINTS` (a figure is saved at its own size, so
+    points are what a reader gets); texts of one legend, one table are reported once."""
+    found, seen = [], set()
+    for text in fig.findobj(Text):
+        if not text.get_visible() or not text.get_text().strip() or text.get_fontsize() >= MIN_POINTS - 1e-9:
+            continue
+        if text.axes is not None and not text.axes.get_visible():
+            continue
+        owner = text.axes if text.axes is not None else text.figure
+        key = (id(owner), text.get_fontsize())
+        if key not in seen:
+            seen.add(key)
+            found.append(f"text {text.get_text()[:20]!r} is {text.get_fontsize():g} pt (readable: {MIN_POINTS:g} pt or more)")
+    return found
+
+
 def defects(fig) -> list[str]:
     """Every defect of ``fig`` found by the checks of this module (also of a figure already saved
     and closed: it gets an Agg canvas to lay it out again)."""
     if not hasattr(fig.canvas, "get_renderer"):
         FigureCanvasAgg(fig)
     return (overlapping_text(fig) + overflowing_cells(fig) + empty_axes(fig) + colorbar_mismatch(fig)
-            + raw_legends(fig) + legend_defects(fig))
+            + raw_legends(fig) + raw_names(fig) + legend_defects(fig) + clipped_markers(fig)
+            + unlabelled_log_range(fig) + small_text(fig))

@@ -5,6 +5,10 @@ after; Ding 2024 fig 2), ``error`` (the calibrated total field minus the referen
 The default is ``sphere`` for the kind ``sphere``, else ``magnitude``. ``plot.unit``: the unit of the
 readings (their scenario's, default ``nT``), printed on the axes and with the RMS.
 
+An error panel whose every error is at or below the round-off floor (the CSV writes such values as
+±1e-9, :data:`magexp.artifacts.spec.ROUNDOFF_FLOOR`) draws them at 0 on the scale of its neighbour
+and says so in its title: the floor is not data.
+
 The seed shown is the first whose run succeeded (the artifact's ``success:`` rule); where none
 did, or none is judged, the first seed. The CSV's ``seed`` and ``outcome`` columns and each panel's
 title say which.
@@ -19,6 +23,7 @@ import pandas as pd
 from matplotlib.ticker import FixedLocator
 
 from magexp.artifacts.plots.style import group_values, label, panels, plt, unit
+from magexp.artifacts.spec import ROUNDOFF_FLOOR
 
 
 def tabulate(runs) -> pd.DataFrame:
@@ -75,7 +80,7 @@ def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
     key, readings_unit = spec.plot.get("panels"), unit(spec)
     values = group_values(frame, key)
     fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
-    n = len(values)
+    n, exact_panels = len(values), []
     for i, v in enumerate(values):
         sub = frame if v is None else frame[frame[key] == v]
         title = "" if v is None else label(spec, key, v)
@@ -94,11 +99,18 @@ def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
             ax.ticklabel_format(axis="y", useOffset=True, style="plain")
         else:
             ax = axes[i]
-            ax.plot(sub.reading, sub.error, ".", ms=2.5)
+            exact = bool((sub.error.abs() <= ROUNDOFF_FLOOR).all())  # written as ±floor: no value to draw
+            ax.plot(sub.reading, np.where(exact, 0.0, sub.error), ".", ms=2.5)
             ax.axhline(0, color="k", lw=0.8)
-            ax.set_title(_lines(title, f"RMS {rms:.3g} {readings_unit} ({_which(sub)})"))
+            what = f"|error| ≤ {ROUNDOFF_FLOOR:g} {readings_unit} (round-off)" if exact else f"RMS {rms:.3g} {readings_unit}"
+            ax.set_title(_lines(title, f"{what} ({_which(sub)})"))
             ax.set_ylabel(f"total-field error ({readings_unit})")
+            exact_panels += [ax] if exact else []
         ax.set_xlabel("reading")
+    scaled = [ax for ax in axes[:n] if ax not in exact_panels]
+    for ax in exact_panels:  # the scale of the nearest panel with errors, so that 0 reads as 0
+        if scaled:
+            ax.set_ylim(min(scaled, key=lambda other: abs(axes.index(other) - axes.index(ax))).get_ylim())
     fig.suptitle(spec.title, fontsize=10)
     return fig
 

@@ -6,11 +6,14 @@ panels each; default ``fun``); ``plot.hue``: one line per value (default ``estim
 one line per combination; ``plot.names``: ``{value: legend text}``); ``plot.panels``: one column
 of panels per value; ``plot.xscale``:
 ``linear``, ``log`` or ``symlog`` (with ``plot.linthresh``, for sweeps that include 0; its ticks are
-0 and the decades from ``linthresh`` up);
+0 and the decades from ``linthresh`` up, and it starts a little below 0 so that the markers at 0 are whole);
 ``plot.ylog`` (default true; ``{metric: false}`` for a linear y axis of that metric's panels only);
 ``plot.ylabel`` / ``plot.ylabels`` (per metric); ``plot.bound``: a
 bound column of the metric drawn per objective (e.g. ``offset_bound``); ``plot.targets``:
-``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy). Against the objective ``fun`` the
+``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy); ``plot.levels``: a paper's values
+that are not compared cell by cell (``[{label, match, value}]``, e.g. the paper's PSO at each noise
+level beside every PSO setting of a sweep), each a horizontal line across the panels whose settings
+``match`` selects, one style per ``label``. Against the objective ``fun`` the
 noise floor and the Cramér-Rao RMS floor are drawn (over the lines, which run close to them);
 against ``rms_ratio`` (the residual RMS over that floor) the floor is the line at 1. A cell where fewer than half the runs succeeded
 is ringed in red. A cell without a value is marked by a cross at the top of its panel (legend text:
@@ -31,9 +34,11 @@ from matplotlib.ticker import FixedLocator
 
 from magexp.artifacts.plan import quantiles
 from magexp.artifacts.claims import matches
-from magexp.artifacts.plots.style import group_values, label, legend_entries, panels, paper_values, plt, shared_legend, tidy_log_axes
+from magexp.artifacts.plots.style import (group_values, label, legend_entries, panels, paper_values, plt, scenario_label,
+                                         shared_legend, tidy_log_axes)
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
+SYMLOG_PAD = 0.12  # a symlog x axis from 0 starts this fraction of its linear part below 0
 CRB_FLOOR = "Cramér-Rao floor (Gaussian)"
 
 
@@ -158,6 +163,25 @@ def _paper(ax, spec, placed, metric, colours):
                             mew=1.3, zorder=4, label="paper's value (open diamond)")
 
 
+#: styles of the ``plot.levels`` lines, one per label (in the order first seen)
+LEVEL_STYLES = ({"color": "k", "ls": "-.", "lw": 1.3}, {"color": "C4", "ls": (0, (1, 1)), "lw": 1.3},
+                {"color": "0.3", "ls": (0, (5, 2, 1, 2, 1, 2)), "lw": 1.1})
+
+
+def _levels(ax, spec, sub: pd.DataFrame, metric: str) -> None:
+    """The ``plot.levels`` whose ``match`` selects the panel's cells (a key the cells lack is no
+    match), drawn across the panel; only against ``plot.metric``'s first metric."""
+    levels = list(spec.plot.get("levels", []) or [])
+    if not levels or metric != metric_list(spec)[0]:
+        return
+    styles = {}
+    for level in levels:
+        style = styles.setdefault(str(level["label"]), LEVEL_STYLES[len(styles) % len(LEVEL_STYLES)])
+        match = dict(level.get("match", {}) or {})
+        if all(k in sub for k in match) and any(matches(match, row) for row in sub.to_dict("records")):
+            ax.axhline(float(level["value"]), zorder=4, label=str(level["label"]), **style)
+
+
 def _references(ax, sub, spec, x_key, metric):
     """The bound per objective, the floors (against ``fun``) and the paper's target."""
     if "bound" in sub and sub.bound.notna().any():  # the bound belongs to the problem: one per objective
@@ -199,6 +223,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             placed = _lines(ax, sub, spec, x_key, hue_key, colours)
             _paper(ax, spec, placed, metric, colours)
             _references(ax, sub, spec, x_key, metric)
+            _levels(ax, spec, sub, metric)
             _scale_axes(ax, spec, sub, frame[x_key], ylog(spec, metric))
             _label_panel(ax, spec, metric, len(metrics), panel_key, pv)
     entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
@@ -225,11 +250,12 @@ def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None
         ax.set_yscale("log" if log_y else "linear")
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo, hi * (hi / lo) ** 0.25 if ax.get_yscale() == "log" else hi + 0.25 * (hi - lo))
-    scale = spec.plot.get("xscale", "linear")
-    ax.set_xscale(scale, **({"linthresh": float(spec.plot.get("linthresh", 1.0))} if scale == "symlog" else {}))
+    scale, linthresh = spec.plot.get("xscale", "linear"), float(spec.plot.get("linthresh", 1.0))
+    ax.set_xscale(scale, **({"linthresh": linthresh} if scale == "symlog" else {}))
+    ax.autoscale_view(scaley=False)  # the margins of the new scale: the markers at the ends are drawn whole
     if scale == "symlog" and (xs.astype(float) >= 0).all():
-        ax.set_xlim(left=0)
-        ax.xaxis.set_major_locator(FixedLocator(symlog_ticks(xs, float(spec.plot.get("linthresh", 1.0)))))
+        ax.set_xlim(left=-SYMLOG_PAD * linthresh)  # from 0, with room for the markers drawn at 0
+        ax.xaxis.set_major_locator(FixedLocator(symlog_ticks(xs, linthresh)))
     if log_y:
         ax.set_yscale("log")
 
@@ -250,4 +276,4 @@ def _label_panel(ax, spec, metric: str, n_metrics: int, panel_key, pv) -> None:
     ax.set_xlabel(label(spec, spec.plot.x))
     ax.set_ylabel(ylabels.get(metric, default_ylabel if n_metrics == 1 else metric.replace("_", " ")))
     if pv is not None:
-        ax.set_title(str(pv) if panel_key == "scenario" else label(spec, panel_key, pv))
+        ax.set_title(scenario_label(pv) if panel_key == "scenario" else label(spec, panel_key, pv))

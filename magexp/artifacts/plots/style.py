@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
 from magexp.artifacts.plots import VECTOR
 from magexp.core.atomic import atomic_path
@@ -186,29 +187,68 @@ def save(fig, path: Path) -> list[Path]:
     return [path, twin]
 
 
-class _LogMinorLabels(matplotlib.ticker.LogFormatterSciNotation):
-    """Minor tick labels of a log axis only while its view holds fewer than two decade ticks: with two
-    or more, the decades are labelled and give the scale, and matplotlib's labels of a subset of minor
-    ticks (2, 3, 4, 6 x 10^k) would collide on a short axis; with one, that lone label cannot give the
-    scale, so the minor ticks are labelled (only 2 and 5 x 10^k when the view spans a decade or more). Decided when the figure is drawn, after every limit is set."""
+#: mantissas of the ticks of a log axis that holds fewer than two decade ticks, coarsest first: the
+#: first set giving :data:`MIN_LOG_TICKS` ticks in the view is used
+NARROW_LOG_SUBS = ((1.0, 2.0, 5.0), (1.0, 1.5, 2.0, 3.0, 5.0, 7.0), (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0))
+MIN_LOG_TICKS = 3
+
+
+def _decade_ticks(lo: float, hi: float) -> int:
+    """How many powers of ten lie in ``[lo, hi]`` (both positive)."""
+    return math.floor(math.log10(hi) + 1e-12) - math.ceil(math.log10(lo) - 1e-12) + 1
+
+
+def narrow_log_ticks(lo: float, hi: float, at_least: int = MIN_LOG_TICKS) -> list[float]:
+    """Ticks of a log view ``[lo, hi]`` that holds fewer than two decade ticks: the coarsest mantissa
+    set of :data:`NARROW_LOG_SUBS` that puts ``at_least`` ticks inside it (a view of 0.85 to
+    1.8 gets 0.9, 1, 1.2, 1.5); a view too narrow for any of them, evenly spaced round values.
+    Used by :func:`tidy_log_axes` and for colour bars of ratios."""
+    lo, hi = sorted((lo, hi))
+    for subs in NARROW_LOG_SUBS:
+        ticks = [float(f"{m * 10.0 ** e:.12g}") for e in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
+                 for m in subs if lo <= m * 10.0 ** e <= hi]
+        if len(ticks) >= at_least:
+            return ticks
+    return [float(f"{t:.12g}") for t in matplotlib.ticker.MaxNLocator(4).tick_values(lo, hi) if lo <= t <= hi]
+
+
+class _ReadableLogLocator(matplotlib.ticker.LogLocator):
+    """Major ticks of a log axis: matplotlib's decades, or where the view holds fewer than two of
+    them, :func:`narrow_log_ticks` (labelled plainly, so the values beyond one decade can be read).
+    Decided when the figure is drawn, after every limit is set."""
+
+    def tick_values(self, vmin, vmax):
+        lo, hi = sorted((vmin, vmax))
+        if lo > 0 and np.isfinite(hi) and _decade_ticks(lo, hi) < 2:
+            return np.array(narrow_log_ticks(lo, hi))
+        return super().tick_values(vmin, vmax)
+
+
+class _ReadableLogLabels(matplotlib.ticker.LogFormatterSciNotation):
+    """Labels of :class:`_ReadableLogLocator`'s ticks: powers of ten as ``10^k``; the ticks of a
+    narrow view (fewer than two decade ticks) as plain numbers (``1.5``, ``0.02``)."""
 
     def __call__(self, x, pos=None):
         lo, hi = sorted(self.axis.get_view_interval())
-        if lo > 0 and math.floor(math.log10(hi)) - math.ceil(math.log10(lo)) >= 1:  # two decade ticks or more
-            return ""
-        mantissa = round(x / 10 ** math.floor(math.log10(x))) if x > 0 else 0
-        if lo > 0 and hi / lo >= 10 and mantissa not in (2, 5):  # a decade or more: 2 and 5 x 10^k only
-            return ""
+        if lo > 0 and _decade_ticks(lo, hi) < 2:
+            return f"{x:g}"
         return super().__call__(x, pos)
 
 
+def _unlabelled(x, pos=None) -> str:
+    return ""
+
+
 def tidy_log_axes(fig):
-    """Give every log-scaled axis of ``fig`` the minor labels of :class:`_LogMinorLabels`; returns ``fig``
-    (call it last in a kind's ``draw``)."""
+    """Give every log-scaled axis of ``fig`` readable ticks: decades where its view holds two or more
+    (minor ticks unlabelled), else the plain ticks of :func:`narrow_log_ticks` (a reader can read a
+    point at 1.8 on an axis from 0.85); returns ``fig`` (call it last in a kind's ``draw``)."""
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
             if axis.get_scale() == "log":
-                axis.set_minor_formatter(_LogMinorLabels(labelOnlyBase=False))
+                axis.set_major_locator(_ReadableLogLocator())
+                axis.set_major_formatter(_ReadableLogLabels(labelOnlyBase=False))
+                axis.set_minor_formatter(matplotlib.ticker.FuncFormatter(_unlabelled))
     return fig
 
 

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.plan import quantiles
-from magexp.artifacts.plots.style import legend_entries, panels, plt, shared_legend, tidy_log_axes
+from magexp.artifacts.plots.style import legend_entries, panels, plt, scenario_label, shared_legend, tidy_log_axes
 
 #: families with at most this many settings show each setting by name (else best / median / worst)
 FEW = 4
@@ -140,7 +140,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             ax.set_xticks(range(len(families)), families, rotation=30, ha="right", fontsize=7)
         top.set_yscale("log")
         top.set_ylabel(spec.plot.get("ylabel", f"median {frame.metric.iloc[0]} per setting"))
-        top.set_title(sc, fontsize=9)
+        top.set_title(scenario_label(sc), fontsize=9)
         bottom.set_ylim(0, 1.05)
         bottom.set_ylabel("success rate")
     entries = legend_entries(axes)
