@@ -24,7 +24,7 @@ from magexp.artifacts.claims import (CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, 
                                      interpolate, shorten)
 from magexp.artifacts.plots.benchmark_table import winners
 from magexp.artifacts.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
-from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS
+from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
 from magexp.core.atomic import atomic_path, write_text
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS, ROOT
@@ -297,8 +297,8 @@ def counts(claims: list[dict], peers: list[str] = ()) -> str:
     paper = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "paper"]
     own = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "magexp"] + list(peers)
     sanity = sum(c["role"] == "sanity" for c in claims)
-    text = ("the papers' headline claims: " + ", ".join(f"{k} {int(heads.get(k, 0))}" for k in HEADLINE_VERDICTS)
-            if len(heads) else "no headline claim")
+    text = ("The papers' headline claims: " + ", ".join(f"{k} {int(heads.get(k, 0))}" for k in HEADLINE_VERDICTS)
+            if len(heads) else "No headline claim")
     text += f"; the papers' findings: {_held(paper)}" if paper else ""
     text += f"; magexp's own statements: {_held(own)}" if own else ""
     return text + (f"; sanity checks (true by construction, not counted): {sanity}" if sanity else "")
@@ -365,16 +365,12 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
                             for k in VERDICTS if k in counts)
         others = cell[cell.verdict != "reproduced"]
         reason = "; ".join(f"{r.quantity} {r.verdict}: paper {_fmt(r.paper_value)}, ours {_fmt(r.judged_value)}"
-                           + (f" ({_percent(r.rel_difference)} of scale)" if r.verdict == "differs" else "")
+                           + (f" ({relative(r.rel_difference)})" if r.verdict == "differs" else "")
                            for r in others.itertuples())
         runs = ", ".join(sorted(set(cell.judged_runs.astype(str))))
         out.append({"label": label, "paper": f"{len(cell)} values", "ours": f"{runs}: see appendix", "verdict": verdict,
                     "reason": shorten(reason or "every value reproduced", MAX_CELL, "the appendix")})
     return pd.DataFrame(out, columns=["label", "paper", "ours", "verdict", "reason"])
-
-
-def _percent(x: float) -> str:
-    return f"{100 * x:.2g} %" if np.isfinite(x) else "n/a"
 
 
 #: a ``differs`` row whose difference is below this fraction of its block's scale is counted apart
@@ -389,7 +385,7 @@ def compared_counts(rows: pd.DataFrame) -> str:
     differs = rows[rows.verdict == "differs"]
     small = int((differs.rel_difference < SMALL_DIFFERENCE).sum())
     failed = int(differs.reason.astype(str).str.contains("failed majority").sum())
-    split = [f"{small} of them by less than {SMALL_DIFFERENCE:.0%} of their scale"] if small else []
+    split = [f"{small} of them by less than {100 * SMALL_DIFFERENCE:g} % of their scale"] if small else []
     split += [f"{failed} on a failed majority of our runs"] if failed else []
     parts = [f"{k} {int(counts.get(k, 0))}" + (f" ({'; '.join(split)})" if k == "differs" and split else "")
              for k in VERDICTS if k not in NOT_COMPARED]
@@ -444,8 +440,8 @@ def _winners_section(p: Paper) -> str:
 
 def _report_section(p: Paper) -> str:
     intro = " ".join(str(p.meta.intro).split())
-    lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "",
-             f"**Counts.** {counts(p.headlines + p.claims)}.\n", "### Headline claims\n", _headline_table(p)]
+    lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n",
+             f"**Counts.** {counts(p.headlines + p.claims)}.\n", _headline_table(p)]
     lines += [_findings_table(p), _winners_section(p), _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
               f"Figures, notes, full tables and sanity checks: [appendix](APPENDIX.md#{p.paper}).\n"]
     return "\n".join(x for x in lines if x)

@@ -207,7 +207,7 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     scale = paper_scale(spec, quantity, settings) if paper is not None else np.nan
     rel = abs(judged["judged_value"] - paper) / scale if paper is not None and scale > 0 else np.nan
     if verdict == "differs" and np.isfinite(rel):
-        reason += f"; {_percent(rel)} of its block's scale ({scale:.4g})"
+        reason += f"; off by {relative(rel)} ({scale:.4g})"
     return {
         "paper": spec.paper, "artifact": spec.name, "quantity": quantity, "estimator": estimator,
         "setting": setting + extra_setting, "truth": truth, "paper_value": paper, "value": med,
@@ -219,9 +219,12 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     }
 
 
-def _percent(x: float) -> str:
-    """A fraction as a percentage with two significant digits (``0.0003`` -> ``0.03 %``)."""
-    return f"{100 * x:.2g} %"
+def relative(x: float) -> str:
+    """A difference on its block's scale: a percentage with two significant digits below 10 times the
+    scale (``0.0003`` -> ``0.03 % of its scale``), else a multiple (``38 times its scale``)."""
+    if not np.isfinite(x):
+        return "n/a"
+    return f"{100 * x:.2g} % of its scale" if x < 10 else f"{x:.2g} times its scale"
 
 
 def _judged(runs: np.ndarray, med: float, aggregate: str, ls, tol, outcome: str) -> dict:
