@@ -138,7 +138,7 @@ def test_the_report_has_no_ellipsis_and_keeps_its_size():
 def test_shorten_keeps_whole_items_and_says_where_the_rest_is():
     text = "; ".join(f"item {i} " + "x" * 40 for i in range(10))
     out = shorten(text, 120)
-    assert len(out) <= 120 and "…" not in out and out.endswith("more in claims.csv)") and "item 0" in out
+    assert len(out) <= 120 and "…" not in out and out.endswith("more parts: see claims.csv)") and "item 0" in out
     assert shorten("short", 120) == "short"
     cut = shorten("y" * 50 + " " + "z" * 200, 120, "the appendix")
     assert len(cut) <= 120 and cut.endswith("(cut: the rest in the appendix)")

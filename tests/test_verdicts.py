@@ -201,3 +201,4 @@ def test_a_difference_is_read_on_its_blocks_scale_of_the_paper_values():
     assert paper_scale(spec, "b1", {"scenario": "m1"}) == pytest.approx(10.0)
     assert paper_scale(spec, "final_rms", {"scenario": "m1"}) == pytest.approx(2.0)  # alone: its own magnitude
     assert relative(0.0003) == "0.03 % of its scale" and relative(38.0) == "38 times its scale"
+    assert relative(2.4) == "240 % of its scale"

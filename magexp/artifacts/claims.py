@@ -513,17 +513,22 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
              else [(0, j) for j in range(1, len(stats))])
     tests = [compare(claim, table, claim.cells[i], claim.cells[j], (stats[i], stats[j]), (cis[i], cis[j]))
              for i, j in pairs]
-    p = max(t.p_hold for t in tests)
-    p_contra = min(1.0, len(tests) * min(t.p_contra for t in tests))
-    p_min = max(t.p_min for t in tests)
-    result = decide(p, p_contra, p_min)
-    order = "lower" if claim.better == "lower" else "higher"
-    head = f"{stat} of {claim.metric} ({order} is better): "
+    combined = _combined(tests)
+    result = decide(combined["p"], combined["p_contra"], combined["p_min"])
+    head = f"{stat} of {claim.metric} ({claim.better} is better): "
     short = "; ".join(f"{_short_value(stats[i])} vs {_short_value(stats[j])}, {t.text}" for (i, j), t in zip(pairs, tests))
     return Outcome(claim, result == HOLDS, head + "; ".join(parts) + "; one-sided tests: " + "; ".join(t.text for t in tests),
-                   result=result, short=f"{stat} {short}", p=p, p_contra=p_contra, p_min=p_min,
-                   n=min(t.n for t in tests), detectable=max(t.detectable for t in tests),
-                   test=tests[int(np.argmax([t.detectable for t in tests]))].name)
+                   result=result, short=f"{stat} {short}", **combined)
+
+
+def _combined(tests: list[Test]) -> dict:
+    """The :class:`Outcome` fields of a claim of several pairs: every pair must hold (``p``: the
+    largest), one the other way contradicts it (``p_contra``: the smallest times the number of
+    pairs), the largest ``p_min``, the smallest ``n`` and the weakest pair's ``detectable``."""
+    weakest = max(tests, key=lambda t: t.detectable if np.isfinite(t.detectable) else -np.inf)
+    return {"p": max(t.p_hold for t in tests), "p_contra": min(1.0, len(tests) * min(t.p_contra for t in tests)),
+            "p_min": max(t.p_min for t in tests), "n": min(t.n for t in tests), "detectable": weakest.detectable,
+            "test": weakest.name}
 
 
 def holm(p: list[float]) -> list[float]:
@@ -550,10 +555,10 @@ def adjust(outcomes: list[Outcome]) -> list[Outcome]:
     for o, p, pc in zip(family, holm([o.p for o in family]), holm([o.p_contra for o in family])):
         o.p_adjusted, o.result = p, decide(p, pc, o.p_min)
         o.holds = o.result == HOLDS
-    for o in (o for o in outcomes if o.is_comparison and o.claim.role == "sanity"):
-        o.p_adjusted = o.p
     for o in (o for o in outcomes if o.is_comparison):
-        note = _adjusted_note(o, len(family) if o.claim.role != "sanity" else 1)
+        alone = o.claim.role == "sanity"
+        o.p_adjusted = o.p if alone else o.p_adjusted
+        note = _adjusted_note(o, 1 if alone else len(family))
         o.short, o.evidence = f"{o.short}; {note}", f"{o.evidence}; {note}"
     return outcomes
 
@@ -587,7 +592,7 @@ def shorten(text: str, n: int = SHORT, where: str = "claims.csv") -> str:
         return text
     items = text.split("; ")
     for k in range(len(items) - 1, 0, -1):
-        tail = f" ({len(items) - k} more in {where})"
+        tail = f" (and {len(items) - k} more part{'s' if len(items) - k > 1 else ''}: see {where})"
         head = "; ".join(items[:k])
         if len(head) + len(tail) <= n:
             return head + tail

@@ -204,10 +204,8 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     verdict, reason = _informative(verdict, reason, entry, tol, lambda: uninformative(
         paper, jlo, jhi, kind=kind, search_range=search_range, block_scale=block_scale, median=med,
         mixed_outcome=ratio and outcome == "failed"))
-    scale = paper_scale(spec, quantity, settings) if paper is not None else np.nan
-    rel = abs(judged["judged_value"] - paper) / scale if paper is not None and scale > 0 else np.nan
-    if verdict == "differs" and np.isfinite(rel):
-        reason += f"; off by {relative(rel)} ({scale:.4g})"
+    scale, rel = _difference(spec, quantity, settings, paper, judged["judged_value"])
+    reason += f"; off by {relative(rel)} ({scale:.4g})" if verdict == "differs" and np.isfinite(rel) else ""
     return {
         "paper": spec.paper, "artifact": spec.name, "quantity": quantity, "estimator": estimator,
         "setting": setting + extra_setting, "truth": truth, "paper_value": paper, "value": med,
@@ -224,7 +222,9 @@ def relative(x: float) -> str:
     scale (``0.0003`` -> ``0.03 % of its scale``), else a multiple (``38 times its scale``)."""
     if not np.isfinite(x):
         return "n/a"
-    return f"{100 * x:.2g} % of its scale" if x < 10 else f"{x:.2g} times its scale"
+    if x >= 10:
+        return f"{x:.2g} times its scale"
+    return f"{100 * x:{'.0f' if x >= 1 else '.2g'}} % of its scale"
 
 
 def _judged(runs: np.ndarray, med: float, aggregate: str, ls, tol, outcome: str) -> dict:
@@ -239,6 +239,14 @@ def _judged(runs: np.ndarray, med: float, aggregate: str, ls, tol, outcome: str)
         which = f"fixed tolerance, {which}"
     centre = med if tol is not None or aggregate == "mean" or not finite.size else float(np.median(finite))
     return {"judged_runs": which, "judged_n": int(finite.size), "judged_value": centre}
+
+
+def _difference(spec, quantity: str, settings: dict, paper, judged_value: float) -> tuple[float, float]:
+    """``(scale, rel_difference)`` of a row (:func:`paper_scale`; NaN without a paper value)."""
+    if paper is None:
+        return np.nan, np.nan
+    scale = paper_scale(spec, quantity, settings)
+    return scale, (abs(judged_value - paper) / scale if scale > 0 else np.nan)
 
 
 def paper_scale(spec, quantity: str, settings: dict) -> float:
