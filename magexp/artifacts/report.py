@@ -32,8 +32,8 @@ from magexp.run import provenance
 
 #: significant digits of every float written to a results CSV (round-off must not churn files)
 DIGITS = 6
-SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "value", "lo", "hi", "success_rate",
-                 "n_seeds", "truth_in_interval", "verdict"]
+SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "judged_value", "judged_lo", "judged_hi",
+                 "judged_runs", "judged_n", "success_rate", "truth_in_interval", "verdict", "rel_difference"]
 #: limits of REPORT.md (the appendix holds the rest; the section "magexp beside MAGYC" links its claims table)
 MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 #: verdicts of a headline claim
@@ -606,7 +606,8 @@ def build(root: Path = RESULTS) -> None:
     write_text(root / "REPORT.md", "\n".join(text))
     appendix = ["# magexp report: appendix\n", "Everything [REPORT.md](REPORT.md) leaves out: per artifact its figure, "
                 "caption, every summary row (`n/a` rows too), its table and notes; per paper its sanity checks. "
-                "Columns of the tables: see the README (`results/summary.csv`).\n"]
+                "Columns of the tables: see the README (`results/summary.csv`); `judged_*` are the median, interval, "
+                "runs and their number that the verdict used.\n"]
     appendix += [_appendix_section(p) for p in parts]
     appendix.append(_speed_section(root))
     write_text(root / "APPENDIX.md", "\n".join(appendix))
