@@ -208,7 +208,8 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
     """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure.
     ``outcomes``: ``{"artifact.id": Outcome}``; a part naming no claim of the paper is an error.
     The reason is written whole (:func:`_headline_verdict`; ``tests/test_report.py`` holds it to
-    :data:`magexp.artifacts.claims.SHORT` characters)."""
+    :data:`magexp.artifacts.claims.SHORT` characters); the evidence is the reason followed by every
+    part's outcome and full evidence."""
     declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
     rows = []
     for h in load_paper(paper).headline:
@@ -216,11 +217,13 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
         if unknown:
             raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {unknown[0]!r} names no claim of {paper} "
                               "(write <artifact>.<claim id>)")
-        verdict, reason = _headline_verdict(h, [outcomes.get(p) for p in h.parts], runs)
+        parts = [outcomes.get(p) for p in h.parts]
+        verdict, reason = _headline_verdict(h, parts, runs)
         figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
+        evidence = " | ".join([reason] + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(h.parts, parts) if o])
         rows.append({"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline",
                      "section": h.section, "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
-                     "reason": reason, "evidence": reason})
+                     "reason": reason, "evidence": evidence})
     return rows
 
 
