@@ -202,3 +202,28 @@ def test_a_difference_is_read_on_its_blocks_scale_of_the_paper_values():
     assert paper_scale(spec, "final_rms", {"scenario": "m1"}) == pytest.approx(2.0)  # alone: its own magnitude
     assert relative(0.0003) == "0.03 % of its scale" and relative(38.0) == "38 times its scale"
     assert relative(2.4) == "240 % of its scale"
+
+
+def test_every_committed_verdict_agrees_with_the_interval_it_names():
+    """The rule applied again to the committed ``summary.csv``: a row is inside exactly when the paper's
+    value lies in ``judged_lo``-``judged_hi`` widened by its printing precision (the ``± w`` of its
+    ``tolerance``); ``differs`` outside or on a failed majority, else ``reproduced`` or ``uninformative``."""
+    import re
+
+    from magexp.artifacts.summary import inside
+    from magexp.paths import RESULTS
+
+    path = RESULTS / "summary.csv"
+    if not path.exists() or "judged_lo" not in path.read_text().splitlines()[0]:
+        pytest.skip("results/ are absent or predate the judged columns: run make reproduce")
+    rows = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    rows = rows[~rows.verdict.isin(["n/a", "not compared"]) & rows.tolerance.str.match(r"^(95 % of runs|ls t-interval)")]
+    wrong = []
+    for r in rows.itertuples():
+        width = float(m.group(1)) if (m := re.search(r"± ([0-9.e+-]+)$", r.tolerance)) else 0.0
+        within = inside(r.paper_value, r.judged_lo, r.judged_hi, width, floor=1e-9)
+        failed = np.isfinite(r.success_rate) and r.success_rate < 0.5
+        expected = {"differs"} if not within or failed else {"reproduced", "uninformative"}
+        if r.verdict not in expected:
+            wrong.append(f"{r.artifact} {r.label}: {r.verdict}")
+    assert len(rows) > 100 and not wrong, "\n".join(wrong)
