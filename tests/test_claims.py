@@ -4,8 +4,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, Claim, ci, evaluate, fisher_greater,
-                           interpolate, wilcoxon_less)
+from magexp.artifacts.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED, Claim, adjust, ci,
+                                     detectable_paired, detectable_rates, evaluate, fisher_greater, holm, interpolate,
+                                     permutation_less, wilcoxon_less)
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.artifacts.report import claim_outcomes
@@ -161,7 +162,7 @@ def test_paired_comparison_on_shared_seeds():
     assert wilcoxon_less(np.zeros(5)) == 1.0  # no non-zero difference: no evidence
 
 
-def test_intervals_where_cells_do_not_share_data():
+def test_unpaired_cells_are_compared_by_a_permutation_test():
     rng = np.random.default_rng(5)
     far = pd.concat([_shared({"a": 1 + 0.01 * rng.standard_normal(30)}, "x"),
                      _shared({"b": 2 + 0.01 * rng.standard_normal(30)}, "y").assign(cell=1)])
@@ -169,11 +170,75 @@ def test_intervals_where_cells_do_not_share_data():
                       _shared({"b": 1.1 + rng.standard_normal(30)}, "y").assign(cell=1)])
     up = Claim(id="i", text="", kind="ordering", cells=[{"estimator": "a"}, {"estimator": "b"}])
     down = Claim(id="i", text="", kind="ordering", cells=[{"estimator": "b"}, {"estimator": "a"}])
-    assert evaluate(up, far).result == HOLDS and "95 % CIs separate" in evaluate(up, far).evidence
+    assert evaluate(up, far).result == HOLDS and "permutation p" in evaluate(up, far).evidence
     assert evaluate(down, far).result == CONTRADICTED
-    assert evaluate(up, near).result == NO_DIFFERENCE
-    forced = Claim(id="i", text="", kind="ordering", test="intervals", cells=[{"estimator": "a"}, {"estimator": "b"}])
-    assert "95 % CIs" in evaluate(forced, _shared({"a": np.ones(30), "b": np.ones(30) * 2})).evidence
+    tie = evaluate(up, near)
+    assert tie.result == NO_DIFFERENCE and 0 < tie.detectable < 2  # it says what it could have seen
+    old_name = Claim(id="i", text="", kind="ordering", test="intervals", cells=[{"estimator": "a"}, {"estimator": "b"}])
+    assert old_name.test == "unpaired"  # overlapping (or separate) intervals are no test
+
+
+def test_separate_intervals_of_three_runs_each_cannot_be_decided():
+    """Three runs a side whose values do not even overlap: the permutation test's smallest p is
+    1 / C(6, 3) = 0.05, not below alpha, so the comparison cannot hold, whatever the intervals say."""
+    small = pd.concat([_shared({"a": [1.0, 1.1, 1.2]}, "x"), _shared({"b": [5.0, 5.1, 5.2]}, "y").assign(cell=1)])
+    out = evaluate(Claim(id="i", text="", kind="ordering", cells=[{"estimator": "a"}, {"estimator": "b"}]), small)
+    assert out.result == UNDECIDED and out.p_min == pytest.approx(1 / 20) and not out.holds
+    a, b, p_min = permutation_less(np.array([1.0, 1.1, 1.2, 1.3]), np.array([5.0, 5.1, 5.2, 5.3]), "median")
+    assert p_min == pytest.approx(1 / 70) and a < 0.05 and b > 0.9  # four a side: decidable
+
+
+def test_holm_adjusts_step_down():
+    assert holm([0.01, 0.04, 0.03]) == pytest.approx([0.03, 0.06, 0.06])  # 3 x 0.01; max(2 x 0.03, 0.04)
+    assert holm([0.2, float("nan")])[0] == pytest.approx(0.2) and np.isnan(holm([0.2, float("nan")])[1])
+
+
+def test_five_seeds_win_raw_but_not_in_a_family_and_four_cannot_be_decided():
+    """A paired test over 5 seeds, better on every seed: p = 1/32 holds alone, not after Holm over three
+    comparisons (3/32 > 0.05); over 4 seeds the smallest p is 1/16: it cannot be decided at all."""
+    base = np.array([5.0, 6.0, 7.0, 8.0, 9.0])
+    five = _shared({"a": base - 1, "b": base})
+    c = Claim(id="p", text="", kind="winner", cells=[{"estimator": "a"}, {"estimator": "b"}])
+    alone = evaluate(c, five)
+    assert alone.result == HOLDS and alone.p == pytest.approx(1 / 32) and alone.p_min == pytest.approx(1 / 32)
+    family = adjust([evaluate(c, five), evaluate(c, five), evaluate(c, five)])
+    assert all(o.result == NO_DIFFERENCE and o.p_adjusted == pytest.approx(3 / 32) for o in family)
+    assert "Holm p = 0.0938 of 3" in family[0].evidence and "detectable at 80% power" in family[0].evidence
+    four = evaluate(c, _shared({"a": base[:4] - 1, "b": base[:4]}))
+    assert four.result == UNDECIDED and "cannot be decided at n = 4" in adjust([four])[0].evidence
+    sanity = Claim(id="s", text="", kind="winner", role="sanity", cells=[{"estimator": "a"}, {"estimator": "b"}])
+    mixed = adjust([evaluate(sanity, five), evaluate(c, five)])
+    assert mixed[0].p_adjusted == mixed[0].p and mixed[1].result == HOLDS  # a sanity check is not in the family
+
+
+def test_a_fisher_comparison_states_its_smallest_p_and_what_it_could_detect():
+    table = _table({"a": [1.0] * 30, "b": [1.0] * 27 + [100.0] * 3})
+    c = Claim(id="f", text="", kind="ordering", stat="success_rate", better="higher",
+              cells=[{"estimator": "a"}, {"estimator": "b"}])
+    out = evaluate(c, table)  # 30/30 vs 27/30: even the most extreme table of these margins has p 0.119
+    assert out.result == UNDECIDED and out.p_min == pytest.approx(fisher_greater(30, 30, 27, 30))
+
+
+def test_the_detectable_rate_difference_has_about_the_stated_power():
+    """Fisher's exact test at the rate ``p0 + detectable_rates(p0, 30, 30)`` against ``p0``, its power
+    summed over every outcome of two binomials: near 80 % (Fisher's is conservative: a little below)."""
+    from scipy.stats import binom
+
+    p0 = 0.5
+    p1 = p0 + detectable_rates(p0, 30, 30)
+    k = np.arange(31)
+    power = sum(binom.pmf(k1, 30, p1) * binom.pmf(k2, 30, p0) for k1 in k for k2 in k
+                if fisher_greater(int(k1), 30, int(k2), 30) < 0.05)
+    assert 0.65 < power < 0.85 and 0.25 < p1 - p0 < 0.4
+    assert detectable_rates(0.95, 30, 30) == pytest.approx(0.05)  # no rate up to 100 % is detectable
+
+
+def test_the_detectable_paired_shift_has_about_the_stated_power():
+    rng = np.random.default_rng(7)
+    shift = detectable_paired(rng.standard_normal(4000))  # sd 1 at n = 4000: the shift for n = 30 below
+    shift *= np.sqrt(4000 / 30)
+    hits = [wilcoxon_less(rng.standard_normal(30) - shift) < 0.05 for _ in range(400)]
+    assert 0.72 < np.mean(hits) < 0.88
 
 
 def test_a_single_value_prints_no_nan_interval():

@@ -84,14 +84,23 @@ def test_peer_round_trip_recovers_an_exact_ellipsoid(tmp_path):
 def test_compare_and_winner_use_the_report_vocabulary():
     import pandas as pd
 
-    from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE
+    from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
     from magexp.perf.peers import claims
 
     idx = pd.MultiIndex.from_arrays([[str(s) for s in range(5)], ["all"] * 5])
     low, high = pd.Series([1.0, 1.1, 0.9, 1.2, 1.0], idx), pd.Series([2.0, 2.2, 1.9, 2.4, 2.1], idx)
     assert claims.compare(low, high)[0] == HOLDS
     assert claims.compare(high, low)[0] == CONTRADICTED
-    assert claims.compare(low, low + pd.Series([0.1, -0.1, 0.05, -0.05, 0.0], idx))[0] == NO_DIFFERENCE
+    assert claims.compare(low, low + pd.Series([0.1, -0.1, 0.05, -0.05, 0.02], idx))[0] == NO_DIFFERENCE
+    # one equal pair leaves 4 differences: the smallest p is 1/16, above alpha, whatever they are
+    assert claims.compare(low, low + pd.Series([0.1, 0.1, 0.05, 0.05, 0.0], idx))[0] == UNDECIDED
+    halves = pd.MultiIndex.from_arrays([["0", "0"], ["first_half", "second_half"]])
+    a, b = pd.Series([0.8, 1.0], halves), pd.Series([10.0, 14.0], halves)
+    assert claims.compare(a, b)[0] == UNDECIDED  # two halves of a recording decide nothing
+    assert claims.said(b) == "12 (halves 10 and 14)"  # two values, never an interval in brackets
+    family = claims.adjust([{"test": claims.tested(low, high), "evidence": "e"} for _ in range(3)])
+    assert all(c["result"] == NO_DIFFERENCE for c in family)  # 1/32 each, x 3 by Holm: above alpha
+    assert "Holm p = 0.094 of 3" in family[0]["evidence"]
     rows = [{"kind": "magyc_synthetic", "dataset": "magyc_high", "seed": s, "fit_on": "all", "axis_map": "",
              "side": "x", "method": m, "metric": metric, "value": v.iloc[s] * (1.0 if metric == "soft_iron_error" else 0.5)}
             for m, v in (("a", low), ("b", high), ("c", low + pd.Series([0.1, -0.1, 0.05, -0.05, 0.02], idx))) for s in range(5)

@@ -5,10 +5,11 @@ import re
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS
+from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS, SHORT, UNDECIDED, shorten
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.artifacts.report import MAX_CELL, MAX_CHARS, MAX_LINES, compared_rows, headline_verdict, markdown_table
+from magexp.artifacts.report import (MAX_CELL, MAX_CHARS, MAX_LINES, compared_counts, compared_rows, counts,
+                                     headline_verdict, markdown_table)
 from magexp.artifacts.schema import build
 from magexp.artifacts.spec import Headline
 
@@ -41,11 +42,15 @@ def test_an_empty_table_is_an_error():
 def test_a_parameter_table_is_one_line_naming_what_is_not_reproduced():
     rows = pd.DataFrame({"artifact": "t", "estimator": "rdpso", "setting": "s", "label": [f"RDPSO S{i}, mode4" for i in range(6)],
                          "quantity": [f"S{i}" for i in range(6)], "paper_value": 1.0, "value": 1.0, "lo": 0.9, "hi": 1.1,
-                         "verdict": ["reproduced"] * 4 + ["differs", "uninformative"], "reason": "r"})
+                         "verdict": ["reproduced"] * 4 + ["differs", "uninformative"], "reason": "r",
+                         "judged_runs": "successful seeds", "judged_n": 28, "judged_value": 1.0, "judged_lo": 0.9,
+                         "judged_hi": 1.1, "rel_difference": 0.002})
     out = compared_rows(rows)
     assert len(out) == 1 and "reproduced 4" in out.verdict[0] and "S4 differs" in out.reason[0]
     assert "S5 uninformative" in out.reason[0] and "S0 " not in out.reason[0]
-    assert len(compared_rows(rows.iloc[:3])) == 3  # small cells stay one row per number
+    assert "S4 differs: paper 1, ours 1 (0.2 % of its scale)" in out.reason[0] and out.ours[0].startswith("successful")
+    small = compared_rows(rows.iloc[:3])
+    assert len(small) == 3 and small.ours[0] == "1 [0.9, 1.1], successful seeds (28)"  # what the verdict used
 
 
 def _report():
@@ -87,9 +92,11 @@ def test_each_paper_section_opens_with_its_headline_claims():
     assert {"paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason",
             "evidence"} <= set(claims.columns)
     heads = claims[claims.role == "headline"]
-    assert set(heads.verdict) <= {"supported", "partly", "contradicted", "not testable here"}
-    assert set(claims[claims.role != "headline"].verdict) <= {HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE}
+    assert set(heads.verdict) <= {"supported", "partly", "contradicted", "not testable here", "by construction"}
+    assert set(claims[claims.role != "headline"].verdict) <= {HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE, UNDECIDED}
     assert (claims.reason.str.len() <= MAX_CELL).all()
+    # a headline's reason is written whole, decisive evidence first: it fits the first screen uncut
+    assert all(e.startswith(r) for r, e in zip(heads.reason, heads.evidence)) and (heads.reason.str.len() <= SHORT).all()
 
 
 def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypatch):
@@ -139,3 +146,38 @@ def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
         n = pd.read_csv(RESULTS / spec.paper / f"{m.group(2)}_runs.csv").seed.nunique()
         own = pd.read_csv(RESULTS / spec.paper / f"{spec.name}_runs.csv").seed.nunique()
         assert n != own and f"{m.group(1)}{n}{m.group(3)}" in appendix  # the other's count, not its own
+
+
+def test_the_report_has_no_ellipsis_and_keeps_its_size():
+    report, appendix = _report()
+    assert "…" not in report and "…" not in appendix, "a cut text: write it to fit, or say where the rest is"
+    assert len(report.splitlines()) <= MAX_LINES, f"{len(report.splitlines())} lines"
+    assert len(report) <= MAX_CHARS, f"{len(report)} characters"
+
+
+def test_shorten_keeps_whole_items_and_says_where_the_rest_is():
+    text = "; ".join(f"item {i} " + "x" * 40 for i in range(10))
+    out = shorten(text, 120)
+    assert len(out) <= 120 and "…" not in out and out.endswith("more parts: see claims.csv)") and "item 0" in out
+    assert shorten("short", 120) == "short"
+    cut = shorten("y" * 50 + " " + "z" * 200, 120, "the appendix")
+    assert len(cut) <= 120 and cut.endswith("(cut: the rest in the appendix)")
+
+
+def test_counts_keep_the_papers_claims_apart_from_magexps_and_sanity_checks():
+    claims = [{"role": "headline", "by": "paper", "verdict": "supported"},
+              {"role": "headline", "by": "paper", "verdict": "by construction"},
+              {"role": "finding", "by": "paper", "verdict": HOLDS}, {"role": "finding", "by": "paper", "verdict": NO_DIFFERENCE},
+              {"role": "finding", "by": "magexp", "verdict": HOLDS}, {"role": "sanity", "by": "magexp", "verdict": HOLDS}]
+    text = counts(claims, [UNDECIDED])
+    assert "supported 1," in text and "by construction 1" in text
+    assert "the papers' findings: 1 of 2 hold (no difference detected 1)" in text
+    assert "magexp's own statements: 1 of 2 hold (cannot be decided 1)" in text and "not counted): 1" in text
+
+
+def test_compared_counts_split_differs_by_scale_and_failed_majority():
+    rows = pd.DataFrame({"verdict": ["reproduced", "differs", "differs", "differs", "not compared"],
+                         "rel_difference": [0.0, 0.001, 0.5, 0.002, float("nan")],
+                         "reason": ["", "outside", "outside", "(a failed majority); inside", ""]})
+    assert compared_counts(rows) == ("reproduced 1, differs 3 (2 of them by less than 1 % of their scale; 1 on a failed "
+                                     "majority of our runs), uninformative 0; not compared 1")

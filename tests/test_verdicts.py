@@ -155,3 +155,75 @@ def test_block_scale_and_readable_labels():
     cells = [{"scenario": "ding2024_exp1", "scenario.noise": "2", "estimator": "ipso"},
              {"scenario": "ding2024_exp1", "scenario.noise": "5", "estimator": "ipso"}]
     assert label_of(spec, cells, 0, "final_rms", "ipso") == "IPSO final RMS, A = 2 nT"
+
+
+def test_the_rule_is_applied_in_order_outside_first():
+    """An entry marked ``informative: false`` is uninformative only when the paper's value is inside:
+    outside, it differs (Ding's A = 0 ratio, 1.03e6 against [2.7e10, 4.1e11], was mislabelled);
+    ``compared: false`` is not compared whatever its interval."""
+    v = np.linspace(0.9, 1.1, 30)
+    rows = summary_of([{"quantity": "q", "match": {"estimator": "out"}, "value": 50.0, "informative": False, "reason": "r"},
+                       {"quantity": "q", "match": {"estimator": "in"}, "value": 1.0, "informative": False, "reason": "r"},
+                       {"quantity": "q", "match": {"estimator": "skip"}, "value": 1.0, "compared": False,
+                        "reason": "a repeat of another row"}],
+                      {"out": v, "in": v, "skip": v}, {}, {})
+    assert rows.loc["out", "verdict"] == "differs" and "outside" in rows.loc["out", "reason"]
+    assert rows.loc["in", "verdict"] == "uninformative"
+    assert rows.loc["skip", "verdict"] == "not compared" and rows.loc["skip", "reason"] == "a repeat of another row"
+    with pytest.raises(Exception, match="compared: false needs a reason"):
+        Reported(quantity="q", value=1.0, compared=False)
+
+
+def test_the_judged_interval_median_and_runs_are_written_beside_the_verdict():
+    """A paper value inside our successful runs while most runs fail: differs (a failed majority),
+    and the row names the runs, their median and interval that were judged."""
+    ok = np.r_[np.ones(10), np.zeros(20)]
+    v = np.r_[np.linspace(0.9, 1.1, 10), np.linspace(300, 500, 20)]
+    rows = summary_of([{"quantity": "q", "match": {"estimator": "pso"}, "value": 1.0}],
+                      {"pso": v}, {"pso": ok}, {"pso": 1.0})
+    row = rows.loc["pso"]
+    assert row["verdict"] == "differs" and "failed majority" in row["reason"] and "inside our successful" in row["reason"]
+    assert row["judged_runs"] == "successful seeds" and row["judged_n"] == 10
+    assert row["judged_value"] == pytest.approx(1.0) and row["judged_hi"] <= 1.1 and row["hi"] > 300
+    assert row["scale"] == 1.0 and row["rel_difference"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_difference_is_read_on_its_blocks_scale_of_the_paper_values():
+    from magexp.artifacts.spec import parse
+    from magexp.artifacts.summary import paper_scale, relative
+
+    spec = parse({"kind": "final", "title": "t", "seeds": 30, "summarise": [{"mode": "parameters"}],
+                  "reported": [{"quantities": ["S11", "S12", "b1", "b2"], "match": {"scenario": "m1"},
+                                "values": [3.0, 4.0, 10.0, -10.0]},
+                               {"quantity": "S11", "match": {"scenario": "m2"}, "value": 100.0},
+                               {"quantity": "final_rms", "match": {}, "value": -2.0}]}, Path("p") / "a.yaml")
+    assert paper_scale(spec, "S12", {"scenario": "m1"}) == pytest.approx(np.sqrt(12.5))  # S's entries of m1 only
+    assert paper_scale(spec, "b1", {"scenario": "m1"}) == pytest.approx(10.0)
+    assert paper_scale(spec, "final_rms", {"scenario": "m1"}) == pytest.approx(2.0)  # alone: its own magnitude
+    assert relative(0.0003) == "0.03 % of its scale" and relative(38.0) == "38 times its scale"
+    assert relative(2.4) == "240 % of its scale"
+
+
+def test_every_committed_verdict_agrees_with_the_interval_it_names():
+    """The rule applied again to the committed ``summary.csv``: a row is inside exactly when the paper's
+    value lies in ``judged_lo``-``judged_hi`` widened by its printing precision (the ``± w`` of its
+    ``tolerance``); ``differs`` outside or on a failed majority, else ``reproduced`` or ``uninformative``."""
+    import re
+
+    from magexp.artifacts.summary import inside
+    from magexp.paths import RESULTS
+
+    path = RESULTS / "summary.csv"
+    if not path.exists() or "judged_lo" not in path.read_text().splitlines()[0]:
+        pytest.skip("results/ are absent or predate the judged columns: run make reproduce")
+    rows = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    rows = rows[~rows.verdict.isin(["n/a", "not compared"]) & rows.tolerance.str.match(r"^(95 % of runs|ls t-interval)")]
+    wrong = []
+    for r in rows.itertuples():
+        width = float(m.group(1)) if (m := re.search(r"± ([0-9.e+-]+)$", r.tolerance)) else 0.0
+        within = inside(r.paper_value, r.judged_lo, r.judged_hi, width, floor=1e-9)
+        failed = np.isfinite(r.success_rate) and r.success_rate < 0.5
+        expected = {"differs"} if not within or failed else {"reproduced", "uninformative"}
+        if r.verdict not in expected:
+            wrong.append(f"{r.artifact} {r.label}: {r.verdict}")
+    assert len(rows) > 100 and not wrong, "\n".join(wrong)

@@ -28,20 +28,29 @@ run). ``role: finding`` (default) claims with ``by: magexp`` are what the report
 artifact whose figure shows the claim (default: its own).
 
 **Comparisons** (``kind: ordering``: each cell better than the next; ``kind: winner``: the first
-better than every other) hold only when a test at level :data:`ALPHA` separates the two sides
-(``test:``):
+better than every other) hold only when a test separates the two sides (``test:``):
 
 * ``fisher``: one-sided Fisher's exact test on the success counts (``stat: success_rate``);
 * ``paired``: one-sided Wilcoxon signed-rank test on the per-seed differences of ``metric``,
   where the two cells share their seeds and scenario (same seed and scenario: the same readings);
-* ``intervals``: the 95 % bootstrap CIs of ``stat`` do not overlap;
+* ``unpaired``: one-sided permutation test of the difference of ``stat`` between the two cells'
+  per-seed values (:data:`N_PERM` relabellings from a fixed generator; ``intervals``, its old name,
+  is read as it: two bootstrap intervals that do not overlap are no test);
 * ``auto`` (default): ``fisher`` for success rates, ``paired`` where the cells differ only in
   estimator-side keys (``estimator``, ``estimator.*``, ``objective``) and have the same seeds,
-  ``intervals`` otherwise.
+  ``unpaired`` otherwise.
 
-A comparison's outcome is ``holds`` (every pair significant in the stated direction),
-``contradicted`` (a pair significant in the opposite direction) or ``no difference detected``;
-a threshold's or a success rate's is ``holds`` or ``does not hold``.
+Each comparison carries its ``p`` (of the claimed direction; for several pairs the largest: every
+pair must hold), the smallest ``p_min`` its test can give at its n (a signed-rank test of n
+non-zero differences: ``2^-n``; Fisher's: the most extreme table of its margins), and, where it
+detects no difference, ``detectable``: the smallest difference it would detect with
+:data:`POWER` probability (:func:`detectable_paired`, :func:`detectable_unpaired`,
+:func:`detectable_rates`). Within a paper the ``p`` of its comparison claims (sanity checks
+apart) are adjusted by Holm's step-down rule (:func:`holm`, :func:`adjust`): a comparison
+``holds`` when its ``p_adjusted`` is below :data:`ALPHA`, is ``contradicted`` when the converse's
+is, ``cannot be decided`` when ``p_min`` is not below :data:`ALPHA` (the test cannot reach it at
+this n, whatever the data), else ``no difference detected``; a threshold's or a success rate's
+outcome is ``holds`` or ``does not hold``.
 
 Notes interpolate measured values with ``{stat:metric@key=value,key=value:format}``, e.g.
 ``{median:fun@estimator=ipso,scenario.noise=2:.3g}`` (:func:`interpolate`); a field whose
@@ -58,6 +67,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from scipy.special import ndtri
 
 from magexp.artifacts.schema import Float, typed
 from magexp.errors import MagexpError
@@ -80,12 +90,17 @@ STATS = {
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
 KINDS = ("threshold", "success", "ordering", "winner")
 ROLES = ("finding", "sanity")
-TESTS = ("auto", "fisher", "paired", "intervals")
+TESTS = ("auto", "fisher", "paired", "unpaired", "intervals")
 N_BOOT = 2000
 #: significance level of every comparison test
 ALPHA = 0.05
 #: outcomes of a claim; the first is the only one that counts as holding
 HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE = "holds", "does not hold", "contradicted", "no difference detected"
+UNDECIDED = "cannot be decided"
+#: power at which ``detectable`` is the smallest difference a comparison would detect
+POWER = 0.8
+#: relabellings of the permutation test (``unpaired``): its smallest p is ``1 / (N_PERM + 1)``
+N_PERM = 4000
 #: cell keys that choose the method, not the readings: cells that differ only in these share their data
 ESTIMATOR_SIDE = ("estimator", "objective")
 
@@ -126,22 +141,38 @@ class Claim:
             raise MagexpError(f"claim {self.id!r}: by: paper needs a section (where the paper says it)")
         if self.test == "fisher" and self.stat != "success_rate":
             raise MagexpError(f"claim {self.id!r}: test: fisher compares success counts: it needs stat: success_rate")
+        if self.test == "intervals":  # the old name: overlapping intervals are no test, a permutation test is
+            object.__setattr__(self, "test", "unpaired")
 
 
 @dataclass
 class Outcome:
-    """A claim's outcome (``result``: :data:`HOLDS`, :data:`FAILS`, :data:`CONTRADICTED` or
-    :data:`NO_DIFFERENCE`) with its evidence: ``short`` (the numbers) and ``evidence`` (all of them)."""
+    """A claim's outcome (``result``: :data:`HOLDS`, :data:`FAILS`, :data:`CONTRADICTED`,
+    :data:`NO_DIFFERENCE` or :data:`UNDECIDED`) with its evidence: ``short`` (the numbers) and
+    ``evidence`` (all of them). A comparison also has ``p`` (its claimed direction), ``p_contra``
+    (the converse), ``p_min`` (the smallest its test can give), ``n`` (its smallest sample),
+    ``detectable`` (module docstring) and, once :func:`adjust` has seen its family, ``p_adjusted``."""
 
     claim: Claim
     holds: bool
     evidence: str
     result: str = ""
     short: str = ""
+    p: float = float("nan")
+    p_contra: float = float("nan")
+    p_min: float = float("nan")
+    n: int = 0
+    detectable: float = float("nan")
+    p_adjusted: float = float("nan")
+    test: str = ""
 
     def __post_init__(self):
         self.result = self.result or (HOLDS if self.holds else FAILS)
         self.short = self.short or self.evidence
+
+    @property
+    def is_comparison(self) -> bool:
+        return bool(np.isfinite(self.p))
 
 
 def same(a, b) -> bool:
@@ -291,46 +322,109 @@ def _column(runs: pd.DataFrame, metric: str) -> np.ndarray:
         raise MagexpError(f"metric {metric!r} is not a column or an expression of the runs' columns: {exc}") from None
 
 
-def compare(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, stats: tuple, cis: tuple) -> tuple[str, str]:
-    """Whether the cells ``better`` beat the cells ``worse`` by the claim's test: ``(outcome, text)``."""
+@dataclass(frozen=True)
+class Test:
+    """One pair's test: the one-sided p of the claim (``p_hold``) and of its converse (``p_contra``),
+    the smallest p the test can give at its n (``p_min``), the pair's smallest sample ``n``, the
+    difference it would detect with :data:`POWER` (``detectable``, in the units of the statistic)
+    and a text."""
+
+    name: str
+    p_hold: float
+    p_contra: float
+    p_min: float
+    n: int
+    detectable: float
+    text: str
+
+
+def decide(p: float, p_contra: float, p_min: float, alpha: float = ALPHA) -> str:
+    """The outcome of a comparison from its p-values (module docstring): :data:`UNDECIDED` when even
+    the smallest attainable p is not below ``alpha``."""
+    if not p_min < alpha:
+        return UNDECIDED
+    if p < alpha:
+        return HOLDS
+    return CONTRADICTED if p_contra < alpha else NO_DIFFERENCE
+
+
+def compare(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, stats: tuple, cis: tuple) -> Test:
+    """The test of "the cells ``better`` beat the cells ``worse``" by the claim's ``test``."""
     test, pair = _test_of(claim, table, better, worse)
     if test == "fisher":
-        p_hold, p_contra, text = _fisher_test(claim, table, better, worse)
-    elif test == "paired":
-        p_hold, p_contra, text = _paired_test(claim, pair or _paired(table, better, worse, claim.metric))
-    else:
-        p_hold, p_contra, text = _interval_test(claim, cis)
-    if p_hold < ALPHA:
-        return HOLDS, text
-    if p_contra < ALPHA:
-        return CONTRADICTED, text
-    return NO_DIFFERENCE, text
+        return _fisher_test(claim, table, better, worse)
+    if test == "paired":
+        return _paired_test(claim, pair or _paired(table, better, worse, claim.metric))
+    return _unpaired_test(claim, table, better, worse, cis)
 
 
 def _test_of(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> tuple[str, tuple | None]:
     """The test of a comparison and the paired values ``test: auto`` found: ``fisher`` for success
-    rates, ``paired`` for two single cells with the same seeds and scenario, else ``intervals``."""
+    rates, ``paired`` for two single cells with the same seeds and scenario, else ``unpaired``."""
     if claim.test != "auto":
         return claim.test, None
     if claim.stat == "success_rate":
         return "fisher", None
     pair = _paired(table, better, worse, claim.metric)
-    return ("paired" if pair is not None else "intervals"), pair
+    return ("paired" if pair is not None else "unpaired"), pair
 
 
-def _fisher_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> tuple[float, float, str]:
-    """Fisher's exact test of the success counts: ``(p of the claim, p of its converse, text)``."""
+def _z_power(alpha: float = ALPHA, power: float = POWER) -> float:
+    """``z(1 - alpha) + z(power)``: the distance, in standard errors, a one-sided test at ``alpha``
+    needs to detect a difference with probability ``power``."""
+    return float(ndtri(1 - alpha) + ndtri(power))
+
+
+def detectable_paired(d: np.ndarray) -> float:
+    """The shift of the paired differences ``d`` a one-sided Wilcoxon signed-rank test detects with
+    :data:`POWER`: the normal approximation ``(z(1-alpha) + z(power)) s / sqrt(n)``, divided by the
+    square root of the test's asymptotic relative efficiency against the t-test (3/pi). ``s`` is the
+    robust scale ``1.4826 MAD(d)`` (the standard deviation of normal differences): a rank test does
+    not see how far a failed run's difference lies, so its tails do not inflate ``s``."""
+    d = np.asarray(d, float)
+    d = d[np.isfinite(d)]
+    if d.size < 2:
+        return float("nan")
+    scale = 1.4826 * float(np.median(np.abs(d - np.median(d))))
+    return _z_power() * scale / math.sqrt(d.size) / math.sqrt(3 / math.pi)
+
+
+def detectable_unpaired(ci_a: tuple, ci_b: tuple) -> float:
+    """The difference of a statistic between two independent samples the permutation test detects
+    with :data:`POWER`: ``(z(1-alpha) + z(power)) sqrt(se_a^2 + se_b^2)``, each standard error read
+    off its 95 % bootstrap interval (``(hi - lo) / (2 z(0.975))``)."""
+    z = float(ndtri(0.975))
+    se = [(hi - lo) / (2 * z) for lo, hi in (ci_a, ci_b)]
+    return _z_power() * math.sqrt(se[0] ** 2 + se[1] ** 2) if all(np.isfinite(se)) else float("nan")
+
+
+def detectable_rates(p0: float, n1: int, n2: int) -> float:
+    """The rise of a success rate above ``p0`` (the rate of the side claimed worse, ``n2`` runs)
+    that a one-sided test of ``n1`` against ``n2`` runs detects with :data:`POWER`, by the arcsine
+    approximation: ``2 asin(sqrt(p1)) - 2 asin(sqrt(p0)) = (z(1-alpha) + z(power)) sqrt(1/n1 + 1/n2)``
+    (Cohen's h); ``1 - p0`` when no rate up to 1 reaches that power (then nothing is detectable)."""
+    if min(n1, n2) < 1 or not np.isfinite(p0):
+        return float("nan")
+    phi = math.asin(math.sqrt(p0)) + _z_power() * math.sqrt(1 / n1 + 1 / n2) / 2
+    return (math.sin(phi) ** 2 if phi < math.pi / 2 else 1.0) - p0
+
+
+def _fisher_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> Test:
+    """Fisher's exact test of the success counts; its smallest p: the most extreme table of its margins."""
     ka, kb = (values(select(table, w), claim.metric, "success_rate") for w in (better, worse))
     if claim.better == "lower":  # fewer successes is better: swap the roles
         ka, kb = kb, ka
-    p_hold = fisher_greater(int(ka.sum()), len(ka), int(kb.sum()), len(kb))
-    p_contra = fisher_greater(int(kb.sum()), len(kb), int(ka.sum()), len(ka))
-    return p_hold, p_contra, f"Fisher p = {p_hold:.3g} ({int(ka.sum())}/{len(ka)} vs {int(kb.sum())}/{len(kb)})"
+    (a, na), (b, nb) = (int(ka.sum()), len(ka)), (int(kb.sum()), len(kb))
+    p_hold, p_contra = fisher_greater(a, na, b, nb), fisher_greater(b, nb, a, na)
+    top = min(na, a + b)
+    p_min = fisher_greater(top, na, a + b - top, nb)
+    return Test("fisher", p_hold, p_contra, p_min, min(na, nb), detectable_rates(b / nb if nb else np.nan, na, nb),
+                f"Fisher p = {p_hold:.3g} ({a}/{na} vs {b}/{nb})")
 
 
-def _paired_test(claim: Claim, pair: tuple | None) -> tuple[float, float, str]:
+def _paired_test(claim: Claim, pair: tuple | None) -> Test:
     """The one-sided Wilcoxon signed-rank test of the per-seed differences of ``pair`` (the two
-    cells' values on the same seeds): ``(p of the claim, p of its converse, text)``."""
+    cells' values on the same seeds); its smallest p: ``2^-n`` for n non-zero differences."""
     if pair is None:
         raise MagexpError(f"claim {claim.id!r}: test: paired needs two single cells with the same seeds and scenario")
     sign = 1 if claim.better == "lower" else -1
@@ -338,17 +432,37 @@ def _paired_test(claim: Claim, pair: tuple | None) -> tuple[float, float, str]:
     d = d[np.isfinite(d)]
     p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
     wins, losses = int((d < 0).sum()), int((d > 0).sum())
-    return p_hold, p_contra, (f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
-                              f"equal on {d.size - wins - losses} of {d.size} seeds)")
+    return Test("paired", p_hold, p_contra, 0.5 ** (wins + losses), d.size, detectable_paired(d),
+                f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
+                f"equal on {d.size - wins - losses} of {d.size} seeds)")
 
 
-def _interval_test(claim: Claim, cis: tuple) -> tuple[float, float, str]:
-    """Whether the two 95 % intervals ``cis`` separate (p 0 for the side that is better, else 1)."""
-    sign = 1 if claim.better == "lower" else -1
-    (alo, ahi), (blo, bhi) = cis
-    p_hold = 0.0 if (ahi < blo if sign > 0 else alo > bhi) else 1.0
-    p_contra = 0.0 if (bhi < alo if sign > 0 else blo > ahi) else 1.0
-    return p_hold, p_contra, "95 % CIs " + ("separate" if min(p_hold, p_contra) == 0 else "overlap")
+def permutation_less(a: np.ndarray, b: np.ndarray, stat: str) -> tuple[float, float, float]:
+    """One-sided permutation p-values that ``stat`` of ``a`` lies below that of ``b`` and of the
+    converse, and the smallest p the test can give: :data:`N_PERM` random relabellings of the pooled
+    values (a fixed generator: the same on every run), ``p = (1 + #{relabelled difference at or
+    beyond the observed}) / (N_PERM + 1)`` (Phipson & Smyth 2010), at least ``1 / C(n, n_a)``."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    pooled, na = np.r_[a, b], len(a)
+    rng = np.random.default_rng(0)
+    perm = pooled[rng.permuted(np.tile(np.arange(pooled.size), (N_PERM, 1)), axis=1)]
+    diff = np.asarray(STATS[stat](perm[:, :na], axis=1), float) - np.asarray(STATS[stat](perm[:, na:], axis=1), float)
+    observed = statistic(a, stat) - statistic(b, stat)
+    p_less = (1 + int(np.sum(diff <= observed))) / (N_PERM + 1)
+    p_more = (1 + int(np.sum(diff >= observed))) / (N_PERM + 1)
+    return p_less, p_more, max(1 / (N_PERM + 1), 1 / math.comb(pooled.size, na))
+
+
+def _unpaired_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, cis: tuple) -> Test:
+    """The one-sided permutation test (:func:`permutation_less`) of ``stat`` of two sets of runs that
+    share no readings."""
+    a, b = (values(select(table, w), claim.metric, claim.stat) for w in (better, worse))
+    if min(len(a), len(b)) < 1:
+        raise MagexpError(f"claim {claim.id!r}: a side of the comparison has no runs")
+    p_less, p_more, p_min = permutation_less(a, b, claim.stat)
+    p_hold, p_contra = (p_less, p_more) if claim.better == "lower" else (p_more, p_less)
+    return Test("unpaired", p_hold, p_contra, p_min, min(len(a), len(b)), detectable_unpaired(*cis),
+                f"permutation p = {p_hold:.3g} (n = {len(a)}, {len(b)})")
 
 
 def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
@@ -381,14 +495,16 @@ def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome
         ok &= bool(np.isfinite(s) and OPS[claim.op](s, float(claim.value)))
         parts.append(text), stats.append(s)
     evidence = f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts)
-    got = ", ".join(_short_value(s) for s in stats)
+    got = (", ".join(_short_value(s) for s in stats) if len(stats) <= 8
+           else f"from {_short_value(np.nanmin(stats))} to {_short_value(np.nanmax(stats))}")
     return Outcome(claim, ok, evidence, short=f"required {stat} {claim.op} {claim.value:g}; "
-                   f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {_shorten(got, 200)}")
+                   f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {got}")
 
 
 def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
     """``kind: ordering | winner``: each cell against the next (ordering) or the first against every
-    other (winner), by :func:`compare`."""
+    other (winner), by :func:`compare`; every pair must hold (its ``p``: the largest of the pairs'),
+    a pair the other way contradicts it (the converse's p: the smallest, times the number of pairs)."""
     stats, cis, parts = [], [], []
     for where in claim.cells:
         v = values(select(table, where), claim.metric, stat)
@@ -398,16 +514,69 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
         return Outcome(claim, False, "; ".join(parts) + " (a selection has no runs)")
     pairs = (list(zip(range(len(stats)), range(1, len(stats)))) if claim.kind == "ordering"
              else [(0, j) for j in range(1, len(stats))])
-    results, tests = [], []
-    for i, j in pairs:
-        r, t = compare(claim, table, claim.cells[i], claim.cells[j], (stats[i], stats[j]), (cis[i], cis[j]))
-        results.append(r), tests.append(t)
-    result = HOLDS if all(r == HOLDS for r in results) else CONTRADICTED if CONTRADICTED in results else NO_DIFFERENCE
-    order = "lower" if claim.better == "lower" else "higher"
-    head = f"{stat} of {claim.metric} ({order} is better): "
-    short = "; ".join(f"{_short_value(stats[i])} vs {_short_value(stats[j])}, {t}" for (i, j), t in zip(pairs, tests))
-    return Outcome(claim, result == HOLDS, head + "; ".join(parts) + "; tests at alpha " + f"{ALPHA:g}: " + "; ".join(tests),
-                   result=result, short=f"{stat} {short}")
+    tests = [compare(claim, table, claim.cells[i], claim.cells[j], (stats[i], stats[j]), (cis[i], cis[j]))
+             for i, j in pairs]
+    combined = _combined(tests)
+    result = decide(combined["p"], combined["p_contra"], combined["p_min"])
+    head = f"{stat} of {claim.metric} ({claim.better} is better): "
+    short = "; ".join(f"{_short_value(stats[i])} vs {_short_value(stats[j])}, {t.text}" for (i, j), t in zip(pairs, tests))
+    return Outcome(claim, result == HOLDS, head + "; ".join(parts) + "; one-sided tests: " + "; ".join(t.text for t in tests),
+                   result=result, short=f"{stat} {short}", **combined)
+
+
+def _combined(tests: list[Test]) -> dict:
+    """The :class:`Outcome` fields of a claim of several pairs: every pair must hold (``p``: the
+    largest), one the other way contradicts it (``p_contra``: the smallest times the number of
+    pairs), the largest ``p_min``, the smallest ``n`` and the weakest pair's ``detectable``."""
+    weakest = max(tests, key=lambda t: t.detectable if np.isfinite(t.detectable) else -np.inf)
+    return {"p": max(t.p_hold for t in tests), "p_contra": min(1.0, len(tests) * min(t.p_contra for t in tests)),
+            "p_min": max(t.p_min for t in tests), "n": min(t.n for t in tests), "detectable": weakest.detectable,
+            "test": weakest.name}
+
+
+def holm(p: list[float]) -> list[float]:
+    """Holm's step-down adjusted p-values of ``p`` (NaN stays NaN and is not counted): the i-th
+    smallest of m becomes ``max over j <= i of min(1, (m - j + 1) p_(j))`` (Holm 1979)."""
+    p = np.asarray(p, float)
+    out = np.full(p.shape, np.nan)
+    idx = np.flatnonzero(np.isfinite(p))
+    order = idx[np.argsort(p[idx], kind="stable")]
+    m = len(order)
+    running = 0.0
+    for rank, i in enumerate(order):
+        running = max(running, min(1.0, (m - rank) * p[i]))
+        out[i] = running
+    return out.tolist()
+
+
+def adjust(outcomes: list[Outcome]) -> list[Outcome]:
+    """Holm's correction over one paper's family: the comparisons among ``outcomes`` that are not
+    sanity checks (a sanity check keeps its own p). Each gets ``p_adjusted``; its result is decided
+    again on it (:func:`decide`) and its evidence names the family's size; a comparison that detects
+    no difference says the difference it could have detected. Returns ``outcomes`` (changed in place)."""
+    family = [o for o in outcomes if o.is_comparison and o.claim.role != "sanity"]
+    for o, p, pc in zip(family, holm([o.p for o in family]), holm([o.p_contra for o in family])):
+        o.p_adjusted, o.result = p, decide(p, pc, o.p_min)
+        o.holds = o.result == HOLDS
+    for o in (o for o in outcomes if o.is_comparison):
+        alone = o.claim.role == "sanity"
+        o.p_adjusted = o.p if alone else o.p_adjusted
+        note = _adjusted_note(o, 1 if alone else len(family))
+        o.short, o.evidence = f"{o.short}; {note}", f"{o.evidence}; {note}"
+    return outcomes
+
+
+def _adjusted_note(o: Outcome, m: int) -> str:
+    """What the evidence of a comparison adds once its family is known: the adjusted p, and what it
+    could detect (no difference) or why it cannot decide."""
+    note = f"Holm p = {o.p_adjusted:.3g} of {m}" if m > 1 else f"p = {o.p:.3g}"
+    if o.result == UNDECIDED:
+        return f"{note}; cannot be decided at n = {o.n}: its smallest p is {o.p_min:.3g}"
+    if o.result == NO_DIFFERENCE and np.isfinite(o.detectable):
+        what = {"fisher": "a success-rate rise", "paired": f"a per-seed shift of {o.claim.metric}"}.get(
+            o.test, f"a {o.claim.stat} difference")
+        return f"{note}; detectable at {POWER:.0%} power: {what} of {_short_value(o.detectable)}"
+    return note
 
 
 def _short_value(v: float) -> str:
@@ -418,12 +587,20 @@ def _short_value(v: float) -> str:
 SHORT = 300
 
 
-def _shorten(text: str, n: int = SHORT) -> str:
-    """``text`` cut at ``n`` characters (on a ``;`` where one is near), with an ellipsis."""
+def shorten(text: str, n: int = SHORT, where: str = "claims.csv") -> str:
+    """``text`` if it fits in ``n`` characters; else its whole ``;``-separated items that fit, followed
+    by how many were left out and ``where`` they are (never an ellipsis; a first item too long for
+    ``n`` is cut at a word and says so)."""
     if len(text) <= n:
         return text
-    cut = text.rfind(";", 0, n - 2)
-    return text[:cut if cut > n // 2 else n - 2].rstrip() + " …"
+    items = text.split("; ")
+    for k in range(len(items) - 1, 0, -1):
+        tail = f" (and {len(items) - k} more part{'s' if len(items) - k > 1 else ''}: see {where})"
+        head = "; ".join(items[:k])
+        if len(head) + len(tail) <= n:
+            return head + tail
+    tail = f" (cut: the rest in {where})"
+    return text[:n - len(tail)].rsplit(" ", 1)[0] + tail
 
 
 #: what a note field prints when its cells exist but its row filter (``succeeded``, ``seeds``) leaves no

@@ -21,10 +21,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, _shorten, evaluate, interpolate
+from magexp.artifacts.claims import (CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, UNDECIDED, adjust, evaluate,
+                                     interpolate, shorten)
 from magexp.artifacts.plots.benchmark_table import winners
 from magexp.artifacts.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
-from magexp.artifacts.summary import COLUMNS, VERDICTS
+from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
 from magexp.core.atomic import atomic_path, write_text
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS, ROOT
@@ -32,15 +33,16 @@ from magexp.run import provenance
 
 #: significant digits of every float written to a results CSV (round-off must not churn files)
 DIGITS = 6
-SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "value", "lo", "hi", "success_rate",
-                 "n_seeds", "truth_in_interval", "verdict"]
+SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "judged_value", "judged_lo", "judged_hi",
+                 "judged_runs", "judged_n", "success_rate", "truth_in_interval", "verdict", "rel_difference"]
 #: limits of REPORT.md (the appendix holds the rest; the section "magexp beside MAGYC" links its claims table)
 MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 #: verdicts of a headline claim
-HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here")
+HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here", "by construction")
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
-CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence"]
+CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
+                 "p", "p_adjusted", "p_min", "detectable"]
 
 
 def _floats(column: pd.Series) -> np.ndarray | None:
@@ -55,14 +57,19 @@ def _floats(column: pd.Series) -> np.ndarray | None:
     return None
 
 
+#: columns of probabilities: never floored as round-off (a p of 1e-22 is written as it is)
+EXACT = ("p", "p_adjusted", "p_min")
+
+
 def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
     """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
-    written as ``±floor``; every float then rounded to :data:`DIGITS` significant digits."""
+    written as ``±floor`` (not the :data:`EXACT` ones); every float then rounded to :data:`DIGITS`
+    significant digits."""
     out = frame.copy()
     for col in out.columns:
         v = _floats(out[col])
         if v is not None:
-            small = np.isfinite(v) & (v != 0) & (np.abs(v) < floor)
+            small = np.isfinite(v) & (v != 0) & (np.abs(v) < (0 if col in EXACT else floor))
             v = np.where(small, np.sign(v) * floor, v)
             with np.errstate(divide="ignore", invalid="ignore"):
                 mag = np.where(np.isfinite(v) & (v != 0), np.floor(np.log10(np.abs(np.where(v == 0, 1, v)))), 0)
@@ -168,12 +175,14 @@ def _runs_reader(root: Path, paper: str):
 
 
 def _outcomes(specs: list, runs) -> list[tuple[str, object]]:
-    """``(artifact, Outcome)`` of every claim of ``specs`` whose runs table (``runs(name)``) has rows."""
+    """``(artifact, Outcome)`` of every claim of ``specs`` (one paper: one family of comparisons,
+    Holm-adjusted by :func:`magexp.artifacts.claims.adjust`) whose runs table (``runs(name)``) has rows."""
     out = []
     for spec in specs:
         table = runs(spec.name) if spec.claims else None
         if table is not None and len(table):
             out += [(spec.name, evaluate(c, table)) for c in spec.claims]
+    adjust([o for _, o in out])
     return out
 
 
@@ -198,7 +207,10 @@ def headline_verdict(results: list[str | None]) -> str:
 
 def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
     """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure.
-    ``outcomes``: ``{"artifact.id": Outcome}``; a part naming no claim of the paper is an error."""
+    ``outcomes``: ``{"artifact.id": Outcome}``; a part naming no claim of the paper is an error.
+    The reason is written whole (:func:`_headline_verdict`; ``tests/test_report.py`` holds it to
+    :data:`magexp.artifacts.claims.SHORT` characters); the evidence is the reason followed by every
+    part's outcome and full evidence."""
     declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
     rows = []
     for h in load_paper(paper).headline:
@@ -206,33 +218,41 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
         if unknown:
             raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {unknown[0]!r} names no claim of {paper} "
                               "(write <artifact>.<claim id>)")
-        verdict, reason = _headline_verdict(h, [outcomes.get(p) for p in h.parts], runs)
+        parts = [outcomes.get(p) for p in h.parts]
+        verdict, reason = _headline_verdict(h, parts, runs)
         figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
+        evidence = " | ".join([reason] + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(h.parts, parts) if o])
         rows.append({"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline",
                      "section": h.section, "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
-                     "reason": _shorten(reason), "evidence": reason})
+                     "reason": reason, "evidence": evidence})
     return rows
 
 
 def _headline_verdict(h, parts: list, runs) -> tuple[str, str]:
     """The verdict of headline ``h`` and its reason, from the outcomes ``parts`` of its parts (None:
     no runs here): its ``reason:`` template read on the runs of the first part's artifact, else each
-    part's result and numbers; an untestable headline says why."""
+    part's result and numbers; an untestable headline says why; one that is ``supported`` only by
+    construction (``construction:`` says why) reads ``by construction``, never counted as supported."""
     if h.untestable:
         return "not testable here", str(h.untestable).strip()
     verdict = headline_verdict([o.result if o is not None else None for o in parts])
+    if verdict == "supported" and str(h.construction).strip():
+        verdict = "by construction"
     if h.reason and parts[0] is not None:
-        return verdict, interpolate(str(h.reason).strip(), runs(h.parts[0].split(".")[0]))
+        return verdict, interpolate(" ".join(str(h.reason).split()), runs(h.parts[0].split(".")[0]))
     return verdict, "; ".join(f"{p.split('.')[1]}: {o.result if o else 'no runs here'}"
                               + (f" ({o.short})" if o else "") for p, o in zip(h.parts, parts))
 
 
 def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
-    """One ``claims.csv`` row per evaluated claim of ``paper``."""
+    """One ``claims.csv`` row per evaluated claim of ``paper`` (``p``, ``p_adjusted``, ``p_min`` and
+    ``detectable`` for comparisons; ``detectable`` only where no difference is detected)."""
     own = {s.name: s for s in specs}
     return [{"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
              "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
-             "text": o.claim.text, "verdict": o.result, "reason": _shorten(o.short), "evidence": o.evidence}
+             "text": o.claim.text, "verdict": o.result, "reason": shorten(o.short), "evidence": o.evidence,
+             "p": o.p, "p_adjusted": o.p_adjusted, "p_min": o.p_min,
+             "detectable": o.detectable if o.result == NO_DIFFERENCE else np.nan}
             for name, o in outcomes]
 
 
@@ -246,11 +266,6 @@ def _link(figure: str, root: Path) -> str:
 
 def _bold(verdict: str) -> str:
     return f"**{verdict}**" if verdict in ("contradicted", "partly", FAILS, CONTRADICTED, "differs") else verdict
-
-
-def _counts(rows: pd.DataFrame) -> str:
-    counts = rows.verdict.value_counts()
-    return ", ".join(f"{k} {int(counts.get(k, 0))}" for k in VERDICTS)
 
 
 class Paper:
@@ -278,35 +293,71 @@ def _headline_table(p: Paper) -> str:
     return markdown_table(frame, ["claim", "section", "verdict", "reason", "figure"])
 
 
-def _findings_table(p: Paper) -> str:
-    found = [c for c in p.claims if c["role"] == "finding"]
-    if not found:
+def counts(claims: list[dict], peers: list[str] = ()) -> str:
+    """The counts of a section (or of all, ``claims`` of every paper): the papers' headline claims by
+    verdict, the papers' findings apart from magexp's own statements (with ``peers``: the outcomes of
+    the MAGYC section's claims, magexp's too), and the sanity checks, which are not counted."""
+    heads = pd.Series([c["verdict"] for c in claims if c["role"] == "headline"], dtype=object).value_counts()
+    paper = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "paper"]
+    own = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "magexp"] + list(peers)
+    sanity = sum(c["role"] == "sanity" for c in claims)
+    text = ("The papers' headline claims: " + ", ".join(f"{k} {int(heads.get(k, 0))}" for k in HEADLINE_VERDICTS)
+            if len(heads) else "No headline claim")
+    text += f"; the papers' findings: {_held(paper)}" if paper else ""
+    text += f"; magexp's own statements: {_held(own)}" if own else ""
+    return text + (f"; sanity checks (true by construction, not counted): {sanity}" if sanity else "")
+
+
+def _held(results: list[str]) -> str:
+    """``k of n hold`` and how the others went (``contradicted 2, no difference detected 3``)."""
+    others = pd.Series([r for r in results if r != HOLDS], dtype=object).value_counts()
+    rest = ", ".join(f"{k} {int(others[k])}" for k in (FAILS, CONTRADICTED, NO_DIFFERENCE, UNDECIDED) if k in others)
+    return f"{sum(r == HOLDS for r in results)} of {len(results)} hold" + (f" ({rest})" if rest else "")
+
+
+def _findings_table(p: Paper, *, appendix: bool = False) -> str:
+    """The findings of a section: in the report the paper's own (and magexp's where the section has no
+    headline claim: it is magexp's own work), in the appendix magexp's statements of a paper section."""
+    own_here = appendix or not p.headlines
+    found = [c for c in p.claims if c["role"] == "finding" and (c["by"] == "paper" or own_here)
+             and not (appendix and c["by"] == "paper")]
+    if not found or (appendix and not p.headlines):
         return ""
+    found.sort(key=lambda c: c["by"] != "paper")
     frame = pd.DataFrame(found)
     frame["claim"] = [f"{t} ({s})" if s else t for t, s in zip(frame.text, frame.section)]
     frame["result"] = frame.verdict.map(_bold)
-    frame["evidence"] = frame.reason.map(lambda r: _shorten(r, 160))
-    held = sum(c["verdict"] == HOLDS for c in found)
-    return (f"### Findings\n\n{held} of {len(found)} hold (*magexp*: stated by this report, a test fails if one "
-            "does not hold; *paper*: the paper's statement, checked). Comparisons hold only where a test "
-            "separates the two sides (alpha 0.05); full evidence: [`claims.csv`](claims.csv).\n\n"
-            + markdown_table(frame, ["by", "claim", "result", "evidence"]))
+    frame["evidence"] = frame.reason.map(lambda r: shorten(r, 200))
+    where = ("" if own_here else " magexp's own statements on this paper's runs are listed in the "
+             f"[appendix](APPENDIX.md#{p.paper}).")
+    title = "### magexp's own statements\n\n" if appendix else "### Findings\n\n"
+    return (title + "*paper*: the paper's statement, checked; *magexp*: stated by this report, a test fails if one "
+            "does not hold. A comparison holds only where its test separates the two sides at alpha 0.05 after "
+            "Holm's correction over the section's comparisons; full evidence and p-values: "
+            f"[`claims.csv`](claims.csv).{where}\n\n" + markdown_table(frame, ["by", "claim", "result", "evidence"]))
 
 
 #: a cell with more compared numbers than this (a parameter table) is one line of the report
 COLLAPSE = 4
 
 
+def _judged_text(r) -> str:
+    """What a row's verdict used: ``median [lo, hi], <which runs> (n)``."""
+    interval = f" [{_fmt(r.judged_lo)}, {_fmt(r.judged_hi)}]" if np.isfinite(r.judged_lo) else ""
+    return f"{_fmt(r.judged_value)}{interval}, {r.judged_runs} ({int(r.judged_n)})"
+
+
 def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
     """The report's rows of compared numbers (``label``, ``paper``, ``ours``, ``verdict``, ``reason``):
-    one per summary row with a paper value, except that a cell with more than :data:`COLLAPSE` of
-    them (a parameter table) becomes one line: its verdict counts, and the rows not reproduced
-    (every row stays in the appendix and ``summary.csv``)."""
+    one per summary row with a compared paper value, ``ours`` what its verdict used
+    (:func:`_judged_text`), except that a cell with more than :data:`COLLAPSE` of them (a parameter
+    table) becomes one line: its verdict counts, and the rows not reproduced (every row stays in the
+    appendix and ``summary.csv``)."""
     out = []
-    rows = rows[rows.verdict != "n/a"]
+    rows = rows[~rows.verdict.isin(NOT_COMPARED)]
     for _, cell in rows.groupby(["artifact", "estimator", "setting"], sort=False):
         if len(cell) <= COLLAPSE:
-            out += [{"label": r.label, "paper": _fmt(r.paper_value), "ours": f"{_fmt(r.value)} [{_fmt(r.lo)}, {_fmt(r.hi)}]",
+            out += [{"label": r.label, "paper": _fmt(r.paper_value), "ours": _judged_text(r),
                      "verdict": _bold(r.verdict), "reason": r.reason} for r in cell.itertuples()]
             continue
         first = cell.iloc[0]
@@ -317,23 +368,47 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
         verdict = ", ".join(_bold(f"{k} {int(counts[k])}") if k != "reproduced" else f"{k} {int(counts[k])}"
                             for k in VERDICTS if k in counts)
         others = cell[cell.verdict != "reproduced"]
-        reason = "; ".join(f"{r.quantity} {r.verdict}: paper {_fmt(r.paper_value)}, ours {_fmt(r.value)}" for r in others.itertuples())
-        out.append({"label": label, "paper": f"{len(cell)} values", "ours": "see appendix", "verdict": verdict,
-                    "reason": _shorten(reason or "every value reproduced", MAX_CELL)})
+        reason = "; ".join(f"{r.quantity} {r.verdict}: paper {_fmt(r.paper_value)}, ours {_fmt(r.judged_value)}"
+                           + (f" ({relative(r.rel_difference)})" if r.verdict == "differs" else "")
+                           for r in others.itertuples())
+        runs = ", ".join(sorted(set(cell.judged_runs.astype(str))))
+        out.append({"label": label, "paper": f"{len(cell)} values", "ours": f"{runs}: see appendix", "verdict": verdict,
+                    "reason": shorten(reason or "every value reproduced", MAX_CELL, "the appendix")})
     return pd.DataFrame(out, columns=["label", "paper", "ours", "verdict", "reason"])
+
+
+#: a ``differs`` row whose difference is below this fraction of its block's scale is counted apart
+SMALL_DIFFERENCE = 0.01
+
+
+def compared_counts(rows: pd.DataFrame) -> str:
+    """The verdict counts of compared rows, ``differs`` split by its size on the block's scale and
+    by a failed majority: ``reproduced 8, differs 4 (1 by less than 1 % of its scale; 2 on a failed
+    majority), uninformative 4``; then the rows not compared."""
+    counts = rows.verdict.value_counts()
+    differs = rows[rows.verdict == "differs"]
+    small = int((differs.rel_difference < SMALL_DIFFERENCE).sum())
+    failed = int(differs.reason.astype(str).str.contains("failed majority").sum())
+    split = [f"{small} of them by less than {100 * SMALL_DIFFERENCE:g} % of their scale"] if small else []
+    split += [f"{failed} on a failed majority of our runs"] if failed else []
+    parts = [f"{k} {int(counts.get(k, 0))}" + (f" ({'; '.join(split)})" if k == "differs" and split else "")
+             for k in VERDICTS if k not in NOT_COMPARED]
+    skipped = int(counts.get("not compared", 0))
+    return ", ".join(parts) + (f"; not compared {skipped}" if skipped else "")
 
 
 def _compared_table(p: Paper) -> str:
     rows = p.rows[p.rows.verdict != "n/a"]
     if not len(rows):
         return ""
-    counts = rows.verdict.value_counts()
-    return ("### Compared numbers\n\n" + ", ".join(f"{k} {int(counts.get(k, 0))}" for k in VERDICTS if k != "n/a")
-            + " (`uninformative` is not counted as reproduced). *ours*: median [2.5-97.5 % over all seeds]; the reason "
-            f"names the interval the paper's run is judged against; a parameter table is one line (all its rows: "
+    return ("### Compared numbers\n\n" + compared_counts(rows)
+            + " (`uninformative` is not counted as reproduced; `not compared`: the row's reason says why). *ours*: "
+            "the median and 2.5-97.5 % interval the verdict used, over the runs named (all seeds, or those of the "
+            "paper run's outcome) and their number; a `differs` row gives its distance from the paper's value as a "
+            "share of its block's scale (summary.csv `scale`); a parameter table is one line (all its rows: "
             f"[appendix](APPENDIX.md#{p.paper})). The {int((p.rows.verdict == 'n/a').sum())} rows without a paper "
             "value are in the appendix and [`summary.csv`](summary.csv).\n\n"
-            + markdown_table(compared_rows(rows), ["label", "paper", "ours", "verdict", "reason"],
+            + markdown_table(compared_rows(rows[rows.verdict != "not compared"]), ["label", "paper", "ours", "verdict", "reason"],
                              names=["quantity", "paper", "ours", "verdict", "reason"]))
 
 
@@ -342,7 +417,7 @@ def _deviations_section(meta, paper: str, root: Path, *, full: bool = False) -> 
     characters (``full``: the appendix's whole text, with the LaTeX twin)."""
     if not meta.deviations:
         return ""
-    cut = (lambda t: " ".join(t.split())) if full else (lambda t: _shorten(" ".join(t.split()), MAX_CELL))
+    cut = (lambda t: " ".join(t.split())) if full else (lambda t: shorten(" ".join(t.split()), MAX_CELL, "the appendix"))
     frame = pd.DataFrame([{"what": cut(d.text), "why": cut(d.reason)} for d in meta.deviations])
     return "### Deviations from the paper's text\n\n" + markdown_table(
         frame, ["what", "why"], tex=root / paper / "deviations.tex" if full else None)
@@ -369,7 +444,8 @@ def _winners_section(p: Paper) -> str:
 
 def _report_section(p: Paper) -> str:
     intro = " ".join(str(p.meta.intro).split())
-    lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n", _headline_table(p)]
+    lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n",
+             f"**Counts.** {counts(p.headlines + p.claims)}.\n", _headline_table(p)]
     lines += [_findings_table(p), _winners_section(p), _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
               f"Figures, notes, full tables and sanity checks: [appendix](APPENDIX.md#{p.paper}).\n"]
     return "\n".join(x for x in lines if x)
@@ -379,6 +455,7 @@ def _appendix_section(p: Paper) -> str:
     """A paper's appendix: sanity checks, then every artifact with its figure, caption, tables, notes."""
     lines = [f'<a id="{p.paper}"></a>\n', f"## {p.meta.title}\n", f"{str(p.meta.intro).strip()}\n",
              _deviations_section(p.meta, p.paper, p.root, full=True)]
+    lines.append(_findings_table(p, appendix=True))
     frame = pd.DataFrame(p.claims) if p.claims else pd.DataFrame(columns=CLAIM_COLUMNS)
     sanity = frame[frame.role == "sanity"]
     if len(sanity):
@@ -460,12 +537,29 @@ def _artifact_table(spec, path: Path) -> str:
     return text
 
 
+def peer_results(root: Path) -> list[str]:
+    """The results of the claims of the section "magexp beside MAGYC": the second column of the claims
+    table of ``root/peers/peers.md`` (the table under its ``**Claims**`` line; none without the file)."""
+    path = root / "peers" / "peers.md"
+    if not path.exists():
+        return []
+    lines = path.read_text().split(PEERS_MARK)[0].splitlines()
+    start = next((i for i, line in enumerate(lines) if line.startswith("**Claims** (")), len(lines))
+    table = []
+    for line in lines[start + 1:]:
+        if line.startswith("|"):
+            table.append(line)
+        elif table:
+            break
+    return [row.split("|")[2].strip() for row in table[2:]]
+
+
 def _peers_section(root: Path) -> str:
-    """The section "magexp beside MAGYC": the headline and the count of claims that hold from
-    ``root/peers/peers.md`` (the text above :data:`PEERS_MARK` up to its first table), the figure, and a link
-    to the claims table and the rest (its claims are computed by :mod:`magexp.perf.peers`, which
-    ``make peers-bench`` runs; ``make reproduce`` never writes ``results/peers``), or one line when the bench
-    has not been run."""
+    """The section "magexp beside MAGYC": its counts (:func:`peer_results`, magexp's own statements),
+    the headline and the count of claims that hold from ``root/peers/peers.md`` (the text above
+    :data:`PEERS_MARK` up to its first table), the figure, and a link to the claims table and the rest
+    (its claims are computed by :mod:`magexp.perf.peers`, which ``make peers-bench`` runs; ``make
+    reproduce`` never writes ``results/peers``), or one line when the bench has not been run."""
     path = root / "peers" / "peers.md"
     if not path.exists():
         return ("## magexp beside MAGYC\n\nSkipped: `results/peers/peers.md` is absent (`make peers` builds the "
@@ -474,6 +568,7 @@ def _peers_section(root: Path) -> str:
     first_table = next((i for i, line in enumerate(lines) if line.startswith("|")), len(lines))
     lines = [line.split(";")[0] + "; their table and rule: [`peers/peers.md`](peers/peers.md))."
              if line.startswith("**Claims** (") else line for line in lines[:first_table]]
+    lines.insert(1, f"\n**Counts.** {counts([], peer_results(root))}.")
     text = "\n".join(lines).rstrip()
     figure = "![peers](peers/peers.png)\n\n" if (root / "peers" / "peers.png").exists() else ""
     return f"{text}\n\n{figure}Every table and note: [`peers/peers.md`](peers/peers.md); every run: [`peers/peers.csv`](peers/peers.csv).\n"
@@ -491,13 +586,14 @@ def _speed_section(root: Path) -> str:
             "\n\n" + markdown_table(frame, cols, tex=root / "bench.tex"))
 
 
-RULE = ("Verdict `reproduced`: the paper's value lies in the interval of our runs (2.5-97.5 % over seeds; "
-        "a paper run that succeeded or failed is judged against our runs of the same outcome), widened only by "
-        "its printing precision, and at least half the runs succeeded. `uninformative`: inside, but the interval "
-        "cannot exclude values far from the paper's: a ratio matched only by ratios with a failed run on one side, "
-        "a parameter whose interval spans half its search range or more than 15 % of its block's scale (the RMS "
-        "of S's entries, of b's components), any other value whose interval is wider than the value itself, or "
-        "an entry the artifact marks `informative: false`. `differs`: outside, or a failed majority.")
+RULE = ("The verdict of a compared number is one rule, applied in order: `differs` when the paper's value lies "
+        "outside the interval of our runs (2.5-97.5 % over seeds, widened only by its printing precision; a paper "
+        "run that succeeded or failed is judged against our runs of the same outcome, a parameter against our "
+        "successful runs), or inside but with most of our runs failed; `uninformative` when inside, but the "
+        "interval cannot exclude values far from the paper's (a ratio matched only by ratios with a failed run on "
+        "one side, a parameter whose interval spans half its search range or more than 15 % of its block's scale, "
+        "any other value whose interval is wider than the value itself, or an entry marked `informative: false`); "
+        "else `reproduced`. `not compared`: a number the artifact says is not comparable (its reason says why).")
 
 
 def build(root: Path = RESULTS) -> None:
@@ -511,26 +607,25 @@ def build(root: Path = RESULTS) -> None:
     parts = [Paper(p, summary, root) for p in papers() if (summary.paper == p).any() or (root / p).is_dir()]
     claims = pd.DataFrame([r for p in parts for r in p.headlines + p.claims], columns=CLAIM_COLUMNS)
     write_csv(claims, root / "claims.csv")
-    heads = claims[claims.role == "headline"].verdict.value_counts()
-    found = claims[claims.role == "finding"]
     compared = summary[summary.verdict != "n/a"]
     text = [
         "# magexp report\n",
         "Every number below is regenerated by `make reproduce` (one paper: `make reproduce-<paper>`). Per paper: "
-        "its headline claims and whether our runs support them, magexp's findings, the paper's numbers beside ours, "
+        "its headline claims and whether our runs support them, the paper's findings and magexp's own statements, "
+        "the paper's numbers beside ours, "
         "and where we depart from its text. " + RULE + " Figures, notes, full tables and sanity checks: "
         "[APPENDIX.md](APPENDIX.md); every row: [`summary.csv`](summary.csv); every claim with its full evidence: "
         "[`claims.csv`](claims.csv); versions: [`versions.csv`](versions.csv).\n",
-        f"**Overall.** Headline claims: " + ", ".join(f"{k} {int(heads.get(k, 0))}" for k in HEADLINE_VERDICTS)
-        + f". Findings: {int((found.verdict == HOLDS).sum())} of {len(found)} hold. Compared numbers ("
-        f"{len(compared)} of {len(summary)} summary rows have a paper value): {_counts(compared)}.\n",
+        f"**Overall.** {counts(claims.to_dict('records'), peer_results(root))}. Compared numbers ("
+        f"{len(compared)} of {len(summary)} summary rows have a paper value): {compared_counts(compared)}.\n",
     ]
     text += [_report_section(p) for p in parts]
     text.append(_peers_section(root))
     write_text(root / "REPORT.md", "\n".join(text))
     appendix = ["# magexp report: appendix\n", "Everything [REPORT.md](REPORT.md) leaves out: per artifact its figure, "
                 "caption, every summary row (`n/a` rows too), its table and notes; per paper its sanity checks. "
-                "Columns of the tables: see the README (`results/summary.csv`).\n"]
+                "Columns of the tables: see the README (`results/summary.csv`); `judged_*` are the median, interval, "
+                "runs and their number that the verdict used.\n"]
     appendix += [_appendix_section(p) for p in parts]
     appendix.append(_speed_section(root))
     write_text(root / "APPENDIX.md", "\n".join(appendix))

@@ -19,7 +19,8 @@ An artifact is a paper's figure or table as data::
     reported:                    # the paper's numbers (printed precision: decimals, else inferred from the value)
       - {quantity: final_rms, match: {estimator: ipso, scenario.noise: 2}, value: 0.58}
       - {quantities: [S11, S12], match: {estimator: rdpso}, values: [-1.6013, 0.4010], decimals: 4}
-      - {quantity: b1, match: {scenario: yuan2018_mode4}, value: -42.87, informative: false, reason: "..."}  # forced
+      - {quantity: b1, match: {scenario: yuan2018_mode4}, value: -42.87, informative: false, reason: "..."}  # inside: uninformative
+      - {quantity: F_g, match: {estimator: ekf}, value: 14.86, compared: false, reason: "..."}  # not compared
     tolerance: {rel: 0.15, reason: ...}   # only where the paper gives no run to compare with
     claims: [...]                # magexp.artifacts.claims.Claim: conditions on the results (by, section, role, figure, test)
     notes: ...                   # prose; {median:fun@estimator=ipso:.3g} interpolates a measured value
@@ -166,12 +167,15 @@ class Reported:
     match: dict[str, Any] = field(default_factory=dict)
     decimals: Int | None = None
     tolerance: Tolerance | None = None
-    informative: Bool = True  # false: the row's verdict is ``uninformative`` whatever its interval (``reason`` says why)
+    informative: Bool = True  # false: a row inside its interval is ``uninformative`` (``reason`` says why)
+    compared: Bool = True  # false: the row is ``not compared`` (``reason`` says why: not comparable, a repeat)
     reason: str = ""
 
     def __post_init__(self):
         if not self.informative and not str(self.reason).strip():
             raise MagexpError(f"reported {self.quantity}: informative: false needs a reason (why the runs cannot pin it down)")
+        if not self.compared and not str(self.reason).strip():
+            raise MagexpError(f"reported {self.quantity}: compared: false needs a reason (why the number is not compared)")
 
     def half_unit(self) -> float:
         """Half a unit of the last printed digit: the paper's printing precision."""
@@ -355,7 +359,9 @@ class Headline:
     ``supported`` (every part holds), ``contradicted`` (none holds), ``partly`` (some hold), or
     ``not testable here`` when ``untestable`` (why) is given instead of parts. ``reason``: an
     optional template interpolated with the runs of the first part's artifact
-    (:func:`magexp.artifacts.claims.interpolate`). ``figure``: ``<paper folder>/<artifact>`` whose figure shows it."""
+    (:func:`magexp.artifacts.claims.interpolate`). ``figure``: ``<paper folder>/<artifact>`` whose figure shows it.
+    ``construction``: why its parts hold by construction (then a ``supported`` verdict reads ``by
+    construction`` and is not counted as support)."""
 
     id: str
     text: str
@@ -364,6 +370,7 @@ class Headline:
     parts: list[str] = field(default_factory=list)
     reason: str = ""
     untestable: str = ""
+    construction: str = ""
 
     def __post_init__(self):
         if bool(self.parts) == bool(str(self.untestable).strip()):

@@ -12,14 +12,24 @@ outcome, it is compared with our runs of the same outcome, whose interval is ``l
   a calibration that worked); ``value`` is then their median (``success_rate`` counts the others).
 
 Elsewhere ``lo_same``/``hi_same`` are empty and the paper's value is judged against ``lo``-``hi``.
-The judged interval is widened only by the paper's printing precision (half a unit of its last
-printed digit). ``verdict``:
+What the verdict used is written beside it: ``judged_runs`` (``all seeds``, ``successful seeds``,
+``failed seeds``, ``least-squares t-interval`` or ``fixed tolerance``), ``judged_n`` (how many
+runs), ``judged_value`` (their median) and ``judged_lo``-``judged_hi`` (their interval). The
+judged interval is widened only by the paper's printing precision (half a unit of its last printed
+digit). ``verdict``, one rule applied in this order (:func:`judge`, then :func:`uninformative`):
 
-* ``reproduced``: inside, at least half the runs succeeded, and the interval is informative;
-* ``uninformative``: inside, but the interval cannot exclude values far from the paper's
-  (:func:`uninformative`): not counted as reproduced;
-* ``differs``: outside, or a failed majority;
-* ``n/a``: the paper gives no number.
+1. ``n/a``: the paper gives no number; ``not compared``: the artifact says why its number is not
+   comparable (``reported[].compared: false``: e.g. an absolute F_g, a row that repeats another's);
+2. ``differs``: the paper's value is outside the judged interval (or its fixed tolerance);
+3. ``differs``: inside, but fewer than half of our runs succeeded (a failed majority);
+4. ``uninformative``: inside, but the interval cannot exclude values far from the paper's
+   (:func:`uninformative`): not counted as reproduced;
+5. ``reproduced``: inside and informative.
+
+``scale`` is the scale of the row's block (:func:`paper_scale`: the RMS of the paper's values of
+the quantities sharing the row's block, e.g. S's nine entries of the same cell; a quantity alone in
+its block: its own magnitude) and ``rel_difference`` ``|judged_value - paper_value| / scale``: how
+far the paper's number is from ours on that scale.
 
 ``label`` names the row for a reader ("IPSO final RMS, exp1, A = 2 nT"); ``reason`` says in a
 line why the verdict is what it is. ``truth_in_interval`` says whether the true calibration's value
@@ -44,8 +54,11 @@ from magexp.errors import MagexpError
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
            "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval",
-           "label", "reason", "lo_same", "hi_same"]
-VERDICTS = ("reproduced", "differs", "uninformative", "n/a")
+           "label", "reason", "lo_same", "hi_same", "judged_runs", "judged_n", "judged_value", "judged_lo",
+           "judged_hi", "scale", "rel_difference"]
+VERDICTS = ("reproduced", "differs", "uninformative", "not compared", "n/a")
+#: verdicts of rows that are not compared numbers
+NOT_COMPARED = ("not compared", "n/a")
 #: the interval of a single run: these quantiles over seeds
 INTERVAL = (0.025, 0.975)
 #: a parameter's interval spanning at least this fraction of its search range is uninformative
@@ -75,17 +88,29 @@ def interval(values, floor: float = 0.0) -> tuple[float, float]:
 
 def judge(paper: float | None, lo: float, hi: float, width: float, success_rate: float, *, floor: float = 0.0,
           tolerance=None, value: float = np.nan) -> str:
-    """The verdict of one row (module docstring). ``tolerance``: a fixed
+    """The verdict of one row before the informativeness rules (module docstring, steps 1-3): inside
+    or outside first (:func:`inside`), then a failed majority. ``tolerance``: a fixed
     :class:`magexp.artifacts.spec.Tolerance` against ``value`` instead of the interval."""
     if paper is None or not np.isfinite(paper):
         return "n/a"
-    if np.isfinite(success_rate) and success_rate < 0.5:
+    if not inside(paper, lo, hi, width, floor=floor, tolerance=tolerance, value=value):
         return "differs"
+    return "differs" if _failed(success_rate) else "reproduced"
+
+
+def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0.0, tolerance=None,
+           value: float = np.nan) -> bool:
+    """Whether the paper's value lies in ``lo``-``hi`` widened by ``width`` (a value below the
+    round-off ``floor`` counts as it), or within a fixed ``tolerance`` of ``value``."""
     if tolerance is not None:
-        return "reproduced" if np.isfinite(value) and tolerance.holds(value, paper) else "differs"
+        return bool(np.isfinite(value) and tolerance.holds(value, paper))
     p = max(paper, floor) if 0 <= paper < floor else paper
-    inside = np.isfinite(lo) and lo - width <= p <= hi + width
-    return "reproduced" if inside else "differs"
+    return bool(np.isfinite(lo) and lo - width <= p <= hi + width)
+
+
+def _failed(success_rate: float) -> bool:
+    """Fewer than half of the judged runs succeeded."""
+    return bool(np.isfinite(success_rate) and success_rate < 0.5)
 
 
 def cell_overrides(runs: ArtifactRuns, ci: int) -> dict:
@@ -171,12 +196,16 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     jlo, jhi = (lo_same, hi_same) if same is not None else (lo, hi)
     width = entry.half_unit() if entry is not None else 0.0
     tol = None if entry is None else (entry.tolerance or spec.tolerance)
+    judged = _judged(v if same is None else same, med, aggregate, ls, tol, outcome)
     verdict = judge(paper, jlo, jhi, width, success_rate, floor=floor, tolerance=tol, value=med)
-    reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, outcome, ls is not None)
+    within = paper is not None and inside(paper, jlo, jhi, width, floor=floor, tolerance=tol, value=med)
+    reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, outcome, ls is not None, within)
     kind = "ratio" if ratio else "parameter" if parameters else "value"
     verdict, reason = _informative(verdict, reason, entry, tol, lambda: uninformative(
         paper, jlo, jhi, kind=kind, search_range=search_range, block_scale=block_scale, median=med,
         mixed_outcome=ratio and outcome == "failed"))
+    scale, rel = _difference(spec, quantity, settings, paper, judged["judged_value"])
+    reason += f"; off by {relative(rel)} ({scale:.4g})" if verdict == "differs" and np.isfinite(rel) else ""
     return {
         "paper": spec.paper, "artifact": spec.name, "quantity": quantity, "estimator": estimator,
         "setting": setting + extra_setting, "truth": truth, "paper_value": paper, "value": med,
@@ -184,7 +213,49 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
         "verdict": verdict, "lo": lo, "hi": hi, "success_rate": success_rate,
         "truth_in_interval": _truth_inside(truth, lo, jlo, jhi, width, floor),
         "label": label or quantity, "reason": reason, "lo_same": lo_same, "hi_same": hi_same,
+        **judged, "judged_lo": jlo, "judged_hi": jhi, "scale": scale, "rel_difference": rel,
     }
+
+
+def relative(x: float) -> str:
+    """A difference on its block's scale: a percentage with two significant digits below 10 times the
+    scale (``0.0003`` -> ``0.03 % of its scale``), else a multiple (``38 times its scale``)."""
+    if not np.isfinite(x):
+        return "n/a"
+    if x >= 10:
+        return f"{x:.2g} times its scale"
+    return f"{100 * x:{'.0f' if x >= 1 else '.2g'}} % of its scale"
+
+
+def _judged(runs: np.ndarray, med: float, aggregate: str, ls, tol, outcome: str) -> dict:
+    """``judged_runs``, ``judged_n`` and ``judged_value`` of a row: which runs the verdict used, how
+    many, and their median (the least-squares estimate of an ``ls`` row, the row's value for a fixed
+    tolerance or an ``aggregate: mean`` row)."""
+    finite = runs[np.isfinite(runs)]
+    if ls is not None:
+        return {"judged_runs": "least-squares t-interval", "judged_n": 1, "judged_value": float(ls[0])}
+    which = f"{outcome} seeds" if outcome else "all seeds"
+    if tol is not None:
+        which = f"fixed tolerance, {which}"
+    centre = med if tol is not None or aggregate == "mean" or not finite.size else float(np.median(finite))
+    return {"judged_runs": which, "judged_n": int(finite.size), "judged_value": centre}
+
+
+def _difference(spec, quantity: str, settings: dict, paper, judged_value: float) -> tuple[float, float]:
+    """``(scale, rel_difference)`` of a row (:func:`paper_scale`; NaN without a paper value)."""
+    if paper is None:
+        return np.nan, np.nan
+    scale = paper_scale(spec, quantity, settings)
+    return scale, (abs(judged_value - paper) / scale if scale > 0 else np.nan)
+
+
+def paper_scale(spec, quantity: str, settings: dict) -> float:
+    """The scale a row's difference is read on: the RMS of the paper's values of the quantities of
+    the row's block (:func:`block_of`: ``S11``..``S33`` -> ``S``) reported for the same cell; a
+    quantity alone in its block (a final RMS, an F_g) has its own magnitude."""
+    block = block_of(quantity)
+    paper = [float(e.value) for e in spec.reported if block_of(e.quantity) == block and matches(e.match, settings)]
+    return float(np.sqrt(np.mean(np.square(paper)))) if paper else np.nan
 
 
 def _success_rate(ok: np.ndarray) -> float:
@@ -230,12 +301,17 @@ def _intervals(v: np.ndarray, same, floor: float, ls) -> tuple[float, float, flo
 
 
 def _informative(verdict: str, reason: str, entry, tol, why) -> tuple[str, str]:
-    """The verdict and reason once the informativeness rules are applied: a row whose reported entry
-    says ``informative: false`` is uninformative for its own reason; a ``reproduced`` without a fixed
-    tolerance is uninformative when ``why()`` (:func:`uninformative`) gives a reason."""
-    if verdict != "n/a" and entry is not None and not entry.informative:
+    """Steps 1 and 4 of the rule (module docstring): an entry marked ``compared: false`` is not
+    compared (its reason says why); a ``reproduced`` row (inside, a successful majority) whose entry
+    says ``informative: false`` is uninformative for its own reason, and one without a fixed
+    tolerance when ``why()`` (:func:`uninformative`) gives a reason. Rows outside keep ``differs``."""
+    if verdict != "n/a" and entry is not None and not entry.compared:
+        return "not compared", str(entry.reason).strip()
+    if verdict != "reproduced":
+        return verdict, reason
+    if entry is not None and not entry.informative:
         return "uninformative", str(entry.reason).strip()
-    if verdict == "reproduced" and tol is None:
+    if tol is None:
         text = why()
         if text:
             return "uninformative", text
@@ -261,17 +337,18 @@ def _tolerance_text(entry, tol, ls, width: float) -> str:
 
 
 def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol, med: float, outcome: str,
-            ls: bool) -> str:
-    """A short line: why ``verdict`` (numbers from the row)."""
+            ls: bool, within: bool) -> str:
+    """A short line: why ``verdict`` (numbers from the row; ``within``: :func:`inside`)."""
     if verdict == "n/a":
         return ""
-    if np.isfinite(success_rate) and success_rate < 0.5:
-        return f"our runs succeed on {success_rate:.0%} of seeds (a failed majority)"
     if tol is not None:
-        return f"median {med:.4g} vs paper {paper:.4g} ({tol.text()})"
-    against = "the least-squares t-interval" if ls else f"our {outcome} runs" if outcome else "our runs"
-    where = "inside" if verdict == "reproduced" else "outside"
-    return f"paper {paper:.4g} {where} {against} ({lo:.4g} to {hi:.4g})"
+        where = f"median {med:.4g} vs paper {paper:.4g} ({tol.text()})"
+    else:
+        against = "the least-squares t-interval" if ls else f"our {outcome} runs" if outcome else "our runs"
+        where = f"paper {paper:.4g} {'inside' if within else 'outside'} {against} ({lo:.4g} to {hi:.4g})"
+    if within and _failed(success_rate):
+        return f"our runs succeed on {success_rate:.0%} of seeds (a failed majority); {where}"
+    return where
 
 
 def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, prefix: str = "") -> str:
