@@ -39,6 +39,9 @@ MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here")
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
+#: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
+#: them out unless both sides have their source)
+PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence"]
 
 
@@ -453,7 +456,7 @@ def _peers_section(root: Path) -> str:
     has not been run."""
     path = root / "peers" / "peers.md"
     if not path.exists():
-        return ("## magexp beside MAGYC\n\nSkipped: `results/peers/peers.md` is absent (`make peers` builds the "
+        return (f"{PEERS_HEADING}\n\nSkipped: `results/peers/peers.md` is absent (`make peers` builds the "
                 "peer's environment, `make peers-bench` runs the bench).\n")
     lines = path.read_text().split(PEERS_MARK)[0].rstrip().splitlines()
     first_table = next((i for i, line in enumerate(lines) if line.startswith("|")), len(lines))
@@ -470,7 +473,7 @@ def _speed_section(root: Path) -> str:
         return ""
     frame = pd.read_csv(path)
     cols = [c for c in ("measure", "estimator", "value", "unit", "lo", "hi") if c in frame]
-    return ("## Speed of the core (`make bench`)\n\nMeasured by `make bench` on this machine, side by side in one "
+    return (f"{SPEED_HEADING} (`make bench`)\n\nMeasured by `make bench` on this machine, side by side in one "
             "run (variants alternating, one BLAS thread): medians with the interquartile range (`lo`-`hi`), or a "
             "95 % interval for success rates ([`bench.csv`](bench.csv); the sections are described in the README)."
             "\n\n" + markdown_table(frame, cols, tex=root / "bench.tex"))

@@ -103,6 +103,8 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     return True
 
 
+#: a column of wall times measured on this machine has this in its name (kept in ``results/timing/``)
+MEASURED = "wall_time"
 #: columns that identify a row of an artifact's table (kept beside its wall times in the timing file)
 ROW_KEYS = ("case", "family", "label", "scenario", "estimator", "objective", "setting")
 
@@ -111,7 +113,7 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
     """Move the wall-time columns of ``frame`` into the timing file ``path`` (with the row keys):
     the results' CSVs then hold only what a fresh clone computes to the same bytes, and
     ``results/timing/`` and ``results/timing.csv`` what this machine measured."""
-    timed = [c for c in frame.columns if "wall_time" in c]
+    timed = [c for c in frame.columns if MEASURED in c]
     if not timed:
         return frame
     path.parent.mkdir(parents=True, exist_ok=True)
