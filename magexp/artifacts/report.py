@@ -39,6 +39,9 @@ MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here")
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
+#: a column of wall times measured on this machine has this in its name (an artifact's table keeps them in
+#: ``results/timing/``, :func:`magexp.artifacts.reproduce.split_timing`)
+MEASURED = "wall_time"
 #: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
 #: them out unless both sides have their source)
 PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"

@@ -28,7 +28,7 @@ import pandas as pd
 
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact, rebuild_problem
 from magexp.artifacts.plots import VECTOR, kind_module
-from magexp.artifacts.report import build, read_runs, write_csv
+from magexp.artifacts.report import MEASURED, build, read_runs, write_csv
 from magexp.artifacts.spec import papers
 from magexp.artifacts.summary import COLUMNS, summarise
 from magexp import paths
@@ -103,8 +103,6 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     return True
 
 
-#: a column of wall times measured on this machine has this in its name (kept in ``results/timing/``)
-MEASURED = "wall_time"
 #: columns that identify a row of an artifact's table (kept beside its wall times in the timing file)
 ROW_KEYS = ("case", "family", "label", "scenario", "estimator", "objective", "setting")
 
