@@ -203,3 +203,19 @@ def test_another_processor_agrees_with_the_committed_artifact(tmp_path):
         result = compare(out, tmp_path / "committed" / "results", files=files)
         assert result.agrees, f"{name}: " + "; ".join(d.line() for d in result.disagreements[:5])
         assert result.csv_files == 2 and result.figures == 2 and result.rows == 40
+
+
+def test_which_reproduction_is_checked(cli, sides, monkeypatch):
+    """Without --against: results/ when it differs from the committed one, else a reproduction into
+    the scratch folder (here a stand-in that returns a copy with one verdict changed)."""
+    ours, committed = sides
+    monkeypatch.setattr("magexp.artifacts.verify.changed_results", lambda: True)
+    monkeypatch.setattr("magexp.paths.RESULTS", ours)
+    done = cli("verify", "--committed", committed)
+    assert done.returncode == 0 and "verify: results/ (the working tree" in done.stdout
+    edit(ours / "summary.csv", first_row(ours / "summary.csv", "verdict", "reproduced"), "verdict", "differs")
+    monkeypatch.setattr("magexp.artifacts.verify.changed_results", lambda: False)
+    monkeypatch.setattr("magexp.artifacts.verify.reproduce_scratch", lambda jobs: ours)
+    done = cli("verify", "--committed", committed)
+    assert done.returncode == 1 and "reproducing every paper into" in done.stdout
+    assert "(reproduced now: results/ is the committed one)" in done.stdout and "1 verdicts changed" in done.stdout

@@ -3,9 +3,9 @@
     python -m magexp verify [--against DIR] [--committed DIR] [--rtol R] [--all] [--jobs N]
 
 On another machine (another CPU, numba kernels compiled for another target, the numpy path
-``MAGEXP_NUMBA=0``) a reproduction differs from the committed ``results/`` in the last printed digit
-of some numbers and in the pixels of its figures, never in a verdict. ``verify`` holds a
-reproduction to exactly that:
+``MAGEXP_NUMBA=0``) a reproduction differs from the committed ``results/`` in the last printed digits
+of some numbers and in the pixels of its figures; it should not differ in a verdict. ``verify``
+holds a reproduction to that:
 
 * every verdict identical: the ``verdict`` column of every CSV (each summary row's verdict; in
   ``claims.csv`` each claim's result and each headline verdict);
