@@ -20,7 +20,7 @@ PYTEST := $(PY) -m pytest $(if $(filter-out 0,$(TEST_JOBS)),-n $(TEST_JOBS) --di
 unexport PYTHONDONTWRITEBYTECODE
 
 .DEFAULT_GOAL := help
-.PHONY: help venv lock bench reproduce redraw report test test-full docs clean peers peers-lock peers-bench
+.PHONY: help venv lock bench reproduce verify redraw report test test-full docs clean peers peers-lock peers-bench
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_%-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
@@ -38,6 +38,9 @@ venv: $(STAMP) ## create .venv and install magexp with its test extras
 
 reproduce: $(STAMP) ## regenerate every figure, table and the report into results/
 	$(PY) -m magexp reproduce all $(RUN_ON)
+
+verify: $(STAMP) ## does a reproduction agree with the committed results/? (results/ if reproduced, else one into .cache/verify)
+	$(PY) -m magexp verify --jobs $(JOBS)
 
 redraw: $(STAMP) ## rebuild every figure, results/summary.csv and REPORT.md from the CSVs (no run)
 	$(PY) -m magexp reproduce all --redraw

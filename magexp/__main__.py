@@ -6,6 +6,8 @@
 ``magexp calibrate KEY=...``    calibrate a recording (:mod:`magexp.calibration.fit`)
 ``magexp reproduce PAPER ...``  regenerate a paper's figures, tables and the report
                                 (:mod:`magexp.artifacts.reproduce`; what ``make reproduce`` runs)
+``magexp verify [OPTIONS]``     compare a reproduction with the committed results
+                                (:mod:`magexp.artifacts.verify`; what ``make verify`` runs)
 ==============================  ==================================================================
 
 Every command runs under :func:`magexp.errors.guarded`: any error is one line on stderr and an
@@ -29,6 +31,8 @@ def command(name: str):
         from magexp.calibration.fit import command as main
     elif name == "reproduce":
         from magexp.artifacts.reproduce import command as main
+    elif name == "verify":
+        from magexp.artifacts.verify import command as main
     else:
         from magexp.run.command import run_command as main
     return main
@@ -39,7 +43,7 @@ def main(argv: list[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     if argv is None:  # a closed pipe (magexp --help | head) ends quietly, as for any Unix tool
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
-    name = args[0] if args and args[0] in ("calibrate", "reproduce") else "run"
+    name = args[0] if args and args[0] in ("calibrate", "reproduce", "verify") else "run"
     one_blas_thread()  # this process and its workers; before the command imports numpy
     guarded(command(name), args[1:] if name != "run" else args)
 

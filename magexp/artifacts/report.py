@@ -41,6 +41,12 @@ MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here", "by construction")
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
+#: a column of wall times measured on this machine has this in its name (an artifact's table keeps them in
+#: ``results/timing/``, :func:`magexp.artifacts.reproduce.split_timing`)
+MEASURED = "wall_time"
+#: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
+#: them out unless both sides have their source)
+PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
                  "p", "p_adjusted", "p_min", "detectable"]
 
@@ -562,7 +568,7 @@ def _peers_section(root: Path) -> str:
     reproduce`` never writes ``results/peers``), or one line when the bench has not been run."""
     path = root / "peers" / "peers.md"
     if not path.exists():
-        return ("## magexp beside MAGYC\n\nSkipped: `results/peers/peers.md` is absent (`make peers` builds the "
+        return (f"{PEERS_HEADING}\n\nSkipped: `results/peers/peers.md` is absent (`make peers` builds the "
                 "peer's environment, `make peers-bench` runs the bench).\n")
     lines = path.read_text().split(PEERS_MARK)[0].rstrip().splitlines()
     first_table = next((i for i, line in enumerate(lines) if line.startswith("|")), len(lines))
@@ -580,7 +586,7 @@ def _speed_section(root: Path) -> str:
         return ""
     frame = pd.read_csv(path)
     cols = [c for c in ("measure", "estimator", "value", "unit", "lo", "hi") if c in frame]
-    return ("## Speed of the core (`make bench`)\n\nMeasured by `make bench` on this machine, side by side in one "
+    return (f"{SPEED_HEADING} (`make bench`)\n\nMeasured by `make bench` on this machine, side by side in one "
             "run (variants alternating, one BLAS thread): medians with the interquartile range (`lo`-`hi`), or a "
             "95 % interval for success rates ([`bench.csv`](bench.csv); the sections are described in the README)."
             "\n\n" + markdown_table(frame, cols, tex=root / "bench.tex"))

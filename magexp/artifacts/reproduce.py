@@ -28,7 +28,7 @@ import pandas as pd
 
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact, rebuild_problem
 from magexp.artifacts.plots import VECTOR, kind_module
-from magexp.artifacts.report import build, read_runs, write_csv
+from magexp.artifacts.report import MEASURED, build, read_runs, write_csv
 from magexp.artifacts.spec import papers
 from magexp.artifacts.summary import COLUMNS, summarise
 from magexp import paths
@@ -111,7 +111,7 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
     """Move the wall-time columns of ``frame`` into the timing file ``path`` (with the row keys):
     the results' CSVs then hold only what a fresh clone computes to the same bytes, and
     ``results/timing/`` and ``results/timing.csv`` what this machine measured."""
-    timed = [c for c in frame.columns if "wall_time" in c]
+    timed = [c for c in frame.columns if MEASURED in c]
     if not timed:
         return frame
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,562 @@
+"""Does a reproduction agree with the published one? ``magexp verify`` (what ``make verify`` runs).
+
+    python -m magexp verify [--against DIR] [--committed DIR] [--rtol R] [--all] [--jobs N]
+
+On another machine (another CPU, numba kernels compiled for another target, the numpy path
+``MAGEXP_NUMBA=0``) a reproduction differs from the committed ``results/`` in the last printed digits
+of some numbers and in the pixels of its figures; it should not differ in a verdict. ``verify``
+holds a reproduction to that:
+
+* every verdict identical: the ``verdict`` column of every CSV (each summary row's verdict; in
+  ``claims.csv`` each claim's result and each headline verdict);
+* every number within a tolerance (:func:`tolerance`): :data:`RTOL` relative, or one unit of its
+  printed precision, whichever is larger; a column of integers (seeds, cells, counts) is held to
+  the relative tolerance alone, i.e. exactly;
+* every text identical up to the numbers in it, which are held to the same tolerance
+  (:func:`compare_text`): the CSVs' labels, reasons and evidence, ``REPORT.md``, ``APPENDIX.md``
+  and the LaTeX tables;
+* a figure through the data it draws (its ``.csv`` and ``_runs.csv``), never its pixels: its PNG
+  and PDF must exist on both sides;
+* a file on one side only is a disagreement; what differs by design is left out, and listed
+  (:data:`EXCLUDED`, :data:`OPTIONAL`, :data:`MEASURED`, :data:`SECTIONS`).
+
+The reproduction is ``--against DIR`` if given; else ``results/`` when it differs from the committed
+one (after ``make reproduce``); else a reproduction of every paper into :func:`scratch` (beside the run
+cache, never ``results/``: only the runs the cache lacks are computed). The committed side is
+``--committed DIR`` or ``results/`` of the last commit, read from git (``git archive``), so it is
+there after ``make reproduce`` overwrote ``results/``. Exit code 0: it agrees; 1: it does not; 2: bad
+input (no git, a folder that does not exist).
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import math
+import re
+import subprocess
+import sys
+import tarfile
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from magexp import paths
+from magexp.artifacts.report import DIGITS, MEASURED, PEERS_HEADING, SPEED_HEADING
+from magexp.artifacts.spec import ROUNDOFF_FLOOR
+from magexp.errors import MagexpError, exit_code
+from magexp.run.guard import OneLineParser, check_destination
+
+#: relative tolerance of a number. A reproduction elsewhere (another CPU, BLAS or numba target, the numpy
+#: path) sums in another order: most numbers move in their 6th significant digit (1e-6 to 1e-5
+#: relative, the precision of the CSVs), but a difference of two nearly equal numbers magnifies the
+#: round-off of its operands by their ratio. Measured against the committed results: a Kalman estimate's
+#: distance from least squares (``yan2022_fig_tuning`` ``k_vs_ls``, 4e-9) moved by 3.9e-4 relative, a
+#: calibrated field's error ``|B_cal| - |B_ref|`` (0.003 nT of 50 000 nT, ``ding2024_fig2``) by 4.4e-4.
+#: 1e-3 covers those twice over and is at most one unit of the 4th significant digit, the precision
+#: REPORT.md prints: a difference it allows can show there only as a flip of a last digit, and never
+#: moves a verdict (verdicts are compared exactly).
+RTOL = 1e-3
+#: files (and folders, ending in ``/``) of ``results/`` that differ by design, with why
+EXCLUDED = {
+    "versions.csv": "magexp's commit and the library versions",
+    "timing.csv": "wall times of this machine",
+    "timing/": "wall times of this machine",
+    "bench.csv": "the speed benchmark of this machine (make bench)",
+    "bench.tex": "the speed benchmark of this machine (make bench)",
+}
+#: folders compared only when both sides have them (only ``make peers-bench`` writes them)
+OPTIONAL = {"peers/": "make peers-bench"}
+#: sections of the report files left out: ``(file, heading, the folder or file it shows)``; a section
+#: whose source is compared (on both sides) is compared too
+SECTIONS = (("APPENDIX.md", SPEED_HEADING, "bench.csv"), ("REPORT.md", PEERS_HEADING, "peers/"))
+#: files compared line by line, their numbers tokenised (:func:`compare_text`)
+TEXT = (".md", ".tex")
+#: figures: present on both sides, their pixels never compared (their data is in the CSVs)
+FIGURES = (".png", ".pdf")
+#: columns that name a row in a disagreement (the first few present)
+KEYS = ("artifact", "id", "role", "quantity", "parameter", "case", "family", "label", "scenario", "estimator",
+        "objective", "cell", "seed", "measure", "metric")
+#: a number in a text: not inside a word (``exp1``, ``S11``, ``ding2024``), an optional sign, an exponent
+NUMBER = re.compile(r"((?<![\w.])[-+]?(?>\d+(?:\.\d*)?|\.\d+)(?>[eE][-+]?\d+)?(?!\w))")
+#: how many disagreements the screen lists (the count says how many there are)
+SHOWN = 20
+
+
+@dataclass
+class Difference:
+    """One difference: where (``file``, ``row``, ``column``), the two values and how far apart."""
+
+    file: str
+    row: str
+    column: str
+    ours: str
+    committed: str
+    relative: float = math.nan
+
+    def line(self) -> str:
+        where = ", ".join(x for x in (self.row, f"column {self.column}" if self.column else "") if x)
+        return f"{self.file}{': ' + where if where else ''}: ours {_quote(self.ours)}, committed {_quote(self.committed)}"
+
+
+@dataclass
+class Comparison:
+    """What :func:`compare` found (counts, the disagreements, the differences within the tolerance)."""
+
+    rtol: float
+    csv_files: int = 0
+    rows: int = 0
+    values: int = 0
+    text_files: int = 0
+    lines: int = 0
+    figures: int = 0
+    verdicts: dict = field(default_factory=dict)  # {what: number compared} (summary rows, claims, headlines)
+    changed: list = field(default_factory=list)  # verdicts that changed (Differences)
+    disagreements: list = field(default_factory=list)  # everything else beyond the tolerance
+    below: dict = field(default_factory=dict)  # {file: values that differ within the tolerance}
+    largest: Difference | None = None  # the largest relative difference within the tolerance
+    excluded: list = field(default_factory=list)  # what was left out, and why
+
+    @property
+    def agrees(self) -> bool:
+        return not self.changed and not self.disagreements
+
+    def within(self, diff: Difference, count: int = 1) -> None:
+        """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them."""
+        self.below[diff.file] = self.below.get(diff.file, 0) + count
+        if self.largest is None or diff.relative > self.largest.relative:
+            self.largest = diff
+
+
+def _quote(text: str, n: int = 60) -> str:
+    text = str(text)
+    return repr(text if len(text) <= n else text[: n - 3] + "...")
+
+
+# ---------------------------------------------------------------------------------------------
+# numbers and texts
+
+def tolerance(ours: np.ndarray, committed: np.ndarray, unit: np.ndarray, rtol: float) -> np.ndarray:
+    """The largest difference allowed between ``ours`` and ``committed``: ``rtol`` times the larger
+    magnitude, or one ``unit`` of the printed precision, whichever is larger."""
+    return np.maximum(rtol * np.maximum(np.abs(ours), np.abs(committed)), unit)
+
+
+def csv_unit(values: np.ndarray) -> np.ndarray:
+    """One unit of the last digit of floats written with :data:`magexp.artifacts.report.DIGITS`
+    significant digits (``%.6g``: trailing zeros dropped, so the text itself does not tell). Round-off
+    is written as ``0`` or ``±ROUNDOFF_FLOOR`` (:func:`magexp.artifacts.report.tidy`): a value of at most
+    that magnitude is printed to within the band ``-floor .. floor``, whose width is its unit."""
+    mag = np.abs(values)
+    with np.errstate(divide="ignore"):
+        digit = np.where(mag > 0, 10.0 ** (np.floor(np.log10(np.where(mag > 0, mag, 1))) - (DIGITS - 1)), 0.0)
+    return np.where(mag <= ROUNDOFF_FLOOR, 2 * ROUNDOFF_FLOOR, digit)
+
+
+def text_unit(token: str) -> float:
+    """One unit of the last printed digit of a number in a text (``0.254`` -> 0.001, ``1.2e-05`` ->
+    1e-06, ``30`` -> 1)."""
+    mantissa, _, exponent = token.lower().partition("e")
+    decimals = len(mantissa.partition(".")[2])
+    return 10.0 ** (int(exponent or 0) - decimals)
+
+
+def relative(a: float, b: float) -> float:
+    """``|a - b|`` over the larger magnitude (0 when both are 0)."""
+    scale = max(abs(a), abs(b))
+    return abs(a - b) / scale if scale else 0.0
+
+
+def compare_text(ours: str, committed: str, rtol: float) -> tuple[bool, float, tuple[str, str]]:
+    """Whether two texts agree: the same words, and each number within :func:`tolerance` (its unit
+    the finer of the two printed precisions: ``1.5`` beside ``1.501`` is one unit of ``0.001``).
+    Returns ``(agrees, largest relative difference of a number, (ours, committed) of the first
+    disagreement or of the largest difference)``."""
+    a, b = NUMBER.split(ours), NUMBER.split(committed)
+    if len(a) != len(b) or a[0::2] != b[0::2]:
+        return False, math.nan, _first_difference(ours, committed)
+    worst, where = 0.0, (ours, committed)
+    for x, y in zip(a[1::2], b[1::2]):
+        if x == y:
+            continue
+        fx, fy = float(x), float(y)
+        unit = min(text_unit(x), text_unit(y))
+        if abs(fx - fy) > tolerance(np.float64(fx), np.float64(fy), unit, rtol) * (1 + 1e-9):
+            return False, math.nan, (x, y)
+        if relative(fx, fy) >= worst:
+            worst, where = relative(fx, fy), (x, y)
+    return True, worst, where
+
+
+def _first_difference(a: str, b: str, context: int = 25) -> tuple[str, str]:
+    """The two texts around their first differing character."""
+    i = next((k for k, (x, y) in enumerate(zip(a, b)) if x != y), min(len(a), len(b)))
+    start = max(0, i - context)
+    return a[start:i + context], b[start:i + context]
+
+
+# ---------------------------------------------------------------------------------------------
+# files
+
+def read_table(path: Path) -> pd.DataFrame:
+    """A results CSV as text (every cell as written; an empty cell ``""``)."""
+    return pd.read_csv(path, dtype=str, keep_default_na=False)
+
+
+def row_name(frame: pd.DataFrame, i: int) -> str:
+    """``row N (key=value, ...)``: the row's number (1 = the first after the header) and its first
+    :data:`KEYS` present, each cut to 40 characters."""
+    keys = [c for c in KEYS if c in frame.columns][:3]
+    shown = ", ".join(f"{k}={_cut(frame[k].iat[i])}" for k in keys)
+    return f"row {i + 1}" + (f" ({shown})" if shown else "")
+
+
+def _cut(text: str, n: int = 40) -> str:
+    return text if len(text) <= n else text[: n - 3] + "..."
+
+
+def compare_csv(name: str, ours: Path, committed: Path, result: Comparison) -> None:
+    """Compare two results CSVs cell by cell (by row position; a different row count is one
+    disagreement): a ``verdict`` cell exactly, numbers within the tolerance, texts by
+    :func:`compare_text`. Only the cells whose text differs are looked at further."""
+    a, b = read_table(ours), read_table(committed)
+    columns = _columns(name, a, b, result)
+    result.csv_files += 1
+    result.rows += len(b)
+    result.values += len(b) * len(columns)
+    if len(a) != len(b):
+        result.disagreements.append(Difference(name, "rows", "", f"{len(a)} rows", f"{len(b)} rows"))
+        return
+    if not len(b) or not columns:
+        return
+    differ = a[columns].to_numpy() != b[columns].to_numpy()
+    for j in np.flatnonzero(differ.any(axis=0)):
+        _compare_column(name, columns[j], a, b, np.flatnonzero(differ[:, j]), result)
+
+
+def _columns(name: str, a: pd.DataFrame, b: pd.DataFrame, result: Comparison) -> list[str]:
+    """The columns of ``b`` (committed) that ``a`` has too, without this machine's wall times
+    (:data:`magexp.artifacts.reproduce.MEASURED`, listed as excluded); a column on one side only
+    is a disagreement."""
+    measured = [c for c in b.columns if MEASURED in c]
+    if measured:
+        result.excluded.append(f"column {', '.join(measured)} of {name} (wall times of this machine)")
+    for col in [c for c in b.columns if c not in a.columns and c not in measured]:
+        result.disagreements.append(Difference(name, "", col, "(no such column)", "(a column)"))
+    for col in [c for c in a.columns if c not in b.columns and MEASURED not in c]:
+        result.disagreements.append(Difference(name, "", col, "(a column)", "(no such column)"))
+    return [c for c in b.columns if c in a.columns and c not in measured]
+
+
+def _compare_column(name: str, col: str, a: pd.DataFrame, b: pd.DataFrame, rows: np.ndarray,
+                    result: Comparison) -> None:
+    """The differing cells ``rows`` of column ``col``: a verdict changed, numbers judged together
+    (vectorised), anything else as a text."""
+    x, y = a[col].to_numpy()[rows], b[col].to_numpy()[rows]
+    if col == "verdict":
+        result.changed += [Difference(name, row_name(b, i), col, u, v) for i, u, v in zip(rows, x, y)]
+        return
+    fx = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
+    fy = pd.to_numeric(pd.Series(y), errors="coerce").to_numpy(float)
+    numeric = np.isfinite(fx) & np.isfinite(fy)
+    if numeric.any():
+        floats = b[col].str.contains(r"[.eE]").any() or a[col].str.contains(r"[.eE]").any()
+        gap, scale = np.abs(fx - fy), np.maximum(np.abs(fx), np.abs(fy))
+        unit = csv_unit(scale) if floats else np.zeros(len(fx))
+        beyond = numeric & (gap > tolerance(fx, fy, unit, result.rtol) * (1 + 1e-9))
+        with np.errstate(invalid="ignore", divide="ignore"):  # round-off on both sides: no relative difference
+            rel = np.where(numeric, np.where(scale > ROUNDOFF_FLOOR, gap / scale, 0.0), np.nan)
+        for k in np.flatnonzero(beyond):
+            result.disagreements.append(Difference(name, row_name(b, rows[k]), col, x[k], y[k], rel[k]))
+        within = np.flatnonzero(numeric & ~beyond)
+        if within.size:
+            k = within[np.argmax(rel[within])]
+            result.within(Difference(name, row_name(b, rows[k]), col, x[k], y[k], rel[k]), within.size)
+    for k in np.flatnonzero(~numeric):
+        ok, rel, (u, v) = compare_text(x[k], y[k], result.rtol)
+        diff = Difference(name, row_name(b, rows[k]), col, u, v, rel)
+        result.within(diff) if ok else result.disagreements.append(diff)
+
+
+def text_lines(path: Path, cut: list[str]) -> list[str]:
+    """The lines of a text file, without the sections whose heading line starts with one of ``cut``
+    (a section ends at the next heading of its level or above)."""
+    lines, keep, level = path.read_text(encoding="utf-8").splitlines(), [], 0
+    for line in lines:
+        heading = len(line) - len(line.lstrip("#")) if line.startswith("#") and " " in line else 0
+        if level and heading and heading <= level:
+            level = 0
+        if not level and heading and any(line.startswith(h) for h in cut):
+            level = heading
+        if not level:
+            keep.append(line)
+    return keep
+
+
+def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison, cut: list[str]) -> None:
+    """Compare two report or LaTeX files line by line (:func:`compare_text`), without the sections ``cut``."""
+    a, b = text_lines(ours, cut), text_lines(committed, cut)
+    result.text_files += 1
+    result.lines += len(b)
+    if len(a) != len(b):
+        i = next((k for k, (u, v) in enumerate(zip(a, b)) if u != v), min(len(a), len(b)))
+        result.disagreements.append(Difference(name, f"{len(a)} lines vs {len(b)}, first difference at line {i + 1}",
+                                               "", a[i] if i < len(a) else "", b[i] if i < len(b) else ""))
+        return
+    for i, (u, v) in enumerate(zip(a, b)):
+        if u != v:
+            ok, rel, (x, y) = compare_text(u, v, result.rtol)
+            diff = Difference(name, f"line {i + 1}", "", x, y, rel)
+            result.within(diff) if ok else result.disagreements.append(diff)
+
+
+# ---------------------------------------------------------------------------------------------
+# two folders
+
+def _files(root: Path) -> set[str]:
+    return {p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file()}
+
+
+def _left_out(rel: str, rules) -> str | None:
+    """The rule of ``rules`` (:data:`EXCLUDED`, :data:`OPTIONAL`) that covers the relative path ``rel``."""
+    return next((r for r in rules if rel == r or (r.endswith("/") and rel.startswith(r))), None)
+
+
+def compare(ours: Path, committed: Path, *, rtol: float = RTOL, files=None) -> Comparison:
+    """Compare the reproduction ``ours`` with the committed results ``committed`` (two folders laid
+    out as ``results/``), every file but those that differ by design (module docstring); ``files``:
+    only these relative paths (e.g. one artifact's)."""
+    ours, committed = Path(ours), Path(committed)
+    result = Comparison(rtol=rtol)
+    mine, theirs = _files(ours), _files(committed)
+    if files is not None:
+        mine, theirs = mine & set(files), theirs & set(files)
+    by_design = _by_design(mine, theirs, result)
+    mine, theirs = mine - by_design, theirs - by_design
+    both = sorted(mine & theirs)
+    cut = _cut_sections(both, result)
+    for rel in sorted(theirs - mine):
+        result.disagreements.append(Difference(rel, "", "", "(missing)", "(a file)"))
+    for rel in sorted(mine - theirs):
+        result.disagreements.append(Difference(rel, "", "", "(a file)", "(not committed)"))
+    for rel in both:
+        _compare_file(rel, ours, committed, result, cut.get(rel, []))
+    _count_verdicts(committed, both, result)
+    return result
+
+
+def _by_design(mine: set[str], theirs: set[str], result: Comparison) -> set[str]:
+    """The files of either side that differ by design (:data:`EXCLUDED`; :data:`OPTIONAL` when on one
+    side only), each rule that left one out listed in ``result.excluded``."""
+    left = set()
+    for rule, why in EXCLUDED.items():
+        hit = {f for f in mine | theirs if _left_out(f, [rule])}
+        if hit:
+            left |= hit
+            result.excluded.append(rule + (f" ({len(hit)} files)" if rule.endswith("/") else "") + f": {why}")
+    for rule, why in OPTIONAL.items():
+        on = [{f for f in side if _left_out(f, [rule])} for side in (mine, theirs)]
+        if bool(on[0]) != bool(on[1]):
+            left |= on[0] | on[1]
+            result.excluded.append(f"{rule}: on one side only (written by {why} alone)")
+    return left
+
+
+def _compare_file(rel: str, ours: Path, committed: Path, result: Comparison, cut: list[str]) -> None:
+    """Compare the file ``rel`` of both folders by its kind: a CSV, a text, a figure (present), other bytes."""
+    suffix = Path(rel).suffix
+    if suffix == ".csv":
+        compare_csv(rel, ours / rel, committed / rel, result)
+    elif suffix in TEXT:
+        compare_text_file(rel, ours / rel, committed / rel, result, cut)
+    elif suffix in FIGURES:
+        result.figures += 1
+    elif (ours / rel).read_bytes() != (committed / rel).read_bytes():
+        result.disagreements.append(Difference(rel, "", "", "(other bytes)", "(other bytes)"))
+
+
+def _cut_sections(both: list[str], result: Comparison) -> dict[str, list[str]]:
+    """``{report file: [headings left out]}``: a section of :data:`SECTIONS` whose source is not
+    compared (excluded by design, or on one side only)."""
+    cut: dict[str, list[str]] = {}
+    for name, heading, source in SECTIONS:
+        shown = any(f == source or (source.endswith("/") and f.startswith(source)) for f in both)
+        if name in both and not shown:
+            cut.setdefault(name, []).append(heading)
+            result.excluded.append(f"{name} section {heading.lstrip('# ')!r}: it shows {source}")
+    return cut
+
+
+def _count_verdicts(committed: Path, both: list[str], result: Comparison) -> None:
+    """How many verdicts were compared: summary rows, claims and headline verdicts."""
+    if "summary.csv" in both:
+        result.verdicts["summary rows"] = len(read_table(committed / "summary.csv"))
+    if "claims.csv" in both:
+        roles = read_table(committed / "claims.csv")["role"]
+        result.verdicts["claims"] = int((roles != "headline").sum())
+        result.verdicts["headline verdicts"] = int((roles == "headline").sum())
+
+
+# ---------------------------------------------------------------------------------------------
+# which folders
+
+def git(*args: str) -> str:
+    """The output of ``git ARGS`` in the checkout; one line (exit 2) when there is no git or no repository."""
+    try:
+        done = subprocess.run(["git", "-C", str(paths.ROOT), *args], capture_output=True, check=True)
+    except FileNotFoundError:
+        raise MagexpError("verify reads the committed results/ from git, and git is not installed: "
+                          "give the published results with --committed DIR") from None
+    except subprocess.CalledProcessError as exc:
+        first = (exc.stderr.decode(errors="replace").strip().splitlines() or [""])[0]
+        raise MagexpError(f"verify reads the committed results/ from git, which says: {first} "
+                          "(give the published results with --committed DIR)") from None
+    return done.stdout.decode(errors="replace") if args[0] != "archive" else done.stdout
+
+
+def committed_results(dest: Path, files=("results",)) -> str:
+    """Extract ``results/`` (or only ``files``, paths from the checkout's root) of the last commit
+    into ``dest`` (``dest/results/...``); returns a line naming the commit."""
+    head = git("rev-parse", "--short=12", "HEAD").strip()
+    last = git("log", "-1", "--format=%h %cs", "--", "results").strip()
+    with tarfile.open(fileobj=io.BytesIO(git("archive", "--format=tar", "HEAD", "--", *files))) as tar:
+        tar.extractall(dest, filter="data")
+    return f"the committed results/ of HEAD {head} (results last committed in {last})"
+
+
+def changed_results() -> bool:
+    """Whether the working tree's ``results/`` differs from the committed one (git)."""
+    return bool(git("status", "--porcelain", "--untracked-files=all", "--", "results").strip())
+
+
+def scratch() -> Path:
+    """The folder of :func:`reproduce_scratch`: beside the run cache (``.cache/verify``), never ``results/``."""
+    return paths.CACHE.parent / "verify"
+
+
+def reproduce_scratch(jobs: int) -> Path:
+    """Reproduce every paper into :func:`scratch` (runs from the run cache where it has them). The
+    figures of the last such reproduction are kept, so that an unchanged figure is not drawn again
+    (:mod:`magexp.artifacts.plots.memo`); every other file is written afresh, and a figure whose CSV
+    was not written again is removed."""
+    out = scratch()
+    if out.is_dir():
+        for path in [p for p in out.rglob("*") if p.is_file() and p.suffix not in FIGURES]:
+            path.unlink()
+    # a process of its own, as make reproduce runs it (its progress on this terminal)
+    code = subprocess.run([sys.executable, "-m", "magexp", "reproduce", "all", "--out", str(out), "--jobs", str(jobs)],
+                          cwd=paths.ROOT).returncode
+    if code:
+        raise MagexpError(f"the reproduction into {out} failed (exit {code})")
+    for figure in [p for p in out.rglob("*") if p.suffix in FIGURES and not p.with_suffix(".csv").is_file()]:
+        figure.unlink()
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# the screen
+
+def render(result: Comparison, ours: str, committed: str, *, every: bool = False) -> str:
+    """One screen: what was compared with what, the counts, and the verdict of the comparison; up to
+    :data:`SHOWN` disagreements each on a line, more grouped by file and column (``every``: each on a line)."""
+    n = sum(result.verdicts.values())
+    lines = [f"verify: {ours}", f"  against {committed}",
+             f"compared {result.csv_files} CSV files ({result.rows:,} rows, {result.values:,} values), "
+             f"{result.text_files} report and LaTeX files ({result.lines:,} lines), {result.figures} figures "
+             "(present on both sides; drawn from the CSVs, pixels not compared)",
+             "excluded by design: " + ("; ".join(result.excluded) or "nothing"),
+             f"verdicts: {n:,} compared (" + ", ".join(f"{v:,} {k}" for k, v in result.verdicts.items())
+             + f"): {len(result.changed)} changed" if n else f"verdicts: {len(result.changed)} changed"]
+    rule = f"relative {result.rtol:g} or one unit of the printed digit, whichever is larger"
+    if result.below:
+        big = result.largest
+        lines.append(f"within the tolerance ({rule}): {sum(result.below.values()):,} values in {len(result.below)} "
+                     f"files differ; the largest: {big.line()} (relative {big.relative:.2g})")
+    else:
+        lines.append(f"every number identical to the byte (tolerance: {rule})")
+    wrong = result.changed + result.disagreements
+    if result.agrees:
+        lines.append("AGREES: every verdict, claim and headline identical, every number within the tolerance, "
+                     "every word identical")
+        return "\n".join(lines)
+    lines.append(f"DISAGREES: {len(result.changed)} verdicts changed, {len(result.disagreements)} other disagreements")
+    if len(wrong) <= SHOWN or every:
+        return "\n".join(lines + [f"  {_shown(d)}" for d in wrong])
+    groups: dict[tuple, list] = {}
+    for d in wrong:
+        groups.setdefault((d.file, d.column), []).append(d)
+    lines.append(f"  in {len(groups)} columns and files (each with its largest difference; --all lists every one):")
+    lines += [f"  {len(ds)} x {_shown(max(ds, key=_size))}" for ds in list(groups.values())[:SHOWN]]
+    if len(groups) > SHOWN:
+        lines.append(f"  ... and {len(groups) - SHOWN} more columns and files")
+    return "\n".join(lines)
+
+
+def _size(d: Difference) -> float:
+    return d.relative if np.isfinite(d.relative) else math.inf
+
+
+def _shown(d: Difference) -> str:
+    return d.line() + (f" (relative {d.relative:.2g})" if np.isfinite(d.relative) else "")
+
+
+def parser() -> argparse.ArgumentParser:
+    p = OneLineParser(prog="magexp verify", description=__doc__.splitlines()[0])
+    p.add_argument("--against", "--out", dest="against", default=None,
+                   help="the reproduction to check (default: results/ if it differs from the committed one, "
+                        "else a fresh reproduction into .cache/verify)")
+    p.add_argument("--committed", default=None, help="the published results (default: results/ of git's HEAD)")
+    p.add_argument("--rtol", type=float, default=RTOL, help=f"relative tolerance of a number (default {RTOL:g})")
+    p.add_argument("--all", action="store_true", dest="every", help="list every disagreement, one a line")
+    p.add_argument("--jobs", type=int, default=0, help="processes of a reproduction into .cache/verify (0: all cores)")
+    return p
+
+
+def _folder(text: str, what: str) -> Path:
+    path = Path(text).expanduser()
+    if not path.is_dir():
+        raise MagexpError(f"{what} {text!r} is not allowed: it is not a folder (give a results folder)")
+    return path
+
+
+def command(argv: list[str]) -> int:
+    """``magexp verify [OPTIONS]``: 0 when the reproduction agrees, 1 when not (errors are raised:
+    the one error path, :func:`magexp.errors.guarded`, turns them into one line and exit 2)."""
+    args = parser().parse_args(argv)
+    if not 0 <= args.rtol < 1:
+        raise MagexpError(f"--rtol {args.rtol!r} is not allowed: it must be a number >= 0 and < 1")
+    if args.jobs < 0:
+        raise MagexpError(f"--jobs {args.jobs} is not allowed: it must be an integer >= 0")
+    ours = _folder(args.against, "--against") if args.against is not None else None
+    with tempfile.TemporaryDirectory(prefix="magexp-verify-") as tmp:
+        if args.committed is not None:
+            committed, named = _folder(args.committed, "--committed"), f"{args.committed} (--committed)"
+        else:
+            named = committed_results(Path(tmp))
+            committed = Path(tmp) / "results"
+        if ours is None and changed_results():
+            ours, label = paths.RESULTS, "results/ (the working tree: it differs from the committed one)"
+        elif ours is None:
+            check_destination(scratch(), "the scratch reproduction")
+            print(f"results/ is the committed one: reproducing every paper into {scratch()} first")
+            ours = reproduce_scratch(args.jobs)
+            label = f"{ours} (reproduced now: results/ is the committed one)"
+        else:
+            label = str(ours)
+        result = compare(ours, committed, rtol=args.rtol)
+        print(render(result, label, named, every=args.every))
+    if not result.agrees:
+        raise SystemExit(1)
+    return 0
+
+
+def main(argv=None) -> int:
+    """``python -m magexp.artifacts.verify ...``: the exit code of :func:`command` (2 on bad input)."""
+    return exit_code(command, sys.argv[1:] if argv is None else list(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
