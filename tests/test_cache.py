@@ -442,3 +442,41 @@ def test_code_versions_are_kept_under_the_sources_stamp(sources, keyed):
     assert new not in ("kept", version)  # a new stamp: worked out again
     assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == {
         "|".join(targets): new}
+
+
+def reading(run: dict, file: Path, format: str = "auto") -> dict:
+    """``run`` with a recording scenario that reads ``file`` in ``format``."""
+    return {**run, "scenario": {"_target_": "magexp.scenarios.recording.RecordingScenario", "name": "reading",
+                                "file": str(file), "format": format, "objective": "scalar"}}
+
+
+def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sources, keyed, tmp_path):
+    logs = {"a.ulg": b"ULog\x01\x12", "b.dat": b"ULog\x01\x12", "c.bin": b"\xa3\x95\x80", "d.txt": b"1 2 3\n4 5 6\n"}
+    for name, content in logs.items():  # keying a run reads no more than a text file's first lines
+        (tmp_path / name).write_bytes(content)
+    lm = keyed["yuan2018_mode1", "lm"]
+    runs = {"ulog": reading(lm, tmp_path / "a.ulg"), "named ulog": reading(lm, tmp_path / "b.dat", "ulog"),
+            "dataflash": reading(lm, tmp_path / "c.bin"), "plain": reading(lm, tmp_path / "d.txt"),
+            "simulated": lm, "ding": keyed["ding2024_exp1", "pso"]}
+    imported = {m for m in sys.modules if m.startswith("magexp.core.readers")}
+    assert "magexp.core.readers.ulog.read_ulog" in cache.run_targets(runs["named ulog"])  # the format named wins
+    before = keys_of(runs)
+    (sources / "magexp/core/readers/new.py").write_text('"""A reader of a new format."""\n')
+    cache.forget_code()
+    assert keys_of(runs) == before  # a new reader reruns nothing
+    edit(sources / "magexp/core/readers/ulog.py", '"""PX4 ULog (``.ulg``) logs', '"""PX4 ULog (``.ulg``) flight logs')
+    assert changed(before, after := keys_of(runs)) == {"ulog", "named ulog"}
+    edit(sources / "magexp/core/readers/dataflash.py", '"""ArduPilot DataFlash', '"""The ArduPilot DataFlash')
+    assert changed(after, again := keys_of(runs)) == {"dataflash"}
+    edit(sources / "magexp/core/readers/__init__.py", '"""Readers of the flight', '"""Readers of the drone, flight')
+    assert changed(again, keys_of(runs)) == {"ulog", "named ulog", "dataflash"}  # what every log reader imports
+    assert {m for m in sys.modules if m.startswith("magexp.core.readers")} == imported  # named, never imported
+
+
+def test_a_recording_of_the_shared_data_folder_is_keyed_by_its_content(tmp_path, monkeypatch):
+    monkeypatch.setattr("magexp.core.datafiles.SHARED_DATA", tmp_path)
+    (tmp_path / "rec.txt").write_text("1 2 3\n4 5 6\n")
+    run = reading({"seed": 0}, Path("rec.txt"))  # as conf/scenario/real_*.yaml name their file
+    key = cache.run_key(run)
+    (tmp_path / "rec.txt").write_text("1 2 3\n4 5 60\n")
+    assert cache.run_key(run) != key

@@ -601,6 +601,8 @@ def _log_reader(module: str, function: str):
 
         return getattr(import_module(f"magexp.core.readers.{module}"), function)(path, **options)
 
+    # it stands for that function (:func:`reader_of` names it): the run cache keys a run on that module
+    read.__module__, read.__name__, read.__qualname__ = f"magexp.core.readers.{module}", function, function
     read.__doc__ = f"See :func:`magexp.core.readers.{module}.{function}`."
     return read
 
@@ -638,6 +640,15 @@ def detect(path: Path) -> str:
     if _NAMED.match(first.split(",")[-1] if "," in first else ""):
         return "named-columns"
     return "plain" if _is_plain(head) else "magexp-v1"
+
+
+def reader_of(path: Path, format: str | None = "auto") -> str:
+    """The dotted name of the function of :data:`READERS` that reads the recording ``path`` in ``format``
+    (``auto``, None or a name not of :data:`READERS`: :func:`detect`'s, from its name or its first
+    three lines). A log's reader module is named, not imported: the run cache keys a run
+    that reads ``path`` on that module's source (:func:`magexp.run.cache.run_targets`)."""
+    read = READERS[format if format in READERS else detect(path)]
+    return f"{read.__module__}.{read.__qualname__}"
 
 
 def load_recording(path: str | Path, *, unit: str | None = None, format: str = "auto",
