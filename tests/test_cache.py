@@ -475,8 +475,11 @@ def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sour
 
 def test_a_recording_of_the_shared_data_folder_is_keyed_by_its_content(tmp_path, monkeypatch):
     monkeypatch.setattr("magexp.core.datafiles.SHARED_DATA", tmp_path)
-    (tmp_path / "rec.txt").write_text("1 2 3\n4 5 6\n")
-    run = reading({"seed": 0}, Path("rec.txt"))  # as conf/scenario/real_*.yaml name their file
-    key = cache.run_key(run)
+    for name in ("rec.txt", "pair_mag.csv", "pair_imu.csv"):
+        (tmp_path / name).write_text("1 2 3\n4 5 6\n")
+    runs = {name: reading({"seed": 0}, Path(name)) for name in ("rec.txt", "pair", "pair_mag.csv")}  # as the
+    before = keys_of(runs)                            # real_* scenarios name theirs: a file, a two-stream stem
     (tmp_path / "rec.txt").write_text("1 2 3\n4 5 60\n")
-    assert cache.run_key(run) != key
+    assert changed(before, after := keys_of(runs)) == {"rec.txt"}
+    (tmp_path / "pair_imu.csv").write_text("1 2 3\n4 5 60\n")
+    assert changed(after, keys_of(runs)) == {"pair", "pair_mag.csv"}  # a two-stream recording is its two files

@@ -2,7 +2,8 @@
 
 A file is looked up where recordings are: as given, relative to ``data/``
 (:func:`magexp.core.recordings.resolve`) and to the shared data folder
-(:class:`magexp.scenarios.recording.RecordingScenario`); each of these that exists counts. Its content,
+(:class:`magexp.scenarios.recording.RecordingScenario`); each of these that exists counts, and a
+two-stream recording named by its stem or one of its files is its two files. Its content,
 not its name, enters the run's cache key and the reuse of built scenarios, so an edited recording
 reruns exactly the runs that read it. The format named beside it (:func:`data_formats`) tells the
 run cache which reader's code the run executes.
@@ -11,10 +12,15 @@ run cache which reader's code the run executes.
 from __future__ import annotations
 
 import hashlib
+import os
 from functools import lru_cache
 from pathlib import Path
 
 from magexp.paths import DATA, SHARED_DATA
+
+#: the endings of the two files of a two-stream recording, which is named by their common stem or by
+#: either file (:func:`magexp.core.recordings.read_two_stream`)
+TWO_STREAM = ("_mag.csv", "_imu.csv")
 
 
 def _strings(node, format=None):
@@ -32,16 +38,22 @@ def _strings(node, format=None):
 
 
 def _as_files(text: str) -> list[Path]:
-    """``text`` as existing files: as given, relative to ``data/`` and to the shared data folder."""
+    """``text`` as existing files: as given, relative to ``data/`` and to the shared data folder; for
+    the stem of a two-stream recording, or one of its files, both its files (:data:`TWO_STREAM`)."""
     if not text or len(text) > 4096 or "\n" in text:
         return []
     found = []
-    for path in (Path(text), DATA / text, SHARED_DATA / text):
-        try:
-            if path.is_file() and path.resolve() not in found:
-                found.append(path.resolve())
-        except OSError:
-            pass
+    for path in dict.fromkeys((text, os.path.join(DATA, text), os.path.join(SHARED_DATA, text))):  # absolute: one
+        stem = next((path[: -len(tail)] for tail in TWO_STREAM if path.endswith(tail)), None)
+        if stem is None and os.path.isfile(path):
+            names = [path]
+        elif stem is None and not os.path.isfile(path + TWO_STREAM[0]):
+            continue  # neither a file nor a two-stream recording's stem
+        else:
+            names = [(path if stem is None else stem) + tail for tail in TWO_STREAM]
+        for name in names:
+            if os.path.isfile(name) and (file := Path(name).resolve()) not in found:
+                found.append(file)
     return found
 
 
@@ -58,16 +70,17 @@ def data_formats(resolved: dict) -> dict[Path, str | None]:
     """``{path: format}`` of every existing file that a string value of the config names: the
     ``format`` value beside that string (``scenario.format``, ``data.format``), None if there is none."""
     found = {}
-    for text, format in _strings(resolved):
+    for text, format in dict.fromkeys(_strings(resolved)):
         for path in _as_files(text):
             found.setdefault(path, format)
     return found
 
 
-def data_files(resolved: dict) -> dict[str, str]:
-    """``{path: sha256}`` of every existing file that a string value of the config names."""
+def data_files(resolved: dict, formats: dict | None = None) -> dict[str, str]:
+    """``{path: sha256}`` of every existing file that a string value of the config names (``formats``:
+    its :func:`data_formats`, found here if None)."""
     out = {}
-    for path in data_formats(resolved):
+    for path in data_formats(resolved) if formats is None else formats:
         stat = path.stat()
         out[str(path)] = _file_digest(path, stat.st_mtime_ns, stat.st_size)
     return out

@@ -100,6 +100,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.core.datafiles import TWO_STREAM
 from magexp.core.geometry import attitude_at, axis_map, ship_attitude
 from magexp.errors import LARGEST, MagexpError, excerpt
 from magexp.paths import DATA
@@ -476,9 +477,9 @@ def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> 
     """``<stem>_mag.csv`` + ``<stem>_imu.csv``: readings at the magnetometer's times, the gyroscope
     stream at its own (integrated at the readings' times by :meth:`Recording.attitude`)."""
     stem = str(path)
-    for tail in ("_mag.csv", "_imu.csv"):
+    for tail in TWO_STREAM:
         stem = stem[: -len(tail)] if stem.endswith(tail) else stem
-    mag_path, imu_path = Path(stem + "_mag.csv"), Path(stem + "_imu.csv")
+    mag_path, imu_path = (Path(stem + tail) for tail in TWO_STREAM)
     for p in (mag_path, imu_path):
         if not p.is_file():
             raise MagexpError(f"recording {str(p)!r} does not exist: a two-stream recording needs both "
@@ -628,7 +629,7 @@ def detect(path: Path) -> str:
         return LOG_SUFFIXES[path.suffix.lower()]
     if path.is_dir() and (path / "metadata.yaml").is_file():
         return "rosbag"
-    if str(path).endswith(("_mag.csv", "_imu.csv")) or (not path.is_file() and Path(f"{path}_mag.csv").is_file()):
+    if str(path).endswith(TWO_STREAM) or (not path.is_file() and Path(f"{path}{TWO_STREAM[0]}").is_file()):
         return "two-stream"
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
         head = [fh.readline() for _ in range(3)]
@@ -675,7 +676,7 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
     file = resolve(path)
     if file.is_dir() and not (file / "metadata.yaml").is_file():  # a ROS 2 bag is a folder with metadata.yaml
         raise MagexpError(f"recording {str(path)!r} is a directory: give a file")
-    if not file.is_file() and not file.is_dir() and not Path(f"{file}_mag.csv").is_file():
+    if not file.is_file() and not file.is_dir() and not Path(f"{file}{TWO_STREAM[0]}").is_file():
         raise MagexpError(f"recording {str(path)!r} does not exist (looked in the working folder and {DATA})")
     key = detect(file) if format in (None, "auto") else format
     if key not in READERS:

@@ -228,12 +228,11 @@ def _targets_in(node, found: set) -> set:
     return found
 
 
-def data_readers(resolved: dict) -> set[str]:
-    """The readers of the data files a config names: the dotted name of the function reading each
-    (:func:`magexp.core.recordings.reader_of`) in the format named beside it
-    (:func:`magexp.core.datafiles.data_formats`), else in the one detected from its name or first
-    lines. None is imported: a log's reader module is imported by name when the log is read."""
-    formats = data_formats(resolved)
+def data_readers(formats: dict) -> set[str]:
+    """The readers of a config's data files (``formats``: its :func:`magexp.core.datafiles.data_formats`):
+    the dotted name of the function reading each (:func:`magexp.core.recordings.reader_of`) in the
+    format named beside it, else in the one detected from its name or first lines. None is imported: a
+    log's reader module is imported by name when the log is read."""
     if not formats:
         return set()
     from magexp.core.recordings import reader_of  # here: a config naming no file is keyed without numpy (0.25 s)
@@ -241,12 +240,14 @@ def data_readers(resolved: dict) -> set[str]:
     return {reader_of(path, format) for path, format in formats.items()}
 
 
-def run_targets(resolved: dict) -> tuple[str, ...]:
+def run_targets(resolved: dict, formats: dict | None = None) -> tuple[str, ...]:
     """What a run instantiates or calls by name: every ``_target_`` of its resolved config, the reader of
-    each data file it names (:func:`data_readers`), and the problem class of its objective (``objective``, else its scenario's:
-    in its config, else fixed by its class, :func:`_default_objective`; one not found so: every
-    registered problem class)."""
-    found = _targets_in(resolved, set()) | data_readers(resolved)
+    each data file it names (:func:`data_readers`; ``formats``: its data files' formats, found here if
+    None), and the problem class of its objective (``objective``, else its scenario's: in its config,
+    else fixed by its class, :func:`_default_objective`; one not found so: every registered problem
+    class)."""
+    formats = data_formats(resolved) if formats is None else formats
+    found = _targets_in(resolved, set()) | data_readers(formats)
     scenario = resolved.get("scenario") if isinstance(resolved.get("scenario"), dict) else {}
     objective = resolved.get("objective") or scenario.get("objective")
     if objective is None and isinstance(scenario.get("_target_"), str):
@@ -355,7 +356,8 @@ def run_keys(configs) -> list[str]:
     for cfg in configs:
         rest = json.dumps({k: v for k, v in cfg.items() if k != "seed"}, sort_keys=True, default=str)
         if rest not in known:
-            known[rest] = (data_files(cfg), run_targets(cfg))
+            formats = data_formats(cfg)
+            known[rest] = (data_files(cfg, formats), run_targets(cfg, formats))
         rests.append(rest)
     versions = code_versions(targets for _, targets in known.values())
     return [run_key(cfg, known[rest][0], versions[known[rest][1]]) for cfg, rest in zip(configs, rests)]
