@@ -3,7 +3,8 @@
 A file is looked up where recordings are: as given, relative to ``data/``
 (:func:`magexp.core.recordings.resolve`) and to the shared data folder
 (:class:`magexp.scenarios.recording.RecordingScenario`); each of these that exists counts, and a
-two-stream recording named by its stem or one of its files is its two files. Its content,
+two-stream recording or a ROS 2 bag folder, named by its stem, its folder or one of its files, is all
+its files. Its content,
 not its name, enters the run's cache key and the reuse of built scenarios, so an edited recording
 reruns exactly the runs that read it. The format named beside it (:func:`data_formats`) tells the
 run cache which reader's code the run executes.
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import stat
 from functools import lru_cache
 from pathlib import Path
 
@@ -21,6 +23,8 @@ from magexp.paths import DATA, SHARED_DATA
 #: the endings of the two files of a two-stream recording, which is named by their common stem or by
 #: either file (:func:`magexp.core.recordings.read_two_stream`)
 TWO_STREAM = ("_mag.csv", "_imu.csv")
+#: the file that makes a folder a ROS 2 bag (:mod:`magexp.core.readers.rosbag`)
+BAG_MARKER = "metadata.yaml"
 
 
 def _strings(node, format=None):
@@ -37,21 +41,31 @@ def _strings(node, format=None):
         yield node, format
 
 
+def _names(path: str) -> list[str]:
+    """The files that ``path`` names: itself if a file; both files of a two-stream recording
+    (:data:`TWO_STREAM`) if it is its stem or one of them; every file of a ROS 2 bag (:data:`BAG_MARKER`)
+    if it is its folder or one of its files (the bag is read whole); none if nothing of these exists."""
+    stem = next((path[: -len(tail)] for tail in TWO_STREAM if path.endswith(tail)), None)
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        mode = 0
+    folder = path if stat.S_ISDIR(mode) else os.path.dirname(path) if stat.S_ISREG(mode) else None
+    if folder is not None and os.path.isfile(os.path.join(folder, BAG_MARKER)):
+        return sorted(os.path.join(folder, name) for name in os.listdir(folder))
+    if stem is None and (stat.S_ISREG(mode) or not os.path.isfile(path + TWO_STREAM[0])):
+        return [path] if stat.S_ISREG(mode) else []
+    return [(path if stem is None else stem) + tail for tail in TWO_STREAM]
+
+
 def _as_files(text: str) -> list[Path]:
-    """``text`` as existing files: as given, relative to ``data/`` and to the shared data folder; for
-    the stem of a two-stream recording, or one of its files, both its files (:data:`TWO_STREAM`)."""
+    """``text`` as existing files (:func:`_names`): as given, relative to ``data/`` and to the shared
+    data folder."""
     if not text or len(text) > 4096 or "\n" in text:
         return []
     found = []
     for path in dict.fromkeys((text, os.path.join(DATA, text), os.path.join(SHARED_DATA, text))):  # absolute: one
-        stem = next((path[: -len(tail)] for tail in TWO_STREAM if path.endswith(tail)), None)
-        if stem is None and os.path.isfile(path):
-            names = [path]
-        elif stem is None and not os.path.isfile(path + TWO_STREAM[0]):
-            continue  # neither a file nor a two-stream recording's stem
-        else:
-            names = [(path if stem is None else stem) + tail for tail in TWO_STREAM]
-        for name in names:
+        for name in _names(path):
             if os.path.isfile(name) and (file := Path(name).resolve()) not in found:
                 found.append(file)
     return found
@@ -81,6 +95,6 @@ def data_files(resolved: dict, formats: dict | None = None) -> dict[str, str]:
     its :func:`data_formats`, found here if None)."""
     out = {}
     for path in data_formats(resolved) if formats is None else formats:
-        stat = path.stat()
-        out[str(path)] = _file_digest(path, stat.st_mtime_ns, stat.st_size)
+        st = path.stat()
+        out[str(path)] = _file_digest(path, st.st_mtime_ns, st.st_size)
     return out

@@ -100,7 +100,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.datafiles import TWO_STREAM
+from magexp.core.datafiles import BAG_MARKER, TWO_STREAM
 from magexp.core.geometry import attitude_at, axis_map, ship_attitude
 from magexp.errors import LARGEST, MagexpError, excerpt
 from magexp.paths import DATA
@@ -627,7 +627,7 @@ def detect(path: Path) -> str:
     """The format key of ``path`` (see the module docstring)."""
     if path.suffix.lower() in LOG_SUFFIXES:
         return LOG_SUFFIXES[path.suffix.lower()]
-    if path.is_dir() and (path / "metadata.yaml").is_file():
+    if path.is_dir() and (path / BAG_MARKER).is_file():
         return "rosbag"
     if str(path).endswith(TWO_STREAM) or (not path.is_file() and Path(f"{path}{TWO_STREAM[0]}").is_file()):
         return "two-stream"
@@ -674,7 +674,7 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
         infinite, an unknown unit, or a bad metadata value (e.g. ``reference_total <= 0``).
     """
     file = resolve(path)
-    if file.is_dir() and not (file / "metadata.yaml").is_file():  # a ROS 2 bag is a folder with metadata.yaml
+    if file.is_dir() and not (file / BAG_MARKER).is_file():  # a ROS 2 bag is a folder with metadata.yaml
         raise MagexpError(f"recording {str(path)!r} is a directory: give a file")
     if not file.is_file() and not file.is_dir() and not Path(f"{file}{TWO_STREAM[0]}").is_file():
         raise MagexpError(f"recording {str(path)!r} does not exist (looked in the working folder and {DATA})")
