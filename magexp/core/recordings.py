@@ -647,7 +647,7 @@ def reader_of(path: Path, format: str | None = "auto") -> str:
     """The dotted name of the function of :data:`READERS` that reads the recording ``path`` in ``format``
     (``auto``, None or a name not of :data:`READERS`: :func:`detect`'s, from its name or its first
     three lines). A log's reader module is named, not imported: the run cache keys a run
-    that reads ``path`` on that module's source (:func:`magexp.run.cache.run_targets`)."""
+    that reads ``path`` on that module's source (:func:`magexp.run.cache.data_readers`)."""
     read = READERS[format if format in READERS else detect(path)]
     return f"{read.__module__}.{read.__qualname__}"
 
