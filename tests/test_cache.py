@@ -442,3 +442,53 @@ def test_code_versions_are_kept_under_the_sources_stamp(sources, keyed):
     assert new not in ("kept", version)  # a new stamp: worked out again
     assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == {
         "|".join(targets): new}
+
+
+def reading(run: dict, file: Path, format: str = "auto") -> dict:
+    """``run`` with a recording scenario that reads ``file`` in ``format``."""
+    return {**run, "scenario": {"_target_": "magexp.scenarios.recording.RecordingScenario", "name": "reading",
+                                "file": str(file), "format": format, "objective": "scalar"}}
+
+
+def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sources, keyed, tmp_path):
+    logs = {"a.ulg": b"ULog\x01\x12", "b.dat": b"ULog\x01\x12", "c.bin": b"\xa3\x95\x80", "d.txt": b"1 2 3\n4 5 6\n"}
+    for name, content in logs.items():  # keying a run reads no more than a text file's first lines
+        (tmp_path / name).write_bytes(content)
+    bag = tmp_path / "bag"  # a ROS 2 bag: a folder with metadata.yaml and its storage files
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information:\n  version: 5\n")
+    (bag / "bag_0.db3").write_bytes(b"SQLite format 3\x00")
+    lm = keyed["yuan2018_mode1", "lm"]
+    runs = {"ulog": reading(lm, tmp_path / "a.ulg"), "named ulog": reading(lm, tmp_path / "b.dat", "ulog"),
+            "dataflash": reading(lm, tmp_path / "c.bin"), "plain": reading(lm, tmp_path / "d.txt"),
+            "ros2 bag": reading(lm, bag),
+            "simulated": lm, "ding": keyed["ding2024_exp1", "pso"]}
+    imported = {m for m in sys.modules if m.startswith("magexp.core.readers")}
+    assert "magexp.core.readers.ulog.read_ulog" in cache.run_targets(runs["named ulog"])  # the format named wins
+    before = keys_of(runs)
+    (sources / "magexp/core/readers/new.py").write_text('"""A reader of a new format."""\n')
+    cache.forget_code()
+    assert keys_of(runs) == before  # a new reader reruns nothing
+    edit(sources / "magexp/core/readers/ulog.py", '"""PX4 ULog (``.ulg``) logs', '"""PX4 ULog (``.ulg``) flight logs')
+    assert changed(before, after := keys_of(runs)) == {"ulog", "named ulog"}
+    edit(sources / "magexp/core/readers/dataflash.py", '"""ArduPilot DataFlash', '"""The ArduPilot DataFlash')
+    assert changed(after, again := keys_of(runs)) == {"dataflash"}
+    edit(sources / "magexp/core/readers/rosbag.py", '"""ROS 1 bags', '"""The ROS 1 bags')
+    assert changed(again, again := keys_of(runs)) == {"ros2 bag"}
+    (bag / "bag_0.db3").write_bytes(b"SQLite format 3\x00\x01")
+    assert changed(again, again := keys_of(runs)) == {"ros2 bag"}  # a bag folder's files are its data
+    edit(sources / "magexp/core/readers/__init__.py", '"""Readers of the flight', '"""Readers of the drone, flight')
+    assert changed(again, keys_of(runs)) == {"ulog", "named ulog", "dataflash", "ros2 bag"}  # what they all import
+    assert {m for m in sys.modules if m.startswith("magexp.core.readers")} == imported  # named, never imported
+
+
+def test_a_recording_of_the_shared_data_folder_is_keyed_by_its_content(tmp_path, monkeypatch):
+    monkeypatch.setattr("magexp.core.datafiles.SHARED_DATA", tmp_path)
+    for name in ("rec.txt", "pair_mag.csv", "pair_imu.csv"):
+        (tmp_path / name).write_text("1 2 3\n4 5 6\n")
+    runs = {name: reading({"seed": 0}, Path(name)) for name in ("rec.txt", "pair", "pair_mag.csv")}  # as the
+    before = keys_of(runs)                            # real_* scenarios name theirs: a file, a two-stream stem
+    (tmp_path / "rec.txt").write_text("1 2 3\n4 5 60\n")
+    assert changed(before, after := keys_of(runs)) == {"rec.txt"}
+    (tmp_path / "pair_imu.csv").write_text("1 2 3\n4 5 60\n")
+    assert changed(after, keys_of(runs)) == {"pair", "pair_mag.csv"}  # a two-stream recording is its two files

@@ -103,6 +103,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.core.datafiles import BAG_MARKER, TWO_STREAM
 from magexp.core.geometry import attitude_at, axis_map, ship_attitude
 from magexp.errors import LARGEST, MagexpError, excerpt
 from magexp.paths import DATA
@@ -479,9 +480,9 @@ def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> 
     """``<stem>_mag.csv`` + ``<stem>_imu.csv``: readings at the magnetometer's times, the gyroscope
     stream at its own (integrated at the readings' times by :meth:`Recording.attitude`)."""
     stem = str(path)
-    for tail in ("_mag.csv", "_imu.csv"):
+    for tail in TWO_STREAM:
         stem = stem[: -len(tail)] if stem.endswith(tail) else stem
-    mag_path, imu_path = Path(stem + "_mag.csv"), Path(stem + "_imu.csv")
+    mag_path, imu_path = (Path(stem + tail) for tail in TWO_STREAM)
     for p in (mag_path, imu_path):
         if not p.is_file():
             raise MagexpError(f"recording {str(p)!r} does not exist: a two-stream recording needs both "
@@ -708,6 +709,8 @@ def _log_reader(module: str, function: str):
 
         return getattr(import_module(f"magexp.core.readers.{module}"), function)(path, **options)
 
+    # it stands for that function (:func:`reader_of` names it): the run cache keys a run on that module
+    read.__module__, read.__name__, read.__qualname__ = f"magexp.core.readers.{module}", function, function
     read.__doc__ = f"See :func:`magexp.core.readers.{module}.{function}`."
     return read
 
@@ -732,9 +735,9 @@ def detect(path: Path) -> str:
     """The format key of ``path`` (see the module docstring)."""
     if path.suffix.lower() in LOG_SUFFIXES:
         return LOG_SUFFIXES[path.suffix.lower()]
-    if path.is_dir() and (path / "metadata.yaml").is_file():
+    if path.is_dir() and (path / BAG_MARKER).is_file():
         return "rosbag"
-    if str(path).endswith(("_mag.csv", "_imu.csv")) or (not path.is_file() and Path(f"{path}_mag.csv").is_file()):
+    if str(path).endswith(TWO_STREAM) or (not path.is_file() and Path(f"{path}{TWO_STREAM[0]}").is_file()):
         return "two-stream"
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
         head = [fh.readline() for _ in range(3)]
@@ -748,6 +751,15 @@ def detect(path: Path) -> str:
     if header_columns(first) is not None:
         return "header-row"
     return "plain" if _is_plain(head) else "magexp-v1"
+
+
+def reader_of(path: Path, format: str | None = "auto") -> str:
+    """The dotted name of the function of :data:`READERS` that reads the recording ``path`` in ``format``
+    (``auto``, None or a name not of :data:`READERS`: :func:`detect`'s, from its name or its first
+    three lines). A log's reader module is named, not imported: the run cache keys a run
+    that reads ``path`` on that module's source (:func:`magexp.run.cache.data_readers`)."""
+    read = READERS[format if format in READERS else detect(path)]
+    return f"{read.__module__}.{read.__qualname__}"
 
 
 def load_recording(path: str | Path, *, unit: str | None = None, format: str = "auto",
@@ -774,9 +786,9 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
         infinite, an unknown unit, or a bad metadata value (e.g. ``reference_total <= 0``).
     """
     file = resolve(path)
-    if file.is_dir() and not (file / "metadata.yaml").is_file():  # a ROS 2 bag is a folder with metadata.yaml
+    if file.is_dir() and not (file / BAG_MARKER).is_file():  # a ROS 2 bag is a folder with metadata.yaml
         raise MagexpError(f"recording {str(path)!r} is a directory: give a file")
-    if not file.is_file() and not file.is_dir() and not Path(f"{file}_mag.csv").is_file():
+    if not file.is_file() and not file.is_dir() and not Path(f"{file}{TWO_STREAM[0]}").is_file():
         raise MagexpError(f"recording {str(path)!r} does not exist (looked in the working folder and {DATA})")
     key = detect(file) if format in (None, "auto") else format
     if key not in READERS:

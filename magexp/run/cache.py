@@ -14,8 +14,11 @@ The key of a run (:func:`run_key`) hashes
   source, never imported. So an estimator edit reruns the runs of that estimator and of the
   estimators importing its module, an unused new module reruns nothing, and code downstream of a run
   (``plots/``, ``summary``, ``report``, ``reproduce``, the executor) is not part of any key: a figure
-  or report edit costs no run. A module imported by a computed name (``importlib``, as the
-  recording readers are) is not seen.
+  or report edit costs no run. The recording readers, which a run imports by a computed name
+  (``importlib``) when it reads a log, are in its code through its data files: the reader of each
+  file's format (:func:`data_readers`, from the format its config names or the file's name and
+  first lines). So a reader edit reruns the runs reading a file of its format
+  and a new reader module reruns nothing.
 
 An entry (:func:`pack`) is data, never code: a line with a SHA-256 digest, a JSON header (its key, its
 kind, the tree of its values) and the raw bytes of its numpy arrays. Reading one (:func:`load`)
@@ -53,7 +56,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from magexp.core.atomic import write_bytes
-from magexp.core.datafiles import data_files
+from magexp.core.datafiles import data_files, data_formats
 from magexp.paths import CACHE, ROOT
 from magexp.problems import OBJECTIVES
 
@@ -225,11 +228,26 @@ def _targets_in(node, found: set) -> set:
     return found
 
 
-def run_targets(resolved: dict) -> tuple[str, ...]:
-    """What a run instantiates by name: every ``_target_`` of its resolved config, and the problem class
-    of its objective (``objective``, else its scenario's: in its config, else fixed by its class,
-    :func:`_default_objective`; one not found so: every registered problem class)."""
-    found = _targets_in(resolved, set())
+def data_readers(formats: dict) -> set[str]:
+    """The readers of a config's data files (``formats``: its :func:`magexp.core.datafiles.data_formats`):
+    the dotted name of the function reading each (:func:`magexp.core.recordings.reader_of`) in the
+    format named beside it, else in the one detected from its name or first lines. None is imported: a
+    log's reader module is imported by name when the log is read."""
+    if not formats:
+        return set()
+    from magexp.core.recordings import reader_of  # here: a config naming no file is keyed without numpy (0.25 s)
+
+    return {reader_of(path, format) for path, format in formats.items()}
+
+
+def run_targets(resolved: dict, formats: dict | None = None) -> tuple[str, ...]:
+    """What a run instantiates or calls by name: every ``_target_`` of its resolved config, the reader of
+    each data file it names (:func:`data_readers`; ``formats``: its data files' formats, found here if
+    None), and the problem class of its objective (``objective``, else its scenario's: in its config,
+    else fixed by its class, :func:`_default_objective`; one not found so: every registered problem
+    class)."""
+    formats = data_formats(resolved) if formats is None else formats
+    found = _targets_in(resolved, set()) | data_readers(formats)
     scenario = resolved.get("scenario") if isinstance(resolved.get("scenario"), dict) else {}
     objective = resolved.get("objective") or scenario.get("objective")
     if objective is None and isinstance(scenario.get("_target_"), str):
@@ -338,7 +356,8 @@ def run_keys(configs) -> list[str]:
     for cfg in configs:
         rest = json.dumps({k: v for k, v in cfg.items() if k != "seed"}, sort_keys=True, default=str)
         if rest not in known:
-            known[rest] = (data_files(cfg), run_targets(cfg))
+            formats = data_formats(cfg)
+            known[rest] = (data_files(cfg, formats), run_targets(cfg, formats))
         rests.append(rest)
     versions = code_versions(targets for _, targets in known.values())
     return [run_key(cfg, known[rest][0], versions[known[rest][1]]) for cfg, rest in zip(configs, rests)]

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.core.datafiles import BAG_MARKER
 from magexp.core.readers import check_count, log_recording, log_unit, navigation_angles, need, place
 from magexp.errors import MagexpError
 from magexp.core.recordings import Recording
@@ -122,7 +123,7 @@ def _open(path: Path):
 
     if path.suffix == ".bag":
         return Reader1(path), False
-    folder = path.parent if path.is_file() and (path.parent / "metadata.yaml").is_file() else path
+    folder = path.parent if path.is_file() and (path.parent / BAG_MARKER).is_file() else path
     return Reader2(folder), True
 
 
