@@ -477,7 +477,7 @@ def _appendix_section(p: Paper) -> str:
         lines.append(f"### {spec.name}: {spec.title}\n")
         lines.append(f"![{spec.name}]({p.paper}/{spec.name}.png)\n")
         if spec.caption:
-            lines.append(f"{_prose(spec, spec.caption, table, p.runs)}\n")
+            lines.append(f"{_prose(spec, spec.caption, table, p.runs, p.specs)}\n")
         timing = (f", wall times on this machine: [`timing/{spec.name}.csv`](timing/{spec.name}.csv)"
                   if (p.root / "timing" / f"{spec.name}.csv").exists() else "")
         lines.append(f"Data: [`{p.paper}/{spec.name}.csv`]({p.paper}/{spec.name}.csv), "
@@ -488,7 +488,7 @@ def _appendix_section(p: Paper) -> str:
         if spec.report_table:
             lines.append(_artifact_table(spec, p.root / p.paper / f"{spec.name}.csv"))
         if spec.notes:
-            lines.append(f"\n{_prose(spec, spec.notes, table, p.runs)}\n")
+            lines.append(f"\n{_prose(spec, spec.notes, table, p.runs, p.specs)}\n")
     return "\n".join(lines)
 
 
@@ -496,10 +496,11 @@ def _appendix_section(p: Paper) -> str:
 _SEEDS_OF = re.compile(r"\{seeds:(\w+)\}")
 
 
-def _prose(spec, text: str, table: pd.DataFrame | None, runs=None) -> str:
+def _prose(spec, text: str, table: pd.DataFrame | None, runs=None, specs=()) -> str:
     """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs),
     ``{seeds:<artifact>}`` (the seeds of that artifact's runs, ``runs(name)``: a caption pointing to
-    another artifact's table) and every ``{stat:metric@selection:format}`` field
+    another artifact's table; the seeds that artifact's spec declares, among ``specs``, where its runs
+    are not in this output folder, as after ``reproduce --only``) and every ``{stat:metric@selection:format}`` field
     (:func:`magexp.artifacts.claims.interpolate`; a field whose selection has no value fails the build,
     naming the artifact and the field)."""
     seeds = table.seed.nunique() if table is not None and "seed" in table else spec.seeds
@@ -507,9 +508,12 @@ def _prose(spec, text: str, table: pd.DataFrame | None, runs=None) -> str:
 
     def seeds_of(m: re.Match) -> str:
         other = runs(m.group(1)) if runs is not None else None
-        if other is None or "seed" not in other:
-            raise MagexpError(f"{spec.name}: caption field {m.group(0)!r}: no runs of {m.group(1)!r} in this paper")
-        return str(other.seed.nunique())
+        if other is not None and "seed" in other:
+            return str(other.seed.nunique())
+        declared = [s.seeds for s in specs if s.name == m.group(1)]
+        if not declared:
+            raise MagexpError(f"{spec.name}: caption field {m.group(0)!r}: {m.group(1)!r} is no artifact of this paper")
+        return str(declared[0])
 
     text = _SEEDS_OF.sub(seeds_of, text)
     if table is None:
