@@ -37,7 +37,7 @@ means one core.
 6. **numba's first call** in a fresh process: with the on-disk cache warm, and cold
    (compilation into an empty cache).
 7. **Memory**: peak resident memory of a command-line ``ipso`` run with 500 particles on 1e6
-   readings (3 iterations: the peak does not grow with them), from the child's own ``ru_maxrss``,
+   readings (3 iterations: the peak does not grow with them), from the run's own ``ru_maxrss``,
    minus that of the same command on 300 readings (the interpreter, its imports and compiled
    kernels), beside the run guard's estimate of the same run (:mod:`magexp.run.budget`) and their
    ratio (estimate / measured; kept within 1 to 2 by ``tests/test_budget.py``).
@@ -439,25 +439,33 @@ MEMORY_RUN = ("scenario=ding2024_exp1", "estimator=ipso")
 BASELINE_READINGS = 300
 
 
-def run_peak(overrides) -> tuple[int, float]:
-    """Peak resident memory (bytes) and wall time of ``python -m magexp *overrides`` in a fresh child.
+#: a small launcher: runs its arguments and prints their exit code and peak resident memory (kB on
+#: Linux). Linux counts the resident memory of the process a child is forked from into the child's
+#: ``ru_maxrss`` (at its exec), so a command spawned straight from this (large) process would
+#: report at least this process's size; spawned from the launcher (a few MB), its peak is its own.
+LAUNCH = ("import os, subprocess, sys\n"
+          "child = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL)\n"
+          "_, status, usage = os.wait4(child.pid, 0)\n"
+          "print(os.waitstatus_to_exitcode(status), usage.ru_maxrss)")
 
-    The peak is that child's own ``ru_maxrss`` (``os.wait4``: no other child counts); its output
-    folder and its run cache are temporary, so it computes (never reads a cached result) and
-    leaves nothing behind. A failed run raises, with the end of its error output.
+
+def run_peak(overrides) -> tuple[int, float]:
+    """Peak resident memory (bytes) and wall time of ``python -m magexp *overrides`` in a fresh process.
+
+    The peak is that process's own ``ru_maxrss`` (``os.wait4`` in :data:`LAUNCH`: no other process
+    counts); its output folder and its run cache are temporary, so it computes (never reads a
+    cached result) and leaves nothing behind. A failed run raises, with the end of its error output.
     """
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, MAGEXP_CACHE=str(Path(tmp) / "cache"))
         start = time.perf_counter()
-        child = subprocess.Popen([sys.executable, "-m", "magexp", *overrides, f"hydra.run.dir={tmp}/run"],
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
-        err = child.stderr.read().decode(errors="replace")
-        _, status, usage = os.wait4(child.pid, 0)
-        child.returncode = os.waitstatus_to_exitcode(status)
+        done = subprocess.run([sys.executable, "-c", LAUNCH, sys.executable, "-m", "magexp", *overrides,
+                               f"hydra.run.dir={tmp}/run"], capture_output=True, text=True, env=env)
         wall = time.perf_counter() - start
-    if child.returncode != 0:
-        raise RuntimeError(f"python -m magexp {' '.join(overrides)} exited {child.returncode}: {err.strip()[-500:]}")
-    return usage.ru_maxrss * (1 if sys.platform == "darwin" else 1024), wall  # Linux: kB, macOS: bytes
+    code, maxrss = (int(v) for v in done.stdout.split()) if done.returncode == 0 else (done.returncode, 0)
+    if code != 0:
+        raise RuntimeError(f"python -m magexp {' '.join(overrides)} exited {code}: {done.stderr.strip()[-500:]}")
+    return maxrss * (1 if sys.platform == "darwin" else 1024), wall  # Linux: kB, macOS: bytes
 
 
 def memory_check(n_readings: int, n_particles: int, n_iterations: int) -> dict:

@@ -49,6 +49,9 @@ CHUNK = 1 << 16  # particle-readings per temporary of the numpy fallback
 CHUNK_TEMPORARIES = 4
 #: float64 numbers the fused kernel holds per particle (its coefficients, accumulator and result)
 FUSED_FLOATS_PER_PARTICLE = 14
+#: float64 numbers the numpy fallback holds per particle beside its chunks: the coefficients and the
+#: products that form them (tracemalloc: 29 a particle for the scalar cost, 100 000 particles)
+FALLBACK_FLOATS_PER_PARTICLE = 32
 COMPILE_MIN_READINGS = 1 << 14  # residuals of fewer readings stay in numpy (no numba import)
 
 
@@ -65,12 +68,14 @@ def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None
     The fused kernel: :data:`FUSED_FLOATS_PER_PARTICLE` per particle,
     whatever the readings. The numpy fallback: :data:`CHUNK_TEMPORARIES` arrays of one chunk,
     ``max(CHUNK, rows P)`` particle-readings (a chunk holds at least one reading of every particle's
-    ``rows`` components), beside ten features or seven columns of each of its readings.
+    ``rows`` components), beside ten features or seven columns of each of its readings, and
+    :data:`FALLBACK_FLOATS_PER_PARTICLE` a particle for the coefficients.
     """
     if fused_enabled() if fused is None else fused:
         return FUSED_FLOATS_PER_PARTICLE * n_particles
     per_chunk = max(CHUNK, rows * n_particles)
-    return CHUNK_TEMPORARIES * per_chunk + 10 * max(1, per_chunk // max(rows * n_particles, 1))
+    return (CHUNK_TEMPORARIES * per_chunk + 10 * max(1, per_chunk // max(rows * n_particles, 1))
+            + FALLBACK_FLOATS_PER_PARTICLE * n_particles)
 
 
 @cache
