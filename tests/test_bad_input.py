@@ -114,6 +114,7 @@ TABLE = [
     row("run", ["sed=3"], ["sed", "seed"]),
     row("run", ["objective=bogus"], ["'bogus'", "scalar"]),
     row("run", ["+foo=1"], ["foo"]),
+    row("run", ["+analysis=nope"], ["+analysis=nope", "field_kalman"]),  # an optional group is added with a choice
     row("run", ["=3"], ["=3"]),
     # the simulation command has no calibration keys
     row("run", ["task=calibrate"], ["task=calibrate", "magexp calibrate"]),

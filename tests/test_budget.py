@@ -150,15 +150,46 @@ def test_the_sweep_size_is_counted_without_listing_it():
 
 
 def test_the_estimate_follows_the_equations():
-    """E = P (T + 1) for a swarm, M = 8 [N (64 + 3 P) + 2 (T + 1)] bytes."""
+    """E = P (T + 1) for a swarm; M = 8 [96 N + 120 P + C(N, P) + 2 (T + 1)] bytes, C the cost's own
+    working memory: 14 P for the fused scalar cost (never N x P), 48 N P for the gyro-aided one."""
+    from magexp.problems import kernels
+
     plain = resolved(compose_config(["estimator=ipso", "scenario=ding2024_exp1"]))
     est = budget.estimate_run(plain)
     assert est.evaluations == 50 * 801 and est.work == 50 * 801 * 300
-    assert est.memory == 8 * (300 * (64 + 3 * 50) + 801 * 2)
+    cost = 14 * 50 if kernels.fused_enabled() else kernels.working_floats(50, fused=False)
+    assert est.memory == 8 * (300 * 96 + 120 * 50 + cost + 801 * 2)
     lm = budget.estimate_run(resolved(compose_config(["estimator=lm"])))
     assert lm.evaluations == 12 * 2000 and lm.particles == 1
     kf = budget.estimate_run(resolved(compose_config(["estimator=kf", "scenario=yan2022_sim"])))
-    assert kf.memory == 8 * (12 * (64 + 3) + 601 * (2 + 12))
+    assert kf.memory == 8 * (12 * 96 + 120 + 3 * 12 + 601 * (2 + 12))  # yan2022_sim names no objective: generic
+    gyro = budget.estimate_run({**plain, "objective": "gyro"})
+    assert gyro.memory == 8 * (300 * 96 + 120 * 50 + 48 * 300 * 50 + 801 * 2)
+
+
+@pytest.mark.parametrize("fused", [True, False])
+def test_a_fused_cost_needs_memory_of_order_n_plus_p(fused, monkeypatch):
+    """make bench's run (1e6 readings, 500 particles) is within the 8 GiB default on both paths
+    of the fused cost, and doubling the particles adds O(P), not O(N P)."""
+    from magexp.problems import kernels
+
+    monkeypatch.setenv("MAGEXP_NUMBA", "1" if fused else "0")
+    if fused and not kernels.fused_enabled():
+        pytest.skip("numba is not installed")
+    run = ["scenario=ding2024_exp1", "estimator=ipso", "scenario.n_readings=1000000", "estimator.n_iterations=3"]
+    small, large = (budget.check_run(resolved(compose_config([*run, f"estimator.n_particles={p}"])))
+                    for p in (500, 1000))
+    assert small.memory < 2 ** 30 and large.memory - small.memory < 8 * 500 * 1000
+
+
+def test_the_memory_estimate_of_a_fused_run_bounds_its_measured_peak():
+    """The guard's estimate of a command-line ipso run (200 000 readings, 500 particles) is at
+    least its peak resident memory above the baseline and at most twice it, both measured in
+    child processes (:func:`magexp.perf.bench.memory_check`; make bench does it at 1e6)."""
+    from magexp.perf.bench import memory_check
+
+    m = memory_check(200_000, 500, 3)
+    assert 1.0 <= m["ratio"] <= 2.0, m
 
 
 def test_every_papers_reproduction_is_within_the_runs_limit():

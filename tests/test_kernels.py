@@ -93,6 +93,28 @@ def test_a_particles_cost_does_not_depend_on_the_particles_beside_it(n_readings,
         np.testing.assert_array_equal(cost(w[order], o[order]), whole[:, order])
 
 
+@pytest.mark.parametrize("n_particles", [50, 5000])
+def test_the_fallbacks_working_memory_is_one_chunk(n_particles):
+    """What the run guard counts for the numpy fallback (:func:`kernels.working_floats`) bounds the peak
+    of one call beyond its inputs (tracemalloc, which numpy reports to) and is under twice it:
+    ``O(max(CHUNK, P))`` on 2 000 readings, never readings x particles."""
+    import tracemalloc
+
+    readings, w, o = swarm(2000, n_particles)
+    reference = np.linalg.norm(readings, axis=1)
+    from magexp.core.ellipsoid import normalise
+
+    c, s, u = normalise(readings)
+    for rows, call in ((1, lambda: kernels.scalar_cost_numpy(w, o, c, s, u, reference)),
+                       (3, lambda: kernels.vector_cost_numpy(w, o, readings, readings))):
+        tracemalloc.start()
+        call()
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        bound = 8 * kernels.working_floats(n_particles, rows, fused=False)
+        assert bound / 2 <= peak <= bound, (rows, peak, bound)
+
+
 def test_fallback_is_used_without_numba(monkeypatch):
     readings, w, o = swarm(50, 4)
     monkeypatch.setenv("MAGEXP_NUMBA", "0")

@@ -7,8 +7,8 @@ import pytest
 from magexp.errors import MagexpError
 from magexp.core.geometry import (attitude_at, attitude_with_bias, axis_map, cumulative_product, exp_so3,
                              integrate_rates, preintegrate)
-from magexp.paths import SHARED_DATA
-from magexp.core.recordings import READERS, detect, load_recording
+from magexp.paths import DATA, SHARED_DATA
+from magexp.core.recordings import READERS, detect, load_recording, resolve
 
 needs_data = pytest.mark.skipif(not SHARED_DATA.is_dir(), reason=f"{SHARED_DATA} is not present")
 
@@ -80,6 +80,24 @@ def test_two_stream_and_named_column_files(tmp_path):
     (tmp_path / "q.csv").write_text("Fs,50.00\nInitialization time,60\nmx,my,mz\n" + "1,2,3\n" * 12)
     rec = load_recording(tmp_path / "q.csv")
     assert rec.unit == "counts" and rec.meta["fs"] == "50.00" and rec.reading_times()[-1] == pytest.approx(0.22)
+
+
+def test_a_relative_path_resolves_against_the_working_folder_first(tmp_path, monkeypatch):
+    """A relative file or two-stream stem found from the working folder is read there (also
+    through ``..``); only a path found nowhere there is looked up in data/ (issue 31)."""
+    work, beside = tmp_path / "clone", tmp_path / "shared"
+    work.mkdir(), beside.mkdir()
+    (beside / "s_mag.csv").write_text("t_s,mx_G,my_G,mz_G\n" + "".join(f"{0.1 * k:.3f},{k},{-k},1\n" for k in range(20)))
+    (beside / "s_imu.csv").write_text("t_s,gx_dps,gy_dps,gz_dps\n" + "".join(f"{0.1 * k:.3f},0,0,0\n" for k in range(20)))
+    (work / "yan2022_mockup.csv").write_text("1 2 3\n" * 12)  # the name of a file shipped in data/
+    monkeypatch.chdir(work)
+    assert resolve("../shared/s") == resolve("../shared/s_mag.csv").with_name("s")
+    assert load_recording("../shared/s").n == 20 and load_recording("../shared/s").meta["format"] == "two-stream"
+    assert load_recording("yan2022_mockup.csv", unit="nT").meta["format"].startswith("plain")  # the working folder's
+    (work / "yan2022_mockup.csv").unlink()
+    assert load_recording("yan2022_mockup.csv").path == DATA / "yan2022_mockup.csv"  # found nowhere here: data/'s
+    with pytest.raises(MagexpError, match="does not exist"):
+        load_recording("../shared/t")
 
 
 @pytest.mark.parametrize("text, message", [

@@ -475,7 +475,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     folds = check_folds(folds)
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
-    check_calibration(rec.n, folds, estimator)  # readings, folds, memory and work within magexp.run.budget's limits
+    check_calibration(rec.n, folds, estimator, problem_class(objective))  # readings, folds, memory and work within magexp.run.budget's limits
     has_gyro = rec.gyro_rates() is not None
     model = models_.check_model(model, objective, gyro=has_gyro)
     thresholds = gate_thresholds(gate_overrides)

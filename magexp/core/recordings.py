@@ -198,10 +198,18 @@ class Recording:
                        times=pick(times), gyro_stream=self.gyro_rates())
 
 
+def exists(path: Path) -> bool:
+    """Whether ``path`` names a recording: a file, a folder (a ROS 2 bag), or a two-stream stem
+    (``<path>_mag.csv`` exists; its ``_imu.csv`` is checked by the reader)."""
+    return path.exists() or Path(f"{path}{TWO_STREAM[0]}").is_file()
+
+
 def resolve(path: str | Path) -> Path:
-    """``path`` as given, or relative to the project's ``data/`` folder."""
+    """Where the recording ``path`` is: an absolute path as given; a relative one against the
+    working folder first (a file, a folder or a two-stream stem found there, :func:`exists`), else
+    relative to the project's ``data/`` folder (the recordings shipped with magexp)."""
     path = Path(path)
-    return path if path.is_absolute() or path.exists() else DATA / path
+    return path if path.is_absolute() or exists(path) else DATA / path
 
 
 def check_unit(unit: str, what: str) -> str:
@@ -768,8 +776,8 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
 
     Parameters
     ----------
-    path : the file (for ``two-stream``, either file or their common stem); a relative path not
-        found from the working folder is looked up in ``data/``.
+    path : the file (for ``two-stream``, either file or their common stem); a relative path is
+        looked up from the working folder first, then in ``data/`` (:func:`resolve`).
     unit : unit of a plain file's readings (required for one); for a file that names its unit it
         may be left None and must otherwise agree with it.
     format : a key of :data:`READERS`, or ``auto`` (:func:`detect`).
@@ -788,7 +796,7 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
     file = resolve(path)
     if file.is_dir() and not (file / BAG_MARKER).is_file():  # a ROS 2 bag is a folder with metadata.yaml
         raise MagexpError(f"recording {str(path)!r} is a directory: give a file")
-    if not file.is_file() and not file.is_dir() and not Path(f"{file}{TWO_STREAM[0]}").is_file():
+    if not exists(file):
         raise MagexpError(f"recording {str(path)!r} does not exist (looked in the working folder and {DATA})")
     key = detect(file) if format in (None, "auto") else format
     if key not in READERS:

@@ -37,7 +37,10 @@ means one core.
 6. **numba's first call** in a fresh process: with the on-disk cache warm, and cold
    (compilation into an empty cache).
 7. **Memory**: peak resident memory of a command-line ``ipso`` run with 500 particles on 1e6
-   readings (3 iterations: the peak does not grow with them), from the child's ``ru_maxrss``.
+   readings (3 iterations: the peak does not grow with them), from the run's own ``ru_maxrss``,
+   minus that of the same command on 300 readings (the interpreter, its imports and compiled
+   kernels), beside the run guard's estimate of the same run (:mod:`magexp.run.budget`) and their
+   ratio (estimate / measured; kept within 1 to 2 by ``tests/test_budget.py``).
 
 Writes ``results/bench.csv`` in long format (``measure, estimator, value, unit, lo, hi``) and
 prints it.
@@ -47,7 +50,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -431,22 +433,76 @@ def first_call_rows(repeat: int = 3) -> list[dict]:
     return rows
 
 
-def memory_rows(n_readings: int = 1_000_000, n_particles: int = 500, n_iterations: int = 3) -> list[dict]:
-    """Peak RSS of a command-line ``ipso`` run (children's ``ru_maxrss``), and its wall time."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+#: the command-line run of the memory section (its sizes are the section's arguments)
+MEMORY_RUN = ("scenario=ding2024_exp1", "estimator=ipso")
+#: readings of the baseline run: the same command, whose data are negligible (300 readings: 0.2 MB)
+BASELINE_READINGS = 300
+
+
+#: a small launcher: runs its arguments and prints their exit code and peak resident memory (kB on
+#: Linux). Linux counts the resident memory of the process a child is forked from into the child's
+#: ``ru_maxrss`` (at its exec), so a command spawned straight from this (large) process would
+#: report at least this process's size; spawned from the launcher (a few MB), its peak is its own.
+LAUNCH = ("import os, subprocess, sys\n"
+          "child = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL)\n"
+          "_, status, usage = os.wait4(child.pid, 0)\n"
+          "print(os.waitstatus_to_exitcode(status), usage.ru_maxrss)")
+
+
+def run_peak(overrides) -> tuple[int, float]:
+    """Peak resident memory (bytes) and wall time of ``python -m magexp *overrides`` in a fresh process.
+
+    The peak is that process's own ``ru_maxrss`` (``os.wait4`` in :data:`LAUNCH`: no other process
+    counts); its output folder and its run cache are temporary, so it computes (never reads a
+    cached result) and leaves nothing behind. A failed run raises, with the end of its error output.
+    """
     with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, MAGEXP_CACHE=str(Path(tmp) / "cache"))
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "magexp", "scenario=ding2024_exp1", "estimator=ipso",
-                        f"scenario.n_readings={n_readings}", f"estimator.n_particles={n_particles}",
-                        f"estimator.n_iterations={n_iterations}", f"hydra.run.dir={tmp}"],
-                       check=True, capture_output=True)
+        done = subprocess.run([sys.executable, "-c", LAUNCH, sys.executable, "-m", "magexp", *overrides,
+                               f"hydra.run.dir={tmp}/run"], capture_output=True, text=True, env=env)
         wall = time.perf_counter() - start
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    if peak <= before:  # an earlier child used more: the measure would be that child's
-        return [row("ipso peak memory", "ipso", [], "not measurable in this process: run --only memory")]
+    code, maxrss = (int(v) for v in done.stdout.split()) if done.returncode == 0 else (done.returncode, 0)
+    if code != 0:
+        raise RuntimeError(f"python -m magexp {' '.join(overrides)} exited {code}: {done.stderr.strip()[-500:]}")
+    return maxrss * (1 if sys.platform == "darwin" else 1024), wall  # Linux: kB, macOS: bytes
+
+
+def memory_check(n_readings: int, n_particles: int, n_iterations: int) -> dict:
+    """The run guard's memory estimate of an ``ipso`` run beside the peak it measures.
+
+    ``estimate``: :func:`magexp.run.budget.estimate_run` of the composed config, what
+    ``magexp`` checks against its limit. ``peak``: :func:`run_peak` of the same command;
+    ``baseline``: that of the same command on :data:`BASELINE_READINGS` readings (the same
+    interpreter, imports, compiled kernels and steps, on negligible data); ``measured = peak -
+    baseline``, the part the estimate models (it leaves out the interpreter and its libraries);
+    ``ratio = estimate / measured``.
+    """
+    from magexp.run.budget import estimate_run
+    from magexp.run.compose import resolved
+
+    sizes = [f"estimator.n_particles={n_particles}", f"estimator.n_iterations={n_iterations}"]
+    overrides = [*MEMORY_RUN, f"scenario.n_readings={n_readings}", *sizes]
+    estimate = estimate_run(resolved(compose(overrides))).memory
+    baseline, _ = run_peak([*MEMORY_RUN, f"scenario.n_readings={BASELINE_READINGS}", *sizes])
+    peak, wall = run_peak(overrides)
+    measured = peak - baseline
+    return {"estimate": estimate, "peak": peak, "baseline": baseline, "measured": measured,
+            "ratio": estimate / measured if measured > 0 else np.nan, "wall": wall}
+
+
+def memory_rows(n_readings: int = 1_000_000, n_particles: int = 500, n_iterations: int = 3) -> list[dict]:
+    """Peak memory of a command-line ``ipso`` run beside the run guard's estimate (:func:`memory_check`)."""
+    m = memory_check(n_readings, n_particles, n_iterations)
     size = f"{n_readings} readings x {n_particles} particles, {n_iterations} iterations"
-    return [row(f"peak resident memory, command-line run, {size}", "ipso", [peak / 1024], "MB"),
-            row(f"wall time, command-line run, {size}", "ipso", [wall], "s")]
+    mib = 2.0 ** 20
+    return [row(f"peak resident memory, command-line run, {size}", "ipso", [m["peak"] / mib], "MiB"),
+            row(f"peak resident memory, the same run on {BASELINE_READINGS} readings (baseline)", "ipso",
+                [m["baseline"] / mib], "MiB"),
+            row(f"peak memory above the baseline, {size}", "ipso", [m["measured"] / mib], "MiB"),
+            row(f"run guard's memory estimate, {size}", "ipso", [m["estimate"] / mib], "MiB"),
+            row(f"run guard's memory estimate / peak above the baseline, {size}", "ipso", [m["ratio"]], "ratio"),
+            row(f"wall time, command-line run, {size}", "ipso", [m["wall"]], "s")]
 
 
 SECTIONS = ("cost", "engine", "pyswarms", "peers", "bound", "first-call", "memory")
@@ -454,7 +510,7 @@ SECTIONS = ("cost", "engine", "pyswarms", "peers", "bound", "first-call", "memor
 
 def measure(sections=SECTIONS, rounds: int = 7, seeds: int = 20) -> list[dict]:
     rows = []
-    if "memory" in sections:  # first: the only child of this process so far
+    if "memory" in sections:
         rows += memory_rows()
     if "first-call" in sections:
         rows += first_call_rows()

@@ -24,6 +24,9 @@ from magexp.errors import MagexpError
 SCALAR, VECTOR = 0, 1  # the kinds of compiled swarm cost (:func:`magexp.problems._compiled.swarm_cost`)
 
 PARAMETERISATIONS = ("inverse", "forward")
+#: float64 numbers a cost call is assumed to hold per particle-reading when its problem does not say
+#: (:meth:`CalibrationProblem.cost_floats`): a swarm cost that forms ``(P, N, 3)`` arrays
+FLOATS_PER_PARTICLE_READING = 3
 
 #: Every capability a problem may offer, with the words used in a refusal.
 CAPABILITIES: dict[str, str] = {
@@ -136,6 +139,13 @@ class CalibrationProblem:
         self.parameterisation = parameterisation
         self.options = {"parameterisation": parameterisation}
         self.lower, self.upper = search.bounds()
+
+    @classmethod
+    def cost_floats(cls, n_readings: int, n_particles: int) -> int:
+        """float64 numbers one :meth:`cost` call on ``n_particles`` holds beyond the problem's data
+        (what :mod:`magexp.run.budget` adds to a run's memory); here, for a problem that does not
+        say, :data:`FLOATS_PER_PARTICLE_READING` per particle-reading."""
+        return FLOATS_PER_PARTICLE_READING * n_readings * n_particles
 
     def swarm_kernel(self) -> tuple | None:
         """``(kind, data, reference, params)``: the arguments, prepared once, of the compiled

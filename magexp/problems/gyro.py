@@ -89,6 +89,14 @@ class GyroAidedCalibration(CalibrationProblem):
             cal = np.einsum("nij,nkj->nki", w, self.dataset.readings[None] - o[:, None, :])
             return self.reference_swarm(thetas) - cal
 
+    @classmethod
+    def cost_floats(cls, n_readings: int, n_particles: int) -> int:
+        """48 float64 numbers per particle-reading: the ``(n, M, 3, 3)`` rotations of
+        :func:`~magexp.core.geometry.attitude_with_bias` and their intermediates, the references and
+        residuals (tracemalloc's peak of one call: 46.2 to 46.6 a particle-reading, 300 readings, 50
+        and 200 particles)."""
+        return 48 * n_readings * n_particles
+
     def cost(self, thetas) -> np.ndarray:
         """``F_g`` of every particle, ``(n, 17) -> (n,)``; non-finite values become ``inf``."""
         err = self.residual_swarm(thetas)

@@ -38,6 +38,7 @@ exact to rounding at a noise-free optimum.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from functools import cache
 
@@ -47,13 +48,44 @@ from magexp.core.ellipsoid import quadratic_features
 from magexp.errors import MagexpError
 
 CHUNK = 1 << 16  # particle-readings per temporary of the numpy fallback
+#: float64 temporaries of the numpy fallback per particle-reading of a chunk (the product, its root,
+#: the error, its square; for the vector cost the product, its squares and their sum)
+CHUNK_TEMPORARIES = 4
+#: float64 numbers the fused kernel holds per particle (its coefficients, accumulator and result)
+FUSED_FLOATS_PER_PARTICLE = 14
+#: float64 numbers the numpy fallback holds per particle beside its chunks: the coefficients and the
+#: products that form them (tracemalloc: 29 a particle for the scalar cost, 100 000 particles)
+FALLBACK_FLOATS_PER_PARTICLE = 32
 COMPILE_MIN_READINGS = 1 << 14  # residuals of fewer readings stay in numpy (no numba import)
+
+
+def fused_enabled() -> bool:
+    """Whether the compiled kernels are wanted and installed (``MAGEXP_NUMBA`` not ``0``, numba
+    findable), without importing numba: the path :func:`compiled` takes."""
+    return os.environ.get("MAGEXP_NUMBA", "1") != "0" and importlib.util.find_spec("numba") is not None
+
+
+def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None) -> int:
+    """float64 numbers one swarm-cost call holds beyond the problem's data, on the path it takes
+    (``fused``: None, the compiled kernel if :func:`fused_enabled`; False: the numpy fallback).
+
+    The fused kernel: :data:`FUSED_FLOATS_PER_PARTICLE` per particle,
+    whatever the readings. The numpy fallback: :data:`CHUNK_TEMPORARIES` arrays of one chunk,
+    ``max(CHUNK, rows P)`` particle-readings (a chunk holds at least one reading of every particle's
+    ``rows`` components), beside ten features or seven columns of each of its readings, and
+    :data:`FALLBACK_FLOATS_PER_PARTICLE` a particle for the coefficients.
+    """
+    if fused_enabled() if fused is None else fused:
+        return FUSED_FLOATS_PER_PARTICLE * n_particles
+    per_chunk = max(CHUNK, rows * n_particles)
+    return (CHUNK_TEMPORARIES * per_chunk + 10 * max(1, per_chunk // max(rows * n_particles, 1))
+            + FALLBACK_FLOATS_PER_PARTICLE * n_particles)
 
 
 @cache
 def compiled():
     """The numba kernels (a namespace), or None when numba is unavailable or ``MAGEXP_NUMBA=0``."""
-    if os.environ.get("MAGEXP_NUMBA", "1") == "0":
+    if not fused_enabled():
         return None
     try:  # lazy: numba, measured 205 ms CPU to import (min of 5, after numpy), which a closed-form run (lm, ellipsoid) never pays
         from magexp.problems import _compiled

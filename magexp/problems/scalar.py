@@ -51,6 +51,12 @@ class ScalarCalibration(CalibrationProblem):
         c, s, u = self._normalised
         return SCALAR, u, self._reference.reshape(-1, 1), np.append(c, s)
 
+    @classmethod
+    def cost_floats(cls, n_readings: int, n_particles: int) -> int:
+        """The fused cost's working memory (:func:`magexp.problems.kernels.working_floats`): ``O(P)``
+        compiled, one chunk in numpy; never ``N × P``."""
+        return kernels.working_floats(n_particles)
+
     def swarm_kernel(self) -> tuple | None:
         """``(SCALAR, u, B_a (N, 1), [c, s])`` in the inverse parameterisation with numba, else None."""
         return self._swarm_kernel

@@ -108,6 +108,12 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
             return None  # W = S^-1 is inverted by numpy in unpack
         return VECTOR, self._readings, np.ascontiguousarray(self.reference, float), np.zeros(4)
 
+    @classmethod
+    def cost_floats(cls, n_readings: int, n_particles: int) -> int:
+        """The fused cost's working memory (:func:`magexp.problems.kernels.working_floats`, three
+        components a particle-reading): ``O(P)`` compiled, one chunk in numpy; never ``N × P``."""
+        return kernels.working_floats(n_particles, rows=3)
+
     def swarm_kernel(self) -> tuple | None:
         """``(VECTOR, readings, v_i (N, 3), ·)`` in the inverse parameterisation with numba, else None."""
         return self._swarm_kernel
@@ -161,6 +167,11 @@ class VectorLeastSquares(VectorCalibration):
 
     objective = "vector_ls"
     objective_is_rms = True
+
+    @classmethod
+    def cost_floats(cls, n_readings: int, n_particles: int) -> int:
+        """One chunk of :func:`magexp.problems.kernels.vector_cost_numpy` (always numpy)."""
+        return kernels.working_floats(n_particles, rows=3, fused=False)
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
         """RMS of every particle's residual components, ``(n, 12) -> (n,)``; non-finite -> ``inf``."""

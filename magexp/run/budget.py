@@ -22,14 +22,19 @@ for ``N`` readings, and its memory, in float64 numbers,
 
 .. math::
 
-    M = 8 \\left[ N (f_N + f_P \\, P) + (T + 1) (f_T + f_S) \\right] \\text{ bytes}
+    M = 8 \\left[ f_N N + f_P \\, P + C(N, P) + (T + 1) (f_T + f_S) \\right] \\text{ bytes}
 
-with ``f_N`` numbers kept per reading (readings, reference, attitude, calibrated, features),
-``f_P`` per reading and particle of a swarm's cost evaluation (``P``: its particles, a
-population's ``popsize * p``, else 1), ``f_T`` per iteration (the history) and ``f_S = p`` per
-step of a filter (its state): :data:`FLOATS_PER_READING`, :data:`FLOATS_PER_READING_PARTICLE`,
-:data:`FLOATS_PER_ITERATION`, :data:`PARAMETERS`. These are rough upper
-estimates, meant to stop a mistake (a typed ``1e12``), not to plan a cluster.
+with ``f_N`` numbers kept per reading (readings, reference, attitude, calibrated, features, the
+bound's Jacobians), ``f_P`` per particle of a swarm (positions, velocities, personal bests, draws;
+``P``: its particles, a population's ``popsize * p``, else 1), ``C(N, P)`` the working memory of one
+cost call on ``P`` particles, as the run's problem declares it
+(:meth:`magexp.problems.base.CalibrationProblem.cost_floats`, e.g. ``O(P)`` for the fused scalar and
+vector costs, one chunk of ``O(max(CHUNK, P))`` for their numpy fallback, ``48 N P`` for the
+gyro-aided cost), ``f_T`` per iteration (the history) and ``f_S = p`` per step of a filter (its
+state): :data:`FLOATS_PER_READING`, :data:`FLOATS_PER_PARTICLE`, :data:`FLOATS_PER_ITERATION`,
+:data:`PARAMETERS`. These are upper estimates of the run's peak above the interpreter and its
+imports, meant to stop a mistake (a typed ``1e12``), not to plan a cluster; ``make bench`` writes the
+estimate beside the measured peak of a large run (``results/bench.csv``, within 1 to 2 times it).
 
 A sweep costs its jobs' runs (its size is counted from the override grammar *before* it is
 expanded), a reproduction its artifacts' cells times their seeds, a calibration ``folds + 1``
@@ -50,12 +55,15 @@ from pathlib import Path
 from magexp.core.datafiles import data_files
 from magexp.core.limits import refuse_over, show
 from magexp.errors import MagexpError
+from magexp.problems import problem_class
+from magexp.problems.base import CalibrationProblem
 
 #: float64 numbers a run keeps per reading (readings, reference field, attitude, calibrated
-#: readings, problem features); per reading and particle in a swarm's cost evaluation; per
-#: iteration (the history: best cost, evaluations spent) and per filter step (its state)
-FLOATS_PER_READING = 64
-FLOATS_PER_READING_PARTICLE = 3
+#: readings, problem features, the bound's Jacobians); per particle of a swarm (its state and
+#: draws: ten vectors of :data:`PARAMETERS`); per iteration (the history: best cost, evaluations
+#: spent) and per filter step (its state)
+FLOATS_PER_READING = 96  # measured: 68 a reading above the interpreter (make bench, 2e5 and 1e6 readings)
+FLOATS_PER_PARTICLE = 120
 FLOATS_PER_ITERATION = 2
 #: parameters of the largest problem (a Jacobian's columns per solver step)
 PARAMETERS = 12
@@ -96,9 +104,11 @@ class Estimate:
 
 
 def estimate_fit(estimator: Mapping, n_readings: int, prefix: str = "estimator.",
-                 readings_key: str = "scenario.n_readings", floats_per_reading: int = FLOATS_PER_READING) -> Estimate:
+                 readings_key: str = "scenario.n_readings", floats_per_reading: int = FLOATS_PER_READING,
+                 problem=CalibrationProblem) -> Estimate:
     """The :class:`Estimate` of fitting ``estimator`` (its settings: a config node or an estimator's
-    ``vars()``) to ``n_readings`` readings (the module docstring's ``E`` and ``M``)."""
+    ``vars()``) to ``n_readings`` readings of ``problem`` (its class: what its cost holds; the
+    module docstring's ``E`` and ``M``)."""
     particles, state = _int(estimator, "n_particles"), 0
     popsize = _int(estimator, "popsize")
     factors = [(readings_key, n_readings)]
@@ -121,8 +131,8 @@ def estimate_fit(estimator: Mapping, n_readings: int, prefix: str = "estimator."
         factors.append((prefix + "n_steps", t))
     else:  # a closed form
         iterations, evaluations = 1, PARAMETERS
-    memory = 8 * (n_readings * (floats_per_reading + FLOATS_PER_READING_PARTICLE * width)
-                  + (iterations + 1) * (FLOATS_PER_ITERATION + state))
+    memory = 8 * (n_readings * floats_per_reading + FLOATS_PER_PARTICLE * width
+                  + problem.cost_floats(n_readings, width) + (iterations + 1) * (FLOATS_PER_ITERATION + state))
     return Estimate(readings=n_readings, evaluations=evaluations, iterations=iterations, particles=width,
                     memory=memory, factors=tuple(factors))
 
@@ -137,10 +147,21 @@ def run_readings(scenario: Mapping) -> int:
     return max(sizes) // SHORTEST_LINE if sizes else 300
 
 
+def run_problem(cfg: Mapping):
+    """The problem class of a run: its ``objective``, else its scenario's; the generic
+    :class:`~magexp.problems.base.CalibrationProblem` when neither names one (a scenario whose
+    class fixes it)."""
+    objective = cfg.get("objective") or (cfg.get("scenario") or {}).get("objective")
+    try:
+        return problem_class(objective) if isinstance(objective, str) else CalibrationProblem
+    except MagexpError:  # an unknown objective is refused where the problem is built, naming it
+        return CalibrationProblem
+
+
 def estimate_run(cfg: Mapping) -> Estimate:
     """The :class:`Estimate` of a run of the (composed or resolved) config ``cfg``."""
     scenario, estimator = cfg.get("scenario") or {}, cfg.get("estimator") or {}
-    return estimate_fit(estimator, run_readings(scenario))
+    return estimate_fit(estimator, run_readings(scenario), problem=run_problem(cfg))
 
 
 def check_estimate(est: Estimate, what: str) -> None:
@@ -270,17 +291,18 @@ def check_recording_file(path, what: str = "data.path") -> int:
     return n
 
 
-def check_calibration(n_readings: int, folds: int, estimator) -> Estimate:
+def check_calibration(n_readings: int, folds: int, estimator, problem=CalibrationProblem) -> Estimate:
     """Refuse a calibration of ``n_readings`` readings over the readings limit, more held-out
     ``folds`` than readings, one fit over the memory or work limit, or ``folds + 1`` fits over
-    the command's work limit; ``estimator``: its config node or the object (``vars()`` are its settings)."""
+    the command's work limit; ``estimator``: its config node or the object (``vars()`` are its
+    settings); ``problem``: the class of the objective fitted (what its cost holds)."""
     refuse_over(n_readings, "readings", f"{n_readings} readings", "the recording holds")
     if isinstance(folds, int) and folds > n_readings:
         raise MagexpError(f"folds={folds} is not allowed: at most {n_readings}, one per reading of the recording "
                           "(each held-out block must hold a reading)")
     settings = estimator if isinstance(estimator, Mapping) else vars(estimator)
     est = estimate_fit(settings, n_readings, readings_key="readings",
-                       floats_per_reading=CALIBRATION_FLOATS_PER_READING)
+                       floats_per_reading=CALIBRATION_FLOATS_PER_READING, problem=problem)
     check_estimate(est, "one fit")
     fits = folds + 1 if isinstance(folds, int) and folds >= 2 else 1
     refuse_over(est.work * fits, "work", f"folds={folds}" if fits > 1 else est.subject(),

@@ -151,7 +151,8 @@ def check_override_values(overrides: list[str]) -> list[str]:
     """The ``KEY=VALUE`` overrides, checked and ready for Hydra's parser.
 
     A key is set, never added (``+key=``) or deleted (``~key``): the objects a config builds take
-    the keys it has. A value holding ``${`` is refused (an interpolation reads other keys, the environment or
+    the keys it has; only a config group the primary config leaves out is added, with one of its
+    choices (``+analysis=field_kalman``). A value holding ``${`` is refused (an interpolation reads other keys, the environment or
     files: a command-line value must be the value itself); ``hydra.*`` settings keep theirs
     (``hydra.sweep.subdir=${hydra.job.num}``). A plain value with characters outside ASCII
     (``data.unit=µT``), which Hydra's lexer cannot read, is quoted for it.
@@ -159,6 +160,12 @@ def check_override_values(overrides: list[str]) -> list[str]:
     out = []
     for ov in overrides:
         key, sep, value = ov.partition("=")
+        if key.startswith("+") and _addable_group(key[1:]):
+            choices = sorted(p.stem for p in (paths.CONF / key[1:]).glob("*.yaml"))
+            if value not in choices:
+                raise MagexpError(f"{ov} is not allowed: choose one of {', '.join(choices)}")
+            out.append(ov)
+            continue
         if key.startswith(("+", "~")) and not key.lstrip("+~").startswith("hydra"):
             raise MagexpError(f"{ov} is not allowed: an override sets a key the config has (magexp --cfg job lists "
                               f"them); adding (+) or deleting (~) a key would be ignored or break the run")
@@ -169,6 +176,12 @@ def check_override_values(overrides: list[str]) -> list[str]:
             ov = f"{key}='{value}'"
         out.append(ov)
     return out
+
+
+def _addable_group(name: str) -> bool:
+    """Whether ``name`` is a config group of ``conf/`` that the primary config leaves out, so a run
+    adds it with ``+name=choice`` (``+analysis=field_kalman``: an analysis step after the fit)."""
+    return name.isidentifier() and name not in ("scenario", "estimator", "hydra") and (paths.CONF / name).is_dir()
 
 
 #: what ``--cfg`` may show (Hydra's choices)

@@ -27,7 +27,7 @@ import numpy as np
 
 from magexp.core.dataset import Dataset
 from magexp.core.geometry import preintegrate
-from magexp.core.recordings import load_recording
+from magexp.core.recordings import exists, load_recording
 from magexp.errors import MagexpError, check_positive_int
 from magexp.paths import SHARED_DATA
 from magexp.scenarios.search import BOXES, centroid_radius, search_box
@@ -85,7 +85,7 @@ class RecordingScenario:
         """The loaded recording (``file``, default the scenario's), cut to the window."""
         file = file or self.file
         path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
-        if not path.exists() and not Path(f"{path}_mag.csv").exists():
+        if not exists(path):
             raise MagexpError(f"scenario.file={file!r} is not allowed: {path} does not exist "
                               "(set MAGEXP_DATA to the folder of the recordings)")
         rec = load_recording(path, **self.load_options)
