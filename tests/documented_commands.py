@@ -134,6 +134,9 @@ COMMANDS: dict[str, tuple] = {
     "magexp reproduce yan2022 --out scratch": (RUN_FULL, "30 s"),
     "magexp reproduce --help": (RUN_FULL, "prints the options"),
     "magexp reproduce --limits": (RUN_FULL, "12 s: plans every artifact"),
+    # checking a reproduction (README.md, docs/results.md): reproduces what the cache lacks, then compares
+    "make verify": (COMPOSE, "every run of every paper that the cache lacks"),
+    "python -m magexp verify": (COMPOSE, "every run of every paper that the cache lacks"),
     # the installed wheel (docs/guide/runs.md): the same console script, from another folder
     "pip install .": (PIP, "installs into the reader's environment"),
     "pip install -e '.[cluster]'": (PIP, "installs dask-jobqueue"),
@@ -146,8 +149,8 @@ COMMANDS: dict[str, tuple] = {
         (RUN_FULL, "2 s", {"files": {"mine.csv": MINE}}),
     ".venv/bin/python -m magexp calibrate data.path=mine.csv field.latitude=52.2 field.longitude=0.1 "
     "field.date=2024-05-01": (RUN_FULL, "2 s", {"files": {"mine.csv": MINE}}),
-    ".venv/bin/python -m magexp calibrate data.path=mine.csv estimator=ipso seed=1 folds=5":
-        (RUN_FULL, "ipso and 5 held-out fits", {"files": {"mine.csv": MINE}}),
+    ".venv/bin/python -m magexp calibrate data.path=mine.csv estimator=ipso seed=1":
+        (RUN_FULL, "ipso and its held-out fits", {"files": {"mine.csv": MINE}}),
     ".venv/bin/python -m magexp calibrate data.path=mine.csv export=ardupilot figure=true":
         (RUN_FULL, "draws the figure", {"files": {"mine.csv": MINE}}),
     ".venv/bin/python -m magexp calibrate data.path=mine_with_attitudes.csv objective=vector estimator=lm":
@@ -176,6 +179,8 @@ COMMANDS: dict[str, tuple] = {
     # the benches and the warm-up
     "python -m magexp.perf.bench --help": (RUN_FULL, "prints the options (two interpreters: one BLAS thread)"),
     "python -m magexp.perf.warmup": (RUN_FULL, "the kernels compiled once (make venv)"),
+    "python -m magexp.perf.crosstable": (RUN_FULL, "every HMC5883L calibration on every HMC5883L recording: 30 s",
+                                         {"shared": True}),
     ".venv/bin/python -m magexp.perf.peers.bench --redraw --out results/peers":
         (RUN_FULL, "redraws the clone's copy of results/peers", {"files": {"results/peers": "a copy of results/peers"}}),
     "python -m magexp.perf.peers.bench --redraw --out results/peers":

@@ -163,7 +163,7 @@ def split_program(command: str) -> tuple[str, list[str]]:
             return f"python -m {module}", words
     else:
         words = words[1:]
-    if words and words[0] in ("calibrate", "reproduce"):
+    if words and words[0] in ("calibrate", "reproduce", "verify"):
         return f"magexp {words[0]}", words[1:]
     return "magexp", words
 
@@ -231,6 +231,10 @@ def test_documented_command_composes(command, tmp_path):
                 assert f"{flag} {settings[var]}" in proc.stdout, proc.stdout
     elif program == "magexp reproduce":
         compose_reproduce(arguments)
+    elif program == "magexp verify":
+        from magexp.artifacts.verify import parser as verify_parser
+
+        verify_parser().parse_args(arguments)
     else:
         assert program == "magexp", f"no composer for {program}"
         compose_run(arguments, tmp_path)

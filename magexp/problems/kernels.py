@@ -48,9 +48,11 @@ from magexp.core.ellipsoid import quadratic_features
 from magexp.errors import MagexpError
 
 CHUNK = 1 << 16  # particle-readings per temporary of the numpy fallback
-#: float64 temporaries of the numpy fallback per particle-reading of a chunk (the product, its root,
-#: the error, its square; for the vector cost the product, its squares and their sum)
-CHUNK_TEMPORARIES = 4
+#: float64 temporaries of the numpy fallback per particle-reading of a chunk, by the components of a
+#: reading's residual: the scalar cost (1) holds the product, its root, the error and its square; the
+#: vector cost (3) the three differences ``d``, a row of ``W d``, a scratch array, the sum of squares and
+#: numpy's transients (tracemalloc: 7.9 and 9.0 chunks at 5 000 and 50 particles)
+CHUNK_TEMPORARIES = {1: 4, 3: 10}
 #: float64 numbers the fused kernel holds per particle (its coefficients, accumulator and result)
 FUSED_FLOATS_PER_PARTICLE = 14
 #: float64 numbers the numpy fallback holds per particle beside its chunks: the coefficients and the
@@ -70,7 +72,7 @@ def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None
     (``fused``: None, the compiled kernel if :func:`fused_enabled`; False: the numpy fallback).
 
     The fused kernel: :data:`FUSED_FLOATS_PER_PARTICLE` per particle,
-    whatever the readings. The numpy fallback: :data:`CHUNK_TEMPORARIES` arrays of one chunk,
+    whatever the readings. The numpy fallback: :data:`CHUNK_TEMPORARIES` ``[rows]`` arrays of one chunk,
     ``max(CHUNK, rows P)`` particle-readings (a chunk holds at least one reading of every particle's
     ``rows`` components), beside ten features or seven columns of each of its readings, and
     :data:`FALLBACK_FLOATS_PER_PARTICLE` a particle for the coefficients.
@@ -78,7 +80,7 @@ def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None
     if fused_enabled() if fused is None else fused:
         return FUSED_FLOATS_PER_PARTICLE * n_particles
     per_chunk = max(CHUNK, rows * n_particles)
-    return (CHUNK_TEMPORARIES * per_chunk + 10 * max(1, per_chunk // max(rows * n_particles, 1))
+    return (CHUNK_TEMPORARIES[rows] * per_chunk + 10 * max(1, per_chunk // max(rows * n_particles, 1))
             + FALLBACK_FLOATS_PER_PARTICLE * n_particles)
 
 
