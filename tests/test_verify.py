@@ -1,8 +1,9 @@
 """``magexp verify``: a reproduction against the committed results (magexp/artifacts/verify.py).
 
 Small copies of the committed files in ``tmp_path`` (the comparison is given both folders: no git),
-each edited in one place; and one artifact reproduced as another processor would (numba kernels
-compiled for a generic CPU, and the numpy path) checked against its committed CSVs."""
+each edited in one place; and artifacts reproduced as another processor would (numba kernels
+compiled for a generic CPU, the numpy path; numpy's loops without AVX-512 and OpenBLAS's Haswell
+kernels) checked against their committed CSVs."""
 
 from __future__ import annotations
 
@@ -249,7 +250,7 @@ def test_another_processors_numpy_and_blas_kernels_agree_on_lm(tmp_path, spec):
     OpenBLAS's Haswell kernels (where this CPU has AVX-512 and AVX2; skipped elsewhere, and without the
     recording) agrees with its committed CSVs: lm's fits within the tolerance, its evaluation counts
     (``nit``, ``nfev``: other round-off meets its stopping test at another iteration) as path
-    diagnostics (6.6 s of CPU)."""
+    diagnostics (6.2 s of CPU, one process)."""
     if not (AVX512_TARGETS and __cpu_features__.get("AVX2") and
             any(__cpu_features__.get(t) for t in ("X86_V4", "AVX512F"))):
         pytest.skip("this CPU has no AVX-512 loops to turn off, or no AVX2 for OpenBLAS's Haswell kernels")
