@@ -1,8 +1,9 @@
 """``magexp verify``: a reproduction against the committed results (magexp/artifacts/verify.py).
 
 Small copies of the committed files in ``tmp_path`` (the comparison is given both folders: no git),
-each edited in one place; and one artifact reproduced as another processor would (numba kernels
-compiled for a generic CPU, and the numpy path) checked against its committed CSVs."""
+each edited in one place; and artifacts reproduced as another processor would (numba kernels
+compiled for a generic CPU, the numpy path; numpy's loops without AVX-512 and OpenBLAS's Haswell
+kernels) checked against their committed CSVs."""
 
 from __future__ import annotations
 
@@ -15,10 +16,11 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
 
 from magexp.artifacts.report import SPEED_HEADING
-from magexp.artifacts.verify import RTOL, committed_results, compare, compare_text
-from magexp.paths import RESULTS, ROOT
+from magexp.artifacts.verify import RTOL, committed_results, compare, compare_text, render
+from magexp.paths import EXPERIMENTS, RESULTS, ROOT
 
 #: the committed files copied into each test's two folders
 FILES = ("summary.csv", "claims.csv", "REPORT.md", "yuan2018/yuan2018_table3.csv", "yuan2018/yuan2018_table3.png")
@@ -158,6 +160,26 @@ def test_what_differs_by_design_is_left_out_and_listed(sides):
     assert "timing.csv" in listed and "peers/: on one side only" in listed and "Speed of the core" in listed
 
 
+def test_path_diagnostics_are_compared_through_the_verdicts(tmp_path):
+    """A minimiser's iteration count (a CSV column or a table's column) may differ: counted and shown, not
+    a disagreement; a path diagnostic on one side only, or any other column beyond the tolerance, is one."""
+    ours, committed = tmp_path / "ours", tmp_path / "committed"
+    table = ("\\begin{tabular}{lll}\n\\toprule\nestimator & fun & nfev\\_to\\_1.1 \\\\\n\\midrule\n"
+             "lm & {fun} & {nfev} \\\\\n\\bottomrule\n\\end{tabular}\n")
+    for side, nit, nfev, fun in ((ours, "39", "1849", "16.92"), (committed, "52", "1986", "16.92")):
+        side.mkdir()
+        (side / "a_runs.csv").write_text(f"estimator,seed,fun,nit,nfev_to_1.1\nlm,0,{fun},{nit},{nfev}\nlm,1,1.5,40,7\n")
+        (side / "a.tex").write_text(table.replace("{fun}", fun).replace("{nfev}", nfev))
+    result = compare(ours, committed)
+    assert result.agrees, [d.line() for d in result.disagreements]
+    assert result.paths == {"a_runs.csv": 2, "a.tex": 1} and result.path_largest.column == "nit"
+    assert "path diagnostics (nit, nfev," in render(result, "ours", "committed")
+    (ours / "a_runs.csv").write_text("estimator,seed,fun,nit,nfev_to_1.1\nlm,0,16.95,39,\nlm,1,1.5,40,7\n")
+    (ours / "a.tex").write_text(table.replace("{fun}", "16.95").replace("{nfev}", "1849"))
+    wrong = {(d.file, d.column) for d in compare(ours, committed).disagreements}
+    assert wrong == {("a_runs.csv", "fun"), ("a_runs.csv", "nfev_to_1.1"), ("a.tex", "fun")}
+
+
 def test_bad_input_is_one_line_and_exit_2(cli, sides, tmp_path, monkeypatch):
     done = verify(cli, tmp_path / "nowhere", sides[1])
     assert done.returncode == 2 and "--against" in done.stderr and len(done.stderr.splitlines()) == 1
@@ -175,16 +197,29 @@ PROCESSORS = {"kernels compiled for a generic CPU": {"NUMBA_CPU_NAME": "generic"
               "the numpy path": {"MAGEXP_NUMBA": "0"}}
 
 
-def _reproduce_elsewhere(tmp_path: Path, name: str, env: dict) -> Path:
+def _reproduce_elsewhere(tmp_path: Path, name: str, env: dict, paper: str = PAPER, artifact: str = ARTIFACT,
+                         runs: int = 10, numba: bool = True) -> Path:
     """``python -m magexp reproduce PAPER --only ARTIFACT`` in a fresh process, with its own empty run
-    cache and numba cache, under ``env``; returns its output folder."""
+    cache and (``numba``) numba cache, under ``env``; returns its output folder."""
     out, folder = tmp_path / name / "out", tmp_path / name
-    environment = {**os.environ, "MAGEXP_CACHE": str(folder / "runs"), "NUMBA_CACHE_DIR": str(folder / "numba"), **env}
-    done = subprocess.run([sys.executable, "-m", "magexp", "reproduce", PAPER, "--only", ARTIFACT, "--out", str(out),
+    fresh = {"NUMBA_CACHE_DIR": str(folder / "numba")} if numba else {}
+    environment = {**os.environ, "MAGEXP_CACHE": str(folder / "runs"), **fresh, **env}
+    done = subprocess.run([sys.executable, "-m", "magexp", "reproduce", paper, "--only", artifact, "--out", str(out),
                            "--jobs", "1"], env=environment, cwd=ROOT, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert "10 computed, 0 from the cache" in done.stdout
+    assert f"{runs} computed, 0 from the cache" in done.stdout
     return out
+
+
+def _committed(tmp_path: Path, paper: str, artifact: str) -> tuple[Path, list[str]]:
+    """The committed CSVs and figures of ``artifact`` (read from git) in ``tmp_path/committed``, and their
+    paths relative to ``results/``; skips where there is no git."""
+    files = [f"{paper}/{artifact}{suffix}" for suffix in (".csv", "_runs.csv", ".png", ".pdf")]
+    try:
+        committed_results(tmp_path / "committed", [f"results/{f}" for f in files])
+    except ValueError as exc:  # no git here: the committed files are those of the checkout
+        pytest.skip(str(exc))
+    return tmp_path / "committed" / "results", files
 
 
 @pytest.mark.slow
@@ -192,18 +227,39 @@ def test_another_processor_agrees_with_the_committed_artifact(tmp_path):
     """One artifact reproduced twice from nothing, as on another processor (numba compiled for a
     generic CPU; numpy instead of numba), agrees with its committed CSVs (read from git) within the
     tolerance: the two reproductions run side by side (9.3 s of CPU in all, two processes)."""
-    files = [f"{PAPER}/{ARTIFACT}{suffix}" for suffix in (".csv", "_runs.csv", ".png", ".pdf")]
-    try:
-        committed_results(tmp_path / "committed", [f"results/{f}" for f in files])
-    except ValueError as exc:  # no git here: the committed files are those of the checkout
-        pytest.skip(str(exc))
+    committed, files = _committed(tmp_path, PAPER, ARTIFACT)
     with ThreadPoolExecutor(len(PROCESSORS)) as pool:
         outs = dict(zip(PROCESSORS, pool.map(lambda item: _reproduce_elsewhere(tmp_path, f"p{item[0]}", item[1][1]),
                                              enumerate(PROCESSORS.items()))))
     for name, out in outs.items():
-        result = compare(out, tmp_path / "committed" / "results", files=files)
+        result = compare(out, committed, files=files)
         assert result.agrees, f"{name}: " + "; ".join(d.line() for d in result.disagreements[:5])
         assert result.csv_files == 2 and result.figures == 2 and result.rows == 40
+
+
+#: numpy's SIMD loops above AVX2 (``log``, ``exp``, ``power`` give other last bits without them) and
+#: OpenBLAS's Haswell kernels instead of this CPU's: another processor's numpy and BLAS on this one
+AVX512_TARGETS = [t for t in __cpu_dispatch__ if t == "X86_V4" or t.startswith("AVX512")]
+OTHER_KERNELS = {"NPY_DISABLE_CPU_FEATURES": " ".join(AVX512_TARGETS), "OPENBLAS_CORETYPE": "Haswell"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("spec", [EXPERIMENTS / "real" / "real_modes.yaml"], ids=["real_modes"])
+def test_another_processors_numpy_and_blas_kernels_agree_on_lm(tmp_path, spec):
+    """``real_modes`` (five lm fits on recordings) reproduced with numpy's AVX-512 loops disabled and
+    OpenBLAS's Haswell kernels (where this CPU has AVX-512 and AVX2; skipped elsewhere, and without the
+    recording) agrees with its committed CSVs: lm's fits within the tolerance, its evaluation counts
+    (``nit``, ``nfev``: other round-off meets its stopping test at another iteration) as path
+    diagnostics (6.2 s of CPU, one process)."""
+    if not (AVX512_TARGETS and __cpu_features__.get("AVX2") and
+            any(__cpu_features__.get(t) for t in ("X86_V4", "AVX512F"))):
+        pytest.skip("this CPU has no AVX-512 loops to turn off, or no AVX2 for OpenBLAS's Haswell kernels")
+    committed, files = _committed(tmp_path, spec.parent.name, spec.stem)
+    # numba's kernels are this CPU's (compiled for a generic one in the test above): its cache is reused
+    out = _reproduce_elsewhere(tmp_path, "other", OTHER_KERNELS, spec.parent.name, spec.stem, runs=5, numba=False)
+    result = compare(out, committed, files=files)
+    assert result.agrees, "; ".join(d.line() for d in result.disagreements[:5])
+    assert result.csv_files == 2 and result.figures == 2
 
 
 def test_which_reproduction_is_checked(cli, sides, monkeypatch):

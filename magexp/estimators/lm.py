@@ -24,6 +24,14 @@ so the fit returns that unique member of the valley: the same numbers in every p
 parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
 parameters as before (kept to compare; ``tests/test_determinism.py`` churns the memory of a fresh
 process and checks that the gauge-fixed fit gives the same bits through it).
+
+**Its path is a diagnostic.** ``xtol = ftol = gtol = 1e-12`` are met where the steps and reductions
+are at round-off level, so on another processor (numpy's SIMD loops, BLAS kernels, numba target) the
+test is met an iteration earlier or later: ``nit``/``nfev`` move by one Jacobian (``p + 1``
+evaluations: 40 vs 53 on Yuan's vector problem) while the fit agrees to its 6th digit. ``magexp verify``
+compares them as path diagnostics (:data:`magexp.artifacts.verify.PATH_DIAGNOSTICS`). A fit the data
+leave undetermined (``real_xio_fusion``: offset standard error 4 800 of offsets 25 000) walks its flat
+valley until the evaluation budget, and where it stops moves with the round-off (2e-3 relative measured).
 """
 
 from __future__ import annotations
