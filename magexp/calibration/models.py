@@ -75,6 +75,39 @@ def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, n
     return np.eye(3) * radius / fitted, centre
 
 
+#: a gyroscope axis is clipped where its largest ``|rate|``, at least :data:`CLIP_RATE` rad/s (115 deg/s, under
+#: the smallest common full scale of 125 deg/s), recurs on :data:`CLIP_COUNT` readings or more: a rate that
+#: varies does not repeat its extreme exactly; the HMC5883L full sphere's MPU-6050 sits at 250.13 deg/s
+#: (32767 / 131 LSB) on 22 readings, every other shared recording's gyroscope reaches its extreme once
+CLIP_COUNT = 3
+CLIP_RATE = 2.0
+
+
+def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
+    """``(axis, limit in deg/s, readings there)`` of each clipped axis of the gyroscope's ``rates`` (rad/s)."""
+    out = []
+    for k, axis in enumerate("xyz"):
+        size = np.abs(rates[:, k])
+        top = float(size.max(initial=0.0))
+        count = int(np.count_nonzero(size >= top * (1 - 1e-9)))
+        if top >= CLIP_RATE and count >= CLIP_COUNT:
+            out.append((axis, float(np.degrees(top)), count))
+    return out
+
+
+def gyro_unusable(stream) -> str | None:
+    """Why the gyro-aided model cannot succeed on the gyroscope ``stream`` (``(times, rates)``,
+    :meth:`~magexp.core.recordings.Recording.gyro_rates`), or None: a clipped axis (:func:`clipped`)
+    loses the rotation beyond its limit, so the attitude it integrates is wrong from the first clip on."""
+    if stream is None:
+        return "the recording has no gyroscope"
+    clips = clipped(np.asarray(stream[1], float))
+    if not clips:
+        return None
+    where = ", ".join(f"g{axis} at ±{limit:.4g} deg/s on {count} readings" for axis, limit, count in clips)
+    return f"the gyroscope saturates ({where}): the rotation beyond its range is lost"
+
+
 #: the closed-form models: ``readings, radius -> (W, o)`` or None
 CLOSED_FORM = {"sphere": fit_sphere_model, "diagonal": fit_diagonal}
 

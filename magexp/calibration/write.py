@@ -304,7 +304,9 @@ def summary(cal) -> dict:
         "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
         "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
         "rms before": f"{m['rms_before']:.6g} {u} (|raw| - reference)",
-        "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)",
+        "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)" + (
+            f"; the readings' own noise {m['noise_after']:.6g} {u} (from neighbouring readings)" if m.get("noise_after")
+            else ""),
         "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} regions of directions, each "
                             "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
