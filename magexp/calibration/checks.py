@@ -175,8 +175,9 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     failed = []
 
     def fail(check, value, threshold, text):
-        failed.append({"check": check, "value": value, "threshold": threshold,
-                       "line": f"check {check!r} failed: {text}: {ADVICE[check]}"})
+        reason = f"check {check!r} failed: {text}"
+        failed.append({"check": check, "value": value, "threshold": threshold, "reason": reason,
+                       "line": f"{reason}: {ADVICE[check]}"})
 
     held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
     if held is not None and not (held < t["heldout_vs_raw"] * raw):
@@ -248,4 +249,4 @@ def _rms_check(rms: float, reference: float, to_mg, t: dict, noise: float = 0.0)
 def refuse(name: str, failed: list[dict]) -> None:
     """Raise the gate's one line: every failed check, then how to override."""
     raise MagexpError(f"{name}: calibration refused, nothing written: " + "; ".join(f["line"] for f in failed)
-                      + " (accept=true writes it anyway, with these failures recorded)")
+                      + "; accept=true writes it anyway, with these failures recorded")

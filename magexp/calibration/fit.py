@@ -59,6 +59,7 @@ from omegaconf import OmegaConf
 from magexp.calibration import models as models_
 from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, options_of as export_options_of,
                                       render as render_export)
+from magexp.calibration.onboard import onboard_of, saying_onboard
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
@@ -519,7 +520,8 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     MagexpError
         One line: bad input, degenerate data, a failed fit, or (unless ``accept``) every failed check of the gate.
     """
-    check_size(rec)
+    with saying_onboard(rec):
+        check_size(rec)
     folds = check_folds(folds)
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
@@ -532,7 +534,8 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     reference = reference_total if isinstance(reference_total, Reference) else reference_of(rec, reference_total)
     dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
-        check_readings(rec.readings, rec.name)
+        with saying_onboard(rec):
+            check_readings(rec.readings, rec.name)
         check_gyro(rec, model)
     selection, held = None, {}
     if model == "auto" and folds < 2:  # nothing held out to choose by: the richest model, and say so
@@ -555,7 +558,8 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
-    report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]), **gyro_extras(model, problem, result)}
+    report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]),
+              **gyro_extras(model, problem, result), **onboard_of(rec, metrics.get("heldout_spread"))}
     if selection is not None:
         report["model_selection"] = selection
     report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
@@ -605,7 +609,8 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
                   estimated=reference.estimated or reference.unit is not None, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
                   thresholds=thresholds)
     if failed and checks and not accept:
-        refuse(rec.name, failed)
+        with saying_onboard(rec, metrics.get("heldout_spread")):
+            refuse(rec.name, failed)
     return {"passed": not failed, "failed": failed, "accepted_anyway": bool(failed) and accept,
             "thresholds": {k: list(v) if isinstance(v, tuple) else v for k, v in thresholds.items()}}
 
