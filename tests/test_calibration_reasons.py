@@ -1,14 +1,16 @@
 """Refuse only for the right reason (issue 33 item 4): the gate's anisotropy limit set from real sensors, the
 residual RMS less the readings' own noise, an estimator short of the closed-form optimum named as such, a fit
-that collapsed not blamed on the recording, and the gyro-aided model refused for a saturated gyroscope."""
+that collapsed not blamed on the recording, and the gyro-aided model refused for a saturated gyroscope; and
+model=auto (item 7) reporting every candidate, a gyro-aided one that cannot succeed dropped before its fit."""
 
 import numpy as np
 import pytest
 
 import magexp
 from magexp.calibration.checks import GATE, check_fit
+from magexp.calibration import fit as fit_module
 from magexp.calibration.fit import main, noise_of
-from magexp.calibration.models import clipped, gyro_unusable
+from magexp.calibration.models import clipped, gyro_unusable, select
 from magexp.errors import MagexpError
 from magexp.paths import SHARED_DATA
 
@@ -104,3 +106,26 @@ def test_gyro_model_on_a_saturated_gyroscope_is_refused_for_it(tmp_path, capsys)
     """Was: "every calibrated direction lies within 0.0 deg of one (a single attitude)"."""
     line = _refused(tmp_path, capsys, f"data.path={SPHERE}", "model=gyro")
     assert "gyroscope saturates (gx at ±250.1 deg/s on 9 readings)" in line and "model=full" in line
+
+
+# -- model=auto reports every candidate, and drops one that cannot succeed before fitting it (item 7) ----------
+def test_auto_reports_every_candidate_fitted_failed_or_dropped():
+    spreads = {"sphere": 0.05, "diagonal": float("nan"), "full": 0.01}
+    chosen, record = select(spreads.get, "scalar", 0.1, dropped={"gyro": "the gyroscope saturates (gx ...)"})
+    assert chosen == "full" and record["dropped"] == {"gyro": "the gyroscope saturates (gx ...)"}
+    assert "held out: full 1 %, sphere 5 %, diagonal: its fit failed with a region of directions held out" in record["why"]
+    assert record["why"].endswith("; gyro not fitted: the gyroscope saturates (gx ...))")
+
+
+@_present(SPHERE)
+def test_auto_never_fits_the_gyro_model_of_a_saturated_gyroscope(monkeypatch):
+    """Was: 2.3 of auto's 3.2 CPU-seconds on the gyro-aided candidate, whose fit failed and was dropped without a
+    word. Now it is dropped before any fit (the default run: 0.57 s of CPU against model=full's 0.48 s)."""
+    fitted = []
+    real = fit_module.heldout
+    monkeypatch.setattr(fit_module, "heldout", lambda *a, **k: fitted.append(a[-1] if len(a) > 6 else k.get("model"))
+                        or real(*a, **k))
+    cal = magexp.calibrate(SPHERE)
+    assert "gyro" not in fitted and set(fitted) == {"sphere", "diagonal", "full"}
+    selection = cal.report["model_selection"]
+    assert "gyroscope saturates" in selection["dropped"]["gyro"] and "gyro not fitted" in selection["why"]

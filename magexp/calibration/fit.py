@@ -356,6 +356,20 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
     return w, o, calibrated, problem, result, box
 
 
+def select_model(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
+                 margin: float) -> tuple[str, dict, dict]:
+    """``model=auto`` (:func:`magexp.calibration.models.select`): ``(model, record, held-out of each fitted
+    candidate)``. ``gyro`` is dropped before any fit where it cannot succeed (no gyroscope, or a saturated one:
+    :func:`magexp.calibration.models.gyro_unusable`), and the record says why."""
+    unusable = models_.gyro_unusable(rec.gyro_rates())
+    held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
+            for m in models_.candidates(objective, gyro=not unusable)}
+    model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
+                                      models_.check_margin(margin), gyro=not unusable,
+                                      dropped={"gyro": unusable} if unusable and objective == "scalar" else {})
+    return model, selection, held
+
+
 def check_gyro(rec: Recording, model: str) -> None:
     """Refuse ``model=gyro`` in one line, before any fit, where it cannot succeed
     (:func:`magexp.calibration.models.gyro_unusable`: a saturated gyroscope); other models pass."""
@@ -542,10 +556,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         model, selection = "full", {"chosen": "full", "why": f"full: folds={folds}, no held-out check to choose by",
                                     "margin": auto_margin, "heldout_spread": {}}
     if model == "auto":
-        held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
-                for m in models_.candidates(objective, gyro=has_gyro)}
-        model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
-                                          models_.check_margin(auto_margin), gyro=has_gyro)
+        model, selection, held = select_model(rec, estimator, objective, reference, folds, rng, auto_margin)
     w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
     cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
     name = (f"{model} fit" if model in models_.CLOSED_FORM

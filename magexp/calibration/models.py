@@ -146,7 +146,8 @@ def check_margin(margin) -> float:
     return value
 
 
-def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = False) -> tuple[str, dict]:
+def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = False,
+           dropped: dict | None = None) -> tuple[str, dict]:
     """The model ``auto`` chooses, and the record of the choice.
 
     Parameters
@@ -155,11 +156,14 @@ def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = F
     objective : ``scalar`` (all of :data:`ORDER`) or ``vector`` (``full`` only): :func:`candidates`.
     margin : a richer model must have a held-out spread below ``(1 - margin)`` times the current choice's.
     gyro : the recording has a gyroscope (``gyro`` is a candidate).
+    dropped : ``{model: reason}`` of the models dropped before any fit, because they cannot succeed
+        (:func:`gyro_unusable`); they are not fitted, and the record says why.
 
     Returns
     -------
     (model, record)
-        ``record``: ``chosen``, ``why``, ``margin`` and ``heldout_spread`` of each candidate (None: the fit failed).
+        ``record``: ``chosen``, ``why`` (every candidate: its held-out spread, or why it was dropped),
+        ``margin``, ``heldout_spread`` of each fitted candidate (None: the fit failed) and ``dropped``.
     """
     tried = candidates(objective, gyro=gyro)
     spreads = {}
@@ -180,10 +184,20 @@ def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = F
             why = (f"{name}: held-out spread {100 * value:.3g} % beats {chosen}'s {100 * spreads[chosen]:.3g} % by "
                    f"more than the margin {100 * margin:g} %")
             chosen = name
+    dropped = dict(dropped or {})
     if chosen is None:
         raise MagexpError("model=auto: no model could be fitted with a region of directions held out (" + ", ".join(tried) + " "
                           "all failed): record again while turning the sensor through as many orientations as you can")
-    rejected = [f"{n} {100 * v:.3g} %" for n, v in spreads.items() if v is not None and n != chosen]
-    if rejected:
-        why += f" (held out: {chosen} {100 * spreads[chosen]:.3g} %, " + ", ".join(rejected) + ")"
-    return chosen, {"chosen": chosen, "why": why, "margin": margin, "heldout_spread": spreads}
+    return chosen, {"chosen": chosen, "why": f"{why} ({candidates_text(chosen, spreads, dropped)})", "margin": margin,
+                    "heldout_spread": spreads, "dropped": dropped}
+
+
+def candidates_text(chosen: str, spreads: dict, dropped: dict) -> str:
+    """Every candidate of :func:`select`, the chosen first: its held-out spread, that its fit failed with a
+    region held out, or why it was dropped before any fit."""
+    def one(name):
+        value = spreads[name]
+        return (f"{name} {100 * value:.3g} %" if value is not None
+                else f"{name}: its fit failed with a region of directions held out")
+    held = [one(chosen)] + [one(n) for n in spreads if n != chosen]
+    return "held out: " + ", ".join(held) + "".join(f"; {n} not fitted: {why}" for n, why in dropped.items())
