@@ -59,7 +59,7 @@ from omegaconf import OmegaConf
 from magexp.calibration import models as models_
 from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, options_of as export_options_of,
                                       render as render_export)
-from magexp.calibration.onboard import onboard_of, saying_onboard
+from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
@@ -499,6 +499,7 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
     return out
 
 
+@says_onboard
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
                         folds: int = 6, rng: np.random.Generator, checks: bool = True,
                         model: str = "full", accept: bool = False, gate_overrides=None,
@@ -534,8 +535,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     MagexpError
         One line: bad input, degenerate data, a failed fit, or (unless ``accept``) every failed check of the gate.
     """
-    with saying_onboard(rec):
-        check_size(rec)
+    check_size(rec)
     folds = check_folds(folds)
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
@@ -548,8 +548,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     reference = reference_total if isinstance(reference_total, Reference) else reference_of(rec, reference_total)
     dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
-        with saying_onboard(rec):
-            check_readings(rec.readings, rec.name)
+        check_readings(rec.readings, rec.name)
         check_gyro(rec, model)
     selection, held = None, {}
     if model == "auto" and folds < 2:  # nothing held out to choose by: the richest model, and say so

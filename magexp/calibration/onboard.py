@@ -10,6 +10,7 @@ printed report, ``calibration.json`` (``quality.onboard_calibration``) and a ref
 
 from __future__ import annotations
 
+import functools
 import re
 from contextlib import contextmanager
 
@@ -53,19 +54,32 @@ def onboard_line(record: dict | None) -> str:
     if not record:
         return ""
     held = record["heldout_spread_magexp"]
-    return (f"the log's onboard calibration ({record['parameters']}) was undone, the readings are raw: spread as "
+    return (f"{SAID}{record['parameters']}) was undone, the readings are raw: spread as "
             f"logged (onboard-corrected) {100 * record['spread_as_logged']:.3g} %, raw {100 * record['spread_raw']:.3g} "
             "%, magexp's calibration held out " + ("not measured" if held is None else f"{100 * held:.3g} %"))
+
+
+#: how every :func:`onboard_line` starts (a refusal that says it already is not told again)
+SAID = "the log's onboard calibration ("
 
 
 @contextmanager
 def saying_onboard(rec: Recording, heldout_spread: float | None = None):
     """Within the block, a refusal (:class:`~magexp.errors.MagexpError`) of a log whose onboard calibration was
-    undone ends with :func:`onboard_line`: what the firmware already did, and how good it was."""
+    undone ends with :func:`onboard_line`: what the firmware already did, and how good it was (once)."""
     try:
         yield
     except MagexpError as exc:
         note = onboard_line(onboard_of(rec, heldout_spread).get("onboard_calibration"))
-        if not note:
+        if not note or SAID in str(exc):
             raise
         raise MagexpError(f"{exc}; {note}") from None
+
+
+def says_onboard(calibrate):
+    """``calibrate(rec, ...)`` whose every refusal of a log says what its firmware already did (:func:`saying_onboard`)."""
+    @functools.wraps(calibrate)
+    def wrapped(rec: Recording, *args, **kwargs):
+        with saying_onboard(rec):
+            return calibrate(rec, *args, **kwargs)
+    return wrapped
