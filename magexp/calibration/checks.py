@@ -35,11 +35,13 @@ def check_readings(readings: np.ndarray, name: str) -> None:
     moved = float(np.sqrt((centred**2).sum(axis=1).mean()) / max(np.linalg.norm(readings, axis=1).mean(), 1e-300))
     if moved < STILL:
         raise MagexpError(f"{name}: the readings barely move (RMS distance from their centroid {100 * moved:.2g} % of "
-                          f"their magnitude): one attitude cannot determine a calibration: {RECORD}")
+                          f"their magnitude, under the limit {100 * STILL:g} %): one attitude cannot determine a "
+                          f"calibration: {RECORD}")
     ev = np.linalg.eigvalsh(centred.T @ centred / len(readings))
     if ev[0] <= (PLANE_RATIO**2) * ev[-1]:
         raise MagexpError(f"{name}: the readings lie in one plane (thickness {np.sqrt(max(ev[0], 0) / ev[-1]):.2g} of "
-                          "their width: turns about one axis only), which cannot determine the offset along its "
+                          f"their width, under the limit {PLANE_RATIO:g}: turns about one axis only), which cannot "
+                          "determine the offset along its "
                           "normal nor the scale across it: also turn the sensor about a second axis")
 
 
@@ -67,10 +69,10 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
                           "estimator=ellipsoid (the closed-form fit) or model=full")
     if one:
         raise MagexpError(f"{name}: every calibrated direction lies within {cover['direction_max_angle_deg']:.1f} deg "
-                          f"of one (a single attitude): {RECORD}")
+                          f"of one, under the limit {ONE_ATTITUDE_DEG:g} deg (a single attitude): {RECORD}")
     if cells < MIN_CELLS:
-        raise MagexpError(f"{name}: the readings point into only {cells} of {CELLS} sphere cells (too few distinct "
-                          f"directions): {RECORD}")
+        raise MagexpError(f"{name}: the readings point into only {cells} of {CELLS} sphere cells, under the limit "
+                          f"{MIN_CELLS} (too few distinct directions): {RECORD}")
 
 
 #: an estimator's spread may exceed the closed-form ellipsoid fit's by this factor (:func:`check_optimum`)
