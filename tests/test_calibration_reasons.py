@@ -92,6 +92,9 @@ def test_a_collapsed_fit_is_blamed_on_the_fit():
     with pytest.raises(MagexpError, match="single attitude"):
         check_fit("r", "ipso", True, "", {"coverage_cells": 0.03, "direction_max_angle_deg": 12.0},
                   {"coverage_cells": 0.03, "direction_max_angle_deg": 12.0})
+    partial = {"coverage_cells": 11 / 32, "direction_max_angle_deg": 80.0}  # x-io: z stays negative
+    with pytest.raises(MagexpError, match=r"into 11 \(34 % of the sphere, under 75 %\).*model=sphere"):
+        check_fit("r", "lm", True, "", {"coverage_cells": 6 / 32, "direction_max_angle_deg": 38.8}, partial)
 
 
 def test_clipped_gyroscope_axes():

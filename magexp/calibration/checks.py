@@ -49,8 +49,8 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
     """Fail in one line if the estimator failed or the calibrated directions show one attitude
     or too few distinct directions. ``raw_cover``: the coverage of the raw readings about the
     centre of their fitted sphere (what a failed fit's message quotes). Where the raw readings cover
-    more than one attitude (or enough cells) and only the fitted centre makes them look like one, the
-    fit collapsed, and the line says so instead of blaming the recording."""
+    at least :data:`PARTIAL` of the sphere about that centre and only the fit's centre makes them look like one
+    attitude or too few directions, the fit collapsed, and the line says so instead of blaming the recording."""
     if not success:
         why = message.splitlines()[0] if message else "no message"
         if raw_cover["coverage_cells"] < PARTIAL:
@@ -61,18 +61,20 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
                           "try another estimator (ellipsoid, lm), or record more orientations")
     cells, raw_cells = round(cover["coverage_cells"] * CELLS), round(raw_cover["coverage_cells"] * CELLS)
     one = cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG
-    if (one and raw_cover["direction_max_angle_deg"] >= ONE_ATTITUDE_DEG) or (cells < MIN_CELLS <= raw_cells):
-        raise MagexpError(f"{name}: estimator={estimator!r} did not converge, nothing written: about its centre the "
-                          f"readings point into {cells} of {CELLS} sphere cells (within "
-                          f"{cover['direction_max_angle_deg']:.1f} deg of one direction), about the centre of the "
-                          f"sphere fitted to them into {raw_cells}: the fit collapsed, not the recording; use "
-                          "estimator=ellipsoid (the closed-form fit) or model=full")
-    if one:
+    if not (one or cells < MIN_CELLS):
+        return
+    where = (f"about its centre the readings point into {cells} of {CELLS} sphere cells (within "
+             f"{cover['direction_max_angle_deg']:.1f} deg of one direction; limits {MIN_CELLS} cells, "
+             f"{ONE_ATTITUDE_DEG:g} deg), about the centre of the sphere fitted to them into {raw_cells}")
+    if raw_cover["coverage_cells"] >= PARTIAL:  # the readings cover the sphere: the fit collapsed
+        raise MagexpError(f"{name}: estimator={estimator!r} did not converge, nothing written: {where}: the fit "
+                          "collapsed, not the recording; use estimator=ellipsoid (the closed-form fit) or model=full")
+    if one and raw_cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG:
         raise MagexpError(f"{name}: every calibrated direction lies within {cover['direction_max_angle_deg']:.1f} deg "
                           f"of one, under the limit {ONE_ATTITUDE_DEG:g} deg (a single attitude): {RECORD}")
-    if cells < MIN_CELLS:
-        raise MagexpError(f"{name}: the readings point into only {cells} of {CELLS} sphere cells, under the limit "
-                          f"{MIN_CELLS} (too few distinct directions): {RECORD}")
+    raise MagexpError(f"{name}: estimator={estimator!r}: too few distinct directions, nothing written: {where} "
+                      f"({100 * raw_cover['coverage_cells']:.0f} % of the sphere, under {100 * PARTIAL:g} %): record the "
+                      "missing orientations, or fit model=sphere (offset and one scale)")
 
 
 #: an estimator's spread may exceed the closed-form ellipsoid fit's by this factor (:func:`check_optimum`)
