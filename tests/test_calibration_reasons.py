@@ -79,6 +79,15 @@ def test_an_unconverged_swarm_is_named_with_the_closed_form_fit(tmp_path, capsys
 
 
 @_present(SPHERE)
+def test_an_unconverged_swarm_under_auto_is_named_by_its_held_out_spread(tmp_path, capsys):
+    """model=auto (the default): the swarm's full model failed on the folds (26 % held out); auto would otherwise
+    have fallen back to the diagonal model (2.83 %) without a word."""
+    line = _refused(tmp_path, capsys, f"data.path={SPHERE}", "estimator=ipso", "estimator.n_iterations=3")
+    assert "estimator='ipso' did not converge" in line and "its held-out spread 26 %" in line
+    assert "closed-form ellipsoid fit's 0.707 % (limit 1.1 times)" in line
+
+
+@_present(SPHERE)
 def test_a_converged_swarm_reaches_the_closed_form_optimum():
     swarm = magexp.calibrate(SPHERE, estimator="ipso", model="full", folds=0)
     closed = magexp.calibrate(SPHERE, model="full", folds=0)

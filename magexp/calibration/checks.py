@@ -81,17 +81,18 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
 OPTIMUM_FACTOR = 1.1
 
 
-def check_optimum(name: str, estimator: str, spread_after: float, closed_form: float | None) -> None:
-    """Fail in one line if an iterative estimator stopped short of the optimum: its in-sample spread
-    over :data:`OPTIMUM_FACTOR` times that of the closed-form ellipsoid fit of the same readings
-    (``closed_form``; None when that fit is not an ellipsoid, and nothing is checked). The line names
-    the closed-form fit that reached it, not the recording."""
-    if closed_form is None or not np.isfinite(closed_form) or spread_after <= OPTIMUM_FACTOR * closed_form:
+def check_optimum(name: str, estimator: str, value: float, closed_form: float | None, what: str = "spread") -> None:
+    """Fail in one line if an iterative estimator stopped short of the optimum: its ``what`` (the in-sample
+    spread, or the held-out spread of ``model=full``) over :data:`OPTIMUM_FACTOR` times that of the closed-form
+    ellipsoid fit of the same readings (``closed_form``; None or NaN when that fit is not an ellipsoid, and
+    nothing is checked). The line names the closed-form fit that reached it, not the recording."""
+    if closed_form is None or not np.isfinite(closed_form) or value <= OPTIMUM_FACTOR * closed_form:
         return
-    raise MagexpError(f"{name}: estimator={estimator!r} did not converge, nothing written: its spread "
-                      f"{100 * spread_after:.3g} % is {spread_after / closed_form:.3g} times the closed-form ellipsoid "
-                      f"fit's {100 * closed_form:.3g} % (limit {OPTIMUM_FACTOR:g}): use estimator=ellipsoid, or give it "
-                      "more iterations (estimator.n_iterations=...)")
+    mine = (f"its {what} {100 * value:.3g} % is {value / closed_form:.3g} times" if np.isfinite(value)
+            else f"its fit failed for a region of directions held out ({what} NaN), against")
+    raise MagexpError(f"{name}: estimator={estimator!r} did not converge, nothing written: {mine} the closed-form "
+                      f"ellipsoid fit's {100 * closed_form:.3g} % (limit {OPTIMUM_FACTOR:g} times): use "
+                      "estimator=ellipsoid, or give it more iterations (estimator.n_iterations=...)")
 
 
 # -- the acceptance gate ---------------------------------------------------------------------------

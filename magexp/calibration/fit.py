@@ -389,6 +389,31 @@ def check_converged(rec: Recording, estimator, objective: str, model: str, resul
                   closed_form_spread(rec, reference, dataset))
 
 
+def measured_heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng, model: str,
+                     held: dict, *, checks: bool) -> dict:
+    """The held-out record of ``model`` (:func:`heldout`; ``held``: those ``model=auto`` measured already), after,
+    with ``checks``, the held-out spread of ``model=full`` has been checked against the closed-form optimum
+    (:func:`check_heldout_converged`)."""
+    record = held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model)
+    if checks:
+        check_heldout_converged(rec, estimator, objective, held.get("full") or {model: record}.get("full", {}),
+                                reference, folds, rng)
+    return record
+
+
+def check_heldout_converged(rec: Recording, estimator, objective: str, full: dict, reference: Reference,
+                            folds: int, rng) -> None:
+    """An iterative estimator's held-out spread of ``model=full`` (``full``: :func:`heldout`'s record of that
+    model, the candidate's under ``model=auto``; empty for another model) must be within
+    :data:`~magexp.calibration.checks.OPTIMUM_FACTOR` of the closed-form ellipsoid fit's, measured on the same
+    regions (:func:`magexp.calibration.checks.check_optimum`): a swarm that fails on the folds is named, not the data."""
+    value = full.get("heldout_spread")
+    if value is None or objective != "scalar" or not getattr(estimator, "iterative", True):
+        return
+    closed = heldout(rec, estimator_named("ellipsoid"), "scalar", reference, folds, rng, "full").get("heldout_spread")
+    check_optimum(rec.name, estimator.name, value, closed, what="held-out spread")
+
+
 def closed_form_spread(rec: Recording, reference: Reference, dataset: Dataset) -> float | None:
     """The spread of the closed-form ellipsoid fit (``estimator=ellipsoid``, ``model=full``) of ``rec``, or
     None where it is not an ellipsoid: the optimum an iterative estimator must reach
@@ -567,7 +592,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     metrics = {**quality(rec.readings, calibrated, reference.total), **cover, **regions(rec.readings)[1]}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
-    metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
+    metrics.update(measured_heldout(rec, estimator, objective, reference, folds, rng, model, held, checks=checks))
     report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]),
               **gyro_extras(model, problem, result), **onboard_of(rec, metrics.get("heldout_spread"))}
     if selection is not None:
