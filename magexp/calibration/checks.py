@@ -81,18 +81,29 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
 OPTIMUM_FACTOR = 1.1
 
 
-def check_optimum(name: str, estimator: str, value: float, closed_form: float | None, what: str = "spread") -> None:
-    """Fail in one line if an iterative estimator stopped short of the optimum: its ``what`` (the in-sample
+#: the option that sets an iterative estimator's budget, by the first of these its config has (:func:`budget_key`)
+BUDGET_KEYS = ("n_iterations", "max_evaluations", "max_nfev", "max_iter")
+
+
+def budget_key(estimator) -> str | None:
+    """The option of ``estimator`` that gives it more iterations (:data:`BUDGET_KEYS`), or None."""
+    return next((k for k in BUDGET_KEYS if hasattr(estimator, k)), None)
+
+
+def check_optimum(name: str, estimator, value: float, closed_form: float | None, what: str = "spread") -> None:
+    """Fail in one line if an iterative ``estimator`` stopped short of the optimum: its ``what`` (the in-sample
     spread, or the held-out spread of ``model=full``) over :data:`OPTIMUM_FACTOR` times that of the closed-form
     ellipsoid fit of the same readings (``closed_form``; None or NaN when that fit is not an ellipsoid, and
-    nothing is checked). The line names the closed-form fit that reached it, not the recording."""
+    nothing is checked). The line names the closed-form fit that reached it, not the recording, and the
+    estimator's budget option (:func:`budget_key`)."""
     if closed_form is None or not np.isfinite(closed_form) or value <= OPTIMUM_FACTOR * closed_form:
         return
     mine = (f"its {what} {100 * value:.3g} % is {value / closed_form:.3g} times" if np.isfinite(value)
             else f"its fit failed for a region of directions held out ({what} NaN), against")
-    raise MagexpError(f"{name}: estimator={estimator!r} did not converge, nothing written: {mine} the closed-form "
-                      f"ellipsoid fit's {100 * closed_form:.3g} % (limit {OPTIMUM_FACTOR:g} times): use "
-                      "estimator=ellipsoid, or give it more iterations (estimator.n_iterations=...)")
+    key = budget_key(estimator)
+    raise MagexpError(f"{name}: estimator={estimator.name!r} did not converge, nothing written: {mine} the closed-form "
+                      f"ellipsoid fit's {100 * closed_form:.3g} % (limit {OPTIMUM_FACTOR:g} times): use estimator=ellipsoid"
+                      + (f", or give it a larger budget (estimator.{key}=..., now {getattr(estimator, key)})" if key else ""))
 
 
 # -- the acceptance gate ---------------------------------------------------------------------------

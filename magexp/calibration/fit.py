@@ -385,7 +385,7 @@ def check_converged(rec: Recording, estimator, objective: str, model: str, resul
     (:func:`magexp.calibration.checks.check_optimum`); other fits are not checked."""
     if not (result.success and model == "full" and objective == "scalar" and getattr(estimator, "iterative", True)):
         return
-    check_optimum(rec.name, estimator.name, spread(np.linalg.norm(calibrated, axis=1)),
+    check_optimum(rec.name, estimator, spread(np.linalg.norm(calibrated, axis=1)),
                   closed_form_spread(rec, reference, dataset))
 
 
@@ -411,7 +411,7 @@ def check_heldout_converged(rec: Recording, estimator, objective: str, full: dic
     if value is None or objective != "scalar" or not getattr(estimator, "iterative", True):
         return
     closed = heldout(rec, estimator_named("ellipsoid"), "scalar", reference, folds, rng, "full").get("heldout_spread")
-    check_optimum(rec.name, estimator.name, value, closed, what="held-out spread")
+    check_optimum(rec.name, estimator, value, closed, what="held-out spread")
 
 
 def closed_form_spread(rec: Recording, reference: Reference, dataset: Dataset) -> float | None:
