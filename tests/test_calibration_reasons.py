@@ -117,7 +117,7 @@ def test_clipped_gyroscope_axes():
 def test_gyro_model_on_a_saturated_gyroscope_is_refused_for_it(tmp_path, capsys):
     """Was: "every calibrated direction lies within 0.0 deg of one (a single attitude)"."""
     line = _refused(tmp_path, capsys, f"data.path={SPHERE}", "model=gyro")
-    assert "gyroscope saturates (gx at ±250.1 deg/s on 9 readings)" in line and "model=full" in line
+    assert "gyroscope saturates (gx at ±250.1 deg/s on 22 readings)" in line and "model=full" in line
 
 
 # -- model=auto reports every candidate, and drops one that cannot succeed before fitting it (item 7) ----------

@@ -81,6 +81,9 @@ def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, n
 #: (32767 / 131 LSB) on 22 readings, every other shared recording's gyroscope reaches its extreme once
 CLIP_COUNT = 3
 CLIP_RATE = 2.0
+#: readings within this fraction of the largest ``|rate|`` are at it (a 16-bit range is asymmetric by one count:
+#: the MPU-6050's +250.137 and -250.130 deg/s)
+CLIP_TOLERANCE = 1e-3
 
 
 def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
@@ -89,7 +92,7 @@ def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
     for k, axis in enumerate("xyz"):
         size = np.abs(rates[:, k])
         top = float(size.max(initial=0.0))
-        count = int(np.count_nonzero(size >= top * (1 - 1e-9)))
+        count = int(np.count_nonzero(size >= top * (1 - CLIP_TOLERANCE)))
         if top >= CLIP_RATE and count >= CLIP_COUNT:
             out.append((axis, float(np.degrees(top)), count))
     return out
