@@ -6,6 +6,9 @@ STAMP  := $(VENV)/.installed
 # the peer MAGYC (magexp/perf/peers): an environment of its own, from requirements-peers.lock
 PEERS  ?= .peers/venv
 PEERS_STAMP := $(PEERS)/.installed
+# the calibration tools pilots use (magcal, circuitpython-mag-cal): their own environment, requirements-peers-tools.lock
+TOOLS_VENV ?= .peers/tools-venv
+TOOLS_STAMP := $(TOOLS_VENV)/.installed
 JOBS   ?= 0
 # EXECUTOR=dask runs on a Dask cluster: a local one, or SCHEDULER=tcp://host:8786 | slurm | pbs | sge
 EXECUTOR ?= local
@@ -20,7 +23,7 @@ PYTEST := $(PY) -m pytest $(if $(filter-out 0,$(TEST_JOBS)),-n $(TEST_JOBS) --di
 unexport PYTHONDONTWRITEBYTECODE
 
 .DEFAULT_GOAL := help
-.PHONY: help venv lock bench reproduce verify redraw report test test-full docs clean peers peers-lock peers-bench
+.PHONY: help venv lock bench reproduce verify redraw report test test-full docs clean peers peers-lock peers-bench peers-tools peers-tools-bench
 
 help: ## list the targets
 	@grep -E '^[a-zA-Z0-9_%-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "}; {printf "  %-22s %s\n", $$1, $$2}'
@@ -83,6 +86,17 @@ peers: $(PEERS_STAMP) ## build the peer MAGYC's own environment .peers/venv from
 
 peers-bench: $(STAMP) $(PEERS_STAMP) ## magexp beside MAGYC on the same data; writes results/peers/ (minutes)
 	nice $(PY) -m magexp.perf.peers.bench --out results/peers
+
+$(TOOLS_STAMP): requirements-peers-tools.lock
+	rm -rf $(TOOLS_VENV) && $(PYTHON) -m venv $(TOOLS_VENV)
+	$(TOOLS_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(TOOLS_VENV)/bin/python -m pip install --quiet --no-deps -r requirements-peers-tools.lock
+	MPLBACKEND=Agg $(TOOLS_VENV)/bin/python -c "import magcal.core, mag_cal"
+	@touch $(TOOLS_STAMP)
+
+peers-tools: $(TOOLS_STAMP) ## build the environment of magcal and circuitpython-mag-cal, .peers/tools-venv
+peers-tools-bench: $(STAMP) $(TOOLS_STAMP) ## magexp beside magcal and circuitpython-mag-cal on every shared recording: results/peers/tools.md (1 min)
+	nice $(PY) -m magexp.perf.peers.tools --out results/peers
 
 peers-lock: ## refresh requirements-peers.lock from the newest magyc release (then commit it)
 	rm -rf .lockenv && $(PYTHON) -m venv .lockenv

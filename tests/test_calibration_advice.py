@@ -35,11 +35,11 @@ def rotated_vector_recording(path, degrees: float = 5.0, n: int = 200, seed: int
 
 
 def stretched_recording(path):
-    """A full sphere stretched 2.6 times along one axis: W's anisotropy fails the gate (2.0)."""
+    """A full sphere stretched 3.5 times along one axis: W's anisotropy fails the gate (3.0)."""
     rng = np.random.default_rng(8)
     d = rng.standard_normal((300, 3))
-    d = 50 * d / np.linalg.norm(d, axis=1, keepdims=True)
-    return write_recording(path, d * [2.6, 1.0, 1.0] + [5, 5, 5], meta=["# unit: uT"])
+    d = 30 * d / np.linalg.norm(d, axis=1, keepdims=True)
+    return write_recording(path, d * [3.5, 1.0, 1.0] + [5, 5, 5], meta=["# unit: uT"])
 
 
 CASES = {  # name: (recording maker, arguments, the key the refusal must advise)

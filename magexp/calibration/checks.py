@@ -35,18 +35,22 @@ def check_readings(readings: np.ndarray, name: str) -> None:
     moved = float(np.sqrt((centred**2).sum(axis=1).mean()) / max(np.linalg.norm(readings, axis=1).mean(), 1e-300))
     if moved < STILL:
         raise MagexpError(f"{name}: the readings barely move (RMS distance from their centroid {100 * moved:.2g} % of "
-                          f"their magnitude): one attitude cannot determine a calibration: {RECORD}")
+                          f"their magnitude, under the limit {100 * STILL:g} %): one attitude cannot determine a "
+                          f"calibration: {RECORD}")
     ev = np.linalg.eigvalsh(centred.T @ centred / len(readings))
     if ev[0] <= (PLANE_RATIO**2) * ev[-1]:
         raise MagexpError(f"{name}: the readings lie in one plane (thickness {np.sqrt(max(ev[0], 0) / ev[-1]):.2g} of "
-                          "their width: turns about one axis only), which cannot determine the offset along its "
+                          f"their width, under the limit {PLANE_RATIO:g}: turns about one axis only), which cannot "
+                          "determine the offset along its "
                           "normal nor the scale across it: also turn the sensor about a second axis")
 
 
 def check_fit(name: str, estimator: str, success: bool, message: str, cover: dict, raw_cover: dict) -> None:
     """Fail in one line if the estimator failed or the calibrated directions show one attitude
     or too few distinct directions. ``raw_cover``: the coverage of the raw readings about the
-    centre of their fitted sphere (what a failed fit's message quotes)."""
+    centre of their fitted sphere (what a failed fit's message quotes). Where the raw readings cover
+    at least :data:`PARTIAL` of the sphere about that centre and only the fit's centre makes them look like one
+    attitude or too few directions, the fit collapsed, and the line says so instead of blaming the recording."""
     if not success:
         why = message.splitlines()[0] if message else "no message"
         if raw_cover["coverage_cells"] < PARTIAL:
@@ -55,20 +59,58 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
                               "missing orientations, or fit model=sphere (offset and one scale)")
         raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({why}), nothing written: "
                           "try another estimator (ellipsoid, lm), or record more orientations")
-    if cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG:
+    cells, raw_cells = round(cover["coverage_cells"] * CELLS), round(raw_cover["coverage_cells"] * CELLS)
+    one = cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG
+    if not (one or cells < MIN_CELLS):
+        return
+    where = (f"about its centre the readings point into {cells} of {CELLS} sphere cells (within "
+             f"{cover['direction_max_angle_deg']:.1f} deg of one direction; limits {MIN_CELLS} cells, "
+             f"{ONE_ATTITUDE_DEG:g} deg), about the centre of the sphere fitted to them into {raw_cells}")
+    if raw_cover["coverage_cells"] >= PARTIAL:  # the readings cover the sphere: the fit collapsed
+        raise MagexpError(f"{name}: estimator={estimator!r} did not converge, nothing written: {where}: the fit "
+                          "collapsed, not the recording; use estimator=ellipsoid (the closed-form fit) or model=full")
+    if one and raw_cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG:
         raise MagexpError(f"{name}: every calibrated direction lies within {cover['direction_max_angle_deg']:.1f} deg "
-                          f"of one (a single attitude): {RECORD}")
-    cells = round(cover["coverage_cells"] * CELLS)
-    if cells < MIN_CELLS:
-        raise MagexpError(f"{name}: the readings point into only {cells} of {CELLS} sphere cells (too few distinct "
-                          f"directions): {RECORD}")
+                          f"of one, under the limit {ONE_ATTITUDE_DEG:g} deg (a single attitude): {RECORD}")
+    raise MagexpError(f"{name}: estimator={estimator!r}: too few distinct directions, nothing written: {where} "
+                      f"({100 * raw_cover['coverage_cells']:.0f} % of the sphere, under {100 * PARTIAL:g} %): record the "
+                      "missing orientations, or fit model=sphere (offset and one scale)")
+
+
+#: an estimator's spread may exceed the closed-form ellipsoid fit's by this factor (:func:`check_optimum`)
+OPTIMUM_FACTOR = 1.1
+
+
+#: the option that sets an iterative estimator's budget, by the first of these its config has (:func:`budget_key`)
+BUDGET_KEYS = ("n_iterations", "max_evaluations", "max_nfev", "max_iter")
+
+
+def budget_key(estimator) -> str | None:
+    """The option of ``estimator`` that gives it more iterations (:data:`BUDGET_KEYS`), or None."""
+    return next((k for k in BUDGET_KEYS if hasattr(estimator, k)), None)
+
+
+def check_optimum(name: str, estimator, value: float, closed_form: float | None, what: str = "spread") -> None:
+    """Fail in one line if an iterative ``estimator`` stopped short of the optimum: its ``what`` (the in-sample
+    spread, or the held-out spread of ``model=full``) over :data:`OPTIMUM_FACTOR` times that of the closed-form
+    ellipsoid fit of the same readings (``closed_form``; None or NaN when that fit is not an ellipsoid, and
+    nothing is checked). The line names the closed-form fit that reached it, not the recording, and the
+    estimator's budget option (:func:`budget_key`)."""
+    if closed_form is None or not np.isfinite(closed_form) or value <= OPTIMUM_FACTOR * closed_form:
+        return
+    mine = (f"its {what} {100 * value:.3g} % is {value / closed_form:.3g} times" if np.isfinite(value)
+            else f"its fit failed for a region of directions held out ({what} NaN), against")
+    key = budget_key(estimator)
+    raise MagexpError(f"{name}: estimator={estimator.name!r} did not converge, nothing written: {mine} the closed-form "
+                      f"ellipsoid fit's {100 * closed_form:.3g} % (limit {OPTIMUM_FACTOR:g} times): use estimator=ellipsoid"
+                      + (f", or give it a larger budget (estimator.{key}=..., now {getattr(estimator, key)})" if key else ""))
 
 
 # -- the acceptance gate ---------------------------------------------------------------------------
 #: The gate's default thresholds (``gate.*`` in ``conf/calibrate.yaml``; :func:`gate`).
 GATE = {
     "heldout_vs_raw": 1.0,   # the held-out spread must be below this times the raw spread
-    "max_anisotropy": 2.0,   # largest / smallest singular value of W
+    "max_anisotropy": 3.0,   # largest / smallest singular value of W (real sensors up to 2.25: docs/calibrate.md)
     "scale_range": (0.2, 5.0),  # each singular value of W / (reference / raw radius): ArduPilot's diagonal range
     "radius_mG": (150.0, 950.0),  # the raw readings' sphere radius (ArduPilot's accepted field radius)
     "radius_vs_reference": (0.5, 2.0),  # the raw radius / the reference total, when a reference is given
@@ -80,11 +122,13 @@ GATE = {
 ADVICE = {
     "heldout": "the calibration does not hold on readings it was not fitted to: record more orientations "
                "(turn about every axis)",
-    "anisotropy": "W stretches one direction far more than another: the readings do not cover the directions "
-                  "it stretches; record turns about every axis",
+    "anisotropy": "no magnetometer measured stretches one axis that much (at most 2.25, a QMC5883L: "
+                  "docs/calibrate.md): check data.mag_axes and that no iron is fixed beside the sensor; "
+                  "gate.max_anisotropy=<limit> accepts it",
     "scale": "W's scale is implausible for a magnetometer: record turns about every axis",
     "radius": "the readings' radius is not an Earth field: check data.unit and that the readings are raw",
-    "rms": "the calibrated total still varies too much: record slowly, away from iron and motors",
+    "rms": "the calibrated total still varies more than the readings' noise explains: record slowly, away from "
+           "iron and motors",
     "regions": "no held-out check could test the calibration on attitudes there, and it is untested where the data "
                "stop: record turns that point the sensor so",
 }
@@ -137,7 +181,8 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     spread; ``W``'s singular values ``σ`` with ``σ_max / σ_min <= max_anisotropy`` and each
     ``σ / (reference / raw_radius)`` within ``scale_range``; the raw radius within ``radius_mG``
     and, with a given reference, ``raw_radius / reference`` within ``radius_vs_reference``; the RMS of
-    ``|B| - reference`` at most ``max_rms_mG`` (or ``max_rms_fraction`` of the reference for counts); each
+    ``|B| - reference``, less the readings' own noise (``metrics["noise_after"]``), at most ``max_rms_mG`` (or
+    ``max_rms_fraction`` of the reference for counts); each
     of the six regions of directions (``metrics["direction_regions"]``, :func:`magexp.calibration.fit.regions`)
     holding at least ``min_region`` of the readings: a region below it was never held out, so the
     calibration is untested on attitudes there.
@@ -146,8 +191,9 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     failed = []
 
     def fail(check, value, threshold, text):
-        failed.append({"check": check, "value": value, "threshold": threshold,
-                       "line": f"{text}: {ADVICE[check]}"})
+        reason = f"check {check!r} failed: {text}"
+        failed.append({"check": check, "value": value, "threshold": threshold, "reason": reason,
+                       "line": f"{reason}: {ADVICE[check]}"})
 
     held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
     if held is not None and not (held < t["heldout_vs_raw"] * raw):
@@ -155,7 +201,7 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     sigma = np.linalg.svd(w, compute_uv=False)
     if sigma[0] > t["max_anisotropy"] * sigma[-1]:
         fail("anisotropy", float(sigma[0] / sigma[-1]), t["max_anisotropy"],
-             f"W's singular values {sigma[0]:.3g}/{sigma[-1]:.3g} = {sigma[0] / sigma[-1]:.3g} exceed "
+             f"W's singular values {sigma[0]:.3g}/{sigma[-1]:.3g} = {sigma[0] / sigma[-1]:.3g} exceed the limit "
              f"{t['max_anisotropy']:g}")
     scaled = sigma * raw_radius / reference
     low, high = t["scale_range"]
@@ -173,7 +219,8 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
             fail("radius", raw_radius / reference, [low, high],
                  f"radius {raw_radius:.4g} is {raw_radius / reference:.3g} times the reference {reference:.4g} "
                  f"(allowed [{low:g}, {high:g}])")
-    for check in (_rms_check(metrics["rms_after"], reference, to_mg, t), _region_check(metrics, t)):
+    for check in (_rms_check(metrics["rms_after"], reference, to_mg, t, metrics.get("noise_after", 0.0)),
+                  _region_check(metrics, t)):
         if check:
             fail(*check)
     return failed
@@ -199,17 +246,23 @@ def _region_check(metrics: dict, t: dict) -> tuple | None:
             f"{100 * t['min_region']:g} % of them toward {where}, in the sensor's axes, about the fitted centre)")
 
 
-def _rms_check(rms: float, reference: float, to_mg, t: dict) -> tuple | None:
-    """``(check, value, threshold, text)`` when the residual RMS exceeds its threshold (:func:`gate`)."""
-    if to_mg is not None and rms * to_mg > t["max_rms_mG"]:
-        return "rms", rms * to_mg, t["max_rms_mG"], f"residual RMS {rms * to_mg:.3g} mGauss exceeds {t['max_rms_mG']:g}"
-    if to_mg is None and rms > t["max_rms_fraction"] * reference:
-        return ("rms", rms / reference, t["max_rms_fraction"],
-                f"residual RMS {100 * rms / reference:.3g} % of the reference exceeds {100 * t['max_rms_fraction']:g} %")
+def _rms_check(rms: float, reference: float, to_mg, t: dict, noise: float = 0.0) -> tuple | None:
+    """``(check, value, threshold, text)`` when the residual RMS, less the readings' own noise ``noise``
+    (the RMS of the calibrated magnitudes' reading-to-reading noise, :func:`magexp.calibration.fit.noise_of`;
+    ``sqrt(rms² - noise²)``: what a calibration could still remove), exceeds its threshold (:func:`gate`)."""
+    left = float(np.sqrt(max(rms**2 - noise**2, 0.0)))
+    if to_mg is not None and left * to_mg > t["max_rms_mG"]:
+        return "rms", left * to_mg, t["max_rms_mG"], (f"residual RMS {rms * to_mg:.3g} mGauss, {left * to_mg:.3g} without "
+                                                      f"the readings' noise {noise * to_mg:.3g}, exceeds the limit "
+                                                      f"{t['max_rms_mG']:g}")
+    if to_mg is None and left > t["max_rms_fraction"] * reference:
+        return ("rms", left / reference, t["max_rms_fraction"],
+                f"residual RMS {100 * rms / reference:.3g} % of the reference, {100 * left / reference:.3g} % without "
+                f"the readings' noise {100 * noise / reference:.3g} %, exceeds the limit {100 * t['max_rms_fraction']:g} %")
     return None
 
 
 def refuse(name: str, failed: list[dict]) -> None:
     """Raise the gate's one line: every failed check, then how to override."""
     raise MagexpError(f"{name}: calibration refused, nothing written: " + "; ".join(f["line"] for f in failed)
-                      + " (accept=true writes it anyway, with these failures recorded)")
+                      + "; accept=true writes it anyway, with these failures recorded")

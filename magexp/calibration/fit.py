@@ -59,7 +59,8 @@ from omegaconf import OmegaConf
 from magexp.calibration import models as models_
 from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, options_of as export_options_of,
                                       render as render_export)
-from magexp.calibration.checks import check_fit, check_readings, gate, gate_thresholds, refuse
+from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
+from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.write import check_out, read_parameters, save_parameters, summary, table, write
 from magexp.core.dataset import Dataset
 from magexp.problems import kernels
@@ -301,13 +302,30 @@ def check_size(rec: Recording) -> None:
                           f"{MIN_READINGS} (the 12 parameters of W and the offset)")
 
 
+#: readings whose mean step from one to the next is below this fraction of their radius are a time series
+#: (:func:`noise_of`): the noise of neighbours is the sensor's; a shuffled set's steps are about 1.3 radii
+SERIES_STEP = 0.25
+
+
+def noise_of(raw: np.ndarray, calibrated: np.ndarray) -> float:
+    """The readings' own noise in the calibrated magnitude: the RMS of its second differences over
+    ``sqrt(6)`` (white noise of variance ``σ²`` has second differences of variance ``6 σ²``; a
+    calibration error varies slowly with the attitude and cancels there). 0 when the readings are not
+    a time series (their mean step over :data:`SERIES_STEP` of the raw radius), where neighbours are
+    not close in time. The gate's RMS check discounts it (:func:`magexp.calibration.checks.gate`): a
+    noisy sensor (the QMC5883L log: 6.04 % of 6.27 %) is not a bad calibration."""
+    if len(raw) < 3 or np.linalg.norm(np.diff(raw, axis=0), axis=1).mean() > SERIES_STEP * centroid_radius(raw):
+        return 0.0
+    return float(np.sqrt(np.mean(np.diff(np.linalg.norm(calibrated, axis=1), 2) ** 2) / 6))
+
+
 def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> dict:
-    """Magnitude statistics before and after, and the RMS against the reference."""
+    """Magnitude statistics before and after, the RMS against the reference and the readings' noise (:func:`noise_of`)."""
     before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
     return {"mean_before": float(before.mean()), "std_before": float(before.std()), "spread_before": spread(before),
             "rms_before": float(np.sqrt(np.mean((before - reference) ** 2))),
             "mean_after": float(after.mean()), "std_after": float(after.std()), "spread_after": spread(after),
-            "rms_after": float(np.sqrt(np.mean((after - reference) ** 2)))}
+            "rms_after": float(np.sqrt(np.mean((after - reference) ** 2))), "noise_after": noise_of(raw, calibrated)}
 
 
 def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",
@@ -336,6 +354,76 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
         w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
         calibrated = (rec.readings - o) @ w.T
     return w, o, calibrated, problem, result, box
+
+
+def select_model(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
+                 margin: float) -> tuple[str, dict, dict]:
+    """``model=auto`` (:func:`magexp.calibration.models.select`): ``(model, record, held-out of each fitted
+    candidate)``. ``gyro`` is dropped before any fit where it cannot succeed (no gyroscope, or a saturated one:
+    :func:`magexp.calibration.models.gyro_unusable`), and the record says why."""
+    unusable = models_.gyro_unusable(rec.gyro_rates())
+    held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
+            for m in models_.candidates(objective, gyro=not unusable)}
+    model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
+                                      models_.check_margin(margin), gyro=not unusable,
+                                      dropped={"gyro": unusable} if unusable and objective == "scalar" else {})
+    return model, selection, held
+
+
+def check_gyro(rec: Recording, model: str) -> None:
+    """Refuse ``model=gyro`` in one line, before any fit, where it cannot succeed
+    (:func:`magexp.calibration.models.gyro_unusable`: a saturated gyroscope); other models pass."""
+    why = models_.gyro_unusable(rec.gyro_rates()) if model == "gyro" else None
+    if why:
+        raise MagexpError(f"{rec.name}: model='gyro' cannot succeed, nothing fitted: {why}: choose model=full, "
+                          "or record turning more slowly")
+
+
+def check_converged(rec: Recording, estimator, objective: str, model: str, result: FitResult, calibrated: np.ndarray,
+                    reference: Reference, dataset: Dataset) -> None:
+    """An iterative estimator's successful ``model=full`` scalar fit must reach the closed-form optimum
+    (:func:`magexp.calibration.checks.check_optimum`); other fits are not checked."""
+    if not (result.success and model == "full" and objective == "scalar" and getattr(estimator, "iterative", True)):
+        return
+    check_optimum(rec.name, estimator, spread(np.linalg.norm(calibrated, axis=1)),
+                  closed_form_spread(rec, reference, dataset))
+
+
+def measured_heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng, model: str,
+                     held: dict, *, checks: bool) -> dict:
+    """The held-out record of ``model`` (:func:`heldout`; ``held``: those ``model=auto`` measured already), after,
+    with ``checks``, the held-out spread of ``model=full`` has been checked against the closed-form optimum
+    (:func:`check_heldout_converged`)."""
+    record = held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model)
+    if checks:
+        check_heldout_converged(rec, estimator, objective, held.get("full") or {model: record}.get("full", {}),
+                                reference, folds, rng)
+    return record
+
+
+def check_heldout_converged(rec: Recording, estimator, objective: str, full: dict, reference: Reference,
+                            folds: int, rng) -> None:
+    """An iterative estimator's held-out spread of ``model=full`` (``full``: :func:`heldout`'s record of that
+    model, the candidate's under ``model=auto``; empty for another model) must be within
+    :data:`~magexp.calibration.checks.OPTIMUM_FACTOR` of the closed-form ellipsoid fit's, measured on the same
+    regions (:func:`magexp.calibration.checks.check_optimum`): a swarm that fails on the folds is named, not the data."""
+    value = full.get("heldout_spread")
+    if value is None or objective != "scalar" or not getattr(estimator, "iterative", True):
+        return
+    closed = heldout(rec, estimator_named("ellipsoid"), "scalar", reference, folds, rng, "full").get("heldout_spread")
+    check_optimum(rec.name, estimator, value, closed, what="held-out spread")
+
+
+def closed_form_spread(rec: Recording, reference: Reference, dataset: Dataset) -> float | None:
+    """The spread of the closed-form ellipsoid fit (``estimator=ellipsoid``, ``model=full``) of ``rec``, or
+    None where it is not an ellipsoid: the optimum an iterative estimator must reach
+    (:func:`magexp.calibration.checks.check_optimum`). Milliseconds beside any iterative fit."""
+    try:
+        _, _, calibrated, _, result, _ = _fit(rec, estimator_named("ellipsoid"), "scalar", reference, None, "full",
+                                              dataset)
+    except MagexpError:
+        return None
+    return spread(np.linalg.norm(calibrated, axis=1)) if result.success else None
 
 
 def _closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
@@ -436,6 +524,7 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
     return out
 
 
+@says_onboard
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
                         folds: int = 6, rng: np.random.Generator, checks: bool = True,
                         model: str = "full", accept: bool = False, gate_overrides=None,
@@ -485,27 +574,27 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     dataset = recording_dataset(rec, reference, objective)  # the objective's needs first (attitudes, field)
     if checks:
         check_readings(rec.readings, rec.name)
+        check_gyro(rec, model)
     selection, held = None, {}
     if model == "auto" and folds < 2:  # nothing held out to choose by: the richest model, and say so
         model, selection = "full", {"chosen": "full", "why": f"full: folds={folds}, no held-out check to choose by",
                                     "margin": auto_margin, "heldout_spread": {}}
     if model == "auto":
-        held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
-                for m in models_.candidates(objective, gyro=has_gyro)}
-        model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
-                                          models_.check_margin(auto_margin), gyro=has_gyro)
+        model, selection, held = select_model(rec, estimator, objective, reference, folds, rng, auto_margin)
     w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
     cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
     name = (f"{model} fit" if model in models_.CLOSED_FORM
             else GYRO_ESTIMATOR["name"] if model == "gyro" else estimator.name)
     if checks:
+        check_converged(rec, estimator, objective, model, result, calibrated, reference, dataset)
         check_fit(rec.name, name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
     metrics = {**quality(rec.readings, calibrated, reference.total), **cover, **regions(rec.readings)[1]}
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
-    metrics.update(held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model))
-    report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]), **gyro_extras(model, problem, result)}
+    metrics.update(measured_heldout(rec, estimator, objective, reference, folds, rng, model, held, checks=checks))
+    report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]),
+              **gyro_extras(model, problem, result), **onboard_of(rec, metrics.get("heldout_spread"))}
     if selection is not None:
         report["model_selection"] = selection
     report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
@@ -555,7 +644,8 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
                   estimated=reference.estimated or reference.unit is not None, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
                   thresholds=thresholds)
     if failed and checks and not accept:
-        refuse(rec.name, failed)
+        with saying_onboard(rec, metrics.get("heldout_spread")):
+            refuse(rec.name, failed)
     return {"passed": not failed, "failed": failed, "accepted_anyway": bool(failed) and accept,
             "thresholds": {k: list(v) if isinstance(v, tuple) else v for k, v in thresholds.items()}}
 

@@ -75,6 +75,42 @@ def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, n
     return np.eye(3) * radius / fitted, centre
 
 
+#: a gyroscope axis is clipped where its largest ``|rate|``, at least :data:`CLIP_RATE` rad/s (115 deg/s, under
+#: the smallest common full scale of 125 deg/s), recurs on :data:`CLIP_COUNT` readings or more: a rate that
+#: varies does not repeat its extreme exactly; the HMC5883L full sphere's MPU-6050 sits at 250.13 deg/s
+#: (32767 / 131 LSB) on 22 readings, every other shared recording's gyroscope reaches its extreme once
+CLIP_COUNT = 3
+CLIP_RATE = 2.0
+#: readings within this fraction of the largest ``|rate|`` are at it (a 16-bit range is asymmetric by one count:
+#: the MPU-6050's +250.137 and -250.130 deg/s)
+CLIP_TOLERANCE = 1e-3
+
+
+def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
+    """``(axis, limit in deg/s, readings there)`` of each clipped axis of the gyroscope's ``rates`` (rad/s)."""
+    out = []
+    for k, axis in enumerate("xyz"):
+        size = np.abs(rates[:, k])
+        top = float(size.max(initial=0.0))
+        count = int(np.count_nonzero(size >= top * (1 - CLIP_TOLERANCE)))
+        if top >= CLIP_RATE and count >= CLIP_COUNT:
+            out.append((axis, float(np.degrees(top)), count))
+    return out
+
+
+def gyro_unusable(stream) -> str | None:
+    """Why the gyro-aided model cannot succeed on the gyroscope ``stream`` (``(times, rates)``,
+    :meth:`~magexp.core.recordings.Recording.gyro_rates`), or None: a clipped axis (:func:`clipped`)
+    loses the rotation beyond its limit, so the attitude it integrates is wrong from the first clip on."""
+    if stream is None:
+        return "the recording has no gyroscope"
+    clips = clipped(np.asarray(stream[1], float))
+    if not clips:
+        return None
+    where = ", ".join(f"g{axis} at ±{limit:.4g} deg/s on {count} readings" for axis, limit, count in clips)
+    return f"the gyroscope saturates ({where}): the rotation beyond its range is lost"
+
+
 #: the closed-form models: ``readings, radius -> (W, o)`` or None
 CLOSED_FORM = {"sphere": fit_sphere_model, "diagonal": fit_diagonal}
 
@@ -113,7 +149,8 @@ def check_margin(margin) -> float:
     return value
 
 
-def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = False) -> tuple[str, dict]:
+def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = False,
+           dropped: dict | None = None) -> tuple[str, dict]:
     """The model ``auto`` chooses, and the record of the choice.
 
     Parameters
@@ -122,11 +159,14 @@ def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = F
     objective : ``scalar`` (all of :data:`ORDER`) or ``vector`` (``full`` only): :func:`candidates`.
     margin : a richer model must have a held-out spread below ``(1 - margin)`` times the current choice's.
     gyro : the recording has a gyroscope (``gyro`` is a candidate).
+    dropped : ``{model: reason}`` of the models dropped before any fit, because they cannot succeed
+        (:func:`gyro_unusable`); they are not fitted, and the record says why.
 
     Returns
     -------
     (model, record)
-        ``record``: ``chosen``, ``why``, ``margin`` and ``heldout_spread`` of each candidate (None: the fit failed).
+        ``record``: ``chosen``, ``why`` (every candidate: its held-out spread, or why it was dropped),
+        ``margin``, ``heldout_spread`` of each fitted candidate (None: the fit failed) and ``dropped``.
     """
     tried = candidates(objective, gyro=gyro)
     spreads = {}
@@ -147,10 +187,20 @@ def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = F
             why = (f"{name}: held-out spread {100 * value:.3g} % beats {chosen}'s {100 * spreads[chosen]:.3g} % by "
                    f"more than the margin {100 * margin:g} %")
             chosen = name
+    dropped = dict(dropped or {})
     if chosen is None:
         raise MagexpError("model=auto: no model could be fitted with a region of directions held out (" + ", ".join(tried) + " "
                           "all failed): record again while turning the sensor through as many orientations as you can")
-    rejected = [f"{n} {100 * v:.3g} %" for n, v in spreads.items() if v is not None and n != chosen]
-    if rejected:
-        why += f" (held out: {chosen} {100 * spreads[chosen]:.3g} %, " + ", ".join(rejected) + ")"
-    return chosen, {"chosen": chosen, "why": why, "margin": margin, "heldout_spread": spreads}
+    return chosen, {"chosen": chosen, "why": f"{why} ({candidates_text(chosen, spreads, dropped)})", "margin": margin,
+                    "heldout_spread": spreads, "dropped": dropped}
+
+
+def candidates_text(chosen: str, spreads: dict, dropped: dict) -> str:
+    """Every candidate of :func:`select`, the chosen first: its held-out spread, that its fit failed with a
+    region held out, or why it was dropped before any fit."""
+    def one(name):
+        value = spreads[name]
+        return (f"{name} {100 * value:.3g} %" if value is not None
+                else f"{name}: its fit failed with a region of directions held out")
+    held = [one(chosen)] + [one(n) for n in spreads if n != chosen]
+    return "held out: " + ", ".join(held) + "".join(f"; {n} not fitted: {why}" for n, why in dropped.items())

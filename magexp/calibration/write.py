@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
 from magexp.core.recordings import VERSION_LINE
@@ -278,7 +279,14 @@ def _gate_line(record: dict) -> str:
     if record["passed"]:
         return ("passed (held out beats raw, every region of directions tested; W's shape, the radius and the residual "
                 "RMS plausible)")
-    return "FAILED, written because accept=true: " + "; ".join(f["line"].split(":")[0] for f in record["failed"])
+    return "FAILED, written because accept=true: " + "; ".join(f.get("reason") or f["line"].split(":")[0]
+                                                                for f in record["failed"])
+
+
+def _onboard_lines(report: dict) -> dict:
+    """The line of a log's undone onboard calibration (:mod:`magexp.calibration.onboard`; nothing without one)."""
+    record = report.get("onboard_calibration")
+    return {"onboard calibration": onboard_line(record)} if record else {}
 
 
 def _gyro_lines(report: dict, unit: str) -> dict:
@@ -301,10 +309,13 @@ def summary(cal) -> dict:
         "model": (r.get("model_selection") or {}).get("why") or r.get("model", ""),
         "gate": _gate_line(r.get("gate") or {}),
         "reference": cal.reference.describe(),
+        **_onboard_lines(r),
         "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
         "spread after": f"{100 * m['spread_after']:.3f} % (std/mean of |calibrated|, mean {m['mean_after']:.6g} {u})",
         "rms before": f"{m['rms_before']:.6g} {u} (|raw| - reference)",
-        "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)",
+        "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)" + (
+            f"; the readings' own noise {m['noise_after']:.6g} {u} (from neighbouring readings)" if m.get("noise_after")
+            else ""),
         "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} regions of directions, each "
                             "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",

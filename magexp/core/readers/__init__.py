@@ -14,6 +14,7 @@ recording uses) with, on one clock:
   whose matrix is exactly the logged navigation -> body rotation (:func:`angles_from_attitude`);
   the navigation frame is **NED** for every format (a ROS ENU orientation is converted);
 * ``gyro_stream``: the gyroscope's ``(times, rates rad/s)`` at its own times;
+* ``columns`` :data:`LOGGED`: the readings as logged (after the onboard calibration), where it was undone;
 * ``meta``: the position and date of the log (``latitude``, ``longitude`` in degrees,
   ``altitude_km``, ``date`` ISO, from its GPS), the source topics, what was undone, the firmware.
   :func:`magexp.core.field_model.place_of` reads the position back.
@@ -151,14 +152,22 @@ def place(latitude, longitude, altitude_m, when: _dt.datetime | None) -> dict:
     return out
 
 
+#: the columns of a log's readings as logged, after the onboard calibration its reader undid (:func:`log_recording`)
+LOGGED = ("logged_bx", "logged_by", "logged_bz")
+
+
 def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, angles: np.ndarray | None,
-                  gyro: tuple | None, meta: dict, mag_axes=None, gyro_axes=None):
+                  gyro: tuple | None, meta: dict, mag_axes=None, gyro_axes=None, logged: np.ndarray | None = None):
     """The :class:`~magexp.core.recordings.Recording` of a log: readings (with ``mag_axes``) at
-    ``times``, the attitude angles, the gyroscope stream (with ``gyro_axes``), ``meta``."""
+    ``times``, the attitude angles, the gyroscope stream (with ``gyro_axes``), ``meta``; ``logged``: the
+    readings as logged, before the reader undid the onboard calibration (columns :data:`LOGGED`), or None."""
     order = np.argsort(times, kind="stable")
-    rec = Recording(readings=np.asarray(readings, float)[order] @ axis_map(mag_axes, "data.mag_axes").T,
+    axes = axis_map(mag_axes, "data.mag_axes").T
+    columns = {} if logged is None else dict(zip(LOGGED, (np.asarray(logged, float)[order] @ axes).T))
+    rec = Recording(readings=np.asarray(readings, float)[order] @ axes,
                     angles=None if angles is None else np.asarray(angles)[order], field=None, unit=unit,
-                    meta={"nav_frame": "NED", **meta}, times=np.asarray(times, float)[order], path=path)
+                    meta={"nav_frame": "NED", **meta}, times=np.asarray(times, float)[order], path=path,
+                    columns=columns)
     if gyro is not None and len(gyro[0]) >= 2:
         g_order = np.argsort(gyro[0], kind="stable")
         rec.gyro_stream = (np.asarray(gyro[0], float)[g_order],

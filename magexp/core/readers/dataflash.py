@@ -195,11 +195,12 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
     t0 = min(int(rows["TimeUS"].min()) for rows in (mag, att, imu, gps) if rows is not None and "TimeUS" in rows)
     clock = lambda rows: (rows["TimeUS"].astype(np.int64) - t0) / 1e6  # noqa: E731
     meta = {"format": "dataflash", "source": "MAG" if instance == 0 else f"MAG instance {instance}"}
+    logged = np.column_stack([mag[f"Mag{a}"] for a in "XYZ"]).astype(float)
     if undo:
         raw, undone = undo_correction(mag, parameters(reader, float(t_mag.min())), instance)
         meta.update(undone)
     else:
-        raw = np.column_stack([mag[f"Mag{a}"] for a in "XYZ"]).astype(float)
+        raw = logged
         meta["corrected"] = "kept as logged (undo=False)"
     times = clock(mag)
     angles, gyro = None, None
@@ -211,4 +212,4 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
         gyro = clock(imu), np.column_stack([imu[f"Gyr{a}"] for a in "XYZ"]).astype(float)
     meta.update(_gps(gps))
     return log_recording(Path(path), readings=raw, unit="mG", times=times, angles=angles, gyro=gyro, meta=meta,
-                         mag_axes=mag_axes, gyro_axes=gyro_axes)
+                         mag_axes=mag_axes, gyro_axes=gyro_axes, logged=logged if undo else None)

@@ -238,6 +238,7 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
     check_count(len(readings), f"data.path={name!r}")
     meta = {"format": "ulog", "source": topic, "firmware": ".".join(map(str, _version(ulog) or ("< 1.12 (not logged)",))),
             "hardware": str(ulog.msg_info_dict.get("ver_hw", "")), "device_id": str(device)}
+    logged = readings
     if undo:
         readings, undone = undo_calibration(ulog, topic, device, readings, np.asarray(times_us, float), name)
         meta.update(undone)
@@ -253,4 +254,5 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
         meta["attitude"] = "vehicle_attitude (body FRD -> NED)"
     meta.update(_gps(ulog))
     return log_recording(Path(path), readings=readings, unit="G", times=times, angles=angles, gyro=_gyro(ulog, t0),
-                         meta=meta, mag_axes=mag_axes, gyro_axes=gyro_axes)
+                         meta=meta, mag_axes=mag_axes, gyro_axes=gyro_axes,
+                         logged=logged if meta["corrected"].startswith("undone") else None)
