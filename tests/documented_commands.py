@@ -174,8 +174,8 @@ COMMANDS: dict[str, tuple] = {
         (RUN_FULL, "gyro-aided, the whole recording", {"shared": True}),
     ".venv/bin/python -m magexp calibrate data.path=../shared/data/xio_fusion_sensor_data.csv model=sphere accept=true":
         (RUN_FULL, "a recording", {"shared": True}),
-    ".venv/bin/python -m magexp calibrate data.path=../shared/data/qmc5883l_noisy_raw_data.csv accept=true":
-        (RUN_FULL, "a recording", {"shared": True}),
+    ".venv/bin/python -m magexp calibrate data.path=../shared/data/qmc5883l_noisy_raw_data.csv":
+        (RUN_FULL, "a recording the gate accepts", {"shared": True}),
     # the benches and the warm-up
     "python -m magexp.perf.bench --help": (RUN_FULL, "prints the options (two interpreters: one BLAS thread)"),
     "python -m magexp.perf.warmup": (RUN_FULL, "the kernels compiled once (make venv)"),
@@ -185,6 +185,7 @@ COMMANDS: dict[str, tuple] = {
         (RUN_FULL, "redraws the clone's copy of results/peers", {"files": {"results/peers": "a copy of results/peers"}}),
     "python -m magexp.perf.peers.bench --redraw --out results/peers":
         (RUN_FULL, "redraws the clone's copy of results/peers", {"files": {"results/peers": "a copy of results/peers"}}),
+    "make peers-tools-bench": (COMPOSE, "builds the peer tools' own environment (PyPI) first"),
     # a shared run cache on a cluster (docs/guide/sweeps.md)
     "$EDITOR ~/.config/dask/jobqueue.yaml": (SHELL, "dask-jobqueue's own config, in the reader's editor"),
     "mkdir -p /shared/magexp && chgrp mygroup /shared/magexp && chmod 2775 /shared/magexp":
