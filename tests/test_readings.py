@@ -38,7 +38,7 @@ def test_readings_that_split_read_depends_and_name_both_sides(monkeypatch):
         {"label": "reading B", "source": "the paper's words", "parts": ["art.b_ok"]}]}
     row = _headlines(monkeypatch, [head], table, [a_ok, b_ok])["h"]
     assert row["verdict"] == "depends"
-    assert row["reason"].startswith("depends: supported under reading A; contradicted under reading B")
+    assert row["reason"].startswith('depends: supported under "reading A"; contradicted under "reading B"')
     assert (row["readings_total"], row["readings_holding"]) == (2, 1)
     assert "reading B (the paper's words): contradicted" in row["evidence"]
 
@@ -58,7 +58,7 @@ def test_readings_that_agree_keep_the_common_verdict(monkeypatch):
 
 def test_readings_verdict_orders_the_sides():
     verdict, split = report.readings_verdict([("x", "contradicted"), ("y", "supported"), ("z", "contradicted")])
-    assert verdict == "depends" and split == "depends: supported under y; contradicted under x, z"
+    assert verdict == "depends" and split == 'depends: supported under "y"; contradicted under "x", "z"'
     assert report.readings_verdict([("x", "partly"), ("y", "partly")]) == ("partly", "")
 
 

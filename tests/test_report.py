@@ -134,6 +134,7 @@ def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
     runs, ``{seeds:<artifact>}`` another's (the appendix prints that artifact's count), and no caption
     types a count."""
     from magexp.artifacts.plan import paper_specs
+    from magexp.artifacts.report import seed_count
     from magexp.artifacts.spec import papers
 
     specs = [s for p in papers() for s in paper_specs(p) if s.caption]
@@ -143,8 +144,8 @@ def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
     cited = [(s, m) for s in specs for m in re.finditer(r"([^{}]{0,40})\{seeds:(\w+)\}([^{}]{0,20})", " ".join(str(s.caption).split()))]
     assert {m.group(2) for _, m in cited} >= {"ding2024_table_rms", "yuan2018_table3"}
     for spec, m in cited:
-        n = pd.read_csv(RESULTS / spec.paper / f"{m.group(2)}_runs.csv").seed.nunique()
-        own = pd.read_csv(RESULTS / spec.paper / f"{spec.name}_runs.csv").seed.nunique()
+        n = seed_count(pd.read_csv(RESULTS / spec.paper / f"{m.group(2)}_runs.csv"))
+        own = seed_count(pd.read_csv(RESULTS / spec.paper / f"{spec.name}_runs.csv"))
         assert n != own and f"{m.group(1)}{n}{m.group(3)}" in appendix  # the other's count, not its own
 
 

@@ -210,15 +210,16 @@ def headline_verdict(results: list[str | None]) -> str:
 def readings_verdict(verdicts: list[tuple[str, str]]) -> tuple[str, str]:
     """The verdict of a headline judged under several readings of what its paper left unstated, from
     ``(label, verdict)`` per reading: the common verdict where every reading gives the same, else
-    ``depends`` with the split, which names the readings on each side (``"depends: supported under
-    w = 0.4, c1 = c2 = 2; contradicted under constriction PSO"``; '' when they agree)."""
+    ``depends`` with the split, which names the readings on each side, each label quoted (``depends:
+    supported under "w = 0.4", "c1 = c2 = 2"; contradicted under "constriction PSO"``; '' when they agree)."""
     order = {v: i for i, v in enumerate(HEADLINE_VERDICTS)}
     sides: dict[str, list[str]] = {}
     for label, verdict in verdicts:
         sides.setdefault(verdict, []).append(label)
     if len(sides) == 1:
         return verdicts[0][1], ""
-    split = "; ".join(f"{v} under {', '.join(labels)}" for v, labels in sorted(sides.items(), key=lambda kv: order[kv[0]]))
+    split = "; ".join(f"{v} under " + ", ".join(f'"{label}"' for label in labels)
+                      for v, labels in sorted(sides.items(), key=lambda kv: order[kv[0]]))
     return "depends", f"depends: {split}"
 
 
@@ -582,20 +583,29 @@ def _appendix_section(p: Paper) -> str:
 _SEEDS_OF = re.compile(r"\{seeds:(\w+)\}")
 
 
+def seed_count(table: pd.DataFrame) -> str:
+    """The seeds per cell of a runs table: ``"30"``, or ``"30 to 150"`` where a ``grow:`` rule gave
+    some cells more."""
+    per = table.groupby("cell").seed.nunique() if "cell" in table else pd.Series([table.seed.nunique()])
+    lo, hi = int(per.min()), int(per.max())
+    return str(hi) if lo == hi else f"{lo} to {hi}"
+
+
 def _prose(spec, text: str, table: pd.DataFrame | None, runs=None) -> str:
-    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs),
+    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds per cell of its runs,
+    :func:`seed_count`),
     ``{seeds:<artifact>}`` (the seeds of that artifact's runs, ``runs(name)``: a caption pointing to
     another artifact's table) and every ``{stat:metric@selection:format}`` field
     (:func:`magexp.artifacts.claims.interpolate`; a field whose selection has no value fails the build,
     naming the artifact and the field)."""
-    seeds = table.seed.nunique() if table is not None and "seed" in table else spec.seeds
-    text = str(text).strip().replace("{seeds}", str(seeds))
+    seeds = seed_count(table) if table is not None and "seed" in table else str(spec.seeds)
+    text = str(text).strip().replace("{seeds}", seeds)
 
     def seeds_of(m: re.Match) -> str:
         other = runs(m.group(1)) if runs is not None else None
         if other is None or "seed" not in other:
             raise MagexpError(f"{spec.name}: caption field {m.group(0)!r}: no runs of {m.group(1)!r} in this paper")
-        return str(other.seed.nunique())
+        return seed_count(other)
 
     text = _SEEDS_OF.sub(seeds_of, text)
     if table is None:
