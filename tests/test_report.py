@@ -8,7 +8,7 @@ import pytest
 from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS, SHORT, UNDECIDED, shorten
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.artifacts.report import (MAX_CELL, MAX_CHARS, MAX_LINES, compared_counts, compared_rows, counts,
+from magexp.artifacts.report import (HEADLINE_VERDICTS, MAX_CELL, MAX_CHARS, MAX_LINES, compared_counts, compared_rows, counts,
                                      headline_verdict, markdown_table)
 from magexp.artifacts.schema import build
 from magexp.artifacts.spec import Headline
@@ -92,7 +92,7 @@ def test_each_paper_section_opens_with_its_headline_claims():
     assert {"paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason",
             "evidence"} <= set(claims.columns)
     heads = claims[claims.role == "headline"]
-    assert set(heads.verdict) <= {"supported", "partly", "contradicted", "not testable here", "by construction"}
+    assert set(heads.verdict) <= set(HEADLINE_VERDICTS)
     assert set(claims[claims.role != "headline"].verdict) <= {HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE, UNDECIDED}
     assert (claims.reason.str.len() <= MAX_CELL).all()
     # a headline's reason is written whole, decisive evidence first: it fits the first screen uncut
@@ -134,6 +134,7 @@ def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
     runs, ``{seeds:<artifact>}`` another's (the appendix prints that artifact's count), and no caption
     types a count."""
     from magexp.artifacts.plan import paper_specs
+    from magexp.artifacts.report import seed_count
     from magexp.artifacts.spec import papers
 
     specs = [s for p in papers() for s in paper_specs(p) if s.caption]
@@ -143,8 +144,8 @@ def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
     cited = [(s, m) for s in specs for m in re.finditer(r"([^{}]{0,40})\{seeds:(\w+)\}([^{}]{0,20})", " ".join(str(s.caption).split()))]
     assert {m.group(2) for _, m in cited} >= {"ding2024_table_rms", "yuan2018_table3"}
     for spec, m in cited:
-        n = pd.read_csv(RESULTS / spec.paper / f"{m.group(2)}_runs.csv").seed.nunique()
-        own = pd.read_csv(RESULTS / spec.paper / f"{spec.name}_runs.csv").seed.nunique()
+        n = seed_count(pd.read_csv(RESULTS / spec.paper / f"{m.group(2)}_runs.csv"))
+        own = seed_count(pd.read_csv(RESULTS / spec.paper / f"{spec.name}_runs.csv"))
         assert n != own and f"{m.group(1)}{n}{m.group(3)}" in appendix  # the other's count, not its own
 
 

@@ -150,7 +150,8 @@ class Outcome:
     """A claim's outcome (``result``: :data:`HOLDS`, :data:`FAILS`, :data:`CONTRADICTED`,
     :data:`NO_DIFFERENCE` or :data:`UNDECIDED`) with its evidence: ``short`` (the numbers) and
     ``evidence`` (all of them). A comparison also has ``p`` (its claimed direction), ``p_contra``
-    (the converse), ``p_min`` (the smallest its test can give), ``n`` (its smallest sample),
+    (the converse), ``p_min`` (the smallest its test can give), ``n`` (its smallest sample; of a
+    threshold: the fewest runs of a selected cell),
     ``detectable`` (module docstring) and, once :func:`adjust` has seen its family, ``p_adjusted``."""
 
     claim: Claim
@@ -488,17 +489,17 @@ def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome
     chosen = [ci for ci, s in cells.items() if matches(where, s) and ci in present]
     if not chosen:
         return Outcome(claim, False, f"no runs match {_name(claim.where)}")
-    parts, stats, ok = [], [], True
+    parts, stats, ok, n = [], [], True, []
     for ci in chosen:
         v = values(table[table.cell == ci], claim.metric, stat)
         s, _, text = _describe({k: cells[ci][k] for k in cells[ci] if k not in where} or where, v, stat)
         ok &= bool(np.isfinite(s) and OPS[claim.op](s, float(claim.value)))
-        parts.append(text), stats.append(s)
+        parts.append(text), stats.append(s), n.append(len(v))
     evidence = f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts)
     got = (", ".join(_short_value(s) for s in stats) if len(stats) <= 8
            else f"from {_short_value(np.nanmin(stats))} to {_short_value(np.nanmax(stats))}")
     return Outcome(claim, ok, evidence, short=f"required {stat} {claim.op} {claim.value:g}; "
-                   f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {got}")
+                   f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {got}", n=min(n))
 
 
 def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:

@@ -18,6 +18,7 @@ import pandas as pd
 from hydra.utils import get_class
 from omegaconf import DictConfig, OmegaConf
 
+from magexp.artifacts.claims import evaluate, matches
 from magexp.artifacts.spec import artifact_paths, load
 from magexp.core.seeding import run_generators, scenario_stream
 from magexp.errors import MagexpError
@@ -205,24 +206,85 @@ def _per_seed(cfg: DictConfig, n_seeds: int) -> list[dict]:
     return out
 
 
-def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False) -> ArtifactPlan:
-    """Every run of ``spec``: each cell of its grid over its seeds (``seeds`` overrides the spec's)."""
+def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False,
+                  cell_seeds: dict[int, int] | None = None) -> ArtifactPlan:
+    """Every run of ``spec``: each cell of its grid over its seeds (``seeds`` overrides the spec's and
+    leaves out its ``grow:`` rule). ``cell_seeds``: ``{cell: seeds}`` of the cells that ``grow:`` gives
+    more (default: its ``start`` for the cells of its claims, :func:`grow_start`)."""
     n_seeds = int(seeds if seeds is not None else spec.seeds)
     if n_seeds < 1:
         raise MagexpError(f"seeds={n_seeds} is not allowed: it must be an integer >= 1")
     plan = ArtifactPlan(spec=spec, cells=[], overrides=[], configs=[], index=[])
+    composed = []
     for cell in cells(spec):
         cfg = apply_optional(spec, compose_config(overrides_of(spec, cell)))
         if spec.skip_inapplicable and not applicable(cfg):
             continue
-        ci = len(plan.cells)
         plan.cells.append(cell)
         plan.overrides.append(overrides_of(spec, cell, cfg))
+        composed.append(cfg)
+    grown = {} if seeds is not None or tiny else (grow_start(plan) if cell_seeds is None else cell_seeds)
+    for ci, cfg in enumerate(composed):
         if tiny:
             cfg = shrink(cfg)
-        plan.configs.extend(_per_seed(cfg, n_seeds))
-        plan.index.extend((ci, seed) for seed in range(n_seeds))
+        n = max(n_seeds, grown.get(ci, 0))
+        plan.configs.extend(_per_seed(cfg, n))
+        plan.index.extend((ci, seed) for seed in range(n))
     return plan
+
+
+def _settings(overrides: list[str]) -> dict:
+    """A cell's settings as its runs table names them: its overrides, ``estimator`` its name
+    (``estimator.name`` where a case renames it)."""
+    pairs = dict(o.split("=", 1) for o in overrides)
+    if "estimator.name" in pairs:
+        pairs["estimator"] = pairs["estimator.name"]
+    return pairs
+
+
+def grown_cells(plan: ArtifactPlan, claim) -> list[int]:
+    """The cells of ``plan`` that a comparison claim selects (its ``cells``, matched on the cell's
+    overrides; a key that is no setting, a row filter such as ``succeeded``, is left out)."""
+    settings = [_settings(o) for o in plan.overrides]
+    keys = {k for s in settings for k in s}
+    return sorted({ci for where in claim.cells for ci, s in enumerate(settings)
+                   if matches({k: v for k, v in where.items() if k in keys}, s)})
+
+
+def grow_start(plan: ArtifactPlan) -> dict[int, int]:
+    """``{cell: seeds}`` of the first stage of ``grow:``: its ``start`` for every cell of its claims."""
+    rule = plan.spec.grow
+    if rule is None:
+        return {}
+    claims = {c.id: c for c in plan.spec.claims}
+    return {ci: rule.start for cid in rule.claims for ci in grown_cells(plan, claims[cid])}
+
+
+def next_seeds(n: int, outcome, rule) -> int:
+    """The seeds of a comparison's cells at the next stage of ``rule`` (:class:`magexp.artifacts.spec.Grow`):
+    ``n + step`` (at most ``cap``) while its ``outcome`` is not decided at ``rule.alpha`` (neither ``p``
+    nor ``p_contra`` below it) and its ``detectable`` difference is above ``margin`` (or unknown); else
+    ``n`` (the rule stops)."""
+    undecided = not min(outcome.p, outcome.p_contra) < rule.alpha
+    too_coarse = not (np.isfinite(outcome.detectable) and outcome.detectable <= rule.margin)
+    return min(n + rule.step, rule.cap) if undecided and too_coarse and n < rule.cap else n
+
+
+def grow_stage(plan: ArtifactPlan, table: pd.DataFrame, seeds: dict[int, int]) -> dict[int, int] | None:
+    """The next stage of ``grow:`` from the runs ``table`` of the stage ``seeds`` (``{cell: seeds}``):
+    the new ``{cell: seeds}``, or None when no claim needs more (each claim by :func:`next_seeds`)."""
+    rule = plan.spec.grow
+    if rule is None:
+        return None
+    claims = {c.id: c for c in plan.spec.claims}
+    new = dict(seeds)
+    for cid in rule.claims:
+        chosen = grown_cells(plan, claims[cid])
+        n = min(seeds.get(ci, plan.spec.seeds) for ci in chosen)
+        more = next_seeds(n, evaluate(claims[cid], table), rule)
+        for ci in chosen:
+            new[ci] = max(new.get(ci, 0), more)
+    return new if new != seeds else None
 
 
 class _ByRun(Mapping):

@@ -23,7 +23,9 @@ import pandas as pd
 
 from magexp.artifacts.claims import (CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, UNDECIDED, adjust, evaluate,
                                      interpolate, shorten)
+from magexp.artifacts.plots import readings as readings_plot
 from magexp.artifacts.plots.benchmark_table import winners
+from magexp.artifacts.plots.style import save
 from magexp.artifacts.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
 from magexp.core.atomic import atomic_path, write_text
@@ -38,7 +40,7 @@ SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "ju
 #: limits of REPORT.md (the appendix holds the rest; the section "magexp beside MAGYC" links its claims table)
 MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 #: verdicts of a headline claim
-HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here", "by construction")
+HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "depends", "not testable here", "by construction")
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
 #: a column of wall times measured on this machine has this in its name (an artifact's table keeps them in
@@ -48,7 +50,7 @@ MEASURED = "wall_time"
 #: them out unless both sides have their source)
 PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
-                 "p", "p_adjusted", "p_min", "detectable"]
+                 "p", "p_adjusted", "p_min", "detectable", "seeds", "readings_total", "readings_holding"]
 
 
 def _floats(column: pd.Series) -> np.ndarray | None:
@@ -211,27 +213,85 @@ def headline_verdict(results: list[str | None]) -> str:
     return "contradicted" if held == 0 else "partly"
 
 
+def readings_verdict(verdicts: list[tuple[str, str]]) -> tuple[str, str]:
+    """The verdict of a headline judged under several readings of what its paper left unstated, from
+    ``(label, verdict)`` per reading: the common verdict where every reading gives the same, else
+    ``depends`` with the split, which names the readings on each side, each label quoted (``depends:
+    supported under "w = 0.4", "c1 = c2 = 2"; contradicted under "constriction PSO"``; '' when they agree)."""
+    order = {v: i for i, v in enumerate(HEADLINE_VERDICTS)}
+    sides: dict[str, list[str]] = {}
+    for label, verdict in verdicts:
+        sides.setdefault(verdict, []).append(label)
+    if len(sides) == 1:
+        return verdicts[0][1], ""
+    split = "; ".join(f"{v} under " + ", ".join(f'"{label}"' for label in labels)
+                      for v, labels in sorted(sides.items(), key=lambda kv: order[kv[0]]))
+    return "depends", f"depends: {split}"
+
+
+def _reading_rows(h, outcomes: dict) -> list[dict]:
+    """Each reading of headline ``h``: its label, source, parts and verdict (its parts' outcomes,
+    :func:`headline_verdict`); none when ``h`` declares no readings."""
+    rows = []
+    for r in h.readings:
+        parts = list(r.parts or h.parts)
+        results = [outcomes[p].result if p in outcomes else None for p in parts]
+        rows.append({"label": r.label, "source": " ".join(str(r.source).split()), "parts": parts,
+                     "verdict": headline_verdict(results),
+                     "outcomes": "; ".join(f"{p}: {res or 'no runs here'}" for p, res in zip(parts, results))})
+    return rows
+
+
 def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
-    """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure.
-    ``outcomes``: ``{"artifact.id": Outcome}``; a part naming no claim of the paper is an error.
-    The reason is written whole (:func:`_headline_verdict`; ``tests/test_report.py`` holds it to
-    :data:`magexp.artifacts.claims.SHORT` characters); the evidence is the reason followed by every
-    part's outcome and full evidence."""
+    """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure
+    (:func:`_headline_row`). ``outcomes``: ``{"artifact.id": Outcome}``; a part (of the headline or of
+    a reading) naming no claim of the paper is an error."""
     declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
     rows = []
     for h in load_paper(paper).headline:
-        unknown = [p for p in h.parts if p not in declared]
+        named = list(h.parts) + [p for r in h.readings for p in r.parts]
+        unknown = [p for p in named if p not in declared]
         if unknown:
             raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {unknown[0]!r} names no claim of {paper} "
                               "(write <artifact>.<claim id>)")
-        parts = [outcomes.get(p) for p in h.parts]
-        verdict, reason = _headline_verdict(h, parts, runs)
-        figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
-        evidence = " | ".join([reason] + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(h.parts, parts) if o])
-        rows.append({"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline",
-                     "section": h.section, "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
-                     "reason": reason, "evidence": evidence})
+        rows.append(_headline_row(paper, h, outcomes, runs))
     return rows
+
+
+def _over_readings(h, verdict: str, readings: list[dict]) -> tuple[str, str]:
+    """The verdict of headline ``h`` over its ``readings`` (:func:`readings_verdict`; ``verdict``, its
+    own, when it has none) and the split ('' when they agree); a common ``supported`` of a headline
+    that holds by construction reads ``by construction``."""
+    if not readings:
+        return verdict, ""
+    verdict, split = readings_verdict([(r["label"], r["verdict"]) for r in readings])
+    if not split and verdict == "supported" and str(h.construction).strip():
+        verdict = "by construction"
+    return verdict, split
+
+
+def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:
+    """One headline's row. The reason is written whole (:func:`_headline_verdict`;
+    ``tests/test_report.py`` holds it to :data:`magexp.artifacts.claims.SHORT` characters); the
+    evidence is the reason followed by each reading's verdict and every part's outcome and full
+    evidence. With ``readings:`` it is judged under each (:func:`readings_verdict`): a split verdict
+    reads ``depends`` and its reason opens with the split; ``readings_total`` counts its readings (1:
+    the headline's own parts only), ``readings_holding`` those under which it is supported;
+    ``readings`` keeps each reading's verdict (for the figure)."""
+    parts = [outcomes.get(p) for p in h.parts]
+    verdict, reason = _headline_verdict(h, parts, runs)
+    readings = _reading_rows(h, outcomes)
+    verdict, split = _over_readings(h, verdict, readings)
+    full = f"{split}. {reason}" if split else reason
+    figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
+    evidence = " | ".join([full] + [f"reading {r['label']} ({r['source']}): {r['verdict']} ({r['outcomes']})"
+                                    for r in readings]
+                          + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(h.parts, parts) if o])
+    holding = sum(r["verdict"] == "supported" for r in readings) if readings else int(verdict == "supported")
+    return {"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline", "section": h.section,
+            "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
+            "reason": full if len(full) <= SHORT else split or reason, "evidence": evidence,
+            "readings_total": len(readings) or int(bool(h.parts)), "readings_holding": holding, "readings": readings}
 
 
 def _headline_verdict(h, parts: list, runs) -> tuple[str, str]:
@@ -258,7 +318,7 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
              "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
              "text": o.claim.text, "verdict": o.result, "reason": shorten(o.short), "evidence": o.evidence,
              "p": o.p, "p_adjusted": o.p_adjusted, "p_min": o.p_min,
-             "detectable": o.detectable if o.result == NO_DIFFERENCE else np.nan}
+             "detectable": o.detectable if o.result == NO_DIFFERENCE else np.nan, "seeds": o.n or np.nan}
             for name, o in outcomes]
 
 
@@ -287,6 +347,10 @@ class Paper:
         by_id = {f"{name}.{o.claim.id}": o for name, o in self.outcomes}
         self.headlines = headlines(paper, self.specs, by_id, self.runs)
         self.claims = claim_rows(paper, self.specs, self.outcomes)
+        #: the claims that test a headline only under another reading than magexp's (the readings figure
+        #: and claims.csv show them; the report's findings table leaves them out)
+        self.reading_parts = {part for h in self.meta.headline for r in h.readings for part in r.parts} - {
+            part for h in self.meta.headline for part in h.parts}
 
 
 def _headline_table(p: Paper) -> str:
@@ -296,7 +360,20 @@ def _headline_table(p: Paper) -> str:
     frame["claim"] = frame.text
     frame["verdict"] = frame.verdict.map(_bold)
     frame["figure"] = frame.figure.map(lambda f: _link(f, p.root))
-    return markdown_table(frame, ["claim", "section", "verdict", "reason", "figure"])
+    frame["readings"] = [f"{h} of {t} supported" if t else "" for h, t in zip(frame.readings_holding, frame.readings_total)]
+    grid = (f"Each headline is judged under every plausible reading of a setting the paper leaves unstated "
+            f"(`readings:` of its `paper.yaml`; `depends`: the readings split, the reason names each side); the "
+            f"verdict under each reading: {_link(f'{p.paper}/readings', p.root)}.\n\n")
+    return grid + markdown_table(frame, ["claim", "section", "verdict", "readings", "reason", "figure"])
+
+
+def draw_readings(p: Paper) -> None:
+    """``<paper>/readings.png``: the verdict of each headline under each reading
+    (:mod:`magexp.artifacts.plots.readings`); none for a paper without headlines."""
+    if p.headlines:
+        (p.root / p.paper).mkdir(parents=True, exist_ok=True)
+        save(readings_plot.draw(p.headlines, f"{p.meta.title}: each headline under each reading"),
+             p.root / p.paper / "readings.png")
 
 
 def counts(claims: list[dict], peers: list[str] = ()) -> str:
@@ -321,12 +398,26 @@ def _held(results: list[str]) -> str:
     return f"{sum(r == HOLDS for r in results)} of {len(results)} hold" + (f" ({rest})" if rest else "")
 
 
+def _elsewhere(p: Paper) -> str:
+    """What the findings table of the report leaves out: the claims that test a headline only under
+    another reading than magexp's (:attr:`Paper.reading_parts`)."""
+    n = sum(f"{c['artifact']}.{c['id']}" in p.reading_parts for c in p.claims)
+    return (f" The {n} claims that test a headline under another reading of an unstated setting are in the "
+            "readings figure and `claims.csv`.") if n else ""
+
+
+def _listed(p: Paper, c: dict, own_here: bool, appendix: bool) -> bool:
+    """Whether the findings table lists claim row ``c`` (:func:`_findings_table`)."""
+    by_paper = c["by"] == "paper"
+    return (c["role"] == "finding" and (by_paper or own_here) and not (appendix and by_paper)
+            and f"{c['artifact']}.{c['id']}" not in p.reading_parts)
+
+
 def _findings_table(p: Paper, *, appendix: bool = False) -> str:
     """The findings of a section: in the report the paper's own (and magexp's where the section has no
     headline claim: it is magexp's own work), in the appendix magexp's statements of a paper section."""
     own_here = appendix or not p.headlines
-    found = [c for c in p.claims if c["role"] == "finding" and (c["by"] == "paper" or own_here)
-             and not (appendix and c["by"] == "paper")]
+    found = [c for c in p.claims if _listed(p, c, own_here, appendix)]
     if not found or (appendix and not p.headlines):
         return ""
     found.sort(key=lambda c: c["by"] != "paper")
@@ -340,7 +431,9 @@ def _findings_table(p: Paper, *, appendix: bool = False) -> str:
     return (title + "*paper*: the paper's statement, checked; *magexp*: stated by this report, a test fails if one "
             "does not hold. A comparison holds only where its test separates the two sides at alpha 0.05 after "
             "Holm's correction over the section's comparisons; full evidence and p-values: "
-            f"[`claims.csv`](claims.csv).{where}\n\n" + markdown_table(frame, ["by", "claim", "result", "evidence"]))
+            f"[`claims.csv`](claims.csv).{where}"
+            + ("" if appendix else _elsewhere(p))
+            + "\n\n" + markdown_table(frame, ["by", "claim", "result", "evidence"]))
 
 
 #: a cell with more compared numbers than this (a parameter table) is one line of the report
@@ -496,20 +589,29 @@ def _appendix_section(p: Paper) -> str:
 _SEEDS_OF = re.compile(r"\{seeds:(\w+)\}")
 
 
+def seed_count(table: pd.DataFrame) -> str:
+    """The seeds per cell of a runs table: ``"30"``, or ``"30 to 150"`` where a ``grow:`` rule gave
+    some cells more."""
+    per = table.groupby("cell").seed.nunique() if "cell" in table else pd.Series([table.seed.nunique()])
+    lo, hi = int(per.min()), int(per.max())
+    return str(hi) if lo == hi else f"{lo} to {hi}"
+
+
 def _prose(spec, text: str, table: pd.DataFrame | None, runs=None, specs=()) -> str:
-    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds of its runs),
+    """A caption or note with its measured values filled in: ``{seeds}`` (the seeds per cell of its runs,
+    :func:`seed_count`),
     ``{seeds:<artifact>}`` (the seeds of that artifact's runs, ``runs(name)``: a caption pointing to
     another artifact's table; the seeds that artifact's spec declares, among ``specs``, where its runs
     are not in this output folder, as after ``reproduce --only``) and every ``{stat:metric@selection:format}`` field
     (:func:`magexp.artifacts.claims.interpolate`; a field whose selection has no value fails the build,
     naming the artifact and the field)."""
-    seeds = table.seed.nunique() if table is not None and "seed" in table else spec.seeds
-    text = str(text).strip().replace("{seeds}", str(seeds))
+    seeds = seed_count(table) if table is not None and "seed" in table else str(spec.seeds)
+    text = str(text).strip().replace("{seeds}", seeds)
 
     def seeds_of(m: re.Match) -> str:
         other = runs(m.group(1)) if runs is not None else None
         if other is not None and "seed" in other:
-            return str(other.seed.nunique())
+            return seed_count(other)
         declared = [s.seeds for s in specs if s.name == m.group(1)]
         if not declared:
             raise MagexpError(f"{spec.name}: caption field {m.group(0)!r}: {m.group(1)!r} is no artifact of this paper")
@@ -615,6 +717,8 @@ def build(root: Path = RESULTS) -> None:
     with atomic_path(root / "versions.csv") as tmp:
         pd.DataFrame([{"package": k, "version": v} for k, v in record.items()]).to_csv(tmp, index=False)
     parts = [Paper(p, summary, root) for p in papers() if (summary.paper == p).any() or (root / p).is_dir()]
+    for p in parts:
+        draw_readings(p)
     claims = pd.DataFrame([r for p in parts for r in p.headlines + p.claims], columns=CLAIM_COLUMNS)
     write_csv(claims, root / "claims.csv")
     compared = summary[summary.verdict != "n/a"]

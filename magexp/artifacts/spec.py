@@ -23,6 +23,7 @@ An artifact is a paper's figure or table as data::
       - {quantity: F_g, match: {estimator: ekf}, value: 14.86, compared: false, reason: "..."}  # not compared
     tolerance: {rel: 0.15, reason: ...}   # only where the paper gives no run to compare with
     claims: [...]                # magexp.artifacts.claims.Claim: conditions on the results (by, section, role, figure, test)
+    grow: {claims: [a, b], start: 100, step: 50, cap: 200, margin: 0.1}   # the seeds those comparisons need (Grow)
     notes: ...                   # prose; {median:fun@estimator=ipso:.3g} interpolates a measured value
     caption: ...
 
@@ -45,7 +46,7 @@ from typing import Any
 import yaml
 from omegaconf import DictConfig, OmegaConf
 
-from magexp.artifacts.claims import Claim
+from magexp.artifacts.claims import ALPHA, Claim
 from magexp.artifacts.plots import KINDS
 from magexp.artifacts.schema import Bool, Float, Int, allowed, build, typed, unknown
 from magexp.errors import MagexpError
@@ -198,6 +199,36 @@ class Success:
 
 
 @typed
+@dataclass(frozen=True)
+class Grow:
+    """The seeds a verdict needs (``grow:`` of an artifact), fixed before any run: the cells of the
+    comparison ``claims`` (their ``cells``) start with ``start`` seeds (at least the artifact's
+    ``seeds``); while one of those claims is not decided at ``alpha`` on its own p (neither its p nor
+    its converse's below it; a paper's family is Holm-adjusted later, so ``alpha`` may be set below
+    :data:`magexp.artifacts.claims.ALPHA`) and could not have detected a difference of ``margin`` (its
+    ``detectable`` is above it), its cells get ``step`` more seeds, up to ``cap``
+    (:func:`magexp.artifacts.plan.next_seeds`). The same
+    runs give the same stages: the reproduction stays deterministic, and ``claims.csv`` records the
+    seeds each comparison used (``seeds``)."""
+
+    claims: list[str]
+    start: Int
+    step: Int
+    cap: Int
+    margin: Float
+    alpha: Float = ALPHA
+
+    def __post_init__(self):
+        if not 0 < self.alpha < 1:
+            raise MagexpError(f"grow: alpha={self.alpha} is not allowed: it must lie in (0, 1)")
+        if not (1 <= self.start <= self.cap) or self.step < 1:
+            raise MagexpError(f"grow: start={self.start}, step={self.step}, cap={self.cap} is not allowed: "
+                              "1 <= start <= cap and step >= 1")
+        if self.margin < 0:
+            raise MagexpError(f"grow: margin={self.margin} is not allowed: it must be >= 0")
+
+
+@typed
 @dataclass
 class Artifact:
     """A validated artifact spec (see the module docstring). ``plot`` stays an OmegaConf node
@@ -220,6 +251,7 @@ class Artifact:
     success: Success = field(default_factory=Success)
     floor: Float = ROUNDOFF_FLOOR
     claims: list[Claim] = field(default_factory=list)
+    grow: Grow | None = None
     notes: str = ""
     caption: str = ""
     report_table: list[str] = field(default_factory=list)
@@ -310,6 +342,14 @@ def parse(data: dict, path: Path) -> Artifact:
     art.plot = _plot(art.kind, plot, f"{where}.plot")
     _check_fixed_tolerances(art, where)
     _check_unique_ids(art.claims, f"{where}.claims")
+    if art.grow is not None:
+        comparisons = {c.id for c in art.claims if c.kind in ("ordering", "winner")}
+        unknown_ids = [c for c in art.grow.claims if c not in comparisons]
+        if unknown_ids:
+            raise MagexpError(f"{where}.grow.claims: {unknown_ids[0]!r} is not allowed: name comparison claims "
+                              f"of this artifact ({', '.join(sorted(comparisons)) or 'none'})")
+        if art.grow.start < art.seeds:
+            raise MagexpError(f"{where}.grow.start={art.grow.start} is not allowed: at least seeds ({art.seeds})")
     return art
 
 
@@ -352,6 +392,37 @@ class Deviation:
 
 @typed
 @dataclass(frozen=True)
+class Reading:
+    """One plausible reading of a setting the paper leaves unstated (``readings:`` of a headline).
+
+    ``label``: a short name used in the verdict's reason (at most :data:`READING_LABEL` characters);
+    ``source``: where the reading comes from (a standard of the literature, the paper's own words, a
+    value its numbers point to); ``parts``: the artifact claims (``<artifact>.<claim id>``) that test
+    the headline under this reading (none: the headline's own ``parts``, magexp's default reading)."""
+
+    label: str
+    source: str
+    parts: list[str] = field(default_factory=list)
+
+    def __post_init__(self):
+        if len(str(self.label)) > READING_LABEL:
+            raise MagexpError(f"reading {self.label!r}: the label is {len(str(self.label))} characters: at most "
+                              f"{READING_LABEL} are allowed (the source says the rest)")
+        _check_parts(self.parts, f"reading {self.label!r}")
+
+
+#: longest label of a :class:`Reading` (the reason of a split verdict names every reading)
+READING_LABEL = 40
+
+
+def _check_parts(parts: list, where: str) -> None:
+    for part in parts:
+        if not isinstance(part, str) or part.count(".") != 1:
+            raise MagexpError(f"{where}: part {part!r} is not allowed: write <artifact>.<claim id>")
+
+
+@typed
+@dataclass(frozen=True)
 class Headline:
     """A headline claim of the paper (``headline:`` of ``paper.yaml``), in the paper's own words.
 
@@ -361,7 +432,9 @@ class Headline:
     optional template interpolated with the runs of the first part's artifact
     (:func:`magexp.artifacts.claims.interpolate`). ``figure``: ``<paper folder>/<artifact>`` whose figure shows it.
     ``construction``: why its parts hold by construction (then a ``supported`` verdict reads ``by
-    construction`` and is not counted as support)."""
+    construction`` and is not counted as support). ``readings``: the unstated settings its verdict
+    depends on, each plausible reading with its own parts (:class:`Reading`); the headline is judged
+    under each (:func:`magexp.artifacts.report.readings_verdict`)."""
 
     id: str
     text: str
@@ -371,13 +444,16 @@ class Headline:
     reason: str = ""
     untestable: str = ""
     construction: str = ""
+    readings: list[Reading] = field(default_factory=list)
 
     def __post_init__(self):
         if bool(self.parts) == bool(str(self.untestable).strip()):
             raise MagexpError(f"headline {self.id!r}: give either parts (artifact.claim ids) or untestable (why), not both or neither")
-        for part in self.parts:
-            if not isinstance(part, str) or part.count(".") != 1:
-                raise MagexpError(f"headline {self.id!r}: part {part!r} is not allowed: write <artifact>.<claim id>")
+        _check_parts(self.parts, f"headline {self.id!r}")
+        if len(self.readings) == 1:
+            raise MagexpError(f"headline {self.id!r}: one reading is no choice: declare at least two, or none")
+        if sum(not r.parts for r in self.readings) > 1:
+            raise MagexpError(f"headline {self.id!r}: only one reading may leave out parts (the headline's own)")
         if self.figure and str(self.figure).count("/") != 1:
             raise MagexpError(f"headline {self.id!r}: figure={self.figure!r} is not allowed: write <paper folder>/<artifact>")
 

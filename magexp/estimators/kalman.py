@@ -106,7 +106,9 @@ class KalmanFilter(_Tuning):
     agree_k, agree_bp : tolerances of the ``steps_to_ls`` diagnostic: the first step, at the end
         of a full pass over the readings, after which the state at every later pass end stays
         within them of the least-squares solution (NaN if it never does). Within a pass the
-        readings are unequally weighted, so the state fluctuates around that solution.
+        readings are unequally weighted, so the state fluctuates around that solution;
+        ``steps_to_ls_every_step`` is the same at every step from the end of the first pass (the state
+        within a pass too).
 
     ``x(0) = 0``. The result's ``trace["x"]`` is the state at every step as ``theta``
     (``n_steps + 1``, 12), ``history`` the fit RMS at every step.
@@ -133,14 +135,20 @@ class KalmanFilter(_Tuning):
         history = problem.cost(thetas)
         ls = problem.least_squares()
         ends = np.arange(len(c), steps + 1, len(c))  # every full pass weighs each reading equally
-        apart = (np.abs(thetas[ends, :9] - ls[:9]).max(axis=1) > self.agree_k) | (
-            np.abs(thetas[ends, 9:] - ls[9:]).max(axis=1) > self.agree_bp)
-        first = settled_since(apart)
-        settled = float(ends[first]) if 0 <= first < len(ends) else np.nan
+        every = np.arange(len(c), steps + 1)  # every step from the end of the first pass
         return FitResult(x=thetas[-1], fun=problem.cost_direct(thetas[-1]), nit=steps, nfev=steps,
                          history=history, history_nfev=np.arange(steps + 1), trace={"x": thetas},
-                         metrics={"steps_to_ls": settled},
+                         metrics={"steps_to_ls": self._settled(thetas, ls, ends),
+                                  "steps_to_ls_every_step": self._settled(thetas, ls, every)},
                          message=f"{steps} steps over {len(c)} readings")
+
+    def _settled(self, thetas: np.ndarray, ls: np.ndarray, steps: np.ndarray) -> float:
+        """The first of ``steps`` from which the state at every later one of ``steps`` stays within
+        ``agree_k`` (K) and ``agree_bp`` (Bp) of the least-squares solution ``ls``; NaN if never."""
+        apart = (np.abs(thetas[steps, :9] - ls[:9]).max(axis=1) > self.agree_k) | (
+            np.abs(thetas[steps, 9:] - ls[9:]).max(axis=1) > self.agree_bp)
+        first = settled_since(apart)
+        return float(steps[first]) if 0 <= first < len(steps) else np.nan
 
 
 def direct_field(k: np.ndarray, bp: np.ndarray, attitude: np.ndarray, readings: np.ndarray) -> np.ndarray:
