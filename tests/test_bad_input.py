@@ -59,6 +59,8 @@ FILES = {
     "dup_column.csv": "# magexp-recording v1\n# unit: nT\nbx,by,bz,bx\n1,2,3,4\n",
     "bad_field.csv": "# magexp-recording v1\n# unit: nT\n# field: 1,2\nbx,by,bz\n1,2,3\n",
     "neg_reference.csv": "# magexp-recording v1\n# unit: nT\n# reference_total: -5\nbx,by,bz\n1,2,3\n",
+    "evil.pickle": "cio\nopen\np0\n(VPWNED\np1\nVw\np2\ntp3\nRp4\n.",  # unpickled, it creates PWNED here
+    "userplain.py": "class Plain:\n    pass\n\ndef f():\n    pass\n",  # a user module with no plug-in class
 }
 BINARY = bytes(range(256)) * 4  # not UTF-8 text
 ENVIRON = b"SECRET_KEY=swordfish\x00HOME=/root\x00PATH=/usr/bin\x00"  # like /proc/self/environ
@@ -197,6 +199,41 @@ TABLE = [
     row("run", ["--config-name", "nosuch"], ["--config-name", "'nosuch'", "config"]),
     row("run", ["-cn", "nosuch"], ["'nosuch'"]),
     row("run", ["--config-dir", "no_such_dir"], ["no_such_dir"]),
+    # ---- no code from a file or an override (issue 34): refused before anything is imported or called
+    row("run", ["--experimental-rerun", "evil.pickle"], ["--experimental-rerun", "unpickles"]),
+    row("run", ["--cfg", "job", "--experimental-rerun", "evil.pickle"], ["--experimental-rerun"]),
+    row("run", ["--config-dir", "a_folder"], ["--config-dir", "conf/"]),
+    row("run", ["-cp", "a_folder"], ["-cp", "conf/"]),
+    row("run", ["estimator._target_=os.system"], ["estimator._target_='os.system'", "no class"]),
+    row("run", ["estimator=lm", "estimator._target_=numpy.savetxt"], ["'numpy.savetxt'"]),
+    row("run", ["scenario._target_=subprocess.Popen"], ["scenario._target_='subprocess.Popen'"]),
+    row("run", ["estimator._target_=magexp.run.cache.write"], ["'magexp.run.cache.write'", "not a class"]),
+    row("run", ["estimator._target_=magexp.run.sweep.SweepTable"], ["SweepTable", "plug-in"]),
+    row("run", ["estimator._target_=magexp.estimators.lm.EllipsoidFit.fit"], ["EllipsoidFit.fit", "cannot be imported"]),
+    row("run", ["scenario._target_=magexp.core.dataset.Dataset"], ["Dataset", "plug-in"]),
+    row("run", ["estimator._target_=userplain.f"], ["'userplain.f'"]),
+    row("run", ["estimator._target_=setup.X"], ["'setup.X'"]),
+    row("run", ["estimator._target_=os"], ["estimator._target_='os'", "dotted name"]),
+    row("run", ["estimator.velocity._target_=builtins.exec"], ["estimator.velocity._target_='builtins.exec'"]),
+    row("run", ["estimator.velocity={_target_:os.system,command:id}"], ["estimator.velocity._target_='os.system'"]),
+    row("run", ["+hydra.callbacks.x._target_=numpy.savetxt"], ["hydra.callbacks.x._target_", "SweepTable"]),
+    row("run", ["hydra.job.env_set.LD_PRELOAD=x.so"], ["hydra.job.env_set.LD_PRELOAD", "not allowed"]),
+    row("run", ["+hydra.searchpath=[file://a_folder]"], ["+hydra.searchpath", "not allowed"]),
+    row("calibrate", ["data.path=good.csv", "estimator._target_=os.system"],
+        ["estimator._target_='os.system'"]),
+    row("calibrate", ["data.path=good.csv", "estimator=lm", "estimator._target_=shutil.rmtree"],
+        ["'shutil.rmtree'"]),
+    row("sweep", ["-m", "estimator=lm", "+hydra.callbacks.x._target_=numpy.savetxt",
+                  f"+hydra.callbacks.x.fname={R('summary.csv')}", "+hydra.callbacks.x.X=[0]"],
+        ["hydra.callbacks.x", "not allowed"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.launcher._target_=os.getpid"], ["hydra.launcher._target_='os.getpid'",
+                                                                               "MagexpLauncher"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweeper._target_=os.getpid"], ["'os.getpid'", "MagexpSweeper"]),
+    row("sweep", ["-m", "hydra.callbacks.sweep_table._target_=os.getpid"], ["sweep_table._target_='os.getpid'"]),
+    row("sweep", ["-m", "hydra.launcher={_target_:os.getpid}"], ["hydra.launcher._target_='os.getpid'"]),
+    row("sweep", ["-m", "+hydra.job_logging.handlers.x.class=os.system"], ["hydra.job_logging", "not allowed"]),
+    row("sweep", ["-m", "+hydra.sweeper.params.estimator._target_=os.system"], ["_target_"]),
+    row("sweep", ["-m", "seed=0,1", "estimator._target_=os.system"], ["'os.system'"]),
     row("run", ["--cfg", "job", "scenario.nosie=1"], ["'nosie'"]),
     row("run", ["scenario.noise=1,2"], ["needs -m"]),
     row("run", ["hydra.job.chdir=true"], ["hydra.job.chdir"]),
@@ -591,3 +628,24 @@ def test_bad_input_in_a_process(workdir, args):
     proc = subprocess.run([sys.executable, *args], cwd=workdir, capture_output=True, text=True,
                           env={**os.environ, "MAGEXP_CACHE": str(workdir.parent / "cache")})
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and proc.stderr.startswith("error: "), proc.stderr
+
+
+def test_a_users_plugin_class_is_a_target_and_nothing_else_is_imported(tmp_path, monkeypatch):
+    """docs/extending.md's ``_target_: mypackage.MyMethod`` passes the target check; a user module that
+    does not define the named class at its top level is refused without being imported (its import
+    would run its code), as are Python's own modules and functions."""
+    from magexp.run.guard import check_target
+
+    pkg = tmp_path / "mypackage"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("from magexp.estimators.lm import LevenbergMarquardt\n\n\n"
+                                     "class MyMethod(LevenbergMarquardt):\n    pass\n")
+    (tmp_path / "loud.py").write_text("open(__file__ + '.imported', 'w').close()\n\n\ndef X():\n    pass\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    check_target("estimator", "mypackage.MyMethod")
+    for target in ("loud.X", "os.system", "builtins.eval", "mypackage.LevenbergMarquardt.fit"):
+        with pytest.raises(MagexpError):
+            check_target("estimator", target)
+    assert not (tmp_path / "loud.py.imported").exists()
+    with pytest.raises(MagexpError, match="SweepTable"):
+        check_target("hydra.callbacks.x", "mypackage.MyMethod")

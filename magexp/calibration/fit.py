@@ -78,7 +78,8 @@ from magexp.problems import make_problem, problem_class
 from magexp.run.budget import check_calibration, check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options, target_class
 from magexp.run.outputs import print_table
-from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
+from magexp.run.guard import (check_destination, check_folds, check_hydra_keys, check_override_targets,
+                              check_override_values, readings_array)
 from magexp.run.runner import build
 from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box
 
@@ -666,6 +667,8 @@ def calibrate_config(argv: list[str]):
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
                           "(e.g. data.path=mine.csv data.unit=uT estimator=lm)")
+    check_hydra_keys(argv)
+    check_override_targets(argv)  # no code from an override, before the recording is read
     argv = check_override_values(argv)
     for arg in argv:
         if arg.partition("=")[0] in GROUPS:

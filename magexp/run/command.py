@@ -32,8 +32,9 @@ from omegaconf import OmegaConf
 from magexp.errors import MagexpError, guarded
 from magexp.paths import CONF
 from magexp.run.compose import GROUPS, compose_config, options, register_schemas
-from magexp.run.guard import (check_destination, check_flags, check_output_folder, check_override_values,
-                              check_subdir, create_unique, first_missing, removed_on_failure)
+from magexp.run.guard import (check_destination, check_flags, check_hydra_keys, check_output_folder,
+                              check_override_targets, check_override_values, check_subdir, create_unique,
+                              first_missing, removed_on_failure)
 from magexp.run.outputs import execute, print_table
 from magexp.run.preflight import check_jobs, expand_sweep, validate_runs
 from magexp.run.provenance import version_line
@@ -191,8 +192,10 @@ def run_one(user: list[str], hyd: list[str]) -> None:
 def run_command(args: list[str]) -> None:
     """``magexp ARGS``: help, version, the composed config, Hydra's own flags, a sweep, or one run."""
     user, hyd, flags = split_args(args)
-    user = check_override_values(user)
     check_flags(flags)
+    check_hydra_keys(hyd)  # no code from an override: before anything reads them
+    check_override_targets(user + hyd)
+    user = check_override_values(user)
     if flags.get("-h") or flags.get("--help"):
         return print_help()
     if flags.get("--version"):
