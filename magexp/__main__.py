@@ -19,6 +19,7 @@ from __future__ import annotations
 import signal
 import sys
 
+from magexp import paths
 from magexp.errors import guarded
 from magexp.run.threads import one_blas_thread
 
@@ -45,7 +46,16 @@ def main(argv: list[str] | None = None) -> None:
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     name = args[0] if args and args[0] in ("calibrate", "reproduce", "verify") else "run"
     one_blas_thread()  # this process and its workers; before the command imports numpy
-    guarded(command(name), args[1:] if name != "run" else args)
+    guarded(start, name, args[1:] if name != "run" else args)
+
+
+def start(name: str, args: list[str]) -> None:
+    """Subcommand ``name`` on ``args``, once the run cache's folder is allowed (not inside ``results/``)."""
+    from magexp.run.guard import check_cache_folder  # imports numpy: after one_blas_thread()
+
+    check_cache_folder(str(paths.CACHE))
+    check_cache_folder(str(paths.composed_configs()))
+    command(name)(args)
 
 
 if __name__ == "__main__":

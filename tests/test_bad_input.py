@@ -100,6 +100,13 @@ def no_scheduler(*args, **kwargs):
 GOOD3 = np.ones((20, 3))
 
 
+def magexp_calibration():
+    """A calibration of good readings, accepted whatever its gate says (to be saved or exported)."""
+    import magexp
+
+    return magexp.calibrate(SPHERE, unit="uT", model="full", folds=0, accept=True)
+
+
 def row(entry, args, words, code=2, patch=None):
     return (entry, args, words, code, patch)
 
@@ -199,6 +206,26 @@ TABLE = [
     row("run", ["--config-name", "nosuch"], ["--config-name", "'nosuch'", "config"]),
     row("run", ["-cn", "nosuch"], ["'nosuch'"]),
     row("run", ["--config-dir", "no_such_dir"], ["no_such_dir"]),
+    # ---- results/ is the canonical reproduction's alone, whatever a path's interpolations resolve to (issue 34)
+    row("run", ["estimator=lm", "hydra.run.dir=${oc.env:HOME}"], ["hydra.run.dir='${oc.env:HOME}'", "interpolations"]),
+    row("run", ["hydra.run.dir=${hydra:runtime.cwd}/results/x"], ["interpolations"]),
+    row("run", ["+hydra.run.dir=results/x"], ["hydra.run.dir='results/x'", "inside results/"]),
+    row("run", ["~hydra.run.dir"], ["~hydra.run.dir", "name a folder"]),
+    row("run", ["hydra.run.dir=a,b"], ["hydra.run.dir='a,b'", "quote", "'a,b'"]),
+    row("run", ["hydra.run.dir=a=b"], ["hydra.run.dir='a=b'", "quote"]),
+    row("run", [f"hydra.run.dir='{R('x,y')}'"], ["inside results/"]),  # quoted for Hydra, still checked
+    row("run", ["estimator=lm"], ["MAGEXP_CACHE", "inside results/"], patch=[("magexp.paths.CACHE", RESULTS / "c")]),
+    row("sweep", ["-m", "estimator=lm", "seed=0,1", "hydra.sweep.dir=${oc.env:HOME}"], ["interpolations"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir=${hydra:runtime.cwd}/results/x"], ["interpolations"]),
+    row("sweep", ["-m", "estimator=lm", "++hydra.sweep.dir=${hydra:runtime.cwd}/results/x"], ["interpolations"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir=a,b"], ["hydra.sweep.dir='a,b'", "quote"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir=[a]"], ["hydra.sweep.dir='[a]'", "quote"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir='results/x'"], ["inside results/"]),
+    row("calibrate", ["data.path=good.csv"], ["MAGEXP_CACHE", "inside results/"],
+        patch=[("magexp.paths.CACHE", RESULTS / "cache")]),
+    row("api", lambda: magexp_calibration().save(R("calibration.json")), ["path=", "inside results/"]),
+    row("api", lambda: magexp_calibration().export("ardupilot", R()), ["export path=", "inside results/"]),
+    row("api", lambda: magexp_calibration().export("ros", R("ros.yaml")), ["export path=", "inside results/"]),
     # ---- no code from a file or an override (issue 34): refused before anything is imported or called
     row("run", ["--experimental-rerun", "evil.pickle"], ["--experimental-rerun", "unpickles"]),
     row("run", ["--cfg", "job", "--experimental-rerun", "evil.pickle"], ["--experimental-rerun"]),

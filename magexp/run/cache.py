@@ -59,6 +59,7 @@ from magexp.core.atomic import write_bytes
 from magexp.core.datafiles import data_files, data_formats
 from magexp.paths import CACHE, ROOT
 from magexp.problems import OBJECTIVES
+from magexp.run.guard import check_cache_folder
 
 #: the modules every run executes whatever its config: the runner, which builds the config's objects,
 #: makes the problem, fits and evaluates (with its import closure: metrics, bounds, seeding, the bases)
@@ -543,7 +544,9 @@ def _folder(path: Path, root: Path) -> None:
 
 def write(path: Path, data: bytes, root: Path) -> None:
     """Write ``data`` to ``path`` (inside the cache folder ``root``) atomically
-    (:func:`magexp.core.atomic.write_bytes`), with the permissions of :func:`_modes`. Raises ``OSError``."""
+    (:func:`magexp.core.atomic.write_bytes`), with the permissions of :func:`_modes`. Raises ``OSError``,
+    or MagexpError for a cache folder inside ``results/`` (:func:`magexp.run.guard.check_cache_folder`)."""
+    check_cache_folder(str(root))
     _folder(path.parent, root)
     write_bytes(path, data, mode=_modes(root)[0])
 

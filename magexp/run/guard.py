@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import ast
 import contextlib
+import functools
 import importlib
 import importlib.metadata
 import importlib.util
@@ -91,6 +92,13 @@ def check_destination(folder, what: str, *, canonical: bool = False) -> Path:
         raise MagexpError(f"{what}={text!r} is not allowed: it is inside results/ ({results}), which only a "
                           "canonical reproduction writes; name a folder outside it")
     return path
+
+
+@functools.lru_cache(maxsize=16)
+def check_cache_folder(root: str) -> None:
+    """A run cache (``$MAGEXP_CACHE``) or its composed configs beside it, never inside ``results/``
+    (:func:`check_destination`), checked before any command starts and before every cache write."""
+    check_destination(root, "MAGEXP_CACHE (the run cache folder)")
 
 
 def check_subdir(subdir: str, what: str = "hydra.sweep.subdir") -> None:
@@ -424,8 +432,6 @@ def check_hydra_keys(overrides: list[str]) -> None:
 def check_override_targets(overrides: list[str]) -> None:
     """Every ``_target_`` an override sets (``estimator._target_=...``, or inside a value such as
     ``estimator.velocity={_target_: ...}``) checked by :func:`check_target` before Hydra sees it."""
-    from magexp.run.compose import yaml_value  # compose imports this module
-
     for ov in overrides:
         key, _, value = ov.partition("=")
         where = key.lstrip("+~")
@@ -434,9 +440,11 @@ def check_override_targets(overrides: list[str]) -> None:
         if where.endswith("_target_"):
             check_target(where.rpartition(".")[0], value)
         elif "_target_" in value:
-            try:
-                parsed = yaml_value(value)
-            except MagexpError:
+            try:  # Hydra's grammar, loaded only for such a value (its import: 0.1 s, measured with -X importtime)
+                from hydra.core.override_parser.overrides_parser import OverridesParser
+
+                parsed = OverridesParser.create().parse_override(f"k={value}").value()
+            except Exception:
                 raise MagexpError(f"{key}={value[:40]!r} is not allowed: a _target_ must be a class name") from None
             check_targets(parsed, where)
 
@@ -477,21 +485,35 @@ def check_target(where: str, target, *, plugin: bool = False) -> None:
     shown = f"{where}._target_={text[:60]!r}"
     head = where.split(".")[0]
     if head == "hydra" and not plugin:
-        group = next((g for g in HYDRA_TARGETS if where == g or where.startswith(g + ".")), None)
-        allowed = HYDRA_TARGETS.get(group, ())
-        if text not in allowed:
-            raise MagexpError(f"{shown} is not allowed: " + (f"choose one of {', '.join(allowed)}" if allowed else
-                                                             "this Hydra setting takes no _target_"))
-        return
+        return _check_hydra_target(where, text, shown)
     if head not in PLUGIN_NODES and not plugin:
         raise MagexpError(f"{shown} is not allowed: only scenario, estimator and analysis nodes build objects")
+    obj = _named_class(text, shown)
+    bases = [c for c in obj.__mro__ if c.__module__.startswith(PLUGIN_PACKAGES)]
+    own = text.startswith("magexp.")
+    if own and (not bases or bases[0] is not obj) or not own and not bases and not any(
+            callable(getattr(obj, m, None)) for m in PLUGIN_METHODS):
+        raise MagexpError(f"{shown} is not allowed: it is not one of magexp's plug-in classes (estimators, scenarios, "
+                          "problems and their pieces) nor a subclass of one")
+
+
+def _check_hydra_target(where: str, text: str, shown: str) -> None:
+    """A ``_target_`` of Hydra's own nodes: one of :data:`HYDRA_TARGETS` (compared as a string)."""
+    group = next((g for g in HYDRA_TARGETS if where == g or where.startswith(g + ".")), None)
+    allowed = HYDRA_TARGETS.get(group, ())
+    if text not in allowed:
+        raise MagexpError(f"{shown} is not allowed: " + (f"choose one of {', '.join(allowed)}" if allowed else
+                                                         "this Hydra setting takes no _target_"))
+
+
+def _named_class(text: str, shown: str) -> type:
+    """The class a ``_target_`` names, imported only if it is magexp's or passes :func:`_user_module_source`."""
     parts = text.split(".")
     if len(parts) < 2 or not all(p.isidentifier() for p in parts):
         raise MagexpError(f"{shown} is not allowed: a _target_ is a class's dotted name, e.g. "
                           "magexp.estimators.lm.LevenbergMarquardt or mypackage.MyMethod")
     module_name, name = ".".join(parts[:-1]), parts[-1]
-    own = text.startswith("magexp.")
-    if not own and not _user_module_source(module_name, name):
+    if not text.startswith("magexp.") and not _user_module_source(module_name, name):
         raise MagexpError(f"{shown} is not allowed: it names no class of magexp's estimators, scenarios or problems "
                           "nor a class of your own package defined at its top level (docs/extending.md)")
     try:
@@ -501,46 +523,45 @@ def check_target(where: str, target, *, plugin: bool = False) -> None:
     if not isinstance(obj, type):
         raise MagexpError(f"{shown} is not allowed: it is not a class (a _target_ builds an estimator, a scenario "
                           "or one of their pieces)")
-    bases = [c for c in obj.__mro__ if c.__module__.startswith(PLUGIN_PACKAGES)]
-    if own and (not bases or bases[0] is not obj) or not own and not bases and not any(
-            callable(getattr(obj, m, None)) for m in PLUGIN_METHODS):
-        raise MagexpError(f"{shown} is not allowed: it is not one of magexp's plug-in classes (estimators, scenarios, "
-                          "problems and their pieces) nor a subclass of one")
+    return obj
 
 
 def _user_module_source(module_name: str, name: str) -> bool:
     """Whether ``module_name`` is a user's module whose source defines ``class <name>`` at its top
-    level, found without importing anything: its top-level package is not Python's own, and is
-    either outside the interpreter's installation (the working folder, ``PYTHONPATH``) or an
-    installed distribution that requires magexp."""
+    level, found without importing anything (:func:`_user_package`, then down its folders)."""
     top, *rest = module_name.split(".")
-    if top in sys.stdlib_module_names or top in sys.builtin_module_names or top in ("magexp", "hydra_plugins"):
-        return False
-    try:
-        spec = importlib.util.find_spec(top)  # a top-level name: located, not imported
-    except (ImportError, ValueError):
-        return False
-    if spec is None or not spec.origin and not spec.submodule_search_locations:
-        return False
-    where = Path(spec.origin or next(iter(spec.submodule_search_locations))).resolve()
-    installed = {Path(p).resolve() for p in (*site.getsitepackages(), site.getusersitepackages(),
-                                              sysconfig.get_paths()["stdlib"], sysconfig.get_paths()["platstdlib"])}
-    if any(p in where.parents for p in installed):
-        dists = importlib.metadata.packages_distributions().get(top, [])
-        if not any(re.match(r"magexp\b", req) for d in dists for req in (importlib.metadata.requires(d) or [])):
-            return False
-    source = where
+    source = _user_package(top)
     for part in rest:  # down the package's folders, importing nothing
-        folder = source.parent if source.name == "__init__.py" else None
+        folder = source.parent if source is not None and source.name == "__init__.py" else None
         if folder is None:
             return False
         source = next((c for c in (folder / f"{part}.py", folder / part / "__init__.py") if c.is_file()), None)
-        if source is None:
-            return False
     try:
-        if not source.is_file() or source.stat().st_size > _SOURCE_LIMIT:
+        if source is None or not source.is_file() or source.stat().st_size > _SOURCE_LIMIT:
             return False
         tree = ast.parse(source.read_bytes())
     except (OSError, SyntaxError, ValueError):
         return False
     return any(isinstance(n, ast.ClassDef) and n.name == name for n in tree.body)
+
+
+def _user_package(top: str) -> Path | None:
+    """The source file of top-level module ``top`` if it is a user's (located, not imported): not
+    Python's own, and either outside the interpreter's installation (the working folder,
+    ``PYTHONPATH``) or an installed distribution that requires magexp."""
+    if top in sys.stdlib_module_names or top in sys.builtin_module_names or top in ("magexp", "hydra_plugins"):
+        return None
+    try:
+        spec = importlib.util.find_spec(top)  # a top-level name: located, not imported
+    except (ImportError, ValueError):
+        return None
+    if spec is None or not spec.origin or not Path(spec.origin).is_file():
+        return None
+    where = Path(spec.origin).resolve()
+    installed = {Path(p).resolve() for p in (*site.getsitepackages(), site.getusersitepackages(),
+                                              sysconfig.get_paths()["stdlib"], sysconfig.get_paths()["platstdlib"])}
+    if any(p in where.parents for p in installed):
+        dists = importlib.metadata.packages_distributions().get(top, [])
+        if not any(re.match(r"magexp\b", req) for d in dists for req in (importlib.metadata.requires(d) or [])):
+            return None
+    return where
