@@ -226,6 +226,10 @@ TABLE = [
     row("api", lambda: magexp_calibration().save(R("calibration.json")), ["path=", "inside results/"]),
     row("api", lambda: magexp_calibration().export("ardupilot", R()), ["export path=", "inside results/"]),
     row("api", lambda: magexp_calibration().export("ros", R("ros.yaml")), ["export path=", "inside results/"]),
+    # ---- bounded before it starts: processes by the cores (issue 34)
+    row("reproduce", ["ding2024", "--jobs", "1000000"], ["--jobs 1000000", "cores"]),
+    row("reproduce", ["ding2024", "--jobs", "1e20"], ["--jobs", "'1e20'"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.launcher.jobs=1000000"], ["hydra.launcher.jobs=1000000", "cores"]),
     # ---- no code from a file or an override (issue 34): refused before anything is imported or called
     row("run", ["--experimental-rerun", "evil.pickle"], ["--experimental-rerun", "unpickles"]),
     row("run", ["--cfg", "job", "--experimental-rerun", "evil.pickle"], ["--experimental-rerun"]),

@@ -493,16 +493,28 @@ def _arrays(buf: bytearray, table: list, start: int) -> list:
     return arrays
 
 
+#: the largest cache entry read (bytes): far above a run's output within the budget's limits
+MAX_ENTRY = 2 ** 30
+
+
 def read(path: Path, key: str, kind: str):
     """The value of the entry at ``path`` (:func:`unpack`). Raises ``FileNotFoundError`` if there
-    is none, ``PermissionError`` if it cannot be read, :class:`InvalidEntry` if it is not valid."""
+    is none, ``PermissionError`` if it cannot be read, :class:`InvalidEntry` if it is not valid.
+    An entry is read only if it is a regular file (a FIFO or a device is never opened for a
+    blocking read) of at most :data:`MAX_ENTRY` bytes (a huge file is refused by its size, unread)."""
     try:
-        with open(path, "rb") as fh:
-            buf = bytearray(os.fstat(fh.fileno()).st_size)
-            if fh.readinto(buf) != len(buf):
-                raise InvalidEntry("shorter than its size")
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except IsADirectoryError:
         raise InvalidEntry("a folder, not a file") from None
+    with open(fd, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        if not stat.S_ISREG(st.st_mode):
+            raise InvalidEntry("not a regular file")
+        if st.st_size > MAX_ENTRY:
+            raise InvalidEntry(f"{st.st_size} bytes, more than an entry holds ({MAX_ENTRY})")
+        buf = bytearray(st.st_size)
+        if fh.readinto(buf) != len(buf):
+            raise InvalidEntry("shorter than its size")
     return unpack(buf, key, kind)
 
 

@@ -265,6 +265,10 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
         raise MagexpError(f"--executor {kind!r} is not allowed: choose one of {', '.join(EXECUTORS)}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
         raise MagexpError(f"--jobs {jobs!r} is not allowed: it must be an integer >= 0 (0: all cores)")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    if jobs > cores and (kind == "local" or scheduler is None):  # processes on this machine
+        raise MagexpError(f"--jobs {jobs} is not allowed: this machine gives {cores} cores; give at most {cores} "
+                          "(0: all cores)")
     if scheduler is not None and kind != "dask":
         raise MagexpError(f"--scheduler {scheduler!r} needs --executor dask")
     check_scheduler_address(scheduler)
