@@ -2,6 +2,7 @@
 turns any error into that line and an exit code, for every command."""
 
 import os
+import signal
 import sys
 
 #: the largest magnitude a reading, noise amplitude or search bound may have: squares and
@@ -76,6 +77,29 @@ EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 2, 3, 130
 INTERRUPTED = "interrupted (Ctrl-C); finished runs are cached, rerun the same command to resume"
 
 
+class Terminated(KeyboardInterrupt):
+    """A command stopped by a signal other than Ctrl-C (``SIGTERM``, :func:`stop_on_signals`): it ends as
+    Ctrl-C does (every cleanup that undoes an interrupted command runs), with exit code ``128 + signum``."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _stop(signum, frame) -> None:
+    """The handler of :func:`stop_on_signals`: broken pipes become errors from now on (the workers are
+    about to be stopped: writing to them must not kill this process silently), then Ctrl-C's path."""
+    signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    raise KeyboardInterrupt if signum == signal.SIGINT else Terminated(signum)
+
+
+def stop_on_signals() -> None:
+    """Make ``SIGTERM`` and ``SIGINT`` (to this process alone, or its group) end a command as Ctrl-C does:
+    one line, exit 143 / 130, nothing half-written left (the command's own cleanups)."""
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, _stop)
+
+
 def fail(message: str, code: int = EXIT_BAD_INPUT) -> None:
     """One line on stderr (``error: ...``), then exit with ``code``."""
     print(f"error: {message}", file=sys.stderr)
@@ -100,6 +124,8 @@ def guarded(func, *args):
         return func(*args)
     except MagexpError as exc:
         fail(str(exc).splitlines()[0] if str(exc) else "bad input")
+    except Terminated as exc:
+        fail(INTERRUPTED.replace("(Ctrl-C)", f"({signal.Signals(exc.signum).name})"), 128 + exc.signum)
     except KeyboardInterrupt:
         fail(INTERRUPTED, EXIT_INTERRUPTED)
     except OSError as exc:

@@ -688,3 +688,42 @@ def test_a_users_plugin_class_is_a_target_and_nothing_else_is_imported(tmp_path,
     assert not (tmp_path / "loud.py.imported").exists()
     with pytest.raises(MagexpError, match="SweepTable"):
         check_target("hydra.callbacks.x", "mypackage.MyMethod")
+
+
+def test_a_signal_ends_as_ctrl_c_does(capsys):
+    """A command stopped by SIGTERM takes Ctrl-C's path (every cleanup of an interrupted command) and
+    ends with one line naming the signal and exit 128 + 15."""
+    import signal
+
+    from magexp.errors import Terminated, guarded
+
+    def stopped():
+        raise Terminated(signal.SIGTERM)
+
+    with pytest.raises(SystemExit) as exit_:
+        guarded(stopped)
+    assert exit_.value.code == 143
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "error: interrupted (SIGTERM); finished runs are cached, rerun the same command to resume"]
+
+
+def test_sigterm_during_a_sweep_leaves_nothing(tmp_path):
+    """``kill -TERM`` of a sweep's process (issue 34: exit -15, no line, its folder left behind): one line,
+    exit 143, and its folder gone (a real process: the signal handlers are the command's)."""
+    import signal
+    import time
+
+    sweep_dir = tmp_path / "sweep"
+    env = dict(os.environ, MAGEXP_CACHE=str(tmp_path / "cache"))
+    proc = subprocess.Popen([sys.executable, "-m", "magexp", "-m", "estimator=pso", "seed=range(400)",
+                             f"hydra.sweep.dir={sweep_dir}"], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not (sweep_dir / "multirun.yaml").exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert err.strip().splitlines() == [
+        "error: interrupted (SIGTERM); finished runs are cached, rerun the same command to resume"]
+    assert not sweep_dir.exists()
