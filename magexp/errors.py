@@ -57,8 +57,9 @@ def check_magnitude(value, name: str) -> float:
     return v
 
 
-#: the most characters of a file's content an error message shows (:func:`excerpt`)
-EXCERPT = 40
+#: the most characters of a file's content an error message shows (:func:`excerpt`): enough to find the
+#: offending token, too few to print a secret (a password line, a key of an ``.env`` file)
+EXCERPT = 6
 
 
 def excerpt(text) -> str:

@@ -59,6 +59,9 @@ FILES = {
     "dup_column.csv": "# magexp-recording v1\n# unit: nT\nbx,by,bz,bx\n1,2,3,4\n",
     "bad_field.csv": "# magexp-recording v1\n# unit: nT\n# field: 1,2\nbx,by,bz\n1,2,3\n",
     "neg_reference.csv": "# magexp-recording v1\n# unit: nT\n# reference_total: -5\nbx,by,bz\n1,2,3\n",
+    "shadow": "root:$6$saltsalt$swordfishHASH:19000:0:99999:7:::\n",  # a password file: its hash never echoed
+    ".env": "SECRET_KEY=swordfish\nDEBUG=1\n",  # a secret on its first line
+    "secret_value.csv": CALIB_HEADER + "1,2,3\n4,5,swordfish\n",  # a secret in a value
     "evil.pickle": "cio\nopen\np0\n(VPWNED\np1\nVw\np2\ntp3\nRp4\n.",  # unpickled, it creates PWNED here
     "userplain.py": "class Plain:\n    pass\n\ndef f():\n    pass\n",  # a user module with no plug-in class
 }
@@ -206,6 +209,11 @@ TABLE = [
     row("run", ["--config-name", "nosuch"], ["--config-name", "'nosuch'", "config"]),
     row("run", ["-cn", "nosuch"], ["'nosuch'"]),
     row("run", ["--config-dir", "no_such_dir"], ["no_such_dir"]),
+    # ---- say where, not what: file, line, column and what was expected; never a secret (issue 34)
+    row("calibrate", ["data.path=shadow"], ["shadow line 1, column 1", "found 'r'", "magexp-recording v1"]),
+    row("calibrate", ["data.path=.env", "data.unit=uT"], [".env line 1, column 1", "found 'S'"]),
+    row("calibrate", ["data.path=secret_value.csv"], ["secret_value.csv line 5", "bz=", "not a number"]),
+    row("run", ["scenario=yan2022_mockup", "estimator=ls", "scenario.path=.env"], [".env line 1, column 1"]),
     # ---- results/ is the canonical reproduction's alone, whatever a path's interpolations resolve to (issue 34)
     row("run", ["estimator=lm", "hydra.run.dir=${oc.env:HOME}"], ["hydra.run.dir='${oc.env:HOME}'", "interpolations"]),
     row("run", ["hydra.run.dir=${hydra:runtime.cwd}/results/x"], ["interpolations"]),
