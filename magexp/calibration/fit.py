@@ -65,7 +65,7 @@ from magexp.core.dataset import Dataset
 from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
 from magexp.core.identifiability import canonical, coverage, direction_regions, identifiability, spread
-from magexp.core.field_model import field_of_recording, place_of
+from magexp.core.field_model import check_model, field_of_recording, place_of
 from magexp.core.recordings import (MAG_COLUMNS, UNITS, Recording, check_unique, check_unit, load_recording,
                                     resolve)
 from magexp.core.seeding import run_generators
@@ -685,6 +685,7 @@ def field_keys(cfg) -> dict:
             raise MagexpError(f"igrf.latitude={old.get('latitude')!r} is not allowed with field.latitude: igrf.* is "
                               "the older name of field.* (with field.model=igrf), give field.* only")
         place.update(dict(cfg.igrf), model="igrf")
+    check_model(place.get("model"))  # a bad model named even when no place asks for one
     return place
 
 

@@ -216,7 +216,7 @@ def check_flags(flags: dict) -> None:
     for flag in ("--cfg", "-c"):
         if flag in flags and flags[flag] not in CFG_CHOICES:
             raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: choose one of {', '.join(CFG_CHOICES)}")
-    names = sorted(p.stem for p in paths.CONF.glob("*.yaml"))
+    names = ["config"]  # calibrate.yaml is magexp calibrate's own (magexp calibrate KEY=VALUE ...)
     for flag in ("--config-name", "-cn"):
         if flag in flags and flags[flag] not in names:
             raise MagexpError(f"{flag} {flags[flag]!r} is not allowed: choose one of {', '.join(names)}")
