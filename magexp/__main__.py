@@ -11,7 +11,7 @@
 ==============================  ==================================================================
 
 Every command runs under :func:`magexp.errors.guarded`: any error is one line on stderr and an
-exit code (2 bad input, 3 a bug, 130 Ctrl-C).
+exit code (2 bad input, 3 a bug, 130 Ctrl-C, 143 SIGTERM).
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ from __future__ import annotations
 import signal
 import sys
 
-from magexp.errors import guarded
+from magexp import paths
+from magexp.errors import guarded, stop_on_signals
 from magexp.run.threads import one_blas_thread
 
 
@@ -43,9 +44,19 @@ def main(argv: list[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     if argv is None:  # a closed pipe (magexp --help | head) ends quietly, as for any Unix tool
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+        stop_on_signals()  # SIGTERM, and SIGINT to this process alone, end as Ctrl-C does
     name = args[0] if args and args[0] in ("calibrate", "reproduce", "verify") else "run"
     one_blas_thread()  # this process and its workers; before the command imports numpy
-    guarded(command(name), args[1:] if name != "run" else args)
+    guarded(start, name, args[1:] if name != "run" else args)
+
+
+def start(name: str, args: list[str]) -> None:
+    """Subcommand ``name`` on ``args``, once the run cache's folder is allowed (not inside ``results/``)."""
+    from magexp.run.guard import check_cache_folder  # imports numpy: after one_blas_thread()
+
+    check_cache_folder(str(paths.CACHE))
+    check_cache_folder(str(paths.composed_configs()))
+    command(name)(args)
 
 
 if __name__ == "__main__":

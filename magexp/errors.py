@@ -2,6 +2,7 @@
 turns any error into that line and an exit code, for every command."""
 
 import os
+import signal
 import sys
 
 #: the largest magnitude a reading, noise amplitude or search bound may have: squares and
@@ -56,8 +57,9 @@ def check_magnitude(value, name: str) -> float:
     return v
 
 
-#: the most characters of a file's content an error message shows (:func:`excerpt`)
-EXCERPT = 40
+#: the most characters of a file's content an error message shows (:func:`excerpt`): enough to find the
+#: offending token, too few to print a secret (a password line, a key of an ``.env`` file)
+EXCERPT = 6
 
 
 def excerpt(text) -> str:
@@ -74,6 +76,29 @@ def excerpt(text) -> str:
 
 EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 2, 3, 130
 INTERRUPTED = "interrupted (Ctrl-C); finished runs are cached, rerun the same command to resume"
+
+
+class Terminated(KeyboardInterrupt):
+    """A command stopped by a signal other than Ctrl-C (``SIGTERM``, :func:`stop_on_signals`): it ends as
+    Ctrl-C does (every cleanup that undoes an interrupted command runs), with exit code ``128 + signum``."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _stop(signum, frame) -> None:
+    """The handler of :func:`stop_on_signals`: broken pipes become errors from now on (the workers are
+    about to be stopped: writing to them must not kill this process silently), then Ctrl-C's path."""
+    signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    raise KeyboardInterrupt if signum == signal.SIGINT else Terminated(signum)
+
+
+def stop_on_signals() -> None:
+    """Make ``SIGTERM`` and ``SIGINT`` (to this process alone, or its group) end a command as Ctrl-C does:
+    one line, exit 143 / 130, nothing half-written left (the command's own cleanups)."""
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, _stop)
 
 
 def fail(message: str, code: int = EXIT_BAD_INPUT) -> None:
@@ -100,6 +125,8 @@ def guarded(func, *args):
         return func(*args)
     except MagexpError as exc:
         fail(str(exc).splitlines()[0] if str(exc) else "bad input")
+    except Terminated as exc:
+        fail(INTERRUPTED.replace("(Ctrl-C)", f"({signal.Signals(exc.signum).name})"), 128 + exc.signum)
     except KeyboardInterrupt:
         fail(INTERRUPTED, EXIT_INTERRUPTED)
     except OSError as exc:

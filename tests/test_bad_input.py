@@ -59,6 +59,11 @@ FILES = {
     "dup_column.csv": "# magexp-recording v1\n# unit: nT\nbx,by,bz,bx\n1,2,3,4\n",
     "bad_field.csv": "# magexp-recording v1\n# unit: nT\n# field: 1,2\nbx,by,bz\n1,2,3\n",
     "neg_reference.csv": "# magexp-recording v1\n# unit: nT\n# reference_total: -5\nbx,by,bz\n1,2,3\n",
+    "shadow": "root:$6$saltsalt$swordfishHASH:19000:0:99999:7:::\n",  # a password file: its hash never echoed
+    ".env": "SECRET_KEY=swordfish\nDEBUG=1\n",  # a secret on its first line
+    "secret_value.csv": CALIB_HEADER + "1,2,3\n4,5,swordfish\n",  # a secret in a value
+    "evil.pickle": "cio\nopen\np0\n(VPWNED\np1\nVw\np2\ntp3\nRp4\n.",  # unpickled, it creates PWNED here
+    "userplain.py": "class Plain:\n    pass\n\ndef f():\n    pass\n",  # a user module with no plug-in class
 }
 BINARY = bytes(range(256)) * 4  # not UTF-8 text
 ENVIRON = b"SECRET_KEY=swordfish\x00HOME=/root\x00PATH=/usr/bin\x00"  # like /proc/self/environ
@@ -96,6 +101,13 @@ def no_scheduler(*args, **kwargs):
 
 
 GOOD3 = np.ones((20, 3))
+
+
+def magexp_calibration():
+    """A calibration of good readings, accepted whatever its gate says (to be saved or exported)."""
+    import magexp
+
+    return magexp.calibrate(SPHERE, unit="uT", model="full", folds=0, accept=True)
 
 
 def row(entry, args, words, code=2, patch=None):
@@ -197,6 +209,93 @@ TABLE = [
     row("run", ["--config-name", "nosuch"], ["--config-name", "'nosuch'", "config"]),
     row("run", ["-cn", "nosuch"], ["'nosuch'"]),
     row("run", ["--config-dir", "no_such_dir"], ["no_such_dir"]),
+    # ---- every bad input one line (issue 34 item 4): singular setups, tolerances, labels, silent keys
+    row("run", ["estimator=lm", "scenario.errors.scale=[0,1,1]"], ["errors.scale=", "non-zero"]),
+    row("run", ["estimator=lm", "scenario.errors.scale=[1,1,0]"], ["errors.scale=", "non-zero"]),
+    row("run", ["estimator=lm", "scenario.errors.nonorthogonality_deg=[90,0,0]"], ["nonorthogonality_deg", "singular"]),
+    row("run", ["estimator=lm", "scenario.errors.soft_iron=[[-1,0,0],[0,0,0],[0,0,0]]"], ["soft_iron", "singular"]),
+    row("run", ["estimator=lm", "estimator.tol=0"], ["estimator.tol=0", "machine epsilon"]),
+    row("run", ["estimator=lm", "estimator.tol=-1"], ["estimator.tol=-1"]),
+    row("run", ["estimator=ml_scalar", "estimator.tol=0"], ["estimator.tol=0"]),
+    row("run", ["estimator=triangular", "estimator.tol=-1"], ["estimator.tol=-1"]),
+    row("run", ["estimator=lm", "estimator.tol=nan"], ["estimator.tol=nan"]),
+    row("run", ["estimator=lm", "estimator.name=ipso"], ["estimator.name='ipso'", "LevenbergMarquardt", "estimator=ipso"]),
+    row("run", ["estimator=ellipsoid", "estimator.name=lm"], ["estimator.name='lm'", "estimator=lm"]),
+    row("run", ["--config-name", "calibrate"], ["--config-name", "'calibrate'", "config"]),
+    row("calibrate", ["data.path=good.csv", "estimator=lm", "estimator.tol=nan"], ["estimator.tol=nan"]),
+    row("calibrate", ["data.path=good.csv", "field.model=foo"], ["field.model='foo'", "igrf"]),
+    # ---- say where, not what: file, line, column and what was expected; never a secret (issue 34)
+    row("calibrate", ["data.path=shadow"], ["shadow line 1, column 1", "found 'r'", "magexp-recording v1"]),
+    row("calibrate", ["data.path=.env", "data.unit=uT"], [".env line 1, column 1", "found 'S'"]),
+    row("calibrate", ["data.path=secret_value.csv"], ["secret_value.csv line 5", "bz=", "not a number"]),
+    row("run", ["scenario=yan2022_mockup", "estimator=ls", "scenario.path=.env"], [".env line 1, column 1"]),
+    # ---- results/ is the canonical reproduction's alone, whatever a path's interpolations resolve to (issue 34)
+    row("run", ["estimator=lm", "hydra.run.dir=${oc.env:HOME}"], ["hydra.run.dir='${oc.env:HOME}'", "interpolations"]),
+    row("run", ["hydra.run.dir=${hydra:runtime.cwd}/results/x"], ["interpolations"]),
+    row("run", ["+hydra.run.dir=results/x"], ["hydra.run.dir='results/x'", "inside results/"]),
+    row("run", ["~hydra.run.dir"], ["~hydra.run.dir", "name a folder"]),
+    row("run", ["hydra.run.dir=a,b"], ["hydra.run.dir='a,b'", "quote", "'a,b'"]),
+    row("run", ["hydra.run.dir=a=b"], ["hydra.run.dir='a=b'", "quote"]),
+    row("run", [f"hydra.run.dir='{R('x,y')}'"], ["inside results/"]),  # quoted for Hydra, still checked
+    row("run", ["estimator=lm"], ["MAGEXP_CACHE", "inside results/"], patch=[("magexp.paths.CACHE", RESULTS / "c")]),
+    row("sweep", ["-m", "estimator=lm", "seed=0,1", "hydra.sweep.dir=${oc.env:HOME}"], ["interpolations"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir=${hydra:runtime.cwd}/results/x"], ["interpolations"]),
+    row("sweep", ["-m", "estimator=lm", "++hydra.sweep.dir=${hydra:runtime.cwd}/results/x"], ["interpolations"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir=a,b"], ["hydra.sweep.dir='a,b'", "quote"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir=[a]"], ["hydra.sweep.dir='[a]'", "quote"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweep.dir='results/x'"], ["inside results/"]),
+    row("calibrate", ["data.path=good.csv"], ["MAGEXP_CACHE", "inside results/"],
+        patch=[("magexp.paths.CACHE", RESULTS / "cache")]),
+    row("api", lambda: magexp_calibration().save(R("calibration.json")), ["path=", "inside results/"]),
+    row("api", lambda: magexp_calibration().export("ardupilot", R()), ["export path=", "inside results/"]),
+    row("api", lambda: magexp_calibration().export("ros", R("ros.yaml")), ["export path=", "inside results/"]),
+    # ---- bounded before it starts: processes by the cores (issue 34)
+    row("reproduce", ["ding2024", "--jobs", "1000000"], ["--jobs 1000000", "cores"]),
+    row("reproduce", ["ding2024", "--jobs", "1e20"], ["--jobs", "'1e20'"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.launcher.jobs=1000000"], ["hydra.launcher.jobs=1000000", "cores"]),
+    row("run", ["scenario=yuan2018_mode1", "estimator=lm", "scenario.rotation.sample_period=1e-10"],
+        ["sample_period=1e-10", "MAGEXP_MAX_READINGS"]),
+    row("run", ["estimator.init.burn_in=1e12"], ["burn_in=", "MAGEXP_MAX_RUN_WORK"]),
+    row("run", ["estimator.init.burn_in=-1"], ["burn_in=-1", "integer >= 0"]),
+    row("run", ["estimator.init.burn_in=2.5"], ["burn_in=2.5", "integer >= 0"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.folds=100000000"], ["folds=100000000", "readings"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.folds=2.5"], ["folds=2.5", "integer >= 0"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.heldout_fold=2.5"], ["heldout_fold=2.5"]),
+    # ---- no code from a file or an override (issue 34): refused before anything is imported or called
+    row("run", ["--experimental-rerun", "evil.pickle"], ["--experimental-rerun", "unpickles"]),
+    row("run", ["--cfg", "job", "--experimental-rerun", "evil.pickle"], ["--experimental-rerun"]),
+    row("run", ["--config-dir", "a_folder"], ["--config-dir", "conf/"]),
+    row("run", ["-cp", "a_folder"], ["-cp", "conf/"]),
+    row("run", ["estimator._target_=os.system"], ["estimator._target_='os.system'", "no class"]),
+    row("run", ["estimator=lm", "estimator._target_=numpy.savetxt"], ["'numpy.savetxt'"]),
+    row("run", ["scenario._target_=subprocess.Popen"], ["scenario._target_='subprocess.Popen'"]),
+    row("run", ["estimator._target_=magexp.run.cache.write"], ["'magexp.run.cache.write'", "not a class"]),
+    row("run", ["estimator._target_=magexp.run.sweep.SweepTable"], ["SweepTable", "plug-in"]),
+    row("run", ["estimator._target_=magexp.estimators.lm.EllipsoidFit.fit"], ["EllipsoidFit.fit", "cannot be imported"]),
+    row("run", ["scenario._target_=magexp.core.dataset.Dataset"], ["Dataset", "plug-in"]),
+    row("run", ["estimator._target_=userplain.f"], ["'userplain.f'"]),
+    row("run", ["estimator._target_=setup.X"], ["'setup.X'"]),
+    row("run", ["estimator._target_=os"], ["estimator._target_='os'", "dotted name"]),
+    row("run", ["estimator.velocity._target_=builtins.exec"], ["estimator.velocity._target_='builtins.exec'"]),
+    row("run", ["estimator.velocity={_target_:os.system,command:id}"], ["estimator.velocity._target_='os.system'"]),
+    row("run", ["+hydra.callbacks.x._target_=numpy.savetxt"], ["hydra.callbacks.x._target_", "SweepTable"]),
+    row("run", ["hydra.job.env_set.LD_PRELOAD=x.so"], ["hydra.job.env_set.LD_PRELOAD", "not allowed"]),
+    row("run", ["+hydra.searchpath=[file://a_folder]"], ["+hydra.searchpath", "not allowed"]),
+    row("calibrate", ["data.path=good.csv", "estimator._target_=os.system"],
+        ["estimator._target_='os.system'"]),
+    row("calibrate", ["data.path=good.csv", "estimator=lm", "estimator._target_=shutil.rmtree"],
+        ["'shutil.rmtree'"]),
+    row("sweep", ["-m", "estimator=lm", "+hydra.callbacks.x._target_=numpy.savetxt",
+                  f"+hydra.callbacks.x.fname={R('summary.csv')}", "+hydra.callbacks.x.X=[0]"],
+        ["hydra.callbacks.x", "not allowed"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.launcher._target_=os.getpid"], ["hydra.launcher._target_='os.getpid'",
+                                                                               "MagexpLauncher"]),
+    row("sweep", ["-m", "estimator=lm", "hydra.sweeper._target_=os.getpid"], ["'os.getpid'", "MagexpSweeper"]),
+    row("sweep", ["-m", "hydra.callbacks.sweep_table._target_=os.getpid"], ["sweep_table._target_='os.getpid'"]),
+    row("sweep", ["-m", "hydra.launcher={_target_:os.getpid}"], ["hydra.launcher._target_='os.getpid'"]),
+    row("sweep", ["-m", "+hydra.job_logging.handlers.x.class=os.system"], ["hydra.job_logging", "not allowed"]),
+    row("sweep", ["-m", "+hydra.sweeper.params.estimator._target_=os.system"], ["_target_"]),
+    row("sweep", ["-m", "seed=0,1", "estimator._target_=os.system"], ["'os.system'"]),
     row("run", ["--cfg", "job", "scenario.nosie=1"], ["'nosie'"]),
     row("run", ["scenario.noise=1,2"], ["needs -m"]),
     row("run", ["hydra.job.chdir=true"], ["hydra.job.chdir"]),
@@ -591,3 +690,63 @@ def test_bad_input_in_a_process(workdir, args):
     proc = subprocess.run([sys.executable, *args], cwd=workdir, capture_output=True, text=True,
                           env={**os.environ, "MAGEXP_CACHE": str(workdir.parent / "cache")})
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and proc.stderr.startswith("error: "), proc.stderr
+
+
+def test_a_users_plugin_class_is_a_target_and_nothing_else_is_imported(tmp_path, monkeypatch):
+    """docs/extending.md's ``_target_: mypackage.MyMethod`` passes the target check; a user module that
+    does not define the named class at its top level is refused without being imported (its import
+    would run its code), as are Python's own modules and functions."""
+    from magexp.run.guard import check_target
+
+    pkg = tmp_path / "mypackage"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("from magexp.estimators.lm import LevenbergMarquardt\n\n\n"
+                                     "class MyMethod(LevenbergMarquardt):\n    pass\n")
+    (tmp_path / "loud.py").write_text("open(__file__ + '.imported', 'w').close()\n\n\ndef X():\n    pass\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    check_target("estimator", "mypackage.MyMethod")
+    for target in ("loud.X", "os.system", "builtins.eval", "mypackage.LevenbergMarquardt.fit"):
+        with pytest.raises(MagexpError):
+            check_target("estimator", target)
+    assert not (tmp_path / "loud.py.imported").exists()
+    with pytest.raises(MagexpError, match="SweepTable"):
+        check_target("hydra.callbacks.x", "mypackage.MyMethod")
+
+
+def test_a_signal_ends_as_ctrl_c_does(capsys):
+    """A command stopped by SIGTERM takes Ctrl-C's path (every cleanup of an interrupted command) and
+    ends with one line naming the signal and exit 128 + 15."""
+    import signal
+
+    from magexp.errors import Terminated, guarded
+
+    def stopped():
+        raise Terminated(signal.SIGTERM)
+
+    with pytest.raises(SystemExit) as exit_:
+        guarded(stopped)
+    assert exit_.value.code == 143
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "error: interrupted (SIGTERM); finished runs are cached, rerun the same command to resume"]
+
+
+def test_sigterm_during_a_sweep_leaves_nothing(tmp_path):
+    """``kill -TERM`` of a sweep's process (issue 34: exit -15, no line, its folder left behind): one line,
+    exit 143, and its folder gone (a real process: the signal handlers are the command's)."""
+    import signal
+    import time
+
+    sweep_dir = tmp_path / "sweep"
+    env = dict(os.environ, MAGEXP_CACHE=str(tmp_path / "cache"))
+    proc = subprocess.Popen([sys.executable, "-m", "magexp", "-m", "estimator=pso", "seed=range(400)",
+                             f"hydra.sweep.dir={sweep_dir}"], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not (sweep_dir / "multirun.yaml").exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert err.strip().splitlines() == [
+        "error: interrupted (SIGTERM); finished runs are cached, rerun the same command to resume"]
+    assert not sweep_dir.exists()

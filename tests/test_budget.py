@@ -267,3 +267,20 @@ def test_a_recording_whose_calibration_would_not_fit_in_memory_is_refused_unread
     assert result.returncode == 2
     one_line(result.stderr, f"data.path='{data}'", "need to calibrate", "100 KiB", "MAGEXP_MAX_RUN_MEMORY")
     assert started["reads"] == 0 and started["fits"] == 0
+
+
+def test_a_sparse_recording_is_refused_by_its_size_unread(tmp_path):
+    """A 2 GiB file of zeros (sparse: no line ends in its head) counts as its size in shortest lines and is
+    refused before it is read (issue 34: it took 140 s to reach its one-line refusal)."""
+    import time
+
+    from magexp.errors import MagexpError
+    from magexp.run.budget import check_recording_file
+
+    big = tmp_path / "big.csv"
+    with open(big, "wb") as fh:
+        fh.truncate(2 * 2 ** 30)
+    start = time.perf_counter()
+    with pytest.raises(MagexpError, match="readings"):
+        check_recording_file(big)
+    assert time.perf_counter() - start < 1

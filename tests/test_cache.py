@@ -492,3 +492,19 @@ def test_a_recording_of_the_shared_data_folder_is_keyed_by_its_content(tmp_path,
     assert changed(before, after := keys_of(runs)) == {"rec.txt"}
     (tmp_path / "pair_imu.csv").write_text("1 2 3\n4 5 60\n")
     assert changed(after, keys_of(runs)) == {"pair", "pair_mag.csv"}  # a two-stream recording is its two files
+
+
+def test_only_a_regular_file_of_plausible_size_is_read(tmp_path):
+    """A FIFO in the cache is not opened for a blocking read (the sweep would hang) and a huge entry is
+    refused by its size, unread (issue 34): each in well under a second."""
+    import time
+
+    fifo, huge = tmp_path / "fifo.mxc", tmp_path / "huge.mxc"
+    os.mkfifo(fifo)
+    with open(huge, "wb") as fh:  # sparse: 3 GiB that take no disk
+        fh.truncate(3 * 2 ** 30)
+    for path, words in ((fifo, "not a regular file"), (huge, "more than an entry holds")):
+        start = time.perf_counter()
+        with pytest.raises(cache.InvalidEntry, match=words):
+            cache.read(path, "k" * 64, "RunOutput")
+        assert time.perf_counter() - start < 1

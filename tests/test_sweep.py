@@ -251,3 +251,18 @@ def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path)
                     {"estimator": "ellipsoid", "scenario.noise": "5", "job": "1", "fun": "2.5", "nfev": "",
                      "gram_error": "0.1"}]
 
+
+
+def test_the_cached_column_is_true_only_for_runs_read_from_the_cache(tmp_path, cli):
+    """A sweep's ``cached`` column says True for a run read from a valid cache entry, and False for one
+    recomputed after its entry was damaged (issue 34: it said True for both)."""
+    args = ["-m", "estimator=lm", "seed=0,1", "hydra.launcher.jobs=1"]
+    assert cli(*args, f"hydra.sweep.dir={tmp_path / 'a'}", cwd=tmp_path).returncode == 0
+    entries = sorted(cache.CACHE.rglob(f"*{cache.SUFFIX}"), key=lambda p: p.stat().st_mtime_ns)
+    assert len(entries) == 2
+    damaged = bytearray(entries[0].read_bytes())
+    damaged[len(damaged) // 2] ^= 0xFF  # a flipped byte: the entry's digest no longer matches
+    entries[0].write_bytes(bytes(damaged))
+    again = cli(*args, f"hydra.sweep.dir={tmp_path / 'b'}", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert sorted(r["cached"] for r in read_csv(tmp_path / "b" / "sweep.csv")) == ["False", "True"]

@@ -57,7 +57,7 @@ GOOD = "# magexp-recording v1\n# unit: nT\n# field: 1, 2, 3\nbx,by,bz,heading,ro
     (GOOD.replace("1,2,3,0.1", "1,2,abc,0.1"), "bz='abc' is not a number"),
     (GOOD.replace("1,2,3,0.1", "1,2,nan,0.1"), "bz='nan' is not allowed"),
     (GOOD.replace("0.2,0.3", "0.2"), "line 5: 5 values, but the header has 6 columns"),
-    (GOOD.replace("# magexp-recording v1", "# other v2"), "must be '# magexp-recording v1'"),
+    (GOOD.replace("# magexp-recording v1", "# other v2"), "line 1, column 3: found 'o', expected '# magexp-recording v1'"),
     (GOOD.replace("# field: 1, 2, 3", "# field: 1, 2"), "field='1, 2' is not allowed"),
     (GOOD.replace("# unit: nT", "# angles: grad"), "angles='grad' is not allowed"),
 ])

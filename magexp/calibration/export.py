@@ -65,6 +65,7 @@ from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
 from magexp.core.geometry import rotation_angle
 from magexp.core.recordings import RAW_UNITS, UNITS
+from magexp.run.guard import check_destination
 
 #: the export targets
 TARGETS = ("ardupilot", "px4", "ros", "c")
@@ -343,6 +344,7 @@ def write(out: Export, path: str | Path | None = None) -> Path:
     path = Path(".") if path is None else Path(path)
     if path.is_dir():
         path = path / FILE_NAMES[out.target]
+    check_destination(path, "export path")
     if path.exists():
         raise MagexpError(f"export path {str(path)!r} is not allowed: it exists already (never overwritten), "
                           "choose another")

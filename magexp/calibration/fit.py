@@ -66,7 +66,7 @@ from magexp.core.dataset import Dataset
 from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
 from magexp.core.identifiability import canonical, coverage, direction_regions, identifiability, spread
-from magexp.core.field_model import field_of_recording, place_of
+from magexp.core.field_model import check_model, field_of_recording, place_of
 from magexp.core.recordings import (MAG_COLUMNS, UNITS, Recording, check_unique, check_unit, load_recording,
                                     resolve)
 from magexp.core.seeding import run_generators
@@ -79,7 +79,8 @@ from magexp.problems import make_problem, problem_class
 from magexp.run.budget import check_calibration, check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options, target_class
 from magexp.run.outputs import print_table
-from magexp.run.guard import check_destination, check_folds, check_override_values, readings_array
+from magexp.run.guard import (check_destination, check_folds, check_hydra_keys, check_override_targets,
+                              check_override_values, readings_array)
 from magexp.run.runner import build
 from magexp.scenarios.search import SearchBox, centroid_radius, fit_sphere, search_box
 
@@ -756,6 +757,8 @@ def calibrate_config(argv: list[str]):
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
                           "(e.g. data.path=mine.csv data.unit=uT estimator=lm)")
+    check_hydra_keys(argv)
+    check_override_targets(argv)  # no code from an override, before the recording is read
     argv = check_override_values(argv)
     for arg in argv:
         if arg.partition("=")[0] in GROUPS:
@@ -772,6 +775,7 @@ def field_keys(cfg) -> dict:
             raise MagexpError(f"igrf.latitude={old.get('latitude')!r} is not allowed with field.latitude: igrf.* is "
                               "the older name of field.* (with field.model=igrf), give field.* only")
         place.update(dict(cfg.igrf), model="igrf")
+    check_model(place.get("model"))  # a bad model named even when no place asks for one
     return place
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
+from magexp.run.guard import check_destination
 from magexp.core.recordings import VERSION_LINE
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
@@ -110,6 +111,7 @@ def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
     """Write :func:`parameters` of ``cal`` to ``path`` atomically; an existing file is refused in one
     line unless ``overwrite``."""
     path = Path(path)
+    check_destination(path, "path")
     if path.exists() and not overwrite:
         raise MagexpError(f"path {str(path)!r} is not allowed: it exists already (never overwritten unless "
                           "overwrite=True)")

@@ -97,6 +97,7 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -234,9 +235,11 @@ def _number(text: str, where: str, what: str) -> float:
 
 def _header(lines: list[str], name: str) -> tuple[dict, int]:
     if not lines or lines[0].strip() != VERSION_LINE:
-        first = lines[0].strip() if lines else ""
-        raise MagexpError(f"{name}: first line {excerpt(first)} is not allowed: it must be {VERSION_LINE!r} "
-                          "(or the file must be plain numbers in three columns)")
+        first = lines[0].rstrip("\r\n") if lines else ""
+        col = len(os.path.commonprefix([first, VERSION_LINE])) + 1  # where it departs from the version line
+        found = f"found {excerpt(first[col - 1:col])}" if col <= len(first) else "the line ends"
+        raise MagexpError(f"{name} line 1, column {col}: {found}, expected {VERSION_LINE!r} as the first line "
+                          "(or plain numbers in three columns)")
     meta, i = {}, 1
     while i < len(lines) and lines[i].lstrip().startswith("#"):
         key, sep, value = lines[i].lstrip()[1:].partition(":")

@@ -9,6 +9,8 @@ from functools import cache
 
 import numpy as np
 
+from magexp.core.limits import refuse_over
+from magexp.errors import check_positive_int
 from magexp.estimators.circle import FORMS, circle_map
 from magexp.problems import kernels
 
@@ -60,7 +62,8 @@ class CircleMap:
     def __init__(self, form: str = "printed", burn_in: int = 0):
         circle_map(np.zeros(1), form)  # validates the form
         self.form = form
-        self.burn_in = int(burn_in)
+        self.burn_in = check_positive_int(burn_in, "estimator.init.burn_in", minimum=0)
+        refuse_over(self.burn_in, "run_work", f"estimator.init.burn_in={burn_in!r}", "its steps of the map are")
 
     def sequence(self, z0: np.ndarray, n: int) -> np.ndarray:
         """The ``n`` iterates after ``burn_in`` steps from ``z0``, shape ``(n, d)``."""

@@ -59,6 +59,7 @@ from magexp.core.atomic import write_bytes
 from magexp.core.datafiles import data_files, data_formats
 from magexp.paths import CACHE, ROOT
 from magexp.problems import OBJECTIVES
+from magexp.run.guard import check_cache_folder
 
 #: the modules every run executes whatever its config: the runner, which builds the config's objects,
 #: makes the problem, fits and evaluates (with its import closure: metrics, bounds, seeding, the bases)
@@ -492,16 +493,28 @@ def _arrays(buf: bytearray, table: list, start: int) -> list:
     return arrays
 
 
+#: the largest cache entry read (bytes): far above a run's output within the budget's limits
+MAX_ENTRY = 2 ** 30
+
+
 def read(path: Path, key: str, kind: str):
     """The value of the entry at ``path`` (:func:`unpack`). Raises ``FileNotFoundError`` if there
-    is none, ``PermissionError`` if it cannot be read, :class:`InvalidEntry` if it is not valid."""
+    is none, ``PermissionError`` if it cannot be read, :class:`InvalidEntry` if it is not valid.
+    An entry is read only if it is a regular file (a FIFO or a device is never opened for a
+    blocking read) of at most :data:`MAX_ENTRY` bytes (a huge file is refused by its size, unread)."""
     try:
-        with open(path, "rb") as fh:
-            buf = bytearray(os.fstat(fh.fileno()).st_size)
-            if fh.readinto(buf) != len(buf):
-                raise InvalidEntry("shorter than its size")
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except IsADirectoryError:
         raise InvalidEntry("a folder, not a file") from None
+    with open(fd, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        if not stat.S_ISREG(st.st_mode):
+            raise InvalidEntry("not a regular file")
+        if st.st_size > MAX_ENTRY:
+            raise InvalidEntry(f"{st.st_size} bytes, more than an entry holds ({MAX_ENTRY})")
+        buf = bytearray(st.st_size)
+        if fh.readinto(buf) != len(buf):
+            raise InvalidEntry("shorter than its size")
     return unpack(buf, key, kind)
 
 
@@ -543,7 +556,9 @@ def _folder(path: Path, root: Path) -> None:
 
 def write(path: Path, data: bytes, root: Path) -> None:
     """Write ``data`` to ``path`` (inside the cache folder ``root``) atomically
-    (:func:`magexp.core.atomic.write_bytes`), with the permissions of :func:`_modes`. Raises ``OSError``."""
+    (:func:`magexp.core.atomic.write_bytes`), with the permissions of :func:`_modes`. Raises ``OSError``,
+    or MagexpError for a cache folder inside ``results/`` (:func:`magexp.run.guard.check_cache_folder`)."""
+    check_cache_folder(str(root))
     _folder(path.parent, root)
     write_bytes(path, data, mode=_modes(root)[0])
 

@@ -31,9 +31,10 @@ from omegaconf import OmegaConf
 
 from magexp.errors import MagexpError, guarded
 from magexp.paths import CONF
-from magexp.run.compose import GROUPS, compose_config, options, register_schemas
-from magexp.run.guard import (check_destination, check_flags, check_output_folder, check_override_values,
-                              check_subdir, create_unique, first_missing, removed_on_failure)
+from magexp.run.compose import GROUPS, compose_config, options, parse_overrides, register_schemas
+from magexp.run.guard import (check_destination, check_flags, check_hydra_keys, check_output_folder,
+                              check_override_targets, check_override_values, check_subdir, create_unique,
+                              first_missing, removed_on_failure)
 from magexp.run.outputs import execute, print_table
 from magexp.run.preflight import check_jobs, expand_sweep, validate_runs
 from magexp.run.provenance import version_line
@@ -132,7 +133,7 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
     validate_runs(jobs, keep=False)
     explicit = [o for o in hydra_overrides if o.startswith("hydra.sweep.dir=")]
     if explicit:
-        folder, created = check_output_folder(explicit[-1].partition("=")[2], "hydra.sweep.dir"), None
+        folder, created = check_output_folder(folder_of(explicit[-1]), "hydra.sweep.dir"), None
     else:
         folder = Path(time.strftime(SWEEP_DIR))
         check_output_folder(folder, "sweep folder")
@@ -174,7 +175,7 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
 
 def run_one(user: list[str], hyd: list[str]) -> None:
     """One run: ``hydra.run.dir`` is the only Hydra setting it takes; a value list needs ``-m``."""
-    run_dirs = [o.partition("=")[2] for o in hyd if o.startswith("hydra.run.dir=")]
+    run_dirs = [folder_of(o) for o in hyd if o.startswith("hydra.run.dir=")]
     for run_dir in run_dirs:  # not empty, not a root, not inside results/
         check_destination(run_dir, "hydra.run.dir")
     if len(run_dirs) != len(hyd):
@@ -188,11 +189,55 @@ def run_one(user: list[str], hyd: list[str]) -> None:
     single_run(user, run_dirs[-1] if run_dirs else None)
 
 
+FOLDER_KEYS = ("hydra.run.dir", "hydra.sweep.dir")  # the output folders a command line may name
+
+
+def folder_overrides(hyd: list[str]) -> list[str]:
+    """``hyd`` with each output folder override (:data:`FOLDER_KEYS`, also as ``+key`` / ``++key``) as
+    ``key=value``, its folder read as Hydra's parser reads it, or one line: an interpolation
+    (``${oc.env:...}``, ``${hydra:...}``, resolved only later, could point into ``results/`` or name a
+    folder literally ``${...}``), a deletion, or a value Hydra cannot read as one path (an ``=``, a
+    comma, a space...), with how to quote it."""
+    out = []
+    for ov in hyd:
+        key, _, value = ov.partition("=")
+        name = key.lstrip("+~")
+        if name not in FOLDER_KEYS:
+            out.append(ov)
+            continue
+        if key.startswith("~"):
+            raise MagexpError(f"{ov} is not allowed: name a folder ({name}=<folder>)")
+        if "${" in value:
+            raise MagexpError(f"{name}={value!r} is not allowed: interpolations (${{...}}) are not read in an "
+                              "output folder (resolved later they could point anywhere); give the folder itself")
+        try:
+            parsed = parse_overrides([f"{name}={value}"])[0]
+            folder = parsed.value() if not parsed.is_sweep_override() else None
+        except MagexpError:
+            folder = None
+        if not isinstance(folder, str):
+            quoted = value.replace("'", "\\'")
+            raise MagexpError(f"{name}={value!r} is not allowed as written: Hydra reads an '=', ',', space, quote or "
+                              f"bracket in it; quote the folder for Hydra, e.g. \"{name}='{quoted}'\"")
+        out.append(f"{name}={value}")
+    return out
+
+
+def folder_of(ov: str) -> str:
+    """The folder of a checked output folder override (:func:`folder_overrides`)."""
+    return parse_overrides([ov])[0].value()
+
+
 def run_command(args: list[str]) -> None:
     """``magexp ARGS``: help, version, the composed config, Hydra's own flags, a sweep, or one run."""
     user, hyd, flags = split_args(args)
-    user = check_override_values(user)
     check_flags(flags)
+    check_hydra_keys(hyd)  # no code from an override: before anything reads them
+    check_override_targets(user + hyd)
+    checked = folder_overrides(hyd)
+    args = [dict(zip(hyd, checked)).get(a, a) for a in args]
+    hyd = checked
+    user = check_override_values(user)
     if flags.get("-h") or flags.get("--help"):
         return print_help()
     if flags.get("--version"):

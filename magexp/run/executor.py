@@ -265,6 +265,10 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
         raise MagexpError(f"--executor {kind!r} is not allowed: choose one of {', '.join(EXECUTORS)}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
         raise MagexpError(f"--jobs {jobs!r} is not allowed: it must be an integer >= 0 (0: all cores)")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    if jobs > cores and (kind == "local" or scheduler is None):  # processes on this machine
+        raise MagexpError(f"--jobs {jobs} is not allowed: this machine gives {cores} cores; give at most {cores} "
+                          "(0: all cores)")
     if scheduler is not None and kind != "dask":
         raise MagexpError(f"--scheduler {scheduler!r} needs --executor dask")
     check_scheduler_address(scheduler)
@@ -379,11 +383,13 @@ def run_row(out) -> dict:
 class Outputs(Sequence):
     """The outputs of :func:`run_many`, read back from the run cache on access (a few are kept).
 
-    ``metrics(i)`` gives run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output.
+    ``metrics(i)`` gives run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output;
+    ``was_cached(i)`` whether it was read from the run cache (a valid entry) rather than computed.
     """
 
-    def __init__(self, keys: list[str], metrics: dict[str, dict], root=None, keep: int = 256, held=None):
-        self.keys, self._metrics, self.root, self.keep = keys, metrics, root, keep
+    def __init__(self, keys: list[str], metrics: dict[str, dict], root=None, keep: int = 256, held=None,
+                 read: frozenset = frozenset()):
+        self.keys, self._metrics, self.root, self.keep, self.read = keys, metrics, root, keep, read
         self.held = {} if held is None else held  # outputs the run cache could not keep, by key
         self._recent: OrderedDict = OrderedDict()
 
@@ -392,6 +398,9 @@ class Outputs(Sequence):
 
     def metrics(self, i: int) -> dict:
         return self._metrics[self.keys[i]]
+
+    def was_cached(self, i: int) -> bool:
+        return self.keys[i] in self.read
 
     def __getitem__(self, i):
         if isinstance(i, slice):
@@ -429,6 +438,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     for i, key in enumerate(keys):
         first.setdefault(key, i)
     metrics = _cached_rows(first, use_cache)
+    read = frozenset(metrics)  # valid entries only: a damaged one is recomputed, not read
     todo = [i for key, i in first.items() if key not in metrics]
     if counts is not None:
         counts.update(requested=len(configs), distinct=len(first), computed=len(todo), cached=len(first) - len(todo))
@@ -453,7 +463,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     if counts is not None:
         counts.update(fit_cpu=done.fit_cpu, task_cpu=done.task_cpu, computed=counts["computed"] - done.shared,
                       cached=counts["cached"] + done.shared)
-    return Outputs(keys, metrics, held=done.held)
+    return Outputs(keys, metrics, held=done.held, read=read)
 
 
 def _cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:

@@ -16,9 +16,11 @@ import json
 
 import numpy as np
 from hydra.core.override_parser.types import Glob
+from omegaconf import OmegaConf
 
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check, check_positive_int
+from magexp.paths import CONF
 from magexp.problems import make_problem
 from magexp.run.budget import Tally, check_run, check_sweep
 from magexp.run.compose import GROUPS, check_choice, compose_config, options, parse_overrides, resolved, yaml_value
@@ -115,6 +117,7 @@ def _check_config(cfg, seen: set, estimates: dict):
     check_seed(cfg.seed)
     plain = resolved(cfg)
     check_run_values(plain)
+    check_label(plain.get("estimator") or {})
     s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
     e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
     if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
@@ -127,6 +130,19 @@ def _check_config(cfg, seen: set, estimates: dict):
         check_problem(cfg, scenario)
         seen.add(s_key)
     return estimates[s_key, e_key]
+
+
+def check_label(estimator: dict) -> None:
+    """An estimator's ``name`` labels its metrics in every table: the name of another estimator config
+    whose class differs (``estimator=lm estimator.name=ipso``: ``lm`` labelled ``ipso``) is refused; a
+    name of its own (``estimator.name=ipso_w``, an ablation's variant) is the caller's label."""
+    name, target = estimator.get("name"), estimator.get("_target_")
+    if isinstance(name, str) and name in options("estimator"):
+        theirs = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("_target_")
+        if theirs != target:
+            raise MagexpError(f"estimator.name={name!r} is not allowed for {str(target).rpartition('.')[2]}: it is the "
+                              f"label of conf/estimator/{name}.yaml ({str(theirs).rpartition('.')[2]}); choose "
+                              f"estimator={name}, or a name of its own")
 
 
 def check_jobs(overrides: list[str], jobs: list) -> None:

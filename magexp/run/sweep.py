@@ -36,7 +36,6 @@ from omegaconf import OmegaConf, open_dict
 from magexp.core.atomic import atomic_open, write_text
 from magexp.errors import MagexpError
 from magexp.paths import CONF
-from magexp.run import cache
 from magexp.run.compose import GROUPS, compose_config, hydra_compose, resolved, yaml_value
 from magexp.run.executor import check_executor, make_executor, run_many
 from magexp.run.guard import check_job_folders
@@ -177,12 +176,11 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
 
     ``settings``: ``executor`` (``local`` | ``dask``), ``jobs`` (0: all cores) and ``scheduler``
     (:func:`magexp.run.executor.make_executor`). A job's ``cached`` column says whether its result
-    was in the run cache when the batch started.
+    was read from the run cache (a valid entry; a damaged one is recomputed and says False).
     """
     check_settings(settings)
     jobs = [list(o) for o in job_overrides]
     plains = _configs(jobs)
-    cached = [cache.exists(key) for key in cache.run_keys(plains)]
     sweep_dir = Path(str(config.hydra.sweep.dir))
     folders = [sweep_dir / job_subdir(config, initial_job_idx + n, job) for n, job in enumerate(jobs)]
     check_job_folders(folders, sweep_dir)  # before the first run
@@ -195,7 +193,7 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
             outputs = run_many(plains, executor=ex, progress=progress)
     returns = []
     for n, (job, plain, folder) in enumerate(zip(jobs, plains, folders)):
-        metrics = write_outputs(outputs[n], plain, folder, cached=cached[n])
+        metrics = write_outputs(outputs[n], plain, folder, cached=outputs.was_cached(n))
         (folder / ".hydra").mkdir(exist_ok=True)
         write_text(folder / ".hydra" / "overrides.yaml", to_yaml(job))
         returns.append(JobReturn(overrides=job, working_dir=str(folder), task_name=str(config.hydra.job.name),

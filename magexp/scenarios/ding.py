@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.core.dataset import Dataset, Truth
-from magexp.errors import check_positive_int, MagexpError
+from magexp.errors import MagexpError, check, check_positive_int
 from magexp.core.geometry import field_ned, random_rotations
 from magexp.scenarios.noise import Noise
 from magexp.scenarios.search import SearchBox
@@ -50,6 +50,11 @@ def error_model(*, scale, nonorthogonality_deg, soft_iron, hard_iron, bias) -> t
     s = _vector(soft_iron, "errors.soft_iron", (3, 3))
     kc = np.diag(k) @ c
     m = kc @ (np.eye(3) + s)
+    check(np.all(k != 0), f"errors.scale={list(map(float, k))!r} is not allowed: each axis's scale must be non-zero "
+          "(a zero scale loses that axis)")
+    check(abs(np.linalg.det(m)) > 1e-9 * max(np.abs(m).max(), 1e-300) ** 3,
+          "errors.nonorthogonality_deg and errors.soft_iron are not allowed together: they make the error matrix "
+          "singular (an axis lost); keep each angle below 90 degrees and I + soft_iron invertible")
     i = kc @ _vector(hard_iron, "errors.hard_iron", (3,)) + _vector(bias, "errors.bias", (3,))
     return m, i
 

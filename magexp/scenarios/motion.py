@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.core.limits import refuse_over
 from magexp.errors import MagexpError, check, check_nonnegative, check_positive_int
 
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -72,6 +73,12 @@ class Trajectory:
         self.dt = check_nonnegative(sample_period, "rotation.sample_period")
         check(self.rate > 0, f"rotation.rate_deg_s={rate_deg_s!r} is not allowed: it must be > 0")
         check(self.dt > 0, f"rotation.sample_period={sample_period!r} is not allowed: it must be > 0")
+        refuse_over(self.samples(), "readings", f"scenario.rotation.sample_period={sample_period!r}",
+                    "its turns at this rate and period are samples")  # counted before any array is made
+
+    def samples(self) -> float:
+        """The number of steps of :meth:`rates`, counted without making them."""
+        return sum(max(round(arc / (self.rate * self.dt)), 1) for _, arc in self.segments)
 
     def rates(self) -> np.ndarray:
         """True body rates (rad/s) of every step, shape ``(K, 3)``."""

@@ -70,8 +70,8 @@ class RecordingScenario:
         self.window = window
         self.rest_file = rest_file
         self.n_readings = None if n_readings is None else check_positive_int(n_readings, "scenario.n_readings", 12)
-        self.folds = int(folds)
-        self.heldout_fold = int(heldout_fold)
+        self.folds = check_positive_int(folds, "scenario.folds", minimum=0)
+        self.heldout_fold = check_positive_int(heldout_fold, "scenario.heldout_fold", minimum=0)
         if self.folds and not 0 <= self.heldout_fold < self.folds:
             raise MagexpError(f"scenario.heldout_fold={heldout_fold!r} is not allowed: choose 0 to {self.folds - 1}")
         if box not in ("auto", *BOXES):
@@ -102,6 +102,9 @@ class RecordingScenario:
         rec = self.recording()
         n = rec.n
         heldout = np.zeros(n, bool)
+        if self.objective == "scalar" and self.folds > n:
+            raise MagexpError(f"scenario.folds={self.folds} is not allowed: the recording holds {n} readings; give "
+                              f"at most {n} blocks (0: none)")
         if self.objective == "scalar" and self.folds > 1:
             edges = np.linspace(0, n, self.folds + 1).astype(int)
             heldout[edges[self.heldout_fold]:edges[self.heldout_fold + 1]] = True
