@@ -87,11 +87,28 @@ class Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
+#: the signal :func:`_stop` received, once one has (a library that catches every exception may have swallowed it)
+_STOPPED: list[int] = []
+
+
+def _stopping(signum: int) -> KeyboardInterrupt:
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+
+
 def _stop(signum, frame) -> None:
     """The handler of :func:`stop_on_signals`: broken pipes become errors from now on (the workers are
     about to be stopped: writing to them must not kill this process silently), then Ctrl-C's path."""
     signal.signal(signal.SIGPIPE, signal.SIG_IGN)
-    raise KeyboardInterrupt if signum == signal.SIGINT else Terminated(signum)
+    _STOPPED.append(signum)
+    raise _stopping(signum)
+
+
+def raise_if_stopped() -> None:
+    """Raise again the stop of a signal :func:`_stop` received: for a handler of ``Exception`` around a
+    library call that may turn the signal's exception into one of its own (OmegaConf's merge, seen
+    swallowing a SIGTERM into a ``ConfigKeyError``), so that the command still stops."""
+    if _STOPPED:
+        raise _stopping(_STOPPED[0])
 
 
 def stop_on_signals() -> None:
@@ -119,10 +136,15 @@ def guarded(func, *args):
     sweep's launcher): :class:`MagexpError` and ``OSError`` (a file or folder the user named) exit
     :data:`EXIT_BAD_INPUT`, and so does a missing optional package (the line names its extra,
     :data:`EXTRAS`); Ctrl-C exits :data:`EXIT_INTERRUPTED` with one line; anything else is a
-    bug: one line and :data:`EXIT_BUG` (``MAGEXP_DEBUG=1`` shows the traceback).
+    bug: one line and :data:`EXIT_BUG` (``MAGEXP_DEBUG=1`` shows the traceback). An error raised after a
+    stop signal was received is that stop (:func:`raise_if_stopped`): the signal decides how it ends.
     """
     try:
-        return func(*args)
+        try:
+            return func(*args)
+        except Exception:
+            raise_if_stopped()
+            raise
     except MagexpError as exc:
         fail(str(exc).splitlines()[0] if str(exc) else "bad input")
     except Terminated as exc:

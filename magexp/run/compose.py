@@ -30,7 +30,7 @@ from typing import Any, List, Optional
 from omegaconf import MISSING, DictConfig, OmegaConf, flag_override
 
 from magexp import paths
-from magexp.errors import MagexpError
+from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
 from magexp.run import cache
 
@@ -415,6 +415,7 @@ def _config_from(entry) -> DictConfig:
         for name, schema in entry["schemas"].items():
             cfg[name] = OmegaConf.merge(OmegaConf.structured(SCHEMAS[schema]), entry["config"][name])
     except Exception as exc:  # OmegaConf refuses what its schema does not allow
+        raise_if_stopped()  # ...or it swallowed a SIGTERM that arrived during the merge
         raise cache.InvalidEntry(f"not a composed config: {type(exc).__name__}") from None
     OmegaConf.set_struct(cfg, True)
     return cfg
