@@ -752,19 +752,30 @@ def test_sigterm_during_a_sweep_leaves_nothing(tmp_path):
     assert not sweep_dir.exists()
 
 
-def test_a_sigterm_that_omegaconf_swallows_still_stops_the_command(monkeypatch):
+def test_a_sigterm_that_omegaconf_swallows_still_stops_the_command():
     """OmegaConf turns an exception raised inside its merge (the signal handler's ``Terminated``) into a
     ``ConfigKeyError`` about one time in seven (measured with a timer signal): the sweep above then read
     it as a damaged composed-config entry and ran on to exit 0. A stop received before such an error is
-    raised again, so the command still ends as the signal asks."""
-    import signal
-
-    from magexp import errors
-    from magexp.run import cache, compose
-
-    entry = {"config": {"scenario": {"n_readings": "many"}}, "schemas": {"scenario": "ding"}}  # a refused value
-    with pytest.raises(cache.InvalidEntry):
-        compose._config_from(entry)
-    monkeypatch.setattr(errors, "_STOPPED", [signal.SIGTERM])
-    with pytest.raises(errors.Terminated):
-        compose._config_from(entry)
+    raised again, so the command still ends as the signal asks (in a process of its own: the handlers
+    are a command's)."""
+    script = """
+import os, signal
+from magexp import errors
+from magexp.run import cache, compose
+entry = {"config": {"scenario": {"n_readings": "many"}}, "schemas": {"scenario": "ding"}}  # a refused value
+try:
+    compose.config_from(entry)
+except cache.InvalidEntry:
+    print("invalid")
+errors.stop_on_signals()
+try:
+    os.kill(os.getpid(), signal.SIGTERM)
+except errors.Terminated:
+    print("stopped")
+try:
+    compose.config_from(entry)
+except errors.Terminated as exc:
+    print("stopped again", exc.signum)
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert done.stdout.split("\n")[:3] == ["invalid", "stopped", "stopped again 15"], done.stdout + done.stderr

@@ -368,7 +368,7 @@ def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
     key = _compose_key(config_name, choices)
     path = root / f"{key}.json"
     try:
-        return _config_from(cache.read(path, key, "config"))
+        return config_from(cache.read(path, key, "config"))
     except FileNotFoundError:
         pass
     except (OSError, cache.InvalidEntry) as exc:
@@ -377,7 +377,7 @@ def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
     entry = {"config": OmegaConf.to_container(cfg, resolve=False),
              "schemas": {name: schema for name in cfg if (schema := _schema_of(cfg[name]))}}
     try:
-        if OmegaConf.to_yaml(_config_from(entry)) == OmegaConf.to_yaml(cfg):
+        if OmegaConf.to_yaml(config_from(entry)) == OmegaConf.to_yaml(cfg):
             _PENDING.append((path, cache.pack(key, "config", entry), root))  # kept once the overrides pass
     except cache.InvalidEntry:  # a config this format cannot hold exactly: composed every time
         pass
@@ -404,7 +404,7 @@ def _schema_of(node) -> str | None:
     return next((name for name, schema in SCHEMAS.items() if schema is kind), None)
 
 
-def _config_from(entry) -> DictConfig:
+def config_from(entry) -> DictConfig:
     """The config an entry of :func:`_stored_compose` holds: its container, each typed node merged
     onto its schema (so its keys and value types are checked as Hydra's are), in struct mode."""
     if not (isinstance(entry, dict) and isinstance(entry.get("config"), dict) and isinstance(entry.get("schemas"), dict)
