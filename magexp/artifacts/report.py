@@ -369,9 +369,12 @@ def _headline_table(p: Paper) -> str:
 
 def draw_readings(p: Paper) -> None:
     """``<paper>/readings.png``: the verdict of each headline under each reading
-    (:mod:`magexp.artifacts.plots.readings`); none for a paper without headlines."""
+    (:mod:`magexp.artifacts.plots.readings`), and the cells it draws in ``readings.csv``; none for a
+    paper without headlines."""
     if p.headlines:
         (p.root / p.paper).mkdir(parents=True, exist_ok=True)
+        write_csv(pd.DataFrame(readings_plot.cells(p.headlines), columns=["headline", "reading", "verdict"]),
+                  p.root / p.paper / "readings.csv")
         save(readings_plot.draw(p.headlines, f"{p.meta.title}: each headline under each reading"),
              p.root / p.paper / "readings.png")
 

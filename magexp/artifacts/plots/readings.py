@@ -28,9 +28,21 @@ def cells_of(headline: dict) -> list[tuple[str, str]]:
     return [(r["label"], r["verdict"]) for r in readings] or [("magexp's settings", headline["verdict"])]
 
 
+def drawn(headlines: list[dict]) -> list[dict]:
+    """The headlines the grid draws: every one but the untestable (no runs to judge)."""
+    return [h for h in headlines if h["verdict"] != "not testable here"]
+
+
+def cells(headlines: list[dict]) -> list[dict]:
+    """The data the grid draws, a row per cell: ``headline`` (its id), ``reading`` and ``verdict``
+    (written beside the figure as ``readings.csv``, what ``magexp verify`` compares)."""
+    return [{"headline": h["id"], "reading": label, "verdict": verdict}
+            for h in drawn(headlines) for label, verdict in cells_of(h)]
+
+
 def draw(headlines: list[dict], title: str):
     """The grid of ``headlines`` (rows of :func:`magexp.artifacts.report.headlines`) as a figure."""
-    rows = [h for h in headlines if h["verdict"] != "not testable here"]
+    rows = drawn(headlines)
     width = max((len(cells_of(h)) for h in rows), default=1)
     fig, ax = plt.subplots(figsize=(1.9 * width + 2.2, 0.62 * len(rows) + 0.9))
     for i, h in enumerate(rows):
