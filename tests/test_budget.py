@@ -197,7 +197,7 @@ def test_every_papers_reproduction_is_within_the_runs_limit():
 
     selected = select(available_papers(), None)
     runs = check_reproduction(selected, None)
-    assert 10000 < runs < limits.limit("runs") / 10  # make reproduce: about 14000 runs, far from the limit
+    assert 10000 < runs < limits.limit("runs") / 8  # make reproduce: about 20600 runs, far from the limit
 
 
 def test_reproduce_seeds_is_refused_before_planning(work, started, capsys):
