@@ -558,6 +558,8 @@ TABLE = [
 #      once) given a wrong type, NaN, infinity, a negative number and, where its meaning excludes it, zero;
 #      through the command line and, for the estimators that calibrate, through the API
 
+#: keys whose line names them by their last part: the search box, shared by every scenario, names its own arguments
+PART_NAMED = {"scenario.matrix_bound": "matrix_bound"}
 #: keys whose negative values have a meaning (angles)
 NEGATIVE_ALLOWED = {"scenario.field.inclination", "scenario.field.declination"}
 #: keys whose zero has a meaning: a default (cma's population), none (no noise, drift, process noise, burn-in,
@@ -613,7 +615,7 @@ def generated_rows() -> list:
                 seen.add((target, key))
                 for typed, shown in bad_values(key, target):
                     rows.append(row("run", [f"{group}={name}", *others, f"{key}={typed}"],
-                                    [f"{key.rpartition('.')[2]}=", shown]))
+                                    [f"{PART_NAMED.get(key, key)}=", shown]))
                 if group == "estimator" and key.count(".") == 1 and name in API_ESTIMATORS:
                     option = key.partition(".")[2]
                     for typed, shown in bad_values(key, target):

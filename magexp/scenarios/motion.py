@@ -71,10 +71,10 @@ class Trajectory:
         arc = check_nonnegative(partial_arc_deg, "scenario.rotation.partial_arc_deg")
         check(arc > 0, f"scenario.rotation.partial_arc_deg={partial_arc_deg!r} is not allowed: it must be > 0")
         self.segments = segments_of(mode, segments, arc)
-        self.rate = check_nonnegative(rate_deg_s, "rotation.rate_deg_s")
-        self.dt = check_nonnegative(sample_period, "rotation.sample_period")
-        check(self.rate > 0, f"rotation.rate_deg_s={rate_deg_s!r} is not allowed: it must be > 0")
-        check(self.dt > 0, f"rotation.sample_period={sample_period!r} is not allowed: it must be > 0")
+        self.rate = check_nonnegative(rate_deg_s, "scenario.rotation.rate_deg_s")
+        self.dt = check_nonnegative(sample_period, "scenario.rotation.sample_period")
+        check(self.rate > 0, f"scenario.rotation.rate_deg_s={rate_deg_s!r} is not allowed: it must be > 0")
+        check(self.dt > 0, f"scenario.rotation.sample_period={sample_period!r} is not allowed: it must be > 0")
         refuse_over(self.samples(), "readings", f"scenario.rotation.sample_period={sample_period!r}",
                     "its turns at this rate and period are samples")  # counted before any array is made
 
