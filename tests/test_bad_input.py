@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from magexp.errors import MagexpError
-from magexp.paths import RESULTS
+from magexp.paths import RESULTS, SHARED_DATA
 
 MOCKUP_HEADER = "# magexp-recording v1\n# unit: nT\n# angles: rad\n# field: 34425, 1961, 35898\nbx,by,bz,heading,roll,trim\n"
 ROWS = "".join(f"{1000 + 37 * i},{-500 + 11 * i * i % 700},{200 + 53 * i % 900},{0.1 * i},0.01,-0.02\n"
@@ -67,6 +67,8 @@ FILES = {
 }
 BINARY = bytes(range(256)) * 4  # not UTF-8 text
 ENVIRON = b"SECRET_KEY=swordfish\x00HOME=/root\x00PATH=/usr/bin\x00"  # like /proc/self/environ
+
+DATAFLASH = SHARED_DATA / "ardupilot_test.bin"  # a real DataFlash log, damaged in the working folder
 
 MOCKUP = ["scenario=yan2022_mockup", "estimator=ls"]
 DASK = ["hydra.launcher.executor=dask"]
@@ -472,7 +474,162 @@ TABLE = [
     row("api", load("binary.csv"), ["binary.csv", "not UTF-8"]),
     row("api", load("plain.txt", unit="µ"), ["unit='µ'"]),
     row("api", load("good.csv", format="nope"), ["data.format='nope'"]),
+    # ---- the last silent and multi-line cases of issue 34: zeros no key allows, implausible rates, a
+    #      binary file and a damaged log (one line each), every field.* value, a bool that must be a bool
+    row("run", ["estimator=pso", "estimator.velocity_clamp=0"], ["velocity_clamp=0", "> 0", "unbounded"]),
+    row("run", ["estimator=ipso", "estimator.velocity_clamp=0"], ["velocity_clamp=0", "> 0"]),
+    row("run", ["estimator=pso9", "estimator.velocity_clamp=-1"], ["velocity_clamp=-1"]),
+    row("run", ["estimator=rdpso", "estimator.velocity_clamp=0"], ["velocity_clamp=0", "> 0"]),
+    row("run", ["estimator=rdpso", "estimator.velocity_limit=0"], ["velocity_limit=0", "> 0"]),
+    row("run", ["estimator=ipso", "estimator.velocity.c1.start=-1"], ["velocity.c1.start=-1", ">= 0"]),
+    row("run", ["scenario=yuan2018_mode1", "estimator=ekf", "estimator.r=0"], ["estimator.r=0", "> 0"]),
+    row("run", ["scenario=yuan2018_mode1", "estimator=ekf", "estimator.r=-1"], ["estimator.r=-1"]),
+    row("run", ["scenario=yan2022_sim", "estimator=kf", "estimator.offset_scale=0"], ["offset_scale=0", "> 0"]),
+    row("run", ["estimator=ellipsoid_specific", "estimator.k=0"], ["estimator.k=0", "> 0"]),
+    row("run", ["scenario=yuan2018_adis16488", "estimator=lm", "scenario.gyro.noise_deg_s=1e12"],
+        ["scenario.gyro.noise_deg_s=1e+12", "<= 4000", "full-scale"]),
+    row("run", ["scenario=yuan2018_mode1", "estimator=lm", "scenario.gyro.drift_deg_h=1e12"], ["drift_deg_h=1e+12"]),
+    row("run", ["scenario=yuan2018_mode2", "estimator=lm", "scenario.rotation.partial_arc_deg=-1"],
+        ["partial_arc_deg=-1"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.bias_bound_deg_s=abc"], ["bias_bound_deg_s='abc'"]),
+    row("run", ["scenario=real_xio_fusion", "estimator=lm", "scenario.bias_bound_deg_s=-1"], ["bias_bound_deg_s=-1"]),
+    row("calibrate", ["data.path=random.bin"], ["random.bin", "no DataFlash log", "byte 0"]),
+    row("calibrate", ["data.path=random.bin", "data.format=dataflash"], ["random.bin", "byte 0"]),
+    row("calibrate", ["data.path=flipped.bin"], ["flipped.bin", "damaged at byte"]),
+    *(row("calibrate", ["data.path=good.csv", *args], words) for args, words in [
+        (["field.model=42"], ["field.model=42", "igrf, wmm"]),
+        (["field.date=someday"], ["field.date='someday'", "YYYY-MM-DD"]),
+        (["field.date=2020-13-01"], ["field.date='2020-13-01'"]),
+        (["field.date=true"], ["field.date=True"]),
+        (["field.date=2200-01-01"], ["field.date='2200-01-01'", "1900 to 2030"]),
+        (["field.model=wmm", "field.date=2000-01-01"], ["field.date='2000-01-01'", "model=wmm"]),
+        (["field.latitude=abc"], ["field.latitude='abc'", "[-90, 90]"]),
+        (["field.latitude=100"], ["field.latitude=100"]),
+        (["field.latitude=nan"], ["field.latitude=nan"]),
+        (["field.longitude=500"], ["field.longitude=500", "[-180, 360]"]),
+        (["field.longitude=abc"], ["field.longitude='abc'"]),
+        (["field.longitude=inf"], ["field.longitude=inf"]),
+        (["field.altitude_km=abc"], ["field.altitude_km='abc'", "35786"]),
+        (["field.altitude_km=nan"], ["field.altitude_km=nan"]),
+        (["field.altitude_km=-1e9"], ["field.altitude_km=", "[-11, 35786]"]),
+        (["field.latitude=10", "field.longitude=10", "field.date=2020-01-01", "field.altitude_km=1e9"],
+         ["field.altitude_km="]),
+        (["data.reference_total=50", "field.longitude=999"], ["field.longitude=999"]),  # unused, still refused
+        (["igrf.date=someday"], ["igrf.date='someday'"]),
+        (["igrf.altitude_km=abc"], ["igrf.altitude_km='abc'"]),
+        (["igrf.longitude=999"], ["igrf.longitude=999"]),
+        (["counts_nt=abc"], ["counts_nt='abc'", "> 0"]),
+        (["counts_nt=-1"], ["counts_nt=-1"]),
+        (["max_rotation_deg=-1"], ["max_rotation_deg=-1", "[0, 180]"]),
+        (["max_rotation_deg=abc"], ["max_rotation_deg='abc'"]),
+        (["auto_margin=-1"], ["auto_margin=-1", "[0, 1)"]),
+        (["auto_margin=nan"], ["auto_margin=nan"]),
+        (["auto_margin=1"], ["auto_margin=1"]),
+        (["accept=yes"], ["accept='yes'", "true"]),
+        (["accept=2"], ["accept=2"]),
+    ]),
+    row("api", api(accept="yes"), ["accept='yes'", "true or"]),
+    row("api", api(checks="no"), ["checks='no'"]),
+    row("api", api(accept=1), ["accept=1"]),
+    row("api", api(checks=None), ["checks=None"]),
+    row("api", api(model="full", auto_margin=-1), ["auto_margin=-1"]),
+    row("api", api(auto_margin="abc"), ["auto_margin='abc'"]),
+    row("api", api(gate="abc"), ["gate='abc'", "mapping"]),
+    row("api", api(gate={"max_rms_mG": -1}), ["gate.max_rms_mG=-1"]),
+    row("api", api(gate={"nosuch": 1}), ["gate.nosuch=1"]),
+    row("api", api(reference_total=True), ["reference_total=True"]),
+    row("api", api(reference_total=[1, 2]), ["reference_total=[1, 2]"]),
+    row("api", api(model=None), ["model=None"]),
+    row("api", api(objective=None), ["objective=None"]),
+    row("api", api(unit=3), ["unit=3"]),
+    row("api", api(folds=True), ["folds=True"]),
+    row("api", api(seed=True), ["seed=True"]),
+    row("api", api(seed=float("nan")), ["seed=nan"]),
+    row("api", api(folds=1e9), ["folds=1000000000", "at most"]),
+    row("api", lambda: magexp_calibration().export("ardupilot", "x.param", counts_nt="abc"), ["counts_nt='abc'"]),
+    row("api", lambda: magexp_calibration().export("ardupilot", "x.param", max_rotation_deg=-1),
+        ["max_rotation_deg=-1"]),
+    row("api", load("random.bin"), ["random.bin", "byte 0"]),
+    row("api", load("flipped.bin"), ["flipped.bin", "damaged"]),
 ]
+
+
+# ---- generated from conf/: every numeric key of every estimator and scenario config (each class's key
+#      once) given a wrong type, NaN, infinity, a negative number and, where its meaning excludes it, zero;
+#      through the command line and, for the estimators that calibrate, through the API
+
+#: keys whose line names them by their last part: the search box, shared by every scenario, names its own arguments
+PART_NAMED = {"scenario.matrix_bound": "matrix_bound"}
+#: keys whose negative values have a meaning (angles)
+NEGATIVE_ALLOWED = {"scenario.field.inclination", "scenario.field.declination"}
+#: keys whose zero has a meaning: a default (cma's population), none (no noise, drift, process noise, burn-in,
+#: folds), a tolerance met only at the budget's end, a prior or coefficient that switches its term off
+ZERO_ALLOWED = {
+    "estimator.popsize@magexp.estimators.cmaes.CMAES", "estimator.recombination", "estimator.tol@magexp.estimators.de.",
+    "estimator.tol@magexp.estimators.twostep.", "estimator.gtol", "estimator.p0_s", "estimator.p0_b", "estimator.q_s",
+    "estimator.q_b", "estimator.p0", "estimator.q", "estimator.agree_k", "estimator.agree_bp", "estimator.init.burn_in",
+    "estimator.velocity.", "scenario.folds", "scenario.heldout_fold", "scenario.noise", "scenario.angle_noise_deg",
+    "scenario.gyro.drift_deg_h", "scenario.gyro.noise_deg_s", "scenario.field.inclination",
+    "scenario.field.declination", "scenario.errors.", "scenario.angle_noise",
+}
+
+
+def zero_allowed(key: str, target: str) -> bool:
+    """Whether ``key`` of a config whose ``_target_`` is ``target`` takes 0 (:data:`ZERO_ALLOWED`:
+    ``key``, a prefix of it ending in ``.``, or ``key@target-prefix``)."""
+    return any(key == z or (z.endswith(".") and key.startswith(z))
+               or ("@" in z and key == z.partition("@")[0] and target.startswith(z.partition("@")[2]))
+               for z in ZERO_ALLOWED)
+
+
+def numeric_keys(node: dict, prefix: str):
+    """``(key, value)`` of every number (not a bool) under ``node``, a composed config's group."""
+    for k, v in node.items():
+        if isinstance(v, dict):
+            yield from numeric_keys(v, f"{prefix}{k}.")
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            yield f"{prefix}{k}", v
+
+
+def bad_values(key: str, target: str) -> list[tuple[str, str]]:
+    """``(typed, shown)``: the values of ``key`` refused, as typed and as the line shows them."""
+    out = [("abc", "abc"), ("nan", "nan"), ("inf", "inf")]
+    out += [] if key in NEGATIVE_ALLOWED else [("-1", "-1")]
+    return out + ([] if zero_allowed(key, target) else [("0", "0")])
+
+
+def generated_rows() -> list:
+    """The table's rows generated from ``conf/`` (see above)."""
+    from omegaconf import OmegaConf
+
+    from magexp.run.compose import compose_config, options
+
+    rows, seen = [], set()
+    for group, others in (("estimator", []), ("scenario", ["estimator=lm"])):
+        for name in options(group):
+            node = OmegaConf.to_container(compose_config([f"{group}={name}", *others])[group], resolve=True)
+            for key, _ in numeric_keys(node, f"{group}."):
+                target = str(node.get("_target_"))
+                if (target, key) in seen:
+                    continue
+                seen.add((target, key))
+                for typed, shown in bad_values(key, target):
+                    rows.append(row("run", [f"{group}={name}", *others, f"{key}={typed}"],
+                                    [f"{PART_NAMED.get(key, key)}=", shown]))
+                if group == "estimator" and key.count(".") == 1 and name in API_ESTIMATORS:
+                    option = key.partition(".")[2]
+                    for typed, shown in bad_values(key, target):
+                        value = {"abc": "abc", "nan": float("nan"), "inf": float("inf")}.get(typed, typed)
+                        value = int(value) if typed in ("-1", "0") else value
+                        rows.append(row("api", api(estimator=name, **{option: value}), [f"{option}=", shown]))
+    return rows
+
+
+#: the estimators that calibrate a recording (the scalar objective's), each given bad options through the API
+API_ESTIMATORS = ("cmaes", "de", "ellipsoid_specific", "ipso", "lm", "local", "ml_scalar", "pso", "rdpso",
+                  "triangular", "twostep")
+
+TABLE += generated_rows()
 
 CATEGORIES = ("clean", "not one line", "wrote something", "wrong result")
 
@@ -492,6 +649,10 @@ def make_workdir(folder: Path) -> Path:
         (folder / name).write_text(text)
     (folder / "binary.csv").write_bytes(BINARY)
     (folder / "environ").write_bytes(ENVIRON)
+    (folder / "random.bin").write_bytes(np.random.default_rng(0).bytes(4096))  # a .bin file: read as a log
+    log = bytearray(DATAFLASH.read_bytes())
+    log[log.index(b"\xa3\x95", len(log) // 3)] ^= 0x10  # a flipped bit in a message's header, a third of the way in
+    (folder / "flipped.bin").write_bytes(bytes(log))
     (folder / "a_file").write_text("not a folder\n")
     (folder / "a_folder").mkdir()
     (folder / "taken").mkdir()
@@ -564,7 +725,7 @@ def outcome(case, watched, capsys, monkeypatch) -> tuple[str, str]:
     if changed:
         return "wrote something", f"{got}: changed {[p for p, _ in changed][:3]}; {text[:200]}"
     if got != expected or len(lines) != 1 or "Traceback" in out + err or "error: unexpected" in text:
-        return "not one line", f"{got}, {len(lines)} lines: {text[:300]}"
+        return "not one line", f"{got}, {len(lines)} lines: {text[:900]}"
     if any(w not in lines[0] for w in words) or "swordfish" in out + err + message:
         return "not one line", f"{got}: the line lacks {[w for w in words if w not in lines[0]]}: {lines[0]}"
     return "clean", lines[0]
@@ -578,8 +739,13 @@ def workdir(tmp_path, monkeypatch):
 
 
 def test_table_has_every_case():
-    assert len(TABLE) >= 150
-    assert {entry for entry, *_ in TABLE} == {"run", "sweep", "calibrate", "reproduce", "api"}
+    """Issue 34: at least 400 command-line and 100 API cases, every numeric key of every config among them."""
+    entries = [entry for entry, *_ in TABLE]
+    assert sum(e != "api" for e in entries) >= 400 and entries.count("api") >= 100
+    assert set(entries) == {"run", "sweep", "calibrate", "reproduce", "api"}
+    generated = {arg.partition("=")[0] for entry, args, *_ in generated_rows() if entry != "api" for arg in args}
+    assert {"estimator.velocity_clamp", "estimator.r", "estimator.offset_scale", "scenario.gyro.noise_deg_s",
+            "scenario.bias_bound_deg_s", "estimator.velocity.c1.start"} <= generated
 
 
 @pytest.fixture(scope="module")
@@ -684,6 +850,9 @@ def test_valid_edges_are_accepted(workdir, cli):
 @pytest.mark.parametrize("args", [
     ["-m", "magexp", "calibrate", "data.path=good.csv", "folds=abc"],
     ["-m", "magexp.artifacts.reproduce", "ding2024", "--jobs", "abc"],
+    # pymavlink's indexer prints on the file descriptors themselves, which only a process shows
+    ["-m", "magexp", "calibrate", "data.path=random.bin"],
+    ["-m", "magexp", "calibrate", "data.path=flipped.bin"],
 ], ids=lambda a: " ".join(a[1:]))
 def test_bad_input_in_a_process(workdir, args):
     """The process boundary: the same one line, exit 2, from a real ``python -m ...``."""

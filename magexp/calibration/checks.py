@@ -8,6 +8,8 @@ core's (:mod:`magexp.core.identifiability`).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from magexp.core.identifiability import CELLS
@@ -147,6 +149,9 @@ def _pair(value, key: str) -> tuple[float, float]:
 def gate_thresholds(overrides=None) -> dict:
     """:data:`GATE` with ``overrides`` (a mapping of ``gate.*``), each checked; unknown keys refused."""
     out = dict(GATE)
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise MagexpError(f"gate={overrides!r} is not allowed: give a mapping of the gate's keys to thresholds "
+                          f"({', '.join(GATE)})")
     for key, value in dict(overrides or {}).items():
         if key not in GATE:
             raise MagexpError(f"gate.{key}={value!r} is not allowed: the gate's keys are {', '.join(GATE)}")

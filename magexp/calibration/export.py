@@ -116,19 +116,35 @@ def polar(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u @ vt, (s + s.T) / 2
 
 
+def _number(value) -> float:
+    """``value`` as a float (NaN for anything that is not a number, a bool included)."""
+    return float(value) if isinstance(value, (int, float, np.number)) and not isinstance(value, bool) else float("nan")
+
+
+def check_counts_nt(counts_nt) -> float:
+    """``counts_nt`` (nT per count) as a float, else one line."""
+    value = _number(counts_nt)
+    if not (np.isfinite(value) and value > 0):
+        raise MagexpError(f"counts_nt={counts_nt!r} is not allowed: it must be a number > 0 (nT per count)")
+    return value
+
+
+def check_max_rotation(max_rotation_deg) -> float:
+    """``max_rotation_deg`` as a float in [0, 180], else one line."""
+    limit = _number(max_rotation_deg)
+    if not 0 <= limit <= 180:
+        raise MagexpError(f"max_rotation_deg={max_rotation_deg!r} is not allowed: it must be a number of degrees in "
+                          "[0, 180]")
+    return limit
+
+
 def _factor(unit: str, target_unit: str, counts_nt, what: str) -> float:
     """Target units per ``unit``: from :data:`UNITS`, or ``counts_nt`` for a raw unit."""
     if unit in RAW_UNITS:
         if counts_nt is None:
             raise MagexpError(f"{what} {unit!r} has no known factor to nT: give counts_nt=<nT per count of the "
                               "firmware's magnetometer driver> to export it")
-        try:
-            value = float(counts_nt)
-        except (TypeError, ValueError):
-            value = float("nan")
-        if not (np.isfinite(value) and value > 0):
-            raise MagexpError(f"counts_nt={counts_nt!r} is not allowed: it must be a number > 0 (nT per count)")
-        return value / UNITS[target_unit]
+        return check_counts_nt(counts_nt) / UNITS[target_unit]
     if unit not in UNITS:
         raise MagexpError(f"{what} {unit!r} is not allowed: choose one of {', '.join((*UNITS, *RAW_UNITS))}")
     return UNITS[unit] / UNITS[target_unit]
@@ -156,13 +172,7 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
     else:
         k_in = _factor(unit, target_unit, counts_nt, "unit")
         k_out = _factor(field_unit, target_unit, counts_nt, "field_unit")
-    try:
-        limit = float(max_rotation_deg)
-    except (TypeError, ValueError):
-        limit = float("nan")
-    if not 0 <= limit <= 180:
-        raise MagexpError(f"max_rotation_deg={max_rotation_deg!r} is not allowed: it must be a number of degrees in "
-                          "[0, 180]")
+    limit = check_max_rotation(max_rotation_deg)
     rotation = np.eye(3)
     if symmetric:
         if np.linalg.det(w) <= 0:
@@ -314,9 +324,13 @@ def options_of(target: str) -> tuple[str, ...]:
 def render(target: str, w, offset, unit: str, **options) -> Export:
     """The :class:`Export` of ``target`` (:data:`TARGETS`) for ``B = W (r − o)`` in ``unit``;
     ``options``: the target function's keywords (``field_unit``, ``counts_nt``, ``instance``,
-    ``max_rotation_deg``, ``notes``, ...)."""
+    ``max_rotation_deg``, ``notes``, ...); ``counts_nt`` and ``max_rotation_deg`` checked even where unused
+    (a unit with a factor, a target without the rotation limit): a bad value is refused, not ignored."""
     if target not in RENDERERS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
+    for key, check_value in (("counts_nt", check_counts_nt), ("max_rotation_deg", check_max_rotation)):
+        if options.get(key) is not None:
+            check_value(options[key])
     return RENDERERS[target](w, offset, unit, **options)
 
 

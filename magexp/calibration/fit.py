@@ -57,7 +57,8 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
-from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, options_of as export_options_of,
+from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, check_counts_nt, check_max_rotation,
+                                      options_of as export_options_of,
                                       render as render_export)
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
@@ -66,7 +67,7 @@ from magexp.core.dataset import Dataset
 from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
 from magexp.core.identifiability import canonical, coverage, direction_regions, identifiability, spread
-from magexp.core.field_model import check_model, field_of_recording, place_of
+from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
 from magexp.core.recordings import (MAG_COLUMNS, UNITS, Recording, check_unique, check_unit, load_recording,
                                     resolve)
 from magexp.core.seeding import run_generators
@@ -246,7 +247,7 @@ def reference_of(rec: Recording, override=None) -> Reference:
     n = rec.n
     if override is not None:
         try:
-            value = float(override)
+            value = float("nan") if isinstance(override, bool) else float(override)
         except (TypeError, ValueError):
             value = float("nan")
         if not (np.isfinite(value) and 0 < value <= LARGEST):
@@ -562,6 +563,8 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         One line: bad input, degenerate data, a failed fit, or (unless ``accept``) every failed check of the gate.
     """
     check_size(rec)
+    checks, accept = check_flag(checks, "checks"), check_flag(accept, "accept")
+    models_.check_margin(auto_margin)
     folds = check_folds(folds)
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
@@ -776,6 +779,8 @@ def field_keys(cfg) -> dict:
                               "the older name of field.* (with field.model=igrf), give field.* only")
         place.update(dict(cfg.igrf), model="igrf")
     check_model(place.get("model"))  # a bad model named even when no place asks for one
+    check_given({**dict(cfg.get("igrf") or {}), "model": "igrf"}, "igrf")
+    check_given(place)
     return place
 
 
@@ -800,6 +805,7 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
 def run(cfg) -> Calibration:
     """Load, calibrate, check and write as ``cfg`` says; print the summary."""
     data = cfg.data
+    check_options(cfg)
     rec = recording_of(cfg)
     out = cfg.get("out")
     out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
@@ -823,6 +829,19 @@ def run(cfg) -> Calibration:
                  + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
                  + ("" if draw else "; no figure (figure=true draws it)")}))
     return cal
+
+
+def check_options(cfg) -> None:
+    """The keys that a run may not use checked before anything is read: every given ``field.*`` and
+    ``igrf.*`` value (used only when a place is known, and not at all beside ``data.reference_total``),
+    ``counts_nt`` and ``max_rotation_deg`` (used only by some exports), ``auto_margin`` (only by
+    ``model=auto``): a bad value is refused in one line, not ignored."""
+    field_keys(cfg)
+    if cfg.get("counts_nt") is not None:
+        check_counts_nt(cfg.counts_nt)
+    if cfg.get("max_rotation_deg") is not None:
+        check_max_rotation(cfg.max_rotation_deg)
+    models_.check_margin(cfg.get("auto_margin", models_.MARGIN))
 
 
 def recording_of(cfg) -> Recording:
@@ -863,10 +882,14 @@ def export_options(cfg, target: str, rec: Recording) -> dict:
 
 def flag(cfg, key: str) -> bool:
     """A true/false key of ``cfg`` (default false), else one line."""
-    value = cfg.get(key, False)
-    if not isinstance(value, bool):
+    return check_flag(cfg.get(key, False), key)
+
+
+def check_flag(value, key: str) -> bool:
+    """``value`` if it is a bool (``"yes"``, ``1`` or ``"no"`` are not: a string is always true), else one line."""
+    if not isinstance(value, (bool, np.bool_)):
         raise MagexpError(f"{key}={value!r} is not allowed: give {key}=true or {key}=false")
-    return value
+    return bool(value)
 
 
 _KEY_LINE = re.compile(r"^(?P<indent> *)(?P<key>[A-Za-z_]\w*):\s*(?P<value>[^#]*?)\s*(#\s*(?P<text>.*))?$")

@@ -39,6 +39,12 @@ from magexp.core.recordings import RAW_UNITS, UNITS, Recording
 MODELS = ("igrf", "wmm")
 #: WMM coefficient files shipped with pygeomag, by the first year of their epoch (each valid 5 years)
 WMM_FILES = {2010: "WMM_2010.COF", 2015: "WMM_2015v2.COF", 2020: "WMM_2020.COF", 2025: "WMM.COF"}
+#: the years each model covers (first, last)
+SPANS = {"igrf": (1900, 2030), "wmm": (min(WMM_FILES), max(WMM_FILES) + 4)}
+#: the allowed range of each number of a place: a latitude, a longitude east or west of Greenwich
+#: (-180 to 360, both conventions), an altitude from the deepest ocean trench (11 km below sea level)
+#: to geostationary orbit (35,786 km), beyond which the internal field of these models is not the field
+PLACE_RANGES = {"latitude": (-90.0, 90.0), "longitude": (-180.0, 360.0), "altitude_km": (-11.0, 35786.0)}
 
 
 @dataclass(frozen=True)
@@ -85,6 +91,31 @@ def check_model(model: str, prefix: str = "field") -> str:
     if text not in MODELS:
         raise MagexpError(f"{prefix}.model={model!r} is not allowed: choose one of {', '.join(MODELS)}")
     return text
+
+
+def check_given(place: dict, prefix: str = "field") -> None:
+    """Each value of ``place`` (``model``, ``latitude``, ``longitude``, ``altitude_km``, ``date``) that is
+    given (not None) checked on its own, before the log's GPS fills in the others: a value is refused
+    in one line even when no field model is used (no latitude given, none in the log), not ignored.
+    Numbers within :data:`PLACE_RANGES`, a date ``YYYY-MM-DD`` within the model's :data:`SPANS`."""
+    model = check_model(place.get("model") or "igrf", prefix)
+    for key, (low, high) in PLACE_RANGES.items():
+        value = place.get(key)
+        if value is None:
+            continue
+        number = value if isinstance(value, (int, float)) and not isinstance(value, bool) else float("nan")
+        if not low <= number <= high:
+            raise MagexpError(f"{prefix}.{key}={value!r} is not allowed: it must be a number in [{low:g}, {high:g}]")
+    date = place.get("date")
+    if date is not None:
+        try:
+            when = date if isinstance(date, _dt.date) else _dt.date.fromisoformat(str(date))
+        except ValueError:
+            raise MagexpError(f"{prefix}.date={date!r} is not allowed: give a date YYYY-MM-DD") from None
+        first, last = SPANS[model]
+        if not first <= when.year <= last:
+            raise MagexpError(f"{prefix}.date={str(date)!r} is not allowed with model={model}: it covers {first} to "
+                              f"{last}")
 
 
 def igrf_generation() -> str:

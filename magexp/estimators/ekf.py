@@ -91,6 +91,8 @@ class ExtendedKalmanFilter:
               (("p0_s", p0_s), ("p0_b", p0_b), ("q_s", q_s), ("q_b", q_b), ("r", r))]
         self.p0 = np.diag(np.r_[np.full(9, sd[0]), np.full(3, sd[1])] ** 2)
         self.q = np.diag(np.r_[np.full(9, sd[2]), np.full(3, sd[3])] ** 2)
+        check(sd[4] > 0, f"estimator.r={r!r} is not allowed: it must be a number > 0 (R = r^2 I, the measurement "
+                         "noise, must be positive definite: the gain inverts it)")
         self.r = max(sd[4], 1e-12) ** 2  # measurement variance r² (R = r² I)
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.core.ellipsoid import fit_ellipsoid, fit_ellipsoid_specific
-from magexp.errors import check_nonnegative
+from magexp.errors import check, check_nonnegative
 from magexp.estimators.result import FitResult
 
 
@@ -60,6 +60,8 @@ class EllipsoidSpecificFit(EllipsoidFit):
     def __init__(self, *, name: str = "ellipsoid_specific", k: float = 4.0):
         super().__init__(name=name)
         self.k = check_nonnegative(k, "estimator.k")
+        check(self.k > 0, f"estimator.k={k!r} is not allowed: it must be a number > 0 (J > 0 for every ellipsoid, "
+                          "so k J - I^2 = 1 has no solution with k <= 0)")
 
     def quadric(self, readings: np.ndarray, radius: float):
         return fit_ellipsoid_specific(readings, radius, self.k)

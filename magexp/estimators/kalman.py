@@ -119,7 +119,10 @@ class KalmanFilter(_Tuning):
     def __init__(self, *, name: str = "kf", p0: float = 1.0, q: float = 0.0, sigma2: float = 3333.0,
                  offset_scale: float = 3000.0, n_steps: int = 600, agree_k: float = 1e-4, agree_bp: float = 1.0):
         super().__init__(name=name, p0=p0, q=q, sigma2=sigma2, n_steps=n_steps)
-        self.scale = np.diag([1.0, 1.0, 1.0, check_nonnegative(offset_scale, "estimator.offset_scale") ** 2])
+        check(check_nonnegative(offset_scale, "estimator.offset_scale") > 0,
+              f"estimator.offset_scale={offset_scale!r} is not allowed: it must be a number > 0 (P(0) and Q scale "
+              "the offset Bp by offset_scale^2: 0 would keep Bp at its start, never estimated)")
+        self.scale = np.diag([1.0, 1.0, 1.0, float(offset_scale) ** 2])
         self.agree_k = check_nonnegative(agree_k, "estimator.agree_k")
         self.agree_bp = check_nonnegative(agree_bp, "estimator.agree_bp")
 

@@ -88,7 +88,7 @@ class LevenbergMarquardt:
         self.name = name
         self.start = start
         self.max_nfev = check_positive_int(max_nfev, "estimator.max_nfev")
-        self.tol = float(tol)
+        self.tol = float(tol) if isinstance(tol, (int, float)) and not isinstance(tol, bool) else float("nan")
         check(np.isfinite(self.tol) and np.finfo(float).eps < self.tol < 1,
               f"estimator.tol={tol!r} is not allowed: it must be a number in (2.2e-16, 1) (above machine epsilon)")
         self.gauge = gauge

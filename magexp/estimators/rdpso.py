@@ -47,9 +47,9 @@ class ThermalCoefficient:
     """
 
     def __init__(self, base: float = 0.3, span: float = 0.6, rate: float = 4.0):
-        self.base = check_nonnegative(base, "velocity.alpha.base")
-        self.span = check_nonnegative(span, "velocity.alpha.span")
-        self.rate = check_nonnegative(rate, "velocity.alpha.rate")
+        self.base = check_nonnegative(base, "estimator.velocity.alpha.base")
+        self.span = check_nonnegative(span, "estimator.velocity.alpha.span")
+        self.rate = check_nonnegative(rate, "estimator.velocity.alpha.rate")
 
     def __call__(self, t: int, t_max: int) -> float:
         return self.base + self.span / (1.0 + self.rate * t / t_max)
@@ -65,8 +65,8 @@ class RandomDriftVelocity:
     """
 
     def __init__(self, c1: float = 1.45, c2: float = 1.45, alpha=None):
-        self.c1 = check_nonnegative(c1, "velocity.c1")
-        self.c2 = check_nonnegative(c2, "velocity.c2")
+        self.c1 = check_nonnegative(c1, "estimator.velocity.c1")
+        self.c2 = check_nonnegative(c2, "estimator.velocity.c2")
         self.alpha = alpha if alpha is not None else ThermalCoefficient()
 
     def __call__(self, x, v, pbest, gbest, t, t_max, *, rng):

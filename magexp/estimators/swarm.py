@@ -79,6 +79,15 @@ def compiled():
     return _compiled
 
 
+def check_speed(value, name: str, per: str) -> float:
+    """``value`` as a float, refused unless finite and > 0: a ``v_max`` of 0 (or none) leaves the velocity
+    unbounded, its uniform initial draw ``U(-inf, inf)`` is not a number."""
+    v = check_nonnegative(value, name)
+    check(v > 0, f"{name}={value!r} is not allowed: it must be a number > 0 (v_max = {name.rpartition('.')[2]}"
+                 f"{' x ' + per if per else ''}; 0 leaves the velocity unbounded)")
+    return v
+
+
 class SwarmOptimizer:
     """Global-best particle swarm over a box-bounded problem.
 
@@ -88,9 +97,10 @@ class SwarmOptimizer:
     n_particles, n_iterations : swarm size and number of iterations.
     velocity : velocity rule (default: traditional inertia-weight PSO).
     init : initialiser (default: uniform).
-    velocity_clamp : ``v_max = velocity_clamp * (upper - lower)``; 0 disables clamping.
+    velocity_clamp : ``v_max = velocity_clamp * (upper - lower)``, > 0 (0 would leave the velocity unbounded:
+        the first uniform initial velocity ``U(-inf, inf)`` is not a number).
     velocity_limit : absolute ``v_max``, the same for every dimension (Yuan 2018 Table 1:
-        1.5); when given it replaces ``velocity_clamp``.
+        1.5), > 0; when given it replaces ``velocity_clamp``.
     initial_velocity : ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
     boundary : what a particle leaving the box does: ``clip``, ``reflect`` or ``random``
         (:mod:`magexp.estimators.boundaries`).
@@ -109,9 +119,9 @@ class SwarmOptimizer:
         self.n_iterations = check_positive_int(n_iterations, "estimator.n_iterations")
         self.velocity = velocity if velocity is not None else InertiaVelocity()
         self.init = init if init is not None else Uniform()
-        self.velocity_clamp = check_nonnegative(velocity_clamp, "estimator.velocity_clamp")
-        self.velocity_limit = None if velocity_limit is None else check_nonnegative(velocity_limit,
-                                                                                     "estimator.velocity_limit")
+        self.velocity_clamp = check_speed(velocity_clamp, "estimator.velocity_clamp", "(upper - lower)")
+        self.velocity_limit = None if velocity_limit is None else check_speed(velocity_limit,
+                                                                              "estimator.velocity_limit", "")
         check(initial_velocity in ("uniform", "zero"),
               f"estimator.initial_velocity={initial_velocity!r} is not allowed: choose uniform or zero")
         self.initial_velocity = initial_velocity
@@ -121,11 +131,9 @@ class SwarmOptimizer:
 
     def velocity_max(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """Per-dimension ``v_max``: absolute limit, fraction of the box, or ``inf`` (no clamp)."""
-        if self.velocity_limit is not None and self.velocity_limit > 0:
+        if self.velocity_limit is not None:
             return np.full(lo.shape, self.velocity_limit)
-        if self.velocity_clamp > 0:
-            return self.velocity_clamp * (hi - lo)
-        return np.full(lo.shape, np.inf)
+        return self.velocity_clamp * (hi - lo)
 
     def _run(self, nb, kernel, x, v, pbest, pcost, history, blocks, limits) -> int:
         """Every iteration with the cost compiled in (:func:`magexp.estimators._compiled.run`): one

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.errors import MagexpError
 from magexp.estimators.schedules import Constant, values
 
 _NO_DRAWS = np.empty((2, 0, 0))  # the random numbers of a step that does not move
@@ -21,6 +22,19 @@ def inertia_velocity(v, x, pbest, gbest, *, w, c1, c2, r1, r2):
     return w * v + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x)
 
 
+def check_schedule(schedule, role: str):
+    """``schedule`` of the coefficient ``role`` (``inertia``, ``c1``, ``c2``), refused if a value it
+    is given (``value``, ``start``, ``end``: a linear schedule's extremes) is negative: a negative
+    inertia reverses the velocity every step, a negative learning factor drives a particle away from
+    the best position found."""
+    for part in ("value", "start", "end"):
+        v = getattr(schedule, part, None)
+        if isinstance(v, float) and v < 0:
+            raise MagexpError(f"estimator.velocity.{role}.{part}={v:g} is not allowed: it must be a number >= 0 "
+                              f"(a negative {role} reverses its term of the velocity update)")
+    return schedule
+
+
 class InertiaVelocity:
     """Inertia-weight velocity with scheduled ``w``, ``c1``, ``c2``.
 
@@ -30,9 +44,9 @@ class InertiaVelocity:
     """
 
     def __init__(self, inertia=None, c1=None, c2=None):
-        self.inertia = inertia if inertia is not None else Constant(0.7298)
-        self.c1 = c1 if c1 is not None else Constant(1.49618)
-        self.c2 = c2 if c2 is not None else Constant(1.49618)
+        self.inertia = check_schedule(inertia if inertia is not None else Constant(0.7298), "inertia")
+        self.c1 = check_schedule(c1 if c1 is not None else Constant(1.49618), "c1")
+        self.c2 = check_schedule(c2 if c2 is not None else Constant(1.49618), "c2")
 
     def __call__(self, x, v, pbest, gbest, t, t_max, *, rng):
         r1 = rng.random(x.shape)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 
 import numpy as np
 from hydra.core.override_parser.types import Glob
@@ -26,6 +27,10 @@ from magexp.run.budget import Tally, check_run, check_sweep
 from magexp.run.compose import GROUPS, check_choice, compose_config, options, parse_overrides, resolved, yaml_value
 from magexp.run.guard import check_run_values
 from magexp.run.runner import build
+
+#: the module of the swarm's coefficient schedules (:func:`check_schedules`)
+SCHEDULES = "magexp.estimators.schedules."
+
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
     """The jobs of a sweep: the cartesian product of every override's values, first key slowest
@@ -118,6 +123,7 @@ def _check_config(cfg, seen: set, estimates: dict):
     plain = resolved(cfg)
     check_run_values(plain)
     check_label(plain.get("estimator") or {})
+    check_schedules(plain.get("estimator") or {})
     s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
     e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
     if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
@@ -130,6 +136,19 @@ def _check_config(cfg, seen: set, estimates: dict):
         check_problem(cfg, scenario)
         seen.add(s_key)
     return estimates[s_key, e_key]
+
+
+def check_schedules(node: dict, prefix: str = "estimator") -> None:
+    """Every value of a coefficient schedule under ``node`` (:mod:`magexp.estimators.schedules`) a finite
+    number, named by its whole key (``estimator.velocity.c1.start``): the schedule knows only its own
+    part's name (``start``)."""
+    schedule = str(node.get("_target_", "")).startswith(SCHEDULES)
+    for key, value in node.items():
+        if isinstance(value, dict):
+            check_schedules(value, f"{prefix}.{key}")
+        elif schedule and key != "_target_":
+            number = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+            check(number, f"{prefix}.{key}={value!r} is not allowed: it must be a finite number")
 
 
 def check_label(estimator: dict) -> None:

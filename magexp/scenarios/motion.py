@@ -68,11 +68,13 @@ class Trajectory:
 
     def __init__(self, *, mode: str | None = "mode1", segments=None, partial_arc_deg: float = 180.0,
                  rate_deg_s: float = 36.0, sample_period: float = 0.01):
-        self.segments = segments_of(mode, segments, float(partial_arc_deg))
-        self.rate = check_nonnegative(rate_deg_s, "rotation.rate_deg_s")
-        self.dt = check_nonnegative(sample_period, "rotation.sample_period")
-        check(self.rate > 0, f"rotation.rate_deg_s={rate_deg_s!r} is not allowed: it must be > 0")
-        check(self.dt > 0, f"rotation.sample_period={sample_period!r} is not allowed: it must be > 0")
+        arc = check_nonnegative(partial_arc_deg, "scenario.rotation.partial_arc_deg")
+        check(arc > 0, f"scenario.rotation.partial_arc_deg={partial_arc_deg!r} is not allowed: it must be > 0")
+        self.segments = segments_of(mode, segments, arc)
+        self.rate = check_nonnegative(rate_deg_s, "scenario.rotation.rate_deg_s")
+        self.dt = check_nonnegative(sample_period, "scenario.rotation.sample_period")
+        check(self.rate > 0, f"scenario.rotation.rate_deg_s={rate_deg_s!r} is not allowed: it must be > 0")
+        check(self.dt > 0, f"scenario.rotation.sample_period={sample_period!r} is not allowed: it must be > 0")
         refuse_over(self.samples(), "readings", f"scenario.rotation.sample_period={sample_period!r}",
                     "its turns at this rate and period are samples")  # counted before any array is made
 
@@ -94,6 +96,11 @@ class Trajectory:
         return len(self.rates()) * self.dt
 
 
+#: the widest full-scale range of a MEMS rate gyroscope (°/s; the ICM-42686-P's ±4000 °/s, twice the usual
+#: ±2000 °/s): a drift or a noise level beyond it is no gyroscope's, the bound of :class:`Gyro`'s values
+GYRO_RANGE_DEG_S = 4000.0
+
+
 class Gyro:
     """A rate gyro: true rate + constant drift + white noise.
 
@@ -105,8 +112,12 @@ class Gyro:
     """
 
     def __init__(self, *, drift_deg_h: float = 6.25, drift_axis=(1.0, 1.0, 1.0), noise_deg_s: float = 0.0):
-        self.drift_deg_h = check_nonnegative(drift_deg_h, "gyro.drift_deg_h")
-        self.noise_deg_s = check_nonnegative(noise_deg_s, "gyro.noise_deg_s")
+        self.drift_deg_h = check_nonnegative(drift_deg_h, "scenario.gyro.drift_deg_h")
+        self.noise_deg_s = check_nonnegative(noise_deg_s, "scenario.gyro.noise_deg_s")
+        for key, value, limit in (("drift_deg_h", self.drift_deg_h, GYRO_RANGE_DEG_S * 3600),
+                                  ("noise_deg_s", self.noise_deg_s, GYRO_RANGE_DEG_S)):
+            check(value <= limit, f"scenario.gyro.{key}={value:g} is not allowed: it must be <= {limit:g} (a rate "
+                                  f"beyond a gyroscope's widest full-scale range, {GYRO_RANGE_DEG_S:g} deg/s)")
         axis = np.asarray(drift_axis, float)
         check(axis.shape == (3,) and np.all(np.isfinite(axis)) and np.linalg.norm(axis) > 0,
               f"gyro.drift_axis={drift_axis!r} is not allowed: it must be 3 finite numbers, not all 0")

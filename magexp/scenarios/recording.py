@@ -28,8 +28,9 @@ import numpy as np
 from magexp.core.dataset import Dataset
 from magexp.core.geometry import preintegrate
 from magexp.core.recordings import exists, load_recording
-from magexp.errors import MagexpError, check_positive_int
+from magexp.errors import MagexpError, check, check_nonnegative, check_positive_int
 from magexp.paths import SHARED_DATA
+from magexp.scenarios.motion import GYRO_RANGE_DEG_S
 from magexp.scenarios.search import BOXES, centroid_radius, search_box
 
 OBJECTIVES = ("scalar", "gyro")
@@ -78,7 +79,10 @@ class RecordingScenario:
             raise MagexpError(f"scenario.box={box!r} is not allowed: choose one of auto, {', '.join(BOXES)}")
         self.box_options = {"shape": AUTO_BOX[objective] if box == "auto" else box,
                             "matrix_bound": matrix_bound, "offset_width": offset_width}
-        self.problem_options = {"bias_bound_deg_s": float(bias_bound_deg_s)} if objective == "gyro" else {}
+        bound = check_nonnegative(bias_bound_deg_s, "scenario.bias_bound_deg_s")
+        check(0 < bound <= GYRO_RANGE_DEG_S, f"scenario.bias_bound_deg_s={bias_bound_deg_s!r} is not allowed: it must "
+                                             f"be > 0 and <= {GYRO_RANGE_DEG_S:g} (a gyroscope's widest range, deg/s)")
+        self.problem_options = {"bias_bound_deg_s": bound} if objective == "gyro" else {}
         self._data = None
 
     def recording(self, file=None):
