@@ -17,6 +17,7 @@ import argparse
 import functools
 import os
 import resource
+import shutil
 import sys
 import time
 from collections.abc import Mapping
@@ -430,9 +431,20 @@ def _main(args) -> int:
         return _write(args, selected)
 
 
+def with_peer_bench(out: Path) -> None:
+    """Copy the committed peer bench (``results/peers/``: written by ``make peers-bench`` only, never by
+    a reproduction) into ``out``, where the report reads it, so that a reproduction into another folder
+    reports what ``make reproduce`` does; not into ``results/`` itself, nor over a bench ``out`` holds
+    (its ``peers.md``)."""
+    peers = RESULTS / "peers"
+    if out.resolve() != RESULTS.resolve() and peers.is_dir() and not (out / "peers" / "peers.md").exists():
+        shutil.copytree(peers, out / "peers", dirs_exist_ok=True)
+
+
 def _write(args, selected) -> int:
     """Run and write (or redraw) the ``selected`` artifacts into ``args.out`` (checked by :func:`_main`)."""
     args.out.mkdir(parents=True, exist_ok=True)
+    with_peer_bench(args.out)
     start = time.perf_counter()
     if args.redraw:
         drawn, kept = redraw(selected, args.out, force=args.force)

@@ -39,7 +39,6 @@ import io
 import math
 import re
 import subprocess
-import shutil
 import sys
 import tarfile
 import tempfile
@@ -520,15 +519,12 @@ def reproduce_scratch(jobs: int) -> Path:
     """Reproduce every paper into :func:`scratch` (runs from the run cache where it has them). The
     figures of the last such reproduction are kept, so that an unchanged figure is not drawn again
     (:mod:`magexp.artifacts.plots.memo`); every other file is written afresh, and a figure whose CSV
-    was not written again is removed. The committed ``results/peers/`` (written by ``make peers-bench``,
-    never by a reproduction) is copied in first, as the report of ``make reproduce`` reads it there."""
+    was not written again is removed. (The reproduction takes the committed ``results/peers/`` with it:
+    :func:`magexp.artifacts.reproduce.with_peer_bench`.)"""
     out = scratch()
     if out.is_dir():
         for path in [p for p in out.rglob("*") if p.is_file() and p.suffix not in FIGURES]:
             path.unlink()
-    peers = paths.RESULTS / "peers"  # make peers-bench's files, which the report reads: an input, not a product
-    if peers.is_dir():
-        shutil.copytree(peers, out / "peers", dirs_exist_ok=True)
     # a process of its own, as make reproduce runs it (its progress on this terminal)
     code = subprocess.run([sys.executable, "-m", "magexp", "reproduce", "all", "--out", str(out), "--jobs", str(jobs)],
                           cwd=paths.ROOT).returncode
