@@ -251,13 +251,13 @@ def _simulated_headline(claims: list[dict], args) -> str:
             for c in claims if "best" in c and c["basis"] == basis)
         if not said:
             continue
-        vs = [f"against MAGYC-NLS as its example notebook calls it (a Savitzky-Golay prefilter) it is "
+        vs = [f"against MAGYC-NLS as its example notebook calls it (a Savitzky-Golay prefilter): "
               f"{against(basis, 'magyc_nls_sg')}" if against(basis, "magyc_nls_sg") else "",
-              f"against MAGYC-NLS on the raw readings it is {against(basis, 'magyc_nls')}"]
+              f"against MAGYC-NLS on the raw readings: {against(basis, 'magyc_nls')}"]
         which = (" (every reading)" if basis == "all" else
                  ", evenly spaced (magexp's fit; the gyroscope between them as one mean rate per interval)")
         out.append(f"On {readings}{which}, the most accurate method per motion "
-                   f"level (lowest worse error of soft and hard iron) is: {said}; magexp's gyro-aided lm "
+                   f"level (lowest worse error of soft and hard iron) is: {said}. magexp's gyro-aided lm, "
                    + "; ".join(v for v in vs if v) + ".")
     return " ".join(out)
 
