@@ -179,13 +179,14 @@ def test_claims_on_each_basis_use_only_its_runs():
                           "axis_map": "", "side": "x", "method": method, "metric": metric, "value": v * (1 + 0.1 * s)}
                          for metric in ("soft_iron_error", "hard_iron_error")]
     args = Namespace(nsamples=6000, n_fit=300, seeds=5)
-    claims = report.simulated_claims(peer_claims.frame_of(rows), bench.summarise(rows), args)
+    frame, summary = peer_claims.frame_of(rows), bench.summarise(rows)
+    claims = report.simulated_claims(frame, summary, args)
     said = {(c["basis"], c.get("peer", "best")): c for c in claims}
     assert said[("all", "magyc_nls")]["text"].startswith("MAM (mid), the same 6,000 readings: magexp lm")
     assert said[("subset", "magyc_nls")]["text"].startswith("MAM (mid), the same 300 readings: magexp lm")
     assert said[("all", "magyc_nls")]["test"].p_hold == pytest.approx(1 / 32)  # lower on every seed of "all"
     assert said[("subset", "magyc_nls")]["test"].p_contra == pytest.approx(1 / 32)  # higher on every seed of "subset"
     assert said[("all", "best")]["best"] == "magexp_lm_gyro" and said[("subset", "best")]["best"] == "magyc_nls"
-    text = report._simulated_headline(peer_claims.adjust(claims), args)
+    text = report.headline(peer_claims.adjust(claims), frame, summary, args)
     assert "On the same 6,000 readings (every reading)" in text and "On the same 300 readings, evenly spaced" in text
     assert f"at most {magexp_side.LM_NFEV} evaluations" in text
