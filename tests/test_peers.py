@@ -2,12 +2,16 @@
 trip through the peer's environment (skipped without ``make peers``). The bench itself is not run here."""
 
 import json
+import subprocess
+from argparse import Namespace
 
 import numpy as np
 import pytest
 
 from magexp.errors import MagexpError
-from magexp.perf.peers import data, exchange, measures
+from magexp.core.geometry import preintegrate
+from magexp.perf.peers import bench, data, exchange, magexp_side, measures, report
+from magexp.perf.peers import claims as peer_claims
 from magexp.perf.peers.magexp_side import Estimate
 
 
@@ -125,3 +129,64 @@ def test_report_includes_the_peers_section_and_never_writes_it(tmp_path):
     out = (tmp_path / "REPORT.md").read_text()
     assert "**Headline.** shown" in out and "not shown" not in out and "(peers/peers.png)" in out
     assert (peers / "peers.md").read_text() == text and sorted(p.name for p in peers.iterdir()) == ["peers.md", "peers.png"]
+
+
+def test_subset_gives_both_sides_the_same_readings_and_rotations():
+    ds = dataset(n=1000)
+    sub = magexp_side.subset(ds, 300)
+    fit = magexp_side.fit_indices(len(ds.t), 300)
+    assert len(sub.t) == len(fit) == 300 and fit[0] == 0 and fit[-1] == 999
+    np.testing.assert_array_equal(sub.mag, ds.mag[fit])
+    # the mean rate held over each interval rotates exactly as the full gyro stream between the two readings
+    full, _ = preintegrate(ds.t[:-1], ds.gyro[1:], ds.t[fit])
+    held, _ = preintegrate(sub.t[:-1], sub.gyro[1:], sub.t)
+    np.testing.assert_allclose(held, full, atol=1e-12)
+    assert not np.allclose(sub.gyro[1:], ds.gyro[fit[1:]])  # not the sampled rates: the mean over each interval
+    # every reading: the dataset itself
+    np.testing.assert_allclose(magexp_side.subset(ds, 5000).gyro, ds.gyro, atol=1e-12)
+
+
+def test_jobs_run_both_sides_on_every_reading_and_on_the_same_subset(monkeypatch, tmp_path):
+    ds = dataset(n=1000)
+    ds.side["kind"] = "magyc_synthetic"
+    monkeypatch.setattr(bench, "simulated_sets", lambda args, work: [ds])
+    args = bench.parse(["--out", str(tmp_path), "--no-real"])
+    jobs = bench.jobs_of(args, tmp_path)
+    assert [(label, len(d.t)) for d, _, label, _ in jobs] == [("all", 1000), (magexp_side.SUBSET, magexp_side.N_FIT)]
+    # both sides read the same neutral dataset of each job: the subset's readings are those of magexp's fit
+    np.testing.assert_array_equal(jobs[1][0].mag, ds.mag[magexp_side.fit_indices(1000, magexp_side.N_FIT)])
+    assert all(d.side["methods"] == args.peer.split(",") for d, *_ in jobs)
+
+
+@pytest.mark.skipif(exchange.available() is not None, reason="the peer's environment is absent (make peers)")
+def test_magexp_lm_budget_is_the_peers():
+    code = ("import inspect, re, magyc; print([inspect.signature(magyc.magyc_bfg).parameters['max_iter'].default] + "
+            "[int(v) for f in (magyc.magyc_ls, magyc.magyc_nls) for v in re.findall(r'max_nfev=(\\d+)', "
+            "inspect.getsource(f))] + ['max_iter' in inspect.signature(magyc.magyc_ifg).parameters])")
+    out = subprocess.run([str(exchange.PEER_VENV / "bin" / "python"), "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    *budgets, ifg_capped = json.loads(out.replace("False", "false").replace("True", "true"))
+    assert budgets == [magexp_side.LM_NFEV] * 3  # MAGYC-BFG (gtsam iterations), -LS and -NLS (scipy evaluations)
+    assert not ifg_capped  # MAGYC-IFG: incremental updates, no iteration budget (the section says so)
+
+
+def test_claims_on_each_basis_use_only_its_runs():
+    rows = []
+    for basis, (lm, nls) in (("all", (0.01, 0.2)), ("subset", (0.3, 0.02))):
+        for s in range(5):
+            for method, v in (("magexp_lm_gyro", lm), ("magyc_nls", nls)):
+                rows += [{"kind": "magyc_synthetic", "dataset": "magyc_mid", "seed": str(s), "fit_on": basis,
+                          "axis_map": "", "side": "x", "method": method, "metric": metric, "value": v * (1 + 0.1 * s)}
+                         for metric in ("soft_iron_error", "hard_iron_error")]
+    args = Namespace(nsamples=6000, n_fit=300, seeds=5)
+    frame, summary = peer_claims.frame_of(rows), bench.summarise(rows)
+    claims = report.simulated_claims(frame, summary, args)
+    said = {(c["basis"], c.get("peer", "best")): c for c in claims}
+    assert said[("all", "magyc_nls")]["text"].startswith("MAM (mid), the same 6,000 readings: magexp lm")
+    assert said[("subset", "magyc_nls")]["text"].startswith("MAM (mid), the same 300 readings: magexp lm")
+    assert said[("all", "magyc_nls")]["test"].p_hold == pytest.approx(1 / 32)  # lower on every seed of "all"
+    assert said[("subset", "magyc_nls")]["test"].p_contra == pytest.approx(1 / 32)  # higher on every seed of "subset"
+    assert said[("all", "best")]["best"] == "magexp_lm_gyro" and said[("subset", "best")]["best"] == "magyc_nls"
+    text = report.headline(peer_claims.adjust(claims), frame, summary, args)
+    assert "On the same 6,000 readings (every reading)" in text and "On the same 300 readings, evenly spaced" in text
+    assert f"at most {magexp_side.LM_NFEV} evaluations" in text

@@ -8,7 +8,10 @@ prints one line and writes nothing.
 The data (:mod:`.data`), each written to a neutral file and read by both sides:
 
 * MAGYC's generator at its paper's settings, motion levels ``--levels`` (WAM ``high``, MAM ``mid``, LAM ``low``),
-  seeds ``0 .. --seeds - 1``: truth known; errors, success (:mod:`.measures`) and time;
+  seeds ``0 .. --seeds - 1``: truth known; errors, success (:mod:`.measures`) and time. Both sides on the same
+  readings with the same budget (:data:`.magexp_side.LM_NFEV`, the peer's), both ways: every reading to both
+  (``fit_on`` ``all``), and magexp's ``--n-fit`` readings to both (``fit_on`` :data:`.magexp_side.SUBSET`,
+  :func:`.magexp_side.subset`);
 * Yuan 2018's scenarios (:data:`.data.YUAN_SCENARIOS`) as 100 Hz streams, seeds ``0 .. --yuan-seeds - 1``;
 * the HMC5883L + MPU6050 sequences (:data:`.data.SEQUENCES`) with the axis map ``aligned``: each method fitted
   on every reading (spread in sample) and on each contiguous half (spread on the other half: held out), its gyro
@@ -54,7 +57,7 @@ def parse(argv) -> argparse.Namespace:
     p.add_argument("--levels", default="high,mid,low", help="MAGYC motion levels (high,mid,low: WAM, MAM, LAM)")
     p.add_argument("--nsamples", type=int, default=6000, help="readings per MAGYC simulation (6000: its paper's)")
     p.add_argument("--yuan-seeds", type=int, default=3, help="seeds per Yuan scenario (3)")
-    p.add_argument("--n-fit", type=int, default=magexp_side.N_FIT, help="readings of magexp's gyro-aided fit")
+    p.add_argument("--n-fit", type=int, default=magexp_side.N_FIT, help="readings of magexp's gyro-aided fit on Yuan's streams and the recordings, and of the subset of MAGYC's data given to both sides")
     p.add_argument("--magexp", default=",".join(magexp_side.DEFAULT),
                    help=f"magexp's methods (of {', '.join(magexp_side.METHODS)})")
     p.add_argument("--peer", default=",".join(PEER_DEFAULT), help=f"MAGYC's methods (of {', '.join(PEER_METHODS)})")
@@ -129,7 +132,10 @@ def jobs_of(args, work: Path) -> list[tuple]:
     total = sum(len(d.t) for d in sims) + sum(len(f.t) for f, _, _ in fits)
     if total > MAX_READINGS:
         raise MagexpError(f"{total} readings in all is not allowed: at most {MAX_READINGS} (fewer seeds or samples)")
-    jobs = [(ds, None, "all", None) for ds in sims] + [(f, h, label, f.side.get("axis_map")) for f, h, label in fits]
+    jobs = [(ds, None, "all", None) for ds in sims]
+    jobs += [(magexp_side.subset(ds, args.n_fit), None, magexp_side.SUBSET, None) for ds in sims
+             if ds.side["kind"] == "magyc_synthetic"]
+    jobs += [(f, h, label, f.side.get("axis_map")) for f, h, label in fits]
     for ds, *_ in jobs:
         ds.side["methods"] = args.peer.split(",")
     return jobs
@@ -154,9 +160,9 @@ def answered(datasets: list[exchange.NeutralDataset], work: Path) -> list[dict]:
 def peer_answers(args, jobs: list[tuple], work: Path) -> list[dict]:
     """The peer's answer for every job, computed where ``work`` does not hold it yet; with the example notebook's
     recipe (:data:`NOTEBOOK`) the peer runs once more on its own data and the recordings, those methods named
-    ``*_sg``."""
-    notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, *_) in enumerate(jobs)
-                                            if ds.side["kind"] in ("magyc_synthetic", "recording")]
+    ``*_sg`` (not on :data:`.magexp_side.SUBSET`: its 50-sample window is 5 s of the 10 Hz stream, 100 s of readings 2 s apart)."""
+    notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, _, label, _) in enumerate(jobs)
+                                            if ds.side["kind"] in ("magyc_synthetic", "recording") and label != magexp_side.SUBSET]
     answers = answered([ds for ds, *_ in jobs] + [ds for _, ds in notebook], work)
     for (k, _), answer in zip(notebook, answers[len(jobs):]):
         answers[k]["results"] += [dict(r, method=r["method"] + "_sg") for r in answer["results"]]
@@ -168,7 +174,8 @@ def job_rows(args, job: tuple, answer: dict, rests: dict) -> list[dict]:
     (simulations)."""
     ds, held, label, axis_map = job
     estimates = [("magyc", magexp_side.Estimate.from_peer(r)) for r in answer["results"]]
-    estimates += [("magexp", magexp_side.fit(m, ds, seed=int(ds.side["seed"]), n_fit=args.n_fit))
+    n_fit = len(ds.t) if ds.side["kind"] == "magyc_synthetic" else args.n_fit  # MAGYC's data: the peer's readings
+    estimates += [("magexp", magexp_side.fit(m, ds, seed=int(ds.side["seed"]), n_fit=n_fit))
                   for m in args.magexp.split(",")]
     base = {"kind": ds.side["kind"], "dataset": ds.name.removesuffix("_first").removesuffix("_second"),
             "seed": ds.side["seed"], "fit_on": label, "axis_map": axis_map or ""}
@@ -176,7 +183,7 @@ def job_rows(args, job: tuple, answer: dict, rests: dict) -> list[dict]:
     if axis_map and label == "all":
         rows.append({**base, "side": "none", "method": "raw", "metric": "spread_in_sample",
                      "value": measures.spread(np.linalg.norm(ds.mag, axis=1))})
-    if not axis_map:  # the Cramér-Rao floor of the gyro-aided problem on magexp's readings and on all
+    if not axis_map and label == "all":  # the Cramér-Rao floor of the gyro-aided problem on --n-fit readings and on all
         for name, n in (("crb_fit", args.n_fit), ("crb_all", len(ds.t))):
             rows += [{**base, "side": "bound", "method": name, "metric": k, "value": v}
                      for k, v in bound.gyro_floor(ds, n).items()]

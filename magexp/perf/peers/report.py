@@ -9,6 +9,7 @@ from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDE
 from magexp.artifacts.report import PEERS_MARK
 from magexp.perf.peers import claims as peer_claims
 from magexp.perf.peers import measures
+from magexp.perf.peers.magexp_side import LM_NFEV, SUBSET
 from magexp.perf.peers.data import AXIS_MAPS
 
 #: how each method is named in the figure and the tables, in the order they are listed
@@ -20,7 +21,7 @@ LABELS = {
     "sar_ls": "SAR-LS", "sar_kf": "SAR-KF", "sar_aid": "SAR-AID",
     "magyc_ls_sg": "MAGYC-LS, notebook", "magyc_nls_sg": "MAGYC-NLS, notebook",
     "magyc_bfg_sg": "MAGYC-BFG, notebook", "magyc_ifg_sg": "MAGYC-IFG, notebook",
-    "crb_fit": "Cramér-Rao floor (magexp's readings)", "crb_all": "Cramér-Rao floor (every reading)",
+    "crb_fit": "Cramér-Rao floor (the evenly spaced subset)", "crb_all": "Cramér-Rao floor (every reading)",
 }
 LEVELS = {"magyc_high": "WAM (high)", "magyc_mid": "MAM (mid)", "magyc_low": "LAM (low)",
           "magyc_tiny": "tiny", "magyc_cross": "cross"}
@@ -64,7 +65,7 @@ def _simulated_panel(ax, summary, methods: list[str], levels: list[str], metric:
     """One metric on MAGYC's data: a marker per method and motion level, the Cramér-Rao floor per level."""
     x = np.arange(len(methods))
     for k, level in enumerate(levels):
-        med, err = _arrays([one(summary, dataset=level, method=m, metric=metric) for m in methods])
+        med, err = _arrays([one(summary, dataset=level, fit_on="all", method=m, metric=metric) for m in methods])
         bar = ax.errorbar(x + (k - (len(levels) - 1) / 2) * 0.22, med, yerr=err, fmt="o", ms=4, capsize=2,
                           label=LEVELS[level])
         floor = one(summary, dataset=level, method="crb_all", metric=metric)
@@ -74,7 +75,7 @@ def _simulated_panel(ax, summary, methods: list[str], levels: list[str], metric:
     ax.axhline(tol, color="0.4", ls=":", lw=1, label="success threshold")
     ax.set_yscale("log")
     ax.set_ylabel(title, fontsize=8)
-    ax.set_title(f"MAGYC's synthetic data: {title}", fontsize=9)
+    ax.set_title(f"MAGYC's synthetic data, every reading to both sides:\n{title}", fontsize=9)
     ax.set_xticks(x, [LABELS[m] for m in methods], rotation=60, ha="right", fontsize=7)
 
 
@@ -150,26 +151,34 @@ def _claim(text: str, test, evidence: str, **tags) -> dict:
     return {"text": text, "test": test, "result": "", "evidence": evidence, **tags}
 
 
-def simulated_claims(frame, summary) -> list[dict]:
-    """Per motion level of MAGYC's data: the most accurate method, and magexp lm (gyro) against MAGYC-NLS
-    (called directly, and as its example notebook calls it)."""
+def bases(args) -> dict[str, str]:
+    """The two comparisons on MAGYC's data, ``fit_on`` -> the readings both sides were given, in words."""
+    return {"all": f"the same {args.nsamples:,} readings", SUBSET: f"the same {args.n_fit:,} readings"}
+
+
+def simulated_claims(frame, summary, args) -> list[dict]:
+    """Per comparison (:func:`bases`: every reading to both sides, and magexp's readings to both) and motion level
+    of MAGYC's data: the most accurate method, and magexp lm (gyro) against MAGYC-NLS (called directly, and, on
+    every reading, as its example notebook calls it)."""
     out = []
-    for level in (d for d in LEVELS if pick(summary, dataset=d)):
-        where = {"kind": "magyc_synthetic", "dataset": level}
-        methods = [m for m in methods_of(summary) if one(summary, method=m, **where)]
-        best, test, tied = peer_claims.winner_test(frame, peer_claims.ERROR, methods, **where)
-        best_v = peer_claims.values(frame, peer_claims.ERROR, method=best, **where)
-        out.append(_claim(f"{LEVELS[level]}: the most accurate method is {LABELS[best]}", test,
-                          f"worse error {peer_claims.said(best_v)}"
-                          + ("; not separated from " + ", ".join(LABELS[m] for m in tied) if tied else ""),
-                          level=LEVELS[level], best=best, tied=tied))
-        lm = peer_claims.values(frame, peer_claims.ERROR, method="magexp_lm_gyro", **where)
-        for peer in ("magyc_nls", "magyc_nls_sg"):
-            other = peer_claims.values(frame, peer_claims.ERROR, method=peer, **where)
-            if len(lm) and len(other):
-                out.append(_claim(f"{LEVELS[level]}: magexp lm (gyro) is more accurate than {LABELS[peer]}",
-                                  peer_claims.tested(lm, other),
-                                  f"{peer_claims.said(lm)} vs {peer_claims.said(other)}", level=LEVELS[level], peer=peer))
+    for basis, readings in bases(args).items():
+        for level in (d for d in LEVELS if pick(summary, dataset=d, fit_on=basis)):
+            where = {"kind": "magyc_synthetic", "dataset": level, "fit_on": basis}
+            tags = {"level": LEVELS[level], "basis": basis}
+            methods = [m for m in methods_of(summary) if one(summary, method=m, **where)]
+            best, test, tied = peer_claims.winner_test(frame, peer_claims.ERROR, methods, **where)
+            best_v = peer_claims.values(frame, peer_claims.ERROR, method=best, **where)
+            out.append(_claim(f"{LEVELS[level]}, {readings}: the most accurate method is {LABELS[best]}", test,
+                              f"worse error {peer_claims.said(best_v)}"
+                              + ("; not separated from " + ", ".join(LABELS[m] for m in tied) if tied else ""),
+                              best=best, tied=tied, **tags))
+            lm = peer_claims.values(frame, peer_claims.ERROR, method="magexp_lm_gyro", **where)
+            for peer in ("magyc_nls", "magyc_nls_sg"):
+                other = peer_claims.values(frame, peer_claims.ERROR, method=peer, **where)
+                if len(lm) and len(other):
+                    out.append(_claim(f"{LEVELS[level]}, {readings}: magexp lm (gyro) is more accurate than "
+                                      f"{LABELS[peer]}", peer_claims.tested(lm, other),
+                                      f"{peer_claims.said(lm)} vs {peer_claims.said(other)}", peer=peer, **tags))
     return out
 
 
@@ -225,20 +234,32 @@ def spread_table(summary) -> list[str]:
     return lines
 
 
-def _simulated_headline(claims: list[dict]) -> str:
-    """The headline's sentences on MAGYC's data: the winner per motion level, magexp lm (gyro) against MAGYC-NLS."""
-    said = "; ".join(f"{c['level']} {LABELS[c['best']]}, " + (
-        "separated from every other" if c["result"] == HOLDS else
-        f"not separated from {', '.join(LABELS[m] for m in c['tied'])}" if c["tied"] else
-        f"{c['result']} against every other after Holm's correction") for c in claims if "best" in c)
+def _simulated_headline(claims: list[dict], args) -> str:
+    """The headline's sentences on MAGYC's data, one per comparison (:func:`bases`): the winner per motion level,
+    magexp lm (gyro) against MAGYC-NLS."""
+    def against(basis: str, peer: str) -> str:
+        return ", ".join(f"{VERB[c['result']]} it at {c['level']}" for c in claims
+                         if c.get("peer") == peer and c.get("basis") == basis)
 
-    def against(peer: str) -> str:
-        return ", ".join(f"{VERB[c['result']]} it at {c['level']}" for c in claims if c.get("peer") == peer)
-
-    return (f"On MAGYC's own synthetic data the most accurate method per motion level (lowest worse error of soft "
-            f"and hard iron) is: {said}. magexp's gyro-aided lm, against MAGYC-NLS as MAGYC's example notebook calls "
-            f"it (a Savitzky-Golay prefilter), is {against('magyc_nls_sg')}; against MAGYC-NLS called on the raw "
-            f"readings it is {against('magyc_nls')}.")
+    out = [f"On MAGYC's own synthetic data both sides get the same readings and the same budget (magexp's lm at most "
+           f"{LM_NFEV} evaluations, as MAGYC-LS, -NLS and -BFG), both ways."]
+    for basis, readings in bases(args).items():
+        said = "; ".join(f"{c['level']} {LABELS[c['best']]}, " + (
+            "separated from every other" if c["result"] == HOLDS else
+            f"not separated from {', '.join(LABELS[m] for m in c['tied'])}" if c["tied"] else
+            f"{c['result']} against every other after Holm's correction")
+            for c in claims if "best" in c and c["basis"] == basis)
+        if not said:
+            continue
+        vs = [f"against MAGYC-NLS as its example notebook calls it (a Savitzky-Golay prefilter): "
+              f"{against(basis, 'magyc_nls_sg')}" if against(basis, "magyc_nls_sg") else "",
+              f"against MAGYC-NLS on the raw readings: {against(basis, 'magyc_nls')}"]
+        which = (" (every reading)" if basis == "all" else
+                 ", evenly spaced (magexp's fit; the gyroscope between them as one mean rate per interval)")
+        out.append(f"On {readings}{which}, the most accurate method per motion "
+                   f"level (lowest worse error of soft and hard iron) is: {said}. magexp's gyro-aided lm, "
+                   + "; ".join(v for v in vs if v) + ".")
+    return " ".join(out)
 
 
 def _recording_headline(claims: list[dict], frame, summary) -> str:
@@ -259,9 +280,9 @@ def _recording_headline(claims: list[dict], frame, summary) -> str:
             f"reaches {peer_claims.said(nls_rt, **pct)} ({retimed[0]}): {cause}. Figure `peers.png`.")
 
 
-def headline(claims: list[dict], frame, summary) -> str:
+def headline(claims: list[dict], frame, summary, args) -> str:
     """The section's first paragraph: the claims' outcomes in words, every number read from the rows."""
-    return "**Headline.** " + _simulated_headline(claims) + _recording_headline(claims, frame, summary)
+    return "**Headline.** " + _simulated_headline(claims, args) + _recording_headline(claims, frame, summary)
 
 
 def notes(frame, summary) -> list[str]:
@@ -275,7 +296,7 @@ def notes(frame, summary) -> list[str]:
                    f"the retimed full sphere MAGYC-NLS's own output spreads {_cell(own, percent=True)}, its estimates "
                    f"applied to the readings {_cell(applied, percent=True)}. The bench applies every method's estimates "
                    "itself.")
-    where = {"kind": "magyc_synthetic", "dataset": "magyc_high"}
+    where = {"kind": "magyc_synthetic", "dataset": "magyc_high", "fit_on": "all"}
     theirs, ours = (peer_claims.values(frame, "soft_iron_error", method=m, **where)
                     for m in ("ellipsoid_fit", "magexp_ellipsoid"))
     if len(theirs) and len(ours):
@@ -303,16 +324,16 @@ def notes(frame, summary) -> list[str]:
     return out
 
 
-def top(rows, summary) -> list[str]:
+def top(rows, summary, args) -> list[str]:
     """The part of the section the report shows (:data:`magexp.artifacts.report.PEERS_MARK` ends it): the
     headline, the claims with their outcomes, the full sphere's spreads and the notes."""
     frame = peer_claims.frame_of(rows)
-    claims = peer_claims.adjust(simulated_claims(frame, summary) + recording_claims(frame))
+    claims = peer_claims.adjust(simulated_claims(frame, summary, args) + recording_claims(frame))
     held = sum(c["result"] == HOLDS for c in claims)
-    return [headline(claims, frame, summary), "",
+    return [headline(claims, frame, summary, args), "",
             f"**Claims** ({held} of {len(claims)} hold; a comparison holds only where a one-sided paired Wilcoxon "
             f"test over seeds separates the two sides at alpha {peer_claims.ALPHA} after Holm's correction over "
-            f"these {len(claims)} claims; at 5 seeds its smallest p is 1/32, on the recording's two halves 1/4: "
+            f"these {len(claims)} claims; at {args.seeds} seeds its smallest p is 1/{2 ** args.seeds}, on the recording's two halves 1/4: "
             "those cannot be decided; brackets: 95 % bootstrap interval of the median over seeds):", "",
             "| claim | result | evidence |", "|---|---|---|",
             *(f"| {c['text']} | {c['result']} | {c['evidence']} |" for c in claims), "",
@@ -343,7 +364,7 @@ def section(rows, summary, args) -> str:
     recs = {}
     for r in pick(summary, kind="recording", fit_on="all", method="raw"):
         recs[(r["dataset"], r["axis_map"])] = r
-    out = ["## magexp beside MAGYC", "", "### Headline claims", "", *top(rows, summary), "", PEERS_MARK, "",
+    out = ["## magexp beside MAGYC", "", "### Headline claims", "", *top(rows, summary, args), "", PEERS_MARK, "",
            f"Produced by `python -m magexp.perf.peers.bench` (MAGYC's generator: {args.seeds} seeds x "
            f"{args.nsamples} readings per motion level; Yuan's scenarios: {args.yuan_seeds} seeds at 100 Hz; "
            "figure `peers.png`). Medians over seeds with the 95 % bootstrap interval of the median in brackets. "
@@ -352,11 +373,22 @@ def section(rows, summary, args) -> str:
            f"{measures.HARD_TOL} and its gyro bias, where it estimates one, within {measures.BIAS_TOL} °/s. "
            "*notebook*: the peer as its example notebook calls it, after a Savitzky-Golay filter (50 samples, "
            "order 2) of the magnetometer and the gyroscope.", "",
-           "### MAGYC's synthetic data (its generator, its paper's settings)", ""]
-    out += _table(summary, levels, sim_metrics, methods, kind="magyc_synthetic")
+           "### MAGYC's synthetic data (its generator, its paper's settings)", "",
+           f"Both sides on the same readings with the same budget, both ways: every reading, and the {args.n_fit} "
+           "readings evenly spaced of magexp's fit (the gyroscope between them given to both as one mean rate per "
+           "interval, the rotation preintegrated over every gyro sample). Budget: magexp's lm at most "
+           f"{LM_NFEV} evaluations; magyc 1.0.0's MAGYC-LS and -NLS call scipy's least_squares with max_nfev = 1000, "
+           "MAGYC-BFG gtsam with max_iter = 1000; MAGYC-IFG updates iSAM2 once per ten windows of 25 readings, with no "
+           "iteration budget. The notebook's prefilter (50 samples: 5 s of the 10 Hz "
+           "stream) is run on every reading only. Yuan's streams and the recordings: magexp's gyro-aided fit on "
+           f"{args.n_fit} readings, the peer on every reading.", "",
+           f"**On {bases(args)['all']} (every reading, both sides)**", ""]
+    out += _table(summary, levels, sim_metrics, methods, kind="magyc_synthetic", fit_on="all")
+    out += ["", f"**On {bases(args)[SUBSET]} (magexp's evenly spaced readings, both sides)**", ""]
+    out += _table(summary, levels, sim_metrics, methods, kind="magyc_synthetic", fit_on=SUBSET)
     out += ["", "The Cramér-Rao floor of the gyro-aided problem (magexp.core.bounds at the truth, Gaussian magnetometer noise, "
             "a noise-free gyroscope: a floor below the real one), median over seeds:", ""]
-    out += _table(summary, levels, sim_metrics[:3], ["crb_fit", "crb_all"], kind="magyc_synthetic")
+    out += _table(summary, levels, sim_metrics[:3], ["crb_fit", "crb_all"], kind="magyc_synthetic", fit_on="all")
     if yuan:
         out += ["", "### Yuan 2018's scenarios as 100 Hz streams", ""]
         out += _table(summary, yuan, sim_metrics, methods, kind="yuan_stream")
