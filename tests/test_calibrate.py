@@ -252,18 +252,22 @@ def test_a_closed_form_calibration_in_a_longer_process_leaves_the_compiled_kerne
 
     monkeypatch.delenv("MAGEXP_NUMBA", raising=False)
     kernels.compiled.cache_clear()
-    assert kernels.compiled() is not None
-    seen = []
-    real = calibrate_recording
-    monkeypatch.setattr("magexp.calibration.fit.calibrate_recording",
-                        lambda *a, **k: seen.append((os.environ.get("MAGEXP_NUMBA"), kernels.compiled())) or real(*a, **k))
-    rng = np.random.default_rng(0)
-    directions = rng.normal(size=(400, 3))
-    field = 50.0 * directions / np.linalg.norm(directions, axis=1, keepdims=True)
-    readings = field @ np.array([[1.1, 0.05, 0.0], [0.0, 0.95, 0.02], [0.0, 0.0, 1.02]]).T + [4.0, -3.0, 2.0]
-    path = tmp_path / "sphere.csv"
-    write_recording(path, readings + rng.normal(scale=0.05, size=readings.shape), meta=["# unit: uT"])
-    proc = magexp(f"data.path={path}", "estimator=ellipsoid", f"out={tmp_path / 'o'}", cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr
-    assert seen == [("0", None)]  # numpy inside the command
-    assert "MAGEXP_NUMBA" not in os.environ and kernels.compiled() is not None  # as it was, after it
+    try:
+        assert kernels.compiled() is not None
+        seen = []
+        real = calibrate_recording
+        monkeypatch.setattr("magexp.calibration.fit.calibrate_recording",
+                            lambda *a, **k: seen.append((os.environ.get("MAGEXP_NUMBA"), kernels.compiled())) or real(*a, **k))
+        rng = np.random.default_rng(0)
+        directions = rng.normal(size=(400, 3))
+        field = 50.0 * directions / np.linalg.norm(directions, axis=1, keepdims=True)
+        readings = field @ np.array([[1.1, 0.05, 0.0], [0.0, 0.95, 0.02], [0.0, 0.0, 1.02]]).T + [4.0, -3.0, 2.0]
+        path = tmp_path / "sphere.csv"
+        write_recording(path, readings + rng.normal(scale=0.05, size=readings.shape), meta=["# unit: uT"])
+        proc = magexp(f"data.path={path}", "estimator=ellipsoid", f"out={tmp_path / 'o'}", cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        assert seen == [("0", None)]  # numpy inside the command
+        assert "MAGEXP_NUMBA" not in os.environ and kernels.compiled() is not None  # as it was, after it
+    finally:  # the worker's own MAGEXP_NUMBA back, and the kernels' choice made again from it
+        monkeypatch.undo()
+        kernels.compiled.cache_clear()
