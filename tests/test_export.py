@@ -210,3 +210,71 @@ def test_write_never_overwrites(tmp_path):
     assert "\n" not in str(err.value)
     with pytest.raises(MagexpError, match="does not exist"):
         ex.write(ex.render("c", w, offset, "uT"), tmp_path / "missing" / "x.h")
+
+
+def parse_orientation_px4(text: str) -> tuple[dict, dict]:
+    """``(real parameters, integer parameters)`` of a QGroundControl file (type 9 REAL32, type 6 INT32)."""
+    rows = [ln.split("\t") for ln in text.splitlines() if ln and not ln.startswith("#")]
+    return ({r[2]: float(r[3]) for r in rows if r[4] == "9"}, {r[2]: int(r[3]) for r in rows if r[4] == "6"})
+
+
+def ardupilot_with_orientation(raw_mg: np.ndarray, p: dict) -> np.ndarray:
+    """AP_Compass_Backend: rotate_field (``COMPASS_ORIENT``, an external compass) before correct_field."""
+    turned = raw_mg @ ex.standard_rotation(int(p["COMPASS_ORIENT"])).T
+    return ardupilot_correct_field(turned, p)
+
+
+@pytest.mark.parametrize("n", [2, 8, 17, 28, 40])
+def test_a_rotation_near_a_standard_one_is_exported_as_the_orientation(n):
+    """W = R_n R_e S (R_e 0.4 deg): both firmwares get orientation n and S; their field is magexp's up to R_e."""
+    w, offset, raw = synthetic("G")
+    small = rot_z(np.deg2rad(0.4))
+    turned = ex.standard_rotation(n) @ small @ w
+    b = (raw - offset) @ turned.T
+    ap = ex.render("ardupilot", turned, offset, "G", orient=True)
+    p = parse_ardupilot(ap.text)
+    assert p["COMPASS_ORIENT"] == n and "orientation" in ap.text
+    real, ints = parse_orientation_px4(ex.render("px4", turned, offset, "G", orient=True).text)
+    assert ints == {"CAL_MAG0_ROT": n}
+    err_ap = relative(ardupilot_with_orientation(raw * 1000, p), b * 1000)
+    err_px4 = relative(px4_correct(raw, real, 0, ex.standard_rotation(n)), b)
+    assert max(err_ap, err_px4) < 1.01 * np.deg2rad(0.4)  # the residual left out, nothing more
+    exact = ex.render("ardupilot", ex.standard_rotation(n) @ w, offset, "G", orient=True)
+    assert relative(ardupilot_with_orientation(raw * 1000, parse_ardupilot(exact.text)),
+                    (raw - offset) @ (ex.standard_rotation(n) @ w).T * 1000) < RTOL
+
+
+def test_every_standard_rotation_is_its_own_nearest_and_a_far_one_names_a_key_that_works():
+    for n in ex.STANDARD_ROTATIONS:
+        index, residual = ex.nearest_orientation(ex.standard_rotation(n))
+        assert residual < 1e-6 and np.allclose(ex.standard_rotation(index), ex.standard_rotation(n))
+    w, offset, _ = synthetic("G")
+    turned = ex.standard_rotation(6) @ rot_z(np.deg2rad(3.0)) @ w
+    with pytest.raises(MagexpError, match=r"3.00 deg from the nearest .* \(6: roll 0, pitch 0, yaw 270\)") as err:
+        ex.render("px4", turned, offset, "G", orient=True)
+    key = re.search(r"max_rotation_deg=([0-9.]+)", str(err.value)).group(1)
+    assert "\n" not in str(err.value) and float(key) >= 3.0
+    assert "CAL_MAG0_ROT\t6\t6" in ex.render("px4", turned, offset, "G", orient=True, max_rotation_deg=float(key)).text
+
+
+def test_a_gyro_calibration_of_a_turned_magnetometer_exports_its_orientation():
+    """The tumbling IMU of test_calibration_gyro_model with its magnetometer mounted yaw 90 deg: the gyro-aided
+    fit's W = R_2 S⁻¹; S⁻¹'s own rotation (3.8 deg) is over the default limit, so the export names
+    max_rotation_deg; with it, both files carry orientation 2 and reproduce the calibrated field."""
+    from tests.test_calibration_gyro_model import tumbling
+    import magexp
+
+    rec = tumbling()
+    rec = type(rec)(**{**rec.__dict__, "readings": (rec.readings - rec.readings.mean(0)) @ ex.standard_rotation(2)
+                       + rec.readings.mean(0)})
+    cal = magexp.calibrate(rec, model="gyro")
+    assert ex.orientable(cal)
+    with pytest.raises(MagexpError, match=r"nearest of the firmware's standard orientations \(2:") as err:
+        ex.of_calibration(cal, "ardupilot")
+    limit = float(re.search(r"max_rotation_deg=([0-9.]+)", str(err.value)).group(1))
+    p = parse_ardupilot(ex.of_calibration(cal, "ardupilot", max_rotation_deg=limit).text)
+    real, ints = parse_orientation_px4(ex.of_calibration(cal, "px4", max_rotation_deg=limit).text)
+    assert p["COMPASS_ORIENT"] == 2 and ints == {"CAL_MAG0_ROT": 2}
+    raw, b = rec.readings, cal.calibrated
+    assert relative(ardupilot_with_orientation(raw * 1000, p), b * 1000) < 1.01 * np.deg2rad(limit)
+    assert relative(px4_correct(raw, real, 0, ex.standard_rotation(2)), b) < 1.01 * np.deg2rad(limit)

@@ -40,6 +40,19 @@ refuses, in one line, an ``R`` turning by more than ``max_rotation_deg`` (defaul
 :data:`MAX_ROTATION_DEG`, a documented default: 1° of heading error is what a good compass
 calibration is expected to leave) and a ``W`` with a negative determinant (a mirrored axis).
 
+**Orientation (the gyro-aided model).** Where ``R`` is determined (``model=gyro`` on readings in the
+magnetometer's own axes, ``orient=True``), it is written as the firmware's orientation parameter when
+it lies within ``max_rotation_deg`` of one of the firmware's standard rotations ``R_n``
+(:data:`STANDARD_ROTATIONS`: the enum both ArduPilot's ``AP_Math/rotations.h`` and PX4's
+``src/lib/conversion/rotation.h`` number 0-40, ``R_n = R_z(yaw) R_y(pitch) R_x(roll)``, the rotation from
+the sensor's axes to the body's): ``W = R_n (R_n^T W)`` and ``R_n^T W`` is symmetrised as above, its own
+rotation (the residual, at most ``max_rotation_deg``) left out. PX4 applies the rotation last,
+``B = R_n S (r − OFF)``: ``CAL_MAGn_ROT = n``, ``S`` and ``OFF`` in the sensor's axes. ArduPilot
+applies it first, ``B = M (R_n r + OFS)``: ``COMPASS_ORIENT = n``, ``M = R_n S R_n^T``,
+``OFS = −R_n o``. Both firmwares use that parameter for an external magnetometer only (an internal
+one follows the board's orientation); the file says so. Farther than ``max_rotation_deg`` from every
+standard rotation, the export refuses in one line naming ``max_rotation_deg=`` with the residual.
+
 **ArduPilot's scale.** ``COMPASS_SCALE`` is written as 1 (ArduPilot applies a scale only within
 ``[0.85, 1.4]``; the whole of ``S`` sits in ``DIA/ODI``, exact for any scale), and written
 explicitly so that an earlier value on the vehicle does not rescale the new calibration. ArduPilot's
@@ -63,7 +76,7 @@ import yaml
 
 from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
-from magexp.core.geometry import rotation_angle
+from magexp.core.geometry import rot_x, rot_y, rot_z, rotation_angle
 from magexp.core.recordings import RAW_UNITS, UNITS
 from magexp.run.guard import check_destination
 
@@ -76,10 +89,24 @@ FILE_NAMES = {"ardupilot": "magexp_compass.param", "px4": "magexp_mag.params", "
               "c": "magexp_mag_calibration.h"}
 #: the largest rotation ``R`` of ``W = R S`` a symmetric-only target accepts (degrees; a config value)
 MAX_ROTATION_DEG = 1.0
+#: the firmware's standard sensor rotations: enum value -> (roll, pitch, yaw) in degrees, as both ArduPilot
+#: (``AP_Math/rotations.h``, ``COMPASS_ORIENT``) and PX4 (``src/lib/conversion/rotation.h``, ``CAL_MAGn_ROT``)
+#: number them; 38 (roll 90, pitch 68, yaw 293: one board's mounting) is left out, and the two firmwares'
+#: lists part after 40
+STANDARD_ROTATIONS = {
+    0: (0, 0, 0), 1: (0, 0, 45), 2: (0, 0, 90), 3: (0, 0, 135), 4: (0, 0, 180), 5: (0, 0, 225), 6: (0, 0, 270),
+    7: (0, 0, 315), 8: (180, 0, 0), 9: (180, 0, 45), 10: (180, 0, 90), 11: (180, 0, 135), 12: (0, 180, 0),
+    13: (180, 0, 225), 14: (180, 0, 270), 15: (180, 0, 315), 16: (90, 0, 0), 17: (90, 0, 45), 18: (90, 0, 90),
+    19: (90, 0, 135), 20: (270, 0, 0), 21: (270, 0, 45), 22: (270, 0, 90), 23: (270, 0, 135), 24: (0, 90, 0),
+    25: (0, 270, 0), 26: (0, 180, 90), 27: (0, 180, 270), 28: (90, 90, 0), 29: (180, 90, 0), 30: (270, 90, 0),
+    31: (90, 180, 0), 32: (270, 180, 0), 33: (90, 270, 0), 34: (180, 270, 0), 35: (270, 270, 0),
+    36: (90, 180, 90), 37: (90, 0, 270), 39: (0, 315, 0), 40: (90, 315, 0)}
+#: each target's orientation parameter (``{n}``: ArduPilot's compass suffix, PX4's slot)
+ORIENTATION_KEYS = {"ardupilot": "COMPASS_ORIENT{n}", "px4": "CAL_MAG{n}_ROT"}
 #: ArduPilot's calibrator's accepted ranges (``CompassCalibrator``) and ``COMPASS_OFFS_MAX``'s default (mGauss)
 ARDUPILOT_DIAGONAL, ARDUPILOT_OFFDIAGONAL, ARDUPILOT_OFFSET_MAX = (0.2, 5.0), (-1.0, 1.0), 1800.0
-#: MAVLink's ``MAV_PARAM_TYPE_REAL32``, the type column of a QGroundControl ``.params`` file
-REAL32 = 9
+#: MAVLink's ``MAV_PARAM_TYPE_REAL32`` and ``MAV_PARAM_TYPE_INT32``, the type column of a QGroundControl ``.params`` file
+REAL32, INT32 = 9, 6
 
 
 @dataclass(frozen=True)
@@ -92,10 +119,16 @@ class Correction:
     unit: str
     field_unit: str
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    orientation: int | None = None
 
     @property
     def rotation_deg(self) -> float:
         return float(np.rad2deg(rotation_angle(self.rotation)))
+
+    @property
+    def orientation_matrix(self) -> np.ndarray:
+        """``R_n`` of :attr:`orientation` (the identity when none is exported)."""
+        return np.eye(3) if self.orientation is None else standard_rotation(self.orientation)
 
 
 @dataclass(frozen=True)
@@ -114,6 +147,46 @@ def polar(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     u, sigma, vt = np.linalg.svd(np.asarray(w, float))
     s = vt.T @ np.diag(sigma) @ vt
     return u @ vt, (s + s.T) / 2
+
+
+def standard_rotation(index: int) -> np.ndarray:
+    """The rotation matrix of a firmware's standard rotation.
+
+    Parameters
+    ----------
+    index : int
+        A key of :data:`STANDARD_ROTATIONS` (``COMPASS_ORIENT``, ``CAL_MAGn_ROT``).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R_z(yaw) R_y(pitch) R_x(roll)`` (PX4's ``Dcmf{Eulerf{roll, pitch, yaw}}``; ArduPilot's
+        ``Vector3f::rotate``): a reading in the sensor's axes times it is the reading in the body's.
+    """
+    roll, pitch, yaw = np.radians(STANDARD_ROTATIONS[index])
+    return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
+
+
+def nearest_orientation(rotation: np.ndarray) -> tuple[int, float]:
+    """The standard rotation nearest to ``rotation`` and the angle left between them.
+
+    Parameters
+    ----------
+    rotation : ndarray, shape (3, 3)
+        A rotation matrix (``R`` of ``W = R S``).
+
+    Returns
+    -------
+    index : int
+        The key of :data:`STANDARD_ROTATIONS` minimising the angle of ``R_n^T R`` (the lowest on a tie:
+        ArduPilot's 26 and 27 equal 14 and 10).
+    residual_deg : float
+        That angle in degrees.
+    """
+    indices = list(STANDARD_ROTATIONS)
+    angles = np.rad2deg(rotation_angle(np.stack([standard_rotation(i).T @ rotation for i in indices])))
+    best = int(np.argmin(angles))
+    return indices[best], float(angles[best])
 
 
 def _number(value) -> float:
@@ -151,16 +224,41 @@ def _factor(unit: str, target_unit: str, counts_nt, what: str) -> float:
 
 
 def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: str | None = None, counts_nt=None,
-                symmetric: bool = False, max_rotation_deg: float = MAX_ROTATION_DEG) -> Correction:
-    """magexp's ``B = W (r − o)`` (``r`` in ``unit``, ``B`` in ``field_unit``, default ``unit``) as
-    ``B_t = matrix (r_t − offset)`` in ``target_unit`` (None: unchanged), symmetrised if ``symmetric``
-    (module docstring: ``matrix = (k_out / k_in) S``, ``offset = k_in o``).
+                symmetric: bool = False, max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False) -> Correction:
+    """magexp's ``B = W (r − o)`` in a target's unit and form.
+
+    Parameters
+    ----------
+    w, offset : array_like
+        ``W`` (3 × 3) and ``o`` (3,), ``r`` in ``unit``.
+    unit, target_unit : str
+        The readings' unit and the target's (None: unchanged).
+    field_unit : str, optional
+        The unit of ``B`` (default ``unit``).
+    counts_nt : float, optional
+        nT per count, for a raw-count ``unit``.
+    symmetric : bool
+        Symmetrise: ``W = R S`` (:func:`polar`), ``S`` exported (module docstring).
+    max_rotation_deg : float
+        The largest rotation left out of a symmetrised ``W``.
+    orient : bool
+        With ``symmetric``: ``R`` was determined (the gyro-aided model), so a rotation beyond
+        ``max_rotation_deg`` is exported as the standard rotation ``R_n`` nearest to it
+        (:func:`nearest_orientation`) when the residual ``R_n^T R`` is within ``max_rotation_deg``.
+
+    Returns
+    -------
+    Correction
+        ``B_t = matrix (r_t − offset)`` in ``target_unit``, ``matrix = (k_out / k_in) S``,
+        ``offset = k_in o`` (module docstring), in the sensor's axes when an ``orientation`` is set
+        (``B_t = R_n matrix (r_t − offset)``).
 
     Raises
     ------
     MagexpError
         One line for a non-finite calibration, a unit without a factor, a mirrored ``W``, or (with
-        ``symmetric``) a rotation part over ``max_rotation_deg``.
+        ``symmetric``) a rotation part over ``max_rotation_deg`` (with ``orient``: its residual from
+        the nearest standard rotation).
     """
     w, offset = np.asarray(w, float), np.asarray(offset, float)
     if w.shape != (3, 3) or offset.shape != (3,) or not (np.all(np.isfinite(w)) and np.all(np.isfinite(offset))):
@@ -173,24 +271,40 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
         k_in = _factor(unit, target_unit, counts_nt, "unit")
         k_out = _factor(field_unit, target_unit, counts_nt, "field_unit")
     limit = check_max_rotation(max_rotation_deg)
-    rotation = np.eye(3)
+    rotation, orientation = np.eye(3), None
     if symmetric:
         if np.linalg.det(w) <= 0:
             raise MagexpError(f"W with determinant {np.linalg.det(w):.3g} is not allowed for a firmware's symmetric "
                               "matrix: it mirrors an axis; set the magnetometer's orientation in the firmware first")
-        rotation, w = polar(w)
+        rotation, s = polar(w)
         angle = float(np.rad2deg(rotation_angle(rotation)))
-        if angle > limit:
+        if orient:
+            orientation, residual = nearest_orientation(rotation)
+            if residual > limit:
+                roll, pitch, yaw = STANDARD_ROTATIONS[orientation]
+                raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation), {residual:.2f} deg "
+                                  f"from the nearest of the firmware's standard orientations ({orientation}: roll {roll}, "
+                                  f"pitch {pitch}, yaw {yaw}), over the limit {limit:g}: the heading would be off by up "
+                                  f"to that much; allow it with max_rotation_deg={np.ceil(residual * 10) / 10:g} to "
+                                  f"export orientation {orientation} and S")
+            rotation, s = polar(standard_rotation(orientation).T @ w)
+        elif angle > limit:
             raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation): the firmware's symmetric "
                               f"matrix holds S only, so its heading would be off by up to that much; set the "
                               f"magnetometer's orientation to R in the firmware, or allow it with "
                               f"max_rotation_deg={np.ceil(angle * 10) / 10:g} to export S alone")
-    return Correction(matrix=(k_out / k_in) * w, offset=k_in * offset,
-                      unit=target_unit or unit, field_unit=target_unit or field_unit, rotation=rotation)
+        w = s
+    return Correction(matrix=(k_out / k_in) * w, offset=k_in * offset, unit=target_unit or unit,
+                      field_unit=target_unit or field_unit, rotation=rotation, orientation=orientation)
 
 
 def _comments(notes: dict | None, convention: str, correction: Correction, marker: str) -> list[str]:
     lines = [f"{marker} magexp magnetometer calibration", f"{marker} {convention}"]
+    if correction.orientation is not None:
+        roll, pitch, yaw = STANDARD_ROTATIONS[correction.orientation]
+        lines.append(f"{marker} orientation {correction.orientation} (roll {roll}, pitch {pitch}, yaw {yaw} deg) from the "
+                     "gyro-aided fit: the magnetometer's axes as recorded to the gyroscope's; the firmware applies it to "
+                     "an external magnetometer only (an internal one follows the board orientation)")
     if correction.rotation_deg > 0:
         lines.append(f"{marker} W = R S (polar decomposition): S exported, R turns by "
                      f"{correction.rotation_deg:.3g} deg (the firmware's field is R^T times magexp's)")
@@ -201,7 +315,7 @@ def _comments(notes: dict | None, convention: str, correction: Correction, marke
 
 
 def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0,
-              max_rotation_deg: float = MAX_ROTATION_DEG, notes: dict | None = None) -> Export:
+              max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False, notes: dict | None = None) -> Export:
     """ArduPilot parameters (a Mission Planner / MAVProxy ``.param`` file, ``NAME,VALUE`` lines).
 
     Convention (``AP_Compass_Backend::correct_field``): ``B = M (s (r + OFS))``, mGauss, ``r`` the
@@ -209,25 +323,30 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     mGauss): ``COMPASS_OFS = −o'``, ``M = S'``, ``COMPASS_SCALE = 1``. ``instance`` 0, 1, 2 (as the
     log's ``MAG`` instance, :func:`magexp.core.readers.dataflash.read_dataflash`): the names
     ``COMPASS_OFS_X``, ``COMPASS_OFS2_X``, ``COMPASS_OFS3_X`` (``DIA``, ``ODI``, ``SCALE`` alike).
+    ``orient``: ``W``'s rotation was determined (:func:`to_firmware`); its standard rotation ``R_n`` is
+    written as ``COMPASS_ORIENT`` (applied before the offsets): ``M = R_n S' R_n^T``, ``OFS = −R_n o'``.
     """
     if instance not in (0, 1, 2):
         raise MagexpError(f"instance={instance!r} is not allowed for ardupilot: choose 0, 1 or 2 (the compass)")
     c = to_firmware(w, offset, unit, TARGET_UNITS["ardupilot"], field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
-                    max_rotation_deg=max_rotation_deg)
+                    max_rotation_deg=max_rotation_deg, orient=orient)
     n = "" if instance == 0 else str(instance + 1)
-    m = c.matrix
-    values = {**{f"COMPASS_OFS{n}_{a}": float(-c.offset[i]) for i, a in enumerate("XYZ")},
+    turn = c.orientation_matrix
+    m, ofs = turn @ c.matrix @ turn.T, -(turn @ c.offset)
+    values = {**{f"COMPASS_OFS{n}_{a}": float(ofs[i]) for i, a in enumerate("XYZ")},
               **{f"COMPASS_DIA{n}_{a}": float(m[i, i]) for i, a in enumerate("XYZ")},
               **{f"COMPASS_ODI{n}_{a}": float(v) for a, v in zip("XYZ", (m[0, 1], m[0, 2], m[1, 2]))},
               f"COMPASS_SCALE{n}": 1.0}
+    if c.orientation is not None:
+        values[ORIENTATION_KEYS["ardupilot"].format(n=n)] = c.orientation
     warnings = []
     for key, value in values.items():
         if "_DIA" in key and not ARDUPILOT_DIAGONAL[0] <= value <= ARDUPILOT_DIAGONAL[1]:
             warnings.append(f"{key}={value:.6g} is outside ArduPilot's calibrator range {list(ARDUPILOT_DIAGONAL)}")
         if "_ODI" in key and not ARDUPILOT_OFFDIAGONAL[0] <= value <= ARDUPILOT_OFFDIAGONAL[1]:
             warnings.append(f"{key}={value:.6g} is outside ArduPilot's calibrator range {list(ARDUPILOT_OFFDIAGONAL)}")
-    if np.max(np.abs(c.offset)) > ARDUPILOT_OFFSET_MAX:
-        warnings.append(f"an offset of {np.max(np.abs(c.offset)):.6g} mGauss exceeds COMPASS_OFFS_MAX's default "
+    if np.max(np.abs(ofs)) > ARDUPILOT_OFFSET_MAX:
+        warnings.append(f"an offset of {np.max(np.abs(ofs)):.6g} mGauss exceeds COMPASS_OFFS_MAX's default "
                         f"{ARDUPILOT_OFFSET_MAX:g} (a pre-arm check)")
     head = _comments(notes, "ArduPilot: B = M (COMPASS_SCALE (raw + COMPASS_OFS)), M = [[DIA_X, ODI_X, ODI_Y], "
                             "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#")
@@ -237,7 +356,7 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
 
 
 def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0, rotation=None,
-        max_rotation_deg: float = MAX_ROTATION_DEG, notes: dict | None = None) -> Export:
+        max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False, notes: dict | None = None) -> Export:
     """PX4 parameters (a QGroundControl ``.params`` file: ``vehicle component name value type``).
 
     Convention (``Magnetometer::Correct``): ``B = R S (r − OFF)``, gauss; ``S`` from ``SCALE`` and
@@ -246,7 +365,8 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
     ``rotation``: that ``R`` when ``W`` maps the readings into the body frame (a vector calibration
     of a ULog's readings, :func:`magexp.core.readers.onboard_rotation_of`); None: the identity (a
     total-field calibration, or readings in the body frame). ``instance``: the slot ``n`` of
-    ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``).
+    ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``). ``orient`` (without ``rotation``): ``W``'s rotation
+    was determined (:func:`to_firmware`); its standard rotation is written as ``CAL_MAGn_ROT``.
     """
     if instance not in (0, 1, 2, 3):
         raise MagexpError(f"instance={instance!r} is not allowed for px4: choose 0, 1, 2 or 3 (CAL_MAGn)")
@@ -254,17 +374,20 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
         rotation = np.asarray(rotation, float)
         if rotation.shape != (3, 3) or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6):
             raise MagexpError("rotation is not allowed: it must be a 3 x 3 rotation matrix (PX4's R)")
-        w = rotation.T @ np.asarray(w, float)
+        w, orient = rotation.T @ np.asarray(w, float), False
     c = to_firmware(w, offset, unit, TARGET_UNITS["px4"], field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
-                    max_rotation_deg=max_rotation_deg)
+                    max_rotation_deg=max_rotation_deg, orient=orient)
     n, m = instance, c.matrix
     values = {**{f"CAL_MAG{n}_{a}OFF": float(c.offset[i]) for i, a in enumerate("XYZ")},
               **{f"CAL_MAG{n}_{a}SCALE": float(m[i, i]) for i, a in enumerate("XYZ")},
               **{f"CAL_MAG{n}_{a}ODIAG": float(v) for a, v in zip("XYZ", (m[0, 1], m[0, 2], m[1, 2]))}}
+    if c.orientation is not None:
+        values[ORIENTATION_KEYS["px4"].format(n=n)] = c.orientation
     head = _comments(notes, "PX4: B = R S (raw - CAL_MAGn_OFF), S = [[XSCALE, XODIAG, YODIAG], [XODIAG, YSCALE, "
                             "ZODIAG], [YODIAG, ZODIAG, ZSCALE]]; gauss; keep CAL_MAGn_ID and CAL_MAGn_ROT", c, "#")
     head.append("# Vehicle-Id Component-Id Name Value Type")
-    text = "\n".join(head + [f"1\t1\t{k}\t{v!r}\t{REAL32}" for k, v in values.items()]) + "\n"
+    text = "\n".join(head + [f"1\t1\t{k}\t{v!r}\t{INT32 if isinstance(v, int) else REAL32}"
+                             for k, v in values.items()]) + "\n"
     return Export("px4", text, values)
 
 
@@ -334,11 +457,33 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
     return RENDERERS[target](w, offset, unit, **options)
 
 
+def orientable(cal) -> bool:
+    """Whether the rotation of ``cal``'s ``W`` is the magnetometer's orientation (``orient`` of :func:`to_firmware`).
+
+    Parameters
+    ----------
+    cal : Calibration
+        A fitted or loaded calibration.
+
+    Returns
+    -------
+    bool
+        True for the gyro-aided model (it determines ``R``, the rotation from the magnetometer's axes to
+        the gyroscope's) on readings in the magnetometer's own axes; False for a total-field model
+        (``R`` is the identity) and for a flight log's readings (the firmware had already turned them by
+        its orientation parameter, which ``R`` would have to be composed with).
+    """
+    from_log = "onboard_calibration" in cal.report or (cal.recording is not None and "corrected" in cal.recording.meta)
+    return cal.model == "gyro" and not from_log
+
+
 def of_calibration(cal, target: str, **options) -> Export:
     """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.Calibration` ``cal``:
     ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``
     to the calibration's. Refuses (one line) before anything is written: a caller renders first."""
     options.setdefault("field_unit", cal.field_unit)
+    if "orient" in options_of(target):
+        options.setdefault("orient", orientable(cal))
     notes = options.pop("notes", None) or {"recording": cal.name, "estimator": cal.estimator,
                                              "objective": cal.objective, "magexp unit": cal.unit}
     return render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
