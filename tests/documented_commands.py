@@ -149,8 +149,8 @@ COMMANDS: dict[str, tuple] = {
         (RUN_FULL, "2 s", {"files": {"mine.csv": MINE}}),
     ".venv/bin/python -m magexp calibrate data.path=mine.csv field.latitude=52.2 field.longitude=0.1 "
     "field.date=2024-05-01": (RUN_FULL, "2 s", {"files": {"mine.csv": MINE}}),
-    ".venv/bin/python -m magexp calibrate data.path=mine.csv estimator=ipso seed=1":
-        (RUN_FULL, "ipso and its held-out fits", {"files": {"mine.csv": MINE}}),
+    ".venv/bin/python -m magexp calibrate data.path=mine.csv estimator=ipso estimator.n_iterations=3000 seed=1":
+        (RUN_FULL, "ipso and its held-out fits (800 iterations stop short of the closed form on this recording: refused as not converged)", {"files": {"mine.csv": MINE}}),
     ".venv/bin/python -m magexp calibrate data.path=mine.csv export=ardupilot figure=true":
         (RUN_FULL, "draws the figure", {"files": {"mine.csv": MINE}}),
     ".venv/bin/python -m magexp calibrate data.path=mine_with_attitudes.csv objective=vector estimator=lm":
