@@ -20,6 +20,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from magexp.artifacts.claims import evaluate, matches
 from magexp.artifacts.spec import artifact_paths, load
+from magexp.core import outcomes
 from magexp.core.seeding import run_generators, scenario_stream
 from magexp.errors import MagexpError
 from magexp.estimators.base import applies_to
@@ -68,28 +69,24 @@ def best_of(table: pd.DataFrame, metric: str) -> pd.Series:
 
 
 def succeeded(table: pd.DataFrame, success) -> pd.Series:
-    """Per run: ``metric <= factor * reference + floor`` (:class:`magexp.artifacts.spec.Success`); NaN where the
-    reference (the true calibration's value) is unknown. ``reference: best`` (:data:`BEST`): the lowest
-    value of ``metric`` over the artifact's runs of the same scenario and objective."""
+    """The runs table's ``succeeded`` column: :func:`magexp.core.outcomes.succeeded` of the artifact's
+    rule (:class:`magexp.artifacts.spec.Success`), 1/0, NaN where the reference (the true calibration's
+    value) is unknown. ``reference: best`` (:data:`BEST`): the lowest value of ``metric`` over the
+    artifact's runs of the same scenario and objective."""
     if success.metric not in table or (success.reference not in table and success.reference != BEST):
         return pd.Series(np.nan, index=table.index)
-    metric = table[success.metric].astype(float)
     ref = best_of(table, success.metric) if success.reference == BEST else table[success.reference].astype(float)
-    ok = (metric <= success.factor * ref + success.floor).astype(float)  # a diverged (NaN) metric fails
-    return ok.where(ref.notna())
+    return pd.Series(outcomes.succeeded(table[success.metric], ref, success.factor, success.floor), index=table.index)
 
 
 #: the offset parameters' columns of a runs table: ``I`` of the inverse parameterisation (Ding's eq 9),
 #: ``b`` of the forward one (:meth:`magexp.problems.base.CalibrationProblem.parameter_names`)
 OFFSET_COLUMNS = (("I1", "I2", "I3"), ("b1", "b2", "b3"))
-#: a coordinate is on a face of the box when ``|x - face| <= FACE_TOL (high - low)`` (the tolerance of
-#: the swarm's own ``on_boundary`` count, :mod:`magexp.estimators.swarm`)
-FACE_TOL = 1e-9
-
 
 def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None:
     """Per run, how many of the three offset estimates sit on a face of the search box's offset
-    interval ``scenario.search.offset = [low, high]`` of that run's config (``configs[k]`` is row ``k``).
+    interval ``scenario.search.offset = [low, high]`` of that run's config (``configs[k]`` is row ``k``), by
+    :func:`magexp.core.outcomes.on_face` (the tolerance of the swarm's own ``on_boundary`` count).
 
     A swarm that clips positions to the box (``boundary: clip``) leaves a coordinate that crossed a face
     exactly on it, and a run whose best particle has an offset there cannot reach the optimum when the
@@ -113,9 +110,7 @@ def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None
     if not known.any():
         return None
     x = table[list(columns)].to_numpy(float)
-    lo, hi = box[:, :1], box[:, 1:]
-    atol = FACE_TOL * (hi - lo)
-    on = (np.abs(x - lo) <= atol) | (np.abs(x - hi) <= atol)
+    on = outcomes.on_face(x, box[:, :1], box[:, 1:])  # NaN box: False, and the row is NaN below
     return pd.Series(np.where(known, on.sum(axis=1), np.nan), index=table.index, name="offset_at_face")
 
 

@@ -26,9 +26,10 @@ from magexp.artifacts.claims import (CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, 
 from magexp.artifacts.plots import readings as readings_plot
 from magexp.artifacts.plots.benchmark_table import winners
 from magexp.artifacts.plots.style import save
-from magexp.artifacts.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
+from magexp.artifacts.spec import artifact_paths, load, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
 from magexp.core.atomic import atomic_path, write_text
+from magexp.core.outcomes import ROUNDOFF_FLOOR, succeeded_majority
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS, ROOT
 from magexp.run import provenance
@@ -641,7 +642,7 @@ def _artifact_table(spec, path: Path) -> str:
         simulated = by == "bound_ratio"
         what = "RMS offset error / sqrt(tr CRB)" if simulated else str(by).replace("_", " ")
         among = "" if simulated else "; among the estimators that succeed on at least half the runs"
-        ranked = frame if simulated else frame[frame.success_rate >= 0.5]
+        ranked = frame if simulated else frame[succeeded_majority(frame.success_rate)]
         best = winners(ranked, by)
         if not len(best):
             return text + f"\nNo case has a winner: no estimator has an interval of its {what}{among}.\n"

@@ -49,14 +49,10 @@ from omegaconf import DictConfig, OmegaConf
 from magexp.artifacts.claims import ALPHA, Claim
 from magexp.artifacts.plots import KINDS
 from magexp.artifacts.schema import Bool, Float, Int, allowed, build, typed, unknown
+from magexp.core.outcomes import ROUNDOFF_FLOOR, SUCCESS_FACTOR
 from magexp.errors import MagexpError
 from magexp.paths import EXPERIMENTS
 
-#: a run succeeds when ``metric <= SUCCESS_FACTOR * reference + floor`` (``reference``: the same
-#: metric of the true calibration on the same readings, the optimum the truth gives)
-SUCCESS_FACTOR = 1.1
-#: round-off floor of the objectives (nT or mG): values below it are written and compared as the floor
-ROUNDOFF_FLOOR = 1.0e-9
 #: minimum number of seeds of a cell whose interval is compared with a paper number
 MIN_SEEDS_COMPARED = 30
 
@@ -190,7 +186,8 @@ class Reported:
 @dataclass(frozen=True)
 class Success:
     """A run succeeds when ``metric <= factor * reference + floor`` (``reference``: the metric of the
-    true calibration on the same readings). Runs without the reference column are not judged."""
+    true calibration on the same readings). Runs without the reference column are not judged. The
+    rule and its defaults: :mod:`magexp.core.outcomes` (:func:`~magexp.core.outcomes.succeeded`)."""
 
     metric: str = "fun"
     reference: str = "truth_fun"

@@ -50,6 +50,7 @@ from scipy.special import fdtrc, stdtrit
 
 from magexp.artifacts.claims import matches
 from magexp.artifacts.plan import ArtifactRuns, quantiles, rebuild_problem
+from magexp.core.outcomes import failed_majority, success_threshold
 from magexp.errors import MagexpError
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
@@ -95,7 +96,7 @@ def judge(paper: float | None, lo: float, hi: float, width: float, success_rate:
         return "n/a"
     if not inside(paper, lo, hi, width, floor=floor, tolerance=tolerance, value=value):
         return "differs"
-    return "differs" if _failed(success_rate) else "reproduced"
+    return "differs" if failed_majority(success_rate) else "reproduced"
 
 
 def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0.0, tolerance=None,
@@ -106,11 +107,6 @@ def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0
         return bool(np.isfinite(value) and tolerance.holds(value, paper))
     p = max(paper, floor) if 0 <= paper < floor else paper
     return bool(np.isfinite(lo) and lo - width <= p <= hi + width)
-
-
-def _failed(success_rate: float) -> bool:
-    """Fewer than half of the judged runs succeeded."""
-    return bool(np.isfinite(success_rate) and success_rate < 0.5)
 
 
 def cell_overrides(runs: ArtifactRuns, ci: int) -> dict:
@@ -346,7 +342,7 @@ def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol,
     else:
         against = "the least-squares t-interval" if ls else f"our {outcome} runs" if outcome else "our runs"
         where = f"paper {paper:.4g} {'inside' if within else 'outside'} {against} ({lo:.4g} to {hi:.4g})"
-    if within and _failed(success_rate):
+    if within and failed_majority(success_rate):
         return f"our runs succeed on {success_rate:.0%} of seeds (a failed majority); {where}"
     return where
 
@@ -572,7 +568,8 @@ def _value_row(runs: ArtifactRuns, item, ci: int, sub: pd.DataFrame) -> dict:
     spec, metric = runs.spec, item.metric
     truth = _cell_truth(sub, item.truth_metric or f"truth_{metric}")
     ls, scale = _least_squares_item(runs, item, ci)
-    threshold = None if truth is None or metric != spec.success.metric else spec.success.factor * truth + spec.success.floor
+    threshold = (None if truth is None or metric != spec.success.metric
+                 else success_threshold(truth, spec.success.factor, spec.success.floor))
     return _row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
                 sub[metric].astype(float).to_numpy(), cell_overrides(runs, ci), ok=_cell_ok(runs, ci),
                 aggregate=item.aggregate, ls=ls, success_threshold=threshold,

@@ -50,7 +50,7 @@ import pandas as pd
 
 from magexp import paths
 from magexp.artifacts.report import DIGITS, MEASURED, PEERS_HEADING, SPEED_HEADING
-from magexp.artifacts.spec import ROUNDOFF_FLOOR
+from magexp.core.outcomes import ROUNDOFF_FLOOR
 from magexp.errors import MagexpError, exit_code
 from magexp.run.guard import OneLineParser, check_destination
 

@@ -67,6 +67,7 @@ from magexp.core.dataset import Dataset
 from magexp.problems import kernels
 from magexp.core.geometry import preintegrate
 from magexp.core.identifiability import canonical, coverage, direction_regions, identifiability, spread
+from magexp.core.metrics import total_field_rms
 from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
 from magexp.core.recordings import (MAG_COLUMNS, UNITS, Recording, check_unique, check_unit, load_recording,
                                     resolve)
@@ -325,9 +326,9 @@ def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> d
     """Magnitude statistics before and after, the RMS against the reference and the readings' noise (:func:`noise_of`)."""
     before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
     return {"mean_before": float(before.mean()), "std_before": float(before.std()), "spread_before": spread(before),
-            "rms_before": float(np.sqrt(np.mean((before - reference) ** 2))),
+            "rms_before": total_field_rms(raw, reference),
             "mean_after": float(after.mean()), "std_after": float(after.std()), "spread_after": spread(after),
-            "rms_after": float(np.sqrt(np.mean((after - reference) ** 2))), "noise_after": noise_of(raw, calibrated)}
+            "rms_after": total_field_rms(calibrated, reference), "noise_after": noise_of(raw, calibrated)}
 
 
 def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",

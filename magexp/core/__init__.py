@@ -3,7 +3,9 @@ the readers of recorded data.
 
 Lives here: :mod:`~magexp.core.dataset` (the ``Dataset`` every scenario produces),
 :mod:`~magexp.core.geometry` (rotations, attitudes), :mod:`~magexp.core.igrf` (reference field),
-:mod:`~magexp.core.seeding` (every random draw from the run's seed), :mod:`~magexp.core.metrics`,
+:mod:`~magexp.core.seeding` (every random draw from the run's seed), :mod:`~magexp.core.metrics` (and the
+one total-field RMS), :mod:`~magexp.core.outcomes` (what a successful run is, a failed majority, a face of
+the search box, the round-off floor),
 :mod:`~magexp.core.bounds` (Cramér-Rao bounds), :mod:`~magexp.core.identifiability` (canonical form,
 standard errors, coverage, spread), :mod:`~magexp.core.ellipsoid` (the algebraic ellipsoid fit),
 :mod:`~magexp.core.recordings` (one reader per recording format), :mod:`~magexp.core.datafiles`,

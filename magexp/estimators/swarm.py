@@ -36,6 +36,7 @@ from itertools import chain
 
 import numpy as np
 
+from magexp.core.outcomes import on_face
 from magexp.errors import check, check_nonnegative, check_positive_int
 from magexp.estimators import boundaries
 from magexp.estimators.initialisers import Uniform
@@ -207,9 +208,7 @@ class SwarmOptimizer:
             if callback is not None and callback(t, pbest[g], pcost[g]):
                 break
         history = history[: nit + 1]
-        # on a face: |best - face| <= 1e-9 (hi - lo) (np.isclose with rtol=0 where the box is finite)
-        best, atol = pbest[g], 1e-9 * (hi - lo)
-        edge = (np.abs(best - lo) <= atol) | (np.abs(best - hi) <= atol) | (best == lo) | (best == hi)
+        edge = on_face(pbest[g], lo, hi)  # |best - face| <= FACE_TOL (hi - lo), or on an infinite face
         return FitResult(
             x=pbest[g].copy(), fun=float(pcost[g]), nit=nit, nfev=n * (nit + 1),
             history=history, history_nfev=n * np.arange(1, nit + 2),

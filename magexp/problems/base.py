@@ -192,23 +192,17 @@ class CalibrationProblem:
         return [f"{m}{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"{o}{i + 1}" for i in range(3)]
 
     # -- metrics ---------------------------------------------------------------------------
-    def field_rms(self, theta: np.ndarray) -> float:
-        """Total-field RMS of the calibrated readings against the reference (Ding 2024 eq 18)."""
-        b = np.linalg.norm(self.calibrate(theta), axis=1)
-        return float(np.sqrt(np.mean((b - self.dataset.reference_norm) ** 2)))
-
     def metrics(self, theta: np.ndarray) -> dict:
         """Problem-specific metrics of a fitted ``theta`` (subclasses may add their own).
 
-        ``field_rms``: total-field RMS; with a known truth,
-        ``gram_error``: relative Frobenius error of ``W^T W`` (rotation-invariant, what a
+        With a known truth: ``gram_error``: relative Frobenius error of ``W^T W`` (rotation-invariant, what a
         scalar fit identifies); ``offset_error``: Euclidean error of the offset;
         ``matrix_error``: largest absolute error of an entry of ``W`` (needs a vector fit);
         ``param_matrix_error`` / ``param_offset_error``: largest absolute error of an entry of
         the parameter vector's matrix part (``S`` in the forward form) / offset part.
         With known attitudes, ``fg``: Yuan 2018's ``F_g`` (eq 8) at ``theta``, whatever the objective.
         """
-        out = {"field_rms": self.field_rms(theta)}
+        out = {}
         if self.dataset.attitude is not None and self.dataset.field_nav is not None:
             out["fg"] = self.fg(theta)
         truth = self.dataset.truth

@@ -33,6 +33,7 @@ from scipy.optimize import least_squares
 from magexp.core.ellipsoid import fit_ellipsoid
 from magexp.core.geometry import attitude_with_bias, exp_so3
 from magexp.core.identifiability import canonical, identifiability, spread
+from magexp.core.metrics import total_field_rms
 from magexp.problems.base import CalibrationProblem
 
 EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro_bias_z")
@@ -150,8 +151,9 @@ class GyroAidedCalibration(CalibrationProblem):
         leave it undetermined; :func:`magexp.core.identifiability.identifiability`)."""
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
-        mags = np.linalg.norm(self.calibrate(theta), axis=1)
-        out = {"fg": self.fg(theta), "field_rms": float(np.sqrt(np.mean((mags - self.total) ** 2))),
+        calibrated = self.calibrate(theta)
+        mags = np.linalg.norm(calibrated, axis=1)
+        out = {"fg": self.fg(theta), "field_rms": total_field_rms(calibrated, self.total),
                "vector_residual_fraction": float(np.sqrt(np.mean(np.sum(err**2, axis=1))) / self.total),
                "spread_after": spread(mags)}
         out.update(dict(zip(EXTRA, theta[12:].tolist())))

@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 
 from magexp.core.ellipsoid import normalise
+from magexp.core.metrics import rms
 from magexp.problems import kernels
 from magexp.problems.base import SCALAR, CalibrationProblem
 
@@ -78,8 +79,10 @@ class ScalarCalibration(CalibrationProblem):
         return (b / np.sqrt(np.einsum("ni,ni->n", b, b))[:, None])[:, None, :]
 
     def cost_direct(self, theta: np.ndarray) -> float:
-        """Total-field RMS of one parameter vector by the direct formula."""
-        return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))
+        """Total-field RMS of one parameter vector by the direct formula: the RMS of :meth:`residuals`,
+        :func:`magexp.core.metrics.total_field_rms` with compiled residuals for many readings (it is
+        also :meth:`field_rms`, so the runs carry it once, as ``fun``)."""
+        return rms(self.residuals(theta))
 
     def invariants(self, theta: np.ndarray) -> np.ndarray:
         """What a scalar fit identifies: the 6 entries of ``W^T W`` (upper triangle) and ``o``."""

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.core.metrics import rms
 from magexp.problems.base import CalibrationProblem
 from magexp.problems.vector import LinearVectorModel, theta_to_state
 
@@ -102,7 +103,7 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
 
     def cost_direct(self, theta: np.ndarray) -> float:
         """Fit residual RMS (nT) of one parameter vector."""
-        return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))
+        return rms(self.residuals(theta))
 
     def metrics(self, theta: np.ndarray) -> dict:
         """``fit_rms`` (nT); the estimate per parameter (``K11``...``Bp3``); its distance to the

@@ -17,7 +17,7 @@ from functools import cached_property
 
 import numpy as np
 
-from magexp.core.metrics import truth_cost
+from magexp.core.metrics import rms, total_field_rms, truth_cost
 from magexp.problems import kernels
 from magexp.problems.base import VECTOR, CalibrationProblem, inverse, reference_vectors
 
@@ -146,7 +146,11 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         return self.least_squares()
 
     def metrics(self, theta: np.ndarray) -> dict:
+        """:meth:`CalibrationProblem.metrics`, the noise floor, and ``field_rms``: the total-field RMS of
+        the calibrated readings against the reference (:func:`magexp.core.metrics.total_field_rms`), which
+        a vector fit does not minimise (on a scalar problem it is the objective ``fun`` itself)."""
         out = super().metrics(theta)
+        out["field_rms"] = total_field_rms(self.calibrate(theta), self.dataset.reference_norm)
         floor = truth_cost(self)  # F at the truth, once per problem
         if floor is not None:
             out["noise_floor"] = floor
@@ -183,4 +187,4 @@ class VectorLeastSquares(VectorCalibration):
 
     def cost_direct(self, theta: np.ndarray) -> float:
         """RMS of the residual components of one parameter vector."""
-        return float(np.sqrt(np.mean(self.residuals(theta) ** 2)))
+        return rms(self.residuals(theta))

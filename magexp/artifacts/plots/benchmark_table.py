@@ -20,6 +20,7 @@ import pandas as pd
 
 from magexp.artifacts.plan import quantiles
 from magexp.artifacts.claims import ci
+from magexp.core.outcomes import recording_succeeded
 
 # what each column is computed from (median over seeds unless said)
 COLUMNS = {
@@ -93,10 +94,9 @@ def tabulate(runs) -> pd.DataFrame:
             row[col] = quantiles((good if col in ACCURACY else sub)[col])[0] if col in sub else np.nan
         row["bound_ratio"], row["bound_ratio_lo"], row["bound_ratio_hi"] = bound_ratio(sub)
         ok = sub["succeeded"].dropna() if "succeeded" in sub else pd.Series(dtype=float)
-        if not len(ok) and "success" in sub:  # no truth to compare with (recordings): the fit's own verdict,
-            ok = sub["success"].dropna().astype(bool)  # and a calibration must not widen the spread it fits
-            if {"spread_after", "spread_before"} <= set(sub.columns):
-                ok = ok & (sub.loc[ok.index, "spread_after"] < sub.loc[ok.index, "spread_before"])
+        if not len(ok) and {"optimizer_success", "spread_after", "spread_before"} <= set(sub.columns):
+            ok = pd.Series(recording_succeeded(sub.optimizer_success, sub.spread_before, sub.spread_after),
+                           index=sub.index)  # no truth to compare with (recordings)
         row["success_rate"] = float(ok.mean()) if len(ok) else np.nan
         row["n_failed"] = int((ok == 0).sum()) if len(ok) else 0
         rows.append(row)

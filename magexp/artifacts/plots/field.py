@@ -6,7 +6,7 @@ The default is ``sphere`` for the kind ``sphere``, else ``magnitude``. ``plot.un
 readings (their scenario's, default ``nT``), printed on the axes and with the RMS.
 
 An error panel whose every error is at or below the round-off floor (the CSV writes such values as
-±1e-9, :data:`magexp.artifacts.spec.ROUNDOFF_FLOOR`) draws them at 0 on the scale of its neighbour
+±1e-9, :data:`magexp.core.outcomes.ROUNDOFF_FLOOR`) draws them at 0 on the scale of its neighbour
 and says so in its title: the floor is not data.
 
 The seed shown is the first whose run succeeded (the artifact's ``success:`` rule); where none
@@ -23,7 +23,8 @@ import pandas as pd
 from matplotlib.ticker import FixedLocator
 
 from magexp.artifacts.plots.style import group_values, label, panels, plt, unit
-from magexp.artifacts.spec import ROUNDOFF_FLOOR
+from magexp.core.metrics import rms as rms_of
+from magexp.core.outcomes import ROUNDOFF_FLOOR
 
 
 def tabulate(runs) -> pd.DataFrame:
@@ -84,7 +85,7 @@ def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
     for i, v in enumerate(values):
         sub = frame if v is None else frame[frame[key] == v]
         title = "" if v is None else label(spec, key, v)
-        rms = float(np.sqrt(np.mean(sub.error**2)))
+        rms = rms_of(sub.error)
         if show_raw:
             ax = axes[i]
             ax.plot(sub.reading, sub.raw, ".", ms=2.5, color="0.5", label="before")
@@ -129,7 +130,7 @@ def _draw_sphere(frame: pd.DataFrame, spec, axes=None):
                           color="0.8", lw=0.4)
         ax.scatter(sub.raw_x, sub.raw_y, sub.raw_z, s=6, color="0.45", label="before")
         ax.scatter(sub.cal_x, sub.cal_y, sub.cal_z, s=8, color="C0", label="after")
-        rms = float(np.sqrt(np.mean(sub.error**2)))
+        rms = rms_of(sub.error)
         title = "" if val is None else label(spec, key, val)
         ax.set_title(_lines(title, f"{_which(sub)}: RMS of |B| - |H| after {rms:.3g} {readings_unit}"), fontsize=8)
         ax.set_box_aspect((1, 1, 1))

@@ -36,6 +36,7 @@ from magexp.artifacts.plan import quantiles
 from magexp.artifacts.claims import matches
 from magexp.artifacts.plots.style import (group_values, label, legend_entries, panels, paper_values, plt, scenario_label,
                                          shared_legend, tidy_log_axes)
+from magexp.core.outcomes import failed_majority
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
 SYMLOG_PAD = 0.12  # a symlog x axis from 0 starts this fraction of its linear part below 0
@@ -145,7 +146,7 @@ def _lines(ax, sub, spec, x_key, hue_key, colours):
             ax.plot(x[missing], np.full(missing.sum(), 0.96), "x", color=colour, ms=6, mew=1.4,
                     transform=ax.get_xaxis_transform(), label=f"x at the top: {label(spec, 'missing')}")
         if "success_rate" in line:
-            bad = (line.success_rate < 0.5).to_numpy()
+            bad = failed_majority(line.success_rate)
             if bad.any():
                 ax.plot(x[bad], np.maximum(y[bad], TINY), "o", mfc="none", mec="r", ms=9, mew=1.2,
                         label="fewer than half succeeded")

@@ -4,8 +4,8 @@ Colour and text on one scale: each cell is coloured by the value it prints, on a
 scale symmetric about 1 (the efficient value): at or below 1 green, above it yellow to red; the
 colour bar is labelled in the ratio itself (0.5, 1, 2), not in its logarithm. The bound ratio is
 computed over the successful runs only (:mod:`magexp.artifacts.plots.benchmark_table`); failures
-never enter a colour: a cell with failed runs is hatched (``//`` when some failed, ``xx`` when at
-least half did) and prints how many. Each cell prints the value, its 95 % interval (where the table
+never enter a colour: a cell with failed runs is hatched (``//`` when some failed, ``xx`` when fewer
+than half succeeded, :func:`magexp.core.outcomes.failed_majority`) and prints how many. Each cell prints the value, its 95 % interval (where the table
 has one) and the failures, in :data:`CELL_POINTS` type. A case where no estimator has a value (no
 truth, so no bound) is left out of the map (it stays in the table). The colour bar names the column
 drawn (:func:`magexp.artifacts.plots.style.colorbar`).
@@ -19,6 +19,7 @@ from matplotlib.patches import Rectangle
 
 from magexp.artifacts.plots.benchmark_table import column_label, tabulate  # noqa: F401  (tabulate: the kind's interface, kind_module(kind).tabulate)
 from magexp.artifacts.plots.style import colorbar, drawn_from, narrow_log_ticks, plt
+from magexp.core.outcomes import failed_majority
 
 
 def readable_case(case: str) -> str:
@@ -37,7 +38,7 @@ def _failures(r) -> tuple[str, str | None]:
     failed = int(r["n_failed"]) if "n_failed" in r and np.isfinite(r["n_failed"]) else int(round((1 - rate) * n))
     if failed == 0:
         return f"\nall {n} ok", None
-    return f"\n{failed} of {n} failed", "xx" if failed >= n / 2 else "//"
+    return f"\n{failed} of {n} failed", "xx" if failed_majority(rate) else "//"
 
 
 #: type size of the cells' text (points at the saved size)

@@ -7,7 +7,7 @@ left out of the fit), each the median over seeds; the held-out spread's 95 % int
 of the seeds' block-bootstrap intervals (:func:`magexp.core.identifiability.block_bootstrap_spread`: it covers
 the data's own uncertainty, which one recording cannot average away, and the seeds' differences).
 ``success_rate``: the share of runs where the estimator reports success and the calibrated spread
-is below the raw one (as :func:`magexp.artifacts.plots.benchmark_table.tabulate`). The winner per recording
+is below the raw one (:func:`magexp.core.outcomes.recording_succeeded`). The winner per recording
 (:func:`magexp.artifacts.plots.benchmark_table.winners` on ``heldout_spread``) is named only where its interval
 lies below every other estimator's.
 """
@@ -20,6 +20,7 @@ from matplotlib.lines import Line2D
 
 from magexp.artifacts.plan import quantiles
 from magexp.artifacts.plots.style import panels, scenario_label, tidy_log_axes
+from magexp.core.outcomes import failed_majority, recording_succeeded
 
 COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_cells", "wall_time")
 
@@ -36,8 +37,7 @@ def tabulate(runs) -> pd.DataFrame:
                   for c in ("heldout_spread_lo", "heldout_spread_hi"))
         row["heldout_spread_lo"] = float(np.min(lo)) if np.isfinite(lo).all() else np.nan
         row["heldout_spread_hi"] = float(np.max(hi)) if np.isfinite(hi).all() else np.nan
-        ok = sub["success"].astype(bool) & (sub["spread_after"] < sub["spread_before"])
-        row["success_rate"] = float(ok.mean())
+        row["success_rate"] = float(recording_succeeded(sub.optimizer_success, sub.spread_before, sub.spread_after).mean())
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -51,7 +51,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     for ax, case in zip(axes, cases):
         sub = frame[frame.case == case].reset_index(drop=True)
         x = np.arange(len(sub))
-        failed = (sub.success_rate < 0.5).to_numpy()
+        failed = failed_majority(sub.success_rate)
         colour = np.where(failed, "tab:red", "tab:blue")
         ax.axhline(sub.spread_before.iloc[0], color="0.4", ls="--", lw=1, label="raw readings")
         ax.scatter(x - 0.12, sub.spread_after, marker="o", s=18, c=colour, label="calibrated, fitted readings")
