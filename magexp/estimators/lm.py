@@ -44,7 +44,7 @@ from magexp.core.identifiability import canonical, identifiability
 from magexp.errors import check, check_positive_int
 from magexp.estimators.base import Stop, applies_to, stopper
 from magexp.estimators.ellipsoid import EllipsoidFit
-from magexp.estimators.reduced import UPPER, expand
+from magexp.problems.symmetric import UPPER, expand
 from magexp.estimators.result import FitResult
 
 STARTS = ("ellipsoid", "centre", "problem")
