@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.artifacts.claims import ci
 from magexp.errors import MagexpError
 from magexp.perf.peers import bound, data, exchange, magexp_side, measures
 from magexp.perf.peers.magyc_side import METHODS as PEER_METHODS
@@ -204,8 +205,6 @@ def run(args, work: Path) -> list[dict]:
 def summarise(rows: list[dict]) -> list[dict]:
     """Mean, median and 95 % interval of the median (:func:`magexp.artifacts.claims.ci`) of every measure over seeds (simulations) or over the
     two held-out halves (recordings), per dataset, axis map and method."""
-    from magexp.artifacts.claims import ci
-
     groups: dict[tuple, list[float]] = {}
     for r in rows:
         fit_on = "halves" if r["fit_on"] in ("first_half", "second_half") else r["fit_on"]
