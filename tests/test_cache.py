@@ -349,7 +349,7 @@ def changed(before: dict, after: dict) -> set:
 
 
 def test_a_runs_code_is_the_closure_of_what_it_builds_and_of_the_core(keyed):
-    files = set(codekey.code_files(codekey.run_targets(keyed["ding2024_exp1", "pso"])))
+    files = set(codekey.code_files(cache.run_targets(keyed["ding2024_exp1", "pso"])))
     for needed in ("magexp.run.runner", "magexp.core.metrics", "magexp.core.bounds", "magexp.core.seeding", "magexp",
                    "magexp.scenarios.ding", "magexp.problems.scalar", "magexp.estimators.swarm",
                    "magexp.estimators.velocity", "magexp.estimators.schedules", "magexp.estimators.initialisers"):
@@ -359,7 +359,7 @@ def test_a_runs_code_is_the_closure_of_what_it_builds_and_of_the_core(keyed):
                   "magexp.scenarios.yuan", "magexp.problems.vector", "magexp.problems.ship"):
         assert other not in files, other  # downstream code, and other runs' classes
     # a ship scenario's config names no objective: its class fixes it (``objective = "ship"``)
-    assert [t for t in codekey.run_targets(keyed["yan2022_sim", "kf"]) if t.startswith("magexp.problems.")] == [
+    assert [t for t in cache.run_targets(keyed["yan2022_sim", "kf"]) if t.startswith("magexp.problems.")] == [
         "magexp.problems.ship.ShipMagnetization"]
 
 
@@ -413,7 +413,7 @@ def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sourc
             "pso": keyed["yuan2018_mode1", "pso"]}
     before = keys_of(runs)
     assert "toypkg" not in sys.modules  # found from its source, not imported
-    assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(codekey.code_files(codekey.run_targets(runs["docs"])))
+    assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(codekey.code_files(cache.run_targets(runs["docs"])))
     edit(package / "methods.py", "under another name", "under a new name")
     assert changed(before, keys_of(runs)) == {"docs", "module"}
     again = keys_of(runs)
@@ -430,7 +430,7 @@ def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sourc
 def test_code_versions_are_kept_under_the_sources_stamp(sources, keyed):
     import json
 
-    targets = codekey.run_targets(keyed["ding2024_exp1", "pso"])
+    targets = cache.run_targets(keyed["ding2024_exp1", "pso"])
     version = cache.code_version(targets)
     memo = cache.CACHE / "code-version.json"
     (stamp, kept), = json.loads(memo.read_text()).items()  # the versions, under the sources' stamp
@@ -464,7 +464,7 @@ def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sour
             "ros2 bag": reading(lm, bag),
             "simulated": lm, "ding": keyed["ding2024_exp1", "pso"]}
     imported = {m for m in sys.modules if m.startswith("magexp.core.readers")}
-    assert "magexp.core.readers.ulog.read_ulog" in codekey.run_targets(runs["named ulog"])  # the format named wins
+    assert "magexp.core.readers.ulog.read_ulog" in cache.run_targets(runs["named ulog"])  # the format named wins
     before = keys_of(runs)
     (sources / "magexp/core/readers/new.py").write_text('"""A reader of a new format."""\n')
     codekey.forget_code()

@@ -32,8 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.formats import DIGITS
-from magexp.artifacts.report import MEASURED, PEERS_HEADING, SPEED_HEADING
+from magexp.artifacts.formats import DIGITS, MEASURED, PEERS_HEADING, SPEED_HEADING
 from magexp.artifacts.spec import ROUNDOFF_FLOOR
 
 #: relative tolerance of a number. A reproduction elsewhere (another CPU, BLAS or numba target, the numpy
@@ -249,7 +248,7 @@ def compare_csv(name: str, ours: Path, committed: Path, result: Comparison) -> N
 
 def _columns(name: str, a: pd.DataFrame, b: pd.DataFrame, result: Comparison) -> list[str]:
     """The columns of ``b`` (committed) that ``a`` has too, without this machine's wall times
-    (:data:`magexp.artifacts.reproduce.MEASURED`, listed as excluded); a column on one side only
+    (:data:`magexp.artifacts.formats.MEASURED`, listed as excluded); a column on one side only
     is a disagreement."""
     measured = [c for c in b.columns if MEASURED in c]
     if measured:

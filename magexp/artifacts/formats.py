@@ -1,7 +1,9 @@
-"""The formats of the results files: a results CSV (every float rounded to :data:`DIGITS` significant
-digits, round-off floored: :func:`tidy`, :func:`write_csv`), a runs CSV read back (:func:`read_runs`), and a
-table as Markdown and LaTeX (:func:`markdown_table`, :func:`latex_table`). Identical bytes on every fresh clone
-when only round-off differs; ``magexp verify`` holds a reproduction to one unit of these digits."""
+"""The formats of the results files: a results CSV (every float rounded to :data:`DIGITS` significant digits,
+round-off floored: :func:`tidy`, :func:`write_csv`), a runs CSV read back (:func:`read_runs`), and a table as
+Markdown and LaTeX (:func:`markdown_table`, :func:`latex_table`); what ``magexp verify`` leaves out by design
+(:data:`MEASURED` columns, the report's sections of :data:`PEERS_HEADING` and :data:`SPEED_HEADING`).
+Identical bytes on every fresh clone when only round-off differs; ``magexp verify`` holds a reproduction to
+one unit of these digits."""
 
 from __future__ import annotations
 
@@ -16,6 +18,12 @@ from magexp.errors import MagexpError
 
 #: significant digits of every float written to a results CSV (round-off must not churn files)
 DIGITS = 6
+#: a column of wall times measured on this machine has this in its name (an artifact's table keeps them in
+#: ``results/timing/``, :func:`magexp.artifacts.reproduce.split_timing`)
+MEASURED = "wall_time"
+#: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
+#: them out unless both sides have their source)
+PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
 
 
 def _floats(column: pd.Series) -> np.ndarray | None:

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, UNDECIDED, interpolate, shorten
-from magexp.artifacts.formats import fmt, latex_table, markdown_table, write_csv
+from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, write_csv
 from magexp.artifacts.headlines import HEADLINE_VERDICTS, claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.plots import readings as readings_plot
 from magexp.artifacts.plots.benchmark_table import winners
@@ -39,12 +39,6 @@ SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "ju
 MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
-#: a column of wall times measured on this machine has this in its name (an artifact's table keeps them in
-#: ``results/timing/``, :func:`magexp.artifacts.reproduce.split_timing`)
-MEASURED = "wall_time"
-#: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
-#: them out unless both sides have their source)
-PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
                  "p", "p_adjusted", "p_min", "detectable", "seeds", "readings_total", "readings_holding"]
 

@@ -5,11 +5,13 @@ The key of a run (:func:`run_key`) hashes
 * its fully resolved config (every setting, the seed included),
 * the content of every data file the config names (:func:`magexp.core.datafiles.data_files`), so that editing a
   recording such as ``data/yan2022_mockup.csv`` reruns exactly the runs that read it,
-* the source of the code the run executes (:func:`code_version`: the hash of the modules that
-  :mod:`magexp.run.codekey` finds a run executes, kept under the sources' stamp). So an estimator edit reruns the
-  runs of that estimator and of the estimators importing its module, and code downstream of a run (``plots/``,
-  ``summary``, ``report``, ``reproduce``, the executor, this module) is not part of any key: a figure or report
-  edit costs no run.
+* the source of the code the run executes (:func:`code_version`): the modules of what it names
+  (:func:`run_targets`: every ``_target_`` of its config, the reader of each data file it reads, its
+  objective's problem class) with their import closure and the core every run executes, found and hashed by
+  :mod:`magexp.run.codekey` and kept under the sources' stamp. So an estimator edit reruns the runs of that
+  estimator and of the estimators importing its module, a reader edit the runs reading a file of its format,
+  and code downstream of a run (``plots/``, ``summary``, ``report``, ``reproduce``, the executor, this module)
+  is not part of any key: a figure or report edit costs no run.
 
 An entry (:func:`pack`) is data, never code: a line with a SHA-256 digest, a JSON header (its key, its
 kind, the tree of its values) and the raw bytes of its numpy arrays. Reading one (:func:`load`)
@@ -47,7 +49,8 @@ from pathlib import Path
 from magexp.core.atomic import write_bytes
 from magexp.core.datafiles import data_files, data_formats
 from magexp.paths import CACHE
-from magexp.run.codekey import code_hash, run_targets, source_stamp
+from magexp.problems import OBJECTIVES
+from magexp.run.codekey import code_hash, default_objective, source_stamp
 from magexp.run.guard import check_cache_folder
 
 
@@ -61,6 +64,50 @@ def files_digest(files, base: Path):
         h.update(path.relative_to(base).as_posix().encode())
         h.update(path.read_bytes())
     return h
+
+
+def _targets_in(node, found: set) -> set:
+    """Every ``_target_`` string in a config tree (nested strategy objects included), added to ``found``."""
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if key == "_target_" and isinstance(value, str):
+                found.add(value)
+            else:
+                _targets_in(value, found)
+    elif isinstance(node, (list, tuple)):
+        for value in node:
+            _targets_in(value, found)
+    return found
+
+
+def data_readers(formats: dict) -> set[str]:
+    """The readers of a config's data files (``formats``: its :func:`magexp.core.datafiles.data_formats`):
+    the dotted name of the function reading each (:func:`magexp.core.recordings.reader_of`) in the
+    format named beside it, else in the one detected from its name or first lines. None is imported: a
+    log's reader module is imported by name when the log is read."""
+    if not formats:
+        return set()
+    # lazy: a config naming no file is keyed without it (104 ms CPU to import, min of 3, numpy included)
+    from magexp.core.recordings import reader_of
+
+    return {reader_of(path, format) for path, format in formats.items()}
+
+
+def run_targets(resolved: dict, formats: dict | None = None) -> tuple[str, ...]:
+    """What a run instantiates or calls by name: every ``_target_`` of its resolved config, the reader of
+    each data file it names (:func:`data_readers`; ``formats``: its data files' formats, found here if
+    None), and the problem class of its objective (``objective``, else its scenario's: in its config,
+    else fixed by its class, :func:`magexp.run.codekey.default_objective`; one not found so: every registered problem
+    class)."""
+    formats = data_formats(resolved) if formats is None else formats
+    found = _targets_in(resolved, set()) | data_readers(formats)
+    scenario = resolved.get("scenario") if isinstance(resolved.get("scenario"), dict) else {}
+    objective = resolved.get("objective") or scenario.get("objective")
+    if objective is None and isinstance(scenario.get("_target_"), str):
+        objective = default_objective(scenario["_target_"])
+    problems = [OBJECTIVES[objective]] if objective in OBJECTIVES else list(OBJECTIVES.values())
+    found.update(p.replace(":", ".") for p in problems)
+    return tuple(sorted(found))
 
 
 def code_versions(target_sets) -> dict[tuple, str]:
@@ -98,7 +145,7 @@ def code_versions(target_sets) -> dict[tuple, str]:
 
 
 def code_version(targets: tuple[str, ...] = ()) -> str:
-    """Hash of the code a run of ``targets`` (its :func:`magexp.run.codekey.run_targets`) executes: the name
+    """Hash of the code a run of ``targets`` (its :func:`run_targets`) executes: the name
     and content of each file of :func:`magexp.run.codekey.code_files`. Only an edit of such a file invalidates
     the run."""
     return code_versions([tuple(targets)])[tuple(targets)]

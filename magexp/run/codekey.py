@@ -1,16 +1,15 @@
 """The code a run executes, found from the sources without importing them, and its hash.
 
 A run executes (:func:`code_files`) the modules of the classes its config names by ``_target_`` (scenario,
-estimator, their nested strategy objects, an analysis step; :func:`run_targets`) and of its objective's problem
-class, with their static import closure inside magexp and inside the class's own top-level package, and the core
-every run executes (:data:`CORE`: the runner and its closure). A class of another package (``_target_:
+estimator, their nested strategy objects, an analysis step) and of its objective's problem class, with their
+static import closure inside magexp and inside the class's own top-level package, and the core every run
+executes (:data:`CORE`: the runner and its closure). A class of another package (``_target_:
 mypackage.MyMethod``) brings its module's file and the modules it imports of its own package and of magexp.
-Modules are found from their source, never imported. So an estimator edit reruns the runs of that estimator and
-of the estimators importing its module, an unused new module reruns nothing, and code downstream of a run
-(``plots/``, ``summary``, ``report``, ``reproduce``, the executor, the run cache itself) is not part of any key.
-The recording readers, which a run imports by a computed name (``importlib``) when it reads a log, are in its code
-through its data files: the reader of each file's format (:func:`data_readers`). So a reader edit reruns the runs
-reading a file of its format, and a new reader module reruns nothing.
+Modules are found from their source, never imported. So an estimator edit reruns the runs of that estimator
+and of the estimators importing its module, an unused new module reruns nothing, and code downstream of a run
+(``plots/``, ``summary``, ``report``, ``reproduce``, the executor, the run cache itself) is not part of any
+key. Which targets a run names (its ``_target_`` strings, the readers of its data files, its problem class) is
+:func:`magexp.run.cache.run_targets`'s.
 
 :func:`code_hash` hashes the name and content of each of those files; :mod:`magexp.run.cache` keeps the hashes
 (``code-version.json``, under the sources' :func:`source_stamp`) and puts them in every run's key.
@@ -24,9 +23,7 @@ import importlib.util
 from functools import lru_cache
 from pathlib import Path
 
-from magexp.core.datafiles import data_formats
 from magexp.paths import ROOT
-from magexp.problems import OBJECTIVES
 
 #: the modules every run executes whatever its config: the runner, which builds the config's objects,
 #: makes the problem, fits and evaluates (with its import closure: metrics, bounds, seeding, the bases)
@@ -131,7 +128,7 @@ def _target_module(target: str) -> str | None:
 
 def code_files(targets=()) -> dict[str, Path]:
     """The source files a run executes, by module name: the import closure (:func:`_deps`) of
-    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`run_targets`)."""
+    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`magexp.run.cache.run_targets`)."""
     todo = list(CORE) + [m for m in map(_target_module, targets) if m is not None]
     found: dict[str, Path] = {}
     while todo:
@@ -160,7 +157,7 @@ def _fixed_objective(cls: ast.ClassDef) -> str | None:
 
 
 @lru_cache(maxsize=None)
-def _default_objective(target: str) -> str | None:
+def default_objective(target: str) -> str | None:
     """The objective that the scenario class ``target`` fixes when its config names none, read from
     its module's source (:func:`_fixed_objective` of the class, else of its base classes defined in the
     same module); None if not found so."""
@@ -180,50 +177,6 @@ def _default_objective(target: str) -> str | None:
             return found
         todo.extend(b.id for b in classes[name].bases if isinstance(b, ast.Name))
     return None
-
-
-def _targets_in(node, found: set) -> set:
-    """Every ``_target_`` string in a config tree (nested strategy objects included), added to ``found``."""
-    if isinstance(node, dict):
-        for key, value in node.items():
-            if key == "_target_" and isinstance(value, str):
-                found.add(value)
-            else:
-                _targets_in(value, found)
-    elif isinstance(node, (list, tuple)):
-        for value in node:
-            _targets_in(value, found)
-    return found
-
-
-def data_readers(formats: dict) -> set[str]:
-    """The readers of a config's data files (``formats``: its :func:`magexp.core.datafiles.data_formats`):
-    the dotted name of the function reading each (:func:`magexp.core.recordings.reader_of`) in the
-    format named beside it, else in the one detected from its name or first lines. None is imported: a
-    log's reader module is imported by name when the log is read."""
-    if not formats:
-        return set()
-    # lazy: a config naming no file is keyed without it (104 ms CPU to import, min of 3, numpy included)
-    from magexp.core.recordings import reader_of
-
-    return {reader_of(path, format) for path, format in formats.items()}
-
-
-def run_targets(resolved: dict, formats: dict | None = None) -> tuple[str, ...]:
-    """What a run instantiates or calls by name: every ``_target_`` of its resolved config, the reader of
-    each data file it names (:func:`data_readers`; ``formats``: its data files' formats, found here if
-    None), and the problem class of its objective (``objective``, else its scenario's: in its config,
-    else fixed by its class, :func:`_default_objective`; one not found so: every registered problem
-    class)."""
-    formats = data_formats(resolved) if formats is None else formats
-    found = _targets_in(resolved, set()) | data_readers(formats)
-    scenario = resolved.get("scenario") if isinstance(resolved.get("scenario"), dict) else {}
-    objective = resolved.get("objective") or scenario.get("objective")
-    if objective is None and isinstance(scenario.get("_target_"), str):
-        objective = _default_objective(scenario["_target_"])
-    problems = [OBJECTIVES[objective]] if objective in OBJECTIVES else list(OBJECTIVES.values())
-    found.update(p.replace(":", ".") for p in problems)
-    return tuple(sorted(found))
 
 
 @lru_cache(maxsize=None)
@@ -252,5 +205,5 @@ def source_stamp() -> str:
 def forget_code() -> None:
     """Forget what this process found of the sources (files, imports, digests): for a process that
     edits sources, or changes ``sys.path``, and keys runs again."""
-    for cached in (_top_spec, _source, _parse, _deps, _default_objective, _digest):
+    for cached in (_top_spec, _source, _parse, _deps, default_objective, _digest):
         cached.cache_clear()

@@ -174,7 +174,7 @@ def job_rows(args, job: tuple, answer: dict, rests: dict) -> list[dict]:
     """The long rows of one fit: both sides' measures, the raw spread (recordings) or the Cramér-Rao floor
     (simulations)."""
     ds, held, label, axis_map = job
-    estimates = [("magyc", magexp_side.Estimate.from_peer(r)) for r in answer["results"]]
+    estimates = [("magyc", exchange.Estimate.from_peer(r)) for r in answer["results"]]
     n_fit = len(ds.t) if ds.side["kind"] == "magyc_synthetic" else args.n_fit  # MAGYC's data: the peer's readings
     estimates += [("magexp", magexp_side.fit(m, ds, seed=int(ds.side["seed"]), n_fit=n_fit))
                   for m in args.magexp.split(",")]
