@@ -48,7 +48,7 @@ def test_no_function_is_too_complex():
 
 # ---------------------------------------------------------------------------------------------
 # the import graph: every import of one magexp module by another, at module top or inside a
-# function (a lazy import is still a dependency)
+# function (a lazy import is still a dependency); and the size of a module
 
 #: the modules allowed directly in magexp/ beside the packages
 TOP_MODULES = {"__init__", "__main__", "errors", "paths"}
@@ -106,22 +106,99 @@ def import_graph() -> dict[str, set[str]]:
     return graph
 
 
-def _depth(graph, module, seen=()) -> int:
-    assert module not in seen, "import cycle: " + " -> ".join([*seen, module])
-    return 1 + max((_depth(graph, m, (*seen, module)) for m in graph[module]), default=0)
+#: the modules other helpers of issue 35 are splitting: allowed over :data:`MAX_LINES` and inside an import
+#: cycle until their splits land (the lead removes this allowlist after merging them)
+PENDING_SPLITS = {"magexp/calibration/fit.py", "magexp/core/recordings.py", "magexp/artifacts/summary.py",
+                  "magexp/artifacts/claims.py"}
+#: imports left to the splits above, not counted in the depth: ``expand`` and ``UPPER`` live in
+#: ``magexp.problems.symmetric``; ``calibration/fit.py`` still takes them through ``estimators.reduced`` (and so
+#: imports the swarm engine), and its split imports them from their home
+PENDING_EDGES = {("magexp.calibration.fit", "magexp.estimators.reduced")}
+#: the most lines a module may have (issue 35): a longer one holds more than one concept
+MAX_LINES = 600
 
 
-def test_at_most_four_modules_sit_beside_the_packages():
-    top = {p.stem for p in (ROOT / "magexp").glob("*.py")}
-    assert top <= TOP_MODULES, f"modules directly in magexp/: {sorted(top - TOP_MODULES)}"
+def _pending(module: str) -> bool:
+    return module.replace(".", "/") + ".py" in PENDING_SPLITS
 
 
-def test_the_import_graph_has_no_cycle_and_is_shallow():
-    graph = import_graph()
-    depth = _depth(graph, "magexp.__main__")  # fails on the first cycle it meets, naming it
-    for module in graph:
-        _depth(graph, module)
-    assert depth <= MAX_DEPTH, f"{depth} modules deep from magexp.__main__ (at most {MAX_DEPTH})"
+def _cycles(graph) -> list[list[str]]:
+    """The import cycles of ``graph``: each strongly connected component of more than one module (Tarjan)."""
+    index, low, stack, on, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while not component or component[-1] != v:
+                component.append(stack.pop())
+                on.discard(component[-1])
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def _depths(graph) -> dict[str, tuple[str, ...]]:
+    """``{module: its longest chain of imports down to a leaf}`` (an import back into the chain, possible only
+    inside a cycle, ends it)."""
+    chains: dict[str, tuple[str, ...]] = {}
+
+    def chain(module, seen=()):
+        if module in chains:
+            return chains[module]
+        below = [chain(m, (*seen, module)) for m in sorted(graph[module]) if m not in seen and m != module]
+        found = (module, *max(below, key=len, default=()))
+        if not seen or not any(m in seen for m in graph[module]):
+            chains[module] = found
+        return found
+
+    for module in sorted(graph):
+        chain(module)
+    return chains
+
+
+def test_no_module_is_too_long():
+    sizes = {p.relative_to(ROOT).as_posix(): len(p.read_text().splitlines()) for p in (ROOT / "magexp").rglob("*.py")}
+    assert len(sizes) > 100  # the walk saw the package
+    over = {path: n for path, n in sizes.items() if n > MAX_LINES and path not in PENDING_SPLITS}
+    assert not over, f"modules over {MAX_LINES} lines (split them by concept): " + ", ".join(
+        f"{path} ({n})" for path, n in sorted(over.items()))
+
+
+def test_the_import_graph_has_no_cycle():
+    cycles = [c for c in _cycles(import_graph()) if not any(_pending(m) for m in c)]
+    assert not cycles, "import cycles (imports inside functions count): " + "; ".join(" <-> ".join(c) for c in cycles)
+
+
+def test_the_import_graph_is_shallow():
+    """No chain of imports, from any module (the entry point ``magexp.__main__`` among them) down to a leaf, is
+    longer than :data:`MAX_DEPTH` modules, counting every import (inside functions too)."""
+    graph = {m: targets - {t for s, t in PENDING_EDGES if s == m} for m, targets in import_graph().items()}
+    chains = _depths(graph)
+    assert len(chains["magexp.__main__"]) > 3  # the entry point reaches down the layers
+    deep = {m: c for m, c in chains.items() if len(c) > MAX_DEPTH}
+    assert not deep, f"import chains over {MAX_DEPTH} modules: " + "; ".join(
+        " -> ".join(c) for c in sorted(deep.values(), key=len, reverse=True)[:3])
+
+
+def test_the_architecture_checks_find_what_they_look_for():
+    """The cycle and depth scans on a hand-made graph: a cycle found (and only it), the longest chain measured."""
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a", "d"}, "d": set(), "e": {"d"}}
+    assert _cycles(graph) == [["a", "b", "c"]]
+    line = {"a": {"b", "d"}, "b": {"c"}, "c": {"d"}, "d": set()}
+    assert _depths(line)["a"] == ("a", "b", "c", "d") and _depths(line)["c"] == ("c", "d")
 
 
 def test_packages_import_only_the_layers_below_them():

@@ -875,7 +875,7 @@ def test_a_users_plugin_class_is_a_target_and_nothing_else_is_imported(tmp_path,
     """docs/extending.md's ``_target_: mypackage.MyMethod`` passes the target check; a user module that
     does not define the named class at its top level is refused without being imported (its import
     would run its code), as are Python's own modules and functions."""
-    from magexp.run.guard import check_target
+    from magexp.run.targets import check_target
 
     pkg = tmp_path / "mypackage"
     pkg.mkdir()

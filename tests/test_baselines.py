@@ -9,7 +9,7 @@ from magexp.core.dataset import Dataset, Truth
 from magexp.estimators import twostep as ts
 from magexp.estimators.boundaries import clip, random_reentry, reflect
 from magexp.core.ellipsoid import constraint_matrix, fit_ellipsoid, fit_ellipsoid_specific
-from magexp.estimators.reduced import expand
+from magexp.problems.symmetric import expand
 from magexp.estimators.triangular import (MaximumLikelihoodScalar, TriangularCalibration, merayo_matrix,
                                           merayo_parameters)
 from magexp.core.metrics import evaluate

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from magexp.run import cache
+from magexp.run import cache, codekey
 
 from magexp.artifacts import reproduce
 from magexp.estimators.result import RunOutput
@@ -322,14 +322,14 @@ def keyed() -> dict:
 
 @pytest.fixture
 def sources(tmp_path, monkeypatch):
-    """A copy of magexp's sources that run keys are worked out from (``cache.ROOT``), to edit; what
+    """A copy of magexp's sources that run keys are worked out from (``codekey.ROOT``), to edit; what
     the process found of the sources is forgotten before and after."""
     copy = tmp_path / "repo"
     shutil.copytree(ROOT / "magexp", copy / "magexp", ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(cache, "ROOT", copy)
-    cache.forget_code()
+    monkeypatch.setattr(codekey, "ROOT", copy)
+    codekey.forget_code()
     yield copy
-    cache.forget_code()
+    codekey.forget_code()
 
 
 def keys_of(configs: dict) -> dict:
@@ -341,7 +341,7 @@ def edit(path: Path, old: str, new: str) -> None:
     text = path.read_text()
     assert text.count(old) == 1, old
     path.write_text(text.replace(old, new))
-    cache.forget_code()
+    codekey.forget_code()
 
 
 def changed(before: dict, after: dict) -> set:
@@ -349,7 +349,7 @@ def changed(before: dict, after: dict) -> set:
 
 
 def test_a_runs_code_is_the_closure_of_what_it_builds_and_of_the_core(keyed):
-    files = set(cache.code_files(cache.run_targets(keyed["ding2024_exp1", "pso"])))
+    files = set(codekey.code_files(cache.run_targets(keyed["ding2024_exp1", "pso"])))
     for needed in ("magexp.run.runner", "magexp.core.metrics", "magexp.core.bounds", "magexp.core.seeding", "magexp",
                    "magexp.scenarios.ding", "magexp.problems.scalar", "magexp.estimators.swarm",
                    "magexp.estimators.velocity", "magexp.estimators.schedules", "magexp.estimators.initialisers"):
@@ -368,7 +368,7 @@ def test_an_unused_module_changes_no_key_and_a_plot_edit_none_either(sources, ke
     (sources / "magexp/estimators/toy.py").write_text('"""A toy."""\n\n\nclass Toy:\n    """Empty."""\n')
     with (sources / "magexp/artifacts/plots/convergence.py").open("a") as fh:
         fh.write("\n# a new label\n")
-    cache.forget_code()
+    codekey.forget_code()
     assert keys_of(keyed) == before
 
 
@@ -382,7 +382,7 @@ def test_a_core_edit_changes_every_key(sources, keyed):
     before = keys_of(keyed)
     with (sources / "magexp/core/bounds.py").open("a") as fh:
         fh.write("\n# a change upstream of every run\n")
-    cache.forget_code()
+    codekey.forget_code()
     assert changed(before, keys_of(keyed)) == set(keyed)
 
 
@@ -406,19 +406,19 @@ def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sourc
     (package / "methods.py").write_text(TOY_METHODS)
     (package / "unused.py").write_text('"""Imported by nothing."""\n')
     monkeypatch.syspath_prepend(str(package.parent))
-    cache.forget_code()
+    codekey.forget_code()
     lm = keyed["yuan2018_mode1", "lm"]
     runs = {"docs": {**lm, "estimator": {**lm["estimator"], "_target_": "toypkg.MyMethod"}},  # docs/extending.md's way
             "module": {**lm, "estimator": {**lm["estimator"], "_target_": "toypkg.methods.MyMethod"}},
             "pso": keyed["yuan2018_mode1", "pso"]}
     before = keys_of(runs)
     assert "toypkg" not in sys.modules  # found from its source, not imported
-    assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(cache.code_files(cache.run_targets(runs["docs"])))
+    assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(codekey.code_files(cache.run_targets(runs["docs"])))
     edit(package / "methods.py", "under another name", "under a new name")
     assert changed(before, keys_of(runs)) == {"docs", "module"}
     again = keys_of(runs)
     (package / "unused.py").write_text('"""Edited, still imported by nothing."""\n')
-    cache.forget_code()
+    codekey.forget_code()
     assert keys_of(runs) == again
     edit(sources / "magexp/estimators/lm.py", '"""Levenberg-Marquardt refinement', '"""Levenberg-Marquardt (LM) refinement')
     assert changed(again, keys_of(runs)) == {"docs", "module"}  # magexp code it imports is its code too
@@ -467,7 +467,7 @@ def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sour
     assert "magexp.core.readers.ulog.read_ulog" in cache.run_targets(runs["named ulog"])  # the format named wins
     before = keys_of(runs)
     (sources / "magexp/core/readers/new.py").write_text('"""A reader of a new format."""\n')
-    cache.forget_code()
+    codekey.forget_code()
     assert keys_of(runs) == before  # a new reader reruns nothing
     edit(sources / "magexp/core/readers/ulog.py", '"""PX4 ULog (``.ulg``) logs', '"""PX4 ULog (``.ulg``) flight logs')
     assert changed(before, after := keys_of(runs)) == {"ulog", "named ulog"}

@@ -9,7 +9,7 @@ from magexp.artifacts.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS
                                      permutation_less, wilcoxon_less)
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.artifacts.report import claim_outcomes
+from magexp.artifacts.headlines import claim_outcomes
 
 
 def _table(groups: dict) -> pd.DataFrame:

@@ -12,7 +12,7 @@ from magexp.errors import MagexpError
 from magexp.core.geometry import preintegrate
 from magexp.perf.peers import bench, data, exchange, magexp_side, measures, report
 from magexp.perf.peers import claims as peer_claims
-from magexp.perf.peers.magexp_side import Estimate
+from magexp.perf.peers.exchange import Estimate
 
 
 def dataset(n=400, *, soft=None, hard=(0.02, 0.12, 0.09)):

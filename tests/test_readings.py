@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import pandas as pd
 import pytest
 
-from magexp.artifacts import report
+from magexp.artifacts import headlines
 from magexp.artifacts.claims import Claim, evaluate
 from magexp.artifacts.plan import ArtifactPlan, grow_stage, next_seeds
 from magexp.artifacts.schema import build
@@ -25,8 +25,8 @@ def _headlines(monkeypatch, heads: list[dict], table: pd.DataFrame, claims: list
     specs = [SimpleNamespace(name="art", claims=claims)]
     outcomes = {f"art.{c.id}": evaluate(c, table) for c in claims}
     paper = Paper(title="p", headline=[build(Headline, h, "h") for h in heads])
-    monkeypatch.setattr(report, "load_paper", lambda name: paper)
-    return {r["id"]: r for r in report.headlines("p", specs, outcomes, lambda name: table)}
+    monkeypatch.setattr(headlines, "load_paper", lambda name: paper)
+    return {r["id"]: r for r in headlines.headlines("p", specs, outcomes, lambda name: table)}
 
 
 def test_readings_that_split_read_depends_and_name_both_sides(monkeypatch):
@@ -57,9 +57,9 @@ def test_readings_that_agree_keep_the_common_verdict(monkeypatch):
 
 
 def test_readings_verdict_orders_the_sides():
-    verdict, split = report.readings_verdict([("x", "contradicted"), ("y", "supported"), ("z", "contradicted")])
+    verdict, split = headlines.readings_verdict([("x", "contradicted"), ("y", "supported"), ("z", "contradicted")])
     assert verdict == "depends" and split == 'depends: supported under "y"; contradicted under "x", "z"'
-    assert report.readings_verdict([("x", "partly"), ("y", "partly")]) == ("partly", "")
+    assert headlines.readings_verdict([("x", "partly"), ("y", "partly")]) == ("partly", "")
 
 
 def test_a_reading_schema_is_checked():

@@ -8,8 +8,9 @@ import pytest
 from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS, SHORT, UNDECIDED, shorten
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.artifacts.report import (HEADLINE_VERDICTS, MAX_CELL, MAX_CHARS, MAX_LINES, compared_counts, compared_rows, counts,
-                                     headline_verdict, markdown_table)
+from magexp.artifacts.formats import markdown_table
+from magexp.artifacts.headlines import HEADLINE_VERDICTS, headline_verdict
+from magexp.artifacts.report import MAX_CELL, MAX_CHARS, MAX_LINES, compared_counts, compared_rows, counts
 from magexp.artifacts.schema import build
 from magexp.artifacts.spec import Headline
 
@@ -102,7 +103,7 @@ def test_each_paper_section_opens_with_its_headline_claims():
 def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypatch):
     from types import SimpleNamespace
 
-    from magexp.artifacts import report
+    from magexp.artifacts import headlines
     from magexp.artifacts.claims import Claim, evaluate
     from magexp.artifacts.spec import Paper
 
@@ -116,16 +117,16 @@ def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypat
         {"id": "both", "text": "t", "section": "s", "parts": ["art.ok", "art.bad"], "reason": "a at {median:fun@estimator=a:.2g}"},
         {"id": "one", "text": "t", "section": "s", "parts": ["art.ok"], "figure": "p/fig"},
         {"id": "none", "text": "t", "section": "s", "untestable": "the data are not public"})]
-    monkeypatch.setattr(report, "load_paper", lambda paper: Paper(title="p", headline=heads))
-    rows = {r["id"]: r for r in report.headlines("p", specs, outcomes, lambda name: table)}
+    monkeypatch.setattr(headlines, "load_paper", lambda paper: Paper(title="p", headline=heads))
+    rows = {r["id"]: r for r in headlines.headlines("p", specs, outcomes, lambda name: table)}
     assert rows["both"]["verdict"] == "partly" and rows["both"]["reason"] == "a at 1.1"
     assert rows["one"]["verdict"] == "supported" and rows["one"]["figure"] == "p/fig"
     assert rows["both"]["figure"] == "p/art"  # default: the first part's artifact
     assert rows["none"]["verdict"] == "not testable here" and rows["none"]["reason"] == "the data are not public"
     typo = [build(Headline, {"id": "x", "text": "t", "section": "s", "parts": ["art.nope"]}, "h")]
-    monkeypatch.setattr(report, "load_paper", lambda paper: Paper(title="p", headline=typo))
+    monkeypatch.setattr(headlines, "load_paper", lambda paper: Paper(title="p", headline=typo))
     with pytest.raises(MagexpError, match="'art.nope' names no claim"):
-        report.headlines("p", specs, outcomes, lambda name: table)
+        headlines.headlines("p", specs, outcomes, lambda name: table)
 
 
 def test_a_caption_counts_seeds_from_the_runs_never_by_hand():

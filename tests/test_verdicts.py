@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from magexp.artifacts.plan import succeeded
-from magexp.artifacts.report import tidy
+from magexp.artifacts.formats import tidy
 from magexp.artifacts.spec import Success, Tolerance
 from magexp.artifacts.summary import interval, judge
 

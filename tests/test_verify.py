@@ -18,8 +18,9 @@ import pandas as pd
 import pytest
 from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
 
-from magexp.artifacts.report import SPEED_HEADING
-from magexp.artifacts.verify import RTOL, committed_results, compare, compare_text, render
+from magexp.artifacts.formats import SPEED_HEADING
+from magexp.artifacts.compare import RTOL, compare, compare_text
+from magexp.artifacts.verify import committed_results, render
 from magexp.paths import EXPERIMENTS, RESULTS, ROOT
 
 #: the committed files copied into each test's two folders

@@ -4,8 +4,10 @@ verdicts and claims, drawn, and written up in ``results/REPORT.md``.
 
 Lives here: :mod:`~magexp.artifacts.spec` (the typed spec), :mod:`~magexp.artifacts.plan` (spec → runs →
 tidy rows), :mod:`~magexp.artifacts.reproduce` (``magexp reproduce``), :mod:`~magexp.artifacts.summary`
-(verdicts), :mod:`~magexp.artifacts.claims`, :mod:`~magexp.artifacts.report`, and :mod:`~magexp.artifacts.plots`
-(one module per figure kind).
+(verdicts), :mod:`~magexp.artifacts.claims`, :mod:`~magexp.artifacts.headlines` (a paper's headline claims
+judged), :mod:`~magexp.artifacts.report`, :mod:`~magexp.artifacts.formats` (the results files' CSV and table
+formats), :mod:`~magexp.artifacts.verify` (``magexp verify``) and :mod:`~magexp.artifacts.compare` (two results
+folders compared), and :mod:`~magexp.artifacts.plots` (one module per figure kind).
 
 May import: ``core``, ``run``, ``problems`` (the problem facts a verdict needs, rebuilt in one place:
 :func:`magexp.artifacts.plan.rebuild_problem`) and :mod:`magexp.estimators.base` (whether an estimator

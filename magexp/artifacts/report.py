@@ -3,16 +3,15 @@
 
 ``REPORT.md`` is claims first (at most :data:`MAX_LINES` lines and :data:`MAX_CHARS` characters,
 no table cell over :data:`MAX_CELL`): per paper, (1) its headline claims with their verdicts
-(:func:`headline_verdict`), reasons and figures, (2) magexp's own findings, (3) the compared
+(:mod:`magexp.artifacts.headlines`), reasons and figures, (2) magexp's own findings, (3) the compared
 numbers (rows with a paper value), (4) the deviations. ``APPENDIX.md`` holds the rest: per
 artifact its figure, caption, full summary table (``n/a`` rows too), table and notes (measured
 values interpolated from the runs, :func:`magexp.artifacts.claims.interpolate`), the sanity checks and the
-speed of the core. ``claims.csv`` has every claim (headline, finding, sanity) with its full evidence."""
+speed of the core. ``claims.csv`` has every claim (headline, finding, sanity) with its full evidence. Every CSV
+and table is written in the formats of :mod:`magexp.artifacts.formats`."""
 
 from __future__ import annotations
 
-import functools
-import platform
 import re
 import subprocess
 import sys
@@ -21,8 +20,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import (CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, UNDECIDED, adjust, evaluate,
-                                     interpolate, shorten)
+from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, UNDECIDED, interpolate, shorten
+from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, write_csv
+from magexp.artifacts.headlines import HEADLINE_VERDICTS, claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.plots import readings as readings_plot
 from magexp.artifacts.plots.benchmark_table import winners
 from magexp.artifacts.plots.style import save
@@ -34,64 +34,14 @@ from magexp.errors import MagexpError
 from magexp.paths import RESULTS, ROOT
 from magexp.run import provenance
 
-#: significant digits of every float written to a results CSV (round-off must not churn files)
-DIGITS = 6
 SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "judged_value", "judged_lo", "judged_hi",
                  "judged_runs", "judged_n", "success_rate", "truth_in_interval", "verdict", "rel_difference"]
 #: limits of REPORT.md (the appendix holds the rest; the section "magexp beside MAGYC" links its claims table)
 MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
-#: verdicts of a headline claim
-HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "depends", "not testable here", "by construction")
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
-#: a column of wall times measured on this machine has this in its name (an artifact's table keeps them in
-#: ``results/timing/``, :func:`magexp.artifacts.reproduce.split_timing`)
-MEASURED = "wall_time"
-#: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
-#: them out unless both sides have their source)
-PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
                  "p", "p_adjusted", "p_min", "detectable", "seeds", "readings_total", "readings_holding"]
-
-
-def _floats(column: pd.Series) -> np.ndarray | None:
-    """The column as floats if it holds floats: a float column, or an object column whose values are
-    floats and missing values (e.g. a truth that some rows lack); else None (text, integers, flags)."""
-    if pd.api.types.is_float_dtype(column):
-        return column.to_numpy(float)
-    if column.dtype == object:
-        present = [v for v in column if v is not None and not (isinstance(v, float) and np.isnan(v))]
-        if present and all(isinstance(v, (float, np.floating)) for v in present):
-            return np.array([np.nan if v is None else float(v) for v in column])
-    return None
-
-
-#: columns of probabilities: never floored as round-off (a p of 1e-22 is written as it is)
-EXACT = ("p", "p_adjusted", "p_min")
-
-
-def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
-    """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
-    written as ``±floor`` (not the :data:`EXACT` ones); every float then rounded to :data:`DIGITS`
-    significant digits."""
-    out = frame.copy()
-    for col in out.columns:
-        v = _floats(out[col])
-        if v is not None:
-            small = np.isfinite(v) & (v != 0) & (np.abs(v) < (0 if col in EXACT else floor))
-            v = np.where(small, np.sign(v) * floor, v)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                mag = np.where(np.isfinite(v) & (v != 0), np.floor(np.log10(np.abs(np.where(v == 0, 1, v)))), 0)
-            scale = 10.0 ** (DIGITS - 1 - mag)
-            out[col] = np.where(np.isfinite(v), np.round(v * scale) / scale, v)
-    return out
-
-
-def write_csv(frame: pd.DataFrame, path: Path) -> None:
-    """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
-    when only round-off differs)."""
-    with atomic_path(path) as tmp:  # an interrupt leaves the old file or the new one
-        tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
 
 
 def versions() -> dict:
@@ -109,50 +59,6 @@ def versions() -> dict:
             "magexp_commit": commit}
 
 
-def _fmt(v) -> str:
-    if v is None or (isinstance(v, float) and not np.isfinite(v)):
-        return ""
-    if isinstance(v, (bool, np.bool_)):
-        return "yes" if v else "no"
-    if isinstance(v, (float, np.floating)):
-        return f"{v:.4g}"
-    return str(v)
-
-
-_LATEX = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_", "{": r"\{",
-          "}": r"\}", "~": r"\textasciitilde{}", "^": r"\textasciicircum{}"}
-
-
-def _tex(text: str) -> str:
-    return "".join(_LATEX.get(ch, ch) for ch in str(text))
-
-
-def latex_table(frame: pd.DataFrame, columns: list[str]) -> str:
-    """The same table as :func:`markdown_table`, as a LaTeX ``tabular`` with ``booktabs`` rules
-    (``\\usepackage{booktabs}``), ready to ``\\input`` into a paper."""
-    lines = [r"\begin{tabular}{" + "l" * len(columns) + "}", r"\toprule",
-             " & ".join(_tex(c) for c in columns) + r" \\", r"\midrule"]
-    lines += [" & ".join(_tex(_fmt(r[c])) for c in columns) + r" \\" for _, r in frame.iterrows()]
-    return "\n".join(lines + [r"\bottomrule", r"\end{tabular}", ""])
-
-
-def _cell(v) -> str:
-    """A Markdown table cell: :func:`_fmt`, with ``|`` escaped and line breaks flattened."""
-    return " ".join(_fmt(v).split()).replace("|", "\\|")
-
-
-def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = None, names: list[str] | None = None) -> str:
-    """A Markdown table of ``columns`` (headed ``names``, default the columns); with ``tex``, its
-    LaTeX twin (:func:`latex_table`) is written there. A table without rows is an error: the
-    caller says in words that there is nothing to show."""
-    if not len(frame):
-        raise MagexpError(f"an empty table ({', '.join(columns)}) would be printed: say so in words instead")
-    if tex is not None:
-        write_text(tex, latex_table(frame, columns))
-    head = "| " + " | ".join(names or columns) + " |\n|" + "---|" * len(columns) + "\n"
-    return head + "".join("| " + " | ".join(_cell(r[c]) for c in columns) + " |\n" for _, r in frame.iterrows())
-
-
 def collect(root: Path = RESULTS) -> pd.DataFrame:
     """Every paper's summary part, in the papers' order."""
     parts = []
@@ -164,163 +70,6 @@ def collect(root: Path = RESULTS) -> pd.DataFrame:
     if not parts:
         return pd.DataFrame(columns=COLUMNS)
     return pd.concat(parts, ignore_index=True)[COLUMNS]
-
-
-def read_runs(path: Path) -> pd.DataFrame:
-    """A runs CSV, consolidated: ``read_csv`` leaves one block per column (95 in ``benchmark_heatmap``),
-    a copy one per dtype, and the claims and the summary take rows from it hundreds of times (a
-    selection of ``benchmark_heatmap``'s cells: 1.7 ms as read, 1.0 ms consolidated)."""
-    return pd.read_csv(path).copy()
-
-
-def _runs(root: Path, paper: str, name: str) -> pd.DataFrame | None:
-    path = root / paper / f"{name}_runs.csv"
-    return read_runs(path) if path.exists() else None
-
-
-def _runs_reader(root: Path, paper: str):
-    """``name -> runs table`` of ``paper``: each runs CSV read once, however many sections use it."""
-    return functools.cache(lambda name: _runs(root, paper, name))
-
-
-def _outcomes(specs: list, runs) -> list[tuple[str, object]]:
-    """``(artifact, Outcome)`` of every claim of ``specs`` (one paper: one family of comparisons,
-    Holm-adjusted by :func:`magexp.artifacts.claims.adjust`) whose runs table (``runs(name)``) has rows."""
-    out = []
-    for spec in specs:
-        table = runs(spec.name) if spec.claims else None
-        if table is not None and len(table):
-            out += [(spec.name, evaluate(c, table)) for c in spec.claims]
-    adjust([o for _, o in out])
-    return out
-
-
-def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple[str, object]]:
-    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``."""
-    return [o for p in ([paper] if paper else papers())
-            for o in _outcomes([load(path) for path in artifact_paths(p)], _runs_reader(root, p))]
-
-
-def headline_verdict(results: list[str | None]) -> str:
-    """The verdict of a headline claim from its parts' outcomes (None: the part's artifact has no
-    runs here): ``supported`` (every part holds), ``contradicted`` (none holds), ``partly``
-    (some hold), ``not testable here`` (no part could be evaluated)."""
-    known = [r for r in results if r is not None]
-    if not known:
-        return "not testable here"
-    held = sum(r == HOLDS for r in known)
-    if held == len(results):
-        return "supported"
-    return "contradicted" if held == 0 else "partly"
-
-
-def readings_verdict(verdicts: list[tuple[str, str]]) -> tuple[str, str]:
-    """The verdict of a headline judged under several readings of what its paper left unstated, from
-    ``(label, verdict)`` per reading: the common verdict where every reading gives the same, else
-    ``depends`` with the split, which names the readings on each side, each label quoted (``depends:
-    supported under "w = 0.4", "c1 = c2 = 2"; contradicted under "constriction PSO"``; '' when they agree)."""
-    order = {v: i for i, v in enumerate(HEADLINE_VERDICTS)}
-    sides: dict[str, list[str]] = {}
-    for label, verdict in verdicts:
-        sides.setdefault(verdict, []).append(label)
-    if len(sides) == 1:
-        return verdicts[0][1], ""
-    split = "; ".join(f"{v} under " + ", ".join(f'"{label}"' for label in labels)
-                      for v, labels in sorted(sides.items(), key=lambda kv: order[kv[0]]))
-    return "depends", f"depends: {split}"
-
-
-def _reading_rows(h, outcomes: dict) -> list[dict]:
-    """Each reading of headline ``h``: its label, source, parts and verdict (its parts' outcomes,
-    :func:`headline_verdict`); none when ``h`` declares no readings."""
-    rows = []
-    for r in h.readings:
-        parts = list(r.parts or h.parts)
-        results = [outcomes[p].result if p in outcomes else None for p in parts]
-        rows.append({"label": r.label, "source": " ".join(str(r.source).split()), "parts": parts,
-                     "verdict": headline_verdict(results),
-                     "outcomes": "; ".join(f"{p}: {res or 'no runs here'}" for p, res in zip(parts, results))})
-    return rows
-
-
-def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
-    """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure
-    (:func:`_headline_row`). ``outcomes``: ``{"artifact.id": Outcome}``; a part (of the headline or of
-    a reading) naming no claim of the paper is an error."""
-    declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
-    rows = []
-    for h in load_paper(paper).headline:
-        named = list(h.parts) + [p for r in h.readings for p in r.parts]
-        unknown = [p for p in named if p not in declared]
-        if unknown:
-            raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {unknown[0]!r} names no claim of {paper} "
-                              "(write <artifact>.<claim id>)")
-        rows.append(_headline_row(paper, h, outcomes, runs))
-    return rows
-
-
-def _over_readings(h, verdict: str, readings: list[dict]) -> tuple[str, str]:
-    """The verdict of headline ``h`` over its ``readings`` (:func:`readings_verdict`; ``verdict``, its
-    own, when it has none) and the split ('' when they agree); a common ``supported`` of a headline
-    that holds by construction reads ``by construction``."""
-    if not readings:
-        return verdict, ""
-    verdict, split = readings_verdict([(r["label"], r["verdict"]) for r in readings])
-    if not split and verdict == "supported" and str(h.construction).strip():
-        verdict = "by construction"
-    return verdict, split
-
-
-def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:
-    """One headline's row. The reason is written whole (:func:`_headline_verdict`;
-    ``tests/test_report.py`` holds it to :data:`magexp.artifacts.claims.SHORT` characters); the
-    evidence is the reason followed by each reading's verdict and every part's outcome and full
-    evidence. With ``readings:`` it is judged under each (:func:`readings_verdict`): a split verdict
-    reads ``depends`` and its reason opens with the split; ``readings_total`` counts its readings (1:
-    the headline's own parts only), ``readings_holding`` those under which it is supported;
-    ``readings`` keeps each reading's verdict (for the figure)."""
-    parts = [outcomes.get(p) for p in h.parts]
-    verdict, reason = _headline_verdict(h, parts, runs)
-    readings = _reading_rows(h, outcomes)
-    verdict, split = _over_readings(h, verdict, readings)
-    full = f"{split}. {reason}" if split else reason
-    figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
-    evidence = " | ".join([full] + [f"reading {r['label']} ({r['source']}): {r['verdict']} ({r['outcomes']})"
-                                    for r in readings]
-                          + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(h.parts, parts) if o])
-    holding = sum(r["verdict"] == "supported" for r in readings) if readings else int(verdict == "supported")
-    return {"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline", "section": h.section,
-            "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
-            "reason": full if len(full) <= SHORT else split or reason, "evidence": evidence,
-            "readings_total": len(readings) or int(bool(h.parts)), "readings_holding": holding, "readings": readings}
-
-
-def _headline_verdict(h, parts: list, runs) -> tuple[str, str]:
-    """The verdict of headline ``h`` and its reason, from the outcomes ``parts`` of its parts (None:
-    no runs here): its ``reason:`` template read on the runs of the first part's artifact, else each
-    part's result and numbers; an untestable headline says why; one that is ``supported`` only by
-    construction (``construction:`` says why) reads ``by construction``, never counted as supported."""
-    if h.untestable:
-        return "not testable here", str(h.untestable).strip()
-    verdict = headline_verdict([o.result if o is not None else None for o in parts])
-    if verdict == "supported" and str(h.construction).strip():
-        verdict = "by construction"
-    if h.reason and parts[0] is not None:
-        return verdict, interpolate(" ".join(str(h.reason).split()), runs(h.parts[0].split(".")[0]))
-    return verdict, "; ".join(f"{p.split('.')[1]}: {o.result if o else 'no runs here'}"
-                              + (f" ({o.short})" if o else "") for p, o in zip(h.parts, parts))
-
-
-def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
-    """One ``claims.csv`` row per evaluated claim of ``paper`` (``p``, ``p_adjusted``, ``p_min`` and
-    ``detectable`` for comparisons; ``detectable`` only where no difference is detected)."""
-    own = {s.name: s for s in specs}
-    return [{"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
-             "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
-             "text": o.claim.text, "verdict": o.result, "reason": shorten(o.short), "evidence": o.evidence,
-             "p": o.p, "p_adjusted": o.p_adjusted, "p_min": o.p_min,
-             "detectable": o.detectable if o.result == NO_DIFFERENCE else np.nan, "seeds": o.n or np.nan}
-            for name, o in outcomes]
 
 
 def _link(figure: str, root: Path) -> str:
@@ -342,9 +91,9 @@ class Paper:
         self.paper, self.root = paper, root
         self.meta = load_paper(paper)
         self.specs = [load(path) for path in artifact_paths(paper)]
-        self.runs = _runs_reader(root, paper)
+        self.runs = runs_reader(root, paper)
         self.rows = summary[summary.paper == paper]
-        self.outcomes = _outcomes(self.specs, self.runs)
+        self.outcomes = paper_outcomes(self.specs, self.runs)
         by_id = {f"{name}.{o.claim.id}": o for name, o in self.outcomes}
         self.headlines = headlines(paper, self.specs, by_id, self.runs)
         self.claims = claim_rows(paper, self.specs, self.outcomes)
@@ -446,8 +195,8 @@ COLLAPSE = 4
 
 def _judged_text(r) -> str:
     """What a row's verdict used: ``median [lo, hi], <which runs> (n)``."""
-    interval = f" [{_fmt(r.judged_lo)}, {_fmt(r.judged_hi)}]" if np.isfinite(r.judged_lo) else ""
-    return f"{_fmt(r.judged_value)}{interval}, {r.judged_runs} ({int(r.judged_n)})"
+    interval = f" [{fmt(r.judged_lo)}, {fmt(r.judged_hi)}]" if np.isfinite(r.judged_lo) else ""
+    return f"{fmt(r.judged_value)}{interval}, {r.judged_runs} ({int(r.judged_n)})"
 
 
 def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
@@ -460,7 +209,7 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
     rows = rows[~rows.verdict.isin(NOT_COMPARED)]
     for _, cell in rows.groupby(["artifact", "estimator", "setting"], sort=False):
         if len(cell) <= COLLAPSE:
-            out += [{"label": r.label, "paper": _fmt(r.paper_value), "ours": _judged_text(r),
+            out += [{"label": r.label, "paper": fmt(r.paper_value), "ours": _judged_text(r),
                      "verdict": _bold(r.verdict), "reason": r.reason} for r in cell.itertuples()]
             continue
         first = cell.iloc[0]
@@ -471,7 +220,7 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
         verdict = ", ".join(_bold(f"{k} {int(counts[k])}") if k != "reproduced" else f"{k} {int(counts[k])}"
                             for k in VERDICTS if k in counts)
         others = cell[cell.verdict != "reproduced"]
-        reason = "; ".join(f"{r.quantity} {r.verdict}: paper {_fmt(r.paper_value)}, ours {_fmt(r.judged_value)}"
+        reason = "; ".join(f"{r.quantity} {r.verdict}: paper {fmt(r.paper_value)}, ours {fmt(r.judged_value)}"
                            + (f" ({relative(r.rel_difference)})" if r.verdict == "differs" else "")
                            for r in others.itertuples())
         runs = ", ".join(sorted(set(cell.judged_runs.astype(str))))

@@ -30,7 +30,8 @@ import pandas as pd
 from magexp.artifacts.plan import (ArtifactRuns, cells, collect, grow_stage, grow_start, paper_specs, plan_artifact,
                                   rebuild_problem)
 from magexp.artifacts.plots import VECTOR, kind_module
-from magexp.artifacts.report import MEASURED, build, read_runs, write_csv
+from magexp.artifacts.formats import MEASURED, read_runs, write_csv
+from magexp.artifacts.report import build
 from magexp.artifacts.spec import papers
 from magexp.artifacts.summary import COLUMNS, summarise
 from magexp import paths

@@ -7,7 +7,8 @@ null vector of the design matrix ``[u², v², w², 2uv, 2uw, 2vw, 2u, 2v, 2w, 1]
 (:func:`quadratic_features`; smallest right singular vector). Then the centre is ``u_0 = -A^{-1} b``,
 ``Q = A / (u_0^T A u_0 - d)`` and the calibration is the symmetric square root
 ``W = B_a Q^{1/2} / s``, ``o = c + s u_0`` (:func:`quadric_calibration`). A scalar reference cannot
-fix the rotation of ``W``; the symmetric root is the conventional choice.
+fix the rotation of ``W``; the symmetric root is the conventional choice. Its simplest case, a sphere
+(:func:`fit_sphere`: a centre and a radius, Pratt 1987), is linear least squares.
 
 Its home is the core: the estimators (:mod:`magexp.estimators.ellipsoid`, ``triangular``) fit with it,
 and so do problems (the start of :class:`magexp.problems.gyro.GyroAidedCalibration`), which must not
@@ -38,6 +39,21 @@ def quadratic_features(u: np.ndarray) -> np.ndarray:
 
 
 LINEAR_TWICE = np.array([1, 1, 1, 1, 1, 1, 2, 2, 2, 1.0])  # the quadric u^T A u + 2 b^T u + d
+
+
+def fit_sphere(readings: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre and radius of the sphere that best fits ``readings``: linear least squares of
+    ``|r|² = 2 cᵀr + (R² - |c|²)`` (Pratt 1987), on readings centred on their mean. Not a sphere
+    (readings on a line): the centroid and the mean distance from it."""
+    r = np.asarray(readings, float)
+    shift = r.mean(axis=0)
+    u = r - shift
+    design = np.column_stack([2 * u, np.ones(len(u))])
+    sol = np.linalg.lstsq(design, (u * u).sum(axis=1), rcond=None)[0]
+    radius2 = sol[3] + sol[:3] @ sol[:3]
+    if np.isfinite(radius2) and radius2 > 0:
+        return shift + sol[:3], float(np.sqrt(radius2))
+    return shift, float(np.linalg.norm(u, axis=1).mean())
 
 
 def fit_ellipsoid(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:

@@ -30,6 +30,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from pygeomag import GeoMag
+from pygeomag.time import calculate_decimal_year
 
 from magexp.errors import MagexpError
 from magexp.core.igrf import check_place, field_at
@@ -120,7 +122,7 @@ def check_given(place: dict, prefix: str = "field") -> None:
 
 def igrf_generation() -> str:
     """``IGRF-<n>`` of the coefficient file ppigrf evaluates (its ``shc_fn``, e.g. ``IGRF14.shc``)."""
-    import ppigrf
+    import ppigrf  # lazy: 181 ms CPU to import (min of 5, after numpy; as in magexp.core.igrf)
 
     stem = Path(ppigrf.ppigrf.shc_fn).stem.upper()
     return f"IGRF-{stem.removeprefix('IGRF')}"
@@ -129,9 +131,6 @@ def igrf_generation() -> str:
 def wmm_field(latitude: float, longitude: float, altitude_km: float, when: _dt.datetime,
               prefix: str = "field") -> tuple[np.ndarray, str]:
     """``(NED nT, generation)`` of the WMM epoch holding ``when`` (:data:`WMM_FILES`)."""
-    from pygeomag import GeoMag
-    from pygeomag.time import calculate_decimal_year
-
     epoch = next((y for y in sorted(WMM_FILES, reverse=True) if y <= when.year < y + 5), None)
     if epoch is None:
         raise MagexpError(f"{prefix}.date={when.date().isoformat()!r} is not allowed for model=wmm: the WMM "

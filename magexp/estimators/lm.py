@@ -29,7 +29,7 @@ process and checks that the gauge-fixed fit gives the same bits through it).
 are at round-off level, so on another processor (numpy's SIMD loops, BLAS kernels, numba target) the
 test is met an iteration earlier or later: ``nit``/``nfev`` move by one Jacobian (``p + 1``
 evaluations: 40 vs 53 on Yuan's vector problem) while the fit agrees to its 6th digit. ``magexp verify``
-compares them as path diagnostics (:data:`magexp.artifacts.verify.PATH_DIAGNOSTICS`). A fit the data
+compares them as path diagnostics (:data:`magexp.artifacts.compare.PATH_DIAGNOSTICS`). A fit the data
 leave undetermined (``real_xio_fusion``: offset standard error 4 800 of offsets 25 000) walks its flat
 valley until the evaluation budget, and where it stops moves with the round-off (2e-3 relative measured).
 """
@@ -44,7 +44,7 @@ from magexp.core.identifiability import canonical, identifiability
 from magexp.errors import check, check_positive_int
 from magexp.estimators.base import Stop, applies_to, stopper
 from magexp.estimators.ellipsoid import EllipsoidFit
-from magexp.estimators.reduced import UPPER, expand
+from magexp.problems.symmetric import UPPER, expand
 from magexp.estimators.result import FitResult
 
 STARTS = ("ellipsoid", "centre", "problem")

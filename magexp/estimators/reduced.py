@@ -9,9 +9,9 @@ the shared swarm engine over
 .. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad
           M = M^T
 
-(``M`` the matrix part of the problem's own parameters: Yuan's ``S`` in the forward form,
-``W`` in the inverse one) with the problem's total-field cost of the expanded 12-vector. The box of
-each ``q`` entry is the box of its entry of the 12-vector. A symmetric ``W`` is the unique
+(:func:`magexp.problems.symmetric.expand`; ``M`` the matrix part of the problem's own parameters:
+Yuan's ``S`` in the forward form, ``W`` in the inverse one) with the problem's total-field cost of
+the expanded 12-vector. The box of each ``q`` entry is the box of its entry of the 12-vector. A symmetric ``W`` is the unique
 symmetric root of ``W^T W`` (what a scalar fit identifies), so on a scalar problem the rotation
 valley is gone; a non-symmetric truth (Yuan's ``S``) cannot be reached.
 """
@@ -21,15 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.estimators.swarm import SwarmOptimizer
-
-UPPER = np.array([0, 1, 2, 4, 5, 8])  # row-major positions of M11 M12 M13 M22 M23 M33
-MIRROR = np.array([0, 1, 2, 1, 3, 4, 2, 4, 5])  # the 9 row-major entries from the 6 unique ones
-
-
-def expand(q: np.ndarray) -> np.ndarray:
-    """12-vectors ``[vec(M), o]`` (n, 12) with ``M`` symmetric from 9-vectors ``q`` (n, 9)."""
-    q = np.atleast_2d(q)
-    return np.concatenate([q[:, MIRROR], q[:, 6:]], axis=1)
+from magexp.problems.symmetric import UPPER, expand
 
 
 class SymmetricView:

@@ -49,19 +49,34 @@ prints it.
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
+from numba import njit
 
-from magexp.run import threads
 from magexp.core.atomic import atomic_path
+from magexp.core.bounds import cramer_rao
 from magexp.core.ellipsoid import quadratic_features
+from magexp.core.seeding import run_generators
 from magexp.paths import RESULTS
+from magexp.problems import kernels, make_problem
+from magexp.run import threads
+from magexp.run.budget import estimate_run
+from magexp.run.compose import compose_config, resolved
+from magexp.run.runner import build
+
+try:  # an optional peer of the bench (pip install '.[bench]'): its section says so when it is absent
+    import pyswarms
+except ImportError:
+    pyswarms = None
 
 SIZES = [(300, 50), (30_000, 500)]  # (readings, particles)
 BUDGET_PARTICLES, BUDGET_ITERATIONS = 50, 800  # every iterative peer: 50 x 801 cost evaluations
@@ -108,18 +123,12 @@ BLAS_THREADS = threads.BLAS_THREADS
 
 def compose(overrides: list[str]):
     """The run config of ``overrides`` (the project's one composer)."""
-    from magexp.run.compose import compose_config
-
     return compose_config(overrides)
 
 
 # -- problems ----------------------------------------------------------------------------------------
 def ding_problem(n_readings: int, seed: int = 0, *overrides: str):
     """Ding 2024 simulation 1 with ``n_readings`` readings (data of ``seed``) and its scenario."""
-    from magexp.problems import make_problem
-    from magexp.run.runner import build
-    from magexp.core.seeding import run_generators
-
     cfg = compose(["scenario=ding2024_exp1", f"scenario.n_readings={n_readings}", *overrides])
     scenario = build(cfg.scenario, "scenario")
     dataset = scenario.generate(rng=run_generators(seed)[0])
@@ -130,10 +139,6 @@ def vector_problem(n_readings: int):
     """A vector problem (Yuan 2018 eq 8) of any size: Ding's readings with their true body-frame
     field as the reference vectors (identity attitudes; the vector scenarios' trajectories are too
     short for 3e4 readings, and only the shapes matter here)."""
-    from dataclasses import replace
-
-    from magexp.problems import make_problem
-
     problem, scenario = ding_problem(n_readings)
     ds = problem.dataset
     ds = replace(ds, attitude=np.broadcast_to(np.eye(3), (ds.n, 3, 3)), field_nav=ds.field_body_true)
@@ -148,8 +153,6 @@ def swarm_in_box(problem, n_particles: int, seed: int = 0) -> np.ndarray:
 # -- 1. cost against its floor -------------------------------------------------------------------------
 def _sqrt_pass():
     """The single-pass lower bound: ``acc[p] += sqrt(a_i + b_p)`` over every particle-reading."""
-    from numba import njit
-
     @njit(cache=True, nogil=True, error_model="numpy")
     def sqrt_pass(a, b):
         acc = np.zeros(b.shape[0])
@@ -163,8 +166,6 @@ def _sqrt_pass():
 
 
 def cost_rows(rounds: int) -> list[dict]:
-    from magexp.problems import kernels
-
     sqrt_pass = _sqrt_pass()
     rows = []
     for n, n_p in SIZES:
@@ -206,10 +207,8 @@ def cost_rows(rounds: int) -> list[dict]:
 
 # -- 2. engine overhead; 3. engine vs pyswarms -----------------------------------------------------------
 def swarm_estimator(name: str, n_particles: int = BUDGET_PARTICLES, n_iterations: int = BUDGET_ITERATIONS):
-    from magexp.run.runner import build
-
     cfg = compose([f"estimator={name}", f"estimator.n_particles={n_particles}",
-                          f"estimator.n_iterations={n_iterations}"])
+                   f"estimator.n_iterations={n_iterations}"])
     return build(cfg.estimator, "estimator")
 
 
@@ -243,14 +242,10 @@ class PyswarmsPSO:
         self.options = {"w": rule.inertia(1, 1), "c1": rule.c1(1, 1), "c2": rule.c2(1, 1)}
 
     def fit(self, problem, *, rng: np.random.Generator):
-        import logging
-
-        import pyswarms as ps
-
         logging.getLogger("pyswarms").setLevel(logging.ERROR)
         np.random.seed(int(rng.integers(2**31 - 1)))
         vmax = self.clamp * (problem.upper - problem.lower)
-        opt = ps.single.GlobalBestPSO(n_particles=self.n_particles, dimensions=problem.n_params, options=self.options,
+        opt = pyswarms.single.GlobalBestPSO(n_particles=self.n_particles, dimensions=problem.n_params, options=self.options,
                                       bounds=(problem.lower, problem.upper), bh_strategy="nearest",
                                       velocity_clamp=(-vmax, vmax))
         # pyswarms evaluates the swarm at the start of each iteration: n_iterations + 1 of them
@@ -260,9 +255,7 @@ class PyswarmsPSO:
 
 
 def pyswarms_rows(rounds: int) -> list[dict]:
-    try:
-        import pyswarms  # noqa: F401
-    except ImportError:
+    if pyswarms is None:
         return [row("engine vs pyswarms", "pyswarms", [], "not installed (pip install '.[bench]')")]
     rows = []
     iterations = 200
@@ -301,18 +294,13 @@ class Recorded:
 
 
 def peer_estimators():
-    from magexp.run.runner import build
-
     out = {}
     for name in PEERS:
         if name in ("ipso", "pso", "rdpso"):
             out[name] = swarm_estimator(name)
         elif name == "pyswarms":
-            try:
-                import pyswarms  # noqa: F401
-            except ImportError:
-                continue
-            out[name] = PyswarmsPSO()
+            if pyswarms is not None:
+                out[name] = PyswarmsPSO()
         else:
             out[name] = build(compose([f"estimator={name}"]).estimator, "estimator")
     return out
@@ -355,8 +343,6 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
 
 
 def peer_rows(seeds: int) -> list[dict]:
-    from magexp.core.seeding import run_generators
-
     estimators = peer_estimators()
     names = list(estimators)
     runs = {name: [] for name in names}
@@ -392,8 +378,6 @@ def peer_rows(seeds: int) -> list[dict]:
 def bound_rows(rounds: int, n_readings: int = 100_000) -> list[dict]:
     """Seconds per bound, wall clock and CPU (the process's own CPU time: what the call costs an
     idle core; on a shared machine the wall clock also counts waiting for one)."""
-    from magexp.core.bounds import cramer_rao
-
     problem, _ = ding_problem(n_readings)
     cramer_rao(problem)
     wall, cpu = [], []
@@ -478,9 +462,6 @@ def memory_check(n_readings: int, n_particles: int, n_iterations: int) -> dict:
     baseline``, the part the estimate models (it leaves out the interpreter and its libraries);
     ``ratio = estimate / measured``.
     """
-    from magexp.run.budget import estimate_run
-    from magexp.run.compose import resolved
-
     sizes = [f"estimator.n_particles={n_particles}", f"estimator.n_iterations={n_iterations}"]
     overrides = [*MEMORY_RUN, f"scenario.n_readings={n_readings}", *sizes]
     estimate = estimate_run(resolved(compose(overrides))).memory
@@ -528,8 +509,6 @@ def measure(sections=SECTIONS, rounds: int = 7, seeds: int = 20) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    import pandas as pd
-
     if any(os.environ.get(var) != "1" for var in BLAS_THREADS):  # one BLAS thread, set before numpy loads it
         env = dict(os.environ, **dict.fromkeys(BLAS_THREADS, "1"))
         argv = sys.argv[1:] if argv is None else list(argv)

@@ -23,6 +23,10 @@ import time
 
 import numpy as np
 
+from magexp.problems import kernels
+from magexp.run.compose import compose_config
+from magexp.run.runner import run
+
 #: tiny configurations that between them reach every compiled kernel
 FITS = (
     ["scenario=ding2024_exp1", "estimator=ipso", "estimator.n_iterations=3", "estimator.n_particles=4"],
@@ -38,10 +42,6 @@ FITS = (
 
 
 def main() -> int:
-    from magexp.run.compose import compose_config
-    from magexp.problems import kernels
-    from magexp.run.runner import run
-
     if kernels.compiled() is None:
         print("warm-up: numba is not in use (MAGEXP_NUMBA=0 or not installed); nothing to compile")
         return 0

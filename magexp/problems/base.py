@@ -182,7 +182,7 @@ class CalibrationProblem:
         """:meth:`residuals` of each parameter vector of a stack, ``(n, p) -> (n, m)``: the residual
         function :func:`magexp.core.identifiability.identifiability` takes. ``of`` maps a row of the
         stack, in another parameterisation, to this problem's vector (e.g. the 9 parameters of a
-        symmetric matrix part, :func:`magexp.estimators.reduced.expand`; ``magexp calibrate``'s
+        symmetric matrix part, :func:`magexp.problems.symmetric.expand`; ``magexp calibrate``'s
         ``[vec W, o]`` or ``[s, o]``)."""
         return np.array([self.residuals(row if of is None else of(row)) for row in np.atleast_2d(thetas)])
 

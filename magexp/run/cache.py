@@ -5,20 +5,13 @@ The key of a run (:func:`run_key`) hashes
 * its fully resolved config (every setting, the seed included),
 * the content of every data file the config names (:func:`magexp.core.datafiles.data_files`), so that editing a
   recording such as ``data/yan2022_mockup.csv`` reruns exactly the runs that read it,
-* the source of the code the run executes (:func:`code_version` of its :func:`run_targets`): the
-  modules of the classes its config names by ``_target_`` (scenario, estimator, their nested strategy
-  objects, an analysis step) and of its objective's problem class, with their static import closure
-  inside magexp (:func:`code_files`), and the core every run executes (:data:`CORE`: the runner and
-  its closure). A class of another package (``_target_: mypackage.MyMethod``) brings its module's
-  file and the modules it imports of its own package and of magexp. Modules are found from their
-  source, never imported. So an estimator edit reruns the runs of that estimator and of the
-  estimators importing its module, an unused new module reruns nothing, and code downstream of a run
-  (``plots/``, ``summary``, ``report``, ``reproduce``, the executor) is not part of any key: a figure
-  or report edit costs no run. The recording readers, which a run imports by a computed name
-  (``importlib``) when it reads a log, are in its code through its data files: the reader of each
-  file's format (:func:`data_readers`, from the format its config names or the file's name and
-  first lines). So a reader edit reruns the runs reading a file of its format
-  and a new reader module reruns nothing.
+* the source of the code the run executes (:func:`code_version`): the modules of what it names
+  (:func:`run_targets`: every ``_target_`` of its config, the reader of each data file it reads, its
+  objective's problem class) with their import closure and the core every run executes, found and hashed by
+  :mod:`magexp.run.codekey` and kept under the sources' stamp. So an estimator edit reruns the runs of that
+  estimator and of the estimators importing its module, a reader edit the runs reading a file of its format,
+  and code downstream of a run (``plots/``, ``summary``, ``report``, ``reproduce``, the executor, this module)
+  is not part of any key: a figure or report edit costs no run.
 
 An entry (:func:`pack`) is data, never code: a line with a SHA-256 digest, a JSON header (its key, its
 kind, the tree of its values) and the raw bytes of its numpy arrays. Reading one (:func:`load`)
@@ -38,11 +31,9 @@ beside its entry) before computing it, and a run another process is computing is
 
 from __future__ import annotations
 
-import ast
 import dataclasses
 import fcntl
 import hashlib
-import importlib.util
 import json
 import math
 import os
@@ -57,162 +48,22 @@ from pathlib import Path
 
 from magexp.core.atomic import write_bytes
 from magexp.core.datafiles import data_files, data_formats
-from magexp.paths import CACHE, ROOT
+from magexp.paths import CACHE
 from magexp.problems import OBJECTIVES
+from magexp.run.codekey import code_hash, default_objective, source_stamp
 from magexp.run.guard import check_cache_folder
 
-#: the modules every run executes whatever its config: the runner, which builds the config's objects,
-#: makes the problem, fits and evaluates (with its import closure: metrics, bounds, seeding, the bases)
-CORE = ("magexp.run.runner",)
 
+# ---------------------------------------------------------------------------------------------
+# keys
 
-@lru_cache(maxsize=None)
-def _top_spec(top: str):
-    """The import spec of the top-level module or package ``top``, or None. Finding the spec of a
-    top-level name executes nothing (that of a submodule would import its parent packages)."""
-    try:
-        return importlib.util.find_spec(top)
-    except (ImportError, ValueError):
-        return None
-
-
-@lru_cache(maxsize=None)
-def _source(name: str) -> Path | None:
-    """The source file of module ``name`` (a module's ``.py`` or a package's ``__init__.py``), or None.
-
-    Found without importing anything: magexp's under :data:`ROOT`, another package's in the folders
-    its top-level package's spec names (:func:`_top_spec`), as the import system finds a module of
-    plain source folders. A module found another way (a zip, a ``__path__`` its package extends
-    when imported) is not found here."""
-    top, *rest = name.split(".")
-    if top == "magexp":
-        folders = [ROOT / "magexp"]
-    else:
-        spec = _top_spec(top)
-        if spec is None:
-            return None
-        if not rest:
-            origin = Path(spec.origin) if spec.has_location and spec.origin else None
-            return origin if origin is not None and origin.is_file() else None
-        folders = [Path(p) for p in spec.submodule_search_locations or ()]
-    for folder in folders:
-        base = folder.joinpath(*rest)
-        for path in ((base.with_suffix(".py"),) if rest else ()) + (base / "__init__.py",):
-            if path.is_file():
-                return path
-    return None
-
-
-def _statements(nodes):
-    """Every statement of ``nodes`` and of the blocks inside them (an import is a statement: the
-    expressions, most of a module's nodes, are not visited)."""
-    for node in nodes:
-        yield node
-        for block in ("body", "orelse", "finalbody", "handlers", "cases"):
-            yield from _statements(getattr(node, block, ()))
-
-
-@lru_cache(maxsize=None)
-def _parse(path: Path) -> ast.Module:
-    """The syntax tree of the Python source ``path``; an empty module for a file that is not valid
-    Python source (a compiled module; a syntax error, which the run itself then reports)."""
-    try:
-        return ast.parse(path.read_bytes(), filename=str(path))
-    except (SyntaxError, ValueError):
-        return ast.Module(body=[], type_ignores=[])
-
-
-def _imports(path: Path, name: str) -> frozenset[str]:
-    """Every module that ``path`` (module ``name``) imports anywhere (function bodies included),
-    relative imports made absolute; ``from pkg import x`` names ``pkg.x`` too (``x`` may be a module)."""
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    names = set()
-    for node in _statements(_parse(path).body):
-        if isinstance(node, ast.Import):
-            names.update(a.name for a in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                parts = package.split(".")
-                module = ".".join(parts[: len(parts) - node.level + 1] + ([node.module] if node.module else []))
-            else:
-                module = node.module or ""
-            names.add(module)
-            names.update(f"{module}.{a.name}" for a in node.names)
-    return frozenset(names)
-
-
-@lru_cache(maxsize=None)
-def _deps(name: str) -> tuple[str, ...]:
-    """The modules executed with module ``name``: its parent packages, and those it imports of magexp
-    and of its own top-level package (the standard library, numpy, ... are not followed). The
-    top-level ``magexp/__init__.py``'s imports are not followed either (they serve the API, not a run)."""
-    parts = name.split(".")
-    parents = {".".join(parts[:i]) for i in range(1, len(parts))}
-    path = _source(name)
-    if path is None or name == "magexp":
-        return tuple(sorted(parents))
-    own = ("magexp", parts[0])
-    found = {n for n in _imports(path, name) if n.partition(".")[0] in own and _source(n) is not None}
-    return tuple(sorted(parents | found))
-
-
-def _target_module(target: str) -> str | None:
-    """The module a ``_target_`` (``package.module.Class``) is taken from: its longest prefix with a source."""
-    parts = target.split(".")
-    return next((m for m in (".".join(parts[:i]) for i in range(len(parts) - 1, 0, -1)) if _source(m)), None)
-
-
-def code_files(targets=()) -> dict[str, Path]:
-    """The source files a run executes, by module name: the import closure (:func:`_deps`) of
-    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`run_targets`)."""
-    todo = list(CORE) + [m for m in map(_target_module, targets) if m is not None]
-    found: dict[str, Path] = {}
-    while todo:
-        name = todo.pop()
-        if name not in found and (path := _source(name)) is not None:
-            found[name] = path
-            todo.extend(_deps(name))
-    return dict(sorted(found.items()))
-
-
-def _fixed_objective(cls: ast.ClassDef) -> str | None:
-    """The objective a class body fixes: a class attribute ``objective = "..."``, or the default of
-    an ``objective`` argument of its ``__init__``; None if neither."""
-    for node in cls.body:
-        value = None
-        if isinstance(node, ast.FunctionDef) and node.name == "__init__":
-            a = node.args
-            pairs = [*zip([*a.posonlyargs, *a.args][::-1], a.defaults[::-1]), *zip(a.kwonlyargs, a.kw_defaults)]
-            value = next((default for arg, default in pairs if arg.arg == "objective"), None)
-        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
-            names = node.targets if isinstance(node, ast.Assign) else [node.target]
-            value = node.value if any(getattr(n, "id", None) == "objective" for n in names) else None
-        if isinstance(value, ast.Constant) and isinstance(value.value, str):
-            return value.value
-    return None
-
-
-@lru_cache(maxsize=None)
-def _default_objective(target: str) -> str | None:
-    """The objective that the scenario class ``target`` fixes when its config names none, read from
-    its module's source (:func:`_fixed_objective` of the class, else of its base classes defined in the
-    same module); None if not found so."""
-    module = _target_module(target)
-    name = target[len(module) + 1:] if module is not None else ""
-    if not name or "." in name:
-        return None
-    classes = {n.name: n for n in _parse(_source(module)).body if isinstance(n, ast.ClassDef)}
-    todo, seen = [name], set()
-    while todo:
-        name = todo.pop(0)
-        if name in seen or name not in classes:
-            continue
-        seen.add(name)
-        found = _fixed_objective(classes[name])
-        if found is not None:
-            return found
-        todo.extend(b.id for b in classes[name].bases if isinstance(b, ast.Name))
-    return None
+def files_digest(files, base: Path):
+    """A SHA-256 object fed with the path (relative to ``base``) and content of each of ``files``."""
+    h = hashlib.sha256()
+    for path in files:
+        h.update(path.relative_to(base).as_posix().encode())
+        h.update(path.read_bytes())
+    return h
 
 
 def _targets_in(node, found: set) -> set:
@@ -236,7 +87,8 @@ def data_readers(formats: dict) -> set[str]:
     log's reader module is imported by name when the log is read."""
     if not formats:
         return set()
-    from magexp.core.recordings import reader_of  # here: a config naming no file is keyed without numpy (0.25 s)
+    # lazy: a config naming no file is keyed without it (104 ms CPU to import, min of 3, numpy included)
+    from magexp.core.recordings import reader_of
 
     return {reader_of(path, format) for path, format in formats.items()}
 
@@ -245,49 +97,17 @@ def run_targets(resolved: dict, formats: dict | None = None) -> tuple[str, ...]:
     """What a run instantiates or calls by name: every ``_target_`` of its resolved config, the reader of
     each data file it names (:func:`data_readers`; ``formats``: its data files' formats, found here if
     None), and the problem class of its objective (``objective``, else its scenario's: in its config,
-    else fixed by its class, :func:`_default_objective`; one not found so: every registered problem
+    else fixed by its class, :func:`magexp.run.codekey.default_objective`; one not found so: every registered problem
     class)."""
     formats = data_formats(resolved) if formats is None else formats
     found = _targets_in(resolved, set()) | data_readers(formats)
     scenario = resolved.get("scenario") if isinstance(resolved.get("scenario"), dict) else {}
     objective = resolved.get("objective") or scenario.get("objective")
     if objective is None and isinstance(scenario.get("_target_"), str):
-        objective = _default_objective(scenario["_target_"])
+        objective = default_objective(scenario["_target_"])
     problems = [OBJECTIVES[objective]] if objective in OBJECTIVES else list(OBJECTIVES.values())
     found.update(p.replace(":", ".") for p in problems)
     return tuple(sorted(found))
-
-
-def files_digest(files, base: Path):
-    """A SHA-256 object fed with the path (relative to ``base``) and content of each of ``files``."""
-    h = hashlib.sha256()
-    for path in files:
-        h.update(path.relative_to(base).as_posix().encode())
-        h.update(path.read_bytes())
-    return h
-
-
-@lru_cache(maxsize=None)
-def _digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _version(targets: tuple[str, ...]) -> str:
-    """Hash of the name and content of each file of :func:`code_files`."""
-    h = hashlib.sha256()
-    for name, path in code_files(targets).items():
-        h.update(f"{name}\0{_digest(path)}\n".encode())
-    return h.hexdigest()[:16]
-
-
-def _source_stamp() -> str:
-    """A digest of where the package's sources are and of every ``.py`` file's path, size,
-    modification time and inode: any edit, checkout or copy changes it (cheap: stats, no reads)."""
-    h = hashlib.sha256(str(ROOT).encode())
-    for path in sorted((ROOT / "magexp").rglob("*.py")):
-        st = path.stat()
-        h.update(f"{path.relative_to(ROOT).as_posix()}\0{st.st_size}\0{st.st_mtime_ns}\0{st.st_ino}\n".encode())
-    return h.hexdigest()[:32]
 
 
 def code_versions(target_sets) -> dict[tuple, str]:
@@ -296,10 +116,10 @@ def code_versions(target_sets) -> dict[tuple, str]:
     Finding the code of a run parses the modules of its closure (about 20 ms for one run's, 60 ms
     for every run of ``reproduce all``). The versions of targets that are all magexp's are kept in
     the run cache folder (``code-version.json``, beside the results' two-letter folders) under the
-    sources' :func:`_source_stamp`, so a later command with unchanged sources reads them instead (a
-    changed stamp only recomputes them: never a stale version). A target of another package is
+    sources' :func:`magexp.run.codekey.source_stamp`, so a later command with unchanged sources reads
+    them instead (a changed stamp only recomputes them: never a stale version). A target of another package is
     worked out each time: the stamp does not cover its files."""
-    memo, stamp = CACHE / "code-version.json", _source_stamp()
+    memo, stamp = CACHE / "code-version.json", source_stamp()
     try:
         known = json.loads(memo.read_text())
         known = known if isinstance(known, dict) else {}
@@ -312,7 +132,7 @@ def code_versions(target_sets) -> dict[tuple, str]:
         if isinstance(kept.get(name), str):
             versions[targets] = kept[name]
             continue
-        versions[targets] = _version(targets)
+        versions[targets] = code_hash(targets)
         if all(t.startswith("magexp.") for t in targets):
             new[name] = versions[targets]
     if new:
@@ -325,16 +145,10 @@ def code_versions(target_sets) -> dict[tuple, str]:
 
 
 def code_version(targets: tuple[str, ...] = ()) -> str:
-    """Hash of the code a run of ``targets`` (its :func:`run_targets`) executes: the name and content
-    of each file of :func:`code_files`. Only an edit of such a file invalidates the run."""
+    """Hash of the code a run of ``targets`` (its :func:`run_targets`) executes: the name
+    and content of each file of :func:`magexp.run.codekey.code_files`. Only an edit of such a file invalidates
+    the run."""
     return code_versions([tuple(targets)])[tuple(targets)]
-
-
-def forget_code() -> None:
-    """Forget what this process found of the sources (files, imports, digests): for a process that
-    edits sources, or changes ``sys.path``, and keys runs again."""
-    for cached in (_top_spec, _source, _parse, _deps, _default_objective, _digest):
-        cached.cache_clear()
 
 
 def run_key(resolved: dict, files: dict[str, str] | None = None, code: str | None = None) -> str:
@@ -382,7 +196,7 @@ class InvalidEntry(Exception):
 
 def _tree(value, arrays: list, where: str):
     """``value`` as a JSON tree, each numpy array replaced by ``{"$array": i}`` and appended to ``arrays``."""
-    import numpy as np  # here, not at the top: a config entry has no array, and ``--cfg job`` no numpy (60 ms)
+    import numpy as np  # lazy: a config entry has no array, and ``--cfg job`` no numpy (86 ms CPU, min of 5)
 
     if isinstance(value, np.ndarray):
         if not _DTYPE.fullmatch(value.dtype.str):

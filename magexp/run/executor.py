@@ -225,7 +225,7 @@ class DaskExecutor(InlineExecutor):
     """
 
     def __init__(self, jobs: int = 0, scheduler: str | None = None):
-        try:  # distributed: 2 s of import, only for --executor dask
+        try:  # lazy: distributed, 0.30 s CPU to import (min of 3, after numpy), only for --executor dask
             from distributed import Client, LocalCluster
         except ImportError:  # pragma: no cover - distributed is a dependency
             raise MagexpError("--executor dask needs the 'distributed' package: pip install 'magexp[dask]'") from None
@@ -249,7 +249,7 @@ class DaskExecutor(InlineExecutor):
         return self.client.submit(fn, *args, pure=False)
 
     def as_completed(self, futures: Iterable) -> Iterator:
-        from distributed import as_completed  # as in __init__
+        from distributed import as_completed  # lazy: as in __init__ (distributed: 0.30 s CPU)
 
         return iter(as_completed(list(futures)))
 
@@ -276,7 +276,7 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
 
 def jobqueue_cluster(system: str):
     """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job."""
-    try:
+    try:  # lazy: an optional extra that imports distributed (as in DaskExecutor), only for --scheduler slurm|pbs|sge
         import dask_jobqueue
     except ImportError:
         raise MagexpError(f"--scheduler {system} needs dask-jobqueue: pip install 'magexp[cluster]'") from None

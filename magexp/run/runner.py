@@ -15,7 +15,7 @@ from magexp.core.datafiles import data_files
 from magexp.errors import MagexpError
 from magexp.estimators.base import check_applies
 from magexp.estimators.result import RunOutput
-from magexp.run.guard import check_targets
+from magexp.run.targets import check_targets
 from magexp.core.metrics import evaluate, problem_bound
 from magexp.problems import make_problem, problem_class
 from magexp.core.seeding import run_sequences, scenario_stream
@@ -24,7 +24,7 @@ from magexp.core.seeding import run_sequences, scenario_stream
 def build(node, what: str):
     """Instantiate a ``_target_`` node with plain-Python arguments, one-line errors. ``what`` begins with
     what the node is (``estimator 'lm'``): every ``_target_`` in the node is checked first
-    (:func:`magexp.run.guard.check_targets`: a plug-in class, never a function), so nothing else is called."""
+    (:func:`magexp.run.targets.check_targets`: a plug-in class, never a function), so nothing else is called."""
     check_targets(node, what.split()[0], plugin=True)
     try:
         return instantiate(node, _convert_="all")

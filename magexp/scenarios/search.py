@@ -1,7 +1,8 @@
 """The search box of the 12-parameter calibration problems.
 
 A box derived from a recording (:func:`search_box`) scales the matrix entries by ``s``, the ratio of
-the reference total to the radius ``R0`` of the sphere fitted to the readings (:func:`fit_sphere`).
+the reference total to the radius ``R0`` of the sphere fitted to the readings
+(:func:`magexp.core.ellipsoid.fit_sphere`).
 It has one of two shapes (:data:`BOXES`):
 
 * ``aligned``: diagonal in ``[0.5 s, 1.5 s]``, off-diagonal in ``[-0.5 s, 0.5 s]``, every offset
@@ -30,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from magexp.core.ellipsoid import fit_sphere
 from magexp.errors import LARGEST, MagexpError
 
 
@@ -76,24 +78,9 @@ class SearchBox:
         return (np.concatenate([lo, np.full(3, self.offset[0])]), np.concatenate([hi, np.full(3, self.offset[1])]))
 
 
-def fit_sphere(readings: np.ndarray) -> tuple[np.ndarray, float]:
-    """Centre and radius of the sphere that best fits ``readings``: linear least squares of
-    ``|r|² = 2 cᵀr + (R² - |c|²)`` (Pratt 1987), on readings centred on their mean. Not a sphere
-    (readings on a line): the centroid and the mean distance from it."""
-    r = np.asarray(readings, float)
-    shift = r.mean(axis=0)
-    u = r - shift
-    design = np.column_stack([2 * u, np.ones(len(u))])
-    sol = np.linalg.lstsq(design, (u * u).sum(axis=1), rcond=None)[0]
-    radius2 = sol[3] + sol[:3] @ sol[:3]
-    if np.isfinite(radius2) and radius2 > 0:
-        return shift + sol[:3], float(np.sqrt(radius2))
-    return shift, float(np.linalg.norm(u, axis=1).mean())
-
-
 def centroid_radius(readings: np.ndarray) -> float:
-    """Radius of the sphere fitted to ``readings`` (:func:`fit_sphere`): unlike the mean distance from
-    the centroid it stays right when the readings cover only part of the sphere."""
+    """Radius of the sphere fitted to ``readings`` (:func:`magexp.core.ellipsoid.fit_sphere`): unlike the
+    mean distance from the centroid it stays right when the readings cover only part of the sphere."""
     return fit_sphere(readings)[1]
 
 

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.artifacts.claims import ci
 from magexp.errors import MagexpError
 from magexp.perf.peers import bound, data, exchange, magexp_side, measures
 from magexp.perf.peers.magyc_side import METHODS as PEER_METHODS
@@ -173,7 +174,7 @@ def job_rows(args, job: tuple, answer: dict, rests: dict) -> list[dict]:
     """The long rows of one fit: both sides' measures, the raw spread (recordings) or the Cramér-Rao floor
     (simulations)."""
     ds, held, label, axis_map = job
-    estimates = [("magyc", magexp_side.Estimate.from_peer(r)) for r in answer["results"]]
+    estimates = [("magyc", exchange.Estimate.from_peer(r)) for r in answer["results"]]
     n_fit = len(ds.t) if ds.side["kind"] == "magyc_synthetic" else args.n_fit  # MAGYC's data: the peer's readings
     estimates += [("magexp", magexp_side.fit(m, ds, seed=int(ds.side["seed"]), n_fit=n_fit))
                   for m in args.magexp.split(",")]
@@ -204,8 +205,6 @@ def run(args, work: Path) -> list[dict]:
 def summarise(rows: list[dict]) -> list[dict]:
     """Mean, median and 95 % interval of the median (:func:`magexp.artifacts.claims.ci`) of every measure over seeds (simulations) or over the
     two held-out halves (recordings), per dataset, axis map and method."""
-    from magexp.artifacts.claims import ci
-
     groups: dict[tuple, list[float]] = {}
     for r in rows:
         fit_on = "halves" if r["fit_on"] in ("first_half", "second_half") else r["fit_on"]

@@ -23,10 +23,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.errors import MagexpError
 from magexp.core.geometry import integrate_rates, merged_steps
+from magexp.core.recordings import load_recording
+from magexp.core.seeding import run_generators
+from magexp.errors import MagexpError
 from magexp.paths import SHARED_DATA
 from magexp.perf.peers.exchange import FORMAT, NeutralDataset
+from magexp.run.compose import compose_config
+from magexp.run.runner import build
 from magexp.scenarios.search import centroid_radius
 
 #: the HMC5883L + MPU6050 sequences of the bench (``hmc5883l_<sequence>_{mag,imu}.csv``)
@@ -79,10 +83,6 @@ def yuan_stream(scenario: str, seed: int) -> NeutralDataset:
     eq 1) and the gyro rate ``ω_k + drift + noise`` held over ``[t_k, t_{k+1}]`` (:class:`~magexp.scenarios.motion.Gyro`);
     the truth is ``D = S``, ``h = b``, the gyro bias the drift vector.
     """
-    from magexp.run.compose import compose_config
-    from magexp.run.runner import build
-    from magexp.core.seeding import run_generators
-
     cfg = compose_config([f"scenario={scenario}"])
     scen = build(cfg.scenario, "scenario")
     rng, _ = run_generators(int(seed), f"peers/{scenario}")  # the bench's own stream of the scenario
@@ -118,8 +118,6 @@ def recording(sequence: str, axis_map: str = "aligned", *, retime: bool = False)
     recorded timestamps are arrival times of buffered bursts (median spacing about 3 ms, gaps up to 250 ms, for
     sensors sampling at 77 and 99 Hz): a method that differentiates the readings over their timestamps sees
     nonsense rates; one that integrates the gyroscope between them sees attitudes off by up to one gap."""
-    from magexp.core.recordings import load_recording
-
     if axis_map not in AXIS_MAPS:
         raise MagexpError(f"axis_map={axis_map!r} is not allowed: choose one of {', '.join(AXIS_MAPS)}")
     mag_axes, gyro_axes = AXIS_MAPS[axis_map]
@@ -144,8 +142,6 @@ def recording(sequence: str, axis_map: str = "aligned", *, retime: bool = False)
 
 def rest_bias(axis_map: str = "aligned") -> np.ndarray:
     """The mean rate (rad/s) of the 10-minute rest recording in the gyroscope axes of ``axis_map``."""
-    from magexp.core.recordings import load_recording
-
     mag_axes, gyro_axes = AXIS_MAPS[axis_map]
     rec = load_recording(SHARED_DATA / f"hmc5883l_{REST}", mag_axes=mag_axes, gyro_axes=gyro_axes)
     return rec.gyro_rates()[1].mean(axis=0)

@@ -15,7 +15,8 @@ A dataset is two files with one stem:
     one is given), ``axes`` and ``alignment`` (in words), ``methods`` (the peer's methods to run).
 
 The peer's answer (``<out>.json``): ``{"format", "peer", "version", "results": [{"method", "soft_iron",
-"hard_iron", "gyro_bias", "convention", "seconds", "own_output_spread", "error"}]}`` (:mod:`.magyc_side`).
+"hard_iron", "gyro_bias", "convention", "seconds", "own_output_spread", "error"}]}`` (:mod:`.magyc_side`), read into
+:class:`Estimate` objects, the form in which both sides' answers are measured (:mod:`.measures`).
 """
 
 from __future__ import annotations
@@ -149,3 +150,33 @@ def synthesise(out_dir: Path, seed: int, nsamples: int, *, timeout: float = 600.
     """MAGYC's own generator in the peer's environment (:func:`.magyc_side.synth`): the ``.npz`` files made."""
     _peer(["synth", str(out_dir), str(int(seed)), str(int(nsamples))], f"its generator (seed {seed})", timeout)
     return sorted(Path(out_dir).glob(f"magyc_*_s{int(seed)}.npz"))
+
+
+@dataclass
+class Estimate:
+    """One method's answer on one dataset, of either side, in the peer's form ``m = D m_true + h``: ``D`` the soft
+    iron, ``h`` the hard iron (:mod:`.magexp_side` maps magexp's ``W (r - o)`` onto it)."""
+
+    method: str
+    soft_iron: np.ndarray | None  # D of m = D m_true + h; None: taken as the identity
+    hard_iron: np.ndarray | None
+    gyro_bias: np.ndarray | None  # rad/s
+    seconds: float
+    error: str | None = None
+    own_output_spread: float = float("nan")
+
+    @classmethod
+    def from_peer(cls, result: dict) -> "Estimate":
+        """The peer's JSON result (:mod:`.magyc_side`), its ``correction`` matrices inverted."""
+        if result.get("error"):
+            return cls(result["method"], None, None, None, float("nan"), result["error"])
+        soft = None if result.get("soft_iron") is None else np.asarray(result["soft_iron"], float)
+        if soft is not None and result.get("convention") == "correction":
+            soft = np.linalg.inv(soft)
+        bias = result.get("gyro_bias")
+        values = [v for v in (result.get("soft_iron"), result["hard_iron"], bias) if v is not None]
+        if not all(np.all(np.isfinite(np.asarray(v, float))) for v in values):
+            return cls(result["method"], None, None, None, float(result["seconds"]), "non-finite estimate")
+        return cls(result["method"], soft, np.asarray(result["hard_iron"], float),
+                   None if bias is None else np.asarray(bias, float), float(result["seconds"]),
+                   own_output_spread=float(result.get("own_output_spread", float("nan"))))

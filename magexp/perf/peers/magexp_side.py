@@ -1,6 +1,6 @@
 """magexp's side of the bench: its applicable estimators on a neutral dataset (:mod:`.exchange`).
 
-Every method returns an :class:`Estimate` in the peer's form, ``m = D m_true + h`` (``D = W^-1``, ``h = o``
+Every method returns an :class:`.exchange.Estimate` in the peer's form, ``m = D m_true + h`` (``D = W^-1``, ``h = o``
 of magexp's ``W (r - o)``), the gyro bias in rad/s where the method estimates one, and its wall seconds.
 
 * ``gyro`` objective (:class:`magexp.problems.gyro.GyroAidedCalibration`, Yuan 2018 eq 8 with the field direction
@@ -24,7 +24,6 @@ field's magnitude from the scale of ``D``, and the bench compares ``D`` up to sc
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -33,7 +32,7 @@ from magexp.calibration.fit import estimator_named
 from magexp.core.dataset import Dataset
 from magexp.errors import MagexpError
 from magexp.core.geometry import preintegrate
-from magexp.perf.peers.exchange import NeutralDataset
+from magexp.perf.peers.exchange import Estimate, NeutralDataset
 from magexp.problems import make_problem
 from magexp.scenarios.search import search_box
 from magexp.core.seeding import run_generators
@@ -55,35 +54,6 @@ METHODS = {
 #: ``fit_on`` of MAGYC's data on the readings of :func:`subset`, given to both sides (``all``: every reading to both)
 SUBSET = "subset"
 DEFAULT = ("magexp_lm_gyro", "magexp_ellipsoid", "magexp_twostep")
-
-
-@dataclass
-class Estimate:
-    """One method's answer on one dataset, in the peer's form (module docstring)."""
-
-    method: str
-    soft_iron: np.ndarray | None  # D of m = D m_true + h; None: taken as the identity
-    hard_iron: np.ndarray | None
-    gyro_bias: np.ndarray | None  # rad/s
-    seconds: float
-    error: str | None = None
-    own_output_spread: float = float("nan")
-
-    @classmethod
-    def from_peer(cls, result: dict) -> "Estimate":
-        """The peer's JSON result (:mod:`.magyc_side`), its ``correction`` matrices inverted."""
-        if result.get("error"):
-            return cls(result["method"], None, None, None, float("nan"), result["error"])
-        soft = None if result.get("soft_iron") is None else np.asarray(result["soft_iron"], float)
-        if soft is not None and result.get("convention") == "correction":
-            soft = np.linalg.inv(soft)
-        bias = result.get("gyro_bias")
-        values = [v for v in (result.get("soft_iron"), result["hard_iron"], bias) if v is not None]
-        if not all(np.all(np.isfinite(np.asarray(v, float))) for v in values):
-            return cls(result["method"], None, None, None, float(result["seconds"]), "non-finite estimate")
-        return cls(result["method"], soft, np.asarray(result["hard_iron"], float),
-                   None if bias is None else np.asarray(bias, float), float(result["seconds"]),
-                   own_output_spread=float(result.get("own_output_spread", float("nan"))))
 
 
 def fit_indices(n: int, n_fit: int = N_FIT) -> np.ndarray:

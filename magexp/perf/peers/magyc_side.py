@@ -34,9 +34,17 @@ import sys
 import tempfile
 import time
 import traceback
+from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
+
+try:  # the peer's environment; magexp's has no magyc and imports this file for METHODS only
+    import magyc
+except ModuleNotFoundError as missing:
+    if missing.name != "magyc":  # magyc is there, one of its own dependencies is not: a broken environment
+        raise
+    magyc = None
 
 FORMAT = "magexp-peer-exchange v1"
 
@@ -62,6 +70,13 @@ PAPER = {"frequency": 10.0, "mag_noise_G": 0.01, "gyro_noise_rad_s": 0.01}
 CORRECTION = ("ellipsoid_fit",)
 
 
+def need_magyc() -> None:
+    """Stop, in one line, where magyc is not installed (this file runs in the peer's environment, ``make peers``)."""
+    if magyc is None:
+        raise SystemExit("magyc_side.py runs in the peer's environment (.peers/venv, make peers): magyc is not "
+                         "installed in this one")
+
+
 def _spread(vectors) -> float:
     mags = np.linalg.norm(np.asarray(vectors, float).reshape(-1, 3), axis=1)
     return float(mags.std() / mags.mean()) if mags.size else float("nan")
@@ -74,6 +89,8 @@ def prepare(data: dict, side: dict) -> dict:
     window = side.get("savgol_window")
     if not window:
         return data
+    # lazy: 0.54 s CPU to import in magexp's environment (min of 3, after magexp.perf.peers.bench's imports),
+    # which imports this file for METHODS only
     from scipy.signal import savgol_filter
 
     order = int(side.get("savgol_order", 2))
@@ -84,8 +101,6 @@ def prepare(data: dict, side: dict) -> dict:
 def call(method: str, data, side: dict) -> dict:
     """One MAGYC method on ``data`` (``t``, ``mag``, ``gyro``) -> its estimates as plain lists. MAGYC-BFG and
     -IFG take the sidecar's ``measurements_window`` (their example notebook: the sample rate in Hz)."""
-    import magyc
-
     needs, returns = METHODS[method]
     mag, gyro, t = data["mag"], data["gyro"], data["t"]
     fun = getattr(magyc, method)
@@ -112,9 +127,7 @@ def call(method: str, data, side: dict) -> dict:
 
 def run(path_in: str, path_out: str) -> None:
     """Every method of the sidecar's ``methods`` on ``path_in``; the estimates to ``path_out``."""
-    import magyc  # noqa: F401  (fails here, before any method, when the environment is broken)
-    from importlib.metadata import version
-
+    need_magyc()
     side = json.loads(Path(path_in).with_suffix(".json").read_text())
     if side.get("format") != FORMAT:
         raise SystemExit(f"{path_in}: format {side.get('format')!r} is not allowed: expected {FORMAT!r}")
@@ -136,8 +149,7 @@ def run(path_in: str, path_out: str) -> None:
 
 def synth(out_dir: str, seed: str, nsamples: str) -> None:
     """MAGYC's generator, one simulation per motion level, exported as neutral datasets with the truth."""
-    import magyc
-
+    need_magyc()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     np.random.seed(int(seed))  # the generator draws from numpy's global generator

@@ -1,4 +1,4 @@
-"""The measures both sides get, from an :class:`~.magexp_side.Estimate` and a neutral dataset.
+"""The measures both sides get, from an :class:`~.exchange.Estimate` and a neutral dataset.
 
 Soft iron, compared up to scale and rotation. The gyro-aided methods cannot see the field's magnitude (MAGYC
 fixes ``det D = 1``, magexp fixes ``|h|`` to the readings' sphere radius) and the total-field methods cannot see
@@ -29,8 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.core.geometry import attitude_at
-from magexp.perf.peers.exchange import NeutralDataset
-from magexp.perf.peers.magexp_side import Estimate
+from magexp.perf.peers.exchange import Estimate, NeutralDataset
 from magexp.core.identifiability import spread
 
 SOFT_TOL = 0.05  # log-Euclidean distance of the unit-determinant shapes (about 5 %)

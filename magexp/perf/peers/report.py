@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt  # the Agg backend: chosen by magexp.artifacts.plots.style (imported with the report)
 import numpy as np
 
 from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
@@ -101,11 +102,6 @@ def _recording_panel(ax, summary, methods: list[str]) -> None:
 def figure(summary, path) -> None:
     """Three panels: soft-iron and hard-iron error on MAGYC's data per motion level, held-out spread on the
     full-sphere recording."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     methods = methods_of(summary)
     levels = [d for d in LEVELS if pick(summary, dataset=d)]
     fig, axes = plt.subplots(1, 3, figsize=(13.5, 5.6), constrained_layout=True)

@@ -21,21 +21,17 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import os
 import sys
 import time
 from importlib.metadata import version
 
 import numpy as np
-
-os.environ.setdefault("MPLBACKEND", "Agg")  # magcal imports pyplot at import time
+from mag_cal import Sensor
+from magcal.core import MagnetometerCalibrator  # it imports pyplot (and pyserial): run with MPLBACKEND=Agg (tools.py)
 
 
 def load() -> dict:
-    """The tools' fit functions, their modules imported (before any timing: magcal imports pyplot and pyserial)."""
-    from magcal.core import MagnetometerCalibrator  # here: absent from magexp's environment, which imports this module
-    from mag_cal import Sensor  # likewise
-
+    """The tools' fit functions (their modules are imported with this file, before any timing)."""
     def fit_magcal(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(W, o)`` of magcal's ellipsoid method (module docstring); its refusal raised as it raises it."""
         cal = MagnetometerCalibrator()

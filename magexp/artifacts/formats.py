@@ -1,0 +1,118 @@
+"""The formats of the results files: a results CSV (every float rounded to :data:`DIGITS` significant digits,
+round-off floored: :func:`tidy`, :func:`write_csv`), a runs CSV read back (:func:`read_runs`), and a table as
+Markdown and LaTeX (:func:`markdown_table`, :func:`latex_table`); what ``magexp verify`` leaves out by design
+(:data:`MEASURED` columns, the report's sections of :data:`PEERS_HEADING` and :data:`SPEED_HEADING`).
+Identical bytes on every fresh clone when only round-off differs; ``magexp verify`` holds a reproduction to
+one unit of these digits."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from magexp.core.outcomes import ROUNDOFF_FLOOR
+from magexp.core.atomic import atomic_path, write_text
+from magexp.errors import MagexpError
+
+#: significant digits of every float written to a results CSV (round-off must not churn files)
+DIGITS = 6
+#: a column of wall times measured on this machine has this in its name (an artifact's table keeps them in
+#: ``results/timing/``, :func:`magexp.artifacts.reproduce.split_timing`)
+MEASURED = "wall_time"
+#: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
+#: them out unless both sides have their source)
+PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
+
+
+def _floats(column: pd.Series) -> np.ndarray | None:
+    """The column as floats if it holds floats: a float column, or an object column whose values are
+    floats and missing values (e.g. a truth that some rows lack); else None (text, integers, flags)."""
+    if pd.api.types.is_float_dtype(column):
+        return column.to_numpy(float)
+    if column.dtype == object:
+        present = [v for v in column if v is not None and not (isinstance(v, float) and np.isnan(v))]
+        if present and all(isinstance(v, (float, np.floating)) for v in present):
+            return np.array([np.nan if v is None else float(v) for v in column])
+    return None
+
+
+#: columns of probabilities: never floored as round-off (a p of 1e-22 is written as it is)
+EXACT = ("p", "p_adjusted", "p_min")
+
+
+def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
+    """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
+    written as ``±floor`` (not the :data:`EXACT` ones); every float then rounded to :data:`DIGITS`
+    significant digits."""
+    out = frame.copy()
+    for col in out.columns:
+        v = _floats(out[col])
+        if v is not None:
+            small = np.isfinite(v) & (v != 0) & (np.abs(v) < (0 if col in EXACT else floor))
+            v = np.where(small, np.sign(v) * floor, v)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                mag = np.where(np.isfinite(v) & (v != 0), np.floor(np.log10(np.abs(np.where(v == 0, 1, v)))), 0)
+            scale = 10.0 ** (DIGITS - 1 - mag)
+            out[col] = np.where(np.isfinite(v), np.round(v * scale) / scale, v)
+    return out
+
+
+def write_csv(frame: pd.DataFrame, path: Path) -> None:
+    """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
+    when only round-off differs)."""
+    with atomic_path(path) as tmp:  # an interrupt leaves the old file or the new one
+        tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
+
+
+def read_runs(path: Path) -> pd.DataFrame:
+    """A runs CSV, consolidated: ``read_csv`` leaves one block per column (95 in ``benchmark_heatmap``),
+    a copy one per dtype, and the claims and the summary take rows from it hundreds of times (a
+    selection of ``benchmark_heatmap``'s cells: 1.7 ms as read, 1.0 ms consolidated)."""
+    return pd.read_csv(path).copy()
+
+
+def fmt(v) -> str:
+    """A value as a table shows it: 4 significant digits, ``yes``/``no``, '' for a missing number."""
+    if v is None or (isinstance(v, float) and not np.isfinite(v)):
+        return ""
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    if isinstance(v, (float, np.floating)):
+        return f"{v:.4g}"
+    return str(v)
+
+
+_LATEX = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_", "{": r"\{",
+          "}": r"\}", "~": r"\textasciitilde{}", "^": r"\textasciicircum{}"}
+
+
+def _tex(text: str) -> str:
+    return "".join(_LATEX.get(ch, ch) for ch in str(text))
+
+
+def latex_table(frame: pd.DataFrame, columns: list[str]) -> str:
+    """The same table as :func:`markdown_table`, as a LaTeX ``tabular`` with ``booktabs`` rules
+    (``\\usepackage{booktabs}``), ready to ``\\input`` into a paper."""
+    lines = [r"\begin{tabular}{" + "l" * len(columns) + "}", r"\toprule",
+             " & ".join(_tex(c) for c in columns) + r" \\", r"\midrule"]
+    lines += [" & ".join(_tex(fmt(r[c])) for c in columns) + r" \\" for _, r in frame.iterrows()]
+    return "\n".join(lines + [r"\bottomrule", r"\end{tabular}", ""])
+
+
+def _cell(v) -> str:
+    """A Markdown table cell: :func:`fmt`, with ``|`` escaped and line breaks flattened."""
+    return " ".join(fmt(v).split()).replace("|", "\\|")
+
+
+def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = None, names: list[str] | None = None) -> str:
+    """A Markdown table of ``columns`` (headed ``names``, default the columns); with ``tex``, its
+    LaTeX twin (:func:`latex_table`) is written there. A table without rows is an error: the
+    caller says in words that there is nothing to show."""
+    if not len(frame):
+        raise MagexpError(f"an empty table ({', '.join(columns)}) would be printed: say so in words instead")
+    if tex is not None:
+        write_text(tex, latex_table(frame, columns))
+    head = "| " + " | ".join(names or columns) + " |\n|" + "---|" * len(columns) + "\n"
+    return head + "".join("| " + " | ".join(_cell(r[c]) for c in columns) + " |\n" for _, r in frame.iterrows())
