@@ -29,7 +29,7 @@ from magexp.artifacts.plots.style import save
 from magexp.artifacts.spec import artifact_paths, load, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
 from magexp.core.atomic import atomic_path, write_text
-from magexp.core.outcomes import ROUNDOFF_FLOOR, succeeded_majority
+from magexp.core.outcomes import succeeded_majority
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS, ROOT
 from magexp.run import provenance
