@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import magexp
-from magexp.calibration.fit import Calibration, main
+from magexp import Calibration
+from magexp.calibration.command import main
 from magexp.core.geometry import random_rotations
 from magexp.errors import MagexpError
 from magexp.paths import SHARED_DATA
@@ -101,7 +102,7 @@ def test_import_magexp_sets_no_thread_variables():
     import sys
 
     env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
-    code = ("import os, magexp, magexp.calibration.fit; "
+    code = ("import os, magexp, magexp.calibration.command; "
             "print(sorted(k for k in os.environ if k.endswith('_NUM_THREADS')))")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

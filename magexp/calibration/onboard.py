@@ -18,7 +18,7 @@ import numpy as np
 
 from magexp.core.identifiability import spread
 from magexp.core.readers import LOGGED
-from magexp.core.recordings import Recording
+from magexp.core.recording import Recording
 from magexp.errors import MagexpError
 
 

@@ -33,7 +33,7 @@ from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
 from magexp.run.guard import check_destination
-from magexp.core.recordings import VERSION_LINE
+from magexp.core.formats import VERSION_LINE
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.run.guard import first_missing
