@@ -27,7 +27,23 @@ from magexp.run.guard import readings_array
 
 def frame_readings(frame) -> np.ndarray:
     """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``mx, my, mz``, ``x, y, z``:
-    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns."""
+    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The readings' table.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, 3)`` float readings.
+
+    Raises
+    ------
+    MagexpError
+        Columns that are neither named nor three numeric ones.
+    """
     cols = [str(c).strip().lower() for c in frame.columns]
     check_unique(cols, "readings")
     pick = next((names for names in MAG_COLUMNS if all(n in cols for n in names)), None)
@@ -40,7 +56,25 @@ def frame_readings(frame) -> np.ndarray:
 
 def as_recording(readings, *, unit: str | None = None) -> Recording:
     """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
-    ``x, y, z``, else its three numeric columns), a path or a Recording."""
+    ``x, y, z``, else its three numeric columns), a path or a Recording.
+
+    Parameters
+    ----------
+    readings : array_like, DataFrame, str, Path or Recording
+        As :func:`calibrate`'s.
+    unit : str or None
+        The unit of an array or DataFrame (required), of a path (``data.unit``).
+
+    Returns
+    -------
+    Recording
+        The recording (an array's: format ``array``, name ``readings``).
+
+    Raises
+    ------
+    MagexpError
+        A shape other than (N, 3), a value not finite, an array without a unit.
+    """
     if isinstance(readings, Recording):
         return readings
     if isinstance(readings, (str, Path)):

@@ -36,7 +36,23 @@ from magexp.run.runner import build
 def calibrate_config(argv: list[str]):
     """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed as every
     command's config is (:func:`magexp.run.compose.compose_config`: Hydra once per estimator choice,
-    kept on disk)."""
+    kept on disk).
+
+    Parameters
+    ----------
+    argv : list of str
+        The ``KEY=VALUE`` overrides.
+
+    Returns
+    -------
+    DictConfig
+        The composed config.
+
+    Raises
+    ------
+    MagexpError
+        An argument without ``=``, a Hydra key, a code target or value, an unknown choice.
+    """
     bad = [a for a in argv if "=" not in a]
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
@@ -51,7 +67,23 @@ def calibrate_config(argv: list[str]):
 
 
 def field_keys(cfg) -> dict:
-    """``field.*`` of ``cfg``, with the older ``igrf.*`` keys as aliases (``field.model=igrf``)."""
+    """``field.*`` of ``cfg``, with the older ``igrf.*`` keys as aliases (``field.model=igrf``).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+
+    Returns
+    -------
+    dict
+        ``model``, ``latitude``, ``longitude``, ``altitude_km``, ``date``.
+
+    Raises
+    ------
+    MagexpError
+        Both ``igrf.*`` and ``field.*`` given, or a bad value.
+    """
     place = {k: v for k, v in dict(cfg.get("field") or {}).items()}
     old = {k: v for k, v in dict(cfg.get("igrf") or {}).items() if v is not None and k != "altitude_km"}
     if old:
@@ -69,7 +101,20 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
     """The field model's total where and when ``rec`` was recorded (:mod:`magexp.core.field_model`):
     ``field.latitude/longitude/altitude_km/date`` (each, if not given, from the log's GPS), or None
     when neither the command line nor the log gives a place. In the recording's unit; a raw-count
-    recording is calibrated to the model's total in nT (``W`` then maps counts to nT)."""
+    recording is calibrated to the model's total in nT (``W`` then maps counts to nT).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+
+    Returns
+    -------
+    Reference or None
+        The model's total per reading, its source and record, or None.
+    """
     place = field_keys(cfg)
     if place.get("latitude") is None and not {"latitude", "date"} <= set(place_of(rec)):
         return None
@@ -84,7 +129,23 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
 
 
 def run(cfg) -> Calibration:
-    """Load, calibrate, check and write as ``cfg`` says; print the summary."""
+    """Load, calibrate, check and write as ``cfg`` says; print the summary.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+
+    Returns
+    -------
+    Calibration
+        The calibration written.
+
+    Raises
+    ------
+    MagexpError
+        Bad input, degenerate data, a failed fit or a refused one; nothing is written.
+    """
     data = cfg.data
     check_options(cfg)
     rec = recording_of(cfg)
@@ -116,7 +177,18 @@ def check_options(cfg) -> None:
     """The keys that a run may not use checked before anything is read: every given ``field.*`` and
     ``igrf.*`` value (used only when a place is known, and not at all beside ``data.reference_total``),
     ``counts_nt`` and ``max_rotation_deg`` (used only by some exports), ``auto_margin`` (only by
-    ``model=auto``): a bad value is refused in one line, not ignored."""
+    ``model=auto``): a bad value is refused in one line, not ignored.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+
+    Raises
+    ------
+    MagexpError
+        A bad value of those keys.
+    """
     field_keys(cfg)
     if cfg.get("counts_nt") is not None:
         check_counts_nt(cfg.counts_nt)
@@ -126,7 +198,23 @@ def check_options(cfg) -> None:
 
 
 def recording_of(cfg) -> Recording:
-    """The recording ``data.*`` names (its size checked before it is read; ``instance``: a DataFlash log's compass)."""
+    """The recording ``data.*`` names (its size checked before it is read; ``instance``: a DataFlash log's compass).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+
+    Returns
+    -------
+    Recording
+        The recording read (:func:`magexp.core.recordings.load_recording`).
+
+    Raises
+    ------
+    MagexpError
+        No ``data.path``, a file over the readings limit, or a malformed file.
+    """
     data = cfg.data
     if data.get("path") is None or not str(data.path).strip():
         raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
@@ -140,7 +228,25 @@ def recording_of(cfg) -> Recording:
 def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
     """``(target, options)`` of ``export=<target>`` (``(None, None)`` without one), checked before the fit:
     the target's name, and its options on an identity calibration (``counts_nt`` for raw counts, the
-    rotation limit, the slot: :func:`export_options`)."""
+    rotation limit, the slot: :func:`export_options`).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+
+    Returns
+    -------
+    tuple
+        ``(target or None, options or None)``.
+
+    Raises
+    ------
+    MagexpError
+        An unknown target or a refused option.
+    """
     target = cfg.get("export")
     if target is None:
         return None, None
@@ -154,7 +260,22 @@ def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
 def export_options(cfg, target: str, rec: Recording) -> dict:
     """The options of ``export=<target>`` from the command line (those the target takes,
     :func:`magexp.calibration.export.options_of`): ``counts_nt``, ``max_rotation_deg`` and ``instance``, the
-    parameter slot (null: a ULog's calibration slot, else 0; a DataFlash log's instance is the one read)."""
+    parameter slot (null: a ULog's calibration slot, else 0; a DataFlash log's instance is the one read).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    target : str
+        The export target.
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+
+    Returns
+    -------
+    dict
+        The options ``target`` takes, given.
+    """
     slot = cfg.get("instance")
     given = {"counts_nt": cfg.get("counts_nt"), "max_rotation_deg": cfg.get("max_rotation_deg"),
              "instance": int(rec.meta.get("calibration_slot", 0)) if slot is None else slot}
@@ -162,7 +283,25 @@ def export_options(cfg, target: str, rec: Recording) -> dict:
 
 
 def flag(cfg, key: str) -> bool:
-    """A true/false key of ``cfg`` (default false), else one line."""
+    """A true/false key of ``cfg`` (default false), else one line.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    key : str
+        A true/false key.
+
+    Returns
+    -------
+    bool
+        Its value.
+
+    Raises
+    ------
+    MagexpError
+        A value that is not true or false.
+    """
     return check_flag(cfg.get(key, False), key)
 
 
@@ -171,7 +310,13 @@ def flag(cfg, key: str) -> bool:
 def command(argv: list[str]) -> None:
     """``magexp calibrate KEY=VALUE ...``: compose, check, calibrate, write; errors are raised (the
     one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code).
-    ``--help`` (``-h``) prints :func:`help_text`."""
+    ``--help`` (``-h``) prints :func:`help_text`.
+
+    Parameters
+    ----------
+    argv : list of str
+        The arguments after ``calibrate``.
+    """
     if any(a in ("--help", "-h") for a in argv):
         print(help_text(options("estimator")))
         return
@@ -180,7 +325,18 @@ def command(argv: list[str]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m magexp.calibration.command KEY=VALUE ...`` (= ``magexp calibrate``): 0 on success; one
-    line on stderr and exit 2 on bad input or degenerate data (nothing written), 3 on a bug."""
+    line on stderr and exit 2 on bad input or degenerate data (nothing written), 3 on a bug.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        The arguments (None: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 

@@ -91,7 +91,13 @@ GYRO_ESTIMATOR = {"name": "lm", "max_nfev": 200, "tol": 1e-10, "jacobian": "stac
 
 
 def gyro_estimator():
-    """The estimator of ``model=gyro``: ``conf/estimator/lm.yaml``'s class with :data:`GYRO_ESTIMATOR`."""
+    """The estimator of ``model=gyro``: ``conf/estimator/lm.yaml``'s class with :data:`GYRO_ESTIMATOR`.
+
+    Returns
+    -------
+    LevenbergMarquardt
+        The estimator, built fresh.
+    """
     return target_class("estimator", "lm")(**GYRO_ESTIMATOR)
 #: ``model=gyro`` fits at most this many readings, evenly spaced in time (the gyroscope integrated between
 #: them), as the ``real_hmc5883l_*`` scenarios do (``n_readings: 300``): a documented default that bounds
@@ -101,7 +107,25 @@ GYRO_READINGS = 300
 
 
 def reference_of(rec: Recording, override=None) -> Reference:
-    """The reference total field of ``rec`` (see the module docstring for the order)."""
+    """The reference total field of ``rec`` (see the module docstring for the order).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    override : float, str or None
+        ``data.reference_total`` (the recording's unit), else None.
+
+    Returns
+    -------
+    Reference
+        The total per reading, its source, and whether it was estimated.
+
+    Raises
+    ------
+    MagexpError
+        ``override`` not a number > 0 and <= LARGEST.
+    """
     n = rec.n
     if override is not None:
         try:
@@ -122,13 +146,44 @@ def reference_of(rec: Recording, override=None) -> Reference:
 
 
 def attitude_of(rec: Recording) -> np.ndarray | None:
-    """Navigation -> sensor rotations ``(N, 3, 3)`` (:meth:`Recording.attitude`), or None."""
+    """Navigation -> sensor rotations ``(N, 3, 3)`` (:meth:`Recording.attitude`), or None.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The rotations, or None without attitudes or a gyroscope.
+    """
     return rec.attitude()
 
 
 def recording_dataset(rec: Recording, reference: Reference, objective: str) -> Dataset:
     """The :class:`Dataset` of ``rec`` for ``objective`` (attitudes and field for ``vector``): the one path
-    from a recording to a Dataset, :func:`magexp.core.recording.recording_dataset`, which the scenarios take too."""
+    from a recording to a Dataset, :func:`magexp.core.recording.recording_dataset`, which the scenarios take too.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    objective : str
+        ``scalar`` or ``vector``.
+
+    Returns
+    -------
+    Dataset
+        The readings with their reference totals (and attitudes and field).
+
+    Raises
+    ------
+    MagexpError
+        An objective not of :data:`OBJECTIVES`, or ``vector`` without attitudes and a field.
+    """
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed for magexp calibrate: choose one of "
                           f"{', '.join(OBJECTIVES)}")
@@ -138,14 +193,43 @@ def recording_dataset(rec: Recording, reference: Reference, objective: str) -> D
 def gyro_dataset(rec: Recording, reference: Reference) -> Dataset:
     """The :class:`Dataset` of ``model=gyro`` (:class:`~magexp.problems.gyro.GyroAidedCalibration`): the
     readings (at most :data:`GYRO_READINGS`, evenly spaced), the reference total (the field's magnitude ``F``)
-    and the gyroscope's rotation increments between their times (:func:`magexp.core.geometry.preintegrate`)."""
+    and the gyroscope's rotation increments between their times (:func:`magexp.core.geometry.preintegrate`).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+
+    Returns
+    -------
+    Dataset
+        The dataset of :class:`~magexp.problems.gyro.GyroAidedCalibration`.
+
+    Raises
+    ------
+    MagexpError
+        A recording without a gyroscope.
+    """
     if rec.gyro_rates() is None or rec.reading_times() is None:
         models_.check_model("gyro", "scalar", gyro=False)
     return dataset_of(rec, reference.total, "gyro", keep=evenly_spaced(rec.n, GYRO_READINGS))
 
 
 def check_size(rec: Recording) -> None:
-    """At least :data:`MIN_READINGS` readings."""
+    """At least :data:`MIN_READINGS` readings.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+
+    Raises
+    ------
+    MagexpError
+        Fewer than :data:`MIN_READINGS` readings.
+    """
     if rec.n < MIN_READINGS:
         raise MagexpError(f"{rec.name}: {rec.n} readings is not allowed: a calibration needs at least "
                           f"{MIN_READINGS} (the 12 parameters of W and the offset)")
@@ -162,14 +246,45 @@ def noise_of(raw: np.ndarray, calibrated: np.ndarray) -> float:
     calibration error varies slowly with the attitude and cancels there). 0 when the readings are not
     a time series (their mean step over :data:`SERIES_STEP` of the raw radius), where neighbours are
     not close in time. The gate's RMS check discounts it (:func:`magexp.calibration.checks.gate`): a
-    noisy sensor (the QMC5883L log: 6.04 % of 6.27 %) is not a bad calibration."""
+    noisy sensor (the QMC5883L log: 6.04 % of 6.27 %) is not a bad calibration.
+
+    .. math:: \\hat\\sigma = \\sqrt{\\tfrac{1}{6}\\,\\overline{(|B|_{i+1} - 2|B|_i + |B|_{i-1})^2}}
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        ``(N, 3)`` raw readings in time order.
+    calibrated : numpy.ndarray
+        ``(N, 3)`` the calibrated readings.
+
+    Returns
+    -------
+    float
+        ``sqrt(mean(Δ²|B|)² / 6)`` in the calibrated unit, or 0.
+    """
     if len(raw) < 3 or np.linalg.norm(np.diff(raw, axis=0), axis=1).mean() > SERIES_STEP * centroid_radius(raw):
         return 0.0
     return float(np.sqrt(np.mean(np.diff(np.linalg.norm(calibrated, axis=1), 2) ** 2) / 6))
 
 
 def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> dict:
-    """Magnitude statistics before and after, the RMS against the reference and the readings' noise (:func:`noise_of`)."""
+    """Magnitude statistics before and after, the RMS against the reference and the readings' noise (:func:`noise_of`).
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        ``(N, 3)`` raw readings.
+    calibrated : numpy.ndarray
+        ``(N, 3)`` calibrated readings.
+    reference : numpy.ndarray
+        ``(N,)`` reference total per reading.
+
+    Returns
+    -------
+    dict
+        ``mean_*``, ``std_*``, ``spread_*`` (std / mean), ``rms_*`` (of ``|B| - reference``) before and after, and
+        ``noise_after``.
+    """
     before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
     return {"mean_before": float(before.mean()), "std_before": float(before.std()), "spread_before": spread(before),
             "rms_before": float(np.sqrt(np.mean((before - reference) ** 2))),
@@ -209,7 +324,30 @@ def select_model(rec: Recording, estimator, objective: str, reference: Reference
                  margin: float) -> tuple[str, dict, dict]:
     """``model=auto`` (:func:`magexp.calibration.models.select`): ``(model, record, held-out of each fitted
     candidate)``. ``gyro`` is dropped before any fit where it cannot succeed (no gyroscope, or a saturated one:
-    :func:`magexp.calibration.models.gyro_unusable`), and the record says why."""
+    :func:`magexp.calibration.models.gyro_unusable`), and the record says why.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    estimator : estimator
+        The estimator object (``fit(problem, *, rng)``).
+    objective : str
+        ``scalar`` or ``vector``.
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    folds : int
+        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
+    rng : numpy.random.Generator or None
+        The estimator's random generator.
+    margin : float
+        ``auto_margin``.
+
+    Returns
+    -------
+    tuple
+        ``(model, selection record, {model: heldout record})``.
+    """
     unusable = models_.gyro_unusable(rec.gyro_rates())
     held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
             for m in models_.candidates(objective, gyro=not unusable)}
@@ -221,7 +359,20 @@ def select_model(rec: Recording, estimator, objective: str, reference: Reference
 
 def check_gyro(rec: Recording, model: str) -> None:
     """Refuse ``model=gyro`` in one line, before any fit, where it cannot succeed
-    (:func:`magexp.calibration.models.gyro_unusable`: a saturated gyroscope); other models pass."""
+    (:func:`magexp.calibration.models.gyro_unusable`: a saturated gyroscope); other models pass.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    model : str
+        The model asked for.
+
+    Raises
+    ------
+    MagexpError
+        ``model=gyro`` with a saturated gyroscope.
+    """
     why = models_.gyro_unusable(rec.gyro_rates()) if model == "gyro" else None
     if why:
         raise MagexpError(f"{rec.name}: model='gyro' cannot succeed, nothing fitted: {why}: choose model=full, "
@@ -231,7 +382,32 @@ def check_gyro(rec: Recording, model: str) -> None:
 def check_converged(rec: Recording, estimator, objective: str, model: str, result: FitResult, calibrated: np.ndarray,
                     reference: Reference, dataset: Dataset) -> None:
     """An iterative estimator's successful ``model=full`` scalar fit must reach the closed-form optimum
-    (:func:`magexp.calibration.checks.check_optimum`); other fits are not checked."""
+    (:func:`magexp.calibration.checks.check_optimum`); other fits are not checked.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    estimator : estimator
+        The estimator object (``fit(problem, *, rng)``).
+    objective : str
+        ``scalar`` or ``vector``.
+    model : str
+        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    result : FitResult
+        The fit's result.
+    calibrated : numpy.ndarray
+        ``(N, 3)`` the calibrated readings.
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    dataset : Dataset
+        The recording's dataset (:func:`recording_dataset`).
+
+    Raises
+    ------
+    MagexpError
+        The fit's spread over :data:`~magexp.calibration.checks.OPTIMUM_FACTOR` times the closed form's.
+    """
     if not (result.success and model == "full" and objective == "scalar" and getattr(estimator, "iterative", True)):
         return
     check_optimum(rec.name, estimator, spread(np.linalg.norm(calibrated, axis=1)),
@@ -242,7 +418,34 @@ def measured_heldout(rec: Recording, estimator, objective: str, reference: Refer
                      held: dict, *, checks: bool) -> dict:
     """The held-out record of ``model`` (:func:`heldout`; ``held``: those ``model=auto`` measured already), after,
     with ``checks``, the held-out spread of ``model=full`` has been checked against the closed-form optimum
-    (:func:`check_heldout_converged`)."""
+    (:func:`check_heldout_converged`).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    estimator : estimator
+        The estimator object (``fit(problem, *, rng)``).
+    objective : str
+        ``scalar`` or ``vector``.
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    folds : int
+        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
+    rng : numpy.random.Generator or None
+        The estimator's random generator.
+    model : str
+        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    held : dict
+        ``{model: heldout record}`` measured by ``model=auto`` (empty otherwise).
+    checks : bool
+        Check ``model=full``'s held-out spread against the closed form's.
+
+    Returns
+    -------
+    dict
+        :func:`heldout`'s record of ``model``.
+    """
     record = held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model)
     if checks:
         check_heldout_converged(rec, estimator, objective, held.get("full") or {model: record}.get("full", {}),
@@ -255,7 +458,30 @@ def check_heldout_converged(rec: Recording, estimator, objective: str, full: dic
     """An iterative estimator's held-out spread of ``model=full`` (``full``: :func:`heldout`'s record of that
     model, the candidate's under ``model=auto``; empty for another model) must be within
     :data:`~magexp.calibration.checks.OPTIMUM_FACTOR` of the closed-form ellipsoid fit's, measured on the same
-    regions (:func:`magexp.calibration.checks.check_optimum`): a swarm that fails on the folds is named, not the data."""
+    regions (:func:`magexp.calibration.checks.check_optimum`): a swarm that fails on the folds is named, not the data.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    estimator : estimator
+        The estimator object (``fit(problem, *, rng)``).
+    objective : str
+        ``scalar`` or ``vector``.
+    full : dict
+        :func:`heldout`'s record of ``model=full`` (empty: nothing checked).
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    folds : int
+        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
+    rng : numpy.random.Generator or None
+        The estimator's random generator.
+
+    Raises
+    ------
+    MagexpError
+        The held-out spread over the closed form's by more than the factor.
+    """
     value = full.get("heldout_spread")
     if value is None or objective != "scalar" or not getattr(estimator, "iterative", True):
         return
@@ -266,7 +492,22 @@ def check_heldout_converged(rec: Recording, estimator, objective: str, full: dic
 def closed_form_spread(rec: Recording, reference: Reference, dataset: Dataset) -> float | None:
     """The spread of the closed-form ellipsoid fit (``estimator=ellipsoid``, ``model=full``) of ``rec``, or
     None where it is not an ellipsoid: the optimum an iterative estimator must reach
-    (:func:`magexp.calibration.checks.check_optimum`). Milliseconds beside any iterative fit."""
+    (:func:`magexp.calibration.checks.check_optimum`). Milliseconds beside any iterative fit.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    dataset : Dataset
+        The recording's dataset (:func:`recording_dataset`).
+
+    Returns
+    -------
+    float or None
+        The spread (std / mean of ``|B|``), or None.
+    """
     try:
         _, _, calibrated, _, result, _ = _fit(rec, estimator_named("ellipsoid"), "scalar", reference, None, "full",
                                               dataset)
@@ -297,7 +538,18 @@ def regions(readings: np.ndarray) -> tuple[np.ndarray, dict]:
     """``(labels, record)``: the region of directions of each reading
     (:func:`magexp.core.identifiability.direction_regions` about the centre of the sphere fitted to them)
     and ``{direction_regions: fraction of the readings in each, region_axes: each region's half-axis}``
-    (what the gate's ``min_region`` check reads)."""
+    (what the gate's ``min_region`` check reads).
+
+    Parameters
+    ----------
+    readings : numpy.ndarray
+        ``(N, 3)`` raw readings.
+
+    Returns
+    -------
+    tuple
+        ``(labels (N,) in 0..5, record)``.
+    """
     labels, axes = direction_regions(readings - fit_sphere(readings)[0])
     fractions = np.bincount(labels, minlength=6) / len(readings)
     return labels, {"direction_regions": fractions.tolist(), "region_axes": axes.tolist()}
@@ -308,7 +560,30 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
     """Spread of each region of directions calibrated by the fit on the others (module docstring): the
     regions of :func:`regions` holding at least :data:`MIN_READINGS` readings are held out one at a time
     (a smaller one's readings stay in every fit). ``folds`` < 2: no check. NaN when fewer than two
-    regions can be held out or a fold cannot be fitted."""
+    regions can be held out or a fold cannot be fitted.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    estimator : estimator
+        The estimator object (``fit(problem, *, rng)``).
+    objective : str
+        ``scalar`` or ``vector``.
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    folds : int
+        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
+    rng : numpy.random.Generator or None
+        The estimator's random generator.
+    model : str
+        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+
+    Returns
+    -------
+    dict
+        ``heldout_spread`` (pooled), ``heldout_spread_max_fold`` and ``heldout_folds``; {} without folds.
+    """
     if folds < 2:
         return {}
     labels, _ = regions(rec.readings)
@@ -363,7 +638,29 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
     (:meth:`~magexp.problems.base.CalibrationProblem.residual_stack`): ``[s, o]`` (``W = s I``) for the
     sphere model, the 6 upper entries of the symmetric ``W`` and ``o`` for the scalar objective,
     ``[vec W, o]`` for the vector one, ``[vec W, o]`` and ``extra`` (the field direction and gyro bias
-    of the fit) for the gyro-aided model."""
+    of the fit) for the gyro-aided model.
+
+    Parameters
+    ----------
+    objective : str
+        ``scalar`` or ``vector``.
+    w : numpy.ndarray
+        ``(3, 3)`` the reported ``W``.
+    o : numpy.ndarray
+        ``(3,)`` the offset.
+    problem : CalibrationProblem
+        The fit's own problem.
+    model : str
+        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    extra : array_like
+        The gyro-aided fit's further parameters (field direction, gyro bias).
+
+    Returns
+    -------
+    dict
+        :func:`magexp.core.identifiability.identifiability`'s report, with ``W_standard_errors``,
+        ``offset_standard_errors``, ``w_form`` and ``model``.
+    """
     if model == "sphere":
         theta = np.concatenate([[w[0, 0]], o])
         names = ["s", "o1", "o2", "o3"]
@@ -506,7 +803,22 @@ def gyro_extras(model: str, problem, result) -> dict:
     """What the gyro-aided model reports beside ``W`` and ``o`` (nothing for the others): the field
     direction (rad) and the gyroscope's bias (deg/s) it fitted, and ``vector_rms``, the RMS of
     ``R_jᵀ h - W (r_j - o)`` over the readings the fit used (against the field the gyroscope carries to
-    each reading; the recording's unit)."""
+    each reading; the recording's unit).
+
+    Parameters
+    ----------
+    model : str
+        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    problem : GyroAidedCalibration
+        The gyro-aided problem.
+    result : FitResult
+        Its fit.
+
+    Returns
+    -------
+    dict
+        ``field_azimuth``, ``field_elevation`` (rad), ``gyro_bias_deg_s``, ``vector_rms``; {} for another model.
+    """
     if model != "gyro":
         return {}
     x = result.x
@@ -519,7 +831,35 @@ def gyro_extras(model: str, problem, result) -> dict:
 def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: dict, *, checks: bool,
             accept: bool) -> dict:
     """The acceptance gate's outcome (:func:`magexp.calibration.checks.gate`): refused in one line
-    unless ``accept`` (or ``checks`` is False); ``{passed, failed, accepted_anyway, thresholds}``."""
+    unless ``accept`` (or ``checks`` is False); ``{passed, failed, accepted_anyway, thresholds}``.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    w : numpy.ndarray
+        ``(3, 3)`` the calibration's ``W``.
+    metrics : dict
+        Its metrics (:func:`quality`, coverage, regions, held out).
+    reference : Reference
+        The reference total field (:func:`reference_of`).
+    thresholds : dict
+        :func:`magexp.calibration.checks.gate_thresholds`.
+    checks : bool
+        Refuse a failing calibration (False: record only).
+    accept : bool
+        Keep a failing calibration, its failures recorded.
+
+    Returns
+    -------
+    dict
+        ``{passed, failed, accepted_anyway, thresholds}``.
+
+    Raises
+    ------
+    MagexpError
+        Every failed check, unless ``accept`` or not ``checks``.
+    """
     failed = gate(w, metrics, raw_radius=centroid_radius(rec.readings), reference=float(np.mean(reference.total)),
                   estimated=reference.estimated or reference.unit is not None, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
                   thresholds=thresholds)
@@ -531,7 +871,25 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
 
 
 def estimator_named(name: str, **overrides):
-    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``."""
+    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``.
+
+    Parameters
+    ----------
+    name : str
+        A name of ``conf/estimator/*.yaml``.
+    **overrides
+        Options of that config.
+
+    Returns
+    -------
+    estimator
+        The estimator built from the config (:func:`magexp.run.runner.build`).
+
+    Raises
+    ------
+    MagexpError
+        An unknown name or option.
+    """
     path = CONF / "estimator" / f"{name}.yaml"
     if not path.is_file():
         known = sorted(p.stem for p in (CONF / "estimator").glob("*.yaml"))
@@ -546,7 +904,25 @@ def estimator_named(name: str, **overrides):
 
 
 def check_flag(value, key: str) -> bool:
-    """``value`` if it is a bool (``"yes"``, ``1`` or ``"no"`` are not: a string is always true), else one line."""
+    """``value`` if it is a bool (``"yes"``, ``1`` or ``"no"`` are not: a string is always true), else one line.
+
+    Parameters
+    ----------
+    value : object
+        The value given.
+    key : str
+        Its key, which the line names.
+
+    Returns
+    -------
+    bool
+        ``value``.
+
+    Raises
+    ------
+    MagexpError
+        A value that is not a bool.
+    """
     if not isinstance(value, (bool, np.bool_)):
         raise MagexpError(f"{key}={value!r} is not allowed: give {key}=true or {key}=false")
     return bool(value)

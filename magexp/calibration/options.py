@@ -33,7 +33,22 @@ CONFIG = CONF / "calibrate.yaml"
 
 
 def option(default, text: str, *, factory=None):
-    """A schema field: its ``default`` (or ``factory`` for a group) and its sentence ``text``."""
+    """A schema field: its ``default`` (or ``factory`` for a group) and its sentence ``text``.
+
+    Parameters
+    ----------
+    default : object
+        The default (None for a group).
+    text : str
+        The key's sentence (``--help``, the YAML comment).
+    factory : type or None
+        A group's dataclass.
+
+    Returns
+    -------
+    dataclasses.Field
+        The field.
+    """
     if factory is not None:
         return field(default_factory=factory, metadata={"help": text})
     return field(default=default, metadata={"help": text})

@@ -41,6 +41,13 @@ class Reference:
     record: dict | None = None  # a field model's name, generation and inputs (:meth:`ReferenceField.record`)
 
     def describe(self) -> str:
+        """The reference in one line, as the summary prints it.
+
+        Returns
+        -------
+        str
+            The mean total and its source, or how it was estimated.
+        """
         mean = float(np.mean(self.total))
         if self.estimated:
             return (f"none given: estimated as the mean calibrated magnitude, scale fixed to the radius of the "
@@ -87,14 +94,41 @@ class Calibration:
 
     @property
     def name(self) -> str:
+        """The recording's file name (a loaded calibration's: the one it was made from).
+
+        """
         return self.recording.name if self.recording is not None else Path(self.saved["recording"]).name
 
     @property
     def model(self) -> str:
+        """The model fitted (``report['model']``: ``sphere``, ``diagonal``, ``full`` or ``gyro``).
+
+        """
         return self.report.get("model", "full")
 
     def apply(self, readings) -> np.ndarray:
-        """``B = W (r - o)`` of raw ``readings`` (``(N, 3)`` or ``(3,)``, the recording's unit)."""
+        """``B = W (r - o)`` of raw ``readings`` (``(N, 3)`` or ``(3,)``, the recording's unit).
+
+        .. math:: \\mathbf B_i = W (\\mathbf r_i - \\mathbf o)
+
+        the calibration of every problem (:mod:`magexp.problems`; Yuan 2018's ``W = S^{-1}``, ``o = b``), whose
+        total-field RMS against the reference is Ding 2024's eq 18.
+
+        Parameters
+        ----------
+        readings : array_like
+            ``(N, 3)`` or ``(3,)`` raw readings, the recording's unit.
+
+        Returns
+        -------
+        numpy.ndarray
+            The calibrated field ``B``, shape of ``readings``, in :attr:`field_unit`.
+
+        Raises
+        ------
+        MagexpError
+            Readings of another shape.
+        """
         r = readings_array(readings)
         if r.shape[-1:] != (3,) or r.ndim > 2:
             raise MagexpError(f"readings of shape {r.shape} are not allowed: give (N, 3) or (3,) raw readings")
@@ -102,12 +136,46 @@ class Calibration:
 
     def save(self, path, *, overwrite: bool = False) -> Path:
         """Write ``calibration.json`` content (versioned, with provenance) to ``path``; an existing
-        file is refused in one line unless ``overwrite``. :meth:`load` reads it back exactly."""
+        file is refused in one line unless ``overwrite``. :meth:`load` reads it back exactly.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file to write.
+        overwrite : bool
+            Replace an existing file.
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        MagexpError
+            An existing file without ``overwrite``.
+        """
         return save_parameters(self, path, overwrite=overwrite)
 
     @classmethod
     def load(cls, path) -> "Calibration":
-        """A :class:`Calibration` from a ``calibration.json`` (:meth:`save`, ``magexp calibrate``)."""
+        """A :class:`Calibration` from a ``calibration.json`` (:meth:`save`, ``magexp calibrate``).
+
+        Parameters
+        ----------
+        path : str or Path
+            A ``calibration.json``.
+
+        Returns
+        -------
+        Calibration
+            The calibration, without its recording.
+
+        Raises
+        ------
+        MagexpError
+            A file that is not a readable calibration.
+        """
         data = read_parameters(path)
         ref = data["reference"]
         reference = Reference(np.array([ref["total"]]), ref["source"], ref["estimated"], ref.get("unit"),
@@ -128,17 +196,54 @@ class Calibration:
                 f"{held}{state}; B = W (r - o), r in {self.unit}, B in {self.field_unit}>")
 
     def summary(self) -> str:
-        """The printed summary of ``magexp calibrate`` (the key numbers, one per line)."""
+        """The printed summary of ``magexp calibrate`` (the key numbers, one per line).
+
+        Returns
+        -------
+        str
+            ``key  value`` lines.
+        """
         return table(summary(self))
 
     def plot(self):
-        """The before/after figure (:mod:`magexp.calibration.figure`); returns the matplotlib Figure."""
+        """The before/after figure (:mod:`magexp.calibration.figure`); returns the matplotlib Figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        MagexpError
+            A loaded calibration (no readings).
+        """
         if self.recording is None:
             raise MagexpError("plot() is not allowed for a loaded calibration: it has no readings; calibrate the "
                               "recording again, or plot cal.apply(readings) yourself")
         return figure(self)
 
     def export(self, target: str, path=None, **options) -> Path:
-        """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`)."""
+        """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`).
+
+        Parameters
+        ----------
+        target : str
+            ``ardupilot``, ``px4``, ``ros`` or ``c``.
+        path : str, Path or None
+            The folder or file (None: the working folder).
+        **options
+            The target's options (:func:`magexp.calibration.export.options_of`).
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        MagexpError
+            A refused export.
+        """
         return export(self, target, path, **options)
 
