@@ -72,7 +72,7 @@ def field_keys(cfg) -> dict:
     Parameters
     ----------
     cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+        The command's config; its ``field.*`` and ``igrf.*`` keys are read.
 
     Returns
     -------
@@ -105,10 +105,10 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
 
     Parameters
     ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    cfg
+        As in :func:`run`.
     rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
+        The recording, whose log may give the place and date (its GPS).
 
     Returns
     -------
@@ -134,7 +134,8 @@ def run(cfg) -> Calibration:
     Parameters
     ----------
     cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`), checked here first
+        (:func:`check_options`).
 
     Returns
     -------
@@ -232,10 +233,10 @@ def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
 
     Parameters
     ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    cfg
+        As in :func:`run`.
     rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
+        The recording: its unit, and a ULog's calibration slot.
 
     Returns
     -------
@@ -269,7 +270,7 @@ def export_options(cfg, target: str, rec: Recording) -> dict:
     target : str
         The export target.
     rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
+        The recording whose calibration is exported (a ULog's slot: ``meta["calibration_slot"]``).
 
     Returns
     -------
@@ -330,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
     Parameters
     ----------
     argv : list of str or None
-        The arguments (None: ``sys.argv[1:]``).
+        The arguments after ``calibrate`` (None: ``sys.argv[1:]``).
 
     Returns
     -------

@@ -137,12 +137,8 @@ def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.nd
 
     Parameters
     ----------
-    raw : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    calibrated : numpy.ndarray
-        ``(N, 3)`` calibrated readings.
-    reference : numpy.ndarray
-        ``(N,)`` reference totals.
+    raw, calibrated, reference
+        As :func:`magnitudes` (every reading: :func:`drawn` chooses those drawn).
     unit : str
         The calibrated field's unit.
     title : str

@@ -151,7 +151,7 @@ def attitude_of(rec: Recording) -> np.ndarray | None:
     Parameters
     ----------
     rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
+        A recording with angles or a gyroscope (or neither).
 
     Returns
     -------
@@ -167,12 +167,8 @@ def recording_dataset(rec: Recording, reference: Reference, objective: str) -> D
 
     Parameters
     ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    reference : Reference
-        The reference total field (:func:`reference_of`).
-    objective : str
-        ``scalar`` or ``vector``.
+    rec, reference, objective
+        As in :func:`heldout`.
 
     Returns
     -------
@@ -197,10 +193,8 @@ def gyro_dataset(rec: Recording, reference: Reference) -> Dataset:
 
     Parameters
     ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    reference : Reference
-        The reference total field (:func:`reference_of`).
+    rec, reference
+        As in :func:`heldout`.
 
     Returns
     -------
@@ -272,10 +266,8 @@ def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> d
 
     Parameters
     ----------
-    raw : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    calibrated : numpy.ndarray
-        ``(N, 3)`` calibrated readings.
+    raw, calibrated
+        As :func:`noise_of`.
     reference : numpy.ndarray
         ``(N,)`` reference total per reading.
 
@@ -328,18 +320,8 @@ def select_model(rec: Recording, estimator, objective: str, reference: Reference
 
     Parameters
     ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    estimator : estimator
-        The estimator object (``fit(problem, *, rng)``).
-    objective : str
-        ``scalar`` or ``vector``.
-    reference : Reference
-        The reference total field (:func:`reference_of`).
-    folds : int
-        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
-    rng : numpy.random.Generator or None
-        The estimator's random generator.
+    rec, estimator, objective, reference, folds, rng
+        As in :func:`heldout`.
     margin : float
         ``auto_margin``.
 
@@ -386,14 +368,8 @@ def check_converged(rec: Recording, estimator, objective: str, model: str, resul
 
     Parameters
     ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    estimator : estimator
-        The estimator object (``fit(problem, *, rng)``).
-    objective : str
-        ``scalar`` or ``vector``.
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    rec, estimator, objective, model
+        As in :func:`heldout`.
     result : FitResult
         The fit's result.
     calibrated : numpy.ndarray
@@ -422,20 +398,8 @@ def measured_heldout(rec: Recording, estimator, objective: str, reference: Refer
 
     Parameters
     ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    estimator : estimator
-        The estimator object (``fit(problem, *, rng)``).
-    objective : str
-        ``scalar`` or ``vector``.
-    reference : Reference
-        The reference total field (:func:`reference_of`).
-    folds : int
-        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
-    rng : numpy.random.Generator or None
-        The estimator's random generator.
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    rec, estimator, objective, reference, folds, rng, model
+        As in :func:`heldout`.
     held : dict
         ``{model: heldout record}`` measured by ``model=auto`` (empty otherwise).
     checks : bool
@@ -462,20 +426,12 @@ def check_heldout_converged(rec: Recording, estimator, objective: str, full: dic
 
     Parameters
     ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    estimator : estimator
-        The estimator object (``fit(problem, *, rng)``).
-    objective : str
-        ``scalar`` or ``vector``.
+    rec, estimator, objective
+        As in :func:`heldout`.
     full : dict
         :func:`heldout`'s record of ``model=full`` (empty: nothing checked).
-    reference : Reference
-        The reference total field (:func:`reference_of`).
-    folds : int
-        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
-    rng : numpy.random.Generator or None
-        The estimator's random generator.
+    reference, folds, rng
+        As in :func:`heldout`.
 
     Raises
     ------
@@ -496,10 +452,8 @@ def closed_form_spread(rec: Recording, reference: Reference, dataset: Dataset) -
 
     Parameters
     ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    reference : Reference
-        The reference total field (:func:`reference_of`).
+    rec, reference
+        As in :func:`heldout`.
     dataset : Dataset
         The recording's dataset (:func:`recording_dataset`).
 

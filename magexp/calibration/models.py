@@ -87,10 +87,8 @@ def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, n
 
     Parameters
     ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    radius : float
-        The reference total.
+    readings, radius
+        As :func:`fit_diagonal`.
 
     Returns
     -------

@@ -29,7 +29,7 @@ def parameters_of(rec: Recording) -> str:
     Parameters
     ----------
     rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
+        A log's recording whose reader undid an onboard calibration.
 
     Returns
     -------

@@ -140,20 +140,13 @@ class Calibration:
 
         Parameters
         ----------
-        path : str or Path
-            The file to write.
-        overwrite : bool
-            Replace an existing file.
+        path, overwrite
+            As :func:`magexp.calibration.write.save_parameters` (which writes it).
 
         Returns
         -------
         Path
-            The file written.
-
-        Raises
-        ------
-        MagexpError
-            An existing file without ``overwrite``.
+            ``path``.
         """
         return save_parameters(self, path, overwrite=overwrite)
 
@@ -163,8 +156,8 @@ class Calibration:
 
         Parameters
         ----------
-        path : str or Path
-            A ``calibration.json``.
+        path
+            As :func:`magexp.calibration.write.read_parameters` (which reads and checks it).
 
         Returns
         -------
@@ -238,12 +231,12 @@ class Calibration:
         Returns
         -------
         Path
-            The file written.
+            The firmware's file, written atomically.
 
         Raises
         ------
         MagexpError
-            A refused export.
+            An export the target refuses (:func:`magexp.calibration.export.render`), in one line.
         """
         return export(self, target, path, **options)
 
