@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.calibration.fit import MIN_READINGS, attitude_of, calibrate_recording
+from magexp.calibration.fit import calibrate_recording
+from magexp.calibration.inputs import MIN_READINGS
+from magexp.calibration.inputs import attitude_of
 from magexp.scenarios.search import search_box
 from magexp.calibration.write import FILES, check_out
 from magexp.errors import MagexpError
@@ -225,7 +227,7 @@ def test_units_are_carried():
 
 
 def test_reference_order_and_unit_agreement(tmp_path):
-    from magexp.calibration.fit import reference_of
+    from magexp.calibration.inputs import reference_of
 
     rows = np.column_stack([np.ones((12, 3)), np.arange(50.0, 62.0)])
     body = "\n".join(",".join(map(str, r)) for r in rows) + "\n"

@@ -1,10 +1,12 @@
 """Calibrating a user's recording: ``magexp calibrate`` and :func:`magexp.calibrate`, in three rooms.
 
 * **The API**: :mod:`~magexp.calibration.api` (:func:`~magexp.calibration.api.calibrate`, its keyword
-  parameters explicit) and :mod:`~magexp.calibration.result` (``Calibration``, what it returns, and
-  ``Reference``, the reference total field).
-* **The pipeline** (read → fit → checks → outputs): :mod:`~magexp.calibration.fit` (the fit, the held-out
-  regions, the quality report), :mod:`~magexp.calibration.models` (``model=auto``: sphere, diagonal, full or,
+  parameters explicit) and :mod:`~magexp.calibration.result` (``Calibration``, what it returns, holding
+  the ``Reference`` of :mod:`~magexp.calibration.inputs`).
+* **The pipeline** (read → fit → checks → outputs): :mod:`~magexp.calibration.inputs` (the reference total
+  field and the recording's dataset), :mod:`~magexp.calibration.fit` (the pipeline itself, the fit and the
+  held-out regions), :mod:`~magexp.calibration.quality` (spread, noise, the identifiability report),
+  :mod:`~magexp.calibration.models` (``model=auto``: sphere, diagonal, full or,
   with a gyroscope, gyro-aided, chosen by held-out spread), :mod:`~magexp.calibration.checks` (the acceptance
   gate: degenerate data, failed fits and implausible calibrations, refused in one line),
   :mod:`~magexp.calibration.onboard` (a log's onboard calibration), :mod:`~magexp.calibration.write` (the

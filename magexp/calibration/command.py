@@ -19,7 +19,8 @@ from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, check_counts_n
                                       render as render_export)
 from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
 from magexp.calibration.options import help_text
-from magexp.calibration.result import Calibration, Reference
+from magexp.calibration.inputs import Reference
+from magexp.calibration.result import Calibration
 from magexp.calibration.write import check_out, summary, table, write
 from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
 from magexp.core.recording import UNITS, Recording

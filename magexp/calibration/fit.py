@@ -1,18 +1,13 @@
-"""Calibrate a recording or an array of readings, and say how good the calibration is.
-
-Command line (its own primary config, ``conf/calibrate.yaml``)::
-
-    magexp calibrate data.path=mine.csv [data.unit=uT] [estimator=lm] [out=folder] [KEY=VALUE ...]
-
-Python::
-
-    import magexp
-    cal = magexp.calibrate(readings, unit="uT", estimator="ellipsoid")   # (N, 3) array or DataFrame
-    cal.w, cal.offset, cal.report                                         # B = W (reading - offset)
+"""The pipeline of a calibration: read → fit → checks → outputs (:func:`calibrate_recording`), and say how
+good the calibration is. The API (:func:`magexp.calibration.api.calibrate`) and the command
+(:mod:`magexp.calibration.command`, ``magexp calibrate``) both run it; its stages: the inputs
+(:mod:`magexp.calibration.inputs`), the fit and the held-out regions (here), the quality
+(:mod:`magexp.calibration.quality`), the refusals (:mod:`magexp.calibration.checks`), the outputs
+(:mod:`magexp.calibration.write`).
 
 Flow (the same as a simulated run, with a recording instead of a scenario)::
 
-    recording (magexp.core.recordings) ──► dataset: readings, reference total, attitudes (if any)
+    recording (magexp.core.recordings) ──► dataset (magexp.core.recording.recording_dataset): readings, reference, attitudes
     dataset + objective (scalar | vector) + search box from the data ──► problem
     estimator.fit(problem, rng=...) ──► W, o ──► canonical form, quality (magexp.core.identifiability), k-fold
 
@@ -21,7 +16,7 @@ column, ``# reference_total:``, the norm of ``# field:``, the ``field.model`` (`
 at ``field.latitude``, ``field.longitude``, ``field.altitude_km``, ``field.date``, each taken from
 the log's GPS when not given (:mod:`magexp.core.field_model`; ``igrf.*``: the older names of these
 keys with ``field.model=igrf``); a raw-count recording is then calibrated to the model's total in nT. With none, the reference is *estimated*: the fit uses ``R0``, the radius of
-the sphere fitted to the raw readings (:func:`centroid_radius`), as the radius, then ``W`` is rescaled so that
+the sphere fitted to the raw readings (:func:`~magexp.scenarios.search.centroid_radius`), as the radius, then ``W`` is rescaled so that
 the mean calibrated magnitude equals ``R0``. The shape of the calibration (and the spread
 std/mean) does not depend on this choice; the absolute scale does, and the output says so.
 
@@ -54,11 +49,14 @@ from omegaconf import OmegaConf
 from magexp.calibration import models as models_
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
-from magexp.calibration.result import Calibration, Reference
+from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
+                                      recording_dataset, reference_of)
+from magexp.calibration.quality import gyro_extras, quality, report_of
+from magexp.calibration.result import Calibration
 from magexp.core.dataset import Dataset
-from magexp.core.identifiability import canonical, coverage, direction_regions, identifiability, spread
-from magexp.core.recording import UNITS, Recording, evenly_spaced, recording_dataset as dataset_of
-from magexp.errors import LARGEST, MagexpError
+from magexp.core.identifiability import canonical, coverage, direction_regions, spread
+from magexp.core.recording import UNITS, Recording
+from magexp.errors import MagexpError
 from magexp.estimators.base import check_applies
 from magexp.estimators.result import FitResult
 from magexp.paths import CONF
@@ -69,19 +67,8 @@ from magexp.run.guard import check_folds
 from magexp.run.runner import build
 from magexp.scenarios.search import centroid_radius, fit_sphere, search_box
 
-#: Objectives a recording can be calibrated with.
-OBJECTIVES = ("scalar", "vector")
-#: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
-MIN_READINGS = 12
 #: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full``, ``gyro`` and ``auto``.
 MODELS = models_.MODELS
-#: How each objective's ``W`` is reported.
-FORMS = {"scalar": "symmetric positive-definite polar factor (W = Q P, reported P = (W^T W)^(1/2)): a total-field "
-                   "fit cannot see a rotation of W",
-         "vector": "as fitted (the vector objective determines the rotation)",
-         "sphere": "s I (model=sphere: offset and one scale only)",
-         "diagonal": "diag(w1, w2, w3) (model=diagonal: offset and one scale per axis)",
-         "gyro": "as fitted (model=gyro: the gyro-aided fit determines the rotation into the gyroscope's axes)"}
 #: The estimator of ``model=gyro`` (:mod:`magexp.calibration.models`): Levenberg-Marquardt from the gyro-aided
 #: problem's two-stage start, whatever ``estimator`` is, its Jacobian from one stacked evaluation
 #: (:func:`magexp.estimators.lm.stacked_jacobian`); at most 200 residual evaluations at a tolerance of
@@ -99,189 +86,6 @@ def gyro_estimator():
         The estimator, built fresh.
     """
     return target_class("estimator", "lm")(**GYRO_ESTIMATOR)
-#: ``model=gyro`` fits at most this many readings, evenly spaced in time (the gyroscope integrated between
-#: them), as the ``real_hmc5883l_*`` scenarios do (``n_readings: 300``): a documented default that bounds
-#: the work of its 17-parameter fit (each held-out fold and the final fit) whatever the recording's length.
-GYRO_READINGS = 300
-
-
-
-def reference_of(rec: Recording, override=None) -> Reference:
-    """The reference total field of ``rec`` (see the module docstring for the order).
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    override : float, str or None
-        ``data.reference_total`` (the recording's unit), else None.
-
-    Returns
-    -------
-    Reference
-        The total per reading, its source, and whether it was estimated.
-
-    Raises
-    ------
-    MagexpError
-        ``override`` not a number > 0 and <= LARGEST.
-    """
-    n = rec.n
-    if override is not None:
-        try:
-            value = float("nan") if isinstance(override, bool) else float(override)
-        except (TypeError, ValueError):
-            value = float("nan")
-        if not (np.isfinite(value) and 0 < value <= LARGEST):
-            raise MagexpError(f"data.reference_total={override!r} is not allowed: it must be a number > 0 and "
-                              f"<= {LARGEST:g}")
-        return Reference(np.full(n, value), "data.reference_total")
-    if rec.total is not None:
-        return Reference(np.asarray(rec.total, float), "the total column")
-    if rec.reference_total is not None:
-        return Reference(np.full(n, rec.reference_total), "'# reference_total:'")
-    if rec.field is not None:
-        return Reference(np.full(n, float(np.linalg.norm(rec.field))), "the norm of '# field:'")
-    return Reference(np.full(n, centroid_radius(rec.readings)), "estimated", estimated=True)
-
-
-def attitude_of(rec: Recording) -> np.ndarray | None:
-    """Navigation -> sensor rotations ``(N, 3, 3)`` (:meth:`Recording.attitude`), or None.
-
-    Parameters
-    ----------
-    rec : Recording
-        A recording with angles or a gyroscope (or neither).
-
-    Returns
-    -------
-    numpy.ndarray or None
-        The rotations, or None without attitudes or a gyroscope.
-    """
-    return rec.attitude()
-
-
-def recording_dataset(rec: Recording, reference: Reference, objective: str) -> Dataset:
-    """The :class:`Dataset` of ``rec`` for ``objective`` (attitudes and field for ``vector``): the one path
-    from a recording to a Dataset, :func:`magexp.core.recording.recording_dataset`, which the scenarios take too.
-
-    Parameters
-    ----------
-    rec, reference, objective
-        As in :func:`heldout`.
-
-    Returns
-    -------
-    Dataset
-        The readings with their reference totals (and attitudes and field).
-
-    Raises
-    ------
-    MagexpError
-        An objective not of :data:`OBJECTIVES`, or ``vector`` without attitudes and a field.
-    """
-    if objective not in OBJECTIVES:
-        raise MagexpError(f"objective={objective!r} is not allowed for magexp calibrate: choose one of "
-                          f"{', '.join(OBJECTIVES)}")
-    return dataset_of(rec, reference.total, objective)
-
-
-def gyro_dataset(rec: Recording, reference: Reference) -> Dataset:
-    """The :class:`Dataset` of ``model=gyro`` (:class:`~magexp.problems.gyro.GyroAidedCalibration`): the
-    readings (at most :data:`GYRO_READINGS`, evenly spaced), the reference total (the field's magnitude ``F``)
-    and the gyroscope's rotation increments between their times (:func:`magexp.core.geometry.preintegrate`).
-
-    Parameters
-    ----------
-    rec, reference
-        As in :func:`heldout`.
-
-    Returns
-    -------
-    Dataset
-        The dataset of :class:`~magexp.problems.gyro.GyroAidedCalibration`.
-
-    Raises
-    ------
-    MagexpError
-        A recording without a gyroscope.
-    """
-    if rec.gyro_rates() is None or rec.reading_times() is None:
-        models_.check_model("gyro", "scalar", gyro=False)
-    return dataset_of(rec, reference.total, "gyro", keep=evenly_spaced(rec.n, GYRO_READINGS))
-
-
-def check_size(rec: Recording) -> None:
-    """At least :data:`MIN_READINGS` readings.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-
-    Raises
-    ------
-    MagexpError
-        Fewer than :data:`MIN_READINGS` readings.
-    """
-    if rec.n < MIN_READINGS:
-        raise MagexpError(f"{rec.name}: {rec.n} readings is not allowed: a calibration needs at least "
-                          f"{MIN_READINGS} (the 12 parameters of W and the offset)")
-
-
-#: readings whose mean step from one to the next is below this fraction of their radius are a time series
-#: (:func:`noise_of`): the noise of neighbours is the sensor's; a shuffled set's steps are about 1.3 radii
-SERIES_STEP = 0.25
-
-
-def noise_of(raw: np.ndarray, calibrated: np.ndarray) -> float:
-    """The readings' own noise in the calibrated magnitude: the RMS of its second differences over
-    ``sqrt(6)`` (white noise of variance ``σ²`` has second differences of variance ``6 σ²``; a
-    calibration error varies slowly with the attitude and cancels there). 0 when the readings are not
-    a time series (their mean step over :data:`SERIES_STEP` of the raw radius), where neighbours are
-    not close in time. The gate's RMS check discounts it (:func:`magexp.calibration.checks.gate`): a
-    noisy sensor (the QMC5883L log: 6.04 % of 6.27 %) is not a bad calibration.
-
-    .. math:: \\hat\\sigma = \\sqrt{\\tfrac{1}{6}\\,\\overline{(|B|_{i+1} - 2|B|_i + |B|_{i-1})^2}}
-
-    Parameters
-    ----------
-    raw : numpy.ndarray
-        ``(N, 3)`` raw readings in time order.
-    calibrated : numpy.ndarray
-        ``(N, 3)`` the calibrated readings.
-
-    Returns
-    -------
-    float
-        ``sqrt(mean(Δ²|B|)² / 6)`` in the calibrated unit, or 0.
-    """
-    if len(raw) < 3 or np.linalg.norm(np.diff(raw, axis=0), axis=1).mean() > SERIES_STEP * centroid_radius(raw):
-        return 0.0
-    return float(np.sqrt(np.mean(np.diff(np.linalg.norm(calibrated, axis=1), 2) ** 2) / 6))
-
-
-def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> dict:
-    """Magnitude statistics before and after, the RMS against the reference and the readings' noise (:func:`noise_of`).
-
-    Parameters
-    ----------
-    raw, calibrated
-        As :func:`noise_of`.
-    reference : numpy.ndarray
-        ``(N,)`` reference total per reading.
-
-    Returns
-    -------
-    dict
-        ``mean_*``, ``std_*``, ``spread_*`` (std / mean), ``rms_*`` (of ``|B| - reference``) before and after, and
-        ``noise_after``.
-    """
-    before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
-    return {"mean_before": float(before.mean()), "std_before": float(before.std()), "spread_before": spread(before),
-            "rms_before": float(np.sqrt(np.mean((before - reference) ** 2))),
-            "mean_after": float(after.mean()), "std_after": float(after.std()), "spread_after": spread(after),
-            "rms_after": float(np.sqrt(np.mean((after - reference) ** 2))), "noise_after": noise_of(raw, calibrated)}
 
 
 def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",
@@ -563,90 +367,6 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
             "heldout_folds": len(tested)}
 
 
-#: the symmetric ``W``'s 6 unique entries, its upper triangle row by row: ``W11 W12 W13 W22 W23 W33``
-UPPER = np.triu_indices(3)
-
-
-def symmetric(upper) -> np.ndarray:
-    """The symmetric 3 x 3 matrix of its upper triangle ``upper`` (:data:`UPPER`'s order), each entry copied.
-
-    Parameters
-    ----------
-    upper : array_like of shape (6,)
-        ``[W11, W12, W13, W22, W23, W33]``.
-
-    Returns
-    -------
-    numpy.ndarray of shape (3, 3)
-        ``W`` with ``W21 = W12``, ``W31 = W13``, ``W32 = W23``.
-    """
-    w = np.empty((3, 3))
-    w[UPPER] = upper
-    w[UPPER[1], UPPER[0]] = upper
-    return w
-
-
-def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> dict:
-    """Standard errors, conditioning, undetermined combinations (:func:`magexp.core.identifiability.identifiability`)
-    of the reported parameters, over the residuals of the fit's own ``problem``
-    (:meth:`~magexp.problems.base.CalibrationProblem.residual_stack`): ``[s, o]`` (``W = s I``) for the
-    sphere model, the 6 upper entries of the symmetric ``W`` and ``o`` for the scalar objective,
-    ``[vec W, o]`` for the vector one, ``[vec W, o]`` and ``extra`` (the field direction and gyro bias
-    of the fit) for the gyro-aided model.
-
-    Parameters
-    ----------
-    objective : str
-        ``scalar`` or ``vector``.
-    w : numpy.ndarray
-        ``(3, 3)`` the reported ``W``.
-    o : numpy.ndarray
-        ``(3,)`` the offset.
-    problem : CalibrationProblem
-        The fit's own problem.
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
-    extra : array_like
-        The gyro-aided fit's further parameters (field direction, gyro bias).
-
-    Returns
-    -------
-    dict
-        :func:`magexp.core.identifiability.identifiability`'s report, with ``W_standard_errors``,
-        ``offset_standard_errors``, ``w_form`` and ``model``.
-    """
-    if model == "sphere":
-        theta = np.concatenate([[w[0, 0]], o])
-        names = ["s", "o1", "o2", "o3"]
-        to_problem = lambda t: problem.pack(t[0] * np.eye(3), t[1:])  # noqa: E731
-    elif model == "diagonal":
-        theta = np.concatenate([np.diag(w), o])
-        names = ["W11", "W22", "W33", "o1", "o2", "o3"]
-        to_problem = lambda t: problem.pack(np.diag(t[:3]), t[3:])  # noqa: E731
-    elif objective == "scalar":
-        theta = np.concatenate([w[UPPER], o])  # the 6 upper entries of the symmetric W, then o
-        names = [f"W{i + 1}{j + 1}" for i, j in zip(*UPPER)] + ["o1", "o2", "o3"]
-        to_problem = lambda t: problem.pack(symmetric(t[:6]), t[6:])  # noqa: E731
-    else:
-        theta = np.concatenate([w.ravel(), o, extra])
-        names = ([f"W{i + 1}{j + 1}" for i in range(3) for j in range(3)] + ["o1", "o2", "o3"]
-                 + problem.parameter_names()[12:])
-        to_problem = lambda t: np.concatenate([problem.pack(t[:9].reshape(3, 3), t[9:12]), t[12:]])  # noqa: E731
-    out = identifiability(lambda thetas: problem.residual_stack(thetas, of=to_problem), theta, names)
-    se = out["standard_errors"]
-    if model == "sphere":
-        out["W_standard_errors"] = (np.eye(3) * se["s"]).tolist()
-    elif model == "diagonal":
-        out["W_standard_errors"] = np.diag([se["W11"], se["W22"], se["W33"]]).tolist()
-    else:
-        out["W_standard_errors"] = [[se[f"W{min(i, j) + 1}{max(i, j) + 1}"] if objective == "scalar"
-                                     else se[f"W{i + 1}{j + 1}"] for j in range(3)] for i in range(3)]
-    out["offset_standard_errors"] = [se["o1"], se["o2"], se["o3"]]
-    out["w_form"] = FORMS[model if model in FORMS else objective]
-    out["model"] = model
-    return out
-
-
 @says_onboard
 def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar", reference_total=None,
                         folds: int = 6, rng: np.random.Generator, checks: bool = True,
@@ -751,35 +471,6 @@ def numpy_path(compiled: bool | None, estimator) -> bool:
     if compiled is None:
         return not getattr(estimator, "iterative", True) and "MAGEXP_NUMBA" not in os.environ
     return not check_flag(compiled, "compiled")
-
-
-def gyro_extras(model: str, problem, result) -> dict:
-    """What the gyro-aided model reports beside ``W`` and ``o`` (nothing for the others): the field
-    direction (rad) and the gyroscope's bias (deg/s) it fitted, and ``vector_rms``, the RMS of
-    ``R_jᵀ h - W (r_j - o)`` over the readings the fit used (against the field the gyroscope carries to
-    each reading; the recording's unit).
-
-    Parameters
-    ----------
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
-    problem : GyroAidedCalibration
-        The gyro-aided problem.
-    result : FitResult
-        Its fit.
-
-    Returns
-    -------
-    dict
-        ``field_azimuth``, ``field_elevation`` (rad), ``gyro_bias_deg_s``, ``vector_rms``; {} for another model.
-    """
-    if model != "gyro":
-        return {}
-    x = result.x
-    residual = problem.residual_swarm(x[None])[0]
-    return {"field_azimuth": float(x[12]), "field_elevation": float(x[13]),
-            "gyro_bias_deg_s": [float(v) for v in x[14:17]],
-            "vector_rms": float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))}
 
 
 def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: dict, *, checks: bool,

@@ -1,6 +1,6 @@
 """What a calibration is: :class:`Calibration`, the fitted ``B = W (reading - offset)`` with how good it is
-(what :func:`magexp.calibrate` returns, what ``calibration.json`` holds), and :class:`Reference`, the
-reference total field it was fitted to. Made by the pipeline (:mod:`magexp.calibration.fit`); written and
+(what :func:`magexp.calibrate` returns, what ``calibration.json`` holds), with the reference total field it
+was fitted to (:class:`magexp.calibration.inputs.Reference`). Made by the pipeline (:mod:`magexp.calibration.fit`); written and
 read back by :mod:`magexp.calibration.write`.
 """
 
@@ -12,47 +12,13 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.export import export
+from magexp.calibration.inputs import Reference
 from magexp.calibration.write import figure, read_parameters, save_parameters, summary, table
 from magexp.core.recording import Recording
 from magexp.errors import MagexpError
 from magexp.estimators.result import FitResult
 from magexp.run.guard import readings_array
 from magexp.scenarios.search import SearchBox
-
-
-@dataclass
-class Reference:
-    """The reference total field of a calibration.
-
-    Attributes
-    ----------
-    total : (N,) reference total per reading (in the recording's unit).
-    source : where it comes from (``data.reference_total``, ``total column``, ``IGRF-14 at ...``).
-    estimated : True when no reference was given and the scale was fixed from the data.
-    unit : the reference's unit when it differs from the recording's (a raw-count recording
-        calibrated to a field model's total in nT); None: the recording's.
-    record : the field model, generation and inputs it came from, or None.
-    """
-
-    total: np.ndarray
-    source: str
-    estimated: bool = False
-    unit: str | None = None  # the reference's unit when it is not the recording's (counts calibrated to nT)
-    record: dict | None = None  # a field model's name, generation and inputs (:meth:`ReferenceField.record`)
-
-    def describe(self) -> str:
-        """The reference in one line, as the summary prints it.
-
-        Returns
-        -------
-        str
-            The mean total and its source, or how it was estimated.
-        """
-        mean = float(np.mean(self.total))
-        if self.estimated:
-            return (f"none given: estimated as the mean calibrated magnitude, scale fixed to the radius of the "
-                    f"sphere fitted to the raw readings, {mean:.6g}")
-        return f"{mean:.6g} from {self.source}"
 
 
 @dataclass

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.calibration.export import FILE_NAMES, of_calibration
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
@@ -280,8 +281,6 @@ def export_name(target: str) -> str:
     str
         Its file name.
     """
-    from magexp.calibration.export import FILE_NAMES  # lazy: the export targets only when exporting
-
     return FILE_NAMES[target]
 
 
@@ -330,8 +329,6 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
     check_out(out_dir, overwrite=overwrite, export=export)
     rendered = None
     if export:
-        from magexp.calibration.export import of_calibration  # lazy: see export_name
-
         rendered = of_calibration(cal, export, **(export_options or {}))
     keys = ("parameters", "readings", *(("figure", "figure_vector") if draw else ()))
     paths = {key: out_dir / FILES[key] for key in keys}
