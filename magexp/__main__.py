@@ -3,7 +3,7 @@
 ==============================  ==================================================================
 ``magexp [KEY=VALUE ...]``      one run, ``-m`` a sweep, ``--cfg job``, ``--help``, ``--version``
                                 (:mod:`magexp.run.command`)
-``magexp calibrate KEY=...``    calibrate a recording (:mod:`magexp.calibration.fit`)
+``magexp calibrate KEY=...``    calibrate a recording (:mod:`magexp.calibration.command`)
 ``magexp reproduce PAPER ...``  regenerate a paper's figures, tables and the report
                                 (:mod:`magexp.artifacts.reproduce`; what ``make reproduce`` runs)
 ``magexp verify [OPTIONS]``     compare a reproduction with the committed results
@@ -29,7 +29,7 @@ def command(name: str):
     is called: a single run does not import the reproduction's pandas and matplotlib or the
     calibration's readers (measured: ``python -m magexp --help`` 0.6 s instead of 1.4 s)."""
     if name == "calibrate":
-        from magexp.calibration.fit import command as main
+        from magexp.calibration.command import command as main
     elif name == "reproduce":
         from magexp.artifacts.reproduce import command as main
     elif name == "verify":

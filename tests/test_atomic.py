@@ -66,7 +66,7 @@ def test_a_figure_killed_while_drawing_keeps_the_previous_one(tmp_path, monkeypa
 
 def test_a_calibration_interrupted_while_writing_leaves_no_file(tmp_path, monkeypatch):
     import magexp.calibration.write as output
-    from magexp.calibration.fit import calibrate
+    from magexp import calibrate
 
     rng = np.random.default_rng(0)
     u = rng.normal(size=(200, 3))
@@ -88,7 +88,7 @@ def test_the_calibrated_table_is_written_in_blocks_as_one(tmp_path, monkeypatch)
     import io
 
     import magexp.calibration.write as output
-    from magexp.calibration.fit import calibrate
+    from magexp import calibrate
 
     rng = np.random.default_rng(1)
     u = rng.normal(size=(301, 3))

@@ -832,7 +832,7 @@ def test_utf8_byte_order_mark_is_accepted(workdir, cli):
     assert proc.returncode == 0, proc.stderr
     assert "fit_rms" in (workdir / "run" / "metrics.csv").read_text()
     (workdir / "bom.txt").write_bytes(b"\xef\xbb\xbf" + PLAIN.encode())  # plain numbers, with a BOM
-    from magexp.calibration.fit import calibrate_config
+    from magexp.calibration.command import calibrate_config
     from magexp.core.recordings import load_recording
 
     rec = load_recording("bom.txt", unit=calibrate_config(["data.unit=µT"]).data.unit)  # µT: the alias of uT

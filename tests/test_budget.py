@@ -237,7 +237,7 @@ def test_a_calibration_over_a_limit_is_refused_before_a_fit(cli, work, started, 
 
 
 def test_folds_times_fits_over_the_work_limit_is_refused(work, started, monkeypatch):
-    from magexp.calibration.fit import calibrate
+    from magexp import calibrate
 
     monkeypatch.setenv("MAGEXP_MAX_WORK", "1e9")
     data = recording(work / "rec.csv", 2000)

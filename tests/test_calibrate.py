@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from magexp.calibration.fit import MIN_READINGS, attitude_of, calibrate_recording
+from magexp.calibration.fit import calibrate_recording
+from magexp.calibration.inputs import MIN_READINGS
+from magexp.calibration.inputs import attitude_of
 from magexp.scenarios.search import search_box
 from magexp.calibration.write import FILES, check_out
 from magexp.errors import MagexpError
@@ -34,8 +36,8 @@ def magexp(cli):
     """``magexp(*args, cwd=...)``: ``magexp calibrate ARGS`` in-process (the ``cli`` fixture of conftest.py)."""
     import importlib.util
 
-    if importlib.util.find_spec("magexp.calibration.fit") is None:
-        pytest.skip("the calibrate command (magexp.calibration.fit) is not in this build")
+    if importlib.util.find_spec("magexp.calibration.command") is None:
+        pytest.skip("the calibrate command (magexp.calibration.command) is not in this build")
     return lambda *args, cwd: cli("calibrate", *args, cwd=cwd)
 
 
@@ -207,7 +209,7 @@ def test_estimator_that_does_not_apply_is_one_line(tmp_path):
 def test_units_are_carried():
     """A calibration is in its readings' unit: the same readings in uT, in mG (x10) and in raw counts
     give the same offset in each unit; the factors to nT are the SI ones."""
-    from magexp.calibration.fit import calibrate as calibrate_api
+    from magexp import calibrate as calibrate_api
     from magexp.core.recordings import RAW_UNITS
 
     assert UNITS == {"nT": 1.0, "uT": 1e3, "mG": 100.0, "G": 1e5, "T": 1e9} and "counts" in RAW_UNITS
@@ -225,7 +227,7 @@ def test_units_are_carried():
 
 
 def test_reference_order_and_unit_agreement(tmp_path):
-    from magexp.calibration.fit import reference_of
+    from magexp.calibration.inputs import reference_of
 
     rows = np.column_stack([np.ones((12, 3)), np.arange(50.0, 62.0)])
     body = "\n".join(",".join(map(str, r)) for r in rows) + "\n"
@@ -243,9 +245,10 @@ def test_reference_order_and_unit_agreement(tmp_path):
 
 
 def test_a_closed_form_calibration_in_a_longer_process_leaves_the_compiled_kernels_on(tmp_path, magexp, monkeypatch):
-    """The command computes a closed-form fit's residuals with numpy (MAGEXP_NUMBA=0 inside it), and
-    leaves the process as it found it: run in a notebook or a test worker, it once turned numba off
-    for everything after it (an order-dependent failure of the kernels' tests)."""
+    """The command computes a closed-form fit's residuals with numpy (its ``compiled`` choice, not an
+    environment variable: none is set inside it), and leaves the process as it found it: run in a notebook
+    or a test worker, it once turned numba off for everything after it (an order-dependent failure of the
+    kernels' tests)."""
     import os
 
     from magexp.problems import kernels
@@ -256,7 +259,7 @@ def test_a_closed_form_calibration_in_a_longer_process_leaves_the_compiled_kerne
         assert kernels.compiled() is not None
         seen = []
         real = calibrate_recording
-        monkeypatch.setattr("magexp.calibration.fit.calibrate_recording",
+        monkeypatch.setattr("magexp.calibration.command.calibrate_recording",
                             lambda *a, **k: seen.append((os.environ.get("MAGEXP_NUMBA"), kernels.compiled())) or real(*a, **k))
         rng = np.random.default_rng(0)
         directions = rng.normal(size=(400, 3))
@@ -266,7 +269,7 @@ def test_a_closed_form_calibration_in_a_longer_process_leaves_the_compiled_kerne
         write_recording(path, readings + rng.normal(scale=0.05, size=readings.shape), meta=["# unit: uT"])
         proc = magexp(f"data.path={path}", "estimator=ellipsoid", f"out={tmp_path / 'o'}", cwd=tmp_path)
         assert proc.returncode == 0, proc.stderr
-        assert seen == [("0", None)]  # numpy inside the command
+        assert seen == [(None, None)]  # numpy inside the command, the environment untouched
         assert "MAGEXP_NUMBA" not in os.environ and kernels.compiled() is not None  # as it was, after it
     finally:  # the worker's own MAGEXP_NUMBA back, and the kernels' choice made again from it
         monkeypatch.undo()

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import magexp
-from magexp.calibration.fit import Calibration, main
+from magexp import Calibration
+from magexp.calibration.command import main
 from magexp.core.geometry import random_rotations
 from magexp.errors import MagexpError
 from magexp.paths import SHARED_DATA
@@ -101,7 +102,7 @@ def test_import_magexp_sets_no_thread_variables():
     import sys
 
     env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
-    code = ("import os, magexp, magexp.calibration.fit; "
+    code = ("import os, magexp, magexp.calibration.command; "
             "print(sorted(k for k in os.environ if k.endswith('_NUM_THREADS')))")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
@@ -148,3 +149,67 @@ def test_bad_new_keys_are_one_line_nothing_written(tmp_path, capsys, args, messa
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0], err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_public_api_is_importable_from_the_root():
+    """``from magexp import calibrate, Calibration, FitResult``: the API's own objects, not forwarders."""
+    import inspect
+
+    from magexp import FitResult, calibrate
+    from magexp.calibration import api, result
+    from magexp.estimators import result as estimator_result
+
+    assert calibrate is api.calibrate and Calibration is result.Calibration and FitResult is estimator_result.FitResult
+    assert {"calibrate", "Calibration", "FitResult"} <= set(dir(magexp))
+    params = inspect.signature(calibrate).parameters
+    keywords = [n for n, p in params.items() if p.kind is p.KEYWORD_ONLY]
+    assert keywords[:12] == ["unit", "estimator", "objective", "reference_total", "folds", "seed", "checks", "model",
+                             "accept", "gate", "auto_margin", "compiled"]
+    with pytest.raises(AttributeError, match="no attribute 'calibrat'"):
+        magexp.calibrat  # noqa: B018
+
+
+def test_the_api_and_the_command_take_their_defaults_from_one_schema():
+    """The defaults of ``calibrate``'s keywords are the schema's, and ``conf/calibrate.yaml`` is the schema's text."""
+    import inspect
+
+    from magexp.calibration.options import CONFIG, DEFAULTS, ESTIMATOR, yaml_text
+
+    params = inspect.signature(magexp.calibrate).parameters
+    for key in ("objective", "folds", "seed", "model", "accept", "auto_margin"):
+        assert params[key].default == getattr(DEFAULTS, key), key
+    assert params["estimator"].default == ESTIMATOR
+    assert CONFIG.read_text() == yaml_text(), "run: python -m magexp.calibration.options --write"
+
+
+def test_the_help_gives_each_key_its_type(capsys):
+    assert main(["--help"]) == 0
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line.split()}
+    assert lines["seed"].split()[1:3] == ["int", "0:"]
+    assert lines["gate.scale_range"].split()[1:3] == ["[float,", "float]"]
+    assert "str or null" in lines["data.unit"] and "float or null" in lines["counts_nt"]
+
+
+def test_the_kernels_path_is_an_argument_not_the_environment(monkeypatch):
+    """``compiled=False`` computes with numpy, ``None`` (a closed form) too, without touching ``MAGEXP_NUMBA``;
+    both give the same calibration, and the process's choice is as it was after."""
+    import os
+
+    from magexp.calibration import fit
+    from magexp.problems import kernels
+
+    monkeypatch.delenv("MAGEXP_NUMBA", raising=False)
+    seen, real = [], fit.calibrate_recording
+    monkeypatch.setattr("magexp.calibration.api.calibrate_recording",
+                        lambda *a, **k: seen.append((os.environ.get("MAGEXP_NUMBA"), kernels.fused_enabled()))
+                        or real(*a, **k))
+    rng = np.random.default_rng(5)
+    u = random_rotations(300, rng=rng)[:, :, 0]
+    readings = 50.0 * u @ M.T + OFFSET + rng.normal(0, 0.05, (300, 3))
+    a = magexp.calibrate(readings, unit="uT", model="full", compiled=False)
+    b = magexp.calibrate(readings, unit="uT", model="full")
+    assert seen == [(None, False), (None, False)]  # numpy both times, the environment untouched
+    assert np.array_equal(a.w, b.w) and a.config["compiled"] is False and "compiled" not in b.config
+    assert fit.numpy_path(True, object()) is False and fit.numpy_path(None, object()) is False  # iterative: compiled
+    with pytest.raises(MagexpError, match="compiled='yes' is not allowed: give compiled=true or compiled=false"):
+        magexp.calibrate(readings, unit="uT", compiled="yes")

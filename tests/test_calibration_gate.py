@@ -8,7 +8,7 @@ import pytest
 
 import magexp
 from magexp.calibration.checks import GATE, gate, gate_thresholds
-from magexp.calibration.fit import main
+from magexp.calibration.command import main
 from magexp.calibration.models import fit_diagonal, select
 from magexp.core.geometry import random_rotations
 from magexp.core.identifiability import coverage

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import magexp
-from magexp.calibration.fit import Calibration
+from magexp import Calibration
 from magexp.calibration.models import candidates, select
 from magexp.core.geometry import attitude_at
 from magexp.core.recordings import Recording
@@ -68,7 +68,8 @@ def test_the_gyro_model_without_a_gyroscope_is_one_line(objective):
 def test_the_stacked_jacobian_is_scipys_forward_difference_from_one_call():
     from scipy.optimize._numdiff import approx_derivative
 
-    from magexp.calibration.fit import Reference, gyro_dataset
+    from magexp.calibration.inputs import gyro_dataset
+    from magexp.calibration.inputs import Reference
     from magexp.estimators.lm import LevenbergMarquardt, stacked_jacobian
     from magexp.problems import make_problem
     from magexp.scenarios.search import SearchBox

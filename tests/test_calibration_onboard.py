@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import magexp
-from magexp.calibration.fit import main
+from magexp.calibration.command import main
 from magexp.core.identifiability import spread
 from magexp.core.readers.dataflash import read_dataflash
 from magexp.core.readers.ulog import read_ulog

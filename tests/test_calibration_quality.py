@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 import magexp
-from magexp.calibration.fit import main
+from magexp.calibration.command import main
 from magexp.errors import MagexpError
 from magexp.core.geometry import random_rotations
 from magexp.paths import SHARED_DATA

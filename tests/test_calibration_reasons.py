@@ -9,7 +9,8 @@ import pytest
 import magexp
 from magexp.calibration.checks import GATE, check_fit
 from magexp.calibration import fit as fit_module
-from magexp.calibration.fit import main, noise_of
+from magexp.calibration.command import main
+from magexp.calibration.quality import noise_of
 from magexp.calibration.models import clipped, gyro_unusable, select
 from magexp.errors import MagexpError
 from magexp.paths import SHARED_DATA

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from magexp.calibration.fit import main as calibrate_main
+from magexp.calibration.command import main as calibrate_main
 from magexp.core.readers import angles_from_attitude, attitude_at, euler_quaternions
 from magexp.errors import MagexpError
 from magexp.core.geometry import quat_to_matrix, random_rotations, rotation_angle, ship_attitude

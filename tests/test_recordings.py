@@ -1,6 +1,8 @@
 """Readers of every recorded format, axis maps, and attitude maths (prefix scan, gyro integrated at
 the readings' times, preintegrated bias Jacobians)."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -142,3 +144,59 @@ def test_rest_recording_gyro_bias_is_a_few_deg_per_second():
     bias = np.rad2deg(rec.gyro_stream[1].mean(axis=0))
     print("rest gyro bias (deg/s):", bias.round(3))
     assert 1.0 < np.linalg.norm(bias) < 10.0
+
+
+def test_the_readers_registry_and_the_names_the_cache_keys_on_agree():
+    """:data:`READERS` (the functions) and :data:`magexp.core.formats.READER_NAMES` (what the run cache keys a
+    run on, without importing a reader) name the same function for every format."""
+    from magexp.core.formats import READER_NAMES, reader_of
+
+    assert {k: f"{f.__module__}.{f.__qualname__}" for k, f in READERS.items()} == READER_NAMES
+    for name in READER_NAMES.values():  # each name is a real function of a real module
+        module, _, function = name.rpartition(".")
+        assert callable(getattr(__import__(module, fromlist=[function]), function))
+    assert reader_of(Path("x.ulg")) == READER_NAMES["ulog"]
+
+
+def test_no_reader_imports_the_loader():
+    """The readers import :mod:`magexp.core.recording` (the type), never :mod:`magexp.core.recordings` (the
+    loader, which names them): no cycle, hidden or not."""
+    import ast
+
+    import magexp.core.readers
+
+    folder = Path(magexp.core.readers.__file__).parent
+    for path in [*folder.glob("*.py"), folder.parent / "text_readers.py", folder.parent / "recording.py",
+                 folder.parent / "formats.py"]:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                assert node.module != "magexp.core.recordings", path
+            elif isinstance(node, ast.Import):
+                assert all(a.name != "magexp.core.recordings" for a in node.names), path
+
+
+def test_one_path_from_a_recording_to_a_dataset(tmp_path):
+    """The scenario's gyro dataset is :func:`magexp.core.recording.recording_dataset` of its readings: the
+    readings kept, their reference, the gyroscope preintegrated between their times (the calibration's path)."""
+    from magexp.core.geometry import preintegrate
+    from magexp.core.recording import Recording, evenly_spaced, recording_dataset
+    from magexp.scenarios.recording import RecordingScenario
+    from magexp.scenarios.search import centroid_radius
+
+    t = np.arange(200) * 0.02
+    u = np.column_stack([np.cos(t), np.sin(t) * np.cos(3 * t), np.sin(t) * np.sin(3 * t)])
+    rows = np.column_stack([t, 40 * u + [3, -2, 1], np.full((200, 3), 0.1)])
+    path = tmp_path / "rec.csv"
+    path.write_text("t,mx_uT,my_uT,mz_uT,gx,gy,gz\n" + "\n".join(",".join(f"{v:.6f}" for v in r) for r in rows) + "\n")
+    scenario = RecordingScenario(name="s", file=str(path), objective="gyro", folds=0, n_readings=20)
+    data = scenario.generate()
+    rec = load_recording(path)
+    keep = evenly_spaced(rec.n, 20)
+    assert keep[0] == 0 and keep[-1] == 199 and len(keep) == 20 and np.all(np.diff(keep) > 0)
+    direct = recording_dataset(rec, centroid_radius(rec.readings[keep]), "gyro", keep=keep)
+    assert np.array_equal(data.readings, direct.readings) and np.array_equal(data.reference_norm, direct.reference_norm)
+    for got, want in zip(data.extra["preintegration"], preintegrate(*rec.gyro_rates(), rec.reading_times()[keep])):
+        assert np.array_equal(got, want)
+    assert np.array_equal(evenly_spaced(5, None), np.arange(5)) and np.array_equal(evenly_spaced(5, 9), np.arange(5))
+    with pytest.raises(MagexpError, match="objective='gyro' is not allowed for readings: it has no gyroscope"):
+        recording_dataset(Recording(readings=rec.readings, angles=None, field=None, unit="uT"), 40.0, "gyro")

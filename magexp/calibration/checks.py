@@ -28,7 +28,20 @@ RECORD = "record again while turning the sensor slowly through as many orientati
 def check_readings(readings: np.ndarray, name: str) -> None:
     """Fail in one line if the raw readings cannot determine a calibration: too few distinct
     readings, readings that barely move (one attitude; an offset over ~20 times the field would
-    look the same), or readings in one plane."""
+    look the same), or readings in one plane.
+
+    Parameters
+    ----------
+    readings : numpy.ndarray
+        ``(N, 3)`` raw readings.
+    name : str
+        The recording's name, which the line names.
+
+    Raises
+    ------
+    MagexpError
+        Degenerate readings.
+    """
     distinct = len(np.unique(readings, axis=0))
     if distinct < MIN_DISTINCT:
         raise MagexpError(f"{name}: only {distinct} distinct readings, a calibration needs at least {MIN_DISTINCT}: "
@@ -52,7 +65,28 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
     or too few distinct directions. ``raw_cover``: the coverage of the raw readings about the
     centre of their fitted sphere (what a failed fit's message quotes). Where the raw readings cover
     at least :data:`PARTIAL` of the sphere about that centre and only the fit's centre makes them look like one
-    attitude or too few directions, the fit collapsed, and the line says so instead of blaming the recording."""
+    attitude or too few directions, the fit collapsed, and the line says so instead of blaming the recording.
+
+    Parameters
+    ----------
+    name : str
+        The recording's name, which the line names.
+    estimator : str
+        The estimator's (or the closed-form fit's) name.
+    success : bool
+        The fit's success.
+    message : str
+        The fit's message.
+    cover : dict
+        :func:`magexp.core.identifiability.coverage` of the calibrated directions.
+    raw_cover : dict
+        The same of the raw readings about their sphere's centre.
+
+    Raises
+    ------
+    MagexpError
+        A failed or collapsed fit.
+    """
     if not success:
         why = message.splitlines()[0] if message else "no message"
         if raw_cover["coverage_cells"] < PARTIAL:
@@ -88,7 +122,18 @@ BUDGET_KEYS = ("n_iterations", "max_evaluations", "max_nfev", "max_iter")
 
 
 def budget_key(estimator) -> str | None:
-    """The option of ``estimator`` that gives it more iterations (:data:`BUDGET_KEYS`), or None."""
+    """The option of ``estimator`` that gives it more iterations (:data:`BUDGET_KEYS`), or None.
+
+    Parameters
+    ----------
+    estimator : estimator
+        The estimator.
+
+    Returns
+    -------
+    str or None
+        The key (``n_iterations``, ``max_evaluations``, ...).
+    """
     return next((k for k in BUDGET_KEYS if hasattr(estimator, k)), None)
 
 
@@ -97,7 +142,26 @@ def check_optimum(name: str, estimator, value: float, closed_form: float | None,
     spread, or the held-out spread of ``model=full``) over :data:`OPTIMUM_FACTOR` times that of the closed-form
     ellipsoid fit of the same readings (``closed_form``; None or NaN when that fit is not an ellipsoid, and
     nothing is checked). The line names the closed-form fit that reached it, not the recording, and the
-    estimator's budget option (:func:`budget_key`)."""
+    estimator's budget option (:func:`budget_key`).
+
+    Parameters
+    ----------
+    name : str
+        The recording's name, which the line names.
+    estimator : estimator
+        The iterative estimator.
+    value : float
+        Its spread.
+    closed_form : float or None
+        The closed-form ellipsoid fit's.
+    what : str
+        What is compared, for the line.
+
+    Raises
+    ------
+    MagexpError
+        ``value`` over :data:`OPTIMUM_FACTOR` times ``closed_form``.
+    """
     if closed_form is None or not np.isfinite(closed_form) or value <= OPTIMUM_FACTOR * closed_form:
         return
     mine = (f"its {what} {100 * value:.3g} % is {value / closed_form:.3g} times" if np.isfinite(value)
@@ -147,7 +211,23 @@ def _pair(value, key: str) -> tuple[float, float]:
 
 
 def gate_thresholds(overrides=None) -> dict:
-    """:data:`GATE` with ``overrides`` (a mapping of ``gate.*``), each checked; unknown keys refused."""
+    """:data:`GATE` with ``overrides`` (a mapping of ``gate.*``), each checked; unknown keys refused.
+
+    Parameters
+    ----------
+    overrides : mapping or None
+        ``gate.*`` values.
+
+    Returns
+    -------
+    dict
+        The thresholds.
+
+    Raises
+    ------
+    MagexpError
+        An unknown key or a bad value.
+    """
     out = dict(GATE)
     if overrides is not None and not isinstance(overrides, Mapping):
         raise MagexpError(f"gate={overrides!r} is not allowed: give a mapping of the gate's keys to thresholds "
@@ -191,6 +271,11 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     of the six regions of directions (``metrics["direction_regions"]``, :func:`magexp.calibration.fit.regions`)
     holding at least ``min_region`` of the readings: a region below it was never held out, so the
     calibration is untested on attitudes there.
+
+    Returns
+    -------
+    list of dict
+        The failed checks (empty: the gate passed).
     """
     t = GATE if thresholds is None else thresholds
     failed = []
@@ -268,6 +353,19 @@ def _rms_check(rms: float, reference: float, to_mg, t: dict, noise: float = 0.0)
 
 
 def refuse(name: str, failed: list[dict]) -> None:
-    """Raise the gate's one line: every failed check, then how to override."""
+    """Raise the gate's one line: every failed check, then how to override.
+
+    Parameters
+    ----------
+    name : str
+        The recording's name, which the line names.
+    failed : list of dict
+        :func:`gate`'s failed checks.
+
+    Raises
+    ------
+    MagexpError
+        Always: the one line.
+    """
     raise MagexpError(f"{name}: calibration refused, nothing written: " + "; ".join(f["line"] for f in failed)
                       + "; accept=true writes it anyway, with these failures recorded")

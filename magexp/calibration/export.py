@@ -77,7 +77,7 @@ import yaml
 from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
 from magexp.core.geometry import rot_x, rot_y, rot_z, rotation_angle
-from magexp.core.recordings import RAW_UNITS, UNITS
+from magexp.core.recording import RAW_UNITS, UNITS
 from magexp.run.guard import check_destination
 
 #: the export targets

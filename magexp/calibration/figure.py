@@ -19,12 +19,39 @@ MAX_POINTS = 20_000
 
 
 def drawn(n: int, most: int = MAX_POINTS) -> np.ndarray:
-    """Indices of the readings drawn out of ``n``: all, or ``most`` evenly spaced ones."""
+    """Indices of the readings drawn out of ``n``: all, or ``most`` evenly spaced ones.
+
+    Parameters
+    ----------
+    n : int
+        How many readings.
+    most : int
+        The most drawn.
+
+    Returns
+    -------
+    numpy.ndarray
+        The indices.
+    """
     return np.arange(n) if n <= most else np.unique(np.linspace(0, n - 1, most).round().astype(int))
 
 
 def projections(axes, raw: np.ndarray, calibrated: np.ndarray, radius: float, unit: str) -> None:
-    """Three plane projections: raw and calibrated readings, and the reference circle."""
+    """Three plane projections: raw and calibrated readings, and the reference circle.
+
+    Parameters
+    ----------
+    axes : sequence of Axes
+        Three axes.
+    raw : numpy.ndarray
+        ``(N, 3)`` raw readings.
+    calibrated : numpy.ndarray
+        ``(N, 3)`` calibrated readings.
+    radius : float
+        The reference circle's radius.
+    unit : str
+        The unit of the axes.
+    """
     t = np.linspace(0, 2 * np.pi, 200)
     for ax, (i, j, a, b) in zip(axes, PAIRS):
         ax.scatter(raw[:, i], raw[:, j], s=4, color="0.6", label="raw")
@@ -37,7 +64,23 @@ def projections(axes, raw: np.ndarray, calibrated: np.ndarray, radius: float, un
 
 
 def magnitudes(ax_trace, ax_hist, raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, unit: str) -> None:
-    """Total field per reading, and its histogram, before and after."""
+    """Total field per reading, and its histogram, before and after.
+
+    Parameters
+    ----------
+    ax_trace : Axes
+        The trace's axes.
+    ax_hist : Axes
+        The histogram's axes.
+    raw : numpy.ndarray
+        ``(N, 3)`` raw readings.
+    calibrated : numpy.ndarray
+        ``(N, 3)`` calibrated readings.
+    reference : numpy.ndarray
+        ``(N,)`` reference totals.
+    unit : str
+        The unit of the axes.
+    """
     before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
     k = drawn(len(before))
     ax_trace.plot(k, before[k], ".", ms=3, color="0.6", label="raw")
@@ -57,7 +100,17 @@ def magnitudes(ax_trace, ax_hist, raw: np.ndarray, calibrated: np.ndarray, refer
 def coverage_map(ax, raw: np.ndarray, centre: np.ndarray) -> None:
     """The sphere's :data:`~magexp.core.identifiability.CELLS` equal-area cells (their centres, in
     azimuth and ``z = sin(elevation)``, an equal-area map), filled where the raw directions about the
-    fitted centre reach: what the recording covered (the report's ``coverage_cells``)."""
+    fitted centre reach: what the recording covered (the report's ``coverage_cells``).
+
+    Parameters
+    ----------
+    ax : Axes
+        The map's axes.
+    raw : numpy.ndarray
+        ``(N, 3)`` raw readings.
+    centre : numpy.ndarray
+        ``(3,)`` the fitted centre.
+    """
     u = raw - centre
     u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
     cells = fibonacci_sphere(CELLS)
@@ -80,7 +133,24 @@ def coverage_map(ax, raw: np.ndarray, centre: np.ndarray) -> None:
 def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, *, unit: str, title: str,
                        centre: np.ndarray | None = None):
     """The whole figure: projections and (with the fitted ``centre``) the coverage map on top,
-    magnitude trace and histogram below; returns it."""
+    magnitude trace and histogram below; returns it.
+
+    Parameters
+    ----------
+    raw, calibrated, reference
+        As :func:`magnitudes` (every reading: :func:`drawn` chooses those drawn).
+    unit : str
+        The calibrated field's unit.
+    title : str
+        The figure's title.
+    centre : numpy.ndarray or None
+        The fitted centre (the coverage map).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = plt.figure(figsize=(13.5 if centre is not None else 10.5, 6.6), layout="constrained")
     grid = fig.add_gridspec(2, 4 if centre is not None else 3)
     k = drawn(len(raw))

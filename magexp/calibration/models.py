@@ -46,7 +46,7 @@ import numpy as np
 
 from magexp.core.ellipsoid import LINEAR_TWICE, normalise, quadratic_features, quadric_calibration
 from magexp.errors import MagexpError
-from magexp.scenarios.search import fit_sphere
+from magexp.core.ellipsoid import fit_sphere
 
 #: the models, simplest first (parameters of W and o: 4, 6, 9, 12), and ``auto``
 ORDER = ("sphere", "diagonal", "full", "gyro")
@@ -61,7 +61,20 @@ DIAGONAL_COLUMNS = [0, 1, 2, 6, 7, 8, 9]
 
 def fit_diagonal(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
     """``(W, o)`` of the axis-aligned ellipsoid through ``readings`` mapped onto the sphere of
-    ``radius`` (``W`` diagonal); None if the fit is not an ellipsoid (module docstring)."""
+    ``radius`` (``W`` diagonal); None if the fit is not an ellipsoid (module docstring).
+
+    Parameters
+    ----------
+    readings : numpy.ndarray
+        ``(N, 3)`` raw readings.
+    radius : float
+        The reference total.
+
+    Returns
+    -------
+    tuple or None
+        ``(W (3, 3) diagonal, o (3,))``, or None.
+    """
     c, s, u = normalise(readings)
     design = (quadratic_features(u) * LINEAR_TWICE)[:, DIAGONAL_COLUMNS]
     p7 = np.linalg.svd(design, full_matrices=False)[2][-1]
@@ -70,7 +83,18 @@ def fit_diagonal(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.nd
 
 
 def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(s I, centre)`` of the sphere through ``readings`` scaled onto ``radius``."""
+    """``(s I, centre)`` of the sphere through ``readings`` scaled onto ``radius``.
+
+    Parameters
+    ----------
+    readings, radius
+        As :func:`fit_diagonal`.
+
+    Returns
+    -------
+    tuple
+        ``(s I, centre)``.
+    """
     centre, fitted = fit_sphere(readings)
     return np.eye(3) * radius / fitted, centre
 
@@ -87,7 +111,18 @@ CLIP_TOLERANCE = 1e-3
 
 
 def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
-    """``(axis, limit in deg/s, readings there)`` of each clipped axis of the gyroscope's ``rates`` (rad/s)."""
+    """``(axis, limit in deg/s, readings there)`` of each clipped axis of the gyroscope's ``rates`` (rad/s).
+
+    Parameters
+    ----------
+    rates : numpy.ndarray
+        ``(K, 3)`` gyroscope rates, rad/s.
+
+    Returns
+    -------
+    list of tuple
+        One per clipped axis.
+    """
     out = []
     for k, axis in enumerate("xyz"):
         size = np.abs(rates[:, k])
@@ -101,7 +136,18 @@ def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
 def gyro_unusable(stream) -> str | None:
     """Why the gyro-aided model cannot succeed on the gyroscope ``stream`` (``(times, rates)``,
     :meth:`~magexp.core.recordings.Recording.gyro_rates`), or None: a clipped axis (:func:`clipped`)
-    loses the rotation beyond its limit, so the attitude it integrates is wrong from the first clip on."""
+    loses the rotation beyond its limit, so the attitude it integrates is wrong from the first clip on.
+
+    Parameters
+    ----------
+    stream : tuple or None
+        ``(times, rates)``, or None without a gyroscope.
+
+    Returns
+    -------
+    str or None
+        The reason, or None.
+    """
     if stream is None:
         return "the recording has no gyroscope"
     clips = clipped(np.asarray(stream[1], float))
@@ -117,7 +163,27 @@ CLOSED_FORM = {"sphere": fit_sphere_model, "diagonal": fit_diagonal}
 
 def check_model(model: str, objective: str, *, gyro: bool = True) -> str:
     """``model`` if it is one of :data:`MODELS`, fits ``objective`` and (``gyro``: the recording has a
-    gyroscope) the data, else one line."""
+    gyroscope) the data, else one line.
+
+    Parameters
+    ----------
+    model : str
+        The model asked for.
+    objective : str
+        ``scalar`` or ``vector``.
+    gyro : bool
+        The recording has a gyroscope.
+
+    Returns
+    -------
+    str
+        ``model``.
+
+    Raises
+    ------
+    MagexpError
+        An unknown model, or one the objective or data cannot have.
+    """
     if model not in MODELS:
         raise MagexpError(f"model={model!r} is not allowed: choose one of {', '.join(MODELS)}")
     if (model in CLOSED_FORM or model in NEEDS_GYRO) and objective != "scalar":
@@ -131,14 +197,43 @@ def check_model(model: str, objective: str, *, gyro: bool = True) -> str:
 
 def candidates(objective: str, *, gyro: bool = False) -> tuple[str, ...]:
     """The models ``auto`` tries, simplest first: all of :data:`ORDER` for the scalar objective
-    (``gyro`` only with a gyroscope), ``full`` for the vector one (it determines the whole ``W``)."""
+    (``gyro`` only with a gyroscope), ``full`` for the vector one (it determines the whole ``W``).
+
+    Parameters
+    ----------
+    objective : str
+        ``scalar`` or ``vector``.
+    gyro : bool
+        The recording has a usable gyroscope.
+
+    Returns
+    -------
+    tuple of str
+        The candidates, simplest first.
+    """
     if objective != "scalar":
         return ("full",)
     return tuple(m for m in ORDER if gyro or m not in NEEDS_GYRO)
 
 
 def check_margin(margin) -> float:
-    """``auto_margin`` as a float in ``[0, 1)``, else one line."""
+    """``auto_margin`` as a float in ``[0, 1)``, else one line.
+
+    Parameters
+    ----------
+    margin : object
+        ``auto_margin``.
+
+    Returns
+    -------
+    float
+        The margin.
+
+    Raises
+    ------
+    MagexpError
+        A value outside [0, 1).
+    """
     try:
         value = float(margin)
     except (TypeError, ValueError):
@@ -197,7 +292,22 @@ def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = F
 
 def candidates_text(chosen: str, spreads: dict, dropped: dict) -> str:
     """Every candidate of :func:`select`, the chosen first: its held-out spread, that its fit failed with a
-    region held out, or why it was dropped before any fit."""
+    region held out, or why it was dropped before any fit.
+
+    Parameters
+    ----------
+    chosen : str
+        The chosen model.
+    spreads : dict
+        ``{model: held-out spread or None}``.
+    dropped : dict
+        ``{model: reason}`` of the models not fitted.
+
+    Returns
+    -------
+    str
+        One clause per candidate.
+    """
     def one(name):
         value = spreads[name]
         return (f"{name} {100 * value:.3g} %" if value is not None

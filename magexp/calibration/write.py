@@ -29,11 +29,12 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.calibration.export import FILE_NAMES, of_calibration
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
 from magexp.run.guard import check_destination
-from magexp.core.recordings import VERSION_LINE
+from magexp.core.formats import VERSION_LINE
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.run.guard import first_missing
@@ -46,7 +47,22 @@ FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure
 def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = None) -> None:
     """Refuse, in one line, an output folder under ``results/`` or one that holds an output file
     (:data:`FILES`, and the file of the ``export`` target; unless ``overwrite``: then the files of an
-    earlier calibration are replaced)."""
+    earlier calibration are replaced).
+
+    Parameters
+    ----------
+    out_dir : Path
+        The output folder.
+    overwrite : bool
+        Replace an earlier calibration's files.
+    export : str or None
+        The export target, whose file counts too.
+
+    Raises
+    ------
+    MagexpError
+        A folder under results/ or holding an output file.
+    """
     out_dir = Path(out_dir).resolve()
     if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: results/ holds the reproduced papers only, "
@@ -76,7 +92,20 @@ def parameters(cal, *, seed: int | None = None) -> dict:
     latitude, longitude, altitude, date), the metrics, the quality report (with the acceptance
     gate and the model selection), the fit's outcome, the config and the provenance (magexp
     version, commit, libraries: :func:`magexp.run.provenance.provenance`). A loaded calibration
-    gives back the JSON it was read from."""
+    gives back the JSON it was read from.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+    seed : int or None
+        Its seed (None: ``cal.seed``).
+
+    Returns
+    -------
+    dict
+        The JSON content.
+    """
     if cal.saved is not None:
         return cal.saved
     rec, box = cal.recording, cal.search
@@ -109,7 +138,27 @@ def parameters(cal, *, seed: int | None = None) -> dict:
 
 def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
     """Write :func:`parameters` of ``cal`` to ``path`` atomically; an existing file is refused in one
-    line unless ``overwrite``."""
+    line unless ``overwrite``.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+    path : str or Path
+        The file.
+    overwrite : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    MagexpError
+        An existing file without ``overwrite``.
+    """
     path = Path(path)
     check_destination(path, "path")
     if path.exists() and not overwrite:
@@ -120,7 +169,23 @@ def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
 
 def read_parameters(path) -> dict:
     """The content of a ``calibration.json``, checked: its format one of :data:`READABLE`, ``W`` 3 x 3
-    and the offset 3 finite numbers (JSON: nothing read can run code); else one line."""
+    and the offset 3 finite numbers (JSON: nothing read can run code); else one line.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``calibration.json``.
+
+    Returns
+    -------
+    dict
+        Its content.
+
+    Raises
+    ------
+    MagexpError
+        An unreadable or malformed file.
+    """
     path = Path(path)
     try:
         data = json.loads(path.read_text())
@@ -157,7 +222,15 @@ ROWS_PER_BLOCK = 1 << 16
 
 def write_readings(cal, fh) -> None:
     """The calibrated readings as a ``magexp-recording v1`` CSV, into the text file ``fh``: a block of
-    :data:`ROWS_PER_BLOCK` rows at a time, each block one ``%``-format in C (``%.10g`` per value)."""
+    :data:`ROWS_PER_BLOCK` rows at a time, each block one ``%``-format in C (``%.10g`` per value).
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+    fh : text file
+        Where to write.
+    """
     raw, cal_b = cal.recording.readings, cal.calibrated
     head = [VERSION_LINE, f"# source: {cal.recording.name} calibrated by magexp "
                           f"(estimator {cal.estimator}, objective {cal.objective})", f"# unit: {cal.field_unit}"]
@@ -173,7 +246,18 @@ def write_readings(cal, fh) -> None:
 
 
 def figure(cal):
-    """The before/after figure of ``cal`` (:func:`magexp.calibration.figure.calibration_figure`)."""
+    """The before/after figure of ``cal`` (:func:`magexp.calibration.figure.calibration_figure`).
+
+    Parameters
+    ----------
+    cal : Calibration
+        A calibration with its recording.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     # lazy: matplotlib only when a figure is drawn; the Python API and magexp calibrate without
     # figure=true never pay for it (these cost 478 ms CPU to import after magexp.calibration.fit, min of 5)
     from magexp.calibration.figure import calibration_figure
@@ -185,9 +269,18 @@ def figure(cal):
 
 
 def export_name(target: str) -> str:
-    """The file name ``export=<target>`` writes (:data:`magexp.calibration.export.FILE_NAMES`)."""
-    from magexp.calibration.export import FILE_NAMES  # lazy: the export targets only when exporting
+    """The file name ``export=<target>`` writes (:data:`magexp.calibration.export.FILE_NAMES`).
 
+    Parameters
+    ----------
+    target : str
+        An export target.
+
+    Returns
+    -------
+    str
+        Its file name.
+    """
     return FILE_NAMES[target]
 
 
@@ -203,13 +296,39 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
     inside ``out_dir`` and moved into place only once all are complete, a file that exists being
     replaced only with ``overwrite``. A failure or an interruption removes the staging folder and
     whatever this call created (the folders made for ``out_dir``, a file already moved into place),
-    nothing else. The figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
+    nothing else. The figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+    out_dir : Path
+        The output folder.
+    seed : int or None
+        Its seed (None: ``cal.seed``).
+    draw : bool
+        Draw the figure.
+    overwrite : bool
+        Replace an earlier calibration's files.
+    export : str or None
+        An export target.
+    export_options : dict or None
+        Its options.
+
+    Returns
+    -------
+    dict
+        ``{kind: path}`` of the files written.
+
+    Raises
+    ------
+    MagexpError
+        A refused folder, file or export; nothing is left behind.
+    """
     out_dir = Path(out_dir)
     check_out(out_dir, overwrite=overwrite, export=export)
     rendered = None
     if export:
-        from magexp.calibration.export import of_calibration  # lazy: see export_name
-
         rendered = of_calibration(cal, export, **(export_options or {}))
     keys = ("parameters", "readings", *(("figure", "figure_vector") if draw else ()))
     paths = {key: out_dir / FILES[key] for key in keys}
@@ -262,7 +381,18 @@ def _place(stage: Path, paths: list[Path], *, overwrite: bool, placed: list[Path
 
 
 def table(rows: dict) -> str:
-    """``key  value`` lines, keys aligned (the printed summary)."""
+    """``key  value`` lines, keys aligned (the printed summary).
+
+    Parameters
+    ----------
+    rows : dict
+        ``{key: value}``.
+
+    Returns
+    -------
+    str
+        The lines.
+    """
     width = max(len(k) for k in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows.items())
 
@@ -301,7 +431,18 @@ def _gyro_lines(report: dict, unit: str) -> dict:
 
 
 def summary(cal) -> dict:
-    """The key numbers to print, in order."""
+    """The key numbers to print, in order.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+
+    Returns
+    -------
+    dict
+        ``{key: text}`` in print order.
+    """
     m, u, r = cal.metrics, cal.unit, cal.report
     return {
         "recording": (f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})"

@@ -40,6 +40,8 @@ from __future__ import annotations
 
 import importlib.util
 import os
+from contextlib import contextmanager
+from contextvars import ContextVar
 from functools import cache
 
 import numpy as np
@@ -61,10 +63,15 @@ FALLBACK_FLOATS_PER_PARTICLE = 32
 COMPILE_MIN_READINGS = 1 << 14  # residuals of fewer readings stay in numpy (no numba import)
 
 
+#: False within :func:`numpy_only`: the calls made there take the numpy path whatever ``MAGEXP_NUMBA`` says
+_COMPILED_ALLOWED = ContextVar("magexp_compiled_allowed", default=True)
+
+
 def fused_enabled() -> bool:
     """Whether the compiled kernels are wanted and installed (``MAGEXP_NUMBA`` not ``0``, numba
-    findable), without importing numba: the path :func:`compiled` takes."""
-    return os.environ.get("MAGEXP_NUMBA", "1") != "0" and importlib.util.find_spec("numba") is not None
+    findable, not within :func:`numpy_only`), without importing numba: the path :func:`compiled` takes."""
+    return (_COMPILED_ALLOWED.get() and os.environ.get("MAGEXP_NUMBA", "1") != "0"
+            and importlib.util.find_spec("numba") is not None)
 
 
 def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None) -> int:
@@ -84,9 +91,33 @@ def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None
             + FALLBACK_FLOATS_PER_PARTICLE * n_particles)
 
 
-@cache
+@contextmanager
+def numpy_only(on: bool = True):
+    """Within the block (this thread or task only), :func:`compiled` is None when ``on``: the caller's
+    choice of the numpy path for the kernels it calls (``magexp calibrate``'s ``compiled=False``), an
+    argument rather than the process's environment; afterwards the choice is as it was.
+
+    Parameters
+    ----------
+    on : bool
+        True: numpy within the block; False: the choice is left as it is.
+    """
+    token = _COMPILED_ALLOWED.set(_COMPILED_ALLOWED.get() and not on)
+    try:
+        yield
+    finally:
+        _COMPILED_ALLOWED.reset(token)
+
+
 def compiled():
-    """The numba kernels (a namespace), or None when numba is unavailable or ``MAGEXP_NUMBA=0``."""
+    """The numba kernels (a namespace), or None when numba is unavailable, ``MAGEXP_NUMBA=0``, or within
+    :func:`numpy_only`."""
+    return _loaded() if _COMPILED_ALLOWED.get() else None
+
+
+@cache
+def _loaded():
+    """The numba kernels, or None when numba is unavailable or ``MAGEXP_NUMBA=0`` (read once: :func:`compiled`)."""
     if not fused_enabled():
         return None
     try:  # lazy: numba, measured 205 ms CPU to import (min of 5, after numpy), which a closed-form run (lm, ellipsoid) never pays
@@ -94,6 +125,9 @@ def compiled():
     except ImportError:  # numba not installed
         return None
     return _compiled
+
+
+compiled.cache_clear = _loaded.cache_clear  # MAGEXP_NUMBA read again (the tests change it)
 
 
 def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:

@@ -21,7 +21,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from magexp import __version__
+from magexp._version import __version__
 from magexp.paths import PACKAGE, ROOT, SOURCE_CHECKOUT
 
 LIBRARIES = ("numpy", "scipy", "hydra", "omegaconf")
@@ -29,7 +29,7 @@ COMMIT_FILE = PACKAGE / "_resources" / "commit.txt"  # written into a wheel at b
 
 
 def version() -> str:
-    """magexp's version (``magexp.__version__``, the one home of it; ``pyproject.toml`` reads it)."""
+    """magexp's version (:data:`magexp._version.__version__`, its one home; ``pyproject.toml`` reads it)."""
     return __version__
 
 

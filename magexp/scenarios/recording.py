@@ -2,7 +2,8 @@
 
 :class:`RecordingScenario` loads a file of :data:`magexp.core.recordings.READERS` (from
 :data:`magexp.paths.SHARED_DATA`, i.e. ``$MAGEXP_DATA`` or ``../shared/data``), optionally cuts a
-time ``window``, and gives the :class:`~magexp.core.dataset.Dataset` of one objective:
+time ``window``, and gives the :class:`~magexp.core.dataset.Dataset` of one objective (by
+:func:`magexp.core.recording.recording_dataset`, the path ``magexp calibrate`` takes too):
 
 * ``scalar``: the readings, ``n_readings`` evenly spaced ones for the fit; the block of fold
   ``heldout_fold`` of ``folds`` contiguous blocks is held out (``dataset.extra["heldout"]``) and
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.dataset import Dataset
-from magexp.core.geometry import preintegrate
+from magexp.core.recording import evenly_spaced, recording_dataset
 from magexp.core.recordings import exists, load_recording
 from magexp.errors import MagexpError, check, check_nonnegative, check_positive_int
 from magexp.paths import SHARED_DATA
@@ -113,21 +114,18 @@ class RecordingScenario:
             edges = np.linspace(0, n, self.folds + 1).astype(int)
             heldout[edges[self.heldout_fold]:edges[self.heldout_fold + 1]] = True
         fit = np.flatnonzero(~heldout)
-        if self.n_readings is not None and self.n_readings < len(fit):
-            fit = fit[np.round(np.linspace(0, len(fit) - 1, self.n_readings)).astype(int)]
+        fit = fit[evenly_spaced(len(fit), self.n_readings)]
         radius = centroid_radius(rec.readings[fit])
         extra = {"heldout": rec.readings[heldout], "all_readings": rec.readings}
         if self.objective == "gyro":
-            stream = rec.gyro_rates()
-            if stream is None:
+            if rec.gyro_rates() is None:
                 raise MagexpError(f"scenario {self.name!r}: objective 'gyro' needs a gyroscope, {rec.name} has none")
-            extra["preintegration"] = preintegrate(*stream, rec.reading_times()[fit])
             if self.rest_file:
                 rest = self.recording(self.rest_file).gyro_rates()
                 extra["rest_gyro_bias_deg_s"] = np.rad2deg(rest[1].mean(axis=0))
         self.search = search_box(rec.readings[fit], radius, forward=True, **self.box_options)
-        self._data = Dataset(readings=rec.readings[fit], reference_norm=np.full(len(fit), radius), unit=rec.unit,
-                             meta={"scenario": self.name, "recording": rec.name}, extra=extra)
+        self._data = recording_dataset(rec, radius, self.objective, keep=fit, meta={"scenario": self.name},
+                                       extra=extra)
 
     @property
     def search(self):

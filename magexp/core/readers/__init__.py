@@ -1,6 +1,6 @@
 """Readers of the flight and robot logs users have: PX4 ULog, ArduPilot DataFlash, ROS 1/2 bags and MCAP.
 
-Each reader returns a :class:`magexp.core.recordings.Recording` (the structure every other magexp
+Each reader returns a :class:`magexp.core.recording.Recording` (the structure every other magexp
 recording uses) with, on one clock:
 
 * ``readings``: the magnetometer, *before* the firmware's onboard calibration (undone where the
@@ -40,7 +40,7 @@ import numpy as np
 from magexp.core.limits import refuse_over
 from magexp.errors import MagexpError
 from magexp.core.geometry import axis_map, quat_to_matrix
-from magexp.core.recordings import Recording
+from magexp.core.recording import Recording
 
 #: the ``pip install`` extra of each optional package a reader needs
 EXTRAS = {"pyulog": "ulog", "pymavlink": "dataflash", "rosbags": "ros"}
@@ -158,7 +158,7 @@ LOGGED = ("logged_bx", "logged_by", "logged_bz")
 
 def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, angles: np.ndarray | None,
                   gyro: tuple | None, meta: dict, mag_axes=None, gyro_axes=None, logged: np.ndarray | None = None):
-    """The :class:`~magexp.core.recordings.Recording` of a log: readings (with ``mag_axes``) at
+    """The :class:`~magexp.core.recording.Recording` of a log: readings (with ``mag_axes``) at
     ``times``, the attitude angles, the gyroscope stream (with ``gyro_axes``), ``meta``; ``logged``: the
     readings as logged, before the reader undid the onboard calibration (columns :data:`LOGGED`), or None."""
     order = np.argsort(times, kind="stable")

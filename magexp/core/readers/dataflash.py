@@ -57,7 +57,7 @@ import numpy as np
 from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
                                  navigation_angles, need, place)
 from magexp.errors import MagexpError
-from magexp.core.recordings import Recording
+from magexp.core.recording import Recording
 
 #: ``struct`` codes of DataFlash fields -> numpy dtypes (little-endian, packed)
 DTYPES = {"b": "i1", "B": "u1", "h": "<i2", "H": "<u2", "i": "<i4", "I": "<u4", "q": "<i8", "Q": "<u8",
@@ -241,7 +241,7 @@ def _open(df, path: Path, name: str):
 
 def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, instance: int = 0,
                    undo: bool = True) -> Recording:
-    """The :class:`~magexp.core.recordings.Recording` of an ArduPilot DataFlash ``.bin`` log (module docstring).
+    """The :class:`~magexp.core.recording.Recording` of an ArduPilot DataFlash ``.bin`` log (module docstring).
 
     Parameters
     ----------

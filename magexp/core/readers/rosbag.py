@@ -43,7 +43,7 @@ import numpy as np
 from magexp.core.datafiles import BAG_MARKER
 from magexp.core.readers import check_count, log_recording, log_unit, navigation_angles, need, place
 from magexp.errors import MagexpError
-from magexp.core.recordings import Recording
+from magexp.core.recording import Recording
 
 MAG, IMU, FIX = "sensor_msgs/msg/MagneticField", "sensor_msgs/msg/Imu", "sensor_msgs/msg/NavSatFix"
 #: tesla -> µT
@@ -171,7 +171,7 @@ def _messages(reader, connections, msgtype: str, cdr: bool, name: str) -> tuple[
 
 
 def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: str | None = None) -> Recording:
-    """The :class:`~magexp.core.recordings.Recording` of a ROS 1/2 bag or MCAP file (module docstring).
+    """The :class:`~magexp.core.recording.Recording` of a ROS 1/2 bag or MCAP file (module docstring).
 
     Parameters
     ----------

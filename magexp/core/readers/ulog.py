@@ -59,7 +59,7 @@ from magexp.core.readers import (check_count, euler_quaternions, log_recording, 
                                  navigation_angles, need, place)
 from magexp.errors import MagexpError
 from magexp.core.geometry import quat_to_matrix
-from magexp.core.recordings import Recording
+from magexp.core.recording import Recording
 
 #: the topics read (pyulog loads only these)
 TOPICS = ("vehicle_magnetometer", "sensor_combined", "sensor_mag", "vehicle_attitude", "vehicle_angular_velocity",
@@ -212,7 +212,7 @@ def _gyro(ulog, t0: int) -> tuple | None:
 
 
 def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: bool = True) -> Recording:
-    """The :class:`~magexp.core.recordings.Recording` of a PX4 ULog file (module docstring).
+    """The :class:`~magexp.core.recording.Recording` of a PX4 ULog file (module docstring).
 
     Parameters
     ----------

@@ -1,0 +1,175 @@
+"""The Python API of the calibration: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
+
+:func:`calibrate` takes readings as they come (an ``(N, 3)`` array, a DataFrame, a recording's path or a
+:class:`~magexp.core.recording.Recording`), runs the pipeline (:func:`magexp.calibration.fit.calibrate_recording`)
+and returns a :class:`~magexp.calibration.result.Calibration`. Its keyword defaults are the command's
+(:data:`magexp.calibration.options.DEFAULTS`, the one home of both).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from magexp.calibration.fit import calibrate_recording, estimator_named, numpy_path
+from magexp.calibration.options import DEFAULTS, ESTIMATOR
+from magexp.calibration.result import Calibration
+from magexp.core.recording import Recording, check_unit
+from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording
+from magexp.core.seeding import run_generators
+from magexp.errors import MagexpError, check_positive_int
+from magexp.problems.kernels import numpy_only
+from magexp.run.compose import options
+from magexp.run.guard import readings_array
+
+
+def frame_readings(frame) -> np.ndarray:
+    """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``mx, my, mz``, ``x, y, z``:
+    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The readings' table.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, 3)`` float readings.
+
+    Raises
+    ------
+    MagexpError
+        Columns that are neither named nor three numeric ones.
+    """
+    cols = [str(c).strip().lower() for c in frame.columns]
+    check_unique(cols, "readings")
+    pick = next((names for names in MAG_COLUMNS if all(n in cols for n in names)), None)
+    chosen = frame.iloc[:, [cols.index(n) for n in pick]] if pick else frame.select_dtypes("number")
+    if chosen.shape[1] != 3:
+        raise MagexpError(f"readings with columns {list(frame.columns)} are not allowed: give bx, by, bz "
+                          "(or x, y, z), or exactly three numeric columns")
+    return chosen.to_numpy(float)
+
+
+def as_recording(readings, *, unit: str | None = None) -> Recording:
+    """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
+    ``x, y, z``, else its three numeric columns), a path or a Recording.
+
+    Parameters
+    ----------
+    readings : array_like, DataFrame, str, Path or Recording
+        As :func:`calibrate`'s.
+    unit : str or None
+        The unit of an array or DataFrame (required), of a path (``data.unit``).
+
+    Returns
+    -------
+    Recording
+        The recording (an array's: format ``array``, name ``readings``).
+
+    Raises
+    ------
+    MagexpError
+        A shape other than (N, 3), a value not finite, an array without a unit.
+    """
+    if isinstance(readings, Recording):
+        return readings
+    if isinstance(readings, (str, Path)):
+        return load_recording(readings, unit=unit)
+    pandas = sys.modules.get("pandas")  # a DataFrame exists only if pandas is loaded: not importing it saves
+    if pandas is not None and isinstance(readings, pandas.DataFrame):  # 240 ms (-X importtime) per calibration
+        readings = frame_readings(readings)
+    values = readings_array(readings)
+    if values.ndim != 2 or values.shape[1] != 3:
+        raise MagexpError(f"readings of shape {values.shape} are not allowed: give an (N, 3) array")
+    if not np.all(np.isfinite(values)):
+        raise MagexpError("readings with NaN or infinite values are not allowed: every value must be finite")
+    if unit is None:
+        raise MagexpError("unit=None is not allowed: name the unit of the readings (nT, uT, mG, G, T or counts)")
+    return Recording(readings=values, angles=None, field=None, unit=check_unit(unit, "unit"),
+                     meta={"format": "array", "name": "readings"})
+
+
+
+def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objective: str = DEFAULTS.objective,
+              reference_total=None, folds: int = DEFAULTS.folds, seed: int = DEFAULTS.seed, checks: bool = True,
+              model: str = DEFAULTS.model, accept: bool = DEFAULTS.accept, gate=None,
+              auto_margin: float = DEFAULTS.auto_margin, compiled: bool | None = None,
+              **estimator_options) -> Calibration:
+    """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
+
+    Fits ``B = W (r - o)`` (the total field ``|B|`` against the reference, Ding 2024 eq 18 as the
+    objective; or the vector field, Yuan 2018 eq 8) with the model ``model=auto`` chooses by held-out
+    spread, then checks it (the acceptance gate, :mod:`magexp.calibration.checks`).
+
+    Parameters
+    ----------
+    readings : array_like, DataFrame, str, Path or Recording
+        ``(N, 3)`` raw readings, a DataFrame (``bx, by, bz`` / ``mx, my, mz`` / ``x, y, z`` columns, else
+        its three numeric columns), a recording's path in any format of
+        :data:`magexp.core.recordings.READERS`, or a loaded :class:`~magexp.core.recording.Recording`.
+    unit : str or None
+        Unit of an array or DataFrame (``nT, uT, mG, G, T, counts``); of a path, as ``data.unit``.
+    estimator : str or estimator
+        A name of ``conf/estimator/*.yaml`` (``ellipsoid``, ``lm``, ``ipso``, ...) or an object with a
+        ``fit(problem, rng=...)`` method.
+    objective : str
+        ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
+    reference_total : float or None
+        The reference total field (the readings' unit); None: the recording's, else estimated
+        (:func:`magexp.calibration.fit.reference_of`).
+    folds : int
+        The held-out check: 0 none; 2 or more, each region of directions calibrated by the fit on the others.
+    seed : int
+        The estimator's random generator derives from it (:func:`magexp.core.seeding.run_generators`).
+    checks : bool
+        Refuse degenerate data, failed fits and calibrations failing the gate; False measures them anyway.
+    model : str
+        ``auto``, ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    accept : bool
+        Keep a calibration that fails the acceptance gate, its failures recorded in ``report["gate"]``.
+    gate : dict or None
+        ``gate.*`` thresholds overriding :data:`magexp.calibration.checks.GATE`.
+    auto_margin : float
+        ``model=auto``: a richer model must cut the simpler one's held-out spread by this fraction.
+    compiled : bool or None
+        The kernels' path: False numpy; True the compiled (numba) kernels where installed and not turned off
+        by ``MAGEXP_NUMBA=0``; None (default) the compiled ones for an iterative estimator, numpy for a
+        closed form, whose few residual evaluations do not repay loading numba
+        (:func:`magexp.calibration.fit.numpy_path`).
+    **estimator_options
+        Overrides of the estimator config (e.g. ``n_iterations=200``).
+
+    Returns
+    -------
+    Calibration
+        ``.w`` (canonical form), ``.offset``, ``.calibrated``, ``.metrics`` (spread before, after,
+        held out; coverage), ``.report`` (standard errors, conditioning, undetermined combinations, the gate).
+
+    Raises
+    ------
+    MagexpError
+        One line for degenerate data, a failed estimator or bad input.
+    """
+    rec = as_recording(readings, unit=unit)
+    if not isinstance(estimator, str) and not callable(getattr(estimator, "fit", None)):
+        raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
+                          f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
+    est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
+    seed = check_positive_int(seed, "seed", minimum=0)
+    _, rng = run_generators(seed)
+    with numpy_only(numpy_path(compiled, est)):
+        cal = calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,
+                                  rng=rng, checks=checks, model=model, accept=accept, gate_overrides=gate,
+                                  auto_margin=auto_margin)
+    cal.seed = seed
+    cal.config = {"readings": str(readings) if isinstance(readings, (str, Path)) else type(readings).__name__,
+                  "unit": unit, "estimator": est.name if hasattr(est, "name") else str(estimator),
+                  "objective": objective, "reference_total": None if reference_total is None else
+                  float(np.mean(cal.reference.total)), "folds": folds, "seed": seed, "checks": checks, "model": model,
+                  "accept": accept, "gate": dict(gate or {}), "auto_margin": auto_margin,
+                  **({} if compiled is None else {"compiled": compiled}), **estimator_options}
+    return cal

@@ -1,0 +1,346 @@
+"""The command ``magexp calibrate KEY=VALUE ...`` (= ``python -m magexp.calibration.command``): parse and
+check the overrides, compose ``conf/calibrate.yaml`` (its keys, types, defaults and sentences:
+:mod:`magexp.calibration.options`), read the recording, run the pipeline
+(:func:`magexp.calibration.fit.calibrate_recording`), write the output folder and print the summary.
+``--help`` prints :func:`magexp.calibration.options.help_text`.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from magexp.calibration import models as models_
+from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, check_counts_nt, check_max_rotation,
+                                      options_of as export_options_of,
+                                      render as render_export)
+from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
+from magexp.calibration.options import help_text
+from magexp.calibration.inputs import Reference
+from magexp.calibration.result import Calibration
+from magexp.calibration.write import check_out, summary, table, write
+from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
+from magexp.core.recording import UNITS, Recording
+from magexp.core.recordings import load_recording, resolve
+from magexp.core.seeding import run_generators
+from magexp.errors import MagexpError, check_positive_int, exit_code
+from magexp.problems.kernels import numpy_only
+from magexp.run.budget import check_recording_file
+from magexp.run.compose import GROUPS, check_choice, compose_config, options
+from magexp.run.guard import check_destination, check_hydra_keys, check_override_targets, check_override_values
+from magexp.run.runner import build
+
+
+def calibrate_config(argv: list[str]):
+    """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed as every
+    command's config is (:func:`magexp.run.compose.compose_config`: Hydra once per estimator choice,
+    kept on disk).
+
+    Parameters
+    ----------
+    argv : list of str
+        The ``KEY=VALUE`` overrides.
+
+    Returns
+    -------
+    DictConfig
+        The composed config.
+
+    Raises
+    ------
+    MagexpError
+        An argument without ``=``, a Hydra key, a code target or value, an unknown choice.
+    """
+    bad = [a for a in argv if "=" not in a]
+    if bad:
+        raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
+                          "(e.g. data.path=mine.csv data.unit=uT estimator=lm)")
+    check_hydra_keys(argv)
+    check_override_targets(argv)  # no code from an override, before the recording is read
+    argv = check_override_values(argv)
+    for arg in argv:
+        if arg.partition("=")[0] in GROUPS:
+            check_choice(*arg.split("=", 1))
+    return compose_config(argv, config_name="calibrate")
+
+
+def field_keys(cfg) -> dict:
+    """``field.*`` of ``cfg``, with the older ``igrf.*`` keys as aliases (``field.model=igrf``).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The command's config; its ``field.*`` and ``igrf.*`` keys are read.
+
+    Returns
+    -------
+    dict
+        ``model``, ``latitude``, ``longitude``, ``altitude_km``, ``date``.
+
+    Raises
+    ------
+    MagexpError
+        Both ``igrf.*`` and ``field.*`` given, or a bad value.
+    """
+    place = {k: v for k, v in dict(cfg.get("field") or {}).items()}
+    old = {k: v for k, v in dict(cfg.get("igrf") or {}).items() if v is not None and k != "altitude_km"}
+    if old:
+        if place.get("latitude") is not None:
+            raise MagexpError(f"igrf.latitude={old.get('latitude')!r} is not allowed with field.latitude: igrf.* is "
+                              "the older name of field.* (with field.model=igrf), give field.* only")
+        place.update(dict(cfg.igrf), model="igrf")
+    check_model(place.get("model"))  # a bad model named even when no place asks for one
+    check_given({**dict(cfg.get("igrf") or {}), "model": "igrf"}, "igrf")
+    check_given(place)
+    return place
+
+
+def reference_from_field(cfg, rec: Recording) -> Reference | None:
+    """The field model's total where and when ``rec`` was recorded (:mod:`magexp.core.field_model`):
+    ``field.latitude/longitude/altitude_km/date`` (each, if not given, from the log's GPS), or None
+    when neither the command line nor the log gives a place. In the recording's unit; a raw-count
+    recording is calibrated to the model's total in nT (``W`` then maps counts to nT).
+
+    Parameters
+    ----------
+    cfg
+        As in :func:`run`.
+    rec : Recording
+        The recording, whose log may give the place and date (its GPS).
+
+    Returns
+    -------
+    Reference or None
+        The model's total per reading, its source and record, or None.
+    """
+    place = field_keys(cfg)
+    if place.get("latitude") is None and not {"latitude", "date"} <= set(place_of(rec)):
+        return None
+    ref = field_of_recording(rec, model=place.get("model") or "igrf", latitude=place.get("latitude"),
+                             longitude=place.get("longitude"), altitude_km=place.get("altitude_km"),
+                             date=place.get("date"), prefix="field")
+    unit = rec.unit if rec.unit in UNITS else "nT"
+    inputs = ref.record()
+    where = f"{ref.generation} at {inputs['latitude']:g}, {inputs['longitude']:g}, {inputs['date']}"
+    return Reference(np.full(rec.n, ref.total / UNITS[unit]), where, unit=None if unit == rec.unit else unit,
+                     record=inputs)
+
+
+def run(cfg) -> Calibration:
+    """Load, calibrate, check and write as ``cfg`` says; print the summary.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`), checked here first
+        (:func:`check_options`).
+
+    Returns
+    -------
+    Calibration
+        The calibration written.
+
+    Raises
+    ------
+    MagexpError
+        Bad input, degenerate data, a failed fit or a refused one; nothing is written.
+    """
+    data = cfg.data
+    check_options(cfg)
+    rec = recording_of(cfg)
+    out = cfg.get("out")
+    out_dir = Path(f"calibration_{rec.path.stem}") if out is None else Path(str(out))
+    check_destination(out_dir if out is None else out, "out")
+    overwrite, draw = flag(cfg, "overwrite"), flag(cfg, "figure")
+    target, options = export_of(cfg, rec)
+    check_out(out_dir, overwrite=overwrite, export=target)
+    estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
+    seed = check_positive_int(cfg.seed, "seed", minimum=0)
+    _, est_rng = run_generators(seed)
+    reference = data.get("reference_total")
+    if reference is None:
+        reference = reference_from_field(cfg, rec)
+    with numpy_only(numpy_path(None, estimator)):
+        cal = calibrate_recording(rec, estimator, objective=cfg.objective, reference_total=reference,
+                                  folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
+                                  gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
+    cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
+    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=target, export_options=options)
+    print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
+                 + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
+                 + ("" if draw else "; no figure (figure=true draws it)")}))
+    return cal
+
+
+def check_options(cfg) -> None:
+    """The keys that a run may not use checked before anything is read: every given ``field.*`` and
+    ``igrf.*`` value (used only when a place is known, and not at all beside ``data.reference_total``),
+    ``counts_nt`` and ``max_rotation_deg`` (used only by some exports), ``auto_margin`` (only by
+    ``model=auto``): a bad value is refused in one line, not ignored.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+
+    Raises
+    ------
+    MagexpError
+        A bad value of those keys.
+    """
+    field_keys(cfg)
+    if cfg.get("counts_nt") is not None:
+        check_counts_nt(cfg.counts_nt)
+    if cfg.get("max_rotation_deg") is not None:
+        check_max_rotation(cfg.max_rotation_deg)
+    models_.check_margin(cfg.get("auto_margin", models_.MARGIN))
+
+
+def recording_of(cfg) -> Recording:
+    """The recording ``data.*`` names (its size checked before it is read; ``instance``: a DataFlash log's compass).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+
+    Returns
+    -------
+    Recording
+        The recording read (:func:`magexp.core.recordings.load_recording`).
+
+    Raises
+    ------
+    MagexpError
+        No ``data.path``, a file over the readings limit, or a malformed file.
+    """
+    data = cfg.data
+    if data.get("path") is None or not str(data.path).strip():
+        raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
+    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
+    instance = cfg.get("instance")
+    instance = None if instance is None else check_positive_int(instance, "instance", minimum=0)
+    return load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
+                          mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"), instance=instance)
+
+
+def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
+    """``(target, options)`` of ``export=<target>`` (``(None, None)`` without one), checked before the fit:
+    the target's name, and its options on an identity calibration (``counts_nt`` for raw counts, the
+    rotation limit, the slot: :func:`export_options`).
+
+    Parameters
+    ----------
+    cfg
+        As in :func:`run`.
+    rec : Recording
+        The recording: its unit, and a ULog's calibration slot.
+
+    Returns
+    -------
+    tuple
+        ``(target or None, options or None)``.
+
+    Raises
+    ------
+    MagexpError
+        An unknown target or a refused option.
+    """
+    target = cfg.get("export")
+    if target is None:
+        return None, None
+    if str(target) not in EXPORT_TARGETS:
+        raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(EXPORT_TARGETS)} (or null)")
+    options = export_options(cfg, str(target), rec)
+    render_export(str(target), np.eye(3), np.zeros(3), rec.unit, **options)
+    return str(target), options
+
+
+def export_options(cfg, target: str, rec: Recording) -> dict:
+    """The options of ``export=<target>`` from the command line (those the target takes,
+    :func:`magexp.calibration.export.options_of`): ``counts_nt``, ``max_rotation_deg`` and ``instance``, the
+    parameter slot (null: a ULog's calibration slot, else 0; a DataFlash log's instance is the one read).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    target : str
+        The export target.
+    rec : Recording
+        The recording whose calibration is exported (a ULog's slot: ``meta["calibration_slot"]``).
+
+    Returns
+    -------
+    dict
+        The options ``target`` takes, given.
+    """
+    slot = cfg.get("instance")
+    given = {"counts_nt": cfg.get("counts_nt"), "max_rotation_deg": cfg.get("max_rotation_deg"),
+             "instance": int(rec.meta.get("calibration_slot", 0)) if slot is None else slot}
+    return {k: v for k, v in given.items() if v is not None and k in export_options_of(target)}
+
+
+def flag(cfg, key: str) -> bool:
+    """A true/false key of ``cfg`` (default false), else one line.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    key : str
+        A true/false key.
+
+    Returns
+    -------
+    bool
+        Its value.
+
+    Raises
+    ------
+    MagexpError
+        A value that is not true or false.
+    """
+    return check_flag(cfg.get(key, False), key)
+
+
+
+
+def command(argv: list[str]) -> None:
+    """``magexp calibrate KEY=VALUE ...``: compose, check, calibrate, write; errors are raised (the
+    one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code).
+    ``--help`` (``-h``) prints :func:`help_text`.
+
+    Parameters
+    ----------
+    argv : list of str
+        The arguments after ``calibrate``.
+    """
+    if any(a in ("--help", "-h") for a in argv):
+        print(help_text(options("estimator")))
+        return
+    run(calibrate_config(argv))
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m magexp.calibration.command KEY=VALUE ...`` (= ``magexp calibrate``): 0 on success; one
+    line on stderr and exit 2 on bad input or degenerate data (nothing written), 3 on a bug.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        The arguments after ``calibrate`` (None: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
+    return exit_code(command, sys.argv[1:] if argv is None else list(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,188 @@
+"""What a calibration is fitted to: the reference total field of a recording (:class:`Reference`,
+:func:`reference_of`) and its
+:class:`~magexp.core.dataset.Dataset` for the objective or the gyro-aided model (:func:`recording_dataset`,
+:func:`gyro_dataset`: the one path from a recording to a Dataset, :func:`magexp.core.recording.recording_dataset`,
+which the recorded scenarios take too). The first stage of the pipeline (:mod:`magexp.calibration.fit`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from magexp.calibration import models as models_
+from magexp.core.dataset import Dataset
+from magexp.core.recording import Recording, evenly_spaced, recording_dataset as dataset_of
+from magexp.errors import LARGEST, MagexpError
+from magexp.scenarios.search import centroid_radius
+
+@dataclass
+class Reference:
+    """The reference total field of a calibration.
+
+    Attributes
+    ----------
+    total : (N,) reference total per reading (in the recording's unit).
+    source : where it comes from (``data.reference_total``, ``total column``, ``IGRF-14 at ...``).
+    estimated : True when no reference was given and the scale was fixed from the data.
+    unit : the reference's unit when it differs from the recording's (a raw-count recording
+        calibrated to a field model's total in nT); None: the recording's.
+    record : the field model, generation and inputs it came from, or None.
+    """
+
+    total: np.ndarray
+    source: str
+    estimated: bool = False
+    unit: str | None = None  # the reference's unit when it is not the recording's (counts calibrated to nT)
+    record: dict | None = None  # a field model's name, generation and inputs (:meth:`ReferenceField.record`)
+
+    def describe(self) -> str:
+        """The reference in one line, as the summary prints it.
+
+        Returns
+        -------
+        str
+            The mean total and its source, or how it was estimated.
+        """
+        mean = float(np.mean(self.total))
+        if self.estimated:
+            return (f"none given: estimated as the mean calibrated magnitude, scale fixed to the radius of the "
+                    f"sphere fitted to the raw readings, {mean:.6g}")
+        return f"{mean:.6g} from {self.source}"
+
+
+
+#: Objectives a recording can be calibrated with.
+OBJECTIVES = ("scalar", "vector")
+#: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
+MIN_READINGS = 12
+
+#: ``model=gyro`` fits at most this many readings, evenly spaced in time (the gyroscope integrated between
+#: them), as the ``real_hmc5883l_*`` scenarios do (``n_readings: 300``): a documented default that bounds
+#: the work of its 17-parameter fit (each held-out fold and the final fit) whatever the recording's length.
+GYRO_READINGS = 300
+
+
+def reference_of(rec: Recording, override=None) -> Reference:
+    """The reference total field of ``rec`` (see the module docstring for the order).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+    override : float, str or None
+        ``data.reference_total`` (the recording's unit), else None.
+
+    Returns
+    -------
+    Reference
+        The total per reading, its source, and whether it was estimated.
+
+    Raises
+    ------
+    MagexpError
+        ``override`` not a number > 0 and <= LARGEST.
+    """
+    n = rec.n
+    if override is not None:
+        try:
+            value = float("nan") if isinstance(override, bool) else float(override)
+        except (TypeError, ValueError):
+            value = float("nan")
+        if not (np.isfinite(value) and 0 < value <= LARGEST):
+            raise MagexpError(f"data.reference_total={override!r} is not allowed: it must be a number > 0 and "
+                              f"<= {LARGEST:g}")
+        return Reference(np.full(n, value), "data.reference_total")
+    if rec.total is not None:
+        return Reference(np.asarray(rec.total, float), "the total column")
+    if rec.reference_total is not None:
+        return Reference(np.full(n, rec.reference_total), "'# reference_total:'")
+    if rec.field is not None:
+        return Reference(np.full(n, float(np.linalg.norm(rec.field))), "the norm of '# field:'")
+    return Reference(np.full(n, centroid_radius(rec.readings)), "estimated", estimated=True)
+
+
+def attitude_of(rec: Recording) -> np.ndarray | None:
+    """Navigation -> sensor rotations ``(N, 3, 3)`` (:meth:`Recording.attitude`), or None.
+
+    Parameters
+    ----------
+    rec : Recording
+        A recording with angles or a gyroscope (or neither).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The rotations, or None without attitudes or a gyroscope.
+    """
+    return rec.attitude()
+
+
+def recording_dataset(rec: Recording, reference: Reference, objective: str) -> Dataset:
+    """The :class:`Dataset` of ``rec`` for ``objective`` (attitudes and field for ``vector``): the one path
+    from a recording to a Dataset, :func:`magexp.core.recording.recording_dataset`, which the scenarios take too.
+
+    Parameters
+    ----------
+    rec, reference, objective
+        As in :func:`heldout`.
+
+    Returns
+    -------
+    Dataset
+        The readings with their reference totals (and attitudes and field).
+
+    Raises
+    ------
+    MagexpError
+        An objective not of :data:`OBJECTIVES`, or ``vector`` without attitudes and a field.
+    """
+    if objective not in OBJECTIVES:
+        raise MagexpError(f"objective={objective!r} is not allowed for magexp calibrate: choose one of "
+                          f"{', '.join(OBJECTIVES)}")
+    return dataset_of(rec, reference.total, objective)
+
+
+def gyro_dataset(rec: Recording, reference: Reference) -> Dataset:
+    """The :class:`Dataset` of ``model=gyro`` (:class:`~magexp.problems.gyro.GyroAidedCalibration`): the
+    readings (at most :data:`GYRO_READINGS`, evenly spaced), the reference total (the field's magnitude ``F``)
+    and the gyroscope's rotation increments between their times (:func:`magexp.core.geometry.preintegrate`).
+
+    Parameters
+    ----------
+    rec, reference
+        As in :func:`heldout`.
+
+    Returns
+    -------
+    Dataset
+        The dataset of :class:`~magexp.problems.gyro.GyroAidedCalibration`.
+
+    Raises
+    ------
+    MagexpError
+        A recording without a gyroscope.
+    """
+    if rec.gyro_rates() is None or rec.reading_times() is None:
+        models_.check_model("gyro", "scalar", gyro=False)
+    return dataset_of(rec, reference.total, "gyro", keep=evenly_spaced(rec.n, GYRO_READINGS))
+
+
+def check_size(rec: Recording) -> None:
+    """At least :data:`MIN_READINGS` readings.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (:class:`~magexp.core.recording.Recording`).
+
+    Raises
+    ------
+    MagexpError
+        Fewer than :data:`MIN_READINGS` readings.
+    """
+    if rec.n < MIN_READINGS:
+        raise MagexpError(f"{rec.name}: {rec.n} readings is not allowed: a calibration needs at least "
+                          f"{MIN_READINGS} (the 12 parameters of W and the offset)")
+

@@ -1,0 +1,208 @@
+"""What a calibration is: :class:`Calibration`, the fitted ``B = W (reading - offset)`` with how good it is
+(what :func:`magexp.calibrate` returns, what ``calibration.json`` holds), with the reference total field it
+was fitted to (:class:`magexp.calibration.inputs.Reference`). Made by the pipeline (:mod:`magexp.calibration.fit`); written and
+read back by :mod:`magexp.calibration.write`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from magexp.calibration.export import export
+from magexp.calibration.inputs import Reference
+from magexp.calibration.write import figure, read_parameters, save_parameters, summary, table
+from magexp.core.recording import Recording
+from magexp.errors import MagexpError
+from magexp.estimators.result import FitResult
+from magexp.run.guard import readings_array
+from magexp.scenarios.search import SearchBox
+
+
+@dataclass
+class Calibration:
+    """A fitted calibration ``B = W (reading - offset)`` of a recording, and how good it is.
+
+    ``w`` is in the canonical form of :data:`FORMS` (``report["w_form"]``); ``metrics`` holds the
+    spreads before, after and held out; ``report`` the standard errors, conditioning, the
+    undetermined combinations, the direction coverage (:mod:`magexp.core.identifiability`), the
+    acceptance gate's outcome and the model selection. A calibration read back by :meth:`load`
+    has no recording (``recording`` None): it applies, exports and summarises, but has no
+    readings to plot.
+    """
+
+    recording: Recording | None
+    estimator: str
+    objective: str
+    w: np.ndarray
+    offset: np.ndarray
+    reference: Reference
+    search: SearchBox | None
+    fit: FitResult | None
+    calibrated: np.ndarray
+    metrics: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
+    seed: int = 0
+    config: dict = field(default_factory=dict)  # the settings it was made with (the command's config, the call's)
+    saved: dict | None = None  # the JSON it was loaded from (:meth:`load`)
+
+    @property
+    def unit(self) -> str:
+        """Unit of the raw readings."""
+        return self.recording.unit if self.recording is not None else self.saved["unit"]
+
+    @property
+    def field_unit(self) -> str:
+        """Unit of the calibrated field (the recording's, or the field model's nT for raw counts)."""
+        return self.reference.unit or self.unit
+
+    @property
+    def name(self) -> str:
+        """The recording's file name (a loaded calibration's: the one it was made from).
+
+        """
+        return self.recording.name if self.recording is not None else Path(self.saved["recording"]).name
+
+    @property
+    def model(self) -> str:
+        """The model fitted (``report['model']``: ``sphere``, ``diagonal``, ``full`` or ``gyro``).
+
+        """
+        return self.report.get("model", "full")
+
+    def apply(self, readings) -> np.ndarray:
+        """``B = W (r - o)`` of raw ``readings`` (``(N, 3)`` or ``(3,)``, the recording's unit).
+
+        .. math:: \\mathbf B_i = W (\\mathbf r_i - \\mathbf o)
+
+        the calibration of every problem (:mod:`magexp.problems`; Yuan 2018's ``W = S^{-1}``, ``o = b``), whose
+        total-field RMS against the reference is Ding 2024's eq 18.
+
+        Parameters
+        ----------
+        readings : array_like
+            ``(N, 3)`` or ``(3,)`` raw readings, the recording's unit.
+
+        Returns
+        -------
+        numpy.ndarray
+            The calibrated field ``B``, shape of ``readings``, in :attr:`field_unit`.
+
+        Raises
+        ------
+        MagexpError
+            Readings of another shape.
+        """
+        r = readings_array(readings)
+        if r.shape[-1:] != (3,) or r.ndim > 2:
+            raise MagexpError(f"readings of shape {r.shape} are not allowed: give (N, 3) or (3,) raw readings")
+        return (r - self.offset) @ self.w.T
+
+    def save(self, path, *, overwrite: bool = False) -> Path:
+        """Write ``calibration.json`` content (versioned, with provenance) to ``path``; an existing
+        file is refused in one line unless ``overwrite``. :meth:`load` reads it back exactly.
+
+        Parameters
+        ----------
+        path, overwrite
+            As :func:`magexp.calibration.write.save_parameters` (which writes it).
+
+        Returns
+        -------
+        Path
+            ``path``.
+        """
+        return save_parameters(self, path, overwrite=overwrite)
+
+    @classmethod
+    def load(cls, path) -> "Calibration":
+        """A :class:`Calibration` from a ``calibration.json`` (:meth:`save`, ``magexp calibrate``).
+
+        Parameters
+        ----------
+        path
+            As :func:`magexp.calibration.write.read_parameters` (which reads and checks it).
+
+        Returns
+        -------
+        Calibration
+            The calibration, without its recording.
+
+        Raises
+        ------
+        MagexpError
+            A file that is not a readable calibration.
+        """
+        data = read_parameters(path)
+        ref = data["reference"]
+        reference = Reference(np.array([ref["total"]]), ref["source"], ref["estimated"], ref.get("unit"),
+                              ref.get("field_model"))
+        quality = data.get("quality", {})
+        return cls(recording=None, estimator=data["estimator"], objective=data["objective"],
+                   w=np.array(data["W"], float), offset=np.array(data["offset"], float), reference=reference,
+                   search=None, fit=None, calibrated=np.zeros((0, 3)), metrics=data.get("metrics", {}),
+                   report=quality, seed=data.get("seed", 0), config=data.get("config", {}), saved=data)
+
+    def __repr__(self) -> str:
+        m = self.metrics
+        held = f", held out {100 * m['heldout_spread']:.3g} %" if "heldout_spread" in m else ""
+        gate = self.report.get("gate") or {}
+        state = "" if not gate else (", gate passed" if gate.get("passed") else ", gate FAILED (accepted)")
+        return (f"<Calibration {self.name}: {self.model} model by {self.estimator}, spread "
+                f"{100 * m.get('spread_before', float('nan')):.3g} % -> {100 * m.get('spread_after', float('nan')):.3g} %"
+                f"{held}{state}; B = W (r - o), r in {self.unit}, B in {self.field_unit}>")
+
+    def summary(self) -> str:
+        """The printed summary of ``magexp calibrate`` (the key numbers, one per line).
+
+        Returns
+        -------
+        str
+            ``key  value`` lines.
+        """
+        return table(summary(self))
+
+    def plot(self):
+        """The before/after figure (:mod:`magexp.calibration.figure`); returns the matplotlib Figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        MagexpError
+            A loaded calibration (no readings).
+        """
+        if self.recording is None:
+            raise MagexpError("plot() is not allowed for a loaded calibration: it has no readings; calibrate the "
+                              "recording again, or plot cal.apply(readings) yourself")
+        return figure(self)
+
+    def export(self, target: str, path=None, **options) -> Path:
+        """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`).
+
+        Parameters
+        ----------
+        target : str
+            ``ardupilot``, ``px4``, ``ros`` or ``c``.
+        path : str, Path or None
+            The folder or file (None: the working folder).
+        **options
+            The target's options (:func:`magexp.calibration.export.options_of`).
+
+        Returns
+        -------
+        Path
+            The firmware's file, written atomically.
+
+        Raises
+        ------
+        MagexpError
+            An export the target refuses (:func:`magexp.calibration.export.render`), in one line.
+        """
+        return export(self, target, path, **options)
+
