@@ -142,7 +142,8 @@ class CalibrateOptions:
     counts_nt: float | None = option(None, "nT per count of the firmware's magnetometer driver (exporting a counts "
                                            "calibration needs it)")
     max_rotation_deg: float | None = option(None, "export=ardupilot|px4: the largest rotation R of W = R S exported "
-                                                  "as S alone (null: 1 deg)")
+                                                  "as S alone, or left beside the orientation exported for model=gyro "
+                                                  "(null: 1 deg)")
     instance: int | None = option(None, "a DataFlash log's compass (and IMU) instance read, 0 first, and the "
                                         "parameter slot exported (ardupilot COMPASS_OFS2_* for 1; px4 CAL_MAGn); "
                                         "null: 0, for px4 a ULog's calibration slot")
