@@ -27,13 +27,30 @@ MIRROR = np.array([0, 1, 2, 1, 3, 4, 2, 4, 5])  # the 9 row-major entries from t
 
 
 def expand(q: np.ndarray) -> np.ndarray:
-    """12-vectors ``[vec(M), o]`` (n, 12) with ``M`` symmetric from 9-vectors ``q`` (n, 9)."""
+    """The 12-vectors of symmetric-model parameters (module docstring).
+
+    Parameters
+    ----------
+    q : numpy.ndarray
+        ``(n, 9)`` (or ``(9,)``) vectors ``[M11, M12, M13, M22, M23, M33, o]``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 12)`` vectors ``[vec(M), o]`` with ``M`` symmetric.
+    """
     q = np.atleast_2d(q)
     return np.concatenate([q[:, MIRROR], q[:, 6:]], axis=1)
 
 
 class SymmetricView:
-    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector)."""
+    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector).
+
+    Parameters
+    ----------
+    problem : magexp.problems.base.Problem
+        A 12-parameter problem ``[vec(M), o]``.
+    """
 
     def __init__(self, problem):
         self.problem = problem
@@ -42,16 +59,55 @@ class SymmetricView:
         self.n_params = 9
 
     def cost(self, q: np.ndarray) -> np.ndarray:
+        """The problem's cost of the expanded vectors.
+
+        Parameters
+        ----------
+        q : numpy.ndarray
+            ``(n, 9)`` vectors.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n,)`` costs.
+        """
         return self.problem.cost(expand(q))
 
 
 class SymmetricSwarm(SwarmOptimizer):
     """``pso9``: a :class:`~magexp.estimators.swarm.SwarmOptimizer` (same settings) on the
-    symmetric 9-parameter model of a total-field problem (module docstring)."""
+    symmetric 9-parameter model of a total-field problem (module docstring).
+
+    Parameters
+    ----------
+    **settings
+        Those of :class:`~magexp.estimators.swarm.SwarmOptimizer`.
+
+    References
+    ----------
+    Yuan, Wang & Chen (2018), sec 1 and Table 7 (their refs [12, 13]); Kennedy & Eberhart (1995).
+    """
 
     needs = ("total_field",)
+    label = "PSO (9-parameter)"
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None):
+        """The swarm over ``q`` (:class:`SymmetricView`), its best returned as a 12-vector.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            A total-field problem of 12 parameters ``[vec(M), o]``.
+        rng : numpy.random.Generator
+            The run's estimator stream.
+        callback : callable, optional
+            ``callback(t, x, fun)`` after every iteration, ``x`` expanded to 12; a true return stops it.
+
+        Returns
+        -------
+        FitResult
+            ``x`` the expanded best, ``fun`` the problem's objective at it.
+        """
         relay = None if callback is None else (lambda t, q, fun: callback(t, expand(q)[0], fun))
         result = super().fit(SymmetricView(problem), rng=rng, callback=relay)
         result.x = expand(result.x)[0]
