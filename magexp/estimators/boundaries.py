@@ -36,7 +36,7 @@ def clip(x, v, lower, upper, *, rng):
     lower, upper : numpy.ndarray
         The box (d,).
     rng : numpy.random.Generator
-        The run's estimator stream (drawn from by ``random`` only).
+        The run's estimator stream (unused: only ``random`` draws).
 
     Returns
     -------
@@ -49,21 +49,16 @@ def clip(x, v, lower, upper, *, rng):
 def reflect(x, v, lower, upper, *, rng):
     """Mirror the excess back into the box (any number of widths); reverse the velocity where it left.
 
+
     Parameters
     ----------
-    x : numpy.ndarray
-        The unconstrained new positions ``x_old + v`` (n, d).
-    v : numpy.ndarray
-        Their velocities (n, d).
-    lower, upper : numpy.ndarray
-        The box (d,).
-    rng : numpy.random.Generator
-        The run's estimator stream (drawn from by ``random`` only).
+    x, v, lower, upper, rng
+        As :func:`clip` (``rng`` unused)
 
     Returns
     -------
     tuple of numpy.ndarray
-        The positions inside the box and the velocities to carry on with.
+        As :func:`clip`.
     """
     width = upper - lower
     y = np.mod(x - lower, 2.0 * width)
@@ -75,21 +70,16 @@ def reflect(x, v, lower, upper, *, rng):
 def random_reentry(x, v, lower, upper, *, rng):
     """Redraw a coordinate that left uniformly in its range, with zero velocity.
 
+
     Parameters
     ----------
-    x : numpy.ndarray
-        The unconstrained new positions ``x_old + v`` (n, d).
-    v : numpy.ndarray
-        Their velocities (n, d).
-    lower, upper : numpy.ndarray
-        The box (d,).
-    rng : numpy.random.Generator
-        The run's estimator stream (drawn from by ``random`` only).
+    x, v, lower, upper, rng
+        As :func:`clip`: the redrawn coordinates come from ``rng``
 
     Returns
     -------
     tuple of numpy.ndarray
-        The positions inside the box and the velocities to carry on with.
+        As :func:`clip`.
     """
     left = (x < lower) | (x > upper)
     fresh = lower + rng.random(x.shape) * (upper - lower)

@@ -29,13 +29,13 @@ def usual_step(z):
 
     Parameters
     ----------
-    z : float or numpy.ndarray
-        Iterates in [0, 1).
+    z
+        As :func:`printed_step`.
 
     Returns
     -------
     float or numpy.ndarray
-        The next iterates.
+        The next iterates of the standard map.
     """
     return np.mod(z + 0.2 - 0.5 / (2 * np.pi) * np.sin(2 * np.pi * z), 1.0)
 

@@ -81,12 +81,10 @@ class DifferentialEvolution:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its vectorised ``cost`` and its finite box ``lower``, ``upper``.
-        rng : numpy.random.Generator
-            The run's estimator stream; the library's generator is seeded from it (:func:`child_seed`).
-        callback : callable, optional
-            ``callback(t, best_x, best_cost)`` after every generation; a true return value stops the run.
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: the cost and its finite box; the library's
+            generator seeded from ``rng`` (:func:`~magexp.estimators.blackbox.child_seed`); ``callback``
+            after every generation (``popsize · p`` trials).
 
         Returns
         -------

@@ -25,7 +25,7 @@ class EllipsoidFit:
     Parameters
     ----------
     name : str
-        Config name.
+        Config name (``ellipsoid``).
 
     References
     ----------
@@ -63,12 +63,9 @@ class EllipsoidFit:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its dataset (readings, reference field) and ``pack``: it offers ``total_field``.
-        rng : numpy.random.Generator, optional
-            Unused (a closed form draws nothing).
-        callback : callable, optional
-            Unused (not iterative).
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: its readings and reference field
+            (``total_field``); a closed form draws nothing and does not iterate.
 
         Returns
         -------
@@ -116,10 +113,8 @@ class EllipsoidSpecificFit(EllipsoidFit):
 
         Parameters
         ----------
-        readings : numpy.ndarray
-            ``(N, 3)``.
-        radius : float
-            The field magnitude the calibrated readings should have.
+        readings, radius
+            As :meth:`EllipsoidFit.quadric`.
 
         Returns
         -------

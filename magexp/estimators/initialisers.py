@@ -117,16 +117,12 @@ class CircleMap:
 
         Parameters
         ----------
-        n : int
-            Particles.
-        lower, upper : numpy.ndarray
-            The box (d,).
-        rng : numpy.random.Generator
-            The run's estimator stream.
+        n, lower, upper, rng
+            As :meth:`Uniform.__call__` (``z_0`` drawn from ``rng``).
 
         Returns
         -------
         numpy.ndarray
-            ``(n, d)`` positions in the box.
+            ``(n, d)`` positions in the box, on the map's orbit.
         """
         return lower + self.sequence(rng.random(lower.size), n) * (upper - lower)

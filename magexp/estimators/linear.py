@@ -26,11 +26,12 @@ class LeastSquares:
     Parameters
     ----------
     name : str
-        Config name.
+        Config name (``ls``).
 
     References
     ----------
-    Golub & Van Loan, Matrix Computations, ch. 5.
+    Gauss (1809), Theoria motus corporum coelestium; Golub & Van Loan, Matrix Computations, ch. 5 (the
+    QR and SVD solutions).
     """
 
     references = "Gauss 1809; Golub & Van Loan, Matrix Computations"
@@ -47,12 +48,8 @@ class LeastSquares:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its ``least_squares()``: it offers ``linear_design``.
-        rng : numpy.random.Generator, optional
-            Unused (a closed form draws nothing).
-        callback : callable, optional
-            Unused (not iterative).
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: its ``least_squares()`` (``linear_design``).
 
         Returns
         -------
@@ -94,12 +91,8 @@ class FixedParameters:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its objective, with ``n_params`` equal to the length of ``x``.
-        rng : numpy.random.Generator, optional
-            Unused (a closed form draws nothing).
-        callback : callable, optional
-            Unused (not iterative).
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: its ``n_params`` must be the length of ``x``.
 
         Returns
         -------

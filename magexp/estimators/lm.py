@@ -111,6 +111,7 @@ class LevenbergMarquardt:
         Parameters
         ----------
         problem : magexp.problems.base.Problem
+            Its ``initial_estimate()`` where it has one, its readings (the ellipsoid fit), its box.
 
         Returns
         -------

@@ -94,14 +94,13 @@ class ThermalCoefficient:
 
         Parameters
         ----------
-        t : int or numpy.ndarray
-            Iteration(s).
-        t_max : int
-            The last iteration.
+        t, t_max
+            As :meth:`magexp.estimators.schedules.Linear.__call__`.
 
         Returns
         -------
         float or numpy.ndarray
+            ``α(t)``, element-wise for an array ``t``.
         """
         return self.base + self.span / (1.0 + self.rate * t / t_max)
 

@@ -170,6 +170,7 @@ class TriangularCalibration:
         Parameters
         ----------
         problem : magexp.problems.base.Problem
+            Its readings and reference magnitudes, else its box.
 
         Returns
         -------
