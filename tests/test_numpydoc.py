@@ -16,8 +16,9 @@ import pytest
 
 import magexp.estimators
 
-#: modules being rewritten by issue 35's velocity-kernel redesign; the lead enables them when it lands
-SKIP = {"magexp.estimators.velocity", "magexp.estimators._compiled", "magexp.estimators.swarm"}
+#: modules being rewritten by issue 35's velocity-kernel redesign (with the private ``_compiled``, whose
+#: kernels are not public API); the lead enables them when it lands
+SKIP = {"velocity", "swarm"}
 
 
 def sections(doc: str) -> dict[str, list[str]]:
@@ -54,7 +55,7 @@ def public_api() -> list[tuple[str, object, object]]:
     estimators (a constructor is documented by its class's docstring)."""
     out = []
     for info in pkgutil.iter_modules(magexp.estimators.__path__, "magexp.estimators."):
-        if info.name in SKIP:
+        if info.name.rpartition(".")[2] in SKIP or info.name.rpartition(".")[2].startswith("_"):
             continue
         module = importlib.import_module(info.name)
         for name, obj in vars(module).items():
