@@ -81,7 +81,7 @@ DERIVED = types.SimpleNamespace()
 def schema_of(cls) -> type:
     """The schema of the configs that build ``cls``: its ``Config`` dataclass if it has one, else a
     dataclass of its constructor's parameters with their annotations (:func:`_typed`) and defaults
-    (none: the config must give it), plus ``_target_`` (kept in :data:`DERIVED` as ``<class>Config``)."""
+    (none: the config must give it), plus ``_target_`` (kept in :data:`DERIVED` as ``<class>Conf``; class names are unique among the configs' classes)."""
     if "Config" in dir(cls):
         return cls.Config
     name = f"{cls.__name__}Conf"
