@@ -11,7 +11,7 @@ from magexp.calibration.inputs import attitude_of
 from magexp.scenarios.search import search_box
 from magexp.calibration.write import FILES, check_out
 from magexp.errors import MagexpError
-from magexp.paths import CONF, RESULTS, SHARED_DATA
+from magexp.paths import RESULTS, SHARED_DATA
 from magexp.core.recordings import UNITS, load_recording
 from magexp.run.runner import build
 from magexp.core.geometry import ship_attitude
@@ -27,7 +27,9 @@ def calibrate(rec, est, **kw):
 def estimator(name, **overrides):
     from omegaconf import OmegaConf
 
-    cfg = OmegaConf.load(CONF / "estimator" / f"{name}.yaml")
+    from magexp.run.compose import compose_config
+
+    cfg = compose_config([f"estimator={name}"]).estimator  # typed by its schema
     return instantiate(OmegaConf.merge(cfg, overrides), _convert_="all")
 
 

@@ -90,7 +90,8 @@ compose.hydra_compose = no_hydra
 first = compose.compose_config(["scenario=yuan2018_drift"])
 again = compose.compose_config(["scenario=yuan2018_drift"])
 assert again == first and again is not first
-assert OmegaConf.get_type(again.scenario) is compose.YuanScenarioConf
+from magexp.scenarios.yuan import YuanScenarioConf
+assert OmegaConf.get_type(again.scenario) is YuanScenarioConf
 try:
     compose.compose_config(["scenario=yuan2018_drift", "scenario.noise=abc"])
 except MagexpError as exc:
@@ -146,8 +147,9 @@ def test_schema_types_are_checked_at_compose_time():
 
 
 def test_yuan_scenarios_inherit_one_base():
-    from magexp.run.compose import YuanScenarioConf, compose_config
     from magexp.paths import CONF
+    from magexp.run.compose import compose_config
+    from magexp.scenarios.yuan import YuanScenarioConf
 
     names = [n for n in SCENARIOS if n.startswith("yuan2018_")]
     assert len(names) == 8

@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 from hydra.utils import instantiate
+from omegaconf import OmegaConf
 
+from magexp.artifacts.plan import shrink
 from magexp.run.compose import options
 from magexp.errors import MagexpError
 from magexp.estimators.base import Estimator, applies_to
@@ -36,17 +38,18 @@ def first_applicable(make_cfg, est):
 
 @pytest.mark.parametrize("name", ESTIMATORS)
 def test_estimator_contract(make_cfg, name):
-    """Every estimator config: builds, follows the protocol, fits the first scenario it applies to
-    (FitResult with finite x, fun = the objective at x, a non-increasing history ending at fun), and
+    """Every estimator config (docs/extending.md, "The estimator contract"): builds, follows the protocol
+    (name, needs, iterative, label, smoke, references), fits the first scenario it applies to at its smoke
+    sizes (FitResult with finite x, fun = the objective at x, a non-increasing history ending at fun), and
     an iterative one stops when its callback asks."""
-    est = instantiate(make_cfg(f"estimator={name}").estimator, _convert_="all")
+    cfg = make_cfg(f"estimator={name}")
+    est = instantiate(cfg.estimator, _convert_="all")
     assert est.name == name and isinstance(est, Estimator)
+    assert isinstance(est.label, str) and isinstance(est.references, str) and est.references
+    assert all(isinstance(cap, int) and cap > 0 and isinstance(cfg.estimator[key], int) for key, cap in est.smoke.items())
+    est = instantiate(shrink(cfg).estimator, _convert_="all")  # the sizes of a --tiny run
+    assert all(OmegaConf.select(cfg, f"estimator.{key}") <= cap for key, cap in est.smoke.items())
     sc = first_applicable(make_cfg, est)
-    # small budgets (a black-box budget: de's two generations of 10 x 12, as --tiny)
-    for key, cap in (("n_iterations", 30), ("n_particles", 30), ("n_steps", 30), ("max_nfev", 30),
-                     ("max_evaluations", 240)):
-        if hasattr(est, key):
-            setattr(est, key, min(getattr(est, key), cap))
     prob = make_problem(sc.objective, sc.generate(rng=np.random.default_rng(0)), sc.search,
                         **getattr(sc, "problem_options", {}))
     assert isinstance(prob, Problem)

@@ -29,11 +29,6 @@ from magexp.run.compose import compose_config, yaml_value
 from magexp.run.executor import run_row
 from magexp.run.runner import build
 
-# tiny sizes (--tiny, the smoke tests): every iteration budget an estimator has; black-box budgets (cmaes, de)
-# at least de's two generations of 10 x 12; max_iter: local's BFGS and twostep's Gauss-Newton iterations
-SHRINK = {"estimator.n_iterations": 6, "estimator.n_particles": 6, "estimator.n_steps": 12, "estimator.max_nfev": 50,
-          "estimator.max_evaluations": 240, "estimator.max_iter": 12}
-
 
 def load_spec(path: Path | str):
     """Read and validate an artifact YAML (:func:`magexp.artifacts.spec.load`)."""
@@ -159,11 +154,11 @@ def setting_of(overrides: list[str]) -> str:
 
 
 def shrink(cfg: DictConfig) -> DictConfig:
-    """Tiny sizes for smoke tests: cap every size key the config has."""
-    for key, cap in SHRINK.items():
-        value = OmegaConf.select(cfg, key)
+    """Tiny sizes for smoke tests: cap each key of the estimator class's ``smoke`` sizes."""
+    for key, cap in getattr(get_class(cfg.estimator._target_), "smoke", {}).items():
+        value = OmegaConf.select(cfg, f"estimator.{key}")
         if isinstance(value, int):
-            OmegaConf.update(cfg, key, min(value, cap))
+            OmegaConf.update(cfg, f"estimator.{key}", min(value, cap))
     return cfg
 
 

@@ -46,12 +46,15 @@ import re
 
 import numpy as np
 import pandas as pd
+from omegaconf import OmegaConf
 from scipy.special import fdtrc, stdtrit
 
 from magexp.artifacts.claims import matches
 from magexp.artifacts.plan import ArtifactRuns, quantiles, rebuild_problem
 from magexp.core.outcomes import failed_majority, success_threshold
 from magexp.errors import MagexpError
+from magexp.paths import CONF
+from magexp.run.compose import options, target_class
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
            "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval",
@@ -67,13 +70,22 @@ SEARCH_FRACTION = 0.5
 #: a parameter's interval wider than this fraction of its block's scale (the RMS of the medians of the
 #: parameters sharing its name's letters: S's nine entries, b's three components) is uninformative
 BLOCK_FRACTION = 0.15
-#: readable names of estimators and quantities in row labels (others are shown as they are)
-ESTIMATOR_NAMES = {"pso": "PSO", "ipso": "IPSO", "rdpso": "RDPSO", "ekf": "EKF", "kf": "KF", "lm": "lm",
-                   "ellipsoid": "ellipsoid fit", "pso9": "PSO (9-parameter)", "ls": "least squares"}
+#: readable names of quantities in row labels (others are shown as they are)
 QUANTITY_NAMES = {"final_rms": "final RMS", "converged_fraction": "converged fraction",
                   "improvement_ratio": "final RMS ratio", "fit_rms": "fit RMS"}
 
 
+
+
+@functools.cache
+def estimator_label(name: str) -> str:
+    """An estimator's name in row labels: its config's ``label:``, else its class's ``label``
+    (:class:`magexp.estimators.base.Estimator`), else ``name`` (also a name no config has, e.g. a
+    variant named by ``estimator.name=``)."""
+    if name not in options("estimator"):
+        return name
+    label = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("label")
+    return str(label or getattr(target_class("estimator", name), "label", "") or name)
 
 
 def interval(values, floor: float = 0.0) -> tuple[float, float]:
@@ -355,7 +367,7 @@ def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, pr
     varying = [k for k in cell if k != "estimator" and len({str(c.get(k)) for c in cells}) > 1]
     names = dict(spec.plot.get("labels", {}) or {}) if spec.plot is not None else {}
     parts = [_setting_text(key, str(cell[key]), names) for key in varying]
-    head = " ".join(p for p in (prefix or ESTIMATOR_NAMES.get(estimator, estimator),
+    head = " ".join(p for p in (prefix or estimator_label(estimator),
                                 QUANTITY_NAMES.get(quantity, quantity)) if p)
     return ", ".join([head, *parts])
 
@@ -623,7 +635,7 @@ def _ratio_row(runs: ArtifactRuns, item, ci: int, nj: int, settings: dict) -> di
     sub = table[table.cell == ci]
     ref = ",".join(f"{k}={v}" for k, v in num_sel.items())
     threshold = spec.success.factor if item.metric == spec.success.metric else None
-    over = "/".join(ESTIMATOR_NAMES.get(str(e), str(e)) for e in (num_sel.get("estimator"), sub.estimator.iloc[0]) if e)
+    over = "/".join(estimator_label(str(e)) for e in (num_sel.get("estimator"), sub.estimator.iloc[0]) if e)
     return _row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], None, ratio.to_numpy(),
                 settings, extra_setting=f";reference={ref}", success_threshold=threshold,
                 ok=None if both is None else both.to_numpy(float), ratio=True,

@@ -541,6 +541,7 @@ def estimator_named(name: str, **overrides):
         known = sorted(p.stem for p in (CONF / "estimator").glob("*.yaml"))
         raise MagexpError(f"estimator={name!r} is not allowed: choose one of {', '.join(known)}")
     node = OmegaConf.load(path)
+    node.pop("defaults", None)  # its typed schema's line (Hydra's defaults list), not an option
     unknown = [key for key in overrides if key not in node]
     if unknown:
         options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")

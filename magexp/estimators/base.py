@@ -28,28 +28,78 @@ Callback = Callable[[int, np.ndarray, Optional[float]], bool]
 
 @runtime_checkable
 class Estimator(Protocol):
-    """An estimator: keyword-only hyper-parameters, a ``name``, what it ``needs``, and ``fit``.
+    """An estimator: one class and one config (``conf/estimator/<name>.yaml``).
+
+    Its constructor takes the hyper-parameters as typed keyword arguments (``n_particles: int = 50``):
+    they are the config's keys, and their annotations and defaults are its typed schema
+    (:func:`magexp.run.compose.schema_of`), which the config names in its defaults list
+    (``- /schema/estimator/<ClassName>@_here_``). Everything else about it is a class attribute.
 
     Attributes
     ----------
-    name : its config name.
-    needs : capabilities the problem must offer (:data:`magexp.problems.base.CAPABILITIES`).
-    iterative : whether ``fit`` iterates (and so honours ``callback``).
+    name : str
+        Its config name (the constructor's ``name``).
+    needs : tuple of str
+        Capabilities the problem must offer (:data:`magexp.problems.base.CAPABILITIES`).
+    iterative : bool
+        Whether ``fit`` iterates (and so honours ``callback``).
+    label : str
+        Its name in the report's row labels (``"KF"``); empty: the config name. A config may set its
+        own ``label:`` where its class takes one (the swarm engine: ``pso``, ``ipso``, ``rdpso``).
+    smoke : dict of str to int
+        The sizes a smoke run (``reproduce --tiny``, the smoke tests) caps each key to
+        (``{"n_iterations": 6, "n_particles": 6}``); empty: nothing to cap.
+    references : str
+        The paper(s) the method comes from.
+    monotone_history : bool, optional
+        False where the history need not decrease (a filter's objective per step); default True.
     """
 
     name: str
     needs: tuple
     iterative: bool
+    label: str
+    smoke: dict
+    references: str
 
-    def fit(self, problem, *, rng: np.random.Generator, callback: Callback | None = None) -> FitResult: ...
+    def fit(self, problem, *, rng: np.random.Generator, callback: Callback | None = None) -> FitResult:
+        """Fit ``problem``.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            What to fit: it offers every capability of ``needs``.
+        rng : numpy.random.Generator
+            The run's estimator stream (:mod:`magexp.core.seeding`): every random draw comes from it.
+        callback : callable, optional
+            ``callback(t, x, fun)`` after every iteration of an iterative estimator; a true return stops it.
+
+        Returns
+        -------
+        FitResult
+            ``x`` the estimate, ``fun`` the problem's objective at ``x`` (``problem.cost_direct(x)``), the
+            history of the best objective.
+        """
 
 
 def applies_to(estimator, problem) -> tuple[bool, str]:
-    """Whether ``estimator`` (class or instance) applies to ``problem`` (class or instance).
+    """Whether ``estimator`` applies to ``problem``: what it ``needs`` against what the problem offers.
 
-    Returns ``(True, "")`` or ``(False, reason)``, the reason one line naming what the estimator
-    needs and what the problem offers. An estimator may also be bound to one objective
-    (``only_objective``, e.g. a paper's printed solution of one model).
+    An estimator may also be bound to one objective (``only_objective``, e.g. a paper's printed
+    solution of one model).
+
+    Parameters
+    ----------
+    estimator : Estimator class or instance
+        Its ``needs`` (default ``("cost",)``) and ``only_objective`` are read.
+    problem : Problem class or instance
+        Its ``capabilities`` and ``objective`` are read.
+
+    Returns
+    -------
+    tuple of (bool, str)
+        ``(True, "")`` or ``(False, reason)``, the reason one line naming what the estimator needs
+        and what the problem offers.
     """
     name = name_of(estimator)
     objective = getattr(problem, "objective", "?")
@@ -70,16 +120,38 @@ def applies_to(estimator, problem) -> tuple[bool, str]:
 
 
 def name_of(estimator) -> str:
-    """The config name of ``estimator`` (class or instance): its ``name``, else its class's name."""
+    """The config name of ``estimator``: its ``name``, else its class's name.
+
+    Parameters
+    ----------
+    estimator : Estimator class or instance
+
+    Returns
+    -------
+    str
+    """
     name = getattr(estimator, "name", None)
     return name if isinstance(name, str) else getattr(estimator, "__name__", type(estimator).__name__)
 
 
 def check_applies(estimator, problem, where: str = "", alternatives=None) -> None:
-    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes: it names the
-    estimator, the problem's objective, ``where`` (e.g. the scenario) and the reason, and, given
-    ``alternatives`` (a callable returning ``{name: estimator class}``, called only on failure),
-    the estimators that do apply (``magexp calibrate``: every ``conf/estimator/*.yaml``)."""
+    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes.
+
+    Parameters
+    ----------
+    estimator, problem : class or instance
+        As :func:`applies_to`.
+    where : str
+        Named in the error (e.g. the scenario).
+    alternatives : callable, optional
+        Returns ``{name: estimator class}``, called only on failure: the error then names the
+        estimators that do apply (``magexp calibrate``: every ``conf/estimator/*.yaml``).
+
+    Raises
+    ------
+    MagexpError
+        Naming the estimator, the problem's objective, ``where`` and the reason.
+    """
     ok, reason = applies_to(estimator, problem)
     if ok:
         return
@@ -96,9 +168,21 @@ class Stop(Exception):
 
 
 def stopper(callback: Callback | None, best: dict):
-    """A recorder for library optimisers (``least_squares``, ``differential_evolution``...):
-    ``record(x, fun)`` keeps the best ``x`` seen in ``best`` (``best["x"]``, ``best["fun"]``),
-    its history in ``best["history"]``, and raises :class:`Stop` when ``callback`` asks to."""
+    """A recorder for library optimisers (``least_squares``, ``minimize``...).
+
+    Parameters
+    ----------
+    callback : callable or None
+        ``callback(k, best x, best fun)`` after each record ``k``; a true return raises :class:`Stop`.
+    best : dict
+        Filled by the recorder: ``best["x"]``, ``best["fun"]`` (the best seen) and ``best["history"]``
+        (the best after each record).
+
+    Returns
+    -------
+    callable
+        ``record(x, fun)``.
+    """
     best.setdefault("history", [])
     best.setdefault("fun", np.inf)
 

@@ -25,12 +25,41 @@ from magexp.errors import MagexpError
 
 
 def clip(x, v, lower, upper, *, rng):
-    """Clip to the box; velocity unchanged."""
+    """Clip to the box; velocity unchanged.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The unconstrained new positions ``x_old + v`` (n, d).
+    v : numpy.ndarray
+        Their velocities (n, d).
+    lower, upper : numpy.ndarray
+        The box (d,).
+    rng : numpy.random.Generator
+        The run's estimator stream (unused: only ``random`` draws).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The positions inside the box and the velocities to carry on with.
+    """
     return np.clip(x, lower, upper), v
 
 
 def reflect(x, v, lower, upper, *, rng):
-    """Mirror the excess back into the box (any number of widths); reverse the velocity where it left."""
+    """Mirror the excess back into the box (any number of widths); reverse the velocity where it left.
+
+
+    Parameters
+    ----------
+    x, v, lower, upper, rng
+        As :func:`clip` (``rng`` unused)
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        As :func:`clip`.
+    """
     width = upper - lower
     y = np.mod(x - lower, 2.0 * width)
     inside = lower + np.where(y <= width, y, 2.0 * width - y)
@@ -39,7 +68,19 @@ def reflect(x, v, lower, upper, *, rng):
 
 
 def random_reentry(x, v, lower, upper, *, rng):
-    """Redraw a coordinate that left uniformly in its range, with zero velocity."""
+    """Redraw a coordinate that left uniformly in its range, with zero velocity.
+
+
+    Parameters
+    ----------
+    x, v, lower, upper, rng
+        As :func:`clip`: the redrawn coordinates come from ``rng``
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        As :func:`clip`.
+    """
     left = (x < lower) | (x > upper)
     fresh = lower + rng.random(x.shape) * (upper - lower)
     return np.where(left, fresh, x), np.where(left, 0.0, v)
@@ -49,7 +90,18 @@ BOUNDARIES = {"clip": clip, "reflect": reflect, "random": random_reentry}
 
 
 def boundary(name: str):
-    """The strategy called ``name``; a one-line error naming the allowed ones otherwise."""
+    """The strategy called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`BOUNDARIES`; another is refused in one line naming the allowed ones.
+
+    Returns
+    -------
+    callable
+        ``handle(x, v, lower, upper, rng=rng) -> (x, v)``.
+    """
     if name not in BOUNDARIES:
         raise MagexpError(f"estimator.boundary={name!r} is not allowed: choose one of {', '.join(BOUNDARIES)}")
     return BOUNDARIES[name]

@@ -38,15 +38,25 @@ class CMAES:
 
     Parameters
     ----------
-    name : config name.
-    max_evaluations : budget of cost evaluations (default: the swarms' 50 × 801).
-    popsize : ``λ``; 0 keeps cma's default ``4 + ⌊3 ln p⌋``.
-    sigma0 : initial step size in box-normalised coordinates (fraction of the box width).
-    start : ``uniform`` (``m_0`` uniform in the box, from ``rng``) or ``centre``.
+    name : str
+        Config name.
+    max_evaluations : int
+        Budget of cost evaluations (default: the swarms' 50 × 801), at least 2.
+    popsize : int
+        ``λ``; 0 keeps cma's default ``4 + ⌊3 ln p⌋``.
+    sigma0 : float
+        Initial step size in box-normalised coordinates (fraction of the box width), > 0.
+    start : str
+        ``uniform`` (``m_0`` uniform in the box, from ``rng``) or ``centre``.
+
+    References
+    ----------
+    Hansen & Ostermeier (2001), Evolutionary Computation 9(2):159-195; Hansen (2016), arXiv:1604.00772.
     """
 
     references = "Hansen & Ostermeier 2001; Hansen 2016 (arXiv:1604.00772); pycma"
-
+    label = ""
+    smoke = {"max_evaluations": 240}
     needs = ("cost",)
     iterative = True
 
@@ -61,10 +71,19 @@ class CMAES:
         self.start = start
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
-        """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]``.
+        """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]`` (module docstring).
 
-        ``callback(t, best_x, best_cost)`` is called after every generation; a true return value
-        stops the run.
+        Parameters
+        ----------
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: the cost and its finite box; the library's
+            generator seeded from ``rng`` (:func:`~magexp.estimators.blackbox.child_seed`); ``callback``
+            after every generation (``popsize`` candidates).
+
+        Returns
+        -------
+        FitResult
+            The best point evaluated; ``history[k]`` the best cost after generation ``k``.
         """
         import cma  # lazy: 1.3 s CPU to import (min of 5, after numpy), paid only by a cmaes run
 

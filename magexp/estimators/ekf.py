@@ -32,13 +32,39 @@ from magexp.problems.vector import theta_to_state
 
 
 def forward_measurement(theta: np.ndarray, reference: np.ndarray, reading: np.ndarray):
-    """``(z, h, J)`` of the forward form: ``z = B``, ``h = S u + b``."""
+    """The forward form's measurement: ``z = B``, ``h = S u + b`` (Yuan 2018 eq 1).
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        ``[vec(S), b]`` (12,).
+    reference : numpy.ndarray
+        ``u = C H`` (3,), the reference vector in the body frame.
+    reading : numpy.ndarray
+        ``B`` (3,).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(z, h, J)``: the measurement, its prediction and the Jacobian ``∂h/∂θ`` (3, 12).
+    """
     h = theta[:9].reshape(3, 3) @ reference + theta[9:]
     return reading, h, np.hstack([np.kron(np.eye(3), reference[None, :]), np.eye(3)])
 
 
 def inverse_measurement(theta: np.ndarray, reference: np.ndarray, reading: np.ndarray):
-    """``(z, h, J)`` of the inverse form: ``z = u``, ``h = S^{-1}(B - b)``."""
+    """The inverse form's measurement: ``z = u``, ``h = S^{-1}(B - b)`` (Yuan 2018 eq 3).
+
+    Parameters
+    ----------
+    theta, reference, reading : numpy.ndarray
+        As :func:`forward_measurement`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(z, h, J)``: the measurement, its prediction and the Jacobian ``∂h/∂θ`` (3, 12).
+    """
     w = np.linalg.inv(theta[:9].reshape(3, 3))
     h = w @ (reading - theta[9:])
     return reference, h, np.hstack([-np.kron(w, h[None, :]), -w])
@@ -48,12 +74,33 @@ FORMS = {"forward": forward_measurement, "inverse": inverse_measurement}
 
 
 def ekf_step(theta, p, reference, reading, *, q, r, form=forward_measurement):
-    """One predict + update of the filter; returns the new ``(θ, P)``.
+    """One predict + update of the filter.
 
     The linear Kalman update of :func:`magexp.estimators.kalman.kalman_update` applied to the
     measurement linearised at ``θ``: with ``y' = z - h(θ) + J θ`` it gives
-    ``θ + M (z - h(θ))``, ``M = R Jᵀ (J R Jᵀ + r²)⁻¹``, ``R = P + Q``, ``P ← (E - M J) R``.
-    ``r`` is the (isotropic) measurement variance ``r²``.
+
+    .. math:: \\theta + M (z - h(\\theta)),\\quad M = R J^T (J R J^T + r^2)^{-1},\\quad R = P + Q,
+              \\quad P \\leftarrow (E - M J) R
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        The state ``[vec(S), b]`` (12,).
+    p : numpy.ndarray
+        Its covariance ``P`` (12, 12).
+    reference, reading : numpy.ndarray
+        ``u_i`` and ``B_i`` (3,) of the reading.
+    q : numpy.ndarray
+        The process noise ``Q`` (12, 12).
+    r : float
+        The (isotropic) measurement variance ``r²``.
+    form : callable
+        :func:`forward_measurement` or :func:`inverse_measurement`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The new ``(θ, P)``, ``P`` symmetrised.
     """
     z, h, jac = form(theta, reference, reading)
     y = (z - h + jac @ theta)[:, None]
@@ -66,21 +113,35 @@ class ExtendedKalmanFilter:
 
     Parameters
     ----------
-    name : config name.
-    form : measurement form, ``forward`` or ``inverse`` (see the module docstring).
-    n_steps : filter steps; the readings are used in order, again from the first after the last.
-    s0, b0 : initial state (default ``S = I``, ``b = 0``: a sensor without errors).
-    p0_s, p0_b : initial standard deviations of the ``S`` entries and of ``b`` (``P0`` diagonal).
-    q_s, q_b : process-noise standard deviations per step (``Q`` diagonal; 0: constant parameters).
-    r : measurement-noise standard deviation per axis (``R = r² I``, reading units).
+    name : str
+        Config name.
+    form : str
+        Measurement form, ``forward`` or ``inverse`` (see the module docstring).
+    n_steps : int
+        Filter steps; the readings are used in order, again from the first after the last.
+    s0, b0 : list, optional
+        Initial state ``S`` (3 x 3) and ``b`` (3); None: ``S = I``, ``b = 0`` (a sensor without errors).
+    p0_s, p0_b : float
+        Initial standard deviations of the ``S`` entries and of ``b`` (``P0`` diagonal).
+    q_s, q_b : float
+        Process-noise standard deviations per step (``Q`` diagonal; 0: constant parameters).
+    r : float
+        Measurement-noise standard deviation per axis (``R = r² I``, reading units), > 0.
+
+    References
+    ----------
+    Yuan, Wang & Chen (2018), Navigation Positioning & Timing 5(6):92-98 (Table 7's EKF); Kalman (1960).
     """
 
     references = "Yuan, Wang & Chen 2018 (EKF baseline of Table 7); Kalman 1960"
+    label = "EKF"
+    smoke = {"n_steps": 12}
     needs = ("linear_design",)  # the reference vectors u_i = C_i H_i and the readings
     iterative = True
     monotone_history = False  # a filter's objective per step need not decrease
 
-    def __init__(self, *, name: str = "ekf", form: str = "forward", n_steps: int = 300, s0=None, b0=None, p0_s: float = 1.0,
+    def __init__(self, *, name: str = "ekf", form: str = "forward", n_steps: int = 300,
+                 s0: list[list[float]] | None = None, b0: list[float] | None = None, p0_s: float = 1.0,
                  p0_b: float = 100.0, q_s: float = 0.0, q_b: float = 0.0, r: float = 1.0):
         check(form in FORMS, f"estimator.form={form!r} is not allowed: choose one of {', '.join(FORMS)}")
         self.name = name
@@ -96,8 +157,24 @@ class ExtendedKalmanFilter:
         self.r = max(sd[4], 1e-12) ** 2  # measurement variance r² (R = r² I)
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        """Run the filter over the readings (rows of ``problem.design()``); ``callback(step, x, None)``
-        (``x`` in the problem's parameters) may stop it."""
+        """Run the filter over the readings (rows of ``problem.design()``).
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.LinearProblem
+            Its linear design: the reference vectors and the readings.
+        rng : numpy.random.Generator, optional
+            Unused (the filter draws nothing).
+        callback : callable, optional
+            ``callback(step, x, None)`` after every step (``x`` in the problem's parameters); a true
+            return stops it.
+
+        Returns
+        -------
+        FitResult
+            ``history`` the problem's objective at every step; ``trace["state"]`` the state at every
+            step, ``trace["P_diag"]`` the final variances. A diverged filter returns its best finite state.
+        """
         c, readings = problem.design()
         z = c[:, :3]  # the reference vectors u_i = C_i H_i
         theta, p = self.theta0.astype(float), self.p0.copy()

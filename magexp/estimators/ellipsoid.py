@@ -21,9 +21,20 @@ class EllipsoidFit:
     The radius is the mean reference total field of the dataset. If the fit is
     not an ellipsoid (too few or degenerate readings) the result has
     ``success=False`` and ``x`` at the centre of the search box.
+
+    Parameters
+    ----------
+    name : str
+        Config name (``ellipsoid``).
+
+    References
+    ----------
+    Gander, Golub & Strebel (1994), Least-squares fitting of circles and ellipses, BIT 34:558-578.
     """
 
     references = "Gander, Golub & Strebel 1994"
+    label = "ellipsoid fit"
+    smoke: dict = {}
     needs = ("total_field",)  # a scalar reference cannot fix the rotation of W
     iterative = False
 
@@ -31,9 +42,36 @@ class EllipsoidFit:
         self.name = name
 
     def quadric(self, readings: np.ndarray, radius: float):
+        """The calibration of the quadric fitted to ``readings`` (:func:`~magexp.core.ellipsoid.fit_ellipsoid`).
+
+        Parameters
+        ----------
+        readings : numpy.ndarray
+            ``(N, 3)``.
+        radius : float
+            The field magnitude the calibrated readings should have.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            ``(W, o)``, or None when the quadric is not an ellipsoid.
+        """
         return fit_ellipsoid(readings, radius)
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
+        """Fit the quadric to the readings and return its calibration in the problem's parameters.
+
+        Parameters
+        ----------
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: its readings and reference field
+            (``total_field``); a closed form draws nothing and does not iterate.
+
+        Returns
+        -------
+        FitResult
+            ``success=False`` and the box centre when the fit is not an ellipsoid.
+        """
         ds = problem.dataset
         fitted = self.quadric(ds.readings, float(np.mean(ds.reference_norm)))
         if fitted is None:
@@ -51,11 +89,18 @@ class EllipsoidSpecificFit(EllipsoidFit):
 
     Parameters
     ----------
-    name : config name.
-    k : the constraint's ``k`` (4: Li & Griffiths' choice).
+    name : str
+        Config name.
+    k : float
+        The constraint's ``k`` (4: Li & Griffiths' choice), > 0.
+
+    References
+    ----------
+    Li & Griffiths (2004), Least squares ellipsoid specific fitting, GMP 2004, 335-340.
     """
 
     references = "Li & Griffiths 2004, Least squares ellipsoid specific fitting, GMP 2004, 335-340"
+    label = ""
 
     def __init__(self, *, name: str = "ellipsoid_specific", k: float = 4.0):
         super().__init__(name=name)
@@ -64,4 +109,16 @@ class EllipsoidSpecificFit(EllipsoidFit):
                           "so k J - I^2 = 1 has no solution with k <= 0)")
 
     def quadric(self, readings: np.ndarray, radius: float):
+        """The calibration of the ellipsoid fitted to ``readings`` (:func:`~magexp.core.ellipsoid.fit_ellipsoid_specific`).
+
+        Parameters
+        ----------
+        readings, radius
+            As :meth:`EllipsoidFit.quadric`.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            ``(W, o)``, or None when no ellipsoid fits.
+        """
         return fit_ellipsoid_specific(readings, radius, self.k)

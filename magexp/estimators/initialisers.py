@@ -19,6 +19,22 @@ class Uniform:
     """Independent uniform positions (traditional PSO)."""
 
     def __call__(self, n: int, lower: np.ndarray, upper: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
+        """Draw ``n`` positions ``lower + U(0, 1) (upper - lower)``.
+
+        Parameters
+        ----------
+        n : int
+            Particles.
+        lower, upper : numpy.ndarray
+            The box (d,).
+        rng : numpy.random.Generator
+            The run's estimator stream.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, d)`` positions in the box.
+        """
         return lower + rng.random((n, lower.size)) * (upper - lower)
 
 
@@ -57,6 +73,17 @@ class CircleMap:
     ``k`` (k = 1..n) takes the ``k``-th further iterate: ``x_k = lower + z_k (upper - lower)``.
     The map runs along the particles, vectorised over the dimensions (compiled with numba: the
     same numbers, :func:`_compiled_sequence`).
+
+    Parameters
+    ----------
+    form : str
+        ``printed`` (Ding 2024 eq 15 as printed) or ``usual`` (:func:`~magexp.estimators.circle.circle_map`).
+    burn_in : int
+        Map steps before the first particle's iterate, >= 0.
+
+    References
+    ----------
+    Ding 2024, Digital Ocean & Underwater Warfare 7(3):285-292, sec 2.2.3, eq 15.
     """
 
     def __init__(self, form: str = "printed", burn_in: int = 0):
@@ -66,11 +93,36 @@ class CircleMap:
         refuse_over(self.burn_in, "run_work", f"estimator.init.burn_in={burn_in!r}", "its steps of the map are")
 
     def sequence(self, z0: np.ndarray, n: int) -> np.ndarray:
-        """The ``n`` iterates after ``burn_in`` steps from ``z0``, shape ``(n, d)``."""
+        """The ``n`` iterates after ``burn_in`` steps.
+
+        Parameters
+        ----------
+        z0 : numpy.ndarray
+            The seed ``(d,)`` in [0, 1).
+        n : int
+            Iterates.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, d)``.
+        """
         run = _compiled_sequence()
         if run is None:
             return _numpy_sequence(z0, n, self.burn_in, self.form)
         return run(np.asarray(z0, float), n, self.burn_in, self.form == "printed")
 
     def __call__(self, n: int, lower: np.ndarray, upper: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
+        """Draw the seed ``z_0`` from ``rng`` and place particle ``k`` at the ``k``-th iterate.
+
+        Parameters
+        ----------
+        n, lower, upper, rng
+            As :meth:`Uniform.__call__` (``z_0`` drawn from ``rng``).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, d)`` positions in the box, on the map's orbit.
+        """
         return lower + self.sequence(rng.random(lower.size), n) * (upper - lower)

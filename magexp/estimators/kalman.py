@@ -34,7 +34,28 @@ from magexp.estimators.result import FitResult
 
 
 def kalman_update(x, p, h, y, q, sigma2: float):
-    """One step (1)-(4): returns the new state ``x`` (s, c) and ``P`` (s, s)."""
+    """One step (1)-(4) of the module docstring (Yan & Zhou 2022, sec 2.1).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The state ``x(n-1)`` (s, c).
+    p : numpy.ndarray
+        Its covariance ``P(n-1)`` (s, s).
+    h : numpy.ndarray
+        The observation matrix ``H`` (k, s).
+    y : numpy.ndarray
+        The observation ``y(n)`` (k, c).
+    q : numpy.ndarray
+        The process noise ``Q`` (s, s).
+    sigma2 : float
+        The observation noise variance ``σ²``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The new state ``x(n)`` (s, c) and ``P(n)`` (s, s).
+    """
     r = p + q
     rh = r @ h.T
     m = np.linalg.solve(h @ rh + sigma2 * np.eye(h.shape[0]), rh.T).T
@@ -43,10 +64,30 @@ def kalman_update(x, p, h, y, q, sigma2: float):
 
 
 def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
-    """Run :func:`kalman_update` over observations ``h`` (T, k, s), ``y`` (T, k, c) from ``x0``.
+    """Run :func:`kalman_update` over a sequence of observations.
 
-    Returns the state at every step, shape ``(T + 1, s, c)`` (``[0]`` is ``x0``), or up to the
-    step ``n`` at which ``stop(n, x)`` first returned a true value.
+    Parameters
+    ----------
+    h : numpy.ndarray
+        Observation matrices (T, k, s).
+    y : numpy.ndarray
+        Observations (T, k, c).
+    p0 : numpy.ndarray
+        ``P(0)`` (s, s).
+    q : numpy.ndarray
+        ``Q`` (s, s).
+    sigma2 : float
+        ``σ²``.
+    x0 : numpy.ndarray
+        The initial state (s, c).
+    stop : callable, optional
+        ``stop(n, x)`` after step ``n``; a true return ends the run.
+
+    Returns
+    -------
+    numpy.ndarray
+        The state at every step, ``(T + 1, s, c)`` (``[0]`` is ``x0``), or up to the step at which
+        ``stop`` first returned a true value.
     """
     states = np.empty((len(h) + 1,) + np.shape(x0))
     x, p = np.asarray(x0, float), np.asarray(p0, float)
@@ -60,12 +101,36 @@ def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
 
 
 def cyclic(n_rows: int, n_steps: int) -> np.ndarray:
-    """Row index of every filter step: the readings reused in order, ``0, 1, ..., N-1, 0, ...``."""
+    """Row index of every filter step: the readings reused in order, ``0, 1, ..., N-1, 0, ...``.
+
+    Parameters
+    ----------
+    n_rows : int
+        Readings ``N``.
+    n_steps : int
+        Filter steps.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_steps,)`` row indices.
+    """
     return np.arange(n_steps) % n_rows
 
 
 def settled_since(distance: np.ndarray) -> int:
-    """First step from which ``distance`` (per step, True = still apart) stays False; -1 if never."""
+    """The first step from which ``distance`` stays False.
+
+    Parameters
+    ----------
+    distance : numpy.ndarray of bool
+        Per step, True while the state is still apart.
+
+    Returns
+    -------
+    int
+        That step's index, -1 if the last step is still apart.
+    """
     apart = np.flatnonzero(distance)
     if apart.size == 0:
         return 0
@@ -73,7 +138,24 @@ def settled_since(distance: np.ndarray) -> int:
 
 
 def checked_tuning(p0: float, q: float, sigma2: float, n_steps: int, group: str) -> tuple:
-    """``(p0, q, sigma2, n_steps)`` checked (``sigma2 > 0``); ``group`` names the config group."""
+    """The shared filter settings, checked.
+
+    Parameters
+    ----------
+    p0, q : float
+        ``P(0)`` and ``Q`` scales, >= 0.
+    sigma2 : float
+        Observation noise variance, > 0.
+    n_steps : int
+        Filter steps, > 0.
+    group : str
+        The config group named in an error (``estimator``, ``analysis``).
+
+    Returns
+    -------
+    tuple
+        ``(p0, q, sigma2, n_steps)`` as numbers.
+    """
     check(check_nonnegative(sigma2, f"{group}.sigma2") > 0,
           f"{group}.sigma2={sigma2!r} is not allowed: the noise variance must be > 0")
     return (check_nonnegative(p0, f"{group}.p0"), check_nonnegative(q, f"{group}.q"), float(sigma2),
@@ -95,26 +177,38 @@ class _Tuning:
 class KalmanFilter(_Tuning):
     """Yan & Zhou's filter for ``x = [K Bp]^T`` (``kf``).
 
-    Parameters
-    ----------
-    name : config name.
-    p0 : ``P(0) = p0 diag(1, 1, 1, offset_scale^2)`` (the paper: a diagonal matrix).
-    q : ``Q = q diag(1, 1, 1, offset_scale^2)``, process noise per step.
-    sigma2 : observation noise variance ``σ²`` (nT²), one value for the three components.
-    offset_scale : size (nT) of ``Bp`` relative to the entries of ``K`` (~1).
-    n_steps : filter steps; the readings are reused cyclically.
-    agree_k, agree_bp : tolerances of the ``steps_to_ls`` diagnostic: the first step, at the end
-        of a full pass over the readings, after which the state at every later pass end stays
-        within them of the least-squares solution (NaN if it never does). Within a pass the
-        readings are unequally weighted, so the state fluctuates around that solution;
-        ``steps_to_ls_every_step`` is the same at every step from the end of the first pass (the state
-        within a pass too).
-
     ``x(0) = 0``. The result's ``trace["x"]`` is the state at every step as ``theta``
     (``n_steps + 1``, 12), ``history`` the fit RMS at every step.
+
+    Parameters
+    ----------
+    name : str
+        Config name.
+    p0 : float
+        ``P(0) = p0 diag(1, 1, 1, offset_scale^2)`` (the paper: a diagonal matrix).
+    q : float
+        ``Q = q diag(1, 1, 1, offset_scale^2)``, process noise per step.
+    sigma2 : float
+        Observation noise variance ``σ²`` (nT²), one value for the three components.
+    offset_scale : float
+        Size (nT) of ``Bp`` relative to the entries of ``K`` (~1), > 0.
+    n_steps : int
+        Filter steps; the readings are reused cyclically.
+    agree_k, agree_bp : float
+        Tolerances of the ``steps_to_ls`` diagnostic: the first step, at the end of a full pass over
+        the readings, after which the state at every later pass end stays within them of the
+        least-squares solution (NaN if it never does). Within a pass the readings are unequally
+        weighted, so the state fluctuates around that solution; ``steps_to_ls_every_step`` is the
+        same at every step from the end of the first pass (the state within a pass too).
+
+    References
+    ----------
+    Yan & Zhou (2022), Chinese Journal of Ship Research, sec 2.1; Kalman (1960).
     """
 
     references = "Yan & Zhou 2022, sec 2.1"
+    label = "KF"
+    smoke = {"n_steps": 12}
 
     def __init__(self, *, name: str = "kf", p0: float = 1.0, q: float = 0.0, sigma2: float = 3333.0,
                  offset_scale: float = 3000.0, n_steps: int = 600, agree_k: float = 1e-4, agree_bp: float = 1.0):
@@ -127,7 +221,22 @@ class KalmanFilter(_Tuning):
         self.agree_bp = check_nonnegative(agree_bp, "estimator.agree_bp")
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        """Filter the rows of ``problem.design()``; ``callback(step, x, None)`` may stop it."""
+        """Filter the rows of ``problem.design()``, reused cyclically.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.LinearProblem
+            Its linear design ``C x = Y`` and least-squares solution.
+        rng : numpy.random.Generator, optional
+            Unused (the filter draws nothing).
+        callback : callable, optional
+            ``callback(step, x, None)`` after every step; a true return stops it.
+
+        Returns
+        -------
+        FitResult
+            ``trace["x"]`` the state at every step; ``metrics`` ``steps_to_ls``, ``steps_to_ls_every_step``.
+        """
         c, y = problem.design()
         rows = cyclic(len(c), self.n_steps)
         stop = None if callback is None else (lambda n, x: callback(n, problem.from_linear(x), None))
@@ -155,12 +264,42 @@ class KalmanFilter(_Tuning):
 
 
 def direct_field(k: np.ndarray, bp: np.ndarray, attitude: np.ndarray, readings: np.ndarray) -> np.ndarray:
-    """Eq 4 for every reading: ``Be_i = (K A_i)^-1 (B_i - Bp)``, shape (N, 3)."""
+    """Eq 4 for every reading: ``Be_i = (K A_i)^-1 (B_i - Bp)``.
+
+    Parameters
+    ----------
+    k : numpy.ndarray
+        ``K`` (3, 3).
+    bp : numpy.ndarray
+        ``Bp`` (3,).
+    attitude : numpy.ndarray
+        ``A_i`` (N, 3, 3).
+    readings : numpy.ndarray
+        ``B_i`` (N, 3).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Be_i`` (N, 3).
+    """
     return np.linalg.solve(k @ attitude, (readings - bp)[..., None])[..., 0]
 
 
 def field_errors(estimates: np.ndarray, field: np.ndarray) -> tuple[float, float]:
-    """RMS error over all components (nT) and the largest component error relative to ``|Be|``."""
+    """How far field estimates are from the true field.
+
+    Parameters
+    ----------
+    estimates : numpy.ndarray
+        Estimates of ``Be`` (..., 3).
+    field : numpy.ndarray
+        The true ``Be`` (3,).
+
+    Returns
+    -------
+    tuple of float
+        The RMS error over all components (nT) and the largest component error relative to ``|Be|``.
+    """
     err = np.asarray(estimates) - field
     return float(np.sqrt(np.mean(err**2))), float(np.max(np.abs(err)) / np.linalg.norm(field))
 
@@ -176,10 +315,15 @@ class FieldKalmanFilter:
 
     Parameters
     ----------
-    name : config name.
-    p0, q, sigma2, n_steps : as :class:`KalmanFilter` (``P(0)``, ``Q`` in nT²).
-    settle : fraction of the steps after which the solution counts as converged (the paper's
-        "stable solution after convergence"): errors are measured over the last ``1 - settle``.
+    name : str
+        Config name.
+    p0, q, sigma2 : float
+        As :class:`KalmanFilter` (``P(0)``, ``Q`` in nT²).
+    n_steps : int
+        Filter steps.
+    settle : float
+        Fraction of the steps after which the solution counts as converged (the paper's "stable
+        solution after convergence"): errors are measured over the last ``1 - settle``.
 
     The returned result is ``result`` with ``trace["be"]`` (``Be`` at every step) and ``metrics``
     ``be_rms``, ``be_max_rel`` (filter) and ``be_direct_rms``, ``be_direct_max_rel`` (eq 4 on
@@ -196,6 +340,20 @@ class FieldKalmanFilter:
         self.settle = min(check_nonnegative(settle, "analysis.settle"), 1.0)
 
     def __call__(self, problem, result: FitResult) -> FitResult:
+        """Recompute ``Be`` from ``result``'s ``K``, ``Bp`` (the class docstring).
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.LinearProblem
+            The ship problem whose dataset holds the attitudes and readings.
+        result : FitResult
+            The run's estimate.
+
+        Returns
+        -------
+        FitResult
+            ``result`` with the field estimates added to its ``trace`` and ``metrics``.
+        """
         check_applies(self, problem)
         w, bp = (a[0] for a in problem.unpack(result.x))  # B = K u + Bp  <=>  u = K^-1 (B - Bp)
         k = np.linalg.inv(w)

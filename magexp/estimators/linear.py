@@ -21,9 +21,22 @@ def _result(problem, x: np.ndarray, message: str) -> FitResult:
 
 
 class LeastSquares:
-    """Ordinary linear least squares through ``problem.least_squares()``."""
+    """Ordinary linear least squares through ``problem.least_squares()``.
+
+    Parameters
+    ----------
+    name : str
+        Config name (``ls``).
+
+    References
+    ----------
+    Gauss (1809), Theoria motus corporum coelestium; Golub & Van Loan, Matrix Computations, ch. 5 (the
+    QR and SVD solutions).
+    """
 
     references = "Gauss 1809; Golub & Van Loan, Matrix Computations"
+    label = "least squares"
+    smoke: dict = {}
     needs = ("linear_design",)
     iterative = False
 
@@ -31,6 +44,18 @@ class LeastSquares:
         self.name = name
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
+        """The least-squares solution of the problem's linear model.
+
+        Parameters
+        ----------
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: its ``least_squares()`` (``linear_design``).
+
+        Returns
+        -------
+        FitResult
+            One evaluation, the solution.
+        """
         return _result(problem, problem.least_squares(), "closed form")
 
 
@@ -39,23 +64,41 @@ class FixedParameters:
 
     Parameters
     ----------
-    name : config name.
-    x : the parameter vector, in the problem's order (``problem.parameter_names()``).
-    source : where the numbers come from (shown in the result message).
+    name : str
+        Config name.
+    x : list of float
+        The parameter vector, in the problem's order (``problem.parameter_names()``).
+    source : str
+        Where the numbers come from (shown in the result message).
     """
 
+    references = ""  # an instance's: its source
+    label = ""
+    smoke: dict = {}
     needs = ("cost",)
     iterative = False
     only_objective = "ship"  # the printed solutions are of Yan & Zhou's model
 
-    def __init__(self, *, name: str, x, source: str = ""):
+    def __init__(self, *, name: str, x: list[float], source: str = ""):
         self.name = name
         self.x = np.asarray(x, dtype=float)
-        self.source = source
+        self.source = self.references = source
         if self.x.ndim != 1 or not np.all(np.isfinite(self.x)):
             raise MagexpError(f"estimator.x={x!r} is not allowed: it must be a list of finite numbers")
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
+        """``x`` as it is, evaluated on the problem.
+
+        Parameters
+        ----------
+        problem, rng, callback
+            As :meth:`magexp.estimators.base.Estimator.fit`: its ``n_params`` must be the length of ``x``.
+
+        Returns
+        -------
+        FitResult
+            One evaluation, ``x``.
+        """
         if self.x.size != problem.n_params:
             raise MagexpError(f"estimator.x has {self.x.size} values: the problem needs {problem.n_params}")
         return _result(problem, self.x.copy(), self.source or "fixed")

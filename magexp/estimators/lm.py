@@ -37,7 +37,6 @@ valley until the evaluation budget, and where it stops moves with the round-off 
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from magexp.core.ellipsoid import normalise
 from magexp.core.identifiability import canonical, identifiability
@@ -57,24 +56,37 @@ class LevenbergMarquardt:
 
     Parameters
     ----------
-    name : config name.
-    start : ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the
+    name : str
+        Config name.
+    start : str
+        ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the
         linear least-squares fit of the vector problem), else the ellipsoid fit (scalar objective),
         else the centre of the search box; ``ellipsoid``: the ellipsoid fit, else the centre;
         ``centre``.
-    max_nfev : cap on residual evaluations.
-    tol : ``xtol = ftol = gtol`` of ``least_squares``.
-    gauge : on a total-field (scalar) problem, ``symmetric`` (default) fits the 9 parameters of a
+    max_nfev : int
+        Cap on residual evaluations.
+    tol : float
+        ``xtol = ftol = gtol`` of ``least_squares``, in (machine epsilon, 1).
+    gauge : str
+        On a total-field (scalar) problem, ``symmetric`` (default) fits the 9 parameters of a
         symmetric matrix part and returns the polar factor (module docstring); ``free`` fits all 12
         (its ``W`` carries an arbitrary rotation). Other problems always fit all 12.
-    jacobian : ``2-point`` (default): scipy's forward differences, one residual evaluation per
+    jacobian : str
+        ``2-point`` (default): scipy's forward differences, one residual evaluation per
         parameter; ``stacked``: the same forward differences (step ``sqrt(eps) max(1, |x_i|)``) from
         one call of the problem's ``residual_swarm`` on the ``p + 1`` points stacked (:func:`stacked_jacobian`),
         where the problem has one; several times faster where one evaluation costs more in numpy's
         per-call overhead than in arithmetic (the gyro-aided problem's prefix scan).
+
+    References
+    ----------
+    Levenberg (1944); Marquardt (1963); Moré (1978), The Levenberg-Marquardt algorithm:
+    implementation and theory (MINPACK).
     """
 
     references = "Levenberg 1944; Marquardt 1963; More 1978 (MINPACK)"
+    label = ""
+    smoke = {"max_nfev": 50}
     needs = ("residuals",)
     iterative = True
 
@@ -94,6 +106,18 @@ class LevenbergMarquardt:
         self.gauge = gauge
 
     def initial(self, problem) -> np.ndarray:
+        """The start of the fit (``start``, the class docstring).
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            Its ``initial_estimate()`` where it has one, its readings (the ellipsoid fit), its box.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(p,)`` parameters.
+        """
         if self.start == "problem" and hasattr(problem, "initial_estimate"):
             return problem.initial_estimate()
         if self.start in ("ellipsoid", "problem") and applies_to(EllipsoidFit, problem)[0]:
@@ -103,8 +127,23 @@ class LevenbergMarquardt:
         return (problem.lower + problem.upper) / 2
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        """Minimise ``sum(problem.residuals(x)^2)``; ``callback(k, best x, best RMS)`` after each
-        residual evaluation ``k`` may stop it (the best point so far is returned)."""
+        """Minimise ``sum(problem.residuals(x)^2)``.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            Its ``residuals`` (and ``residual_swarm`` for ``jacobian: stacked``).
+        rng : numpy.random.Generator, optional
+            Unused (the fit draws nothing).
+        callback : callable, optional
+            ``callback(k, best x, best RMS)`` after each residual evaluation ``k``; a true return stops
+            it (the best point so far is returned).
+
+        Returns
+        -------
+        FitResult
+            ``history`` the best RMS of the residuals after each evaluation.
+        """
         if self.gauge == "symmetric" and "total_field" in problem.capabilities:
             return self.fit_symmetric(problem, callback=callback)
         jac = stacked_jacobian(problem) if self.jacobian == "stacked" and hasattr(problem, "residual_swarm") else None
@@ -114,8 +153,21 @@ class LevenbergMarquardt:
 
     def fit_symmetric(self, problem, *, callback=None) -> FitResult:
         """The gauge-fixed fit of a total-field problem (module docstring): LM over ``q`` from the polar
-        factor of the start; the result is returned in the problem's 12 parameters, with the metrics
-        of :func:`offset_check` (a fit whose offset the data leave undetermined is not a success)."""
+        factor of the start.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            A total-field problem of 12 parameters.
+        callback : callable, optional
+            As :meth:`fit`, ``x`` expanded to 12.
+
+        Returns
+        -------
+        FitResult
+            In the problem's 12 parameters, with the metrics of :func:`offset_check` (a fit whose
+            offset the data leave undetermined is not a success).
+        """
         x0 = polar(problem, self.initial(problem))
         relay = None if callback is None else (lambda k, q, fun: callback(k, expand(q)[0], fun))
         q, status, message, history = minimise_residuals(lambda q: problem.residuals(expand(q)[0]),
@@ -131,6 +183,24 @@ class LevenbergMarquardt:
 
     @staticmethod
     def result(problem, x, status: int, message: str, history) -> FitResult:
+        """The :class:`FitResult` of a least-squares fit.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+        x : numpy.ndarray
+            The solution; refused (one line) when not finite.
+        status : int
+            scipy's status (> 0: success).
+        message : str
+            scipy's message.
+        history : numpy.ndarray
+            The best value after every evaluation.
+
+        Returns
+        -------
+        FitResult
+        """
         check(np.all(np.isfinite(x)), "lm diverged: the residuals became non-finite")
         return FitResult(x=x, fun=problem.cost_direct(x), nit=len(history), nfev=len(history),
                          history=history, history_nfev=np.arange(1, len(history) + 1),
@@ -148,6 +218,18 @@ def offset_check(problem, q: np.ndarray) -> dict:
     ``offset_determined``: it is below the RMS distance of the readings from their centroid
     (:func:`magexp.core.ellipsoid.normalise`): the data locate the centre of the readings'
     ellipsoid to better than the ellipsoid's own size.
+
+    Parameters
+    ----------
+    problem : magexp.problems.base.Problem
+        A total-field problem (its ``residual_stack`` and dataset).
+    q : numpy.ndarray
+        The gauge-fixed fit (9,).
+
+    Returns
+    -------
+    dict
+        ``offset_standard_error`` (float) and ``offset_determined`` (bool).
     """
     def fun(qs):  # identifiability evaluates a stack of 2 x 9 perturbed vectors
         return problem.residual_stack(qs, of=lambda q: expand(q)[0])
@@ -163,7 +245,20 @@ def polar(problem, x: np.ndarray) -> np.ndarray:
     """``x`` with its ``W`` replaced by the symmetric positive-definite polar factor
     ``(W^T W)^{1/2}`` (:func:`magexp.core.identifiability.canonical`): the same total field, no rotation.
     A symmetric positive-definite matrix part is kept bit for bit (it is already that factor), and so
-    is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of)."""
+    is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of).
+
+    Parameters
+    ----------
+    problem : magexp.problems.base.Problem
+        Its ``unpack`` and ``pack``.
+    x : numpy.ndarray
+        ``(12,)`` parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(12,)`` parameters of the same total field.
+    """
     x = np.asarray(x, float)
     mat = x[:9].reshape(3, 3)
     if np.array_equal(mat, mat.T) and np.all(np.linalg.eigvalsh(mat) > 0):
@@ -178,7 +273,18 @@ def polar(problem, x: np.ndarray) -> np.ndarray:
 def stacked_jacobian(problem):
     """``theta -> J`` (``(m, p)``) by forward differences from one :meth:`residual_swarm` call on ``theta``
     and its ``p`` steps ``h_i = sqrt(eps) max(1, |theta_i|)`` stacked:
-    ``J[:, i] = (r(theta + h_i e_i) - r(theta)) / h_i``."""
+    ``J[:, i] = (r(theta + h_i e_i) - r(theta)) / h_i``.
+
+    Parameters
+    ----------
+    problem : magexp.problems.base.Problem
+        One with ``residual_swarm``.
+
+    Returns
+    -------
+    callable
+        ``jac(theta) -> (m, p)``.
+    """
 
     def jac(theta):
         theta = np.asarray(theta, float)
@@ -194,12 +300,36 @@ def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 200
                        jac=None):
     """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``.
 
-    Returns ``(x, status, message, history)``: scipy's solution (the best ``x`` evaluated when the
-    callback stopped it: status ``-2``), its message, and the best value after every evaluation
-    of ``measure(x)`` (default: the RMS of the residuals; an estimator minimising a weighted
-    criterion reports its problem's objective). Shared by every least-squares refinement. ``jac``:
-    ``theta -> (m, p)`` Jacobian (default: scipy's forward differences).
+    Shared by every least-squares refinement.
+
+    Parameters
+    ----------
+    residuals : callable
+        ``residuals(theta) -> (m,)``.
+    x0 : array_like
+        The start.
+    tol : float
+        ``xtol = ftol = gtol``.
+    max_nfev : int
+        Cap on evaluations.
+    callback : callable, optional
+        ``callback(k, best x, best value)`` after each evaluation; a true return stops the fit.
+    measure : callable, optional
+        ``measure(theta)``, the value recorded (default: the RMS of the residuals; an estimator
+        minimising a weighted criterion reports its problem's objective).
+    jac : callable, optional
+        ``theta -> (m, p)`` Jacobian (default: scipy's forward differences).
+
+    Returns
+    -------
+    tuple
+        ``(x, status, message, history)``: scipy's solution (the best ``x`` evaluated when the
+        callback stopped it: status ``-2``), its message, and the best value after every evaluation.
     """
+    # lazy: scipy.optimize, measured 0.40 s CPU to import (min of 5, after numpy); every command imports this module
+    # to register its typed schema (magexp.run.compose.register_schemas), and only a least-squares run needs it
+    from scipy.optimize import least_squares
+
     best: dict = {}
     record = stopper(callback, best)
 

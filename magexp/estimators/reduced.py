@@ -25,7 +25,13 @@ from magexp.problems.symmetric import UPPER, expand
 
 
 class SymmetricView:
-    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector)."""
+    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector).
+
+    Parameters
+    ----------
+    problem : magexp.problems.base.Problem
+        A 12-parameter problem ``[vec(M), o]``.
+    """
 
     def __init__(self, problem):
         self.problem = problem
@@ -34,16 +40,55 @@ class SymmetricView:
         self.n_params = 9
 
     def cost(self, q: np.ndarray) -> np.ndarray:
+        """The problem's cost of the expanded vectors.
+
+        Parameters
+        ----------
+        q : numpy.ndarray
+            ``(n, 9)`` vectors.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n,)`` costs.
+        """
         return self.problem.cost(expand(q))
 
 
 class SymmetricSwarm(SwarmOptimizer):
     """``pso9``: a :class:`~magexp.estimators.swarm.SwarmOptimizer` (same settings) on the
-    symmetric 9-parameter model of a total-field problem (module docstring)."""
+    symmetric 9-parameter model of a total-field problem (module docstring).
+
+    Parameters
+    ----------
+    **settings
+        Those of :class:`~magexp.estimators.swarm.SwarmOptimizer`.
+
+    References
+    ----------
+    Yuan, Wang & Chen (2018), sec 1 and Table 7 (their refs [12, 13]); Kennedy & Eberhart (1995).
+    """
 
     needs = ("total_field",)
+    label = "PSO (9-parameter)"
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None):
+        """The swarm over ``q`` (:class:`SymmetricView`), its best returned as a 12-vector.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            A total-field problem of 12 parameters ``[vec(M), o]``.
+        rng : numpy.random.Generator
+            The run's estimator stream.
+        callback : callable, optional
+            ``callback(t, x, fun)`` after every iteration, ``x`` expanded to 12; a true return stops it.
+
+        Returns
+        -------
+        FitResult
+            ``x`` the expanded best, ``fun`` the problem's objective at it.
+        """
         relay = None if callback is None else (lambda t, q, fun: callback(t, expand(q)[0], fun))
         result = super().fit(SymmetricView(problem), rng=rng, callback=relay)
         result.x = expand(result.x)[0]

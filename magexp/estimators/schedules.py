@@ -13,9 +13,24 @@ from magexp.errors import MagexpError
 
 
 def values(schedule, t: np.ndarray, t_max: int) -> np.ndarray:
-    """``schedule`` at every iteration of the integer array ``t`` in one vectorised call: the
-    same floats as ``schedule(t_k, t_max)`` one by one (the same IEEE operations, each exact
-    ``int -> float`` conversion included)."""
+    """``schedule`` at every iteration of ``t`` in one vectorised call: the same floats as
+    ``schedule(t_k, t_max)`` one by one (the same IEEE operations, each exact ``int -> float``
+    conversion included).
+
+    Parameters
+    ----------
+    schedule : callable
+        ``schedule(t, t_max)``.
+    t : numpy.ndarray
+        Integer iterations.
+    t_max : int
+        The last iteration.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``t.shape`` floats.
+    """
     out = schedule(t, t_max)
     return out if isinstance(out, np.ndarray) else np.full(t.shape, out, float)  # a constant: one float
 
@@ -31,12 +46,29 @@ def _number(value, name: str) -> float:
 
 
 class Constant:
-    """A fixed coefficient (traditional PSO)."""
+    """A fixed coefficient (traditional PSO).
+
+    Parameters
+    ----------
+    value : float
+        The coefficient, finite.
+    """
 
     def __init__(self, value: float):
         self.value = _number(value, "schedule value")
 
     def __call__(self, t: int, t_max: int) -> float:
+        """The coefficient, whatever the iteration.
+
+        Parameters
+        ----------
+        t, t_max : int
+            The iteration and the last one (unused).
+
+        Returns
+        -------
+        float
+        """
         return self.value
 
 
@@ -49,6 +81,11 @@ class Linear:
     ``w = w_min + (w_max - w_min)(iter_max - iter)/iter_max``; with
     ``c1: start = c1_max, end = c1_min`` and ``c2: start = c2_min, end = c2_max``
     it is eqs 13-14.
+
+    Parameters
+    ----------
+    start, end : float
+        The values at ``t = 0`` and ``t = t_max``, finite.
     """
 
     def __init__(self, start: float, end: float):
@@ -56,4 +93,17 @@ class Linear:
         self.end = _number(end, "schedule end")
 
     def __call__(self, t: int, t_max: int) -> float:
+        """``s(t)``.
+
+        Parameters
+        ----------
+        t : int or numpy.ndarray
+            Iteration(s).
+        t_max : int
+            The last iteration.
+
+        Returns
+        -------
+        float or numpy.ndarray
+        """
         return self.start + (self.end - self.start) * t / t_max

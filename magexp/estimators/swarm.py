@@ -106,16 +106,20 @@ class SwarmOptimizer:
     boundary : what a particle leaving the box does: ``clip``, ``reflect`` or ``random``
         (:mod:`magexp.estimators.boundaries`).
     references : the paper(s) the variant comes from.
+    label : its name in the report's row labels (pso, ipso, rdpso: PSO, IPSO, RDPSO); empty: the class's.
     """
 
     needs = ("cost",)
     iterative = True
+    label = ""
+    smoke = {"n_particles": 6, "n_iterations": 6}
 
     def __init__(self, *, name: str = "pso", n_particles: int = 50, n_iterations: int = 800,
                  velocity=None, init=None, velocity_clamp: float = 0.2,
                  initial_velocity: str = "uniform", references: str = "", velocity_limit: float | None = None,
-                 boundary: str = "clip"):
+                 boundary: str = "clip", label: str = ""):
         self.name = name
+        self.label = label or type(self).label
         self.n_particles = check_positive_int(n_particles, "estimator.n_particles")
         self.n_iterations = check_positive_int(n_iterations, "estimator.n_iterations")
         self.velocity = velocity if velocity is not None else InertiaVelocity()

@@ -52,6 +52,18 @@ def triangular_factor(gram: np.ndarray, form: str = "lower") -> np.ndarray:
 
     ``upper``: ``W = L^T`` of the Cholesky factor ``gram = L L^T``; ``lower``: the same on the
     axes in reverse order (``P`` the reversal), ``W = P (chol(P gram P))^T P``.
+
+    Parameters
+    ----------
+    gram : numpy.ndarray
+        A symmetric positive-definite (3, 3).
+    form : str
+        ``lower`` or ``upper``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``W`` (3, 3).
     """
     if form == "upper":
         return np.linalg.cholesky(gram).T
@@ -60,7 +72,20 @@ def triangular_factor(gram: np.ndarray, form: str = "lower") -> np.ndarray:
 
 
 def merayo_matrix(gains, angles) -> np.ndarray:
-    """``S T`` of Merayo's model: rows ``s_i e_i`` (module docstring), angles ``u_1, u_2, u_3`` in radians."""
+    """``S T`` of Merayo's model: rows ``s_i e_i`` (module docstring).
+
+    Parameters
+    ----------
+    gains : array_like
+        ``s_1, s_2, s_3``.
+    angles : array_like
+        ``u_1, u_2, u_3`` in radians.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``S T`` (3, 3), lower triangular.
+    """
     u1, u2, u3 = angles
     t = np.array([[1.0, 0.0, 0.0], [np.sin(u1), np.cos(u1), 0.0],
                   [np.sin(u2), np.sin(u3) * np.cos(u2), np.cos(u3) * np.cos(u2)]])
@@ -68,7 +93,18 @@ def merayo_matrix(gains, angles) -> np.ndarray:
 
 
 def merayo_parameters(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Gains and angles ``(u_1, u_2, u_3)`` of a lower-triangular ``W = (S T)^{-1}``."""
+    """Merayo's parameters of a calibration.
+
+    Parameters
+    ----------
+    w : numpy.ndarray
+        A lower-triangular ``W = (S T)^{-1}`` (3, 3).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The gains ``s_i`` and the angles ``(u_1, u_2, u_3)`` (radians).
+    """
     m = np.linalg.inv(w)
     gains = np.linalg.norm(m, axis=1)  # every row of T is a unit vector
     t = m / gains[:, None]
@@ -83,13 +119,25 @@ class TriangularCalibration:
 
     Parameters
     ----------
-    name : config name.
-    form : ``lower`` (Merayo's: the first sensor axis is the reference, the second in the plane of
+    name : str
+        Config name.
+    form : str
+        ``lower`` (Merayo's: the first sensor axis is the reference, the second in the plane of
         the first two) or ``upper`` (the same with the axes in reverse order).
-    max_nfev, tol : of the Levenberg-Marquardt refinement.
+    max_nfev : int
+        Cap on residual evaluations of the Levenberg-Marquardt refinement.
+    tol : float
+        Its ``xtol = ftol = gtol``.
+
+    References
+    ----------
+    Merayo, Brauer, Primdahl et al. (2000), Scalar calibration of vector magnetometers, Meas. Sci.
+    Technol. 11:120-132.
     """
 
     references = "Merayo et al. 2000, Meas. Sci. Technol. 11:120-132"
+    label = ""
+    smoke = {"max_nfev": 50}
     needs = ("total_field",)
     iterative = True
     weighted = False
@@ -100,20 +148,53 @@ class TriangularCalibration:
         self.refine = LevenbergMarquardt(max_nfev=max_nfev, tol=tol)  # its settings (checked there)
 
     def unpack(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(W, o)`` of the 9 parameters ``[triangle of W (row-major), o]``."""
+        """The calibration of 9 parameters.
+
+        Parameters
+        ----------
+        q : numpy.ndarray
+            ``[triangle of W (row-major), o]`` (9,).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(W, o)``.
+        """
         w = np.zeros((3, 3))
         w[FORMS[self.form]] = q[:6]
         return w, q[6:]
 
     def start(self, problem) -> np.ndarray:
-        """The ellipsoid fit's ``W^T W`` and ``o`` as 9 parameters (else the box centre's)."""
+        """The start: the ellipsoid fit's ``W^T W`` and ``o`` as 9 parameters (else the box centre's).
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            Its readings and reference magnitudes, else its box.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(9,)``.
+        """
         ds = problem.dataset
         fitted = fit_ellipsoid(ds.readings, float(np.mean(ds.reference_norm)))
         w, o = fitted if fitted is not None else (a[0] for a in problem.unpack((problem.lower + problem.upper) / 2))
         return np.concatenate([triangular_factor(w.T @ w, self.form)[FORMS[self.form]], o])
 
     def residuals_of(self, problem):
-        """The residual function of the 9 parameters (weighted for the ML variant)."""
+        """The residual function of the 9 parameters (module docstring; weighted for the ML variant).
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            Its readings and reference magnitudes.
+
+        Returns
+        -------
+        callable
+            ``residuals(q) -> (N,)``.
+        """
         readings, reference = problem.dataset.readings, np.asarray(problem.dataset.reference_norm)
 
         def residuals(q):
@@ -129,7 +210,22 @@ class TriangularCalibration:
         return residuals
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        """LM on the 9 parameters; ``callback(k, x, fun)`` after each residual evaluation."""
+        """Levenberg-Marquardt on the 9 parameters from :meth:`start`.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            A total-field problem.
+        rng : numpy.random.Generator, optional
+            Unused (the fit draws nothing).
+        callback : callable, optional
+            ``callback(k, x, fun)`` after each residual evaluation; a true return stops it.
+
+        Returns
+        -------
+        FitResult
+            ``history`` the best value of the problem's objective after each evaluation.
+        """
         def to_x(q):
             return problem.pack(*self.unpack(q))
 
@@ -147,7 +243,17 @@ class TriangularCalibration:
 
 
 class MaximumLikelihoodScalar(TriangularCalibration):
-    """Noise-weighted maximum-likelihood scalar calibration (``ml_scalar``; Vasconcelos et al. 2011)."""
+    """Noise-weighted maximum-likelihood scalar calibration (``ml_scalar``; Vasconcelos et al. 2011).
+
+    Parameters
+    ----------
+    name, form, max_nfev, tol
+        As :class:`TriangularCalibration`.
+
+    References
+    ----------
+    Vasconcelos, Elkaim, Silvestre, Oliveira & Cardeira (2011), IEEE TAES 47(2):1293-1306.
+    """
 
     references = "Vasconcelos et al. 2011, IEEE TAES 47(2):1293-1306"
     weighted = True

@@ -54,14 +54,40 @@ UPPER = (np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2]))  # E11 E22 
 
 
 def sym(e6: np.ndarray) -> np.ndarray:
-    """The symmetric 3x3 matrix of ``[E11, E22, E33, E12, E13, E23]``."""
+    """The symmetric matrix of six entries.
+
+    Parameters
+    ----------
+    e6 : numpy.ndarray
+        ``[E11, E22, E33, E12, E13, E23]``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``E`` (3, 3).
+    """
     e = np.zeros((3, 3))
     e[UPPER] = e6
     return e + np.triu(e, 1).T
 
 
 def measurement(b: np.ndarray, h_norm: np.ndarray, sigma: float):
-    """``(z - mu, L, w)``: the scalar measurements, their regressors and weights ``1/sigma_k²``."""
+    """The scalar measurements of the module docstring.
+
+    Parameters
+    ----------
+    b : numpy.ndarray
+        Readings ``B_k`` (N, 3).
+    h_norm : numpy.ndarray
+        Reference magnitudes ``|H_k|`` (N,).
+    sigma : float
+        Reading noise per axis.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(z - mu, L, w)``: the measurements, their regressors ``L_k`` and weights ``1/sigma_k²``.
+    """
     z = (b * b).sum(axis=1) - h_norm**2
     mu = -3.0 * sigma**2
     var = 4.0 * sigma**2 * h_norm**2 + 6.0 * sigma**4
@@ -82,6 +108,18 @@ def centred_estimate(z: np.ndarray, lmat: np.ndarray, w: np.ndarray, b: np.ndarr
     .. math:: \\lambda = \\frac{\\overline{|\\mathbf H|^2 - 3\\sigma^2}}
               {\\overline{\\mathbf B^T F_0\\mathbf B} - 2\\mathbf c_0^T\\overline{\\mathbf B}
                + \\mathbf c_0^T F_0^{-1}\\mathbf c_0}
+
+    Parameters
+    ----------
+    z, lmat, w : numpy.ndarray
+        As :func:`measurement` returns them.
+    b : numpy.ndarray
+        The readings (N, 3).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``θ̃`` (9,).
     """
     wn = w / w.sum()
     zt, lt = z - wn @ z, lmat - wn @ lmat
@@ -101,7 +139,20 @@ def centred_estimate(z: np.ndarray, lmat: np.ndarray, w: np.ndarray, b: np.ndarr
 
 
 def residual_and_jacobian(theta: np.ndarray, z, lmat, w):
-    """Weighted residuals ``sqrt(w) (z - L theta + c^T (I+E)^-1 c)`` and their Jacobian."""
+    """Step 2's weighted residuals ``sqrt(w) (z - L theta + c^T (I+E)^-1 c)`` and their Jacobian.
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        ``[c; E11, E22, E33, E12, E13, E23]`` (9,).
+    z, lmat, w : numpy.ndarray
+        As :func:`measurement` returns them.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The residuals (N,) and the Jacobian (N, 9).
+    """
     c, e = theta[:3], sym(theta[3:])
     g = np.linalg.solve(np.eye(3) + e, c)  # (I+E)^-1 c
     sw = np.sqrt(w)
@@ -113,7 +164,18 @@ def residual_and_jacobian(theta: np.ndarray, z, lmat, w):
 
 
 def calibration(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(W, o)`` = ``((I+E)^{1/2}, (I+E)^{-1} c)``; ``None`` if ``I + E`` is not positive definite."""
+    """The calibration of ``θ``: ``(W, o) = ((I+E)^{1/2}, (I+E)^{-1} c)``.
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        ``[c; E11, E22, E33, E12, E13, E23]`` (9,).
+
+    Returns
+    -------
+    tuple of numpy.ndarray or None
+        ``(W, o)``; None if ``I + E`` is not positive definite.
+    """
     f = np.eye(3) + sym(theta[3:])
     val, vec = np.linalg.eigh(f)
     if not np.all(val > 0):
@@ -126,14 +188,25 @@ class TwoStep:
 
     Parameters
     ----------
-    name : config name.
-    max_iter : Gauss-Newton iterations at most (step 2).
-    tol : stop when the step is below ``tol`` (relative, in the scaled units).
-    sigma : reading-noise standard deviation per axis (reading units) for the weights and the bias
-        ``mu``; ``null``: the dataset's own (``noise_std``), else 0 (equal weights).
+    name : str
+        Config name.
+    max_iter : int
+        Gauss-Newton iterations at most (step 2).
+    tol : float
+        Stop when the step is below ``tol`` (relative, in the scaled units).
+    sigma : float, optional
+        Reading-noise standard deviation per axis (reading units) for the weights and the bias
+        ``mu``; None: the dataset's own (``noise_std``), else 0 (equal weights).
+
+    References
+    ----------
+    Alonso & Shuster (2002), TWOSTEP, J. Astronaut. Sci. 50(4):433-451; Complete linear
+    attitude-independent magnetometer calibration, 50(4):477-490.
     """
 
     references = "Alonso & Shuster 2002 (TWOSTEP), J. Astronaut. Sci. 50(4):433-451 and 477-490"
+    label = ""
+    smoke = {"max_iter": 12}
     needs = ("total_field",)
     iterative = True
     monotone_history = False  # it minimises J (squared magnitudes), not the problem's RMS of magnitudes
@@ -145,7 +218,22 @@ class TwoStep:
         self.sigma = None if sigma is None else check_nonnegative(sigma, "estimator.sigma")
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
-        """Step 1, then Gauss-Newton; ``callback(k, x, fun)`` after every Gauss-Newton step."""
+        """Step 1, then Gauss-Newton (module docstring).
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+            A total-field problem (readings, reference magnitudes, the dataset's noise).
+        rng : numpy.random.Generator, optional
+            Unused (the fit draws nothing).
+        callback : callable, optional
+            ``callback(k, x, fun)`` after every Gauss-Newton step; a true return stops it.
+
+        Returns
+        -------
+        FitResult
+            ``metrics["twostep_centred_fun"]`` the objective at step 1's estimate.
+        """
         ds = problem.dataset
         scale = float(np.mean(ds.reference_norm))
         sigma = self.sigma if self.sigma is not None else (ds.noise_std or 0.0)

@@ -6,7 +6,7 @@ A run config is Hydra's composition of ``conf/config.yaml`` with one choice per 
 choice only once per process (a Hydra compose costs 10-100 ms; grafting a cached node and
 applying overrides with OmegaConf costs well under one).
 
-Structured schemas (:func:`register_schemas`, Hydra's ConfigStore) type the scenario configs:
+Structured schemas (:func:`register_schemas`, Hydra's ConfigStore) type the scenario and estimator configs:
 a typo such as ``scenario.nosie=2`` or a value of the wrong type fails here, at compose time,
 in one line naming the key and the keys that exist. Range checks (``noise >= 0``...) stay in
 the constructors of the objects the configs build.
@@ -19,13 +19,17 @@ import functools
 import hashlib
 import importlib
 import importlib.util
+import inspect
 import json
 import pickle
 import re
 import sys
-from dataclasses import dataclass, field as _field
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import field as _field, make_dataclass
 from pathlib import Path
-from typing import Any, List, Optional
+from typing import Any, Dict, List, Optional
 
 from omegaconf import MISSING, DictConfig, OmegaConf, flag_override
 
@@ -33,6 +37,7 @@ from magexp import paths
 from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
 from magexp.run import cache
+from magexp.run.guard import check_target
 
 GROUPS = ("scenario", "estimator")
 PRIMARY = "config"
@@ -41,135 +46,106 @@ CALIBRATE_KEYS = ("task", "data", "out")
 
 
 # ---------------------------------------------------------------------------------------------
-# structured schemas (ConfigStore group ``schema/scenario``; a scenario YAML names one in its
-# defaults list, e.g. ``- /schema/scenario/ding@_here_``)
+# structured schemas (ConfigStore groups ``schema/scenario`` and ``schema/estimator``)
+#
+# Every scenario and estimator config is typed. A class's schema is its ``Config`` dataclass (the
+# scenarios: beside their classes in magexp/scenarios/), else the dataclass of its constructor's
+# typed parameters (:func:`schema_of`: the estimators and their strategy pieces, so a constructor
+# and its schema cannot disagree). It is stored under the class's name, and a config names it in
+# its defaults list: ``- /schema/estimator/LevenbergMarquardt@_here_``, a nested node of another
+# class at its key (``- /schema/estimator/Linear@velocity.inertia``).
 
-def _list(*values):
-    """A list field with a default (dataclass fields need a factory for mutable defaults)."""
-    return _field(default_factory=lambda: list(values))
-
-
-# A field without a default (MISSING) must be given by the scenario's YAML file.
-
-@dataclass
-class SearchConf:
-    """Box of ``[vec(matrix), offset]``: ``[low, high]`` per kind of entry."""
-
-    diag: List[float] = MISSING
-    offdiag: List[float] = MISSING
-    offset: List[float] = MISSING
+_TARGET = re.compile(r"_target_:\s*([A-Za-z_][\w.]*)")
 
 
-@dataclass
-class DingFieldConf:
-    total: float = MISSING        # nT
-    declination: float = MISSING  # deg
-    inclination: float = MISSING  # deg
+def _typed(hint):
+    """``hint`` as OmegaConf types it: ``X | None`` -> ``Optional[X]``, ``list[X]`` -> ``List[X]``,
+    ``dict`` -> ``Dict[str, Any]``, a class OmegaConf does not type (a strategy object) -> ``Any``."""
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        rest = [a for a in args if a is not type(None)]
+        inner = _typed(rest[0]) if len(rest) == 1 else Any
+        return Optional[inner] if len(rest) < len(args) and inner is not Any else inner
+    if origin in (list, List):
+        return List[_typed(args[0])] if args else List[Any]
+    if hint is dict or origin is dict:
+        return Dict[str, Any]
+    return hint if hint in (int, float, str, bool) else Any
 
 
-@dataclass
-class DingErrorsConf:
-    scale: List[float] = MISSING
-    nonorthogonality_deg: List[float] = MISSING
-    soft_iron: List[List[float]] = MISSING
-    hard_iron: List[float] = MISSING
-    bias: List[float] = MISSING
-
-
-@dataclass
-class ScenarioConf:
-    """What every scenario config has: the class it builds, its name, its search box."""
-
-    _target_: str = MISSING
-    name: str = MISSING
-    search: SearchConf = _field(default_factory=SearchConf)
-
-
-@dataclass
-class SimulationConf(ScenarioConf):
-    """A simulated scenario: its reading noise and number of readings."""
-
-    noise: float = MISSING
-    n_readings: int = MISSING
-
-
-@dataclass
-class DingScenarioConf(SimulationConf):
-    """:class:`magexp.scenarios.ding.DingScenario`."""
-
-    _target_: str = "magexp.scenarios.ding.DingScenario"
-    field: DingFieldConf = _field(default_factory=DingFieldConf)
-    errors: DingErrorsConf = _field(default_factory=DingErrorsConf)
-    noise_kind: str = "uniform"
-    objective: str = "scalar"
-
-
-@dataclass
-class RotationConf:
-    mode: Optional[str] = "mode1"
-    segments: Optional[List[Any]] = None
-    partial_arc_deg: float = 180.0
-    rate_deg_s: float = 36.0
-    sample_period: float = 0.01
-
-
-@dataclass
-class GyroConf:
-    drift_deg_h: float = 6.25
-    drift_axis: List[float] = _list(1.0, 1.0, 1.0)
-    noise_deg_s: float = 0.0
-
-
-@dataclass
-class YuanScenarioConf(SimulationConf):
-    """:class:`magexp.scenarios.yuan.YuanScenario`."""
-
-    _target_: str = "magexp.scenarios.yuan.YuanScenario"
-    field: List[float] = MISSING
-    field_scale: List[float] = _list(1.0, 1.0)
-    S: List[List[float]] = MISSING
-    b: List[float] = MISSING
-    rotation: RotationConf = _field(default_factory=RotationConf)
-    gyro: GyroConf = _field(default_factory=GyroConf)
-    objective: str = "vector"
-
-
-@dataclass
-class ShipSimulationConf(SimulationConf):
-    """:class:`magexp.scenarios.ship.ShipSimulation`."""
-
-    _target_: str = "magexp.scenarios.ship.ShipSimulation"
-    field: List[float] = MISSING
-    K: List[List[float]] = MISSING
-    Bp: List[float] = MISSING
-    heading_deg: List[float] = MISSING
-    roll_deg: List[float] = MISSING
-    trim_deg: List[float] = MISSING
-    angle_noise_deg: float = MISSING
-    noise_kind: str = "uniform"
-
-
-@dataclass
-class ShipRecordingConf(ScenarioConf):
-    """:class:`magexp.scenarios.ship.ShipRecording`."""
-
-    _target_: str = "magexp.scenarios.ship.ShipRecording"
-    path: str = MISSING
-    field: Optional[List[float]] = None
-
-
-SCHEMAS = {"ding": DingScenarioConf, "yuan": YuanScenarioConf, "ship_simulation": ShipSimulationConf,
-           "ship_recording": ShipRecordingConf}
+#: the schemas :func:`schema_of` derives, by name: a derived dataclass lives here, so that it pickles
+DERIVED = types.SimpleNamespace()
 
 
 @functools.cache
-def register_schemas() -> None:
-    """Store the scenario schemas in Hydra's ConfigStore (group ``schema/scenario``), once."""
+def schema_of(cls) -> type:
+    """The schema of the configs that build ``cls``: its ``Config`` dataclass if it has one, else a
+    dataclass of its constructor's parameters with their annotations (:func:`_typed`) and defaults
+    (none: the config must give it), plus ``_target_`` (kept in :data:`DERIVED` as ``<class>Conf``; class names are unique among the configs' classes)."""
+    if "Config" in dir(cls):
+        return cls.Config
+    name = f"{cls.__name__}Conf"
+    hints = typing.get_type_hints(cls.__init__)
+    fields = [("_target_", str, _field(default=MISSING))]
+    for p in list(inspect.signature(cls.__init__).parameters.values())[1:]:
+        if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+            continue
+        default = MISSING if p.default is p.empty else p.default
+        kind = _typed(hints.get(p.name, Any))
+        if isinstance(default, (list, tuple)):
+            fields.append((p.name, kind if kind is not Any else List[Any], _field(default_factory=lambda d=default: list(d))))
+        else:
+            fields.append((p.name, kind, _field(default=default)))
+    schema = make_dataclass(name, fields, namespace={"__doc__": f"Schema of {cls.__module__}.{cls.__qualname__}.",
+                                                     "__module__": __name__})
+    schema.__qualname__ = f"DERIVED.{name}"
+    setattr(DERIVED, name, schema)
+    return schema
+
+
+def schema_classes(group: str) -> list[type]:
+    """Every class a ``_target_`` of ``conf/<group>/`` names (nested nodes and base configs included) that
+    :func:`magexp.run.guard.check_target` allows, imported: the classes whose schemas are registered."""
+    targets = sorted({t for path in (CONF / group).rglob("*.yaml") for t in _TARGET.findall(path.read_text())})
+    classes = []
+    for target in targets:
+        try:
+            check_target(group, target)
+        except MagexpError:  # not a class magexp may build: its config fails when it is composed, not here
+            continue
+        module, _, name = target.rpartition(".")
+        classes.append(getattr(importlib.import_module(module), name))
+    return classes
+
+
+@functools.cache
+def register_schemas() -> dict:
+    """Store the schema of every class of :func:`schema_classes` in Hydra's ConfigStore (group
+    ``schema/<group>``, named after the class), once; returns ``{name: schema}``."""
     from hydra.core.config_store import ConfigStore
 
-    store = ConfigStore.instance()
-    for name, node in SCHEMAS.items():
-        store.store(group="schema/scenario", name=name, node=node)
+    store, schemas = ConfigStore.instance(), {}
+    for group in GROUPS:
+        for cls in schema_classes(group):
+            schemas[cls.__name__] = schema = schema_of(cls)
+            store.store(group=f"schema/{group}", name=cls.__name__, node=schema)
+    return schemas
+
+
+class _Schemas(Mapping):
+    """``{name: schema}`` of :func:`register_schemas`, registered on first use."""
+
+    def __getitem__(self, name):
+        return register_schemas()[name]
+
+    def __iter__(self):
+        return iter(register_schemas())
+
+    def __len__(self):
+        return len(register_schemas())
+
+
+SCHEMAS = _Schemas()
 
 
 # ---------------------------------------------------------------------------------------------

@@ -11,13 +11,17 @@ The calibration (eq 9) is ``B = M^-1 (Br - I)``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field as _field
+from typing import List
+
 import numpy as np
+from omegaconf import MISSING
 
 from magexp.core.dataset import Dataset, Truth
 from magexp.errors import MagexpError, check, check_positive_int
 from magexp.core.geometry import field_ned, random_rotations
 from magexp.scenarios.noise import Noise
-from magexp.scenarios.search import SearchBox
+from magexp.scenarios.search import SearchBox, SimulationConf
 
 
 def nonorthogonality(phi_deg: float, theta_deg: float, psi_deg: float) -> np.ndarray:
@@ -59,6 +63,37 @@ def error_model(*, scale, nonorthogonality_deg, soft_iron, hard_iron, bias) -> t
     return m, i
 
 
+@dataclass
+class DingFieldConf:
+    """Schema of Ding's ``field:`` node."""
+
+    total: float = MISSING        # nT
+    declination: float = MISSING  # deg
+    inclination: float = MISSING  # deg
+
+
+@dataclass
+class DingErrorsConf:
+    """Schema of Ding's ``errors:`` node (the arguments of :func:`error_model`)."""
+
+    scale: List[float] = MISSING
+    nonorthogonality_deg: List[float] = MISSING
+    soft_iron: List[List[float]] = MISSING
+    hard_iron: List[float] = MISSING
+    bias: List[float] = MISSING
+
+
+@dataclass
+class DingScenarioConf(SimulationConf):
+    """Schema of a :class:`DingScenario` config."""
+
+    _target_: str = "magexp.scenarios.ding.DingScenario"
+    field: DingFieldConf = _field(default_factory=DingFieldConf)
+    errors: DingErrorsConf = _field(default_factory=DingErrorsConf)
+    noise_kind: str = "uniform"
+    objective: str = "scalar"
+
+
 class DingScenario:
     """Random 3-D rotations of a sensor with Ding's error model.
 
@@ -73,6 +108,8 @@ class DingScenario:
     search : search box of the calibration parameters (see :class:`SearchBox`).
     objective : the problem used by default (``scalar``).
     """
+
+    Config = DingScenarioConf
 
     def __init__(self, *, name: str, field: dict, errors: dict, noise: float, n_readings: int,
                  search: dict, noise_kind: str = "uniform", objective: str = "scalar"):

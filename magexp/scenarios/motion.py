@@ -20,6 +20,9 @@ not stated it is the config value ``partial_arc_deg`` (default 180°).
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from typing import Any, List, Optional
+
 import numpy as np
 
 from magexp.core.limits import refuse_over
@@ -51,6 +54,17 @@ def segments_of(mode: str | None, segments, partial_arc_deg: float) -> list[tupl
         check(ax in AXES, f"rotation axis={ax!r} is not allowed: choose x, y or z")
         check(np.isfinite(arc) and arc > 0, f"rotation arc_deg={arc!r} is not allowed: it must be > 0")
     return out
+
+
+@dataclass
+class RotationConf:
+    """Schema of a Yuan scenario's ``rotation:`` node (the arguments of :class:`Trajectory`)."""
+
+    mode: Optional[str] = "mode1"
+    segments: Optional[List[Any]] = None
+    partial_arc_deg: float = 180.0
+    rate_deg_s: float = 36.0
+    sample_period: float = 0.01
 
 
 class Trajectory:
@@ -99,6 +113,15 @@ class Trajectory:
 #: the widest full-scale range of a MEMS rate gyroscope (°/s; the ICM-42686-P's ±4000 °/s, twice the usual
 #: ±2000 °/s): a drift or a noise level beyond it is no gyroscope's, the bound of :class:`Gyro`'s values
 GYRO_RANGE_DEG_S = 4000.0
+
+
+@dataclass
+class GyroConf:
+    """Schema of a Yuan scenario's ``gyro:`` node (the arguments of :class:`Gyro`)."""
+
+    drift_deg_h: float = 6.25
+    drift_axis: List[float] = field(default_factory=lambda: [1.0, 1.0, 1.0])
+    noise_deg_s: float = 0.0
 
 
 class Gyro:

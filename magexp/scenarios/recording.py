@@ -61,10 +61,11 @@ class RecordingScenario:
         readings' sphere radius of its centre, Yuan's 100 mG of 527 mG being 0.19).
     """
 
-    def __init__(self, *, name: str, file: str, objective: str = "scalar", unit=None, format: str = "auto",
-                 mag_axes=None, gyro_axes=None, window=None, n_readings=None, folds: int = 5,
-                 heldout_fold: int = 0, bias_bound_deg_s: float = 10.0, rest_file=None, box: str = "auto",
-                 matrix_bound: float = 3.0, offset_width: float | None = None):
+    def __init__(self, *, name: str, file: str, objective: str = "scalar", unit: str | None = None,
+                 format: str = "auto", mag_axes: str | None = None, gyro_axes: str | None = None,
+                 window: list[float] | None = None, n_readings: int | None = None, folds: int = 5,
+                 heldout_fold: int = 0, bias_bound_deg_s: float = 10.0, rest_file: str | None = None,
+                 box: str = "auto", matrix_bound: float = 3.0, offset_width: float | None = None):
         if objective not in OBJECTIVES:
             raise MagexpError(f"scenario.objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
         self.name, self.file, self.objective = name, file, objective

@@ -27,9 +27,11 @@ It has one of two shapes (:data:`BOXES`):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import List
 
 import numpy as np
+from omegaconf import MISSING
 
 from magexp.core.ellipsoid import fit_sphere
 from magexp.errors import LARGEST, MagexpError
@@ -76,6 +78,33 @@ class SearchBox:
         lo = np.where(eye, self.diag[0], self.offdiag[0])
         hi = np.where(eye, self.diag[1], self.offdiag[1])
         return (np.concatenate([lo, np.full(3, self.offset[0])]), np.concatenate([hi, np.full(3, self.offset[1])]))
+
+
+@dataclass
+class SearchConf:
+    """Schema of a ``search:`` node (:class:`SearchBox`): ``[low, high]`` per kind of entry."""
+
+    diag: List[float] = MISSING
+    offdiag: List[float] = MISSING
+    offset: List[float] = MISSING
+
+
+@dataclass
+class ScenarioConf:
+    """Schema of what every simulated or modelled scenario config has: the class it builds, its name,
+    its search box. A field without a default (``MISSING``) must be given by the config."""
+
+    _target_: str = MISSING
+    name: str = MISSING
+    search: SearchConf = field(default_factory=SearchConf)
+
+
+@dataclass
+class SimulationConf(ScenarioConf):
+    """Schema of a simulated scenario: its reading noise and number of readings."""
+
+    noise: float = MISSING
+    n_readings: int = MISSING
 
 
 def centroid_radius(readings: np.ndarray) -> float:

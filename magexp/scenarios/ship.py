@@ -21,14 +21,18 @@ Two scenarios: :class:`ShipSimulation` (sec 2.2) and :class:`ShipRecording` (sec
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import List, Optional
+
 import numpy as np
+from omegaconf import MISSING
 
 from magexp.core.dataset import Dataset, Truth
 from magexp.errors import MagexpError, check_nonnegative, check_positive_int
 from magexp.core.geometry import ship_attitude
 from magexp.core.recordings import load_recording
 from magexp.scenarios.noise import Noise
-from magexp.scenarios.search import SearchBox
+from magexp.scenarios.search import ScenarioConf, SearchBox, SimulationConf
 
 
 def _array(value, name: str, shape) -> np.ndarray:
@@ -75,6 +79,21 @@ def ship_dataset(readings, angles, field, *, angles_true=None, truth=None, noise
     )
 
 
+@dataclass
+class ShipSimulationConf(SimulationConf):
+    """Schema of a :class:`ShipSimulation` config."""
+
+    _target_: str = "magexp.scenarios.ship.ShipSimulation"
+    field: List[float] = MISSING
+    K: List[List[float]] = MISSING
+    Bp: List[float] = MISSING
+    heading_deg: List[float] = MISSING
+    roll_deg: List[float] = MISSING
+    trim_deg: List[float] = MISSING
+    angle_noise_deg: float = MISSING
+    noise_kind: str = "uniform"
+
+
 class ShipSimulation:
     """Yan & Zhou's simulation (sec 2.2): random attitudes, ``B = K A Be + Bp`` plus noise.
 
@@ -92,6 +111,7 @@ class ShipSimulation:
     search : box of ``[vec(K), Bp]`` (for swarm estimators).
     """
 
+    Config = ShipSimulationConf
     objective = "ship"
 
     def __init__(self, *, name: str, field, K, Bp, heading_deg, roll_deg, trim_deg, n_readings: int,
@@ -120,6 +140,15 @@ class ShipSimulation:
                             meta={"scenario": self.name})
 
 
+@dataclass
+class ShipRecordingConf(ScenarioConf):
+    """Schema of a :class:`ShipRecording` config."""
+
+    _target_: str = "magexp.scenarios.ship.ShipRecording"
+    path: str = MISSING
+    field: Optional[List[float]] = None
+
+
 class ShipRecording:
     """A recorded ship dataset (Yan & Zhou's mock-up, Table 1, or a user's own file).
 
@@ -133,6 +162,7 @@ class ShipRecording:
     The data are fixed: ``generate`` ignores ``rng``, and the truth is unknown.
     """
 
+    Config = ShipRecordingConf
     objective = "ship"
 
     def __init__(self, *, name: str, path: str, search: dict, field=None):

@@ -19,14 +19,18 @@ is known to the objective through ``Dataset.field_nav``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field as _field
+from typing import List
+
 import numpy as np
+from omegaconf import MISSING
 
 from magexp.core.dataset import Dataset, Truth
 from magexp.core.geometry import integrate_rates
 from magexp.errors import MagexpError, check, check_nonnegative
-from magexp.scenarios.motion import Gyro, Trajectory, even_subsample
+from magexp.scenarios.motion import Gyro, GyroConf, RotationConf, Trajectory, even_subsample
 from magexp.scenarios.noise import Noise
-from magexp.scenarios.search import SearchBox
+from magexp.scenarios.search import SearchBox, SimulationConf
 
 
 def _array(value, name: str, shape) -> np.ndarray:
@@ -34,6 +38,20 @@ def _array(value, name: str, shape) -> np.ndarray:
     if arr.shape != shape or not np.all(np.isfinite(arr)):
         raise MagexpError(f"{name}={value!r} is not allowed: it must be {shape} finite numbers")
     return arr
+
+
+@dataclass
+class YuanScenarioConf(SimulationConf):
+    """Schema of a :class:`YuanScenario` config."""
+
+    _target_: str = "magexp.scenarios.yuan.YuanScenario"
+    field: List[float] = MISSING
+    field_scale: List[float] = _field(default_factory=lambda: [1.0, 1.0])
+    S: List[List[float]] = MISSING
+    b: List[float] = MISSING
+    rotation: RotationConf = _field(default_factory=RotationConf)
+    gyro: GyroConf = _field(default_factory=GyroConf)
+    objective: str = "vector"
 
 
 class YuanScenario:
@@ -54,6 +72,7 @@ class YuanScenario:
         forward parameterisation ``[vec(S), b]``.
     """
 
+    Config = YuanScenarioConf
     problem_options = {"parameterisation": "forward"}
 
     def __init__(self, *, name: str, field, S, b, rotation: dict, gyro: dict, noise: float, n_readings: int,

@@ -1,0 +1,250 @@
+"""docs/extending.md is right: it lists every key a spec accepts (generated from the schema), and following
+it in a copy of the repository adds a toy estimator, a toy paper and a toy recording format that run."""
+
+import dataclasses
+import os
+import re
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from magexp.artifacts import claims, spec
+from magexp.artifacts.schema import allowed
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = (ROOT / "docs" / "extending.md").read_text()
+
+
+def schema_classes() -> list[type]:
+    """Every dataclass a spec or a ``paper.yaml`` is built of: :class:`~magexp.artifacts.spec.Artifact`,
+    :class:`~magexp.artifacts.spec.Paper` and the dataclasses their fields name, recursively."""
+    named = {name: obj for module in (spec, claims) for name, obj in vars(module).items()
+             if isinstance(obj, type) and dataclasses.is_dataclass(obj) and obj.__module__ == module.__name__}
+    found, todo = [], [spec.Artifact, spec.Paper]
+    while todo:
+        cls = todo.pop(0)
+        if cls in found:
+            continue
+        found.append(cls)
+        for f in dataclasses.fields(cls):
+            todo += [named[n] for n in re.findall(r"\w+", str(f.type)) if n in named]
+    return found
+
+
+def row_of(marker: str) -> str:
+    """The table row of docs/extending.md holding ``marker``."""
+    rows = [line for line in DOC.splitlines() if line.startswith("|") and marker in line]
+    assert len(rows) == 1, f"docs/extending.md: {len(rows)} table rows for {marker}"
+    return rows[0]
+
+
+def test_the_schema_is_walked_whole():
+    names = {c.__name__ for c in schema_classes()}
+    assert {"Artifact", "Summarise", "Ratio", "Reported", "Tolerance", "Success", "Claim", "Grow", "Paper",
+            "Deviation", "Headline", "Reading"} <= names
+
+
+@pytest.mark.parametrize("cls", schema_classes(), ids=lambda c: c.__name__)
+def test_extending_lists_every_key_of_the_spec(cls):
+    row = row_of(f"(`{cls.__name__}`)")
+    missing = [k for k in allowed(cls) if f"`{k}`" not in row]
+    assert not missing, f"docs/extending.md's row of {cls.__name__} does not name {missing}"
+
+
+def test_extending_lists_every_plot_kind_and_its_keys():
+    common = set.intersection(*map(set, spec.PLOT_KEYS.values()))
+    every = next(line for line in DOC.splitlines() if "Every kind" in line or "every kind" in line.lower()
+                 and "takes" in line)
+    paragraph = DOC[DOC.index(every):DOC.index(every) + 400]
+    assert all(f"`{k}`" in paragraph for k in common), common
+    for kind, keys in spec.PLOT_KEYS.items():
+        row = row_of(f"| `{kind}` |")
+        missing = [k for k in keys - common if f"`{k}`" not in row]
+        assert not missing, f"plot kind {kind}: docs/extending.md does not name {missing}"
+    assert "`quantities`" in DOC and "`values`" in DOC  # the vector form of a reported entry
+
+
+# -- following the page in a copy of the repository ----------------------------------------------------
+
+TOY_ESTIMATOR = '''
+"""A toy estimator (docs/extending.md, "Add an estimator"): the best of uniform draws in the box."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from magexp.errors import check_positive_int
+from magexp.estimators.result import FitResult
+
+
+class RandomSearch:
+    """The best of ``n_samples`` uniform draws in the box, evaluated in one vectorised call.
+
+    Parameters
+    ----------
+    name : str
+        Config name.
+    n_samples : int
+        Draws.
+    """
+
+    needs = ("cost",)
+    iterative = False
+    label = "random search"
+    smoke = {"n_samples": 8}
+    references = "Brooks 1958, A discussion of random methods for seeking maxima"
+
+    def __init__(self, *, name: str = "toy", n_samples: int = 200):
+        self.name = name
+        self.n_samples = check_positive_int(n_samples, "estimator.n_samples")
+
+    def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
+        """The best draw.
+
+        Parameters
+        ----------
+        problem : magexp.problems.base.Problem
+        rng : numpy.random.Generator
+        callback : callable, optional
+
+        Returns
+        -------
+        FitResult
+        """
+        x = problem.lower + rng.random((self.n_samples, problem.lower.size)) * (problem.upper - problem.lower)
+        cost = problem.cost(x)
+        best = x[int(np.argmin(cost))]
+        fun = problem.cost_direct(best)
+        return FitResult(x=best, fun=fun, nit=1, nfev=self.n_samples, history=np.array([fun]),
+                         history_nfev=np.array([self.n_samples]), message=f"best of {self.n_samples} draws")
+'''
+
+TOY_CONFIG = """
+defaults:
+  - /schema/estimator/RandomSearch@_here_
+  - _self_
+
+_target_: magexp.estimators.toy.RandomSearch
+name: toy
+n_samples: 400
+"""
+
+TOY_PAPER = """
+title: "Toy 2026: random search against Levenberg-Marquardt"
+intro: "A paper added by following docs/extending.md."
+order: 900
+deviations:
+  - {text: "The toy paper prints no numbers.", reason: "It is a test."}
+"""
+
+TOY_ARTIFACT = """
+name: toy_fig1
+title: "Final total-field RMS vs noise: random search and lm"
+kind: final
+seeds: 2
+base: [scenario=ding2024_exp1, scenario.n_readings=60]
+grid:
+  scenario.noise: [1, 10]
+  estimator: [toy, lm]
+plot: {x: scenario.noise, hue: estimator, metric: fun, xscale: log}
+summarise: [{quantity: final_rms, metric: fun}]
+caption: "Median over {seeds} seeds."
+"""
+
+TOY_READER = '''
+
+
+def read_toy(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """A toy format (docs/extending.md, "Add a recording format"): a line ``TOY <unit>``, then ``x;y;z`` lines."""
+    lines = Path(path).read_text().splitlines()
+    if not lines or not lines[0].startswith("TOY "):
+        raise MagexpError(f"{Path(path).name}: line 1: not a toy recording (it must begin with TOY <unit>)")
+    rows = []
+    for number, line in enumerate(lines[1:], start=2):
+        try:
+            rows.append([float(v) for v in line.split(";")])
+        except ValueError:
+            raise MagexpError(f"{Path(path).name}: line {number}: {line!r} is not x;y;z") from None
+    return Recording(readings=np.array(rows) @ axis_map(mag_axes).T, angles=None, field=None,
+                     unit=check_unit(lines[0].split()[1], "data.unit"), meta={"format": "toy"})
+
+
+READERS["toy"] = read_toy
+'''
+
+
+def toy_recording(path: Path) -> None:
+    """A sensor turned over the sphere: |B| = 50 uT, a scale, a skew and an offset, a little noise."""
+    rng = np.random.default_rng(7)
+    u = rng.normal(size=(400, 3))
+    field = 50.0 * u / np.linalg.norm(u, axis=1, keepdims=True)
+    raw = field @ np.array([[1.1, 0.05, 0.0], [0.0, 0.9, 0.02], [0.0, 0.0, 1.05]]).T + [3.0, -2.0, 1.0]
+    raw += rng.normal(scale=0.05, size=raw.shape)
+    path.write_text("TOY uT\n" + "\n".join(";".join(f"{v:.5f}" for v in row) for row in raw) + "\n")
+
+
+@pytest.fixture(scope="module")
+def copy(tmp_path_factory):
+    """A copy of the repository's code, configs, experiments and small data files (no results, no cache)."""
+    root = tmp_path_factory.mktemp("repo")
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for folder in ("magexp", "conf", "experiments", "data", "hydra_plugins"):
+        if (ROOT / folder).exists():
+            shutil.copytree(ROOT / folder, root / folder, ignore=ignore)
+    shutil.copy(ROOT / "pyproject.toml", root / "pyproject.toml")
+    return root
+
+
+def magexp(copy: Path, *args, cwd: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(copy), "MAGEXP_CACHE": str(cwd.parent / "cache" / "runs")}
+    return subprocess.run([sys.executable, "-m", "magexp", *map(str, args)], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=600)
+
+
+@pytest.mark.full
+def test_following_extending_adds_an_estimator_a_paper_and_a_reader(copy, tmp_path):
+    """One class and one YAML make an estimator (typed, labelled, smoke-sized); a folder of experiments/
+    makes a paper that reproduces; one function and its READERS entry make a format a recorded scenario reads."""
+    work = tmp_path / "work"
+    work.mkdir()
+    (copy / "magexp" / "estimators" / "toy.py").write_text(textwrap.dedent(TOY_ESTIMATOR).lstrip())
+    (copy / "conf" / "estimator" / "toy.yaml").write_text(TOY_CONFIG.lstrip())
+
+    run = magexp(copy, "scenario=ding2024_exp1", "estimator=toy", "seed=0", cwd=work)
+    assert run.returncode == 0, run.stderr
+    metrics = pd.read_csv(next(work.rglob("metrics.csv")))
+    assert metrics.fun.iloc[0] > 0 and np.isfinite(metrics.fun.iloc[0])
+    bad = magexp(copy, "scenario=ding2024_exp1", "estimator=toy", "estimator.n_samples=abc", cwd=work)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "estimator.n_samples=abc" in bad.stderr, bad.stderr
+
+    (copy / "experiments" / "toy").mkdir()
+    (copy / "experiments" / "toy" / "paper.yaml").write_text(TOY_PAPER.lstrip())
+    (copy / "experiments" / "toy" / "toy_fig1.yaml").write_text(TOY_ARTIFACT.lstrip())
+    out = tmp_path / "out"
+    reproduced = magexp(copy, "reproduce", "toy", "--tiny", "--out", out, cwd=work)
+    assert reproduced.returncode == 0, reproduced.stderr
+    assert (out / "toy" / "toy_fig1.png").exists() and (out / "toy" / "toy_fig1.csv").exists()
+    summary = pd.read_csv(out / "toy" / "summary.csv")
+    assert summary.label.str.startswith("random search final RMS").any(), summary.label  # the class's label
+    runs = pd.read_csv(out / "toy" / "toy_fig1_runs.csv")
+    assert set(runs.estimator) == {"toy", "lm"} and len(runs) == 8
+    assert (runs[runs.estimator == "toy"].nfev == 8).all()  # --tiny: the class's smoke size
+
+    with (copy / "magexp" / "core" / "recordings.py").open("a") as fh:
+        fh.write(TOY_READER)
+    toy_recording(tmp_path / "turns.toy")
+    scenario = (copy / "conf" / "scenario" / "real_qmc5883l.yaml").read_text()
+    scenario = re.sub(r"\nname: .*", "\nname: real_toy", scenario)
+    scenario = re.sub(r"\nfile: .*", f"\nfile: {tmp_path / 'turns.toy'}", scenario)
+    scenario = re.sub(r"\nformat: .*", "\nformat: toy", scenario)
+    (copy / "conf" / "scenario" / "real_toy.yaml").write_text(scenario)
+    fitted = magexp(copy, "scenario=real_toy", "estimator=ellipsoid", "seed=0", cwd=work)
+    assert fitted.returncode == 0, fitted.stderr
+    recorded = pd.read_csv(sorted(work.rglob("metrics.csv"))[-1])
+    assert recorded.scenario.iloc[0] == "real_toy" and recorded.fun.iloc[0] < 0.5  # uT: the noise, not the errors
