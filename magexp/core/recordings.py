@@ -1,6 +1,6 @@
 """Recorded magnetometer data: one reader per file format, in one registry (:data:`READERS`), and the loader
-that picks one (:func:`load_recording`). The readers live in :mod:`magexp.core.readers` (the text formats in
-:mod:`~magexp.core.readers.text` and :mod:`~magexp.core.readers.tables`, each log format in its own module);
+that picks one (:func:`load_recording`). The text formats' readers live in :mod:`magexp.core.text_readers`,
+each log format's in its own module of :mod:`magexp.core.readers`;
 what they return, :class:`~magexp.core.recording.Recording`, in :mod:`magexp.core.recording`, which they
 import and this module re-exports. Imports go one way: this module -> readers -> recording.
 
