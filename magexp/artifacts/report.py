@@ -24,7 +24,7 @@ import pandas as pd
 from magexp.artifacts.claims import (CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, SHORT, UNDECIDED, adjust, evaluate,
                                      interpolate, shorten)
 from magexp.artifacts.plots import readings as readings_plot
-from magexp.artifacts.plots.benchmark_table import winners
+from magexp.artifacts.kind_tables import winners
 from magexp.artifacts.plots.style import save
 from magexp.artifacts.spec import ROUNDOFF_FLOOR, artifact_paths, load, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative

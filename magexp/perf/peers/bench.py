@@ -202,9 +202,9 @@ def run(args, work: Path) -> list[dict]:
 
 
 def summarise(rows: list[dict]) -> list[dict]:
-    """Mean, median and 95 % interval of the median (:func:`magexp.artifacts.claims.ci`) of every measure over seeds (simulations) or over the
+    """Mean, median and 95 % interval of the median (:func:`magexp.artifacts.tables.interval`) of every measure over seeds (simulations) or over the
     two held-out halves (recordings), per dataset, axis map and method."""
-    from magexp.artifacts.claims import ci
+    from magexp.artifacts.tables import interval
 
     groups: dict[tuple, list[float]] = {}
     for r in rows:
@@ -215,7 +215,7 @@ def summarise(rows: list[dict]) -> list[dict]:
     for key, values in groups.items():
         v = np.asarray(values, float)
         finite = v[np.isfinite(v)]
-        lo, hi = ci(finite, "median") if len(finite) > 1 else (float("nan"), float("nan"))
+        lo, hi = interval(finite, stat="median") if len(finite) > 1 else (float("nan"), float("nan"))
         out.append(dict(zip(("kind", "dataset", "axis_map", "fit_on", "side", "method", "metric"), key),
                         n=len(v), mean=float(np.mean(finite)) if len(finite) else float("nan"),
                         median=float(np.median(finite)) if len(finite) else float("nan"), lo=lo, hi=hi))
