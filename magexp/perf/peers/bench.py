@@ -1,7 +1,7 @@
 """magexp beside MAGYC on the same data: ``python -m magexp.perf.peers.bench --out DIR`` (``make peers-bench``).
 
 Writes ``DIR/peers.csv`` (long format: one row per dataset, fit, side, method and measure), ``DIR/peers_summary.csv``
-(median and 95 % interval over seeds or folds, :func:`magexp.artifacts.claims.ci`), ``DIR/peers.png`` and ``DIR/peers.md``
+(median and 95 % interval over seeds or folds, :func:`magexp.artifacts.tables.interval`), ``DIR/peers.png`` and ``DIR/peers.md``
 (the section's text, every number read from the summary). Without the peer's environment (``make peers``) it
 prints one line and writes nothing.
 
