@@ -4,12 +4,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED, Claim, adjust, ci,
+from magexp.artifacts.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED, Claim, adjust,
                                      detectable_paired, detectable_rates, evaluate, fisher_greater, holm, interpolate,
                                      permutation_less, wilcoxon_less)
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.artifacts.headlines import claim_outcomes
+from magexp.artifacts.tables import interval
 
 
 def _table(groups: dict) -> pd.DataFrame:
@@ -62,9 +63,9 @@ def test_no_runs_never_holds():
 
 def test_bootstrap_interval_covers_the_statistic_and_is_deterministic():
     v = RNG.standard_normal(200)
-    lo, hi = ci(v, "mean")
+    lo, hi = interval(v, stat="mean")
     assert lo < v.mean() < hi and hi - lo == pytest.approx(2 * 1.96 / np.sqrt(200), rel=0.25)
-    assert ci(v, "mean") == (lo, hi)
+    assert interval(v, stat="mean") == (lo, hi)
 
 
 def test_notes_interpolate_measured_values():

@@ -13,7 +13,7 @@ from omegaconf import OmegaConf
 from magexp.artifacts.plan import paper_specs
 from magexp.paths import RESULTS
 from magexp.artifacts.plots import kind_module
-from magexp.artifacts.plots.benchmark_table import bound_ratio
+from magexp.artifacts.kind_tables import bound_ratio
 from magexp.artifacts.plots.check import colorbar_mismatch, defects, empty_axes, legend_defects, overlapping_text, raw_legends
 from magexp.artifacts.plots.style import colorbar, drawn_from, plt
 from magexp.artifacts.spec import papers
@@ -210,7 +210,7 @@ def test_tuning_names_settings_in_a_legend_only_where_the_axis_does_not(per_fami
 def test_a_calibration_figure_shows_a_successful_run_and_says_so():
     from types import SimpleNamespace
 
-    from magexp.artifacts.plots.field import shown_seed
+    from magexp.artifacts.kind_tables import shown_seed
 
     table = pd.DataFrame({"cell": [0, 0, 0, 1, 1], "seed": [0, 1, 2, 0, 1],
                           "succeeded": [0.0, 1.0, 1.0, 0.0, 0.0]})
@@ -224,7 +224,7 @@ def test_a_calibration_figure_shows_a_successful_run_and_says_so():
 def test_scenario_names_are_readable_in_legends_and_ticks():
     """yuan2018_table3 printed ``rdpso, yuan2018_mode1``: one readable name for every kind that labels
     a scenario (the parameter tables and the recordings' figures)."""
-    from magexp.artifacts.plots.parameters import cell_label
+    from magexp.artifacts.kind_tables import cell_label
     from magexp.artifacts.plots.style import scenario_label
 
     spec = OmegaConf.create({"plot": {}})

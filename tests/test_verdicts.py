@@ -7,7 +7,8 @@ import pytest
 from magexp.artifacts.plan import succeeded
 from magexp.artifacts.formats import tidy
 from magexp.artifacts.spec import Success, Tolerance
-from magexp.artifacts.summary import interval, judge
+from magexp.artifacts.summary import judge
+from magexp.artifacts.tables import interval
 
 
 def test_interval_is_the_central_95_percent_of_runs():

@@ -3,13 +3,15 @@
 verdicts and claims, drawn, and written up in ``results/REPORT.md``.
 
 Lives here: :mod:`~magexp.artifacts.spec` (the typed spec), :mod:`~magexp.artifacts.plan` (spec → runs →
-tidy rows), :mod:`~magexp.artifacts.reproduce` (``magexp reproduce``), :mod:`~magexp.artifacts.summary`
+tidy rows), :mod:`~magexp.artifacts.reproduce` (``magexp reproduce``), :mod:`~magexp.artifacts.tables`
+(every aggregation over runs: medians, quantiles, success fractions, the one interval helper) and
+:mod:`~magexp.artifacts.kind_tables` (the table behind each figure), :mod:`~magexp.artifacts.summary`
 (verdicts), :mod:`~magexp.artifacts.claims`, :mod:`~magexp.artifacts.headlines` (a paper's headline claims
 judged), :mod:`~magexp.artifacts.report`, :mod:`~magexp.artifacts.formats` (the results files' CSV and table
 formats), :mod:`~magexp.artifacts.verify` (``magexp verify``) and :mod:`~magexp.artifacts.compare` (two results
-folders compared), and :mod:`~magexp.artifacts.plots` (one module per figure kind).
+folders compared), and :mod:`~magexp.artifacts.plots` (one module per figure kind: drawing only).
 
-May import: ``core``, ``run``, ``problems`` (the problem facts a verdict needs, rebuilt in one place:
-:func:`magexp.artifacts.plan.rebuild_problem`) and :mod:`magexp.estimators.base` (whether an estimator
-applies, by class); never ``calibration``.
+May import: ``core``, ``run``, ``problems`` (a problem's class, to tell whether an estimator applies;
+the facts a verdict needs come from the stored runs, never a simulation) and
+:mod:`magexp.estimators.base` (whether an estimator applies, by class); never ``calibration``.
 """

@@ -22,8 +22,9 @@ A claim sits in the artifact YAML next to the runs it is about::
 
 ``metric`` is a runs column or an expression of columns (``pandas.eval``); ``stat`` one of
 :data:`STATS` over the seeds of the selected cells (pooled). Confidence intervals are 95 %
-percentile bootstrap intervals over seeds (:func:`ci`, a fixed generator: the same on every
-run). ``role: finding`` (default) claims with ``by: magexp`` are what the report states as true;
+percentile bootstrap intervals over seeds (a fixed generator: the same on every
+run, :func:`magexp.artifacts.tables.interval`). ``role: finding`` (default) claims with ``by: magexp``
+are what the report states as true;
 ``tests/test_claims.py`` fails when one of them does not hold on the results. ``figure``: the
 artifact whose figure shows the claim (default: its own).
 
@@ -70,28 +71,13 @@ import pandas as pd
 from scipy.special import ndtri
 
 from magexp.artifacts.schema import Float, typed
+from magexp.artifacts.tables import STATS, interval, matches, same, statistic
 from magexp.errors import MagexpError
 
-#: a statistic over the seeds of a selection
-STATS = {
-    "median": lambda v, axis=None: np.median(v, axis=axis),
-    "mean": lambda v, axis=None: np.mean(v, axis=axis),
-    "max": lambda v, axis=None: np.max(v, axis=axis),
-    "min": lambda v, axis=None: np.min(v, axis=axis),
-    # RMS over seeds (of error / sqrt(tr CRB) it is 1 for an efficient estimator)
-    "rms": lambda v, axis=None: np.sqrt(np.mean(np.square(v), axis=axis)),
-    "lo": lambda v, axis=None: np.quantile(v, 0.025, axis=axis),
-    "hi": lambda v, axis=None: np.quantile(v, 0.975, axis=axis),
-    "q25": lambda v, axis=None: np.quantile(v, 0.25, axis=axis),
-    "q75": lambda v, axis=None: np.quantile(v, 0.75, axis=axis),
-    "n": lambda v, axis=None: np.shape(v)[-1] * np.ones(np.shape(v)[:-1]) if axis is not None else len(v),
-    "success_rate": lambda v, axis=None: np.mean(v, axis=axis),  # of the 0/1 column ``succeeded``
-}
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
 KINDS = ("threshold", "success", "ordering", "winner")
 ROLES = ("finding", "sanity")
 TESTS = ("auto", "fisher", "paired", "unpaired", "intervals")
-N_BOOT = 2000
 #: significance level of every comparison test
 ALPHA = 0.05
 #: outcomes of a claim; the first is the only one that counts as holding
@@ -176,19 +162,6 @@ class Outcome:
         return bool(np.isfinite(self.p))
 
 
-def same(a, b) -> bool:
-    """Two setting values are equal as numbers where both are numbers (``2`` and ``2.0``), else as text."""
-    try:
-        return float(a) == float(b)
-    except (TypeError, ValueError):
-        return str(a) == str(b)
-
-
-def matches(selection: dict, settings: dict) -> bool:
-    """True if every ``key: value`` of ``selection`` is among ``settings``."""
-    return all(k in settings and same(settings[k], v) for k, v in selection.items())
-
-
 def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
     """``{cell: {key: value}}`` of a runs table: its ``setting`` pairs, estimator and objective."""
     if "cell" not in table or not len(table):
@@ -246,30 +219,15 @@ def values(runs: pd.DataFrame, metric: str, stat: str) -> np.ndarray:
     return v[np.isfinite(v)]
 
 
-def statistic(v: np.ndarray, stat: str) -> float:
-    return float(STATS[stat](v)) if len(v) else float("nan")
-
-
-def ci(v: np.ndarray, stat: str, level: float = 0.95) -> tuple[float, float]:
-    """Percentile bootstrap interval of ``stat`` over the seeds ``v`` (fixed generator)."""
-    if len(v) < 2:
-        return (float("nan"), float("nan"))
-    rng = np.random.default_rng(0)
-    idx = rng.integers(0, len(v), size=(N_BOOT, len(v)))
-    boot = np.asarray(STATS[stat](v[idx], axis=1), float)
-    a = (1 - level) / 2
-    return float(np.quantile(boot, a)), float(np.quantile(boot, 1 - a))
-
-
 def _name(where: dict) -> str:
     return ", ".join(f"{k}={v}" for k, v in where.items()) or "all cells"
 
 
 def _describe(where: dict, v: np.ndarray, stat: str) -> tuple[float, tuple, str]:
     """The statistic, its CI and a text; a CI over fewer than two values is not printed (n says it)."""
-    s, (lo, hi) = statistic(v, stat), ci(v, stat)
-    interval = f" [95 % CI {lo:.4g}, {hi:.4g}]" if np.isfinite(lo) and np.isfinite(hi) else ""
-    return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g}{interval} (n={len(v)})"
+    s, (lo, hi) = statistic(v, stat), interval(v, stat=stat)
+    shown = f" [95 % CI {lo:.4g}, {hi:.4g}]" if np.isfinite(lo) and np.isfinite(hi) else ""
+    return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g}{shown} (n={len(v)})"
 
 
 def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
@@ -509,8 +467,8 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
     stats, cis, parts = [], [], []
     for where in claim.cells:
         v = values(select(table, where), claim.metric, stat)
-        s, interval, text = _describe(where, v, stat)
-        stats.append(s), cis.append(interval), parts.append(text)
+        s, bounds, text = _describe(where, v, stat)
+        stats.append(s), cis.append(bounds), parts.append(text)
     if any(not np.isfinite(s) for s in stats):
         return Outcome(claim, False, "; ".join(parts) + " (a selection has no runs)")
     pairs = (list(zip(range(len(stats)), range(1, len(stats)))) if claim.kind == "ordering"

@@ -21,13 +21,11 @@ from omegaconf import DictConfig, OmegaConf
 from magexp.artifacts.claims import evaluate, matches
 from magexp.artifacts.spec import artifact_paths, load
 from magexp.core import outcomes
-from magexp.core.seeding import run_generators, scenario_stream
 from magexp.errors import MagexpError
 from magexp.estimators.base import applies_to
-from magexp.problems import make_problem, problem_class
+from magexp.problems import problem_class
 from magexp.run.compose import compose_config, yaml_value
 from magexp.run.executor import run_row
-from magexp.run.runner import build
 
 
 def load_spec(path: Path | str):
@@ -311,24 +309,3 @@ def collect(plan: ArtifactPlan, outputs) -> ArtifactRuns:
     return ArtifactRuns(spec=plan.spec, cells=plan.cells, table=table,
                         outputs=_ByRun(plan.index, outputs), overrides=plan.overrides)
 
-
-def rebuild_problem(overrides, seed: int):
-    """The problem of a cell's run ``seed``, rebuilt from the cell's overrides without a fit (its data
-    are deterministic): what the summary reads that a run does not store (the search box, the true
-    parameters, the linear design of a ship problem). The one place above the run layer that builds
-    simulation data (a cleaner design stores these facts with each run's outputs)."""
-    cfg = compose_config(list(overrides))
-    scenario = build(cfg.scenario, "scenario")
-    dataset = scenario.generate(rng=run_generators(seed, stream=scenario_stream(cfg.scenario))[0])
-    objective = cfg.get("objective") or scenario.objective
-    return make_problem(objective, dataset, scenario.search, **getattr(scenario, "problem_options", {}))
-
-
-def quantiles(values) -> tuple[float, float, float]:
-    """Median, 25 % and 75 % quantiles (NaN for no values)."""
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    if v.size == 0:
-        return (np.nan, np.nan, np.nan)
-    q25, q50, q75 = np.quantile(v, [0.25, 0.5, 0.75])
-    return float(q50), float(q25), float(q75)

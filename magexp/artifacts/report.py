@@ -24,7 +24,7 @@ from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, U
 from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, write_csv
 from magexp.artifacts.headlines import HEADLINE_VERDICTS, claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.plots import readings as readings_plot
-from magexp.artifacts.plots.benchmark_table import winners
+from magexp.artifacts.kind_tables import winners
 from magexp.artifacts.plots.style import save
 from magexp.artifacts.spec import artifact_paths, load, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative

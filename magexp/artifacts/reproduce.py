@@ -27,14 +27,16 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.plan import (ArtifactRuns, cells, collect, grow_stage, grow_start, paper_specs, plan_artifact,
-                                  rebuild_problem)
+from magexp.artifacts.kind_tables import tabulate
+from magexp.artifacts.plan import ArtifactRuns, cells, collect, grow_stage, grow_start, paper_specs, plan_artifact
 from magexp.artifacts.plots import VECTOR, kind_module
 from magexp.artifacts.formats import MEASURED, read_runs, write_csv
 from magexp.artifacts.report import build
 from magexp.artifacts.spec import papers
 from magexp.artifacts.summary import COLUMNS, summarise
+from magexp.artifacts.tables import first_output
 from magexp import paths
+from magexp.core.atomic import atomic_path
 from magexp.errors import MagexpError, exit_code
 from magexp.paths import RESULTS
 from magexp.core.limits import LIMITS, refuse_over, show
@@ -123,19 +125,20 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
 
 
 class StoredOutputs(Mapping):
-    """``(cell, seed) -> `` the parts of a run's output the summary reads (``x``, ``parameter_names``,
-    ``truth_x``), from the runs CSV as written: the estimates are its parameter columns, the names
-    and the truth those of the cell's problem (``facts(cell) -> (names, truth)``)."""
+    """``(cell, seed) -> `` the parts of a run's output the summary reads, from the files a reproduction
+    wrote (``--redraw``: no run): ``x`` from the runs CSV's parameter columns, and ``parameter_names``,
+    ``truth_x``, ``lower``, ``upper``, ``design`` of the cell's first run from its cells CSV
+    (``facts``: ``{cell: facts}``, :func:`read_facts`)."""
 
-    def __init__(self, table: pd.DataFrame, facts):
+    def __init__(self, table: pd.DataFrame, facts: dict):
         self._table = table.set_index(["cell", "seed"], drop=False)
-        self._facts = functools.cache(facts)
+        self._facts = facts
 
     def __getitem__(self, key):
-        names, truth = self._facts(int(key[0]))
+        facts = self._facts[int(key[0])]
         row = self._table.loc[key]
-        x = np.array([float(row[n]) if n in row.index else np.nan for n in names])
-        return SimpleNamespace(x=x, parameter_names=names, truth_x=truth)
+        x = np.array([float(row[n]) if n in row.index else np.nan for n in facts["parameter_names"]])
+        return SimpleNamespace(x=x, **facts)
 
     def __iter__(self):
         return iter(zip(self._table.cell.astype(int), self._table.seed.astype(int)))
@@ -144,48 +147,76 @@ class StoredOutputs(Mapping):
         return len(self._table)
 
 
-def stored_runs(spec, table: pd.DataFrame, cells: list, overrides: list, facts) -> ArtifactRuns:
-    """The :class:`ArtifactRuns` the summary reads, from the runs CSV ``table`` as written (a
-    reproduction and a ``--redraw`` summarise the same bytes)."""
-    return ArtifactRuns(spec=spec, cells=cells, table=table, outputs=StoredOutputs(table, facts), overrides=overrides)
+#: the stored facts of a run that the summary reads (:class:`magexp.estimators.result.RunOutput`): per
+#: parameter, and the linear design's arrays (flattened, row-major)
+PARAMETER_FACTS, DESIGN_FACTS = ("truth_x", "lower", "upper"), ("gram", "coef", "rss", "n")
 
 
-def _problem_facts(overrides: list[list[str]], table: pd.DataFrame):
-    """``cell -> (parameter names, true vector)`` of the cell's problem, rebuilt without a run
-    (:func:`magexp.artifacts.plan.rebuild_problem`)."""
+def facts_rows(runs) -> pd.DataFrame:
+    """The cells CSV of an artifact: per cell, the facts its first run stored (:data:`PARAMETER_FACTS`
+    by parameter; :data:`DESIGN_FACTS` where the artifact judges on a least-squares design: ``interval:
+    ls``, ``mode: ftest``), one value a row: ``cell, seed, fact, parameter, index, value``."""
+    design = any(item.interval == "ls" or item.mode == "ftest" for item in runs.spec.summarise)
+    rows = []
+    for ci in range(len(runs.cells)):
+        seed = min(s for c, s in runs.outputs if c == ci)
+        out = first_output(runs, ci)
+        for fact in PARAMETER_FACTS:
+            values = getattr(out, fact, None)
+            rows += [] if values is None else [(ci, seed, fact, n, k, float(v))
+                                               for k, (n, v) in enumerate(zip(out.parameter_names, values))]
+        for fact, values in (out.design or {}).items() if design else ():
+            rows += [(ci, seed, fact, "", k, float(v)) for k, v in enumerate(np.ravel(values))]
+    return pd.DataFrame(rows, columns=["cell", "seed", "fact", "parameter", "index", "value"])
 
-    def facts(ci: int):
-        problem = rebuild_problem(tuple(overrides[ci]), int(table[table.cell == ci].seed.min()))
-        return list(problem.parameter_names()), problem.truth_theta()
 
-    return facts
+def write_facts(frame: pd.DataFrame, path: Path) -> None:
+    """The cells CSV at full precision (``%.17g``: read back to the bit, so that ``--redraw`` judges on
+    what the reproduction judged on)."""
+    with atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False, float_format="%.17g")
+
+
+def read_facts(path: Path) -> dict[int, dict]:
+    """``{cell: {parameter_names, truth_x, lower, upper, design}}`` of a cells CSV (:func:`facts_rows`)."""
+    frame = pd.read_csv(path, keep_default_na=False, na_values=[""])  # pandas 3 reads %.17g back to the bit
+    out = {}
+    for ci, sub in frame.groupby("cell", sort=True):
+        arrays = {f: g.sort_values("index") for f, g in sub.groupby("fact")}
+        names = [str(n) for n in arrays["lower"].parameter] if "lower" in arrays else []
+        got = {f: arrays[f].value.to_numpy(float) if f in arrays else None for f in (*PARAMETER_FACTS, *DESIGN_FACTS)}
+        design = None
+        if got["gram"] is not None:
+            p = int(round(np.sqrt(got["gram"].size)))
+            design = {"gram": got["gram"].reshape(p, p), "coef": got["coef"].reshape(p, -1), "rss": got["rss"],
+                      "n": int(got["n"][0])}
+        out[int(ci)] = {"parameter_names": names, "truth_x": got["truth_x"], "lower": got["lower"],
+                        "upper": got["upper"], "design": design}
+    return out
 
 
 def summarise_stored(spec, root: Path) -> pd.DataFrame:
-    """The summary rows of ``spec`` from its runs CSV under ``root`` (``--redraw``: no run)."""
+    """The summary rows of ``spec`` from its runs CSV and its cells CSV under ``root`` (``--redraw``:
+    no run, nothing simulated; the runs as written, to 6 digits)."""
     plan = plan_artifact(spec)
     table = read_runs(root / spec.paper / f"{spec.name}_runs.csv")
-    return summarise(stored_runs(spec, table, plan.cells, plan.overrides, _problem_facts(plan.overrides, table)))
+    facts = read_facts(root / spec.paper / f"{spec.name}_cells.csv")
+    return summarise(ArtifactRuns(spec=spec, cells=plan.cells, table=table, outputs=StoredOutputs(table, facts),
+                                  overrides=plan.overrides))
 
 
 def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     """An artifact's CSVs and figure into ``out`` (``force``: draw it even if unchanged); returns its
-    summary rows, computed from the runs CSV as written (:func:`stored_runs`)."""
+    summary rows, computed from the unrounded runs and their stored outputs (the CSVs round them)."""
     path = out / f"{runs.spec.name}.csv"
-    frame = kind_module(runs.spec.kind).tabulate(runs)
+    frame = tabulate(runs)
     if runs.spec.kind != "speed":  # wall times measure this machine today: kept beside timing.csv
         frame = split_timing(frame, out.parent / "timing" / f"{runs.spec.name}.csv")
     write_csv(frame, path)
-    runs_csv = out / f"{runs.spec.name}_runs.csv"
-    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), runs_csv)
+    write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{runs.spec.name}_runs.csv")
+    write_facts(facts_rows(runs), out / f"{runs.spec.name}_cells.csv")
     draw(runs.spec, path, out, force=force)
-    table = read_runs(runs_csv)
-
-    def facts(ci: int):
-        first = runs.outputs[(ci, int(table[table.cell == ci].seed.min()))]
-        return list(first.parameter_names), getattr(first, "truth_x", None)
-
-    return summarise(stored_runs(runs.spec, table, runs.cells, runs.overrides, facts))
+    return summarise(runs)
 
 
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
@@ -294,8 +325,10 @@ def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tup
             if skipped_for_data(spec):
                 continue
             path = root / paper / f"{spec.name}.csv"
-            if not path.is_file() or not (root / paper / f"{spec.name}_runs.csv").is_file():
-                raise MagexpError(f"--redraw: {path} or its runs CSV does not exist: reproduce {spec.name} first")
+            stored = [path] + [root / paper / f"{spec.name}_{part}.csv" for part in ("runs", "cells")]
+            if not all(p.is_file() for p in stored):
+                raise MagexpError(f"--redraw: {path}, its runs CSV or its cells CSV does not exist: "
+                                  f"reproduce {spec.name} first")
             if draw(spec, path, root / paper, force=force):
                 drawn += 1
             else:

@@ -41,7 +41,6 @@ A fixed tolerance is used only where the paper gives no run to compare with
 
 from __future__ import annotations
 
-import functools
 import re
 
 import numpy as np
@@ -49,8 +48,9 @@ import pandas as pd
 from omegaconf import OmegaConf
 from scipy.special import fdtrc, stdtrit
 
-from magexp.artifacts.claims import matches
-from magexp.artifacts.plan import ArtifactRuns, quantiles, rebuild_problem
+from magexp.artifacts.plan import ArtifactRuns
+from magexp.artifacts.tables import (cell_overrides, cell_runs, first_output, matches, median, outcomes,
+                                     parameter_values, reported_entry, row_numbers, successful_medians)
 from magexp.core.outcomes import failed_majority, success_threshold
 from magexp.errors import MagexpError
 from magexp.paths import CONF
@@ -63,8 +63,6 @@ COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "pa
 VERDICTS = ("reproduced", "differs", "uninformative", "not compared", "n/a")
 #: verdicts of rows that are not compared numbers
 NOT_COMPARED = ("not compared", "n/a")
-#: the interval of a single run: these quantiles over seeds
-INTERVAL = (0.025, 0.975)
 #: a parameter's interval spanning at least this fraction of its search range is uninformative
 SEARCH_FRACTION = 0.5
 #: a parameter's interval wider than this fraction of its block's scale (the RMS of the medians of the
@@ -86,17 +84,6 @@ def estimator_label(name: str) -> str:
         return name
     label = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("label")
     return str(label or getattr(target_class("estimator", name), "label", "") or name)
-
-
-def interval(values, floor: float = 0.0) -> tuple[float, float]:
-    """The 2.5-97.5 % quantiles of the finite ``values`` (non-negative values below ``floor`` count as it)."""
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    if v.size == 0:
-        return (np.nan, np.nan)
-    v = np.where((v >= 0) & (v < floor), floor, v)
-    lo, hi = np.quantile(v, INTERVAL)
-    return float(lo), float(hi)
 
 
 def judge(paper: float | None, lo: float, hi: float, width: float, success_rate: float, *, floor: float = 0.0,
@@ -121,31 +108,9 @@ def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0
     return bool(np.isfinite(lo) and lo - width <= p <= hi + width)
 
 
-def cell_overrides(runs: ArtifactRuns, ci: int) -> dict:
-    """The ``{key: value}`` overrides of cell ``ci`` (base and grid), as requested: what a paper's
-    ``reported[].match`` is matched against. Not :func:`magexp.artifacts.claims.cell_settings`, the
-    settings a runs table records (there ``estimator`` is the name of the estimator that ran, e.g.
-    ``ipso_w`` for the overrides ``estimator=pso`` with its options)."""
-    return dict(o.split("=", 1) for o in runs.overrides[ci])
-
-
-def reported_entry(spec, quantity: str, settings: dict):
-    """The paper's :class:`magexp.artifacts.spec.Reported` entry of ``quantity`` for a cell (None if absent)."""
-    for entry in spec.reported:
-        if entry.quantity == quantity and matches(entry.match, settings):
-            return entry
-    return None
-
-
 def reported_entries(spec) -> list[dict]:
     """The paper's numbers as plain ``{quantity, match, value}`` mappings."""
     return [{"quantity": e.quantity, "match": dict(e.match), "value": e.value} for e in spec.reported]
-
-
-def reported_value(spec, quantity: str, settings: dict):
-    """The paper's value of ``quantity`` for a cell and its entry (``(None, None)`` if absent)."""
-    entry = reported_entry(spec, quantity, settings)
-    return (None, None) if entry is None else (float(entry.value), entry)
 
 
 def uninformative(paper: float, lo: float, hi: float, *, kind: str = "value", search_range: float | None = None,
@@ -193,18 +158,15 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     ``ls``: ``(estimate, half width)`` of a least-squares interval (recorded data, one run);
     ``search_range``, ``block_scale``, ``ratio``: what :func:`uninformative` needs."""
     v = np.asarray(values, float)
-    ok = np.full(v.shape, np.nan) if ok is None else np.asarray(ok, float)
-    success_rate = _success_rate(ok)
     entry = reported_entry(spec, quantity, settings)
     paper = None if entry is None else float(entry.value)
     floor = float(spec.floor)
-    basis, same, outcome = _compared_runs(v, ok, paper, parameters=parameters, success_threshold=success_threshold)
-    med, q25, q75 = _centre(v, basis, aggregate)
-    lo, hi, lo_same, hi_same = _intervals(v, same, floor, ls)
-    jlo, jhi = (lo_same, hi_same) if same is not None else (lo, hi)
+    n = row_numbers(v, ok, paper, parameters=parameters, success_threshold=success_threshold, aggregate=aggregate,
+                    floor=floor, ls=ls)
+    success_rate, med, jlo, jhi, outcome = n["success_rate"], n["value"], n["jlo"], n["jhi"], n["outcome"]
     width = entry.half_unit() if entry is not None else 0.0
     tol = None if entry is None else (entry.tolerance or spec.tolerance)
-    judged = _judged(v if same is None else same, med, aggregate, ls, tol, outcome)
+    judged = _judged(n["judged"], med, aggregate, ls, tol, outcome)
     verdict = judge(paper, jlo, jhi, width, success_rate, floor=floor, tolerance=tol, value=med)
     within = paper is not None and inside(paper, jlo, jhi, width, floor=floor, tolerance=tol, value=med)
     reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, outcome, ls is not None, within)
@@ -217,10 +179,10 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     return {
         "paper": spec.paper, "artifact": spec.name, "quantity": quantity, "estimator": estimator,
         "setting": setting + extra_setting, "truth": truth, "paper_value": paper, "value": med,
-        "q25": q25, "q75": q75, "n_seeds": int(np.isfinite(v).sum()), "tolerance": _tolerance_text(entry, tol, ls, width),
-        "verdict": verdict, "lo": lo, "hi": hi, "success_rate": success_rate,
-        "truth_in_interval": _truth_inside(truth, lo, jlo, jhi, width, floor),
-        "label": label or quantity, "reason": reason, "lo_same": lo_same, "hi_same": hi_same,
+        "q25": n["q25"], "q75": n["q75"], "n_seeds": int(np.isfinite(v).sum()),
+        "tolerance": _tolerance_text(entry, tol, ls, width), "verdict": verdict, "lo": n["lo"], "hi": n["hi"],
+        "success_rate": success_rate, "truth_in_interval": _truth_inside(truth, n["lo"], jlo, jhi, width, floor),
+        "label": label or quantity, "reason": reason, "lo_same": n["lo_same"], "hi_same": n["hi_same"],
         **judged, "judged_lo": jlo, "judged_hi": jhi, "scale": scale, "rel_difference": rel,
     }
 
@@ -245,7 +207,7 @@ def _judged(runs: np.ndarray, med: float, aggregate: str, ls, tol, outcome: str)
     which = f"{outcome} seeds" if outcome else "all seeds"
     if tol is not None:
         which = f"fixed tolerance, {which}"
-    centre = med if tol is not None or aggregate == "mean" or not finite.size else float(np.median(finite))
+    centre = med if tol is not None or aggregate == "mean" or not finite.size else median(finite)
     return {"judged_runs": which, "judged_n": int(finite.size), "judged_value": centre}
 
 
@@ -264,48 +226,6 @@ def paper_scale(spec, quantity: str, settings: dict) -> float:
     block = block_of(quantity)
     paper = [float(e.value) for e in spec.reported if block_of(e.quantity) == block and matches(e.match, settings)]
     return float(np.sqrt(np.mean(np.square(paper)))) if paper else np.nan
-
-
-def _success_rate(ok: np.ndarray) -> float:
-    """The fraction of the judged runs (``ok`` 1 or 0, NaN: not judged) that succeeded (NaN if none is judged)."""
-    judged = np.isfinite(ok)
-    return float(ok[judged].mean()) if judged.any() else np.nan
-
-
-def _compared_runs(v: np.ndarray, ok: np.ndarray, paper, *, parameters: bool, success_threshold):
-    """``(basis, same, outcome)``: the values whose quantiles a row reports (``basis``), those the
-    paper's value is compared with (``same``; None: all of ``v``) and which runs they are (``outcome``,
-    "successful", "failed" or ""). A parameter is read from the successful runs; with a
-    ``success_threshold`` the paper's run is classified by our success rule and compared with our
-    runs of the same outcome (with all of them if we have none)."""
-    judged = np.isfinite(ok).any()
-    basis, same, outcome = v, None, ""
-    if parameters and judged:
-        basis = same = v[ok == 1]
-        outcome = "successful"
-    if success_threshold is not None and paper is not None and judged:
-        succeeded = paper <= success_threshold  # the paper's run classified by our rule
-        chosen = v[ok == (1 if succeeded else 0)]
-        same, outcome = (chosen, "successful" if succeeded else "failed") if chosen.size else (None, "")
-    return basis, same, outcome
-
-
-def _centre(v: np.ndarray, basis: np.ndarray, aggregate: str) -> tuple[float, float, float]:
-    """The row's value and quartiles: the median and quartiles of ``basis``, or for ``aggregate:
-    mean`` (fractions) the mean of 0/1 outcomes ``v`` without quartiles."""
-    if aggregate == "mean":
-        return float(np.nanmean(v)), np.nan, np.nan
-    return quantiles(basis)
-
-
-def _intervals(v: np.ndarray, same, floor: float, ls) -> tuple[float, float, float, float]:
-    """``(lo, hi, lo_same, hi_same)``: the interval of all runs (:func:`interval`, or the
-    least-squares ``ls = (estimate, half width)`` when given) and that of the compared runs ``same``."""
-    lo, hi = interval(v, floor)
-    lo_same, hi_same = interval(same, floor) if same is not None else (np.nan, np.nan)
-    if ls is not None:
-        lo, hi = ls[0] - ls[1], ls[0] + ls[1]
-    return lo, hi, lo_same, hi_same
 
 
 def _informative(verdict: str, reason: str, entry, tol, why) -> tuple[str, str]:
@@ -409,16 +329,8 @@ def block_scales(names: list[str], medians: np.ndarray) -> dict[str, float]:
             for b, v in ((b, np.asarray(v, float)) for b, v in groups.items())}
 
 
-def parameter_values(runs: ArtifactRuns, ci: int) -> tuple[list[str], np.ndarray, np.ndarray | None]:
-    """Parameter names, estimates ``(seeds, p)`` and the true vector of cell ``ci``."""
-    outs = [runs.outputs[k] for k in sorted(runs.outputs) if k[0] == ci]
-    truth = getattr(outs[0], "truth_x", None)
-    return list(outs[0].parameter_names), np.array([o.x for o in outs]), truth
-
-
 def _cell_ok(runs: ArtifactRuns, ci: int) -> np.ndarray:
-    sub = runs.table[runs.table.cell == ci].sort_values("seed")
-    return sub["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(sub), np.nan)
+    return outcomes(cell_runs(runs, ci, by_seed=True))
 
 
 def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
@@ -431,8 +343,7 @@ def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
             continue
         names, values, truth = parameter_values(runs, ci)
         ok = _cell_ok(runs, ci)
-        kept = values[ok == 1] if np.isfinite(ok).any() and (ok == 1).any() else values
-        scales = block_scales(names, np.nanmedian(kept, axis=0) if len(kept) else np.full(len(names), np.nan))
+        scales = block_scales(names, successful_medians(values, ok))
         ranges = search_ranges(runs, ci)
         for k, name in enumerate(names):
             rows.append(_row(runs.spec, name, sub.estimator.iloc[0], sub.setting.iloc[0],
@@ -443,21 +354,13 @@ def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
 
 
 def search_ranges(runs: ArtifactRuns, ci: int) -> dict[str, float]:
-    """``{parameter: upper - lower}`` of cell ``ci``'s search box (the problem rebuilt from the
-    cell's overrides, :func:`magexp.artifacts.plan.rebuild_problem`; no run); empty where the problem cannot be rebuilt here
-    (e.g. a recording that is absent)."""
-    try:
-        names, lower, upper = _box(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
-    except (MagexpError, OSError):  # e.g. a recording that is absent: the other rules still apply
+    """``{parameter: upper - lower}`` of cell ``ci``'s search box, as its first run stored it (empty
+    where it stored none)."""
+    out = first_output(runs, ci)
+    lower, upper = getattr(out, "lower", None), getattr(out, "upper", None)
+    if lower is None or upper is None:
         return {}
-    return {n: float(u - lo) for n, lo, u in zip(names, lower, upper)}
-
-
-@functools.lru_cache(maxsize=64)
-def _box(overrides: tuple[str, ...], seed: int) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Parameter names and search box of a cell's problem (:func:`magexp.artifacts.plan.rebuild_problem`)."""
-    problem = rebuild_problem(overrides, seed)
-    return list(problem.parameter_names()), np.asarray(problem.lower, float), np.asarray(problem.upper, float)
+    return {n: float(u - lo) for n, lo, u in zip(out.parameter_names, lower, upper)}
 
 
 def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> dict:
@@ -469,12 +372,10 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     from ``scipy.special.stdtrit`` (what ``scipy.stats.t.ppf`` evaluates, without importing
     ``scipy.stats``).
     """
-    c, y, names = _design_of(runs, ci)
-    n, p = c.shape
-    coef, *_ = np.linalg.lstsq(c, y, rcond=None)  # (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
-    rss = np.sum((y - c @ coef) ** 2, axis=0)
+    gram, coef, rss, n, names = _design_of(runs, ci)  # coef (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
+    p = gram.shape[0]
     dof = n - p
-    cov = np.linalg.inv(c.T @ c)
+    cov = np.linalg.inv(gram)
     se = np.sqrt(np.outer(np.diag(cov), rss / dof))  # (4, 3)
     t = stdtrit(dof, 0.5 + level / 2)
     out = {}
@@ -489,15 +390,13 @@ def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
     """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
     parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
     p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates)."""
-    c, y, _ = _design_of(runs, ci)
-    n, p = c.shape
-    coef, *_ = np.linalg.lstsq(c, y, rcond=None)
+    gram, coef, rss, n, _ = _design_of(runs, ci)
+    p = gram.shape[0]
     k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
     out = []
     for a in range(3):
         d = np.append(k[a], bp[a]) - coef[:, a]
-        s2 = np.sum((y[:, a] - c @ coef[:, a]) ** 2) / (n - p)
-        f = float(d @ c.T @ c @ d / p / s2)
+        f = float(d @ gram @ d / p / (rss[a] / (n - p)))
         out.append({"axis": a + 1, "F": f, "dof": (p, n - p), "p_value": float(fdtrc(p, n - p, f))})
     return out
 
@@ -519,34 +418,20 @@ def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
     return rows
 
 
-def _design_of(runs: ArtifactRuns, ci: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """``(C, y, parameter names)`` of the linear problem of cell ``ci``'s first seed
-    (``problem.design()``, :func:`_design`): built once per cell and seed, however many summary rows
-    and tests read it (the mock-up's interval rows and F-tests share one)."""
-    return _design(tuple(runs.overrides[ci]), int(runs.table[runs.table.cell == ci].seed.min()))
-
-
-@functools.lru_cache(maxsize=64)
-def _design(overrides: tuple[str, ...], seed: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """The design of the cell's problem (:func:`magexp.artifacts.plan.rebuild_problem`; read-only arrays:
-    one copy is shared by every caller); :func:`summarise` empties this cache when it returns (a data
-    file edited later is read again)."""
-    problem = rebuild_problem(overrides, seed)
-    c, y = (np.array(a, float) for a in problem.design())
-    c.setflags(write=False), y.setflags(write=False)
-    return c, y, list(problem.parameter_names())
+def _design_of(runs: ArtifactRuns, ci: int) -> tuple:
+    """``(C^T C, least-squares coefficients, residual sums of squares per axis, N, parameter names)`` of
+    the linear problem of cell ``ci``'s first seed, as its run stored them (``design``); a problem
+    without a linear design cannot give a least-squares interval (one line)."""
+    out = first_output(runs, ci)
+    design = getattr(out, "design", None)
+    if not design:
+        raise MagexpError(f"{runs.spec.name}: cell {ci} has no linear design (interval: ls and mode: ftest need one)")
+    return (np.asarray(design["gram"], float), np.asarray(design["coef"], float), np.asarray(design["rss"], float),
+            int(design["n"]), list(out.parameter_names))
 
 
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
-    """One row per (summarised quantity, cell) and per ratio group."""
-    try:
-        return _summarise(runs)
-    finally:
-        _design.cache_clear()
-        _box.cache_clear()
-
-
-def _summarise(runs: ArtifactRuns) -> pd.DataFrame:
+    """One row per (summarised quantity, cell) and per ratio group, from the unrounded runs."""
     rows = []
     for item in runs.spec.summarise:
         rows += _item_rows(runs, item)
@@ -591,7 +476,7 @@ def _value_row(runs: ArtifactRuns, item, ci: int, sub: pd.DataFrame) -> dict:
 
 def _cell_truth(sub: pd.DataFrame, column: str) -> float | None:
     """The median of the true value ``column`` over a cell's runs (None unless every run has it)."""
-    return float(np.median(sub[column])) if column in sub and sub[column].notna().all() else None
+    return median(sub[column]) if column in sub and sub[column].notna().all() else None
 
 
 def _least_squares_item(runs: ArtifactRuns, item, ci: int) -> tuple:

@@ -150,7 +150,7 @@ def block_bootstrap_spread(magnitudes, level: float = 0.95) -> tuple[float, floa
     are cut into :data:`SPREAD_BLOCKS` contiguous blocks (consecutive readings are correlated, so
     single readings are not resampled) and the blocks drawn with replacement :data:`SPREAD_RESAMPLES`
     times, from a fixed generator (the interval describes the data, it is the same on every run;
-    as :func:`magexp.artifacts.claims.ci`). NaN for fewer readings than blocks."""
+    as :func:`magexp.artifacts.tables.interval`). NaN for fewer readings than blocks."""
     mags = np.asarray(magnitudes, float)
     if mags.size < SPREAD_BLOCKS:
         return float("nan"), float("nan")

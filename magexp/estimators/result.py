@@ -50,4 +50,10 @@ class RunOutput:
     calibrated: np.ndarray | None = None
     reference_norm: np.ndarray | None = None
     truth_x: np.ndarray | None = None  # the true parameter vector (simulations)
+    # what the summary reads of the run's problem, so that nothing is simulated again: its search box
+    # (``lower``, ``upper``) and, for a linear problem, its least-squares summary (``design``: ``gram``
+    # ``C^T C``, ``coef``, ``rss`` per axis, ``n`` readings; :func:`magexp.run.runner.design_summary`)
+    lower: np.ndarray | None = None
+    upper: np.ndarray | None = None
+    design: dict | None = None
     fit_cpu: float = 0.0  # CPU seconds of this process inside ``estimator.fit`` (not a metric: it varies)

@@ -145,4 +145,17 @@ def run_batch(configs) -> Iterator[RunOutput]:
                         history_nfev=np.asarray(result.history_nfev), x=np.asarray(result.x),
                         parameter_names=problem.parameter_names(), trace=result.trace, readings=dataset.readings,
                         calibrated=problem.calibrate(result.x), reference_norm=np.asarray(dataset.reference_norm),
-                        truth_x=problem.truth_theta(), fit_cpu=cpu)
+                        truth_x=problem.truth_theta(), lower=np.asarray(problem.lower, float),
+                        upper=np.asarray(problem.upper, float), design=design_summary(problem), fit_cpu=cpu)
+
+
+def design_summary(problem) -> dict | None:
+    """What the least-squares t-interval and F-test of a linear problem ``Y = C x`` need, without its
+    readings (None for a problem without a linear design): ``gram`` ``C^T C``, ``coef`` the
+    least-squares ``x`` (``numpy.linalg.lstsq``), ``rss`` the residual sum of squares of each column
+    of ``Y`` and ``n`` the readings (:func:`magexp.artifacts.summary.least_squares_interval`)."""
+    if "linear_design" not in problem.capabilities:
+        return None
+    c, y = (np.asarray(a, float) for a in problem.design())
+    coef = np.linalg.lstsq(c, y, rcond=None)[0]
+    return {"gram": c.T @ c, "coef": coef, "rss": np.sum((y - c @ coef) ** 2, axis=0), "n": len(c)}

@@ -1,7 +1,9 @@
-"""Artifact kinds: each module turns runs into the CSV behind a figure and draws it from that CSV alone.
+"""Artifact kinds: each module draws a figure from the CSV behind it, and aggregates nothing.
 
-A kind module has ``tabulate(runs) -> DataFrame`` and ``draw(frame, spec) -> Figure``.
-Kinds are looked up by name in :data:`KINDS`.
+A kind module has ``draw(frame, spec) -> Figure``; the CSV it draws is the table
+:func:`magexp.artifacts.kind_tables.tabulate` builds from the runs (every median, quantile and
+interval is computed there and in :mod:`magexp.artifacts.tables`). Kinds are looked up by name in
+:data:`KINDS`.
 """
 
 from __future__ import annotations

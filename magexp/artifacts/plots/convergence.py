@@ -1,4 +1,5 @@
-"""RMS (objective) of the best particle vs iteration: median over seeds with an interquartile band.
+"""RMS (objective) of the best particle vs iteration: median over seeds with an interquartile band
+(the table: :func:`magexp.artifacts.kind_tables.convergence_table`).
 
 A triangle on each curve marks the median, over the successful runs, of the iterations a run took to
 come within 1.1 x its own final value (``iterations_to_1.1``): how fast it converged, whatever the
@@ -10,43 +11,6 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.plots.style import group_values, label, panels, plt, shared_legend, tidy_log_axes
-
-
-def _stack(histories: list[np.ndarray]) -> np.ndarray:
-    n = max(len(h) for h in histories)
-    return np.vstack([np.pad(h, (0, n - len(h)), mode="edge") for h in histories])
-
-
-def _speed(sub: pd.DataFrame) -> float:
-    """Median iterations to 1.1 x the final value over the successful runs (every run if none is judged)."""
-    if "iterations_to_1.1" not in sub:
-        return np.nan
-    if "succeeded" in sub and sub.succeeded.notna().any():
-        sub = sub[sub.succeeded == 1]
-    values = sub["iterations_to_1.1"].astype(float).dropna()
-    return float(values.median()) if len(values) else np.nan
-
-
-def tabulate(runs) -> pd.DataFrame:
-    frames = []
-    for ci, cell in enumerate(runs.cells):
-        seeds = sorted(s for (c, s) in runs.outputs if c == ci)
-        hist = _stack([runs.outputs[(ci, s)].history for s in seeds])
-        nfev = _stack([runs.outputs[(ci, s)].history_nfev for s in seeds])
-        q25, q50, q75 = np.quantile(hist, [0.25, 0.5, 0.75], axis=0)
-        sub = runs.table[runs.table.cell == ci]
-        frames.append(pd.DataFrame({
-            **{k: v for k, v in cell.items()}, "estimator": sub.estimator.iloc[0],
-            "iteration": np.arange(hist.shape[1]), "nfev": np.median(nfev, axis=0),
-            "median": q50, "q25": q25, "q75": q75,
-            "noise_floor": float(sub.noise_floor.median()) if "noise_floor" in sub else np.nan,
-            "rms_bound": float(sub.rms_bound.median()) if "rms_bound" in sub else np.nan,
-            "n_seeds": len(seeds),
-            "converged": int(sub.converged.sum()) if "converged" in sub else -1,
-            "succeeded": int(sub.succeeded.sum()) if "succeeded" in sub and sub.succeeded.notna().any() else -1,
-            "iterations_to_1.1": _speed(sub),
-        }))
-    return pd.concat(frames, ignore_index=True)
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
@@ -100,12 +64,18 @@ def _draw_line(ax, sub: pd.DataFrame, line: pd.DataFrame, lab: str, colour) -> N
 
 def _draw_references(ax, sub: pd.DataFrame) -> None:
     """The noise floor and the Cramér-Rao floor of panel ``sub``, where one value holds for all its lines."""
-    floor = float(sub.noise_floor.median())
-    if sub.noise_floor.nunique() == 1 and np.isfinite(floor) and floor > 0:
+    floor = _common(sub.noise_floor)
+    if np.isfinite(floor) and floor > 0:
         ax.axhline(floor, color="k", ls="--", lw=0.9, label="noise floor")
-    bound = float(sub.rms_bound.median()) if "rms_bound" in sub else np.nan
-    if sub.rms_bound.nunique() <= 1 and np.isfinite(bound) and bound > 0:
+    bound = _common(sub.rms_bound) if "rms_bound" in sub else np.nan
+    if np.isfinite(bound) and bound > 0:
         ax.axhline(bound, color="0.4", ls=":", lw=1.1, label="Cramér-Rao floor")
+
+
+def _common(column: pd.Series) -> float:
+    """The one value every line of a panel has in ``column`` (NaN where they differ or have none)."""
+    values = column.dropna().unique()
+    return float(values[0]) if len(values) == 1 else np.nan
 
 
 def _dress_panel(ax, spec, head: str, counts: list[str]) -> None:

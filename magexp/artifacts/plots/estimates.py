@@ -7,7 +7,8 @@ The artifact's ``reported:`` value of a row stated for one estimator is printed 
 cell (``paper: 0.0001``), unless the row prints it already (a column of the paper's own estimate);
 one stated for none gets a ``paper states`` column (only then: a column
 empty on most rows says nothing). The CSV is long: one row per (quantity, cell). The figure renders
-the table, each row as tall as its cell of most lines.
+the table, each row as tall as its cell of most lines (the table:
+:func:`magexp.artifacts.kind_tables.estimates_table`).
 """
 
 from __future__ import annotations
@@ -15,24 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.plan import quantiles
 from magexp.artifacts.plots.style import panels, paper_values, plt
-
-
-def tabulate(runs) -> pd.DataFrame:
-    names = list(next(iter(runs.outputs.values())).parameter_names) + list(runs.spec.plot.get("rows", []))
-    rows = []
-    for ci, cell in enumerate(runs.cells):
-        sub = runs.table[runs.table.cell == ci]
-        for name in names:
-            if name not in sub:
-                continue
-            med, q25, q75 = quantiles(sub[name])
-            truth = f"truth_{name}"
-            rows.append({**cell, "estimator": sub.estimator.iloc[0], "quantity": name, "median": med, "q25": q25,
-                         "q75": q75, "truth": float(sub[truth].median()) if truth in sub else np.nan,
-                         "n_seeds": len(sub)})
-    return pd.DataFrame(rows)
 
 
 def _cell(row) -> str:
@@ -81,7 +65,7 @@ def _table(frame: pd.DataFrame, spec) -> tuple[list[str], list[str], list[list[s
     quantities = list(dict.fromkeys(frame.quantity))
     estimators = list(dict.fromkeys(frame.estimator))
     names = dict(spec.plot.get("names", {}) or {})
-    truth = frame.groupby("quantity", sort=False).truth.first()
+    truth = frame.dropna(subset=["truth"]).drop_duplicates("quantity").set_index("quantity").truth.reindex(quantities)
     stated = {q: _stated(spec, q, estimators, {f"{v:.6g}" for v in frame[frame.quantity == q]["median"]})
               for q in quantities}
     others = any(text for _, text in stated.values())

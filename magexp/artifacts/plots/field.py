@@ -11,7 +11,7 @@ and says so in its title: the floor is not data.
 
 The seed shown is the first whose run succeeded (the artifact's ``success:`` rule); where none
 did, or none is judged, the first seed. The CSV's ``seed`` and ``outcome`` columns and each panel's
-title say which.
+title say which (the table: :func:`magexp.artifacts.kind_tables.field_table`).
 """
 
 from __future__ import annotations
@@ -23,39 +23,9 @@ import pandas as pd
 from matplotlib.ticker import FixedLocator
 
 from magexp.artifacts.plots.style import group_values, label, panels, plt, unit
+from magexp.artifacts.tables import median
 from magexp.core.metrics import rms as rms_of
 from magexp.core.outcomes import ROUNDOFF_FLOOR
-
-
-def tabulate(runs) -> pd.DataFrame:
-    """Per reading of the first seed of each cell: raw and calibrated vectors and total fields,
-    the reference total field and the error of the calibrated one."""
-    frames = []
-    for ci, cell in enumerate(runs.cells):
-        seed, outcome = shown_seed(runs, ci)
-        out = runs.outputs[(ci, seed)]
-        raw, cal = np.asarray(out.readings), np.asarray(out.calibrated)
-        calibrated = np.linalg.norm(cal, axis=1)
-        frames.append(pd.DataFrame({
-            **cell, "seed": seed, "outcome": outcome, "reading": np.arange(len(raw)),
-            "raw_x": raw[:, 0], "raw_y": raw[:, 1], "raw_z": raw[:, 2],
-            "cal_x": cal[:, 0], "cal_y": cal[:, 1], "cal_z": cal[:, 2],
-            "raw": np.linalg.norm(raw, axis=1), "calibrated": calibrated,
-            "reference": out.reference_norm, "error": calibrated - out.reference_norm,
-        }))
-    return pd.concat(frames, ignore_index=True)
-
-
-def shown_seed(runs, ci: int) -> tuple[int, str]:
-    """The seed of cell ``ci`` whose readings are drawn and its outcome (``succeeded``, ``failed``
-    or ``not judged``): the first successful seed, else the first seed."""
-    seeds = sorted(s for (c, s) in runs.outputs if c == ci)
-    sub = runs.table[runs.table.cell == ci]
-    if "succeeded" not in sub or sub.succeeded.isna().all():
-        return seeds[0], "not judged"
-    ok = sub.set_index("seed").succeeded
-    good = [s for s in seeds if ok.get(s) == 1]
-    return (good[0], "succeeded") if good else (seeds[0], "failed")
 
 
 def _which(sub) -> str:
@@ -125,7 +95,7 @@ def _draw_sphere(frame: pd.DataFrame, spec, axes=None):
     for i, val in enumerate(values):
         sub = frame if val is None else frame[frame[key] == val]
         ax = fig.add_subplot(1, len(values), i + 1, projection="3d") if given is None else given[i]
-        r = float(sub.reference.median())
+        r = median(sub.reference)
         ax.plot_wireframe(r * np.cos(u) * np.sin(v), r * np.sin(u) * np.sin(v), r * np.cos(v),
                           color="0.8", lw=0.4)
         ax.scatter(sub.raw_x, sub.raw_y, sub.raw_z, s=6, color="0.45", label="before")

@@ -21,6 +21,7 @@ is ringed in red. A cell without a value is marked by a cross at the top of its 
 ``reported:`` entries of the quantities summarised from the metric) are open diamonds in the colour of
 their line. Each of the artifact's ``ratios:`` (per seed, numerator over denominator cell) adds a row
 of panels: its median and quartiles over seeds, with the paper's ratios and the line of equality.
+The table: :func:`magexp.artifacts.kind_tables.final_table`.
 """
 
 from __future__ import annotations
@@ -32,10 +33,10 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import FixedLocator
 
-from magexp.artifacts.plan import quantiles
-from magexp.artifacts.claims import matches
+from magexp.artifacts.kind_tables import metric_list
 from magexp.artifacts.plots.style import (group_values, label, legend_entries, panels, paper_values, plt, scenario_label,
                                          shared_legend, tidy_log_axes)
+from magexp.artifacts.tables import matches
 from magexp.core.outcomes import failed_majority
 
 TINY = 1e-14  # log axes: values at or below zero are drawn here
@@ -48,65 +49,6 @@ def ylog(spec, metric: str) -> bool:
     default true)."""
     flag = spec.plot.get("ylog", True)
     return bool(flag.get(metric, True)) if isinstance(flag, Mapping) else bool(flag)
-
-
-def metric_list(spec) -> list[str]:
-    """The metric columns drawn (``plot.metric``: one name or a list)."""
-    metric = spec.plot.get("metric", "fun")
-    return [metric] if isinstance(metric, str) else list(metric)
-
-
-def ratio_name(item) -> str:
-    """The line name of a ratio: numerator over denominator (their distinguishing values)."""
-    return " / ".join(", ".join(str(v) for v in side.values()) for side in (item.numerator, item.denominator))
-
-
-def _ratio_rows(runs) -> list[dict]:
-    """Per ``ratios:`` item and denominator cell: median and quartiles of the per-seed ratio
-    (seeds share readings, so the ratio is paired), the fraction of seeds where both runs succeeded."""
-    table, rows = runs.table, []
-    for item in runs.spec.ratios:
-        for ci, cell in enumerate(runs.cells):
-            if not matches(item.denominator, cell):
-                continue
-            partner = {**cell, **{k: str(v) for k, v in item.numerator.items()}}
-            nj = [cj for cj, other in enumerate(runs.cells) if all(matches({k: v}, other) for k, v in partner.items())]
-            if not nj:
-                continue
-            den = table[table.cell == ci].set_index("seed")
-            num = table[table.cell == nj[0]].set_index("seed")
-            ratio = (num[item.metric].astype(float) / den[item.metric].astype(float)).dropna()
-            med, q25, q75 = quantiles(ratio)
-            row = {**cell, "estimator": ratio_name(item), "objective": den.objective.iloc[0], "metric": item.quantity,
-                   "median": med, "q25": q25, "q75": q75, "n_seeds": len(ratio)}
-            if "succeeded" in den and den.succeeded.notna().any():
-                row["success_rate"] = float((num.succeeded * den.succeeded).reindex(ratio.index).mean())
-            rows.append(row)
-    return rows
-
-
-def tabulate(runs) -> pd.DataFrame:
-    """Per cell and metric: median and quartiles, the success rate and converged fraction, the
-    floors (``noise_floor``, ``truth_fun``, ``rms_bound``) and the median of ``plot.bound``."""
-    bound = runs.spec.plot.get("bound")
-    rows = []
-    for ci, cell in enumerate(runs.cells):
-        sub = runs.table[runs.table.cell == ci]
-        for metric in metric_list(runs.spec):
-            med, q25, q75 = quantiles(sub[metric]) if metric in sub else (np.nan,) * 3
-            row = {**cell, "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],
-                   "metric": metric, "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub)}
-            if bound and bound in sub:
-                row["bound"] = quantiles(sub[bound])[0]
-            for extra in ("noise_floor", "truth_fun", "rms_bound"):
-                if extra in sub:
-                    row[extra] = float(sub[extra].median())
-            if "converged" in sub:
-                row["converged_fraction"] = float(sub.converged.astype(float).mean())
-            if "succeeded" in sub and sub.succeeded.notna().any():
-                row["success_rate"] = float(sub.succeeded.dropna().mean())
-            rows.append(row)
-    return pd.DataFrame(rows + _ratio_rows(runs))
 
 
 def _colours(frame, hue_key) -> dict:
@@ -241,7 +183,7 @@ def _with_hue(frame: pd.DataFrame, spec, hue_key) -> tuple[pd.DataFrame, str]:
         return frame, hue_key
     first, *rest = list(hue_key)
     named = [frame[k].astype(str).map(lambda v, k=k: label(spec, k, v)) for k in rest]
-    return frame.assign(_hue=pd.concat([frame[first].astype(str), *named], axis=1).agg(", ".join, axis=1)), "_hue"
+    return frame.assign(_hue=frame[first].astype(str).str.cat(named, sep=", ")), "_hue"
 
 
 def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None:

@@ -3,7 +3,7 @@
 Colour and text on one scale: each cell is coloured by the value it prints, on a logarithmic colour
 scale symmetric about 1 (the efficient value): at or below 1 green, above it yellow to red; the
 colour bar is labelled in the ratio itself (0.5, 1, 2), not in its logarithm. The bound ratio is
-computed over the successful runs only (:mod:`magexp.artifacts.plots.benchmark_table`); failures
+computed over the successful runs only (:func:`magexp.artifacts.kind_tables.benchmark_table`); failures
 never enter a colour: a cell with failed runs is hatched (``//`` when some failed, ``xx`` when fewer
 than half succeeded, :func:`magexp.core.outcomes.failed_majority`) and prints how many. Each cell prints the value, its 95 % interval (where the table
 has one) and the failures, in :data:`CELL_POINTS` type. A case where no estimator has a value (no
@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.colors import LogNorm
 from matplotlib.patches import Rectangle
 
-from magexp.artifacts.plots.benchmark_table import column_label, tabulate  # noqa: F401  (tabulate: the kind's interface, kind_module(kind).tabulate)
+from magexp.artifacts.kind_tables import column_label
 from magexp.artifacts.plots.style import colorbar, drawn_from, narrow_log_ticks, plt
 from magexp.core.outcomes import failed_majority
 
@@ -67,8 +67,8 @@ def _cell_text(r, value: str) -> tuple[str, str | None]:
 
 def draw(frame, spec, ax=None):
     value = spec.plot.get("metric", "bound_ratio")
-    valued = frame.groupby("case", sort=False)[value].apply(lambda v: np.isfinite(v.astype(float)).any())
-    frame = frame[frame.case.isin(valued[valued].index)]  # a case with no value anywhere: in the table only
+    valued = set(frame.case[np.isfinite(frame[value].astype(float))])
+    frame = frame[frame.case.isin(valued)]  # a case with no value anywhere: in the table only
     cases = list(dict.fromkeys(frame.case))
     estimators = list(dict.fromkeys(frame.estimator))
     index = {(r.estimator, r.case): r for _, r in frame.iterrows()}

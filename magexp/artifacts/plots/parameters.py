@@ -4,57 +4,15 @@ Where the runs measure F_g (eq 8 at the estimate, the ``fg`` column), one more r
 its median and quartiles over every seed (parameter ``F_g``). The figure shows errors against the
 truth, and F_g in a third panel with the paper's F_g; the legend gives each cell's success rate. The
 offsets and F_g are in the readings' unit (``plot.unit``, :func:`magexp.artifacts.plots.style.unit`);
-the matrix entries have none."""
+the matrix entries have none. The table: :func:`magexp.artifacts.kind_tables.parameters_table`."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.plan import quantiles
-from magexp.artifacts.plots.style import label as key_label, scenario_label
+from magexp.artifacts.kind_tables import FIT
 from magexp.artifacts.plots.style import panels, shared_legend, tidy_log_axes, unit
-from magexp.artifacts.summary import cell_overrides, parameter_values, reported_value
-
-
-#: the fit-quality row a cell gets where its runs measure it: (parameter name, runs column)
-FIT = ("F_g", "fg")
-
-
-def cell_label(cell: dict, estimator: str, spec) -> str:
-    """A short legend text of a cell: the estimator, then its other swept values (a scenario by its
-    name made readable by :func:`magexp.artifacts.plots.style.scenario_label`, other keys as
-    ``name = value`` with ``plot.labels``)."""
-    rest = [scenario_label(v) if k == "scenario" else key_label(spec, k, v) for k, v in cell.items() if k != "estimator"]
-    return ", ".join([estimator] + rest)
-
-
-def tabulate(runs) -> pd.DataFrame:
-    rows = []
-    for ci, cell in enumerate(runs.cells):
-        sub = runs.table[runs.table.cell == ci]
-        names, values, truth = parameter_values(runs, ci)
-        settings = cell_overrides(runs, ci)
-        ok = sub.sort_values("seed")["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(values), np.nan)
-        judged = np.isfinite(ok)
-        kept = values[ok == 1] if judged.any() else values  # over the successful runs; failures counted beside
-        for k, name in enumerate(names):
-            med, q25, q75 = quantiles(kept[:, k])
-            paper, _ = reported_value(runs.spec, name, settings)
-            rows.append({**cell, "label": cell_label(cell, sub.estimator.iloc[0], runs.spec),
-                         "estimator": sub.estimator.iloc[0],
-                         "objective": sub.objective.iloc[0], "parameter": name,
-                         "truth": np.nan if truth is None else float(truth[k]), "median": med, "q25": q25,
-                         "q75": q75, "paper_value": np.nan if paper is None else paper, "n_seeds": len(values),
-                         "n_failed": int((ok[judged] == 0).sum()),
-                         "success_rate": float(ok[judged].mean()) if judged.any() else np.nan})
-        name, column = FIT
-        if column in sub and sub[column].notna().any():  # over every seed, as the summary's F_g row
-            med, q25, q75 = quantiles(sub[column])
-            paper, _ = reported_value(runs.spec, name, settings)
-            rows.append({**rows[-1], "parameter": name, "truth": np.nan, "median": med, "q25": q25, "q75": q75,
-                         "paper_value": np.nan if paper is None else paper})
-    return pd.DataFrame(rows)
 
 
 def _fit_panel(ax, frame, labels, colours, readings_unit: str):

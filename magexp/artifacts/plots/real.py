@@ -15,7 +15,9 @@ recording (the hue):
 * the smallest relative singular value of the scaled Jacobian (what the motion leaves undetermined).
 
 The gyro-aided objective cannot tell ``(S, b, h)`` from ``(-S, b, -h)`` (both give the same residual
-norm), so each estimate is shown as the member of the pair with ``det S > 0`` (:func:`canonical_sign`).
+norm), so each estimate is shown as the member of the pair with ``det S > 0``
+(:func:`magexp.artifacts.kind_tables.canonical_sign`; the tables:
+:func:`magexp.artifacts.kind_tables.recording_table` and :func:`~magexp.artifacts.kind_tables.spread_table`).
 
 Kind ``recording_spread`` (``real_benchmark``, scalar objective on every recording) draws per
 recording the spread of the raw readings, of the calibrated fitted readings and of the calibrated
@@ -31,13 +33,8 @@ import numpy as np
 import pandas as pd
 from matplotlib.lines import Line2D
 
-from magexp.artifacts.plan import quantiles
-from magexp.artifacts.plots.style import panels, scenario_label, tidy_log_axes
-from magexp.artifacts.summary import parameter_values
+from magexp.artifacts.plots.style import panels, tidy_log_axes
 
-#: per-run quantities of the ``recording`` table (one row per seed)
-RUN_QUANTITIES = ("fg", "vector_residual_fraction", "spread_before", "spread_after", "weakest_relative_sv",
-                  "gyro_bias_rest_x", "gyro_bias_rest_y", "gyro_bias_rest_z")
 #: the estimate panels of the ``recording`` figure: title, parameters
 ESTIMATE_PANELS = (("matrix S (dimensionless)", ["S11", "S12", "S13", "S21", "S22", "S23", "S31", "S32", "S33"]),
                    ("offset b (G)", ["b1", "b2", "b3"]),
@@ -45,62 +42,6 @@ ESTIMATE_PANELS = (("matrix S (dimensionless)", ["S11", "S12", "S13", "S21", "S2
 #: a standard error larger than this many times the spread of the panel's estimates is drawn as
 #: "larger than the panel" (an open marker) instead of an error bar that would hide every other one
 SE_SHOWN = 3.0
-
-
-def canonical_sign(names: list[str], x: np.ndarray) -> np.ndarray:
-    """The member with ``det S > 0`` of the pair ``(S, b, h)``, ``(-S, b, -h)`` that the gyro-aided
-    objective cannot tell apart (``h`` by azimuth ``a`` and elevation ``e``: ``-h`` is ``(a + pi, -e)``);
-    other parameter vectors are returned as they are."""
-    x = np.array(x, float)
-    if "field_azimuth" not in names or np.linalg.det(x[:9].reshape(3, 3)) >= 0:
-        return x
-    a, e = names.index("field_azimuth"), names.index("field_elevation")
-    x[:9] *= -1
-    x[a] = np.mod(x[a] + 2 * np.pi, 2 * np.pi) - np.pi
-    x[e] = -x[e]
-    return x
-
-
-def _hue_labels(runs) -> list[str]:
-    """One readable label per cell: the estimator where one recording is fitted, the recording where
-    one estimator is, both otherwise; an estimator setting the cell sets (e.g. its boundary rule) in
-    brackets."""
-    firsts = runs.table.drop_duplicates("cell").sort_values("cell")
-    one_scenario, one_estimator = firsts.scenario.nunique() == 1, firsts.estimator.nunique() == 1
-    out = []
-    for (_, r), cell in zip(firsts.iterrows(), runs.cells):
-        parts = ([] if one_scenario else [scenario_label(r.scenario)]) + ([] if one_estimator and not one_scenario
-                                                                        else [r.estimator])
-        own = [str(v) for k, v in cell.items() if k.startswith("estimator.")]
-        out.append(", ".join(parts) + (f" ({', '.join(own)})" if own else ""))
-    return out
-
-
-def tabulate(runs) -> pd.DataFrame:
-    """Rows ``row = run`` (a per-run quantity of one seed) and ``row = estimate`` (a parameter: median
-    over the successful seeds, and the median of their standard errors)."""
-    rows = []
-    labels = _hue_labels(runs)
-    for ci, label in enumerate(labels):
-        sub = runs.table[runs.table.cell == ci].sort_values("seed")
-        ok = sub["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(sub), np.nan)
-        head = {"label": label, "estimator": sub.estimator.iloc[0], "scenario": sub.scenario.iloc[0],
-                "n_seeds": len(sub), "n_success": int(np.nansum(ok)),
-                "success_rate": float(np.nanmean(ok)) if np.isfinite(ok).any() else np.nan}
-        for (_, run), good in zip(sub.iterrows(), ok):
-            for q in RUN_QUANTITIES:
-                if q in run and np.isfinite(run[q]):
-                    rows.append({**head, "row": "run", "quantity": q, "seed": int(run.seed), "value": float(run[q]),
-                                 "se": np.nan, "succeeded": good})
-        names, values, _ = parameter_values(runs, ci)
-        values = np.array([canonical_sign(names, v) for v in values])
-        kept = (ok == 1) if np.isfinite(ok).any() else np.ones(len(ok), bool)
-        for k, name in enumerate(names):
-            se = sub[f"se_{name}"].to_numpy(float)[kept] if f"se_{name}" in sub else np.array([])
-            rows.append({**head, "row": "estimate", "quantity": name, "seed": np.nan,
-                         "value": quantiles(values[kept, k])[0] if kept.any() else np.nan,
-                         "se": float(np.median(se)) if se.size else np.nan, "succeeded": np.nan})
-    return pd.DataFrame(rows)
 
 
 def _dots(ax, frame: pd.DataFrame, quantity: str, labels: list[str], colours: dict) -> None:

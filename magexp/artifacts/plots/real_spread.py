@@ -7,8 +7,10 @@ left out of the fit), each the median over seeds; the held-out spread's 95 % int
 of the seeds' block-bootstrap intervals (:func:`magexp.core.identifiability.block_bootstrap_spread`: it covers
 the data's own uncertainty, which one recording cannot average away, and the seeds' differences).
 ``success_rate``: the share of runs where the estimator reports success and the calibrated spread
-is below the raw one (:func:`magexp.core.outcomes.recording_succeeded`). The winner per recording
-(:func:`magexp.artifacts.plots.benchmark_table.winners` on ``heldout_spread``) is named only where its interval
+is below the raw one (:func:`magexp.core.outcomes.recording_succeeded`, as
+:func:`magexp.artifacts.kind_tables.benchmark_table`; this table: :func:`magexp.artifacts.kind_tables.spread_table`).
+The winner per recording
+(:func:`magexp.artifacts.kind_tables.winners` on ``heldout_spread``) is named only where its interval
 lies below every other estimator's.
 """
 
@@ -18,29 +20,8 @@ import numpy as np
 import pandas as pd
 from matplotlib.lines import Line2D
 
-from magexp.artifacts.plan import quantiles
-from magexp.artifacts.plots.style import panels, scenario_label, tidy_log_axes
-from magexp.core.outcomes import failed_majority, recording_succeeded
-
-COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_cells", "wall_time")
-
-
-def tabulate(runs) -> pd.DataFrame:
-    rows = []
-    for ci in range(len(runs.cells)):
-        sub = runs.table[runs.table.cell == ci]
-        row = {"case": scenario_label(sub.scenario.iloc[0]), "scenario": sub.scenario.iloc[0],
-               "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],
-               "setting": sub.setting.iloc[0], "n_seeds": len(sub)}
-        row.update({c: quantiles(sub[c])[0] if c in sub else np.nan for c in COLUMNS})
-        lo, hi = (sub[c].to_numpy(float) if c in sub else np.array([np.nan])
-                  for c in ("heldout_spread_lo", "heldout_spread_hi"))
-        row["heldout_spread_lo"] = float(np.min(lo)) if np.isfinite(lo).all() else np.nan
-        row["heldout_spread_hi"] = float(np.max(hi)) if np.isfinite(hi).all() else np.nan
-        row["success_rate"] = float(recording_succeeded(sub.optimizer_success, sub.spread_before, sub.spread_after).mean())
-        rows.append(row)
-    return pd.DataFrame(rows)
-
+from magexp.artifacts.plots.style import panels, tidy_log_axes
+from magexp.core.outcomes import failed_majority
 
 def draw(frame: pd.DataFrame, spec, axes=None):
     """One panel per recording: per estimator, the calibrated spread on the fitted readings (dot)

@@ -5,9 +5,8 @@ to 1.8 is labelled at 0.9, 1, 1.2 and 1.5)."""
 
 from __future__ import annotations
 
-import numpy as np
 
-from magexp.artifacts.plots.benchmark_table import column_label, tabulate  # noqa: F401  (tabulate: the kind's interface, kind_module(kind).tabulate)
+from magexp.artifacts.kind_tables import column_label
 from magexp.artifacts.plots.style import plt, tidy_log_axes
 
 MARKERS = "osD^v<>PX*hp"

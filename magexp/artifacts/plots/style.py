@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import functools
 import math
-import re
 import sys
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import matplotlib
 import numpy as np
 
 from magexp.artifacts.plots import VECTOR
+from magexp.artifacts.tables import scenario_label  # noqa: F401  (the kinds' legends and ticks use it from here)
 from magexp.core.atomic import atomic_path
 from magexp.errors import MagexpError
 
@@ -82,19 +82,6 @@ def unit(spec) -> str:
     """The unit of the readings an artifact's scenarios generate (``plot.unit``, default ``nT``; Yuan's
     scenarios: ``mG``), printed wherever a figure draws a field, an offset or an objective in it."""
     return str(spec.plot.get("unit", "nT"))
-
-
-def scenario_label(scenario: str) -> str:
-    """A scenario's name, readable in a legend or on a tick: without its paper's prefix, the rotation
-    mode or experiment numbered apart (``yuan2018_mode1`` -> ``mode 1``, ``ding2024_exp2`` -> ``exp 2``),
-    and a recording without ``real_`` and its sensor (``real_hmc5883l_rotate_ccw_around_x`` ->
-    ``rotate ccw around x``)."""
-    name = str(scenario)
-    if name.startswith("real_"):
-        name = name.removeprefix("real_").removeprefix("hmc5883l_")
-    elif (paper := re.match(r"[a-z]+\d{4}_", name)) is not None:
-        name = re.sub(r"(?<=[a-z])(?=\d{1,2}$)", " ", name[paper.end():])  # not a sensor's model number
-    return name.replace("_", " ")
 
 
 def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, axes=None):

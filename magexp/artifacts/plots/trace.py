@@ -15,100 +15,17 @@ measured against. A second row of panels then draws, on a log axis, per paramete
 over seeds, interquartile band), the distance of every other estimate from it (the paper's: dash-dot;
 the truth: dashed) and ``plot.tolerances`` (one per group: the accuracy at which the caption calls the
 trace converged) as a black line: differences of 1e-4 that the estimates' own scale hides.
+The table: :func:`magexp.artifacts.kind_tables.trace_table`.
 """
 
 from __future__ import annotations
 
-import numpy as np
 import pandas as pd
 
 from magexp.artifacts.plots.style import panels, plt, tidy_log_axes
 
 TINY = 1e-12  # a log axis draws a distance of 0 (the reference's own seed, round-off) here
 REFERENCE_STYLES = {":": "dotted", "-.": "dash-dot", (0, (5, 1, 1, 1, 1, 1)): "dash-dot-dot"}
-
-
-def _names(out, key: str) -> list[str]:
-    return list(out.trace.get(f"{key}_names", out.parameter_names))
-
-
-def _traced(runs, ci: int, seeds: list[int], key: str, cell: dict, estimator: str) -> pd.DataFrame:
-    stack = np.stack([np.asarray(runs.outputs[(ci, s)].trace[key]) for s in seeds])  # (seeds, steps, p)
-    q25, q50, q75 = np.quantile(stack, [0.25, 0.5, 0.75], axis=0)
-    steps = np.arange(stack.shape[1])
-    return pd.concat([pd.DataFrame({**cell, "estimator": estimator, "kind": "trace", "parameter": name, "step": steps,
-                                    "median": q50[:, j], "q25": q25[:, j], "q75": q75[:, j], "n_seeds": len(seeds)})
-                      for j, name in enumerate(_names(runs.outputs[(ci, seeds[0])], key))], ignore_index=True)
-
-
-def _levels(sub: pd.DataFrame, names: list[str], prefix: str, kind: str, cell: dict, estimator: str) -> list[dict]:
-    rows = []
-    for name in names:
-        col = f"{prefix}{name}"
-        if col in sub and sub[col].notna().any():
-            v = sub[col].astype(float)
-            rows.append({**cell, "estimator": estimator, "kind": kind, "parameter": name, "step": np.nan,
-                         "median": float(v.median()), "q25": float(v.quantile(0.25)), "q75": float(v.quantile(0.75)),
-                         "n_seeds": len(sub)})
-    return rows
-
-
-def _distances(runs, key: str, names: list[str], traced: set) -> list[pd.DataFrame]:
-    """Rows of ``|x - x_ref|`` per parameter (``plot.relative_to``: the reference estimator): each
-    traced cell's trace per step (kind ``distance``), every other cell's estimate and the truth
-    (kind ``distance_reference``, ``distance_truth``), quantiles over the seeds they share."""
-    ref = runs.spec.plot.get("relative_to")
-    table = runs.table
-    ref_rows = table[table.estimator == ref].set_index("seed")[names] if ref else None
-    if ref_rows is None or not len(ref_rows):
-        return []
-    frames = []
-    for ci, cell in enumerate(runs.cells):
-        sub = table[table.cell == ci].set_index("seed")
-        est, seeds = sub.estimator.iloc[0], sorted(set(sub.index) & set(ref_rows.index))
-        if est == ref or not seeds:
-            continue
-        if ci in traced:
-            stack = np.stack([np.abs(np.asarray(runs.outputs[(ci, s)].trace[key]) - ref_rows.loc[s].to_numpy(float))
-                              for s in seeds])
-            frames.append(_quantile_rows(stack, names, {**cell, "estimator": est, "kind": "distance"}))
-            truth = [f"truth_{n}" for n in names]
-            if set(truth) <= set(sub.columns):
-                gap = np.abs(sub.loc[seeds, truth].to_numpy(float) - ref_rows.loc[seeds].to_numpy(float))
-                frames.append(_quantile_rows(gap[:, None, :], names, {**cell, "estimator": est, "kind": "distance_truth"}, step=np.nan))
-        else:
-            gap = np.abs(sub.loc[seeds, names].to_numpy(float) - ref_rows.loc[seeds].to_numpy(float))
-            frames.append(_quantile_rows(gap[:, None, :], names, {**cell, "estimator": est, "kind": "distance_reference"}, step=np.nan))
-    return frames
-
-
-def _quantile_rows(stack: np.ndarray, names: list[str], fixed: dict, step=None) -> pd.DataFrame:
-    """Median and quartiles over seeds (axis 0) of ``stack`` (seeds, steps, p), one row per (step, name)."""
-    q25, q50, q75 = np.quantile(stack, [0.25, 0.5, 0.75], axis=0)
-    steps = np.arange(stack.shape[1]) if step is None else np.full(stack.shape[1], step)
-    return pd.concat([pd.DataFrame({**fixed, "parameter": name, "step": steps, "median": q50[:, j], "q25": q25[:, j],
-                                    "q75": q75[:, j], "n_seeds": stack.shape[0]}) for j, name in enumerate(names)],
-                     ignore_index=True)
-
-
-def tabulate(runs) -> pd.DataFrame:
-    key = runs.spec.plot.get("trace", "x")
-    traced = {ci for (ci, s), out in runs.outputs.items() if key in out.trace}
-    names = _names(runs.outputs[min(k for k in runs.outputs if k[0] in traced)], key) if traced else []
-    frames, levels = [], []
-    for ci, cell in enumerate(runs.cells):
-        seeds = sorted(s for (c, s) in runs.outputs if c == ci)
-        sub = runs.table[runs.table.cell == ci]
-        est = sub.estimator.iloc[0]
-        if ci in traced:
-            frames.append(_traced(runs, ci, seeds, key, cell, est))
-            levels += _levels(sub, names, "truth_", "truth", cell, est)
-        else:
-            levels += _levels(sub, names, "", "reference", cell, est)
-    truth = pd.DataFrame(levels)
-    if len(truth):  # one truth line per parameter
-        truth = pd.concat([truth[truth.kind == "truth"].drop_duplicates("parameter"), truth[truth.kind != "truth"]])
-    return pd.concat(frames + [truth] + _distances(runs, key, names, traced), ignore_index=True)
 
 
 def _name(spec, estimator: str) -> str:

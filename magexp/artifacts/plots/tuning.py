@@ -17,7 +17,7 @@ in both panels: on top its median metric, below its success rate (no legend wher
 setting: the x axis names it already, e.g. an ablation's variants). With more settings, the top
 panel shows every setting's median as a dot, the best / median / worst ones with their own markers
 and the default as a star; below, the success rates of the median and best settings and the default
-(of the one setting where a family has only one).
+(of the one setting where a family has only one). The table: :func:`magexp.artifacts.kind_tables.tuning_table`.
 """
 
 from __future__ import annotations
@@ -25,69 +25,18 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.plan import quantiles
 from magexp.artifacts.plots.style import legend_entries, panels, plt, scenario_label, shared_legend, tidy_log_axes
+from magexp.artifacts.tables import median
 
 #: families with at most this many settings show each setting by name (else best / median / worst)
 FEW = 4
 ROLE_MARKERS = {"best": "^", "median": "D", "worst": "v"}
 
 
-def _median(sub, col):
-    return quantiles(sub[col])[0] if col in sub else np.nan
-
-
-def _rate(values) -> float:
-    v = pd.Series(values).dropna()
-    return float(v.astype(float).mean()) if len(v) else np.nan
-
-
-def tabulate(runs) -> pd.DataFrame:
-    spec = runs.spec
-    defaults = {k: {kk: str(vv) for kk, vv in v.items()} for k, v in (spec.plot.get("default", {}) or {}).items()}
-    frame = pd.DataFrame([_setting_row(runs, ci, defaults) for ci in range(len(runs.cells))])
-    frame["role"] = ""
-    for _, idx in frame.groupby(["family", "scenario"], sort=False).groups.items():
-        group = frame.loc[idx].sort_values("median", kind="stable")
-        if len(group) >= 3:
-            frame.loc[group.index[0], "role"] = "best"
-            frame.loc[group.index[len(group) // 2], "role"] = "median"
-            frame.loc[group.index[-1], "role"] = "worst"
-    return frame
-
-
-def _setting_row(runs, ci: int, defaults: dict) -> dict:
-    """The row of cell ``ci`` (module docstring); ``defaults``: ``plot.default`` with text values."""
-    spec = runs.spec
-    metric = spec.plot.get("metric", "fun")
-    short = dict(spec.plot.get("labels", {}) or {})
-    sub = runs.table[runs.table.cell == ci]
-    family = str(sub.estimator.iloc[0])
-    settings = dict(o.split("=", 1) for o in runs.overrides[ci])
-    label = ", ".join(f"{short.get(k, k.split('.')[-1])} = {settings[k]}"
-                      for k in list(spec.plot.get("label", [])) if k in settings) or family
-    med, q25, q75 = quantiles(sub[metric])
-    default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
-    return {"family": family, "label": label, "scenario": str(sub.scenario.iloc[0]), "metric": metric,
-            "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub), "success_rate": _success_rate(sub),
-            "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub else np.nan,
-            "on_boundary_rate": _rate(sub["on_boundary"] > 0) if "on_boundary" in sub else np.nan,
-            "offset_error_ratio": _median(sub, "offset_error_ratio"),
-            "wall_time": _median(sub, "wall_time"), "nfev_to_1.1": _median(sub, "nfev_to_1.1"),
-            "default": default, "setting": sub.setting.iloc[0]}
-
-
-def _success_rate(sub: pd.DataFrame) -> float:
-    """The fraction of a cell's seeds that succeeded (``succeeded``), else converged (``converged``)."""
-    if "succeeded" in sub and sub.succeeded.notna().any():
-        return _rate(sub["succeeded"])
-    return _rate(sub["converged"]) if "converged" in sub else np.nan
-
-
 def _named(top, bottom, sub, families, colours, legend: bool):
     """Few settings per family: one colour per setting label, in both panels (named in the legend if
     ``legend``)."""
-    width = 0.8 / max(sub.groupby("family").size().max(), 1)
+    width = 0.8 / max(sub.family.value_counts().max(), 1)
     for k, fam in enumerate(families):
         f = sub[sub.family == fam]
         for j, (_, r) in enumerate(f.iterrows()):
@@ -114,7 +63,7 @@ def _ranked(top, bottom, sub, families):
         if len(f) == 1:  # one setting (an ablation variant): its success rate
             bottom.bar(k, float(f.success_rate.iloc[0]), width=0.5, color="C0")
             continue
-        bottom.bar(k - 0.2, f.success_rate.median(), width=0.2, color="C0", label="success rate: median over settings")
+        bottom.bar(k - 0.2, median(f.success_rate), width=0.2, color="C0", label="success rate: median over settings")
         best = f[f.role == "best"] if (f.role == "best").any() else f
         bottom.bar(k, float(best.success_rate.iloc[0]), width=0.2, color="C2", label="success rate: best setting")
         if f.default.any():
@@ -124,7 +73,7 @@ def _ranked(top, bottom, sub, families):
 def draw(frame: pd.DataFrame, spec, axes=None):
     scenarios = list(dict.fromkeys(frame.scenario))
     families = list(dict.fromkeys(frame.family))
-    few = frame.groupby(["family", "scenario"]).size().max() <= FEW and frame.label.nunique() <= 2 * FEW
+    few = frame.value_counts(["family", "scenario"]).max() <= FEW and frame.label.nunique() <= 2 * FEW
     cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     colours = {lab: cycle[j % len(cycle)] for j, lab in enumerate(dict.fromkeys(frame.label))}
     width = max(3.6, 0.9 * len(families) + 1.5, 7.0 / len(scenarios))  # room for the title
@@ -133,7 +82,8 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         top, bottom = axes[j], axes[len(scenarios) + j]
         sub = frame[frame.scenario == sc]
         if few:
-            _named(top, bottom, sub, families, colours, legend=frame.groupby("family").label.nunique().max() > 1)
+            _named(top, bottom, sub, families, colours,
+                   legend=frame.drop_duplicates(["family", "label"]).family.value_counts().max() > 1)
         else:
             _ranked(top, bottom, sub, families)
         for ax in (top, bottom):

@@ -1,7 +1,7 @@
 """magexp beside MAGYC on the same data: ``python -m magexp.perf.peers.bench --out DIR`` (``make peers-bench``).
 
 Writes ``DIR/peers.csv`` (long format: one row per dataset, fit, side, method and measure), ``DIR/peers_summary.csv``
-(median and 95 % interval over seeds or folds, :func:`magexp.artifacts.claims.ci`), ``DIR/peers.png`` and ``DIR/peers.md``
+(median and 95 % interval over seeds or folds, :func:`magexp.artifacts.tables.interval`), ``DIR/peers.png`` and ``DIR/peers.md``
 (the section's text, every number read from the summary). Without the peer's environment (``make peers``) it
 prints one line and writes nothing.
 
@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.artifacts.claims import ci
+from magexp.artifacts.tables import interval
 from magexp.errors import MagexpError
 from magexp.perf.peers import bound, data, exchange, magexp_side, measures
 from magexp.perf.peers.magyc_side import METHODS as PEER_METHODS
@@ -203,7 +203,7 @@ def run(args, work: Path) -> list[dict]:
 
 
 def summarise(rows: list[dict]) -> list[dict]:
-    """Mean, median and 95 % interval of the median (:func:`magexp.artifacts.claims.ci`) of every measure over seeds (simulations) or over the
+    """Mean, median and 95 % interval of the median (:func:`magexp.artifacts.tables.interval`) of every measure over seeds (simulations) or over the
     two held-out halves (recordings), per dataset, axis map and method."""
     groups: dict[tuple, list[float]] = {}
     for r in rows:
@@ -214,7 +214,7 @@ def summarise(rows: list[dict]) -> list[dict]:
     for key, values in groups.items():
         v = np.asarray(values, float)
         finite = v[np.isfinite(v)]
-        lo, hi = ci(finite, "median") if len(finite) > 1 else (float("nan"), float("nan"))
+        lo, hi = interval(finite, stat="median") if len(finite) > 1 else (float("nan"), float("nan"))
         out.append(dict(zip(("kind", "dataset", "axis_map", "fit_on", "side", "method", "metric"), key),
                         n=len(v), mean=float(np.mean(finite)) if len(finite) else float("nan"),
                         median=float(np.median(finite)) if len(finite) else float("nan"), lo=lo, hi=hi))

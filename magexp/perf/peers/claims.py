@@ -24,8 +24,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import (ALPHA, CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, Test, ci, decide,
+from magexp.artifacts.claims import (ALPHA, CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, Test, decide,
                                      detectable_paired, holm, wilcoxon_less)
+from magexp.artifacts.tables import interval
 
 #: the combined error of a simulated run (module docstring)
 ERROR = "worse_error"
@@ -53,7 +54,7 @@ def values(frame: pd.DataFrame, metric: str, **where) -> pd.Series:
 
 
 def _median_ci(v: pd.Series) -> tuple[float, float, float]:
-    lo, hi = ci(v.to_numpy(), "median") if len(v) > 1 else (np.nan, np.nan)
+    lo, hi = interval(v.to_numpy(), stat="median") if len(v) > 1 else (np.nan, np.nan)
     return float(np.median(v)) if len(v) else np.nan, lo, hi
 
 
