@@ -41,6 +41,7 @@ A fixed tolerance is used only where the paper gives no run to compare with
 
 from __future__ import annotations
 
+import functools
 import re
 
 import numpy as np
