@@ -222,19 +222,6 @@ def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path, cli):
         [("ellipsoid", "0"), ("ellipsoid", "1")]
 
 
-def test_job_yaml_is_omegaconfs_text(make_cfg):
-    """A job's ``config.yaml`` and ``overrides.yaml`` are written without building a config; the same bytes."""
-    from omegaconf import OmegaConf
-
-    from magexp.run.outputs import to_yaml
-    from magexp.run.compose import resolved
-
-    plain = resolved(make_cfg("scenario=yuan2018_mode1", "estimator=rdpso", "seed=4"))
-    odd = {**plain, "strings": ["null", "true", "1e-3", "a: b", "'q'", "ünï", ""], "none": None, "nested": [[1, 2.5]]}
-    for value in (plain, odd, ["estimator=ipso", "seed=3", "scenario.noise=1e-3", "x='a,b'"]):
-        assert to_yaml(value) == OmegaConf.to_yaml(value)
-
-
 def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path):
     from magexp.run.sweep import gather
 

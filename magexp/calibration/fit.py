@@ -690,12 +690,10 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
 
 
 def estimator_named(name: str, **overrides):
-    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``."""
-    path = CONF / "estimator" / f"{name}.yaml"
-    if not path.is_file():
-        known = sorted(p.stem for p in (CONF / "estimator").glob("*.yaml"))
-        raise MagexpError(f"estimator={name!r} is not allowed: choose one of {', '.join(known)}")
-    node = OmegaConf.load(path)
+    """The estimator of ``conf/estimator/<name>.yaml`` (composed: :func:`magexp.run.compose.compose_config`)
+    with ``overrides``."""
+    check_choice("estimator", name)
+    node = compose_config([f"estimator={name}"], config_name="calibrate").estimator
     unknown = [key for key in overrides if key not in node]
     if unknown:
         options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")
@@ -754,8 +752,7 @@ def calibrate(readings, *, unit: str | None = None, estimator="ellipsoid", objec
 # -- the command -----------------------------------------------------------------------------------
 def calibrate_config(argv: list[str]):
     """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed as every
-    command's config is (:func:`magexp.run.compose.compose_config`: Hydra once per estimator choice,
-    kept on disk)."""
+    command's config is (:func:`magexp.run.compose.compose_config`)."""
     bad = [a for a in argv if "=" not in a]
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
