@@ -300,7 +300,12 @@ def apply_overrides(cfg: DictConfig, overrides: list[str], *, config_name: str =
     """Apply ``key=value`` overrides to ``cfg`` with Hydra's own override step (its parser types each
     value, OmegaConf checks it against the config's schema); an unknown key, or a value the schema's
     type refuses, is one MagexpError line naming the key and what exists."""
-    for override in parse_overrides(overrides):
+    return _apply(cfg, parse_overrides(overrides), config_name)
+
+
+def _apply(cfg: DictConfig, overrides: list[Override], config_name: str) -> DictConfig:
+    """:func:`apply_overrides` of overrides parsed already."""
+    for override in overrides:
         key = override.key_or_group
         if override.is_sweep_override():
             raise MagexpError(f"{override.input_line} is not allowed: it lists several values (a sweep); give one "
@@ -344,14 +349,14 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
     caller's own.
     """
     parsed = parse_overrides(list(overrides))
-    for ov in parsed:
-        if ov.key_or_group in GROUPS and not ov.is_sweep_override():
-            check_choice(ov.key_or_group, ov.get_value_element_as_str())
-    values = [ov.input_line for ov in parsed if _is_value(ov)]
     defaults = tuple(ov.input_line for ov in parsed if not _is_value(ov))
     if (config_name, defaults) not in _COMPOSED:
+        for ov in parsed:
+            if ov.key_or_group in GROUPS and not ov.is_sweep_override():
+                check_choice(ov.key_or_group, ov.get_value_element_as_str())
         _COMPOSED[config_name, defaults] = hydra_compose(defaults, config_name)
-    return apply_overrides(copy.deepcopy(_COMPOSED[config_name, defaults]), values, config_name=config_name)
+    cfg = copy.deepcopy(_COMPOSED[config_name, defaults])
+    return _apply(cfg, [ov for ov in parsed if _is_value(ov)], config_name)
 
 
 def sweep_jobs(overrides: list[str]) -> list[list[str]]:
