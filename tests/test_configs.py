@@ -120,3 +120,17 @@ def test_calibration_keys_are_unknown_to_a_simulation_run():
     for override in ("task=calibrate", "data.path=x.csv", "out=folder"):
         with pytest.raises(MagexpError, match="magexp calibrate"):
             compose_config([override])
+
+
+def test_an_artifact_is_composed_once_per_cell_as_hydra_composes_each_run():
+    """Every run an artifact plans is ``hydra.compose`` of its cell's overrides (the ``?key=value`` ones
+    where the cell's config has the key) with its seed: one compose per cell, the seed set per run."""
+    from magexp.artifacts.plan import paper_specs, plan_artifact
+    from magexp.run.compose import hydra_compose, resolved
+
+    spec = next(s for s in paper_specs("benchmark") if s.name == "benchmark_baselines")
+    assert any(str(o).startswith("?") for o in spec.base)
+    plan = plan_artifact(spec, seeds=2)
+    assert len(plan.configs) == 2 * len(plan.cells)
+    for (ci, seed), cfg in list(zip(plan.index, plan.configs))[::7]:
+        assert cfg == resolved(hydra_compose((*plan.overrides[ci], f"seed={seed}")))

@@ -208,6 +208,30 @@ def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path,
     assert list(tmp_path.iterdir()) == [tmp_path / "cache"] or not list(tmp_path.iterdir())
 
 
+def test_a_sweep_composes_each_cell_once_and_each_job_reads_hydras_config(tmp_path, cli, monkeypatch):
+    """``-m scenario=ding2024_exp1 estimator=ellipsoid,lm seed=0,1``: two cells of two seeds, each cell
+    composed once; every job's ``config.yaml`` is ``hydra.compose`` of that job's own overrides."""
+    from omegaconf import OmegaConf
+
+    from magexp.run import compose
+
+    composed = []
+    monkeypatch.setattr(compose, "_COMPOSED", {})  # this process composed nothing yet
+    hydra_compose = compose.hydra_compose
+    monkeypatch.setattr(compose, "hydra_compose", lambda *a, **k: composed.append(a) or hydra_compose(*a, **k))
+    proc = cli("-m", "scenario=ding2024_exp1", "estimator=ellipsoid,lm", "seed=0,1", f"hydra.sweep.dir={tmp_path / 's'}",
+               cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(a[0] for a in composed) == [("scenario=ding2024_exp1", "estimator=ellipsoid"),
+                                                            ("scenario=ding2024_exp1", "estimator=lm")]
+    for job in (["scenario=ding2024_exp1", f"estimator={e}", f"seed={s}"] for e in ("ellipsoid", "lm") for s in (0, 1)):
+        folder = next(p.parent.parent for p in (tmp_path / "s").glob("*/.hydra/overrides.yaml")
+                      if yaml.safe_load(p.read_text()) == job)
+        expected = compose.resolved(hydra_compose(tuple(job)))
+        assert yaml.safe_load((folder / "config.yaml").read_text()) == expected
+        assert OmegaConf.to_yaml(expected) == (folder / "config.yaml").read_text()
+
+
 def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path, cli):
     """``a,b``, ``range()`` and a group's ``glob()``: the jobs magexp checks are the jobs Hydra launches."""
     from magexp.run.preflight import expand_sweep
