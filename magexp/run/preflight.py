@@ -15,11 +15,9 @@ import json
 import math
 
 import numpy as np
-from omegaconf import OmegaConf
 
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check, check_positive_int
-from magexp.paths import CONF
 from magexp.problems import make_problem
 from magexp.run.budget import Tally, check_run, check_sweep
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
@@ -88,6 +86,8 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
             tally.add(composed[rest])
             continue
         cfg = compose_config(job)
+        if any(o.partition("=")[0] == "estimator.name" for o in job):  # a config's own name is its own label
+            check_label(cfg.estimator)
         composed[rest] = _check_config(cfg, seen, estimates)
         tally.add(composed[rest])
         if keep:
@@ -111,7 +111,6 @@ def _check_config(cfg, seen: set, estimates: dict):
     check_seed(cfg.seed)
     plain = resolved(cfg)
     check_run_values(plain)
-    check_label(plain.get("estimator") or {})
     check_schedules(plain.get("estimator") or {})
     s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
     e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
@@ -140,13 +139,13 @@ def check_schedules(node: dict, prefix: str = "estimator") -> None:
             check(number, f"{prefix}.{key}={value!r} is not allowed: it must be a finite number")
 
 
-def check_label(estimator: dict) -> None:
-    """An estimator's ``name`` labels its metrics in every table: the name of another estimator config
-    whose class differs (``estimator=lm estimator.name=ipso``: ``lm`` labelled ``ipso``) is refused; a
+def check_label(estimator) -> None:
+    """An estimator's ``name`` labels its metrics in every table: set to the name of another estimator
+    config whose class differs (``estimator=lm estimator.name=ipso``: ``lm`` labelled ``ipso``) is refused; a
     name of its own (``estimator.name=ipso_w``, an ablation's variant) is the caller's label."""
     name, target = estimator.get("name"), estimator.get("_target_")
     if isinstance(name, str) and name in options("estimator"):
-        theirs = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("_target_")
+        theirs = compose_config([f"estimator={name}"]).estimator.get("_target_")
         if theirs != target:
             raise MagexpError(f"estimator.name={name!r} is not allowed for {str(target).rpartition('.')[2]}: it is the "
                               f"label of conf/estimator/{name}.yaml ({str(theirs).rpartition('.')[2]}); choose "

@@ -36,8 +36,7 @@ from omegaconf import OmegaConf, open_dict
 
 from magexp.core.atomic import atomic_open, write_text
 from magexp.errors import MagexpError
-from magexp.paths import CONF
-from magexp.run.compose import apply_overrides, compose_config, hydra_compose, override_value, resolved
+from magexp.run.compose import apply_overrides, compose_config, hydra_compose, resolved
 from magexp.run.executor import check_executor, make_executor, run_many
 from magexp.run.guard import check_job_folders
 from magexp.run.outputs import write_outputs
@@ -103,24 +102,13 @@ def check_settings(settings: dict) -> None:
 
 
 def check_hydra_settings(settings: list[str]) -> None:
-    """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one).
+    """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one):
+    Hydra composes its own node with them, then magexp's launcher settings are checked if it is the
+    launcher chosen."""
 
-    Settings of magexp's launcher alone (``hydra.launcher.executor|jobs|scheduler=...``) are checked
-    against its config file; anything else (another launcher, other ``hydra.*`` keys) by composing
-    Hydra's own node (a full Hydra compose), then magexp's launcher settings if it is the one chosen.
-    """
-
-    own = {f"hydra.launcher.{key}" for key in SETTINGS}
-    if all(o.partition("=")[0] in own for o in settings):
-        node = OmegaConf.load(CONF / "hydra" / "launcher" / "magexp.yaml")
-        values = {key: node[key] for key in SETTINGS}
-        values.update({o.partition("=")[0].rpartition(".")[2]: override_value(o.partition("=")[2]) for o in settings})
-    else:
-        launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
-        if not str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
-            return
-        values = {key: launcher.get(key) for key in SETTINGS}
-    check_settings(values)
+    launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
+    if str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
+        check_settings({key: launcher.get(key) for key in SETTINGS})
 
 
 def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
