@@ -128,9 +128,9 @@ def test_an_artifact_is_composed_once_per_cell_as_hydra_composes_each_run():
     from magexp.artifacts.plan import paper_specs, plan_artifact
     from magexp.run.compose import hydra_compose, resolved
 
-    spec = next(s for s in paper_specs("benchmark") if s.name == "benchmark_baselines")
-    assert any(str(o).startswith("?") for o in spec.base)
+    spec = next(s for s in paper_specs("yuan2018") if s.name == "yuan2018_table4")  # 4 cells, 2 sets of choices
     plan = plan_artifact(spec, seeds=2)
-    assert len(plan.configs) == 2 * len(plan.cells)
-    for (ci, seed), cfg in list(zip(plan.index, plan.configs))[::7]:
+    assert len(plan.configs) == 2 * len(plan.cells) == 8
+    assert all("estimator.n_particles=80" in o for o in plan.overrides)  # its ?key=value, both swarms have it
+    for (ci, seed), cfg in zip(plan.index, plan.configs):
         assert cfg == resolved(hydra_compose((*plan.overrides[ci], f"seed={seed}")))
