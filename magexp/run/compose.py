@@ -6,8 +6,9 @@ A run config is Hydra's composition of ``conf/config.yaml`` with one choice per 
 defaults tree of the group choices (and of any ``+key``, ``~key`` or ``hydra.*`` override) once
 per process; each ``key=value`` override is then applied to a copy by Hydra's own override step
 (:func:`apply_overrides`), as ``hydra.compose`` applies it after the defaults. An artifact's cells
-share a few group choices (688 cells, 128 choices in ``make reproduce``): a compose of each cell
-would cost Hydra's 75 ms (its defaults list and a dozen YAML files read again) 688 times.
+share a few group choices (``make reproduce``: 688 cells, 144 sets of choices): a Hydra compose
+of each cell (75 ms: its defaults list and a dozen YAML files read again) took 68 s of CPU to plan
+it, this 16 s (``docs/measurements.md``, "Speed twins").
 
 Structured schemas (:func:`register_schemas`, Hydra's ConfigStore) type the scenario configs:
 a typo such as ``scenario.nosie=2`` or a value of the wrong type fails here, at compose time,
@@ -298,8 +299,27 @@ def _groups() -> frozenset:
 
 def apply_overrides(cfg: DictConfig, overrides: list[str], *, config_name: str = PRIMARY) -> DictConfig:
     """Apply ``key=value`` overrides to ``cfg`` with Hydra's own override step (its parser types each
-    value, OmegaConf checks it against the config's schema); an unknown key, or a value the schema's
-    type refuses, is one MagexpError line naming the key and what exists."""
+    value, OmegaConf checks it against the config's schema).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        A composed config, changed in place.
+    overrides : list of str
+        ``key=value`` overrides of keys ``cfg`` has (``seed=3``, ``scenario.noise=2``).
+    config_name : str
+        The primary config ``cfg`` was composed from (it words the error of an unknown key).
+
+    Returns
+    -------
+    DictConfig
+        ``cfg``.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the key and what exists, for an unknown key or a value the schema's type refuses.
+    """
     return _apply(cfg, parse_overrides(overrides), config_name)
 
 
@@ -341,12 +361,28 @@ _COMPOSED: dict = {}  # (config name, the overrides Hydra composes with) -> Hydr
 
 
 def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: str = PRIMARY) -> DictConfig:
-    """The config of ``overrides``, as ``hydra.compose`` composes it, or one MagexpError line.
+    """The config of ``overrides``, as ``hydra.compose`` composes it.
 
     Hydra composes the defaults of the config-group choices and of the overrides it applies while
     composing (``+key``, ``~key``, ``hydra.*``) once per process; a copy then takes the ``key=value``
-    overrides through :func:`apply_overrides` (Hydra's step after the defaults). The result is the
-    caller's own.
+    overrides through :func:`apply_overrides` (Hydra's step after the defaults).
+
+    Parameters
+    ----------
+    overrides : list of str
+        Hydra overrides (``scenario=ding2024_exp1``, ``estimator.n_particles=30``, ``seed=3``).
+    config_name : str
+        The primary config: ``config`` (a run) or ``calibrate``.
+
+    Returns
+    -------
+    DictConfig
+        The composed config, in struct mode, the caller's own.
+
+    Raises
+    ------
+    MagexpError
+        One line for an unknown choice or key, or a value the schema refuses.
     """
     parsed = parse_overrides(list(overrides))
     defaults = tuple(ov.input_line for ov in parsed if not _is_value(ov))
