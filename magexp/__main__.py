@@ -55,7 +55,6 @@ def start(name: str, args: list[str]) -> None:
     from magexp.run.guard import check_cache_folder  # imports numpy: after one_blas_thread()
 
     check_cache_folder(str(paths.CACHE))
-    check_cache_folder(str(paths.composed_configs()))
     command(name)(args)
 
 

@@ -31,11 +31,6 @@ SHARED_DATA = Path(os.environ["MAGEXP_DATA"]) if os.environ.get("MAGEXP_DATA") e
     ROOT.parent / "shared" / "data")
 
 
-def composed_configs() -> Path:
-    """Where composed configs are kept (beside the run cache, never inside it)."""
-    return CACHE.parent / f"{CACHE.name}-configs"
-
-
 def paper_results(paper: str) -> Path:
     """``results/<paper>/``, created on demand."""
     path = RESULTS / paper

@@ -63,13 +63,6 @@ def _session_root(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def _composed_configs(tmp_path_factory):
-    """One composed-config cache for the whole test session, shared by the xdist workers (a config
-    is composed by Hydra once per session, not once per test: a large part of an artifact's smoke run)."""
-    return _session_root(tmp_path_factory) / "composed-configs"
-
-
-@pytest.fixture(scope="session")
 def _caches(tmp_path_factory):
     """The folder of the run caches of the tests that have no ``tmp_path`` of their own."""
     return tmp_path_factory.getbasetemp() / "caches"
@@ -79,18 +72,16 @@ _TESTS = itertools.count()
 
 
 @pytest.fixture(autouse=True)
-def _isolated_cache(request, monkeypatch, _composed_configs, _caches):
+def _isolated_cache(request, monkeypatch, _caches):
     """Each test gets its own run cache, so nothing is read from or left in .cache/: ``tmp_path / "cache"``
     for a test with a ``tmp_path``, else a folder of its own that the cache creates if it writes (most
-    tests never do: a ``tmp_path`` for each would cost a folder per test). Composed configs come from the
-    session's own cache (the tests of that cache use fresh processes: test_configs.py)."""
+    tests never do: a ``tmp_path`` for each would cost a folder per test)."""
     if "tmp_path" in request.fixturenames:
         folder = request.getfixturevalue("tmp_path") / "cache"
     else:
         folder = _caches / str(next(_TESTS)) / "cache"  # what lives beside it (the figure cache) its own too
     monkeypatch.setattr("magexp.paths.CACHE", folder)
     monkeypatch.setattr("magexp.run.cache.CACHE", folder)
-    monkeypatch.setattr("magexp.paths.composed_configs", lambda: _composed_configs, raising=False)
 
 
 @pytest.fixture

@@ -932,29 +932,28 @@ def test_sigterm_during_a_sweep_leaves_nothing(tmp_path):
 
 
 def test_a_sigterm_that_omegaconf_swallows_still_stops_the_command():
-    """OmegaConf turns an exception raised inside its merge (the signal handler's ``Terminated``) into a
-    ``ConfigKeyError`` about one time in seven (measured with a timer signal): the sweep above then read
-    it as a damaged composed-config entry and ran on to exit 0. A stop received before such an error is
-    raised again, so the command still ends as the signal asks (in a process of its own: the handlers
-    are a command's)."""
+    """OmegaConf turns an exception raised inside its update (the signal handler's ``Terminated``) into an
+    error of its own about one time in seven (measured with a timer signal), which the composer would
+    report as a refused value (exit 2). A stop received before such an error is raised again, so the
+    command still ends as the signal asks (in a process of its own: the handlers are a command's)."""
     script = """
 import os, signal
 from magexp import errors
-from magexp.run import cache, compose
-entry = {"config": {"scenario": {"n_readings": "many"}}, "schemas": {"scenario": "DingScenario"}}  # a refused value
+from magexp.run import compose
+cfg = compose.compose_config(["scenario=ding2024_exp1"])
 try:
-    compose.config_from(entry)
-except cache.InvalidEntry:
-    print("invalid")
+    compose.apply_overrides(cfg, ["scenario.n_readings=many"])
+except errors.MagexpError:
+    print("refused")
 errors.stop_on_signals()
 try:
     os.kill(os.getpid(), signal.SIGTERM)
 except errors.Terminated:
     print("stopped")
 try:
-    compose.config_from(entry)
+    compose.apply_overrides(cfg, ["scenario.n_readings=many"])
 except errors.Terminated as exc:
     print("stopped again", exc.signum)
 """
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
-    assert done.stdout.split("\n")[:3] == ["invalid", "stopped", "stopped again 15"], done.stdout + done.stderr
+    assert done.stdout.split("\n")[:3] == ["refused", "stopped", "stopped again 15"], done.stdout + done.stderr

@@ -96,10 +96,10 @@ def test_a_run_over_a_limit_is_refused_before_it_starts(cli, work, started, args
 def test_a_sweep_is_counted_before_it_is_expanded(cli, work, started, monkeypatch):
     import magexp.run.preflight
 
-    def no_product(*axes):  # expanding 10^8 jobs is itself the work to refuse
+    def no_expansion(*overrides):  # expanding 10^8 jobs is itself the work to refuse
         raise AssertionError("the sweep was expanded before its size was checked")
 
-    monkeypatch.setattr(magexp.run.preflight.itertools, "product", no_product)
+    monkeypatch.setattr(magexp.run.preflight, "sweep_jobs", no_expansion)
     result = cli("-m", "seed=range(0,100000000)", "estimator=pso,ipso", cwd=work)
     assert result.returncode == 2
     one_line(result.stderr, "seed=range(0,100000000)", "200000000 runs", "200000 runs", "MAGEXP_MAX_RUNS")

@@ -102,7 +102,7 @@ def test_exit_codes_across_the_process_boundary(tmp_path):
     assert (tmp_path / "r" / "metrics.csv").exists()
     bad = magexp("scenario.nosie=2", cwd=tmp_path)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "nosie" in bad.stderr
-    assert {p.name for p in tmp_path.iterdir()} == {"cache", "cache-configs", "r"}  # caches and the run only
+    assert {p.name for p in tmp_path.iterdir()} == {"cache", "r"}  # the run cache and the run only
 
 
 def test_each_subcommand_goes_through_the_one_error_path(cli, tmp_path):

@@ -59,15 +59,6 @@ def test_artifact_spec_is_well_formed(path):
 
 # --- the one composer (magexp.run.compose) -------------------------------------------------------
 
-@pytest.mark.parametrize("text", ["2", "-3", "+4", "007", "0", "1.5", "1e-06", "1E5", ".5", "5.", "05e1", "abc", "a_b",
-                                  "True", "null", "inf", "nan", "[1,2]", "1_000", "0x10", "'quoted'"])
-def test_yaml_value_types_as_hydras_grammar(text):
-    from magexp.run.compose import parse_overrides, yaml_value
-
-    ours, hydra = yaml_value(text), parse_overrides([f"k={text}"])[0].value()
-    assert type(ours) is type(hydra) and (ours == hydra or ours != ours and hydra != hydra)
-
-
 @pytest.mark.parametrize("overrides", [[], ["scenario=yuan2018_mode3", "estimator=rdpso"], ["estimator=kf"],
                                        ["scenario=yan2022_mockup", "estimator=ls", "seed=4"],
                                        ["scenario=ding2024_exp2", "scenario.noise=5", "estimator.n_particles=7"]])
@@ -75,53 +66,11 @@ def test_compose_config_equals_hydras_compose(overrides):
     from magexp.run.compose import compose_config, hydra_compose
 
     expected = OmegaConf.to_container(hydra_compose(tuple(overrides)), resolve=True)
-    for _ in range(3):  # first compose, then from disk / grafted in memory
-        assert OmegaConf.to_container(compose_config(overrides), resolve=True) == expected
-
-
-#: a fresh process composing from the composed-config cache on disk: no Hydra compose, the schema kept
-FROM_DISK = """
-from omegaconf import OmegaConf
-from magexp.errors import MagexpError
-from magexp.run import compose
-def no_hydra(*args, **kwargs):
-    raise AssertionError("composed by Hydra: the entry on disk was not read")
-compose.hydra_compose = no_hydra
-first = compose.compose_config(["scenario=yuan2018_drift"])
-again = compose.compose_config(["scenario=yuan2018_drift"])
-assert again == first and again is not first
-from magexp.scenarios.yuan import YuanScenarioConf
-assert OmegaConf.get_type(again.scenario) is YuanScenarioConf
-try:
-    compose.compose_config(["scenario=yuan2018_drift", "scenario.noise=abc"])
-except MagexpError as exc:
-    print(exc)
-"""
-
-
-def test_a_composed_config_is_kept_once_its_overrides_pass_and_comes_back_with_its_schema(tmp_path):
-    """Three fresh processes on one cold cache: a typo writes no composed config; a passing command
-    keeps one; a third process composes from it without Hydra, typed by its schema."""
-    import os
-    import subprocess
-    import sys
-
-    env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "c" / "runs")}
-
-    def python(*args):
-        return subprocess.run([sys.executable, *args], cwd=tmp_path, env=env, capture_output=True, text=True,
-                              timeout=120)
-
-    typo = python("-m", "magexp", "scenario=yuan2018_drift", "scenario.nosie=2")
-    assert typo.returncode == 2 and "nosie" in typo.stderr and not list(tmp_path.rglob("*.json")), typo.stderr
-    kept = python("-m", "magexp", "--cfg", "job", "scenario=yuan2018_drift")
-    assert kept.returncode == 0, kept.stderr
-    (entry,) = tmp_path.rglob("*.json")
-    stamp = entry.stat().st_mtime_ns
-    read = python("-c", FROM_DISK)
-    assert read.returncode == 0, read.stderr
-    assert "scenario.noise=abc" in read.stdout
-    assert list(tmp_path.rglob("*.json")) == [entry] and entry.stat().st_mtime_ns == stamp
+    for _ in range(2):  # composed by Hydra, then its group choices composed already in this process
+        cfg = compose_config(overrides)
+        assert OmegaConf.to_container(cfg, resolve=True) == expected
+        cfg.seed = 99  # the caller's own copy
+    assert compose_config(overrides).seed != 99
 
 
 def test_a_typo_names_the_key_and_the_keys_that_exist():
@@ -172,3 +121,17 @@ def test_calibration_keys_are_unknown_to_a_simulation_run():
     for override in ("task=calibrate", "data.path=x.csv", "out=folder"):
         with pytest.raises(MagexpError, match="magexp calibrate"):
             compose_config([override])
+
+
+def test_an_artifact_is_composed_once_per_cell_as_hydra_composes_each_run():
+    """Every run an artifact plans is ``hydra.compose`` of its cell's overrides (the ``?key=value`` ones
+    where the cell's config has the key) with its seed: one compose per cell, the seed set per run."""
+    from magexp.artifacts.plan import paper_specs, plan_artifact
+    from magexp.run.compose import hydra_compose, resolved
+
+    spec = next(s for s in paper_specs("yuan2018") if s.name == "yuan2018_table4")  # 4 cells, 2 sets of choices
+    plan = plan_artifact(spec, seeds=2)
+    assert len(plan.configs) == 2 * len(plan.cells) == 8
+    assert all("estimator.n_particles=80" in o for o in plan.overrides)  # its ?key=value, both swarms have it
+    for (ci, seed), cfg in zip(plan.index, plan.configs):
+        assert cfg == resolved(hydra_compose((*plan.overrides[ci], f"seed={seed}")))

@@ -208,6 +208,36 @@ def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path,
     assert list(tmp_path.iterdir()) == [tmp_path / "cache"] or not list(tmp_path.iterdir())
 
 
+def test_a_sweep_composes_each_cell_once_and_each_job_reads_hydras_config(tmp_path, cli, monkeypatch):
+    """``-m scenario=ding2024_exp1 estimator=ellipsoid,lm seed=0,1``: two cells of two seeds, each cell
+    composed by Hydra at most once in the process (its checks and its launch share it); every job's
+    ``config.yaml`` is ``hydra.compose`` of that job's own overrides."""
+    from omegaconf import OmegaConf
+
+    from magexp.run import compose
+
+    composed = []
+    hydra_compose = compose.hydra_compose
+
+    def counted(overrides=(), *args, with_hydra=False):
+        if not with_hydra:  # a run config (not the hydra node that checks the launcher's settings)
+            composed.append(overrides)
+        return hydra_compose(overrides, *args, with_hydra=with_hydra)
+
+    monkeypatch.setattr(compose, "hydra_compose", counted)
+    proc = cli("-m", "scenario=ding2024_exp1", "estimator=ellipsoid,lm", "seed=0,1", f"hydra.sweep.dir={tmp_path / 's'}",
+               cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    cells = {("scenario=ding2024_exp1", "estimator=ellipsoid"), ("scenario=ding2024_exp1", "estimator=lm")}
+    assert len(set(composed)) == len(composed) and set(composed) <= cells  # none twice (once, unless before)
+    for job in (["scenario=ding2024_exp1", f"estimator={e}", f"seed={s}"] for e in ("ellipsoid", "lm") for s in (0, 1)):
+        folder = next(p.parent.parent for p in (tmp_path / "s").glob("*/.hydra/overrides.yaml")
+                      if yaml.safe_load(p.read_text()) == job)
+        expected = compose.resolved(hydra_compose(tuple(job)))
+        assert yaml.safe_load((folder / "config.yaml").read_text()) == expected
+        assert OmegaConf.to_yaml(expected) == (folder / "config.yaml").read_text()
+
+
 def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path, cli):
     """``a,b``, ``range()`` and a group's ``glob()``: the jobs magexp checks are the jobs Hydra launches."""
     from magexp.run.preflight import expand_sweep
@@ -220,19 +250,6 @@ def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path, cli):
     assert proc.returncode == 0, proc.stderr
     assert [(r["estimator"], r["seed"]) for r in read_csv(tmp_path / "s" / "sweep.csv")] == \
         [("ellipsoid", "0"), ("ellipsoid", "1")]
-
-
-def test_job_yaml_is_omegaconfs_text(make_cfg):
-    """A job's ``config.yaml`` and ``overrides.yaml`` are written without building a config; the same bytes."""
-    from omegaconf import OmegaConf
-
-    from magexp.run.outputs import to_yaml
-    from magexp.run.compose import resolved
-
-    plain = resolved(make_cfg("scenario=yuan2018_mode1", "estimator=rdpso", "seed=4"))
-    odd = {**plain, "strings": ["null", "true", "1e-3", "a: b", "'q'", "ünï", ""], "none": None, "nested": [[1, 2.5]]}
-    for value in (plain, odd, ["estimator=ipso", "seed=3", "scenario.noise=1e-3", "x='a,b'"]):
-        assert to_yaml(value) == OmegaConf.to_yaml(value)
 
 
 def test_sweep_table_has_the_swept_keys_first_and_the_union_of_metrics(tmp_path):

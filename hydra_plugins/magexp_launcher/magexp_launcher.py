@@ -2,7 +2,7 @@
 
 Hydra's sweeper expands the sweep (``a,b``, ``range()``, globs, ``hydra.sweeper.params``) and
 hands each batch of jobs to :meth:`MagexpLauncher.launch`, which runs it with
-:func:`magexp.run.sweep.launch`: each job composed by magexp's composer, the batch run by
+:func:`magexp.run.sweep.launch`: each cell composed once with Hydra's compose, the batch run by
 :func:`magexp.run.executor.run_many` (the run cache and the executors of ``make reproduce``), each
 job's folder written. Its settings (``conf/hydra/launcher/magexp.yaml``)::
 

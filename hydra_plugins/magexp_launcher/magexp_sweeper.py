@@ -5,8 +5,9 @@ Hydra's :class:`BasicSweeper` expands the sweep (``a,b``, ``range()``, globs,
 composes every job with Hydra's config loader only to find composition errors early: a full
 Hydra compose per job, most of a closed-form sweep's time. magexp has already composed and
 checked every job before Hydra started (:func:`magexp.run.preflight.validate_runs`, one line on the
-first bad value, nothing written), and magexp's launcher composes each job again with magexp's
-composer before the first run; so this sweeper only skips that step.
+first bad value, nothing written), and magexp's launcher composes each cell again
+(:func:`magexp.run.compose.compose_config`) before the first run; so this sweeper only skips that
+step (a sweep of 40 jobs: 4.0 times less CPU, ``docs/measurements.md``).
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ from magexp.core import outcomes
 from magexp.errors import MagexpError
 from magexp.estimators.base import applies_to
 from magexp.problems import problem_class
-from magexp.run.compose import compose_config, yaml_value
+from magexp.run.compose import apply_overrides, compose_config
 from magexp.run.executor import run_row
 
 
@@ -133,14 +133,9 @@ def overrides_of(spec, cell: dict[str, str], cfg: DictConfig | None = None) -> l
 
 
 def apply_optional(spec, cfg: DictConfig) -> DictConfig:
-    """Apply the ``?key=value`` overrides of ``spec.base`` that ``cfg`` has a key for."""
-    for o in spec.base:
-        o = str(o)
-        if o.startswith("?"):
-            key, value = o[1:].split("=", 1)
-            if OmegaConf.select(cfg, key) is not None:
-                OmegaConf.update(cfg, key, yaml_value(value))
-    return cfg
+    """Apply the ``?key=value`` overrides of ``spec.base`` that ``cfg`` has a key for (Hydra's override step)."""
+    optional = [str(o)[1:] for o in spec.base if str(o).startswith("?")]
+    return apply_overrides(cfg, [o for o in optional if OmegaConf.select(cfg, o.split("=", 1)[0]) is not None])
 
 
 def setting_of(overrides: list[str]) -> str:

@@ -36,8 +36,7 @@ from magexp.run.runner import build
 
 def calibrate_config(argv: list[str]):
     """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed as every
-    command's config is (:func:`magexp.run.compose.compose_config`: Hydra once per estimator choice,
-    kept on disk).
+    command's config is (:func:`magexp.run.compose.compose_config`).
 
     Parameters
     ----------

@@ -44,7 +44,6 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
@@ -54,18 +53,16 @@ from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, chec
 from magexp.calibration.quality import gyro_extras, quality, report_of
 from magexp.calibration.result import Calibration
 from magexp.core.dataset import Dataset
+from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import canonical, coverage, direction_regions, spread
 from magexp.core.recording import UNITS, Recording
 from magexp.errors import MagexpError
 from magexp.estimators.base import check_applies
 from magexp.estimators.result import FitResult
-from magexp.paths import CONF
 from magexp.problems import make_problem, problem_class
 from magexp.run.budget import check_calibration
 from magexp.run.compose import options, target_class
 from magexp.run.guard import check_folds
-from magexp.run.runner import build
-from magexp.core.ellipsoid import fit_sphere
 from magexp.scenarios.search import centroid_radius, search_box
 
 #: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full``, ``gyro`` and ``auto``.
@@ -514,40 +511,6 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
             refuse(rec.name, failed)
     return {"passed": not failed, "failed": failed, "accepted_anyway": bool(failed) and accept,
             "thresholds": {k: list(v) if isinstance(v, tuple) else v for k, v in thresholds.items()}}
-
-
-def estimator_named(name: str, **overrides):
-    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``.
-
-    Parameters
-    ----------
-    name : str
-        A name of ``conf/estimator/*.yaml``.
-    **overrides
-        Options of that config.
-
-    Returns
-    -------
-    estimator
-        The estimator built from the config (:func:`magexp.run.runner.build`).
-
-    Raises
-    ------
-    MagexpError
-        An unknown name or option.
-    """
-    path = CONF / "estimator" / f"{name}.yaml"
-    if not path.is_file():
-        known = sorted(p.stem for p in (CONF / "estimator").glob("*.yaml"))
-        raise MagexpError(f"estimator={name!r} is not allowed: choose one of {', '.join(known)}")
-    node = OmegaConf.load(path)
-    node.pop("defaults", None)  # its typed schema's line (Hydra's defaults list), not an option
-    unknown = [key for key in overrides if key not in node]
-    if unknown:
-        options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")
-        raise MagexpError(f"{unknown[0]}={overrides[unknown[0]]!r} is not allowed: estimator {name!r} has no option "
-                          f"{unknown[0]!r} (options: {options})")
-    return build(OmegaConf.merge(node, overrides), f"estimator {name!r}")
 
 
 def check_flag(value, key: str) -> bool:

@@ -27,7 +27,8 @@ import time
 import numpy as np
 
 from magexp.calibration.checks import ONE_ATTITUDE_DEG
-from magexp.calibration.fit import calibrate_recording, estimator_named
+from magexp.calibration.fit import calibrate_recording
+from magexp.run.compose import estimator_named
 from magexp.core.identifiability import spread
 from magexp.core.recordings import load_recording
 from magexp.core.seeding import run_generators

@@ -10,7 +10,7 @@
   killed sweep resumes), and the sweep ends with ``<sweep dir>/sweep.csv``;
 * ``magexp --help``, ``--version``, ``--cfg job`` (the composed config, not run).
 
-A single run is composed once (:func:`magexp.run.compose.compose_config`) and run without Hydra's
+A single run is composed once by Hydra (:func:`magexp.run.compose.compose_config`) and run without Hydra's
 application machinery; a sweep is handed to Hydra (its sweeper, then magexp's launcher) after
 every job and the launcher's settings have been checked. Every user mistake ends in one line on
 stderr and a non-zero exit (:func:`magexp.errors.guarded`), with nothing written.
@@ -19,7 +19,6 @@ stderr and a non-zero exit (:func:`magexp.errors.guarded`), with nothing written
 from __future__ import annotations
 
 import importlib.util
-import re
 import shutil
 import sys
 import time
@@ -42,7 +41,6 @@ from magexp.run.sweep import check_hydra_settings
 
 RUN_DIR = "outputs/%Y-%m-%d/%H-%M-%S"     # a single run's folder (strftime), made unique
 SWEEP_DIR = "multirun/%Y-%m-%d/%H-%M-%S"  # a sweep's folder, made unique
-_PLAIN = re.compile(r"[A-Za-z0-9_.+\-]*")  # a value that cannot be a sweep or need Hydra's parser
 #: the extra that provides a Hydra launcher (``hydra/launcher=<name>``)
 LAUNCHER_EXTRAS = {"slurm": ("hydra_plugins.hydra_submitit_launcher", "cluster"),
                    "submitit_slurm": ("hydra_plugins.hydra_submitit_launcher", "cluster"),
@@ -183,8 +181,7 @@ def run_one(user: list[str], hyd: list[str]) -> None:
         check_launcher(rest)
         raise MagexpError(f"{rest[0]} is not allowed for a single run: hydra.* settings other than hydra.run.dir "
                           "apply to -m sweeps")
-    plain = all(_PLAIN.fullmatch(ov.partition("=")[2]) for ov in user)  # nothing Hydra's parser must read
-    if not plain and len(expand_sweep(user)) > 1:
+    if any(ov.is_sweep_override() for ov in parse_overrides(user)) and len(expand_sweep(user)) > 1:
         raise MagexpError("a value list (a,b or range()) needs -m: magexp -m " + " ".join(user))
     single_run(user, run_dirs[-1] if run_dirs else None)
 

@@ -1,10 +1,14 @@
-"""The one place that composes configurations: the CLI, reproduce, bench, calibrate and the tests.
+"""The one place that composes configurations: the CLI, sweeps, reproduce, bench, calibrate and the tests.
 
 A run config is Hydra's composition of ``conf/config.yaml`` with one choice per config group
-(``conf/scenario/*.yaml``, ``conf/estimator/*.yaml``) and ``key=value`` overrides.
-:func:`compose_config` gives the same result as ``hydra.compose`` but composes each group
-choice only once per process (a Hydra compose costs 10-100 ms; grafting a cached node and
-applying overrides with OmegaConf costs well under one).
+(``conf/scenario/*.yaml``, ``conf/estimator/*.yaml``) and ``key=value`` overrides:
+:func:`compose_config` is ``hydra.compose``, in two of Hydra's own steps. Hydra composes the
+defaults tree of the group choices (and of any ``+key``, ``~key`` or ``hydra.*`` override) once
+per process; each ``key=value`` override is then applied to a copy by Hydra's own override step
+(:func:`apply_overrides`), as ``hydra.compose`` applies it after the defaults. An artifact's cells
+share a few group choices (``make reproduce``: 688 cells, 144 sets of choices): a Hydra compose
+of each cell (75 ms: its defaults list and a dozen YAML files read again) took 68 s of CPU to plan
+it, this 16 s (``docs/measurements.md``, "Speed twins").
 
 Structured schemas (:func:`register_schemas`, Hydra's ConfigStore) type the scenario and estimator configs:
 a typo such as ``scenario.nosie=2`` or a value of the wrong type fails here, at compose time,
@@ -14,30 +18,32 @@ the constructors of the objects the configs build.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import functools
-import hashlib
 import importlib
 import importlib.util
 import inspect
-import json
-import pickle
 import re
-import sys
 import types
 import typing
 from collections.abc import Mapping
 from dataclasses import field as _field, make_dataclass
-from pathlib import Path
 from typing import Any, Dict, List, Optional
 
-from omegaconf import MISSING, DictConfig, OmegaConf, flag_override
+from hydra import compose, initialize_config_dir
+from hydra._internal.config_loader_impl import ConfigLoaderImpl
+from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+from hydra.core.global_hydra import GlobalHydra
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.core.override_parser.types import Override, OverrideType
+from hydra.utils import get_class
+from omegaconf import MISSING, DictConfig, OmegaConf
 
-from magexp import paths
 from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
-from magexp.run import cache
-from magexp.run.guard import check_target
+from magexp.run.runner import build
+from magexp.run.targets import check_target
 
 GROUPS = ("scenario", "estimator")
 PRIMARY = "config"
@@ -153,40 +159,21 @@ SCHEMAS = _Schemas()
 
 @functools.cache
 def _override_parser():
-    from hydra.core.override_parser.overrides_parser import OverridesParser
-
     return OverridesParser.create()
 
 
-def parse_overrides(overrides: list[str]) -> list:
-    """Hydra's parsed overrides, or one MagexpError line."""
+def parse_overrides(overrides: list[str], *, parser: OverridesParser | None = None) -> list[Override]:
+    """Hydra's parsed overrides (its grammar types every value), or one MagexpError line."""
     try:
-        return _override_parser().parse_overrides(list(overrides))
+        return (parser or _override_parser()).parse_overrides(list(overrides))
     except Exception as exc:
         raise MagexpError(f"could not parse the overrides {' '.join(overrides)!r}: "
                           f"{str(exc).splitlines()[0]}") from None
 
 
-_INT = re.compile(r"[-+]?(0|[1-9][0-9]*)")
-_FLOAT = re.compile(r"[-+]?((0|[1-9][0-9]*)\.[0-9]*|\.[0-9]+|(0|[1-9][0-9]*))([eE][-+]?[0-9]+)?")
-_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-_SPECIAL = {"true", "false", "null", "inf", "nan"}
-
-
-def yaml_value(text: str):
-    """A command-line value typed as Hydra's override grammar types it (``2`` -> int,
-    ``1e-06`` -> float, ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str).
-
-    Plain integers, decimal floats and identifiers are typed here; anything else (lists,
-    quotes, ``inf``, ``null``, interpolations...) by Hydra's parser, which the common case of a
-    one-run command then never loads.
-    """
-    if _INT.fullmatch(text):
-        return int(text)
-    if _FLOAT.fullmatch(text):
-        return float(text)
-    if _WORD.fullmatch(text) and text.lower() not in _SPECIAL:
-        return text
+def override_value(text: str):
+    """A command-line value as Hydra's override grammar types it (``2`` -> int, ``1e-06`` -> float,
+    ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str)."""
     return parse_overrides([f"k={text}"])[0].value()
 
 
@@ -195,10 +182,9 @@ def options(group: str) -> list[str]:
     return sorted(p.stem for p in (CONF / group).glob("*.yaml"))
 
 
-def target_class(group: str, name: str):
-    """The class named by ``_target_`` in ``conf/<group>/<name>.yaml`` (imported, not built)."""
-    module, _, cls = str(OmegaConf.load(CONF / group / f"{name}.yaml")["_target_"]).rpartition(".")
-    return getattr(importlib.import_module(module), cls)
+def target_class(group: str, name: str, *, config_name: str = PRIMARY):
+    """The class named by ``_target_`` in the composed ``conf/<group>/<name>.yaml`` (imported, not built)."""
+    return get_class(compose_config([f"{group}={name}"], config_name=config_name)[group]._target_)
 
 
 def check_choice(group: str, choice: str) -> None:
@@ -230,8 +216,10 @@ def unknown_key(cfg: DictConfig, key: str, value: str, config_name: str = PRIMAR
                        f"(keys: {', '.join(keys)})")
 
 
-def _bad_value(key: str, value: str, exc: Exception) -> MagexpError:
+def _bad_value(key: str, value: str, exc: BaseException) -> MagexpError:
     """A value the schema's type refuses: one line naming the key, the value and the type wanted."""
+    while exc.__cause__ is not None:  # Hydra keeps OmegaConf's reason in the cause
+        exc = exc.__cause__
     msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
     for name, wanted in (("Integer", "an integer"), ("Float", "a number"), ("Boolean", "true or false")):
         if f"converted to {name}" in msg:
@@ -242,23 +230,29 @@ def _bad_value(key: str, value: str, exc: Exception) -> MagexpError:
 # ---------------------------------------------------------------------------------------------
 # composing
 
+@contextlib.contextmanager
+def _hydra():
+    """Hydra initialised on ``conf/`` with magexp's schemas (the caller's own initialisation if Hydra
+    runs already: a job of Hydra's own launchers)."""
+    register_schemas()
+    if GlobalHydra.instance().is_initialized():
+        yield GlobalHydra.instance()
+    else:
+        with initialize_config_dir(config_dir=str(CONF), version_base=None):
+            yield GlobalHydra.instance()
+
+
 def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *,
                   with_hydra: bool = False) -> DictConfig:
-    """``hydra.compose`` of ``conf/<config_name>.yaml`` (inside or outside an initialised Hydra);
-    ``with_hydra``: with the ``hydra`` node (launcher, sweeper, folders), which checks ``hydra.*``
-    overrides."""
-    from hydra import compose, initialize_config_dir
-    from hydra.core.global_hydra import GlobalHydra
-
-    register_schemas()
+    """``hydra.compose`` of ``conf/<config_name>.yaml``, or one MagexpError line; ``with_hydra``: with
+    the ``hydra`` node (launcher, sweeper, folders), which checks ``hydra.*`` overrides."""
     try:
-        if GlobalHydra.instance().is_initialized():
-            return compose(config_name, overrides=list(overrides), return_hydra_config=with_hydra)
-        with initialize_config_dir(config_dir=str(CONF), version_base=None):
+        with _hydra():
             return compose(config_name, overrides=list(overrides), return_hydra_config=with_hydra)
     except MagexpError:
         raise
     except Exception as exc:
+        raise_if_stopped()  # a SIGTERM that OmegaConf turned into an error of its own stops the command
         chain, cause = [], exc
         while cause is not None and len(chain) < 5:  # Hydra keeps the reason in the cause
             chain.append(str(cause))
@@ -269,193 +263,126 @@ def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *
         raise MagexpError(f"bad override: {detail}") from None
 
 
-_SKELETONS: dict = {}  # config name -> the pickled primary config without its group nodes
-_NODES: dict = {}  # (config name, group, choice) -> that choice's composed node, pickled
-_SEEN: set = set()  # config names composed at least once in this process
-
-
-def _composed(config_name: str, choices: dict[str, str]) -> DictConfig:
-    """A config with these group choices, for the caller to keep.
-
-    A process's first config is Hydra's compose itself (a one-run command composes once and
-    copies nothing). From the second on, every new choice is composed by Hydra once and kept
-    (the primary config's skeleton and each group's node); configs of known choices are
-    then grafted without Hydra from fresh copies of the pieces. The pieces are kept as this
-    process's own pickles (never written anywhere): a copy is then an unpickling, 1.3 ms for a
-    whole run config where ``copy.deepcopy`` of its pieces took 5 ms (OmegaConf copies node by
-    node in Python), and the grafted nodes, fresh already, are set without OmegaConf's copy.
-    """
-    for group, choice in choices.items():
-        check_choice(group, choice)
-    wanted = {g: choices.get(g) or _default_choice(config_name, g) for g in GROUPS}
-    if config_name in _SKELETONS and all((config_name, g, c) in _NODES for g, c in wanted.items() if c):
-        cfg = pickle.loads(_SKELETONS[config_name])
-        OmegaConf.set_struct(cfg, False)
-        with flag_override(cfg, "no_deepcopy_set_nodes", True):
-            for group, choice in wanted.items():
-                if choice:
-                    cfg[group] = pickle.loads(_NODES[(config_name, group, choice)])
-        OmegaConf.set_struct(cfg, True)
-        return cfg
-    cfg = _stored_compose(config_name, choices)
-    if config_name in _SEEN:  # more than one config in this process: keep the pieces
-        kept = copy.deepcopy(cfg)
-        OmegaConf.set_struct(kept, False)
-        for group, choice in wanted.items():
-            if choice and group in kept:
-                node = kept[group]
-                del kept[group]
-                node._set_parent(None)  # pickled alone: a node keeps its parent, the whole config, after del
-                _NODES.setdefault((config_name, group, choice), pickle.dumps(node))
-        OmegaConf.set_struct(kept, True)
-        _SKELETONS.setdefault(config_name, pickle.dumps(kept))
-    _SEEN.add(config_name)
-    return cfg
-
-
-def _compose_key(config_name: str, choices: dict[str, str]) -> str:
-    """Key of a composed config on disk: the choices, and the size and time of every config file,
-    of this module (the schemas) and of the Hydra and OmegaConf installed."""
-    h = hashlib.sha256(json.dumps([config_name, sorted(choices.items()), OmegaConf.__module__]).encode())
-    files = sorted(CONF.rglob("*.yaml")) + [Path(__file__)]
-    for name in ("hydra", "omegaconf"):
-        spec = importlib.util.find_spec(name)
-        files.append(Path(spec.origin) if spec and spec.origin else Path(name))
-    for path in files:
-        try:
-            st = path.stat()
-            h.update(f"{path}:{st.st_size}:{st.st_mtime_ns};".encode())
-        except OSError:
-            h.update(f"{path}:missing;".encode())
-    return h.hexdigest()[:32]
-
-
-def _stored_compose(config_name: str, choices: dict[str, str]) -> DictConfig:
-    """Hydra's compose of these choices, kept on disk (:func:`magexp.paths.composed_configs`) under a key of
-    every config file, so that a command whose choices were composed before needs no Hydra
-    compose at all (the largest part of a one-run command's start-up: ``--cfg job`` takes less than
-    half the CPU time with it, measured beside composing without it).
-
-    An entry is data (:func:`magexp.run.cache.pack`, kind ``config``): the config's unresolved
-    container and the schema of each node that has one (:data:`SCHEMAS`), checked when read (its
-    key, kind and digest); it is kept only when it gives back the very config Hydra composed. An
-    invalid entry is composed again (said once)."""
-    root = paths.composed_configs()
-    key = _compose_key(config_name, choices)
-    path = root / f"{key}.json"
-    try:
-        return config_from(cache.read(path, key, "config"))
-    except FileNotFoundError:
-        pass
-    except (OSError, cache.InvalidEntry) as exc:
-        _say_once(f"note: composed-config cache {root}: an entry is not valid ({exc}); composed again")
-    cfg = hydra_compose(tuple(f"{g}={c}" for g, c in choices.items()), config_name)
-    entry = {"config": OmegaConf.to_container(cfg, resolve=False),
-             "schemas": {name: schema for name in cfg if (schema := _schema_of(cfg[name]))}}
-    try:
-        if OmegaConf.to_yaml(config_from(entry)) == OmegaConf.to_yaml(cfg):
-            _PENDING.append((path, cache.pack(key, "config", entry), root))  # kept once the overrides pass
-    except cache.InvalidEntry:  # a config this format cannot hold exactly: composed every time
-        pass
-    return cfg
-
-
-_PENDING: list = []  # (path, packed entry, cache folder) composed by Hydra, not yet kept on disk
-
-
-def _keep_composed() -> None:
-    """Keep the configs Hydra composed on disk (:func:`_stored_compose`), after the overrides of the
-    command were applied without error: a refused command writes no composed config."""
-    while _PENDING:
-        path, data, root = _PENDING.pop()
-        try:
-            cache.write(path, data, root)
-        except OSError:  # a read-only cache: compose every time
-            pass
-
-
-def _schema_of(node) -> str | None:
-    """The name of the :data:`SCHEMAS` entry that types ``node``, if any."""
-    kind = OmegaConf.get_type(node) if isinstance(node, DictConfig) else None
-    return next((name for name, schema in SCHEMAS.items() if schema is kind), None)
-
-
-def config_from(entry) -> DictConfig:
-    """The config an entry of :func:`_stored_compose` holds: its container, each typed node merged
-    onto its schema (so its keys and value types are checked as Hydra's are), in struct mode."""
-    if not (isinstance(entry, dict) and isinstance(entry.get("config"), dict) and isinstance(entry.get("schemas"), dict)
-            and all(name in entry["config"] and schema in SCHEMAS for name, schema in entry["schemas"].items())):
-        raise cache.InvalidEntry("not a composed config")
-    try:
-        cfg = OmegaConf.create(entry["config"])
-        for name, schema in entry["schemas"].items():
-            cfg[name] = OmegaConf.merge(OmegaConf.structured(SCHEMAS[schema]), entry["config"][name])
-    except Exception as exc:  # OmegaConf refuses what its schema does not allow
-        raise_if_stopped()  # ...or it swallowed a SIGTERM that arrived during the merge
-        raise cache.InvalidEntry(f"not a composed config: {type(exc).__name__}") from None
-    OmegaConf.set_struct(cfg, True)
-    return cfg
-
-
-_SAID: list = []
-
-
-def _say_once(line: str) -> None:
-    """Print ``line`` if this process has said nothing about the composed-config cache yet."""
-    if not _SAID:
-        print(line, file=sys.stderr)
-    _SAID.append(line)
+def _is_value(override: Override) -> bool:
+    """Whether Hydra applies ``override`` after composing the defaults (``key=value`` of a config key),
+    rather than while composing them (a config group's choice, ``+key``, ``~key``, ``hydra.*``)."""
+    key = override.key_or_group
+    return (override.type == OverrideType.CHANGE and override.package is None and "/" not in key
+            and not key.startswith("hydra") and key not in _groups())
 
 
 @functools.cache
-def _default_choice(config_name: str, group: str) -> str | None:
-    """The primary config's default option of ``group`` (its defaults list)."""
-    defaults = OmegaConf.load(CONF / f"{config_name}.yaml").get("defaults", [])
-    for entry in defaults:
-        if isinstance(entry, DictConfig) and group in entry:
-            return str(entry[group])
-    return None
+def _groups() -> frozenset:
+    """The config groups of ``conf/`` (its folders)."""
+    return frozenset(p.name for p in CONF.iterdir() if p.is_dir())
+
+
+def apply_overrides(cfg: DictConfig, overrides: list[str], *, config_name: str = PRIMARY) -> DictConfig:
+    """Apply ``key=value`` overrides to ``cfg`` with Hydra's own override step (its parser types each
+    value, OmegaConf checks it against the config's schema).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        A composed config, changed in place.
+    overrides : list of str
+        ``key=value`` overrides of keys ``cfg`` has (``seed=3``, ``scenario.noise=2``).
+    config_name : str
+        The primary config ``cfg`` was composed from (it words the error of an unknown key).
+
+    Returns
+    -------
+    DictConfig
+        ``cfg``.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the key and what exists, for an unknown key or a value the schema's type refuses.
+    """
+    return _apply(cfg, parse_overrides(overrides), config_name)
+
+
+def _apply(cfg: DictConfig, overrides: list[Override], config_name: str) -> DictConfig:
+    """:func:`apply_overrides` of overrides parsed already."""
+    for override in overrides:
+        key = override.key_or_group
+        if override.is_sweep_override():
+            raise MagexpError(f"{override.input_line} is not allowed: it lists several values (a sweep); give one "
+                              "value, or a list as [a,b]")
+        text = override.get_value_element_as_str()
+        if OmegaConf.select(cfg, key, default="__missing__") == "__missing__":
+            raise unknown_key(cfg, key, text, config_name)
+        try:
+            ConfigLoaderImpl._apply_overrides_to_config([override], cfg)
+        except Exception as exc:  # the schema refused the value's type
+            raise_if_stopped()  # ...or OmegaConf swallowed a SIGTERM that arrived during the update
+            if not _assigned(cfg, key, override.value()):
+                raise _bad_value(key, text, exc) from None
+    return cfg
+
+
+def _assigned(cfg: DictConfig, key: str, value) -> bool:
+    """Whether OmegaConf's assignment takes a value that Hydra's merge refused: integers in a nested list
+    of floats (OmegaConf's merge checks a nested list's element type before converting it:
+    ``scenario.errors.soft_iron=[[1,0,0],[0,1,0],[0,0,1]]``), or a float with an integer value for an
+    integer key (``scenario.n_readings=1e8`` is 100000000)."""
+    whole = isinstance(value, float) and value.is_integer()
+    for candidate in (value, int(value)) if whole else (value,):
+        try:
+            OmegaConf.update(cfg, key, candidate, merge=False)
+            return True
+        except Exception:
+            raise_if_stopped()
+    return False
+
+
+_COMPOSED: dict = {}  # (config name, the overrides Hydra composes with) -> Hydra's config, never handed out
 
 
 def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: str = PRIMARY) -> DictConfig:
-    """The run config of ``overrides``, as Hydra composes it, or one MagexpError line.
+    """The config of ``overrides``, as ``hydra.compose`` composes it.
 
-    The config-group choices (``scenario=...``, ``estimator=...``) are composed by Hydra once
-    per process; their nodes are grafted onto the primary config and the ``key=value``
-    overrides applied with OmegaConf in struct mode (an unknown key, or a value the schema's
-    type refuses, is an error naming the key and what exists). Anything beyond ``group=choice``
-    and ``key=value`` (``+key``, ``~key``, ``hydra.*``, ``group/sub=...``) goes to Hydra itself.
-    The result is the caller's own (a fresh copy).
+    Hydra composes the defaults of the config-group choices and of the overrides it applies while
+    composing (``+key``, ``~key``, ``hydra.*``) once per process; a copy then takes the ``key=value``
+    overrides through :func:`apply_overrides` (Hydra's step after the defaults).
+
+    Parameters
+    ----------
+    overrides : list of str
+        Hydra overrides (``scenario=ding2024_exp1``, ``estimator.n_particles=30``, ``seed=3``).
+    config_name : str
+        The primary config: ``config`` (a run) or ``calibrate``.
+
+    Returns
+    -------
+    DictConfig
+        The composed config, in struct mode, the caller's own.
+
+    Raises
+    ------
+    MagexpError
+        One line for an unknown choice or key, or a value the schema refuses.
     """
-    choices, values = {}, []
-    for ov in overrides:
-        key, _, value = ov.partition("=")
-        if key in GROUPS:
-            choices[key] = value
-        elif key.startswith(("+", "~", "hydra")) or "/" in key or "@" in key:
-            for group, choice in choices.items():
-                check_choice(group, choice)
-            return hydra_compose(tuple(overrides), config_name)
-        else:
-            values.append((key, value))
-    cfg = _composed(config_name, choices)
-    for key, value in values:
-        if OmegaConf.select(cfg, key, default="__missing__") == "__missing__":
-            raise unknown_key(cfg, key, value, config_name)
-        typed = yaml_value(value)
-        try:
-            OmegaConf.update(cfg, key, typed, merge=False)
-        except MagexpError:
-            raise
-        except Exception as exc:  # the schema refused the value's type
-            if not (isinstance(typed, float) and typed.is_integer()):
-                raise _bad_value(key, value, exc) from None
-            try:  # 1e8 for an integer key means 100000000
-                OmegaConf.update(cfg, key, int(typed), merge=False)
-            except Exception:
-                raise _bad_value(key, value, exc) from None
-    _keep_composed()
-    return cfg
+    parsed = parse_overrides(list(overrides))
+    defaults = tuple(ov.input_line for ov in parsed if not _is_value(ov))
+    if (config_name, defaults) not in _COMPOSED:
+        for ov in parsed:
+            if ov.key_or_group in GROUPS and not ov.is_sweep_override():
+                check_choice(ov.key_or_group, ov.get_value_element_as_str())
+        _COMPOSED[config_name, defaults] = hydra_compose(defaults, config_name)
+    cfg = copy.deepcopy(_COMPOSED[config_name, defaults])
+    return _apply(cfg, [ov for ov in parsed if _is_value(ov)], config_name)
+
+
+def sweep_jobs(overrides: list[str]) -> list[list[str]]:
+    """The jobs of a ``-m`` sweep as Hydra's basic sweeper forms them (its ``split_arguments``): the
+    cartesian product of every override's values, first key slowest; ``a,b``, ``range(...)``,
+    ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's config loader)."""
+    with _hydra() as hydra:
+        parsed = parse_overrides(overrides, parser=OverridesParser.create(config_loader=hydra.config_loader()))
+        (jobs,) = BasicSweeper.split_arguments(parsed, None)
+    return jobs
 
 
 def resolved(cfg: DictConfig) -> dict:
@@ -463,3 +390,34 @@ def resolved(cfg: DictConfig) -> dict:
     out = OmegaConf.to_container(cfg, resolve=True)
     out.pop("hydra", None)
     return out
+
+
+def estimator_named(name: str, **overrides):
+    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``, composed as every config is
+    (:func:`compose_config`, the calibration's primary config ``conf/calibrate.yaml``).
+
+    Parameters
+    ----------
+    name : str
+        A name of ``conf/estimator/*.yaml``.
+    **overrides
+        Options of that config (``n_iterations=3``...).
+
+    Returns
+    -------
+    estimator
+        The estimator built from the config (:func:`magexp.run.runner.build`).
+
+    Raises
+    ------
+    MagexpError
+        An unknown name or option.
+    """
+    check_choice("estimator", name)
+    node = compose_config([f"estimator={name}"], config_name="calibrate").estimator
+    unknown = [key for key in overrides if key not in node]
+    if unknown:
+        options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")
+        raise MagexpError(f"{unknown[0]}={overrides[unknown[0]]!r} is not allowed: estimator {name!r} has no option "
+                          f"{unknown[0]!r} (options: {options})")
+    return build(OmegaConf.merge(node, overrides), f"estimator {name!r}")

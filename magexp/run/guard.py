@@ -90,7 +90,7 @@ def check_destination(folder, what: str, *, canonical: bool = False) -> Path:
 
 @functools.lru_cache(maxsize=16)
 def check_cache_folder(root: str) -> None:
-    """A run cache (``$MAGEXP_CACHE``) or its composed configs beside it, never inside ``results/``
+    """A run cache (``$MAGEXP_CACHE``) or a cache beside it (the figures'), never inside ``results/``
     (:func:`check_destination`), checked before any command starts and before every cache write."""
     check_destination(root, "MAGEXP_CACHE (the run cache folder)")
 

@@ -1,6 +1,6 @@
 """Checks made before any computation, so that a user mistake is one line and nothing is written.
 
-* :func:`expand_sweep`: every job of a ``-m`` sweep, as Hydra's basic sweeper forms them;
+* :func:`expand_sweep`: every job of a ``-m`` sweep, as Hydra's basic sweeper forms them, within the runs limit;
 * :func:`validate_runs`: every job composed (:func:`magexp.run.compose.compose_config`) and every
   distinct scenario and estimator built, so that each value is checked by its constructor
   before the first job starts; the data of each distinct scenario is checked against the
@@ -11,20 +11,17 @@
 
 from __future__ import annotations
 
-import itertools
 import json
 import math
 
 import numpy as np
-from hydra.core.override_parser.types import Glob
-from omegaconf import OmegaConf
 
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check, check_positive_int
-from magexp.paths import CONF
 from magexp.problems import make_problem
 from magexp.run.budget import Tally, check_run, check_sweep
-from magexp.run.compose import GROUPS, check_choice, compose_config, options, parse_overrides, resolved, yaml_value
+from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
+                                 sweep_jobs)
 from magexp.run.guard import check_run_values
 from magexp.run.runner import build
 
@@ -33,25 +30,15 @@ SCHEDULES = "magexp.estimators.schedules."
 
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
-    """The jobs of a sweep: the cartesian product of every override's values, first key slowest
-    (Hydra's basic sweeper); ``a,b``, ``range(...)``, ``choice(...)`` and, for a config group,
-    ``glob(...)`` are expanded, once their count is within the runs limit (:func:`magexp.run.budget.check_sweep`)."""
-    axes = []
+    """The jobs of a sweep (Hydra's basic sweeper: :func:`magexp.run.compose.sweep_jobs`), once their
+    count is within the runs limit (:func:`magexp.run.budget.check_sweep`)."""
     parsed = parse_overrides(overrides)
-    check_sweep(parsed, lambda key: options(key) if key in GROUPS else [])
     for ov in parsed:
-        key = ov.get_key_element()
-        if ov.is_sweep_override():
-            try:
-                glob = ov.value() if key in GROUPS and isinstance(ov.value(), Glob) else None
-                values = glob.filter(options(key)) if glob else [str(v) for v in ov.sweep_string_iterator()]
-            except Exception as exc:
-                raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
-                                  f"group's glob() can be swept ({str(exc).splitlines()[0]})") from None
-        else:
-            values = [ov.get_value_element_as_str()]
-        axes.append([f"{key}={v}" for v in values])
-    return [list(job) for job in itertools.product(*axes)]
+        if ov.is_sweep_override() and not ov.is_discrete_sweep():
+            raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
+                              "group's glob() can be swept")
+    check_sweep(parsed, lambda key: options(key) if key in GROUPS else [])
+    return sweep_jobs(overrides)
 
 
 def swept_keys(overrides: list[str]) -> list[str]:
@@ -95,10 +82,12 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
         if not keep and rest in composed:
             for ov in job:
                 if ov.partition("=")[0] == "seed":
-                    check_seed(yaml_value(ov.partition("=")[2]))
+                    check_seed(override_value(ov.partition("=")[2]))
             tally.add(composed[rest])
             continue
         cfg = compose_config(job)
+        if any(o.partition("=")[0] == "estimator.name" for o in job):  # a config's own name is its own label
+            check_label(cfg.estimator)
         composed[rest] = _check_config(cfg, seen, estimates)
         tally.add(composed[rest])
         if keep:
@@ -122,7 +111,6 @@ def _check_config(cfg, seen: set, estimates: dict):
     check_seed(cfg.seed)
     plain = resolved(cfg)
     check_run_values(plain)
-    check_label(plain.get("estimator") or {})
     check_schedules(plain.get("estimator") or {})
     s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
     e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
@@ -151,13 +139,13 @@ def check_schedules(node: dict, prefix: str = "estimator") -> None:
             check(number, f"{prefix}.{key}={value!r} is not allowed: it must be a finite number")
 
 
-def check_label(estimator: dict) -> None:
-    """An estimator's ``name`` labels its metrics in every table: the name of another estimator config
-    whose class differs (``estimator=lm estimator.name=ipso``: ``lm`` labelled ``ipso``) is refused; a
+def check_label(estimator) -> None:
+    """An estimator's ``name`` labels its metrics in every table: set to the name of another estimator
+    config whose class differs (``estimator=lm estimator.name=ipso``: ``lm`` labelled ``ipso``) is refused; a
     name of its own (``estimator.name=ipso_w``, an ablation's variant) is the caller's label."""
     name, target = estimator.get("name"), estimator.get("_target_")
     if isinstance(name, str) and name in options("estimator"):
-        theirs = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("_target_")
+        theirs = compose_config([f"estimator={name}"]).estimator.get("_target_")
         if theirs != target:
             raise MagexpError(f"estimator.name={name!r} is not allowed for {str(target).rpartition('.')[2]}: it is the "
                               f"label of conf/estimator/{name}.yaml ({str(theirs).rpartition('.')[2]}); choose "

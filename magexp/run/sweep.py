@@ -3,7 +3,8 @@
 Hydra's sweeper expands a sweep into jobs; magexp's launcher (the default,
 ``hydra_plugins/magexp_launcher``) hands each batch of them to :func:`launch`, which
 
-1. composes every job with :func:`magexp.run.compose.compose_config` (the composer of every command);
+1. composes every job with :func:`magexp.run.compose.compose_config` (Hydra's compose), once per cell: the
+   jobs that differ only in ``seed`` share one composed config, each job's seed set on it;
 2. runs the batch with :func:`magexp.run.executor.run_many`, the layer behind ``make reproduce``:
    each distinct run once, through the same run cache (a killed sweep, started again, redoes
    only the unfinished runs), in tasks of one scenario and a block of seeds, on local processes
@@ -35,11 +36,10 @@ from omegaconf import OmegaConf, open_dict
 
 from magexp.core.atomic import atomic_open, write_text
 from magexp.errors import MagexpError
-from magexp.paths import CONF
-from magexp.run.compose import GROUPS, compose_config, hydra_compose, resolved, yaml_value
+from magexp.run.compose import apply_overrides, compose_config, hydra_compose, resolved
 from magexp.run.executor import check_executor, make_executor, run_many
 from magexp.run.guard import check_job_folders
-from magexp.run.outputs import to_yaml, write_outputs
+from magexp.run.outputs import write_outputs
 from magexp.run.preflight import swept_keys
 from magexp.run.progress import Progress
 
@@ -102,24 +102,13 @@ def check_settings(settings: dict) -> None:
 
 
 def check_hydra_settings(settings: list[str]) -> None:
-    """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one).
+    """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one):
+    Hydra composes its own node with them, then magexp's launcher settings are checked if it is the
+    launcher chosen."""
 
-    Settings of magexp's launcher alone (``hydra.launcher.executor|jobs|scheduler=...``) are checked
-    against its config file; anything else (another launcher, other ``hydra.*`` keys) by composing
-    Hydra's own node (a full Hydra compose), then magexp's launcher settings if it is the one chosen.
-    """
-
-    own = {f"hydra.launcher.{key}" for key in SETTINGS}
-    if all(o.partition("=")[0] in own for o in settings):
-        node = OmegaConf.load(CONF / "hydra" / "launcher" / "magexp.yaml")
-        values = {key: node[key] for key in SETTINGS}
-        values.update({o.partition("=")[0].rpartition(".")[2]: yaml_value(o.partition("=")[2]) for o in settings})
-    else:
-        launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
-        if not str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
-            return
-        values = {key: launcher.get(key) for key in SETTINGS}
-    check_settings(values)
+    launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
+    if str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
+        check_settings({key: launcher.get(key) for key in SETTINGS})
 
 
 def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
@@ -139,11 +128,8 @@ def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
 
 
 def _configs(jobs: list[list[str]]) -> list[dict]:
-    """The resolved config of each job; jobs that differ only in ``seed`` are composed once.
-
-    Keys in Hydra's order (the config groups, then the primary config's own keys), whichever way
-    the composer built the config, so that every job's ``config.yaml`` reads the same.
-    """
+    """The resolved config of each job; jobs that differ only in ``seed`` (a cell) are composed once,
+    and each job's seed set on that config (Hydra's override step)."""
 
     composed: dict[tuple, object] = {}
     plains = []
@@ -154,9 +140,8 @@ def _configs(jobs: list[list[str]]) -> list[dict]:
             composed[rest] = compose_config(list(rest))
         cfg = composed[rest]
         if seeds:
-            OmegaConf.update(cfg, "seed", yaml_value(seeds[-1]), merge=False)
-        plain = resolved(cfg)
-        plains.append({**{g: plain[g] for g in GROUPS if g in plain}, **plain})
+            apply_overrides(cfg, [f"seed={seeds[-1]}"])
+        plains.append(resolved(cfg))
     return plains
 
 
@@ -195,7 +180,7 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     for n, (job, plain, folder) in enumerate(zip(jobs, plains, folders)):
         metrics = write_outputs(outputs[n], plain, folder, cached=outputs.was_cached(n))
         (folder / ".hydra").mkdir(exist_ok=True)
-        write_text(folder / ".hydra" / "overrides.yaml", to_yaml(job))
+        write_text(folder / ".hydra" / "overrides.yaml", OmegaConf.to_yaml(job))
         returns.append(JobReturn(overrides=job, working_dir=str(folder), task_name=str(config.hydra.job.name),
                                  status=JobStatus.COMPLETED, _return_value=metrics))
     return returns

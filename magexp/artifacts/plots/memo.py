@@ -19,7 +19,7 @@ and the cache keeps, under that key, the SHA-256 digests of the PNG and PDF the 
 whose two files are still in place with those digests is not drawn again; otherwise it is drawn and
 its digests recorded. Any change (a new CSV, a deleted or edited figure, a code edit) draws it.
 ``--force`` draws every figure. The cache lives beside the run cache
-(``<run cache>-figures``, like the composed configs), never in ``results/``.
+(``<run cache>-figures``), never in ``results/``.
 """
 
 from __future__ import annotations
