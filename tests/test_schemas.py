@@ -43,21 +43,6 @@ def numeric_keys(node, prefix: str) -> list[tuple[str, str]]:
     return out
 
 
-@pytest.fixture(scope="module")
-def _fresh_pieces(tmp_path_factory):
-    """The composer's in-process pieces forgotten once (they may come from a composed config another test
-    kept on disk, which keeps the schema of a config's top node, not those of its nested strategy nodes)."""
-    for kept in ("_SKELETONS", "_NODES"):
-        getattr(compose, kept, {}).clear()
-    return tmp_path_factory.mktemp("composed")
-
-
-@pytest.fixture(autouse=True)
-def fresh_composer(_fresh_pieces, monkeypatch):
-    """This module's composed configs are its own (composed by Hydra in this process)."""
-    monkeypatch.setattr("magexp.paths.composed_configs", lambda: _fresh_pieces)
-
-
 CONFIGS = [(group, name) for group in GROUPS for name in options(group)]
 
 

@@ -420,4 +420,11 @@ def estimator_named(name: str, **overrides):
         options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")
         raise MagexpError(f"{unknown[0]}={overrides[unknown[0]]!r} is not allowed: estimator {name!r} has no option "
                           f"{unknown[0]!r} (options: {options})")
-    return build(OmegaConf.merge(node, overrides), f"estimator {name!r}")
+    try:
+        node = OmegaConf.merge(node, overrides)
+    except Exception as exc:  # the schema refused a value's type
+        raise_if_stopped()
+        key = str(getattr(exc, "full_key", "") or "").removeprefix("estimator.")
+        key = key if key in overrides else next(iter(overrides))
+        raise _bad_value(key, repr(overrides[key]), exc) from None
+    return build(node, f"estimator {name!r}")
