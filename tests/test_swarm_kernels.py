@@ -318,7 +318,7 @@ def test_the_compiled_run_covers_every_iteration_once(make_cfg, monkeypatch, dra
         monkeypatch.setattr(swarm, "DRAW_BLOCK", draw_block)
     est, prob = _swarm_case(make_cfg, "rdpso", "ding2024_exp1", None, None, f"estimator.n_iterations={n_iterations}")
     calls = []
-    engine = nb.engine(est.velocity.kernel)
+    engine = nb.engine(est.velocity.kernel, est.velocity.needs_mean)
     run = engine.run
 
     def spy(x, v, pbest, pcost, history, t, n, *rest):
@@ -470,7 +470,7 @@ R2 = np.array([[0.25, 0.5], [1.0, 1.0], [0.0, 0.5]])
 def _step(path, kernel, x, v, pbest, pcost, cost, r, c, limits):
     """One step of ``path`` (``compiled`` or ``numpy``, then the box clip of the ``clip`` boundary)."""
     if path == "numpy":
-        g = numpy_step(kernel, x, v, pbest, pcost, cost, True, r, np.array(c), limits, False)
+        g = numpy_step(kernel, True, x, v, pbest, pcost, cost, True, r, np.array(c), limits, False)
         np.copyto(x, np.clip(x, limits[1], limits[2]))
         return g
     from magexp.estimators import swarm
@@ -478,7 +478,7 @@ def _step(path, kernel, x, v, pbest, pcost, cost, r, c, limits):
     nb = swarm.compiled()
     if nb is None:
         pytest.skip("numba not installed or MAGEXP_NUMBA=0")
-    return nb.engine(kernel).step(x, v, pbest, pcost, cost, True, r, np.array(c), limits, True)
+    return nb.engine(kernel, True).step(x, v, pbest, pcost, cost, True, r, np.array(c), limits, True)
 
 
 @pytest.mark.parametrize("path", ["compiled", "numpy"])
@@ -500,10 +500,11 @@ def test_an_inertia_step_by_hand(path):
 @pytest.mark.parametrize("path", ["compiled", "numpy"])
 def test_a_drift_step_by_hand(path):
     """:func:`random_drift` with ``α = 0.5, c1 = c2 = 1`` (Yuan 2018 eq 16), ``M`` the mean of the
-    personal bests after the update, ``[4/3, 2/3]``, and the factors ``φ``."""
+    personal bests after the update, ``[4/3, 2/3]``, and ``φ = ±ln(1/u)`` signed by ``s > 0.5``."""
     x, v, pbest, pcost, cost, limits = _three_particles()
-    phi = np.array([[1.0, -2.0], [0.5, 1.0], [-2.0, 0.25]])
-    g = _step(path, random_drift, x, v, pbest, pcost, cost, np.stack([R1, R2, phi]), (0.5, 1.0, 1.0), limits)
+    s = np.array([[0.9, 0.1], [0.6, 0.6], [0.2, 0.7]])
+    log_u = np.array([[1.0, 2.0], [0.5, 1.0], [2.0, 0.25]])  # phi = [[1, -2], [0.5, 1], [-2, 0.25]]
+    g = _step(path, random_drift, x, v, pbest, pcost, cost, np.stack([R1, R2, s, log_u]), (0.5, 1.0, 1.0), limits)
     assert g == 2
     # particle 0: |M-x| = [4/3, 1/3]: 0.5*4/3*1 + 0.5*1*(1-0) + 0.25*(1-0) = 17/12 ; 0.5*1/3*-2 + 0 + 0 = -1/3
     # particle 1: |M-x| = [2/3, 5/3]: 0.5*2/3*0.5 + 0 + 1*(1-2) = -5/6 ; 0.5*5/3 + 0.2*(0+1) + 1*(1+1) = 91/30 -> 2
@@ -556,8 +557,10 @@ def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
 
     codegen = nb.circle_sequence.targetctx.codegen()
     keys = {kernel: nb.engine(kernel).run._cache._index_key((), codegen)[-1][1] for kernel in (inertia, random_drift)}
-    assert keys[inertia] == digest(nb.source_of(inertia, nb), nb.source_of(costs, kernels)) != keys[random_drift]
-    assert nb.engine(inertia).step._cache._index_key((), codegen)[-1][1] == digest(nb.source_of(inertia, nb))
+    assert keys[inertia] == digest(nb.source_of(inertia, nb), b"\0", nb.source_of(costs, kernels)) != keys[random_drift]
+    assert nb.engine(inertia).step._cache._index_key((), codegen)[-1][1] == digest(nb.source_of(inertia, nb), b"\0")
+    assert nb.engine(inertia, True).step._cache._index_key((), codegen)[-1][1] == digest(nb.source_of(inertia, nb),
+                                                                                           b"\1")
     assert nb.circle_sequence._cache._index_key((), codegen)[-1][1] == digest(nb.source_of(circle))
 
 

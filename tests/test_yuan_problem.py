@@ -42,8 +42,8 @@ def test_random_drift_velocity_by_hand():
     pbest = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 2.0]])  # M = [1, 1]; the global best: particle 0, [1, 1]
     u = np.array([[np.exp(-1.0), 1.0], [np.exp(-2.0), np.exp(-0.5)], [1.0, np.exp(-1.0)]])
     s = np.array([[0.9, 0.1], [0.2, 0.6], [0.7, 0.3]])
-    r = drift_factors(np.stack([np.full((3, 2), 0.5), np.full((3, 2), 0.25), s, 1.0 - u])[None])[0]  # r1, r2, φ
-    assert np.allclose(r[2], [[1.0, -0.0], [-2.0, 0.5], [0.0, -1.0]])  # φ = ±ln(1/u), + where s > 0.5 (eq 14)
+    r = drift_factors(np.stack([np.full((3, 2), 0.5), np.full((3, 2), 0.25), s, 1.0 - u])[None])[0]
+    assert np.allclose(r[3], [[1.0, 0.0], [2.0, 0.5], [0.0, 1.0]])  # ln(1/u); φ = ±ln(1/u), + where s > 0.5 (eq 14)
     v = random_drift(ALL, ALL, x, None, pbest, 0, pbest.mean(axis=0), r, (0.5, 2.0, 4.0))
     # particle 0: 0.5*|1-0|*1 + 1*(1-0) + 1*(1-0) = 2.5 ; 0.5*|1-1|*0 + 0 + 0 = 0
     # particle 1: 0.5*|1-2|*(-2) + 1*(2-2) + 1*(1-2) = -2 ; 0.5*|1+1|*0.5 + 1*(0+1) + 1*(1+1) = 3.5

@@ -167,7 +167,7 @@ def _keyed_on(dispatcher, *sources: bytes):
 
 
 @cache
-def engine(kernel):
+def engine(kernel, needs_mean: bool = False):
     """The compiled steps of the swarm engine around one velocity rule's kernel.
 
     The kernel (:mod:`magexp.estimators.velocity`) is compiled as it is and called for every
@@ -179,6 +179,8 @@ def engine(kernel):
     ----------
     kernel : function
         ``kernel(i, j, x, v, pbest, g, mean, r, c) -> v_ij``.
+    needs_mean : bool
+        Whether the kernel reads ``mean`` (:func:`mean_best`; otherwise ``mean`` is NaN).
 
     Returns
     -------
@@ -186,7 +188,7 @@ def engine(kernel):
         ``move``, ``step`` and ``run``, compiled (their docstrings).
     """
     rule = _jit(kernel)
-    key = source_of(kernel, sys.modules[__name__])
+    key = source_of(kernel, sys.modules[__name__]) + bytes([needs_mean])
 
     def move(x, v, pbest, g, r, c, limits, clip_box):
         """The move of every particle in place (Ding 2024 eqs 10-11; Yuan 2018 eqs 16-17).
@@ -197,7 +199,7 @@ def engine(kernel):
         ``limits[1]``, ``limits[2]`` (lower, upper).
         """
         n, d = x.shape
-        mean = mean_best(pbest, np.empty(d))
+        mean = mean_best(pbest, np.empty(d)) if needs_mean else np.full(d, np.nan)  # NaN: read, it shows
         coef = (c[0], c[1], c[2])  # scalars: read once, not once per element (c may alias v for all numba knows)
         for i in range(n):
             for j in range(d):

@@ -26,10 +26,11 @@ from magexp.estimators.velocity import VelocityRule
 
 
 def random_drift(i, j, x, v, pbest, g, mean, r, c):
-    """RDPSO velocity (eq 16): the kernel of :class:`RandomDriftVelocity`.
+    """RDPSO velocity (eqs 14, 16): the kernel of :class:`RandomDriftVelocity`.
 
     .. math:: v_{ij} = \\alpha \\lvert M_j - x_{ij}\\rvert \\varphi_{ij}
-              + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij})
+              + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij}),\\qquad
+              \\varphi_{ij} = \\pm \\ln(1/u_{ij}),\\ + \\text{ where } s_{ij} > 0.5
 
     Parameters
     ----------
@@ -41,8 +42,8 @@ def random_drift(i, j, x, v, pbest, g, mean, r, c):
         Index of the global best.
     mean : ndarray, shape (d,)
         ``M``, the mean personal best (eq 13).
-    r : ndarray, shape (3, n, d)
-        ``r1, r2`` and ``φ`` (:func:`drift_factors`).
+    r : ndarray, shape (4, n, d)
+        ``r1, r2, s`` and ``ln(1/u)`` (:func:`drift_factors`).
     c : sequence of 3 floats
         ``α, c1, c2``.
 
@@ -51,12 +52,13 @@ def random_drift(i, j, x, v, pbest, g, mean, r, c):
     float or ndarray
         The new velocity before the clamp.
     """
-    return (c[0] * np.abs(mean[j] - x[i, j]) * r[2, i, j] + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j])
-            + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j]))
+    phi = (2.0 * (r[2, i, j] > 0.5) - 1.0) * r[3, i, j]  # ±1 times ln(1/u): exact, on a number or an array
+    return c[0] * np.abs(mean[j] - x[i, j]) * phi + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) \
+        + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j])
 
 
 def drift_factors(r: np.ndarray) -> np.ndarray:
-    """The random factors of :func:`random_drift` from its draws ``r1, r2, s, ·`` (eq 14).
+    """The random factors of :func:`random_drift` from its draws (eq 14).
 
     Parameters
     ----------
@@ -66,11 +68,10 @@ def drift_factors(r: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray, shape (m, 4, n, d)
-        ``r`` with ``r[:, 2]`` replaced, in place, by ``φ = ±ln(1/u)``, ``u = 1 - r[:, 3]`` in
-        ``(0, 1]`` (finite), ``+`` where ``s > 0.5``; computed by numpy on the whole block for
-        both paths (one ``log``).
+        ``r`` with ``r[:, 3]`` replaced, in place, by ``ln(1/u)``, ``u = 1 - r[:, 3]`` in
+        ``(0, 1]`` (finite): numpy's ``log`` on the whole block, for both paths.
     """
-    np.multiply(np.where(r[:, 2] > 0.5, 1.0, -1.0), np.log(1.0 / (1.0 - r[:, 3])), out=r[:, 2])
+    np.log(1.0 / (1.0 - r[:, 3]), out=r[:, 3])
     return r
 
 
@@ -110,6 +111,7 @@ class RandomDriftVelocity(VelocityRule):
     n_draws = 4
     coefficients = ("alpha", "c1", "c2")
     factors = staticmethod(drift_factors)
+    needs_mean = True
 
     def __init__(self, c1: float = 1.45, c2: float = 1.45, alpha=None):
         self.c1 = check_nonnegative(c1, "estimator.velocity.c1")

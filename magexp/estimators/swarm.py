@@ -76,7 +76,7 @@ def _draw_blocks(rng: np.random.Generator, rule, shape: tuple, t_max: int, block
         yield rule.factors(rng.random(out=buffer[: min(block, t_max + 1 - start)]))
 
 
-def numpy_step(kernel, x, v, pbest, pcost, cost, moves, r, c, limits, clip_box) -> int:
+def numpy_step(kernel, needs_mean, x, v, pbest, pcost, cost, moves, r, c, limits, clip_box) -> int:
     """One step in numpy: the best updates with ``cost``, then, if ``moves``, the next move.
 
     The numpy twin of the compiled step (:func:`magexp.estimators._compiled.engine`), with the
@@ -86,6 +86,8 @@ def numpy_step(kernel, x, v, pbest, pcost, cost, moves, r, c, limits, clip_box) 
     ----------
     kernel : function
         The velocity rule's kernel.
+    needs_mean : bool
+        Whether it reads the mean personal best (else it is given None).
     x, v : ndarray, shape (n, d)
         Positions and velocities, moved in place: ``v <- min(max(kernel, -v_max), v_max)``,
         ``x <- x + v``.
@@ -114,7 +116,7 @@ def numpy_step(kernel, x, v, pbest, pcost, cost, moves, r, c, limits, clip_box) 
     np.copyto(pcost, cost, where=better)
     g = int(pcost.argmin())
     if moves:
-        velocity = kernel(ALL, ALL, x, v, pbest, g, pbest.mean(axis=0), r, c)
+        velocity = kernel(ALL, ALL, x, v, pbest, g, pbest.mean(axis=0) if needs_mean else None, r, c)
         np.minimum(np.maximum(velocity, -limits[0]), limits[0], out=v)
         np.add(x, v, out=x)
     return g
@@ -302,10 +304,11 @@ class SwarmOptimizer:
         nb = compiled()
         clip_box = nb is not None and self.boundary == "clip"  # the compiled move clips; numpy: self._handle
         kernel = swarm_kernel(problem) if clip_box and callback is None else None
+        engine = nb.engine(rule.kernel, rule.needs_mean) if nb is not None else None
         if kernel is not None:  # every iteration, compiled in
-            g = self._run(nb.engine(rule.kernel).run, kernel, x, v, pbest, pcost, history, blocks, coef, limits)
+            g = self._run(engine.run, kernel, x, v, pbest, pcost, history, blocks, coef, limits)
             return self._result(pbest, pcost, g, history, t_max, lo, hi)
-        step = nb.engine(rule.kernel).step if nb is not None else partial(numpy_step, rule.kernel)
+        step = engine.step if engine is not None else partial(numpy_step, rule.kernel, rule.needs_mean)
         moves = ((True, r, c) for r, c in zip(chain.from_iterable(blocks), coef))
         g = step(x, v, pbest, pcost, pcost, *next(moves), limits, clip_box)
         history[0], nit = pcost[g], 0
