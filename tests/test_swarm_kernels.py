@@ -12,32 +12,31 @@ from magexp.errors import MagexpError
 from magexp.estimators.initialisers import CircleMap, Uniform, circle_map
 from magexp.estimators.lm import LevenbergMarquardt
 from magexp.estimators.local import LocalMinimiser
-from magexp.estimators.rdpso import ThermalCoefficient
+from magexp.estimators.rdpso import ThermalCoefficient, random_drift
 from magexp.estimators.schedules import Constant, Linear
-from magexp.estimators.swarm import SwarmOptimizer
-from magexp.estimators.velocity import InertiaVelocity, inertia_velocity
+from magexp.estimators.swarm import SwarmOptimizer, numpy_step
+from magexp.estimators.velocity import ALL, InertiaVelocity, VelocityRule, inertia
 
 
-def test_inertia_velocity_by_hand_three_particles():
+def test_inertia_kernel_by_hand_three_particles_on_whole_arrays_and_element_by_element():
     x = np.array([[0.0, 1.0], [2.0, -1.0], [1.0, 1.0]])
     v = np.array([[0.5, 0.0], [-1.0, 1.0], [0.0, 0.2]])
-    p = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 0.0]])
-    g = np.array([1.0, 0.0])
-    r1 = np.array([[0.5, 1.0], [0.1, 0.2], [1.0, 0.0]])
-    r2 = np.array([[0.25, 0.5], [1.0, 1.0], [0.0, 0.5]])
-    got = inertia_velocity(v, x, p, g, w=0.5, c1=2.0, c2=1.0, r1=r1, r2=r2)
-    # particle 0: 0.5*0.5 + 2*0.5*(1-0) + 1*0.25*(1-0) = 0.25 + 1 + 0.25 = 1.5
+    p = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 0.0]])  # the global best: particle 1, [2, 0]
+    r = np.array([[[0.5, 1.0], [0.1, 0.2], [1.0, 0.0]], [[0.25, 0.5], [1.0, 1.0], [0.0, 0.5]]])  # r1, r2
+    got = inertia(ALL, ALL, x, v, p, 1, p.mean(axis=0), r, (0.5, 2.0, 1.0))
+    # particle 0: 0.5*0.5 + 2*0.5*(1-0) + 1*0.25*(2-0) = 0.25 + 1 + 0.5 = 1.75
     #             0.5*0   + 2*1*(1-1)   + 1*0.5*(0-1)  = -0.5
-    # particle 1: 0.5*-1 + 2*0.1*0 + 1*1*(1-2) = -1.5 ; 0.5*1 + 2*0.2*(0+1) + 1*1*(0+1) = 1.9
+    # particle 1: 0.5*-1 + 2*0.1*0 + 1*1*(2-2) = -0.5 ; 0.5*1 + 2*0.2*(0+1) + 1*1*(0+1) = 1.9
     # particle 2: 0 + 2*1*(0-1) + 0 = -2 ; 0.5*0.2 + 0 + 1*0.5*(0-1) = -0.4
-    np.testing.assert_allclose(got, [[1.5, -0.5], [-1.5, 1.9], [-2.0, -0.4]])
+    np.testing.assert_allclose(got, [[1.75, -0.5], [-0.5, 1.9], [-2.0, -0.4]], rtol=1e-15)
+    one_by_one = [[inertia(i, j, x, v, p, 1, None, r, (0.5, 2.0, 1.0)) for j in range(2)] for i in range(3)]
+    np.testing.assert_array_equal(got, one_by_one)  # the one kernel, both ways: the same bits
 
 
-def test_inertia_velocity_rule_uses_schedules_at_iteration():
-    rule = InertiaVelocity(inertia=Linear(0.9, 0.4), c1=Constant(0.0), c2=Constant(0.0))
-    v = np.ones((3, 2))
-    out = rule(np.zeros((3, 2)), v, np.zeros((3, 2)), np.zeros(2), 5, 10, rng=np.random.default_rng(0))
-    np.testing.assert_allclose(out, 0.65 * v)  # w(5/10) = 0.9 - 0.5*0.5
+def test_a_rule_gives_its_coefficients_at_every_iteration():
+    rule = InertiaVelocity(inertia=Linear(0.9, 0.4), c1=Constant(1.5), c2=Linear(0.5, 2.5))
+    np.testing.assert_allclose(rule.schedule(np.array([0, 5, 10]), 10), [[0.9, 1.5, 0.5], [0.65, 1.5, 1.5],
+                                                                         [0.4, 1.5, 2.5]], rtol=1e-15)
 
 
 def test_linear_schedules_match_ding_eqs_12_to_14():
@@ -188,18 +187,120 @@ def test_update_best_keeps_argmin_semantics():
     assert nb.update_best(x, pcost.copy(), pbest, pcost) == int(np.argmin(pcost)) == 1
 
 
-def test_a_rule_changed_by_a_subclass_runs_its_own_numpy_rule():
-    """A subclass that overrides ``__call__`` but inherits ``step`` must not run the parent's
-    compiled step: the numpy path follows the new rule."""
+def constriction(i, j, x, v, pbest, g, mean, r, c):
+    """Clerc & Kennedy 2002: ``χ (v + φ1 r1 (p - x) + φ2 r2 (g - x))``, ``c = (χ, φ1, φ2)``: a rule
+    written here, in a test, as a new rule is written anywhere."""
+    return c[0] * (v[i, j] + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j]))
+
+
+class Constriction(VelocityRule):
+    kernel = staticmethod(constriction)
+    coefficients = ("chi", "phi1", "phi2")
+
+    def __init__(self, chi=0.7298, phi1=2.05, phi2=2.05):
+        self.chi, self.phi1, self.phi2 = chi, phi1, phi2
+
+
+def velocity_rules() -> list[type]:
+    """Every :class:`VelocityRule` subclass of magexp's estimators (all imported) and of this file."""
+    import importlib
+    import pkgutil
+
+    import magexp.estimators
+
+    for module in pkgutil.iter_modules(magexp.estimators.__path__):
+        importlib.import_module(f"magexp.estimators.{module.name}")
+    found, todo = [], list(VelocityRule.__subclasses__())
+    while todo:
+        cls = todo.pop()
+        found.append(cls)
+        todo.extend(cls.__subclasses__())
+    return sorted(found, key=lambda c: c.__qualname__)
+
+
+@pytest.mark.parametrize("boundary", ["clip", "reflect"])  # the cost compiled into the loop; a step per iteration
+@pytest.mark.parametrize("rule", velocity_rules(), ids=lambda c: c.__qualname__)
+def test_every_velocity_rule_gives_the_same_bits_compiled_and_in_numpy(make_cfg, monkeypatch, rule, boundary):
+    """A new rule is one kernel: with its default settings, each rule (the built-in ones and
+    :class:`Constriction`, written in this file) runs its one kernel compiled and in numpy, from one
+    seed, to the same ``x``, ``fun`` and history, bit for bit."""
     from magexp.estimators import swarm
 
-    class Frozen(InertiaVelocity):
-        def __call__(self, x, v, pbest, gbest, t, t_max, *, rng):
-            return np.zeros_like(x)
+    if swarm.compiled() is None:
+        pytest.skip("numba not installed or MAGEXP_NUMBA=0: there is only the numpy path")
+    est, prob = _swarm_case(make_cfg, "pso", "ding2024_exp1", None, None, "estimator.n_iterations=40",
+                            f"estimator.boundary={boundary}")
+    est.velocity = rule()
+    fast = est.fit(prob, rng=np.random.default_rng(5))
+    monkeypatch.setattr(swarm, "compiled", lambda: None)
+    slow = est.fit(prob, rng=np.random.default_rng(5))
+    assert fast.fun == slow.fun and np.all(np.diff(fast.history) <= 0)
+    np.testing.assert_array_equal(fast.x, slow.x)
+    np.testing.assert_array_equal(fast.history, slow.history)
 
-    assert swarm._has_step(InertiaVelocity()) and not swarm._has_step(Frozen())
-    res = SwarmOptimizer(n_particles=5, n_iterations=10, velocity=Frozen()).fit(_Quadratic(), rng=np.random.default_rng(0))
-    assert np.all(res.history == res.history[0])  # nobody moves
+
+#: fits recorded with the code of 90c6f51, before the one-kernel redesign (a numpy function, a class,
+#: two numba functions and a branch per rule; its compiled and numpy paths gave these same bits):
+#: (estimator, scenario, objective, parameterisation, boundary) -> (fun, x) after 150 iterations of
+#: 20 particles from seed 7 on 100 readings (:func:`_swarm_case`)
+RECORDED_AT_90C6F51 = {
+    ("ipso", "ding2024_exp1", None, None, "clip"): (0.5784438085636234, [
+        0.894012340700453, -0.3825008975793716, 0.35235046555405175, 0.05705786965105265, 0.9841440903004678,
+        0.13342669846678462, -0.12408140476647447, -0.37925325678938976, 0.8986782824907765, 292.34358734363377,
+        -296.69386183108315, 348.16266277977337]),
+    ("pso", "ding2024_exp1", None, None, "clip"): (768.8376549762696, [
+        0.8561629760875334, -0.5, 0.5, 0.10422479426757002, 0.9561447600092983, 0.15033472688283897,
+        -0.27843305327906237, -0.2975107663778082, 0.8256238121908808, 581.9636894346671, 1000.0, 691.6135389726967]),
+    ("rdpso", "ding2024_exp1", None, None, "clip"): (143.5324681869904, [
+        0.8585354092030276, -0.07064830804794968, 0.4233066409459224, -0.13053699181606404, 1.1148659401488281,
+        -0.3829210867551033, -0.25506054324669103, 0.13732490939799127, 0.7882333795425651, 73.16730718235485,
+        -279.17338043954976, 453.14983970985577]),
+    ("rdpso", "yuan2018_mode1", None, None, "clip"): (26735.16773150455, [
+        -2.998859356704507, -2.4457568070693694, 1.1362895651945788, -2.998529532121825, -0.003919350084093919,
+        0.18918184274496494, 1.4602339029944975, 1.137181566608423, 1.1027817527686434, 55.476868032392154,
+        53.712172403313154, 32.141821063013786]),
+    ("pso9", "ding2024_exp1", "scalar", None, "clip"): (1.4866398044012714, [
+        0.8914134369228834, -0.11113657135098796, 0.10457970591028493, -0.11113657135098796, 1.1046146492841742,
+        -0.16147383568852913, 0.10457970591028493, -0.16147383568852913, 0.9552554068949556, 293.9196700782687,
+        -297.5356094726991, 346.70699913000647]),
+    ("ipso", "yuan2018_mode1", None, "inverse", "clip"): (754.0465771837345, [
+        1.110846655584808, -0.09299069113993519, -0.26511661423476024, 0.1837090858304895, 0.5217681014949279,
+        0.09322329635634051, -0.10586127454150226, -0.06851733990397209, 0.7200310812919196, -38.6792501471057,
+        4.606911708508246, 54.32785080615957]),
+    ("pso", "ding2024_exp1", None, None, "reflect"): (1.7492833558678613, [
+        0.8785514453357891, -0.29900307659999337, 0.4497821221065632, -0.022848979200746522, 1.0574471472081697,
+        -0.013807784564601633, -0.21332183711235092, -0.22581871033468148, 0.8643474043901472, 293.2161660343029,
+        -298.50226332200236, 346.775955097766]),
+    ("rdpso", "ding2024_exp1", None, None, "random"): (136.10229546531255, [
+        0.9044157330069704, -0.2985251845086355, 0.2864931278532604, 0.01808869918220068, 1.0597903033514156,
+        -0.05991750429076609, -0.04783943686201392, -0.209651359909244, 0.9286161688148962, 83.10356009543226,
+        -337.67338043954976, 486.56898553817194]),
+}
+
+
+@pytest.mark.parametrize("path", ["this process's", "numpy"])
+@pytest.mark.parametrize("case", list(RECORDED_AT_90C6F51), ids=lambda case: "/".join(map(str, case)))
+def test_the_fits_recorded_before_the_one_kernel_redesign(make_cfg, monkeypatch, case, path):
+    """Every velocity rule of conf/estimator (``pso``, ``ipso``, ``pso9``: the inertia rule with
+    constant and linear schedules; ``rdpso``), both objectives, the cost compiled into the loop or
+    not, the three boundaries: the fits end where the code before the redesign ended, on the
+    compiled path (``MAGEXP_NUMBA``'s) and on the numpy path. On the host they were recorded on,
+    and after the redesign, every bit of ``x`` and of the history was the same, on both paths (144
+    fits compared); the tolerance leaves room for another host's ``log`` and BLAS (the docstring of
+    :func:`test_a_seed_gives_the_same_bits_in_a_fresh_process`)."""
+    from magexp.estimators import initialisers, swarm
+    from magexp.problems import kernels
+
+    if path == "numpy":
+        for module, name in ((kernels, "compiled"), (swarm, "compiled"), (initialisers, "_compiled_sequence")):
+            monkeypatch.setattr(module, name, lambda: None)
+    estimator, scenario, objective, parameterisation, boundary = case
+    est, prob = _swarm_case(make_cfg, estimator, scenario, objective, parameterisation, "estimator.n_iterations=150",
+                            f"estimator.boundary={boundary}")
+    res = est.fit(prob, rng=np.random.default_rng(7))
+    fun, x = RECORDED_AT_90C6F51[case]
+    assert res.fun == pytest.approx(fun, rel=1e-9, abs=0)
+    np.testing.assert_allclose(res.x, x, rtol=1e-9, atol=0)
 
 
 @pytest.mark.parametrize("draw_block", [None, 7 * 4 * 20 * 12])
@@ -217,13 +318,14 @@ def test_the_compiled_run_covers_every_iteration_once(make_cfg, monkeypatch, dra
         monkeypatch.setattr(swarm, "DRAW_BLOCK", draw_block)
     est, prob = _swarm_case(make_cfg, "rdpso", "ding2024_exp1", None, None, f"estimator.n_iterations={n_iterations}")
     calls = []
-    run = nb.run
+    engine = nb.engine(est.velocity.kernel, est.velocity.needs_mean)
+    run = engine.run
 
     def spy(x, v, pbest, pcost, history, t, n, *rest):
         calls.append((t, n))
         return run(x, v, pbest, pcost, history, t, n, *rest)
 
-    monkeypatch.setattr(nb, "run", spy)
+    monkeypatch.setattr(engine, "run", spy)
     fused = est.fit(prob, rng=np.random.default_rng(3))
     per_block = swarm.DRAW_BLOCK // (4 * 20 * 12)
     assert [t for t, _ in calls] == list(np.cumsum([0] + [n for _, n in calls[:-1]]))  # consecutive, from 0
@@ -365,15 +467,26 @@ R1 = np.array([[0.5, 1.0], [0.1, 0.2], [1.0, 0.0]])
 R2 = np.array([[0.25, 0.5], [1.0, 1.0], [0.0, 0.5]])
 
 
-def test_a_compiled_inertia_step_by_hand():
-    """:func:`_compiled.inertia_step` with ``w = 0.5, c1 = 2, c2 = 1`` (Ding 2024 eq 10), clamp, move, clip."""
+def _step(path, kernel, x, v, pbest, pcost, cost, r, c, limits):
+    """One step of ``path`` (``compiled`` or ``numpy``, then the box clip of the ``clip`` boundary)."""
+    if path == "numpy":
+        g = numpy_step(kernel, True, x, v, pbest, pcost, cost, True, r, np.array(c), limits, False)
+        np.copyto(x, np.clip(x, limits[1], limits[2]))
+        return g
     from magexp.estimators import swarm
 
     nb = swarm.compiled()
     if nb is None:
         pytest.skip("numba not installed or MAGEXP_NUMBA=0")
+    return nb.engine(kernel, True).step(x, v, pbest, pcost, cost, True, r, np.array(c), limits, True)
+
+
+@pytest.mark.parametrize("path", ["compiled", "numpy"])
+def test_an_inertia_step_by_hand(path):
+    """The best updates and :func:`inertia` with ``w = 0.5, c1 = 2, c2 = 1`` (Ding 2024 eq 10), clamp,
+    move, clip."""
     x, v, pbest, pcost, cost, limits = _three_particles()
-    g = nb.inertia_step(x, v, pbest, pcost, cost, True, np.stack([R1, R2]), 0.5, 2.0, 1.0, limits, True)
+    g = _step(path, inertia, x, v, pbest, pcost, cost, np.stack([R1, R2]), (0.5, 2.0, 1.0), limits)
     assert g == 2
     np.testing.assert_array_equal(pcost, [3.0, 1.0, 0.5])
     np.testing.assert_array_equal(pbest, [[1, 1], [2, 0], [1, 1]])
@@ -384,18 +497,14 @@ def test_a_compiled_inertia_step_by_hand():
     np.testing.assert_allclose(x, [[1.5, 1.0], [0.5, 1.0], [1.0, 1.05]], rtol=1e-15)
 
 
-def test_a_compiled_drift_step_by_hand():
-    """:func:`_compiled.drift_step` with ``α = 0.5, c1 = c2 = 1`` (Yuan 2018 eq 16), ``M`` the mean of
-    the personal bests after the update, ``[4/3, 2/3]``, and ``φ = ±ln(1/u)`` signed by ``s > 0.5``."""
-    from magexp.estimators import swarm
-
-    nb = swarm.compiled()
-    if nb is None:
-        pytest.skip("numba not installed or MAGEXP_NUMBA=0")
+@pytest.mark.parametrize("path", ["compiled", "numpy"])
+def test_a_drift_step_by_hand(path):
+    """:func:`random_drift` with ``α = 0.5, c1 = c2 = 1`` (Yuan 2018 eq 16), ``M`` the mean of the
+    personal bests after the update, ``[4/3, 2/3]``, and ``φ = ±ln(1/u)`` signed by ``s > 0.5``."""
     x, v, pbest, pcost, cost, limits = _three_particles()
     s = np.array([[0.9, 0.1], [0.6, 0.6], [0.2, 0.7]])
     log_u = np.array([[1.0, 2.0], [0.5, 1.0], [2.0, 0.25]])  # phi = [[1, -2], [0.5, 1], [-2, 0.25]]
-    g = nb.drift_step(x, v, pbest, pcost, cost, True, np.stack([R1, R2, s, s]), log_u, 0.5, 1.0, 1.0, limits, True)
+    g = _step(path, random_drift, x, v, pbest, pcost, cost, np.stack([R1, R2, s, log_u]), (0.5, 1.0, 1.0), limits)
     assert g == 2
     # particle 0: |M-x| = [4/3, 1/3]: 0.5*4/3*1 + 0.5*1*(1-0) + 0.25*(1-0) = 17/12 ; 0.5*1/3*-2 + 0 + 0 = -1/3
     # particle 1: |M-x| = [2/3, 5/3]: 0.5*2/3*0.5 + 0 + 1*(1-2) = -5/6 ; 0.5*5/3 + 0.2*(0+1) + 1*(1+1) = 91/30 -> 2
@@ -428,8 +537,10 @@ def test_schedule_values_are_the_one_by_one_floats(schedule):
 
 
 def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
-    """numba keys a cached function by its own bytecode: the engine's run (which inlines the costs)
-    and the Circle-map sequence also carry the sources they call into, so editing those recompiles."""
+    """numba keys a cached function by its own bytecode (and a closure by a pickle of what it closes
+    over, different in every process): the engine's steps carry instead the sources they call into,
+    the rule's kernel by its name too (so two rules of one module differ), and the Circle-map
+    sequence its map's, so editing those recompiles and a fresh process loads."""
     import hashlib
 
     from magexp.estimators import swarm
@@ -441,12 +552,16 @@ def test_the_compiled_runs_cache_key_holds_the_sources_they_call():
     from magexp.problems import _compiled as costs
     from magexp.problems import kernels
 
-    def digest(*modules):
-        return hashlib.sha256(b"".join(Path(m.__file__).read_bytes() for m in modules)).hexdigest()
+    def digest(*sources):
+        return hashlib.sha256(b"".join(sources)).hexdigest()
 
-    codegen = nb.run.targetctx.codegen()
-    assert nb.run._cache._index_key((), codegen)[-1] == digest(costs, kernels)
-    assert nb.circle_sequence._cache._index_key((), codegen)[-1] == digest(circle)  # the Circle map's home
+    codegen = nb.circle_sequence.targetctx.codegen()
+    keys = {kernel: nb.engine(kernel).run._cache._index_key((), codegen)[-1][1] for kernel in (inertia, random_drift)}
+    assert keys[inertia] == digest(nb.source_of(inertia, nb), b"\0", nb.source_of(costs, kernels)) != keys[random_drift]
+    assert nb.engine(inertia).step._cache._index_key((), codegen)[-1][1] == digest(nb.source_of(inertia, nb), b"\0")
+    assert nb.engine(inertia, True).step._cache._index_key((), codegen)[-1][1] == digest(nb.source_of(inertia, nb),
+                                                                                           b"\1")
+    assert nb.circle_sequence._cache._index_key((), codegen)[-1][1] == digest(nb.source_of(circle))
 
 
 def test_a_kernel_stored_for_one_cpu_is_never_loaded_for_another():
@@ -463,8 +578,9 @@ def test_a_kernel_stored_for_one_cpu_is_never_loaded_for_another():
 
     from magexp.problems import _compiled as costs
 
-    kernels_ = [d for m in (nb, costs) for d in vars(m).values() if isinstance(d, Dispatcher)]
-    assert nb.run in kernels_ and costs.scalar_cost in kernels_
+    engines = [vars(nb.engine(kernel)) for kernel in (inertia, random_drift)]
+    kernels_ = [d for m in (vars(nb), vars(costs), *engines) for d in m.values() if isinstance(d, Dispatcher)]
+    assert nb.engine(inertia).run in kernels_ and costs.scalar_cost in kernels_
     for dispatcher in kernels_:
         codegen = dispatcher.targetctx.codegen()
         target = codegen.magic_tuple()

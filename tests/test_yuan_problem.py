@@ -5,7 +5,8 @@ import pytest
 
 from magexp.errors import MagexpError
 from magexp.estimators.ekf import ExtendedKalmanFilter
-from magexp.estimators.rdpso import RandomDriftVelocity, ThermalCoefficient, drift_sign_log, random_drift_velocity
+from magexp.estimators.rdpso import RandomDriftVelocity, ThermalCoefficient, drift_factors, random_drift
+from magexp.estimators.velocity import ALL
 from magexp.problems import make_problem
 from magexp.run.runner import build, run
 from magexp.core.seeding import run_generators
@@ -38,14 +39,12 @@ def test_changing_field_reference(make_cfg):
 
 def test_random_drift_velocity_by_hand():
     x = np.array([[0.0, 1.0], [2.0, -1.0], [1.0, 3.0]])
-    pbest = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 2.0]])  # M = [1, 1]
-    gbest = np.array([1.0, 1.0])
+    pbest = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 2.0]])  # M = [1, 1]; the global best: particle 0, [1, 1]
     u = np.array([[np.exp(-1.0), 1.0], [np.exp(-2.0), np.exp(-0.5)], [1.0, np.exp(-1.0)]])
     s = np.array([[0.9, 0.1], [0.2, 0.6], [0.7, 0.3]])
-    phi = drift_sign_log(u, s)
-    assert np.allclose(phi, [[1.0, -0.0], [-2.0, 0.5], [0.0, -1.0]])
-    r1, r2 = np.full((3, 2), 0.5), np.full((3, 2), 0.25)
-    v = random_drift_velocity(x, pbest, gbest, alpha=0.5, c1=2.0, c2=4.0, r1=r1, r2=r2, phi=phi)
+    r = drift_factors(np.stack([np.full((3, 2), 0.5), np.full((3, 2), 0.25), s, 1.0 - u])[None])[0]
+    assert np.allclose(r[3], [[1.0, 0.0], [2.0, 0.5], [0.0, 1.0]])  # ln(1/u); φ = ±ln(1/u), + where s > 0.5 (eq 14)
+    v = random_drift(ALL, ALL, x, None, pbest, 0, pbest.mean(axis=0), r, (0.5, 2.0, 4.0))
     # particle 0: 0.5*|1-0|*1 + 1*(1-0) + 1*(1-0) = 2.5 ; 0.5*|1-1|*0 + 0 + 0 = 0
     # particle 1: 0.5*|1-2|*(-2) + 1*(2-2) + 1*(1-2) = -2 ; 0.5*|1+1|*0.5 + 1*(0+1) + 1*(1+1) = 3.5
     # particle 2: 0.5*|1-1|*0 + 1*(0-1) + 1*(1-1) = -1 ; 0.5*|1-3|*(-1) + 1*(2-3) + 1*(1-3) = -4
@@ -55,9 +54,8 @@ def test_random_drift_velocity_by_hand():
 def test_thermal_coefficient_as_printed():
     a = ThermalCoefficient()
     assert a(0, 1000) == pytest.approx(0.9) and a(1000, 1000) == pytest.approx(0.42)
-    rule = RandomDriftVelocity()
-    v = rule(np.zeros((4, 3)), None, np.ones((4, 3)), np.ones(3), 1, 10, rng=np.random.default_rng(0))
-    assert v.shape == (4, 3) and np.all(np.isfinite(v))
+    np.testing.assert_allclose(RandomDriftVelocity().schedule(np.array([0, 1000]), 1000), [[0.9, 1.45, 1.45],
+                                                                                             [0.42, 1.45, 1.45]])
 
 
 def test_ekf_converges_without_noise(make_cfg):

@@ -1,29 +1,33 @@
 """Compiled (numba) steps of the swarm engine (:mod:`magexp.estimators.swarm`; imported on first
 use when numba is available and ``MAGEXP_NUMBA`` is not ``0``).
 
-One call per iteration updates the personal bests with the last costs, finds the global best
-and then moves the whole swarm in place for the next iteration: the velocity rule, the velocity
-clamp, the move ``x <- x + v`` and (for ``clip`` boundaries) the clip to the box, element by
-element. It computes exactly the numbers of the numpy path it replaces, operation by operation
-and in the same order
-(:func:`magexp.estimators.velocity.inertia_velocity`,
-:func:`magexp.estimators.rdpso.random_drift_velocity`, ``np.minimum(np.maximum(.))``,
-``np.clip``, ``np.copyto``, ``argmin``): no ``fastmath``, so no reassociation and no fused
-multiply-add, and the random numbers are drawn by numpy from the run's generator in the same
-order as before. A test runs both paths from one seed and compares ``x`` and ``fun`` bit for bit.
+:func:`engine` compiles the steps around one velocity rule's kernel
+(:mod:`magexp.estimators.velocity`): one call per iteration updates the personal bests with the
+last costs, finds the global best and then moves the whole swarm in place for the next iteration,
+element by element: the rule's kernel, the velocity clamp, the move ``x <- x + v`` and (for
+``clip`` boundaries) the clip to the box. It computes exactly the numbers of the numpy path
+(:func:`magexp.estimators.swarm.numpy_step`: the same kernel on whole arrays,
+``np.minimum(np.maximum(.))``, ``np.clip``, ``np.copyto``, ``argmin``), operation by operation
+and in the same order: no ``fastmath``, so no reassociation and no fused multiply-add, and the
+random numbers are drawn by numpy from the run's generator in the same order. A test runs both
+paths from one seed, for every rule, and compares ``x`` and ``fun`` bit for bit.
 
-:func:`run` goes further: a block of iterations in one call, each with the problem's compiled
-cost (:func:`magexp.problems._compiled.swarm_cost`). :func:`circle_sequence` compiles the
-Circle-map initialiser's own step functions (:mod:`magexp.estimators.circle`). numba's
+The engine's ``run`` goes further: a block of iterations in one call, each with the problem's
+compiled cost (:func:`magexp.problems._compiled.swarm_cost`). :func:`circle_sequence` compiles
+the Circle-map initialiser's own step functions (:mod:`magexp.estimators.circle`). numba's
 on-disk cache keys a function by its own file and bytecode, not by the functions it calls (and
-inlines) from other modules: :func:`_keyed_on` adds those modules' sources to the key, so an edit
-there recompiles these two instead of loading stale machine code.
+inlines) from other modules: :func:`_keyed_on` puts those sources in the key, so an edit there
+recompiles instead of loading stale machine code.
 """
 
 from __future__ import annotations
 
 import hashlib
+import inspect
+import sys
+from functools import cache
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from numba import njit
@@ -58,8 +62,22 @@ def _settle(x, vel, vmax, lower, upper, clip_box):
 
 @_jit
 def update_best(x, cost, pbest, pcost):
-    """Personal bests where ``cost < pcost``; returns the first index of the smallest ``pcost``
-    (the first NaN if there is one, as ``argmin``)."""
+    """The personal bests where ``cost < pcost``, in place, and the global best.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, d)
+        Positions whose costs are ``cost``.
+    cost : ndarray, shape (n,)
+        Their costs.
+    pbest, pcost : ndarray, shapes (n, d), (n,)
+        Personal bests and their costs, updated where ``cost < pcost`` (strictly).
+
+    Returns
+    -------
+    int
+        The first index of the smallest ``pcost`` (the first NaN if there is one, as ``argmin``).
+    """
     n, d = x.shape
     for i in range(n):
         if cost[i] < pcost[i]:
@@ -76,99 +94,169 @@ def update_best(x, cost, pbest, pcost):
 
 
 @_jit
-def inertia_move(x, v, pbest, g, r, w, c1, c2, limits, clip_box):
-    """``v <- w v + c1 r1 (p - x) + c2 r2 (p_g - x)`` (Ding 2024 eq 10), clamp, move, clip, in
-    place; ``r`` (2, n, d) holds ``r1, r2``, ``limits`` (3, d) ``v_max``, lower, upper."""
-    n, d = x.shape
-    for i in range(n):
-        for j in range(d):
-            xij = x[i, j]
-            vel = w * v[i, j] + c1 * r[0, i, j] * (pbest[i, j] - xij) + c2 * r[1, i, j] * (pbest[g, j] - xij)
-            v[i, j], x[i, j] = _settle(xij, vel, limits[0, j], limits[1, j], limits[2, j], clip_box)
+def mean_best(pbest, out):
+    """The mean personal best (Yuan 2018 eq 13), :math:`M_j = \\frac1n \\sum_i p_{ij}`.
 
+    Parameters
+    ----------
+    pbest : ndarray, shape (n, d)
+        Personal bests.
+    out : ndarray, shape (d,)
+        Where to write ``M``.
 
-@_jit
-def drift_move(x, v, pbest, g, r, log_u, alpha, c1, c2, limits, clip_box):
-    """``v <- α |M - x| φ + c1 r1 (p - x) + c2 r2 (p_g - x)`` (Yuan 2018 eq 16, ``M`` the mean
-    personal best summed row by row as ``pbest.mean(axis=0)``), clamp, move, clip, in place;
-    ``r`` (4, n, d) holds ``r1, r2, s, ·`` and ``log_u`` ``ln(1/u)``: ``φ = ±ln(1/u)``, ``+`` where
-    ``s > 0.5`` (eq 14; a product with ±1, exact)."""
-    n, d = x.shape
-    mean = pbest[0].copy()
+    Returns
+    -------
+    ndarray, shape (d,)
+        ``out``: the sum row by row, then the division, as ``pbest.mean(axis=0)`` (the same bits).
+    """
+    n, d = pbest.shape
+    for j in range(d):
+        out[j] = pbest[0, j]
     for i in range(1, n):
         for j in range(d):
-            mean[j] += pbest[i, j]
+            out[j] += pbest[i, j]
     for j in range(d):
-        mean[j] /= n
-    for i in range(n):
-        for j in range(d):
-            xij = x[i, j]
-            phi = log_u[i, j] if r[2, i, j] > 0.5 else -1.0 * log_u[i, j]
-            vel = alpha * np.abs(mean[j] - xij) * phi + c1 * r[0, i, j] * (pbest[i, j] - xij) \
-                + c2 * r[1, i, j] * (pbest[g, j] - xij)
-            v[i, j], x[i, j] = _settle(xij, vel, limits[0, j], limits[1, j], limits[2, j], clip_box)
+        out[j] /= n
+    return out
 
 
-@_jit
-def inertia_step(x, v, pbest, pcost, cost, move, r, w, c1, c2, limits, clip_box):
-    """:func:`update_best` with ``cost``, then, if ``move``, :func:`inertia_move`.
-    Returns the global best's index (before the move)."""
-    g = update_best(x, cost, pbest, pcost)
-    if move:
-        inertia_move(x, v, pbest, g, r, w, c1, c2, limits, clip_box)
-    return g
+def source_of(*objects) -> bytes:
+    """The sources of ``objects`` for :func:`_keyed_on`.
+
+    Parameters
+    ----------
+    *objects : module or function
+        What a compiled function calls into.
+
+    Returns
+    -------
+    bytes
+        Their source files, each followed by the object's qualified name (two kernels of one
+        module differ by it).
+    """
+    return b"".join(Path(inspect.getfile(o)).read_bytes() + getattr(o, "__qualname__", "").encode()
+                    for o in objects)
 
 
-@_jit
-def drift_step(x, v, pbest, pcost, cost, move, r, log_u, alpha, c1, c2, limits, clip_box):
-    """:func:`update_best` with ``cost``, then, if ``move``, :func:`drift_move`.
-    Returns the global best's index (before the move)."""
-    g = update_best(x, cost, pbest, pcost)
-    if move:
-        drift_move(x, v, pbest, g, r, log_u, alpha, c1, c2, limits, clip_box)
-    return g
+def _keyed_on(dispatcher, *sources: bytes):
+    """``dispatcher`` with an on-disk cache key made of its bytecode and ``sources``.
 
+    numba keys a stored function by its own bytecode and, for a closure, by a pickle of what it
+    closes over, which for a compiled function differs in every process (the closure would then
+    compile again in every process). Here the key is the target, the signature, the bytecode and
+    ``sources``: the same in every process, and an edit of any of them recompiles.
 
-def _keyed_on(dispatcher, *modules):
-    """``dispatcher`` with the sources of ``modules`` (those its code calls into) in its on-disk
-    cache key (numba's key holds the function's own bytecode only); unchanged if this numba keeps
-    its cache otherwise."""
-    cache = getattr(dispatcher, "_cache", None)
-    key = getattr(cache, "_index_key", None)
-    if key is not None:
-        digest = hashlib.sha256(b"".join(Path(m.__file__).read_bytes() for m in modules)).hexdigest()
-        cache._index_key = lambda sig, codegen: (*key(sig, codegen), digest)
+    Parameters
+    ----------
+    dispatcher : numba Dispatcher
+        A function compiled with ``cache=True``.
+    *sources : bytes
+        What its machine code depends on besides its own bytecode (:func:`source_of`).
+
+    Returns
+    -------
+    numba Dispatcher
+        ``dispatcher``, its key replaced (unchanged if this numba keeps its cache otherwise).
+    """
+    stored = getattr(dispatcher, "_cache", None)
+    if getattr(stored, "_index_key", None) is not None:
+        code = hashlib.sha256(dispatcher.py_func.__code__.co_code).hexdigest()
+        digest = hashlib.sha256(b"".join(sources)).hexdigest()
+        stored._index_key = lambda sig, codegen: (sig, codegen.magic_tuple(), (code, digest))
     return dispatcher
 
 
-@_jit
-def run(x, v, pbest, pcost, history, t, n_iterations, r, log_u, coef, drift, limits, clip_box, kernel):
-    """Iterations ``t .. t + n_iterations - 1`` of the swarm in one call, each: the cost of every
-    particle (:func:`magexp.problems._compiled.swarm_cost` with ``kernel = (kind, data,
-    reference, params)``; iteration 0, the initial swarm, has its costs in ``pcost`` already),
-    :func:`update_best`, ``history[t] = pcost[g]`` and, for the first ``len(coef)`` of them, the
-    move (:func:`drift_move` if ``drift``, else :func:`inertia_move`) with the draws ``r[k]`` (and
-    ``log_u[k]``) and the coefficients ``coef[k]`` (``w, c1, c2`` or ``α, c1, c2``). Returns the
-    global best's index."""
-    kind, data, reference, params = kernel
-    g = 0
-    for k in range(n_iterations):
-        cost = pcost if t + k == 0 else swarm_cost(kind, x, data, reference, params)
+@cache
+def engine(kernel, needs_mean: bool = False):
+    """The compiled steps of the swarm engine around one velocity rule's kernel.
+
+    The kernel (:mod:`magexp.estimators.velocity`) is compiled as it is and called for every
+    element inside the loops below, which close over it: one specialisation per rule, the kernel
+    inlined, stored on disk under :func:`_keyed_on`'s key (the kernel's source and name, this
+    module's, and for ``run`` the costs').
+
+    Parameters
+    ----------
+    kernel : function
+        ``kernel(i, j, x, v, pbest, g, mean, r, c) -> v_ij``.
+    needs_mean : bool
+        Whether the kernel reads ``mean`` (:func:`mean_best`; otherwise ``mean`` is NaN).
+
+    Returns
+    -------
+    SimpleNamespace
+        ``move``, ``step`` and ``run``, compiled (their docstrings).
+    """
+    rule = _jit(kernel)
+    key = source_of(kernel, sys.modules[__name__]) + bytes([needs_mean])
+
+    def move(x, v, pbest, g, r, c, limits, clip_box):
+        """The move of every particle in place (Ding 2024 eqs 10-11; Yuan 2018 eqs 16-17).
+
+        ``v_ij`` = the kernel with the global best ``g``, the mean personal best, the random
+        factors ``r`` (k, n, d) and the coefficients ``c`` (3,); then the clamp to
+        ``limits[0]`` (``v_max``), ``x_ij + v_ij`` and, if ``clip_box``, the clip to
+        ``limits[1]``, ``limits[2]`` (lower, upper).
+        """
+        n, d = x.shape
+        mean = mean_best(pbest, np.empty(d)) if needs_mean else np.full(d, np.nan)  # NaN: read, it shows
+        coef = (c[0], c[1], c[2])  # scalars: read once, not once per element (c may alias v for all numba knows)
+        for i in range(n):
+            for j in range(d):
+                vel = rule(i, j, x, v, pbest, g, mean, r, coef)
+                v[i, j], x[i, j] = _settle(x[i, j], vel, limits[0, j], limits[1, j], limits[2, j], clip_box)
+
+    move = _keyed_on(_jit(move), key)
+
+    def step(x, v, pbest, pcost, cost, moves, r, c, limits, clip_box):
+        """:func:`update_best` with ``cost``, then, if ``moves``, ``move`` with ``r``, ``c``.
+        Returns the global best's index (before the move)."""
         g = update_best(x, cost, pbest, pcost)
-        history[t + k] = pcost[g]
-        if k < coef.shape[0]:
-            if drift:
-                drift_move(x, v, pbest, g, r[k], log_u[k], coef[k, 0], coef[k, 1], coef[k, 2], limits, clip_box)
-            else:
-                inertia_move(x, v, pbest, g, r[k], coef[k, 0], coef[k, 1], coef[k, 2], limits, clip_box)
-    return g
+        if moves:
+            move(x, v, pbest, g, r, c, limits, clip_box)
+        return g
+
+    def run(x, v, pbest, pcost, history, t, n_iterations, r, coef, limits, clip_box, problem):
+        """Iterations ``t .. t + n_iterations - 1`` in one call.
+
+        Each: the cost of every particle (:func:`magexp.problems._compiled.swarm_cost` with
+        ``problem = (kind, data, reference, params)``; iteration 0, the initial swarm, has its
+        costs in ``pcost`` already), :func:`update_best`, ``history[t] = pcost[g]`` and, for the
+        first ``len(coef)`` of them, ``move`` with ``r[k]`` and ``coef[k]``. Returns the global
+        best's index.
+        """
+        kind, data, reference, params = problem
+        g = 0
+        for k in range(n_iterations):
+            cost = pcost if t + k == 0 else swarm_cost(kind, x, data, reference, params)
+            g = update_best(x, cost, pbest, pcost)
+            history[t + k] = pcost[g]
+            if k < coef.shape[0]:
+                move(x, v, pbest, g, r[k], coef[k], limits, clip_box)
+        return g
+
+    return SimpleNamespace(move=move, step=_keyed_on(_jit(step), key),
+                           run=_keyed_on(_jit(run), key, source_of(costs, kernels)))
 
 
 @_jit
 def circle_sequence(z0, n, burn_in, printed):
-    """:meth:`magexp.estimators.initialisers.CircleMap.sequence`: ``burn_in`` steps of the Circle
-    map (``printed`` or ``usual`` form, the same functions compiled) from ``z0``, then the ``n``
-    further iterates as rows; coordinate by coordinate, as numpy's element-wise steps."""
+    """The Circle-map sequence (:meth:`magexp.estimators.initialisers.CircleMap.sequence`).
+
+    Parameters
+    ----------
+    z0 : ndarray, shape (d,)
+        The seed.
+    n, burn_in : int
+        Iterates kept, after ``burn_in`` steps.
+    printed : bool
+        Ding 2024 eq 15 as printed, or the usual form (the same functions, compiled).
+
+    Returns
+    -------
+    ndarray, shape (n, d)
+        The iterates as rows; coordinate by coordinate, as numpy's element-wise steps.
+    """
     z = z0.copy()
     out = np.empty((n, z.size))
     for k in range(burn_in + n):
@@ -179,5 +267,4 @@ def circle_sequence(z0, n, burn_in, printed):
     return out
 
 
-run = _keyed_on(run, costs, kernels)
-circle_sequence = _keyed_on(circle_sequence, circle)
+circle_sequence = _keyed_on(circle_sequence, source_of(circle))

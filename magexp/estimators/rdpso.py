@@ -22,55 +22,57 @@ from __future__ import annotations
 import numpy as np
 
 from magexp.errors import check_nonnegative
-from magexp.estimators.schedules import values
-from magexp.estimators.velocity import _NO_DRAWS
+from magexp.estimators.velocity import VelocityRule
 
 
-def drift_sign_log(u: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """The drift term's random factor ``φ = ±ln(1/u)``, ``+`` where ``s > 0.5`` (Yuan 2018 eq 14).
+def random_drift(i, j, x, v, pbest, g, mean, r, c):
+    """RDPSO velocity (eqs 14, 16): the kernel of :class:`RandomDriftVelocity`.
 
-    Parameters
-    ----------
-    u : numpy.ndarray
-        Draws in (0, 1].
-    s : numpy.ndarray
-        Draws in [0, 1), the sign.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``φ``.
-    """
-    return np.where(s > 0.5, 1.0, -1.0) * np.log(1.0 / u)
-
-
-def random_drift_velocity(x, pbest, gbest, *, alpha, c1, c2, r1, r2, phi):
-    """RDPSO velocity for given random draws (Yuan 2018 eq 16).
-
-    .. math:: v = \\alpha \\lvert M - x\\rvert \\varphi + c_1 r_1 (p - x) + c_2 r_2 (g - x)
+    .. math:: v_{ij} = \\alpha \\lvert M_j - x_{ij}\\rvert \\varphi_{ij}
+              + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij}),\\qquad
+              \\varphi_{ij} = \\pm \\ln(1/u_{ij}),\\ + \\text{ where } s_{ij} > 0.5
 
     Parameters
     ----------
-    x : numpy.ndarray
-        Positions (n, d).
-    pbest : numpy.ndarray
-        Personal bests (n, d); ``M`` is their mean over particles (eq 13).
-    gbest : numpy.ndarray
-        The global best (d,).
-    alpha, c1, c2 : float
-        The thermal coefficient and the learning factors.
-    r1, r2 : numpy.ndarray
-        Uniform draws (n, d).
-    phi : numpy.ndarray
-        :func:`drift_sign_log` of the draws (n, d).
+    i, j : int or slice
+        Particle and dimension (:data:`magexp.estimators.velocity.ALL` for every one).
+    x, v, pbest : ndarray, shape (n, d)
+        Positions, velocities (unused: no inertia) and personal bests.
+    g : int
+        Index of the global best.
+    mean : ndarray, shape (d,)
+        ``M``, the mean personal best (eq 13).
+    r : ndarray, shape (4, n, d)
+        ``r1, r2, s`` and ``ln(1/u)`` (:func:`drift_factors`).
+    c : sequence of 3 floats
+        ``α, c1, c2``.
 
     Returns
     -------
-    numpy.ndarray
-        The new velocities (n, d).
+    float or ndarray
+        The new velocity before the clamp.
     """
-    mean_best = pbest.mean(axis=0)
-    return alpha * np.abs(mean_best - x) * phi + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x)
+    phi = (2.0 * (r[2, i, j] > 0.5) - 1.0) * r[3, i, j]  # ±1 times ln(1/u): exact, on a number or an array
+    return c[0] * np.abs(mean[j] - x[i, j]) * phi + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) \
+        + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j])
+
+
+def drift_factors(r: np.ndarray) -> np.ndarray:
+    """The random factors of :func:`random_drift` from its draws (eq 14).
+
+    Parameters
+    ----------
+    r : ndarray, shape (m, 4, n, d)
+        ``U(0, 1)`` draws of ``m`` iterations: ``r1, r2, s`` and ``1 - u``.
+
+    Returns
+    -------
+    ndarray, shape (m, 4, n, d)
+        ``r`` with ``r[:, 3]`` replaced, in place, by ``ln(1/u)``, ``u = 1 - r[:, 3]`` in
+        ``(0, 1]`` (finite): numpy's ``log`` on the whole block, for both paths.
+    """
+    np.log(1.0 / (1.0 - r[:, 3]), out=r[:, 3])
+    return r
 
 
 class ThermalCoefficient:
@@ -81,7 +83,7 @@ class ThermalCoefficient:
     Parameters
     ----------
     base, span, rate : float
-        >= 0 (Yuan 2018 eq 12 as printed: 0.3, 0.6, 4).
+        The constants of eq 12, >= 0 (Yuan 2018 eq 12 as printed: 0.3, 0.6, 4).
     """
 
     def __init__(self, base: float = 0.3, span: float = 0.6, rate: float = 4.0):
@@ -89,7 +91,7 @@ class ThermalCoefficient:
         self.span = check_nonnegative(span, "estimator.velocity.alpha.span")
         self.rate = check_nonnegative(rate, "estimator.velocity.alpha.rate")
 
-    def __call__(self, t: int, t_max: int) -> float:
+    def __call__(self, t, t_max: int):
         """``α`` at iteration ``t``.
 
         Parameters
@@ -105,14 +107,14 @@ class ThermalCoefficient:
         return self.base + self.span / (1.0 + self.rate * t / t_max)
 
 
-class RandomDriftVelocity:
-    """The RDPSO velocity rule: draws ``r1, r2, u, s`` and calls :func:`random_drift_velocity`.
+class RandomDriftVelocity(VelocityRule):
+    """The RDPSO velocity rule: the kernel :func:`random_drift` on the draws ``r1, r2, s, u``.
 
     Parameters
     ----------
     c1, c2 : float
         Learning factors (Yuan 2018 Table 1: 1.45 each), >= 0.
-    alpha : callable, optional
+    alpha : schedule, optional
         Thermal-coefficient schedule ``alpha(t, t_max)`` (default :class:`ThermalCoefficient`).
 
     References
@@ -121,106 +123,13 @@ class RandomDriftVelocity:
     optimization algorithm.
     """
 
+    kernel = staticmethod(random_drift)
+    n_draws = 4
+    coefficients = ("alpha", "c1", "c2")
+    factors = staticmethod(drift_factors)
+    needs_mean = True
+
     def __init__(self, c1: float = 1.45, c2: float = 1.45, alpha=None):
         self.c1 = check_nonnegative(c1, "estimator.velocity.c1")
         self.c2 = check_nonnegative(c2, "estimator.velocity.c2")
         self.alpha = alpha if alpha is not None else ThermalCoefficient()
-
-    def __call__(self, x, v, pbest, gbest, t, t_max, *, rng):
-        """The new velocities (:func:`random_drift_velocity` on fresh draws).
-
-        Parameters
-        ----------
-        x, v, pbest : numpy.ndarray
-            Positions, velocities, personal bests (n, d).
-        gbest : numpy.ndarray
-            The global best (d,).
-        t, t_max : int
-            The iteration and the last one.
-        rng : numpy.random.Generator
-            The run's estimator stream: ``r1, r2, s, u`` are drawn from it in that order.
-
-        Returns
-        -------
-        numpy.ndarray
-            ``(n, d)``.
-        """
-        r1, r2, s = rng.random(x.shape), rng.random(x.shape), rng.random(x.shape)
-        u = 1.0 - rng.random(x.shape)  # in (0, 1]: ln(1/u) stays finite
-        return random_drift_velocity(x, pbest, gbest, alpha=self.alpha(t, t_max), c1=self.c1, c2=self.c2,
-                                     r1=r1, r2=r2, phi=drift_sign_log(u, s))
-
-    n_draws = 4  # random numbers per particle and dimension in one iteration (r1, r2, s, u)
-
-    drift = True  # the rule of :func:`magexp.estimators._compiled.drift_move` in a compiled run
-
-    def coefficients(self, t: np.ndarray, t_max: int) -> np.ndarray:
-        """``[α, c1, c2]`` at every time of ``t``: the coefficients of
-        :func:`magexp.estimators._compiled.run` (the same floats as :meth:`step`).
-
-        Parameters
-        ----------
-        t : numpy.ndarray
-            Integer times.
-        t_max : int
-            The last iteration.
-
-        Returns
-        -------
-        numpy.ndarray
-            ``(len(t), 3)``.
-        """
-        coef = np.empty((len(t), 3))
-        coef[:, 0], coef[:, 1], coef[:, 2] = values(self.alpha, t, t_max), self.c1, self.c2
-        return coef
-
-    def log_u(self, r: np.ndarray) -> np.ndarray:
-        """``ln(1/u)``, ``u = 1 - r[:, 3]``, of the draws of a compiled run, as :meth:`step` computes it
-        (numpy's ``log``).
-
-        Parameters
-        ----------
-        r : numpy.ndarray
-            Draws (k, 4, n, d).
-
-        Returns
-        -------
-        numpy.ndarray
-            ``(k, n, d)``.
-        """
-        return np.log(1.0 / (1.0 - r[:, 3]))
-
-    def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
-        """One compiled call (:func:`magexp.estimators._compiled.drift_step`): the best updates
-        with ``cost``, then, unless ``r`` is None, iteration ``t``'s move in place (as
-        :meth:`magexp.estimators.velocity.InertiaVelocity.step`) with ``r1, r2, s = r[:3]`` and
-        ``u = 1 - r[3]``: the same numbers as :meth:`__call__` on the same draws (``ln(1/u)`` by
-        numpy, its sign ``s > 0.5`` in the kernel: :func:`drift_sign_log`).
-
-        Parameters
-        ----------
-        kernels : module
-            :mod:`magexp.estimators._compiled`.
-        x, v, pbest : numpy.ndarray
-            Positions, velocities, personal bests (n, d), updated in place.
-        pcost, cost : numpy.ndarray
-            Personal-best costs (updated in place) and the costs of ``x`` (n,).
-        r : numpy.ndarray or None
-            The draws ``(4, n, d)`` of the move, None for the best updates only.
-        t, t_max : int
-            The iteration and the last one.
-        limits : numpy.ndarray
-            ``[v_max, lower, upper]`` (3, d).
-        clip_box : bool
-            Whether the move clips to the box.
-
-        Returns
-        -------
-        int
-            The global best's index.
-        """
-        if r is None:
-            return kernels.drift_step(x, v, pbest, pcost, cost, False, _NO_DRAWS, _NO_DRAWS[0], 0.0, 0.0, 0.0,
-                                      limits, clip_box)
-        return kernels.drift_step(x, v, pbest, pcost, cost, True, r, np.log(1.0 / (1.0 - r[3])), self.alpha(t, t_max),
-                                  self.c1, self.c2, limits, clip_box)

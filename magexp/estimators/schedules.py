@@ -13,25 +13,24 @@ from magexp.errors import MagexpError
 
 
 def values(schedule, t: np.ndarray, t_max: int) -> np.ndarray:
-    """``schedule`` at every iteration of ``t`` in one vectorised call: the same floats as
-    ``schedule(t_k, t_max)`` one by one (the same IEEE operations, each exact ``int -> float``
-    conversion included).
+    """``schedule`` at every iteration of ``t`` in one vectorised call.
 
     Parameters
     ----------
-    schedule : callable
-        ``schedule(t, t_max)``.
-    t : numpy.ndarray
-        Integer iterations.
+    schedule : callable or float
+        A schedule ``s(t, t_max)`` or a constant number.
+    t : ndarray of int
+        Iteration numbers.
     t_max : int
-        The last iteration.
+        Number of iterations.
 
     Returns
     -------
-    numpy.ndarray
-        ``t.shape`` floats.
+    ndarray, shape t.shape
+        The same floats as ``schedule(t_k, t_max)`` one by one (the same IEEE operations, each
+        exact ``int -> float`` conversion included).
     """
-    out = schedule(t, t_max)
+    out = schedule(t, t_max) if callable(schedule) else schedule
     return out if isinstance(out, np.ndarray) else np.full(t.shape, out, float)  # a constant: one float
 
 

@@ -1,7 +1,7 @@
 """The one swarm engine behind every PSO variant in magexp.
 
 Variants differ only by small strategy pieces passed in: the velocity rule
-(:mod:`magexp.estimators.velocity`), its coefficient schedules
+(:mod:`magexp.estimators.velocity`: one kernel per rule), its coefficient schedules
 (:mod:`magexp.estimators.schedules`) and the initialiser
 (:mod:`magexp.estimators.initialisers`). One iteration is
 
@@ -15,23 +15,22 @@ handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
 followed by the personal-best and global-best updates. The whole swarm is
 evaluated with one call of ``problem.cost``.
 
-With numba (:func:`compiled`), a rule whose class has a ``step`` method beside its ``__call__``
-(the built-in ones) makes one
-compiled call per iteration of the best updates and the next iteration's rule, clamp, move and
-``clip`` (:mod:`magexp.estimators._compiled`), on random numbers drawn several iterations per
-call (:func:`_draw_blocks`; the same stream): the same numbers, bit for bit, as the numpy path, which
-runs otherwise (``MAGEXP_NUMBA=0``, numba missing, or a rule without ``step``).
+Each step (the best updates, then the next iteration's move) runs one of two ways, from the same
+kernel: in numpy (:func:`numpy_step`, the kernel on whole arrays) or, with numba
+(:func:`compiled`), in one compiled call per iteration (:func:`magexp.estimators._compiled.engine`,
+the kernel element by element), on random numbers drawn several iterations per call
+(:func:`_draw_blocks`; the same stream either way): the same numbers, bit for bit. numpy runs when
+``MAGEXP_NUMBA=0`` or numba is missing.
 
 When, besides, the problem offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`),
-the boundary is ``clip``, the rule has ``coefficients`` and no callback watches the iterations,
-the cost joins the compiled call and one call runs a whole block of draws' iterations
-(:meth:`SwarmOptimizer._run`, :func:`magexp.estimators._compiled.run`): no Python, no dispatch
-and no argument conversion per iteration, and again the same numbers, bit for bit.
+the boundary is ``clip`` and no callback watches the iterations, the cost joins the compiled call
+and one call runs a whole block of draws' iterations (:meth:`SwarmOptimizer._run`): no Python, no
+dispatch and no argument conversion per iteration, and again the same numbers, bit for bit.
 """
 
 from __future__ import annotations
 
-from functools import cache
+from functools import cache, partial
 from itertools import chain
 
 import numpy as np
@@ -41,36 +40,99 @@ from magexp.errors import check, check_nonnegative, check_positive_int
 from magexp.estimators import boundaries
 from magexp.estimators.initialisers import Uniform
 from magexp.estimators.result import FitResult
-from magexp.estimators.velocity import InertiaVelocity
+from magexp.estimators.velocity import ALL, InertiaVelocity
 from magexp.problems import kernels
-from magexp.problems.base import defining_class, swarm_kernel
+from magexp.problems.base import swarm_kernel
 
 
-DRAW_BLOCK = 1 << 14  # random numbers drawn per call by the compiled path (128 kB: they stay in cache)
+DRAW_BLOCK = 1 << 14  # random numbers drawn per call (128 kB: they stay in cache)
+_NO_MOVE = (False, np.empty((0, 0, 0)), np.zeros(3))  # the step after the last iteration: no move
 
 
-def _draw_blocks(rng: np.random.Generator, shape: tuple, t_max: int, block: int):
-    """The random numbers of iterations ``1..t_max``, ``shape`` each, drawn ``block`` iterations
-    per call (arrays ``(k, *shape)``): the same stream as one ``rng.random(shape)`` per iteration
-    (a generator fills an array in order), with less overhead per call. Every block is drawn into
-    the same buffer (no fresh pages per block): a block is used up before the next is drawn."""
-    buffer = np.empty((min(block, t_max), *shape))
+def _draw_blocks(rng: np.random.Generator, rule, shape: tuple, t_max: int, block: int):
+    """The random factors of iterations ``1..t_max``, drawn ``block`` iterations per call.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The run's generator.
+    rule : VelocityRule
+        Draws ``rule.n_draws`` numbers per particle and dimension, turned into its kernel's
+        factors by ``rule.factors``.
+    shape : tuple
+        ``(n, d)``.
+    t_max, block : int
+        Iterations, and iterations per draw.
+
+    Yields
+    ------
+    ndarray, shape (k, ·, n, d)
+        The factors of ``k <= block`` iterations: the same stream as one ``rng.random`` per
+        iteration (a generator fills an array in order), with less overhead per call. Every block
+        is drawn into the same buffer (no fresh pages per block): a block is used up before the
+        next is drawn.
+    """
+    buffer = np.empty((min(block, t_max), rule.n_draws, *shape))
     for start in range(1, t_max + 1, block):
-        yield rng.random(out=buffer[: min(block, t_max + 1 - start)])
+        yield rule.factors(rng.random(out=buffer[: min(block, t_max + 1 - start)]))
 
 
-def _has_step(rule, name: str = "step") -> bool:
-    """Whether ``rule`` has a compiled ``step`` (or ``coefficients``) of its own rule: one defined
-    by the class that defines its ``__call__`` (a subclass that changes the rule but not the step
-    runs in numpy)."""
-    owner = defining_class(rule, name)
-    return owner is not None and owner is defining_class(rule, "__call__")
+def numpy_step(kernel, needs_mean, x, v, pbest, pcost, cost, moves, r, c, limits, clip_box) -> int:
+    """One step in numpy: the best updates with ``cost``, then, if ``moves``, the next move.
+
+    The numpy twin of the compiled step (:func:`magexp.estimators._compiled.engine`), with the
+    same kernel called once on whole arrays (``i = j =`` :data:`~magexp.estimators.velocity.ALL`).
+
+    Parameters
+    ----------
+    kernel : function
+        The velocity rule's kernel.
+    needs_mean : bool
+        Whether it reads the mean personal best (else it is given None).
+    x, v : ndarray, shape (n, d)
+        Positions and velocities, moved in place: ``v <- min(max(kernel, -v_max), v_max)``,
+        ``x <- x + v``.
+    pbest, pcost : ndarray, shapes (n, d), (n,)
+        Personal bests and their costs, updated in place where ``cost < pcost``.
+    cost : ndarray, shape (n,)
+        The costs of ``x``.
+    moves : bool
+        Whether to move (not after the last iteration).
+    r : ndarray, shape (k, n, d)
+        The kernel's random factors.
+    c : ndarray, shape (3,)
+        Its coefficients.
+    limits : ndarray, shape (3, d)
+        ``v_max``, lower, upper.
+    clip_box : bool
+        Unused: the boundary is applied after the step (``SwarmOptimizer.boundary``).
+
+    Returns
+    -------
+    int
+        The global best's index (before the move).
+    """
+    better = cost < pcost
+    np.copyto(pbest, x, where=better[:, None])
+    np.copyto(pcost, cost, where=better)
+    g = int(pcost.argmin())
+    if moves:
+        velocity = kernel(ALL, ALL, x, v, pbest, g, pbest.mean(axis=0) if needs_mean else None, r, c)
+        np.minimum(np.maximum(velocity, -limits[0]), limits[0], out=v)
+        np.add(x, v, out=x)
+    return g
 
 
 @cache
 def compiled():
-    """The compiled swarm steps (a namespace), or None when numba is unavailable or
-    ``MAGEXP_NUMBA=0`` (the switch of :func:`magexp.problems.kernels.compiled`)."""
+    """The compiled swarm steps, if numba is in use.
+
+    Returns
+    -------
+    module or None
+        :mod:`magexp.estimators._compiled`, or None when numba is unavailable or
+        ``MAGEXP_NUMBA=0`` (the switch of :func:`magexp.problems.kernels.compiled`).
+    """
     if kernels.compiled() is None:
         return None
     # lazy: numba, measured 205 ms CPU to import (min of 5, after numpy); this module is imported by every lm run
@@ -81,8 +143,23 @@ def compiled():
 
 
 def check_speed(value, name: str, per: str) -> float:
-    """``value`` as a float, refused unless finite and > 0: a ``v_max`` of 0 (or none) leaves the velocity
-    unbounded, its uniform initial draw ``U(-inf, inf)`` is not a number."""
+    """A velocity limit, refused unless finite and > 0.
+
+    Parameters
+    ----------
+    value : float
+        The configured number.
+    name : str
+        Its key (``estimator.velocity_clamp``), named in the error.
+    per : str
+        What it multiplies (``(upper - lower)``), or ``""``.
+
+    Returns
+    -------
+    float
+        ``value``; a ``v_max`` of 0 (or none) is refused: it leaves the velocity unbounded, and its
+        uniform initial draw ``U(-inf, inf)`` is not a number.
+    """
     v = check_nonnegative(value, name)
     check(v > 0, f"{name}={value!r} is not allowed: it must be a number > 0 (v_max = {name.rpartition('.')[2]}"
                  f"{' x ' + per if per else ''}; 0 leaves the velocity unbounded)")
@@ -90,23 +167,35 @@ def check_speed(value, name: str, per: str) -> float:
 
 
 class SwarmOptimizer:
-    """Global-best particle swarm over a box-bounded problem.
+    """Global-best particle swarm over a box-bounded problem (Kennedy & Eberhart 1995; the engine
+    of Ding 2024's PSO and IPSO and of Yuan 2018's RDPSO).
 
     Parameters
     ----------
-    name : config name of this estimator.
-    n_particles, n_iterations : swarm size and number of iterations.
-    velocity : velocity rule (default: traditional inertia-weight PSO).
-    init : initialiser (default: uniform).
-    velocity_clamp : ``v_max = velocity_clamp * (upper - lower)``, > 0 (0 would leave the velocity unbounded:
+    name : str
+        Config name of this estimator.
+    n_particles, n_iterations : int
+        Swarm size and number of iterations.
+    velocity : VelocityRule, optional
+        The velocity rule (:mod:`magexp.estimators.velocity`; default: traditional inertia-weight
+        PSO).
+    init : callable, optional
+        The initialiser ``init(n, lower, upper, rng=rng)`` (default: uniform).
+    velocity_clamp : float
+        ``v_max = velocity_clamp * (upper - lower)``, > 0 (0 would leave the velocity unbounded:
         the first uniform initial velocity ``U(-inf, inf)`` is not a number).
-    velocity_limit : absolute ``v_max``, the same for every dimension (Yuan 2018 Table 1:
-        1.5), > 0; when given it replaces ``velocity_clamp``.
-    initial_velocity : ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
-    boundary : what a particle leaving the box does: ``clip``, ``reflect`` or ``random``
+    initial_velocity : str
+        ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
+    references : str
+        The paper(s) the variant comes from.
+    velocity_limit : float, optional
+        Absolute ``v_max``, the same for every dimension (Yuan 2018 Table 1: 1.5), > 0; when
+        given it replaces ``velocity_clamp``.
+    boundary : str
+        What a particle leaving the box does: ``clip``, ``reflect`` or ``random``
         (:mod:`magexp.estimators.boundaries`).
-    references : the paper(s) the variant comes from.
-    label : its name in the report's row labels (pso, ipso, rdpso: PSO, IPSO, RDPSO); empty: the class's.
+    label : str
+        Its name in the report's row labels (pso, ipso, rdpso: PSO, IPSO, RDPSO); empty: the class's.
     """
 
     needs = ("cost",)
@@ -135,83 +224,113 @@ class SwarmOptimizer:
         self.references = references
 
     def velocity_max(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        """Per-dimension ``v_max``: absolute limit, fraction of the box, or ``inf`` (no clamp)."""
+        """The per-dimension velocity limit.
+
+        Parameters
+        ----------
+        lo, hi : ndarray, shape (d,)
+            The box.
+
+        Returns
+        -------
+        ndarray, shape (d,)
+            ``v_max``: the absolute limit, or ``velocity_clamp`` times the box's width.
+        """
         if self.velocity_limit is not None:
             return np.full(lo.shape, self.velocity_limit)
         return self.velocity_clamp * (hi - lo)
 
-    def _run(self, nb, kernel, x, v, pbest, pcost, history, blocks, limits) -> int:
-        """Every iteration with the cost compiled in (:func:`magexp.estimators._compiled.run`): one
-        call per block of draws, from the initial move (iteration 0, on the costs in ``pcost``) to
-        the last iteration (no move), which joins the last block's call. The same numbers as one
-        :meth:`velocity.step` and one ``problem.cost`` per iteration. Returns the global best's index."""
-        rule, t, t_max = self.velocity, 0, len(history) - 1
-        coef = rule.coefficients(np.arange(1, t_max + 1), t_max)  # iteration t moves at time t + 1: row t
+    def _run(self, run, problem, x, v, pbest, pcost, history, blocks, coef, limits) -> int:
+        """Every iteration with the cost compiled in, one call per block of draws.
+
+        From the initial move (iteration 0, on the costs in ``pcost``) to the last iteration (no
+        move), which joins the last block's call; the same numbers as one step and one
+        ``problem.cost`` per iteration.
+
+        Parameters
+        ----------
+        run : numba Dispatcher
+            The rule's compiled ``run`` (:func:`magexp.estimators._compiled.engine`).
+        problem : tuple
+            The compiled cost's arguments (:func:`magexp.problems.base.swarm_kernel`).
+        x, v, pbest, pcost, history : ndarray
+            The swarm, moved and updated in place, and the best cost of every iteration.
+        blocks : iterator of ndarray
+            The random factors (:func:`_draw_blocks`).
+        coef : ndarray, shape (t_max, 3)
+            Row ``t``: the coefficients of the move at time ``t + 1``.
+        limits : ndarray, shape (3, d)
+            ``v_max``, lower, upper.
+
+        Returns
+        -------
+        int
+            The global best's index.
+        """
+        t, t_max = 0, len(history) - 1
         for r in blocks:
             k = len(r)
-            nb.run(x, v, pbest, pcost, history, t, k, r, rule.log_u(r), coef[t: t + k], rule.drift, limits, True,
-                   kernel)
+            run(x, v, pbest, pcost, history, t, k, r, coef[t: t + k], limits, True, problem)
             t += k
-        return nb.run(x, v, pbest, pcost, history, t_max, 1, r[:0], rule.log_u(r[:0]), coef[:0], rule.drift, limits,
-                      True, kernel)
+        return run(x, v, pbest, pcost, history, t_max, 1, r[:0], coef[:0], limits, True, problem)
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
         """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]``.
 
-        ``callback(t, gbest, gbest_cost)`` is called after every iteration; a
-        true return value stops the run.
+        Parameters
+        ----------
+        problem : Problem
+            ``cost(thetas: (n, p)) -> (n,)``, ``lower``, ``upper``.
+        rng : numpy.random.Generator
+            Every random number of the run (initial swarm, rule, boundary).
+        callback : callable, optional
+            ``callback(t, gbest, gbest_cost)`` after every iteration; a true return value stops
+            the run.
+
+        Returns
+        -------
+        FitResult
+            The best position and cost, the best cost of every iteration, and in ``metrics``
+            ``on_boundary``: the coordinates of the best on the box's faces.
         """
         lo, hi = problem.lower, problem.upper
-        n, t_max = self.n_particles, self.n_iterations
+        n, t_max, rule = self.n_particles, self.n_iterations, self.velocity
         vmax = self.velocity_max(lo, hi)
-        x = self.init(n, lo, hi, rng=rng)
+        x = np.array(self.init(n, lo, hi, rng=rng), float, order="C")
         v = rng.uniform(-1.0, 1.0, x.shape) * np.where(np.isfinite(vmax), vmax, 0.0) \
             if self.initial_velocity == "uniform" else np.zeros_like(x)
-        cost = problem.cost(x)
-        pbest, pcost = x.copy(), cost.copy()
-        g = int(np.argmin(pcost))
+        pcost = np.array(problem.cost(x), float)
+        pbest = x.copy()
         history = np.empty(t_max + 1)
-        history[0] = pcost[g]
-        nit = 0
-        neg_vmax = -vmax
-        nb = compiled() if _has_step(self.velocity) else None
-        clip_box = self.boundary == "clip"
-        kernel = None
-        if nb is not None:  # moved in place, one compiled call per iteration (module docstring)
-            x, v, pcost = np.array(x, float, order="C"), np.array(v, float, order="C"), np.array(pcost, float)
-            limits = np.empty((3, lo.size))
-            limits[0], limits[1], limits[2] = vmax, lo, hi
-            # a boundary that draws (random re-entry) takes its numbers between two moves'
-            block = 1 if self.boundary == "random" else max(1, DRAW_BLOCK // (self.velocity.n_draws * x.size))
-            blocks = _draw_blocks(rng, (self.velocity.n_draws, *x.shape), t_max, block)
-            if clip_box and callback is None and _has_step(self.velocity, "coefficients"):
-                kernel = swarm_kernel(problem)
-            if kernel is not None:  # every iteration, compiled in
-                g, nit = self._run(nb, kernel, x, v, pbest, pcost, history, blocks, limits), t_max
-            else:
-                draws = chain.from_iterable(blocks)
-                g = self.velocity.step(nb, x, v, pbest, pcost, pcost, next(draws), 1, t_max, limits, clip_box)
-        for t in range(1, 1 if kernel is not None else t_max + 1):
-            if nb is not None:
-                if not clip_box:
-                    x, v = self._handle(x, v, lo, hi, rng=rng)
-                # iteration t's best updates, then iteration t + 1's move
-                g = self.velocity.step(nb, x, v, pbest, pcost, problem.cost(x), next(draws, None), t + 1, t_max,
-                                       limits, clip_box)
-            else:
-                # clip as min(max(.)): the same numbers as np.clip without its per-call overhead
-                v = np.minimum(np.maximum(self.velocity(x, v, pbest, pbest[g], t, t_max, rng=rng), neg_vmax), vmax)
-                x, v = self._handle(x + v, v, lo, hi, rng=rng)
-                cost = problem.cost(x)
-                better = cost < pcost
-                np.copyto(pbest, x, where=better[:, None])
-                np.copyto(pcost, cost, where=better)
-                g = int(pcost.argmin())
-            history[t] = pcost[g]
-            nit = t
+        limits = np.stack([vmax, lo, hi]).astype(float)
+        coef = rule.schedule(np.arange(1, t_max + 1), t_max)  # row t: the move at time t + 1
+        # a boundary that draws (random re-entry) takes its numbers between two moves'
+        block = 1 if self.boundary == "random" else max(1, DRAW_BLOCK // (rule.n_draws * x.size))
+        blocks = _draw_blocks(rng, rule, x.shape, t_max, block)
+        nb = compiled()
+        clip_box = nb is not None and self.boundary == "clip"  # the compiled move clips; numpy: self._handle
+        kernel = swarm_kernel(problem) if clip_box and callback is None else None
+        engine = nb.engine(rule.kernel, rule.needs_mean) if nb is not None else None
+        if kernel is not None:  # every iteration, compiled in
+            g = self._run(engine.run, kernel, x, v, pbest, pcost, history, blocks, coef, limits)
+            return self._result(pbest, pcost, g, history, t_max, lo, hi)
+        step = engine.step if engine is not None else partial(numpy_step, rule.kernel, rule.needs_mean)
+        moves = ((True, r, c) for r, c in zip(chain.from_iterable(blocks), coef))
+        g = step(x, v, pbest, pcost, pcost, *next(moves), limits, clip_box)
+        history[0], nit = pcost[g], 0
+        for t in range(1, t_max + 1):
+            if not clip_box:
+                x, v = self._handle(x, v, lo, hi, rng=rng)
+            # iteration t's best updates, then iteration t + 1's move
+            g = step(x, v, pbest, pcost, problem.cost(x), *next(moves, _NO_MOVE), limits, clip_box)
+            history[t], nit = pcost[g], t
             if callback is not None and callback(t, pbest[g], pcost[g]):
                 break
-        history = history[: nit + 1]
+        return self._result(pbest, pcost, g, history, nit, lo, hi)
+
+    def _result(self, pbest, pcost, g, history, nit, lo, hi) -> FitResult:
+        """The :class:`FitResult` of the best ``pbest[g]`` after ``nit`` iterations."""
+        history, n = history[: nit + 1], len(pcost)
         edge = on_face(pbest[g], lo, hi)  # |best - face| <= FACE_TOL (hi - lo), or on an infinite face
         return FitResult(
             x=pbest[g].copy(), fun=float(pcost[g]), nit=nit, nfev=n * (nit + 1),

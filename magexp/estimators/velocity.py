@@ -1,6 +1,26 @@
-"""Velocity rules of the swarm engine: pure, vectorised kernels over ``(n, d)`` arrays.
+"""Velocity rules of the swarm engine: each rule is one kernel.
 
-A rule is called as ``rule(x, v, pbest, gbest, t, t_max, rng=rng) -> v_new``.
+A rule's kernel gives the new velocity of particle ``i`` in dimension ``j``, before the clamp::
+
+    kernel(i, j, x, v, pbest, g, mean, r, c) -> v_ij
+
+with ``x``, ``v``, ``pbest`` the positions, velocities and personal bests ``(n, d)``, ``g`` the
+global best's index (its position is ``pbest[g]``), ``mean`` the mean personal best ``(d,)``
+(``M`` of Yuan 2018 eq 13; given only to a rule that ``needs_mean``), ``r`` the rule's random
+factors ``(k, n, d)`` and ``c`` its three coefficients at this iteration. It is written once,
+with arithmetic and ``[i, j]`` indexing only, and runs two ways, as pyswarms'
+``compute_velocity`` is one function per rule:
+
+* compiled (numba), called with integer ``i, j`` for every element inside the engine's loop
+  (:func:`magexp.estimators._compiled.engine`);
+* in numpy, called once with ``i = j =`` :data:`ALL` (``slice(None)``): ``x[i, j]`` is then the
+  whole array and ``pbest[g, j]`` the global best's row, so the same expression computes every
+  element at once, with the same IEEE operations in the same order.
+
+A rule is a :class:`VelocityRule`: its kernel, how many uniform numbers it draws per particle and
+dimension (``n_draws``), the names of its three coefficients (schedules or numbers), and, if its
+random factors are not the uniform draws themselves, :meth:`VelocityRule.factors` (numpy, run on
+whole blocks of draws, so that both paths use the same ``log``).
 """
 
 from __future__ import annotations
@@ -10,23 +30,54 @@ import numpy as np
 from magexp.errors import MagexpError
 from magexp.estimators.schedules import Constant, values
 
-_NO_DRAWS = np.empty((2, 0, 0))  # the random numbers of a step that does not move
-_NO_LOG = np.empty((0, 0, 0))  # ln(1/u) of a rule that draws no u
+ALL = slice(None)  #: ``i = j = ALL``: a kernel computes the whole swarm in numpy
 
 
-def inertia_velocity(v, x, pbest, gbest, *, w, c1, c2, r1, r2):
-    """Global-best PSO velocity (Kennedy & Eberhart 1995; Ding 2024 eq 10).
+def inertia(i, j, x, v, pbest, g, mean, r, c):
+    """Global-best PSO velocity with inertia weight (Kennedy & Eberhart 1995; Ding 2024 eq 10).
 
-    .. math:: v \\leftarrow w v + c_1 r_1 (p - x) + c_2 r_2 (g - x)
+    .. math:: v_{ij} \\leftarrow w\\,v_{ij} + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij})
+
+    Parameters
+    ----------
+    i, j : int or slice
+        Particle and dimension (:data:`ALL` for every one).
+    x, v, pbest : ndarray, shape (n, d)
+        Positions, velocities and personal bests.
+    g : int
+        Index of the global best.
+    mean : ndarray, shape (d,), or None
+        Mean personal best (unused by this rule).
+    r : ndarray, shape (2, n, d)
+        ``r1, r2 ~ U(0, 1)``.
+    c : sequence of 3 floats
+        ``w, c1, c2``.
+
+    Returns
+    -------
+    float or ndarray
+        The new velocity before the clamp.
     """
-    return w * v + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x)
+    return c[0] * v[i, j] + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j])
 
 
 def check_schedule(schedule, role: str):
-    """``schedule`` of the coefficient ``role`` (``inertia``, ``c1``, ``c2``), refused if a value it
-    is given (``value``, ``start``, ``end``: a linear schedule's extremes) is negative: a negative
-    inertia reverses the velocity every step, a negative learning factor drives a particle away from
-    the best position found."""
+    """``schedule`` of the coefficient ``role``, refused if negative.
+
+    Parameters
+    ----------
+    schedule : Constant or Linear
+        The schedule; a value it is given (``value``, ``start``, ``end``: a linear schedule's
+        extremes) must be >= 0: a negative inertia reverses the velocity every step, a negative
+        learning factor drives a particle away from the best position found.
+    role : str
+        ``inertia``, ``c1`` or ``c2`` (named in the error).
+
+    Returns
+    -------
+    Constant or Linear
+        ``schedule`` itself.
+    """
     for part in ("value", "start", "end"):
         v = getattr(schedule, part, None)
         if isinstance(v, float) and v < 0:
@@ -35,50 +86,81 @@ def check_schedule(schedule, role: str):
     return schedule
 
 
-class InertiaVelocity:
-    """Inertia-weight velocity with scheduled ``w``, ``c1``, ``c2``.
+class VelocityRule:
+    """What the swarm engine needs of a velocity rule; a new rule subclasses it.
 
-    Traditional PSO uses :class:`~magexp.estimators.schedules.Constant` schedules;
-    Ding's IPSO uses :class:`~magexp.estimators.schedules.Linear` ones (eqs 12-14).
-    ``r1, r2 ~ U(0, 1)`` independently per particle and dimension.
+    Attributes
+    ----------
+    kernel : function
+        The rule, set by the subclass (a ``staticmethod``): ``kernel(i, j, x, v, pbest, g, mean,
+        r, c)``, arithmetic and indexing only (the module docstring), compiled by numba as it is.
+    n_draws : int
+        Uniform numbers ``U(0, 1)`` drawn per particle and dimension in one iteration.
+    coefficients : tuple of 3 str
+        The attributes holding the three coefficients ``c`` (each a schedule
+        ``s(t, t_max)`` or a number).
+    needs_mean : bool
+        Whether the kernel reads ``mean`` (the engine computes it only then: it costs 3 % of a
+        numpy iteration of 50 particles).
     """
+
+    n_draws = 2
+    coefficients = ("inertia", "c1", "c2")
+    needs_mean = False
+
+    def schedule(self, t: np.ndarray, t_max: int) -> np.ndarray:
+        """The coefficients at every time of ``t``.
+
+        Parameters
+        ----------
+        t : ndarray of int
+            Iteration numbers ``1..t_max``, as :func:`~magexp.estimators.schedules.values` takes them.
+        t_max : int
+            Number of iterations.
+
+        Returns
+        -------
+        ndarray, shape (len(t), 3)
+            Row ``k``: the coefficients ``c`` at time ``t[k]``, the floats ``s(t_k, t_max)`` one
+            call at a time would give (:func:`magexp.estimators.schedules.values`).
+        """
+        return np.stack([values(getattr(self, name), t, t_max) for name in self.coefficients], axis=1)
+
+    @staticmethod
+    def factors(r: np.ndarray) -> np.ndarray:
+        """The kernel's random factors from the uniform draws (here: the draws themselves).
+
+        Parameters
+        ----------
+        r : ndarray, shape (m, n_draws, n, d)
+            The draws of ``m`` iterations, each ``U(0, 1)``.
+
+        Returns
+        -------
+        ndarray, shape (m, k, n, d)
+            The factors ``r`` of each iteration's kernel call (may be ``r``, changed in place).
+        """
+        return r
+
+
+class InertiaVelocity(VelocityRule):
+    """Inertia-weight velocity (:func:`inertia`) with scheduled ``w``, ``c1``, ``c2``.
+
+    Traditional PSO uses :class:`~magexp.estimators.schedules.Constant` schedules; Ding's IPSO
+    uses :class:`~magexp.estimators.schedules.Linear` ones (Ding 2024 eqs 12-14). ``r1, r2 ~
+    U(0, 1)`` independently per particle and dimension.
+
+    Parameters
+    ----------
+    inertia : schedule, optional
+        ``w(t, t_max)`` (default: constant 0.7298, Eberhart & Shi 2000).
+    c1, c2 : schedule, optional
+        Cognitive and social learning factors (default: constant 1.49618 each).
+    """
+
+    kernel = staticmethod(inertia)
 
     def __init__(self, inertia=None, c1=None, c2=None):
         self.inertia = check_schedule(inertia if inertia is not None else Constant(0.7298), "inertia")
         self.c1 = check_schedule(c1 if c1 is not None else Constant(1.49618), "c1")
         self.c2 = check_schedule(c2 if c2 is not None else Constant(1.49618), "c2")
-
-    def __call__(self, x, v, pbest, gbest, t, t_max, *, rng):
-        r1 = rng.random(x.shape)
-        r2 = rng.random(x.shape)
-        return inertia_velocity(
-            v, x, pbest, gbest,
-            w=self.inertia(t, t_max), c1=self.c1(t, t_max), c2=self.c2(t, t_max), r1=r1, r2=r2,
-        )
-
-    n_draws = 2  # random numbers per particle and dimension in one iteration (r1, r2)
-
-    drift = False  # the rule of :func:`magexp.estimators._compiled.inertia_move` in a compiled run
-
-    def coefficients(self, t: np.ndarray, t_max: int) -> np.ndarray:
-        """``[w, c1, c2]`` at every time of the integer array ``t``, ``(len(t), 3)``: the
-        coefficients of :func:`magexp.estimators._compiled.run` (the same floats as :meth:`step`)."""
-        coef = np.empty((len(t), 3))
-        for k, schedule in enumerate((self.inertia, self.c1, self.c2)):
-            coef[:, k] = values(schedule, t, t_max)
-        return coef
-
-    def log_u(self, r: np.ndarray) -> np.ndarray:
-        """``ln(1/u)`` of the draws ``r`` (k, 2, n, d) in a compiled run: none (this rule draws no ``u``)."""
-        return _NO_LOG
-
-    def step(self, kernels, x, v, pbest, pcost, cost, r, t, t_max, limits, clip_box):
-        """One compiled call (:func:`magexp.estimators._compiled.inertia_step`): the best updates
-        with ``cost``, then, unless ``r`` is None (after the last iteration), iteration ``t``'s move
-        in place (this rule with ``r1, r2 = r``, the clamp to ``limits[0]``, ``x += v`` and, if
-        ``clip_box``, the clip to ``limits[1:]``): the same numbers as :meth:`__call__` on the
-        same draws. Returns the global best's index."""
-        if r is None:
-            return kernels.inertia_step(x, v, pbest, pcost, cost, False, _NO_DRAWS, 0.0, 0.0, 0.0, limits, clip_box)
-        return kernels.inertia_step(x, v, pbest, pcost, cost, True, r, self.inertia(t, t_max), self.c1(t, t_max),
-                                    self.c2(t, t_max), limits, clip_box)

@@ -4,9 +4,9 @@ The kernels are compiled with ``cache=True``: the machine code is stored beside 
 loaded by every later process. Without this step the first processes of a fresh clone (each
 worker of ``make reproduce``, each process of ``make test``) compile the same kernels side by
 side. Here one process compiles them by running a few tiny fits that take every compiled path:
-the fused scalar and vector costs inside the compiled swarm loop (``ipso``, ``rdpso``), the
-per-iteration path of a boundary that draws (``random``), and the compiled residuals of a large
-recording. Nothing is written outside the package's own ``__pycache__`` folders and the run
+the fused scalar and vector costs inside each velocity rule's compiled swarm loop (``ipso``,
+``rdpso``), the per-iteration path of a boundary that draws (``random``), and the compiled
+residuals of a large recording. Nothing is written outside the package's own ``__pycache__`` folders and the run
 cache is not used.
 
 numba keys the stored code by its target (CPU name and features, with the source): a process with
@@ -34,6 +34,8 @@ FITS = (
      "estimator.n_particles=4"],
     ["scenario=ding2024_exp1", "estimator=pso", "estimator.boundary=random", "estimator.n_iterations=3",
      "estimator.n_particles=4"],
+    # each velocity rule has its own compiled loop (magexp.estimators._compiled.engine): RDPSO's with the cost in it
+    ["scenario=ding2024_exp1", "estimator=rdpso", "estimator.n_iterations=3", "estimator.n_particles=4"],
     ["scenario=yuan2018_mode1", "objective=vector", "estimator=rdpso", "estimator.n_iterations=3",
      "estimator.n_particles=4"],
     ["scenario=yuan2018_mode1", "objective=scalar", "estimator=rdpso", "estimator.n_iterations=3",
