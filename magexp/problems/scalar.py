@@ -55,22 +55,63 @@ class ScalarCalibration(CalibrationProblem):
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """The fused cost's working memory (:func:`magexp.problems.kernels.working_floats`): ``O(P)``
-        compiled, one chunk in numpy; never ``N × P``."""
+        compiled, one chunk in numpy; never ``N × P``.
+
+        Parameters
+        ----------
+        n_readings : int
+            The readings ``N`` (unused: the memory does not depend on them).
+        n_particles : int
+            The particles ``P`` of one call.
+
+        Returns
+        -------
+        int
+            The float64 numbers held.
+        """
         return kernels.working_floats(n_particles)
 
     def swarm_kernel(self) -> tuple | None:
-        """``(SCALAR, u, B_a (N, 1), [c, s])`` in the inverse parameterisation with numba, else None."""
+        """``(SCALAR, u, B_a (N, 1), [c, s])`` in the inverse parameterisation with numba, else None.
+
+        Returns
+        -------
+        tuple or None
+            The compiled swarm cost's arguments, or None.
+        """
         return self._swarm_kernel
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
-        """Total-field RMS of every particle, ``(n, 12) -> (n,)``."""
+        """Total-field RMS of every particle, ``(n, 12) -> (n,)``.
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, 12)
+            Parameter vectors (:meth:`~magexp.problems.base.CalibrationProblem.unpack`).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            ``RMS(θ) = sqrt(mean_i (|W (r_i - o)| - B_a,i)²)``, Ding 2024's eq 17 (module docstring).
+        """
         if self._swarm_kernel is not None:
             return kernels.swarm_cost(self._swarm_kernel, thetas)
         w, o = self.unpack(thetas)
         return kernels.scalar_cost(w, o, *self._normalised, self._reference)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
-        """``|W (r_i - o)| - B_a,i`` for one parameter vector (direct formula)."""
+        """``|W (r_i - o)| - B_a,i`` for one parameter vector (direct formula).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            A parameter vector.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            The residuals of Ding 2024's eq 17.
+        """
         w, o = self.unpack(theta)
         return kernels.scalar_residuals(w[0], o[0], self.dataset.readings, self._reference)
 
@@ -81,16 +122,54 @@ class ScalarCalibration(CalibrationProblem):
     def cost_direct(self, theta: np.ndarray) -> float:
         """Total-field RMS of one parameter vector by the direct formula: the RMS of :meth:`residuals`,
         :func:`magexp.core.metrics.total_field_rms` with compiled residuals for many readings (it is
-        also :meth:`field_rms`, so the runs carry it once, as ``fun``)."""
+        also :meth:`field_rms`, so the runs carry it once, as ``fun``).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            A parameter vector.
+
+        Returns
+        -------
+        float
+            Ding 2024's eq 17 (= its metric, eq 18) at ``theta``.
+        """
         return rms(self.residuals(theta))
 
     def invariants(self, theta: np.ndarray) -> np.ndarray:
-        """What a scalar fit identifies: the 6 entries of ``W^T W`` (upper triangle) and ``o``."""
+        """What a scalar fit identifies: the 6 entries of ``W^T W`` (upper triangle) and ``o``.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            A parameter vector.
+
+        Returns
+        -------
+        ndarray, shape (9,)
+            ``[(W^T W)_11, _12, _13, _22, _23, _33, o]``.
+        """
         w, o = self.unpack(theta)
         g = w[0].T @ w[0]
         return np.concatenate([g[np.triu_indices(3)], o[0]])
 
     def invariant_bounds(self, theta: np.ndarray, cov: np.ndarray) -> dict:
+        """Expected error sizes from the CRB covariance of :meth:`invariants`.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            The parameter vector the covariance is taken at.
+        cov : ndarray, shape (9, 9)
+            The Cramér-Rao covariance of :meth:`invariants` (:mod:`magexp.core.bounds`).
+
+
+        Returns
+        -------
+        dict
+            ``offset_bound`` (root of the offset block's trace) and ``gram_bound`` (the expected Frobenius
+            error of ``W^T W`` relative to its norm, off-diagonal variances counted twice).
+        """
         w, _ = self.unpack(theta)
         g = w[0].T @ w[0]
         return {"offset_bound": float(np.sqrt(np.trace(cov[-3:, -3:]))),
