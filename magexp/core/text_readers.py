@@ -31,6 +31,29 @@ GYRO_UNITS = ("rad/s", "deg/s")
 
 
 def number(text: str, where: str, what: str) -> float:
+    """``text`` as a finite number of magnitude at most :data:`LARGEST`, else one line.
+
+    Parameters
+    ----------
+    text : str
+        A cell.
+    where : str
+        The file and line, named in the refusal.
+    what : str
+        The column, named in the refusal.
+
+
+    Returns
+    -------
+    float
+        The number.
+
+
+    Raises
+    ------
+    MagexpError
+        One line for a cell that is not such a number.
+    """
     try:
         value = float(text)
     except ValueError:
@@ -212,7 +235,20 @@ def _positive_meta(meta: dict, key: str, name: str) -> float | None:
 
 
 def check_unique(header: list[str], name: str) -> None:
-    """Fail in one line if a column name appears twice."""
+    """Fail in one line if a column name appears twice.
+
+    Parameters
+    ----------
+    header : list of str
+        The column names.
+    name : str
+        The file, named in the refusal.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the repeated column.
+    """
     seen = set()
     for col in header:
         if col in seen:
@@ -221,7 +257,29 @@ def check_unique(header: list[str], name: str) -> None:
 
 
 def numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> np.ndarray:
-    """Comma-separated numbers, ``ncols`` per row, every value finite (one-line errors)."""
+    """Comma-separated numbers, ``ncols`` per row, every value finite (one-line errors).
+
+    Parameters
+    ----------
+    lines : list of str
+        The data rows.
+    name : str
+        The file, named in a refusal.
+    first_line : int
+        The file line number of ``lines[0]``.
+    ncols : int
+        The columns of a row.
+
+    Returns
+    -------
+    ndarray, shape (N, ncols)
+        The numbers.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the line and the value for a short row or a value that is not a finite number.
+    """
     try:
         table = np.loadtxt(lines, delimiter=",", ndmin=2)
     except ValueError:
@@ -240,7 +298,23 @@ def numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> n
 
 
 def read_lines(path: Path) -> list[str]:
-    """The file's lines; a UTF-8 byte-order mark is accepted, a binary file refused in one line."""
+    """The file's lines; a UTF-8 byte-order mark is accepted, a binary file refused in one line.
+
+    Parameters
+    ----------
+    path : Path
+        A text file.
+
+    Returns
+    -------
+    list of str
+        Its lines.
+
+    Raises
+    ------
+    MagexpError
+        One line for a file that is not UTF-8 text.
+    """
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -254,17 +328,72 @@ def read_lines(path: Path) -> list[str]:
 
 
 def to_rad_s(values: np.ndarray, unit: str) -> np.ndarray:
+    """Angular rates in rad/s.
+
+    Parameters
+    ----------
+    values : ndarray
+        Rates.
+    unit : str
+        Their unit, ``deg/s`` or ``rad/s``.
+
+
+    Returns
+    -------
+    ndarray
+        ``values`` in rad/s.
+    """
     return np.deg2rad(values) if unit == "deg/s" else values
 
 
 
 def read_versioned(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
-    """The ``magexp-recording v1`` CSV (module docstring)."""
+    """The ``magexp-recording v1`` CSV (module docstring).
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    unit : str, optional
+        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+
+    Returns
+    -------
+    Recording
+        The readings and what the file holds beside them.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the file, line and value for a malformed file.
+    """
     return _versioned(read_lines(path), path.name, unit)
 
 
 def read_plain(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
-    """Headerless ``x y z`` numbers; the unit must be given."""
+    """Headerless ``x y z`` numbers; the unit must be given.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    unit : str, optional
+        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+
+    Returns
+    -------
+    Recording
+        The readings and what the file holds beside them.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the file, line and value for a malformed file.
+    """
     if unit is None:
         raise MagexpError(f"data.unit=None is not allowed for {path.name}: a file without header does not name "
                           f"its unit, give data.unit=<{'|'.join(UNITS)}>")
@@ -276,6 +405,23 @@ def read_plain(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recor
 
 
 def same_unit(unit, file_unit: str, name: str) -> None:
+    """Refuse, in one line, a ``data.unit`` that disagrees with the unit the file's columns name.
+
+    Parameters
+    ----------
+    unit : str or None
+        ``data.unit`` (None: not given, nothing checked).
+    file_unit : str
+        The file's unit.
+    name : str
+        The file, named in the refusal.
+
+
+    Raises
+    ------
+    MagexpError
+        One line when they differ.
+    """
     if unit is not None and check_unit(unit, "data.unit") != file_unit:
         raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file's columns say {file_unit} "
                           "(leave data.unit unset)")
@@ -305,7 +451,27 @@ def _stream(path: Path, prefix: str, suffixes: dict) -> tuple[np.ndarray, np.nda
 
 def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
     """``<stem>_mag.csv`` + ``<stem>_imu.csv``: readings at the magnetometer's times, the gyroscope
-    stream at its own (integrated at the readings' times by :meth:`Recording.attitude`)."""
+    stream at its own (integrated at the readings' times by :meth:`Recording.attitude`).
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    unit : str, optional
+        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+
+    Returns
+    -------
+    Recording
+        The readings and what the file holds beside them.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the file, line and value for a malformed file.
+    """
     stem = str(path)
     for tail in TWO_STREAM:
         stem = stem[: -len(tail)] if stem.endswith(tail) else stem
@@ -328,6 +494,25 @@ def read_named_columns(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) 
 
     The magnetometer's value repeats while it has not updated: only the rows where any axis
     changes are readings (at their row times); the gyroscope stream keeps every row.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    unit : str, optional
+        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+
+    Returns
+    -------
+    Recording
+        The readings and what the file holds beside them.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the file, line and value for a malformed file.
     """
     lines = read_lines(path)
     header = [h.strip() for h in lines[0].split(",")]
@@ -374,7 +559,27 @@ def _named_rates(table: np.ndarray, gyro: dict[str, tuple[int, str]], name: str)
 
 def read_header_counts(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
     """``Fs,<Hz>``, ``Initialization time,<s>`` (kept as metadata; every reading is kept),
-    ``mx,my,mz``, then raw counts."""
+    ``mx,my,mz``, then raw counts.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    unit : str, optional
+        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+
+    Returns
+    -------
+    Recording
+        The readings and what the file holds beside them.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the file, line and value for a malformed file.
+    """
     lines = read_lines(path)
     meta = {"format": "header-counts"}
     k = 0
@@ -401,7 +606,27 @@ def read_header_row(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> 
     (first found of :data:`MAG_COLUMNS`; unit from a suffix, ``mx_uT`` or ``mx (uT)``, else ``data.unit``),
     optionally a time ``t`` (seconds; :data:`TIME_COLUMNS`) and a gyroscope ``gx, gy, gz`` (rad/s, or
     ``gx_dps`` / ``gx (deg/s)``; it needs the time column); other columns (``ax, ay, az``, ...) are kept.
-    Separated by commas, semicolons, tabs or spaces."""
+    Separated by commas, semicolons, tabs or spaces.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    unit : str, optional
+        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+
+    Returns
+    -------
+    Recording
+        The readings and what the file holds beside them.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the file, line and value for a malformed file.
+    """
     lines = read_lines(path)
     header = header_cells(lines[0]) if lines else []
     check_unique([h.lower() for h in header], path.name)
