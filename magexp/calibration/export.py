@@ -375,20 +375,10 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
 
     Parameters
     ----------
-    w, offset : array_like
-        ``W`` (3 × 3) and ``o`` (3,) of magexp's ``B = W (r − o)``, ``r`` in ``unit``.
-    unit : str
-        The readings' unit (a key of :data:`UNITS` or a raw unit of :data:`RAW_UNITS`).
-    field_unit : str, optional
-        The unit of ``B`` (default ``unit``).
-    counts_nt : float, optional
-        nT per count, for a raw-count ``unit`` (:func:`check_counts_nt`).
+    w, offset, unit, field_unit, counts_nt, max_rotation_deg, orient
+        As :func:`to_firmware` (``symmetric=True``; ``orient``: ``COMPASS_ORIENT`` written).
     instance : int
         The compass, 0, 1 or 2.
-    max_rotation_deg : float
-        The largest rotation left out of the symmetrised ``W`` (:func:`to_firmware`).
-    orient : bool
-        Export ``W``'s rotation as ``COMPASS_ORIENT`` (:func:`to_firmware`).
     notes : dict, optional
         ``key: text`` comment lines written at the file's head.
 
@@ -448,24 +438,14 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
 
     Parameters
     ----------
-    w, offset : array_like
-        ``W`` (3 × 3) and ``o`` (3,) of magexp's ``B = W (r − o)``, ``r`` in ``unit``.
-    unit : str
-        The readings' unit (a key of :data:`UNITS` or a raw unit of :data:`RAW_UNITS`).
-    field_unit : str, optional
-        The unit of ``B`` (default ``unit``).
-    counts_nt : float, optional
-        nT per count, for a raw-count ``unit`` (:func:`check_counts_nt`).
+    w, offset, unit, field_unit, counts_nt, max_rotation_deg, orient
+        As :func:`to_firmware` (``symmetric=True``; ``orient``: ``CAL_MAGn_ROT`` written, not with ``rotation``).
     instance : int
         The slot ``n`` of ``CAL_MAGn_*``, 0-3.
     rotation : array_like, shape (3, 3), optional
         PX4's ``R`` (board or ``CAL_MAGn_ROT``) taken out of ``W`` first: ``Rᵀ W`` is exported.
-    max_rotation_deg : float
-        The largest rotation left out of the symmetrised ``W`` (:func:`to_firmware`).
-    orient : bool
-        Export ``W``'s rotation as ``CAL_MAGn_ROT`` (:func:`to_firmware`; ignored with ``rotation``).
     notes : dict, optional
-        ``key: text`` comment lines written at the file's head.
+        Comment lines, as :func:`ardupilot`'s.
 
     Returns
     -------
@@ -510,20 +490,14 @@ def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/
 
     Parameters
     ----------
-    w, offset : array_like
-        ``W`` (3 × 3) and ``o`` (3,) of magexp's ``B = W (r − o)``, ``r`` in ``unit``.
-    unit : str
-        The readings' unit (a key of :data:`UNITS` or a raw unit of :data:`RAW_UNITS`).
-    field_unit : str, optional
-        The unit of ``B`` (default ``unit``).
-    counts_nt : float, optional
-        nT per count, for a raw-count ``unit`` (:func:`check_counts_nt`).
+    w, offset, unit, field_unit, counts_nt
+        As :func:`to_firmware` (the target unit tesla, ``W`` kept whole).
     node : str
         The node the parameters are for (``/**``: every node).
     namespace : str
         The parameters' namespace under ``ros__parameters``.
     notes : dict, optional
-        ``key: text`` comment lines written at the file's head.
+        Comment lines, as :func:`ardupilot`'s.
 
     Returns
     -------
@@ -553,16 +527,12 @@ def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", no
 
     Parameters
     ----------
-    w, offset : array_like
-        ``W`` (3 × 3) and ``o`` (3,) of magexp's ``B = W (r − o)``, ``r`` in ``unit``.
-    unit : str
-        The readings' unit, kept in the header.
-    field_unit : str, optional
-        The unit of ``B`` (default ``unit``), kept.
+    w, offset, unit, field_unit
+        As :func:`to_firmware` (units kept: no target unit).
     name : str
         A C identifier: the arrays' prefix (upper case) and the function's (lower case).
     notes : dict, optional
-        ``key: text`` comment lines written in the header's opening comment.
+        Comment lines in the header's opening comment.
 
     Returns
     -------
@@ -722,14 +692,14 @@ def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
     target : str
         One of :data:`TARGETS`.
     path : str or Path, optional
-        The file, or a folder (the target's :data:`FILE_NAMES` inside), or None (the working folder).
+        As :func:`write`'s.
     **options
         As :func:`of_calibration`.
 
     Returns
     -------
     Path
-        The file written.
+        :func:`write`'s path.
 
     Raises
     ------
@@ -753,7 +723,7 @@ def write(out: Export, path: str | Path | None = None) -> Path:
     Returns
     -------
     Path
-        The file written.
+        ``path``, or the file made in the folder ``path``.
 
     Raises
     ------

@@ -146,10 +146,8 @@ def fit_ellipsoid_specific(readings: np.ndarray, radius: float, k: float = 4.0) 
 
     Parameters
     ----------
-    readings : ndarray, shape (N, 3)
-        The raw readings.
-    radius : float
-        The sphere's radius (the reference total field).
+    readings, radius
+        As :func:`fit_ellipsoid`.
     k : float
         The constraint's ``k`` (:func:`constraint_matrix`).
 

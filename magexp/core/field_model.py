@@ -358,10 +358,8 @@ def total_in(reference: ReferenceField, unit: str) -> float:
 
     Parameters
     ----------
-    reference : ReferenceField
-        The model field.
-    unit : str
-        A key of :data:`UNITS`.
+    reference, unit
+        As :func:`field_in`.
 
     Returns
     -------

@@ -65,7 +65,7 @@ def header_columns(line: str) -> dict[str, tuple[int, str | None]] | None:
     Parameters
     ----------
     line : str
-        A header row.
+        The first row of a CSV (:func:`header_cells`).
 
     Returns
     -------

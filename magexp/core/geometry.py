@@ -111,7 +111,7 @@ def rot_x(angle) -> np.ndarray:
     Parameters
     ----------
     angle : float or array_like
-        Radians.
+        Radians about x.
 
     Returns
     -------
@@ -127,7 +127,7 @@ def rot_y(angle) -> np.ndarray:
     Parameters
     ----------
     angle : float or array_like
-        Radians.
+        Radians about y; an array gives one matrix per angle.
 
     Returns
     -------
@@ -143,7 +143,7 @@ def rot_z(angle) -> np.ndarray:
     Parameters
     ----------
     angle : float or array_like
-        Radians.
+        Radians about z (an array: a stack of matrices).
 
     Returns
     -------
@@ -331,10 +331,8 @@ def attitude_at(gyro_times: np.ndarray, rates: np.ndarray, at: np.ndarray, *, bi
 
     Parameters
     ----------
-    gyro_times : array_like, shape (G,)
-        The gyro's sample times (s).
-    rates : array_like, shape (G, 3)
-        Its rates (rad/s).
+    gyro_times, rates : array_like, shapes (G,) and (G, 3)
+        The gyro's sample times (s) and rates (rad/s), as :func:`merged_steps` takes them.
     at : array_like, shape (M,)
         The times wanted (s), increasing.
     bias : array_like, shape (3,), optional
@@ -366,10 +364,8 @@ def preintegrate(gyro_times: np.ndarray, rates: np.ndarray, at: np.ndarray) -> t
 
     Parameters
     ----------
-    gyro_times : array_like, shape (G,)
-        The gyro's sample times (s).
-    rates : array_like, shape (G, 3)
-        Its rates (rad/s).
+    gyro_times, rates
+        As :func:`attitude_at`.
     at : array_like, shape (M,)
         The readings' times (s), increasing.
 

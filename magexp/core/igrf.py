@@ -127,14 +127,8 @@ def field_at(latitude, longitude, altitude_km=0.0, date=None, *, prefix: str = "
 
     Parameters
     ----------
-    latitude, longitude : float
-        Geodetic degrees.
-    altitude_km : float
-        Above the WGS84 ellipsoid.
-    date : str, date or datetime
-        ``YYYY-MM-DD`` (None is refused).
-    prefix : str
-        The config key named in a refusal.
+    latitude, longitude, altitude_km, date, prefix
+        As :func:`check_place`; the date within the IGRF's 1900-2030.
 
     Returns
     -------

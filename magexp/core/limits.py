@@ -139,9 +139,9 @@ def refuse_over(value: float, name: str, subject: str, need: str) -> None:
     Parameters
     ----------
     value : float
-        The estimated amount.
+        The estimated amount, in the limit's unit.
     name : str
-        A key of :data:`LIMITS`.
+        A key of :data:`LIMITS` (its environment variable is named).
     subject : str
         What is refused, e.g. ``population=5000``.
     need : str

@@ -130,7 +130,7 @@ def succeeded_majority(success_rate):
     Parameters
     ----------
     success_rate : float or array_like
-        The fraction of succeeded runs; NaN where none is judged.
+        As :func:`failed_majority`'s.
 
     Returns
     -------

@@ -79,10 +79,8 @@ def run_sequences(seed, stream=None) -> tuple[np.random.SeedSequence, np.random.
 
     Parameters
     ----------
-    seed : int
-        The run's seed.
-    stream : str or mapping, optional
-        The scenario's stream.
+    seed, stream
+        As :func:`run_generators`.
 
     Returns
     -------

@@ -35,24 +35,13 @@ def number(text: str, where: str, what: str) -> float:
 
     Parameters
     ----------
-    text : str
-        A cell.
-    where : str
-        The file and line, named in the refusal.
-    what : str
-        The column, named in the refusal.
-
+    text, where, what : str
+        A cell, and the file and line and the column named in the refusal.
 
     Returns
     -------
     float
         The number.
-
-
-    Raises
-    ------
-    MagexpError
-        One line for a cell that is not such a number.
     """
     try:
         value = float(text)
@@ -239,15 +228,8 @@ def check_unique(header: list[str], name: str) -> None:
 
     Parameters
     ----------
-    header : list of str
-        The column names.
-    name : str
-        The file, named in the refusal.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the repeated column.
+    header, name : list of str, str
+        The column names, and the file named in the refusal.
     """
     seen = set()
     for col in header:
@@ -261,24 +243,15 @@ def numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> n
 
     Parameters
     ----------
-    lines : list of str
-        The data rows.
-    name : str
-        The file, named in a refusal.
-    first_line : int
-        The file line number of ``lines[0]``.
-    ncols : int
-        The columns of a row.
+    lines, name : list of str, str
+        The data rows, and the file named in a refusal.
+    first_line, ncols : int
+        The file line number of ``lines[0]``, and the columns of a row.
 
     Returns
     -------
     ndarray, shape (N, ncols)
         The numbers.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the line and the value for a short row or a value that is not a finite number.
     """
     try:
         table = np.loadtxt(lines, delimiter=",", ndmin=2)
@@ -309,11 +282,6 @@ def read_lines(path: Path) -> list[str]:
     -------
     list of str
         Its lines.
-
-    Raises
-    ------
-    MagexpError
-        One line for a file that is not UTF-8 text.
     """
     try:
         text = path.read_text(encoding="utf-8-sig")
@@ -332,11 +300,8 @@ def to_rad_s(values: np.ndarray, unit: str) -> np.ndarray:
 
     Parameters
     ----------
-    values : ndarray
-        Rates.
-    unit : str
-        Their unit, ``deg/s`` or ``rad/s``.
-
+    values, unit : ndarray, str
+        Rates and their unit, ``deg/s`` or ``rad/s``.
 
     Returns
     -------
@@ -352,22 +317,13 @@ def read_versioned(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> R
 
     Parameters
     ----------
-    path : Path
-        The file.
-    unit : str, optional
-        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording` (a malformed file refused in one line).
 
     Returns
     -------
     Recording
-        The readings and what the file holds beside them.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the file, line and value for a malformed file.
+        The readings, angles or gyro rates, the file's field and reference total, its other columns.
     """
     return _versioned(read_lines(path), path.name, unit)
 
@@ -377,22 +333,13 @@ def read_plain(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recor
 
     Parameters
     ----------
-    path : Path
-        The file.
-    unit : str, optional
-        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; ``unit`` is required here.
 
     Returns
     -------
     Recording
-        The readings and what the file holds beside them.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the file, line and value for a malformed file.
+        The readings alone.
     """
     if unit is None:
         raise MagexpError(f"data.unit=None is not allowed for {path.name}: a file without header does not name "
@@ -409,18 +356,10 @@ def same_unit(unit, file_unit: str, name: str) -> None:
 
     Parameters
     ----------
-    unit : str or None
-        ``data.unit`` (None: not given, nothing checked).
-    file_unit : str
-        The file's unit.
+    unit, file_unit : str
+        ``data.unit`` (None: not given, nothing checked) and the file's unit.
     name : str
         The file, named in the refusal.
-
-
-    Raises
-    ------
-    MagexpError
-        One line when they differ.
     """
     if unit is not None and check_unit(unit, "data.unit") != file_unit:
         raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file's columns say {file_unit} "
@@ -455,22 +394,13 @@ def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> 
 
     Parameters
     ----------
-    path : Path
-        The file.
-    unit : str, optional
-        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; the unit comes from the columns' suffix.
 
     Returns
     -------
     Recording
-        The readings and what the file holds beside them.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the file, line and value for a malformed file.
+        The readings at their times and the gyroscope stream.
     """
     stem = str(path)
     for tail in TWO_STREAM:
@@ -497,22 +427,13 @@ def read_named_columns(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) 
 
     Parameters
     ----------
-    path : Path
-        The file.
-    unit : str, optional
-        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; the unit comes from the column names.
 
     Returns
     -------
     Recording
-        The readings and what the file holds beside them.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the file, line and value for a malformed file.
+        The readings where the magnetometer updated, at their times, and the gyroscope stream.
     """
     lines = read_lines(path)
     header = [h.strip() for h in lines[0].split(",")]
@@ -563,22 +484,13 @@ def read_header_counts(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) 
 
     Parameters
     ----------
-    path : Path
-        The file.
-    unit : str, optional
-        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; without ``unit``, raw ``counts``.
 
     Returns
     -------
     Recording
-        The readings and what the file holds beside them.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the file, line and value for a malformed file.
+        The counts, ``Fs`` and the initialisation time in ``meta``.
     """
     lines = read_lines(path)
     meta = {"format": "header-counts"}
@@ -610,22 +522,13 @@ def read_header_row(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> 
 
     Parameters
     ----------
-    path : Path
-        The file.
-    unit : str, optional
-        ``data.unit``: the readings' unit where the file does not say it (it must agree where it does).
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`).
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; a unit suffix must agree with ``unit``.
 
     Returns
     -------
     Recording
-        The readings and what the file holds beside them.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the file, line and value for a malformed file.
+        The readings, their times and the gyroscope stream when the file has them, and its other columns.
     """
     lines = read_lines(path)
     header = header_cells(lines[0]) if lines else []

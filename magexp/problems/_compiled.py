@@ -52,18 +52,8 @@ def scalar_cost(w, o, centre, scale, u, reference):
 
     Parameters
     ----------
-    w : ndarray, shape (P, 3, 3)
-        Every particle's ``W``.
-    o : ndarray, shape (P, 3)
-        Every particle's offset ``o``.
-    centre : ndarray, shape (3,)
-        The readings' centre ``c``.
-    scale : float
-        The readings' scale ``s``.
-    u : ndarray, shape (N, 3)
-        The normalised readings ``(r - c) / s``.
-    reference : ndarray, shape (N,)
-        The reference total field ``B_a,i``.
+    w, o, centre, scale, u, reference
+        As :func:`magexp.problems.kernels.scalar_cost`, which calls this kernel.
 
     Returns
     -------
@@ -111,14 +101,8 @@ def vector_cost(w, o, readings, reference):
 
     Parameters
     ----------
-    w : ndarray, shape (P, 3, 3)
-        Every particle's ``W``.
-    o : ndarray, shape (P, 3)
-        Every particle's offset ``o``.
-    readings : ndarray, shape (N, 3)
-        The raw readings ``r_i``.
-    reference : ndarray, shape (N, 3)
-        The reference vectors ``v_i = C_i^b H_i``.
+    w, o, readings, reference
+        As :func:`magexp.problems.kernels.vector_cost`, which calls this kernel.
 
     Returns
     -------
@@ -196,14 +180,8 @@ def scalar_residuals(w, o, readings, reference):
 
     Parameters
     ----------
-    w : ndarray, shape (3, 3)
-        The calibration matrix ``W``.
-    o : ndarray, shape (3,)
-        The offset ``o``.
-    readings : ndarray, shape (N, 3)
-        The raw readings ``r_i``.
-    reference : ndarray, shape (N,)
-        The reference total field ``B_a,i``.
+    w, o, readings, reference
+        As :func:`magexp.problems.kernels.scalar_residuals`, which calls this kernel.
 
     Returns
     -------

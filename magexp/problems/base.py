@@ -75,7 +75,7 @@ class Problem(Protocol):
         Parameters
         ----------
         theta : ndarray, shape (p,)
-            A parameter vector.
+            One row of :meth:`cost`'s ``thetas``.
 
         Returns
         -------
@@ -89,7 +89,7 @@ class Problem(Protocol):
         Parameters
         ----------
         theta : ndarray, shape (p,)
-            A parameter vector.
+            The point (within the box or not).
 
         Returns
         -------
@@ -107,10 +107,8 @@ class Problem(Protocol):
 
         Returns
         -------
-        W : ndarray, shape (n, 3, 3)
-            The calibration matrices.
-        o : ndarray, shape (n, 3)
-            The offsets.
+        W, o : ndarray, shapes (n, 3, 3) and (n, 3)
+            Each vector's ``W`` and ``o``.
         """
 
     def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray:
@@ -156,12 +154,12 @@ class LinearProblem(Problem, Protocol):
         """
 
     def from_linear(self, states: np.ndarray) -> np.ndarray:
-        """The parameter vectors of linear states.
+        """The parameter vectors of linear states (the Kalman filters' ``x``).
 
         Parameters
         ----------
         states : ndarray, shape (..., 4, 3)
-            Linear states ``x = [S b]^T``.
+            States of ``Y = C x`` (:class:`magexp.problems.vector.LinearVectorModel`).
 
         Returns
         -------
@@ -520,7 +518,7 @@ class CalibrationProblem:
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            The point whose invariants are taken.
 
         Returns
         -------
@@ -555,7 +553,7 @@ class CalibrationProblem:
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            Any fit's estimate (``fg`` is reported whatever the objective).
 
         Returns
         -------

@@ -69,7 +69,6 @@ class GyroAidedCalibration(CalibrationProblem):
         thetas : ndarray, shape (n, 17) or (17,)
             Parameter vectors (module docstring).
 
-
         Returns
         -------
         W : ndarray, shape (n, 3, 3)
@@ -109,7 +108,7 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         thetas : ndarray, shape (n, 17) or (17,)
-            Parameter vectors.
+            Parameter vectors (their ``a``, ``e``: columns 12, 13).
 
         Returns
         -------
@@ -126,7 +125,7 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         thetas : ndarray, shape (n, 17) or (17,)
-            Parameter vectors.
+            Parameter vectors (their ``h`` and ``b_g``).
 
         Returns
         -------
@@ -143,7 +142,7 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         thetas : ndarray, shape (n, 17) or (17,)
-            Parameter vectors.
+            Parameter vectors (all 17 used).
 
         Returns
         -------
@@ -164,15 +163,13 @@ class GyroAidedCalibration(CalibrationProblem):
 
         Parameters
         ----------
-        n_readings : int
-            The readings ``M``.
-        n_particles : int
-            The particles ``n`` of one call.
+        n_readings, n_particles : int
+            As :meth:`CalibrationProblem.cost_floats` (``M`` and ``n`` here).
 
         Returns
         -------
         int
-            The float64 numbers held.
+            ``48 M n``.
         """
         return 48 * n_readings * n_particles
 
@@ -182,7 +179,7 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         thetas : ndarray, shape (n, 17)
-            Parameter vectors.
+            The swarm.
 
         Returns
         -------
@@ -199,13 +196,12 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (17,)
-            A parameter vector.
-
+            One particle of :meth:`cost`'s swarm.
 
         Returns
         -------
         float
-            ``F_g`` at ``theta``.
+            Its cost.
         """
         return float(self.cost(np.asarray(theta)[None])[0])
 
@@ -215,7 +211,7 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (17,)
-            A parameter vector.
+            ``[vec(S), b, a, e, b_g]``.
 
         Returns
         -------
@@ -230,13 +226,12 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (17,)
-            A parameter vector.
-
+            The estimate (with its field direction and gyro bias).
 
         Returns
         -------
         float
-            ``F_g`` at ``theta``.
+            ``F_g``, module docstring.
         """
         return self.cost_direct(theta)
 
@@ -292,12 +287,12 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (17,)
-            The fitted parameter vector.
+            The estimator's result ``x``.
 
         Returns
         -------
         dict
-            Metric name -> value.
+            The keys above (floats; ``weakest_combination`` a text).
         """
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
@@ -329,8 +324,7 @@ class GyroAidedCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (17,)
-            A parameter vector.
-
+            The estimate.
 
         Returns
         -------

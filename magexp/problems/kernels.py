@@ -361,10 +361,8 @@ def vector_cost(w, o, readings, reference) -> np.ndarray:
 
     Parameters
     ----------
-    w : ndarray, shape (P, 3, 3)
-        Every particle's ``W``.
-    o : ndarray, shape (P, 3)
-        Every particle's offset ``o``.
+    w, o : ndarray, shapes (P, 3, 3) and (P, 3)
+        Every particle's calibration ``W (r - o)``.
     readings : ndarray, shape (N, 3)
         The raw readings ``r_i``.
     reference : ndarray, shape (N, 3)

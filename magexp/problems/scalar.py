@@ -59,15 +59,13 @@ class ScalarCalibration(CalibrationProblem):
 
         Parameters
         ----------
-        n_readings : int
-            The readings ``N`` (unused: the memory does not depend on them).
-        n_particles : int
-            The particles ``P`` of one call.
+        n_readings, n_particles : int
+            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (one pass, no ``N × P`` array).
 
         Returns
         -------
         int
-            The float64 numbers held.
+            ``working_floats(n_particles)``.
         """
         return kernels.working_floats(n_particles)
 
@@ -87,7 +85,7 @@ class ScalarCalibration(CalibrationProblem):
         Parameters
         ----------
         thetas : ndarray, shape (n, 12)
-            Parameter vectors (:meth:`~magexp.problems.base.CalibrationProblem.unpack`).
+            The swarm, ``[vec(M^-1), I]`` rows (inverse, Ding 2024's unknowns) or ``[vec(S), b]`` (forward).
 
         Returns
         -------
@@ -105,7 +103,7 @@ class ScalarCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            One particle of :meth:`cost`'s swarm.
 
         Returns
         -------
@@ -127,7 +125,7 @@ class ScalarCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            One particle, as :meth:`residuals` takes it.
 
         Returns
         -------
@@ -142,7 +140,7 @@ class ScalarCalibration(CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            The calibration (its rotation is not seen).
 
         Returns
         -------
@@ -158,11 +156,8 @@ class ScalarCalibration(CalibrationProblem):
 
         Parameters
         ----------
-        theta : ndarray, shape (12,)
-            The parameter vector the covariance is taken at.
-        cov : ndarray, shape (9, 9)
-            The Cramér-Rao covariance of :meth:`invariants` (:mod:`magexp.core.bounds`).
-
+        theta, cov : ndarray
+            As :meth:`CalibrationProblem.invariant_bounds`, ``cov`` (9, 9) here.
 
         Returns
         -------

@@ -99,15 +99,13 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
 
         Parameters
         ----------
-        n_readings : int
-            The readings ``N`` (unused).
-        n_particles : int
-            The particles of one call.
+        n_readings, n_particles : int
+            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (the QR form).
 
         Returns
         -------
         int
-            The float64 numbers held.
+            ``48 n_particles``.
         """
         return 48 * n_particles
 
@@ -133,7 +131,7 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector ``[vec(K), Bp]``.
+            ``[vec(K), Bp]`` (row-major).
 
         Returns
         -------
@@ -173,7 +171,7 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector ``[vec(K), Bp]``.
+            The magnetization, as :meth:`residuals` takes it.
 
         Returns
         -------
@@ -190,12 +188,12 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            The fitted parameter vector.
+            The filter's (or any estimator's) ``[vec(K), Bp]``.
 
         Returns
         -------
         dict
-            Metric name -> float.
+            The keys above, floats.
         """
         theta = np.asarray(theta, float)
         ls = self.least_squares()

@@ -162,15 +162,13 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
 
         Parameters
         ----------
-        n_readings : int
-            The readings ``N`` (unused).
-        n_particles : int
-            The particles ``P`` of one call.
+        n_readings, n_particles : int
+            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (three components a particle-reading, one pass).
 
         Returns
         -------
         int
-            The float64 numbers held.
+            ``working_floats(n_particles, rows=3)``.
         """
         return kernels.working_floats(n_particles, rows=3)
 
@@ -190,7 +188,7 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         Parameters
         ----------
         thetas : ndarray, shape (n, 12)
-            Parameter vectors (:meth:`~magexp.problems.base.CalibrationProblem.unpack`).
+            The swarm, ``[vec(S), b]`` rows (forward) or ``[vec(S^-1), b]`` (inverse).
 
         Returns
         -------
@@ -208,7 +206,7 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            The calibration ``(S, b)`` in the problem's parameterisation.
 
         Returns
         -------
@@ -227,7 +225,7 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            The calibration, as :meth:`residuals` takes it.
 
         Returns
         -------
@@ -258,12 +256,12 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            The fitted parameter vector.
+            The estimator's result ``x``.
 
         Returns
         -------
         dict
-            Metric name -> value.
+            The base metrics, ``field_rms`` and ``noise_floor`` (``F`` of the truth).
         """
         out = super().metrics(theta)
         out["field_rms"] = total_field_rms(self.calibrate(theta), self.dataset.reference_norm)
@@ -294,15 +292,13 @@ class VectorLeastSquares(VectorCalibration):
 
         Parameters
         ----------
-        n_readings : int
-            The readings ``N`` (unused).
-        n_particles : int
-            The particles ``P`` of one call.
+        n_readings, n_particles : int
+            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (numpy chunks, never compiled).
 
         Returns
         -------
         int
-            The float64 numbers held.
+            ``working_floats(n_particles, rows=3, fused=False)``.
         """
         return kernels.working_floats(n_particles, rows=3, fused=False)
 
@@ -312,7 +308,7 @@ class VectorLeastSquares(VectorCalibration):
         Parameters
         ----------
         thetas : ndarray, shape (n, 12)
-            Parameter vectors.
+            The swarm, as :meth:`VectorCalibration.cost`'s.
 
         Returns
         -------
@@ -331,7 +327,7 @@ class VectorLeastSquares(VectorCalibration):
         Parameters
         ----------
         theta : ndarray, shape (12,)
-            A parameter vector.
+            The calibration, as :meth:`VectorCalibration.residuals` takes it.
 
         Returns
         -------
