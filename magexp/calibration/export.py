@@ -123,6 +123,7 @@ class Correction:
 
     @property
     def rotation_deg(self) -> float:
+        """The angle of :attr:`rotation` in degrees (0 when nothing was taken out)."""
         return float(np.rad2deg(rotation_angle(self.rotation)))
 
     @property
@@ -143,7 +144,21 @@ class Export:
 
 
 def polar(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(R, S)`` with ``W = R S``, ``R`` orthogonal, ``S`` symmetric positive semi-definite (SVD)."""
+    """``(R, S)`` with ``W = R S``, ``R`` orthogonal, ``S`` symmetric positive semi-definite (SVD).
+
+    Parameters
+    ----------
+    w : array_like, shape (3, 3)
+        The calibration matrix ``W``.
+
+    Returns
+    -------
+    R : ndarray, shape (3, 3)
+        ``U Vᵀ`` of the SVD ``W = U Σ Vᵀ``: orthogonal (a rotation when ``det W > 0``).
+    S : ndarray, shape (3, 3)
+        ``V Σ Vᵀ``, symmetric (made exactly so) positive semi-definite; ``W = R S`` (the module
+        docstring's "Symmetrising W").
+    """
     u, sigma, vt = np.linalg.svd(np.asarray(w, float))
     s = vt.T @ np.diag(sigma) @ vt
     return u @ vt, (s + s.T) / 2
@@ -195,7 +210,23 @@ def _number(value) -> float:
 
 
 def check_counts_nt(counts_nt) -> float:
-    """``counts_nt`` (nT per count) as a float, else one line."""
+    """``counts_nt`` (nT per count) as a float, else one line.
+
+    Parameters
+    ----------
+    counts_nt : object
+        The nanotesla per count of the firmware's magnetometer driver (a raw-count recording's factor).
+
+    Returns
+    -------
+    float
+        ``counts_nt`` as a float.
+
+    Raises
+    ------
+    MagexpError
+        One line when ``counts_nt`` is not a finite number > 0 (a bool is not a number here).
+    """
     value = _number(counts_nt)
     if not (np.isfinite(value) and value > 0):
         raise MagexpError(f"counts_nt={counts_nt!r} is not allowed: it must be a number > 0 (nT per count)")
@@ -203,7 +234,23 @@ def check_counts_nt(counts_nt) -> float:
 
 
 def check_max_rotation(max_rotation_deg) -> float:
-    """``max_rotation_deg`` as a float in [0, 180], else one line."""
+    """``max_rotation_deg`` as a float in [0, 180], else one line.
+
+    Parameters
+    ----------
+    max_rotation_deg : object
+        The largest rotation ``R`` of ``W = R S`` a symmetric-only target may leave out (degrees).
+
+    Returns
+    -------
+    float
+        ``max_rotation_deg`` as a float.
+
+    Raises
+    ------
+    MagexpError
+        One line when it is not a number in [0, 180] (NaN and bools included).
+    """
     limit = _number(max_rotation_deg)
     if not 0 <= limit <= 180:
         raise MagexpError(f"max_rotation_deg={max_rotation_deg!r} is not allowed: it must be a number of degrees in "
@@ -325,6 +372,27 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     ``COMPASS_OFS_X``, ``COMPASS_OFS2_X``, ``COMPASS_OFS3_X`` (``DIA``, ``ODI``, ``SCALE`` alike).
     ``orient``: ``W``'s rotation was determined (:func:`to_firmware`); its standard rotation ``R_n`` is
     written as ``COMPASS_ORIENT`` (applied before the offsets): ``M = R_n S' R_n^T``, ``OFS = −R_n o'``.
+
+    Parameters
+    ----------
+    w, offset, unit, field_unit, counts_nt, max_rotation_deg, orient
+        As :func:`to_firmware` (``symmetric=True``; ``orient``: ``COMPASS_ORIENT`` written).
+    instance : int
+        The compass, 0, 1 or 2.
+    notes : dict, optional
+        ``key: text`` comment lines written at the file's head.
+
+    Returns
+    -------
+    Export
+        Target ``"ardupilot"``, the ``.param`` text, ``values`` (parameter name -> number) and ``warnings``
+        (values outside ArduPilot's calibrator ranges, :data:`ARDUPILOT_DIAGONAL`,
+        :data:`ARDUPILOT_OFFDIAGONAL`, :data:`ARDUPILOT_OFFSET_MAX`).
+
+    Raises
+    ------
+    MagexpError
+        One line for an ``instance`` not in 0-2, and as :func:`to_firmware` (``symmetric=True``).
     """
     if instance not in (0, 1, 2):
         raise MagexpError(f"instance={instance!r} is not allowed for ardupilot: choose 0, 1 or 2 (the compass)")
@@ -367,6 +435,29 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
     total-field calibration, or readings in the body frame). ``instance``: the slot ``n`` of
     ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``). ``orient`` (without ``rotation``): ``W``'s rotation
     was determined (:func:`to_firmware`); its standard rotation is written as ``CAL_MAGn_ROT``.
+
+    Parameters
+    ----------
+    w, offset, unit, field_unit, counts_nt, max_rotation_deg, orient
+        As :func:`to_firmware` (``symmetric=True``; ``orient``: ``CAL_MAGn_ROT`` written, not with ``rotation``).
+    instance : int
+        The slot ``n`` of ``CAL_MAGn_*``, 0-3.
+    rotation : array_like, shape (3, 3), optional
+        PX4's ``R`` (board or ``CAL_MAGn_ROT``) taken out of ``W`` first: ``Rᵀ W`` is exported.
+    notes : dict, optional
+        Comment lines, as :func:`ardupilot`'s.
+
+    Returns
+    -------
+    Export
+        Target ``"px4"``, the ``.params`` text (``vehicle component name value type``, type
+        :data:`REAL32` or :data:`INT32`) and ``values`` (parameter name -> number).
+
+    Raises
+    ------
+    MagexpError
+        One line for an ``instance`` not in 0-3, a ``rotation`` that is not a 3 × 3 rotation matrix, and as
+        :func:`to_firmware` (``symmetric=True``).
     """
     if instance not in (0, 1, 2, 3):
         raise MagexpError(f"instance={instance!r} is not allowed for px4: choose 0, 1, 2 or 3 (CAL_MAGn)")
@@ -395,7 +486,29 @@ def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/
         namespace: str = "magnetometer_calibration", notes: dict | None = None) -> Export:
     """A ROS 2 parameter file: ``<node>: ros__parameters: <namespace>: {convention, unit, offset,
     matrix}``; ``B = W (r − o)`` in tesla (``sensor_msgs/MagneticField``'s unit), ``matrix`` the
-    full ``W`` row-major (9 numbers), ``offset`` 3 numbers."""
+    full ``W`` row-major (9 numbers), ``offset`` 3 numbers.
+
+    Parameters
+    ----------
+    w, offset, unit, field_unit, counts_nt
+        As :func:`to_firmware` (the target unit tesla, ``W`` kept whole).
+    node : str
+        The node the parameters are for (``/**``: every node).
+    namespace : str
+        The parameters' namespace under ``ros__parameters``.
+    notes : dict, optional
+        Comment lines, as :func:`ardupilot`'s.
+
+    Returns
+    -------
+    Export
+        Target ``"ros"``, the YAML text and ``values`` (``convention``, ``unit``, ``offset``, ``matrix``).
+
+    Raises
+    ------
+    MagexpError
+        As :func:`to_firmware` (a non-finite calibration, a unit without a factor to tesla).
+    """
     c = to_firmware(w, offset, unit, TARGET_UNITS["ros"], field_unit=field_unit, counts_nt=counts_nt)
     values = {"convention": "B = W (r - o), W row-major", "unit": "T",
               "offset": [float(v) for v in c.offset], "matrix": [float(v) for v in c.matrix.ravel()]}
@@ -410,7 +523,27 @@ _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", notes: dict | None = None) -> Export:
     """A C header: ``static const float <NAME>_OFFSET[3]``, ``<NAME>_MATRIX[3][3]`` (row-major) and
     ``static inline void <name>_apply(const float raw[3], float out[3])`` computing ``out = W (raw − o)``,
-    in the recording's units (the raw unit in, ``field_unit`` out), float32 literals (``%.9g``)."""
+    in the recording's units (the raw unit in, ``field_unit`` out), float32 literals (``%.9g``).
+
+    Parameters
+    ----------
+    w, offset, unit, field_unit
+        As :func:`to_firmware` (units kept: no target unit).
+    name : str
+        A C identifier: the arrays' prefix (upper case) and the function's (lower case).
+    notes : dict, optional
+        Comment lines in the header's opening comment.
+
+    Returns
+    -------
+    Export
+        Target ``"c"``, the header text and ``values`` (``offset``, ``matrix`` as lists).
+
+    Raises
+    ------
+    MagexpError
+        One line for a ``name`` that is not a C identifier, and as :func:`to_firmware`.
+    """
     if not _IDENTIFIER.match(str(name)):
         raise MagexpError(f"name={name!r} is not allowed: it must be a C identifier (letters, digits, _)")
     c = to_firmware(w, offset, unit, TARGET_UNITS["c"], field_unit=field_unit)
@@ -438,7 +571,23 @@ RENDERERS = {"ardupilot": ardupilot, "px4": px4, "ros": ros, "c": c_header}
 
 
 def options_of(target: str) -> tuple[str, ...]:
-    """The keyword options ``target``'s renderer takes (:data:`RENDERERS`), e.g. ``counts_nt``, ``instance``."""
+    """The keyword options ``target``'s renderer takes (:data:`RENDERERS`), e.g. ``counts_nt``, ``instance``.
+
+    Parameters
+    ----------
+    target : str
+        One of :data:`TARGETS`.
+
+    Returns
+    -------
+    tuple of str
+        The names of the renderer's keyword-only parameters.
+
+    Raises
+    ------
+    MagexpError
+        One line for a ``target`` not in :data:`TARGETS`.
+    """
     if target not in RENDERERS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
     return tuple(p.name for p in inspect.signature(RENDERERS[target]).parameters.values() if p.kind == p.KEYWORD_ONLY)
@@ -448,7 +597,30 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
     """The :class:`Export` of ``target`` (:data:`TARGETS`) for ``B = W (r − o)`` in ``unit``;
     ``options``: the target function's keywords (``field_unit``, ``counts_nt``, ``instance``,
     ``max_rotation_deg``, ``notes``, ...); ``counts_nt`` and ``max_rotation_deg`` checked even where unused
-    (a unit with a factor, a target without the rotation limit): a bad value is refused, not ignored."""
+    (a unit with a factor, a target without the rotation limit): a bad value is refused, not ignored.
+
+    Parameters
+    ----------
+    target : str
+        One of :data:`TARGETS`.
+    w, offset : array_like
+        ``W`` (3 × 3) and ``o`` (3,) of magexp's ``B = W (r − o)``.
+    unit : str
+        The readings' unit.
+    **options
+        The renderer's keyword options (:func:`options_of`).
+
+    Returns
+    -------
+    Export
+        The target renderer's result (:func:`ardupilot`, :func:`px4`, :func:`ros`, :func:`c_header`; each
+        implements the firmware's convention of the module docstring).
+
+    Raises
+    ------
+    MagexpError
+        One line for an unknown ``target``, a bad ``counts_nt`` or ``max_rotation_deg``, or as the renderer.
+    """
     if target not in RENDERERS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
     for key, check_value in (("counts_nt", check_counts_nt), ("max_rotation_deg", check_max_rotation)):
@@ -480,7 +652,27 @@ def orientable(cal) -> bool:
 def of_calibration(cal, target: str, **options) -> Export:
     """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.Calibration` ``cal``:
     ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``
-    to the calibration's. Refuses (one line) before anything is written: a caller renders first."""
+    to the calibration's. Refuses (one line) before anything is written: a caller renders first.
+
+    Parameters
+    ----------
+    cal : Calibration
+        A fitted or loaded calibration (its ``w``, ``offset``, ``unit``, ``field_unit``).
+    target : str
+        One of :data:`TARGETS`.
+    **options
+        As :func:`render`; ``orient`` defaults to :func:`orientable` where the target takes it.
+
+    Returns
+    -------
+    Export
+        The rendered file, not yet written.
+
+    Raises
+    ------
+    MagexpError
+        As :func:`render`.
+    """
     options.setdefault("field_unit", cal.field_unit)
     if "orient" in options_of(target):
         options.setdefault("orient", orientable(cal))
@@ -493,13 +685,52 @@ def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
     """Write ``target``'s file for the :class:`~magexp.calibration.Calibration` ``cal`` to ``path``
     (a folder: :data:`FILE_NAMES` inside it; None: the working folder); never overwrites a file.
 
-    Returns the path written. ``options`` as :func:`of_calibration`."""
+    Parameters
+    ----------
+    cal : Calibration
+        A fitted or loaded calibration.
+    target : str
+        One of :data:`TARGETS`.
+    path : str or Path, optional
+        As :func:`write`'s.
+    **options
+        As :func:`of_calibration`.
+
+    Returns
+    -------
+    Path
+        :func:`write`'s path.
+
+    Raises
+    ------
+    MagexpError
+        As :func:`of_calibration` and :func:`write`; nothing is written then.
+    """
     return write(of_calibration(cal, target, **options), path)
 
 
 def write(out: Export, path: str | Path | None = None) -> Path:
     """Write the rendered ``out`` to ``path`` (a folder: its default name inside; None: the working
-    folder), atomically; refuse, in one line, a file that exists already (never overwritten)."""
+    folder), atomically; refuse, in one line, a file that exists already (never overwritten).
+
+    Parameters
+    ----------
+    out : Export
+        A rendered export.
+    path : str or Path, optional
+        The file, or a folder (:data:`FILE_NAMES` of ``out.target`` inside), or None (the working folder).
+
+    Returns
+    -------
+    Path
+        ``path``, or the file made in the folder ``path``.
+
+    Raises
+    ------
+    MagexpError
+        One line for a file that exists already, a folder that does not exist, or a destination
+        :func:`magexp.run.guard.check_destination` refuses.
+    """
     path = Path(".") if path is None else Path(path)
     if path.is_dir():
         path = path / FILE_NAMES[out.target]

@@ -82,7 +82,18 @@ def _file_digest(path: Path, mtime_ns: int, size: int) -> str:
 
 def data_formats(resolved: dict) -> dict[Path, str | None]:
     """``{path: format}`` of every existing file that a string value of the config names: the
-    ``format`` value beside that string (``scenario.format``, ``data.format``), None if there is none."""
+    ``format`` value beside that string (``scenario.format``, ``data.format``), None if there is none.
+
+    Parameters
+    ----------
+    resolved : dict
+        The resolved config tree.
+
+    Returns
+    -------
+    dict
+        Path -> format (or None), for every file named.
+    """
     found = {}
     for text, format in dict.fromkeys(_strings(resolved)):
         for path in _as_files(text):
@@ -92,7 +103,20 @@ def data_formats(resolved: dict) -> dict[Path, str | None]:
 
 def data_files(resolved: dict, formats: dict | None = None) -> dict[str, str]:
     """``{path: sha256}`` of every existing file that a string value of the config names (``formats``:
-    its :func:`data_formats`, found here if None)."""
+    its :func:`data_formats`, found here if None).
+
+    Parameters
+    ----------
+    resolved : dict
+        The resolved config tree.
+    formats : dict, optional
+        Its :func:`data_formats`.
+
+    Returns
+    -------
+    dict
+        Path (str) -> the file's sha256 hex digest, part of a run's cache key.
+    """
     out = {}
     for path in data_formats(resolved) if formats is None else formats:
         st = path.stat()

@@ -42,14 +42,36 @@ _COLUMN = re.compile(r"^(?P<base>[a-z][a-z0-9]*?)(?:_(?P<suffix>[a-z]+)|\s*\((?P
 
 
 def header_cells(line: str) -> list[str]:
-    """The cells of a header row: separated by commas, semicolons or tabs if it has any, else by spaces."""
+    """The cells of a header row: separated by commas, semicolons or tabs if it has any, else by spaces.
+
+    Parameters
+    ----------
+    line : str
+        A header row.
+
+    Returns
+    -------
+    list of str
+        Its cells, stripped.
+    """
     text = line.strip()
     return [c.strip() for c in (re.split(r"[,;\t]", text) if re.search(r"[,;\t]", text) else text.split())]
 
 
 def header_columns(line: str) -> dict[str, tuple[int, str | None]] | None:
     """``{name: (column, unit or None)}`` of a header row that names a magnetometer (:data:`MAG_COLUMNS`),
-    else None. A column's unit comes from its ``_<suffix>`` (``mx_ut``, ``gx_dps``) or ``(<unit>)``."""
+    else None. A column's unit comes from its ``_<suffix>`` (``mx_ut``, ``gx_dps``) or ``(<unit>)``.
+
+    Parameters
+    ----------
+    line : str
+        The first row of a CSV (:func:`header_cells`).
+
+    Returns
+    -------
+    dict or None
+        Column name (lower case, unit suffix removed) -> (its index, its unit or None).
+    """
     columns = {}
     for j, cell in enumerate(header_cells(line)):
         m = _COLUMN.match(cell.lower())
@@ -64,12 +86,34 @@ def header_columns(line: str) -> dict[str, tuple[int, str | None]] | None:
 
 
 def split(line: str) -> list[str]:
-    """The cells of a plain line, separated by commas or white space."""
+    """The cells of a plain line, separated by commas or white space.
+
+    Parameters
+    ----------
+    line : str
+        A line of numbers.
+
+    Returns
+    -------
+    list of str
+        Its cells.
+    """
     return [cell for cell in re.split(r"[,\s]+", line.strip()) if cell]
 
 
 def is_plain(lines: list[str]) -> bool:
-    """A headerless numeric file: the first non-blank line is numbers only."""
+    """A headerless numeric file: the first non-blank line is numbers only.
+
+    Parameters
+    ----------
+    lines : list of str
+        The file's first lines.
+
+    Returns
+    -------
+    bool
+        True when the first non-blank line is numbers only.
+    """
     first = next((ln for ln in lines if ln.strip()), "")
     try:
         [float(cell) for cell in split(first)]
@@ -85,7 +129,18 @@ LOG_SUFFIXES = {".ulg": "ulog", ".bin": "dataflash", ".bag": "rosbag", ".mcap": 
 def detect(path: Path) -> str:
     """The format key of ``path``: by its name (:data:`LOG_SUFFIXES`, a bag folder, a two-stream stem), else by
     its first line (the version line, ``Fs,``, a ``<Sensor> X (<unit>)`` column, a row naming magnetometer
-    columns, numbers; :mod:`magexp.core.recordings`)."""
+    columns, numbers; :mod:`magexp.core.recordings`).
+
+    Parameters
+    ----------
+    path : Path
+        A recording file or folder.
+
+    Returns
+    -------
+    str
+        A format key.
+    """
     if path.suffix.lower() in LOG_SUFFIXES:
         return LOG_SUFFIXES[path.suffix.lower()]
     if path.is_dir() and (path / BAG_MARKER).is_file():
@@ -110,5 +165,18 @@ def reader_of(path: Path, format: str | None = "auto") -> str:
     """The dotted name of the function (:data:`READER_NAMES`) that reads the recording ``path`` in ``format``
     (``auto``, None or a name not of :data:`READER_NAMES`: :func:`detect`'s, from its name or its first
     three lines): the run cache keys a run that reads ``path`` on that module's source
-    (:func:`magexp.run.cache.data_readers`)."""
+    (:func:`magexp.run.cache.data_readers`).
+
+    Parameters
+    ----------
+    path : Path
+        A recording.
+    format : str, optional
+        A format key, ``auto`` or None.
+
+    Returns
+    -------
+    str
+        ``module.function`` of the reader.
+    """
     return READER_NAMES[format if format in READER_NAMES else detect(path)]

@@ -26,7 +26,18 @@ class Limit:
     what: str
 
     def value(self) -> float:
-        """The limit in force: the environment variable, else the default."""
+        """The limit in force: the environment variable, else the default.
+
+        Returns
+        -------
+        float
+            The bound, in :attr:`unit`.
+
+        Raises
+        ------
+        MagexpError
+            One line for an environment value that is not an amount > 0.
+        """
         text = os.environ.get(self.env)
         if text is None or not text.strip():
             return self.default
@@ -59,7 +70,19 @@ _FACTORS = {"": 1, "B": 1, "k": 1e3, "K": 1e3, "M": 1e6, "G": 1e9, "T": 1e12,
 
 
 def parse_amount(text: str) -> float | None:
-    """``"4GiB"`` -> 4294967296, ``"2e5"`` -> 200000.0, ``"10M"`` -> 1e7; None if not an amount."""
+    """``"4GiB"`` -> 4294967296, ``"2e5"`` -> 200000.0, ``"10M"`` -> 1e7; None if not an amount.
+
+    Parameters
+    ----------
+    text : str
+        A number with an optional SI (``k``, ``M``, ``G``, ``T``) or binary (``Ki``...``Ti``) suffix and an
+        optional ``B``.
+
+    Returns
+    -------
+    float or None
+        The amount.
+    """
     m = _AMOUNT.fullmatch(str(text))
     if not m:
         return None
@@ -71,7 +94,20 @@ def parse_amount(text: str) -> float | None:
 
 
 def show(value: float, unit: str) -> str:
-    """``value`` for a message: bytes in KiB..TiB, counts as integers or in ``e`` notation."""
+    """``value`` for a message: bytes in KiB..TiB, counts as integers or in ``e`` notation.
+
+    Parameters
+    ----------
+    value : float
+        The amount.
+    unit : str
+        ``bytes`` or a count's noun.
+
+    Returns
+    -------
+    str
+        E.g. ``4 GiB``, ``200000 runs``, ``1e+11 reading-evaluations``.
+    """
     if unit == "bytes":
         for name, factor in (("TiB", 2 ** 40), ("GiB", 2 ** 30), ("MiB", 2 ** 20), ("KiB", 2 ** 10)):
             if value >= factor:
@@ -81,13 +117,41 @@ def show(value: float, unit: str) -> str:
 
 
 def limit(name: str) -> float:
-    """The value in force of the limit ``name`` (:data:`LIMITS`)."""
+    """The value in force of the limit ``name`` (:data:`LIMITS`).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`LIMITS`.
+
+    Returns
+    -------
+    float
+        :meth:`Limit.value`.
+    """
     return LIMITS[name].value()
 
 
 def refuse_over(value: float, name: str, subject: str, need: str) -> None:
     """Raise ``"<subject> is not allowed: <need> about X, over the limit L (ENV)"`` if ``value``
-    exceeds the limit ``name``."""
+    exceeds the limit ``name``.
+
+    Parameters
+    ----------
+    value : float
+        The estimated amount, in the limit's unit.
+    name : str
+        A key of :data:`LIMITS` (its environment variable is named).
+    subject : str
+        What is refused, e.g. ``population=5000``.
+    need : str
+        What it needs, e.g. ``a memory of``.
+
+    Raises
+    ------
+    MagexpError
+        That line, when ``value`` is over the limit in force.
+    """
     lim = LIMITS[name]
     bound = lim.value()
     if value > bound:

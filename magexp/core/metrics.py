@@ -64,7 +64,18 @@ def truth_cost(problem) -> float | None:
     """``problem.cost_direct`` at the true parameters (None without a truth): the objective the
     true calibration reaches on the same readings. It depends on the problem's data only, so it is
     computed once per problem object and shared by every estimator fitted to it (and by the
-    problem's own metrics, e.g. the vector objective's noise floor)."""
+    problem's own metrics, e.g. the vector objective's noise floor).
+
+    Parameters
+    ----------
+    problem : CalibrationProblem
+        A problem whose dataset may know its truth.
+
+    Returns
+    -------
+    float or None
+        ``problem.cost_direct(problem.truth_theta())``.
+    """
     if problem not in _TRUTH_COST:
         truth = problem.truth_theta()
         _TRUTH_COST[problem] = None if truth is None else float(problem.cost_direct(truth))
@@ -79,6 +90,18 @@ def noise_floor(dataset, n_identifiable: int = 9) -> float | None:
     with ``σ`` the per-axis noise standard deviation (``A/√12`` for Ding's
     uniform noise, whose radial component has the same variance) and ``p = 9``
     identifiable parameters of a scalar fit.
+
+    Parameters
+    ----------
+    dataset : Dataset
+        Its readings' count ``N`` and noise (``noise_std``).
+    n_identifiable : int
+        ``p``.
+
+    Returns
+    -------
+    float or None
+        The floor, or None when the noise is unknown (a recording).
     """
     if dataset.noise_std is None:
         return None
@@ -91,6 +114,21 @@ def evaluate(problem, result, crb=None) -> dict:
 
     ``crb``: the problem's :func:`problem_bound`, when the caller shares it between the estimators
     of one dataset (it depends on the data and the truth only); None computes it here.
+
+    Parameters
+    ----------
+    problem : CalibrationProblem
+        The problem fitted.
+    result : FitResult
+        The estimator's result (its ``x``, ``nit``, ``nfev``, ``history``).
+    crb : dict or bool, optional
+        The problem's bound.
+
+    Returns
+    -------
+    dict
+        Metric name -> value: ``fun`` (the objective by its direct formula, e.g. Ding 2024's eq 17 or
+        Yuan 2018's eq 8), ``nit``, ``nfev``, the problem's own metrics, the floor and the bound ratios.
     """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _evaluate(problem, result, problem_bound(problem) if crb is None else crb)
@@ -126,7 +164,20 @@ def _evaluate(problem, result, crb) -> dict:
 def evaluations_to(result, level: float) -> float:
     """Objective evaluations spent when the best value first came within ``level`` (NaN if never):
     with ``level = 1.01 x`` the true calibration's objective, the cost of reaching the floor.
-    Only meaningful for a history of the problem's own objective (a monotone one)."""
+    Only meaningful for a history of the problem's own objective (a monotone one).
+
+    Parameters
+    ----------
+    result : FitResult
+        With ``history`` (best value per iteration) and ``history_nfev``.
+    level : float
+        The objective's level.
+
+    Returns
+    -------
+    float
+        The evaluations, or NaN.
+    """
     hist = np.asarray(result.history, float)
     reached = np.flatnonzero(hist <= level)
     return float(np.asarray(result.history_nfev)[reached[0]]) if reached.size else float("nan")
@@ -134,7 +185,21 @@ def evaluations_to(result, level: float) -> float:
 
 def time_to_reach(result, factor: float = 1.1) -> dict:
     """Iterations and objective evaluations until the best value first came within
-    ``factor`` times its final value (``history[k] <= factor * history[-1]``)."""
+    ``factor`` times its final value (``history[k] <= factor * history[-1]``).
+
+    Parameters
+    ----------
+    result : FitResult
+        With ``history`` and ``history_nfev``.
+    factor : float
+        The multiple of the final value.
+
+    Returns
+    -------
+    dict
+        ``iterations_to_1.1`` and ``nfev_to_1.1`` (named after the default ``factor``); empty for no or a
+        non-finite history.
+    """
     hist = np.asarray(result.history, float)
     if hist.size == 0 or not np.isfinite(hist[-1]):
         return {}
@@ -144,7 +209,18 @@ def time_to_reach(result, factor: float = 1.1) -> dict:
 
 def problem_bound(problem) -> dict | bool:
     """The Cramér-Rao bound of ``problem`` at its truth (:func:`magexp.core.bounds.cramer_rao`), or False
-    when it has none. It depends on the dataset and the truth only, not on the estimator."""
+    when it has none. It depends on the dataset and the truth only, not on the estimator.
+
+    Parameters
+    ----------
+    problem : CalibrationProblem
+        The problem.
+
+    Returns
+    -------
+    dict or bool
+        :func:`~magexp.core.bounds.cramer_rao`'s dict, or False.
+    """
     if not hasattr(problem, "invariants") or not hasattr(problem, "options"):
         return False
     return cramer_rao(problem) or False
@@ -152,7 +228,23 @@ def problem_bound(problem) -> dict | bool:
 
 def bound_metrics(problem, measured: dict, crb: dict | bool | None = None) -> dict:
     """The Cramér-Rao bound of the run's problem (``crb``: :func:`problem_bound`, computed here if
-    None) and each error as a ratio to it."""
+    None) and each error as a ratio to it.
+
+    Parameters
+    ----------
+    problem : CalibrationProblem
+        The problem.
+    measured : dict
+        The run's metrics (``x`` and the ``<name>_error`` values).
+    crb : dict or bool, optional
+        The problem's bound.
+
+    Returns
+    -------
+    dict
+        ``rms_bound`` (or ``residual_rms_bound`` for an objective that is not an RMS), ``identifiable``,
+        ``rms_ratio``, the ``<name>_bound`` and ``<name>_error_ratio`` values; empty without a bound.
+    """
     if crb is None:
         crb = problem_bound(problem)
     if not crb:

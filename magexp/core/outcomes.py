@@ -89,7 +89,18 @@ def succeeded(metric, reference, factor: float = SUCCESS_FACTOR, floor: float = 
 
 def reach_level(truth_fun: float) -> float:
     """The objective at which a run has reached the floor: ``REACHED_FACTOR * truth_fun + ROUNDOFF_FLOOR``
-    (:data:`REACHED_FACTOR`), with ``truth_fun`` the true calibration's objective on the same readings."""
+    (:data:`REACHED_FACTOR`), with ``truth_fun`` the true calibration's objective on the same readings.
+
+    Parameters
+    ----------
+    truth_fun : float
+        The true calibration's objective.
+
+    Returns
+    -------
+    float
+        The level.
+    """
     return REACHED_FACTOR * float(truth_fun) + ROUNDOFF_FLOOR
 
 
@@ -114,7 +125,18 @@ def failed_majority(success_rate):
 
 def succeeded_majority(success_rate):
     """Whether at least half of a cell's judged runs succeeded (``success_rate >= MAJORITY``; False
-    where the rate is NaN: nothing judged has not succeeded either). Same shapes as :func:`failed_majority`."""
+    where the rate is NaN: nothing judged has not succeeded either). Same shapes as :func:`failed_majority`.
+
+    Parameters
+    ----------
+    success_rate : float or array_like
+        As :func:`failed_majority`'s.
+
+    Returns
+    -------
+    bool or numpy.ndarray
+        True at or above :data:`MAJORITY`.
+    """
     with np.errstate(invalid="ignore"):
         out = np.asarray(success_rate, float) >= MAJORITY
     return bool(out) if out.ndim == 0 else out

@@ -70,7 +70,14 @@ class Recording:
         return self.path.name if self.path is not None else self.meta.get("name", "readings")
 
     def gyro_rates(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """``(times, rates)`` of the gyroscope and the reading times, or None without one."""
+        """``(times, rates)`` of the gyroscope and the reading times, or None without one.
+
+        Returns
+        -------
+        tuple of ndarray or None
+            ``(times (G,), rates (G, 3))`` (rad/s): a separate gyro stream's, or the per-reading gyro at
+            ``sample_time`` steps.
+        """
         if self.gyro_stream is not None:
             return self.gyro_stream
         if self.gyro is not None:
@@ -78,6 +85,13 @@ class Recording:
         return None
 
     def reading_times(self) -> np.ndarray | None:
+        """The readings' times (s): the recorded ones, else ``sample_time`` steps from 0.
+
+        Returns
+        -------
+        ndarray, shape (N,) or None
+            The times, or None without either.
+        """
         if self.times is not None:
             return self.times
         return None if self.sample_time is None else np.arange(self.n) * self.sample_time
@@ -85,7 +99,19 @@ class Recording:
     def attitude(self, *, bias=None) -> np.ndarray | None:
         """Navigation -> sensor rotations ``(N, 3, 3)`` from the angles, else from the gyroscope
         integrated at the reading times (the sensor frame at the first reading is the navigation
-        frame; ``bias`` rad/s subtracted), else None."""
+        frame; ``bias`` rad/s subtracted), else None.
+
+        Parameters
+        ----------
+        bias : array_like, shape (3,), optional
+            The gyro bias (rad/s) subtracted before integrating.
+
+        Returns
+        -------
+        ndarray, shape (N, 3, 3) or None
+            From the angles: Yan & Zhou 2022's eq 2 (:func:`magexp.core.geometry.ship_attitude`); from the
+            gyroscope: the transposed :func:`magexp.core.geometry.attitude_at` (Yuan 2018's ``C_i^b``).
+        """
         if self.angles is not None:
             return ship_attitude(*self.angles.T)
         stream = self.gyro_rates()
@@ -94,7 +120,19 @@ class Recording:
         return np.transpose(attitude_at(*stream, self.reading_times(), bias=bias), (0, 2, 1))
 
     def subset(self, index) -> "Recording":
-        """The readings ``index`` (a slice or index array), with their attitudes' sources."""
+        """The readings ``index`` (a slice or index array), with their attitudes' sources.
+
+        Parameters
+        ----------
+        index : slice or array_like
+            The readings kept.
+
+        Returns
+        -------
+        Recording
+            A copy holding those readings, their angles, totals, columns and times; the gyroscope kept whole
+            as a stream (:meth:`gyro_rates`), so the attitude is still integrated over every sample.
+        """
         pick = lambda a: None if a is None else np.asarray(a)[index]  # noqa: E731
         times = self.reading_times()
         return replace(self, readings=self.readings[index], angles=pick(self.angles), total=pick(self.total),
@@ -102,7 +140,25 @@ class Recording:
                        times=pick(times), gyro_stream=self.gyro_rates())
 
 def check_unit(unit: str, what: str) -> str:
-    """``unit`` spelled as in :data:`UNITS`, or a one-line error naming ``what``."""
+    """``unit`` spelled as in :data:`UNITS`, or a one-line error naming ``what``.
+
+    Parameters
+    ----------
+    unit : str
+        A unit's name (any case).
+    what : str
+        What it is the unit of, named in the refusal.
+
+    Returns
+    -------
+    str
+        The key of :data:`UNITS` or :data:`RAW_UNITS`.
+
+    Raises
+    ------
+    MagexpError
+        One line for an unknown unit.
+    """
     text = str(unit).strip()
     text = _ALIASES.get(text.lower(), text)
     if text not in UNITS and text not in RAW_UNITS:

@@ -117,14 +117,36 @@ __all__ = ["READERS", "LOG_SUFFIXES", "detect", "exists", "load_recording", "rea
 
 def exists(path: Path) -> bool:
     """Whether ``path`` names a recording: a file, a folder (a ROS 2 bag), or a two-stream stem
-    (``<path>_mag.csv`` exists; its ``_imu.csv`` is checked by the reader)."""
+    (``<path>_mag.csv`` exists; its ``_imu.csv`` is checked by the reader).
+
+    Parameters
+    ----------
+    path : Path
+        A path.
+
+    Returns
+    -------
+    bool
+        True when it names a recording.
+    """
     return path.exists() or Path(f"{path}{TWO_STREAM[0]}").is_file()
 
 
 def resolve(path: str | Path) -> Path:
     """Where the recording ``path`` is: an absolute path as given; a relative one against the
     working folder first (a file, a folder or a two-stream stem found there, :func:`exists`), else
-    relative to the project's ``data/`` folder (the recordings shipped with magexp)."""
+    relative to the project's ``data/`` folder (the recordings shipped with magexp).
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording as given.
+
+    Returns
+    -------
+    Path
+        The path to read (not checked to exist).
+    """
     path = Path(path)
     return path if path.is_absolute() or exists(path) else DATA / path
 
@@ -173,6 +195,12 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
         None keeps the format's default.
     instance : the compass (and IMU) instance of a DataFlash log (0: the first; None: 0); the other
         formats hold one magnetometer and ignore it.
+
+    Returns
+    -------
+    Recording
+        The readings in the common body axes, their unit, and what the format holds beside them
+        (attitude angles, a gyroscope, times, a reference field, the log's GPS place and date).
 
     Raises
     ------

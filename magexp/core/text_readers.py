@@ -31,6 +31,18 @@ GYRO_UNITS = ("rad/s", "deg/s")
 
 
 def number(text: str, where: str, what: str) -> float:
+    """``text`` as a finite number of magnitude at most :data:`LARGEST`, else one line.
+
+    Parameters
+    ----------
+    text, where, what : str
+        A cell, and the file and line and the column named in the refusal.
+
+    Returns
+    -------
+    float
+        The number.
+    """
     try:
         value = float(text)
     except ValueError:
@@ -212,7 +224,13 @@ def _positive_meta(meta: dict, key: str, name: str) -> float | None:
 
 
 def check_unique(header: list[str], name: str) -> None:
-    """Fail in one line if a column name appears twice."""
+    """Fail in one line if a column name appears twice.
+
+    Parameters
+    ----------
+    header, name : list of str, str
+        The column names, and the file named in the refusal.
+    """
     seen = set()
     for col in header:
         if col in seen:
@@ -221,7 +239,20 @@ def check_unique(header: list[str], name: str) -> None:
 
 
 def numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> np.ndarray:
-    """Comma-separated numbers, ``ncols`` per row, every value finite (one-line errors)."""
+    """Comma-separated numbers, ``ncols`` per row, every value finite (one-line errors).
+
+    Parameters
+    ----------
+    lines, name : list of str, str
+        The data rows, and the file named in a refusal.
+    first_line, ncols : int
+        The file line number of ``lines[0]``, and the columns of a row.
+
+    Returns
+    -------
+    ndarray, shape (N, ncols)
+        The numbers.
+    """
     try:
         table = np.loadtxt(lines, delimiter=",", ndmin=2)
     except ValueError:
@@ -240,7 +271,18 @@ def numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> n
 
 
 def read_lines(path: Path) -> list[str]:
-    """The file's lines; a UTF-8 byte-order mark is accepted, a binary file refused in one line."""
+    """The file's lines; a UTF-8 byte-order mark is accepted, a binary file refused in one line.
+
+    Parameters
+    ----------
+    path : Path
+        A text file.
+
+    Returns
+    -------
+    list of str
+        Its lines.
+    """
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -254,17 +296,51 @@ def read_lines(path: Path) -> list[str]:
 
 
 def to_rad_s(values: np.ndarray, unit: str) -> np.ndarray:
+    """Angular rates in rad/s.
+
+    Parameters
+    ----------
+    values, unit : ndarray, str
+        Rates and their unit, ``deg/s`` or ``rad/s``.
+
+    Returns
+    -------
+    ndarray
+        ``values`` in rad/s.
+    """
     return np.deg2rad(values) if unit == "deg/s" else values
 
 
 
 def read_versioned(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
-    """The ``magexp-recording v1`` CSV (module docstring)."""
+    """The ``magexp-recording v1`` CSV (module docstring).
+
+    Parameters
+    ----------
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording` (a malformed file refused in one line).
+
+    Returns
+    -------
+    Recording
+        The readings, angles or gyro rates, the file's field and reference total, its other columns.
+    """
     return _versioned(read_lines(path), path.name, unit)
 
 
 def read_plain(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
-    """Headerless ``x y z`` numbers; the unit must be given."""
+    """Headerless ``x y z`` numbers; the unit must be given.
+
+    Parameters
+    ----------
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; ``unit`` is required here.
+
+    Returns
+    -------
+    Recording
+        The readings alone.
+    """
     if unit is None:
         raise MagexpError(f"data.unit=None is not allowed for {path.name}: a file without header does not name "
                           f"its unit, give data.unit=<{'|'.join(UNITS)}>")
@@ -276,6 +352,15 @@ def read_plain(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recor
 
 
 def same_unit(unit, file_unit: str, name: str) -> None:
+    """Refuse, in one line, a ``data.unit`` that disagrees with the unit the file's columns name.
+
+    Parameters
+    ----------
+    unit, file_unit : str
+        ``data.unit`` (None: not given, nothing checked) and the file's unit.
+    name : str
+        The file, named in the refusal.
+    """
     if unit is not None and check_unit(unit, "data.unit") != file_unit:
         raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file's columns say {file_unit} "
                           "(leave data.unit unset)")
@@ -305,7 +390,18 @@ def _stream(path: Path, prefix: str, suffixes: dict) -> tuple[np.ndarray, np.nda
 
 def read_two_stream(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
     """``<stem>_mag.csv`` + ``<stem>_imu.csv``: readings at the magnetometer's times, the gyroscope
-    stream at its own (integrated at the readings' times by :meth:`Recording.attitude`)."""
+    stream at its own (integrated at the readings' times by :meth:`Recording.attitude`).
+
+    Parameters
+    ----------
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; the unit comes from the columns' suffix.
+
+    Returns
+    -------
+    Recording
+        The readings at their times and the gyroscope stream.
+    """
     stem = str(path)
     for tail in TWO_STREAM:
         stem = stem[: -len(tail)] if stem.endswith(tail) else stem
@@ -328,6 +424,16 @@ def read_named_columns(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) 
 
     The magnetometer's value repeats while it has not updated: only the rows where any axis
     changes are readings (at their row times); the gyroscope stream keeps every row.
+
+    Parameters
+    ----------
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; the unit comes from the column names.
+
+    Returns
+    -------
+    Recording
+        The readings where the magnetometer updated, at their times, and the gyroscope stream.
     """
     lines = read_lines(path)
     header = [h.strip() for h in lines[0].split(",")]
@@ -374,7 +480,18 @@ def _named_rates(table: np.ndarray, gyro: dict[str, tuple[int, str]], name: str)
 
 def read_header_counts(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
     """``Fs,<Hz>``, ``Initialization time,<s>`` (kept as metadata; every reading is kept),
-    ``mx,my,mz``, then raw counts."""
+    ``mx,my,mz``, then raw counts.
+
+    Parameters
+    ----------
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; without ``unit``, raw ``counts``.
+
+    Returns
+    -------
+    Recording
+        The counts, ``Fs`` and the initialisation time in ``meta``.
+    """
     lines = read_lines(path)
     meta = {"format": "header-counts"}
     k = 0
@@ -401,7 +518,18 @@ def read_header_row(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> 
     (first found of :data:`MAG_COLUMNS`; unit from a suffix, ``mx_uT`` or ``mx (uT)``, else ``data.unit``),
     optionally a time ``t`` (seconds; :data:`TIME_COLUMNS`) and a gyroscope ``gx, gy, gz`` (rad/s, or
     ``gx_dps`` / ``gx (deg/s)``; it needs the time column); other columns (``ax, ay, az``, ...) are kept.
-    Separated by commas, semicolons, tabs or spaces."""
+    Separated by commas, semicolons, tabs or spaces.
+
+    Parameters
+    ----------
+    path, unit, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`; a unit suffix must agree with ``unit``.
+
+    Returns
+    -------
+    Recording
+        The readings, their times and the gyroscope stream when the file has them, and its other columns.
+    """
     lines = read_lines(path)
     header = header_cells(lines[0]) if lines else []
     check_unique([h.lower() for h in header], path.name)

@@ -55,15 +55,77 @@ class Problem(Protocol):
     lower: np.ndarray
     upper: np.ndarray
 
-    def cost(self, thetas: np.ndarray) -> np.ndarray: ...
+    def cost(self, thetas: np.ndarray) -> np.ndarray:
+        """The objective of every parameter vector.
 
-    def cost_direct(self, theta: np.ndarray) -> float: ...
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, p)
+            Parameter vectors within ``[lower, upper]``.
 
-    def residuals(self, theta: np.ndarray) -> np.ndarray: ...
+        Returns
+        -------
+        ndarray, shape (n,)
+            The cost of each.
+        """
 
-    def unpack(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+    def cost_direct(self, theta: np.ndarray) -> float:
+        """The objective of one parameter vector by its textbook formula (the reported number).
 
-    def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray: ...
+        Parameters
+        ----------
+        theta : ndarray, shape (p,)
+            One row of :meth:`cost`'s ``thetas``.
+
+        Returns
+        -------
+        float
+            The cost.
+        """
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        """The residual vector whose sum of squares least squares minimises.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (p,)
+            The point (within the box or not).
+
+        Returns
+        -------
+        ndarray, shape (m,)
+            The residuals.
+        """
+
+    def unpack(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The calibrations ``B = W (r - o)`` of parameter vectors.
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, p)
+            Parameter vectors.
+
+        Returns
+        -------
+        W, o : ndarray, shapes (n, 3, 3) and (n, 3)
+            Each vector's ``W`` and ``o``.
+        """
+
+    def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray:
+        """The parameter vector of the calibration ``B = w (r - o)``.
+
+        Parameters
+        ----------
+        w : ndarray, shape (3, 3)
+            The calibration matrix.
+        o : ndarray, shape (3,)
+            The offset.
+
+        Returns
+        -------
+        ndarray, shape (p,)
+            The parameter vector.
+        """
 
 
 @runtime_checkable
@@ -71,21 +133,71 @@ class LinearProblem(Problem, Protocol):
     """A problem with the capability ``linear_design``: ``Y = C x`` (see
     :class:`magexp.problems.vector.LinearVectorModel`)."""
 
-    def design(self) -> tuple[np.ndarray, np.ndarray]: ...
+    def design(self) -> tuple[np.ndarray, np.ndarray]:
+        """The linear design ``Y = C x``.
 
-    def least_squares(self) -> np.ndarray: ...
+        Returns
+        -------
+        C : ndarray, shape (N, 4)
+            The regressors ``[u_i^T, 1]``.
+        Y : ndarray, shape (N, 3)
+            The readings.
+        """
 
-    def from_linear(self, states: np.ndarray) -> np.ndarray: ...
+    def least_squares(self) -> np.ndarray:
+        """The least-squares parameter vector of ``Y = C x``.
+
+        Returns
+        -------
+        ndarray, shape (p,)
+            The parameter vector.
+        """
+
+    def from_linear(self, states: np.ndarray) -> np.ndarray:
+        """The parameter vectors of linear states (the Kalman filters' ``x``).
+
+        Parameters
+        ----------
+        states : ndarray, shape (..., 4, 3)
+            States of ``Y = C x`` (:class:`magexp.problems.vector.LinearVectorModel`).
+
+        Returns
+        -------
+        ndarray, shape (..., p)
+            The parameter vectors.
+        """
 
 
 def describe(capabilities) -> str:
-    """The capabilities in words, joined by ``, ``."""
+    """The capabilities in words, joined by ``, ``.
+
+    Parameters
+    ----------
+    capabilities : iterable of str
+        Keys of :data:`CAPABILITIES`.
+
+    Returns
+    -------
+    str
+        Their descriptions, sorted by key.
+    """
     return ", ".join(CAPABILITIES[c] for c in sorted(capabilities))
 
 
 def inverse(mats: np.ndarray) -> np.ndarray:
     """Inverses of a stack of 3x3 matrices; an exactly singular one (a swarm clipped onto
-    the box edges can make one) gets its pseudo-inverse instead of stopping the run."""
+    the box edges can make one) gets its pseudo-inverse instead of stopping the run.
+
+    Parameters
+    ----------
+    mats : ndarray, shape (..., 3, 3)
+        The matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Their inverses (pseudo-inverses, for the whole stack, when one is singular).
+    """
     try:
         return np.linalg.inv(mats)
     except np.linalg.LinAlgError:
@@ -95,7 +207,20 @@ def inverse(mats: np.ndarray) -> np.ndarray:
 def defining_class(obj, name: str):
     """The class in ``type(obj)``'s method resolution order that defines attribute ``name``
     (None if none does): whether two methods belong together (e.g. a derivative and the function
-    it differentiates) after subclassing."""
+    it differentiates) after subclassing.
+
+    Parameters
+    ----------
+    obj : object
+        Any object.
+    name : str
+        An attribute's name.
+
+    Returns
+    -------
+    type or None
+        The first class of ``type(obj).__mro__`` whose own namespace holds ``name``.
+    """
     return next((c for c in type(obj).__mro__ if name in vars(c)), None)
 
 
@@ -104,14 +229,36 @@ def swarm_kernel(problem) -> tuple | None:
     (:func:`magexp.problems.kernels.swarm_cost`) that computes ``problem.cost``, or None: none
     offered (a problem without :meth:`CalibrationProblem.swarm_kernel`, numba off, a forward
     parameterisation), or one not defined beside the class's ``cost`` (a subclass that changes
-    the cost, e.g. :class:`magexp.problems.vector.VectorLeastSquares`, gets the generic path)."""
+    the cost, e.g. :class:`magexp.problems.vector.VectorLeastSquares`, gets the generic path).
+
+    Parameters
+    ----------
+    problem : CalibrationProblem
+        A problem.
+
+    Returns
+    -------
+    tuple or None
+        ``(kind, data, reference, params)``, or None.
+    """
     if defining_class(problem, "swarm_kernel") is not defining_class(problem, "cost"):
         return None
     return problem.swarm_kernel()
 
 
 def reference_vectors(dataset) -> np.ndarray:
-    """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field."""
+    """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field.
+
+    Parameters
+    ----------
+    dataset : Dataset
+        With ``attitude`` (N, 3, 3) and ``field_nav`` (N, 3).
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        ``v_i = C_i^b H_i``, the reference vectors of Yuan 2018's eq 8.
+    """
     return np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)
 
 
@@ -144,18 +291,50 @@ class CalibrationProblem:
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """float64 numbers one :meth:`cost` call on ``n_particles`` holds beyond the problem's data
         (what :mod:`magexp.run.budget` adds to a run's memory); here, for a problem that does not
-        say, :data:`FLOATS_PER_PARTICLE_READING` per particle-reading."""
+        say, :data:`FLOATS_PER_PARTICLE_READING` per particle-reading.
+
+        Parameters
+        ----------
+        n_readings : int
+            The readings ``N``.
+        n_particles : int
+            The particles ``P`` of one call.
+
+        Returns
+        -------
+        int
+            The float64 numbers held.
+        """
         return FLOATS_PER_PARTICLE_READING * n_readings * n_particles
 
     def swarm_kernel(self) -> tuple | None:
         """``(kind, data, reference, params)``: the arguments, prepared once, of the compiled
         swarm cost (:func:`magexp.problems.kernels.swarm_cost`) equal to :meth:`cost` bit for bit,
-        or None (here: a problem without one). Read it through :func:`swarm_kernel`."""
+        or None (here: a problem without one). Read it through :func:`swarm_kernel`.
+
+        Returns
+        -------
+        tuple or None
+            The prepared arguments, or None.
+        """
         return None
 
     # -- parameters <-> model ---------------------------------------------------------------
     def unpack(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(W, o)`` of shapes ``(n, 3, 3)``, ``(n, 3)`` from ``thetas`` of shape ``(n, 12)``."""
+        """``(W, o)`` of shapes ``(n, 3, 3)``, ``(n, 3)`` from ``thetas`` of shape ``(n, 12)``.
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, 12) or (12,)
+            Parameter vectors: ``[vec(W), o]`` (inverse) or ``[vec(S), b]`` with ``W = S^-1`` (forward), row-major.
+
+        Returns
+        -------
+        W : ndarray, shape (n, 3, 3)
+            The calibration matrices.
+        o : ndarray, shape (n, 3)
+            The offsets.
+        """
         thetas = np.atleast_2d(thetas)
         mat = thetas[:, :9].reshape(-1, 3, 3)
         if self.parameterisation == "forward":
@@ -163,17 +342,49 @@ class CalibrationProblem:
         return mat, thetas[:, 9:]
 
     def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray:
-        """The parameter vector of the calibration ``B = w (reading - o)``."""
+        """The parameter vector of the calibration ``B = w (reading - o)``.
+
+        Parameters
+        ----------
+        w : ndarray, shape (3, 3)
+            The calibration matrix ``W``.
+        o : ndarray, shape (3,)
+            The offset.
+
+        Returns
+        -------
+        ndarray, shape (12,)
+            ``[vec(W), o]`` (inverse) or ``[vec(W^-1), o]`` (forward), row-major.
+        """
         mat = np.linalg.inv(w) if self.parameterisation == "forward" else w
         return np.concatenate([np.asarray(mat, float).ravel(), np.asarray(o, float).ravel()])
 
     def truth_theta(self) -> np.ndarray | None:
-        """The true parameter vector, if the dataset knows it."""
+        """The true parameter vector, if the dataset knows it.
+
+        Returns
+        -------
+        ndarray, shape (12,) or None
+            :meth:`pack` of the truth's matrix and offset, or None (no truth: a recording).
+        """
         t = self.dataset.truth
         return None if t is None else self.pack(t.matrix, t.offset)
 
     def calibrate(self, theta: np.ndarray, readings: np.ndarray | None = None) -> np.ndarray:
-        """Calibrated readings ``W (reading - o)``, shape ``(N, 3)``."""
+        """Calibrated readings ``W (reading - o)``, shape ``(N, 3)``.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            A parameter vector (:meth:`unpack`).
+        readings : ndarray, shape (N, 3), optional
+            The raw readings (default the dataset's).
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            ``W (r_i - o)`` of every reading.
+        """
         w, o = self.unpack(theta)
         readings = self.dataset.readings if readings is None else readings
         return (readings - o[0]) @ w[0].T
@@ -183,10 +394,31 @@ class CalibrationProblem:
         function :func:`magexp.core.identifiability.identifiability` takes. ``of`` maps a row of the
         stack, in another parameterisation, to this problem's vector (e.g. the 9 parameters of a
         symmetric matrix part, :func:`magexp.problems.symmetric.expand`; ``magexp calibrate``'s
-        ``[vec W, o]`` or ``[s, o]``)."""
+        ``[vec W, o]`` or ``[s, o]``).
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, p)
+            Parameter vectors (this problem's, or ``of``'s).
+        of : callable, optional
+            ``row -> theta``, from another parameterisation to this problem's.
+
+        Returns
+        -------
+        ndarray, shape (n, m)
+            :meth:`residuals` of each row.
+        """
         return np.array([self.residuals(row if of is None else of(row)) for row in np.atleast_2d(thetas)])
 
     def parameter_names(self) -> list[str]:
+        """The names of the 12 parameters, in :meth:`pack`'s order.
+
+        Returns
+        -------
+        list of str
+            ``Minv11``...``Minv33``, ``I1``...``I3`` (inverse, Ding 2024's ``M^-1`` and ``I``) or ``S11``...``S33``,
+            ``b1``...``b3`` (forward, Yuan 2018's ``S`` and ``b``).
+        """
         m = "S" if self.parameterisation == "forward" else "Minv"
         o = "b" if self.parameterisation == "forward" else "I"
         return [f"{m}{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"{o}{i + 1}" for i in range(3)]
@@ -201,6 +433,16 @@ class CalibrationProblem:
         ``param_matrix_error`` / ``param_offset_error``: largest absolute error of an entry of
         the parameter vector's matrix part (``S`` in the forward form) / offset part.
         With known attitudes, ``fg``: Yuan 2018's ``F_g`` (eq 8) at ``theta``, whatever the objective.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            The fitted parameter vector.
+
+        Returns
+        -------
+        dict
+            Metric name -> float (the keys above present when their data are).
         """
         out = {}
         if self.dataset.attitude is not None and self.dataset.field_nav is not None:
@@ -240,6 +482,16 @@ class CalibrationProblem:
         ``J = ∂r/∂θ`` has shape ``(N m, 12)`` (rows as :meth:`residuals`; a transposed view of
         ``12`` contiguous rows), ``G`` ``(N, m, 3)``. Vectorised: one product per parameter
         block, no loop over readings.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            The parameter vector the derivatives are taken at.
+
+        Returns
+        -------
+        tuple of ndarray or None
+            ``(J, G)``, or None without an analytic form.
         """
         if defining_class(self, "_dr_db") is not defining_class(self, "residuals"):
             return None  # residuals changed by a subclass (or none here): no analytic form
@@ -261,15 +513,51 @@ class CalibrationProblem:
 
     # -- what the data can identify (see magexp.core.bounds) ----------------------------------------
     def invariants(self, theta: np.ndarray) -> np.ndarray:
-        """The identifiable functions of ``theta``: here every parameter, as ``[vec(W), o]``."""
+        """The identifiable functions of ``theta``: here every parameter, as ``[vec(W), o]``.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            The point whose invariants are taken.
+
+        Returns
+        -------
+        ndarray, shape (12,)
+            ``[vec(W), o]``.
+        """
         w, o = self.unpack(theta)
         return np.concatenate([w[0].ravel(), o[0]])
 
     def invariant_bounds(self, theta: np.ndarray, cov: np.ndarray) -> dict:
-        """Expected error sizes from the CRB covariance of :meth:`invariants`."""
+        """Expected error sizes from the CRB covariance of :meth:`invariants`.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            The parameter vector the covariance is taken at.
+        cov : ndarray, shape (k, k)
+            The Cramér-Rao covariance of :meth:`invariants` (:mod:`magexp.core.bounds`).
+
+        Returns
+        -------
+        dict
+            ``offset_bound`` (root of the offset block's trace) and ``matrix_bound`` (largest standard
+            deviation of a matrix entry).
+        """
         return {"offset_bound": float(np.sqrt(np.trace(cov[-3:, -3:]))),
                 "matrix_bound": float(np.sqrt(np.max(np.diag(cov)[:-3])))}
 
     def fg(self, theta: np.ndarray) -> float:
-        """Yuan 2018's ``F_g`` (eq 8): ``sum_i ||C_i H_i - W (r_i - o)||`` with the dataset's attitudes."""
+        """Yuan 2018's ``F_g`` (eq 8): ``sum_i ||C_i H_i - W (r_i - o)||`` with the dataset's attitudes.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (12,)
+            Any fit's estimate (``fg`` is reported whatever the objective).
+
+        Returns
+        -------
+        float
+            ``F_g`` at ``theta``.
+        """
         return float(np.linalg.norm(reference_vectors(self.dataset) - self.calibrate(theta), axis=1).sum())

@@ -62,29 +62,93 @@ class GyroAidedCalibration(CalibrationProblem):
         self.upper = np.concatenate([self.upper, [np.pi, np.pi / 2, b, b, b]])
 
     def unpack(self, thetas):
+        """``(W, o)`` of the first 12 parameters (the field direction and gyro bias left out).
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, 17) or (17,)
+            Parameter vectors (module docstring).
+
+        Returns
+        -------
+        W : ndarray, shape (n, 3, 3)
+            The calibration matrices (``S^-1`` in the forward form).
+        o : ndarray, shape (n, 3)
+            The offsets ``b``.
+        """
         w, o = super().unpack(thetas)
         return w, o[:, :3]
 
     def pack_all(self, w, o, field_dir, bias_deg_s) -> np.ndarray:
-        """The 17 parameters from ``W``, ``o``, a field direction vector and a bias (deg/s)."""
+        """The 17 parameters from ``W``, ``o``, a field direction vector and a bias (deg/s).
+
+        Parameters
+        ----------
+        w : ndarray, shape (3, 3)
+            The calibration matrix ``W``.
+        o : ndarray, shape (3,)
+            The offset ``b``.
+        field_dir : array_like, shape (3,)
+            The field's direction in the starting frame (any length).
+        bias_deg_s : array_like, shape (3,)
+            The gyro bias ``b_g`` (deg/s).
+
+        Returns
+        -------
+        ndarray, shape (17,)
+            ``[vec(S), b, a, e, b_g]``.
+        """
         d = np.asarray(field_dir, float) / np.linalg.norm(field_dir)
         return np.concatenate([self.pack(w, o), [np.arctan2(d[1], d[0]), np.arcsin(np.clip(d[2], -1, 1))],
                                bias_deg_s])
 
     def field(self, thetas) -> np.ndarray:
-        """The field ``h`` in the starting frame, ``(n, 3)``."""
+        """The field ``h`` in the starting frame, ``(n, 3)``.
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, 17) or (17,)
+            Parameter vectors (their ``a``, ``e``: columns 12, 13).
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            ``h = F [cos e cos a, cos e sin a, sin e]``, ``F`` the dataset's reference total.
+        """
         thetas = np.atleast_2d(thetas)
         a, e = thetas[:, 12], thetas[:, 13]
         return self.total * np.column_stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
 
     def reference_swarm(self, thetas) -> np.ndarray:
-        """``R_j(b_g)ᵀ h`` of every particle and reading, ``(n, M, 3)``."""
+        """``R_j(b_g)ᵀ h`` of every particle and reading, ``(n, M, 3)``.
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, 17) or (17,)
+            Parameter vectors (their ``h`` and ``b_g``).
+
+        Returns
+        -------
+        ndarray, shape (n, M, 3)
+            The reference vectors of Yuan 2018's eq 8 with the attitude from the bias-corrected gyro.
+        """
         thetas = np.atleast_2d(thetas)
         rot = attitude_with_bias(self.delta, self.jac, np.deg2rad(thetas[:, 14:17]))
         return np.einsum("nmji,nj->nmi", rot, self.field(thetas))
 
     def residual_swarm(self, thetas) -> np.ndarray:
-        """``R_jᵀ h - W (B_j - b)`` of every particle and reading, ``(n, M, 3)``."""
+        """``R_jᵀ h - W (B_j - b)`` of every particle and reading, ``(n, M, 3)``.
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, 17) or (17,)
+            Parameter vectors (all 17 used).
+
+        Returns
+        -------
+        ndarray, shape (n, M, 3)
+            The residual vectors of ``F_g`` (module docstring).
+        """
         w, o = self.unpack(thetas)
         with np.errstate(invalid="ignore", over="ignore"):
             cal = np.einsum("nij,nkj->nki", w, self.dataset.readings[None] - o[:, None, :])
@@ -95,23 +159,80 @@ class GyroAidedCalibration(CalibrationProblem):
         """48 float64 numbers per particle-reading: the ``(n, M, 3, 3)`` rotations of
         :func:`~magexp.core.geometry.attitude_with_bias` and their intermediates, the references and
         residuals (tracemalloc's peak of one call: 46.2 to 46.6 a particle-reading, 300 readings, 50
-        and 200 particles)."""
+        and 200 particles).
+
+        Parameters
+        ----------
+        n_readings, n_particles : int
+            As :meth:`CalibrationProblem.cost_floats` (``M`` and ``n`` here).
+
+        Returns
+        -------
+        int
+            ``48 M n``.
+        """
         return 48 * n_readings * n_particles
 
     def cost(self, thetas) -> np.ndarray:
-        """``F_g`` of every particle, ``(n, 17) -> (n,)``; non-finite values become ``inf``."""
+        """``F_g`` of every particle, ``(n, 17) -> (n,)``; non-finite values become ``inf``.
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (n, 17)
+            The swarm.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            ``F_g = sum_j |R_j(b_g)^T h - S^-1 (B_j - b)|`` of each (Yuan 2018, eq 8, module docstring).
+        """
         err = self.residual_swarm(thetas)
         f = np.sqrt(np.einsum("nmk,nmk->nm", err, err)).sum(axis=1)
         return np.where(np.isfinite(f), f, np.inf)
 
     def cost_direct(self, theta) -> float:
+        """``F_g`` of one parameter vector (:meth:`cost` of a swarm of one).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (17,)
+            One particle of :meth:`cost`'s swarm.
+
+        Returns
+        -------
+        float
+            Its cost.
+        """
         return float(self.cost(np.asarray(theta)[None])[0])
 
     def residuals(self, theta) -> np.ndarray:
-        """The ``3M`` residual components (for least squares)."""
+        """The ``3M`` residual components (for least squares).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (17,)
+            ``[vec(S), b, a, e, b_g]``.
+
+        Returns
+        -------
+        ndarray, shape (3M,)
+            The components of ``R_j^T h - W (B_j - b)``, reading by reading.
+        """
         return self.residual_swarm(np.asarray(theta)[None])[0].ravel()
 
     def fg(self, theta) -> float:
+        """Yuan 2018's ``F_g`` (eq 8) with the estimated field direction and gyro bias: :meth:`cost_direct`.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (17,)
+            The estimate (with its field direction and gyro bias).
+
+        Returns
+        -------
+        float
+            ``F_g``, module docstring.
+        """
         return self.cost_direct(theta)
 
     def initial_estimate(self) -> np.ndarray:
@@ -119,7 +240,13 @@ class GyroAidedCalibration(CalibrationProblem):
         canonical) and the offset; with them fixed, least squares over the 8 numbers of ``Q``
         (rotation vector), the field direction and the gyro bias (from zero, and the field direction
         of the first calibrated reading, ``R_0 = I``) fits ``R_jᵀ h = Q P (B_j - b)``; the full
-        problem starts from there."""
+        problem starts from there.
+
+        Returns
+        -------
+        ndarray, shape (17,)
+            The starting parameter vector.
+        """
         base = self._ellipsoid_start()
         w0, o0 = (a[0] for a in self.unpack(base))
 
@@ -139,6 +266,13 @@ class GyroAidedCalibration(CalibrationProblem):
         return self.pack_all(w, o, w @ (self.dataset.readings[0] - o), np.zeros(3))
 
     def parameter_names(self) -> list[str]:
+        """The names of the 17 parameters, in :meth:`pack_all`'s order.
+
+        Returns
+        -------
+        list of str
+            :meth:`CalibrationProblem.parameter_names` and :data:`EXTRA`.
+        """
         return super().parameter_names() + list(EXTRA)
 
     def metrics(self, theta) -> dict:
@@ -148,7 +282,18 @@ class GyroAidedCalibration(CalibrationProblem):
         ``field_azimuth_deg``/``field_elevation_deg`` on their principal branches); the gyro bias;
         ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
         Jacobian, and ``se_<parameter>``, each parameter's standard error from it (``inf`` where the data
-        leave it undetermined; :func:`magexp.core.identifiability.identifiability`)."""
+        leave it undetermined; :func:`magexp.core.identifiability.identifiability`).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (17,)
+            The estimator's result ``x``.
+
+        Returns
+        -------
+        dict
+            The keys above (floats; ``weakest_combination`` a text).
+        """
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
         calibrated = self.calibrate(theta)
@@ -174,4 +319,16 @@ class GyroAidedCalibration(CalibrationProblem):
         return out
 
     def invariants(self, theta):
+        """What the data identify: here every parameter (the weak combinations are reported by :meth:`metrics`).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (17,)
+            The estimate.
+
+        Returns
+        -------
+        ndarray, shape (17,)
+            ``theta`` as floats.
+        """
         return np.asarray(theta, float)

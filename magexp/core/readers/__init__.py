@@ -50,7 +50,25 @@ NED_TO_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 
 def need(module: str, what: str):
-    """The module ``module`` (``pyulog.core``, ...), or one line naming the extra to install."""
+    """The module ``module`` (``pyulog.core``, ...), or one line naming the extra to install.
+
+    Parameters
+    ----------
+    module : str
+        The module's dotted name.
+    what : str
+        What it is needed for (``a ULog``), named in the refusal.
+
+    Returns
+    -------
+    module
+        The imported module.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the ``pip install 'magexp[<extra>]'`` to run (:data:`EXTRAS`).
+    """
     try:
         return importlib.import_module(module)
     except ImportError:
@@ -60,7 +78,29 @@ def need(module: str, what: str):
 
 
 def log_unit(unit, fixed: str, name: str, what: str) -> str:
-    """``fixed``, the unit a log format defines; one line if ``data.unit`` (``unit``) names another."""
+    """``fixed``, the unit a log format defines; one line if ``data.unit`` (``unit``) names another.
+
+    Parameters
+    ----------
+    unit : str or None
+        ``data.unit`` (None: not given).
+    fixed : str
+        The format's unit.
+    name : str
+        The log, named in the refusal.
+    what : str
+        What is in ``fixed``, named in the refusal.
+
+    Returns
+    -------
+    str
+        ``fixed``.
+
+    Raises
+    ------
+    MagexpError
+        One line when ``unit`` names another.
+    """
     if unit is not None and unit != fixed:
         raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: {what} is in {fixed} (leave data.unit "
                           "unset)")
@@ -79,6 +119,16 @@ def angles_from_attitude(a: np.ndarray) -> np.ndarray:
 
     Exact for every rotation with ``|A_12| < 1`` (the logged attitudes: ``|A_12| = 1`` is the
     body's y axis along the navigation z axis, a 90° roll about x after the heading turn).
+
+    Parameters
+    ----------
+    a : ndarray, shape (N, 3, 3)
+        Navigation -> sensor rotations.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Yan & Zhou 2022's eq 2 angles ψ, θ, φ.
     """
     a = np.asarray(a, float)
     roll = np.arcsin(np.clip(a[..., 1, 2], -1.0, 1.0))
@@ -98,7 +148,27 @@ def _unit_quaternions(q: np.ndarray) -> np.ndarray:
 def attitude_at(times: np.ndarray, quats: np.ndarray, at: np.ndarray) -> np.ndarray:
     """Body -> NED rotations ``(len(at), 3, 3)`` at the times ``at``: the logged unit quaternions
     ``[w, x, y, z]`` (body -> NED) at ``times`` interpolated by spherical linear interpolation
-    between the two neighbouring samples (held at the first or last outside them), vectorised."""
+    between the two neighbouring samples (held at the first or last outside them), vectorised.
+
+    Parameters
+    ----------
+    times : ndarray, shape (K,)
+        The quaternions' times (s).
+    quats : ndarray, shape (K, 4)
+        Body -> NED quaternions ``[w, x, y, z]`` (normalised here).
+    at : ndarray, shape (M,)
+        The times wanted (s).
+
+    Returns
+    -------
+    ndarray, shape (M, 3, 3)
+        The rotations.
+
+    Raises
+    ------
+    MagexpError
+        One line for a zero or non-finite quaternion.
+    """
     q = _unit_quaternions(quats)
     times = np.asarray(times, float)
     order = np.argsort(times, kind="stable")
@@ -121,7 +191,18 @@ def attitude_at(times: np.ndarray, quats: np.ndarray, at: np.ndarray) -> np.ndar
 
 def euler_quaternions(roll, pitch, yaw) -> np.ndarray:
     """Unit quaternions ``[w, x, y, z]`` of the aerospace ``Z-Y-X`` Euler angles (radians): the
-    body -> NED rotation ``R_z(yaw) R_y(pitch) R_x(roll)``."""
+    body -> NED rotation ``R_z(yaw) R_y(pitch) R_x(roll)``.
+
+    Parameters
+    ----------
+    roll, pitch, yaw : array_like
+        Radians, broadcast to one dimension.
+
+    Returns
+    -------
+    ndarray, shape (N, 4)
+        The quaternions.
+    """
     cr, sr = np.cos(np.asarray(roll, float) / 2), np.sin(np.asarray(roll, float) / 2)
     cp, sp = np.cos(np.asarray(pitch, float) / 2), np.sin(np.asarray(pitch, float) / 2)
     cy, sy = np.cos(np.asarray(yaw, float) / 2), np.sin(np.asarray(yaw, float) / 2)
@@ -132,14 +213,46 @@ def euler_quaternions(roll, pitch, yaw) -> np.ndarray:
 def navigation_angles(times: np.ndarray, quats: np.ndarray, at: np.ndarray, *, enu: bool = False) -> np.ndarray:
     """``[heading, roll, trim]`` at ``at`` of the NED -> body rotations of body -> navigation
     quaternions ``quats`` at ``times``; ``enu``: the quaternions rotate into ENU (ROS, REP-103),
-    converted to NED (``A_ned = A_enu C``, ``C`` = :data:`NED_TO_ENU`)."""
+    converted to NED (``A_ned = A_enu C``, ``C`` = :data:`NED_TO_ENU`).
+
+    Parameters
+    ----------
+    times : ndarray, shape (K,)
+        The quaternions' times (s).
+    quats : ndarray, shape (K, 4)
+        Body -> navigation quaternions ``[w, x, y, z]``.
+    at : ndarray, shape (M,)
+        The readings' times (s).
+    enu : bool
+        The navigation frame is ENU (else NED).
+
+    Returns
+    -------
+    ndarray, shape (M, 3)
+        Yan & Zhou 2022's eq 2 angles (:func:`angles_from_attitude`).
+    """
     to_body = np.transpose(attitude_at(times, quats, at), (0, 2, 1))
     return angles_from_attitude(to_body @ NED_TO_ENU if enu else to_body)
 
 
 def place(latitude, longitude, altitude_m, when: _dt.datetime | None) -> dict:
     """Metadata of the log's place and date: the median of the fixes (degrees, km), ISO date; {}
-    without a fix."""
+    without a fix.
+
+    Parameters
+    ----------
+    latitude, longitude : array_like
+        The fixes, degrees (the non-finite and out-of-range ones left out).
+    altitude_m : array_like
+        Their altitudes (m; a non-finite one counts as 0).
+    when : datetime, optional
+        The log's date.
+
+    Returns
+    -------
+    dict
+        ``latitude``, ``longitude``, ``altitude_km``, ``gps_fixes`` and ``date`` as text (``meta`` values).
+    """
     latitude, longitude, altitude_m = (np.asarray(v, float) for v in (latitude, longitude, altitude_m))
     ok = np.isfinite(latitude) & np.isfinite(longitude) & (np.abs(latitude) <= 90) & (np.abs(longitude) <= 360)
     if not np.any(ok):
@@ -160,7 +273,34 @@ def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, a
                   gyro: tuple | None, meta: dict, mag_axes=None, gyro_axes=None, logged: np.ndarray | None = None):
     """The :class:`~magexp.core.recording.Recording` of a log: readings (with ``mag_axes``) at
     ``times``, the attitude angles, the gyroscope stream (with ``gyro_axes``), ``meta``; ``logged``: the
-    readings as logged, before the reader undid the onboard calibration (columns :data:`LOGGED`), or None."""
+    readings as logged, before the reader undid the onboard calibration (columns :data:`LOGGED`), or None.
+
+    Parameters
+    ----------
+    path : Path
+        The log.
+    readings : ndarray, shape (N, 3)
+        The magnetometer's readings, in the log's axes.
+    unit : str
+        Their unit.
+    times : ndarray, shape (N,)
+        Their times (s); the recording is sorted by them.
+    angles : ndarray, shape (N, 3), optional
+        ``[heading, roll, trim]`` at each reading.
+    gyro : tuple, optional
+        ``(times (G,), rates (G, 3))`` of the gyroscope (rad/s).
+    meta : dict
+        The recording's metadata.
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps (:func:`magexp.core.geometry.axis_map`).
+    logged : ndarray, shape (N, 3), optional
+        The readings as logged.
+
+    Returns
+    -------
+    Recording
+        The recording, ``meta['nav_frame'] = 'NED'``.
+    """
     order = np.argsort(times, kind="stable")
     axes = axis_map(mag_axes, "data.mag_axes").T
     columns = {} if logged is None else dict(zip(LOGGED, (np.asarray(logged, float)[order] @ axes).T))
@@ -176,21 +316,67 @@ def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, a
 
 
 def matrix_text(m: np.ndarray) -> str:
-    """A 3 x 3 matrix as ``meta`` text, rows separated by ``;`` (:func:`matrix_of` reads it back)."""
+    """A 3 x 3 matrix as ``meta`` text, rows separated by ``;`` (:func:`matrix_of` reads it back).
+
+    Parameters
+    ----------
+    m : array_like, shape (3, 3)
+        The matrix.
+
+    Returns
+    -------
+    str
+        E.g. ``1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 1.0``.
+    """
     return "; ".join(", ".join(f"{v!r}" for v in np.asarray(row, float).tolist()) for row in m)
 
 
 def matrix_of(text: str) -> np.ndarray:
-    """The matrix of :func:`matrix_text`."""
+    """The matrix of :func:`matrix_text`.
+
+    Parameters
+    ----------
+    text : str
+        A matrix as :func:`matrix_text` writes it.
+
+    Returns
+    -------
+    ndarray
+        The matrix.
+    """
     return np.array([[float(v) for v in row.split(",")] for row in text.split(";")])
 
 
 def onboard_rotation_of(rec: Recording) -> np.ndarray:
     """The rotation the firmware applies after its calibration (``meta['onboard_rotation']`` of a
-    PX4 log), else the identity: what :func:`magexp.calibration.export.px4` takes as ``rotation``."""
+    PX4 log), else the identity: what :func:`magexp.calibration.export.px4` takes as ``rotation``.
+
+    Parameters
+    ----------
+    rec : Recording
+        A recording.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        The rotation.
+    """
     return matrix_of(rec.meta["onboard_rotation"]) if "onboard_rotation" in rec.meta else np.eye(3)
 
 
 def check_count(count: int, subject: str) -> None:
-    """Refuse, before decoding, a log holding more readings than :mod:`magexp.core.limits` allows."""
+    """Refuse, before decoding, a log holding more readings than :mod:`magexp.core.limits` allows.
+
+    Parameters
+    ----------
+    count : int
+        The log's magnetometer readings.
+    subject : str
+        The log, named in the refusal.
+
+    Raises
+    ------
+    MagexpError
+        One line over the ``readings`` limit (:func:`magexp.core.limits.refuse_over`).
+    """
     refuse_over(count, "readings", subject, "its magnetometer messages hold")

@@ -85,7 +85,20 @@ def _dtype(fmt) -> np.dtype:
 
 
 def table(reader, name: str) -> dict | None:
-    """Every ``name`` message of the log as ``{column: array}`` (multipliers applied), or None."""
+    """Every ``name`` message of the log as ``{column: array}`` (multipliers applied), or None.
+
+    Parameters
+    ----------
+    reader : DFReader
+        pymavlink's reader of the log.
+    name : str
+        The message type (``MAG``, ``ATT``, ``GPS``, ...).
+
+    Returns
+    -------
+    dict or None
+        Column -> array, or None when the log has none.
+    """
     ids = [t for t, f in reader.formats.items() if f.name == name]
     offsets = np.asarray(reader.offsets[ids[0]] if ids else [], np.int64)  # offsets: a list by type id
     if offsets.size == 0:
@@ -123,7 +136,20 @@ def _instance(reader, name: str, instance: int) -> dict | None:
 
 
 def parameters(reader, before_us: float) -> dict:
-    """``{name: value}`` of the ``PARM`` messages logged up to ``before_us`` (the last value of each)."""
+    """``{name: value}`` of the ``PARM`` messages logged up to ``before_us`` (the last value of each).
+
+    Parameters
+    ----------
+    reader : DFReader
+        pymavlink's reader of the log.
+    before_us : float
+        The time (µs) up to which the parameters are read.
+
+    Returns
+    -------
+    dict
+        Parameter name -> value.
+    """
     rows = table(reader, "PARM")
     if rows is None:
         return {}
@@ -133,7 +159,24 @@ def parameters(reader, before_us: float) -> dict:
 
 
 def correction(params: dict, instance: int) -> tuple[np.ndarray, float, np.ndarray]:
-    """``(M, s, OFS)`` of compass ``instance`` from the parameters (module docstring)."""
+    """``(M, s, OFS)`` of compass ``instance`` from the parameters (module docstring).
+
+    Parameters
+    ----------
+    params : dict
+        The log's parameters (:func:`parameters`).
+    instance : int
+        The compass (0: ``COMPASS_*``, 1: ``COMPASS_*2``, 2: ``COMPASS_*3``).
+
+    Returns
+    -------
+    M : ndarray, shape (3, 3)
+        The symmetric matrix of ``COMPASS_DIA`` and ``COMPASS_ODI``.
+    s : float
+        ``COMPASS_SCALE`` (1 outside ArduPilot's accepted range, as ArduPilot applies it).
+    OFS : ndarray, shape (3,)
+        ``COMPASS_OFS``.
+    """
     suffix = "" if instance == 0 else str(instance + 1)
     p = lambda key, axis, default: float(params.get(f"COMPASS_{key}{suffix}_{axis}", default))  # noqa: E731
     dia = [p("DIA", a, 1.0) for a in "XYZ"]
@@ -147,7 +190,24 @@ def correction(params: dict, instance: int) -> tuple[np.ndarray, float, np.ndarr
 
 
 def undo_correction(mag: dict, params: dict, instance: int) -> tuple[np.ndarray, dict]:
-    """``r = (M⁻¹ (B − MOFS)) / s − OFS`` (module docstring) and what was undone."""
+    """``r = (M⁻¹ (B − MOFS)) / s − OFS`` (module docstring) and what was undone.
+
+    Parameters
+    ----------
+    mag : dict
+        The ``MAG`` messages (``MagX/Y/Z``, ``MOX/Y/Z``).
+    params : dict
+        The log's parameters.
+    instance : int
+        The compass.
+
+    Returns
+    -------
+    raw : ndarray, shape (N, 3)
+        The raw body-frame field ``r`` (mGauss).
+    meta : dict
+        What was undone, as ``meta`` text.
+    """
     b = np.column_stack([mag[f"Mag{a}"] for a in "XYZ"]).astype(float)
     motor = np.column_stack([mag.get(f"MOfs{a}", np.zeros(len(b))) for a in "XYZ"]).astype(float)
     m, scale, ofs = correction(params, instance)
@@ -250,6 +310,12 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
     mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
     instance : the compass and IMU instance (0: the first).
     undo : undo the onboard correction (default); False keeps ``MagX/Y/Z`` as logged.
+
+    Returns
+    -------
+    Recording
+        The readings (mGauss) at their times, the attitude angles of ``ATT``, the gyroscope of ``IMU``, the
+        GPS place and date and the undone correction in ``meta``.
     """
     name = Path(path).name
     df = need("pymavlink.DFReader", f"{name} (an ArduPilot DataFlash log)")

@@ -83,7 +83,25 @@ class Messages:
         self.pos = np.zeros(len(raws), np.int64)  # from each body's start
 
     def read(self, dtype, count: int = 1) -> np.ndarray:
-        """The next ``count`` values of ``dtype`` of every message, ``(n, count)``."""
+        """The next ``count`` values of ``dtype`` of every message, ``(n, count)``.
+
+        Parameters
+        ----------
+        dtype : str or numpy.dtype
+            A little-endian scalar type, e.g. ``<f8``.
+        count : int
+            How many values.
+
+        Returns
+        -------
+        ndarray, shape (n, count)
+            The values, each aligned to its size under CDR.
+
+        Raises
+        ------
+        LayoutError
+            When a message is too short.
+        """
         dt = np.dtype(dtype)
         if self.cdr:
             self.pos = -(-self.pos // dt.itemsize) * dt.itemsize
@@ -100,7 +118,13 @@ class Messages:
         self.pos = self.pos + n
 
     def header(self) -> tuple[np.ndarray, np.ndarray]:
-        """``std_msgs/Header``: ``(sec, nanosec)`` (ROS 1: ``seq`` first, read past)."""
+        """``std_msgs/Header``: ``(sec, nanosec)`` (ROS 1: ``seq`` first, read past).
+
+        Returns
+        -------
+        sec, nanosec : ndarray, shape (n,)
+            The stamps.
+        """
         if not self.cdr:
             self.read("<u4")
         sec, nsec = self.read("<i4")[:, 0], self.read("<u4")[:, 0]
@@ -129,7 +153,31 @@ def _open(path: Path):
 
 def decode(raws: list[bytes], received: np.ndarray, msgtype: str, *, cdr: bool) -> tuple[np.ndarray, dict]:
     """``(times s, {field: (n, k) array})`` of serialised ``msgtype`` messages (:data:`LAYOUTS`);
-    a time is the header stamp, else (a zero stamp) the bag's receive time ``received`` (ns)."""
+    a time is the header stamp, else (a zero stamp) the bag's receive time ``received`` (ns).
+
+    Parameters
+    ----------
+    raws : list of bytes
+        The serialised messages.
+    received : ndarray, shape (n,)
+        Their receive times (ns).
+    msgtype : str
+        A key of :data:`LAYOUTS`.
+    cdr : bool
+        ROS 2 CDR (else ROS 1's serialisation).
+
+    Returns
+    -------
+    times : ndarray, shape (n,)
+        Seconds.
+    fields : dict
+        Field -> ``(n, k)`` array.
+
+    Raises
+    ------
+    LayoutError
+        When a message does not have the layout.
+    """
     rows = Messages(raws, cdr=cdr)
     sec, nsec = rows.header()
     fields = {}
@@ -179,6 +227,12 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
     unit : must be None or ``uT`` (the tesla of ``MagneticField`` are read as µT).
     mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
     topic : the ``MagneticField`` topic (None: the one with most messages).
+
+    Returns
+    -------
+    Recording
+        The readings (µT) at their times, the orientation's angles and the angular rate of the ``Imu``
+        messages where there are some.
     """
     path = Path(path)
     name = path.name

@@ -144,7 +144,18 @@ def _changed(ulog, n: int, t0: float, t1: float) -> str | None:
 
 def rotation_matrix(enum: int) -> np.ndarray:
     """PX4's ``get_rot_matrix`` (``src/lib/conversion/rotation.cpp``): the ``Z-Y-X`` Euler angles of
-    :data:`ROTATIONS` as a board -> body matrix."""
+    :data:`ROTATIONS` as a board -> body matrix.
+
+    Parameters
+    ----------
+    enum : int
+        A key of :data:`ROTATIONS` (``CAL_MAGn_ROT``, ``SENS_BOARD_ROT``).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R_z(yaw) R_y(pitch) R_x(roll)``.
+    """
     if not 0 <= enum < len(ROTATIONS):
         raise MagexpError(f"rotation {enum} is not allowed: PX4's rotations are 0 to {len(ROTATIONS) - 1}")
     return quat_to_matrix(euler_quaternions(*np.deg2rad(np.array(ROTATIONS[enum], float)[:, None])))[0]
@@ -153,7 +164,20 @@ def rotation_matrix(enum: int) -> np.ndarray:
 def onboard_rotation(params: dict, n: int) -> np.ndarray:
     """``R`` PX4 applies after the calibration of slot ``n``: ``get_rot_matrix(CAL_MAGn_ROT)`` for an
     external magnetometer (``ROT >= 0``), else the board's: ``Euler(SENS_BOARD_X/Y/Z_OFF) ·
-    get_rot_matrix(SENS_BOARD_ROT)`` (``GetBoardRotation``)."""
+    get_rot_matrix(SENS_BOARD_ROT)`` (``GetBoardRotation``).
+
+    Parameters
+    ----------
+    params : dict
+        The log's parameters.
+    n : int
+        The ``CAL_MAGn`` slot.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R`` of ``Magnetometer::Correct``'s ``B = R S (r − OFF)``.
+    """
     rot = int(params.get(f"CAL_MAG{n}_ROT", -1))
     if rot >= 0:
         return rotation_matrix(rot)
@@ -164,7 +188,36 @@ def onboard_rotation(params: dict, n: int) -> np.ndarray:
 def undo_calibration(ulog, topic: str, device: int | None, readings: np.ndarray, times_us: np.ndarray,
                      name: str) -> tuple[np.ndarray, dict]:
     """The readings before PX4's onboard calibration, ``r = S⁻¹ Rᵀ B + OFF`` (module docstring),
-    and what was undone."""
+    and what was undone.
+
+    Parameters
+    ----------
+    ulog : ULog
+        pyulog's parsed log (its parameters and their changes).
+    topic : str
+        The readings' topic (``sensor_mag`` is raw from PX4 1.12 on: nothing to undo; corrected before,
+        not rotated).
+    device : int or None
+        The magnetometer's device id, matched against ``CAL_MAGn_ID``.
+    readings : ndarray, shape (N, 3)
+        The logged field ``B`` (gauss).
+    times_us : ndarray, shape (N,)
+        Their times (µs), to find a calibration changed during the log.
+    name : str
+        The log, named in a refusal.
+
+    Returns
+    -------
+    raw : ndarray, shape (N, 3)
+        ``r`` (gauss).
+    meta : dict
+        What was undone, as ``meta`` text (the slot, ``S``, ``OFF``, ``R``).
+
+    Raises
+    ------
+    MagexpError
+        One line when the device has no ``CAL_MAGn_ID`` or its calibration changed during the log.
+    """
     version = _version(ulog)
     new = version is not None and version >= NEW_CALIBRATION
     if topic.startswith("sensor_mag") and new:
@@ -220,6 +273,12 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
     unit : must be None or ``G`` (ULog magnetometer topics are in gauss).
     mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
     undo : undo the onboard calibration (default); False keeps the readings as logged.
+
+    Returns
+    -------
+    Recording
+        The readings (gauss) at their times, the attitude angles, the gyroscope, the GPS place and date, and
+        the undone calibration in ``meta`` (``onboard_rotation``: :func:`magexp.core.readers.onboard_rotation_of`).
     """
     name = Path(path).name
     core = need("pyulog.core", f"{name} (a PX4 ULog)")
