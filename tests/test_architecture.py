@@ -106,19 +106,8 @@ def import_graph() -> dict[str, set[str]]:
     return graph
 
 
-#: the modules other helpers of issue 35 are splitting: allowed over :data:`MAX_LINES` and inside an import
-#: cycle until their splits land (the lead removes this allowlist after merging them)
-PENDING_SPLITS = {"magexp/artifacts/summary.py", "magexp/artifacts/claims.py"}
-#: imports left to the splits above, not counted in the depth: ``expand`` and ``UPPER`` live in
-#: ``magexp.problems.symmetric``; ``calibration/fit.py`` still takes them through ``estimators.reduced`` (and so
-#: imports the swarm engine), and its split imports them from their home
-PENDING_EDGES: set = set()
 #: the most lines a module may have (issue 35): a longer one holds more than one concept
 MAX_LINES = 600
-
-
-def _pending(module: str) -> bool:
-    return module.replace(".", "/") + ".py" in PENDING_SPLITS
 
 
 def test_at_most_five_modules_sit_beside_the_packages():
@@ -176,20 +165,20 @@ def _depths(graph) -> dict[str, tuple[str, ...]]:
 def test_no_module_is_too_long():
     sizes = {p.relative_to(ROOT).as_posix(): len(p.read_text().splitlines()) for p in (ROOT / "magexp").rglob("*.py")}
     assert len(sizes) > 100  # the walk saw the package
-    over = {path: n for path, n in sizes.items() if n > MAX_LINES and path not in PENDING_SPLITS}
+    over = {path: n for path, n in sizes.items() if n > MAX_LINES}
     assert not over, f"modules over {MAX_LINES} lines (split them by concept): " + ", ".join(
         f"{path} ({n})" for path, n in sorted(over.items()))
 
 
 def test_the_import_graph_has_no_cycle():
-    cycles = [c for c in _cycles(import_graph()) if not any(_pending(m) for m in c)]
+    cycles = _cycles(import_graph())
     assert not cycles, "import cycles (imports inside functions count): " + "; ".join(" <-> ".join(c) for c in cycles)
 
 
 def test_the_import_graph_is_shallow():
     """No chain of imports, from any module (the entry point ``magexp.__main__`` among them) down to a leaf, is
     longer than :data:`MAX_DEPTH` modules, counting every import (inside functions too)."""
-    graph = {m: targets - {t for s, t in PENDING_EDGES if s == m} for m, targets in import_graph().items()}
+    graph = import_graph()
     chains = _depths(graph)
     assert len(chains["magexp.__main__"]) > 3  # the entry point reaches down the layers
     deep = {m: c for m, c in chains.items() if len(c) > MAX_DEPTH}

@@ -18,6 +18,7 @@ from magexp.core.geometry import random_rotations, rot_z
 from magexp.paths import SHARED_DATA
 
 from magexp.calibration import export as ex
+from magexp.calibration import firmware as fw
 
 #: the test's own unit table: mGauss per unit (1 G = 1000 mG = 1e5 nT)
 MG_PER = {"nT": 0.01, "uT": 10.0, "mG": 1.0, "G": 1000.0, "T": 1e7}
@@ -220,7 +221,7 @@ def parse_orientation_px4(text: str) -> tuple[dict, dict]:
 
 def ardupilot_with_orientation(raw_mg: np.ndarray, p: dict) -> np.ndarray:
     """AP_Compass_Backend: rotate_field (``COMPASS_ORIENT``, an external compass) before correct_field."""
-    turned = raw_mg @ ex.standard_rotation(int(p["COMPASS_ORIENT"])).T
+    turned = raw_mg @ fw.standard_rotation(int(p["COMPASS_ORIENT"])).T
     return ardupilot_correct_field(turned, p)
 
 
@@ -229,7 +230,7 @@ def test_a_rotation_near_a_standard_one_is_exported_as_the_orientation(n):
     """W = R_n R_e S (R_e 0.4 deg): both firmwares get orientation n and S; their field is magexp's up to R_e."""
     w, offset, raw = synthetic("G")
     small = rot_z(np.deg2rad(0.4))
-    turned = ex.standard_rotation(n) @ small @ w
+    turned = fw.standard_rotation(n) @ small @ w
     b = (raw - offset) @ turned.T
     ap = ex.render("ardupilot", turned, offset, "G", orient=True)
     p = parse_ardupilot(ap.text)
@@ -237,19 +238,19 @@ def test_a_rotation_near_a_standard_one_is_exported_as_the_orientation(n):
     real, ints = parse_orientation_px4(ex.render("px4", turned, offset, "G", orient=True).text)
     assert ints == {"CAL_MAG0_ROT": n}
     err_ap = relative(ardupilot_with_orientation(raw * 1000, p), b * 1000)
-    err_px4 = relative(px4_correct(raw, real, 0, ex.standard_rotation(n)), b)
+    err_px4 = relative(px4_correct(raw, real, 0, fw.standard_rotation(n)), b)
     assert max(err_ap, err_px4) < 1.01 * np.deg2rad(0.4)  # the residual left out, nothing more
-    exact = ex.render("ardupilot", ex.standard_rotation(n) @ w, offset, "G", orient=True)
+    exact = ex.render("ardupilot", fw.standard_rotation(n) @ w, offset, "G", orient=True)
     assert relative(ardupilot_with_orientation(raw * 1000, parse_ardupilot(exact.text)),
-                    (raw - offset) @ (ex.standard_rotation(n) @ w).T * 1000) < RTOL
+                    (raw - offset) @ (fw.standard_rotation(n) @ w).T * 1000) < RTOL
 
 
 def test_every_standard_rotation_is_its_own_nearest_and_a_far_one_names_a_key_that_works():
-    for n in ex.STANDARD_ROTATIONS:
-        index, residual = ex.nearest_orientation(ex.standard_rotation(n))
-        assert residual < 1e-6 and np.allclose(ex.standard_rotation(index), ex.standard_rotation(n))
+    for n in fw.STANDARD_ROTATIONS:
+        index, residual = fw.nearest_orientation(fw.standard_rotation(n))
+        assert residual < 1e-6 and np.allclose(fw.standard_rotation(index), fw.standard_rotation(n))
     w, offset, _ = synthetic("G")
-    turned = ex.standard_rotation(6) @ rot_z(np.deg2rad(3.0)) @ w
+    turned = fw.standard_rotation(6) @ rot_z(np.deg2rad(3.0)) @ w
     with pytest.raises(MagexpError, match=r"3.00 deg from the nearest .* \(6: roll 0, pitch 0, yaw 270\)") as err:
         ex.render("px4", turned, offset, "G", orient=True)
     key = re.search(r"max_rotation_deg=([0-9.]+)", str(err.value)).group(1)
@@ -265,7 +266,7 @@ def test_a_gyro_calibration_of_a_turned_magnetometer_exports_its_orientation():
     import magexp
 
     rec = tumbling()
-    rec = type(rec)(**{**rec.__dict__, "readings": (rec.readings - rec.readings.mean(0)) @ ex.standard_rotation(2)
+    rec = type(rec)(**{**rec.__dict__, "readings": (rec.readings - rec.readings.mean(0)) @ fw.standard_rotation(2)
                        + rec.readings.mean(0)})
     cal = magexp.calibrate(rec, model="gyro")
     assert ex.orientable(cal)
@@ -277,4 +278,4 @@ def test_a_gyro_calibration_of_a_turned_magnetometer_exports_its_orientation():
     assert p["COMPASS_ORIENT"] == 2 and ints == {"CAL_MAG0_ROT": 2}
     raw, b = rec.readings, cal.calibrated
     assert relative(ardupilot_with_orientation(raw * 1000, p), b * 1000) < 1.01 * np.deg2rad(limit)
-    assert relative(px4_correct(raw, real, 0, ex.standard_rotation(2)), b) < 1.01 * np.deg2rad(limit)
+    assert relative(px4_correct(raw, real, 0, fw.standard_rotation(2)), b) < 1.01 * np.deg2rad(limit)

@@ -15,6 +15,7 @@ from tests.test_export import ardupilot_correct_field, parse_ardupilot, relative
 from tests.test_rosbag_reader import ALT, LAT, LON, write_bag
 
 from magexp.calibration import export as ex
+from magexp.calibration import firmware as fw
 
 
 def test_a_bag_calibrated_to_the_wmm_field_exports_to_ardupilot(tmp_path):
@@ -35,5 +36,5 @@ def test_a_bag_calibrated_to_the_wmm_field_exports_to_ardupilot(tmp_path):
     assert np.allclose(cal.w, w_true, atol=1e-6) and np.allclose(cal.offset, o_true, atol=1e-4)
     out = ex.render("ardupilot", cal.w, cal.offset, cal.unit)  # R of 0.4°: within the 1° the export accepts
     firmware = ardupilot_correct_field(rec.readings * 10, parse_ardupilot(out.text))  # µT -> mGauss
-    rotation, _ = ex.polar(cal.w)
+    rotation, _ = fw.polar(cal.w)
     assert relative(firmware, cal.calibrated @ rotation * 10) < 1e-6  # the firmware's field: Rᵀ B

@@ -14,9 +14,8 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from magexp.calibration import models as models_
-from magexp.calibration.export import (TARGETS as EXPORT_TARGETS, check_counts_nt, check_max_rotation,
-                                      options_of as export_options_of,
-                                      render as render_export)
+from magexp.calibration.export import TARGETS as EXPORT_TARGETS, options_of as export_options_of, render as render_export
+from magexp.calibration.firmware import check_counts_nt, check_max_rotation
 from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
 from magexp.calibration.options import help_text
 from magexp.calibration.inputs import Reference
