@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.tables import (cell_overrides, cell_runs, fraction, interval, matches, median, outcomes,
-                                     parameter_values, quartiles, reported_value, scenario_label, successful)
+from magexp.artifacts.tables import (cell_overrides, cell_runs, estimator_label, fraction, interval, matches, median,
+                                     outcomes, parameter_values, quartiles, reported_value, scenario_label, successful)
 from magexp.core.metrics import rms
 from magexp.core.outcomes import recording_succeeded
 
@@ -382,7 +382,9 @@ def _setting_row(runs, ci: int, defaults: dict) -> dict:
     default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
     rate = _rate(sub["succeeded"]) if "succeeded" in sub and sub.succeeded.notna().any() else (
         _rate(sub["converged"]) if "converged" in sub else np.nan)  # else converged: the 1 % rule
-    return {"family": family, "label": label, "scenario": str(sub.scenario.iloc[0]), "metric": metric,
+    name = dict(spec.plot.get("names", {}) or {}).get(family) or estimator_label(family)  # plot.names: the tick's words
+    return {"family": family, "family_label": str(name), "label": label, "scenario": str(sub.scenario.iloc[0]),
+            "metric": metric,
             "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub), "success_rate": rate,
             "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub else np.nan,
             "on_boundary_rate": _rate(sub["on_boundary"] > 0) if "on_boundary" in sub else np.nan,

@@ -70,7 +70,7 @@ PLOT_KEYS = {
     "estimates": _COMMON | {"rows", "names"},
     "heatmap": _COMMON | {"metric"},
     "speed": _COMMON | {"metric"},
-    "tuning": _COMMON | {"metric", "label", "default"},
+    "tuning": _COMMON | {"metric", "label", "default", "names"},
     "recording": _COMMON | {"metric"},
     "recording_spread": _COMMON | {"metric"},
 }

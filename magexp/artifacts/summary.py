@@ -41,21 +41,17 @@ A fixed tolerance is used only where the paper gives no run to compare with
 
 from __future__ import annotations
 
-import functools
 import re
 
 import numpy as np
 import pandas as pd
-from omegaconf import OmegaConf
 from scipy.special import fdtrc, stdtrit
 
 from magexp.artifacts.plan import ArtifactRuns
-from magexp.artifacts.tables import (cell_overrides, cell_runs, first_output, matches, median, outcomes,
-                                     parameter_values, reported_entry, row_numbers, successful_medians)
+from magexp.artifacts.tables import (cell_overrides, cell_runs, estimator_label, first_output, matches, median,
+                                     outcomes, parameter_values, reported_entry, row_numbers, successful_medians)
 from magexp.core.outcomes import failed_majority, success_threshold
 from magexp.errors import MagexpError
-from magexp.paths import CONF
-from magexp.run.compose import options, target_class
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
            "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval",
@@ -74,17 +70,6 @@ QUANTITY_NAMES = {"final_rms": "final RMS", "converged_fraction": "converged fra
                   "improvement_ratio": "final RMS ratio", "fit_rms": "fit RMS"}
 
 
-
-
-@functools.cache
-def estimator_label(name: str) -> str:
-    """An estimator's name in row labels: its config's ``label:``, else its class's ``label``
-    (:class:`magexp.estimators.base.Estimator`), else ``name`` (also a name no config has, e.g. a
-    variant named by ``estimator.name=``)."""
-    if name not in options("estimator"):
-        return name
-    label = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("label")
-    return str(label or getattr(target_class("estimator", name), "label", "") or name)
 
 
 def judge(paper: float | None, lo: float, hi: float, width: float, success_rate: float, *, floor: float = 0.0,

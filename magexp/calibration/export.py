@@ -207,7 +207,8 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
     if c.orientation is not None:
         values[ORIENTATION_KEYS["px4"].format(n=n)] = c.orientation
     head = _comments(notes, "PX4: B = R S (raw - CAL_MAGn_OFF), S = [[XSCALE, XODIAG, YODIAG], [XODIAG, YSCALE, "
-                            "ZODIAG], [YODIAG, ZODIAG, ZSCALE]]; gauss; keep CAL_MAGn_ID and CAL_MAGn_ROT", c, "#")
+                            "ZODIAG], [YODIAG, ZODIAG, ZSCALE]]; gauss; keep CAL_MAGn_ID"
+                            + ("" if c.orientation is not None else " and CAL_MAGn_ROT"), c, "#")
     head.append("# Vehicle-Id Component-Id Name Value Type")
     text = "\n".join(head + [f"1\t1\t{k}\t{v!r}\t{INT32 if isinstance(v, int) else REAL32}"
                              for k, v in values.items()]) + "\n"

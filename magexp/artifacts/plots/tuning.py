@@ -1,6 +1,7 @@
 """Settings of one method as a distribution: every setting's median beside the default.
 
-One row per cell: ``family`` (the run's estimator name: settings of one method share it),
+One row per cell: ``family`` (the run's estimator name: settings of one method share it) and
+``family_label`` (its words on the x axis: ``plot.names``, else the estimator's label),
 ``label`` (the cell's ``plot.label`` keys, short names from ``plot.labels``), ``scenario``, the
 median and quartiles of ``plot.metric`` (default ``fun``), ``success_rate`` (fraction of seeds that
 succeeded by the artifact's ``success:`` rule, :func:`magexp.artifacts.plan.succeeded`: the objective at
@@ -73,6 +74,7 @@ def _ranked(top, bottom, sub, families):
 def draw(frame: pd.DataFrame, spec, axes=None):
     scenarios = list(dict.fromkeys(frame.scenario))
     families = list(dict.fromkeys(frame.family))
+    ticks = dict(zip(frame.family, frame.family_label))  # each family's words (plot.names, else its label)
     few = frame.value_counts(["family", "scenario"]).max() <= FEW and frame.label.nunique() <= 2 * FEW
     cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     colours = {lab: cycle[j % len(cycle)] for j, lab in enumerate(dict.fromkeys(frame.label))}
@@ -87,7 +89,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         else:
             _ranked(top, bottom, sub, families)
         for ax in (top, bottom):
-            ax.set_xticks(range(len(families)), families, rotation=30, ha="right", fontsize=7)
+            ax.set_xticks(range(len(families)), [ticks[f] for f in families], rotation=30, ha="right", fontsize=7)
         top.set_yscale("log")
         top.set_ylabel(spec.plot.get("ylabel", f"median {frame.metric.iloc[0]} per setting"))
         top.set_title(scenario_label(sc), fontsize=9)
