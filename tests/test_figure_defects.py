@@ -197,13 +197,13 @@ def test_tuning_names_settings_in_a_legend_only_where_the_axis_does_not(per_fami
     """One setting per family (an ablation's variants): the x axis names each, so no legend repeats it;
     two per family: the legend tells them apart."""
     spec = OmegaConf.create({"title": "t", "kind": "tuning", "plot": {}})
-    rows = [{"scenario": "s", "family": fam, "label": f"{fam}, w = {k}", "median": 1.0 + k, "q25": 0.9, "q75": 2.0,
-             "success_rate": 0.9, "default": False, "role": "", "metric": "fun"}
+    rows = [{"scenario": "s", "family": fam, "family_label": fam.upper(), "label": f"{fam}, w = {k}", "median": 1.0 + k,
+             "q25": 0.9, "q75": 2.0, "success_rate": 0.9, "default": False, "role": "", "metric": "fun"}
             for fam in ("pso", "ipso", "ipso_w") for k in range(per_family)]
     fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
     texts = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
     assert texts == ([] if per_family == 1 else [r["label"] for r in rows])
-    assert [t.get_text() for t in fig.axes[0].get_xticklabels()] == ["pso", "ipso", "ipso_w"]
+    assert [t.get_text() for t in fig.axes[0].get_xticklabels()] == ["PSO", "IPSO", "IPSO_W"]  # family_label
     plt.close(fig)
 
 

@@ -9,10 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.tables import (cell_overrides, cell_runs, estimator_label, fraction, interval, matches, median,
+from magexp.artifacts.tables import (cell_overrides, cell_runs, fraction, interval, matches, median,
                                      outcomes, parameter_values, quartiles, reported_value, scenario_label, successful)
 from magexp.core.metrics import rms
 from magexp.core.outcomes import recording_succeeded
+from magexp.run.compose import estimator_label
 
 # convergence: the best objective per iteration
 
@@ -368,6 +369,24 @@ def tuning_table(runs) -> pd.DataFrame:
     return frame
 
 
+def family_words(spec, family: str) -> str:
+    """A tuning family's words on the x axis: ``plot.names[family]``, else the estimator's label.
+
+    Parameters
+    ----------
+    spec : ArtifactSpec
+        The artifact (its ``plot.names``).
+    family : str
+        The estimator name the settings share.
+
+    Returns
+    -------
+    str
+        The words (:func:`magexp.run.compose.estimator_label` when ``plot.names`` has none).
+    """
+    return str(dict(spec.plot.get("names", {}) or {}).get(family) or estimator_label(family))
+
+
 def _setting_row(runs, ci: int, defaults: dict) -> dict:
     """The row of cell ``ci``; ``defaults``: ``plot.default`` with text values."""
     spec = runs.spec
@@ -382,8 +401,7 @@ def _setting_row(runs, ci: int, defaults: dict) -> dict:
     default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
     rate = _rate(sub["succeeded"]) if "succeeded" in sub and sub.succeeded.notna().any() else (
         _rate(sub["converged"]) if "converged" in sub else np.nan)  # else converged: the 1 % rule
-    name = dict(spec.plot.get("names", {}) or {}).get(family) or estimator_label(family)  # plot.names: the tick's words
-    return {"family": family, "family_label": str(name), "label": label, "scenario": str(sub.scenario.iloc[0]),
+    return {"family": family, "family_label": family_words(spec, family), "label": label, "scenario": str(sub.scenario.iloc[0]),
             "metric": metric,
             "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub), "success_rate": rate,
             "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub else np.nan,

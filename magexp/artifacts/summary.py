@@ -48,10 +48,11 @@ import pandas as pd
 from scipy.special import fdtrc, stdtrit
 
 from magexp.artifacts.plan import ArtifactRuns
-from magexp.artifacts.tables import (cell_overrides, cell_runs, estimator_label, first_output, matches, median,
+from magexp.artifacts.tables import (cell_overrides, cell_runs, first_output, matches, median,
                                      outcomes, parameter_values, reported_entry, row_numbers, successful_medians)
 from magexp.core.outcomes import failed_majority, success_threshold
 from magexp.errors import MagexpError
+from magexp.run.compose import estimator_label
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
            "q25", "q75", "n_seeds", "tolerance", "verdict", "lo", "hi", "success_rate", "truth_in_interval",

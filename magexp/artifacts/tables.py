@@ -17,15 +17,10 @@ percentile bootstrap over them (a fixed generator: the same on every run). :func
 
 from __future__ import annotations
 
-import functools
 import re
 
 import numpy as np
 import pandas as pd
-from omegaconf import OmegaConf
-
-from magexp.paths import CONF
-from magexp.run.compose import options, target_class
 
 #: a statistic over the seeds of a selection (claims, note fields, bootstrap intervals)
 STATS = {
@@ -239,14 +234,3 @@ def scenario_label(scenario: str) -> str:
     elif (paper := re.match(r"[a-z]+\d{4}_", name)) is not None:
         name = re.sub(r"(?<=[a-z])(?=\d{1,2}$)", " ", name[paper.end():])  # not a sensor's model number
     return name.replace("_", " ")
-
-
-@functools.cache
-def estimator_label(name: str) -> str:
-    """An estimator's name in row labels: its config's ``label:``, else its class's ``label``
-    (:class:`magexp.estimators.base.Estimator`), else ``name`` (also a name no config has, e.g. a
-    variant named by ``estimator.name=``)."""
-    if name not in options("estimator"):
-        return name
-    label = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("label")
-    return str(label or getattr(target_class("estimator", name), "label", "") or name)

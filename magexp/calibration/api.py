@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.fit import calibrate_recording, numpy_path
-from magexp.run.compose import estimator_named
+from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
 from magexp.core.recording import Recording, check_unit

@@ -61,7 +61,8 @@ from magexp.estimators.base import check_applies
 from magexp.estimators.result import FitResult
 from magexp.problems import make_problem, problem_class
 from magexp.run.budget import check_calibration
-from magexp.run.compose import estimator_named, options, target_class
+from magexp.run.compose import options, target_class
+from magexp.run.named import estimator_named
 from magexp.run.guard import check_folds
 from magexp.scenarios.search import centroid_radius, search_box
 

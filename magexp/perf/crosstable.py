@@ -28,7 +28,7 @@ import numpy as np
 
 from magexp.calibration.checks import ONE_ATTITUDE_DEG
 from magexp.calibration.fit import calibrate_recording
-from magexp.run.compose import estimator_named
+from magexp.run.named import estimator_named
 from magexp.core.identifiability import spread
 from magexp.core.recordings import load_recording
 from magexp.core.seeding import run_generators

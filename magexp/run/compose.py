@@ -42,7 +42,6 @@ from omegaconf import MISSING, DictConfig, OmegaConf
 
 from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
-from magexp.run.runner import build
 from magexp.run.targets import check_target
 
 GROUPS = ("scenario", "estimator")
@@ -216,8 +215,23 @@ def unknown_key(cfg: DictConfig, key: str, value: str, config_name: str = PRIMAR
                        f"(keys: {', '.join(keys)})")
 
 
-def _bad_value(key: str, value: str, exc: BaseException) -> MagexpError:
-    """A value the schema's type refuses: one line naming the key, the value and the type wanted."""
+def bad_value(key: str, value: str, exc: BaseException) -> MagexpError:
+    """A value the schema's type refuses: one line naming the key, the value and the type wanted.
+
+    Parameters
+    ----------
+    key : str
+        The dotted key (``estimator.n_particles``).
+    value : str
+        The value as given.
+    exc : BaseException
+        OmegaConf's or Hydra's refusal (its first line, or the type it wanted, is named).
+
+    Returns
+    -------
+    MagexpError
+        The one line.
+    """
     while exc.__cause__ is not None:  # Hydra keeps OmegaConf's reason in the cause
         exc = exc.__cause__
     msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
@@ -318,7 +332,7 @@ def _apply(cfg: DictConfig, overrides: list[Override], config_name: str) -> Dict
         except Exception as exc:  # the schema refused the value's type
             raise_if_stopped()  # ...or OmegaConf swallowed a SIGTERM that arrived during the update
             if not _assigned(cfg, key, override.value()):
-                raise _bad_value(key, text, exc) from None
+                raise bad_value(key, text, exc) from None
     return cfg
 
 
@@ -392,39 +406,22 @@ def resolved(cfg: DictConfig) -> dict:
     return out
 
 
-def estimator_named(name: str, **overrides):
-    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``, composed as every config is
-    (:func:`compose_config`, the calibration's primary config ``conf/calibrate.yaml``).
+@functools.cache
+def estimator_label(name: str) -> str:
+    """An estimator's name in words (row labels, figure axes).
 
     Parameters
     ----------
     name : str
-        A name of ``conf/estimator/*.yaml``.
-    **overrides
-        Options of that config (``n_iterations=3``...).
+        An estimator's name: a config of ``conf/estimator/``, or a variant named by ``estimator.name=``.
 
     Returns
     -------
-    estimator
-        The estimator built from the config (:func:`magexp.run.runner.build`).
-
-    Raises
-    ------
-    MagexpError
-        An unknown name or option.
+    str
+        Its config's ``label:``, else its class's ``label`` (:class:`magexp.estimators.base.Estimator`),
+        else ``name``.
     """
-    check_choice("estimator", name)
-    node = compose_config([f"estimator={name}"], config_name="calibrate").estimator
-    unknown = [key for key in overrides if key not in node]
-    if unknown:
-        options = ", ".join(str(k) for k in node if not str(k).startswith("_") and k != "name")
-        raise MagexpError(f"{unknown[0]}={overrides[unknown[0]]!r} is not allowed: estimator {name!r} has no option "
-                          f"{unknown[0]!r} (options: {options})")
-    try:
-        node = OmegaConf.merge(node, overrides)
-    except Exception as exc:  # the schema refused a value's type
-        raise_if_stopped()
-        key = str(getattr(exc, "full_key", "") or "").removeprefix("estimator.")
-        key = key if key in overrides else next(iter(overrides))
-        raise _bad_value(key, repr(overrides[key]), exc) from None
-    return build(node, f"estimator {name!r}")
+    if name not in options("estimator"):
+        return name
+    label = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("label")
+    return str(label or getattr(target_class("estimator", name), "label", "") or name)

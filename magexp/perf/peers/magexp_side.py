@@ -28,7 +28,7 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from magexp.run.compose import estimator_named
+from magexp.run.named import estimator_named
 from magexp.core.dataset import Dataset
 from magexp.errors import MagexpError
 from magexp.core.geometry import preintegrate
