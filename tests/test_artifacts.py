@@ -48,7 +48,7 @@ def check_artifact(spec, out, summary, built, seeds=2):
     runs = pd.read_csv(out / f"{spec.name}_runs.csv")
     assert "succeeded" in runs and len(runs) == seeds * runs.cell.nunique()
     # one success column (magexp.core.outcomes); the optimiser's own flag under its own name
-    assert "success" not in runs and "optimizer_success" in runs
+    assert "success" not in runs and "optimizer_flag" in runs
     assert "field_rms" not in runs or runs.field_rms[runs.objective == "scalar"].isna().all()  # its `fun`
     assert list(summary.columns) == COLUMNS
     assert set(summary.verdict) <= set(VERDICTS)

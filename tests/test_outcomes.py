@@ -42,7 +42,7 @@ def test_a_run_the_optimiser_calls_a_success_far_above_the_optimum_has_not_succe
     """``results/real/real_table7_runs.csv``: RDPSO's flag says True at F_g 39.4, where the best fit of
     the same recording reaches 2.59. ``succeeded`` judges the objective, never the flag."""
     table = pd.DataFrame({"scenario": ["real_hmc5883l_full_sphere"] * 2, "objective": ["gyro"] * 2,
-                          "estimator": ["rdpso", "lm"], "optimizer_success": [True, True], "fg": [39.3993, 2.5855]})
+                          "estimator": ["rdpso", "lm"], "optimizer_flag": [True, True], "fg": [39.3993, 2.5855]})
     ok = succeeded(table, Success(metric="fg", reference="best"))
     assert ok.tolist() == [0.0, 1.0]
     assert outcomes.succeeded(39.3993, 2.5855).item() == 0.0
@@ -88,15 +88,15 @@ def _metrics(problem, x, success):
 def test_a_scalar_run_stores_its_total_field_rms_once_and_a_vector_run_beside_its_objective(yuan_mode1):
     """``fun`` of a scalar problem is the total-field RMS: the runs carry it once (no ``field_rms``);
     a vector fit's ``field_rms`` is another number than its objective, and is kept. The optimiser's
-    flag is stored as ``optimizer_success``, never as a second success column."""
+    flag is stored as ``optimizer_flag``, never as a second success column."""
     sc, ds = yuan_mode1
     scalar = make_problem("scalar", ds, sc.search, **sc.problem_options)
     vector = make_problem("vector", ds, sc.search, **sc.problem_options)
     x = scalar.truth_theta() + 1e-3
     m = _metrics(scalar, x, success=True)
-    assert "field_rms" not in m and "success" not in m and m["optimizer_success"] is True
+    assert "field_rms" not in m and "success" not in m and m["optimizer_flag"] is True
     assert m["fun"] == pytest.approx(total_field_rms(scalar.calibrate(x), ds.reference_norm), rel=1e-12)
     v = _metrics(vector, vector.truth_theta() + 1e-3, success=False)
     assert v["field_rms"] == pytest.approx(total_field_rms(vector.calibrate(vector.truth_theta() + 1e-3),
                                                            ds.reference_norm), rel=1e-12)
-    assert v["field_rms"] != pytest.approx(v["fun"], rel=1e-3) and v["optimizer_success"] is False
+    assert v["field_rms"] != pytest.approx(v["fun"], rel=1e-3) and v["optimizer_flag"] is False

@@ -248,7 +248,7 @@ def spread_table(runs) -> pd.DataFrame:
                   for c in ("heldout_spread_lo", "heldout_spread_hi"))
         row["heldout_spread_lo"] = float(np.min(lo)) if np.isfinite(lo).all() else np.nan
         row["heldout_spread_hi"] = float(np.max(hi)) if np.isfinite(hi).all() else np.nan
-        row["success_rate"] = fraction(recording_succeeded(sub.optimizer_success, sub.spread_before, sub.spread_after))
+        row["success_rate"] = fraction(recording_succeeded(sub.optimizer_flag, sub.spread_before, sub.spread_after))
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -320,8 +320,8 @@ def benchmark_table(runs) -> pd.DataFrame:
         row.update({col: median((good if col in ACCURACY else sub)[col]) if col in sub else np.nan for col in COLUMNS})
         row["bound_ratio"], row["bound_ratio_lo"], row["bound_ratio_hi"] = bound_ratio(sub)
         ok = sub["succeeded"].dropna() if "succeeded" in sub else pd.Series(dtype=float)
-        if not len(ok) and {"optimizer_success", "spread_after", "spread_before"} <= set(sub.columns):
-            ok = pd.Series(recording_succeeded(sub.optimizer_success, sub.spread_before, sub.spread_after),
+        if not len(ok) and {"optimizer_flag", "spread_after", "spread_before"} <= set(sub.columns):
+            ok = pd.Series(recording_succeeded(sub.optimizer_flag, sub.spread_before, sub.spread_after),
                            index=sub.index)  # no truth to compare with (recordings)
         row["success_rate"] = fraction(ok) if len(ok) else np.nan
         row["n_failed"] = int((ok == 0).sum()) if len(ok) else 0

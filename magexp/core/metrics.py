@@ -140,7 +140,7 @@ def _evaluate(problem, result, crb) -> dict:
         "fun": float(problem.cost_direct(result.x)),
         "nit": int(result.nit),
         "nfev": int(result.nfev),
-        "optimizer_success": bool(result.success),  # the optimiser's own flag, not a success (core.outcomes)
+        "optimizer_flag": bool(result.success),  # the optimiser's own flag, not a success (core.outcomes)
     }
     floor = noise_floor(problem.dataset)
     if floor is not None:

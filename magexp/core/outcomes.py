@@ -10,7 +10,7 @@ when its objective is within a factor of the objective of the true calibration o
 (:func:`succeeded`); on a recording without a truth, within that factor of the best value any
 estimator reached on it (``success: {reference: best}``, :data:`magexp.artifacts.plan.BEST`). The
 optimiser's own flag (scipy's ``OptimizeResult.success``) says only that its stopping test was met,
-and is stored apart as ``optimizer_success``: a swarm always meets its iteration budget, so the flag
+and is stored apart as ``optimizer_flag``: a swarm always meets its iteration budget, so the flag
 was True for a real-data RDPSO run ending at ``F_g`` = 39.4 where the best fit reaches 2.59
 (``results/real/real_table7_runs.csv``). It imports only numpy.
 """
@@ -162,7 +162,7 @@ def on_face(x, low, high) -> np.ndarray:
         return (np.abs(x - low) <= atol) | (np.abs(x - high) <= atol) | (x == low) | (x == high)
 
 
-def recording_succeeded(optimizer_success, spread_before, spread_after) -> np.ndarray:
+def recording_succeeded(optimizer_flag, spread_before, spread_after) -> np.ndarray:
     """Per run on a recording judged by no reference: the optimiser met its stopping test and the
     calibration narrowed the spread of the total field (``spread_after < spread_before``). The
     fallback of a benchmark of recordings whose artifact has no ``success: {reference: best}``: a
@@ -170,8 +170,8 @@ def recording_succeeded(optimizer_success, spread_before, spread_after) -> np.nd
 
     Parameters
     ----------
-    optimizer_success : array_like of bool
-        The runs' ``optimizer_success`` column.
+    optimizer_flag : array_like of bool
+        The runs' ``optimizer_flag`` column.
     spread_before, spread_after : array_like
         The relative spread ``std/mean`` of ``|B|`` before and after the calibration.
 
@@ -181,4 +181,4 @@ def recording_succeeded(optimizer_success, spread_before, spread_after) -> np.nd
     """
     with np.errstate(invalid="ignore"):
         narrowed = np.asarray(spread_after, float) < np.asarray(spread_before, float)
-    return np.asarray(optimizer_success, bool) & narrowed
+    return np.asarray(optimizer_flag, bool) & narrowed
