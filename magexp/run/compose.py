@@ -34,6 +34,7 @@ from typing import Any, Dict, List, Optional
 from hydra import compose, initialize_config_dir
 from hydra._internal.config_loader_impl import ConfigLoaderImpl
 from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+from hydra.core.config_store import ConfigStore
 from hydra.core.global_hydra import GlobalHydra
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.core.override_parser.types import Override, OverrideType
@@ -127,8 +128,6 @@ def schema_classes(group: str) -> list[type]:
 def register_schemas() -> dict:
     """Store the schema of every class of :func:`schema_classes` in Hydra's ConfigStore (group
     ``schema/<group>``, named after the class), once; returns ``{name: schema}``."""
-    from hydra.core.config_store import ConfigStore
-
     store, schemas = ConfigStore.instance(), {}
     for group in GROUPS:
         for cls in schema_classes(group):
