@@ -1,9 +1,14 @@
-"""Numpydoc on the public API: every public function and method of ``magexp.calibration``, ``magexp.core``,
-``magexp.problems`` and of what ``magexp`` exports (``calibrate``, ``Calibration``, ``FitResult``) has a
-``Parameters`` section when it takes parameters, and a ``Returns`` section when it returns a value (issue 35: 1 %
-of public functions had them)."""
+"""Numpydoc on every public function and method of magexp (issue 35: 1 % of public functions had the sections).
+
+Read from the source (the AST), with a small parser of numpydoc sections (numpydoc itself is not a
+dependency): a function that takes parameters has a ``Parameters`` section naming each of them
+(``name : type`` or ``name1, name2 : type``; ``*args``, ``**settings``), one that returns a value a
+``Returns`` (or ``Yields``) section, and a public class with a constructor of its own names the
+constructor's parameters in its docstring (numpydoc's convention) or in the constructor's.
+"""
 
 import ast
+import inspect
 import re
 from pathlib import Path
 
@@ -12,25 +17,49 @@ import pytest
 import magexp
 
 PACKAGE = Path(magexp.__file__).resolve().parent
-#: the modules checked: the calibration, core (its readers too) and problems packages, the package root and the
-#: estimators' result types.
-MODULES = sorted(p for folder in ("calibration", "core", "core/readers", "problems")
-                 for p in (PACKAGE / folder).glob("*.py")) + [PACKAGE / "__init__.py", PACKAGE / "estimators" / "result.py"]
-SECTION = "^{}\n-+$"
+#: every public module (a private one, ``_compiled.py`` or ``_version.py``, holds no public API)
+MODULES = sorted(p for p in PACKAGE.rglob("*.py")
+                 if "__pycache__" not in p.parts and (p.name == "__init__.py" or not p.name.startswith("_")))
+
+
+def sections(doc: str) -> dict[str, list[str]]:
+    """``{title: lines}`` of the numpydoc sections of ``doc`` (dedented): a title line underlined by dashes."""
+    lines = inspect.cleandoc(doc or "").splitlines()
+    out, title = {}, None
+    for i, line in enumerate(lines):
+        if i + 1 < len(lines) and line.strip() and re.fullmatch(r"-{3,}", lines[i + 1].strip()) \
+                and len(lines[i + 1].strip()) == len(line.strip()):
+            title = line.strip()
+            out[title] = []
+        elif title is not None and not re.fullmatch(r"-{3,}", line.strip()):
+            out[title].append(line)
+    return out
+
+
+def documented(doc: str) -> set[str]:
+    """The parameter names the ``Parameters`` section of ``doc`` documents."""
+    names = set()
+    for line in sections(doc).get("Parameters", []):
+        if line and not line[0].isspace():
+            head = line.split(" : ")[0]
+            names |= {n.strip().lstrip("*") for n in head.split(",") if n.strip()}
+    return names
 
 
 def _public_functions(tree: ast.Module):
-    """``(qualified name, node)`` of every public function and method (properties aside: they are attributes)."""
-    def visit(body, prefix=""):
+    """``(qualified name, node, class docstring)`` of every public function, method and constructor
+    (properties aside: they are attributes; a dataclass's generated constructor has no node)."""
+    def visit(body, prefix="", owner=None):
         for node in body:
             if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
-                yield from visit(node.body, f"{prefix}{node.name}.")
+                yield from visit(node.body, f"{prefix}{node.name}.", ast.get_docstring(node) or "")
             elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                public = not node.name.startswith("_") or node.name in ("__getattr__", "__dir__")
+                public = (not node.name.startswith("_") or node.name in ("__getattr__", "__dir__", "__call__")
+                          or (node.name == "__init__" and owner is not None))
                 prop = any(getattr(d, "id", getattr(d, "attr", None)) in ("property", "cached_property")
                            for d in node.decorator_list)
                 if public and not prop:
-                    yield f"{prefix}{node.name}", node
+                    yield f"{prefix}{node.name}", node, owner
     yield from visit(tree.body)
 
 
@@ -53,26 +82,36 @@ def _returns_value(node) -> bool:
 
 
 def missing_sections(source: str) -> list[str]:
-    """``"name: Section"`` of each public function of ``source`` lacking a section it needs."""
+    """``"name: what"`` of each public function of ``source`` lacking a section it needs, or a parameter
+    its ``Parameters`` section does not name."""
     missing = []
-    for name, node in _public_functions(ast.parse(source)):
+    for name, node, owner in _public_functions(ast.parse(source)):
         doc = ast.get_docstring(node) or ""
-        if _parameters(node) and not re.search(SECTION.format("Parameters"), doc, re.M):
+        wanted = _parameters(node)
+        if name.endswith("__init__"):  # numpydoc: the class documents its constructor
+            doc = owner + "\n\n" + doc if sections(doc).get("Parameters") is None else doc
+        named = documented(doc)
+        if wanted and not named:
             missing.append(f"{name}: Parameters")
-        if _returns_value(node) and not re.search(SECTION.format("(Returns|Yields)"), doc, re.M):
+        elif wanted and set(wanted) - named:
+            missing.append(f"{name}: Parameters ({', '.join(p for p in wanted if p not in named)})")
+        if _returns_value(node) and not name.endswith("__init__") and not re.search(
+                r"^\s*(Returns|Yields)\n\s*-+$", doc, re.M):
             missing.append(f"{name}: Returns")
     return missing
 
 
-def test_the_check_finds_a_missing_section():
+def test_the_check_finds_what_is_missing():
     source = '''
-def documented(x):
+def documented(x, *rest):
     """Twice.
 
     Parameters
     ----------
     x : float
         A number.
+    *rest
+        Ignored.
 
     Returns
     -------
@@ -87,9 +126,30 @@ def bare(x):
     return 2 * x
 
 
+def half(x, y):
+    """Half named.
+
+    Parameters
+    ----------
+    x : float
+    """
+    print(x, y)
+
+
 class Thing:
+    """A thing.
+
+    Parameters
+    ----------
+    size : int
+        Its size.
+    """
+
+    def __init__(self, size, colour):
+        self.size = size
+
     @property
-    def size(self):
+    def area(self):
         """An attribute: no sections needed."""
         return 1
 
@@ -101,7 +161,34 @@ class Thing:
 def _private(z):
     return z
 '''
-    assert missing_sections(source) == ["bare: Parameters", "bare: Returns", "Thing.apply: Parameters"]
+    assert missing_sections(source) == ["bare: Parameters", "bare: Returns", "half: Parameters (y)",
+                                        "Thing.__init__: Parameters (colour)", "Thing.apply: Parameters"]
+
+
+def test_the_parser_reads_numpydoc():
+    doc = """Summary.
+
+    Parameters
+    ----------
+    a, b : float
+        Two.
+    *args
+        More.
+    c : int
+
+    Returns
+    -------
+    int
+    """
+    assert documented(doc) == {"a", "b", "args", "c"} and sections(doc)["Returns"][0] == "int"
+    assert documented("Summary.\n\nname : config name.\n") == set()  # no section, no parameters
+
+
+def test_every_package_is_checked():
+    checked = {p.relative_to(PACKAGE).parts[0] for p in MODULES}
+    assert {"artifacts", "calibration", "core", "estimators", "perf", "problems", "run", "scenarios",
+            "__init__.py", "errors.py", "paths.py"} <= checked
+    assert PACKAGE / "estimators" / "_compiled.py" not in MODULES
 
 
 @pytest.mark.parametrize("path", MODULES, ids=lambda p: p.relative_to(PACKAGE).as_posix())

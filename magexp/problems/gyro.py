@@ -46,6 +46,13 @@ class GyroAidedCalibration(CalibrationProblem):
     the readings' times; ``dataset.reference_norm`` the field magnitude ``F`` (fixed).
     ``search`` bounds ``S`` and ``b``; the field direction spans the sphere and the gyro bias
     ``±bias_bound_deg_s``.
+
+    Parameters
+    ----------
+    dataset, search, parameterisation
+        As :class:`magexp.problems.base.CalibrationProblem` (``search`` bounds ``S`` and ``b``).
+    bias_bound_deg_s : float
+        The gyro-bias bound of the search, deg/s.
     """
 
     objective = "gyro"

@@ -30,6 +30,11 @@ class ScalarCalibration(CalibrationProblem):
     ``o' = (o - c)/s``) is linear in the ten quadratic features of ``u``, so each
     particle-reading costs ten multiply-adds and one square root, and memory is ``O(P + N)``.
     ``cost_direct`` evaluates the textbook formula and is used for reported numbers.
+
+    Parameters
+    ----------
+    dataset, search, parameterisation
+        As :class:`magexp.problems.base.CalibrationProblem`.
     """
 
     objective = "scalar"

@@ -53,6 +53,13 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
 
     ``residuals`` stacks the ``3N`` components for ``lm``; :meth:`least_squares` is the
     closed-form solution the filter converges to when rows are reused.
+
+    Parameters
+    ----------
+    dataset : Dataset
+        The ship's readings, attitudes and field (Yan & Zhou 2022 eq 1).
+    search : SearchBox
+        The bounds of ``K`` and ``Bp``.
     """
 
     objective = "ship"

@@ -139,6 +139,11 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
     ``cost_direct`` is the textbook loop over readings.
     ``metrics`` sets ``noise_floor`` to ``F`` of the true calibration on the same
     readings (what a perfect fit reaches), since the scalar floor does not apply.
+
+    Parameters
+    ----------
+    dataset, search, parameterisation
+        As :class:`magexp.problems.base.CalibrationProblem`.
     """
 
     objective = "vector"

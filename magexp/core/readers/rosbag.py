@@ -69,7 +69,15 @@ class LayoutError(ValueError):
 class Messages:
     """Serialised messages of one type decoded field by field for all of them at once (numpy
     gathers): ROS 2's CDR (a 4-byte encapsulation header, then each value aligned to its size
-    from the body's start) or ROS 1's packed serialisation."""
+    from the body's start) or ROS 1's packed serialisation.
+
+    Parameters
+    ----------
+    raws : list of bytes
+        The serialised messages.
+    cdr : bool
+        ROS 2's CDR (True) or ROS 1's serialisation.
+    """
 
     def __init__(self, raws: list[bytes], *, cdr: bool):
         lengths = np.fromiter(map(len, raws), np.int64, len(raws))
