@@ -19,13 +19,46 @@ class MagexpError(ValueError):
 
 
 def check(condition: bool, message: str) -> None:
-    """Raise :class:`MagexpError` with ``message`` unless ``condition`` holds."""
+    """Raise :class:`MagexpError` with ``message`` unless ``condition`` holds.
+
+    Parameters
+    ----------
+    condition : bool
+        What must hold.
+    message : str
+        The one-line message (names the value and what is allowed).
+
+    Raises
+    ------
+    MagexpError
+        When ``condition`` is false.
+    """
     if not condition:
         raise MagexpError(message)
 
 
 def check_positive_int(value, name: str, minimum: int = 1) -> int:
-    """Return ``value`` as an int, or fail if it is not an integer >= ``minimum``."""
+    """Return ``value`` as an int, or fail if it is not an integer >= ``minimum``.
+
+    Parameters
+    ----------
+    value : object
+        A count from a config (an int, or a float of integral value; not a bool).
+    name : str
+        The config key the message names (``scenario.n_readings``...).
+    minimum : int
+        The smallest value allowed.
+
+    Returns
+    -------
+    int
+        ``value`` as an int.
+
+    Raises
+    ------
+    MagexpError
+        When ``value`` is not an integer >= ``minimum``.
+    """
     if isinstance(value, bool) or not isinstance(value, (int,)) and not (
         isinstance(value, float) and value.is_integer()
     ):
@@ -36,7 +69,25 @@ def check_positive_int(value, name: str, minimum: int = 1) -> int:
 
 
 def check_nonnegative(value, name: str) -> float:
-    """Return ``value`` as a float, or fail if it is negative, NaN or infinite."""
+    """Return ``value`` as a float, or fail if it is negative, NaN or infinite.
+
+    Parameters
+    ----------
+    value : object
+        A number from a config (a noise level, a rate, a width).
+    name : str
+        The config key the message names (``scenario.noise``...).
+
+    Returns
+    -------
+    float
+        The finite ``value``, >= 0.
+
+    Raises
+    ------
+    MagexpError
+        When ``value`` is not a finite number >= 0.
+    """
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -47,7 +98,25 @@ def check_nonnegative(value, name: str) -> float:
 
 
 def check_magnitude(value, name: str) -> float:
-    """Return ``value`` as a float, or fail if it is not finite or larger than :data:`LARGEST` in magnitude."""
+    """Return ``value`` as a float, or fail if it is not finite or larger than :data:`LARGEST` in magnitude.
+
+    Parameters
+    ----------
+    value : object
+        A reading, noise amplitude or search bound.
+    name : str
+        The key or column the message names.
+
+    Returns
+    -------
+    float
+        The ``value``, of magnitude <= :data:`LARGEST`.
+
+    Raises
+    ------
+    MagexpError
+        When ``value`` is not a number or is NaN, infinite or too large.
+    """
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -65,7 +134,18 @@ EXCERPT = 6
 def excerpt(text) -> str:
     """``text`` read from a file, quoted for an error message: at most :data:`EXCERPT` characters,
     each one not printable shown as ``?`` (a message never prints a file's content beyond a short,
-    printable excerpt)."""
+    printable excerpt).
+
+    Parameters
+    ----------
+    text : object
+        Content read from a file (converted with ``str``).
+
+    Returns
+    -------
+    str
+        The quoted excerpt (``...`` appended when ``text`` is longer).
+    """
     text = str(text).strip()
     shown = "".join(c if c.isprintable() else "?" for c in text[:EXCERPT])
     return repr(shown + ("..." if len(text) > EXCERPT else ""))
@@ -119,7 +199,15 @@ def stop_on_signals() -> None:
 
 
 def fail(message: str, code: int = EXIT_BAD_INPUT) -> None:
-    """One line on stderr (``error: ...``), then exit with ``code``."""
+    """One line on stderr (``error: ...``), then exit with ``code``.
+
+    Parameters
+    ----------
+    message : str
+        The line printed after ``error: ``.
+    code : int
+        The exit code (default :data:`EXIT_BAD_INPUT`).
+    """
     print(f"error: {message}", file=sys.stderr)
     sys.exit(code)
 
@@ -138,6 +226,18 @@ def guarded(func, *args):
     :data:`EXTRAS`); Ctrl-C exits :data:`EXIT_INTERRUPTED` with one line; anything else is a
     bug: one line and :data:`EXIT_BUG` (``MAGEXP_DEBUG=1`` shows the traceback). An error raised after a
     stop signal was received is that stop (:func:`raise_if_stopped`): the signal decides how it ends.
+
+    Parameters
+    ----------
+    func : callable
+        The command's body (``main``, a launcher...).
+    *args
+        The arguments ``func`` is called with.
+
+    Returns
+    -------
+    object
+        What ``func`` returns, when it raises nothing (any error exits instead).
     """
     try:
         try:
@@ -174,7 +274,20 @@ def _bug(exc: BaseException) -> None:
 
 def exit_code(func, *args) -> int:
     """:func:`guarded` ``func(*args)``, returning its exit code (0 when it returns) instead of exiting: the
-    ``main(argv) -> int`` of a command that a caller (a test, a script) runs in its own process."""
+    ``main(argv) -> int`` of a command that a caller (a test, a script) runs in its own process.
+
+    Parameters
+    ----------
+    func : callable
+        The command run, as :func:`guarded` runs it.
+    *args
+        Its arguments (e.g. ``argv``).
+
+    Returns
+    -------
+    int
+        0 when ``func`` returns, else the exit code :func:`guarded` chose.
+    """
     try:
         guarded(func, *args)
     except SystemExit as exc:

@@ -32,7 +32,18 @@ SHARED_DATA = Path(os.environ["MAGEXP_DATA"]) if os.environ.get("MAGEXP_DATA") e
 
 
 def paper_results(paper: str) -> Path:
-    """``results/<paper>/``, created on demand."""
+    """``results/<paper>/``, created on demand.
+
+    Parameters
+    ----------
+    paper : str
+        The folder's name (``ding2024``, ``yuan2018``, ``yan2022``, ``benchmark``...).
+
+    Returns
+    -------
+    pathlib.Path
+        The folder, existing.
+    """
     path = RESULTS / paper
     path.mkdir(parents=True, exist_ok=True)
     return path

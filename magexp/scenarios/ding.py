@@ -29,6 +29,22 @@ def nonorthogonality(phi_deg: float, theta_deg: float, psi_deg: float) -> np.nda
 
     .. math:: C = \\begin{bmatrix}\\cos\\theta\\cos\\varphi & \\sin\\theta\\cos\\varphi & \\sin\\varphi\\\\
               0 & \\cos\\psi & \\sin\\psi\\\\ 0 & 0 & 1\\end{bmatrix}
+
+    (Ding 2024, the ``C`` of eqs 1-8.)
+
+    Parameters
+    ----------
+    phi_deg : float
+        ``φ`` (degrees).
+    theta_deg : float
+        ``θ`` (degrees).
+    psi_deg : float
+        ``ψ`` (degrees).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        ``C``, upper triangular.
     """
     ph, th, ps = np.deg2rad([phi_deg, theta_deg, psi_deg])
     return np.array(
@@ -48,7 +64,35 @@ def _vector(value, name: str, shape) -> np.ndarray:
 
 
 def error_model(*, scale, nonorthogonality_deg, soft_iron, hard_iron, bias) -> tuple[np.ndarray, np.ndarray]:
-    """``(M, I)`` from Ding's physical error parameters (eqs 1-8)."""
+    """``(M, I)`` from Ding's physical error parameters (eqs 1-8).
+
+    Ding 2024's error model ``Br = M B + I`` with ``M = K C (E + S)`` and ``I = K C Bh + b``.
+
+    Parameters
+    ----------
+    scale : array_like, shape (3,)
+        The scale factors ``k`` of ``K = diag(k)``, each non-zero.
+    nonorthogonality_deg : array_like, shape (3,)
+        ``(φ, θ, ψ)`` in degrees, the angles of :func:`nonorthogonality`.
+    soft_iron : array_like, shape (3, 3)
+        The soft-iron matrix ``S``.
+    hard_iron : array_like, shape (3,)
+        The hard-iron field ``Bh`` (nT).
+    bias : array_like, shape (3,)
+        The sensor bias ``b`` (nT).
+
+    Returns
+    -------
+    M : numpy.ndarray, shape (3, 3)
+        The error matrix ``K C (E + S)``.
+    I : numpy.ndarray, shape (3,)
+        The offset ``K C Bh + b``.
+
+    Raises
+    ------
+    MagexpError
+        When a value is not finite or of the wrong shape, a scale is 0, or ``M`` is singular.
+    """
     k = _vector(scale, "errors.scale", (3,))
     c = nonorthogonality(*_vector(nonorthogonality_deg, "errors.nonorthogonality_deg", (3,)))
     s = _vector(soft_iron, "errors.soft_iron", (3, 3))
@@ -122,7 +166,19 @@ class DingScenario:
         self.objective = objective
 
     def generate(self, *, rng: np.random.Generator) -> Dataset:
-        """Simulate ``n_readings`` readings at uniformly random attitudes."""
+        """Simulate ``n_readings`` readings at uniformly random attitudes.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The run's generator (the attitudes, then the noise).
+
+        Returns
+        -------
+        Dataset
+            The readings ``M B + I + noise``, the reference total field, the attitudes and the truth
+            ``(M^-1, I)``.
+        """
         r = random_rotations(self.n_readings, rng=rng)  # nav -> body
         body = r @ self.field
         readings = body @ self.m.T + self.i + self.noise.sample(body.shape, rng=rng)

@@ -42,7 +42,29 @@ MODES: dict[str, list[tuple[str, float | str]]] = {
 
 
 def segments_of(mode: str | None, segments, partial_arc_deg: float) -> list[tuple[str, float]]:
-    """The list of ``(axis, arc_deg)`` of a preset ``mode`` or of explicit ``segments``."""
+    """The list of ``(axis, arc_deg)`` of a preset ``mode`` or of explicit ``segments``.
+
+    Yuan 2018's rotation modes (sec 3.2, :data:`MODES`).
+
+    Parameters
+    ----------
+    mode : str or None
+        A preset of :data:`MODES` (``mode1``..``mode4``); unused when ``segments`` are given.
+    segments : list of dict or None
+        Explicit ``[{axis: x, arc_deg: 360}, ...]`` (override ``mode``).
+    partial_arc_deg : float
+        The arc of an incomplete turn (mode 3).
+
+    Returns
+    -------
+    list of tuple of (str, float)
+        ``(axis, arc_deg)`` of each turn, the axis one of ``x``, ``y``, ``z``.
+
+    Raises
+    ------
+    MagexpError
+        When ``mode`` is unknown (without ``segments``), an axis is not x, y or z, or an arc is not > 0.
+    """
     if segments:
         out = [(str(s["axis"]).lower(), float(s["arc_deg"])) for s in segments]
     elif mode in MODES:
@@ -147,13 +169,46 @@ class Gyro:
         self.drift = np.deg2rad(self.drift_deg_h / 3600.0) * axis / np.linalg.norm(axis)  # rad/s
 
     def measure(self, rates: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
-        """Gyro output (rad/s) for true ``rates`` ``(K, 3)``."""
+        """Gyro output (rad/s) for true ``rates`` ``(K, 3)``.
+
+        Yuan 2018's gyro ``ω_m = ω + d + n`` (module docstring).
+
+        Parameters
+        ----------
+        rates : numpy.ndarray, shape (K, 3)
+            True body rates ``ω`` (rad/s).
+        rng : numpy.random.Generator
+            The run's generator (the white noise ``n``; not drawn from when ``noise_deg_s`` is 0).
+
+        Returns
+        -------
+        numpy.ndarray, shape (K, 3)
+            The measured rates ``ω_m`` (rad/s).
+        """
         noise = np.deg2rad(self.noise_deg_s) * rng.standard_normal(rates.shape) if self.noise_deg_s > 0 else 0.0
         return rates + self.drift + noise
 
 
 def even_subsample(n_total: int, n: int) -> np.ndarray:
-    """``n`` evenly spaced indices of ``0..n_total-1`` (first and last included)."""
+    """``n`` evenly spaced indices of ``0..n_total-1`` (first and last included).
+
+    Parameters
+    ----------
+    n_total : int
+        The number of samples of the trajectory.
+    n : int
+        The number of indices wanted, ``1 <= n <= n_total``.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (n,)
+        The indices, increasing.
+
+    Raises
+    ------
+    MagexpError
+        When ``n`` is not a positive integer or exceeds ``n_total``.
+    """
     n = check_positive_int(n, "scenario.n_readings")
     check(n <= n_total, f"scenario.n_readings={n} is not allowed: the trajectory has only {n_total} samples")
     return np.round(np.linspace(0, n_total - 1, n)).astype(int)

@@ -29,6 +29,20 @@ class Noise:
         return self.amplitude / np.sqrt(12.0) if self.kind == "uniform" else self.amplitude
 
     def sample(self, shape, *, rng: np.random.Generator) -> np.ndarray:
+        """Draw the noise of ``shape`` readings' axes.
+
+        Parameters
+        ----------
+        shape : int or tuple of int
+            The shape of the noise array, e.g. ``(N, 3)``.
+        rng : numpy.random.Generator
+            The run's generator.
+
+        Returns
+        -------
+        numpy.ndarray
+            Uniform on ``[-A/2, A/2]`` or normal of standard deviation ``A``, of ``shape``.
+        """
         if self.kind == "uniform":
             return self.amplitude * (rng.random(shape) - 0.5)
         return self.amplitude * rng.standard_normal(shape)

@@ -88,7 +88,24 @@ class RecordingScenario:
         self._data = None
 
     def recording(self, file=None):
-        """The loaded recording (``file``, default the scenario's), cut to the window."""
+        """The loaded recording (``file``, default the scenario's), cut to the window.
+
+        Parameters
+        ----------
+        file : str or None
+            A recording relative to the shared data folder (or absolute); None: the scenario's ``file``
+            (the only one cut to ``window``).
+
+        Returns
+        -------
+        Recording
+            As :func:`magexp.core.recordings.load_recording` reads it.
+
+        Raises
+        ------
+        MagexpError
+            When the file does not exist or the window holds fewer than 12 readings.
+        """
         file = file or self.file
         path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
         if not exists(path):
@@ -136,9 +153,35 @@ class RecordingScenario:
 
     @search.setter
     def search(self, box):
+        """Set the search box (the one :meth:`_prepare` derives from the readings).
+
+        Parameters
+        ----------
+        box : SearchBox
+            The box of the calibration parameters.
+        """
         self._search = box
 
     def generate(self, *, rng: np.random.Generator | None = None) -> Dataset:
+        """The recording's dataset (loaded and prepared once, then shared).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator or None
+            Unused: a recording is what it is (the seed seeds the estimator only).
+
+        Returns
+        -------
+        Dataset
+            The readings of the fit, the reference total (the fitted sphere's radius), no truth;
+            ``extra`` holds the held-out block.
+
+        Raises
+        ------
+        MagexpError
+            When the first call's loading fails (:meth:`recording`), ``folds`` exceeds the readings, or
+            the ``gyro`` objective's recording has no gyroscope.
+        """
         if self._data is None:
             self._prepare()
         return self._data

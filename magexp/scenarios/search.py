@@ -65,6 +65,24 @@ class SearchBox:
 
     @classmethod
     def from_config(cls, cfg) -> "SearchBox":
+        """The box of a scenario's ``search:`` node (:class:`SearchConf`).
+
+        Parameters
+        ----------
+        cfg : mapping
+            ``{diag, offdiag, offset}``, each ``[low, high]`` finite with ``low < high``.
+
+        Returns
+        -------
+        SearchBox
+            The box.
+
+        Raises
+        ------
+        MagexpError
+            When ``cfg`` is None, misses a key, or an interval is not finite, ordered and within
+            :data:`~magexp.errors.LARGEST`.
+        """
         if cfg is None:
             raise MagexpError("search=None is not allowed: the scenario must give search.diag, .offdiag, .offset")
         missing = [k for k in ("diag", "offdiag", "offset") if k not in cfg]
@@ -109,7 +127,18 @@ class SimulationConf(ScenarioConf):
 
 def centroid_radius(readings: np.ndarray) -> float:
     """Radius of the sphere fitted to ``readings`` (:func:`magexp.core.ellipsoid.fit_sphere`): unlike the
-    mean distance from the centroid it stays right when the readings cover only part of the sphere."""
+    mean distance from the centroid it stays right when the readings cover only part of the sphere.
+
+    Parameters
+    ----------
+    readings : numpy.ndarray, shape (N, 3)
+        Raw readings.
+
+    Returns
+    -------
+    float
+        The fitted sphere's radius ``R0`` (reading units).
+    """
     return fit_sphere(readings)[1]
 
 
@@ -125,6 +154,31 @@ def search_box(readings: np.ndarray, reference: float, *, forward: bool = False,
     which the ``ekf`` state uses), so their scale is ``1 / s``. ``shape``: ``aligned`` or ``signed``;
     ``matrix_bound`` (``m``) and ``offset_width`` (relative to ``R0``; None: the readings' range):
     the widths of ``signed``.
+
+    Parameters
+    ----------
+    readings : numpy.ndarray, shape (N, 3)
+        Raw readings (their fitted sphere gives ``R0`` and the centre, their range the offsets).
+    reference : float
+        The reference total field; ``s = reference / R0``.
+    forward : bool
+        Scale the matrix entries by ``1 / s`` (parameters ``S = W^-1``).
+    shape : str
+        ``aligned`` or ``signed`` (:data:`BOXES`).
+    matrix_bound : float
+        ``m`` of ``signed`` (Yuan 2018 Table 1: 3), >= 1.
+    offset_width : float or None
+        ``signed``'s offset half-width relative to ``R0`` about the sphere centre; None: the readings' range.
+
+    Returns
+    -------
+    SearchBox
+        The box of ``[vec(matrix), offset]``.
+
+    Raises
+    ------
+    MagexpError
+        When ``shape`` is unknown or a width is out of its range.
     """
     if shape not in BOXES:
         raise MagexpError(f"box={shape!r} is not allowed: choose one of {', '.join(BOXES)}")

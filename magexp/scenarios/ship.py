@@ -51,14 +51,61 @@ def _range(value, name: str) -> tuple[float, float]:
 
 def bounded_noise(bound: float, kind: str, name: str) -> Noise:
     """Noise of at most ``bound``: ``uniform`` on ``[-bound, bound]`` (std ``bound/sqrt(3)``);
-    ``gaussian`` with standard deviation ``bound`` (not bounded; for comparison)."""
+    ``gaussian`` with standard deviation ``bound`` (not bounded; for comparison).
+
+    Yan & Zhou 2022's errors "at most" 100 nT and 0.05° (sec 2.2).
+
+    Parameters
+    ----------
+    bound : float
+        The bound (>= 0), in the units of the noisy quantity.
+    kind : str
+        ``uniform`` or ``gaussian``.
+    name : str
+        The config key named by an error message.
+
+    Returns
+    -------
+    Noise
+        The noise model.
+
+    Raises
+    ------
+    MagexpError
+        When ``bound`` is negative or not finite, or ``kind`` is unknown.
+    """
     bound = check_nonnegative(bound, name)
     return Noise(2.0 * bound if kind == "uniform" else bound, kind, name)
 
 
 def ship_dataset(readings, angles, field, *, angles_true=None, truth=None, noise=None, meta=None) -> Dataset:
     """A :class:`Dataset` of the ship model: ``attitude`` from the measured angles (N, 3)
-    ``[heading, roll, trim]``, ``field_nav`` the ambient field per reading."""
+    ``[heading, roll, trim]``, ``field_nav`` the ambient field per reading.
+
+    The attitude ``A`` is Yan & Zhou 2022's eq 2 (:func:`magexp.core.geometry.ship_attitude`).
+
+    Parameters
+    ----------
+    readings : array_like, shape (N, 3)
+        The sensor's readings ``B`` (nT).
+    angles : array_like, shape (N, 3)
+        Recorded ``[heading, roll, trim]`` (radians).
+    field : array_like, shape (3,)
+        ``Be`` (nT), geographic frame.
+    angles_true : array_like, shape (N, 3), optional
+        The true angles (default: ``angles``).
+    truth : Truth, optional
+        The true calibration (None: unknown, a recording).
+    noise : Noise, optional
+        The reading noise (its standard deviation and kind are recorded).
+    meta : dict, optional
+        Recorded as the dataset's ``meta``.
+
+    Returns
+    -------
+    Dataset
+        The dataset; ``extra`` holds ``angles``, ``angles_true`` and ``field``.
+    """
     angles = np.asarray(angles, float)
     angles_true = angles if angles_true is None else np.asarray(angles_true, float)
     attitude_true = ship_attitude(*angles_true.T)
@@ -129,7 +176,20 @@ class ShipSimulation:
         self.search = SearchBox.from_config(search)
 
     def generate(self, *, rng: np.random.Generator) -> Dataset:
-        """Draw ``n_readings`` attitudes, the exact readings, then the reading and angle errors."""
+        """Draw ``n_readings`` attitudes, the exact readings, then the reading and angle errors.
+
+        Yan & Zhou 2022's model ``B = K A Be + Bp`` (eqs 1-2).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The run's generator (the angles, the reading noise, then the angle noise).
+
+        Returns
+        -------
+        Dataset
+            The noisy readings and angles, the true angles and the truth ``(K^-1, Bp)``.
+        """
         lo, hi = self.ranges.T
         angles_true = lo + (hi - lo) * rng.random((self.n_readings, 3))
         exact = ship_attitude(*angles_true.T) @ self.field @ self.k.T + self.bp
@@ -178,5 +238,17 @@ class ShipRecording:
         self.search = SearchBox.from_config(search)
 
     def generate(self, *, rng: np.random.Generator | None = None) -> Dataset:
+        """The recording's dataset (Yan & Zhou 2022 Table 1, or a user's file).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator or None
+            Unused: the data are fixed.
+
+        Returns
+        -------
+        Dataset
+            The recorded readings and angles, no truth.
+        """
         rec = self.recording
         return ship_dataset(rec.readings, rec.angles, self.field, meta={"scenario": self.name, **rec.meta})

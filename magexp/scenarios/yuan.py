@@ -93,7 +93,26 @@ class YuanScenario:
         self.objective = objective
 
     def generate(self, *, rng: np.random.Generator) -> Dataset:
-        """Simulate the run and keep ``n_readings`` evenly spaced readings."""
+        """Simulate the run and keep ``n_readings`` evenly spaced readings.
+
+        Yuan 2018's model ``B_b = S C_i^b H_i + b + ε`` (eq 1) along the trajectory.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The run's generator (the gyro noise, then the reading noise).
+
+        Returns
+        -------
+        Dataset
+            The readings, the true and gyro-integrated attitudes, the field per reading and the truth
+            ``(S^-1, b)``.
+
+        Raises
+        ------
+        MagexpError
+            When ``n_readings`` is not a positive integer or exceeds the trajectory's samples.
+        """
         rates = self.trajectory.rates()
         dt = self.trajectory.dt
         true_bn = integrate_rates(rates, dt)[:-1]  # body -> nav at every sample
