@@ -160,7 +160,13 @@ INTERRUPTED = "interrupted (Ctrl-C); finished runs are cached, rerun the same co
 
 class Terminated(KeyboardInterrupt):
     """A command stopped by a signal other than Ctrl-C (``SIGTERM``, :func:`stop_on_signals`): it ends as
-    Ctrl-C does (every cleanup that undoes an interrupted command runs), with exit code ``128 + signum``."""
+    Ctrl-C does (every cleanup that undoes an interrupted command runs), with exit code ``128 + signum``.
+
+    Parameters
+    ----------
+    signum : int
+        The signal's number.
+    """
 
     def __init__(self, signum: int):
         super().__init__(signum)

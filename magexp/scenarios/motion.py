@@ -115,11 +115,23 @@ class Trajectory:
                     "its turns at this rate and period are samples")  # counted before any array is made
 
     def samples(self) -> float:
-        """The number of steps of :meth:`rates`, counted without making them."""
+        """The number of steps of :meth:`rates`, counted without making them.
+
+        Returns
+        -------
+        int
+            The steps of every segment, at least one each.
+        """
         return sum(max(round(arc / (self.rate * self.dt)), 1) for _, arc in self.segments)
 
     def rates(self) -> np.ndarray:
-        """True body rates (rad/s) of every step, shape ``(K, 3)``."""
+        """True body rates of every step.
+
+        Returns
+        -------
+        numpy.ndarray, shape (K, 3)
+            rad/s, one row per step of ``dt``; each segment turns exactly its arc.
+        """
         parts = []
         for ax, arc in self.segments:
             n = max(int(round(arc / (self.rate * self.dt))), 1)
@@ -129,6 +141,13 @@ class Trajectory:
         return np.concatenate(parts)
 
     def duration(self) -> float:
+        """The trajectory's length in time.
+
+        Returns
+        -------
+        float
+            Seconds: the steps of :meth:`rates` times ``dt``.
+        """
         return len(self.rates()) * self.dt
 
 

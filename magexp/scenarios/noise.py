@@ -16,6 +16,15 @@ class Noise:
     ``[-A/2, A/2]`` (Ding 2024's "random noise of maximum amplitude A"; the
     convention that reproduces its RMS values), standard deviation ``A/sqrt(12)``.
     ``kind="gaussian"``: zero-mean normal with standard deviation ``amplitude``.
+
+    Parameters
+    ----------
+    amplitude : float
+        ``A`` (>= 0), in the readings' unit.
+    kind : str
+        ``"uniform"`` or ``"gaussian"``.
+    name : str
+        The config key named by a refusal.
     """
 
     def __init__(self, amplitude: float, kind: str = "uniform", name: str = "scenario.noise"):

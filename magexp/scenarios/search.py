@@ -91,7 +91,14 @@ class SearchBox:
         return cls(*(_interval(cfg[k], k) for k in ("diag", "offdiag", "offset")))
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bound vectors of length 12."""
+        """The box as bound vectors.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (12,)
+            ``[vec(W) row-major, o]``: ``diag`` on the matrix's diagonal, ``offdiag`` off it, ``offset``
+            for the offset.
+        """
         eye = np.eye(3, dtype=bool).ravel()
         lo = np.where(eye, self.diag[0], self.offdiag[0])
         hi = np.where(eye, self.diag[1], self.offdiag[1])
