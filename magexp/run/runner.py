@@ -24,7 +24,19 @@ from magexp.core.seeding import run_sequences, scenario_stream
 def build(node, what: str):
     """Instantiate a ``_target_`` node with plain-Python arguments, one-line errors. ``what`` begins with
     what the node is (``estimator 'lm'``): every ``_target_`` in the node is checked first
-    (:func:`magexp.run.targets.check_targets`: a plug-in class, never a function), so nothing else is called."""
+    (:func:`magexp.run.targets.check_targets`: a plug-in class, never a function), so nothing else is called.
+
+    Parameters
+    ----------
+    node : DictConfig or dict
+        A config node with a ``_target_``.
+    what : str
+        What it is, for the error line (``estimator 'lm'``).
+
+    Returns
+    -------
+    object
+        The instance (``hydra.utils.instantiate``)."""
     check_targets(node, what.split()[0], plugin=True)
     try:
         return instantiate(node, _convert_="all")
@@ -40,7 +52,18 @@ def build(node, what: str):
 
 
 def run(cfg: DictConfig) -> RunOutput:
-    """Simulate (or load) the scenario, fit the estimator, evaluate the result."""
+    """Simulate (or load) the scenario, fit the estimator, evaluate the result.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        A composed run config (``scenario``, ``estimator``, ``seed``...).
+
+    Returns
+    -------
+    RunOutput
+        The run's fit, metrics and what the summary needs (:class:`magexp.estimators.result.RunOutput`).
+    """
     return next(run_batch([cfg]))
 
 
@@ -64,7 +87,21 @@ def _build_key(plain: dict, what: str) -> tuple:
 
 def build_once(node, what: str, keep: int = 256, key: tuple | None = None):
     """:func:`build`, memoised in this process by the node's content and its data files' content
-    (``key``: its :func:`_build_key`, when the caller has it)."""
+    (``key``: its :func:`_build_key`, when the caller has it).
+
+    Parameters
+    ----------
+    node, what
+        As :func:`build`.
+    keep : int
+        How many built objects this process keeps.
+    key : tuple, optional
+        The node's key, when the caller has it.
+
+    Returns
+    -------
+    object
+        The instance, built once per key."""
     key = _build_key(_plain(node), what) if key is None else key
     if key in _BUILT:
         _BUILT.move_to_end(key)
@@ -122,6 +159,16 @@ def run_batch(configs) -> Iterator[RunOutput]:
     Equal to ``run`` on each config, but what the runs share is built once (:class:`_Shared`):
     a batch of one scenario's seeds over several estimators builds the scenario once, each seed's
     dataset and problem once, and computes each seed's Cramér-Rao bound once.
+
+    Parameters
+    ----------
+    configs : iterable of dict or DictConfig
+        Resolved run configs.
+
+    Yields
+    ------
+    RunOutput
+        Each config's output, in order.
     """
     shared = _Shared()
     for cfg in configs:
@@ -153,7 +200,17 @@ def design_summary(problem) -> dict | None:
     """What the least-squares t-interval and F-test of a linear problem ``Y = C x`` need, without its
     readings (None for a problem without a linear design): ``gram`` ``C^T C``, ``coef`` the
     least-squares ``x`` (``numpy.linalg.lstsq``), ``rss`` the residual sum of squares of each column
-    of ``Y`` and ``n`` the readings (:func:`magexp.artifacts.summary.least_squares_interval`)."""
+    of ``Y`` and ``n`` the readings (:func:`magexp.artifacts.summary.least_squares_interval`).
+
+    Parameters
+    ----------
+    problem : Problem
+        The run's problem.
+
+    Returns
+    -------
+    dict or None
+        ``{"gram", "coef", "rss", "n"}``."""
     if "linear_design" not in problem.capabilities:
         return None
     c, y = (np.asarray(a, float) for a in problem.design())

@@ -50,7 +50,21 @@ _SOURCE_LIMIT = 2 ** 20  # bytes of a user module read to find its class statica
 
 def check_targets(node, where: str, *, plugin: bool = False) -> None:
     """Every ``_target_`` in a config node (a DictConfig or a plain container) at dotted ``where``,
-    checked by :func:`check_target` (``plugin``: the node builds a plug-in wherever it sits)."""
+    checked by :func:`check_target` (``plugin``: the node builds a plug-in wherever it sits).
+
+    Parameters
+    ----------
+    node : DictConfig or dict or list
+        The config node.
+    where : str
+        Its dotted place (``estimator``, ``hydra.launcher``).
+    plugin : bool
+        Check every target as a plug-in class.
+
+    Raises
+    ------
+    MagexpError
+        One line for the first target refused."""
     if isinstance(node, (dict, DictConfig)):
         for k, v in node.items():
             if k == "_target_":
@@ -77,6 +91,25 @@ def check_target(where: str, target, *, plugin: bool = False) -> None:
       refused without an import. Nothing named is ever called here;
     * anywhere else: refused (``plugin``: the node is known to build a plug-in, as
       :func:`magexp.run.runner.build` says, and is checked as one wherever it sits).
+
+    Parameters
+    ----------
+    where : str
+        The dotted place of the node holding the target.
+    target : str
+        The ``_target_`` value.
+    plugin : bool
+        Check it as a plug-in class wherever it sits.
+
+    Returns
+    -------
+    None
+        Nothing: an allowed target passes.
+
+    Raises
+    ------
+    MagexpError
+        One line naming ``where``, the target and what is allowed there.
     """
     text = str(target)
     shown = f"{where}._target_={text[:60]!r}"
