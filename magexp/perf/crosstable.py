@@ -135,7 +135,7 @@ def worse(row: dict) -> bool:
     Parameters
     ----------
     row : dict
-        A row of :func:`rows`.
+        A row of :func:`rows` (``calibrated`` and ``raw`` spreads).
 
     Returns
     -------
@@ -188,12 +188,12 @@ def main(argv: list[str] | None = None) -> int:
     Parameters
     ----------
     argv : list of str or None
-        Command-line arguments (None: ``sys.argv``).
+        ``[--csv PATH]`` (None: ``sys.argv``).
 
     Returns
     -------
     int
-        Exit code.
+        0.
     """
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--csv", help="also write the long-format rows here")

@@ -209,7 +209,7 @@ def estimate_run(cfg: Mapping) -> Estimate:
     Parameters
     ----------
     cfg : Mapping
-        The run's (composed or resolved) config.
+        A composed or resolved run config.
 
     Returns
     -------
@@ -241,7 +241,7 @@ def check_run(cfg: Mapping) -> Estimate:
     Parameters
     ----------
     cfg : Mapping
-        The run's (composed or resolved) config.
+        A run config, checked before it runs.
 
     Returns
     -------

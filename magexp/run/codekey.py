@@ -212,7 +212,7 @@ def code_hash(targets: tuple[str, ...]) -> str:
     Parameters
     ----------
     targets : tuple of str
-        ``_target_`` strings of the run.
+        As in :func:`code_files`.
 
     Returns
     -------

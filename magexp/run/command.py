@@ -226,10 +226,8 @@ def run_one(user: list[str], hyd: list[str]) -> None:
 
     Parameters
     ----------
-    user : list of str
-        The user's overrides.
-    hyd : list of str
-        The ``hydra.*`` overrides.
+    user, hyd : list of str
+        The user's overrides; the ``hydra.*`` ones (:func:`split_args`).
     """
     run_dirs = [folder_of(o) for o in hyd if o.startswith("hydra.run.dir=")]
     for run_dir in run_dirs:  # not empty, not a root, not inside results/

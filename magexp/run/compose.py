@@ -216,7 +216,7 @@ def options(group: str) -> list[str]:
     Parameters
     ----------
     group : str
-        A config group of ``conf/``.
+        The config group (a folder of ``conf/``).
 
     Returns
     -------

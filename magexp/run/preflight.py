@@ -36,12 +36,12 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
     Parameters
     ----------
     overrides : list of str
-        The sweep's overrides.
+        The sweep's overrides (``-m``).
 
     Returns
     -------
     list of list of str
-        Each job's overrides.
+        As :func:`magexp.run.compose.sweep_jobs`.
     """
     parsed = parse_overrides(overrides)
     for ov in parsed:
@@ -58,7 +58,7 @@ def swept_keys(overrides: list[str]) -> list[str]:
     Parameters
     ----------
     overrides : list of str
-        The sweep's overrides.
+        The sweep's overrides (Hydra's syntax: ``a,b``, ``range(...)``...).
 
     Returns
     -------

@@ -140,7 +140,7 @@ def provenance(config: dict | None = None) -> dict:
     Parameters
     ----------
     config : dict or None
-        The resolved config.
+        The resolved config (None: no config fields).
 
     Returns
     -------

@@ -106,7 +106,7 @@ def notebook_side(ds: exchange.NeutralDataset) -> exchange.NeutralDataset:
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        A dataset of the bench (its sidecar is copied, not changed).
 
     Returns
     -------
@@ -122,9 +122,9 @@ def simulated_sets(args, work: Path) -> list[exchange.NeutralDataset]:
     Parameters
     ----------
     args : argparse.Namespace
-        The bench's options.
+        ``--seeds``, ``--levels``, ``--nsamples``, ``--yuan-seeds`` of the bench.
     work : pathlib.Path
-        The work folder.
+        Where MAGYC's generator writes its files.
 
     Returns
     -------
@@ -148,7 +148,7 @@ def recorded_fits(args) -> list[tuple[exchange.NeutralDataset, exchange.NeutralD
     Parameters
     ----------
     args : argparse.Namespace
-        The bench's options.
+        The bench's options (the recordings' axis maps and parts).
 
     Returns
     -------
@@ -174,10 +174,8 @@ def jobs_of(args, work: Path) -> list[tuple]:
 
     Parameters
     ----------
-    args : argparse.Namespace
-        The bench's options.
-    work : pathlib.Path
-        The work folder.
+    args, work : argparse.Namespace, pathlib.Path
+        The bench's options and work folder (:func:`simulated_sets`).
 
     Returns
     -------
@@ -207,7 +205,7 @@ def answered(datasets: list[exchange.NeutralDataset], work: Path) -> list[dict]:
     datasets : list of NeutralDataset
         The datasets sent to the peer.
     work : pathlib.Path
-        The work folder.
+        Folder of the neutral files and the answers.
 
     Returns
     -------
@@ -238,7 +236,7 @@ def peer_answers(args, jobs: list[tuple], work: Path) -> list[dict]:
     jobs : list of tuple
         The jobs of :func:`jobs_of`.
     work : pathlib.Path
-        The work folder.
+        Folder of the neutral files and the answers (:func:`answered`).
 
     Returns
     -------
@@ -298,10 +296,8 @@ def run(args, work: Path) -> list[dict]:
 
     Parameters
     ----------
-    args : argparse.Namespace
-        The bench's options.
-    work : pathlib.Path
-        The work folder.
+    args, work : argparse.Namespace, pathlib.Path
+        The bench's options and work folder (:func:`jobs_of`).
 
     Returns
     -------
@@ -320,7 +316,7 @@ def summarise(rows: list[dict]) -> list[dict]:
     Parameters
     ----------
     rows : list of dict
-        The long-format rows.
+        The long-format rows of :func:`run`.
 
     Returns
     -------
@@ -386,7 +382,7 @@ def measured(args) -> list[dict]:
     Parameters
     ----------
     args : argparse.Namespace
-        The bench's options.
+        The bench's options (``--work``: the folder kept).
 
     Returns
     -------
@@ -405,7 +401,7 @@ def write(args, rows: list[dict]) -> None:
     Parameters
     ----------
     args : argparse.Namespace
-        The bench's options.
+        The bench's options (``--out``: the folder written).
     rows : list of dict
         The long-format rows.
     """
@@ -426,12 +422,12 @@ def main(argv=None) -> int:
     Parameters
     ----------
     argv : list of str or None
-        Command-line arguments (None: ``sys.argv``).
+        The options of :func:`parse`.
 
     Returns
     -------
     int
-        Exit code.
+        0, or 2 when the peer is not available.
     """
     try:
         args = parse(argv)

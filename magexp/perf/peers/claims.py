@@ -40,7 +40,7 @@ def frame_of(rows) -> pd.DataFrame:
     Parameters
     ----------
     rows : list of dict
-        The long-format rows.
+        The long-format rows (``peers.csv``).
 
     Returns
     -------
@@ -132,7 +132,7 @@ def compare(better: pd.Series, worse: pd.Series) -> tuple[str, str]:
     Parameters
     ----------
     better, worse : pandas.Series
-        Paired values (:func:`values`).
+        As in :func:`tested`.
 
     Returns
     -------
@@ -154,7 +154,7 @@ def winner_test(frame: pd.DataFrame, metric: str, methods: list[str], **where) -
     frame : pandas.DataFrame
         The rows (:func:`frame_of`).
     metric : str
-        The measure.
+        The measure compared (lower is better).
     methods : list of str
         The methods compared.
     **where
@@ -162,7 +162,7 @@ def winner_test(frame: pd.DataFrame, metric: str, methods: list[str], **where) -
 
     Returns
     -------
-    tuple
+    tuple of (str, Test, list of str)
     """
     cells = {m: values(frame, metric, method=m, **where) for m in methods}
     cells = {m: v for m, v in cells.items() if len(v)}
@@ -181,18 +181,12 @@ def winner(frame: pd.DataFrame, metric: str, methods: list[str], **where) -> tup
 
     Parameters
     ----------
-    frame : pandas.DataFrame
-        The rows (:func:`frame_of`).
-    metric : str
-        The measure.
-    methods : list of str
-        The methods compared.
-    **where
-        Column values selecting the cell.
+    frame, metric, methods, **where : pandas.DataFrame, str, list of str, column values
+        As in :func:`winner_test`.
 
     Returns
     -------
-    tuple
+    tuple of (str, str, list of str)
     """
     best, t, tied = winner_test(frame, metric, methods, **where)
     return best, HOLDS if not tied else NO_DIFFERENCE, tied

@@ -111,7 +111,7 @@ def with_reference(ds: NeutralDataset) -> NeutralDataset:
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        A dataset whose ``reference_total`` is set.
 
     Returns
     -------
@@ -227,7 +227,7 @@ def rest_bias(axis_map: str = "aligned") -> np.ndarray:
     Parameters
     ----------
     axis_map : str
-        A key of :data:`AXIS_MAPS`.
+        The gyroscope axes (a key of :data:`AXIS_MAPS`).
 
     Returns
     -------

@@ -60,10 +60,8 @@ class NeutralDataset:
 
         Parameters
         ----------
-        index : slice
-            The readings kept.
-        suffix : str
-            Appended to the dataset's name.
+        index, suffix : slice, str
+            The readings kept; the suffix of the part's name.
 
         Returns
         -------
@@ -79,7 +77,7 @@ def check(ds: NeutralDataset) -> NeutralDataset:
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        The dataset checked.
 
     Returns
     -------
@@ -104,7 +102,7 @@ def write(ds: NeutralDataset, stem: Path) -> Path:
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        The dataset written.
     stem : pathlib.Path
         The files' path without suffix.
 
@@ -150,7 +148,7 @@ def digest(ds: NeutralDataset) -> str:
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        A dataset to send to the peer.
 
     Returns
     -------

@@ -82,7 +82,7 @@ def subset(ds: NeutralDataset, n_fit: int = N_FIT) -> NeutralDataset:
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        The whole dataset.
     n_fit : int
         Readings kept.
 
@@ -104,7 +104,7 @@ def gyro_problem(ds: NeutralDataset, n_fit: int = N_FIT):
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        The readings and gyro rates.
     n_fit : int
         Readings fitted.
 
@@ -128,7 +128,7 @@ def scalar_problem(ds: NeutralDataset):
     Parameters
     ----------
     ds : NeutralDataset
-        A dataset.
+        The readings and their ``reference_total``.
 
     Returns
     -------
@@ -148,7 +148,7 @@ def fit(method: str, ds: NeutralDataset, *, seed: int = 0, n_fit: int = N_FIT) -
     method : str
         A key of :data:`METHODS`.
     ds : NeutralDataset
-        A dataset.
+        The dataset fitted.
     seed : int
         Seed of the estimator's draws.
     n_fit : int

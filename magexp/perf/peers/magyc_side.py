@@ -119,10 +119,8 @@ def call(method: str, data, side: dict) -> dict:
     ----------
     method : str
         A MAGYC method.
-    data : dict
-        ``t``, ``mag`` and ``gyro`` arrays.
-    side : dict
-        The sidecar.
+    data, side : dict
+        The (prepared: :func:`prepare`) arrays and the sidecar.
 
     Returns
     -------

@@ -97,10 +97,8 @@ def field_spread(est: Estimate, mag: np.ndarray) -> float:
 
     Parameters
     ----------
-    est : Estimate
-        A fitted calibration.
-    mag : numpy.ndarray, shape (N, 3)
-        Raw readings.
+    est, mag : Estimate, numpy.ndarray of shape (N, 3)
+        As in :func:`calibrated`.
 
     Returns
     -------

@@ -34,7 +34,7 @@ def pick(summary, **match) -> list[dict]:
     Parameters
     ----------
     summary : list of dict
-        The summary rows.
+        The summary rows (``peers_summary.csv``).
     **match
         Field values wanted.
 
@@ -50,10 +50,8 @@ def one(summary, **match) -> dict | None:
 
     Parameters
     ----------
-    summary : list of dict
-        The summary rows.
-    **match
-        Field values wanted.
+    summary, **match : list of dict, field values
+        As in :func:`pick`.
 
     Returns
     -------
@@ -69,7 +67,7 @@ def methods_of(summary) -> list[str]:
     Parameters
     ----------
     summary : list of dict
-        The summary rows.
+        The summary rows, bounds included.
 
     Returns
     -------
@@ -163,7 +161,7 @@ def figure(summary, path) -> None:
     Parameters
     ----------
     summary : list of dict
-        The summary rows.
+        The summary rows drawn.
     path : pathlib.Path
         The figure's file.
     """
@@ -218,7 +216,7 @@ def bases(args) -> dict[str, str]:
     Parameters
     ----------
     args : argparse.Namespace
-        The bench's options.
+        The bench's options (``--n-fit``).
 
     Returns
     -------
@@ -278,7 +276,7 @@ def recording_claims(frame) -> list[dict]:
     Parameters
     ----------
     frame : pandas.DataFrame
-        The rows (:func:`.claims.frame_of`).
+        The rows (:func:`.claims.frame_of`), the recordings' read.
 
     Returns
     -------
@@ -317,7 +315,7 @@ def spread_table(summary) -> list[str]:
     Parameters
     ----------
     summary : list of dict
-        The summary rows.
+        The summary rows (the full sphere's are read).
 
     Returns
     -------
@@ -393,12 +391,8 @@ def headline(claims: list[dict], frame, summary, args) -> str:
     ----------
     claims : list of dict
         The section's claims.
-    frame : pandas.DataFrame
-        The rows (:func:`.claims.frame_of`).
-    summary : list of dict
-        The summary rows.
-    args : argparse.Namespace
-        The bench's options.
+    frame, summary, args : pandas.DataFrame, list of dict, argparse.Namespace
+        As in :func:`simulated_claims`.
 
     Returns
     -------
@@ -412,10 +406,8 @@ def notes(frame, summary) -> list[str]:
 
     Parameters
     ----------
-    frame : pandas.DataFrame
-        The rows (:func:`.claims.frame_of`).
-    summary : list of dict
-        The summary rows.
+    frame, summary : pandas.DataFrame, list of dict
+        The rows (:func:`.claims.frame_of`) and their summary, read for the numbers quoted.
 
     Returns
     -------
@@ -465,12 +457,10 @@ def top(rows, summary, args) -> list[str]:
 
     Parameters
     ----------
-    rows : list of dict
-        The long-format rows.
-    summary : list of dict
-        The summary rows.
+    rows, summary : list of dict
+        The long-format rows and their summary.
     args : argparse.Namespace
-        The bench's options.
+        The bench's options (the claims' comparisons).
 
     Returns
     -------
@@ -497,12 +487,8 @@ def section(rows, summary, args) -> str:
 
     Parameters
     ----------
-    rows : list of dict
-        The long-format rows.
-    summary : list of dict
-        The summary rows.
-    args : argparse.Namespace
-        The bench's options.
+    rows, summary, args : list of dict, list of dict, argparse.Namespace
+        As in :func:`top`.
 
     Returns
     -------

@@ -257,12 +257,12 @@ def main(argv: list[str] | None = None) -> int:
     Parameters
     ----------
     argv : list of str or None
-        Command-line arguments (None: ``sys.argv``).
+        ``--out FOLDER`` (None: ``sys.argv``).
 
     Returns
     -------
     int
-        Exit code.
+        0, or 2 when a tool is not installed.
     """
     p = argparse.ArgumentParser(prog="python -m magexp.perf.peers.tools", description=__doc__.splitlines()[0])
     p.add_argument("--out", required=True, type=Path, help="folder of tools.csv and tools.md")
