@@ -427,7 +427,7 @@ def main(argv=None) -> int:
     Returns
     -------
     int
-        0, or 2 when the peer is not available.
+        0 (also when the peer is absent: skipped), 2 on a bad value.
     """
     try:
         args = parse(argv)

@@ -262,7 +262,7 @@ def main(argv: list[str] | None = None) -> int:
     Returns
     -------
     int
-        0, or 2 when a tool is not installed.
+        0, or 2 when the tools' environment is absent.
     """
     p = argparse.ArgumentParser(prog="python -m magexp.perf.peers.tools", description=__doc__.splitlines()[0])
     p.add_argument("--out", required=True, type=Path, help="folder of tools.csv and tools.md")
