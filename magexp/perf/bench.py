@@ -86,7 +86,12 @@ WITHIN = 0.01  # success: best cost within 1 % of the optimum
 
 # -- measuring ---------------------------------------------------------------------------------------
 def row(measure: str, estimator: str, values, unit: str) -> dict:
-    """One long-format row: the median of ``values`` and their interquartile range."""
+    """One long-format row: the median of ``values`` and their interquartile range.
+
+    Parameters
+    ----------
+    measure, estimator, values, unit : str, str, sequence of float, str
+    """
     values = np.asarray(values, float)
     if values.size == 0 or not np.any(np.isfinite(values)):
         return {"measure": measure, "estimator": estimator, "value": np.nan, "unit": unit, "lo": np.nan, "hi": np.nan}
@@ -101,6 +106,10 @@ def side_by_side(variants: dict, rounds: int, target: float = 0.05, clock=time.p
     result maps each name to its ``rounds`` batch means, by ``clock`` (wall clock by default;
     ``time.process_time``: this process's CPU time, which leaves out waiting for a core on a
     shared machine).
+
+    Parameters
+    ----------
+    variants, rounds, target, clock : dict of callables, int, float, callable
     """
     number = {}
     for name, fn in variants.items():
@@ -122,13 +131,23 @@ BLAS_THREADS = threads.BLAS_THREADS
 
 
 def compose(overrides: list[str]):
-    """The run config of ``overrides`` (the project's one composer)."""
+    """The run config of ``overrides`` (the project's one composer).
+
+    Parameters
+    ----------
+    overrides : list of str
+    """
     return compose_config(overrides)
 
 
 # -- problems ----------------------------------------------------------------------------------------
 def ding_problem(n_readings: int, seed: int = 0, *overrides: str):
-    """Ding 2024 simulation 1 with ``n_readings`` readings (data of ``seed``) and its scenario."""
+    """Ding 2024 simulation 1 with ``n_readings`` readings (data of ``seed``) and its scenario.
+
+    Parameters
+    ----------
+    n_readings, seed, *overrides : int, int, str
+    """
     cfg = compose(["scenario=ding2024_exp1", f"scenario.n_readings={n_readings}", *overrides])
     scenario = build(cfg.scenario, "scenario")
     dataset = scenario.generate(rng=run_generators(seed)[0])
@@ -136,9 +155,13 @@ def ding_problem(n_readings: int, seed: int = 0, *overrides: str):
 
 
 def vector_problem(n_readings: int):
-    """A vector problem (Yuan 2018 eq 8) of any size: Ding's readings with their true body-frame
-    field as the reference vectors (identity attitudes; the vector scenarios' trajectories are too
-    short for 3e4 readings, and only the shapes matter here)."""
+    """A vector problem (Yuan 2018 eq 8) of any size: Ding's readings with their true body-frame field as the
+    reference vectors (identity attitudes: only shapes matter; Yuan's trajectories are too short for 3e4 readings).
+
+    Parameters
+    ----------
+    n_readings : int
+    """
     problem, scenario = ding_problem(n_readings)
     ds = problem.dataset
     ds = replace(ds, attitude=np.broadcast_to(np.eye(3), (ds.n, 3, 3)), field_nav=ds.field_body_true)
@@ -308,7 +331,12 @@ def peer_estimators():
 
 def run_peer(estimator, problem, rng) -> dict:
     """One run: final cost (direct formula), evaluations, wall time, and the trace of
-    ``(evaluations so far, best so far, seconds since the start)`` after every cost call."""
+    ``(evaluations so far, best so far, seconds since the start)`` after every cost call.
+
+    Parameters
+    ----------
+    estimator, problem, rng : estimator, CalibrationProblem, numpy.random.Generator
+    """
     rec = Recorded(problem)
     rec.start = time.perf_counter()
     if isinstance(estimator, PyswarmsPSO):
@@ -326,6 +354,10 @@ def reach(run: dict, target: float) -> tuple[float, float]:
     """Evaluations and seconds until the best cost first came within ``target`` (nan if never).
 
     A closed form (no cost calls) reaches it with all its evaluations and its whole wall time.
+
+    Parameters
+    ----------
+    run, target : dict (of :func:`run_peer`), float
     """
     if not run["trace"]:
         return (run["nfev"], run["wall"]) if run["fun"] <= target else (np.nan, np.nan)
@@ -333,7 +365,12 @@ def reach(run: dict, target: float) -> tuple[float, float]:
 
 
 def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95 % Wilson score interval of a success rate."""
+    """95 % Wilson score interval of a success rate.
+
+    Parameters
+    ----------
+    successes, n, z : int, int, float
+    """
     if n == 0:
         return np.nan, np.nan
     p = successes / n
@@ -377,7 +414,12 @@ def peer_rows(seeds: int) -> list[dict]:
 # -- 5. the bound; 6. numba's first call; 7. memory ----------------------------------------------------
 def bound_rows(rounds: int, n_readings: int = 100_000) -> list[dict]:
     """Seconds per bound, wall clock and CPU (the process's own CPU time: what the call costs an
-    idle core; on a shared machine the wall clock also counts waiting for one)."""
+    idle core; on a shared machine the wall clock also counts waiting for one).
+
+    Parameters
+    ----------
+    rounds, n_readings : int
+    """
     problem, _ = ding_problem(n_readings)
     cramer_rao(problem)
     wall, cpu = [], []
@@ -403,7 +445,12 @@ print(time.perf_counter() - start)
 
 
 def first_call_rows(repeat: int = 3) -> list[dict]:
-    """numba import + first calls of both costs in a fresh process, cache warm and cold."""
+    """numba import + first calls of both costs in a fresh process, cache warm and cold.
+
+    Parameters
+    ----------
+    repeat : int
+    """
     rows = []
     for label, cache in (("warm cache", None), ("cold, compiling", "fresh")):
         values = []
@@ -439,6 +486,10 @@ def run_peak(overrides) -> tuple[int, float]:
     The peak is that process's own ``ru_maxrss`` (``os.wait4`` in :data:`LAUNCH`: no other process
     counts); its output folder and its run cache are temporary, so it computes (never reads a
     cached result) and leaves nothing behind. A failed run raises, with the end of its error output.
+
+    Parameters
+    ----------
+    overrides : sequence of str
     """
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, MAGEXP_CACHE=str(Path(tmp) / "cache"))
@@ -461,6 +512,10 @@ def memory_check(n_readings: int, n_particles: int, n_iterations: int) -> dict:
     interpreter, imports, compiled kernels and steps, on negligible data); ``measured = peak -
     baseline``, the part the estimate models (it leaves out the interpreter and its libraries);
     ``ratio = estimate / measured``.
+
+    Parameters
+    ----------
+    n_readings, n_particles, n_iterations : int
     """
     sizes = [f"estimator.n_particles={n_particles}", f"estimator.n_iterations={n_iterations}"]
     overrides = [*MEMORY_RUN, f"scenario.n_readings={n_readings}", *sizes]
@@ -473,7 +528,12 @@ def memory_check(n_readings: int, n_particles: int, n_iterations: int) -> dict:
 
 
 def memory_rows(n_readings: int = 1_000_000, n_particles: int = 500, n_iterations: int = 3) -> list[dict]:
-    """Peak memory of a command-line ``ipso`` run beside the run guard's estimate (:func:`memory_check`)."""
+    """Peak memory of a command-line ``ipso`` run beside the run guard's estimate (:func:`memory_check`).
+
+    Parameters
+    ----------
+    n_readings, n_particles, n_iterations : int
+    """
     m = memory_check(n_readings, n_particles, n_iterations)
     size = f"{n_readings} readings x {n_particles} particles, {n_iterations} iterations"
     mib = 2.0 ** 20
@@ -490,6 +550,12 @@ SECTIONS = ("cost", "engine", "pyswarms", "peers", "bound", "first-call", "memor
 
 
 def measure(sections=SECTIONS, rounds: int = 7, seeds: int = 20) -> list[dict]:
+    """The long-format rows of the bench's ``sections`` (module docstring), in one list.
+
+    Parameters
+    ----------
+    sections, rounds, seeds : sequence of str (of :data:`SECTIONS`), int, int
+    """
     rows = []
     if "memory" in sections:
         rows += memory_rows()

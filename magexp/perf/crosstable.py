@@ -48,7 +48,17 @@ def recordings() -> dict:
 
 def single_attitude(readings: np.ndarray) -> bool:
     """Whether every raw reading lies within :data:`~magexp.calibration.checks.ONE_ATTITUDE_DEG` of their mean
-    direction (the sensor did not turn)."""
+    direction (the sensor did not turn).
+
+    Parameters
+    ----------
+    readings : numpy.ndarray, shape (N, 3)
+        Raw readings.
+
+    Returns
+    -------
+    bool
+    """
     mean = readings.mean(axis=0)
     cosine = readings @ mean / (np.linalg.norm(readings, axis=1) * np.linalg.norm(mean))
     return bool(np.degrees(np.arccos(np.clip(cosine.min(), -1.0, 1.0))) < ONE_ATTITUDE_DEG)
@@ -81,7 +91,22 @@ def carried_noise(cal, readings: np.ndarray) -> float:
 
 def rows(recs: dict, tried=TRIED, *, seed: int = 0) -> list[dict]:
     """One row per (source recording, model, estimator, target recording): accepted or refused, the
-    spread of the target's readings raw and calibrated (spreads as fractions)."""
+    spread of the target's readings raw and calibrated (spreads as fractions).
+
+    Parameters
+    ----------
+    recs : dict
+        ``{sequence: Recording}`` (:func:`recordings`).
+    tried : sequence
+        The (model, estimator) calibrations tried.
+    seed : int
+        Seed of the estimators' draws.
+
+    Returns
+    -------
+    list of dict
+        The long-format rows.
+    """
     out = []
     for source, rec in recs.items():
         for model, name in tried:
@@ -105,7 +130,17 @@ def rows(recs: dict, tried=TRIED, *, seed: int = 0) -> list[dict]:
 
 
 def worse(row: dict) -> bool:
-    """An accepted calibration's spread on a target that turns exceeds the target's raw spread."""
+    """An accepted calibration's spread on a target that turns exceeds the target's raw spread.
+
+    Parameters
+    ----------
+    row : dict
+        A row of :func:`rows` (``calibrated`` and ``raw`` spreads).
+
+    Returns
+    -------
+    bool
+    """
     return row["calibrated"] is not None and not row["single_attitude"] and row["calibrated"] > row["raw"]
 
 
@@ -118,7 +153,18 @@ def _cell(row: dict, raw: float) -> str:
 
 
 def markdown(table: list[dict]) -> str:
-    """The recording × recording table: a row per tried calibration, a column per target recording."""
+    """The recording × recording table: a row per tried calibration, a column per target recording.
+
+    Parameters
+    ----------
+    table : list of dict
+        The rows of :func:`rows`.
+
+    Returns
+    -------
+    str
+        The markdown table.
+    """
     targets = list(dict.fromkeys(r["target"] for r in table))
     raw = {r["target"]: r["raw"] for r in table}
     lines = ["| source | model (chosen) | estimator | " + " | ".join(targets) + " |",
@@ -137,6 +183,18 @@ def markdown(table: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Print the table of the shared recordings (and write its rows to ``--csv``).
+
+    Parameters
+    ----------
+    argv : list of str or None
+        ``[--csv PATH]`` (None: ``sys.argv``).
+
+    Returns
+    -------
+    int
+        0.
+    """
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--csv", help="also write the long-format rows here")
     args = parser.parse_args(argv)

@@ -141,16 +141,24 @@ def code_versions(target_sets) -> dict[tuple, str]:
 
 
 def code_version(targets: tuple[str, ...] = ()) -> str:
-    """Hash of the code a run of ``targets`` (its :func:`run_targets`) executes: the name
-    and content of each file of :func:`magexp.run.codekey.code_files`. Only an edit of such a file invalidates
-    the run."""
+    """Hash of the code a run of ``targets`` (its :func:`run_targets`) executes: the name and content of
+    each file of :func:`magexp.run.codekey.code_files`. Only an edit of such a file invalidates the run.
+
+    Parameters
+    ----------
+    targets : tuple of str
+    """
     return code_versions([tuple(targets)])[tuple(targets)]
 
 
 def run_key(resolved: dict, files: dict[str, str] | None = None, code: str | None = None) -> str:
-    """Key of a run: its resolved config, the content of the data files it names (``files``:
-    its :func:`data_files`, found here if None), the code it executes (``code``: its
-    :func:`code_version`, found here if None)."""
+    """Key of a run: its resolved config, the content of the data files it names, the code it executes.
+
+    Parameters
+    ----------
+    resolved, files, code : dict, dict or None, str or None
+        The resolved config; its :func:`data_files` and :func:`code_version` (None: found here).
+    """
     text = json.dumps(resolved, sort_keys=True, default=str)
     files = data_files(resolved) if files is None else files
     if files:
@@ -426,7 +434,13 @@ def say_notes(stream=None) -> list[str]:
 # runs
 
 def entry_path(key: str, root: Path | None = None) -> Path:
-    """Where the run of ``key`` is stored."""
+    """Where the run of ``key`` is stored.
+
+    Parameters
+    ----------
+    key, root : str, pathlib.Path or None
+        The run's key; the cache folder (None: :data:`magexp.paths.CACHE`).
+    """
     return (CACHE if root is None else Path(root)) / key[:2] / f"{key}{SUFFIX}"
 
 
@@ -470,7 +484,12 @@ def _run_output(value):
 def load(key: str, root: Path | None = None):
     """The stored run of ``key`` (a :class:`magexp.estimators.result.RunOutput`), or None: absent, or not a
     valid entry of ``key`` (a miss noted for :func:`say_notes`; the entry is left in place, the
-    recomputed run replaces it), or not readable by this user (noted, never replaced)."""
+    recomputed run replaces it), or not readable by this user (noted, never replaced).
+
+    Parameters
+    ----------
+    key, root : str, pathlib.Path or None
+    """
     root = CACHE if root is None else Path(root)
     try:
         return _run_output(read(entry_path(key, root), key, "RunOutput"))
@@ -487,7 +506,12 @@ def load(key: str, root: Path | None = None):
 
 def exists(key: str, root: Path | None = None) -> bool:
     """Whether a run of ``key`` is stored (its file's first bytes are those of an entry; the
-    content is checked when it is read)."""
+    content is checked when it is read).
+
+    Parameters
+    ----------
+    key, root : str, pathlib.Path or None
+    """
     try:
         with entry_path(key, root).open("rb") as fh:
             return fh.read(len(MAGIC)) == MAGIC
@@ -497,7 +521,12 @@ def exists(key: str, root: Path | None = None) -> bool:
 
 def store(key: str, value, root: Path | None = None) -> bool:
     """Store the run ``value`` under ``key`` atomically; whether it was kept. A cache that cannot be
-    written, or an entry of another user this user cannot read (left in place), keeps nothing (noted)."""
+    written, or an entry of another user this user cannot read (left in place), keeps nothing (noted).
+
+    Parameters
+    ----------
+    key, value, root : str, RunOutput, pathlib.Path or None
+    """
     root = CACHE if root is None else Path(root)
     path = entry_path(key, root)
     try:  # an entry this user cannot read belongs to another user: never replaced
@@ -540,7 +569,12 @@ class Claim:
 def claim(key: str, root: Path | None = None, *, wait: bool = False) -> Claim | None:
     """A :class:`Claim` on computing ``key``'s run, or None if another process holds it (``wait``:
     wait until it is released instead). Processes that wait must claim their keys in sorted order
-    while holding only claims of smaller keys (so no two wait for each other)."""
+    while holding only claims of smaller keys (so no two wait for each other).
+
+    Parameters
+    ----------
+    key, root, wait : str, pathlib.Path or None, bool
+    """
     root = CACHE if root is None else Path(root)
     path = entry_path(key, root).with_suffix(".lock")
     while True:

@@ -128,7 +128,18 @@ def _target_module(target: str) -> str | None:
 
 def code_files(targets=()) -> dict[str, Path]:
     """The source files a run executes, by module name: the import closure (:func:`_deps`) of
-    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`magexp.run.cache.run_targets`)."""
+    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`magexp.run.cache.run_targets`).
+
+    Parameters
+    ----------
+    targets : iterable of str
+        ``_target_`` strings of the run.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Source file of each module.
+    """
     todo = list(CORE) + [m for m in map(_target_module, targets) if m is not None]
     found: dict[str, Path] = {}
     while todo:
@@ -160,7 +171,18 @@ def _fixed_objective(cls: ast.ClassDef) -> str | None:
 def default_objective(target: str) -> str | None:
     """The objective that the scenario class ``target`` fixes when its config names none, read from
     its module's source (:func:`_fixed_objective` of the class, else of its base classes defined in the
-    same module); None if not found so."""
+    same module); None if not found so.
+
+    Parameters
+    ----------
+    target : str
+        Dotted name of the scenario class.
+
+    Returns
+    -------
+    str or None
+        The objective's dotted name.
+    """
     module = _target_module(target)
     name = target[len(module) + 1:] if module is not None else ""
     if not name or "." in name:
@@ -185,7 +207,18 @@ def _digest(path: Path) -> str:
 
 
 def code_hash(targets: tuple[str, ...]) -> str:
-    """Hash of the name and content of each file of :func:`code_files`."""
+    """Hash of the name and content of each file of :func:`code_files`.
+
+    Parameters
+    ----------
+    targets : tuple of str
+        As in :func:`code_files`.
+
+    Returns
+    -------
+    str
+        Hex digest.
+    """
     h = hashlib.sha256()
     for name, path in code_files(targets).items():
         h.update(f"{name}\0{_digest(path)}\n".encode())

@@ -111,7 +111,18 @@ def schema_of(cls) -> type:
 
 def schema_classes(group: str) -> list[type]:
     """Every class a ``_target_`` of ``conf/<group>/`` names (nested nodes and base configs included) that
-    :func:`magexp.run.guard.check_target` allows, imported: the classes whose schemas are registered."""
+    :func:`magexp.run.guard.check_target` allows, imported: the classes whose schemas are registered.
+
+    Parameters
+    ----------
+    group : str
+        A config group of ``conf/``.
+
+    Returns
+    -------
+    list of type
+        The classes.
+    """
     targets = sorted({t for path in (CONF / group).rglob("*.yaml") for t in _TARGET.findall(path.read_text())})
     classes = []
     for target in targets:
@@ -161,7 +172,20 @@ def _override_parser():
 
 
 def parse_overrides(overrides: list[str], *, parser: OverridesParser | None = None) -> list[Override]:
-    """Hydra's parsed overrides (its grammar types every value), or one MagexpError line."""
+    """Hydra's parsed overrides (its grammar types every value), or one MagexpError line.
+
+    Parameters
+    ----------
+    overrides : list of str
+        ``KEY=VALUE`` overrides.
+    parser : OverridesParser or None
+        A parser to reuse (None: a new one).
+
+    Returns
+    -------
+    list of Override
+        The parsed overrides.
+    """
     try:
         return (parser or _override_parser()).parse_overrides(list(overrides))
     except Exception as exc:
@@ -171,22 +195,67 @@ def parse_overrides(overrides: list[str], *, parser: OverridesParser | None = No
 
 def override_value(text: str):
     """A command-line value as Hydra's override grammar types it (``2`` -> int, ``1e-06`` -> float,
-    ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str)."""
+    ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str).
+
+    Parameters
+    ----------
+    text : str
+        The value as typed.
+
+    Returns
+    -------
+    object
+        The typed value.
+    """
     return parse_overrides([f"k={text}"])[0].value()
 
 
 def options(group: str) -> list[str]:
-    """Config names available in ``conf/<group>/`` (files directly in it; sub-folders hold bases)."""
+    """Config names available in ``conf/<group>/`` (files directly in it; sub-folders hold bases).
+
+    Parameters
+    ----------
+    group : str
+        The config group (a folder of ``conf/``).
+
+    Returns
+    -------
+    list of str
+        The config names.
+    """
     return sorted(p.stem for p in (CONF / group).glob("*.yaml"))
 
 
 def target_class(group: str, name: str, *, config_name: str = PRIMARY):
-    """The class named by ``_target_`` in the composed ``conf/<group>/<name>.yaml`` (imported, not built)."""
+    """The class named by ``_target_`` in the composed ``conf/<group>/<name>.yaml`` (imported, not built).
+
+    Parameters
+    ----------
+    group : str
+        A config group of ``conf/``.
+    name : str
+        A config of that group.
+    config_name : str
+        The primary config composed.
+
+    Returns
+    -------
+    type
+        The class.
+    """
     return get_class(compose_config([f"{group}={name}"], config_name=config_name)[group]._target_)
 
 
 def check_choice(group: str, choice: str) -> None:
-    """Fail unless ``conf/<group>/<choice>.yaml`` exists."""
+    """Fail unless ``conf/<group>/<choice>.yaml`` exists.
+
+    Parameters
+    ----------
+    group : str
+        A config group of ``conf/``.
+    choice : str
+        The option chosen.
+    """
     names = options(group)
     if choice not in names:
         raise MagexpError(f"{group}={choice!r} is not allowed: choose one of {', '.join(names)}")
@@ -205,7 +274,22 @@ def _keys_of(cfg: DictConfig, key: str) -> tuple[str, list[str]]:
 
 
 def unknown_key(cfg: DictConfig, key: str, value: str, config_name: str = PRIMARY) -> MagexpError:
-    """The one-line error of an override whose key is not in the config."""
+    """The one-line error of an override whose key is not in the config.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config.
+    key, value : str
+        The override's key and value.
+    config_name : str
+        The primary config.
+
+    Returns
+    -------
+    MagexpError
+        The error.
+    """
     if config_name == PRIMARY and key.split(".")[0] in CALIBRATE_KEYS:
         return MagexpError(f"{key}={value} is not allowed: the simulation command has no {key.split('.')[0]!r}; "
                            "calibrate a recording with `magexp calibrate data.path=<file> ...`")
@@ -258,7 +342,22 @@ def _hydra():
 def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *,
                   with_hydra: bool = False) -> DictConfig:
     """``hydra.compose`` of ``conf/<config_name>.yaml``, or one MagexpError line; ``with_hydra``: with
-    the ``hydra`` node (launcher, sweeper, folders), which checks ``hydra.*`` overrides."""
+    the ``hydra`` node (launcher, sweeper, folders), which checks ``hydra.*`` overrides.
+
+    Parameters
+    ----------
+    overrides : tuple of str
+        ``KEY=VALUE`` overrides.
+    config_name : str
+        The primary config.
+    with_hydra : bool
+        Keep the ``hydra`` node.
+
+    Returns
+    -------
+    DictConfig
+        The composed config.
+    """
     try:
         with _hydra():
             return compose(config_name, overrides=list(overrides), return_hydra_config=with_hydra)
@@ -391,7 +490,18 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
 def sweep_jobs(overrides: list[str]) -> list[list[str]]:
     """The jobs of a ``-m`` sweep as Hydra's basic sweeper forms them (its ``split_arguments``): the
     cartesian product of every override's values, first key slowest; ``a,b``, ``range(...)``,
-    ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's config loader)."""
+    ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's config loader).
+
+    Parameters
+    ----------
+    overrides : list of str
+        The sweep's overrides.
+
+    Returns
+    -------
+    list of list of str
+        Each job's overrides.
+    """
     with _hydra() as hydra:
         parsed = parse_overrides(overrides, parser=OverridesParser.create(config_loader=hydra.config_loader()))
         (jobs,) = BasicSweeper.split_arguments(parsed, None)
@@ -399,7 +509,18 @@ def sweep_jobs(overrides: list[str]) -> list[list[str]]:
 
 
 def resolved(cfg: DictConfig) -> dict:
-    """The plain resolved container of a run config (``hydra`` node left out): what a run reads."""
+    """The plain resolved container of a run config (``hydra`` node left out): what a run reads.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The run config.
+
+    Returns
+    -------
+    dict
+        The resolved config.
+    """
     out = OmegaConf.to_container(cfg, resolve=True)
     out.pop("hydra", None)
     return out

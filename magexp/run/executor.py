@@ -92,6 +92,11 @@ def watch_parent(parent: int, poll: float = PARENT_POLL) -> None:
     loses only its running task: its runs are cached only once complete (:func:`_run_task`).
     The kernel's "parent" is the *thread* that forked the worker: :class:`LocalExecutor` forks its
     workers at the first ``submit``, from the calling thread (the command's main thread).
+
+    Parameters
+    ----------
+    parent, poll : int, float
+        The parent's process id; seconds between looks.
     """
     if sys.platform.startswith("linux"):
         try:
@@ -153,9 +158,21 @@ class InlineExecutor:
     shares_files = True  # workers see the parent's run cache (they store runs there themselves)
 
     def submit(self, fn, *args):
+        """``fn(*args)``, called when its result is asked for.
+
+        Parameters
+        ----------
+        fn, *args : callable and its arguments
+        """
         return _Deferred(fn, args)
 
     def as_completed(self, futures: Iterable) -> Iterator:
+        """``futures``, in order.
+
+        Parameters
+        ----------
+        futures : iterable of submitted calls
+        """
         return iter(list(futures))
 
     def close(self) -> None:
@@ -260,7 +277,12 @@ class DaskExecutor(InlineExecutor):
 
 
 def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
-    """Refuse bad executor settings in one line (before anything is computed)."""
+    """Refuse bad executor settings in one line (before anything is computed).
+
+    Parameters
+    ----------
+    kind, jobs, scheduler : str, int, str or None
+    """
     if kind not in EXECUTORS:
         raise MagexpError(f"--executor {kind!r} is not allowed: choose one of {', '.join(EXECUTORS)}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
@@ -275,7 +297,12 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
 
 
 def jobqueue_cluster(system: str):
-    """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job."""
+    """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job.
+
+    Parameters
+    ----------
+    system : str
+    """
     try:  # lazy: an optional extra that imports distributed (as in DaskExecutor), only for --scheduler slurm|pbs|sge
         import dask_jobqueue
     except ImportError:
@@ -284,7 +311,13 @@ def jobqueue_cluster(system: str):
 
 
 def make_executor(kind: str = "local", *, jobs: int = 0, scheduler: str | None = None):
-    """The executor ``kind`` (:data:`EXECUTORS`); ``jobs``: processes (0: all cores)."""
+    """The executor ``kind`` (:data:`EXECUTORS`); ``jobs``: processes (0: all cores).
+
+    Parameters
+    ----------
+    kind, jobs, scheduler : str, int, str or None
+        ``scheduler``: :class:`DaskExecutor`'s.
+    """
     check_executor(kind, jobs, scheduler)
     if kind == "dask":
         return DaskExecutor(jobs, scheduler)
@@ -339,7 +372,12 @@ def _group_key(cfg: dict) -> str:
 
 
 def cost_hint(cfg: dict) -> float:
-    """A rough relative cost of a run, to hand out the longest tasks first."""
+    """A rough relative cost of a run, to hand out the longest tasks first.
+
+    Parameters
+    ----------
+    cfg : dict
+    """
     est, scen = cfg.get("estimator") or {}, cfg.get("scenario") or {}
 
     def number(node, *keys, default=1.0):
@@ -355,7 +393,13 @@ def cost_hint(cfg: dict) -> float:
 
 def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
     """Indices of ``configs`` in tasks: per scenario group, blocks of whole seeds (every estimator
-    of a seed in one task), about ``len(configs) / (8 workers)`` runs a task; longest first."""
+    of a seed in one task), about ``len(configs) / (8 workers)`` runs a task; longest first.
+
+    Parameters
+    ----------
+    configs, workers : sequence of dict, int
+        The resolved configs; the executor's workers.
+    """
     groups: dict[str, dict[int, list[int]]] = defaultdict(lambda: defaultdict(list))
     for i, cfg in enumerate(configs):
         groups[_group_key(cfg)][cfg.get("seed")].append(i)
@@ -375,17 +419,19 @@ def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
 
 def run_row(out) -> dict:
     """A run's row of the runs table: its metrics and its parameter estimates (one column per
-    parameter name that is not already a metric)."""
+    parameter name that is not already a metric).
+
+    Parameters
+    ----------
+    out : RunOutput
+        The run's output.
+    """
     estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
     return {**out.metrics, **estimate}
 
 
 class Outputs(Sequence):
-    """The outputs of :func:`run_many`, read back from the run cache on access (a few are kept).
-
-    ``metrics(i)`` gives run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output;
-    ``was_cached(i)`` whether it was read from the run cache (a valid entry) rather than computed.
-    """
+    """The outputs of :func:`run_many`, read back from the run cache on access (a few are kept)."""
 
     def __init__(self, keys: list[str], metrics: dict[str, dict], root=None, keep: int = 256, held=None,
                  read: frozenset = frozenset()):
@@ -397,9 +443,21 @@ class Outputs(Sequence):
         return len(self.keys)
 
     def metrics(self, i: int) -> dict:
+        """Run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output.
+
+        Parameters
+        ----------
+        i : int
+        """
         return self._metrics[self.keys[i]]
 
     def was_cached(self, i: int) -> bool:
+        """Whether run ``i`` was read from the run cache (a valid entry) rather than computed.
+
+        Parameters
+        ----------
+        i : int
+        """
         return self.keys[i] in self.read
 
     def __getitem__(self, i):
@@ -424,13 +482,20 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
              counts: dict | None = None) -> Outputs:
     """Run resolved configs, each distinct one once, cached; returns their :class:`Outputs`.
 
-    ``executor``: from :func:`make_executor` (default: local processes over ``jobs``, 0 = all cores).
-    ``use_cache=False`` reruns every distinct run (and stores it). ``progress(n)`` is called with the
-    number of runs just finished. ``counts`` (a dict), if given, receives ``requested``, ``distinct``,
-    ``computed``, ``cached``, ``fit_cpu`` (CPU seconds inside the computed runs' fits) and
-    ``task_cpu`` (CPU seconds of the tasks, measured inside the workers around each task: building,
-    simulating, fitting, bounds, metrics, storing), so ``task_cpu - fit_cpu`` is the workers' cost
-    outside the fits and the rest of a command's CPU is the parent's.
+    Parameters
+    ----------
+    configs : sequence of dict
+        The resolved configs.
+    jobs, executor : int, executor or None
+        From :func:`make_executor` (default: local processes over ``jobs``, 0 = all cores).
+    use_cache : bool
+        False reruns every distinct run (and stores it).
+    progress : callable or None
+        ``progress(n)`` is called with the number of runs just finished.
+    counts : dict or None
+        Receives ``requested``, ``distinct``, ``computed``, ``cached``, ``fit_cpu`` (CPU seconds inside
+        the computed runs' fits) and ``task_cpu`` (CPU seconds of the tasks, measured inside the workers
+        around each task), so ``task_cpu - fit_cpu`` is the workers' cost outside the fits.
     """
     check_runs(configs)  # the runs limit, each run's memory and work, their total: before any runs
     keys = cache.run_keys(configs)

@@ -91,13 +91,27 @@ def check_destination(folder, what: str, *, canonical: bool = False) -> Path:
 @functools.lru_cache(maxsize=16)
 def check_cache_folder(root: str) -> None:
     """A run cache (``$MAGEXP_CACHE``) or a cache beside it (the figures'), never inside ``results/``
-    (:func:`check_destination`), checked before any command starts and before every cache write."""
+    (:func:`check_destination`), checked before any command starts and before every cache write.
+
+    Parameters
+    ----------
+    root : str
+        The cache folder.
+    """
     check_destination(root, "MAGEXP_CACHE (the run cache folder)")
 
 
 def check_subdir(subdir: str, what: str = "hydra.sweep.subdir") -> None:
     """A sweep job's folder name: relative, not empty, and with no ``..``, so that every job's
-    folder is a folder of its own inside the sweep's folder."""
+    folder is a folder of its own inside the sweep's folder.
+
+    Parameters
+    ----------
+    subdir : str
+        The folder name.
+    what : str
+        The key naming it in messages.
+    """
     text = str(subdir)
     parts = PurePosixPath(text.replace("\\", "/")).parts
     if not text.strip() or text.startswith(("/", "~")) or ".." in parts or all(p == "." for p in parts):
@@ -108,7 +122,15 @@ def check_subdir(subdir: str, what: str = "hydra.sweep.subdir") -> None:
 def check_job_folders(folders: list[Path], sweep_dir: Path) -> None:
     """Each job's folder (``hydra.sweep.subdir`` resolved for it, whose overrides may hold a ``/``)
     strictly inside the sweep's folder, and no two jobs sharing one (the second would overwrite
-    the first's files)."""
+    the first's files).
+
+    Parameters
+    ----------
+    folders : list of pathlib.Path
+        Each job's folder.
+    sweep_dir : pathlib.Path
+        The sweep's folder.
+    """
     outer = Path(sweep_dir).resolve()
     seen: dict = {}
     for n, folder in enumerate(folders):
@@ -129,6 +151,13 @@ def removed_on_failure(folder: Path, created: Path | None = None):
     A folder that did not exist (or ``created``, the highest folder the caller made for it) is
     removed with every parent made for it; in a folder that existed, only the entries the block
     added are removed (what the user had is kept).
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        The folder the block writes into.
+    created : pathlib.Path or None
+        The highest folder the caller created for it.
     """
     folder = Path(folder).absolute()
     top = created if created is not None else first_missing(folder)
@@ -169,6 +198,16 @@ def check_override_values(overrides: list[str]) -> list[str]:
     files: a command-line value must be the value itself); ``hydra.*`` settings keep theirs
     (``hydra.sweep.subdir=${hydra.job.num}``). A plain value with characters outside ASCII
     (``data.unit=µT``), which Hydra's lexer cannot read, is quoted for it.
+
+    Parameters
+    ----------
+    overrides : list of str
+        The command-line overrides.
+
+    Returns
+    -------
+    list of str
+        The checked overrides.
     """
     out = []
     for ov in overrides:
@@ -205,7 +244,13 @@ def check_flags(flags: dict) -> None:
     """The options of ``magexp`` that Hydra would read, checked before Hydra sees them (whose own
     errors are its usage text, or exit 1): ``--cfg job|hydra|all``, ``--config-name`` naming a
     primary config of ``conf/``; ``--experimental-rerun`` (which unpickles a file) and ``--config-dir`` /
-    ``--config-path`` (configs from elsewhere, with their own ``_target_``) are refused."""
+    ``--config-path`` (configs from elsewhere, with their own ``_target_``) are refused.
+
+    Parameters
+    ----------
+    flags : dict
+        Each ``--name`` flag to its value.
+    """
 
     for flag in ("--cfg", "-c"):
         if flag in flags and flags[flag] not in CFG_CHOICES:
@@ -243,6 +288,11 @@ def check_run_values(plain: dict) -> None:
     * ``scenario.field``: ``total`` > 0, ``inclination`` in :data:`INCLINATION`,
       ``declination`` in :data:`DECLINATION` (degrees);
     * ``write_history``: true or false.
+
+    Parameters
+    ----------
+    plain : dict
+        The resolved run config.
     """
     for group in ("scenario", "estimator"):
         for key, value in _numbers(plain.get(group) or {}, group):
@@ -267,7 +317,13 @@ def check_run_values(plain: dict) -> None:
 
 def check_scheduler_address(scheduler) -> None:
     """A Dask scheduler: None (a local cluster), a cluster system (slurm, pbs, sge) or an address
-    with a port (``tcp://host:8786``, ``host:8786``)."""
+    with a port (``tcp://host:8786``, ``host:8786``).
+
+    Parameters
+    ----------
+    scheduler : str or None
+        The scheduler setting.
+    """
     if scheduler is None or scheduler in CLUSTER_SYSTEMS:
         return
     match = _ADDRESS.fullmatch(str(scheduler))
@@ -277,7 +333,18 @@ def check_scheduler_address(scheduler) -> None:
 
 
 def check_folds(folds) -> int:
-    """The held-out check's folds: an integer >= 0 (0 or 1: no held-out check)."""
+    """The held-out check's folds: an integer >= 0 (0 or 1: no held-out check).
+
+    Parameters
+    ----------
+    folds : object
+        The folds setting.
+
+    Returns
+    -------
+    int
+        The folds.
+    """
     if isinstance(folds, str):
         raise MagexpError(f"folds={folds!r} is not allowed: it must be an integer >= 0 (0: no held-out check)")
     return check_positive_int(folds, "folds", minimum=0)
@@ -289,7 +356,18 @@ def check_folds(folds) -> int:
 def readings_array(readings):
     """``readings`` as a float array, or one line: complex numbers and masked arrays are refused
     (their imaginary part and their mask would be dropped silently), as is anything that is not
-    numbers."""
+    numbers.
+
+    Parameters
+    ----------
+    readings : array_like
+        The readings.
+
+    Returns
+    -------
+    numpy.ndarray
+        The readings as floats.
+    """
     if np.ma.isMaskedArray(readings):
         raise MagexpError("masked readings are not allowed: a masked array's hidden values would be used; give "
                           "only the valid readings (readings[~readings.mask.any(axis=1)].data)")
@@ -322,6 +400,13 @@ class OneLineParser(argparse.ArgumentParser):
     """``argparse`` whose every error is one line on stderr and exit 2 (``--help`` still prints the usage)."""
 
     def error(self, message: str):
+        """Print ``message``'s first line (not the usage text) and exit with code 2.
+
+        Parameters
+        ----------
+        message : str
+            What argparse refused.
+        """
         print(f"error: {message.splitlines()[0]} (see {self.prog} --help)", file=sys.stderr)
         sys.exit(2)
 
@@ -329,7 +414,22 @@ class OneLineParser(argparse.ArgumentParser):
 def check_output_folder(folder: Path | str, what: str = "output folder", *, canonical: bool = False) -> Path:
     """Fail unless ``folder`` is (or can be created as) a writable directory a command may write
     (:func:`magexp.run.guard.check_destination`: not empty, not a root, not inside ``results/`` unless
-    ``canonical``); create nothing."""
+    ``canonical``); create nothing.
+
+    Parameters
+    ----------
+    folder : pathlib.Path or str
+        The folder.
+    what : str
+        What it is, named in messages.
+    canonical : bool
+        Allow a folder inside ``results/``.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder as a path.
+    """
     check_destination(folder, what, canonical=canonical)
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
@@ -352,7 +452,18 @@ def check_output_folder(folder: Path | str, what: str = "output folder", *, cano
 
 def first_missing(folder: Path) -> Path | None:
     """The highest of ``folder`` and its parents that does not exist yet (None if ``folder`` exists):
-    removing it after a failure leaves no trace of the folders made for it."""
+    removing it after a failure leaves no trace of the folders made for it.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        The folder.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The highest missing folder.
+    """
     if folder.exists():
         return None
     top = folder
@@ -364,7 +475,18 @@ def first_missing(folder: Path) -> Path | None:
 def create_unique(folder: Path | str) -> tuple[Path, Path]:
     """Create ``folder`` exclusively; if it exists, ``folder-2``, ``folder-3``...: two runs started
     in the same second never share a folder. Returns ``(folder, top)``, ``top`` the highest
-    folder this call created (remove it to leave no trace)."""
+    folder this call created (remove it to leave no trace).
+
+    Parameters
+    ----------
+    folder : pathlib.Path or str
+        The folder wanted.
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        ``(folder, top)``.
+    """
     folder = Path(folder)
     top = first_missing(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
@@ -390,7 +512,13 @@ HYDRA_KEYS = ("hydra.run.dir", "hydra.sweep.dir", "hydra.sweep.subdir", "hydra.l
 
 
 def check_hydra_keys(overrides: list[str]) -> None:
-    """Refuse a ``hydra.*`` override outside :data:`HYDRA_KEYS`, in one line, before Hydra reads it."""
+    """Refuse a ``hydra.*`` override outside :data:`HYDRA_KEYS`, in one line, before Hydra reads it.
+
+    Parameters
+    ----------
+    overrides : list of str
+        The ``hydra.*`` overrides.
+    """
     for ov in overrides:
         key = ov.partition("=")[0].lstrip("+~")
         if not key.startswith("hydra"):
@@ -405,7 +533,13 @@ def check_hydra_keys(overrides: list[str]) -> None:
 
 def check_override_targets(overrides: list[str]) -> None:
     """Every ``_target_`` an override sets (``estimator._target_=...``, or inside a value such as
-    ``estimator.velocity={_target_: ...}``) checked by :func:`check_target` before Hydra sees it."""
+    ``estimator.velocity={_target_: ...}``) checked by :func:`check_target` before Hydra sees it.
+
+    Parameters
+    ----------
+    overrides : list of str
+        The command-line overrides.
+    """
     for ov in overrides:
         key, _, value = ov.partition("=")
         where = key.lstrip("+~")

@@ -31,7 +31,18 @@ SCHEDULES = "magexp.estimators.schedules."
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
     """The jobs of a sweep (Hydra's basic sweeper: :func:`magexp.run.compose.sweep_jobs`), once their
-    count is within the runs limit (:func:`magexp.run.budget.check_sweep`)."""
+    count is within the runs limit (:func:`magexp.run.budget.check_sweep`).
+
+    Parameters
+    ----------
+    overrides : list of str
+        The sweep's overrides (``-m``).
+
+    Returns
+    -------
+    list of list of str
+        As :func:`magexp.run.compose.sweep_jobs`.
+    """
     parsed = parse_overrides(overrides)
     for ov in parsed:
         if ov.is_sweep_override() and not ov.is_discrete_sweep():
@@ -42,13 +53,32 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
 
 
 def swept_keys(overrides: list[str]) -> list[str]:
-    """The keys of ``overrides`` that take more than one value."""
+    """The keys of ``overrides`` that take more than one value.
+
+    Parameters
+    ----------
+    overrides : list of str
+        The sweep's overrides (Hydra's syntax: ``a,b``, ``range(...)``...).
+
+    Returns
+    -------
+    list of str
+        The swept keys.
+    """
     return [ov.get_key_element() for ov in parse_overrides(overrides) if ov.is_sweep_override()]
 
 
 def check_problem(cfg, scenario) -> None:
     """The scenario's data (seed ``cfg.seed``) give at least as many residuals as the problem has
-    parameters: fewer readings than parameters is refused for every estimator."""
+    parameters: fewer readings than parameters is refused for every estimator.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The run config.
+    scenario : object
+        The built scenario.
+    """
 
     data_rng, _ = run_generators(cfg.seed)
     dataset = scenario.generate(rng=data_rng)
@@ -63,6 +93,13 @@ def check_problem(cfg, scenario) -> None:
 
 
 def check_seed(seed) -> None:
+    """Refuse a seed that is not an integer >= 0, in one line.
+
+    Parameters
+    ----------
+    seed : object
+        The ``seed`` value.
+    """
     check_positive_int(seed, "seed", minimum=0)
 
 
@@ -73,6 +110,18 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
     distinct estimator built once. Without ``keep`` (a sweep, whose jobs Hydra composes
     itself), jobs that differ only in ``seed`` are composed once and their seeds checked
     alone, so a sweep over many seeds costs almost nothing to check.
+
+    Parameters
+    ----------
+    jobs : list of list of str
+        Each job's overrides.
+    keep : bool
+        Return the composed configs.
+
+    Returns
+    -------
+    list
+        The composed configs (empty without ``keep``).
     """
     _check_choices(jobs)
     configs, seen, composed, estimates = [], set(), {}, {}
@@ -129,7 +178,15 @@ def _check_config(cfg, seen: set, estimates: dict):
 def check_schedules(node: dict, prefix: str = "estimator") -> None:
     """Every value of a coefficient schedule under ``node`` (:mod:`magexp.estimators.schedules`) a finite
     number, named by its whole key (``estimator.velocity.c1.start``): the schedule knows only its own
-    part's name (``start``)."""
+    part's name (``start``).
+
+    Parameters
+    ----------
+    node : dict
+        A config node.
+    prefix : str
+        The node's key.
+    """
     schedule = str(node.get("_target_", "")).startswith(SCHEDULES)
     for key, value in node.items():
         if isinstance(value, dict):
@@ -142,7 +199,13 @@ def check_schedules(node: dict, prefix: str = "estimator") -> None:
 def check_label(estimator) -> None:
     """An estimator's ``name`` labels its metrics in every table: set to the name of another estimator
     config whose class differs (``estimator=lm estimator.name=ipso``: ``lm`` labelled ``ipso``) is refused; a
-    name of its own (``estimator.name=ipso_w``, an ablation's variant) is the caller's label."""
+    name of its own (``estimator.name=ipso_w``, an ablation's variant) is the caller's label.
+
+    Parameters
+    ----------
+    estimator : DictConfig
+        The estimator node.
+    """
     name, target = estimator.get("name"), estimator.get("_target_")
     if isinstance(name, str) and name in options("estimator"):
         theirs = compose_config([f"estimator={name}"]).estimator.get("_target_")
@@ -154,7 +217,15 @@ def check_label(estimator) -> None:
 
 def check_jobs(overrides: list[str], jobs: list) -> None:
     """A sweep with no job (``estimator=glob(zzz*)``, ``seed=range(0,0)``) is refused, naming the
-    override that selects nothing (and, for a config group, the options there are)."""
+    override that selects nothing (and, for a config group, the options there are).
+
+    Parameters
+    ----------
+    overrides : list of str
+        The sweep's overrides.
+    jobs : list
+        The jobs they form.
+    """
     if jobs:
         return
 

@@ -96,7 +96,18 @@ def working_tree_state() -> str:
 
 
 def config_hash(config: dict | None) -> str:
-    """SHA-256 (16 hex digits) of a resolved config as canonical JSON; empty for no config."""
+    """SHA-256 (16 hex digits) of a resolved config as canonical JSON; empty for no config.
+
+    Parameters
+    ----------
+    config : dict or None
+        The resolved config.
+
+    Returns
+    -------
+    str
+        The hash.
+    """
     if config is None:
         return ""
     text = json.dumps(config, sort_keys=True, default=str, separators=(",", ":"))
@@ -124,7 +135,18 @@ def _libraries() -> dict:
 
 
 def provenance(config: dict | None = None) -> dict:
-    """The provenance fields of an output made with the resolved ``config`` (flat, str values)."""
+    """The provenance fields of an output made with the resolved ``config`` (flat, str values).
+
+    Parameters
+    ----------
+    config : dict or None
+        The resolved config (None: no config fields).
+
+    Returns
+    -------
+    dict
+        The provenance fields.
+    """
     return {"magexp_version": version(), "magexp_commit": commit(), "python": platform.python_version(),
             **_libraries(), "config_hash": config_hash(config)}
 

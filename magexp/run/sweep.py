@@ -54,7 +54,20 @@ def _job_overrides(job_dir: Path) -> dict[str, str]:
 
 
 def gather(sweep_dir: Path | str, keys: list[str]) -> Path:
-    """Write ``sweep_dir/sweep.csv`` from the job folders' ``metrics.csv``; return its path."""
+    """Write ``sweep_dir/sweep.csv`` from the job folders' ``metrics.csv``; return its path.
+
+    Parameters
+    ----------
+    sweep_dir : pathlib.Path or str
+        The sweep's folder.
+    keys : list of str
+        The swept keys (columns).
+
+    Returns
+    -------
+    pathlib.Path
+        The table's path.
+    """
     sweep_dir = Path(sweep_dir)
     jobs = sorted((p.parent for p in sweep_dir.glob("*/metrics.csv")),
                   key=lambda p: (0, int(p.name)) if p.name.isdigit() else (1, p.name))
@@ -80,6 +93,15 @@ class SweepTable(Callback):
     """Hydra callback: after a multirun, write ``sweep.csv`` into the sweep folder."""
 
     def on_multirun_end(self, config, **kwargs) -> None:
+        """Write the sweep's table (:func:`gather`) when the sweep ends.
+
+        Parameters
+        ----------
+        config : DictConfig
+            The sweep's config.
+        **kwargs
+            Hydra's other arguments (unused).
+        """
         overrides = [str(o) for o in config.hydra.overrides.task]
         path = gather(config.hydra.sweep.dir, swept_keys(overrides))
         print(f"sweep table: {path}")
@@ -90,7 +112,13 @@ SETTINGS = {"executor": "--executor", "jobs": "--jobs", "scheduler": "--schedule
 
 
 def check_settings(settings: dict) -> None:
-    """Refuse bad ``hydra.launcher.*`` settings in one line naming the setting (the executor's rules)."""
+    """Refuse bad ``hydra.launcher.*`` settings in one line naming the setting (the executor's rules).
+
+    Parameters
+    ----------
+    settings : dict
+        The ``hydra.launcher`` settings.
+    """
 
     try:
         check_executor(settings["executor"], settings["jobs"], settings["scheduler"])
@@ -104,7 +132,13 @@ def check_settings(settings: dict) -> None:
 def check_hydra_settings(settings: list[str]) -> None:
     """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one):
     Hydra composes its own node with them, then magexp's launcher settings are checked if it is the
-    launcher chosen."""
+    launcher chosen.
+
+    Parameters
+    ----------
+    settings : list of str
+        The ``hydra.*`` overrides.
+    """
 
     launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
     if str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
@@ -112,7 +146,22 @@ def check_hydra_settings(settings: list[str]) -> None:
 
 
 def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
-    """The folder name of job ``num``: ``hydra.sweep.subdir`` resolved for it (by default ``num``)."""
+    """The folder name of job ``num``: ``hydra.sweep.subdir`` resolved for it (by default ``num``).
+
+    Parameters
+    ----------
+    config : DictConfig
+        The sweep's config.
+    num : int
+        The job's number.
+    overrides : sequence of str
+        The job's overrides.
+
+    Returns
+    -------
+    str
+        The folder name.
+    """
 
     raw = OmegaConf.to_container(config.hydra.sweep, resolve=False)["subdir"]
     if raw == "${hydra.job.num}":
@@ -162,6 +211,22 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     ``settings``: ``executor`` (``local`` | ``dask``), ``jobs`` (0: all cores) and ``scheduler``
     (:func:`magexp.run.executor.make_executor`). A job's ``cached`` column says whether its result
     was read from the run cache (a valid entry; a damaged one is recomputed and says False).
+
+    Parameters
+    ----------
+    config : DictConfig
+        The sweep's config.
+    job_overrides : sequence of sequence of str
+        Each job's overrides.
+    initial_job_idx : int
+        The first job's number.
+    settings : dict
+        The launcher's settings.
+
+    Returns
+    -------
+    list
+        Hydra's job returns.
     """
     check_settings(settings)
     jobs = [list(o) for o in job_overrides]

@@ -85,7 +85,20 @@ def _spread(vectors) -> float:
 def prepare(data: dict, side: dict) -> dict:
     """The peer's own preprocessing, as its example notebook (``example/20241107_sim_calibration.ipynb``) does
     before every method: a Savitzky-Golay filter of ``savgol_window`` samples and order ``savgol_order`` on the
-    magnetometer and the gyroscope (none when the sidecar sets no window)."""
+    magnetometer and the gyroscope (none when the sidecar sets no window).
+
+    Parameters
+    ----------
+    data : dict
+        ``t``, ``mag`` and ``gyro`` arrays.
+    side : dict
+        The sidecar.
+
+    Returns
+    -------
+    dict
+        The data filtered.
+    """
     window = side.get("savgol_window")
     if not window:
         return data
@@ -100,7 +113,19 @@ def prepare(data: dict, side: dict) -> dict:
 
 def call(method: str, data, side: dict) -> dict:
     """One MAGYC method on ``data`` (``t``, ``mag``, ``gyro``) -> its estimates as plain lists. MAGYC-BFG and
-    -IFG take the sidecar's ``measurements_window`` (their example notebook: the sample rate in Hz)."""
+    -IFG take the sidecar's ``measurements_window`` (their example notebook: the sample rate in Hz).
+
+    Parameters
+    ----------
+    method : str
+        A MAGYC method.
+    data, side : dict
+        The (prepared: :func:`prepare`) arrays and the sidecar.
+
+    Returns
+    -------
+    dict
+    """
     needs, returns = METHODS[method]
     mag, gyro, t = data["mag"], data["gyro"], data["t"]
     fun = getattr(magyc, method)
@@ -126,7 +151,13 @@ def call(method: str, data, side: dict) -> dict:
 
 
 def run(path_in: str, path_out: str) -> None:
-    """Every method of the sidecar's ``methods`` on ``path_in``; the estimates to ``path_out``."""
+    """Every method of the sidecar's ``methods`` on ``path_in``; the estimates to ``path_out``.
+
+    Parameters
+    ----------
+    path_in, path_out : str
+        The dataset's ``.npz`` and the answer's file.
+    """
     need_magyc()
     side = json.loads(Path(path_in).with_suffix(".json").read_text())
     if side.get("format") != FORMAT:
@@ -148,7 +179,15 @@ def run(path_in: str, path_out: str) -> None:
 
 
 def synth(out_dir: str, seed: str, nsamples: str) -> None:
-    """MAGYC's generator, one simulation per motion level, exported as neutral datasets with the truth."""
+    """MAGYC's generator, one simulation per motion level, exported as neutral datasets with the truth.
+
+    Parameters
+    ----------
+    out_dir : str
+        Folder of the datasets.
+    seed, nsamples : str
+        The generator's seed and readings (command-line strings).
+    """
     need_magyc()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -50,7 +50,19 @@ def load() -> dict:
 
 
 def one(fit, data: np.ndarray) -> dict:
-    """One fit's answer: ``W``, ``o``, ``seconds``, or the tool's ``error``."""
+    """One fit's answer: ``W``, ``o``, ``seconds``, or the tool's ``error``.
+
+    Parameters
+    ----------
+    fit : callable
+        The tool's fit.
+    data : numpy.ndarray, shape (N, 3)
+        Raw readings.
+
+    Returns
+    -------
+    dict
+    """
     start = time.process_time()
     try:
         w, o = fit(data)
@@ -62,6 +74,18 @@ def one(fit, data: np.ndarray) -> dict:
 
 
 def main(argv: list[str]) -> int:
+    """Fit every tool on the readings of ``source`` and on each fold's complement; the answers to ``out``.
+
+    Parameters
+    ----------
+    argv : list of str
+        ``[source, out]``: the ``.npz`` of readings and the answer's JSON file.
+
+    Returns
+    -------
+    int
+        Exit code.
+    """
     source, out = argv
     with np.load(source, allow_pickle=False) as npz:
         mag, labels, folds = (np.asarray(npz[k]) for k in ("mag", "labels", "folds"))
