@@ -27,6 +27,22 @@ def _cell(row) -> str:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    """The estimates as a table figure: per cell and quantity, median and IQR over seeds beside the truth.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table of :func:`magexp.artifacts.kind_tables.estimates_table`.
+    spec : Artifact
+        The artifact (its ``plot`` settings).
+    axes : Axes, optional
+        Draw into the caller's axes instead of a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn.
+    """
     quantities, columns, body = _table(frame, spec)
     widths = _column_widths(columns, body)
     lines = [max(1, *(c.count("\n") + 1 for c in cells)) for cells in body]

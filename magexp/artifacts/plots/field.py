@@ -41,6 +41,22 @@ def _lines(*parts: str) -> str:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    """The readings of the shown seed: total field against the reference, or in 3-D against the sphere.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table of :func:`magexp.artifacts.kind_tables.field_table`.
+    spec : Artifact
+        The artifact (``plot.quantity``: ``sphere`` or ``magnitude``).
+    axes : sequence of Axes, optional
+        Draw into the caller's axes instead of a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn.
+    """
     quantity = spec.plot.get("quantity", "sphere" if spec.kind == "sphere" else "magnitude")
     if quantity == "sphere":
         return _draw_sphere(frame, spec, axes=axes)

@@ -72,6 +72,22 @@ def _ranked(top, bottom, sub, families):
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    """The tuning sweep: per family and scenario, the metric of each setting, best, median and worst marked.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table of :func:`magexp.artifacts.kind_tables.tuning_table`.
+    spec : Artifact
+        The artifact (its ``plot`` settings).
+    axes : sequence of Axes, optional
+        Draw into the caller's axes instead of a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn.
+    """
     scenarios = list(dict.fromkeys(frame.scenario))
     families = list(dict.fromkeys(frame.family))
     ticks = dict(zip(frame.family, frame.family_label))  # each family's words (plot.names, else its label)
