@@ -133,7 +133,9 @@ class Comparison:
         Parameters
         ----------
         diff : Difference
+            The largest difference counted.
         count : int
+            How many differences it stands for.
         """
         self.below[diff.file] = self.below.get(diff.file, 0) + count
         if self.largest is None or diff.relative > self.largest.relative:
@@ -145,7 +147,9 @@ class Comparison:
         Parameters
         ----------
         diff : Difference
+            The largest difference counted.
         count : int
+            How many differences it stands for.
         """
         self.paths[diff.file] = self.paths.get(diff.file, 0) + count
         if self.path_largest is None or diff.relative > self.path_largest.relative:
@@ -167,8 +171,11 @@ def tolerance(ours: np.ndarray, committed: np.ndarray, unit: np.ndarray, rtol: f
     Parameters
     ----------
     ours, committed : numpy.ndarray
+        The two sides' values.
     unit : numpy.ndarray
+        One unit of the printed precision per value.
     rtol : float
+        The relative tolerance.
 
     Returns
     -------
@@ -186,6 +193,7 @@ def csv_unit(values: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     values : numpy.ndarray
+        Values as read from a results CSV.
 
     Returns
     -------
@@ -204,6 +212,7 @@ def text_unit(token: str) -> float:
     Parameters
     ----------
     token : str
+        A number as printed.
 
     Returns
     -------
@@ -220,6 +229,7 @@ def relative(a: float, b: float) -> float:
     Parameters
     ----------
     a, b : float
+        The two numbers.
 
     Returns
     -------

@@ -58,6 +58,10 @@ def select(papers: list[str], only: str | None) -> dict[str, list]:
     ----------
     papers : list of str
     only : str or None
+
+    Returns
+    -------
+    dict
     """
     chosen = {paper: paper_specs(paper) for paper in papers}
     if only is None:
@@ -105,8 +109,7 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     Parameters
     ----------
     spec : Artifact
-    csv : Path
-    out : Path
+    csv, out : Path
     force : bool
     """
     # lazy: matplotlib (memo, style) only here, where a figure is checked or drawn; importing this
@@ -336,8 +339,7 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
     root : Path
     seeds : int, optional
     jobs : int
-    tiny : bool
-    force : bool
+    tiny, force : bool
     executor : Executor, optional
     log : callable
     """
@@ -385,8 +387,7 @@ def grow(plan, outputs, run, log=print, *, active: bool = True):
     ----------
     plan : ArtifactPlan
     outputs : Outputs
-    run : callable
-    log : callable
+    run, log : callable
     active : bool
     """
     seeds = grow_start(plan) if active else {}

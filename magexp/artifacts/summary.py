@@ -82,10 +82,7 @@ def judge(paper: float | None, lo: float, hi: float, width: float, success_rate:
     Parameters
     ----------
     paper : float or None
-    lo, hi : float
-    width : float
-    success_rate : float
-    floor : float
+    lo, hi, width, success_rate, floor : float
     tolerance : Tolerance, optional
     value : float
     """
@@ -103,10 +100,7 @@ def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0
 
     Parameters
     ----------
-    paper : float
-    lo, hi : float
-    width : float
-    floor : float
+    paper, lo, hi, width, floor : float
     tolerance : Tolerance, optional
     value : float
     """
@@ -144,11 +138,9 @@ def uninformative(paper: float, lo: float, hi: float, *, kind: str = "value", se
 
     Parameters
     ----------
-    paper : float
-    lo, hi : float
+    paper, lo, hi : float
     kind : str
-    search_range : float, optional
-    block_scale : float, optional
+    search_range, block_scale : float, optional
     mixed_outcome : bool
     median : float
     """
@@ -324,9 +316,7 @@ def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, pr
     spec : Artifact
     cells : list of dict
     ci : int
-    quantity : str
-    estimator : str
-    prefix : str
+    quantity, estimator, prefix : str
     """
     cell = cells[ci] if ci < len(cells) else {}
     varying = [k for k in cell if k != "estimator" and len({str(c.get(k)) for c in cells}) > 1]
@@ -457,7 +447,14 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
 def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
     """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
     parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
-    p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates)."""
+    p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    ci : int
+    theta : numpy.ndarray
+    """
     gram, coef, rss, n, _ = _design_of(runs, ci)
     p = gram.shape[0]
     k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
@@ -499,7 +496,12 @@ def _design_of(runs: ArtifactRuns, ci: int) -> tuple:
 
 
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
-    """One row per (summarised quantity, cell) and per ratio group, from the unrounded runs."""
+    """One row per (summarised quantity, cell) and per ratio group, from the unrounded runs.
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     rows = []
     for item in runs.spec.summarise:
         rows += _item_rows(runs, item)
