@@ -147,9 +147,9 @@ class Comparison:
         Parameters
         ----------
         diff : Difference
-            The largest difference counted.
+            The largest differing path diagnostic.
         count : int
-            How many differences it stands for.
+            How many differing diagnostics it stands for.
         """
         self.paths[diff.file] = self.paths.get(diff.file, 0) + count
         if self.path_largest is None or diff.relative > self.path_largest.relative:

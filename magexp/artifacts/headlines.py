@@ -248,9 +248,9 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
     Parameters
     ----------
     paper : str
-        The paper.
+        The paper whose claims are listed.
     specs : list of Artifact
-        Its artifacts.
+        Its artifacts, in order.
     outcomes : list of tuple
         ``(artifact, Outcome)`` per claim (:func:`paper_outcomes`).
 

@@ -69,7 +69,7 @@ def cells(spec) -> list[dict[str, str]]:
     Parameters
     ----------
     spec : Artifact
-        The artifact.
+        The artifact (its ``grid`` and ``cases``).
 
     Returns
     -------

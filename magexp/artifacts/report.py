@@ -65,7 +65,7 @@ def collect(root: Path = RESULTS) -> pd.DataFrame:
     Parameters
     ----------
     root : Path
-        The results folder.
+        The results folder, a subfolder per paper.
 
     Returns
     -------
@@ -472,7 +472,7 @@ def peer_results(root: Path) -> list[str]:
     Parameters
     ----------
     root : Path
-        The results folder.
+        The results folder (its ``peers/peers.md``).
 
     Returns
     -------
@@ -542,7 +542,7 @@ def build(root: Path = RESULTS) -> None:
     Parameters
     ----------
     root : Path
-        The results folder.
+        The results folder the report is written into.
     """
     summary = collect(root)
     write_csv(summary, root / "summary.csv")

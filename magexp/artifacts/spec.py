@@ -578,7 +578,7 @@ def artifact_paths(paper: str, root: Path | None = None) -> list[Path]:
     Parameters
     ----------
     paper : str
-        The paper's folder name.
+        The paper whose artifact files are listed.
     root : Path, optional
         The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
 

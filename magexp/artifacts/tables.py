@@ -49,7 +49,7 @@ def finite(values) -> np.ndarray:
     Parameters
     ----------
     values : array_like
-        Numbers (NaN allowed).
+        Numbers, NaN and infinite ones allowed.
 
     Returns
     -------
@@ -127,7 +127,7 @@ def median(values) -> float:
     Parameters
     ----------
     values : array_like
-        Numbers (NaN allowed).
+        The numbers (NaN ones are left out).
 
     Returns
     -------
@@ -218,9 +218,9 @@ def cell_runs(runs, ci: int, by_seed: bool = False) -> pd.DataFrame:
     Parameters
     ----------
     runs : ArtifactRuns
-        The artifact's runs.
+        The artifact's runs (their ``table``).
     ci : int
-        The cell.
+        The cell whose rows are taken.
     by_seed : bool
         Sort by seed.
 
@@ -255,7 +255,7 @@ def successful(sub: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     sub : pandas.DataFrame
-        A cell's rows.
+        The rows of one cell, with ``succeeded`` where judged.
 
     Returns
     -------
@@ -274,9 +274,9 @@ def cell_overrides(runs, ci: int) -> dict:
     Parameters
     ----------
     runs : ArtifactRuns
-        The artifact's runs.
+        The artifact's runs (their ``overrides``).
     ci : int
-        The cell.
+        The cell's index.
 
     Returns
     -------
@@ -292,11 +292,11 @@ def reported_entry(spec, quantity: str, settings: dict):
     Parameters
     ----------
     spec : Artifact
-        The artifact.
+        The artifact (its ``reported:`` entries).
     quantity : str
-        The quantity.
+        The summarised quantity.
     settings : dict
-        The cell's settings.
+        The cell's settings (matched against each ``match``).
 
     Returns
     -------
@@ -314,7 +314,7 @@ def reported_value(spec, quantity: str, settings: dict):
     spec : Artifact
         The artifact.
     quantity : str
-        The quantity.
+        The quantity whose value is looked up.
     settings : dict
         The cell's settings.
 
@@ -334,9 +334,9 @@ def first_output(runs, ci: int):
     Parameters
     ----------
     runs : ArtifactRuns
-        The artifact's runs.
+        The artifact's runs (their stored ``outputs``).
     ci : int
-        The cell.
+        The cell whose first seed is read.
 
     Returns
     -------
@@ -352,9 +352,9 @@ def parameter_values(runs, ci: int) -> tuple[list[str], np.ndarray, np.ndarray |
     Parameters
     ----------
     runs : ArtifactRuns
-        The artifact's runs.
+        The artifact's runs, with their stored outputs.
     ci : int
-        The cell.
+        The cell whose estimates are read.
 
     Returns
     -------

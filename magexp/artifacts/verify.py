@@ -268,12 +268,12 @@ def main(argv=None) -> int:
     Parameters
     ----------
     argv : list of str, optional
-        The arguments (default: ``sys.argv[1:]``).
+        The command-line words after ``verify``; default ``sys.argv[1:]``.
 
     Returns
     -------
     int
-        The exit code.
+        The exit code of :func:`command`, 2 on bad input.
     """
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 

@@ -108,12 +108,12 @@ def overflowing_cells(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure, laid out.
+        A laid-out figure whose table cells are measured.
 
     Returns
     -------
     list of str
-        One line per defect.
+        A line per cell whose text overflows it.
     """
     renderer = fig.canvas.get_renderer()
     found = []
@@ -135,12 +135,12 @@ def empty_axes(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure to check.
+        The figure whose data axes are looked at.
 
     Returns
     -------
     list of str
-        One line per defect.
+        A line per empty axes.
     """
     found = []
     for k, ax in enumerate(fig.axes):
@@ -230,12 +230,12 @@ def overlapping_text(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure to check.
+        The figure; it is laid out here (no rendering).
 
     Returns
     -------
     list of str
-        One line per overlapping pair.
+        A line per pair of overlapping texts.
     """
     fig.draw_without_rendering()
     renderer = fig.canvas.get_renderer()
@@ -260,12 +260,12 @@ def colorbar_mismatch(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure to check.
+        The figure whose colour bars are compared with their images.
 
     Returns
     -------
     list of str
-        One line per defect.
+        A line per colour bar that does not match.
     """
     found = []
     for ax in fig.axes:
@@ -295,12 +295,12 @@ def raw_legends(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure to check.
+        The figure whose legends are read.
 
     Returns
     -------
     list of str
-        One line per raw entry.
+        A line per legend entry made of overrides.
     """
     legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes)]
     texts = [t.get_text() for lg in legends if isinstance(lg, Legend) for t in lg.get_texts()]
@@ -344,12 +344,12 @@ def legend_defects(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure to check.
+        The figure; each legend entry is matched with the series it names.
 
     Returns
     -------
     list of str
-        One line per defect.
+        A line per empty or indistinct entry.
     """
     drawn: dict[str, list] = {}
     for ax in fig.axes:
@@ -398,12 +398,12 @@ def raw_names(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure to check.
+        The figure whose legends, titles, colour-bar labels and table headers are read.
 
     Returns
     -------
     list of str
-        One line per config name printed.
+        A line per config name printed.
     """
     return [f"{where} {text!r} prints the config name {m.group(0)!r}"
             for where, text in _worded_texts(fig) for m in [CONFIG_NAME.search(text)] if m]
@@ -427,12 +427,12 @@ def clipped_markers(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure, laid out.
+        The figure, after a layout pass; each marker is measured against its axes.
 
     Returns
     -------
     list of str
-        One line per clipped marker.
+        A line per clipped marker.
     """
     found = []
     for k, ax in enumerate(fig.axes):
@@ -480,12 +480,12 @@ def unlabelled_log_range(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure, laid out.
+        The figure, after a layout pass; its log axes are read.
 
     Returns
     -------
     list of str
-        One line per such axis.
+        A line per log axis a reader cannot read values from.
     """
     found = []
     for k, ax, name, axis in _log_axes(fig):
@@ -508,12 +508,12 @@ def small_text(fig) -> list[str]:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        The figure to check.
+        The figure whose visible texts are measured.
 
     Returns
     -------
     list of str
-        One line per text (legend, table) too small.
+        A line per text (or legend, table) below the size.
     """
     found, seen = [], set()
     for text in fig.findobj(Text):

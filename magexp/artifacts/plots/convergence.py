@@ -21,14 +21,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.convergence_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact: ``plot.panels`` splits the panels, ``plot.hue`` the lines.
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's panels, one per value of ``plot.panels`` (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The best objective against the iteration, on a log axis.
     """
     panel_key, hue_key = spec.plot.get("panels"), spec.plot.get("hue")
     panel_vals = group_values(frame, panel_key)

@@ -34,14 +34,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.estimates_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact: ``plot.rows`` adds quantities, ``plot.names`` gives the cells words.
     axes : Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's Axes for the table (default: a new figure sized to it).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The table of estimates, a row per quantity.
     """
     quantities, columns, body = _table(frame, spec)
     widths = _column_widths(columns, body)

@@ -48,14 +48,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.field_table`.
     spec : Artifact
-        The artifact (``plot.quantity``: ``sphere`` or ``magnitude``).
+        The artifact: ``plot.quantity`` (``sphere`` or ``magnitude``), ``plot.panels``.
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's panels (3-D ones for ``sphere``; default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The readings' field, raw and calibrated.
     """
     quantity = spec.plot.get("quantity", "sphere" if spec.kind == "sphere" else "magnitude")
     if quantity == "sphere":

@@ -51,9 +51,9 @@ def ylog(spec, metric: str) -> bool:
     Parameters
     ----------
     spec : Artifact
-        The artifact (its ``plot.ylog``).
+        The artifact, whose ``plot.ylog`` is one flag or ``{metric: flag}``.
     metric : str
-        A metric column the figure draws.
+        A metric column the figure draws, by its name.
 
     Returns
     -------
@@ -171,14 +171,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.final_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings and ``ratios``).
+        The artifact: ``plot.x``, ``plot.panels``, ``plot.hue``, ``plot.ylog`` and its ``ratios``.
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's panels, one per metric and panel value (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The final values against ``plot.x``, the paper's values marked.
     """
     x_key, panel_key = spec.plot.x, spec.plot.get("panels")
     frame, hue_key = _with_hue(frame, spec, spec.plot.get("hue", "estimator"))

@@ -95,14 +95,14 @@ def draw(frame, spec, ax=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.benchmark_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact: ``plot.metric`` (default ``bound_ratio``) colours the cells.
     ax : Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's Axes (default: a new figure with a colour bar).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The heat map, estimator against case.
     """
     value = spec.plot.get("metric", "bound_ratio")
     valued = set(frame.case[np.isfinite(frame[value].astype(float))])

@@ -58,14 +58,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.parameters_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact (``plot.unit`` of the offsets, its title).
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's two panels, three with F_g (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        Estimate minus truth per parameter.
     """
     names = [n for n in dict.fromkeys(frame.parameter) if n != FIT[0]]
     groups = [names[:9], names[9:]]

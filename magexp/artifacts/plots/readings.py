@@ -45,7 +45,7 @@ def drawn(headlines: list[dict]) -> list[dict]:
     Parameters
     ----------
     headlines : list of dict
-        The headline rows of a paper.
+        A paper's headline rows (their ``verdict`` is read).
 
     Returns
     -------
@@ -62,7 +62,7 @@ def cells(headlines: list[dict]) -> list[dict]:
     Parameters
     ----------
     headlines : list of dict
-        The headline rows of a paper.
+        A paper's headline rows, with their readings.
 
     Returns
     -------

@@ -101,14 +101,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.recording_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact (``plot.metric``, its success rule and title).
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's six panels (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The six panels of the recordings' fits.
     """
     metric = spec.plot.get("metric", "fg")
     labels = list(dict.fromkeys(frame.label))

@@ -33,14 +33,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.spread_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact (its title).
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's panels, one per recording (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The calibrated spread per recording and estimator.
     """
     cases = list(dict.fromkeys(frame.case))
     fig, axes = panels(len(cases), width=3.6, height=3.0, rows=2 if len(cases) > 2 else 1, axes=axes)

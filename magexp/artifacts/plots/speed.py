@@ -20,14 +20,14 @@ def draw(frame, spec, ax=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.benchmark_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact: ``plot.metric`` (default ``bound_ratio``) on the log axis.
     ax : Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's Axes, one for every paper (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The speed per estimator and case.
     """
     value = spec.plot.get("metric", "bound_ratio")
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 4.8), layout="constrained")

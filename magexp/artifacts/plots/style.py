@@ -100,7 +100,7 @@ def unit(spec) -> str:
     Parameters
     ----------
     spec : Artifact
-        The artifact.
+        The artifact (its ``plot.unit`` and scenarios).
 
     Returns
     -------
@@ -153,7 +153,7 @@ def quantities_of(spec, metric: str) -> set[str]:
     Parameters
     ----------
     spec : Artifact
-        The artifact.
+        The artifact (its ``summarise:`` entries and ``ratios``).
     metric : str
         A runs column.
 
@@ -172,9 +172,9 @@ def paper_values(spec, metric: str) -> list:
     Parameters
     ----------
     spec : Artifact
-        The artifact.
+        The artifact (its ``reported:`` entries).
     metric : str
-        A runs column.
+        The runs column a figure draws.
 
     Returns
     -------

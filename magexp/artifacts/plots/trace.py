@@ -41,14 +41,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.trace_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact: ``plot.groups`` of parameters, ``plot.start``, ``plot.trace``.
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's panels, one per group (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The traces against the filter step.
     """
     traces = frame[(frame.kind == "trace") & (frame.step >= float(spec.plot.get("start", 0)))]
     groups = [list(g) for g in spec.plot.get("groups", [])] or [[p] for p in dict.fromkeys(traces.parameter)]

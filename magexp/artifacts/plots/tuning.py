@@ -79,14 +79,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     frame : pandas.DataFrame
         The table of :func:`magexp.artifacts.kind_tables.tuning_table`.
     spec : Artifact
-        The artifact (its ``plot`` settings).
+        The artifact: ``plot.metric``, ``plot.names``, ``plot.labels``.
     axes : sequence of Axes, optional
-        Draw into the caller's axes instead of a new figure.
+        The caller's Axes: two rows, a column per scenario (default: a new figure).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn.
+        The tuning sweep per family and scenario.
     """
     scenarios = list(dict.fromkeys(frame.scenario))
     families = list(dict.fromkeys(frame.family))
