@@ -495,7 +495,12 @@ def _combined(tests: list[Test]) -> dict:
 
 def holm(p: list[float]) -> list[float]:
     """Holm's step-down adjusted p-values of ``p`` (NaN stays NaN and is not counted): the i-th
-    smallest of m becomes ``max over j <= i of min(1, (m - j + 1) p_(j))`` (Holm 1979)."""
+    smallest of m becomes ``max over j <= i of min(1, (m - j + 1) p_(j))`` (Holm 1979).
+
+    Parameters
+    ----------
+    p : list of float
+    """
     p = np.asarray(p, float)
     out = np.full(p.shape, np.nan)
     idx = np.flatnonzero(np.isfinite(p))

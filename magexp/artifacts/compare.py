@@ -128,13 +128,29 @@ class Comparison:
         return not self.changed and not self.disagreements
 
     def within(self, diff: Difference, count: int = 1) -> None:
-        """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them."""
+        """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them.
+
+        Parameters
+        ----------
+        diff : Difference
+            The largest difference counted.
+        count : int
+            How many differences it stands for.
+        """
         self.below[diff.file] = self.below.get(diff.file, 0) + count
         if self.largest is None or diff.relative > self.largest.relative:
             self.largest = diff
 
     def path(self, diff: Difference, count: int = 1) -> None:
-        """Count ``count`` differing path diagnostics in ``diff.file``, ``diff`` the largest of them."""
+        """Count ``count`` differing path diagnostics in ``diff.file``, ``diff`` the largest of them.
+
+        Parameters
+        ----------
+        diff : Difference
+            The largest differing path diagnostic.
+        count : int
+            How many differing diagnostics it stands for.
+        """
         self.paths[diff.file] = self.paths.get(diff.file, 0) + count
         if self.path_largest is None or diff.relative > self.path_largest.relative:
             self.path_largest = diff
@@ -150,7 +166,21 @@ def _quote(text: str, n: int = 60) -> str:
 
 def tolerance(ours: np.ndarray, committed: np.ndarray, unit: np.ndarray, rtol: float) -> np.ndarray:
     """The largest difference allowed between ``ours`` and ``committed``: ``rtol`` times the larger
-    magnitude, or one ``unit`` of the printed precision, whichever is larger."""
+    magnitude, or one ``unit`` of the printed precision, whichever is larger.
+
+    Parameters
+    ----------
+    ours, committed : numpy.ndarray
+        The two sides' values.
+    unit : numpy.ndarray
+        One unit of the printed precision per value.
+    rtol : float
+        The relative tolerance.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
     return np.maximum(rtol * np.maximum(np.abs(ours), np.abs(committed)), unit)
 
 
@@ -158,7 +188,17 @@ def csv_unit(values: np.ndarray) -> np.ndarray:
     """One unit of the last digit of floats written with :data:`magexp.artifacts.formats.DIGITS`
     significant digits (``%.6g``: trailing zeros dropped, so the text itself does not tell). Round-off
     is written as ``0`` or ``±ROUNDOFF_FLOOR`` (:func:`magexp.artifacts.formats.tidy`): a value of at most
-    that magnitude is printed to within the band ``-floor .. floor``, whose width is its unit."""
+    that magnitude is printed to within the band ``-floor .. floor``, whose width is its unit.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        Values as read from a results CSV.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
     mag = np.abs(values)
     with np.errstate(divide="ignore"):
         digit = np.where(mag > 0, 10.0 ** (np.floor(np.log10(np.where(mag > 0, mag, 1))) - (DIGITS - 1)), 0.0)
@@ -167,14 +207,34 @@ def csv_unit(values: np.ndarray) -> np.ndarray:
 
 def text_unit(token: str) -> float:
     """One unit of the last printed digit of a number in a text (``0.254`` -> 0.001, ``1.2e-05`` ->
-    1e-06, ``30`` -> 1)."""
+    1e-06, ``30`` -> 1).
+
+    Parameters
+    ----------
+    token : str
+        A number as printed.
+
+    Returns
+    -------
+    float
+    """
     mantissa, _, exponent = token.lower().partition("e")
     decimals = len(mantissa.partition(".")[2])
     return 10.0 ** (int(exponent or 0) - decimals)
 
 
 def relative(a: float, b: float) -> float:
-    """``|a - b|`` over the larger magnitude (0 when both are 0)."""
+    """``|a - b|`` over the larger magnitude (0 when both are 0).
+
+    Parameters
+    ----------
+    a, b : float
+        The two numbers.
+
+    Returns
+    -------
+    float
+    """
     scale = max(abs(a), abs(b))
     return abs(a - b) / scale if scale else 0.0
 
@@ -183,7 +243,17 @@ def compare_text(ours: str, committed: str, rtol: float) -> tuple[bool, float, t
     """Whether two texts agree: the same words, and each number within :func:`tolerance` (its unit
     the finer of the two printed precisions: ``1.5`` beside ``1.501`` is one unit of ``0.001``).
     Returns ``(agrees, largest relative difference of a number, (ours, committed) of the first
-    disagreement or of the largest difference)``."""
+    disagreement or of the largest difference)``.
+
+    Parameters
+    ----------
+    ours, committed : str
+    rtol : float
+
+    Returns
+    -------
+    tuple
+    """
     a, b = NUMBER.split(ours), NUMBER.split(committed)
     if len(a) != len(b) or a[0::2] != b[0::2]:
         return False, math.nan, _first_difference(ours, committed)
@@ -211,13 +281,32 @@ def _first_difference(a: str, b: str, context: int = 25) -> tuple[str, str]:
 # files
 
 def read_table(path: Path) -> pd.DataFrame:
-    """A results CSV as text (every cell as written; an empty cell ``""``)."""
+    """A results CSV as text (every cell as written; an empty cell ``""``).
+
+    Parameters
+    ----------
+    path : Path
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
     return pd.read_csv(path, dtype=str, keep_default_na=False)
 
 
 def row_name(frame: pd.DataFrame, i: int) -> str:
     """``row N (key=value, ...)``: the row's number (1 = the first after the header) and its first
-    :data:`KEYS` present, each cut to 40 characters."""
+    :data:`KEYS` present, each cut to 40 characters.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+    i : int
+
+    Returns
+    -------
+    str
+    """
     keys = [c for c in KEYS if c in frame.columns][:3]
     shown = ", ".join(f"{k}={_cut(frame[k].iat[i])}" for k in keys)
     return f"row {i + 1}" + (f" ({shown})" if shown else "")
@@ -230,7 +319,14 @@ def _cut(text: str, n: int = 40) -> str:
 def compare_csv(name: str, ours: Path, committed: Path, result: Comparison) -> None:
     """Compare two results CSVs cell by cell (by row position; a different row count is one
     disagreement): a ``verdict`` cell exactly, numbers within the tolerance, texts by
-    :func:`compare_text`. Only the cells whose text differs are looked at further."""
+    :func:`compare_text`. Only the cells whose text differs are looked at further.
+
+    Parameters
+    ----------
+    name : str
+    ours, committed : Path
+    result : Comparison
+    """
     a, b = read_table(ours), read_table(committed)
     columns = _columns(name, a, b, result)
     result.csv_files += 1
@@ -296,7 +392,17 @@ def _compare_column(name: str, col: str, a: pd.DataFrame, b: pd.DataFrame, rows:
 
 def text_lines(path: Path, cut: list[str]) -> list[str]:
     """The lines of a text file, without the sections whose heading line starts with one of ``cut``
-    (a section ends at the next heading of its level or above)."""
+    (a section ends at the next heading of its level or above).
+
+    Parameters
+    ----------
+    path : Path
+    cut : list of str
+
+    Returns
+    -------
+    list of str
+    """
     lines, keep, level = path.read_text(encoding="utf-8").splitlines(), [], 0
     for line in lines:
         heading = len(line) - len(line.lstrip("#")) if line.startswith("#") and " " in line else 0
@@ -310,7 +416,15 @@ def text_lines(path: Path, cut: list[str]) -> list[str]:
 
 
 def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison, cut: list[str]) -> None:
-    """Compare two report or LaTeX files line by line (:func:`compare_text`), without the sections ``cut``."""
+    """Compare two report or LaTeX files line by line (:func:`compare_text`), without the sections ``cut``.
+
+    Parameters
+    ----------
+    name : str
+    ours, committed : Path
+    result : Comparison
+    cut : list of str
+    """
     a, b = text_lines(ours, cut), text_lines(committed, cut)
     result.text_files += 1
     result.lines += len(b)
@@ -332,7 +446,16 @@ def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison
 
 
 def table_cells(line: str) -> list[str]:
-    """The cells of a row of a Markdown (``| a | b |``) or LaTeX (``a & b \\\\``) table, ``\\_`` read as ``_``."""
+    """The cells of a row of a Markdown (``| a | b |``) or LaTeX (``a & b \\\\``) table, ``\\_`` read as ``_``.
+
+    Parameters
+    ----------
+    line : str
+
+    Returns
+    -------
+    list of str
+    """
     if line.startswith("|"):
         return [c.strip() for c in line.strip().strip("|").split("|")]
     return [c.strip().replace("\\_", "_") for c in line.strip().removesuffix("\\\\").split("&")]
@@ -341,7 +464,16 @@ def table_cells(line: str) -> list[str]:
 def table_headers(lines: list[str]) -> list[list[str] | None]:
     """For each line, the column names of the table it is a body row of (None outside a table): a
     Markdown table's header is the line above its ``|---|`` rule, a LaTeX table's the line after
-    ``\\toprule``; a table ends at a line that is not one of its rows (``\\bottomrule``)."""
+    ``\\toprule``; a table ends at a line that is not one of its rows (``\\bottomrule``).
+
+    Parameters
+    ----------
+    lines : list of str
+
+    Returns
+    -------
+    list
+    """
     out: list[list[str] | None] = [None] * len(lines)
     header = None
     for i, line in enumerate(lines):
@@ -385,7 +517,18 @@ def _left_out(rel: str, rules) -> str | None:
 def compare(ours: Path, committed: Path, *, rtol: float = RTOL, files=None) -> Comparison:
     """Compare the reproduction ``ours`` with the committed results ``committed`` (two folders laid
     out as ``results/``), every file but those that differ by design (module docstring); ``files``:
-    only these relative paths (e.g. one artifact's)."""
+    only these relative paths (e.g. one artifact's).
+
+    Parameters
+    ----------
+    ours, committed : Path
+    rtol : float
+    files : iterable of str, optional
+
+    Returns
+    -------
+    Comparison
+    """
     ours, committed = Path(ours), Path(committed)
     result = Comparison(rtol=rtol)
     mine, theirs = _files(ours), _files(committed)

@@ -31,13 +31,39 @@ def _runs(root: Path, paper: str, name: str) -> pd.DataFrame | None:
 
 
 def runs_reader(root: Path, paper: str):
-    """``name -> runs table`` of ``paper``: each runs CSV read once, however many sections use it."""
+    """``name -> runs table`` of ``paper``: each runs CSV read once, however many sections use it.
+
+    Parameters
+    ----------
+    root : Path
+        The results folder.
+    paper : str
+        The paper.
+
+    Returns
+    -------
+    callable
+        ``name -> runs table`` (cached).
+    """
     return functools.cache(lambda name: _runs(root, paper, name))
 
 
 def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
     """``(artifact, Outcome)`` of every claim of ``specs`` (one paper: one family of comparisons,
-    Holm-adjusted by :func:`magexp.artifacts.claims.adjust`) whose runs table (``runs(name)``) has rows."""
+    Holm-adjusted by :func:`magexp.artifacts.claims.adjust`) whose runs table (``runs(name)``) has rows.
+
+    Parameters
+    ----------
+    specs : list of Artifact
+        The paper's artifacts.
+    runs : callable
+        ``name -> runs table`` (:func:`runs_reader`).
+
+    Returns
+    -------
+    list of tuple
+        ``(artifact, Outcome)`` per claim.
+    """
     out = []
     for spec in specs:
         table = runs(spec.name) if spec.claims else None
@@ -48,7 +74,20 @@ def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
 
 
 def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple[str, object]]:
-    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``."""
+    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``.
+
+    Parameters
+    ----------
+    root : Path
+        The results folder.
+    paper : str, optional
+        One paper (default: every paper).
+
+    Returns
+    -------
+    list of tuple
+        ``(artifact, Outcome)`` per claim.
+    """
     return [o for p in ([paper] if paper else papers())
             for o in paper_outcomes([load(path) for path in artifact_paths(p)], runs_reader(root, p))]
 
@@ -56,7 +95,18 @@ def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple
 def headline_verdict(results: list[str | None]) -> str:
     """The verdict of a headline claim from its parts' outcomes (None: the part's artifact has no
     runs here): ``supported`` (every part holds), ``contradicted`` (none holds), ``partly``
-    (some hold), ``not testable here`` (no part could be evaluated)."""
+    (some hold), ``not testable here`` (no part could be evaluated).
+
+    Parameters
+    ----------
+    results : list of str or None
+        Each part's result (None: no runs).
+
+    Returns
+    -------
+    str
+        The verdict.
+    """
     known = [r for r in results if r is not None]
     if not known:
         return "not testable here"
@@ -70,7 +120,18 @@ def readings_verdict(verdicts: list[tuple[str, str]]) -> tuple[str, str]:
     """The verdict of a headline judged under several readings of what its paper left unstated, from
     ``(label, verdict)`` per reading: the common verdict where every reading gives the same, else
     ``depends`` with the split, which names the readings on each side, each label quoted (``depends:
-    supported under "w = 0.4", "c1 = c2 = 2"; contradicted under "constriction PSO"``; '' when they agree)."""
+    supported under "w = 0.4", "c1 = c2 = 2"; contradicted under "constriction PSO"``; '' when they agree).
+
+    Parameters
+    ----------
+    verdicts : list of tuple of str
+        ``(label, verdict)`` per reading.
+
+    Returns
+    -------
+    tuple of str
+        ``(verdict, split)`` (split empty where every reading agrees).
+    """
     order = {v: i for i, v in enumerate(HEADLINE_VERDICTS)}
     sides: dict[str, list[str]] = {}
     for label, verdict in verdicts:
@@ -98,7 +159,24 @@ def _reading_rows(h, outcomes: dict) -> list[dict]:
 def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
     """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure
     (:func:`_headline_row`). ``outcomes``: ``{"artifact.id": Outcome}``; a part (of the headline or of
-    a reading) naming no claim of the paper is an error."""
+    a reading) naming no claim of the paper is an error.
+
+    Parameters
+    ----------
+    paper : str
+        The paper.
+    specs : list of Artifact
+        Its artifacts.
+    outcomes : dict
+        ``{"artifact.id": Outcome}``.
+    runs : callable
+        ``name -> runs table`` (:func:`runs_reader`).
+
+    Returns
+    -------
+    list of dict
+        A row per headline claim.
+    """
     declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
     rows = []
     for h in load_paper(paper).headline:
@@ -165,7 +243,22 @@ def _headline_verdict(h, parts: list, runs) -> tuple[str, str]:
 
 def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
     """One ``claims.csv`` row per evaluated claim of ``paper`` (``p``, ``p_adjusted``, ``p_min`` and
-    ``detectable`` for comparisons; ``detectable`` only where no difference is detected)."""
+    ``detectable`` for comparisons; ``detectable`` only where no difference is detected).
+
+    Parameters
+    ----------
+    paper : str
+        The paper whose claims are listed.
+    specs : list of Artifact
+        Its artifacts, in order.
+    outcomes : list of tuple
+        ``(artifact, Outcome)`` per claim (:func:`paper_outcomes`).
+
+    Returns
+    -------
+    list of dict
+        A ``claims.csv`` row per claim.
+    """
     own = {s.name: s for s in specs}
     return [{"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
              "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",

@@ -30,7 +30,12 @@ def _count(sub: pd.DataFrame, column: str) -> int:
 def convergence_table(runs) -> pd.DataFrame:
     """Per cell and iteration: the quartiles over seeds of the best objective, the median evaluations,
     the floors, the success counts, and the median iterations to 1.1 x the final value over the
-    successful runs (:mod:`magexp.artifacts.plots.convergence`)."""
+    successful runs (:mod:`magexp.artifacts.plots.convergence`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     frames = []
     for ci, cell in enumerate(runs.cells):
         seeds = sorted(s for (c, s) in runs.outputs if c == ci)
@@ -54,7 +59,12 @@ def convergence_table(runs) -> pd.DataFrame:
 
 def estimates_table(runs) -> pd.DataFrame:
     """Per cell and quantity (the run's parameters, then ``plot.rows``): quartiles over seeds and the
-    median truth (:mod:`magexp.artifacts.plots.estimates`)."""
+    median truth (:mod:`magexp.artifacts.plots.estimates`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     names = list(next(iter(runs.outputs.values())).parameter_names) + list(runs.spec.plot.get("rows", []))
     rows = []
     for ci, cell in enumerate(runs.cells):
@@ -70,7 +80,12 @@ def estimates_table(runs) -> pd.DataFrame:
 # final: final values against a swept key
 
 def metric_list(spec) -> list[str]:
-    """The metric columns a ``final`` figure draws (``plot.metric``: one name or a list)."""
+    """The metric columns a ``final`` figure draws (``plot.metric``: one name or a list).
+
+    Parameters
+    ----------
+    spec : Artifact
+    """
     metric = spec.plot.get("metric", "fun")
     return [metric] if isinstance(metric, str) else list(metric)
 
@@ -107,7 +122,12 @@ def _ratio_rows(runs) -> list[dict]:
 def final_table(runs) -> pd.DataFrame:
     """Per cell and metric: quartiles, the success rate and converged fraction, the floors
     (``noise_floor``, ``truth_fun``, ``rms_bound``) and the median of ``plot.bound``; then the ratios
-    (:mod:`magexp.artifacts.plots.final`)."""
+    (:mod:`magexp.artifacts.plots.final`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     bound = runs.spec.plot.get("bound")
     rows = []
     for ci, cell in enumerate(runs.cells):
@@ -145,7 +165,12 @@ def cell_label(cell: dict, estimator: str, spec) -> str:
 def parameters_table(runs) -> pd.DataFrame:
     """Per cell and parameter: quartiles over the successful seeds (failures counted in ``n_failed``),
     the truth and the paper's value; F_g over every seed where the runs measure it
-    (:mod:`magexp.artifacts.plots.parameters`)."""
+    (:mod:`magexp.artifacts.plots.parameters`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     rows = []
     for ci, cell in enumerate(runs.cells):
         sub = cell_runs(runs, ci)
@@ -208,7 +233,12 @@ def _hue_labels(runs) -> list[str]:
 
 def recording_table(runs) -> pd.DataFrame:
     """Rows ``row = run`` (a per-run quantity of one seed) and ``row = estimate`` (a parameter: median
-    over the successful seeds, and the median of their standard errors) (:mod:`magexp.artifacts.plots.real`)."""
+    over the successful seeds, and the median of their standard errors) (:mod:`magexp.artifacts.plots.real`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     rows = []
     for ci, label in enumerate(_hue_labels(runs)):
         sub = cell_runs(runs, ci, by_seed=True)
@@ -236,7 +266,12 @@ SPREAD_COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_c
 def spread_table(runs) -> pd.DataFrame:
     """Per (recording, estimator): the medians of :data:`SPREAD_COLUMNS`, the widest of the seeds'
     held-out spread intervals and the success rate (reported success and a spread below the raw one)
-    (:mod:`magexp.artifacts.plots.real_spread`)."""
+    (:mod:`magexp.artifacts.plots.real_spread`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     rows = []
     for ci in range(len(runs.cells)):
         sub = cell_runs(runs, ci)
@@ -308,7 +343,12 @@ def benchmark_table(runs) -> pd.DataFrame:
     """One row per (case, estimator): medians (of the accuracy columns over the successful runs), the
     bound ratio with its interval, the success rate and the failures (module docstring of
     :mod:`magexp.artifacts.plots.heatmap`). Where no run is judged (recordings), the fit's own
-    verdict and a spread below the raw one decide success."""
+    verdict and a spread below the raw one decide success.
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     grid_keys = set(runs.spec.grid)
     rows = []
     for ci, cell in enumerate(runs.cells):
@@ -355,7 +395,12 @@ def _rate(values) -> float:
 
 def tuning_table(runs) -> pd.DataFrame:
     """One row per setting (cell), with per (family, scenario) the ``best``, ``median`` and ``worst``
-    setting by the median metric (:mod:`magexp.artifacts.plots.tuning`)."""
+    setting by the median metric (:mod:`magexp.artifacts.plots.tuning`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     spec = runs.spec
     defaults = {k: {kk: str(vv) for kk, vv in v.items()} for k, v in (spec.plot.get("default", {}) or {}).items()}
     frame = pd.DataFrame([_setting_row(runs, ci, defaults) for ci in range(len(runs.cells))])
@@ -470,7 +515,12 @@ def _distances(runs, key: str, names: list[str], traced: set) -> list[pd.DataFra
 def trace_table(runs) -> pd.DataFrame:
     """Per traced cell, parameter and step: quartiles over seeds of ``trace[plot.trace]``; the truth
     and the untraced cells' estimates as levels; the distances from ``plot.relative_to``
-    (:mod:`magexp.artifacts.plots.trace`)."""
+    (:mod:`magexp.artifacts.plots.trace`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     key = runs.spec.plot.get("trace", "x")
     traced = {ci for (ci, s), out in runs.outputs.items() if key in out.trace}
     names = _names(runs.outputs[min(k for k in runs.outputs if k[0] in traced)], key) if traced else []
@@ -509,7 +559,12 @@ def shown_seed(runs, ci: int) -> tuple[int, str]:
 def field_table(runs) -> pd.DataFrame:
     """Per reading of the shown seed of each cell (:func:`shown_seed`): raw and calibrated vectors and
     total fields, the reference total field and the error of the calibrated one
-    (:mod:`magexp.artifacts.plots.field`)."""
+    (:mod:`magexp.artifacts.plots.field`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     frames = []
     for ci, cell in enumerate(runs.cells):
         seed, outcome = shown_seed(runs, ci)
@@ -534,5 +589,10 @@ BUILDERS = {"convergence": convergence_table, "field": field_table, "sphere": fi
 
 
 def tabulate(runs) -> pd.DataFrame:
-    """The table behind the figure of ``runs.spec``: its kind's builder in :data:`BUILDERS`."""
+    """The table behind the figure of ``runs.spec``: its kind's builder in :data:`BUILDERS`.
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     return BUILDERS[runs.spec.kind](runs)

@@ -29,12 +29,34 @@ from magexp.run.executor import run_row
 
 
 def load_spec(path: Path | str):
-    """Read and validate an artifact YAML (:func:`magexp.artifacts.spec.load`)."""
+    """Read and validate an artifact YAML (:func:`magexp.artifacts.spec.load`).
+
+    Parameters
+    ----------
+    path : Path or str
+        The artifact's YAML.
+
+    Returns
+    -------
+    Artifact
+        The validated artifact.
+    """
     return load(path)
 
 
 def paper_specs(paper: str) -> list:
-    """Every artifact of ``paper``, in file-name order."""
+    """Every artifact of ``paper``, in file-name order.
+
+    Parameters
+    ----------
+    paper : str
+        The paper.
+
+    Returns
+    -------
+    list of Artifact
+        Its artifacts.
+    """
     return [load_spec(p) for p in artifact_paths(paper)]
 
 
@@ -43,6 +65,16 @@ def cells(spec) -> list[dict[str, str]]:
 
     ``cases`` (optional): a list of override lists (e.g. a scenario with its own settings),
     each crossed with the ``grid``; the case's overrides come first.
+
+    Parameters
+    ----------
+    spec : Artifact
+        The artifact (its ``grid`` and ``cases``).
+
+    Returns
+    -------
+    list of dict
+        A ``{override key: value}`` per cell.
     """
     grid = dict(spec.grid)
     keys = list(grid)
@@ -57,7 +89,20 @@ BEST = "best"
 
 
 def best_of(table: pd.DataFrame, metric: str) -> pd.Series:
-    """Per run, the lowest ``metric`` over the runs of the same scenario and objective."""
+    """Per run, the lowest ``metric`` over the runs of the same scenario and objective.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The runs table.
+    metric : str
+        A metric column.
+
+    Returns
+    -------
+    pandas.Series
+        The lowest value per run's group.
+    """
     return table[metric].astype(float).groupby([table.scenario, table.objective]).transform("min")
 
 
@@ -65,7 +110,20 @@ def succeeded(table: pd.DataFrame, success) -> pd.Series:
     """The runs table's ``succeeded`` column: :func:`magexp.core.outcomes.succeeded` of the artifact's
     rule (:class:`magexp.artifacts.spec.Success`), 1/0, NaN where the reference (the true calibration's
     value) is unknown. ``reference: best`` (:data:`BEST`): the lowest value of ``metric`` over the
-    artifact's runs of the same scenario and objective."""
+    artifact's runs of the same scenario and objective.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The runs table.
+    success : Success
+        The artifact's success rule.
+
+    Returns
+    -------
+    pandas.Series
+        1/0 per run, NaN where unknown.
+    """
     if success.metric not in table or (success.reference not in table and success.reference != BEST):
         return pd.Series(np.nan, index=table.index)
     ref = best_of(table, success.metric) if success.reference == BEST else table[success.reference].astype(float)
@@ -87,6 +145,18 @@ def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None
     point. Computed from the stored estimates and the config (downstream of the run: no run changes).
     NaN where the run's config has no numeric offset interval; None when no row has one or the table
     has no offset columns.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The runs table.
+    configs : list of dict
+        The resolved config of each run (row order).
+
+    Returns
+    -------
+    pandas.Series or None
+        The count per run (None: no run has a search box).
     """
     columns = next((c for c in OFFSET_COLUMNS if all(k in table for k in c)), None)
     if columns is None or len(configs) != len(table):
@@ -109,7 +179,18 @@ def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None
 
 def applicable(cfg: DictConfig) -> bool:
     """Whether the run's estimator applies to its problem: :func:`magexp.estimators.base.applies_to`
-    on the classes named by the config (nothing is built or simulated)."""
+    on the classes named by the config (nothing is built or simulated).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        A run's composed config.
+
+    Returns
+    -------
+    bool
+        True when the estimator applies.
+    """
     objective = cfg.get("objective") or cfg.scenario.get("objective")
     if objective is None:  # the scenario class fixes it
         objective = getattr(get_class(cfg.scenario._target_), "objective", None)
@@ -121,7 +202,22 @@ def applicable(cfg: DictConfig) -> bool:
 def overrides_of(spec, cell: dict[str, str], cfg: DictConfig | None = None) -> list[str]:
     """The Hydra overrides of a cell. ``?key=value`` entries of ``base`` apply only where the
     composed config has ``key`` (e.g. a swarm size that a closed-form estimator lacks); with
-    ``cfg=None`` they are left out (the plain overrides to compose with)."""
+    ``cfg=None`` they are left out (the plain overrides to compose with).
+
+    Parameters
+    ----------
+    spec : Artifact
+        The artifact.
+    cell : dict
+        The cell's ``{key: value}``.
+    cfg : DictConfig, optional
+        The composed config (None: optional overrides left out).
+
+    Returns
+    -------
+    list of str
+        The Hydra overrides.
+    """
     out = []
     for o in [str(o) for o in spec.base] + [f"{k}={v}" for k, v in cell.items()]:
         if o.startswith("?"):
@@ -133,13 +229,37 @@ def overrides_of(spec, cell: dict[str, str], cfg: DictConfig | None = None) -> l
 
 
 def apply_optional(spec, cfg: DictConfig) -> DictConfig:
-    """Apply the ``?key=value`` overrides of ``spec.base`` that ``cfg`` has a key for (Hydra's override step)."""
+    """Apply the ``?key=value`` overrides of ``spec.base`` that ``cfg`` has a key for (Hydra's override step).
+
+    Parameters
+    ----------
+    spec : Artifact
+        The artifact.
+    cfg : DictConfig
+        A composed config.
+
+    Returns
+    -------
+    DictConfig
+        ``cfg`` with the optional overrides applied.
+    """
     optional = [str(o)[1:] for o in spec.base if str(o).startswith("?")]
     return apply_overrides(cfg, [o for o in optional if OmegaConf.select(cfg, o.split("=", 1)[0]) is not None])
 
 
 def setting_of(overrides: list[str]) -> str:
-    """``key=value`` pairs joined by ``;``, the scenario first, the estimator left out."""
+    """``key=value`` pairs joined by ``;``, the scenario first, the estimator left out.
+
+    Parameters
+    ----------
+    overrides : list of str
+        A cell's overrides.
+
+    Returns
+    -------
+    str
+        The setting's text.
+    """
     pairs = dict(o.split("=", 1) for o in overrides)
     first = [f"scenario={pairs.pop('scenario')}"] if "scenario" in pairs else []
     pairs.pop("estimator", None)
@@ -147,7 +267,18 @@ def setting_of(overrides: list[str]) -> str:
 
 
 def shrink(cfg: DictConfig) -> DictConfig:
-    """Tiny sizes for smoke tests: cap each key of the estimator class's ``smoke`` sizes."""
+    """Tiny sizes for smoke tests: cap each key of the estimator class's ``smoke`` sizes.
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        A composed config.
+
+    Returns
+    -------
+    DictConfig
+        The config with tiny sizes.
+    """
     for key, cap in getattr(get_class(cfg.estimator._target_), "smoke", {}).items():
         value = OmegaConf.select(cfg, f"estimator.{key}")
         if isinstance(value, int):
@@ -193,7 +324,24 @@ def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False,
                   cell_seeds: dict[int, int] | None = None) -> ArtifactPlan:
     """Every run of ``spec``: each cell of its grid over its seeds (``seeds`` overrides the spec's and
     leaves out its ``grow:`` rule). ``cell_seeds``: ``{cell: seeds}`` of the cells that ``grow:`` gives
-    more (default: its ``start`` for the cells of its claims, :func:`grow_start`)."""
+    more (default: its ``start`` for the cells of its claims, :func:`grow_start`).
+
+    Parameters
+    ----------
+    spec : Artifact
+        The artifact.
+    seeds : int, optional
+        Seeds per cell (default: the spec's).
+    tiny : bool
+        Tiny sizes (:func:`shrink`).
+    cell_seeds : dict, optional
+        ``{cell: seeds}`` given by ``grow:``.
+
+    Returns
+    -------
+    ArtifactPlan
+        Every run's config.
+    """
     n_seeds = int(seeds if seeds is not None else spec.seeds)
     if n_seeds < 1:
         raise MagexpError(f"seeds={n_seeds} is not allowed: it must be an integer >= 1")
@@ -227,7 +375,20 @@ def _settings(overrides: list[str]) -> dict:
 
 def grown_cells(plan: ArtifactPlan, claim) -> list[int]:
     """The cells of ``plan`` that a comparison claim selects (its ``cells``, matched on the cell's
-    overrides; a key that is no setting, a row filter such as ``succeeded``, is left out)."""
+    overrides; a key that is no setting, a row filter such as ``succeeded``, is left out).
+
+    Parameters
+    ----------
+    plan : ArtifactPlan
+        The plan.
+    claim : Claim
+        A comparison claim.
+
+    Returns
+    -------
+    list of int
+        The cells it selects.
+    """
     settings = [_settings(o) for o in plan.overrides]
     keys = {k for s in settings for k in s}
     return sorted({ci for where in claim.cells for ci, s in enumerate(settings)
@@ -235,7 +396,18 @@ def grown_cells(plan: ArtifactPlan, claim) -> list[int]:
 
 
 def grow_start(plan: ArtifactPlan) -> dict[int, int]:
-    """``{cell: seeds}`` of the first stage of ``grow:``: its ``start`` for every cell of its claims."""
+    """``{cell: seeds}`` of the first stage of ``grow:``: its ``start`` for every cell of its claims.
+
+    Parameters
+    ----------
+    plan : ArtifactPlan
+        The plan.
+
+    Returns
+    -------
+    dict
+        ``{cell: seeds}``.
+    """
     rule = plan.spec.grow
     if rule is None:
         return {}
@@ -247,7 +419,22 @@ def next_seeds(n: int, outcome, rule) -> int:
     """The seeds of a comparison's cells at the next stage of ``rule`` (:class:`magexp.artifacts.spec.Grow`):
     ``n + step`` (at most ``cap``) while its ``outcome`` is not decided at ``rule.alpha`` (neither ``p``
     nor ``p_contra`` below it) and its ``detectable`` difference is above ``margin`` (or unknown); else
-    ``n`` (the rule stops)."""
+    ``n`` (the rule stops).
+
+    Parameters
+    ----------
+    n : int
+        The seeds of the cells now.
+    outcome : Outcome
+        The comparison's outcome at ``n``.
+    rule : Grow
+        The artifact's ``grow:`` rule.
+
+    Returns
+    -------
+    int
+        The seeds at the next stage (``n``: stop).
+    """
     undecided = not min(outcome.p, outcome.p_contra) < rule.alpha
     too_coarse = not (np.isfinite(outcome.detectable) and outcome.detectable <= rule.margin)
     return min(n + rule.step, rule.cap) if undecided and too_coarse and n < rule.cap else n
@@ -255,7 +442,22 @@ def next_seeds(n: int, outcome, rule) -> int:
 
 def grow_stage(plan: ArtifactPlan, table: pd.DataFrame, seeds: dict[int, int]) -> dict[int, int] | None:
     """The next stage of ``grow:`` from the runs ``table`` of the stage ``seeds`` (``{cell: seeds}``):
-    the new ``{cell: seeds}``, or None when no claim needs more (each claim by :func:`next_seeds`)."""
+    the new ``{cell: seeds}``, or None when no claim needs more (each claim by :func:`next_seeds`).
+
+    Parameters
+    ----------
+    plan : ArtifactPlan
+        The plan.
+    table : pandas.DataFrame
+        The runs of the stage.
+    seeds : dict
+        ``{cell: seeds}`` of the stage.
+
+    Returns
+    -------
+    dict or None
+        The next ``{cell: seeds}``, None to stop.
+    """
     rule = plan.spec.grow
     if rule is None:
         return None
@@ -288,7 +490,20 @@ class _ByRun(Mapping):
 
 
 def collect(plan: ArtifactPlan, outputs) -> ArtifactRuns:
-    """The :class:`ArtifactRuns` of ``plan`` from its outputs (in ``plan.configs`` order)."""
+    """The :class:`ArtifactRuns` of ``plan`` from its outputs (in ``plan.configs`` order).
+
+    Parameters
+    ----------
+    plan : ArtifactPlan
+        The plan.
+    outputs : Outputs
+        The runs' outputs, in ``plan.configs`` order.
+
+    Returns
+    -------
+    ArtifactRuns
+        The runs with their table.
+    """
     metrics = outputs.metrics if hasattr(outputs, "metrics") else (lambda k: run_row(outputs[k]))
     rows = [{"cell": ci, **plan.cells[ci], "setting": setting_of(plan.overrides[ci]), **metrics(k)}
             for k, (ci, seed) in enumerate(plan.index)]

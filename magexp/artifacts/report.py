@@ -60,7 +60,18 @@ def versions() -> dict:
 
 
 def collect(root: Path = RESULTS) -> pd.DataFrame:
-    """Every paper's summary part, in the papers' order."""
+    """Every paper's summary part, in the papers' order.
+
+    Parameters
+    ----------
+    root : Path
+        The results folder, a subfolder per paper.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The summary rows.
+    """
     parts = []
     for paper in papers():
         path = root / paper / "summary.csv"
@@ -120,7 +131,13 @@ def _headline_table(p: Paper) -> str:
 def draw_readings(p: Paper) -> None:
     """``<paper>/readings.png``: the verdict of each headline under each reading
     (:mod:`magexp.artifacts.plots.readings`), and the cells it draws in ``readings.csv``; none for a
-    paper without headlines."""
+    paper without headlines.
+
+    Parameters
+    ----------
+    p : Paper
+        The paper's section.
+    """
     if p.headlines:
         (p.root / p.paper).mkdir(parents=True, exist_ok=True)
         write_csv(pd.DataFrame(readings_plot.cells(p.headlines), columns=["headline", "reading", "verdict"]),
@@ -132,7 +149,20 @@ def draw_readings(p: Paper) -> None:
 def counts(claims: list[dict], peers: list[str] = ()) -> str:
     """The counts of a section (or of all, ``claims`` of every paper): the papers' headline claims by
     verdict, the papers' findings apart from magexp's own statements (with ``peers``: the outcomes of
-    the MAGYC section's claims, magexp's too), and the sanity checks, which are not counted."""
+    the MAGYC section's claims, magexp's too), and the sanity checks, which are not counted.
+
+    Parameters
+    ----------
+    claims : list of dict
+        The claims rows.
+    peers : list of str
+        The results of the MAGYC section's claims.
+
+    Returns
+    -------
+    str
+        The counts' text.
+    """
     heads = pd.Series([c["verdict"] for c in claims if c["role"] == "headline"], dtype=object).value_counts()
     paper = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "paper"]
     own = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "magexp"] + list(peers)
@@ -204,7 +234,18 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
     one per summary row with a compared paper value, ``ours`` what its verdict used
     (:func:`_judged_text`), except that a cell with more than :data:`COLLAPSE` of them (a parameter
     table) becomes one line: its verdict counts, and the rows not reproduced (every row stays in the
-    appendix and ``summary.csv``)."""
+    appendix and ``summary.csv``).
+
+    Parameters
+    ----------
+    rows : pandas.DataFrame
+        Summary rows.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The compared rows.
+    """
     out = []
     rows = rows[~rows.verdict.isin(NOT_COMPARED)]
     for _, cell in rows.groupby(["artifact", "estimator", "setting"], sort=False):
@@ -236,7 +277,18 @@ SMALL_DIFFERENCE = 0.01
 def compared_counts(rows: pd.DataFrame) -> str:
     """The verdict counts of compared rows, ``differs`` split by its size on the block's scale and
     by a failed majority: ``reproduced 8, differs 4 (1 by less than 1 % of its scale; 2 on a failed
-    majority), uninformative 4``; then the rows not compared."""
+    majority), uninformative 4``; then the rows not compared.
+
+    Parameters
+    ----------
+    rows : pandas.DataFrame
+        Compared rows (:func:`compared_rows`).
+
+    Returns
+    -------
+    str
+        The counts' text.
+    """
     counts = rows.verdict.value_counts()
     differs = rows[rows.verdict == "differs"]
     small = int((differs.rel_difference < SMALL_DIFFERENCE).sum())
@@ -344,7 +396,18 @@ _SEEDS_OF = re.compile(r"\{seeds:(\w+)\}")
 
 def seed_count(table: pd.DataFrame) -> str:
     """The seeds per cell of a runs table: ``"30"``, or ``"30 to 150"`` where a ``grow:`` rule gave
-    some cells more."""
+    some cells more.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A runs table.
+
+    Returns
+    -------
+    str
+        The seeds per cell.
+    """
     per = table.groupby("cell").seed.nunique() if "cell" in table else pd.Series([table.seed.nunique()])
     lo, hi = int(per.min()), int(per.max())
     return str(hi) if lo == hi else f"{lo} to {hi}"
@@ -404,7 +467,18 @@ def _artifact_table(spec, path: Path) -> str:
 
 def peer_results(root: Path) -> list[str]:
     """The results of the claims of the section "magexp beside MAGYC": the second column of the claims
-    table of ``root/peers/peers.md`` (the table under its ``**Claims**`` line; none without the file)."""
+    table of ``root/peers/peers.md`` (the table under its ``**Claims**`` line; none without the file).
+
+    Parameters
+    ----------
+    root : Path
+        The results folder (its ``peers/peers.md``).
+
+    Returns
+    -------
+    list of str
+        The claims' results.
+    """
     path = root / "peers" / "peers.md"
     if not path.exists():
         return []
@@ -463,7 +537,13 @@ RULE = ("The verdict of a compared number is one rule, applied in order: `differ
 
 def build(root: Path = RESULTS) -> None:
     """Write ``root/summary.csv``, ``root/claims.csv``, ``root/versions.csv``, ``root/REPORT.md``
-    and ``root/APPENDIX.md``."""
+    and ``root/APPENDIX.md``.
+
+    Parameters
+    ----------
+    root : Path
+        The results folder the report is written into.
+    """
     summary = collect(root)
     write_csv(summary, root / "summary.csv")
     record = versions()

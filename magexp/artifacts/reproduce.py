@@ -52,7 +52,17 @@ def available_papers() -> list[str]:
 
 
 def select(papers: list[str], only: str | None) -> dict[str, list]:
-    """``{paper: [spec, ...]}`` of ``papers``; with ``only``, just that artifact, in whichever paper has it."""
+    """``{paper: [spec, ...]}`` of ``papers``; with ``only``, just that artifact, in whichever paper has it.
+
+    Parameters
+    ----------
+    papers : list of str
+    only : str or None
+
+    Returns
+    -------
+    dict
+    """
     chosen = {paper: paper_specs(paper) for paper in papers}
     if only is None:
         return chosen
@@ -67,7 +77,14 @@ def select(papers: list[str], only: str | None) -> dict[str, list]:
 def check_canonical(out, *, seeds, tiny: bool) -> Path:
     """The folder ``--out`` names, if this reproduction may write there: exploration (``--seeds``,
     ``--tiny``) never into the canonical ``results/``, and no reproduction into a folder inside it
-    (:func:`magexp.run.guard.check_destination`: resolved paths)."""
+    (:func:`magexp.run.guard.check_destination`: resolved paths).
+
+    Parameters
+    ----------
+    out : Path or str
+    seeds : int or None
+    tiny : bool
+    """
     flags = [f for f, on in (("--seeds", seeds is not None), ("--tiny", tiny)) if on]
     if flags and str(out).strip() and Path(out).resolve() == RESULTS.resolve():
         raise MagexpError(f"{' '.join(flags)} explores: give --out DIR other than results/ "
@@ -87,7 +104,14 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     config names, ...); each one is printed as a ``warning:`` line to stderr. The check needs a
     layout pass (about a third of a second a figure), so exploration folders and tests skip it;
     ``tests/test_figure_defects.py`` checks one committed figure of each kind, and
-    ``make test-full`` all of them."""
+    ``make test-full`` all of them.
+
+    Parameters
+    ----------
+    spec : Artifact
+    csv, out : Path
+    force : bool
+    """
     # lazy: matplotlib (memo, style) only here, where a figure is checked or drawn; importing this
     # module (--help, a refused command) never pays for it (493 ms CPU after this module, min of 5)
     from magexp.artifacts.plots import memo
@@ -115,7 +139,13 @@ ROW_KEYS = ("case", "family", "label", "scenario", "estimator", "objective", "se
 def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
     """Move the wall-time columns of ``frame`` into the timing file ``path`` (with the row keys):
     the results' CSVs then hold only what a fresh clone computes to the same bytes, and
-    ``results/timing/`` and ``results/timing.csv`` what this machine measured."""
+    ``results/timing/`` and ``results/timing.csv`` what this machine measured.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+    path : Path
+    """
     timed = [c for c in frame.columns if MEASURED in c]
     if not timed:
         return frame
@@ -155,7 +185,12 @@ PARAMETER_FACTS, DESIGN_FACTS = ("truth_x", "lower", "upper"), ("gram", "coef", 
 def facts_rows(runs) -> pd.DataFrame:
     """The cells CSV of an artifact: per cell, the facts its first run stored (:data:`PARAMETER_FACTS`
     by parameter; :data:`DESIGN_FACTS` where the artifact judges on a least-squares design: ``interval:
-    ls``, ``mode: ftest``), one value a row: ``cell, seed, fact, parameter, index, value``."""
+    ls``, ``mode: ftest``), one value a row: ``cell, seed, fact, parameter, index, value``.
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    """
     design = any(item.interval == "ls" or item.mode == "ftest" for item in runs.spec.summarise)
     rows = []
     for ci in range(len(runs.cells)):
@@ -172,13 +207,24 @@ def facts_rows(runs) -> pd.DataFrame:
 
 def write_facts(frame: pd.DataFrame, path: Path) -> None:
     """The cells CSV at full precision (``%.17g``: read back to the bit, so that ``--redraw`` judges on
-    what the reproduction judged on)."""
+    what the reproduction judged on).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+    path : Path
+    """
     with atomic_path(path) as tmp:
         frame.to_csv(tmp, index=False, float_format="%.17g")
 
 
 def read_facts(path: Path) -> dict[int, dict]:
-    """``{cell: {parameter_names, truth_x, lower, upper, design}}`` of a cells CSV (:func:`facts_rows`)."""
+    """``{cell: {parameter_names, truth_x, lower, upper, design}}`` of a cells CSV (:func:`facts_rows`).
+
+    Parameters
+    ----------
+    path : Path
+    """
     frame = pd.read_csv(path, keep_default_na=False, na_values=[""])  # pandas 3 reads %.17g back to the bit
     out = {}
     for ci, sub in frame.groupby("cell", sort=True):
@@ -197,7 +243,13 @@ def read_facts(path: Path) -> dict[int, dict]:
 
 def summarise_stored(spec, root: Path) -> pd.DataFrame:
     """The summary rows of ``spec`` from its runs CSV and its cells CSV under ``root`` (``--redraw``:
-    no run, nothing simulated; the runs as written, to 6 digits)."""
+    no run, nothing simulated; the runs as written, to 6 digits).
+
+    Parameters
+    ----------
+    spec : Artifact
+    root : Path
+    """
     plan = plan_artifact(spec)
     table = read_runs(root / spec.paper / f"{spec.name}_runs.csv")
     facts = read_facts(root / spec.paper / f"{spec.name}_cells.csv")
@@ -207,7 +259,14 @@ def summarise_stored(spec, root: Path) -> pd.DataFrame:
 
 def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     """An artifact's CSVs and figure into ``out`` (``force``: draw it even if unchanged); returns its
-    summary rows, computed from the unrounded runs and their stored outputs (the CSVs round them)."""
+    summary rows, computed from the unrounded runs and their stored outputs (the CSVs round them).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+    out : Path
+    force : bool
+    """
     path = out / f"{runs.spec.name}.csv"
     frame = tabulate(runs)
     if runs.spec.kind != "speed":  # wall times measure this machine today: kept beside timing.csv
@@ -220,7 +279,14 @@ def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
 
 
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
-    """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows."""
+    """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows.
+
+    Parameters
+    ----------
+    paper : str
+    parts : dict
+    out : Path
+    """
     summary = pd.concat(list(parts.values()), ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
     path = out / "summary.csv"
     if path.exists() and path.stat().st_size > 0:
@@ -234,7 +300,13 @@ def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.D
 
 def skipped_for_data(spec, log=print) -> bool:
     """Whether ``spec`` reads a recording that is not in :data:`magexp.paths.SHARED_DATA` (the
-    recordings of others are never shipped): then it is skipped, with one line."""
+    recordings of others are never shipped): then it is skipped, with one line.
+
+    Parameters
+    ----------
+    spec : Artifact
+    log : callable
+    """
     missing = [f for f in spec.get("requires_data") or [] if not (paths.SHARED_DATA / f).is_file()]
     if missing:
         log(f"{spec.name}: skipped, {missing[0]} is not in {paths.SHARED_DATA} (set MAGEXP_DATA)")
@@ -243,7 +315,13 @@ def skipped_for_data(spec, log=print) -> bool:
 
 def slice_outputs(outputs, start: int, n: int):
     """Runs ``start .. start + n`` of :class:`magexp.run.executor.Outputs`, as an ``Outputs`` of their own
-    (metrics at hand, outputs read from the same run cache on access)."""
+    (metrics at hand, outputs read from the same run cache on access).
+
+    Parameters
+    ----------
+    outputs : Outputs
+    start, n : int
+    """
     keys = outputs.keys[start:start + n]
     return Outputs(keys, {key: outputs.metrics(start + j) for j, key in enumerate(keys)}, outputs.root,
                    held=outputs.held)
@@ -254,6 +332,16 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
     """Plan every run of the ``selected`` artifacts, run them in one pass, write each artifact.
 
     Returns ``{"requested", "distinct", "computed", "cached", "paper summaries": {...}}``.
+
+    Parameters
+    ----------
+    selected : dict
+    root : Path
+    seeds : int, optional
+    jobs : int
+    tiny, force : bool
+    executor : Executor, optional
+    log : callable
     """
     plans = [(paper, plan_artifact(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
              for spec in specs if not skipped_for_data(spec, log)]
@@ -293,7 +381,15 @@ def grow(plan, outputs, run, log=print, *, active: bool = True):
     """The plan and outputs of an artifact once its ``grow:`` rule has stopped: each stage
     (:func:`magexp.artifacts.plan.grow_stage`) plans the cells' new seed counts and runs them with
     ``run(configs)`` (the runs of earlier stages come from the cache). ``active=False`` (``--seeds``,
-    ``--tiny``): as planned."""
+    ``--tiny``): as planned.
+
+    Parameters
+    ----------
+    plan : ArtifactPlan
+    outputs : Outputs
+    run, log : callable
+    active : bool
+    """
     seeds = grow_start(plan) if active else {}
     while seeds:
         new = grow_stage(plan, collect(plan, outputs).table, seeds)

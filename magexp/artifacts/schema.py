@@ -61,7 +61,20 @@ def allowed(cls) -> list[str]:
 
 
 def unknown(where: str, key, cls) -> str:
-    """The line for an unknown ``key`` of a ``cls`` mapping at ``where``."""
+    """The line for an unknown ``key`` of a ``cls`` mapping at ``where``.
+
+    Parameters
+    ----------
+    where : str
+        Where the mapping is (file and key).
+    key : object
+        The unknown key.
+
+    Returns
+    -------
+    str
+        The message.
+    """
     return f"{where}: unknown key {key!r}: allowed keys are {', '.join(allowed(cls))}"
 
 
@@ -117,7 +130,20 @@ def _one_line(error: dict, cls, where: str) -> str:
 def build(cls, data, where: str):
     """The dataclass ``cls`` from the mapping ``data`` (a dict or an OmegaConf node), validated
     against the type hints of ``cls`` and of the dataclasses it nests; an unknown key, a missing key,
-    a value of the wrong type or a check of a ``__post_init__`` fails with one line naming the key."""
+    a value of the wrong type or a check of a ``__post_init__`` fails with one line naming the key.
+
+    Parameters
+    ----------
+    data : Mapping
+        The mapping.
+    where : str
+        Where it is (for messages).
+
+    Returns
+    -------
+    object
+        The ``cls`` instance.
+    """
     if isinstance(data, DictConfig):
         data = OmegaConf.to_container(data, resolve=True)
     if not isinstance(data, dict):

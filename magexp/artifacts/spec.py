@@ -147,6 +147,20 @@ class Tolerance:
         return f"{self.kind} {getattr(self, self.kind):g}"
 
     def holds(self, value: float, paper: float) -> bool:
+        """Whether ``value`` is within this tolerance of the paper's ``paper``.
+
+        Parameters
+        ----------
+        value : float
+            Our value.
+        paper : float
+            The paper's value.
+
+        Returns
+        -------
+        bool
+            True when the tolerance holds.
+        """
         t = getattr(self, self.kind)
         return {"abs": lambda: abs(value - paper) <= t, "below": lambda: value < t and paper < t,
                 "factor": lambda: paper / t <= value <= paper * t,
@@ -256,7 +270,20 @@ class Artifact:
     path: Any = field(default=None, metadata={"yaml": False})  # the file it was read from (set by the loader)
 
     def get(self, key: str, default=None):
-        """Mapping-style access (``spec.get("caption")``), for code written against the old node."""
+        """Mapping-style access (``spec.get("caption")``), for code written against the old node.
+
+        Parameters
+        ----------
+        key : str
+            A field's name.
+        default : object
+            Returned when the field is absent or None.
+
+        Returns
+        -------
+        object
+            The field's value.
+        """
         value = getattr(self, key, default)
         return default if value is None else value
 
@@ -324,7 +351,20 @@ def _check_unique_ids(items: list, where: str) -> None:
 
 
 def parse(data: dict, path: Path) -> Artifact:
-    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults)."""
+    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults).
+
+    Parameters
+    ----------
+    data : dict
+        The loaded YAML mapping.
+    path : Path
+        The artifact's file.
+
+    Returns
+    -------
+    Artifact
+        The validated artifact.
+    """
     where = path.stem
     if not isinstance(data, dict):
         raise MagexpError(f"artifact {str(path)!r} is not a mapping of keys {', '.join(allowed(Artifact))}")
@@ -362,12 +402,34 @@ def _parsed(text: str):
 
 def read_yaml(path: Path):
     """``yaml.safe_load`` of the file ``path``, parsed once per distinct content (a process lists the
-    papers and reads every spec many times: planning, summary, claims, report); a fresh copy each call."""
+    papers and reads every spec many times: planning, summary, claims, report); a fresh copy each call.
+
+    Parameters
+    ----------
+    path : Path
+        A YAML file.
+
+    Returns
+    -------
+    object
+        Its loaded content (a fresh copy).
+    """
     return copy.deepcopy(_parsed(Path(path).read_text()))
 
 
 def load(path: Path | str) -> Artifact:
-    """Read and validate an artifact YAML."""
+    """Read and validate an artifact YAML.
+
+    Parameters
+    ----------
+    path : Path or str
+        An artifact YAML.
+
+    Returns
+    -------
+    Artifact
+        The validated artifact.
+    """
     path = Path(path)
     if not path.exists():
         raise MagexpError(f"artifact {str(path)!r} does not exist")
@@ -470,7 +532,20 @@ class Paper:
 
 
 def load_paper(paper: str, root: Path | None = None) -> Paper:
-    """The validated ``paper.yaml`` of ``paper``."""
+    """The validated ``paper.yaml`` of ``paper``.
+
+    Parameters
+    ----------
+    paper : str
+        The paper's folder name.
+    root : Path, optional
+        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
+
+    Returns
+    -------
+    Paper
+        The validated paper.
+    """
     path = (root or EXPERIMENTS) / paper / "paper.yaml"
     data = (read_yaml(path) or {}) if path.exists() else {"title": paper}
     meta = build(Paper, data, f"{paper}/paper.yaml")
@@ -480,14 +555,38 @@ def load_paper(paper: str, root: Path | None = None) -> Paper:
 
 def papers(root: Path | None = None) -> list[str]:
     """Every folder of ``experiments/`` that holds an artifact YAML, in the papers' ``order``
-    (``paper.yaml``, optional: title, intro, order, deviations)."""
+    (``paper.yaml``, optional: title, intro, order, deviations).
+
+    Parameters
+    ----------
+    root : Path, optional
+        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
+
+    Returns
+    -------
+    list of str
+        The papers' names.
+    """
     root = root or EXPERIMENTS
     names = [p.name for p in root.iterdir() if p.is_dir() and any(q.name != "paper.yaml" for q in p.glob("*.yaml"))]
     return sorted(names, key=lambda n: (load_paper(n, root).order, n))
 
 
 def artifact_paths(paper: str, root: Path | None = None) -> list[Path]:
-    """The artifact files of ``paper``, in file-name order."""
+    """The artifact files of ``paper``, in file-name order.
+
+    Parameters
+    ----------
+    paper : str
+        The paper whose artifact files are listed.
+    root : Path, optional
+        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
+
+    Returns
+    -------
+    list of Path
+        The artifact YAMLs.
+    """
     root = root or EXPERIMENTS
     folder = root / paper
     if not folder.is_dir() or paper not in papers(root):

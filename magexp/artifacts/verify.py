@@ -43,7 +43,18 @@ SHOWN = 20
 # which folders
 
 def git(*args: str) -> str:
-    """The output of ``git ARGS`` in the checkout; one line (exit 2) when there is no git or no repository."""
+    """The output of ``git ARGS`` in the checkout; one line (exit 2) when there is no git or no repository.
+
+    Parameters
+    ----------
+    *args : str
+        The git arguments.
+
+    Returns
+    -------
+    str
+        Its standard output.
+    """
     try:
         done = subprocess.run(["git", "-C", str(paths.ROOT), *args], capture_output=True, check=True)
     except FileNotFoundError:
@@ -58,7 +69,20 @@ def git(*args: str) -> str:
 
 def committed_results(dest: Path, files=("results",)) -> str:
     """Extract ``results/`` (or only ``files``, paths from the checkout's root) of the last commit
-    into ``dest`` (``dest/results/...``); returns a line naming the commit."""
+    into ``dest`` (``dest/results/...``); returns a line naming the commit.
+
+    Parameters
+    ----------
+    dest : Path
+        Where the files are extracted.
+    files : tuple of str
+        Paths from the checkout's root.
+
+    Returns
+    -------
+    str
+        The line naming the commit.
+    """
     head = git("rev-parse", "--short=12", "HEAD").strip()
     last = git("log", "-1", "--format=%h %cs", "--", "results").strip()
     with tarfile.open(fileobj=io.BytesIO(git("archive", "--format=tar", "HEAD", "--", *files))) as tar:
@@ -81,7 +105,18 @@ def reproduce_scratch(jobs: int) -> Path:
     figures of the last such reproduction are kept, so that an unchanged figure is not drawn again
     (:mod:`magexp.artifacts.plots.memo`); every other file is written afresh, and a figure whose CSV
     was not written again is removed. (The reproduction takes the committed ``results/peers/`` with it:
-    :func:`magexp.artifacts.reproduce.with_peer_bench`.)"""
+    :func:`magexp.artifacts.reproduce.with_peer_bench`.)
+
+    Parameters
+    ----------
+    jobs : int
+        Worker processes (0: one per core).
+
+    Returns
+    -------
+    Path
+        The scratch results folder.
+    """
     out = scratch()
     if out.is_dir():
         for path in [p for p in out.rglob("*") if p.is_file() and p.suffix not in FIGURES]:
@@ -101,7 +136,22 @@ def reproduce_scratch(jobs: int) -> Path:
 
 def render(result: Comparison, ours: str, committed: str, *, every: bool = False) -> str:
     """One screen: what was compared with what, the counts, and the verdict of the comparison; up to
-    :data:`SHOWN` disagreements each on a line, more grouped by file and column (``every``: each on a line)."""
+    :data:`SHOWN` disagreements each on a line, more grouped by file and column (``every``: each on a line).
+
+    Parameters
+    ----------
+    result : Comparison
+        The comparison.
+    ours, committed : str
+        What was compared (in words).
+    every : bool
+        Each disagreement on a line.
+
+    Returns
+    -------
+    str
+        The screen.
+    """
     n = sum(result.verdicts.values())
     lines = [f"verify: {ours}", f"  against {committed}",
              f"compared {result.csv_files} CSV files ({result.rows:,} rows, {result.values:,} values), "
@@ -172,7 +222,18 @@ def _folder(text: str, what: str) -> Path:
 
 def command(argv: list[str]) -> int:
     """``magexp verify [OPTIONS]``: 0 when the reproduction agrees, 1 when not (errors are raised:
-    the one error path, :func:`magexp.errors.guarded`, turns them into one line and exit 2)."""
+    the one error path, :func:`magexp.errors.guarded`, turns them into one line and exit 2).
+
+    Parameters
+    ----------
+    argv : list of str
+        The command's arguments.
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
     args = parser().parse_args(argv)
     if not 0 <= args.rtol < 1:
         raise MagexpError(f"--rtol {args.rtol!r} is not allowed: it must be a number >= 0 and < 1")
@@ -202,7 +263,18 @@ def command(argv: list[str]) -> int:
 
 
 def main(argv=None) -> int:
-    """``python -m magexp.artifacts.verify ...``: the exit code of :func:`command` (2 on bad input)."""
+    """``python -m magexp.artifacts.verify ...``: the exit code of :func:`command` (2 on bad input).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command-line words after ``verify``; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit code of :func:`command`, 2 on bad input.
+    """
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 

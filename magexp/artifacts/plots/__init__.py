@@ -33,6 +33,18 @@ KINDS = {
 
 
 def kind_module(kind: str):
+    """The module that draws the artifact kind ``kind`` (:data:`KINDS`).
+
+    Parameters
+    ----------
+    kind : str
+        An artifact kind, a key of :data:`KINDS`.
+
+    Returns
+    -------
+    module
+        The kind's module (its ``draw(frame, spec)``).
+    """
     if kind not in KINDS:
         raise MagexpError(f"artifact kind={kind!r} is not allowed: choose one of {', '.join(sorted(KINDS))}")
     return importlib.import_module(KINDS[kind])

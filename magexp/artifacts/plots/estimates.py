@@ -27,6 +27,22 @@ def _cell(row) -> str:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    """The estimates as a table figure: per cell and quantity, median and IQR over seeds beside the truth.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table of :func:`magexp.artifacts.kind_tables.estimates_table`.
+    spec : Artifact
+        The artifact: ``plot.rows`` adds quantities, ``plot.names`` gives the cells words.
+    axes : Axes, optional
+        The caller's Axes for the table (default: a new figure sized to it).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The table of estimates, a row per quantity.
+    """
     quantities, columns, body = _table(frame, spec)
     widths = _column_widths(columns, body)
     lines = [max(1, *(c.count("\n") + 1 for c in cells)) for cells in body]

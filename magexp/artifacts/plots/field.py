@@ -41,6 +41,22 @@ def _lines(*parts: str) -> str:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    """The readings of the shown seed: total field against the reference, or in 3-D against the sphere.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table of :func:`magexp.artifacts.kind_tables.field_table`.
+    spec : Artifact
+        The artifact: ``plot.quantity`` (``sphere`` or ``magnitude``), ``plot.panels``.
+    axes : sequence of Axes, optional
+        The caller's panels (3-D ones for ``sphere``; default: a new figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The readings' field, raw and calibrated.
+    """
     quantity = spec.plot.get("quantity", "sphere" if spec.kind == "sphere" else "magnitude")
     if quantity == "sphere":
         return _draw_sphere(frame, spec, axes=axes)

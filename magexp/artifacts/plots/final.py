@@ -46,7 +46,20 @@ CRB_FLOOR = "Cramér-Rao floor (Gaussian)"
 
 def ylog(spec, metric: str) -> bool:
     """Whether ``metric``'s panels have a log y axis (``plot.ylog``: one flag, or ``{metric: flag}``,
-    default true)."""
+    default true).
+
+    Parameters
+    ----------
+    spec : Artifact
+        The artifact, whose ``plot.ylog`` is one flag or ``{metric: flag}``.
+    metric : str
+        A metric column the figure draws, by its name.
+
+    Returns
+    -------
+    bool
+        True for a log y axis.
+    """
     flag = spec.plot.get("ylog", True)
     return bool(flag.get(metric, True)) if isinstance(flag, Mapping) else bool(flag)
 
@@ -151,6 +164,22 @@ def _references(ax, sub, spec, x_key, metric):
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
+    """The final value of each metric against the swept key ``plot.x``: median and IQR per hue, a panel per metric.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table of :func:`magexp.artifacts.kind_tables.final_table`.
+    spec : Artifact
+        The artifact: ``plot.x``, ``plot.panels``, ``plot.hue``, ``plot.ylog`` and its ``ratios``.
+    axes : sequence of Axes, optional
+        The caller's panels, one per metric and panel value (default: a new figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The final values against ``plot.x``, the paper's values marked.
+    """
     x_key, panel_key = spec.plot.x, spec.plot.get("panels")
     frame, hue_key = _with_hue(frame, spec, spec.plot.get("hue", "estimator"))
     metrics = metric_list(spec) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
@@ -205,7 +234,20 @@ def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None
 
 def symlog_ticks(xs: pd.Series, linthresh: float) -> list[float]:
     """Major ticks of a ``symlog`` axis from 0: 0, then the decades from the first at or above
-    ``linthresh`` to the largest value's (a decade inside the linear part would be printed beside 0)."""
+    ``linthresh`` to the largest value's (a decade inside the linear part would be printed beside 0).
+
+    Parameters
+    ----------
+    xs : pandas.Series
+        The values on the axis.
+    linthresh : float
+        The linear threshold of the ``symlog`` scale.
+
+    Returns
+    -------
+    list of float
+        The major tick positions.
+    """
     top = float(xs.astype(float).max())
     first = math.ceil(math.log10(linthresh))
     last = math.floor(math.log10(top)) if top > 0 else first

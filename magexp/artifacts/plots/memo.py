@@ -53,7 +53,20 @@ def figure_code_version() -> str:
 
 def key(spec, csv_bytes: bytes) -> str:
     """The key of the figure of ``spec`` drawn from a CSV holding ``csv_bytes`` (module docstring),
-    with matplotlib's settings as they are now (a user's ``matplotlibrc`` draws otherwise)."""
+    with matplotlib's settings as they are now (a user's ``matplotlibrc`` draws otherwise).
+
+    Parameters
+    ----------
+    spec : Artifact
+        The artifact drawn.
+    csv_bytes : bytes
+        The bytes of the CSV it is drawn from.
+
+    Returns
+    -------
+    str
+        The hex digest naming the drawing.
+    """
     h = hashlib.sha256(figure_code_version().encode())
     h.update(repr(sorted(plt.rcParams.items())).encode())  # the settings the draw uses: magexp's style on the user's
     h.update(repr(spec).encode())
@@ -62,7 +75,18 @@ def key(spec, csv_bytes: bytes) -> str:
 
 
 def digests(files: list[Path]) -> list[str] | None:
-    """SHA-256 of each file (None if one is missing)."""
+    """SHA-256 of each file (None if one is missing).
+
+    Parameters
+    ----------
+    files : list of Path
+        The files drawn.
+
+    Returns
+    -------
+    list of str or None
+        A hex digest per file, None if one is missing.
+    """
     try:
         return [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files]
     except FileNotFoundError:
@@ -74,7 +98,20 @@ def _stamp(k: str) -> Path:
 
 
 def current(k: str, files: list[Path]) -> bool:
-    """Whether ``files`` are what the draw of key ``k`` wrote (their recorded digests)."""
+    """Whether ``files`` are what the draw of key ``k`` wrote (their recorded digests).
+
+    Parameters
+    ----------
+    k : str
+        The drawing's key (:func:`key`).
+    files : list of Path
+        The files the drawing writes.
+
+    Returns
+    -------
+    bool
+        True when every file holds what was recorded under ``k``.
+    """
     try:
         recorded = json.loads(_stamp(k).read_text())
     except (OSError, ValueError):
@@ -85,7 +122,15 @@ def current(k: str, files: list[Path]) -> bool:
 def record(k: str, files: list[Path]) -> None:
     """Keep the digests of the ``files`` just drawn under key ``k`` (atomically, readable by whom the
     cache folder is: :func:`magexp.run.cache.write`; where the cache cannot be written, nothing is kept
-    and the figure is drawn again next time)."""
+    and the figure is drawn again next time).
+
+    Parameters
+    ----------
+    k : str
+        The drawing's key (:func:`key`).
+    files : list of Path
+        The files just drawn.
+    """
     try:
         write(_stamp(k), json.dumps(digests(files)).encode(), root())
     except OSError:

@@ -23,25 +23,71 @@ WRAP = 24
 
 def cells_of(headline: dict) -> list[tuple[str, str]]:
     """``(reading label, verdict)`` of each cell of a headline row (``readings`` of
-    :func:`magexp.artifacts.report.headlines`); one cell of magexp's settings when it has none."""
+    :func:`magexp.artifacts.report.headlines`); one cell of magexp's settings when it has none.
+
+    Parameters
+    ----------
+    headline : dict
+        A headline row.
+
+    Returns
+    -------
+    list of tuple of str
+        ``(reading label, verdict)`` per cell.
+    """
     readings = headline.get("readings") or []
     return [(r["label"], r["verdict"]) for r in readings] or [("magexp's settings", headline["verdict"])]
 
 
 def drawn(headlines: list[dict]) -> list[dict]:
-    """The headlines the grid draws: every one but the untestable (no runs to judge)."""
+    """The headlines the grid draws: every one but the untestable (no runs to judge).
+
+    Parameters
+    ----------
+    headlines : list of dict
+        A paper's headline rows (their ``verdict`` is read).
+
+    Returns
+    -------
+    list of dict
+        Those with runs to judge.
+    """
     return [h for h in headlines if h["verdict"] != "not testable here"]
 
 
 def cells(headlines: list[dict]) -> list[dict]:
     """The data the grid draws, a row per cell: ``headline`` (its id), ``reading`` and ``verdict``
-    (written beside the figure as ``readings.csv``, what ``magexp verify`` compares)."""
+    (written beside the figure as ``readings.csv``, what ``magexp verify`` compares).
+
+    Parameters
+    ----------
+    headlines : list of dict
+        A paper's headline rows, with their readings.
+
+    Returns
+    -------
+    list of dict
+        A ``{headline, reading, verdict}`` row per cell.
+    """
     return [{"headline": h["id"], "reading": label, "verdict": verdict}
             for h in drawn(headlines) for label, verdict in cells_of(h)]
 
 
 def draw(headlines: list[dict], title: str):
-    """The grid of ``headlines`` (rows of :func:`magexp.artifacts.report.headlines`) as a figure."""
+    """The grid of ``headlines`` (rows of :func:`magexp.artifacts.report.headlines`) as a figure.
+
+    Parameters
+    ----------
+    headlines : list of dict
+        The headline rows of a paper.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The grid drawn.
+    """
     rows = drawn(headlines)
     width = max((len(cells_of(h)) for h in rows), default=1)
     fig, ax = plt.subplots(figsize=(1.9 * width + 2.2, 0.62 * len(rows) + 0.9))
