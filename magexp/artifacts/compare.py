@@ -99,6 +99,12 @@ class Difference:
     relative: float = math.nan
 
     def line(self) -> str:
+        """The difference as one line: the file, where in it, both values.
+
+        Returns
+        -------
+        str
+        """
         where = ", ".join(x for x in (self.row, f"column {self.column}" if self.column else "") if x)
         return f"{self.file}{': ' + where if where else ''}: ours {_quote(self.ours)}, committed {_quote(self.committed)}"
 
@@ -132,10 +138,8 @@ class Comparison:
 
         Parameters
         ----------
-        diff : Difference
-            The largest difference counted.
-        count : int
-            How many differences it stands for.
+        diff, count : Difference, int
+            The largest difference counted, and how many differences it stands for.
         """
         self.below[diff.file] = self.below.get(diff.file, 0) + count
         if self.largest is None or diff.relative > self.largest.relative:
@@ -146,10 +150,8 @@ class Comparison:
 
         Parameters
         ----------
-        diff : Difference
-            The largest differing path diagnostic.
-        count : int
-            How many differing diagnostics it stands for.
+        diff, count : Difference, int
+            The largest differing path diagnostic, and how many differing diagnostics it stands for.
         """
         self.paths[diff.file] = self.paths.get(diff.file, 0) + count
         if self.path_largest is None or diff.relative > self.path_largest.relative:
@@ -170,10 +172,8 @@ def tolerance(ours: np.ndarray, committed: np.ndarray, unit: np.ndarray, rtol: f
 
     Parameters
     ----------
-    ours, committed : numpy.ndarray
-        The two sides' values.
-    unit : numpy.ndarray
-        One unit of the printed precision per value.
+    ours, committed, unit : numpy.ndarray
+        The two sides' values, and one unit of the printed precision per value.
     rtol : float
         The relative tolerance.
 

@@ -47,7 +47,13 @@ CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "
 def versions() -> dict:
     """The versions behind the results: python and the libraries (:mod:`magexp.run.provenance`) and
     ``magexp_commit``, the last commit that changed anything outside ``results/`` (so committing the
-    regenerated results does not change the record, and a fresh clone writes the same bytes)."""
+    regenerated results does not change the record, and a fresh clone writes the same bytes).
+
+    Returns
+    -------
+    dict
+        ``{name: version}``, ``magexp_commit`` last.
+    """
     try:
         commit = subprocess.run(["git", "log", "-1", "--format=%h", "--abbrev=12", "--", ".", ":(exclude)results"],
                                 capture_output=True, text=True, check=True,
@@ -96,7 +102,17 @@ def _bold(verdict: str) -> str:
 
 
 class Paper:
-    """One paper's parts, each read once: meta, specs, runs, summary rows, claim outcomes."""
+    """One paper's parts, each read once: meta, specs, runs, summary rows, claim outcomes.
+
+    Parameters
+    ----------
+    paper : str
+        The paper's folder name.
+    summary : pandas.DataFrame
+        Every paper's summary rows (:func:`collect`); this paper's are kept.
+    root : Path
+        The results folder, a subfolder per paper.
+    """
 
     def __init__(self, paper: str, summary: pd.DataFrame, root: Path):
         self.paper, self.root = paper, root

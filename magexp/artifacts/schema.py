@@ -56,7 +56,18 @@ Float = Annotated[float, BeforeValidator(_not_a_flag)]
 
 def allowed(cls) -> list[str]:
     """The keys a YAML mapping may give for the dataclass ``cls`` (its fields but those the loader
-    sets, marked ``metadata={"yaml": False}``)."""
+    sets, marked ``metadata={"yaml": False}``).
+
+    Parameters
+    ----------
+    cls : type
+        A dataclass of the schema.
+
+    Returns
+    -------
+    list of str
+        The field names, in order.
+    """
     return [f.name for f in dataclasses.fields(cls) if f.init and f.metadata.get("yaml", True)]
 
 

@@ -144,6 +144,12 @@ class Tolerance:
         return next(k for k in ("below", "abs", "factor", "rel") if getattr(self, k) is not None)
 
     def text(self) -> str:
+        """The tolerance as ``<kind> <value>`` (e.g. ``rel 0.15``).
+
+        Returns
+        -------
+        str
+        """
         return f"{self.kind} {getattr(self, self.kind):g}"
 
     def holds(self, value: float, paper: float) -> bool:
@@ -151,10 +157,8 @@ class Tolerance:
 
         Parameters
         ----------
-        value : float
-            Our value.
-        paper : float
-            The paper's value.
+        value, paper : float
+            Our value and the paper's.
 
         Returns
         -------
@@ -189,7 +193,12 @@ class Reported:
             raise MagexpError(f"reported {self.quantity}: compared: false needs a reason (why the number is not compared)")
 
     def half_unit(self) -> float:
-        """Half a unit of the last printed digit: the paper's printing precision."""
+        """Half a unit of the last printed digit: the paper's printing precision.
+
+        Returns
+        -------
+        float
+        """
         if self.decimals is not None:
             return 0.5 * 10.0 ** (-self.decimals)
         exponent = decimal.Decimal(repr(float(self.value))).normalize().as_tuple().exponent
@@ -212,15 +221,13 @@ class Success:
 @typed
 @dataclass(frozen=True)
 class Grow:
-    """The seeds a verdict needs (``grow:`` of an artifact), fixed before any run: the cells of the
-    comparison ``claims`` (their ``cells``) start with ``start`` seeds (at least the artifact's
-    ``seeds``); while one of those claims is not decided at ``alpha`` on its own p (neither its p nor
-    its converse's below it; a paper's family is Holm-adjusted later, so ``alpha`` may be set below
-    :data:`magexp.artifacts.claims.ALPHA`) and could not have detected a difference of ``margin`` (its
-    ``detectable`` is above it), its cells get ``step`` more seeds, up to ``cap``
-    (:func:`magexp.artifacts.plan.next_seeds`). The same
-    runs give the same stages: the reproduction stays deterministic, and ``claims.csv`` records the
-    seeds each comparison used (``seeds``)."""
+    """The seeds a verdict needs (``grow:`` of an artifact), fixed before any run: the cells of the comparison
+    ``claims`` (their ``cells``) start with ``start`` seeds (at least the artifact's ``seeds``); while one of
+    those claims is not decided at ``alpha`` on its own p (neither its p nor its converse's below it; a paper's
+    family is Holm-adjusted later, so ``alpha`` may be set below :data:`magexp.artifacts.claims.ALPHA`) and
+    could not have detected a difference of ``margin`` (its ``detectable`` is above it), its cells get ``step``
+    more seeds, up to ``cap`` (:func:`magexp.artifacts.plan.next_seeds`). The same runs give the same stages:
+    the reproduction stays deterministic, and ``claims.csv`` records the seeds each comparison used (``seeds``)."""
 
     claims: list[str]
     start: Int
@@ -485,15 +492,14 @@ def _check_parts(parts: list, where: str) -> None:
 class Headline:
     """A headline claim of the paper (``headline:`` of ``paper.yaml``), in the paper's own words.
 
-    ``parts``: the artifact claims (``<artifact>.<claim id>``) that test it; its verdict is
-    ``supported`` (every part holds), ``contradicted`` (none holds), ``partly`` (some hold), or
-    ``not testable here`` when ``untestable`` (why) is given instead of parts. ``reason``: an
-    optional template interpolated with the runs of the first part's artifact
-    (:func:`magexp.artifacts.claims.interpolate`). ``figure``: ``<paper folder>/<artifact>`` whose figure shows it.
-    ``construction``: why its parts hold by construction (then a ``supported`` verdict reads ``by
-    construction`` and is not counted as support). ``readings``: the unstated settings its verdict
-    depends on, each plausible reading with its own parts (:class:`Reading`); the headline is judged
-    under each (:func:`magexp.artifacts.report.readings_verdict`)."""
+    ``parts``: the artifact claims (``<artifact>.<claim id>``) that test it; its verdict is ``supported``
+    (every part holds), ``contradicted`` (none holds), ``partly`` (some hold), or ``not testable here`` when
+    ``untestable`` (why) is given instead of parts. ``reason``: an optional template interpolated with the
+    runs of the first part's artifact (:func:`magexp.artifacts.claims.interpolate`). ``figure``:
+    ``<paper folder>/<artifact>`` whose figure shows it. ``construction``: why its parts hold by construction
+    (then a ``supported`` verdict reads ``by construction`` and is not counted as support). ``readings``: the
+    unstated settings its verdict depends on, each plausible reading with its own parts (:class:`Reading`);
+    the headline is judged under each (:func:`magexp.artifacts.report.readings_verdict`)."""
 
     id: str
     text: str

@@ -91,12 +91,23 @@ def committed_results(dest: Path, files=("results",)) -> str:
 
 
 def changed_results() -> bool:
-    """Whether the working tree's ``results/`` differs from the committed one (git)."""
+    """Whether the working tree's ``results/`` differs from the committed one (git).
+
+    Returns
+    -------
+    bool
+        True when ``git status`` lists a change under ``results/``.
+    """
     return bool(git("status", "--porcelain", "--untracked-files=all", "--", "results").strip())
 
 
 def scratch() -> Path:
-    """The folder of :func:`reproduce_scratch`: beside the run cache (``.cache/verify``), never ``results/``."""
+    """The folder of :func:`reproduce_scratch`: beside the run cache (``.cache/verify``), never ``results/``.
+
+    Returns
+    -------
+    Path
+    """
     return paths.CACHE.parent / "verify"
 
 
@@ -202,6 +213,12 @@ def _shown(d: Difference) -> str:
 
 
 def parser() -> argparse.ArgumentParser:
+    """The argument parser of ``magexp verify``.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
     p = OneLineParser(prog="magexp verify", description=__doc__.splitlines()[0])
     p.add_argument("--against", "--out", dest="against", default=None,
                    help="the reproduction to check (default: results/ if it differs from the committed one, "

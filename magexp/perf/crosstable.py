@@ -41,7 +41,13 @@ TRIED = (("auto", "ellipsoid"), ("sphere", "ellipsoid"), ("diagonal", "ellipsoid
 
 
 def recordings() -> dict:
-    """``{sequence: Recording}`` of every HMC5883L two-stream recording in the shared data."""
+    """``{sequence: Recording}`` of every HMC5883L two-stream recording in the shared data.
+
+    Returns
+    -------
+    dict
+        The recordings by sequence name (``hmc5883l_`` prefix dropped).
+    """
     stems = sorted(p.name[: -len("_mag.csv")] for p in SHARED_DATA.glob("hmc5883l_*_mag.csv"))
     return {stem.removeprefix("hmc5883l_"): load_recording(SHARED_DATA / stem) for stem in stems}
 

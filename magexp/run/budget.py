@@ -100,7 +100,12 @@ class Estimate:
         return self.evaluations * self.readings
 
     def subject(self) -> str:
-        """``key=value`` of the largest factor (the one a mistake most likely typed)."""
+        """``key=value`` of the largest factor (the one a mistake most likely typed).
+
+        Returns
+        -------
+        str
+        """
         key, value = max(self.factors, key=lambda kv: kv[1])
         return f"{key}={value}"
 
@@ -274,7 +279,13 @@ def check_available(need: int, subject: str) -> None:
 
 class Tally:
     """The runs of one command, counted and summed as they are planned (:meth:`add`); :meth:`check`
-    refuses the total. ``subject`` names what made them (``--seeds 5``, the sweep's axes)."""
+    refuses the total. ``subject`` names what made them (``--seeds 5``, the sweep's axes).
+
+    Parameters
+    ----------
+    subject : str
+        What made the runs, for the refusal's message.
+    """
 
     def __init__(self, subject: str = "the command"):
         self.subject, self.runs, self.work = subject, 0, 0

@@ -227,7 +227,13 @@ def code_hash(targets: tuple[str, ...]) -> str:
 
 def source_stamp() -> str:
     """A digest of where the package's sources are and of every ``.py`` file's path, size,
-    modification time and inode: any edit, checkout or copy changes it (cheap: stats, no reads)."""
+    modification time and inode: any edit, checkout or copy changes it (cheap: stats, no reads).
+
+    Returns
+    -------
+    str
+        32 hex digits.
+    """
     h = hashlib.sha256(str(ROOT).encode())
     for path in sorted((ROOT / "magexp").rglob("*.py")):
         st = path.stat()

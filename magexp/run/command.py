@@ -310,6 +310,10 @@ def run_command(args: list[str]) -> None:
     ----------
     args : list of str
         The command-line arguments after ``magexp``.
+
+    Returns
+    -------
+    None
     """
     user, hyd, flags = split_args(args)
     check_flags(flags)

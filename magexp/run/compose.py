@@ -87,7 +87,18 @@ DERIVED = types.SimpleNamespace()
 def schema_of(cls) -> type:
     """The schema of the configs that build ``cls``: its ``Config`` dataclass if it has one, else a
     dataclass of its constructor's parameters with their annotations (:func:`_typed`) and defaults
-    (none: the config must give it), plus ``_target_`` (kept in :data:`DERIVED` as ``<class>Conf``; class names are unique among the configs' classes)."""
+    (none: the config must give it), plus ``_target_`` (kept in :data:`DERIVED` as ``<class>Conf``; class names are unique among the configs' classes).
+
+    Parameters
+    ----------
+    cls : type
+        A class a config group builds.
+
+    Returns
+    -------
+    type
+        The schema dataclass.
+    """
     if "Config" in dir(cls):
         return cls.Config
     name = f"{cls.__name__}Conf"
@@ -138,7 +149,13 @@ def schema_classes(group: str) -> list[type]:
 @functools.cache
 def register_schemas() -> dict:
     """Store the schema of every class of :func:`schema_classes` in Hydra's ConfigStore (group
-    ``schema/<group>``, named after the class), once; returns ``{name: schema}``."""
+    ``schema/<group>``, named after the class), once.
+
+    Returns
+    -------
+    dict
+        ``{class name: schema}``.
+    """
     store, schemas = ConfigStore.instance(), {}
     for group in GROUPS:
         for cls in schema_classes(group):

@@ -66,10 +66,18 @@ def check_destination(folder, what: str, *, canonical: bool = False) -> Path:
 
     Parameters
     ----------
-    folder : the folder as the user gave it (a string or a path).
-    what : the option or key that named it (``--out``, ``hydra.run.dir``...), for the message.
-    canonical : the command is a canonical reproduction: it may write ``results/`` itself (but
-        no folder inside it: the canonical layout is ``results/<paper>/``, made by the command).
+    folder : str or Path
+        The folder as the user gave it.
+    what : str
+        The option or key that named it (``--out``, ``hydra.run.dir``...), for the message.
+    canonical : bool
+        The command is a canonical reproduction: it may write ``results/`` itself (but no folder
+        inside it: the canonical layout is ``results/<paper>/``, made by the command).
+
+    Returns
+    -------
+    Path
+        The resolved folder.
     """
     text = "" if folder is None else str(folder)
     if not text.strip():

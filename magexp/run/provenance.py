@@ -29,7 +29,12 @@ COMMIT_FILE = PACKAGE / "_resources" / "commit.txt"  # written into a wheel at b
 
 
 def version() -> str:
-    """magexp's version (:data:`magexp._version.__version__`, its one home; ``pyproject.toml`` reads it)."""
+    """magexp's version (:data:`magexp._version.__version__`, its one home; ``pyproject.toml`` reads it).
+
+    Returns
+    -------
+    str
+    """
     return __version__
 
 
@@ -68,6 +73,10 @@ def commit() -> str:
 
     A source checkout reads it from ``.git`` (no git process: this runs on every run); an
     installed wheel reads the commit recorded when it was built (``_resources/commit.txt``).
+
+    Returns
+    -------
+    str
     """
     if SOURCE_CHECKOUT:
         try:
@@ -84,7 +93,12 @@ def commit() -> str:
 
 
 def working_tree_state() -> str:
-    """``clean`` or ``modified`` (uncommitted changes in the checkout), ``n/a`` for an installed wheel."""
+    """``clean`` or ``modified`` (uncommitted changes in the checkout), ``n/a`` for an installed wheel.
+
+    Returns
+    -------
+    str
+    """
     if not SOURCE_CHECKOUT:
         return "n/a"
     try:
@@ -152,6 +166,11 @@ def provenance(config: dict | None = None) -> dict:
 
 
 def version_line() -> str:
-    """``magexp <version> (commit <sha>[, modified])`` for ``magexp --version``."""
+    """``magexp <version> (commit <sha>[, with uncommitted changes])`` for ``magexp --version``.
+
+    Returns
+    -------
+    str
+    """
     state = working_tree_state()
     return f"magexp {version()} (commit {commit()}{', with uncommitted changes' if state == 'modified' else ''})"

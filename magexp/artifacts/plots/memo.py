@@ -39,13 +39,25 @@ from magexp.run.cache import files_digest, write
 
 
 def root() -> Path:
-    """The figure cache: beside the run cache (:data:`magexp.paths.CACHE`), never inside it."""
+    """The figure cache: beside the run cache (:data:`magexp.paths.CACHE`), never inside it.
+
+    Returns
+    -------
+    Path
+        ``<cache>-figures``.
+    """
     return paths.CACHE.parent / f"{paths.CACHE.name}-figures"
 
 
 @lru_cache(maxsize=1)
 def figure_code_version() -> str:
-    """Hash of all of magexp's source and of the drawing libraries' versions (module docstring)."""
+    """Hash of all of magexp's source and of the drawing libraries' versions (module docstring).
+
+    Returns
+    -------
+    str
+        A hex digest.
+    """
     h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
     h.update(f"{matplotlib.__version__} {numpy.__version__} {pandas.__version__}".encode())
     return h.hexdigest()

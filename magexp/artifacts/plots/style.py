@@ -45,8 +45,12 @@ def share_mathtext_parses() -> bool:
     owns a parser: each figure, and each of its two formats (PNG, PDF), parses the same labels again.
     A parse depends only on the parser's output type and the arguments of the cached call, so one
     cache per output type gives the same glyphs, hence the same bytes, with fewer parses (a test
-    compares the bytes of figures drawn with and without it). Returns whether it is in place (it is
-    skipped if this matplotlib lays ``parse`` out otherwise).
+    compares the bytes of figures drawn with and without it).
+
+    Returns
+    -------
+    bool
+        Whether it is in place (it is skipped if this matplotlib lays ``parse`` out otherwise).
     """
     cached = getattr(mathtext.MathTextParser, "_parse_cached", None)
     if getattr(cached, "shared", False):

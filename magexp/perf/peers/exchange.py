@@ -165,7 +165,12 @@ def digest(ds: NeutralDataset) -> str:
 
 
 def available() -> str | None:
-    """None when the peer's environment is there, else the one line saying why not."""
+    """None when the peer's environment is there, else the one line saying why not.
+
+    Returns
+    -------
+    str or None
+    """
     python = PEER_VENV / "bin" / "python"
     if not (PEER_VENV / ".installed").exists() or not python.exists():
         return f"MAGYC's environment {PEER_VENV} is absent (make peers builds it): the peer is skipped"

@@ -73,7 +73,12 @@ def recordings(folder: Path = SHARED_DATA) -> list[Path]:
 
 
 def available() -> str | None:
-    """None when the tools' environment is there, else the one line saying why not."""
+    """None when the tools' environment is there, else the one line saying why not.
+
+    Returns
+    -------
+    str or None
+    """
     if not (TOOLS_VENV / ".installed").exists():
         return f"the tools' environment {TOOLS_VENV} is absent (make peers-tools builds it): nothing written"
     return None

@@ -31,7 +31,13 @@ from magcal.core import MagnetometerCalibrator  # it imports pyplot (and pyseria
 
 
 def load() -> dict:
-    """The tools' fit functions (their modules are imported with this file, before any timing)."""
+    """The tools' fit functions (their modules are imported with this file, before any timing).
+
+    Returns
+    -------
+    dict
+        ``{tool: fit}``, each ``fit(data)`` returning ``(W, o)``.
+    """
     def fit_magcal(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(W, o)`` of magcal's ellipsoid method (module docstring); its refusal raised as it raises it."""
         cal = MagnetometerCalibrator()
