@@ -59,11 +59,12 @@ def single_attitude(readings: np.ndarray) -> bool:
     Parameters
     ----------
     readings : numpy.ndarray, shape (N, 3)
-        Raw readings.
+        A recording's raw readings, any order.
 
     Returns
     -------
     bool
+        True when the widest angle from the mean direction is under the limit.
     """
     mean = readings.mean(axis=0)
     cosine = readings @ mean / (np.linalg.norm(readings, axis=1) * np.linalg.norm(mean))
