@@ -414,15 +414,16 @@ def tuning_table(runs) -> pd.DataFrame:
     return frame
 
 
+ESTIMATOR_KEYS = {"estimator", "estimator.name"}  # the settings naming an estimator: in words in a legend
+
+
 def family_words(spec, family: str) -> str:
-    """A tuning family's words on the x axis: ``plot.names[family]``, else the estimator's label.
+    """An estimator's name in words on a tuning figure: ``plot.names[family]``, else its label.
 
     Parameters
     ----------
-    spec : ArtifactSpec
-        The artifact (its ``plot.names``).
-    family : str
-        The estimator name the settings share.
+    spec, family : ArtifactSpec, str
+        The artifact (its ``plot.names``); the estimator's name (a family, or a setting in a legend).
 
     Returns
     -------
@@ -440,15 +441,14 @@ def _setting_row(runs, ci: int, defaults: dict) -> dict:
     sub = cell_runs(runs, ci)
     family = str(sub.estimator.iloc[0])
     settings = cell_overrides(runs, ci)
-    label = ", ".join(f"{short.get(k, k.split('.')[-1])} = {settings[k]}"
-                      for k in list(spec.plot.get("label", [])) if k in settings) or family
+    named = {**settings, **{k: family_words(spec, settings[k]) for k in ESTIMATOR_KEYS & set(settings)}}
+    label = ", ".join(f"{short.get(k, k.split('.')[-1])} = {named[k]}" for k in spec.plot.get("label", []) if k in named)
     med, q25, q75 = quartiles(sub[metric])
     default = family in defaults and all(settings.get(k) == v for k, v in defaults[family].items())
     rate = _rate(sub["succeeded"]) if "succeeded" in sub and sub.succeeded.notna().any() else (
         _rate(sub["converged"]) if "converged" in sub else np.nan)  # else converged: the 1 % rule
-    return {"family": family, "family_label": family_words(spec, family), "label": label, "scenario": str(sub.scenario.iloc[0]),
-            "metric": metric,
-            "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub), "success_rate": rate,
+    return {"family": family, "family_label": family_words(spec, family), "label": label or family,
+            "scenario": str(sub.scenario.iloc[0]), "metric": metric, "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub), "success_rate": rate,
             "bound_success_rate": _rate(sub["offset_error_ratio"] <= 2.0) if "offset_error_ratio" in sub else np.nan,
             "on_boundary_rate": _rate(sub["on_boundary"] > 0) if "on_boundary" in sub else np.nan,
             **{c: median(sub[c]) if c in sub else np.nan for c in ("offset_error_ratio", "wall_time", "nfev_to_1.1")},

@@ -99,13 +99,14 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     for j, sc in enumerate(scenarios):
         top, bottom = axes[j], axes[len(scenarios) + j]
         sub = frame[frame.scenario == sc]
+        present = [f for f in families if (sub.family == f).any()]  # a family not run on this scenario: no tick
         if few:
-            _named(top, bottom, sub, families, colours,
+            _named(top, bottom, sub, present, colours,
                    legend=frame.drop_duplicates(["family", "label"]).family.value_counts().max() > 1)
         else:
-            _ranked(top, bottom, sub, families)
+            _ranked(top, bottom, sub, present)
         for ax in (top, bottom):
-            ax.set_xticks(range(len(families)), [ticks[f] for f in families], rotation=30, ha="right", fontsize=7)
+            ax.set_xticks(range(len(present)), [ticks[f] for f in present], rotation=30, ha="right", fontsize=7)
         top.set_yscale("log")
         top.set_ylabel(spec.plot.get("ylabel", f"median {frame.metric.iloc[0]} per setting"))
         top.set_title(scenario_label(sc), fontsize=9)
