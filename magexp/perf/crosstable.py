@@ -78,7 +78,7 @@ def carried_noise(cal, readings: np.ndarray) -> float:
     Parameters
     ----------
     cal : Calibration
-        Applies ``B = W (m - o)``; ``W`` is read off it as the map of the unit vectors.
+        ``B = W (m - o)`` (its ``w`` and :meth:`apply`).
     readings : ndarray, shape (n, 3)
         Raw readings at one attitude.
 
@@ -89,9 +89,8 @@ def carried_noise(cal, readings: np.ndarray) -> float:
         ``u = W (m̄ - o) / |W (m̄ - o)|``: the standard deviation of ``|B|`` over its mean when ``|B|`` varies only
         through the scatter of the readings.
     """
-    zero = cal.apply(np.zeros((1, 3)))[0]
-    w = (cal.apply(np.eye(3)) - zero).T
-    centre = cal.apply(readings.mean(axis=0)[None])[0]
+    w = cal.w
+    centre = cal.apply(readings.mean(axis=0))
     u = centre / np.linalg.norm(centre)
     return float(np.sqrt(u @ w @ np.cov(readings.T) @ w.T @ u) / np.linalg.norm(centre))
 
