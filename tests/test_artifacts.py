@@ -10,7 +10,8 @@ import pytest
 from magexp.artifacts.plan import cells, overrides_of
 from magexp.artifacts.report import build
 from magexp.artifacts.reproduce import reproduce
-from magexp.artifacts.spec import artifact_paths, load, papers
+from magexp.artifacts.spec import load
+from magexp.artifacts.paper_spec import artifact_paths, papers
 from magexp.artifacts.summary import COLUMNS, VERDICTS
 from magexp.core.outcomes import failed_majority
 from magexp.run.compose import GROUPS, check_choice

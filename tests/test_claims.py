@@ -4,9 +4,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import (CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED, Claim, adjust,
-                                     detectable_paired, detectable_rates, evaluate, fisher_greater, holm, interpolate,
-                                     permutation_less, wilcoxon_less)
+from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED, Claim, adjust, evaluate, interpolate
+from magexp.artifacts.significance import (detectable_paired, detectable_rates, fisher_greater, holm, permutation_less,
+                                           wilcoxon_less)
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.artifacts.headlines import claim_outcomes
@@ -204,7 +204,7 @@ def test_five_seeds_win_raw_but_not_in_a_family_and_four_cannot_be_decided():
     assert alone.result == HOLDS and alone.p == pytest.approx(1 / 32) and alone.p_min == pytest.approx(1 / 32)
     family = adjust([evaluate(c, five), evaluate(c, five), evaluate(c, five)])
     assert all(o.result == NO_DIFFERENCE and o.p_adjusted == pytest.approx(3 / 32) for o in family)
-    assert "Holm p = 0.0938 of 3" in family[0].evidence and "detectable at 80% power" in family[0].evidence
+    assert "0.0938 after Holm over 3 primary tests" in family[0].evidence and "detectable at 80% power" in family[0].evidence
     four = evaluate(c, _shared({"a": base[:4] - 1, "b": base[:4]}))
     assert four.result == UNDECIDED and "cannot be decided at n = 4" in adjust([four])[0].evidence
     sanity = Claim(id="s", text="", kind="winner", role="sanity", cells=[{"estimator": "a"}, {"estimator": "b"}])

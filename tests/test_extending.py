@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts import claims, spec
+from magexp.artifacts import claims, paper_spec, spec
 from magexp.artifacts.schema import allowed
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,10 +23,10 @@ DOC = (ROOT / "docs" / "extending.md").read_text()
 
 def schema_classes() -> list[type]:
     """Every dataclass a spec or a ``paper.yaml`` is built of: :class:`~magexp.artifacts.spec.Artifact`,
-    :class:`~magexp.artifacts.spec.Paper` and the dataclasses their fields name, recursively."""
-    named = {name: obj for module in (spec, claims) for name, obj in vars(module).items()
+    :class:`~magexp.artifacts.paper_spec.Paper` and the dataclasses their fields name, recursively."""
+    named = {name: obj for module in (spec, paper_spec, claims) for name, obj in vars(module).items()
              if isinstance(obj, type) and dataclasses.is_dataclass(obj) and obj.__module__ == module.__name__}
-    found, todo = [], [spec.Artifact, spec.Paper]
+    found, todo = [], [spec.Artifact, paper_spec.Paper]
     while todo:
         cls = todo.pop(0)
         if cls in found:

@@ -16,7 +16,7 @@ from magexp.artifacts.plots import kind_module
 from magexp.artifacts.kind_tables import bound_ratio
 from magexp.artifacts.plots.check import colorbar_mismatch, defects, empty_axes, legend_defects, overlapping_text, raw_legends
 from magexp.artifacts.plots.style import colorbar, drawn_from, plt
-from magexp.artifacts.spec import papers
+from magexp.artifacts.paper_spec import papers
 
 
 #: the figure that stands for its plot kind in ``make test`` (the quickest of the kind to lay out);

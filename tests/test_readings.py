@@ -9,7 +9,8 @@ from magexp.artifacts import headlines
 from magexp.artifacts.claims import Claim, evaluate
 from magexp.artifacts.plan import ArtifactPlan, grow_stage, next_seeds
 from magexp.artifacts.schema import build
-from magexp.artifacts.spec import Grow, Headline, Paper
+from magexp.artifacts.spec import Grow
+from magexp.artifacts.paper_spec import Headline, Paper
 from magexp.errors import MagexpError
 
 

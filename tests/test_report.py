@@ -12,7 +12,7 @@ from magexp.artifacts.formats import markdown_table
 from magexp.artifacts.headlines import HEADLINE_VERDICTS, headline_verdict
 from magexp.artifacts.report import MAX_CELL, MAX_CHARS, MAX_LINES, compared_counts, compared_rows, counts
 from magexp.artifacts.schema import build
-from magexp.artifacts.spec import Headline
+from magexp.artifacts.paper_spec import Headline
 
 
 def test_headline_verdict_aggregates_its_parts():
@@ -105,7 +105,7 @@ def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypat
 
     from magexp.artifacts import headlines
     from magexp.artifacts.claims import Claim, evaluate
-    from magexp.artifacts.spec import Paper
+    from magexp.artifacts.paper_spec import Paper
 
     table = pd.DataFrame({"cell": [0, 0, 1, 1], "seed": [0, 1, 0, 1], "estimator": ["a", "a", "b", "b"],
                           "setting": ["scenario=x"] * 4, "fun": [1.0, 1.2, 5.0, 6.0], "succeeded": [1.0] * 4})
@@ -136,7 +136,7 @@ def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
     types a count."""
     from magexp.artifacts.plan import paper_specs
     from magexp.artifacts.report import seed_count
-    from magexp.artifacts.spec import papers
+    from magexp.artifacts.paper_spec import papers
 
     specs = [s for p in papers() for s in paper_specs(p) if s.caption]
     typed = [(s.name, m.group(0)) for s in specs for m in [re.search(r"\b\d+ (seeds|runs)\b", str(s.caption))] if m]

@@ -6,7 +6,8 @@ import pytest
 import yaml
 
 from magexp.errors import MagexpError
-from magexp.artifacts.spec import Reported, artifact_paths, load, load_paper, papers
+from magexp.artifacts.spec import Reported, load
+from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
 
 ARTIFACTS = [p for paper in papers() for p in artifact_paths(paper)]
 

@@ -35,7 +35,7 @@ better than every other) hold only when a test separates the two sides (``test:`
 * ``paired``: one-sided Wilcoxon signed-rank test on the per-seed differences of ``metric``,
   where the two cells share their seeds and scenario (same seed and scenario: the same readings);
 * ``unpaired``: one-sided permutation test of the difference of ``stat`` between the two cells'
-  per-seed values (:data:`N_PERM` relabellings from a fixed generator; ``intervals``, its old name,
+  per-seed values (:data:`~magexp.artifacts.significance.N_PERM` relabellings from a fixed generator; ``intervals``, its old name,
   is read as it: two bootstrap intervals that do not overlap are no test);
 * ``auto`` (default): ``fisher`` for success rates, ``paired`` where the cells differ only in
   estimator-side keys (``estimator``, ``estimator.*``, ``objective``) and have the same seeds,
@@ -61,32 +61,28 @@ row filter (``succeeded=0``, ``seeds=10``) leaves no value prints :data:`NO_RUNS
 
 from __future__ import annotations
 
-import math
 import operator
 import re
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy.special import ndtri
 
 from magexp.artifacts.schema import Float, typed
+from magexp.artifacts.significance import (ALPHA, POWER, detectable_paired, detectable_rates,
+                                          detectable_unpaired, fisher_greater, holm, permutation_less, wilcoxon_less)
 from magexp.artifacts.tables import STATS, interval, matches, same, statistic
 from magexp.errors import MagexpError
 
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
 KINDS = ("threshold", "success", "ordering", "winner")
-ROLES = ("finding", "sanity")
+#: ``finding``: counted; ``sanity``: true by construction, a check of the code; ``exploratory``: a setting
+#: chosen because its runs resemble the paper's numbers, shown but never counted nor tested in a family
+ROLES = ("finding", "sanity", "exploratory")
 TESTS = ("auto", "fisher", "paired", "unpaired", "intervals")
-#: significance level of every comparison test
-ALPHA = 0.05
 #: outcomes of a claim; the first is the only one that counts as holding
 HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE = "holds", "does not hold", "contradicted", "no difference detected"
 UNDECIDED = "cannot be decided"
-#: power at which ``detectable`` is the smallest difference a comparison would detect
-POWER = 0.8
-#: relabellings of the permutation test (``unpaired``): its smallest p is ``1 / (N_PERM + 1)``
-N_PERM = 4000
 #: cell keys that choose the method, not the readings: cells that differ only in these share their data
 ESTIMATOR_SIDE = ("estimator", "objective")
 
@@ -111,6 +107,7 @@ class Claim:
     role: str = "finding"
     figure: str = ""
     test: str = "auto"
+    effect: dict = field(default_factory=dict)
 
     def __post_init__(self):
         checks = [("kind", self.kind, KINDS), ("by", self.by, ("magexp", "paper")), ("stat", self.stat, tuple(STATS)),
@@ -138,7 +135,9 @@ class Outcome:
     ``evidence`` (all of them). A comparison also has ``p`` (its claimed direction), ``p_contra``
     (the converse), ``p_min`` (the smallest its test can give), ``n`` (its smallest sample; of a
     threshold: the fewest runs of a selected cell),
-    ``detectable`` (module docstring) and, once :func:`adjust` has seen its family, ``p_adjusted``."""
+    ``detectable`` (module docstring) and, once :func:`adjust` has seen its family, ``family`` (its name,
+:mod:`magexp.artifacts.families`), ``family_size``, ``p_adjusted`` and ``level``: the raw-p level Holm's
+rule judged it at."""
 
     claim: Claim
     holds: bool
@@ -152,6 +151,9 @@ class Outcome:
     detectable: float = float("nan")
     p_adjusted: float = float("nan")
     test: str = ""
+    family: str = ""
+    family_size: int = 0
+    level: float = float("nan")
 
     def __post_init__(self):
         self.result = self.result or (HOLDS if self.holds else FAILS)
@@ -230,32 +232,6 @@ def _describe(where: dict, v: np.ndarray, stat: str) -> tuple[float, tuple, str]
     return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g}{shown} (n={len(v)})"
 
 
-def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
-    """One-sided p-value of Fisher's exact test that the success probability of the first group
-    (``k1`` of ``n1``) exceeds the second's (``k2`` of ``n2``): the hypergeometric upper tail
-    ``P(X >= k1)``, ``X ~ Hypergeom(n1 + n2, k1 + k2, n1)`` (what ``scipy.stats.fisher_exact(...,
-    alternative="greater")`` gives)."""
-    total, succ = n1 + n2, k1 + k2
-    denom = math.comb(total, n1)
-    hi = min(n1, succ)
-    return float(sum(math.comb(succ, x) * math.comb(total - succ, n1 - x) for x in range(k1, hi + 1)) / denom)
-
-
-def wilcoxon_less(d: np.ndarray) -> float:
-    """One-sided p-value of the Wilcoxon signed-rank test that the paired differences ``d`` lie
-    below zero (zero differences dropped; 1 when none is left)."""
-    d = np.asarray(d, float)
-    d = d[np.isfinite(d) & (d != 0)]
-    if d.size == 0:
-        return 1.0
-    # lazy: scipy.stats is the largest import of magexp.artifacts; without it ``import
-    # magexp.artifacts.reproduce`` takes 0.61 of the CPU time (farm-bench, paired, median of 5), which
-    # a refused command, ``--help`` and every reader of an artifact's spec would pay for nothing
-    from scipy.stats import wilcoxon
-
-    return float(wilcoxon(d, alternative="less").pvalue)
-
-
 def _paired(table: pd.DataFrame, a: dict, b: dict, metric: str) -> tuple[np.ndarray, np.ndarray] | None:
     """Per-seed values of ``metric`` of the single cells ``a`` and ``b`` matched on seed, when they
     share their seeds and differ only in :data:`ESTIMATOR_SIDE` keys (then a seed is the same
@@ -328,46 +304,6 @@ def _test_of(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> tu
     return ("paired" if pair is not None else "unpaired"), pair
 
 
-def _z_power(alpha: float = ALPHA, power: float = POWER) -> float:
-    """``z(1 - alpha) + z(power)``: the distance, in standard errors, a one-sided test at ``alpha``
-    needs to detect a difference with probability ``power``."""
-    return float(ndtri(1 - alpha) + ndtri(power))
-
-
-def detectable_paired(d: np.ndarray) -> float:
-    """The shift of the paired differences ``d`` a one-sided Wilcoxon signed-rank test detects with
-    :data:`POWER`: the normal approximation ``(z(1-alpha) + z(power)) s / sqrt(n)``, divided by the
-    square root of the test's asymptotic relative efficiency against the t-test (3/pi). ``s`` is the
-    robust scale ``1.4826 MAD(d)`` (the standard deviation of normal differences): a rank test does
-    not see how far a failed run's difference lies, so its tails do not inflate ``s``."""
-    d = np.asarray(d, float)
-    d = d[np.isfinite(d)]
-    if d.size < 2:
-        return float("nan")
-    scale = 1.4826 * float(np.median(np.abs(d - np.median(d))))
-    return _z_power() * scale / math.sqrt(d.size) / math.sqrt(3 / math.pi)
-
-
-def detectable_unpaired(ci_a: tuple, ci_b: tuple) -> float:
-    """The difference of a statistic between two independent samples the permutation test detects
-    with :data:`POWER`: ``(z(1-alpha) + z(power)) sqrt(se_a^2 + se_b^2)``, each standard error read
-    off its 95 % bootstrap interval (``(hi - lo) / (2 z(0.975))``)."""
-    z = float(ndtri(0.975))
-    se = [(hi - lo) / (2 * z) for lo, hi in (ci_a, ci_b)]
-    return _z_power() * math.sqrt(se[0] ** 2 + se[1] ** 2) if all(np.isfinite(se)) else float("nan")
-
-
-def detectable_rates(p0: float, n1: int, n2: int) -> float:
-    """The rise of a success rate above ``p0`` (the rate of the side claimed worse, ``n2`` runs)
-    that a one-sided test of ``n1`` against ``n2`` runs detects with :data:`POWER`, by the arcsine
-    approximation: ``2 asin(sqrt(p1)) - 2 asin(sqrt(p0)) = (z(1-alpha) + z(power)) sqrt(1/n1 + 1/n2)``
-    (Cohen's h); ``1 - p0`` when no rate up to 1 reaches that power (then nothing is detectable)."""
-    if min(n1, n2) < 1 or not np.isfinite(p0):
-        return float("nan")
-    phi = math.asin(math.sqrt(p0)) + _z_power() * math.sqrt(1 / n1 + 1 / n2) / 2
-    return (math.sin(phi) ** 2 if phi < math.pi / 2 else 1.0) - p0
-
-
 def _fisher_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> Test:
     """Fisher's exact test of the success counts; its smallest p: the most extreme table of its margins."""
     ka, kb = (values(select(table, w), claim.metric, "success_rate") for w in (better, worse))
@@ -394,22 +330,6 @@ def _paired_test(claim: Claim, pair: tuple | None) -> Test:
     return Test("paired", p_hold, p_contra, 0.5 ** (wins + losses), d.size, detectable_paired(d),
                 f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
                 f"equal on {d.size - wins - losses} of {d.size} seeds)")
-
-
-def permutation_less(a: np.ndarray, b: np.ndarray, stat: str) -> tuple[float, float, float]:
-    """One-sided permutation p-values that ``stat`` of ``a`` lies below that of ``b`` and of the
-    converse, and the smallest p the test can give: :data:`N_PERM` random relabellings of the pooled
-    values (a fixed generator: the same on every run), ``p = (1 + #{relabelled difference at or
-    beyond the observed}) / (N_PERM + 1)`` (Phipson & Smyth 2010), at least ``1 / C(n, n_a)``."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    pooled, na = np.r_[a, b], len(a)
-    rng = np.random.default_rng(0)
-    perm = pooled[rng.permuted(np.tile(np.arange(pooled.size), (N_PERM, 1)), axis=1)]
-    diff = np.asarray(STATS[stat](perm[:, :na], axis=1), float) - np.asarray(STATS[stat](perm[:, na:], axis=1), float)
-    observed = statistic(a, stat) - statistic(b, stat)
-    p_less = (1 + int(np.sum(diff <= observed))) / (N_PERM + 1)
-    p_more = (1 + int(np.sum(diff >= observed))) / (N_PERM + 1)
-    return p_less, p_more, max(1 / (N_PERM + 1), 1 / math.comb(pooled.size, na))
 
 
 def _unpaired_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, cis: tuple) -> Test:
@@ -493,47 +413,57 @@ def _combined(tests: list[Test]) -> dict:
             "test": weakest.name}
 
 
-def holm(p: list[float]) -> list[float]:
-    """Holm's step-down adjusted p-values of ``p`` (NaN stays NaN and is not counted): the i-th
-    smallest of m becomes ``max over j <= i of min(1, (m - j + 1) p_(j))`` (Holm 1979).
+def adjust(outcomes: list[Outcome], families: list[str] | None = None) -> list[Outcome]:
+    """Holm's correction within each family of comparisons (``families``: each outcome's family,
+    :func:`magexp.artifacts.families.claim_families`; default: one family of every comparison that is not a
+    sanity check). A sanity check or an exploratory claim keeps its own p. Each comparison gets its
+    ``family``, ``family_size``, ``p_adjusted`` and ``level`` (``alpha / (m - rank)``, its step of Holm's
+    rule); its result is decided again on ``p_adjusted`` (:func:`decide`) and its evidence names the family.
 
     Parameters
     ----------
-    p : list of float
+    outcomes : list of Outcome
+        One paper's outcomes.
+    families : list of str, optional
+        The family of each outcome, in order.
+
+    Returns
+    -------
+    list of Outcome
+        ``outcomes``, changed in place.
     """
-    p = np.asarray(p, float)
-    out = np.full(p.shape, np.nan)
-    idx = np.flatnonzero(np.isfinite(p))
-    order = idx[np.argsort(p[idx], kind="stable")]
-    m = len(order)
-    running = 0.0
-    for rank, i in enumerate(order):
-        running = max(running, min(1.0, (m - rank) * p[i]))
-        out[i] = running
-    return out.tolist()
-
-
-def adjust(outcomes: list[Outcome]) -> list[Outcome]:
-    """Holm's correction over one paper's family: the comparisons among ``outcomes`` that are not
-    sanity checks (a sanity check keeps its own p). Each gets ``p_adjusted``; its result is decided
-    again on it (:func:`decide`) and its evidence names the family's size; a comparison that detects
-    no difference says the difference it could have detected. Returns ``outcomes`` (changed in place)."""
-    family = [o for o in outcomes if o.is_comparison and o.claim.role != "sanity"]
-    for o, p, pc in zip(family, holm([o.p for o in family]), holm([o.p_contra for o in family])):
-        o.p_adjusted, o.result = p, decide(p, pc, o.p_min)
-        o.holds = o.result == HOLDS
+    for o, name in zip(outcomes, families or [""] * len(outcomes)):
+        o.family = name or ("sanity" if o.claim.role == "sanity" else "primary")
+    groups: dict[str, list[Outcome]] = {}
     for o in (o for o in outcomes if o.is_comparison):
-        alone = o.claim.role == "sanity"
-        o.p_adjusted = o.p if alone else o.p_adjusted
-        note = _adjusted_note(o, 1 if alone else len(family))
-        o.short, o.evidence = f"{o.short}; {note}", f"{o.evidence}; {note}"
+        groups.setdefault(o.family, []).append(o)
+    for name, family in groups.items():
+        _adjust_family(family, alone=name in ALONE)
     return outcomes
+
+
+def _adjust_family(family: list[Outcome], alone: bool) -> None:
+    """Holm's rule over one family's comparisons (each at its own p when ``alone``), in place."""
+    m = 1 if alone else len(family)
+    p_adj = [o.p for o in family] if alone else holm([o.p for o in family])
+    p_con = [o.p_contra for o in family] if alone else holm([o.p_contra for o in family])
+    rank = {id(o): r for r, o in enumerate(sorted(family, key=lambda o: o.p))}
+    for o, p, pc in zip(family, p_adj, p_con):
+        o.family_size, o.p_adjusted, o.level = m, p, ALPHA / (1 if alone else m - rank[id(o)])
+        o.result = decide(p, pc, o.p_min)
+        o.holds = o.result == HOLDS
+        note = _adjusted_note(o, m)
+        o.short, o.evidence = f"{o.short}; {note}", f"{o.evidence}; {note}"
+
+
+#: families whose comparisons are judged alone, each at its own p (never in a Holm family)
+ALONE = ("sanity", "exploratory")
 
 
 def _adjusted_note(o: Outcome, m: int) -> str:
     """What the evidence of a comparison adds once its family is known: the adjusted p, and what it
     could detect (no difference) or why it cannot decide."""
-    note = f"Holm p = {o.p_adjusted:.3g} of {m}" if m > 1 else f"p = {o.p:.3g}"
+    note = f"{o.p_adjusted:.3g} after Holm over {m} {o.family} tests" if m > 1 else f"p = {o.p:.3g}"
     if o.result == UNDECIDED:
         return f"{note}; cannot be decided at n = {o.n}: its smallest p is {o.p_min:.3g}"
     if o.result == NO_DIFFERENCE and np.isfinite(o.detectable):

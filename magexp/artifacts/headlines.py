@@ -16,8 +16,10 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.claims import HOLDS, NO_DIFFERENCE, SHORT, adjust, evaluate, interpolate, shorten
+from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
-from magexp.artifacts.spec import artifact_paths, load, load_paper, papers
+from magexp.artifacts.spec import load
+from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 
@@ -49,8 +51,9 @@ def runs_reader(root: Path, paper: str):
 
 
 def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
-    """``(artifact, Outcome)`` of every claim of ``specs`` (one paper: one family of comparisons,
-    Holm-adjusted by :func:`magexp.artifacts.claims.adjust`) whose runs table (``runs(name)``) has rows.
+    """``(artifact, Outcome)`` of every claim of ``specs`` (one paper) whose runs table (``runs(name)``)
+    has rows, Holm-adjusted within its family (:func:`magexp.artifacts.families.claim_families`,
+    :func:`magexp.artifacts.claims.adjust`).
 
     Parameters
     ----------
@@ -69,7 +72,8 @@ def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
         table = runs(spec.name) if spec.claims else None
         if table is not None and len(table):
             out += [(spec.name, evaluate(c, table)) for c in spec.claims]
-    adjust([o for _, o in out])
+    family = claim_families(specs[0].paper, specs) if specs else {}
+    adjust([o for _, o in out], [family[f"{name}.{o.claim.id}"] for name, o in out])
     return out
 
 

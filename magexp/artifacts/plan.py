@@ -19,7 +19,8 @@ from hydra.utils import get_class
 from omegaconf import DictConfig, OmegaConf
 
 from magexp.artifacts.claims import evaluate, matches
-from magexp.artifacts.spec import artifact_paths, load
+from magexp.artifacts.spec import load
+from magexp.artifacts.paper_spec import artifact_paths
 from magexp.core import outcomes
 from magexp.errors import MagexpError
 from magexp.estimators.base import applies_to

@@ -26,7 +26,8 @@ from magexp.artifacts.headlines import HEADLINE_VERDICTS, claim_rows, headlines,
 from magexp.artifacts.plots import readings as readings_plot
 from magexp.artifacts.kind_tables import winners
 from magexp.artifacts.plots.style import save
-from magexp.artifacts.spec import artifact_paths, load, load_paper, papers
+from magexp.artifacts.spec import load
+from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
 from magexp.core.atomic import atomic_path, write_text
 from magexp.core.outcomes import succeeded_majority

@@ -32,7 +32,7 @@ from magexp.artifacts.plan import ArtifactRuns, cells, collect, grow_stage, grow
 from magexp.artifacts.plots import VECTOR, kind_module
 from magexp.artifacts.formats import MEASURED, read_runs, write_csv
 from magexp.artifacts.report import build
-from magexp.artifacts.spec import papers
+from magexp.artifacts.paper_spec import papers
 from magexp.artifacts.summary import COLUMNS, summarise
 from magexp.artifacts.tables import first_output
 from magexp import paths
@@ -47,7 +47,7 @@ from magexp.run.progress import Progress
 
 
 def available_papers() -> list[str]:
-    """The folders of ``experiments/`` (:func:`magexp.artifacts.spec.papers`)."""
+    """The folders of ``experiments/`` (:func:`magexp.artifacts.paper_spec.papers`)."""
     return papers()
 
 

@@ -51,7 +51,6 @@ from magexp.artifacts.plots import KINDS
 from magexp.artifacts.schema import Bool, Float, Int, allowed, build, typed, unknown
 from magexp.core.outcomes import ROUNDOFF_FLOOR, SUCCESS_FACTOR
 from magexp.errors import MagexpError
-from magexp.paths import EXPERIMENTS
 
 #: minimum number of seeds of a cell whose interval is compared with a paper number
 MIN_SEEDS_COMPARED = 30
@@ -350,7 +349,7 @@ def _check_fixed_tolerances(art: Artifact, where: str) -> None:
                           f"({loose[0]}) needs at least {MIN_SEEDS_COMPARED} seeds")
 
 
-def _check_unique_ids(items: list, where: str) -> None:
+def check_unique_ids(items: list, where: str) -> None:
     """The ``id`` of every item of ``items`` differs from the others."""
     ids = [item.id for item in items]
     if len(set(ids)) != len(ids):
@@ -385,7 +384,7 @@ def parse(data: dict, path: Path) -> Artifact:
     art.path = path
     art.plot = _plot(art.kind, plot, f"{where}.plot")
     _check_fixed_tolerances(art, where)
-    _check_unique_ids(art.claims, f"{where}.claims")
+    check_unique_ids(art.claims, f"{where}.claims")
     if art.grow is not None:
         comparisons = {c.id for c in art.claims if c.kind in ("ordering", "winner")}
         unknown_ids = [c for c in art.grow.claims if c not in comparisons]
@@ -445,156 +444,3 @@ def load(path: Path | str) -> Artifact:
     except yaml.YAMLError as exc:
         raise MagexpError(f"artifact {str(path)!r} is not valid YAML: {str(exc).splitlines()[0]}") from None
     return parse(data or {}, path)
-
-
-@typed
-@dataclass(frozen=True)
-class Deviation:
-    """Where magexp departs from (or has to read) the paper's text, and why."""
-
-    text: str
-    reason: str
-
-
-@typed
-@dataclass(frozen=True)
-class Reading:
-    """One plausible reading of a setting the paper leaves unstated (``readings:`` of a headline).
-
-    ``label``: a short name used in the verdict's reason (at most :data:`READING_LABEL` characters);
-    ``source``: where the reading comes from (a standard of the literature, the paper's own words, a
-    value its numbers point to); ``parts``: the artifact claims (``<artifact>.<claim id>``) that test
-    the headline under this reading (none: the headline's own ``parts``, magexp's default reading)."""
-
-    label: str
-    source: str
-    parts: list[str] = field(default_factory=list)
-
-    def __post_init__(self):
-        if len(str(self.label)) > READING_LABEL:
-            raise MagexpError(f"reading {self.label!r}: the label is {len(str(self.label))} characters: at most "
-                              f"{READING_LABEL} are allowed (the source says the rest)")
-        _check_parts(self.parts, f"reading {self.label!r}")
-
-
-#: longest label of a :class:`Reading` (the reason of a split verdict names every reading)
-READING_LABEL = 40
-
-
-def _check_parts(parts: list, where: str) -> None:
-    for part in parts:
-        if not isinstance(part, str) or part.count(".") != 1:
-            raise MagexpError(f"{where}: part {part!r} is not allowed: write <artifact>.<claim id>")
-
-
-@typed
-@dataclass(frozen=True)
-class Headline:
-    """A headline claim of the paper (``headline:`` of ``paper.yaml``), in the paper's own words.
-
-    ``parts``: the artifact claims (``<artifact>.<claim id>``) that test it; its verdict is ``supported``
-    (every part holds), ``contradicted`` (none holds), ``partly`` (some hold), or ``not testable here`` when
-    ``untestable`` (why) is given instead of parts. ``reason``: an optional template interpolated with the
-    runs of the first part's artifact (:func:`magexp.artifacts.claims.interpolate`). ``figure``:
-    ``<paper folder>/<artifact>`` whose figure shows it. ``construction``: why its parts hold by construction
-    (then a ``supported`` verdict reads ``by construction`` and is not counted as support). ``readings``: the
-    unstated settings its verdict depends on, each plausible reading with its own parts (:class:`Reading`);
-    the headline is judged under each (:func:`magexp.artifacts.report.readings_verdict`)."""
-
-    id: str
-    text: str
-    section: str
-    figure: str = ""
-    parts: list[str] = field(default_factory=list)
-    reason: str = ""
-    untestable: str = ""
-    construction: str = ""
-    readings: list[Reading] = field(default_factory=list)
-
-    def __post_init__(self):
-        if bool(self.parts) == bool(str(self.untestable).strip()):
-            raise MagexpError(f"headline {self.id!r}: give either parts (artifact.claim ids) or untestable (why), not both or neither")
-        _check_parts(self.parts, f"headline {self.id!r}")
-        if len(self.readings) == 1:
-            raise MagexpError(f"headline {self.id!r}: one reading is no choice: declare at least two, or none")
-        if sum(not r.parts for r in self.readings) > 1:
-            raise MagexpError(f"headline {self.id!r}: only one reading may leave out parts (the headline's own)")
-        if self.figure and str(self.figure).count("/") != 1:
-            raise MagexpError(f"headline {self.id!r}: figure={self.figure!r} is not allowed: write <paper folder>/<artifact>")
-
-
-@typed
-@dataclass(frozen=True)
-class Paper:
-    """``experiments/<paper>/paper.yaml``: the report section's title, intro, order, headline claims
-    (:class:`Headline`) and deviations."""
-
-    title: str
-    intro: str = ""
-    order: Int = 100
-    deviations: list[Deviation] = field(default_factory=list)
-    requires_data: list[str] = field(default_factory=list)  # recordings its artifacts read (skipped when absent)
-    headline: list[Headline] = field(default_factory=list)
-
-
-def load_paper(paper: str, root: Path | None = None) -> Paper:
-    """The validated ``paper.yaml`` of ``paper``.
-
-    Parameters
-    ----------
-    paper : str
-        The paper's folder name.
-    root : Path, optional
-        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
-
-    Returns
-    -------
-    Paper
-        The validated paper.
-    """
-    path = (root or EXPERIMENTS) / paper / "paper.yaml"
-    data = (read_yaml(path) or {}) if path.exists() else {"title": paper}
-    meta = build(Paper, data, f"{paper}/paper.yaml")
-    _check_unique_ids(meta.headline, f"{paper}/paper.yaml.headline")
-    return meta
-
-
-def papers(root: Path | None = None) -> list[str]:
-    """Every folder of ``experiments/`` that holds an artifact YAML, in the papers' ``order``
-    (``paper.yaml``, optional: title, intro, order, deviations).
-
-    Parameters
-    ----------
-    root : Path, optional
-        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
-
-    Returns
-    -------
-    list of str
-        The papers' names.
-    """
-    root = root or EXPERIMENTS
-    names = [p.name for p in root.iterdir() if p.is_dir() and any(q.name != "paper.yaml" for q in p.glob("*.yaml"))]
-    return sorted(names, key=lambda n: (load_paper(n, root).order, n))
-
-
-def artifact_paths(paper: str, root: Path | None = None) -> list[Path]:
-    """The artifact files of ``paper``, in file-name order.
-
-    Parameters
-    ----------
-    paper : str
-        The paper whose artifact files are listed.
-    root : Path, optional
-        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
-
-    Returns
-    -------
-    list of Path
-        The artifact YAMLs.
-    """
-    root = root or EXPERIMENTS
-    folder = root / paper
-    if not folder.is_dir() or paper not in papers(root):
-        raise MagexpError(f"paper={paper!r} is not allowed: choose one of {', '.join(papers(root))}")
-    return sorted(p for p in folder.glob("*.yaml") if p.name != "paper.yaml")

@@ -4,7 +4,7 @@ The bench's rows are not a paper's runs table (:mod:`magexp.artifacts.claims` re
 so its claims are computed here, with the same vocabulary and tests:
 
 * a comparison of two cells (``better`` against ``worse``, lower is better) is the one-sided Wilcoxon
-  signed-rank test of their paired differences (:func:`magexp.artifacts.claims.wilcoxon_less`; pairs: the same
+  signed-rank test of their paired differences (:func:`magexp.artifacts.significance.wilcoxon_less`; pairs: the same
   seed, or the same half of a recording), :func:`tested`; it :data:`HOLDS` when its p, Holm-adjusted over the
   section's comparisons (:func:`adjust`), is below :data:`ALPHA`, is :data:`CONTRADICTED` when the converse's is,
   and :data:`UNDECIDED` when the test cannot reach ``ALPHA`` at its n (n non-zero differences: ``2^-n``; two
@@ -24,8 +24,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import (ALPHA, CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, Test, decide,
-                                     detectable_paired, holm, wilcoxon_less)
+from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, Test, decide
+from magexp.artifacts.significance import ALPHA, detectable_paired, holm, wilcoxon_less
 from magexp.artifacts.tables import interval
 
 #: the combined error of a simulated run (module docstring)
