@@ -146,7 +146,7 @@ def test_fisher_comparison_of_success_counts(a, b, outcome):
               cells=[{"estimator": "a"}, {"estimator": "b"}])
     result = evaluate(c, table)
     assert result.result == outcome and result.holds == (outcome == HOLDS)
-    assert "Fisher p" in result.evidence and f"{a}/30 vs {b}/30" in result.evidence
+    assert "Fisher p" in result.evidence and f"{a} of 30 vs {b} of 30 seeds succeed" in result.evidence
 
 
 def test_paired_comparison_on_shared_seeds():

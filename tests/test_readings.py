@@ -30,43 +30,62 @@ def _headlines(monkeypatch, heads: list[dict], table: pd.DataFrame, claims: list
     return {r["id"]: r for r in headlines.headlines("p", specs, outcomes, lambda name: table)}
 
 
-def test_readings_that_split_read_depends_and_name_both_sides(monkeypatch):
+def test_the_primary_reading_decides_and_the_others_give_robustness(monkeypatch):
+    """Readings that split never make a verdict of their own: the primary decides (here contradicted,
+    although the other reading supports the headline) and the robustness sentence names the other side
+    with why it is less plausible; the other reading's claims sit in the sensitivity family."""
     table = _table({"a": 1.0, "b": 0.0}, 10)
     a_ok = Claim(id="a_ok", text="", kind="success", where={"estimator": "a"}, op=">=", value=0.9)
     b_ok = Claim(id="b_ok", text="", kind="success", where={"estimator": "b"}, op=">=", value=0.9)
-    head = {"id": "h", "text": "t", "section": "s", "parts": ["art.a_ok"], "readings": [
-        {"label": "reading A", "source": "the literature"},
-        {"label": "reading B", "source": "the paper's words", "parts": ["art.b_ok"]}]}
+    head = {"id": "h", "text": "t", "section": "s", "parts": ["art.b_ok"], "primary": "reading B",
+            "why": "Sec. 2: the paper's words", "readings": [
+                {"label": "reading A", "source": "Smith 1999", "settings": "w = 1", "parts": ["art.a_ok"],
+                 "less_plausible": "the paper fixes w below 1"},
+                {"label": "reading B", "source": "the paper's own words (Sec. 2)"}]}
     row = _headlines(monkeypatch, [head], table, [a_ok, b_ok])["h"]
-    assert row["verdict"] == "depends"
-    assert row["reason"].startswith('depends: supported under "reading A"; contradicted under "reading B"')
+    assert row["verdict"] == "contradicted" and row["primary_reading"] == "reading B"
+    assert row["robustness"] == ('contradicted under the primary reading; supported under "reading A" '
+                                 "(less plausible: the paper fixes w below 1)")
     assert (row["readings_total"], row["readings_holding"]) == (2, 1)
-    assert "reading B (the paper's words): contradicted" in row["evidence"]
+    assert "reading reading A (Smith 1999; w = 1): supported" in row["evidence"]
 
 
-def test_readings_that_agree_keep_the_common_verdict(monkeypatch):
+def test_readings_that_agree_are_robust(monkeypatch):
     table = _table({"a": 1.0, "b": 0.95}, 20)
     a_ok = Claim(id="a_ok", text="", kind="success", where={"estimator": "a"}, op=">=", value=0.9)
     b_ok = Claim(id="b_ok", text="", kind="success", where={"estimator": "b"}, op=">=", value=0.9)
-    heads = [{"id": "h", "text": "t", "section": "s", "parts": ["art.a_ok"], "readings": [
-                 {"label": "A", "source": "x"}, {"label": "B", "source": "y", "parts": ["art.b_ok"]}]},
+    heads = [{"id": "h", "text": "t", "section": "s", "parts": ["art.a_ok"], "primary": "A", "why": "w",
+              "readings": [{"label": "A", "source": "x"},
+                           {"label": "B", "source": "y", "parts": ["art.b_ok"], "less_plausible": "z"}]},
              {"id": "plain", "text": "t", "section": "s", "parts": ["art.a_ok"]}]
     rows = _headlines(monkeypatch, heads, table, [a_ok, b_ok])
-    assert rows["h"]["verdict"] == "supported" and not rows["h"]["reason"].startswith("depends")
+    assert rows["h"]["verdict"] == "supported" and rows["h"]["robustness"] == "robust under all 2 readings"
     assert (rows["h"]["readings_total"], rows["h"]["readings_holding"]) == (2, 2)
     assert (rows["plain"]["readings_total"], rows["plain"]["readings_holding"]) == (1, 1)
 
 
-def test_readings_verdict_orders_the_sides():
-    verdict, split = headlines.readings_verdict([("x", "contradicted"), ("y", "supported"), ("z", "contradicted")])
-    assert verdict == "depends" and split == 'depends: supported under "y"; contradicted under "x", "z"'
-    assert headlines.readings_verdict([("x", "partly"), ("y", "partly")]) == ("partly", "")
+def test_a_claim_about_every_instance_fails_on_the_instance_named(monkeypatch):
+    """A universal claim lists each instance as a part: one failing instance makes it partly, and the
+    reason names that instance first."""
+    table = _table({"a": 1.0, "b": 0.0}, 10)
+    a_ok = Claim(id="a_ok", text="instance a recovers", kind="success", where={"estimator": "a"}, op=">=", value=0.9)
+    b_ok = Claim(id="b_ok", text="instance b recovers", kind="success", where={"estimator": "b"}, op=">=", value=0.9)
+    head = {"id": "h", "text": "any instance", "section": "s", "parts": ["art.a_ok", "art.b_ok"]}
+    row = _headlines(monkeypatch, [head], table, [a_ok, b_ok])["h"]
+    assert row["verdict"] == "partly" and row["reason"].startswith("Not on: instance b recovers (does not hold: success rate 0")
 
 
 def test_a_reading_schema_is_checked():
     base = {"id": "h", "text": "t", "section": "s", "parts": ["art.a"]}
     with pytest.raises(MagexpError, match="one reading is no choice"):
-        build(Headline, {**base, "readings": [{"label": "A", "source": "x"}]}, "h")
+        build(Headline, {**base, "primary": "A", "why": "w", "readings": [{"label": "A", "source": "x"}]}, "h")
+    two = [{"label": "A", "source": "x"}, {"label": "B", "source": "y", "parts": ["art.b"]}]
+    with pytest.raises(MagexpError, match="primary='' is not allowed: name one of its readings"):
+        build(Headline, {**base, "readings": two}, "h")
+    with pytest.raises(MagexpError, match="why is missing"):
+        build(Headline, {**base, "primary": "A", "readings": two}, "h")
+    with pytest.raises(MagexpError, match="reading 'B' needs less_plausible"):
+        build(Headline, {**base, "primary": "A", "why": "Sec. 1", "readings": two}, "h")
     with pytest.raises(MagexpError, match="at most 40"):
         build(Headline, {**base, "readings": [{"label": "L" * 41, "source": "x"}, {"label": "B", "source": "y"}]}, "h")
     with pytest.raises(MagexpError, match="start=50, step=10, cap=40"):

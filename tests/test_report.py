@@ -5,12 +5,14 @@ import re
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS, SHORT, UNDECIDED, shorten
+from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.artifacts.formats import markdown_table
-from magexp.artifacts.headlines import HEADLINE_VERDICTS, headline_verdict
-from magexp.artifacts.report import MAX_CELL, MAX_CHARS, MAX_LINES, compared_counts, compared_rows, counts
+from magexp.artifacts.headlines import headline_verdict
+from magexp.artifacts.paper_spec import HEADLINE_VERDICTS
+from magexp.artifacts.report import MAX_CHARS, MAX_LINES, compared_counts, compared_rows
+from magexp.artifacts.report_claims import counts
 from magexp.artifacts.schema import build
 from magexp.artifacts.paper_spec import Headline
 
@@ -74,14 +76,14 @@ def _tables(text: str) -> list[list[str]]:
 
 def test_the_report_is_short_and_complete():
     report, appendix = _report()
-    assert len(report.splitlines()) <= MAX_LINES and len(report) <= MAX_CHARS
+    for section in report.split("\n## "):
+        assert len(section.splitlines()) <= MAX_LINES and len(section) <= MAX_CHARS, section.splitlines()[0]
     for text in (report, appendix):
         for table in _tables(text):
             assert len(table) > 2, f"an empty table: {table[0]}"
         assert "[95 % CI nan" not in text and not re.search(r"\bnan\b", text), "nan printed"
         assert NO_RUNS not in text, "a note field printed no value although the canonical runs should have one"
-    longest = max(len(c) for t in _tables(report) for row in t for c in re.split(r"(?<!\\)\|", row))
-    assert longest <= MAX_CELL + 2  # the cell and its two spaces
+    assert "(cut" not in report and "more part" not in report, "a text cut: every setting a verdict turns on is shown"
 
 
 def test_each_paper_section_opens_with_its_headline_claims():
@@ -95,9 +97,9 @@ def test_each_paper_section_opens_with_its_headline_claims():
     heads = claims[claims.role == "headline"]
     assert set(heads.verdict) <= set(HEADLINE_VERDICTS)
     assert set(claims[claims.role != "headline"].verdict) <= {HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE, UNDECIDED}
-    assert (claims.reason.str.len() <= MAX_CELL).all()
-    # a headline's reason is written whole, decisive evidence first: it fits the first screen uncut
-    assert all(e.startswith(r) for r, e in zip(heads.reason, heads.evidence)) and (heads.reason.str.len() <= SHORT).all()
+    # a headline's reason is written whole, decisive evidence first; every headline names its robustness
+    assert all(e.startswith(r) for r, e in zip(heads.reason, heads.evidence))
+    assert {"primary_reading", "robustness", "family", "level"} <= set(claims.columns) and heads.robustness.str.len().gt(0).all()
 
 
 def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypatch):
@@ -119,7 +121,8 @@ def test_headlines_take_their_verdict_reason_and_figure_from_the_parts(monkeypat
         {"id": "none", "text": "t", "section": "s", "untestable": "the data are not public"})]
     monkeypatch.setattr(headlines, "load_paper", lambda paper: Paper(title="p", headline=heads))
     rows = {r["id"]: r for r in headlines.headlines("p", specs, outcomes, lambda name: table)}
-    assert rows["both"]["verdict"] == "partly" and rows["both"]["reason"] == "a at 1.1"
+    assert rows["both"]["verdict"] == "partly" and rows["both"]["reason"].endswith(". a at 1.1")
+    assert rows["both"]["reason"].startswith("Not on:  (does not hold: median of fun 5.5 (2 seeds); required below 2)")
     assert rows["one"]["verdict"] == "supported" and rows["one"]["figure"] == "p/fig"
     assert rows["both"]["figure"] == "p/art"  # default: the first part's artifact
     assert rows["none"]["verdict"] == "not testable here" and rows["none"]["reason"] == "the data are not public"
@@ -153,28 +156,28 @@ def test_a_caption_counts_seeds_from_the_runs_never_by_hand():
 def test_the_report_has_no_ellipsis_and_keeps_its_size():
     report, appendix = _report()
     assert "…" not in report and "…" not in appendix, "a cut text: write it to fit, or say where the rest is"
-    assert len(report.splitlines()) <= MAX_LINES, f"{len(report.splitlines())} lines"
-    assert len(report) <= MAX_CHARS, f"{len(report)} characters"
-
-
-def test_shorten_keeps_whole_items_and_says_where_the_rest_is():
-    text = "; ".join(f"item {i} " + "x" * 40 for i in range(10))
-    out = shorten(text, 120)
-    assert len(out) <= 120 and "…" not in out and out.endswith("more parts: see claims.csv)") and "item 0" in out
-    assert shorten("short", 120) == "short"
-    cut = shorten("y" * 50 + " " + "z" * 200, 120, "the appendix")
-    assert len(cut) <= 120 and cut.endswith("(cut: the rest in the appendix)")
+    sizes = {s.splitlines()[0]: (len(s.splitlines()), len(s)) for s in report.split("\n## ")}
+    assert all(n <= MAX_LINES and c <= MAX_CHARS for n, c in sizes.values()), sizes
 
 
 def test_counts_keep_the_papers_claims_apart_from_magexps_and_sanity_checks():
+    """Each distinct claim counted once: a re-test under another reading (family sensitivity) is never a
+    finding of the paper, an exploratory setting and a sanity check are counted apart."""
     claims = [{"role": "headline", "by": "paper", "verdict": "supported"},
               {"role": "headline", "by": "paper", "verdict": "by construction"},
-              {"role": "finding", "by": "paper", "verdict": HOLDS}, {"role": "finding", "by": "paper", "verdict": NO_DIFFERENCE},
-              {"role": "finding", "by": "magexp", "verdict": HOLDS}, {"role": "sanity", "by": "magexp", "verdict": HOLDS}]
+              {"role": "finding", "by": "paper", "verdict": HOLDS, "family": "primary"},
+              {"role": "finding", "by": "paper", "verdict": NO_DIFFERENCE, "family": "primary"},
+              {"role": "finding", "by": "paper", "verdict": HOLDS, "family": "sensitivity"},
+              {"role": "finding", "by": "paper", "verdict": FAILS, "family": "sensitivity"},
+              {"role": "exploratory", "by": "paper", "verdict": HOLDS, "family": "exploratory"},
+              {"role": "finding", "by": "magexp", "verdict": HOLDS, "family": "magexp"},
+              {"role": "sanity", "by": "magexp", "verdict": HOLDS, "family": "sanity"}]
     text = counts(claims, [UNDECIDED])
-    assert "supported 1," in text and "by construction 1" in text
+    assert text.startswith("Headline claims: supported 1, by construction 1;")
     assert "the papers' findings: 1 of 2 hold (no difference detected 1)" in text
-    assert "magexp's own statements: 1 of 2 hold (cannot be decided 1)" in text and "not counted): 1" in text
+    assert "magexp's own statements: 1 of 2 hold (cannot be decided 1)" in text
+    assert "(robustness): 1 of 2 hold (does not hold 1)" in text
+    assert "exploratory settings (shown, never counted): 1" in text and "sanity checks (true by construction): 1" in text
 
 
 def test_compared_counts_split_differs_by_scale_and_failed_majority():

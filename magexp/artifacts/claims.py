@@ -75,6 +75,9 @@ from magexp.artifacts.tables import STATS, interval, matches, same, statistic
 from magexp.errors import MagexpError
 
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
+#: the words of an operator and of a statistic in a claim's short evidence
+OP_WORDS = {"<=": "at most", "<": "below", ">=": "at least", ">": "above"}
+STAT_WORDS = {"success_rate": "success rate", "max": "largest", "min": "smallest"}
 KINDS = ("threshold", "success", "ordering", "winner")
 #: ``finding``: counted; ``sanity``: true by construction, a check of the code; ``exploratory``: a setting
 #: chosen because its runs resemble the paper's numbers, shown but never counted nor tested in a family
@@ -314,7 +317,7 @@ def _fisher_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -
     top = min(na, a + b)
     p_min = fisher_greater(top, na, a + b - top, nb)
     return Test("fisher", p_hold, p_contra, p_min, min(na, nb), detectable_rates(b / nb if nb else np.nan, na, nb),
-                f"Fisher p = {p_hold:.3g} ({a}/{na} vs {b}/{nb})")
+                f"{a} of {na} vs {b} of {nb} seeds succeed, Fisher p = {p_hold:.3g}")
 
 
 def _paired_test(claim: Claim, pair: tuple | None) -> Test:
@@ -376,8 +379,10 @@ def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome
     evidence = f"required {stat} {claim.op} {claim.value:g}; " + "; ".join(parts)
     got = (", ".join(_short_value(s) for s in stats) if len(stats) <= 8
            else f"from {_short_value(np.nanmin(stats))} to {_short_value(np.nanmax(stats))}")
-    return Outcome(claim, ok, evidence, short=f"required {stat} {claim.op} {claim.value:g}; "
-                   f"{len(chosen)} cell{'s' if len(chosen) > 1 else ''}: {got}", n=min(n))
+    what = STAT_WORDS.get(stat, stat) + ("" if stat == "success_rate" else f" of {claim.metric}")
+    cells = f"{len(chosen)} cells, {min(n)} seeds or more each" if len(chosen) > 1 else f"{min(n)} seeds"
+    return Outcome(claim, ok, evidence, short=f"{what} {got} ({cells}); required {OP_WORDS[claim.op]} "
+                   f"{claim.value:g}", n=min(n))
 
 
 def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
@@ -398,9 +403,11 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
     combined = _combined(tests)
     result = decide(combined["p"], combined["p_contra"], combined["p_min"])
     head = f"{stat} of {claim.metric} ({claim.better} is better): "
-    short = "; ".join(f"{_short_value(stats[i])} vs {_short_value(stats[j])}, {t.text}" for (i, j), t in zip(pairs, tests))
+    what = "" if stat == "success_rate" else f"{STAT_WORDS.get(stat, stat)} {claim.metric} "
+    short = "; ".join(t.text if t.name == "fisher" else f"{what}{_short_value(stats[i])} vs {_short_value(stats[j])}, {t.text}"
+                      for (i, j), t in zip(pairs, tests))
     return Outcome(claim, result == HOLDS, head + "; ".join(parts) + "; one-sided tests: " + "; ".join(t.text for t in tests),
-                   result=result, short=f"{stat} {short}", **combined)
+                   result=result, short=short, **combined)
 
 
 def _combined(tests: list[Test]) -> dict:
@@ -475,26 +482,6 @@ def _adjusted_note(o: Outcome, m: int) -> str:
 
 def _short_value(v: float) -> str:
     return f"{v:.3g}"
-
-
-#: length of the short evidence printed in the report (the full evidence goes to claims.csv)
-SHORT = 300
-
-
-def shorten(text: str, n: int = SHORT, where: str = "claims.csv") -> str:
-    """``text`` if it fits in ``n`` characters; else its whole ``;``-separated items that fit, followed
-    by how many were left out and ``where`` they are (never an ellipsis; a first item too long for
-    ``n`` is cut at a word and says so)."""
-    if len(text) <= n:
-        return text
-    items = text.split("; ")
-    for k in range(len(items) - 1, 0, -1):
-        tail = f" (and {len(items) - k} more part{'s' if len(items) - k > 1 else ''}: see {where})"
-        head = "; ".join(items[:k])
-        if len(head) + len(tail) <= n:
-            return head + tail
-    tail = f" (cut: the rest in {where})"
-    return text[:n - len(tail)].rsplit(" ", 1)[0] + tail
 
 
 #: what a note field prints when its cells exist but its row filter (``succeeded``, ``seeds``) leaves no

@@ -14,19 +14,17 @@ paper's findings no power.
 
 from __future__ import annotations
 
-from magexp.artifacts.paper_spec import load_paper
-
 #: the families, in the order the report lists them
 FAMILIES = ("primary", "sensitivity", "magexp", "sanity", "exploratory")
 
 
-def claim_families(paper: str, specs: list) -> dict[str, str]:
-    """``{"<artifact>.<claim id>": family}`` of every claim of ``paper`` (module docstring).
+def claim_families(headlines: list, specs: list) -> dict[str, str]:
+    """``{"<artifact>.<claim id>": family}`` of every claim of a paper (module docstring).
 
     Parameters
     ----------
-    paper : str
-        The paper (its ``paper.yaml`` names the headlines' primary and other readings).
+    headlines : list of Headline
+        The paper's headlines (``paper.yaml``: their primary and other readings).
     specs : list of Artifact
         Its artifacts.
 
@@ -35,7 +33,6 @@ def claim_families(paper: str, specs: list) -> dict[str, str]:
     dict
         The family of each claim.
     """
-    headlines = load_paper(paper).headline
     primary = {p for h in headlines for p in h.primary_parts()}
     sensitivity = {p for h in headlines for p in h.sensitivity_parts()} - primary
     out = {}

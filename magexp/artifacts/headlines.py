@@ -1,10 +1,11 @@
-"""A paper's claims judged on its runs, and its headline claims judged from them, under each reading of what
-the paper left unstated.
+"""A paper's claims judged on its runs, and its headline claims judged from them under their primary reading,
+with their robustness under the other readings of what the paper left unstated.
 
-:func:`paper_outcomes` evaluates every claim of a paper's artifacts on their runs tables (one family of
-comparisons, Holm-adjusted); :func:`headlines` gives each headline claim of its ``paper.yaml`` a verdict from
-its parts' outcomes (:func:`headline_verdict`), judged under each reading (:func:`readings_verdict`);
-:func:`claim_rows` are the rows of ``claims.csv``. The report (:mod:`magexp.artifacts.report`) prints them.
+:func:`paper_outcomes` evaluates every claim of a paper's artifacts on their runs tables, Holm-adjusted within
+its family (:mod:`magexp.artifacts.families`); :func:`headlines` gives each headline claim of its
+``paper.yaml`` the verdict of its primary reading's parts (:func:`headline_verdict`) and says how it fares
+under the others (:func:`robustness`); :func:`claim_rows` are the rows of ``claims.csv``. The report
+(:mod:`magexp.artifacts.report`) prints them.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import HOLDS, NO_DIFFERENCE, SHORT, adjust, evaluate, interpolate, shorten
+from magexp.artifacts.claims import HOLDS, NO_DIFFERENCE, adjust, evaluate, interpolate
 from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
@@ -23,8 +24,6 @@ from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 
-#: verdicts of a headline claim
-HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "depends", "not testable here", "by construction")
 
 
 def _runs(root: Path, paper: str, name: str) -> pd.DataFrame | None:
@@ -72,7 +71,7 @@ def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
         table = runs(spec.name) if spec.claims else None
         if table is not None and len(table):
             out += [(spec.name, evaluate(c, table)) for c in spec.claims]
-    family = claim_families(specs[0].paper, specs) if specs else {}
+    family = claim_families(load_paper(specs[0].paper).headline, specs) if specs else {}
     adjust([o for _, o in out], [family[f"{name}.{o.claim.id}"] for name, o in out])
     return out
 
@@ -120,44 +119,52 @@ def headline_verdict(results: list[str | None]) -> str:
     return "contradicted" if held == 0 else "partly"
 
 
-def readings_verdict(verdicts: list[tuple[str, str]]) -> tuple[str, str]:
-    """The verdict of a headline judged under several readings of what its paper left unstated, from
-    ``(label, verdict)`` per reading: the common verdict where every reading gives the same, else
-    ``depends`` with the split, which names the readings on each side, each label quoted (``depends:
-    supported under "w = 0.4", "c1 = c2 = 2"; contradicted under "constriction PSO"``; '' when they agree).
-
-    Parameters
-    ----------
-    verdicts : list of tuple of str
-        ``(label, verdict)`` per reading.
-
-    Returns
-    -------
-    tuple of str
-        ``(verdict, split)`` (split empty where every reading agrees).
-    """
-    order = {v: i for i, v in enumerate(HEADLINE_VERDICTS)}
-    sides: dict[str, list[str]] = {}
-    for label, verdict in verdicts:
-        sides.setdefault(verdict, []).append(label)
-    if len(sides) == 1:
-        return verdicts[0][1], ""
-    split = "; ".join(f"{v} under " + ", ".join(f'"{label}"' for label in labels)
-                      for v, labels in sorted(sides.items(), key=lambda kv: order[kv[0]]))
-    return "depends", f"depends: {split}"
-
-
 def _reading_rows(h, outcomes: dict) -> list[dict]:
-    """Each reading of headline ``h``: its label, source, parts and verdict (its parts' outcomes,
-    :func:`headline_verdict`); none when ``h`` declares no readings."""
+    """Each reading of headline ``h``: its label, source, settings, parts, verdict (its parts' outcomes,
+    :func:`headline_verdict`) and whether it is the primary; none when ``h`` declares no readings."""
     rows = []
     for r in h.readings:
         parts = list(r.parts or h.parts)
         results = [outcomes[p].result if p in outcomes else None for p in parts]
-        rows.append({"label": r.label, "source": " ".join(str(r.source).split()), "parts": parts,
+        rows.append({"label": r.label, "source": " ".join(str(r.source).split()),
+                     "settings": " ".join(str(r.settings).split()), "parts": parts,
+                     "less_plausible": " ".join(str(r.less_plausible).split()), "primary": r.label == h.primary,
                      "verdict": headline_verdict(results),
                      "outcomes": "; ".join(f"{p}: {res or 'no runs here'}" for p, res in zip(parts, results))})
     return rows
+
+
+def robustness(verdict: str, readings: list[dict]) -> str:
+    """One sentence on how the verdict of a headline fares under its other readings: ``robust under all
+    N readings`` where each gives the primary's verdict, else the primary's verdict and, per other
+    verdict, the readings that give it and why each is less plausible.
+
+    Parameters
+    ----------
+    verdict : str
+        The headline's verdict (its primary reading's).
+    readings : list of dict
+        Its readings (:func:`_reading_rows`).
+
+    Returns
+    -------
+    str
+        The sentence.
+    """
+    if not readings:
+        return "no unstated setting it turns on is read otherwise"
+    others = [r for r in readings if not r["primary"]]
+    if all(r["verdict"] == verdict for r in others):
+        return f"robust under all {len(readings)} readings"
+    same = [r for r in others if r["verdict"] == verdict]
+    text = f"{verdict} under the primary reading" + ("".join(f' and under "{r["label"]}"' for r in same))
+    sides: dict[str, list[dict]] = {}
+    for r in others:
+        if r["verdict"] != verdict:
+            sides.setdefault(r["verdict"], []).append(r)
+    for v, rs in sides.items():
+        text += f"; {v} under " + " and ".join(f'"{r["label"]}" (less plausible: {r["less_plausible"]})' for r in rs)
+    return text
 
 
 def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
@@ -193,61 +200,69 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
     return rows
 
 
-def _over_readings(h, verdict: str, readings: list[dict]) -> tuple[str, str]:
-    """The verdict of headline ``h`` over its ``readings`` (:func:`readings_verdict`; ``verdict``, its
-    own, when it has none) and the split ('' when they agree); a common ``supported`` of a headline
-    that holds by construction reads ``by construction``."""
-    if not readings:
-        return verdict, ""
-    verdict, split = readings_verdict([(r["label"], r["verdict"]) for r in readings])
-    if not split and verdict == "supported" and str(h.construction).strip():
-        verdict = "by construction"
-    return verdict, split
-
-
 def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:
-    """One headline's row. The reason is written whole (:func:`_headline_verdict`;
-    ``tests/test_report.py`` holds it to :data:`magexp.artifacts.claims.SHORT` characters); the
-    evidence is the reason followed by each reading's verdict and every part's outcome and full
-    evidence. With ``readings:`` it is judged under each (:func:`readings_verdict`): a split verdict
-    reads ``depends`` and its reason opens with the split; ``readings_total`` counts its readings (1:
-    the headline's own parts only), ``readings_holding`` those under which it is supported;
-    ``readings`` keeps each reading's verdict (for the figure)."""
-    parts = [outcomes.get(p) for p in h.parts]
-    verdict, reason = _headline_verdict(h, parts, runs)
+    """One headline's row, decided by its primary reading (:meth:`Headline.primary_parts`); its other
+    readings give ``robustness`` (:func:`robustness`) and never the verdict. The reason is the deciding
+    numbers (:func:`_headline_verdict`); the evidence adds each reading's verdict, source and settings and
+    every deciding part's outcome; ``readings_total`` counts its readings (1: none declared),
+    ``readings_holding`` those under which it is supported; ``readings`` keeps each reading's row (for
+    the figure)."""
+    deciding = h.primary_parts()
+    parts = [outcomes.get(p) for p in deciding]
+    verdict, reason = _headline_verdict(h, deciding, parts, runs)
     readings = _reading_rows(h, outcomes)
-    verdict, split = _over_readings(h, verdict, readings)
-    full = f"{split}. {reason}" if split else reason
     figure = h.figure or (f"{paper}/{h.parts[0].split('.')[0]}" if h.parts else "")
-    evidence = " | ".join([full] + [f"reading {r['label']} ({r['source']}): {r['verdict']} ({r['outcomes']})"
-                                    for r in readings]
-                          + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(h.parts, parts) if o])
+    robust = robustness(verdict, readings)
+    primary = next((r for r in readings if r["primary"]), None)
+    primary_text = (f"{primary['label']} ({primary['source']}: {primary['settings']})".replace(": )", ")")
+                    if primary else "")
+    evidence = " | ".join([reason, f"primary reading: {primary_text}; why: {' '.join(str(h.why).split())}"
+                           if primary else "", f"robustness: {robust}"]
+                          + [f"reading {r['label']} ({r['source']}; {r['settings']}): {r['verdict']} ({r['outcomes']})"
+                             for r in readings]
+                          + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(deciding, parts) if o])
     holding = sum(r["verdict"] == "supported" for r in readings) if readings else int(verdict == "supported")
     return {"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline", "section": h.section,
-            "figure": figure, "text": str(h.text).strip(), "verdict": verdict,
-            "reason": full if len(full) <= SHORT else split or reason, "evidence": evidence,
+            "figure": figure, "text": str(h.text).strip(), "verdict": verdict, "reason": reason,
+            "evidence": evidence.replace(" |  | ", " | "), "primary_reading": primary["label"] if primary else "",
+            "why": " ".join(str(h.why).split()), "robustness": robust,
             "readings_total": len(readings) or int(bool(h.parts)), "readings_holding": holding, "readings": readings}
 
 
-def _headline_verdict(h, parts: list, runs) -> tuple[str, str]:
-    """The verdict of headline ``h`` and its reason, from the outcomes ``parts`` of its parts (None:
-    no runs here): its ``reason:`` template read on the runs of the first part's artifact, else each
-    part's result and numbers; an untestable headline says why; one that is ``supported`` only by
+def _headline_verdict(h, deciding: list[str], parts: list, runs) -> tuple[str, str]:
+    """The verdict of headline ``h`` and its reason, from the outcomes ``parts`` of its deciding parts
+    (None: no runs here): its ``reason:`` template read on the runs of the first part's artifact, else
+    each part's result and numbers, preceded by the parts that do not hold (a claim about every instance
+    fails on the instances named); an untestable headline says why; one that is ``supported`` only by
     construction (``construction:`` says why) reads ``by construction``, never counted as supported."""
     if h.untestable:
         return "not testable here", str(h.untestable).strip()
     verdict = headline_verdict([o.result if o is not None else None for o in parts])
     if verdict == "supported" and str(h.construction).strip():
         verdict = "by construction"
+    lead, failing = _failing(verdict, deciding, parts)
     if h.reason and parts[0] is not None:
-        return verdict, interpolate(" ".join(str(h.reason).split()), runs(h.parts[0].split(".")[0]))
-    return verdict, "; ".join(f"{p.split('.')[1]}: {o.result if o else 'no runs here'}"
-                              + (f" ({o.short})" if o else "") for p, o in zip(h.parts, parts))
+        return verdict, lead + interpolate(" ".join(str(h.reason).split()), runs(deciding[0].split(".")[0]))
+    shown = [(p, o) for p, o in zip(deciding, parts) if p not in failing]
+    return verdict, lead + "; ".join(f"{p.split('.')[1]}: {o.result if o else 'no runs here'}"
+                                     + (f" ({o.short})" if o else "") for p, o in shown)
+
+
+def _failing(verdict: str, deciding: list[str], parts: list) -> tuple[str, set]:
+    """The lead of a ``partly`` headline's reason, naming each deciding part that does not hold (the
+    instance a claim about every instance fails on) with its evidence, and those parts ('' and none
+    for any other verdict)."""
+    failing = [(p, o) for p, o in zip(deciding, parts) if o is not None and o.result != HOLDS]
+    if verdict != "partly" or not failing:
+        return "", set()
+    return ("Not on: " + "; ".join(f"{o.claim.text} ({o.result}: {o.short})" for _, o in failing) + ". ",
+            {p for p, _ in failing})
 
 
 def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
-    """One ``claims.csv`` row per evaluated claim of ``paper`` (``p``, ``p_adjusted``, ``p_min`` and
-    ``detectable`` for comparisons; ``detectable`` only where no difference is detected).
+    """One ``claims.csv`` row per evaluated claim of ``paper`` (its ``family``; ``level``, ``p``,
+    ``p_adjusted``, ``p_min`` and ``detectable`` for comparisons; ``detectable`` only where no difference
+    is detected).
 
     Parameters
     ----------
@@ -266,7 +281,8 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
     own = {s.name: s for s in specs}
     return [{"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
              "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
-             "text": o.claim.text, "verdict": o.result, "reason": shorten(o.short), "evidence": o.evidence,
+             "text": o.claim.text, "verdict": o.result, "reason": o.short, "evidence": o.evidence,
+             "family": o.family, "level": o.level if o.is_comparison else np.nan,
              "p": o.p, "p_adjusted": o.p_adjusted, "p_min": o.p_min,
              "detectable": o.detectable if o.result == NO_DIFFERENCE else np.nan, "seeds": o.n or np.nan}
             for name, o in outcomes]

@@ -37,6 +37,8 @@ from magexp.paths import EXPERIMENTS
 
 #: longest label of a :class:`Reading` (the robustness sentence names readings by it)
 READING_LABEL = 40
+#: verdicts of a headline claim (its primary reading's: :mod:`magexp.artifacts.headlines`)
+HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "not testable here", "by construction")
 
 
 @typed

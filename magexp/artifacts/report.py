@@ -1,9 +1,9 @@
 """Assemble ``results/summary.csv``, ``results/claims.csv``, ``results/versions.csv``,
 ``results/REPORT.md`` and ``results/APPENDIX.md`` from the papers' parts.
 
-``REPORT.md`` is claims first (at most :data:`MAX_LINES` lines and :data:`MAX_CHARS` characters,
-no table cell over :data:`MAX_CELL`): per paper, (1) its headline claims with their verdicts
-(:mod:`magexp.artifacts.headlines`), reasons and figures, (2) magexp's own findings, (3) the compared
+``REPORT.md`` is claims first (each paper's section at most :data:`MAX_LINES` lines and :data:`MAX_CHARS`
+characters, so a paper added makes room for itself; no text cut): per paper, (1) its headline claims with their verdicts under their primary readings, the deciding
+numbers and their robustness (:mod:`magexp.artifacts.headlines`), (2) the paper's findings, (3) the compared
 numbers (rows with a paper value), (4) the deviations. ``APPENDIX.md`` holds the rest: per
 artifact its figure, caption, full summary table (``n/a`` rows too), table and notes (measured
 values interpolated from the runs, :func:`magexp.artifacts.claims.interpolate`), the sanity checks and the
@@ -20,12 +20,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, UNDECIDED, interpolate, shorten
+from magexp.artifacts.claims import interpolate
 from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, write_csv
-from magexp.artifacts.headlines import HEADLINE_VERDICTS, claim_rows, headlines, paper_outcomes, runs_reader
-from magexp.artifacts.plots import readings as readings_plot
+from magexp.artifacts.headlines import claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.kind_tables import winners
-from magexp.artifacts.plots.style import save
+from magexp.artifacts.report_claims import bold, counts, draw_readings, findings_table, headline_list, link
 from magexp.artifacts.spec import load
 from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
@@ -37,12 +36,14 @@ from magexp.run import provenance
 
 SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "judged_value", "judged_lo", "judged_hi",
                  "judged_runs", "judged_n", "success_rate", "truth_in_interval", "verdict", "rel_difference"]
-#: limits of REPORT.md (the appendix holds the rest; the section "magexp beside MAGYC" links its claims table)
-MAX_LINES, MAX_CHARS, MAX_CELL = 400, 60_000, 300
+#: limits of each section of REPORT.md (a paper's; the appendix holds the rest; the section "magexp beside
+#: MAGYC" links its claims table): a reviewer reads one in a few minutes
+MAX_LINES, MAX_CHARS = 150, 25_000
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
-                 "p", "p_adjusted", "p_min", "detectable", "seeds", "readings_total", "readings_holding"]
+                 "family", "level", "p", "p_adjusted", "p_min", "detectable", "seeds", "primary_reading", "why",
+                 "robustness", "readings_total", "readings_holding"]
 
 
 def versions() -> dict:
@@ -90,18 +91,6 @@ def collect(root: Path = RESULTS) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)[COLUMNS]
 
 
-def _link(figure: str, root: Path) -> str:
-    """A Markdown link to a figure ``<paper>/<artifact>`` (its PNG), or '' if it was not drawn."""
-    if not figure:
-        return ""
-    name = figure.split("/")[-1]
-    return f"[{name}]({figure}.png)" if (root / f"{figure}.png").exists() else name
-
-
-def _bold(verdict: str) -> str:
-    return f"**{verdict}**" if verdict in ("contradicted", "partly", FAILS, CONTRADICTED, "differs") else verdict
-
-
 class Paper:
     """One paper's parts, each read once: meta, specs, runs, summary rows, claim outcomes.
 
@@ -125,115 +114,6 @@ class Paper:
         by_id = {f"{name}.{o.claim.id}": o for name, o in self.outcomes}
         self.headlines = headlines(paper, self.specs, by_id, self.runs)
         self.claims = claim_rows(paper, self.specs, self.outcomes)
-        #: the claims that test a headline only under another reading than magexp's (the readings figure
-        #: and claims.csv show them; the report's findings table leaves them out)
-        self.reading_parts = {part for h in self.meta.headline for r in h.readings for part in r.parts} - {
-            part for h in self.meta.headline for part in h.parts}
-
-
-def _headline_table(p: Paper) -> str:
-    if not p.headlines:
-        return "No headline claim of this section is declared (`headline:` in its `paper.yaml`).\n"
-    frame = pd.DataFrame(p.headlines)
-    frame["claim"] = frame.text
-    frame["verdict"] = frame.verdict.map(_bold)
-    frame["figure"] = frame.figure.map(lambda f: _link(f, p.root))
-    frame["readings"] = [f"{h} of {t} supported" if t else "" for h, t in zip(frame.readings_holding, frame.readings_total)]
-    grid = (f"Each headline is judged under every plausible reading of a setting the paper leaves unstated "
-            f"(`readings:` of its `paper.yaml`; `depends`: the readings split, the reason names each side); the "
-            f"verdict under each reading: {_link(f'{p.paper}/readings', p.root)}.\n\n")
-    return grid + markdown_table(frame, ["claim", "section", "verdict", "readings", "reason", "figure"])
-
-
-def draw_readings(p: Paper) -> None:
-    """``<paper>/readings.png``: the verdict of each headline under each reading
-    (:mod:`magexp.artifacts.plots.readings`), and the cells it draws in ``readings.csv``; none for a
-    paper without headlines.
-
-    Parameters
-    ----------
-    p : Paper
-        The paper's section.
-    """
-    if p.headlines:
-        (p.root / p.paper).mkdir(parents=True, exist_ok=True)
-        write_csv(pd.DataFrame(readings_plot.cells(p.headlines), columns=["headline", "reading", "verdict"]),
-                  p.root / p.paper / "readings.csv")
-        save(readings_plot.draw(p.headlines, f"{p.meta.title}: each headline under each reading"),
-             p.root / p.paper / "readings.png")
-
-
-def counts(claims: list[dict], peers: list[str] = ()) -> str:
-    """The counts of a section (or of all, ``claims`` of every paper): the papers' headline claims by
-    verdict, the papers' findings apart from magexp's own statements (with ``peers``: the outcomes of
-    the MAGYC section's claims, magexp's too), and the sanity checks, which are not counted.
-
-    Parameters
-    ----------
-    claims : list of dict
-        The claims rows.
-    peers : list of str
-        The results of the MAGYC section's claims.
-
-    Returns
-    -------
-    str
-        The counts' text.
-    """
-    heads = pd.Series([c["verdict"] for c in claims if c["role"] == "headline"], dtype=object).value_counts()
-    paper = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "paper"]
-    own = [c["verdict"] for c in claims if c["role"] == "finding" and c["by"] == "magexp"] + list(peers)
-    sanity = sum(c["role"] == "sanity" for c in claims)
-    text = ("The papers' headline claims: " + ", ".join(f"{k} {int(heads.get(k, 0))}" for k in HEADLINE_VERDICTS)
-            if len(heads) else "No headline claim")
-    text += f"; the papers' findings: {_held(paper)}" if paper else ""
-    text += f"; magexp's own statements: {_held(own)}" if own else ""
-    return text + (f"; sanity checks (true by construction, not counted): {sanity}" if sanity else "")
-
-
-def _held(results: list[str]) -> str:
-    """``k of n hold`` and how the others went (``contradicted 2, no difference detected 3``)."""
-    others = pd.Series([r for r in results if r != HOLDS], dtype=object).value_counts()
-    rest = ", ".join(f"{k} {int(others[k])}" for k in (FAILS, CONTRADICTED, NO_DIFFERENCE, UNDECIDED) if k in others)
-    return f"{sum(r == HOLDS for r in results)} of {len(results)} hold" + (f" ({rest})" if rest else "")
-
-
-def _elsewhere(p: Paper) -> str:
-    """What the findings table of the report leaves out: the claims that test a headline only under
-    another reading than magexp's (:attr:`Paper.reading_parts`)."""
-    n = sum(f"{c['artifact']}.{c['id']}" in p.reading_parts for c in p.claims)
-    return (f" The {n} claims that test a headline under another reading of an unstated setting are in the "
-            "readings figure and `claims.csv`.") if n else ""
-
-
-def _listed(p: Paper, c: dict, own_here: bool, appendix: bool) -> bool:
-    """Whether the findings table lists claim row ``c`` (:func:`_findings_table`)."""
-    by_paper = c["by"] == "paper"
-    return (c["role"] == "finding" and (by_paper or own_here) and not (appendix and by_paper)
-            and f"{c['artifact']}.{c['id']}" not in p.reading_parts)
-
-
-def _findings_table(p: Paper, *, appendix: bool = False) -> str:
-    """The findings of a section: in the report the paper's own (and magexp's where the section has no
-    headline claim: it is magexp's own work), in the appendix magexp's statements of a paper section."""
-    own_here = appendix or not p.headlines
-    found = [c for c in p.claims if _listed(p, c, own_here, appendix)]
-    if not found or (appendix and not p.headlines):
-        return ""
-    found.sort(key=lambda c: c["by"] != "paper")
-    frame = pd.DataFrame(found)
-    frame["claim"] = [f"{t} ({s})" if s else t for t, s in zip(frame.text, frame.section)]
-    frame["result"] = frame.verdict.map(_bold)
-    frame["evidence"] = frame.reason.map(lambda r: shorten(r, 200))
-    where = ("" if own_here else " magexp's own statements on this paper's runs are listed in the "
-             f"[appendix](APPENDIX.md#{p.paper}).")
-    title = "### magexp's own statements\n\n" if appendix else "### Findings\n\n"
-    return (title + "*paper*: the paper's statement, checked; *magexp*: stated by this report, a test fails if one "
-            "does not hold. A comparison holds only where its test separates the two sides at alpha 0.05 after "
-            "Holm's correction over the section's comparisons; full evidence and p-values: "
-            f"[`claims.csv`](claims.csv).{where}"
-            + ("" if appendix else _elsewhere(p))
-            + "\n\n" + markdown_table(frame, ["by", "claim", "result", "evidence"]))
 
 
 #: a cell with more compared numbers than this (a parameter table) is one line of the report
@@ -268,14 +148,14 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
     for _, cell in rows.groupby(["artifact", "estimator", "setting"], sort=False):
         if len(cell) <= COLLAPSE:
             out += [{"label": r.label, "paper": fmt(r.paper_value), "ours": _judged_text(r),
-                     "verdict": _bold(r.verdict), "reason": r.reason} for r in cell.itertuples()]
+                     "verdict": bold(r.verdict), "reason": r.reason} for r in cell.itertuples()]
             continue
         first = cell.iloc[0]
         head = str(first.label).split(",", 1)
         name = head[0].rsplit(" ", 1)[0] if " " in head[0] else head[0]  # "RDPSO S11" -> "RDPSO"
         label = ", ".join([f"{name} ({len(cell)} values: {', '.join(cell.quantity.astype(str))})", *head[1:]])
         counts = cell.verdict.value_counts()
-        verdict = ", ".join(_bold(f"{k} {int(counts[k])}") if k != "reproduced" else f"{k} {int(counts[k])}"
+        verdict = ", ".join(bold(f"{k} {int(counts[k])}") if k != "reproduced" else f"{k} {int(counts[k])}"
                             for k in VERDICTS if k in counts)
         others = cell[cell.verdict != "reproduced"]
         reason = "; ".join(f"{r.quantity} {r.verdict}: paper {fmt(r.paper_value)}, ours {fmt(r.judged_value)}"
@@ -283,7 +163,7 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
                            for r in others.itertuples())
         runs = ", ".join(sorted(set(cell.judged_runs.astype(str))))
         out.append({"label": label, "paper": f"{len(cell)} values", "ours": f"{runs}: see appendix", "verdict": verdict,
-                    "reason": shorten(reason or "every value reproduced", MAX_CELL, "the appendix")})
+                    "reason": reason or "every value reproduced"})
     return pd.DataFrame(out, columns=["label", "paper", "ours", "verdict", "reason"])
 
 
@@ -334,12 +214,10 @@ def _compared_table(p: Paper) -> str:
 
 
 def _deviations_section(meta, paper: str, root: Path, *, full: bool = False) -> str:
-    """The deviations from the paper's text; in the report each cell is cut at :data:`MAX_CELL`
-    characters (``full``: the appendix's whole text, with the LaTeX twin)."""
+    """The deviations from the paper's text, whole (``full``: with the LaTeX twin, for the appendix)."""
     if not meta.deviations:
         return ""
-    cut = (lambda t: " ".join(t.split())) if full else (lambda t: shorten(" ".join(t.split()), MAX_CELL, "the appendix"))
-    frame = pd.DataFrame([{"what": cut(d.text), "why": cut(d.reason)} for d in meta.deviations])
+    frame = pd.DataFrame([{"what": " ".join(d.text.split()), "why": " ".join(d.reason.split())} for d in meta.deviations])
     return "### Deviations from the paper's text\n\n" + markdown_table(
         frame, ["what", "why"], tex=root / paper / "deviations.tex" if full else None)
 
@@ -357,7 +235,7 @@ def _winners_section(p: Paper) -> str:
         best = winners(frame)
         if not len(best):
             continue
-        parts.append(f"**{spec.title}** ({_link(f'{p.paper}/{spec.name}', p.root)}): lowest RMS offset error / "
+        parts.append(f"**{spec.title}** ({link(f'{p.paper}/{spec.name}', p.root)}): lowest RMS offset error / "
                      "sqrt(tr CRB), a winner only where its 95 % CI lies below every other's, else the tied set.\n\n"
                      + markdown_table(best, ["case", "winner", "bound_ratio", "success_rate", "tied"]))
     return "### Which method to pick\n\n" + "\n".join(parts) if parts else ""
@@ -365,9 +243,8 @@ def _winners_section(p: Paper) -> str:
 
 def _report_section(p: Paper) -> str:
     intro = " ".join(str(p.meta.intro).split())
-    lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n",
-             f"**Counts.** {counts(p.headlines + p.claims)}.\n", _headline_table(p)]
-    lines += [_findings_table(p), _winners_section(p), _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
+    lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n", headline_list(p)]
+    lines += [findings_table(p), _winners_section(p), _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
               f"Figures, notes, full tables and sanity checks: [appendix](APPENDIX.md#{p.paper}).\n"]
     return "\n".join(x for x in lines if x)
 
@@ -376,7 +253,7 @@ def _appendix_section(p: Paper) -> str:
     """A paper's appendix: sanity checks, then every artifact with its figure, caption, tables, notes."""
     lines = [f'<a id="{p.paper}"></a>\n', f"## {p.meta.title}\n", f"{str(p.meta.intro).strip()}\n",
              _deviations_section(p.meta, p.paper, p.root, full=True)]
-    lines.append(_findings_table(p, appendix=True))
+    lines.append(findings_table(p, appendix=True))
     frame = pd.DataFrame(p.claims) if p.claims else pd.DataFrame(columns=CLAIM_COLUMNS)
     sanity = frame[frame.role == "sanity"]
     if len(sanity):

@@ -350,7 +350,15 @@ def _check_fixed_tolerances(art: Artifact, where: str) -> None:
 
 
 def check_unique_ids(items: list, where: str) -> None:
-    """The ``id`` of every item of ``items`` differs from the others."""
+    """Raise unless the ``id`` of every item of ``items`` differs from the others.
+
+    Parameters
+    ----------
+    items : list
+        Claims or headlines (anything with an ``id``).
+    where : str
+        Where they were read, for the message.
+    """
     ids = [item.id for item in items]
     if len(set(ids)) != len(ids):
         raise MagexpError(f"{where}: ids must be unique, got {ids}")
