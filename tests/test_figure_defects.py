@@ -193,17 +193,42 @@ def test_final_sets_log_axes_per_metric_and_draws_the_floors_over_the_lines():
 
 
 @pytest.mark.parametrize("per_family", [1, 2])
-def test_tuning_names_settings_in_a_legend_only_where_the_axis_does_not(per_family):
-    """One setting per family (an ablation's variants): the x axis names each, so no legend repeats it;
-    two per family: the legend tells them apart."""
+def test_tuning_gives_every_setting_its_own_named_tick(per_family):
+    """One setting per family (an ablation's variants): the tick is the family's words; several (mode 3's
+    arcs): each setting has its own tick, named by family and setting, so no legend has to tell them apart
+    (yuan2018_ext_readings drew two arcs under one tick)."""
     spec = OmegaConf.create({"title": "t", "kind": "tuning", "plot": {}})
-    rows = [{"scenario": "s", "family": fam, "family_label": fam.upper(), "label": f"{fam}, w = {k}", "median": 1.0 + k,
-             "q25": 0.9, "q75": 2.0, "success_rate": 0.9, "default": False, "role": "", "metric": "fun"}
+    rows = [{"scenario": "s", "family": fam, "family_label": fam.upper(), "label": f"w = {k}", "median": 1.0 + k,
+             "q25": 0.9, "q75": 2.0, "success_rate": 0.9, "n_seeds": 30, "default": False, "role": "", "metric": "fun"}
             for fam in ("pso", "ipso", "ipso_w") for k in range(per_family)]
     fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
-    texts = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
-    assert texts == ([] if per_family == 1 else [r["label"] for r in rows])
-    assert [t.get_text() for t in fig.axes[0].get_xticklabels()] == ["PSO", "IPSO", "IPSO_W"]  # family_label
+    assert [t.get_text() for legend in fig.legends for t in legend.get_texts()] == []
+    ticks = [t.get_text() for t in fig.axes[0].get_xticklabels()]
+    assert ticks == ([r["family_label"] for r in rows] if per_family == 1
+                     else [f"{r['family_label']}: {r['label']}" for r in rows])
+    assert len(set(fig.axes[0].get_xticks())) == len(rows)
+    plt.close(fig)
+
+
+def test_tuning_draws_a_success_rate_of_zero_and_marks_the_default():
+    """A success rate of 0 is a bar of no height: it is marked on the axis with its count (yuan2018_ext_turns'
+    90-degree turns); the default setting is a star on top and an outlined bar below, and the legend says so."""
+    spec = OmegaConf.create({"title": "t", "kind": "tuning", "plot": {}})
+    rows = [{"scenario": "s", "family": "rdpso", "family_label": "RDPSO", "label": f"arc (deg) = {a}", "median": m,
+             "q25": m / 2, "q75": m * 2, "success_rate": r, "n_seeds": 30, "default": a == 180, "role": "", "metric": "fun"}
+            for a, m, r in ((90, 30.0, 0.0), (180, 0.2, 0.7), (270, 0.2, 0.9))]
+    fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
+    top, bottom = fig.axes[0], fig.axes[1]
+    assert [t.get_text() for t in bottom.texts] == ["0 of 30"]
+    zero_x = bottom.get_xticks()[0]
+    assert any(ln.get_linewidth() >= 3 and min(ln.get_xdata()) < zero_x < max(ln.get_xdata())
+               and set(ln.get_ydata()) == {0} for ln in bottom.lines)
+    outlined = [p for p in bottom.patches if p.get_linewidth() > 0]
+    assert len(outlined) == 1 and outlined[0].get_height() == pytest.approx(0.7)
+    stars = [c for c in top.collections if c.get_sizes()[0] == 90]
+    assert len(stars) == 1
+    assert any("default" in t.get_text() for legend in fig.legends for t in legend.get_texts())
+    assert defects(fig) == []
     plt.close(fig)
 
 

@@ -13,9 +13,10 @@ evaluations to 1.1x the final value. Per (family, scenario) ``role`` marks the `
 match ``plot.default`` (``{family: {key: value}}``; a family without one: no default).
 
 The figure: one column of two panels per scenario. Where every family has at most
-:data:`FEW` settings, each setting has its own colour (legend: its label, e.g. ``boundary = clip``)
-in both panels: on top its median metric, below its success rate (no legend where each family has one
-setting: the x axis names it already, e.g. an ablation's variants). With more settings, the top
+:data:`FEW` settings, each setting has its own colour and its own tick, named by its family and label
+(e.g. ``RDPSO: arc (deg) = 90``), in both panels: on top its median metric (the default a star), below
+its success rate (the default's bar outlined; a rate of 0, a bar of no height, is marked on the axis with
+its count, ``0 of 30``). With more settings, the top
 panel shows every setting's median as a dot, the best / median / worst ones with their own markers
 and the default as a star; below, the success rates of the median and best settings and the default
 (of the one setting where a family has only one). The table: :func:`magexp.artifacts.kind_tables.tuning_table`.
@@ -34,18 +35,32 @@ FEW = 4
 ROLE_MARKERS = {"best": "^", "median": "D", "worst": "v"}
 
 
-def _named(top, bottom, sub, families, colours, legend: bool):
-    """Few settings per family: one colour per setting label, in both panels (named in the legend if
-    ``legend``)."""
+def _named(top, bottom, sub, families, colours) -> tuple[list, list]:
+    """Few settings per family: one colour per setting label, in both panels, each setting at its own tick
+    (the family's words, and the setting's where the family has several); returns the ticks and their words."""
     width = 0.8 / max(sub.family.value_counts().max(), 1)
+    ticks, words = [], []
     for k, fam in enumerate(families):
         f = sub[sub.family == fam]
         for j, (_, r) in enumerate(f.iterrows()):
             x = k - width * (len(f) - 1) / 2 + width * j
             top.scatter([x], [max(r["median"], 1e-14)], s=90 if r.default else 30, color=colours[r.label], zorder=3,
-                        marker="*" if r.default else "o", label=r.label if legend else "_nolegend_")
+                        marker="*" if r.default else "o")
             top.plot([x, x], [max(r.q25, 1e-14), max(r.q75, 1e-14)], color=colours[r.label], lw=1)
-            bottom.bar(x, float(r.success_rate), width=width * 0.9, color=colours[r.label])
+            _rate_bar(bottom, x, width * 0.9, r, colours[r.label])
+            ticks.append(x)
+            words.append(r.family_label if len(f) == 1 or r.label == r.family else f"{r.family_label}: {r.label}")
+    return ticks, words
+
+
+def _rate_bar(ax, x: float, width: float, row, colour) -> None:
+    """A success-rate bar, outlined where it is the default; a rate of 0 is drawn as a mark and its count."""
+    rate = float(row.success_rate)
+    ax.bar(x, rate, width=width, color=colour, edgecolor="k" if row.default else colour, lw=1.2 if row.default else 0)
+    if rate == 0:  # a bar of height 0 is invisible: mark it on the axis and say so
+        ax.plot([x - width / 2, x + width / 2], [0, 0], color=colour, lw=4, solid_capstyle="butt", clip_on=False, zorder=3)
+        ax.annotate(f"0 of {int(row.n_seeds)}", (x, 0), xytext=(0, 4), textcoords="offset points", ha="center",
+                    va="bottom", fontsize=7, color="0.2")
 
 
 def _ranked(top, bottom, sub, families):
@@ -100,13 +115,13 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         top, bottom = axes[j], axes[len(scenarios) + j]
         sub = frame[frame.scenario == sc]
         present = [f for f in families if (sub.family == f).any()]  # a family not run on this scenario: no tick
-        if few:
-            _named(top, bottom, sub, present, colours,
-                   legend=frame.drop_duplicates(["family", "label"]).family.value_counts().max() > 1)
+        if few:  # every setting at its own tick, named there: no legend of settings
+            positions, words = _named(top, bottom, sub, present, colours)
         else:
             _ranked(top, bottom, sub, present)
+            positions, words = list(range(len(present))), [ticks[f] for f in present]
         for ax in (top, bottom):
-            ax.set_xticks(range(len(present)), [ticks[f] for f in present], rotation=30, ha="right", fontsize=7)
+            ax.set_xticks(positions, words, rotation=30, ha="right", fontsize=7)
         top.set_yscale("log")
         top.set_ylabel(spec.plot.get("ylabel", f"median {frame.metric.iloc[0]} per setting"))
         top.set_title(scenario_label(sc), fontsize=9)
@@ -114,7 +129,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
         bottom.set_ylabel("success rate")
     entries = legend_entries(axes)
     if few and frame.default.any():
-        entries["star: default"] = plt.Line2D([], [], ls="", marker="*", color="0.3", ms=9)
+        entries["star, outlined bar: magexp's default"] = plt.Line2D([], [], ls="", marker="*", color="0.3", ms=9)
     shared_legend(fig, axes, entries, ncols=3, fontsize=7)
     fig.suptitle(spec.title, fontsize=10)
     return tidy_log_axes(fig)
