@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from hydra.utils import instantiate
 
-from magexp.artifacts.censoring import cell_quartiles, censored_statistic
+from magexp.artifacts.censoring import cell_quartiles, censor_row, censored_statistic
 from magexp.artifacts.claims import Claim, evaluate, interpolate, values
 from magexp.artifacts.paper_spec import artifact_paths, load_paper
 from magexp.artifacts.spec import load
@@ -83,6 +83,15 @@ def test_a_threshold_on_a_censored_median_does_not_hold_and_says_so():
     by_300 = Claim(id="b", text="", kind="threshold", metric="steps <= 300", stat="min", where={"estimator": "kf"},
                    op=">=", value=1)
     assert not evaluate(by_300, runs).holds  # a censored step is later than 300, not dropped
+
+
+def test_a_summary_row_of_a_censored_metric_counts_every_seed():
+    runs = _runs([100, 200, np.nan, np.nan, np.nan])
+    row = censor_row({"value": 150.0, "judged_value": 150.0, "n_seeds": 2, "reason": ""}, runs, "steps")
+    assert row["value"] == np.inf and row["judged_value"] == np.inf and row["n_seeds"] == 5
+    assert "3 of 5 seeds censored" in row["reason"] and np.isnan(row["lo"])
+    plain = {"value": 150.0}
+    assert censor_row(plain, _runs([100, 200]), "steps") is plain
 
 
 # -- the paper's readings: sourced, argued, no placeholder ----------------------------------------------

@@ -153,3 +153,33 @@ def cell_quartiles(runs: pd.DataFrame, metric: str) -> dict:
     points = pd.to_numeric(runs[f"{metric}{SUFFIX}"], errors="coerce").to_numpy(float)[mask]
     return {**out, **{stat: censored_statistic(v, stat) if len(v) else np.nan for stat in ("min", "max")},
             "n_censored": int(mask.sum()), "censor_point": float(points.min()) if mask.any() else np.nan}
+
+
+def censor_row(row: dict, runs: pd.DataFrame, metric: str) -> dict:
+    """A summary row of ``metric`` over one cell's ``runs`` with its censoring applied: its median,
+    quartiles and judged value by :func:`cell_quartiles` (``+inf`` where censored), no interval (a
+    bootstrap of censored values is none), every seed counted and the reason saying how many are
+    censored. Unchanged when no run is censored.
+
+    Parameters
+    ----------
+    row : dict
+        The row :mod:`magexp.artifacts.summary` built from the observed values.
+    runs : pandas.DataFrame
+        The cell's runs.
+    metric : str
+        The row's runs column.
+
+    Returns
+    -------
+    dict
+        The row.
+    """
+    mask = censored_mask(runs, metric)
+    if not mask.any():
+        return row
+    q = cell_quartiles(runs, metric)
+    why = f"{int(mask.sum())} of {len(mask)} seeds censored (later than {q['censor_point']:g})"
+    return {**row, "value": q["median"], "q25": q["q25"], "q75": q["q75"], "judged_value": q["median"],
+            "lo": np.nan, "hi": np.nan, "judged_lo": np.nan, "judged_hi": np.nan, "n_seeds": len(mask),
+            "judged_n": len(mask), "reason": "; ".join(r for r in (str(row.get("reason") or ""), why) if r)}

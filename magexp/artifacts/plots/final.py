@@ -131,14 +131,15 @@ def _censored(ax, line, x, colour, k: int = 0) -> None:
             ax.plot([xi, xi], [max(low, TINY), point], color=colour, lw=1, ls="--")
         ax.plot([xi], [point], "^", color=colour, ms=7, mew=1.2, mfc="none", zorder=5,
                 label="seeds later than the censoring point (k/n)")
-        ax.annotate(f"{int(row.n_censored)}/{int(row.n_seeds)}", (xi, point), xytext=(5, 4 + 9 * k),
-                    textcoords="offset points", fontsize=7, color=colour)
+        if row.n_seeds > 1:  # one seed: the arrow says it all
+            ax.annotate(f"{int(row.n_censored)}/{int(row.n_seeds)}", (xi, point), xytext=(5, 4 + 9 * k),
+                        textcoords="offset points", fontsize=7, color=colour)
 
 
 def _extremes(ax, line, x, colour) -> None:
     """The earliest and the latest seed of a censored metric (``min``, ``max`` columns): a small
     down-triangle and bar; a censored maximum is the arrow of :func:`_censored`."""
-    if "min" not in line:
+    if "min" not in line or not (line.n_seeds > 1).any():  # one seed: its value is the median
         return
     lo, hi = line["min"].to_numpy(float), line["max"].to_numpy(float)
     shown = np.isfinite(lo)
@@ -271,6 +272,9 @@ def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None
         ax.xaxis.set_major_locator(FixedLocator(symlog_ticks(xs, linthresh)))
     if log_y:
         ax.set_yscale("log")
+    if "min" in sub and (sub.n_seeds > 1).any():  # room below for the earliest seed's marker
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo / (hi / lo) ** 0.06 if ax.get_yscale() == "log" else lo - 0.04 * (hi - lo), hi)
 
 
 def symlog_ticks(xs: pd.Series, linthresh: float) -> list[float]:
