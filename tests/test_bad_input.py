@@ -562,12 +562,13 @@ TABLE = [
 PART_NAMED = {"scenario.matrix_bound": "matrix_bound"}
 #: keys whose negative values have a meaning (angles)
 NEGATIVE_ALLOWED = {"scenario.field.inclination", "scenario.field.declination"}
-#: keys whose zero has a meaning: a default (cma's population), none (no noise, drift, process noise, burn-in,
+#: keys whose zero has a meaning: a default (cma's population, the filter's horizon: its n_steps), none (no noise, drift, process noise, burn-in,
 #: folds), a tolerance met only at the budget's end, a prior or coefficient that switches its term off
 ZERO_ALLOWED = {
     "estimator.popsize@magexp.estimators.cmaes.CMAES", "estimator.recombination", "estimator.tol@magexp.estimators.de.",
     "estimator.tol@magexp.estimators.twostep.", "estimator.gtol", "estimator.p0_s", "estimator.p0_b", "estimator.q_s",
-    "estimator.q_b", "estimator.p0", "estimator.q", "estimator.agree_k", "estimator.agree_bp", "estimator.init.burn_in",
+    "estimator.q_b", "estimator.p0", "estimator.q", "estimator.agree_k", "estimator.agree_bp", "estimator.horizon",
+    "estimator.init.burn_in",
     "estimator.velocity.", "scenario.folds", "scenario.heldout_fold", "scenario.noise", "scenario.angle_noise_deg",
     "scenario.gyro.drift_deg_h", "scenario.gyro.noise_deg_s", "scenario.field.inclination",
     "scenario.field.declination", "scenario.errors.", "scenario.angle_noise",

@@ -68,10 +68,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from magexp.artifacts.censoring import censored_mask, censored_statistic, censored_text, with_censored
 from magexp.artifacts.schema import Float, typed
 from magexp.artifacts.significance import (ALPHA, POWER, detectable_paired, detectable_rates,
                                           detectable_unpaired, fisher_greater, holm, permutation_less, wilcoxon_less)
-from magexp.artifacts.tables import STATS, interval, matches, same, statistic
+from magexp.artifacts.tables import STATS, interval, matches, same
 from magexp.errors import MagexpError
 
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
@@ -212,16 +213,18 @@ def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
 
 
 def values(runs: pd.DataFrame, metric: str, stat: str) -> np.ndarray:
-    """The per-seed values a statistic is taken over (``succeeded`` for ``success_rate``)."""
+    """The per-seed values a statistic is taken over (``succeeded`` for ``success_rate``); a censored
+    value (:mod:`magexp.artifacts.censoring`) is ``+inf``, never dropped."""
     if stat == "success_rate":
         column = runs["succeeded"] if "succeeded" in runs else pd.Series(dtype=float)
         return column.dropna().astype(float).to_numpy()
+    frame = with_censored(runs)
     try:
-        v = runs[metric] if metric in runs else runs.eval(metric)
+        v = frame[metric] if metric in frame else frame.eval(metric)
     except Exception as exc:
         raise MagexpError(f"metric {metric!r} is not a column or an expression of the runs' columns: {exc}") from None
     v = np.asarray(v, float)
-    return v[np.isfinite(v)]
+    return v[np.isfinite(v) | censored_mask(runs, metric)]
 
 
 def _name(where: dict) -> str:
@@ -229,8 +232,13 @@ def _name(where: dict) -> str:
 
 
 def _describe(where: dict, v: np.ndarray, stat: str) -> tuple[float, tuple, str]:
-    """The statistic, its CI and a text; a CI over fewer than two values is not printed (n says it)."""
-    s, (lo, hi) = statistic(v, stat), interval(v, stat=stat)
+    """The statistic, its CI and a text; a CI over fewer than two values is not printed (n says it);
+    a censored statistic is ``inf``, printed as censored, with no CI."""
+    s = censored_statistic(v, stat)
+    if np.isposinf(v).any():
+        value = "censored" if np.isposinf(s) else f"{s:.4g}"
+        return s, (np.nan, np.nan), f"{_name(where)}: {stat} {value} ({int(np.isposinf(v).sum())} of n={len(v)} censored)"
+    lo, hi = interval(v, stat=stat)
     shown = f" [95 % CI {lo:.4g}, {hi:.4g}]" if np.isfinite(lo) and np.isfinite(hi) else ""
     return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g}{shown} (n={len(v)})"
 
@@ -511,7 +519,9 @@ def interpolate(text: str, table: pd.DataFrame) -> str:
             v = values(select(table, where), metric, stat)
         except MagexpError:
             raise MagexpError(f"note field {m.group(0)!r}: {metric!r} is not a column or an expression of the runs' columns") from None
-        s = statistic(v, stat)
+        s = censored_statistic(v, stat)
+        if np.isposinf(s) and censored_mask(select(table, where), metric).any():
+            return censored_text(select(table, where), metric)  # never a median of the observed values alone
         return format(s, fmt) if np.isfinite(s) else NO_RUNS
 
     return _FIELD.sub(one, text)

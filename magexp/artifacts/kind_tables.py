@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from magexp.artifacts.censoring import cell_quartiles
 from magexp.artifacts.tables import (cell_overrides, cell_runs, fraction, interval, matches, median,
                                      outcomes, parameter_values, quartiles, reported_value, scenario_label, successful)
 from magexp.core.metrics import rms
@@ -120,7 +121,8 @@ def _ratio_rows(runs) -> list[dict]:
 
 
 def final_table(runs) -> pd.DataFrame:
-    """Per cell and metric: quartiles, the success rate and converged fraction, the floors
+    """Per cell and metric: quartiles (of a censored metric also its extremes and censoring,
+    :func:`magexp.artifacts.censoring.cell_quartiles`), the success rate and converged fraction, the floors
     (``noise_floor``, ``truth_fun``, ``rms_bound``) and the median of ``plot.bound``; then the ratios
     (:mod:`magexp.artifacts.plots.final`).
 
@@ -133,9 +135,8 @@ def final_table(runs) -> pd.DataFrame:
     for ci, cell in enumerate(runs.cells):
         sub = cell_runs(runs, ci)
         for metric in metric_list(runs.spec):
-            med, q25, q75 = quartiles(sub[metric]) if metric in sub else (np.nan,) * 3
-            row = {**cell, "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],
-                   "metric": metric, "median": med, "q25": q25, "q75": q75, "n_seeds": len(sub)}
+            row = {**cell, "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],  # censored: inf
+                   "metric": metric, **cell_quartiles(sub, metric), "n_seeds": len(sub)}
             if bound and bound in sub:
                 row["bound"] = median(sub[bound])
             row.update({extra: median(sub[extra]) for extra in ("noise_floor", "truth_fun", "rms_bound") if extra in sub})

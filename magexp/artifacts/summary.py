@@ -47,6 +47,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import fdtrc, stdtrit
 
+from magexp.artifacts.censoring import censor_row, censored_mask
 from magexp.artifacts.plan import ArtifactRuns
 from magexp.artifacts.tables import (cell_overrides, cell_runs, first_output, matches, median,
                                      outcomes, parameter_values, reported_entry, row_numbers, successful_medians)
@@ -524,7 +525,7 @@ def _value_rows(runs: ArtifactRuns, item) -> list[dict]:
     rows = []
     for ci in range(len(runs.cells)):
         sub = runs.table[runs.table.cell == ci].sort_values("seed")
-        if item.metric in sub and not sub[item.metric].isna().all():
+        if item.metric in sub and not (sub[item.metric].isna() & ~censored_mask(sub, item.metric)).all():
             rows.append(_value_row(runs, item, ci, sub))
     return rows
 
@@ -537,11 +538,11 @@ def _value_row(runs: ArtifactRuns, item, ci: int, sub: pd.DataFrame) -> dict:
     ls, scale = _least_squares_item(runs, item, ci)
     threshold = (None if truth is None or metric != spec.success.metric
                  else success_threshold(truth, spec.success.factor, spec.success.floor))
-    return _row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
-                sub[metric].astype(float).to_numpy(), cell_overrides(runs, ci), ok=_cell_ok(runs, ci),
-                aggregate=item.aggregate, ls=ls, success_threshold=threshold,
-                label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0]),
-                parameters=scale is not None, block_scale=scale)
+    return censor_row(_row(spec, item.quantity, sub.estimator.iloc[0], sub.setting.iloc[0], truth,
+                           sub[metric].astype(float).to_numpy(), cell_overrides(runs, ci), ok=_cell_ok(runs, ci),
+                           aggregate=item.aggregate, ls=ls, success_threshold=threshold,
+                           label=label_of(spec, runs.cells, ci, item.quantity, sub.estimator.iloc[0]),
+                           parameters=scale is not None, block_scale=scale), sub, metric)  # censored: never observed-only
 
 
 def _cell_truth(sub: pd.DataFrame, column: str) -> float | None:

@@ -20,6 +20,16 @@ With ``Q = 0`` and rows reused, the parameter filter is recursive least squares:
 converges to the least-squares solution of the readings (the prior ``P(0)`` is forgotten as
 ``1/passes``); ``Q > 0`` keeps it tracking the latest rows, so it fluctuates around it.
 
+**The step of convergence is a censored time-to-event.** ``steps_to_ls`` is the first step ``s``
+from which the state stays within tolerance of the least-squares solution through the horizon
+``H`` (``horizon``, default ``n_steps``; the filter runs on to it, its estimate stays the state at
+``n_steps``). A state that has just come within tolerance near ``H`` need not stay there, so
+:func:`observed_step` reports ``s`` only when the state stayed within tolerance for at least as
+many steps as it took to get there (``s <= H/2``, the *doubling rule*: with ``Q = 0`` the distance
+from the least-squares solution and its swing within a pass shrink as ``1/n``, so a state within
+tolerance over ``[s, 2s]`` stays within it after ``2s``). Otherwise the step is censored: NaN, and
+``<metric>_censored`` holds the censoring point ``H/2`` (the step is later than it); 0 when observed.
+
 References: Yan & Zhou 2022, Chinese Journal of Ship Research, sec 2.1 and 3.2;
 Kalman 1960; Zhang 2002 (the paper's ref. [14]).
 """
@@ -137,6 +147,28 @@ def settled_since(distance: np.ndarray) -> int:
     return -1 if apart[-1] == len(distance) - 1 else int(apart[-1] + 1)
 
 
+def observed_step(step: float, horizon: int) -> tuple[float, float]:
+    """A step of convergence measured over ``horizon`` steps, censored by the doubling rule (module
+    docstring).
+
+    Parameters
+    ----------
+    step : float
+        The first step from which the state stays within tolerance through ``horizon`` (NaN: the
+        state is apart at the horizon).
+    horizon : int
+        The last step observed.
+
+    Returns
+    -------
+    tuple of float
+        ``(step, 0.0)`` when ``step <= horizon / 2``; else ``(nan, horizon / 2)``: the step is
+        only known to be later than ``horizon / 2``.
+    """
+    bound = horizon / 2
+    return (float(step), 0.0) if np.isfinite(step) and step <= bound else (np.nan, float(bound))
+
+
 def checked_tuning(p0: float, q: float, sigma2: float, n_steps: int, group: str) -> tuple:
     """The shared filter settings, checked.
 
@@ -196,10 +228,16 @@ class KalmanFilter(_Tuning):
         Filter steps; the readings are reused cyclically.
     agree_k, agree_bp : float
         Tolerances of the ``steps_to_ls`` diagnostic: the first step, at the end of a full pass over
-        the readings, after which the state at every later pass end stays within them of the
-        least-squares solution (NaN if it never does). Within a pass the readings are unequally
+        the readings, after which the state at every later pass end through ``horizon`` stays within
+        them of the least-squares solution. Within a pass the readings are unequally
         weighted, so the state fluctuates around that solution; ``steps_to_ls_every_step`` is the
-        same at every step from the end of the first pass (the state within a pass too).
+        same at every step from the end of the first pass (the state within a pass too). Both are
+        censored (NaN, with ``steps_to_ls_censored`` etc. the censoring point) when later than
+        ``horizon / 2`` (:func:`observed_step`).
+    horizon : int
+        Steps over which the step of convergence is observed; the filter runs on to
+        ``max(n_steps, horizon)``, its estimate and trace stay those of step ``n_steps``. 0 (default):
+        ``n_steps``.
 
     References
     ----------
@@ -211,7 +249,8 @@ class KalmanFilter(_Tuning):
     smoke = {"n_steps": 12}
 
     def __init__(self, *, name: str = "kf", p0: float = 1.0, q: float = 0.0, sigma2: float = 3333.0,
-                 offset_scale: float = 3000.0, n_steps: int = 600, agree_k: float = 1e-4, agree_bp: float = 1.0):
+                 offset_scale: float = 3000.0, n_steps: int = 600, agree_k: float = 1e-4, agree_bp: float = 1.0,
+                 horizon: int = 0):
         super().__init__(name=name, p0=p0, q=q, sigma2=sigma2, n_steps=n_steps)
         check(check_nonnegative(offset_scale, "estimator.offset_scale") > 0,
               f"estimator.offset_scale={offset_scale!r} is not allowed: it must be a number > 0 (P(0) and Q scale "
@@ -219,6 +258,7 @@ class KalmanFilter(_Tuning):
         self.scale = np.diag([1.0, 1.0, 1.0, float(offset_scale) ** 2])
         self.agree_k = check_nonnegative(agree_k, "estimator.agree_k")
         self.agree_bp = check_nonnegative(agree_bp, "estimator.agree_bp")
+        self.horizon = max(int(check_nonnegative(horizon, "estimator.horizon")), self.n_steps)
 
     def fit(self, problem, *, rng: np.random.Generator | None = None, callback=None) -> FitResult:
         """Filter the rows of ``problem.design()``, reused cyclically.
@@ -238,21 +278,25 @@ class KalmanFilter(_Tuning):
             ``trace["x"]`` the state at every step; ``metrics`` ``steps_to_ls``, ``steps_to_ls_every_step``.
         """
         c, y = problem.design()
-        rows = cyclic(len(c), self.n_steps)
-        stop = None if callback is None else (lambda n, x: callback(n, problem.from_linear(x), None))
+        rows = cyclic(len(c), self.horizon)
+        stop = None if callback is None else (  # the callback sees the filter's n_steps, not the watch beyond them
+            lambda n, x: n <= self.n_steps and callback(n, problem.from_linear(x), None))
         states = kalman_filter(c[rows, None, :], y[rows, None, :], p0=self.p0 * self.scale, q=self.q * self.scale,
                                sigma2=self.sigma2, x0=np.zeros((4, 3)), stop=stop)
-        thetas = problem.from_linear(states)
-        steps = len(states) - 1
+        watched = problem.from_linear(states)
+        last = len(states) - 1  # the horizon, or the step a callback stopped at
+        steps = min(last, self.n_steps)
+        thetas = watched[: steps + 1]
         history = problem.cost(thetas)
         ls = problem.least_squares()
-        ends = np.arange(len(c), steps + 1, len(c))  # every full pass weighs each reading equally
-        every = np.arange(len(c), steps + 1)  # every step from the end of the first pass
+        ends = np.arange(len(c), last + 1, len(c))  # every full pass weighs each reading equally
+        every = np.arange(len(c), last + 1)  # every step from the end of the first pass
+        metrics = {}
+        for name, at in (("steps_to_ls", ends), ("steps_to_ls_every_step", every)):
+            metrics[name], metrics[f"{name}_censored"] = observed_step(self._settled(watched, ls, at), last)
         return FitResult(x=thetas[-1], fun=problem.cost_direct(thetas[-1]), nit=steps, nfev=steps,
                          history=history, history_nfev=np.arange(steps + 1), trace={"x": thetas},
-                         metrics={"steps_to_ls": self._settled(thetas, ls, ends),
-                                  "steps_to_ls_every_step": self._settled(thetas, ls, every)},
-                         message=f"{steps} steps over {len(c)} readings")
+                         metrics=metrics, message=f"{steps} steps over {len(c)} readings (watched to {last})")
 
     def _settled(self, thetas: np.ndarray, ls: np.ndarray, steps: np.ndarray) -> float:
         """The first of ``steps`` from which the state at every later one of ``steps`` stays within

@@ -13,11 +13,14 @@ bound column of the metric drawn per objective (e.g. ``offset_bound``); ``plot.t
 ``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy); ``plot.levels``: a paper's values
 that are not compared cell by cell (``[{label, match, value}]``, e.g. the paper's PSO at each noise
 level beside every PSO setting of a sweep), each a horizontal line across the panels whose settings
-``match`` selects, one style per ``label``. Against the objective ``fun`` the
+``match`` selects (of its ``metrics``, default the first), one style per ``label``. Against the objective ``fun`` the
 noise floor and the Cramér-Rao RMS floor are drawn (over the lines, which run close to them);
 against ``rms_ratio`` (the residual RMS over that floor) the floor is the line at 1. A cell where fewer than half the runs succeeded
 is ringed in red. A cell without a value is marked by a cross at the top of its panel (legend text:
-``plot.labels.missing``, e.g. "never within 600 steps"). The paper's values (the artifact's
+``plot.labels.missing``, e.g. "never within 600 steps"). A censored metric (a step of convergence
+observed within a horizon, :mod:`magexp.artifacts.censoring`) is never drawn as a median of its
+observed values: its censoring point is dotted, a cell with censored seeds gets an up-arrow there
+with "k/n" censored (its median too when ``k >= n/2``), and the earliest and latest seed are marked. The paper's values (the artifact's
 ``reported:`` entries of the quantities summarised from the metric) are open diamonds in the colour of
 their line. Each of the artifact's ``ratios:`` (per seed, numerator over denominator cell) adds a row
 of panels: its median and quartiles over seeds, with the paper's ratios and the line of equality.
@@ -90,13 +93,17 @@ def _lines(ax, sub, spec, x_key, hue_key, colours):
         x = _spread(line[x_key].astype(float).to_numpy(), k, len(hues), scale)
         placed[hv] = (line, x)
         y = line["median"].to_numpy(float)
+        censored = np.isposinf(y)  # a censored median: drawn at its censoring point by _censored
+        y = np.where(censored, np.nan, y)
         err = np.vstack([y - line.q25.to_numpy(float), line.q75.to_numpy(float) - y])
         name = label(spec, hue_key, hv) if hue_key not in ("estimator", "_hue") else str(hv)
         name = dict(spec.plot.get("names", {}) or {}).get(str(hv), name)  # plot.names: a value's legend text
         colour = colours[hv]
         ax.errorbar(x, np.maximum(y, TINY), yerr=np.where(np.isfinite(err), np.maximum(err, 0), 0), marker="o",
                     ms=3.5, capsize=2, lw=1, label=name, color=colour)
-        missing = ~np.isfinite(y)
+        _censored(ax, line, x, colour, k)
+        _extremes(ax, line, x, colour)
+        missing = np.isnan(y) & ~censored
         if missing.any():
             ax.plot(x[missing], np.full(missing.sum(), 0.96), "x", color=colour, ms=6, mew=1.4,
                     transform=ax.get_xaxis_transform(), label=f"x at the top: {label(spec, 'missing')}")
@@ -106,6 +113,40 @@ def _lines(ax, sub, spec, x_key, hue_key, colours):
                 ax.plot(x[bad], np.maximum(y[bad], TINY), "o", mfc="none", mec="r", ms=9, mew=1.2,
                         label="fewer than half succeeded")
     return placed
+
+
+def _censored(ax, line, x, colour, k: int = 0) -> None:
+    """A censored metric (:mod:`magexp.artifacts.censoring`): the censoring point dotted, and at each
+    cell with censored runs an up-arrow there with "k/n" (k of n seeds later than it; the ``k``-th line's
+    text stacked above the others'); a censored upper quartile or median is a bar up to the arrow."""
+    if "n_censored" not in line or not (line.n_censored.fillna(0) > 0).any():
+        return
+    for xi, (_, row) in zip(x, line.iterrows()):
+        if not row.n_censored > 0:
+            continue
+        point = float(row.censor_point)
+        ax.axhline(point, color="0.45", ls=":", lw=1.0, zorder=1, label="censoring point: half the horizon")
+        if not np.isfinite(row.q75):  # the interquartile bar runs on past the censoring point
+            low = next((v for v in (row["median"], row.q25) if np.isfinite(v)), point)
+            ax.plot([xi, xi], [max(low, TINY), point], color=colour, lw=1, ls="--")
+        ax.plot([xi], [point], "^", color=colour, ms=7, mew=1.2, mfc="none", zorder=5,
+                label="seeds later than the censoring point (k/n)")
+        if row.n_seeds > 1:  # one seed: the arrow says it all
+            ax.annotate(f"{int(row.n_censored)}/{int(row.n_seeds)}", (xi, point), xytext=(5, 4 + 9 * k),
+                        textcoords="offset points", fontsize=7, color=colour)
+
+
+def _extremes(ax, line, x, colour) -> None:
+    """The earliest and the latest seed of a censored metric (``min``, ``max`` columns): a small
+    down-triangle and bar; a censored maximum is the arrow of :func:`_censored`."""
+    if "min" not in line or not (line.n_seeds > 1).any():  # one seed: its value is the median
+        return
+    lo, hi = line["min"].to_numpy(float), line["max"].to_numpy(float)
+    shown = np.isfinite(lo)
+    ax.plot(x[shown], np.maximum(lo[shown], TINY), "v", color=colour, ms=4.5, zorder=4, label="earliest seed (v), latest (_)")
+    shown = np.isfinite(hi)
+    ax.plot(x[shown], np.maximum(hi[shown], TINY), "_", color=colour, ms=9, mew=1.5, zorder=4,
+            label="earliest seed (v), latest (_)")
 
 
 def _paper(ax, spec, placed, metric, colours):
@@ -126,13 +167,14 @@ LEVEL_STYLES = ({"color": "k", "ls": "-.", "lw": 1.3}, {"color": "C4", "ls": (0,
 
 def _levels(ax, spec, sub: pd.DataFrame, metric: str) -> None:
     """The ``plot.levels`` whose ``match`` selects the panel's cells (a key the cells lack is no
-    match), drawn across the panel; only against ``plot.metric``'s first metric."""
+    match), drawn across the panel; against the metrics of the level's ``metrics`` (default:
+    ``plot.metric``'s first)."""
     levels = list(spec.plot.get("levels", []) or [])
-    if not levels or metric != metric_list(spec)[0]:
-        return
     styles = {}
     for level in levels:
         style = styles.setdefault(str(level["label"]), LEVEL_STYLES[len(styles) % len(LEVEL_STYLES)])
+        if metric not in list(level.get("metrics", metric_list(spec)[:1])):
+            continue
         match = dict(level.get("match", {}) or {})
         if all(k in sub for k in match) and any(matches(match, row) for row in sub.to_dict("records")):
             ax.axhline(float(level["value"]), zorder=4, label=str(level["label"]), **style)
@@ -218,7 +260,7 @@ def _with_hue(frame: pd.DataFrame, spec, hue_key) -> tuple[pd.DataFrame, str]:
 def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None:
     """The panel's scales: room above the values for the crosses of missing ones, ``xscale`` (a
     ``symlog`` axis of non-negative ``xs`` starts at 0) and a log y axis if ``log_y``."""
-    if sub["median"].isna().any():  # room above the values for the crosses of the missing ones
+    if sub["median"].isna().any() or np.isposinf(sub["median"].astype(float)).any():  # room above: crosses, arrows
         ax.set_yscale("log" if log_y else "linear")
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo, hi * (hi / lo) ** 0.25 if ax.get_yscale() == "log" else hi + 0.25 * (hi - lo))
@@ -230,6 +272,9 @@ def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None
         ax.xaxis.set_major_locator(FixedLocator(symlog_ticks(xs, linthresh)))
     if log_y:
         ax.set_yscale("log")
+    if "min" in sub and (sub.n_seeds > 1).any():  # room below for the earliest seed's marker
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo / (hi / lo) ** 0.06 if ax.get_yscale() == "log" else lo - 0.04 * (hi - lo), hi)
 
 
 def symlog_ticks(xs: pd.Series, linthresh: float) -> list[float]:
