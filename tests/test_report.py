@@ -186,3 +186,26 @@ def test_compared_counts_split_differs_by_scale_and_failed_majority():
                          "reason": ["", "outside", "outside", "(a failed majority); inside", ""]})
     assert compared_counts(rows) == ("reproduced 1, differs 3 (2 of them by less than 1 % of their scale; 1 on a failed "
                                      "majority of our runs), uninformative 0; not compared 1")
+
+
+def test_each_counts_line_agrees_with_the_list_or_table_under_it():
+    """The headline counts above a section's headlines count exactly its listed headlines by verdict, and the
+    "k of n hold" above a findings table counts exactly its rows (issue 39: "34 of 53" stood above a table
+    of 15 rows)."""
+    report, _ = _report()
+    checked = 0
+    for section in report.split("\n## ")[1:]:
+        heads = re.search(r"\*\*Headline claims: ([^*]+)\*\*", section)
+        if heads:
+            said = {k: int(n) for k, n in re.findall(r"([a-z ]+?) (\d+)(?:,|$)", heads.group(1))}
+            listed = re.findall(r"^\d+\. \**([a-z ]+?)\**: ", section, flags=re.M)
+            assert said == {v: listed.count(v) for v in set(listed)}, section.splitlines()[0]
+            checked += 1
+        for block in section.split("### ")[1:]:
+            held = re.search(r"^\*\*(\d+) of (\d+) hold", block.split("\n", 2)[2] if block.count("\n") > 1 else "")
+            if held:
+                rows = [line for line in _tables(block)[0][2:]]
+                results = [re.split(r"(?<!\\)\|", r)[3].strip().strip("*") for r in rows]
+                assert (int(held.group(1)), int(held.group(2))) == (results.count(HOLDS), len(rows)), block[:60]
+                checked += 1
+    assert checked >= 3
