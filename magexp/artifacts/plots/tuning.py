@@ -99,7 +99,8 @@ def _wrapped_ylabel(text: str) -> str:
 
 def _words(frame: pd.DataFrame) -> dict:
     """:func:`_family_words` of every (scenario, family) of the frame."""
-    return {key: _family_words(f) for key, f in frame.groupby(["scenario", "family"], sort=False)}
+    keys = dict.fromkeys(zip(frame.scenario, frame.family))
+    return {(sc, fam): _family_words(frame[(frame.scenario == sc) & (frame.family == fam)]) for sc, fam in keys}
 
 
 def _panel_width(frame: pd.DataFrame, words: dict, few: bool) -> float:
@@ -109,7 +110,7 @@ def _panel_width(frame: pd.DataFrame, words: dict, few: bool) -> float:
     per_family = max(longest([name]) * CHAR * (FONT + 1) / FONT + 0.15 for name, _ in words.values())
     if few:
         per_family = max(per_family, *(len(s) / 0.8 * (longest(s) * CHAR + 0.15) for _, s in words.values()))
-    families = frame.groupby("scenario").family.nunique().max()
+    families = max(sum(1 for key in words if key[0] == sc) for sc in set(frame.scenario))
     return max(3.6, families * per_family + 1.2)
 
 
