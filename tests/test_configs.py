@@ -101,7 +101,7 @@ def test_yuan_scenarios_inherit_one_base():
     from magexp.scenarios.yuan import YuanScenarioConf
 
     names = [n for n in SCENARIOS if n.startswith("yuan2018_")]
-    assert len(names) == 8
+    assert len(names) == 10  # mode 3 about X-Z and Y-Z too (yuan2018_ext_turns: "any two axes")
     base = OmegaConf.load(CONF / "scenario" / "base" / "yuan2018.yaml")
     for name in names:
         own = OmegaConf.load(CONF / "scenario" / f"{name}.yaml")
@@ -111,6 +111,9 @@ def test_yuan_scenarios_inherit_one_base():
         assert OmegaConf.get_type(cfg.scenario) is YuanScenarioConf
         assert cfg.scenario.search == base.search and cfg.scenario.name == name
     assert compose_config(["scenario=yuan2018_mode3"]).scenario.rotation.mode == "mode3"
+    for name, axes in (("yuan2018_mode3_xz", ["x", "z"]), ("yuan2018_mode3_yz", ["y", "z"])):
+        turns = compose_config([f"scenario={name}", "scenario.rotation.partial_arc_deg=90"]).scenario.rotation.segments
+        assert [t.axis for t in turns] == axes and [float(t.arc_deg) for t in turns] == [90.0, 90.0]
     assert compose_config(["scenario=yuan2018_adis16488"]).scenario.gyro.noise_deg_s == 0.16
 
 

@@ -195,18 +195,43 @@ def test_final_sets_log_axes_per_metric_and_draws_the_floors_over_the_lines():
 @pytest.mark.parametrize("per_family", [1, 2])
 def test_tuning_gives_every_setting_its_own_named_tick(per_family):
     """One setting per family (an ablation's variants): the tick is the family's words; several (mode 3's
-    arcs): each setting has its own tick, named by family and setting, so no legend has to tell them apart
-    (yuan2018_ext_readings drew two arcs under one tick)."""
+    arcs): each setting has its own tick, its values under it and its family's words (with the keys its
+    settings share) once below them, so no legend has to tell them apart (yuan2018_ext_readings drew two
+    arcs under one tick)."""
     spec = OmegaConf.create({"title": "t", "kind": "tuning", "plot": {}})
-    rows = [{"scenario": "s", "family": fam, "family_label": fam.upper(), "label": f"w = {k}", "median": 1.0 + k,
-             "q25": 0.9, "q75": 2.0, "success_rate": 0.9, "n_seeds": 30, "default": False, "role": "", "metric": "fun"}
-            for fam in ("pso", "ipso", "ipso_w") for k in range(per_family)]
+    rows = [{"scenario": "s", "family": fam, "family_label": fam.upper(), "label": f"w = {k}" if per_family > 1 else fam,
+             "median": 1.0 + k, "q25": 0.9, "q75": 2.0, "success_rate": 0.9, "n_seeds": 30, "default": False, "role": "",
+             "metric": "fun"} for fam in ("pso", "ipso", "ipso_w") for k in range(per_family)]
     fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
     assert [t.get_text() for legend in fig.legends for t in legend.get_texts()] == []
-    ticks = [t.get_text() for t in fig.axes[0].get_xticklabels()]
-    assert ticks == ([r["family_label"] for r in rows] if per_family == 1
-                     else [f"{r['family_label']}: {r['label']}" for r in rows])
-    assert len(set(fig.axes[0].get_xticks())) == len(rows)
+    families = [t.get_text() for t in fig.axes[0].get_xticklabels()]
+    settings = [t.get_text() for t in fig.axes[0].get_xticklabels(minor=True)]
+    if per_family == 1:
+        assert families == ["PSO", "IPSO", "IPSO_W"] and set(settings) == {""}
+    else:
+        assert families == ["PSO: w", "IPSO: w", "IPSO_W: w"] and settings == ["0", "1"] * 3
+    assert len(set(fig.axes[0].get_xticks(minor=True))) == len(rows)
+    assert defects(fig) == []
+    plt.close(fig)
+
+
+def test_tuning_words_stay_apart_with_long_labels_titles_and_many_settings():
+    """yuan2018_ext_turns and ding2024_ext_ablation_readings: a y label longer than its panel ran into the
+    title, slanted ticks ("RDPSO: arc (deg) = 90") into the next panel's label, and a label repeated the
+    family ("PSO: variant = PSO, boundary = reflect, iterations = 400")."""
+    spec = OmegaConf.create({"title": "A long title " * 12, "kind": "tuning",
+                             "plot": {"ylabel": "median largest |b error| (mG); bar: IQR",
+                                      "names": {"s0": "X, then Y (mode 3)"}}})
+    rows = [{"scenario": f"s{j}", "family": fam, "family_label": words, "label": f"variant = {words}, boundary = {b}, "
+             f"iterations = {n}", "median": 1.0 + k, "q25": 0.9, "q75": 2.0, "success_rate": 0.5, "n_seeds": 30,
+             "default": k == 0, "role": "", "metric": "fun"}
+            for j in range(3) for fam, words in (("rdpso", "RDPSO"), ("local", "optimum of eq 8"))
+            for k, (b, n) in enumerate((("reflect", 400), ("clip", 800), ("random", 1600)))]
+    fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
+    assert defects(fig) == []
+    assert fig.axes[0].get_title() == "X, then Y (mode 3)"
+    assert [t.get_text() for t in fig.axes[0].get_xticklabels(minor=True)][:3] == ["reflect\n400", "clip\n800", "random\n1600"]
+    assert fig.axes[0].get_xticklabels()[1].get_text().replace("\n", " ") == "optimum of eq 8: boundary, iterations"
     plt.close(fig)
 
 
@@ -220,7 +245,7 @@ def test_tuning_draws_a_success_rate_of_zero_and_marks_the_default():
     fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
     top, bottom = fig.axes[0], fig.axes[1]
     assert [t.get_text() for t in bottom.texts] == ["0 of 30"]
-    zero_x = bottom.get_xticks()[0]
+    zero_x = bottom.get_xticks(minor=True)[0]
     assert any(ln.get_linewidth() >= 3 and min(ln.get_xdata()) < zero_x < max(ln.get_xdata())
                and set(ln.get_ydata()) == {0} for ln in bottom.lines)
     outlined = [p for p in bottom.patches if p.get_linewidth() > 0]

@@ -12,17 +12,24 @@ evaluations to 1.1x the final value. Per (family, scenario) ``role`` marks the `
 ``median`` and ``worst`` setting by the median metric, and ``default`` the cell whose overrides
 match ``plot.default`` (``{family: {key: value}}``; a family without one: no default).
 
-The figure: one column of two panels per scenario. Where every family has at most
-:data:`FEW` settings, each setting has its own colour and its own tick, named by its family and label
-(e.g. ``RDPSO: arc (deg) = 90``), in both panels: on top its median metric (the default a star), below
-its success rate (the default's bar outlined; a rate of 0, a bar of no height, is marked on the axis with
-its count, ``0 of 30``). With more settings, the top
+The figure: one column of two panels per scenario, titled by ``plot.names[scenario]`` (else the scenario's
+short name). Where every family has at most :data:`FEW` settings, each setting has its own colour and its own
+tick, in both panels: on top its median metric (the default a star), below its success rate (the default's
+bar outlined; a rate of 0, a bar of no height, is marked on the axis with its count, ``0 of 30``). The x axis
+names on two levels, horizontally (no slanted word runs into the next panel): under each tick the
+setting's values, one a line (``90``; ``reflect`` / ``400``), and under them, once per family, the family's
+words and the keys its settings share (``RDPSO: arc (deg)``); a part of a label naming the family itself is
+left out. Each family gets the same room, wide enough for its words (:func:`_panel_width`); a long y label
+breaks at its ``;``, a long title wraps to the figure's width. With more settings, the top
 panel shows every setting's median as a dot, the best / median / worst ones with their own markers
 and the default as a star; below, the success rates of the median and best settings and the default
-(of the one setting where a family has only one). The table: :func:`magexp.artifacts.kind_tables.tuning_table`.
+(of the one setting where a family has only one), under the family's words. The table: :func:`magexp.artifacts.kind_tables.tuning_table`.
 """
 
 from __future__ import annotations
+
+import re
+import textwrap
 
 import numpy as np
 import pandas as pd
@@ -33,15 +40,21 @@ from magexp.artifacts.tables import median
 #: families with at most this many settings show each setting by name (else best / median / worst)
 FEW = 4
 ROLE_MARKERS = {"best": "^", "median": "D", "worst": "v"}
+#: tick words: a setting's values wrapped to :data:`WRAP` characters a line, a family's words to
+#: :data:`WRAP_FAMILY`, in :data:`FONT` points (a character about :data:`CHAR` inches wide); a y label to
+#: :data:`WRAP_YLABEL` characters (the height of a panel)
+WRAP, WRAP_FAMILY, WRAP_YLABEL, FONT, CHAR = 11, 14, 30, 7, 0.055
 
 
-def _named(top, bottom, sub, families, colours) -> tuple[list, list]:
-    """Few settings per family: one colour per setting label, in both panels, each setting at its own tick
-    (the family's words, and the setting's where the family has several); returns the ticks and their words."""
+def _named(top, bottom, sub, families, colours, words) -> tuple[list, list, list, list]:
+    """Few settings per family: one colour per setting label, in both panels, each setting at its own tick;
+    returns the settings' ticks and words and the families' ticks (the centre of their settings) and words
+    (``words``: :func:`_words`)."""
     width = 0.8 / max(sub.family.value_counts().max(), 1)
-    ticks, words = [], []
+    ticks, below, centres, names = [], [], [], []
     for k, fam in enumerate(families):
         f = sub[sub.family == fam]
+        name, settings = words[(f.scenario.iloc[0], fam)]
         for j, (_, r) in enumerate(f.iterrows()):
             x = k - width * (len(f) - 1) / 2 + width * j
             top.scatter([x], [max(r["median"], 1e-14)], s=90 if r.default else 30, color=colours[r.label], zorder=3,
@@ -49,8 +62,69 @@ def _named(top, bottom, sub, families, colours) -> tuple[list, list]:
             top.plot([x, x], [max(r.q25, 1e-14), max(r.q75, 1e-14)], color=colours[r.label], lw=1)
             _rate_bar(bottom, x, width * 0.9, r, colours[r.label])
             ticks.append(x)
-            words.append(r.family_label if len(f) == 1 or r.label == r.family else f"{r.family_label}: {r.label}")
-    return ticks, words
+        below += settings
+        centres.append(k)
+        names.append(name)
+    return ticks, below, centres, names
+
+
+def _parts(row) -> list[tuple[str, str]]:
+    """The ``(key, value)`` parts of a setting's label, a part naming the family itself left out."""
+    parts = [p.split(" = ", 1) for p in re.split(r", (?=[^,=]+ = )", str(row.label)) if " = " in p]
+    return [(k, v) for k, v in parts if v not in (str(row.family_label), str(row.family))]
+
+
+def _family_words(f: pd.DataFrame) -> tuple[str, list[str]]:
+    """A family's words (its name, and the keys its settings share) and each setting's words (its values,
+    one a line; ``key = value`` where the settings differ in their keys)."""
+    rows = [r for _, r in f.iterrows()]
+    name = str(rows[0].family_label)
+    if len(rows) == 1:
+        return textwrap.fill(name, WRAP_FAMILY), [""]
+    parts = [_parts(r) for r in rows]
+    keys = {tuple(k for k, _ in p) for p in parts}
+    if len(keys) == 1 and keys != {()}:
+        name = f"{name}: {', '.join(next(iter(keys)))}"
+        return textwrap.fill(name, WRAP_FAMILY), ["\n".join(textwrap.fill(v, WRAP) for _, v in p) for p in parts]
+    return textwrap.fill(name, WRAP_FAMILY), ["\n".join(textwrap.fill(f"{k} = {v}", WRAP) for k, v in p) or
+                                              textwrap.fill(str(r.label), WRAP) for p, r in zip(parts, rows)]
+
+
+def _wrapped_ylabel(text: str) -> str:
+    """A y label no taller than its panel: broken at its ``;`` first, then at :data:`WRAP_YLABEL` characters."""
+    if len(text) <= WRAP_YLABEL:
+        return text
+    return "\n".join(textwrap.fill(part, WRAP_YLABEL) for part in text.split("; "))
+
+
+def _words(frame: pd.DataFrame) -> dict:
+    """:func:`_family_words` of every (scenario, family) of the frame."""
+    keys = dict.fromkeys(zip(frame.scenario, frame.family))
+    return {(sc, fam): _family_words(frame[(frame.scenario == sc) & (frame.family == fam)]) for sc, fam in keys}
+
+
+def _panel_width(frame: pd.DataFrame, words: dict, few: bool) -> float:
+    """The width of a panel (inches) that gives every family its words and every setting its own
+    (:func:`_words`)."""
+    longest = lambda texts: max((len(line) for t in texts for line in t.split("\n")), default=0)
+    per_family = max(longest([name]) * CHAR * (FONT + 1) / FONT + 0.15 for name, _ in words.values())
+    if few:
+        per_family = max(per_family, *(len(s) / 0.8 * (longest(s) * CHAR + 0.15) for _, s in words.values()))
+    families = max(sum(1 for key in words if key[0] == sc) for sc in set(frame.scenario))
+    return max(3.6, families * per_family + 1.2)
+
+
+def _two_level_ticks(ax, ticks: list, words: list, centres: list, names: list) -> None:
+    """Each setting's words at its own (minor) tick and its family's words below them, at the family's
+    centre (major ticks padded by the height of the tallest setting words): no label slants into the next
+    panel. Without setting words (one setting per family) the families' words alone."""
+    lines = max((w.count("\n") + 1 for w in words if w), default=0)
+    ax.xaxis.remove_overlapping_locs = False  # a family's centre may be one of its settings' ticks
+    ax.set_xticks(centres, names, fontsize=FONT + 1)
+    ax.set_xticks(ticks, words, minor=True, fontsize=FONT)
+    ax.tick_params(axis="x", which="minor", length=3, pad=2)
+    ax.tick_params(axis="x", which="major", length=0, pad=6 + lines * FONT * 1.4 if lines else 3.5)
+    ax.grid(False, axis="x", which="both")
 
 
 def _rate_bar(ax, x: float, width: float, row, colour) -> None:
@@ -109,27 +183,30 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     few = frame.value_counts(["family", "scenario"]).max() <= FEW and frame.label.nunique() <= 2 * FEW
     cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     colours = {lab: cycle[j % len(cycle)] for j, lab in enumerate(dict.fromkeys(frame.label))}
-    width = max(3.6, 0.9 * len(families) + 1.5, 7.0 / len(scenarios))  # room for the title
+    words = _words(frame)
+    width = max(_panel_width(frame, words, few), 7.0 / len(scenarios))  # room for the words and the title
     fig, axes = panels(2 * len(scenarios), rows=2, width=width, height=2.9, axes=axes)
+    names = dict(spec.plot.get("names", {}) or {})
     for j, sc in enumerate(scenarios):
         top, bottom = axes[j], axes[len(scenarios) + j]
         sub = frame[frame.scenario == sc]
         present = [f for f in families if (sub.family == f).any()]  # a family not run on this scenario: no tick
         if few:  # every setting at its own tick, named there: no legend of settings
-            positions, words = _named(top, bottom, sub, present, colours)
+            levels = _named(top, bottom, sub, present, colours, words)
         else:
             _ranked(top, bottom, sub, present)
-            positions, words = list(range(len(present))), [ticks[f] for f in present]
+            levels = [], [], list(range(len(present))), [textwrap.fill(str(ticks[f]), WRAP_FAMILY) for f in present]
         for ax in (top, bottom):
-            ax.set_xticks(positions, words, rotation=30, ha="right", fontsize=7)
+            _two_level_ticks(ax, *levels)
+            ax.set_xlim(-0.5, len(present) - 0.5)  # each family the same room for its words
         top.set_yscale("log")
-        top.set_ylabel(spec.plot.get("ylabel", f"median {frame.metric.iloc[0]} per setting"))
-        top.set_title(scenario_label(sc), fontsize=9)
+        top.set_ylabel(_wrapped_ylabel(spec.plot.get("ylabel", f"median {frame.metric.iloc[0]} per setting")))
+        top.set_title(str(names.get(sc) or scenario_label(sc)), fontsize=9)
         bottom.set_ylim(0, 1.05)
         bottom.set_ylabel("success rate")
     entries = legend_entries(axes)
     if few and frame.default.any():
         entries["star, outlined bar: magexp's default"] = plt.Line2D([], [], ls="", marker="*", color="0.3", ms=9)
     shared_legend(fig, axes, entries, ncols=3, fontsize=7)
-    fig.suptitle(spec.title, fontsize=10)
+    fig.suptitle(textwrap.fill(str(spec.title), int(fig.get_figwidth() / 0.08)), fontsize=10)
     return tidy_log_axes(fig)
