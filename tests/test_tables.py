@@ -1,5 +1,5 @@
 """Tables apart from plots: every aggregation in magexp.artifacts.tables (and the kinds' tables built on
-it), none in the plot modules; verdicts judged on the unrounded runs."""
+it), none in the plot modules; verdicts judged on the runs as written (what a reader recomputes)."""
 
 import ast
 from pathlib import Path
@@ -12,6 +12,7 @@ import pytest
 from magexp.artifacts import plots, reproduce
 from magexp.artifacts.plan import ArtifactRuns
 from magexp.artifacts.spec import parse
+from magexp.artifacts.summary import summarise
 from magexp.artifacts.tables import interval, quartiles
 
 #: calls that aggregate a table or an array over its rows: they belong in magexp.artifacts.tables
@@ -59,9 +60,11 @@ def test_one_interval_helper_gives_the_run_interval_the_quartiles_and_the_bootst
     assert np.isnan(interval([np.nan])).all() and np.isnan(interval([1.0], stat="median")).all()
 
 
-def test_a_verdict_is_judged_on_the_unrounded_runs(tmp_path):
-    """30 runs at 1.0000004 against a paper value of 1.0 printed to 7 decimals: outside our runs
-    (differs). The runs CSV rounds them to 1 (6 digits), where the paper's value would be inside."""
+def test_a_verdict_is_judged_on_the_runs_as_written(tmp_path):
+    """30 runs at 1.0000004 against a paper value of 1.0 printed to 7 decimals: the runs CSV writes them
+    as 1 (6 digits), and the verdict is the one a reader recomputes from it, the paper's value inside
+    (reproduced), not the one of the unrounded runs (differs): summary.csv says nothing its runs CSV
+    does not (issue 39), and ``--redraw``, which reads the CSV, writes the same row."""
     spec = parse({"kind": "final", "title": "t", "seeds": 30, "plot": {"x": "scenario.noise"},
                   "summarise": [{"quantity": "q", "metric": "q"}],
                   "reported": [{"quantity": "q", "match": {"estimator": "pso"}, "value": 1.0, "decimals": 7}]},
@@ -71,6 +74,7 @@ def test_a_verdict_is_judged_on_the_unrounded_runs(tmp_path):
     stored = SimpleNamespace(parameter_names=[], x=np.array([]), truth_x=None, lower=None, upper=None, design=None)
     runs = ArtifactRuns(spec=spec, cells=[{"estimator": "pso", "scenario.noise": "2"}], table=table,
                         outputs={(0, s): stored for s in range(30)}, overrides=[["estimator=pso", "scenario.noise=2"]])
+    assert summarise(runs).verdict.tolist() == ["differs"]  # the unrounded runs, which no file shows
     rows = reproduce.write_artifact(runs, tmp_path)
-    assert rows.verdict.tolist() == ["differs"]
-    assert set(pd.read_csv(tmp_path / "a_runs.csv").q) == {1.0}  # what a verdict on the CSV would have seen
+    assert set(pd.read_csv(tmp_path / "a_runs.csv").q) == {1.0}
+    assert rows.verdict.tolist() == ["reproduced"] and rows.value.tolist() == [1.0]

@@ -22,21 +22,18 @@ import sys
 import time
 from collections.abc import Mapping
 from pathlib import Path
-from types import SimpleNamespace
 
-import numpy as np
 import pandas as pd
 
 from magexp.artifacts.kind_tables import tabulate
-from magexp.artifacts.plan import ArtifactRuns, cells, collect, grow_stage, grow_start, paper_specs, plan_artifact
+from magexp.artifacts.plan import cells, collect, grow_stage, grow_start, paper_specs, plan_artifact
 from magexp.artifacts.plots import VECTOR, kind_module
-from magexp.artifacts.formats import MEASURED, read_runs, write_csv
+from magexp.artifacts.formats import MEASURED, write_csv
 from magexp.artifacts.report import build
 from magexp.artifacts.paper_spec import papers
-from magexp.artifacts.summary import COLUMNS, summarise
-from magexp.artifacts.tables import first_output
+from magexp.artifacts.stored import facts_rows, summarise_stored, write_facts
+from magexp.artifacts.summary import COLUMNS
 from magexp import paths
-from magexp.core.atomic import atomic_path
 from magexp.errors import MagexpError, exit_code
 from magexp.paths import RESULTS
 from magexp.core.limits import LIMITS, refuse_over, show
@@ -154,118 +151,23 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
     return frame.drop(columns=timed)
 
 
-class StoredOutputs(Mapping):
-    """``(cell, seed) -> `` the parts of a run's output the summary reads, from the files a reproduction
-    wrote (``--redraw``: no run): ``x`` from the runs CSV's parameter columns, and ``parameter_names``,
-    ``truth_x``, ``lower``, ``upper``, ``design`` of the cell's first run from its cells CSV
-    (``facts``: ``{cell: facts}``, :func:`read_facts`)."""
-
-    def __init__(self, table: pd.DataFrame, facts: dict):
-        self._table = table.set_index(["cell", "seed"], drop=False)
-        self._facts = facts
-
-    def __getitem__(self, key):
-        facts = self._facts[int(key[0])]
-        row = self._table.loc[key]
-        x = np.array([float(row[n]) if n in row.index else np.nan for n in facts["parameter_names"]])
-        return SimpleNamespace(x=x, **facts)
-
-    def __iter__(self):
-        return iter(zip(self._table.cell.astype(int), self._table.seed.astype(int)))
-
-    def __len__(self) -> int:
-        return len(self._table)
-
-
-#: the stored facts of a run that the summary reads (:class:`magexp.estimators.result.RunOutput`): per
-#: parameter, and the linear design's arrays (flattened, row-major)
-PARAMETER_FACTS, DESIGN_FACTS = ("truth_x", "lower", "upper"), ("gram", "coef", "rss", "n")
-
-
-def facts_rows(runs) -> pd.DataFrame:
-    """The cells CSV of an artifact: per cell, the facts its first run stored (:data:`PARAMETER_FACTS`
-    by parameter; :data:`DESIGN_FACTS` where the artifact judges on a least-squares design: ``interval:
-    ls``, ``mode: ftest``), one value a row: ``cell, seed, fact, parameter, index, value``.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-    """
-    design = any(item.interval == "ls" or item.mode == "ftest" for item in runs.spec.summarise)
-    rows = []
-    for ci in range(len(runs.cells)):
-        seed = min(s for c, s in runs.outputs if c == ci)
-        out = first_output(runs, ci)
-        for fact in PARAMETER_FACTS:
-            values = getattr(out, fact, None)
-            rows += [] if values is None else [(ci, seed, fact, n, k, float(v))
-                                               for k, (n, v) in enumerate(zip(out.parameter_names, values))]
-        for fact, values in (out.design or {}).items() if design else ():
-            rows += [(ci, seed, fact, "", k, float(v)) for k, v in enumerate(np.ravel(values))]
-    return pd.DataFrame(rows, columns=["cell", "seed", "fact", "parameter", "index", "value"])
-
-
-def write_facts(frame: pd.DataFrame, path: Path) -> None:
-    """The cells CSV at full precision (``%.17g``: read back to the bit, so that ``--redraw`` judges on
-    what the reproduction judged on).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-    path : Path
-    """
-    with atomic_path(path) as tmp:
-        frame.to_csv(tmp, index=False, float_format="%.17g")
-
-
-def read_facts(path: Path) -> dict[int, dict]:
-    """``{cell: {parameter_names, truth_x, lower, upper, design}}`` of a cells CSV (:func:`facts_rows`).
-
-    Parameters
-    ----------
-    path : Path
-    """
-    frame = pd.read_csv(path, keep_default_na=False, na_values=[""])  # pandas 3 reads %.17g back to the bit
-    out = {}
-    for ci, sub in frame.groupby("cell", sort=True):
-        arrays = {f: g.sort_values("index") for f, g in sub.groupby("fact")}
-        names = [str(n) for n in arrays["lower"].parameter] if "lower" in arrays else []
-        got = {f: arrays[f].value.to_numpy(float) if f in arrays else None for f in (*PARAMETER_FACTS, *DESIGN_FACTS)}
-        design = None
-        if got["gram"] is not None:
-            p = int(round(np.sqrt(got["gram"].size)))
-            design = {"gram": got["gram"].reshape(p, p), "coef": got["coef"].reshape(p, -1), "rss": got["rss"],
-                      "n": int(got["n"][0])}
-        out[int(ci)] = {"parameter_names": names, "truth_x": got["truth_x"], "lower": got["lower"],
-                        "upper": got["upper"], "design": design}
-    return out
-
-
-def summarise_stored(spec, root: Path) -> pd.DataFrame:
-    """The summary rows of ``spec`` from its runs CSV and its cells CSV under ``root`` (``--redraw``:
-    no run, nothing simulated; the runs as written, to 6 digits).
-
-    Parameters
-    ----------
-    spec : Artifact
-    root : Path
-    """
-    plan = plan_artifact(spec)
-    table = read_runs(root / spec.paper / f"{spec.name}_runs.csv")
-    facts = read_facts(root / spec.paper / f"{spec.name}_cells.csv")
-    return summarise(ArtifactRuns(spec=spec, cells=plan.cells, table=table, outputs=StoredOutputs(table, facts),
-                                  overrides=plan.overrides))
-
-
 def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     """An artifact's CSVs and figure into ``out`` (``force``: draw it even if unchanged); returns its
-    summary rows, computed from the unrounded runs and their stored outputs (the CSVs round them).
+    summary rows, computed from the CSVs just written (:func:`summarise_stored`, as ``--redraw`` does).
 
     Parameters
     ----------
     runs : ArtifactRuns
+        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
     out : Path
+        The paper's results folder.
     force : bool
+        Draw the figure even if the figure cache has it.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The artifact's rows of ``summary.csv``.
     """
     path = out / f"{runs.spec.name}.csv"
     frame = tabulate(runs)
@@ -275,7 +177,7 @@ def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     write_csv(runs.table.drop(columns=["wall_time"], errors="ignore"), out / f"{runs.spec.name}_runs.csv")
     write_facts(facts_rows(runs), out / f"{runs.spec.name}_cells.csv")
     draw(runs.spec, path, out, force=force)
-    return summarise(runs)
+    return summarise_stored(runs.spec, out, runs)
 
 
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
@@ -413,7 +315,22 @@ def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int =
 def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tuple[int, int]:
     """Each selected artifact's figure from its CSV in ``root`` (unchanged ones are kept, unless
     ``force``: :func:`draw`) and its summary rows from its runs CSV (:func:`summarise_stored`, into
-    ``root/<paper>/summary.csv``); returns how many figures were drawn and how many were unchanged."""
+    ``root/<paper>/summary.csv``): what a reproduction into ``root`` wrote, to the byte.
+
+    Parameters
+    ----------
+    selected : dict
+        ``{paper: [Artifact, ...]}`` (:func:`select`).
+    root : Path
+        The results folder.
+    force : bool
+        Draw every figure, even an unchanged one.
+
+    Returns
+    -------
+    tuple of int
+        How many figures were drawn and how many were unchanged.
+    """
     drawn = kept = 0
     for paper, specs in selected.items():
         parts = {}
@@ -429,7 +346,7 @@ def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tup
                 drawn += 1
             else:
                 kept += 1
-            parts[spec.name] = summarise_stored(spec, root)
+            parts[spec.name] = summarise_stored(spec, root / paper)
         if parts:
             write_summary(paper, parts, root / paper)
     return drawn, kept

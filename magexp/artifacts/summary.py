@@ -497,7 +497,7 @@ def _design_of(runs: ArtifactRuns, ci: int) -> tuple:
 
 
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
-    """One row per (summarised quantity, cell) and per ratio group, from the unrounded runs.
+    """One row per (summarised quantity, cell) and per ratio group, from ``runs`` as handed (a reproduction: as stored).
 
     Parameters
     ----------

@@ -6,8 +6,8 @@ run's stored output) become here
 * the table behind its figure (:func:`tabulate`, one builder per kind in :data:`BUILDERS`): medians
   and quartiles over seeds, success fractions, intervals. :mod:`magexp.artifacts.plots` only draws it,
   from the CSV alone;
-* the numbers of a summary row (:func:`row_numbers`), unrounded: the verdicts of
-  :mod:`magexp.artifacts.summary` are judged on them, and they are rounded only when written.
+* the numbers of a summary row (:func:`row_numbers`) of the runs handed (the runs CSV as written:
+  :mod:`magexp.artifacts.stored`): the verdicts of :mod:`magexp.artifacts.summary` are judged on them.
 
 One interval helper, :func:`interval`: the central ``level`` interval of the values themselves (where a
 single run falls: ``level=0.95``; the quartiles: ``level=0.5``), or, with ``stat``, of that statistic's
