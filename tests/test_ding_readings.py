@@ -117,3 +117,37 @@ def test_every_comparison_of_the_pso_readings_declares_its_effect_and_no_seeds_g
     for c in comparisons:
         key = "rise" if c.test == "fisher" else "ratio"
         assert key in c.effect, f"{c.id}: no {key} in its effect"
+
+
+#: the settings each of IPSO's improvements changes (Sec. 2, items 1-3): its schedule's or its start's keys
+IMPROVEMENTS = {"paper_inertia_schedule_helps": {"estimator.velocity.inertia.end"},
+                "paper_learning_factors_help": {f"estimator.velocity.{c}.{e}" for c in ("c1", "c2") for e in ("start", "end")},
+                "paper_circle_start_avoids_failures": {"estimator"}}
+
+
+def test_the_ablations_primary_adds_each_improvement_alone_to_the_primary_traditional_pso():
+    """improvements_avoid_local_optima is judged where each improvement is the one change made to the
+    traditional PSO of the accuracy headline's primary reading (Shi & Eberhart 1998: w = 0.9, c = 2), at
+    the 800 iterations of the paper's Fig 3."""
+    headline = next(h for h in PAPER.headline if h.id == "improvements_avoid_local_optima")
+    parts = headline.primary_parts()
+    assert {p.split(".")[1] for p in parts} == set(IMPROVEMENTS)
+    for part in parts:
+        stem, claim_id = part.split(".")
+        artifact = _artifact(stem)
+        improved, traditional = (_settings(artifact, cell["estimator"])
+                                 for cell in next(c for c in artifact.claims if c.id == claim_id).cells)
+        assert traditional["estimator"] == "pso" and traditional["estimator.n_iterations"] == "800"
+        assert {traditional[f"estimator.velocity.{k}"] for k in ("inertia.start", "inertia.end")} == {"0.9"}
+        assert {traditional[f"estimator.velocity.{c}.{e}"] for c in ("c1", "c2") for e in ("start", "end")} == {"2.0"}
+        changed = {k for k in improved.keys() | traditional.keys()
+                   if k != "estimator.name" and improved.get(k) != traditional.get(k)}
+        assert changed - {"estimator.init.form"} == IMPROVEMENTS[claim_id], f"{claim_id}: changes {sorted(changed)}"
+    assert all(r.less_plausible for r in headline.readings if r.label != headline.primary)
+
+
+@pytest.mark.parametrize("stem", ["ding2024_ext_ablation_se98", "ding2024_ext_ablation", "ding2024_ext_ablation_readings"])
+def test_every_comparison_of_the_ablations_declares_its_effect_and_no_seeds_grow(stem):
+    artifact = _artifact(stem)
+    comparisons = [c for c in artifact.claims if c.kind in ("ordering", "winner")]
+    assert artifact.grow is None and comparisons and all("rise" in c.effect for c in comparisons)

@@ -15,7 +15,8 @@ from magexp.paths import RESULTS
 from magexp.artifacts.plots import kind_module
 from magexp.artifacts.kind_tables import bound_ratio
 from magexp.artifacts.plots.check import colorbar_mismatch, defects, empty_axes, legend_defects, overlapping_text, raw_legends
-from magexp.artifacts.plots.style import colorbar, drawn_from, plt
+from magexp.artifacts.plots.final import level_span
+from magexp.artifacts.plots.style import colorbar, drawn_from, plt, shared_legend
 from magexp.artifacts.paper_spec import papers
 
 
@@ -443,6 +444,52 @@ def test_final_draws_a_papers_levels_in_the_panels_they_match():
     fig = kind_module("final").draw(pd.DataFrame(rows), spec)
     drawn = [[ln.get_ydata()[0] for ln in ax.lines if ln.get_label() == "paper's PSO value"] for ax in fig.axes[:3]]
     assert drawn == [[8.35], [87.7], []] and defects(fig) == []
+    plt.close(fig)
+
+
+def test_final_draws_a_level_of_one_x_at_that_x_only_and_keeps_the_x_range():
+    """ding2024_ext_pso_readings drew the paper's PSO value at A = 2 nT across A = 5 and 10 nT too."""
+    spec = OmegaConf.create({"title": "t", "kind": "final",
+                             "plot": {"x": "scenario.noise", "hue": "estimator",
+                                      "levels": [{"label": "paper's PSO value", "match": {"scenario.noise": a}, "value": v}
+                                                 for a, v in ((2, 8.35), (5, 87.7), (10, 162.26))]}})
+    rows = [{"scenario.noise": a, "estimator": "pso", "objective": "scalar", "metric": "fun", "median": 10.0 * a,
+             "q25": 9.0 * a, "q75": 11.0 * a} for a in (2, 5, 10)]
+    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    ax = fig.axes[0]
+    spans = sorted((ln.get_xdata()[0], ln.get_xdata()[1], ln.get_ydata()[0]) for ln in ax.lines
+                   if ln.get_label() == "paper's PSO value")
+    assert [v for *_, v in spans] == [8.35, 87.7, 162.26]
+    assert all(lo < a < hi for (lo, hi, _), a in zip(spans, (2, 5, 10)))
+    assert all(hi < nxt_lo for (_, hi, _), (nxt_lo, _, _) in zip(spans, spans[1:]))  # each only at its own A
+    left, right = ax.get_xlim()
+    assert spans[0][0] >= left and spans[-1][1] <= right and right < 10.5  # the lines do not widen the axis
+    assert defects(fig) == []
+    plt.close(fig)
+
+
+def test_level_span_is_centred_on_its_x_on_linear_and_log_axes():
+    assert level_span(5, [2, 5, 10]) == pytest.approx((3.8, 7.0))
+    assert level_span(10, [2, 5, 10]) == pytest.approx((8.0, 10.4))
+    lo, hi = level_span(10, [1, 10, 100], log=True)
+    assert (lo, hi) == pytest.approx((10 ** 0.6, 10 ** 1.4))
+    assert level_span(3, [3]) == pytest.approx((2.5, 3.5))
+
+
+def test_a_legend_below_the_panels_fits_the_figures_width():
+    """Long legend entries (ding2024_ext_pso_readings' sourced readings) in four columns made the legend,
+    and with it the saved figure, twice as wide as the panel: fewer columns, never wider than the figure."""
+    fig, axes = plt.subplots(1, 1, figsize=(6.0, 4.2), layout="constrained")
+    for k in range(8):
+        axes.plot([0, 1], [k, k], label=f"a long legend entry naming a source and its settings, number {k}")
+    legend = shared_legend(fig, [axes])
+    renderer = fig.canvas.get_renderer()
+    assert legend.get_window_extent(renderer).width <= fig.bbox.width
+    plt.close(fig)
+    fig, axes = plt.subplots(1, 1, figsize=(6.0, 4.2), layout="constrained")
+    for k in range(8):
+        axes.plot([0, 1], [k, k], label=f"line {k}")
+    assert shared_legend(fig, [axes])._ncols == 4  # short entries keep their four columns
     plt.close(fig)
 
 

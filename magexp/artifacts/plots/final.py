@@ -13,7 +13,8 @@ bound column of the metric drawn per objective (e.g. ``offset_bound``); ``plot.t
 ``{metric: value}`` drawn dashed (e.g. a paper's stated accuracy); ``plot.levels``: a paper's values
 that are not compared cell by cell (``[{label, match, value}]``, e.g. the paper's PSO at each noise
 level beside every PSO setting of a sweep), each a horizontal line across the panels whose settings
-``match`` selects (of its ``metrics``, default the first), one style per ``label``. Against the objective ``fun`` the
+``match`` selects (of its ``metrics``, default the first; where ``match`` names a value of ``plot.x``:
+a short line at that x only), one style per ``label``. Against the objective ``fun`` the
 noise floor and the Cramér-Rao RMS floor are drawn (over the lines, which run close to them);
 against ``rms_ratio`` (the residual RMS over that floor) the floor is the line at 1. A cell where fewer than half the runs succeeded
 is ringed in red. A cell without a value is marked by a cross at the top of its panel (legend text:
@@ -165,19 +166,55 @@ LEVEL_STYLES = ({"color": "k", "ls": "-.", "lw": 1.3}, {"color": "C4", "ls": (0,
                 {"color": "0.3", "ls": (0, (5, 2, 1, 2, 1, 2)), "lw": 1.1})
 
 
-def _levels(ax, spec, sub: pd.DataFrame, metric: str) -> None:
+def _levels(ax, spec, sub: pd.DataFrame, metric: str, x_key: str) -> None:
     """The ``plot.levels`` whose ``match`` selects the panel's cells (a key the cells lack is no
-    match), drawn across the panel; against the metrics of the level's ``metrics`` (default:
-    ``plot.metric``'s first)."""
+    match): across the panel, or, where ``match`` names a value of the x key, a short line at that x
+    only (drawn after the axes are scaled, within their x range); against the metrics of the level's
+    ``metrics`` (default: ``plot.metric``'s first)."""
     levels = list(spec.plot.get("levels", []) or [])
     styles = {}
+    xs = sorted(set(sub[x_key].astype(float))) if x_key in sub else []
     for level in levels:
         style = styles.setdefault(str(level["label"]), LEVEL_STYLES[len(styles) % len(LEVEL_STYLES)])
         if metric not in list(level.get("metrics", metric_list(spec)[:1])):
             continue
         match = dict(level.get("match", {}) or {})
-        if all(k in sub for k in match) and any(matches(match, row) for row in sub.to_dict("records")):
-            ax.axhline(float(level["value"]), zorder=4, label=str(level["label"]), **style)
+        if not (all(k in sub for k in match) and any(matches(match, row) for row in sub.to_dict("records"))):
+            continue
+        value, name = float(level["value"]), str(level["label"])
+        if x_key in match and xs:
+            lo, hi = level_span(float(match[x_key]), xs, ax.get_xscale() == "log")
+            xlim = ax.get_xlim()  # the cells' x range: the line does not widen it
+            ax.plot([lo, hi], [value, value], zorder=4, label=name, **style)
+            ax.set_xlim(xlim)
+        else:
+            ax.axhline(value, zorder=4, label=name, **style)
+
+
+def level_span(x: float, xs: list[float], log: bool = False) -> tuple[float, float]:
+    """The ends of a level's line drawn at ``x`` only: 0.4 of the gap to each neighbouring x; beyond
+    the first or last x, the axis's default margin (5 % of the range of ``xs``), so that the line does
+    not widen the x range; on a log axis, in the logarithm.
+
+    Parameters
+    ----------
+    x : float
+        The x value the level belongs to.
+    xs : list of float
+        The sorted x values of the panel's cells.
+    log : bool
+        Whether the x axis is logarithmic.
+
+    Returns
+    -------
+    tuple of float
+        The left and right ends of the line (a single x: 0.5 either side).
+    """
+    f, inv = (math.log10, lambda v: 10.0 ** v) if log and min(xs) > 0 else (float, float)
+    at, margin = f(x), 0.05 * (f(max(xs)) - f(min(xs))) or 0.5
+    left = min((0.4 * (at - f(v)) for v in xs if f(v) < at), default=margin)
+    right = min((0.4 * (f(v) - at) for v in xs if f(v) > at), default=margin)
+    return inv(at - left), inv(at + right)
 
 
 def _references(ax, sub, spec, x_key, metric):
@@ -237,8 +274,8 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             placed = _lines(ax, sub, spec, x_key, hue_key, colours)
             _paper(ax, spec, placed, metric, colours)
             _references(ax, sub, spec, x_key, metric)
-            _levels(ax, spec, sub, metric)
             _scale_axes(ax, spec, sub, frame[x_key], ylog(spec, metric))
+            _levels(ax, spec, sub, metric, x_key)
             _label_panel(ax, spec, metric, len(metrics), panel_key, pv)
     entries = legend_entries(axes)  # one legend: every entry once (markers of later panels included)
     shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)

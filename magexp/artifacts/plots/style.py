@@ -223,7 +223,7 @@ def shared_legend(fig, axes, entries: dict | None = None, *, ncols: int = 4, ins
     entries : dict, optional
         ``{label: handle}`` (default: :func:`legend_entries`).
     ncols : int
-        Columns of the legend.
+        Columns of the legend at most (fewer where that many would be wider than the figure).
     inside : bool
         Put it in the first panel even where the figure has constrained layout.
     **kwargs
@@ -238,9 +238,19 @@ def shared_legend(fig, axes, entries: dict | None = None, *, ncols: int = 4, ins
     if not entries:
         return None
     if not inside and type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine":
-        return fig.legend(entries.values(), entries.keys(), loc="outside lower center",
-                          ncols=min(ncols, len(entries)), **kwargs)
+        return _fitting_legend(fig, entries, min(ncols, len(entries)), **kwargs)
     return axes[0].legend(entries.values(), entries.keys(), **kwargs)
+
+
+def _fitting_legend(fig, entries: dict, ncols: int, **kwargs):
+    """The figure's legend below its panels in the most columns, up to ``ncols``, that keep it within
+    the figure's width (long entries: fewer columns, never a legend that widens the figure)."""
+    renderer = fig.canvas.get_renderer()
+    for n in range(ncols, 0, -1):
+        legend = fig.legend(entries.values(), entries.keys(), loc="outside lower center", ncols=n, **kwargs)
+        if n == 1 or legend.get_window_extent(renderer).width <= fig.bbox.width:
+            return legend
+        legend.remove()
 
 
 #: attribute naming the data column a colour bar (and the image it belongs to) shows
