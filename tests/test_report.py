@@ -197,7 +197,7 @@ def test_each_counts_line_agrees_with_the_list_or_table_under_it():
     for section in report.split("\n## ")[1:]:
         heads = re.search(r"\*\*Headline claims: ([^*]+)\*\*", section)
         if heads:
-            said = {k: int(n) for k, n in re.findall(r"([a-z ]+?) (\d+)(?:,|$)", heads.group(1))}
+            said = {k.strip(): int(n) for k, n in re.findall(r"([a-z ]+?) (\d+)(?:,|$)", heads.group(1))}
             listed = re.findall(r"^\d+\. \**([a-z ]+?)\**: ", section, flags=re.M)
             assert said == {v: listed.count(v) for v in set(listed)}, section.splitlines()[0]
             checked += 1

@@ -24,7 +24,8 @@ from magexp.artifacts.claims import interpolate
 from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, write_csv
 from magexp.artifacts.headlines import claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.kind_tables import winners
-from magexp.artifacts.report_claims import bold, counts, draw_readings, findings_table, headline_list, link
+from magexp.artifacts.report_claims import (bold, counts, draw_readings, findings_table, headline_list, link,
+                                            readings_section)
 from magexp.artifacts.spec import load
 from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
@@ -38,7 +39,7 @@ SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "ju
                  "judged_runs", "judged_n", "success_rate", "truth_in_interval", "verdict", "rel_difference"]
 #: limits of each section of REPORT.md (a paper's; the appendix holds the rest; the section "magexp beside
 #: MAGYC" links its claims table): a reviewer reads one in a few minutes
-MAX_LINES, MAX_CHARS = 150, 25_000
+MAX_LINES, MAX_CHARS = 150, 30_000
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
@@ -252,7 +253,7 @@ def _report_section(p: Paper) -> str:
 def _appendix_section(p: Paper) -> str:
     """A paper's appendix: sanity checks, then every artifact with its figure, caption, tables, notes."""
     lines = [f'<a id="{p.paper}"></a>\n', f"## {p.meta.title}\n", f"{str(p.meta.intro).strip()}\n",
-             _deviations_section(p.meta, p.paper, p.root, full=True)]
+             readings_section(p), _deviations_section(p.meta, p.paper, p.root, full=True)]
     lines.append(findings_table(p, appendix=True))
     frame = pd.DataFrame(p.claims) if p.claims else pd.DataFrame(columns=CLAIM_COLUMNS)
     sanity = frame[frame.role == "sanity"]

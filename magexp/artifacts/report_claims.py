@@ -81,7 +81,8 @@ def headline_list(p) -> str:
         primary = next((r for r in h["readings"] if r["primary"]), None)
         if primary:
             settings = f": {primary['settings']}" if primary["settings"] else ""
-            lines.append(f"   - *Primary reading:* {primary['label']} ({primary['source']}{settings}). *Why:* {h['why']}")
+            lines.append(f"   - *Primary reading:* {primary['label']}{settings} (its source, and why the paper most "
+                         f"plausibly meant it: [appendix](APPENDIX.md#{p.paper}-readings)).")
         lines.append(f"   - *{'Why not' if h['verdict'] == 'not testable here' else 'Deciding numbers'}:* {h['reason']}")
         if h["readings"]:
             lines.append(f"   - *Robustness:* {h['robustness']}.")
@@ -220,3 +221,34 @@ def findings_table(p, *, appendix: bool = False) -> str:
             "readings apart, in the readings figure); full evidence and p-values: "
             f"[`claims.csv`](claims.csv).{where}"
             + "\n\n" + markdown_table(frame, ["by", "claim", "result", "reason"], names=["by", "claim", "result", "evidence"]))
+
+
+def readings_section(p) -> str:
+    """The appendix's account of each headline's readings, side by side: the primary first, with the
+    paper's words that make it the most plausible, then every other reading with why it is less plausible;
+    each with its source, settings and the verdict under it.
+
+    Parameters
+    ----------
+    p : Paper
+        The section (:class:`magexp.artifacts.report.Paper`).
+
+    Returns
+    -------
+    str
+        Markdown ('' when no headline declares readings).
+    """
+    lines = []
+    for h in (h for h in p.headlines if h["readings"]):
+        lines.append(f"**{h['id']}** ({bold(h['verdict'])}; {h['robustness']}).\n")
+        for r in sorted(h["readings"], key=lambda r: not r["primary"]):
+            argued = (f"*Primary.* Why: {h['why']}" if r["primary"] else f"Less plausible: {r['less_plausible']}")
+            lines.append(f"- {r['label']}: **{r['verdict']}**. Source: {r['source']}. Settings: "
+                         f"{r['settings'] or 'as the source states'}. {argued}")
+        lines.append("")
+    if not lines:
+        return ""
+    return (f'<a id="{p.paper}-readings"></a>\n\n### Readings of what the paper leaves unstated\n\n'
+            "Each headline is decided by its primary reading; the others test its robustness and never decide "
+            f"(the verdict under each: {link(f'{p.paper}/readings', p.root)}).\n\n" + "\n".join(lines))
+
