@@ -45,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from magexp.artifacts.claims import ALONE, ESTIMATOR_SIDE
 from magexp.artifacts.significance import ALPHA, N_PERM, POWER, effect_kind, effect_words, fisher_power
 from magexp.artifacts.tables import STATS
 
@@ -54,8 +55,6 @@ N_SIM = 400
 N_SIM_PERM = 400
 #: the generator seed of the simulations (fixed: the plan is the same on every machine)
 SIM_SEED = 20240639
-#: cell keys that choose the method, not the readings (:data:`magexp.artifacts.claims.ESTIMATOR_SIDE`)
-_METHOD_KEYS = ("estimator", "objective")
 
 
 def comparison_test(claim) -> str:
@@ -78,7 +77,7 @@ def comparison_test(claim) -> str:
         return "fisher"
     if claim.test != "auto":
         return claim.test
-    data_side = [{k: v for k, v in c.items() if k not in _METHOD_KEYS and not k.startswith("estimator.")}
+    data_side = [{k: v for k, v in c.items() if k not in ESTIMATOR_SIDE and not k.startswith("estimator.")}
                  for c in claim.cells]
     return "paired" if all(d == data_side[0] for d in data_side) else "unpaired"
 
@@ -265,10 +264,6 @@ class ClaimPlan:
     capped: bool
 
 
-#: families whose comparisons are judged alone (:data:`magexp.artifacts.claims.ALONE`)
-_ALONE = ("sanity", "exploratory")
-
-
 def claim_levels(specs: list, family: dict[str, str]) -> dict[str, tuple[str, int, float]]:
     """``{"<artifact>.<claim id>": (family, m, level)}`` of every comparison claim of a paper: its Holm
     family, the number ``m`` of comparisons in it and the strictest step ``ALPHA / m`` (``ALPHA`` alone).
@@ -289,7 +284,7 @@ def claim_levels(specs: list, family: dict[str, str]) -> dict[str, tuple[str, in
     sizes = {name: sum(family[k] == name for k in comparisons) for name in set(family.values())}
     out = {}
     for key in comparisons:
-        m = 1 if family[key] in _ALONE else sizes[family[key]]
+        m = 1 if family[key] in ALONE else sizes[family[key]]
         out[key] = (family[key], m, ALPHA / m)
     return out
 

@@ -34,7 +34,20 @@ def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
     """One-sided p-value of Fisher's exact test that the success probability of the first group
     (``k1`` of ``n1``) exceeds the second's (``k2`` of ``n2``): the hypergeometric upper tail
     ``P(X >= k1)``, ``X ~ Hypergeom(n1 + n2, k1 + k2, n1)`` (what ``scipy.stats.fisher_exact(...,
-    alternative="greater")`` gives)."""
+    alternative="greater")`` gives).
+
+    Parameters
+    ----------
+    k1, n1 : int
+        Successes and runs of the side claimed better.
+    k2, n2 : int
+        Those of the other side.
+
+    Returns
+    -------
+    float
+        The one-sided p.
+    """
     total, succ = n1 + n2, k1 + k2
     denom = math.comb(total, n1)
     hi = min(n1, succ)
@@ -43,7 +56,18 @@ def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
 
 def wilcoxon_less(d: np.ndarray) -> float:
     """One-sided p-value of the Wilcoxon signed-rank test that the paired differences ``d`` lie
-    below zero (zero differences dropped; 1 when none is left)."""
+    below zero (zero differences dropped; 1 when none is left).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        The paired differences.
+
+    Returns
+    -------
+    float
+        The one-sided p.
+    """
     d = np.asarray(d, float)
     d = d[np.isfinite(d) & (d != 0)]
     if d.size == 0:
@@ -58,7 +82,20 @@ def wilcoxon_less(d: np.ndarray) -> float:
 
 def z_power(alpha: float = ALPHA, power: float = POWER) -> float:
     """``z(1 - alpha) + z(power)``: the distance, in standard errors, a one-sided test at ``alpha``
-    needs to detect a difference with probability ``power``."""
+    needs to detect a difference with probability ``power``.
+
+    Parameters
+    ----------
+    alpha : float
+        The one-sided level.
+    power : float
+        The power.
+
+    Returns
+    -------
+    float
+        The distance in standard errors.
+    """
     return float(ndtri(1 - alpha) + ndtri(power))
 
 
@@ -67,7 +104,20 @@ def detectable_paired(d: np.ndarray, alpha: float = ALPHA) -> float:
     :data:`POWER`: the normal approximation ``(z(1-alpha) + z(power)) s / sqrt(n)``, divided by the
     square root of the test's asymptotic relative efficiency against the t-test (3/pi). ``s`` is the
     robust scale ``1.4826 MAD(d)`` (the standard deviation of normal differences): a rank test does
-    not see how far a failed run's difference lies, so its tails do not inflate ``s``."""
+    not see how far a failed run's difference lies, so its tails do not inflate ``s``.
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        The paired differences.
+    alpha : float
+        The one-sided level.
+
+    Returns
+    -------
+    float
+        The shift (NaN below two differences).
+    """
     d = np.asarray(d, float)
     d = d[np.isfinite(d)]
     if d.size < 2:
@@ -79,7 +129,20 @@ def detectable_paired(d: np.ndarray, alpha: float = ALPHA) -> float:
 def detectable_unpaired(ci_a: tuple, ci_b: tuple, alpha: float = ALPHA) -> float:
     """The difference of a statistic between two independent samples the permutation test at ``alpha`` detects
     with :data:`POWER`: ``(z(1-alpha) + z(power)) sqrt(se_a^2 + se_b^2)``, each standard error read
-    off its 95 % bootstrap interval (``(hi - lo) / (2 z(0.975))``)."""
+    off its 95 % bootstrap interval (``(hi - lo) / (2 z(0.975))``).
+
+    Parameters
+    ----------
+    ci_a, ci_b : tuple
+        The two sides' 95 % bootstrap intervals.
+    alpha : float
+        The one-sided level.
+
+    Returns
+    -------
+    float
+        The difference (NaN where an interval is not finite).
+    """
     z = float(ndtri(0.975))
     se = [(hi - lo) / (2 * z) for lo, hi in (ci_a, ci_b)]
     return z_power(alpha) * math.sqrt(se[0] ** 2 + se[1] ** 2) if all(np.isfinite(se)) else float("nan")
@@ -89,7 +152,20 @@ def permutation_less(a: np.ndarray, b: np.ndarray, stat: str) -> tuple[float, fl
     """One-sided permutation p-values that ``stat`` of ``a`` lies below that of ``b`` and of the
     converse, and the smallest p the test can give: :data:`N_PERM` random relabellings of the pooled
     values (a fixed generator: the same on every run), ``p = (1 + #{relabelled difference at or
-    beyond the observed}) / (N_PERM + 1)`` (Phipson & Smyth 2010), at least ``1 / C(n, n_a)``."""
+    beyond the observed}) / (N_PERM + 1)`` (Phipson & Smyth 2010), at least ``1 / C(n, n_a)``.
+
+    Parameters
+    ----------
+    a, b : numpy.ndarray
+        The two samples.
+    stat : str
+        The statistic (:data:`magexp.artifacts.tables.STATS`).
+
+    Returns
+    -------
+    tuple of float
+        ``(p_less, p_more, p_min)``.
+    """
     a, b = np.asarray(a, float), np.asarray(b, float)
     pooled, na = np.r_[a, b], len(a)
     rng = np.random.default_rng(0)
@@ -108,6 +184,12 @@ def holm(p: list[float]) -> list[float]:
     Parameters
     ----------
     p : list of float
+        The raw p-values.
+
+    Returns
+    -------
+    list of float
+        The adjusted p-values.
     """
     p = np.asarray(p, float)
     out = np.full(p.shape, np.nan)
