@@ -128,3 +128,11 @@ def test_no_undetected_difference_is_at_least_what_its_test_could_detect():
     undetected = rows[(rows.verdict == NO_DIFFERENCE) & rows.detectable.notna()]
     bad = undetected[undetected.observed >= undetected.detectable]
     assert bad.empty, f"no difference detected, yet observed >= detectable: {bad[['artifact', 'id']].values.tolist()}"
+
+
+def test_a_binding_cap_is_recorded_with_the_power_it_reaches():
+    from magexp.artifacts.sample_sizes import paper_plans
+
+    plan = paper_plans("real", paper_specs("real"))["real_table7.table7_order"]
+    assert plan.capped and plan.seeds == 5 and plan.power < POWER  # max_seeds: 5 (a run costs ~24 CPU-s)
+    assert plan.power == pytest.approx(power.wilcoxon_power(5, 2.0, 1.0, 0.05))
