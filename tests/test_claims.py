@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED, Claim, adjust, evaluate, interpolate
-from magexp.artifacts.significance import (detectable_paired, detectable_rates, fisher_greater, holm, permutation_less,
+from magexp.artifacts.significance import (detect_rise, detectable_paired, fisher_greater, holm, permutation_less,
                                            wilcoxon_less)
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
@@ -220,18 +220,17 @@ def test_a_fisher_comparison_states_its_smallest_p_and_what_it_could_detect():
     assert out.result == UNDECIDED and out.p_min == pytest.approx(fisher_greater(30, 30, 27, 30))
 
 
-def test_the_detectable_rate_difference_has_about_the_stated_power():
-    """Fisher's exact test at the rate ``p0 + detectable_rates(p0, 30, 30)`` against ``p0``, its power
-    summed over every outcome of two binomials: near 80 % (Fisher's is conservative: a little below)."""
+def test_the_detectable_rate_difference_is_exact_fisher_power_at_the_level():
+    """The rise ``detect_rise`` names: Fisher's exact test reaches 80 % power there, summed over every
+    outcome of two binomials table by table (and not 0.002 below it)."""
     from scipy.stats import binom
 
-    p0 = 0.5
-    p1 = p0 + detectable_rates(p0, 30, 30)
+    p0, level = 0.5, 0.05
+    rise, _ = detect_rise(p0, 30, 30, level)
     k = np.arange(31)
-    power = sum(binom.pmf(k1, 30, p1) * binom.pmf(k2, 30, p0) for k1 in k for k2 in k
-                if fisher_greater(int(k1), 30, int(k2), 30) < 0.05)
-    assert 0.65 < power < 0.85 and 0.25 < p1 - p0 < 0.4
-    assert detectable_rates(0.95, 30, 30) == pytest.approx(0.05)  # no rate up to 100 % is detectable
+    power = lambda p1: sum(binom.pmf(k1, 30, p1) * binom.pmf(k2, 30, p0) for k1 in k for k2 in k
+                           if fisher_greater(int(k1), 30, int(k2), 30) < level)
+    assert power(p0 + rise) >= 0.8 > power(p0 + rise - 0.002) and 0.25 < rise < 0.45
 
 
 def test_the_detectable_paired_shift_has_about_the_stated_power():

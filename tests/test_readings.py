@@ -1,4 +1,4 @@
-"""Headlines judged under each reading of what a paper leaves unstated, and the seeds a verdict needs."""
+"""Headlines judged under each reading of what a paper leaves unstated (the seeds a verdict needs: tests/test_power.py)."""
 
 from types import SimpleNamespace
 
@@ -7,9 +7,7 @@ import pytest
 
 from magexp.artifacts import headlines
 from magexp.artifacts.claims import Claim, evaluate
-from magexp.artifacts.plan import ArtifactPlan, grow_stage, next_seeds
 from magexp.artifacts.schema import build
-from magexp.artifacts.spec import Grow
 from magexp.artifacts.paper_spec import Headline, Paper
 from magexp.errors import MagexpError
 
@@ -88,41 +86,6 @@ def test_a_reading_schema_is_checked():
         build(Headline, {**base, "primary": "A", "why": "Sec. 1", "readings": two}, "h")
     with pytest.raises(MagexpError, match="at most 40"):
         build(Headline, {**base, "readings": [{"label": "L" * 41, "source": "x"}, {"label": "B", "source": "y"}]}, "h")
-    with pytest.raises(MagexpError, match="start=50, step=10, cap=40"):
-        Grow(claims=["c"], start=50, step=10, cap=40, margin=0.1)
-
-
-RULE = Grow(claims=["more"], start=30, step=20, cap=70, margin=0.1)
-
-
-def test_next_seeds_grows_in_steps_and_stops_at_the_cap_or_a_decision():
-    undecided = SimpleNamespace(p=0.2, p_contra=0.9, detectable=0.3)
-    assert next_seeds(30, undecided, RULE) == 50
-    assert next_seeds(60, undecided, RULE) == 70  # capped
-    assert next_seeds(70, undecided, RULE) == 70  # at the cap: stops
-    assert next_seeds(30, SimpleNamespace(p=0.01, p_contra=1.0, detectable=float("nan")), RULE) == 30  # decided
-    assert next_seeds(30, SimpleNamespace(p=1.0, p_contra=0.01, detectable=0.3), RULE) == 30  # decided the other way
-    assert next_seeds(30, SimpleNamespace(p=0.2, p_contra=0.9, detectable=0.05), RULE) == 30  # fine enough
-    strict = Grow(claims=["more"], start=30, step=20, cap=70, margin=0.1, alpha=0.001)
-    assert next_seeds(30, SimpleNamespace(p=0.01, p_contra=1.0, detectable=0.3), strict) == 50  # not at 0.001
-
-
-def _plan(claim: Claim) -> ArtifactPlan:
-    spec = SimpleNamespace(grow=RULE, claims=[claim], seeds=30)
-    return ArtifactPlan(spec=spec, cells=[{"estimator": "a"}, {"estimator": "b"}, {"estimator": "c"}],
-                        overrides=[["estimator=a"], ["estimator=b"], ["estimator=c"]], configs=[], index=[])
-
-
-def test_grow_stage_is_deterministic_and_grows_only_the_claims_cells():
-    more = Claim(id="more", text="", kind="ordering", test="fisher", stat="success_rate", better="higher",
-                 cells=[{"estimator": "a"}, {"estimator": "b"}])
-    plan = _plan(more)
-    close = _table({"a": 0.9, "b": 0.8, "c": 0.1}, 30)  # 27 vs 24 of 30: no difference detected
-    stage = grow_stage(plan, close, {0: 30, 1: 30})
-    assert stage == {0: 50, 1: 50} and grow_stage(plan, close, {0: 30, 1: 30}) == stage
-    apart = _table({"a": 1.0, "b": 0.2, "c": 0.1}, 30)  # decided at the start: the rule stops
-    assert grow_stage(plan, apart, {0: 30, 1: 30}) is None
-    assert grow_stage(plan, _table({"a": 0.9, "b": 0.8, "c": 0.1}, 70), {0: 70, 1: 70}) is None  # at the cap
 
 
 def test_the_committed_headlines_carry_their_readings_and_the_report_names_each_split():

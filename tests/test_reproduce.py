@@ -53,7 +53,7 @@ def test_refusals_are_one_line_and_write_nothing(capsys, tmp_path, monkeypatch, 
 
 def test_a_file_or_unwritable_out_is_refused_before_any_run(capsys, tmp_path, monkeypatch):
     monkeypatch.setattr(runner, "run_batch", lambda *a: pytest.fail("ran before checking --out"))
-    monkeypatch.setattr(reproduce, "plan_artifact", lambda *a, **k: pytest.fail("planned before checking --out"))
+    monkeypatch.setattr(reproduce, "plan_with_effects", lambda *a, **k: pytest.fail("planned before checking --out"))
     afile = tmp_path / "afile"
     afile.write_text("x")
     one_line_error(capsys, ["ding2024", "--out", str(afile)], "is a file")

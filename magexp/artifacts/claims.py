@@ -45,8 +45,10 @@ Each comparison carries its ``p`` (of the claimed direction; for several pairs t
 pair must hold), the smallest ``p_min`` its test can give at its n (a signed-rank test of n
 non-zero differences: ``2^-n``; Fisher's: the most extreme table of its margins), and, where it
 detects no difference, ``detectable``: the smallest difference it would detect with
-:data:`POWER` probability (:func:`detectable_paired`, :func:`detectable_unpaired`,
-:func:`detectable_rates`). Within a paper the ``p`` of its comparison claims (sanity checks
+:data:`POWER` probability at the level Holm's rule judged it at, with its own test (Fisher's by exact
+enumeration, :func:`~magexp.artifacts.significance.detect_rise`; the signed-rank test's "not computable
+(k of n ties)" where its scale is degenerate, :func:`~magexp.artifacts.significance.detect_paired`;
+:func:`~magexp.artifacts.significance.detect_unpaired`), beside the ``observed`` effect in its units. Within a paper the ``p`` of its comparison claims (sanity checks
 apart) are adjusted by Holm's step-down rule (:func:`holm`, :func:`adjust`): a comparison
 ``holds`` when its ``p_adjusted`` is below :data:`ALPHA`, is ``contradicted`` when the converse's
 is, ``cannot be decided`` when ``p_min`` is not below :data:`ALPHA` (the test cannot reach it at
@@ -61,6 +63,7 @@ row filter (``succeeded=0``, ``seeds=10``) leaves no value prints :data:`NO_RUNS
 
 from __future__ import annotations
 
+import functools
 import operator
 import re
 from dataclasses import dataclass, field
@@ -70,9 +73,9 @@ import pandas as pd
 
 from magexp.artifacts.censoring import censored_mask, censored_statistic, censored_text, with_censored
 from magexp.artifacts.schema import Float, typed
-from magexp.artifacts.significance import (ALPHA, POWER, detectable_paired, detectable_rates,
-                                          detectable_unpaired, fisher_greater, holm, permutation_less, wilcoxon_less)
-from magexp.artifacts.tables import STATS, interval, matches, same
+from magexp.artifacts.significance import (ALPHA, POWER, detect_paired, detect_rise, detect_unpaired, effect_error,
+                                          fisher_greater, holm, permutation_less, wilcoxon_less)
+from magexp.artifacts.tables import STATS, interval, matches, same, statistic
 from magexp.errors import MagexpError
 
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
@@ -128,8 +131,17 @@ class Claim:
             raise MagexpError(f"claim {self.id!r}: by: paper needs a section (where the paper says it)")
         if self.test == "fisher" and self.stat != "success_rate":
             raise MagexpError(f"claim {self.id!r}: test: fisher compares success counts: it needs stat: success_rate")
+        self._check_effect()
         if self.test == "intervals":  # the old name: overlapping intervals are no test, a permutation test is
             object.__setattr__(self, "test", "unpaired")
+
+    def _check_effect(self) -> None:
+        """An ``effect:`` only on a comparison, with the keys of its statistic (:func:`effect_error`)."""
+        if not self.effect:
+            return
+        why = effect_error(self.effect, self.stat) if self.kind in ("ordering", "winner") else "only a comparison has one"
+        if why:
+            raise MagexpError(f"claim {self.id!r}: effect={self.effect} is not allowed: {why}")
 
 
 @dataclass
@@ -141,7 +153,8 @@ class Outcome:
     threshold: the fewest runs of a selected cell),
     ``detectable`` (module docstring) and, once :func:`adjust` has seen its family, ``family`` (its name,
 :mod:`magexp.artifacts.families`), ``family_size``, ``p_adjusted`` and ``level``: the raw-p level Holm's
-rule judged it at."""
+rule judged it at, at which ``detectable`` (and ``detectable_words``) is then computed with its own test;
+``observed``: the deciding pair's effect in the units of ``detectable`` (positive: the claimed direction)."""
 
     claim: Claim
     holds: bool
@@ -158,6 +171,9 @@ rule judged it at."""
     family: str = ""
     family_size: int = 0
     level: float = float("nan")
+    observed: float = float("nan")
+    detect: object = None  # level -> (detectable, its words): the deciding pair's (Test.detect)
+    detectable_words: str = ""
 
     def __post_init__(self):
         self.result = self.result or (HOLDS if self.holds else FAILS)
@@ -272,16 +288,18 @@ def _column(runs: pd.DataFrame, metric: str) -> np.ndarray:
 class Test:
     """One pair's test: the one-sided p of the claim (``p_hold``) and of its converse (``p_contra``),
     the smallest p the test can give at its n (``p_min``), the pair's smallest sample ``n``, the
-    difference it would detect with :data:`POWER` (``detectable``, in the units of the statistic)
-    and a text."""
+    observed effect in the claimed direction (``observed``: a success-rate rise, a per-seed shift, a
+    difference of the statistic), a text, and ``detect``: ``level -> (detectable, words)``, the
+    difference it would detect with :data:`POWER` at that level (in the units of ``observed``)."""
 
     name: str
     p_hold: float
     p_contra: float
     p_min: float
     n: int
-    detectable: float
+    observed: float
     text: str
+    detect: object
 
 
 def decide(p: float, p_contra: float, p_min: float, alpha: float = ALPHA) -> str:
@@ -324,8 +342,10 @@ def _fisher_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -
     p_hold, p_contra = fisher_greater(a, na, b, nb), fisher_greater(b, nb, a, na)
     top = min(na, a + b)
     p_min = fisher_greater(top, na, a + b - top, nb)
-    return Test("fisher", p_hold, p_contra, p_min, min(na, nb), detectable_rates(b / nb if nb else np.nan, na, nb),
-                f"{a} of {na} vs {b} of {nb} seeds succeed, Fisher p = {p_hold:.3g}")
+    rise = a / na - b / nb if na and nb else np.nan
+    return Test("fisher", p_hold, p_contra, p_min, min(na, nb), rise,
+                f"{a} of {na} vs {b} of {nb} seeds succeed, Fisher p = {p_hold:.3g}",
+                functools.partial(detect_rise, b / nb if nb else np.nan, na, nb))
 
 
 def _paired_test(claim: Claim, pair: tuple | None) -> Test:
@@ -338,9 +358,9 @@ def _paired_test(claim: Claim, pair: tuple | None) -> Test:
     d = d[np.isfinite(d)]
     p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
     wins, losses = int((d < 0).sum()), int((d > 0).sum())
-    return Test("paired", p_hold, p_contra, 0.5 ** (wins + losses), d.size, detectable_paired(d),
+    return Test("paired", p_hold, p_contra, 0.5 ** (wins + losses), d.size, -float(np.median(d)) if d.size else np.nan,
                 f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
-                f"equal on {d.size - wins - losses} of {d.size} seeds)")
+                f"equal on {d.size - wins - losses} of {d.size} seeds)", functools.partial(detect_paired, d))
 
 
 def _unpaired_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, cis: tuple) -> Test:
@@ -351,8 +371,10 @@ def _unpaired_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict,
         raise MagexpError(f"claim {claim.id!r}: a side of the comparison has no runs")
     p_less, p_more, p_min = permutation_less(a, b, claim.stat)
     p_hold, p_contra = (p_less, p_more) if claim.better == "lower" else (p_more, p_less)
-    return Test("unpaired", p_hold, p_contra, p_min, min(len(a), len(b)), detectable_unpaired(*cis),
-                f"permutation p = {p_hold:.3g} (n = {len(a)}, {len(b)})")
+    sign = 1 if claim.better == "lower" else -1
+    return Test("unpaired", p_hold, p_contra, p_min, min(len(a), len(b)),
+                sign * (statistic(b, claim.stat) - statistic(a, claim.stat)),
+                f"permutation p = {p_hold:.3g} (n = {len(a)}, {len(b)})", functools.partial(detect_unpaired, *cis))
 
 
 def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
@@ -421,11 +443,13 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
 def _combined(tests: list[Test]) -> dict:
     """The :class:`Outcome` fields of a claim of several pairs: every pair must hold (``p``: the
     largest), one the other way contradicts it (``p_contra``: the smallest times the number of
-    pairs), the largest ``p_min``, the smallest ``n`` and the weakest pair's ``detectable``."""
-    weakest = max(tests, key=lambda t: t.detectable if np.isfinite(t.detectable) else -np.inf)
-    return {"p": max(t.p_hold for t in tests), "p_contra": min(1.0, len(tests) * min(t.p_contra for t in tests)),
-            "p_min": max(t.p_min for t in tests), "n": min(t.n for t in tests), "detectable": weakest.detectable,
-            "test": weakest.name}
+    pairs), the largest ``p_min``, the smallest ``n``; the deciding pair's (the largest p) test,
+    observed effect and ``detectable``, at :data:`ALPHA` until :func:`adjust` knows its level."""
+    deciding = max(tests, key=lambda t: t.p_hold)
+    detectable, words = deciding.detect(ALPHA)
+    return {"p": deciding.p_hold, "p_contra": min(1.0, len(tests) * min(t.p_contra for t in tests)),
+            "p_min": max(t.p_min for t in tests), "n": min(t.n for t in tests), "detectable": detectable,
+            "detectable_words": words, "test": deciding.name, "observed": deciding.observed, "detect": deciding.detect}
 
 
 def adjust(outcomes: list[Outcome], families: list[str] | None = None) -> list[Outcome]:
@@ -465,6 +489,8 @@ def _adjust_family(family: list[Outcome], alone: bool) -> None:
     rank = {id(o): r for r, o in enumerate(sorted(family, key=lambda o: o.p))}
     for o, p, pc in zip(family, p_adj, p_con):
         o.family_size, o.p_adjusted, o.level = m, p, ALPHA / (1 if alone else m - rank[id(o)])
+        if o.detect is not None:
+            o.detectable, o.detectable_words = o.detect(o.level)
         o.result = decide(p, pc, o.p_min)
         o.holds = o.result == HOLDS
         note = _adjusted_note(o, m)
@@ -481,10 +507,9 @@ def _adjusted_note(o: Outcome, m: int) -> str:
     note = f"{o.p_adjusted:.3g} after Holm over {m} {o.family} tests" if m > 1 else f"p = {o.p:.3g}"
     if o.result == UNDECIDED:
         return f"{note}; cannot be decided at n = {o.n}: its smallest p is {o.p_min:.3g}"
-    if o.result == NO_DIFFERENCE and np.isfinite(o.detectable):
-        what = {"fisher": "a success-rate rise", "paired": f"a per-seed shift of {o.claim.metric}"}.get(
-            o.test, f"a {o.claim.stat} difference")
-        return f"{note}; detectable at {POWER:.0%} power: {what} of {_short_value(o.detectable)}"
+    if o.result == NO_DIFFERENCE and o.detectable_words:
+        return (f"{note}; detectable at {POWER:.0%} power at its level {o.level:.3g}: {o.detectable_words} "
+                f"(observed: {_short_value(o.observed)})")
     return note
 
 

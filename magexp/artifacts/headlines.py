@@ -21,6 +21,7 @@ from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
 from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
+from magexp.artifacts.power import claim_plans
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 
@@ -261,8 +262,10 @@ def _failing(verdict: str, deciding: list[str], parts: list) -> tuple[str, set]:
 
 def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
     """One ``claims.csv`` row per evaluated claim of ``paper`` (its ``family``; ``level``, ``p``,
-    ``p_adjusted``, ``p_min`` and ``detectable`` for comparisons; ``detectable`` only where no difference
-    is detected).
+    ``p_adjusted``, ``p_min`` for comparisons; ``detectable`` at the row's level beside the ``observed``
+    effect where no difference is detected; a comparison's declared ``effect`` in words and the
+    ``seeds_planned`` for it, :func:`magexp.artifacts.power.claim_plans`, whose evidence says the power
+    reached where the cap bound).
 
     Parameters
     ----------
@@ -279,10 +282,19 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
         A ``claims.csv`` row per claim.
     """
     own = {s.name: s for s in specs}
-    return [{"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
-             "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
-             "text": o.claim.text, "verdict": o.result, "reason": o.short, "evidence": o.evidence,
-             "family": o.family, "level": o.level if o.is_comparison else np.nan,
-             "p": o.p, "p_adjusted": o.p_adjusted, "p_min": o.p_min,
-             "detectable": o.detectable if o.result == NO_DIFFERENCE else np.nan, "seeds": o.n or np.nan}
-            for name, o in outcomes]
+    plans = claim_plans(specs, claim_families(load_paper(paper).headline, specs))
+    rows = []
+    for name, o in outcomes:
+        plan = plans.get(f"{name}.{o.claim.id}")
+        capped = (f"; planned seeds capped at {plan.seeds}: power {plan.power:.2f} against {plan.words} "
+                  f"at level {plan.level:.3g}") if plan is not None and plan.capped else ""
+        undetected = o.result == NO_DIFFERENCE
+        rows.append({"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
+                     "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
+                     "text": o.claim.text, "verdict": o.result, "reason": o.short, "evidence": o.evidence + capped,
+                     "family": o.family, "level": o.level if o.is_comparison else np.nan,
+                     "p": o.p, "p_adjusted": o.p_adjusted, "p_min": o.p_min,
+                     "detectable": o.detectable if undetected else np.nan,
+                     "observed": o.observed if undetected else np.nan, "seeds": o.n or np.nan,
+                     "effect": plan.words if plan else "", "seeds_planned": plan.seeds if plan else np.nan})
+    return rows

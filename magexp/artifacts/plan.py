@@ -18,7 +18,7 @@ import pandas as pd
 from hydra.utils import get_class
 from omegaconf import DictConfig, OmegaConf
 
-from magexp.artifacts.claims import evaluate, matches
+from magexp.artifacts.claims import matches
 from magexp.artifacts.spec import load
 from magexp.artifacts.paper_spec import artifact_paths
 from magexp.core import outcomes
@@ -321,11 +321,11 @@ def _per_seed(cfg: DictConfig, n_seeds: int) -> list[dict]:
     return out
 
 
-def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False,
-                  cell_seeds: dict[int, int] | None = None) -> ArtifactPlan:
-    """Every run of ``spec``: each cell of its grid over its seeds (``seeds`` overrides the spec's and
-    leaves out its ``grow:`` rule). ``cell_seeds``: ``{cell: seeds}`` of the cells that ``grow:`` gives
-    more (default: its ``start`` for the cells of its claims, :func:`grow_start`).
+def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False, seeds_for=None) -> ArtifactPlan:
+    """Every run of ``spec``: each cell of its grid over its seeds; ``seeds_for(plan)``, where given, names
+    the cells that get more (``{cell: seeds}``: those of a comparison's ``effect:``,
+    :func:`magexp.artifacts.sample_sizes.planned_seeds`). ``seeds`` (an exploration) gives every cell that
+    many and plans nothing more; so does ``tiny``.
 
     Parameters
     ----------
@@ -335,8 +335,8 @@ def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False,
         Seeds per cell (default: the spec's).
     tiny : bool
         Tiny sizes (:func:`shrink`).
-    cell_seeds : dict, optional
-        ``{cell: seeds}`` given by ``grow:``.
+    seeds_for : callable, optional
+        ``plan -> {cell: seeds}`` of the cells that get more than the artifact's seeds.
 
     Returns
     -------
@@ -355,11 +355,11 @@ def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False,
         plan.cells.append(cell)
         plan.overrides.append(overrides_of(spec, cell, cfg))
         composed.append(cfg)
-    grown = {} if seeds is not None or tiny else (grow_start(plan) if cell_seeds is None else cell_seeds)
+    planned = seeds_for(plan) if seeds_for is not None and seeds is None and not tiny else {}
     for ci, cfg in enumerate(composed):
         if tiny:
             cfg = shrink(cfg)
-        n = max(n_seeds, grown.get(ci, 0))
+        n = max(n_seeds, planned.get(ci, 0))
         plan.configs.extend(_per_seed(cfg, n))
         plan.index.extend((ci, seed) for seed in range(n))
     return plan
@@ -374,7 +374,7 @@ def _settings(overrides: list[str]) -> dict:
     return pairs
 
 
-def grown_cells(plan: ArtifactPlan, claim) -> list[int]:
+def claim_cells(plan: ArtifactPlan, claim) -> list[int]:
     """The cells of ``plan`` that a comparison claim selects (its ``cells``, matched on the cell's
     overrides; a key that is no setting, a row filter such as ``succeeded``, is left out).
 
@@ -394,83 +394,6 @@ def grown_cells(plan: ArtifactPlan, claim) -> list[int]:
     keys = {k for s in settings for k in s}
     return sorted({ci for where in claim.cells for ci, s in enumerate(settings)
                    if matches({k: v for k, v in where.items() if k in keys}, s)})
-
-
-def grow_start(plan: ArtifactPlan) -> dict[int, int]:
-    """``{cell: seeds}`` of the first stage of ``grow:``: its ``start`` for every cell of its claims.
-
-    Parameters
-    ----------
-    plan : ArtifactPlan
-        The plan.
-
-    Returns
-    -------
-    dict
-        ``{cell: seeds}``.
-    """
-    rule = plan.spec.grow
-    if rule is None:
-        return {}
-    claims = {c.id: c for c in plan.spec.claims}
-    return {ci: rule.start for cid in rule.claims for ci in grown_cells(plan, claims[cid])}
-
-
-def next_seeds(n: int, outcome, rule) -> int:
-    """The seeds of a comparison's cells at the next stage of ``rule`` (:class:`magexp.artifacts.spec.Grow`):
-    ``n + step`` (at most ``cap``) while its ``outcome`` is not decided at ``rule.alpha`` (neither ``p``
-    nor ``p_contra`` below it) and its ``detectable`` difference is above ``margin`` (or unknown); else
-    ``n`` (the rule stops).
-
-    Parameters
-    ----------
-    n : int
-        The seeds of the cells now.
-    outcome : Outcome
-        The comparison's outcome at ``n``.
-    rule : Grow
-        The artifact's ``grow:`` rule.
-
-    Returns
-    -------
-    int
-        The seeds at the next stage (``n``: stop).
-    """
-    undecided = not min(outcome.p, outcome.p_contra) < rule.alpha
-    too_coarse = not (np.isfinite(outcome.detectable) and outcome.detectable <= rule.margin)
-    return min(n + rule.step, rule.cap) if undecided and too_coarse and n < rule.cap else n
-
-
-def grow_stage(plan: ArtifactPlan, table: pd.DataFrame, seeds: dict[int, int]) -> dict[int, int] | None:
-    """The next stage of ``grow:`` from the runs ``table`` of the stage ``seeds`` (``{cell: seeds}``):
-    the new ``{cell: seeds}``, or None when no claim needs more (each claim by :func:`next_seeds`).
-
-    Parameters
-    ----------
-    plan : ArtifactPlan
-        The plan.
-    table : pandas.DataFrame
-        The runs of the stage.
-    seeds : dict
-        ``{cell: seeds}`` of the stage.
-
-    Returns
-    -------
-    dict or None
-        The next ``{cell: seeds}``, None to stop.
-    """
-    rule = plan.spec.grow
-    if rule is None:
-        return None
-    claims = {c.id: c for c in plan.spec.claims}
-    new = dict(seeds)
-    for cid in rule.claims:
-        chosen = grown_cells(plan, claims[cid])
-        n = min(seeds.get(ci, plan.spec.seeds) for ci in chosen)
-        more = next_seeds(n, evaluate(claims[cid], table), rule)
-        for ci in chosen:
-            new[ci] = max(new.get(ci, 0), more)
-    return new if new != seeds else None
 
 
 class _ByRun(Mapping):

@@ -43,8 +43,8 @@ MAX_LINES, MAX_CHARS = 150, 30_000
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
-                 "family", "level", "p", "p_adjusted", "p_min", "detectable", "seeds", "primary_reading", "why",
-                 "robustness", "readings_total", "readings_holding"]
+                 "family", "level", "p", "p_adjusted", "p_min", "detectable", "observed", "seeds", "effect",
+                 "seeds_planned", "primary_reading", "why", "robustness", "readings_total", "readings_holding"]
 
 
 def versions() -> dict:
@@ -290,8 +290,8 @@ _SEEDS_OF = re.compile(r"\{seeds:(\w+)\}")
 
 
 def seed_count(table: pd.DataFrame) -> str:
-    """The seeds per cell of a runs table: ``"30"``, or ``"30 to 150"`` where a ``grow:`` rule gave
-    some cells more.
+    """The seeds per cell of a runs table: ``"30"``, or ``"30 to 150"`` where a comparison's ``effect:``
+    gave some cells more (:mod:`magexp.artifacts.power`).
 
     Parameters
     ----------

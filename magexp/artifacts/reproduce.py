@@ -14,7 +14,6 @@ artifact's CSVs and figure are written. ``--redraw`` rebuilds the figures, ``sum
 from __future__ import annotations
 
 import argparse
-import functools
 import os
 import resource
 import shutil
@@ -26,7 +25,8 @@ from pathlib import Path
 import pandas as pd
 
 from magexp.artifacts.kind_tables import tabulate
-from magexp.artifacts.plan import cells, collect, grow_stage, grow_start, paper_specs, plan_artifact
+from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact
+from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.artifacts.plots import VECTOR, kind_module
 from magexp.artifacts.formats import MEASURED, write_csv
 from magexp.artifacts.report import build
@@ -245,7 +245,7 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
     executor : Executor, optional
     log : callable
     """
-    plans = [(paper, plan_artifact(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
+    plans = [(paper, plan_with_effects(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
              for spec in specs if not skipped_for_data(spec, log)]
     configs = [c for _, plan in plans for c in plan.configs]
     counts: dict = {}
@@ -255,54 +255,14 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
         log(f"{counts['requested']} runs requested, {counts['distinct']} distinct: "
             f"{counts['computed']} computed, {counts['cached']} from the cache")
     start, parts = 0, {paper: {} for paper, _ in plans}
-    run_more = functools.partial(_run_more, jobs=jobs, use_cache=not force, executor=executor, counts=counts)
     for paper, plan in plans:
         out = root / paper
         out.mkdir(parents=True, exist_ok=True)
         n = len(plan.configs)
-        grown, runs = grow(plan, slice_outputs(outputs, start, n), run_more, log,
-                           active=seeds is None and not tiny)
-        parts[paper][plan.spec.name] = write_artifact(collect(grown, runs), out, force=force)
+        parts[paper][plan.spec.name] = write_artifact(collect(plan, slice_outputs(outputs, start, n)), out, force=force)
         start += n
     counts["paper summaries"] = {paper: write_summary(paper, parts[paper], root / paper) for paper in parts}
     return counts
-
-
-def _run_more(configs: list, *, counts: dict, **kwargs):
-    """:func:`run_many` of a further stage of ``grow:``; its computed runs added to ``counts``."""
-    more: dict = {}
-    outputs = run_many(configs, counts=more, **kwargs)
-    for key in ("computed", "fit_cpu", "task_cpu"):
-        counts[key] = counts.get(key, 0) + more.get(key, 0)
-    for key in ("requested", "distinct"):
-        counts[key] = counts.get(key, 0) + more.get("computed", 0)
-    return outputs
-
-
-def grow(plan, outputs, run, log=print, *, active: bool = True):
-    """The plan and outputs of an artifact once its ``grow:`` rule has stopped: each stage
-    (:func:`magexp.artifacts.plan.grow_stage`) plans the cells' new seed counts and runs them with
-    ``run(configs)`` (the runs of earlier stages come from the cache). ``active=False`` (``--seeds``,
-    ``--tiny``): as planned.
-
-    Parameters
-    ----------
-    plan : ArtifactPlan
-    outputs : Outputs
-    run, log : callable
-    active : bool
-    """
-    seeds = grow_start(plan) if active else {}
-    while seeds:
-        new = grow_stage(plan, collect(plan, outputs).table, seeds)
-        if new is None:
-            break
-        seeds = new
-        plan = plan_artifact(plan.spec, cell_seeds=seeds)
-        log(f"{plan.spec.name}: grow: {sum(1 for n in seeds.values() if n == max(seeds.values()))} cells to "
-            f"{max(seeds.values())} seeds")
-        outputs = run(plan.configs)
-    return plan, outputs
 
 
 def reproduce_paper(paper: str, *, root: Path = RESULTS, seeds=None, jobs: int = 0, tiny: bool = False,
@@ -399,9 +359,7 @@ def canonical_needs() -> dict:
     out = {"runs": 0, "work": 0, "run_memory": (0, ""), "run_work": (0, "")}
     for paper in papers():
         for spec in paper_specs(paper):
-            plan = plan_artifact(spec)
-            if spec.grow is not None:  # the most a grow: rule may run: every grown cell at its cap
-                plan = plan_artifact(spec, cell_seeds=dict.fromkeys(grow_start(plan), spec.grow.cap))
+            plan = plan_with_effects(spec)
             for cfg in plan.configs:
                 est = estimate_run(cfg)
                 out["runs"] += 1

@@ -3,7 +3,14 @@
 One-sided tests of "the first side is better": Fisher's exact test of two success counts
 (:func:`fisher_greater`), the Wilcoxon signed-rank test of paired differences (:func:`wilcoxon_less`), a
 permutation test of a statistic of two independent samples (:func:`permutation_less`); the smallest
-difference each detects with :data:`POWER` (``detectable_*``); Holm's step-down adjustment (:func:`holm`).
+difference each detects with :data:`POWER` at a level (``detect_*``: Fisher's by exact enumeration,
+:func:`fisher_power`; the rank and permutation tests by their normal approximations); Holm's step-down
+adjustment (:func:`holm`); the vocabulary of a comparison's ``effect:`` (:func:`effect_error`).
+
+Exact power of Fisher's one-sided test of ``n1`` runs at rate ``p1`` against ``n2`` at ``p0``, at a level:
+``sum_{k1, k2} Bin(k1; n1, p1) Bin(k2; n2, p0) 1[P(X >= k1) < level]``, ``X ~ Hypergeom(n1 + n2, k1 + k2, n1)``.
+The normal approximations: a paired shift ``(z(1 - level) + z(power)) 1.4826 MAD(d) / sqrt(n) / sqrt(3/pi)``;
+an unpaired difference ``(z(1 - level) + z(power)) sqrt(se_a^2 + se_b^2)``.
 """
 
 from __future__ import annotations
@@ -32,14 +39,14 @@ def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
     Parameters
     ----------
     k1, n1 : int
-        Successes and runs of the group claimed better.
+        Successes and runs of the side claimed better.
     k2, n2 : int
-        Successes and runs of the other group.
+        Those of the other side.
 
     Returns
     -------
     float
-        The one-sided p-value.
+        The one-sided p.
     """
     total, succ = n1 + n2, k1 + k2
     denom = math.comb(total, n1)
@@ -59,7 +66,7 @@ def wilcoxon_less(d: np.ndarray) -> float:
     Returns
     -------
     float
-        The one-sided p-value.
+        The one-sided p.
     """
     d = np.asarray(d, float)
     d = d[np.isfinite(d) & (d != 0)]
@@ -82,7 +89,7 @@ def z_power(alpha: float = ALPHA, power: float = POWER) -> float:
     alpha : float
         The one-sided level.
     power : float
-        The probability of detection.
+        The power.
 
     Returns
     -------
@@ -92,8 +99,8 @@ def z_power(alpha: float = ALPHA, power: float = POWER) -> float:
     return float(ndtri(1 - alpha) + ndtri(power))
 
 
-def detectable_paired(d: np.ndarray) -> float:
-    """The shift of the paired differences ``d`` a one-sided Wilcoxon signed-rank test detects with
+def detectable_paired(d: np.ndarray, alpha: float = ALPHA) -> float:
+    """The shift of the paired differences ``d`` a one-sided Wilcoxon signed-rank test at ``alpha`` detects with
     :data:`POWER`: the normal approximation ``(z(1-alpha) + z(power)) s / sqrt(n)``, divided by the
     square root of the test's asymptotic relative efficiency against the t-test (3/pi). ``s`` is the
     robust scale ``1.4826 MAD(d)`` (the standard deviation of normal differences): a rank test does
@@ -102,63 +109,43 @@ def detectable_paired(d: np.ndarray) -> float:
     Parameters
     ----------
     d : numpy.ndarray
-        The paired differences (non-finite ones dropped).
+        The paired differences.
+    alpha : float
+        The one-sided level.
 
     Returns
     -------
     float
-        The detectable shift (NaN for fewer than two differences).
+        The shift (NaN below two differences).
     """
     d = np.asarray(d, float)
     d = d[np.isfinite(d)]
     if d.size < 2:
         return float("nan")
     scale = 1.4826 * float(np.median(np.abs(d - np.median(d))))
-    return z_power() * scale / math.sqrt(d.size) / math.sqrt(3 / math.pi)
+    return z_power(alpha) * scale / math.sqrt(d.size) / math.sqrt(3 / math.pi)
 
 
-def detectable_unpaired(ci_a: tuple, ci_b: tuple) -> float:
-    """The difference of a statistic between two independent samples the permutation test detects
+def detectable_unpaired(ci_a: tuple, ci_b: tuple, alpha: float = ALPHA) -> float:
+    """The difference of a statistic between two independent samples the permutation test at ``alpha`` detects
     with :data:`POWER`: ``(z(1-alpha) + z(power)) sqrt(se_a^2 + se_b^2)``, each standard error read
     off its 95 % bootstrap interval (``(hi - lo) / (2 z(0.975))``).
 
     Parameters
     ----------
-    ci_a, ci_b : tuple of float
-        The two statistics' 95 % bootstrap intervals.
+    ci_a, ci_b : tuple
+        The two sides' 95 % bootstrap intervals.
+    alpha : float
+        The one-sided level.
 
     Returns
     -------
     float
-        The detectable difference (NaN where an interval is not finite).
+        The difference (NaN where an interval is not finite).
     """
     z = float(ndtri(0.975))
     se = [(hi - lo) / (2 * z) for lo, hi in (ci_a, ci_b)]
-    return z_power() * math.sqrt(se[0] ** 2 + se[1] ** 2) if all(np.isfinite(se)) else float("nan")
-
-
-def detectable_rates(p0: float, n1: int, n2: int) -> float:
-    """The rise of a success rate above ``p0`` (the rate of the side claimed worse, ``n2`` runs)
-    that a one-sided test of ``n1`` against ``n2`` runs detects with :data:`POWER`, by the arcsine
-    approximation: ``2 asin(sqrt(p1)) - 2 asin(sqrt(p0)) = (z(1-alpha) + z(power)) sqrt(1/n1 + 1/n2)``
-    (Cohen's h); ``1 - p0`` when no rate up to 1 reaches that power (then nothing is detectable).
-
-    Parameters
-    ----------
-    p0 : float
-        The success rate of the side claimed worse.
-    n1, n2 : int
-        The runs of the side claimed better and of the other.
-
-    Returns
-    -------
-    float
-        The detectable rise (NaN without runs).
-    """
-    if min(n1, n2) < 1 or not np.isfinite(p0):
-        return float("nan")
-    phi = math.asin(math.sqrt(p0)) + z_power() * math.sqrt(1 / n1 + 1 / n2) / 2
-    return (math.sin(phi) ** 2 if phi < math.pi / 2 else 1.0) - p0
+    return z_power(alpha) * math.sqrt(se[0] ** 2 + se[1] ** 2) if all(np.isfinite(se)) else float("nan")
 
 
 def permutation_less(a: np.ndarray, b: np.ndarray, stat: str) -> tuple[float, float, float]:
@@ -172,12 +159,12 @@ def permutation_less(a: np.ndarray, b: np.ndarray, stat: str) -> tuple[float, fl
     a, b : numpy.ndarray
         The two samples.
     stat : str
-        The statistic (a key of :data:`magexp.artifacts.tables.STATS`).
+        The statistic (:data:`magexp.artifacts.tables.STATS`).
 
     Returns
     -------
     tuple of float
-        ``(p that stat(a) < stat(b), p of the converse, the smallest p attainable)``.
+        ``(p_less, p_more, p_min)``.
     """
     a, b = np.asarray(a, float), np.asarray(b, float)
     pooled, na = np.r_[a, b], len(a)
@@ -197,12 +184,12 @@ def holm(p: list[float]) -> list[float]:
     Parameters
     ----------
     p : list of float
-        The raw p-values of one family.
+        The raw p-values.
 
     Returns
     -------
     list of float
-        The adjusted p-values, in the same order.
+        The adjusted p-values.
     """
     p = np.asarray(p, float)
     out = np.full(p.shape, np.nan)
@@ -214,3 +201,222 @@ def holm(p: list[float]) -> list[float]:
         running = max(running, min(1.0, (m - rank) * p[i]))
         out[i] = running
     return out.tolist()
+
+
+# -- power at a level, by the test itself ----------------------------------------------------------------
+
+def fisher_reject(n1: int, n2: int, level: float) -> np.ndarray:
+    """The rejection region of the one-sided Fisher test at ``level``: ``R[k1, k2]`` is True where
+    :func:`fisher_greater` ``(k1, n1, k2, n2) < level`` (the rule of :func:`magexp.artifacts.claims.decide`),
+    every table of both margins at once: the hypergeometric probabilities of ``k1`` given each total
+    ``t = k1 + k2``, ``C(t, k1) C(N - t, n1 - k1) / C(N, n1)`` with ``N = n1 + n2`` (log-gamma, on the
+    grid), summed from ``k1`` up (no loop over tables).
+
+    Parameters
+    ----------
+    n1, n2 : int
+        The runs of the side claimed better and of the other.
+    level : float
+        The raw-p level the test is judged at.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean ``(n1 + 1, n2 + 1)``.
+    """
+    from scipy.special import gammaln
+
+    total = n1 + n2
+    t, k = np.arange(total + 1)[:, None], np.arange(n1 + 1)[None, :]
+    possible = (k <= t) & (n1 - k <= total - t)
+    lc = lambda a, b: gammaln(a + 1) - gammaln(b + 1) - gammaln(np.maximum(a - b, 0) + 1)
+    log_pmf = lc(t, k) + lc(total - t, n1 - k) - lc(total, n1)
+    pmf = np.where(possible, np.exp(np.where(possible, log_pmf, 0.0)), 0.0)
+    upper = np.cumsum(pmf[:, ::-1], axis=1)[:, ::-1]  # P(X >= k1 | t)
+    k1, k2 = np.arange(n1 + 1)[:, None], np.arange(n2 + 1)[None, :]
+    return upper[k1 + k2, k1] < level * (1 - 1e-9)
+
+
+def fisher_power(n1: int, n2: int, p1, p0: float, level: float) -> np.ndarray:
+    """Exact power of the one-sided Fisher test at ``level`` when the better side succeeds with
+    probability ``p1`` (a scalar or an array) and the other with ``p0``:
+    ``sum_{k1, k2} Bin(k1; n1, p1) Bin(k2; n2, p0) 1[p(k1, k2) < level]`` over every table
+    (:func:`fisher_reject`).
+
+    Parameters
+    ----------
+    n1, n2 : int
+        The runs of each side.
+    p1 : float or array_like
+        The better side's success probability.
+    p0 : float
+        The other side's.
+    level : float
+        The raw-p level.
+
+    Returns
+    -------
+    numpy.ndarray
+        The power at each ``p1``.
+    """
+    from scipy.stats import binom
+
+    reject = fisher_reject(n1, n2, level).astype(float)
+    per_k1 = reject @ binom.pmf(np.arange(n2 + 1), n2, p0)  # P(reject | k1), over the worse side's counts
+    p1 = np.atleast_1d(np.asarray(p1, float))
+    return binom.pmf(np.arange(n1 + 1)[None, :], n1, p1[:, None]) @ per_k1
+
+
+#: the grid of better-side rates :func:`detect_rise` searches (steps of 0.001 up to a rate of 1)
+RISE_GRID = 1000
+
+
+def detect_rise(p0: float, n1: int, n2: int, level: float) -> tuple[float, str]:
+    """The smallest rise of the success rate above ``p0`` (the worse side's observed rate) that the
+    one-sided Fisher test of ``n1`` against ``n2`` runs detects with :data:`POWER` at ``level``, by
+    exact enumeration (:func:`fisher_power` on a grid of rates ``p0 + j (1 - p0) / RISE_GRID``; the
+    power rises with the rate), and its words; NaN and "no rise up to a success rate of 1 reaches
+    80 % power at this level" when even a rate of 1 does not.
+
+    Parameters
+    ----------
+    p0 : float
+        The worse side's observed success rate.
+    n1, n2 : int
+        The runs of the better side and of the worse.
+    level : float
+        The raw-p level the comparison is judged at.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The rise and its words.
+    """
+    if min(n1, n2) < 1 or not np.isfinite(p0) or p0 >= 1:
+        return float("nan"), "no rise is possible from a success rate of 1" if p0 >= 1 else "not computable"
+    rates = p0 + (1 - p0) * np.arange(1, RISE_GRID + 1) / RISE_GRID
+    power = fisher_power(n1, n2, rates, p0, level)
+    reached = np.flatnonzero(power >= POWER)
+    if not reached.size:
+        return float("nan"), f"no rise up to a success rate of 1 reaches {POWER * 100:.0f} % power at this level"
+    rise = float(rates[reached[0]] - p0)
+    return rise, f"a success-rate rise of {rise:.3g}"
+
+
+def detect_paired(d: np.ndarray, level: float) -> tuple[float, str]:
+    """:func:`detectable_paired` at ``level`` (the normal approximation of the signed-rank test) and its
+    words; NaN and "not computable (k of n ties)" when the robust scale is degenerate: the MAD of the
+    differences is 0 or at least half of them are tied at their median (the rank test then sees few
+    differences and the scale says nothing of them).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        The paired differences.
+    level : float
+        The raw-p level.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The shift and its words.
+    """
+    d = np.asarray(d, float)
+    d = d[np.isfinite(d)]
+    if d.size < 2:
+        return float("nan"), "not computable (fewer than 2 pairs)"
+    ties = int(np.sum(d == np.median(d)))
+    if 2 * ties >= d.size or np.median(np.abs(d - np.median(d))) == 0:
+        return float("nan"), f"not computable ({ties} of {d.size} ties)"
+    shift = detectable_paired(d, level)
+    return shift, f"a per-seed shift of {shift:.3g}"
+
+
+def detect_unpaired(ci_a: tuple, ci_b: tuple, level: float) -> tuple[float, str]:
+    """:func:`detectable_unpaired` at ``level`` and its words.
+
+    Parameters
+    ----------
+    ci_a, ci_b : tuple
+        The two sides' 95 % bootstrap intervals.
+    level : float
+        The raw-p level.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The difference and its words.
+    """
+    diff = detectable_unpaired(ci_a, ci_b, level)
+    return diff, f"a difference of {diff:.3g}" if np.isfinite(diff) else "not computable"
+
+
+#: the keys of a comparison's ``effect:`` (the smallest effect worth detecting): a success-rate rise above
+#: the worse side's planning rate (Fisher; also a mean of a 0/1 metric), or a ratio of a location
+#: statistic with the planning standard deviation of the log of the metric per seed
+EFFECT_KEYS = {"rates": ("rise", "baseline"), "ratio": ("ratio", "spread")}
+
+
+def effect_kind(stat: str) -> str:
+    """The kind of ``effect:`` a comparison of ``stat`` declares.
+
+    Parameters
+    ----------
+    stat : str
+        The compared statistic.
+
+    Returns
+    -------
+    str
+        ``rates`` for a success rate or a mean (of a 0/1 metric), ``ratio`` for any other statistic.
+    """
+    return "rates" if stat in ("success_rate", "mean") else "ratio"
+
+
+def effect_error(effect: dict, stat: str) -> str:
+    """Why ``effect`` is not allowed for a comparison of ``stat`` ("" when it is): ``{rise, baseline}``
+    with ``0 < rise``, ``0 <= baseline`` and ``baseline + rise <= 1`` for a success rate or a mean of a
+    0/1 metric; ``{ratio, spread}`` with ``ratio > 1`` and ``spread > 0`` for another statistic.
+
+    Parameters
+    ----------
+    effect : dict
+        A claim's ``effect:``.
+    stat : str
+        The compared statistic.
+
+    Returns
+    -------
+    str
+        What is allowed, or "".
+    """
+    keys = EFFECT_KEYS[effect_kind(stat)]
+    if set(effect) != set(keys) or not all(isinstance(effect[k], (int, float)) for k in keys):
+        return f"give exactly {{{keys[0]}: number, {keys[1]}: number}} for stat {stat}"
+    a, b = (float(effect[k]) for k in keys)
+    if keys[0] == "rise" and not (0 < a and 0 <= b and a + b <= 1):
+        return "0 < rise, 0 <= baseline and baseline + rise <= 1"
+    if keys[0] == "ratio" and not (a > 1 and b > 0):
+        return "ratio > 1 (the worse side's statistic over the better's) and spread > 0"
+    return ""
+
+
+def effect_words(effect: dict) -> str:
+    """An ``effect:`` in words: "a success-rate rise of 0.15 from 0.80" or "a 1.5x ratio of medians
+    (log spread 0.5 per seed)"; "" when none is declared.
+
+    Parameters
+    ----------
+    effect : dict
+        A claim's ``effect:``.
+
+    Returns
+    -------
+    str
+        Its words.
+    """
+    if "rise" in effect:
+        return f"a success-rate rise of {effect['rise']:g} from {effect['baseline']:.2f}"
+    if "ratio" in effect:
+        return f"a {effect['ratio']:g}x ratio (log spread {effect['spread']:g} per seed)"
+    return ""

@@ -23,7 +23,7 @@ An artifact is a paper's figure or table as data::
       - {quantity: F_g, match: {estimator: ekf}, value: 14.86, compared: false, reason: "..."}  # not compared
     tolerance: {rel: 0.15, reason: ...}   # only where the paper gives no run to compare with
     claims: [...]                # magexp.artifacts.claims.Claim: conditions on the results (by, section, role, figure, test)
-    grow: {claims: [a, b], start: 100, step: 50, cap: 200, margin: 0.1}   # the seeds those comparisons need (Grow)
+    max_seeds: 400               # the most seeds a comparison's effect: may give a cell (magexp.artifacts.power)
     notes: ...                   # prose; {median:fun@estimator=ipso:.3g} interpolates a measured value
     caption: ...
 
@@ -46,12 +46,14 @@ from typing import Any
 import yaml
 from omegaconf import DictConfig, OmegaConf
 
-from magexp.artifacts.claims import ALPHA, Claim
+from magexp.artifacts.claims import Claim
 from magexp.artifacts.plots import KINDS
 from magexp.artifacts.schema import Bool, Float, Int, allowed, build, typed, unknown
 from magexp.core.outcomes import ROUNDOFF_FLOOR, SUCCESS_FACTOR
 from magexp.errors import MagexpError
 
+#: the cap on a cell's seeds where an artifact gives no ``max_seeds`` (:mod:`magexp.artifacts.power`)
+MAX_SEEDS = 400
 #: minimum number of seeds of a cell whose interval is compared with a paper number
 MIN_SEEDS_COMPARED = 30
 
@@ -218,34 +220,6 @@ class Success:
 
 
 @typed
-@dataclass(frozen=True)
-class Grow:
-    """The seeds a verdict needs (``grow:`` of an artifact), fixed before any run: the cells of the comparison
-    ``claims`` (their ``cells``) start with ``start`` seeds (at least the artifact's ``seeds``); while one of
-    those claims is not decided at ``alpha`` on its own p (neither its p nor its converse's below it; a paper's
-    family is Holm-adjusted later, so ``alpha`` may be set below :data:`magexp.artifacts.claims.ALPHA`) and
-    could not have detected a difference of ``margin`` (its ``detectable`` is above it), its cells get ``step``
-    more seeds, up to ``cap`` (:func:`magexp.artifacts.plan.next_seeds`). The same runs give the same stages:
-    the reproduction stays deterministic, and ``claims.csv`` records the seeds each comparison used (``seeds``)."""
-
-    claims: list[str]
-    start: Int
-    step: Int
-    cap: Int
-    margin: Float
-    alpha: Float = ALPHA
-
-    def __post_init__(self):
-        if not 0 < self.alpha < 1:
-            raise MagexpError(f"grow: alpha={self.alpha} is not allowed: it must lie in (0, 1)")
-        if not (1 <= self.start <= self.cap) or self.step < 1:
-            raise MagexpError(f"grow: start={self.start}, step={self.step}, cap={self.cap} is not allowed: "
-                              "1 <= start <= cap and step >= 1")
-        if self.margin < 0:
-            raise MagexpError(f"grow: margin={self.margin} is not allowed: it must be >= 0")
-
-
-@typed
 @dataclass
 class Artifact:
     """A validated artifact spec (see the module docstring). ``plot`` stays an OmegaConf node
@@ -268,7 +242,7 @@ class Artifact:
     success: Success = field(default_factory=Success)
     floor: Float = ROUNDOFF_FLOOR
     claims: list[Claim] = field(default_factory=list)
-    grow: Grow | None = None
+    max_seeds: Int = MAX_SEEDS  # the cap on a cell's seeds from a comparison's effect (magexp.artifacts.power)
     notes: str = ""
     caption: str = ""
     report_table: list[str] = field(default_factory=list)
@@ -393,14 +367,8 @@ def parse(data: dict, path: Path) -> Artifact:
     art.plot = _plot(art.kind, plot, f"{where}.plot")
     _check_fixed_tolerances(art, where)
     check_unique_ids(art.claims, f"{where}.claims")
-    if art.grow is not None:
-        comparisons = {c.id for c in art.claims if c.kind in ("ordering", "winner")}
-        unknown_ids = [c for c in art.grow.claims if c not in comparisons]
-        if unknown_ids:
-            raise MagexpError(f"{where}.grow.claims: {unknown_ids[0]!r} is not allowed: name comparison claims "
-                              f"of this artifact ({', '.join(sorted(comparisons)) or 'none'})")
-        if art.grow.start < art.seeds:
-            raise MagexpError(f"{where}.grow.start={art.grow.start} is not allowed: at least seeds ({art.seeds})")
+    if art.max_seeds < art.seeds:
+        raise MagexpError(f"{where}.max_seeds={art.max_seeds} is not allowed: at least seeds ({art.seeds})")
     return art
 
 

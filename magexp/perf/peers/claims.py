@@ -21,11 +21,13 @@ on a recording can be decided, and its two halves are printed as two values, nev
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pandas as pd
 
 from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, Test, decide
-from magexp.artifacts.significance import ALPHA, detectable_paired, holm, wilcoxon_less
+from magexp.artifacts.significance import ALPHA, detect_paired, holm, wilcoxon_less
 from magexp.artifacts.tables import interval
 
 #: the combined error of a simulated run (module docstring)
@@ -122,8 +124,9 @@ def tested(better: pd.Series, worse: pd.Series) -> Test:
     d = d[np.isfinite(d)]
     p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
     nonzero = int(np.count_nonzero(d))
-    return Test("paired", p_hold, p_contra, 0.5 ** nonzero if d.size else 1.0, d.size, detectable_paired(d),
-                f"paired p = {p_hold:.2g}, n = {d.size}")
+    return Test("paired", p_hold, p_contra, 0.5 ** nonzero if d.size else 1.0, d.size,
+                -float(np.median(d)) if d.size else float("nan"), f"paired p = {p_hold:.2g}, n = {d.size}",
+                functools.partial(detect_paired, d))
 
 
 def compare(better: pd.Series, worse: pd.Series) -> tuple[str, str]:
@@ -171,8 +174,8 @@ def winner_test(frame: pd.DataFrame, metric: str, methods: list[str], **where) -
     tied = [m for m, t in tests.items() if decide(t.p_hold, t.p_contra, t.p_min) != HOLDS]
     worst = max(tests.values(), key=lambda t: t.p_hold)
     combined = Test("paired", worst.p_hold, min(t.p_contra for t in tests.values()) * len(tests),
-                    max(t.p_min for t in tests.values()), min(t.n for t in tests.values()), worst.detectable,
-                    f"largest paired p = {worst.p_hold:.2g}, n = {worst.n}")
+                    max(t.p_min for t in tests.values()), min(t.n for t in tests.values()), worst.observed,
+                    f"largest paired p = {worst.p_hold:.2g}, n = {worst.n}", worst.detect)
     return best, combined, tied
 
 
@@ -207,12 +210,14 @@ def adjust(claims: list[dict]) -> list[dict]:
     list of dict
     """
     tests = [c["test"] for c in claims]
+    rank = {id(t): r for r, t in enumerate(sorted(tests, key=lambda t: t.p_hold))}
     for c, t, p, pc in zip(claims, tests, holm([t.p_hold for t in tests]), holm([t.p_contra for t in tests])):
         c["result"], c["p_adjusted"] = decide(p, pc, t.p_min), p
         note = f"{t.text}; Holm p = {p:.2g} of {len(claims)}"
         if c["result"] == UNDECIDED:
             note += f"; cannot be decided at n = {t.n}: its smallest p is {t.p_min:.2g}"
-        elif c["result"] == NO_DIFFERENCE and np.isfinite(t.detectable):
-            note += f"; detectable at 80% power: a shift of {t.detectable:.2g}"
+        elif c["result"] == NO_DIFFERENCE:  # at its step of Holm's rule (magexp.artifacts.claims.adjust)
+            level = ALPHA / (len(claims) - rank[id(t)])
+            note += f"; detectable at 80% power at its level {level:.2g}: {t.detect(level)[1]}"
         c["evidence"] = f"{c['evidence']}; {note}"
     return claims
