@@ -71,7 +71,11 @@ def runs_of(spec, row, runs: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     ok = den.succeeded if "succeeded" in den else pd.Series(np.nan, den.index)
     if not reference:
         item = next(i for i in spec.summarise if i.quantity == row.quantity)
-        return den[item.metric].to_numpy(float), ok.to_numpy(float)
+        v = den[item.metric].to_numpy(float)
+        censored = f"{item.metric}_censored"  # a step never observed within the horizon counts as beyond it
+        if censored in den:
+            v = np.where(den[censored].to_numpy(float) > 0, np.inf, v)
+        return v, ok.to_numpy(float)
     item = next(r for r in spec.ratios if r.quantity == row.quantity)
     key, _, value = reference.partition("=")
     num = runs[(runs[key].astype(str) == value) & (runs.setting == setting)].set_index("seed")
@@ -103,7 +107,7 @@ def recomputed_rows(paper: str) -> list[tuple]:
         runs = pd.read_csv(RESULTS / paper / f"{name}_runs.csv")
         for row in rows[rows.quantity.isin(medians) & rows.judged_runs.isin(list(JUDGED))].itertuples():
             v, ok = runs_of(spec, row, runs)
-            finite = np.isfinite(v)
+            finite = ~np.isnan(v)  # a censored step (+inf) is a seed of the row
             outcome = JUDGED[row.judged_runs]
             judged = v[finite & (ok == outcome)] if outcome is not None else v[finite]
             numbers = {"n_seeds": finite.sum(), "value": np.median(v[finite]), "judged_n": judged.size,
