@@ -179,7 +179,7 @@ COMMANDS: dict[str, tuple] = {
         (RUN_FULL, "a recording the gate accepts", {"shared": True}),
     # the benches and the warm-up
     # docs/results.md, Sample sizes: the planned seeds of each comparison (planning only, no run: 2 s)
-    "python -m magexp.artifacts.sample_sizes yuan2018": (RUN, "prints each comparison's effect, level, seeds and power"),
+    "python -m magexp.artifacts.sample_sizes yuan2018": (RUN_FULL, "prints each comparison's effect, level, seeds and power"),
     "python -m magexp.perf.bench --help": (RUN_FULL, "prints the options (two interpreters: one BLAS thread)"),
     "python -m magexp.perf.warmup": (RUN_FULL, "the kernels compiled once (make venv)"),
     "python -m magexp.perf.crosstable": (RUN_FULL, "every HMC5883L calibration on every HMC5883L recording: 30 s",
