@@ -225,9 +225,15 @@ def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:
     holding = sum(r["verdict"] == "supported" for r in readings) if readings else int(verdict == "supported")
     return {"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline", "section": h.section,
             "figure": figure, "text": str(h.text).strip(), "verdict": verdict, "reason": reason,
-            "evidence": evidence.replace(" |  | ", " | "), "primary_reading": primary["label"] if primary else "",
+            "evidence": evidence.replace(" |  | ", " | "), "primary_reading": primary["label"] if primary else _no_reading(verdict),
             "why": " ".join(str(h.why).split()), "robustness": robust,
             "readings_total": len(readings) or int(bool(h.parts)), "readings_holding": holding, "readings": readings}
+
+
+def _no_reading(verdict: str) -> str:
+    """The ``primary_reading`` of a headline that declares no readings: it is judged on the paper's
+    stated settings, or on none when it cannot be tested here."""
+    return "none: not testable here" if verdict == "not testable here" else "the paper's stated settings"
 
 
 def _headline_verdict(h, deciding: list[str], parts: list, runs) -> tuple[str, str]:

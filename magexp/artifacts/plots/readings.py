@@ -40,7 +40,7 @@ def cells_of(headline: dict) -> list[tuple[str, str, bool]]:
     """
     readings = sorted(headline.get("readings") or [], key=lambda r: not r["primary"])
     return ([(r["label"], r["verdict"], r["primary"]) for r in readings]
-            or [("the paper's settings", headline["verdict"], True)])
+            or [("the paper's stated settings", headline["verdict"], True)])
 
 
 def drawn(headlines: list[dict]) -> list[dict]:
