@@ -217,15 +217,15 @@ def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:
     primary = next((r for r in readings if r["primary"]), None)
     primary_text = (f"{primary['label']} ({primary['source']}: {primary['settings']})".replace(": )", ")")
                     if primary else "")
-    evidence = " | ".join([reason, f"primary reading: {primary_text}; why: {' '.join(str(h.why).split())}"
-                           if primary else "", f"robustness: {robust}"]
+    argued = [f"primary reading: {primary_text}; why: {' '.join(str(h.why).split())}"] if primary else []
+    evidence = " | ".join([reason, *argued, f"robustness: {robust}"]
                           + [f"reading {r['label']} ({r['source']}; {r['settings']}): {r['verdict']} ({r['outcomes']})"
                              for r in readings]
                           + [f"{p}: {o.result} ({o.evidence})" for p, o in zip(deciding, parts) if o])
     holding = sum(r["verdict"] == "supported" for r in readings) if readings else int(verdict == "supported")
     return {"paper": paper, "artifact": "", "id": h.id, "by": "paper", "role": "headline", "section": h.section,
             "figure": figure, "text": str(h.text).strip(), "verdict": verdict, "reason": reason,
-            "evidence": evidence.replace(" |  | ", " | "), "primary_reading": primary["label"] if primary else _no_reading(verdict),
+            "evidence": evidence, "primary_reading": primary["label"] if primary else _no_reading(verdict),
             "why": " ".join(str(h.why).split()), "robustness": robust,
             "readings_total": len(readings) or int(bool(h.parts)), "readings_holding": holding, "readings": readings}
 

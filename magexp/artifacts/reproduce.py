@@ -25,7 +25,7 @@ from pathlib import Path
 import pandas as pd
 
 from magexp.artifacts.kind_tables import tabulate
-from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs, plan_artifact
+from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs
 from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.artifacts.plots import VECTOR, kind_module
 from magexp.artifacts.formats import MEASURED, write_csv
