@@ -177,6 +177,13 @@ COMMANDS: dict[str, tuple] = {
         (RUN_FULL, "a recording", {"shared": True}),
     ".venv/bin/python -m magexp calibrate data.path=../shared/data/qmc5883l_noisy_raw_data.csv":
         (RUN_FULL, "a recording the gate accepts", {"shared": True}),
+    # live calibration (docs/calibrate.md): a serial port read as standard input here (the port itself:
+    # tests/test_calibrate_live.py, through a pseudo-terminal)
+    ".venv/bin/python -m magexp calibrate data.serial=/dev/ttyUSB0 data.baud=115200 data.unit=uT out=calib_live/":
+        (RUN_FULL, "the same stream from standard input, the reader's port being absent",
+         {"shared": True, "replace": {"data.serial=/dev/ttyUSB0": "data.path=- <../shared/data/fxos8700_mag_readings.txt"}}),
+    ".venv/bin/python -m magexp calibrate data.path=- data.unit=uT out=calib_stdin/ < ../shared/data/fxos8700_mag_readings.txt":
+        (RUN_FULL, "a recording piped in", {"shared": True}),
     # the benches and the warm-up
     # docs/results.md, Sample sizes: the planned seeds of each comparison (planning only, no run: 2 s)
     "python -m magexp.artifacts.sample_sizes yuan2018": (RUN_FULL, "prints each comparison's effect, level, seeds and power"),

@@ -19,6 +19,7 @@ from magexp.calibration.firmware import check_counts_nt, check_max_rotation
 from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
 from magexp.calibration.options import help_text
 from magexp.calibration.inputs import Reference
+from magexp.calibration.live import is_live, kept, read_live
 from magexp.calibration.result import Calibration
 from magexp.calibration.write import check_out, summary, table, write
 from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
@@ -320,7 +321,14 @@ def command(argv: list[str]) -> None:
     if any(a in ("--help", "-h") for a in argv):
         print(help_text(options("estimator")))
         return
-    run(calibrate_config(argv))
+    cfg = calibrate_config(argv)
+    if is_live(cfg):  # a serial port or standard input (magexp.calibration.live): read it, then calibrate what was read
+        check_options(cfg)
+        cfg = read_live(cfg, calibrate_recording)
+        with kept(cfg.data.path):
+            run(cfg)
+        return
+    run(cfg)
 
 
 def main(argv: list[str] | None = None) -> int:

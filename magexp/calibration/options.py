@@ -24,6 +24,9 @@ from dataclasses import dataclass, field
 
 from magexp.calibration.checks import GATE
 from magexp.calibration.models import MARGIN
+
+#: ``live.margin``: the live stop rule's margin on the gate (:mod:`magexp.calibration.live`)
+LIVE_MARGIN = 0.5
 from magexp.paths import CONF
 
 #: the estimator of ``conf/calibrate.yaml``'s defaults list (``estimator=<name>`` chooses another)
@@ -92,6 +95,26 @@ class DataOptions:
     gyro_axes: str | None = option(None, 'the same for the gyroscope (two-stream default: "-x,y,z")')
     reference_total: float | None = option(None, "reference total field (recording's unit); null: the field "
                                                  "model's, else the file's, else estimated")
+    serial: str | None = option(None, "read a live stream from this serial port (e.g. /dev/ttyUSB0, COM3; pyserial) "
+                                      "instead of data.path (data.path=-: standard input): docs/calibrate.md#live-calibration")
+    baud: int = option(115200, "the serial port's baud rate")
+
+
+@dataclass
+class LiveOptions:
+    """``live.*``: reading a live stream (``data.serial`` or ``data.path=-``; :mod:`magexp.calibration.live`)."""
+
+    margin: float = option(LIVE_MARGIN, "stop when the gate passes with its held-out limit times (1 - margin) and "
+                                        "every region of directions held out")
+    refit_readings: int = option(100, "a live check (closed-form fit, held-out spread, coverage) every this many new "
+                                      "readings")
+    refit_seconds: float = option(1.0, "... or every this many seconds, whichever comes first (and never sooner than "
+                                       "4 times the last check's duration after it)")
+    check_readings: int = option(10000, "a live check fits at most this many readings, evenly spaced (bounded work; "
+                                        "fewer: the readings' noise is no longer measured from neighbours)")
+    stall_seconds: float = option(10.0, "stop when no valid reading has arrived for this many seconds")
+    max_readings: int = option(1_000_000, "stop after this many lines (valid or not)")
+    max_line: int = option(512, "a longer line is garbage (bytes)")
 
 
 @dataclass
@@ -148,6 +171,8 @@ class CalibrateOptions:
                                         "parameter slot exported (ardupilot COMPASS_OFS2_* for 1; px4 CAL_MAGn); "
                                         "null: 0, for px4 a ULog's calibration slot")
     data: DataOptions = option(None, "the recording (magexp/core/recordings.py)", factory=DataOptions)
+    live: LiveOptions = option(None, "a live stream (data.serial or data.path=-): when to check and to stop, what "
+                                     "is read at most", factory=LiveOptions)
     field: FieldOptions = option(None, "the reference total from a field model where and when recorded "
                                        "(magexp/core/field_model.py)", factory=FieldOptions)
     igrf: IgrfOptions = option(None, "the older names of field.* (with field.model=igrf); kept working",
