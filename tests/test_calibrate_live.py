@@ -63,7 +63,8 @@ class Feeder(threading.Thread):
                 self.written = k + 1
         except OSError:  # the command closed the port: it stopped
             return
-        if self.close:
+        if self.close:  # the other side hangs up once what it sent has been read (a pty drops unread input)
+            time.sleep(1.0)
             os.close(self.master)
 
 

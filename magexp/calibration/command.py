@@ -323,7 +323,10 @@ def command(argv: list[str]) -> None:
         return
     cfg = calibrate_config(argv)
     if is_live(cfg):  # a serial port or standard input (magexp.calibration.live): read it, then calibrate what was read
-        check_options(cfg)
+        check_options(cfg)  # and what run() checks later, before the stream is read
+        for key in ("overwrite", "figure", "accept"):
+            flag(cfg, key)
+        build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         cfg = read_live(cfg, calibrate_recording)
         with kept(cfg.data.path):
             run(cfg)

@@ -44,7 +44,7 @@ from magexp.calibration.checks import gate_thresholds
 from magexp.calibration.export import TARGETS as EXPORT_TARGETS
 from magexp.calibration.inputs import MIN_READINGS
 from magexp.calibration.live_display import Display, Progress, axis_names
-from magexp.calibration.live_stream import LineCutter, StreamFile, open_source
+from magexp.calibration.live_stream import POLL, LineCutter, StreamFile, open_source
 from magexp.calibration.write import check_out
 from magexp.problems.kernels import numpy_only
 from magexp.run.guard import check_destination, first_missing
@@ -58,8 +58,6 @@ from magexp.run.named import estimator_named
 
 #: the stream file in the output folder
 STREAM = "stream.txt"
-#: seconds a read waits for data at most (how soon Ctrl-C, a stall and a due check are seen)
-POLL = 0.1
 #: a live check starts no sooner than this many times the last one's duration after its end (at most a fifth of
 #: the time in checks, whatever the stream's rate; the first check, which imports the readers, excepted)
 SHARE = 4

@@ -26,6 +26,8 @@ from magexp.errors import MagexpError, excerpt
 
 #: bytes read from a source at most at a time
 CHUNK = 1 << 16
+#: seconds a serial port's read waits for data at most
+POLL = 0.1
 
 
 class StdinSource:
@@ -88,33 +90,30 @@ class SerialSource:
                               "pip install 'magexp[serial]'") from None
         self._errors = (serial.SerialException, OSError)
         try:
-            self.port = serial.Serial(port, baudrate=baud, timeout=0)
+            self.port = serial.Serial(port, baudrate=baud, timeout=POLL)
         except self._errors as exc:
             raise MagexpError(f"data.serial={port!r} cannot be opened ({str(exc).splitlines()[0]}): give the "
                               "device path of the port (e.g. /dev/ttyUSB0, COM3)") from None
         self.name = f"{port} at {baud} baud"
 
     def read(self, timeout: float) -> bytes | None:
-        """As :meth:`StdinSource.read`; a port that went away (unplugged) ends the stream.
+        """As :meth:`StdinSource.read`, waiting :data:`POLL` seconds at most (the port's own timeout, set once:
+        ``timeout`` is not used); a port that went away (unplugged) ends the stream.
 
         Parameters
         ----------
         timeout : float
-            Seconds to wait for data.
+            Not used (the port's timeout is :data:`POLL`).
 
         Returns
         -------
         bytes or None
-            The bytes read, or None at the end.
+            The bytes read (``b""``: none within the timeout), or None at the end.
         """
         try:
-            ready, _, _ = select.select([self.port.fileno()], [], [], timeout)
-            if not ready:
-                return b""
-            data = self.port.read(max(1, min(self.port.in_waiting, CHUNK)))
+            return self.port.read(max(1, min(self.port.in_waiting, CHUNK)))
         except self._errors:  # the device reports readiness but gives nothing: disconnected
             return None
-        return data if data else None
 
     def close(self) -> None:
         """Close the port."""
