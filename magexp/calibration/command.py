@@ -19,7 +19,7 @@ from magexp.calibration.firmware import check_counts_nt, check_max_rotation
 from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
 from magexp.calibration.options import help_text
 from magexp.calibration.inputs import Reference
-from magexp.calibration.live import is_live, kept, read_live
+from magexp.calibration.live import is_live, kept, read_live, settings as live_settings
 from magexp.calibration.result import Calibration
 from magexp.calibration.write import check_out, summary, table, write
 from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
@@ -178,7 +178,7 @@ def check_options(cfg) -> None:
     """The keys that a run may not use checked before anything is read: every given ``field.*`` and
     ``igrf.*`` value (used only when a place is known, and not at all beside ``data.reference_total``),
     ``counts_nt`` and ``max_rotation_deg`` (used only by some exports), ``auto_margin`` (only by
-    ``model=auto``): a bad value is refused in one line, not ignored.
+    ``model=auto``), ``live.*`` (only by a live stream): a bad value is refused in one line, not ignored.
 
     Parameters
     ----------
@@ -196,6 +196,7 @@ def check_options(cfg) -> None:
     if cfg.get("max_rotation_deg") is not None:
         check_max_rotation(cfg.max_rotation_deg)
     models_.check_margin(cfg.get("auto_margin", models_.MARGIN))
+    live_settings(cfg)  # live.*, data.serial and data.baud, used only by a live stream
 
 
 def recording_of(cfg) -> Recording:

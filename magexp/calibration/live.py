@@ -52,7 +52,7 @@ from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import CELLS, coverage, direction_regions, spread
 from magexp.core.recording import evenly_spaced
 from magexp.core.recordings import load_recording
-from magexp.errors import MagexpError, check_positive_int
+from magexp.errors import MagexpError, check_nonnegative, check_positive_int
 
 from magexp.run.named import estimator_named
 
@@ -95,14 +95,11 @@ def is_live(cfg) -> bool:
 
 
 def _seconds(value, key: str) -> float:
-    """A number of seconds > 0, else one line."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        number = float("nan")
-    if isinstance(value, bool) or not 0 < number < 1e6:
+    """A number of seconds > 0 and < 1e6, else one line."""
+    seconds = check_nonnegative(value, f"live.{key}")
+    if not 0 < seconds < 1e6:
         raise MagexpError(f"live.{key}={value!r} is not allowed: give a number of seconds > 0 and < 1e6")
-    return number
+    return seconds
 
 
 def settings(cfg) -> Settings:
@@ -129,10 +126,10 @@ def settings(cfg) -> Settings:
     if data.get("serial") is not None and not str(data.serial).strip():
         raise MagexpError(f"data.serial={data.serial!r} is not allowed: give the port's device path (e.g. /dev/ttyUSB0)")
     check_positive_int(data.baud, "data.baud")
-    margin = live.margin
-    if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not 0 <= margin < 1:
-        raise MagexpError(f"live.margin={margin!r} is not allowed: give a fraction, 0 <= margin < 1")
-    return Settings(margin=float(margin), refit_readings=check_positive_int(live.refit_readings, "live.refit_readings"),
+    margin = check_nonnegative(live.margin, "live.margin")
+    if not margin < 1:
+        raise MagexpError(f"live.margin={live.margin!r} is not allowed: give a fraction, 0 <= margin < 1")
+    return Settings(margin=margin, refit_readings=check_positive_int(live.refit_readings, "live.refit_readings"),
                     refit_seconds=_seconds(live.refit_seconds, "refit_seconds"),
                     check_readings=check_positive_int(live.check_readings, "live.check_readings", minimum=MIN_READINGS * 6),
                     stall_seconds=_seconds(live.stall_seconds, "stall_seconds"),
@@ -388,9 +385,9 @@ def read_live(cfg, calibrate, display: Display | None = None):
     display = Display() if display is None else display
     settings(cfg)
     out_dir = out_folder(cfg)
+    source = open_source(cfg.data)  # before anything is made: a port that cannot be opened leaves nothing behind
     created = first_missing(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    source = open_source(cfg.data)
     reader = Reader(cfg, out_dir, display, calibrate)
     display.say(f"reading {source.name} into {out_dir / STREAM} (Ctrl-C stops; the gate then decides)")
     try:
