@@ -29,6 +29,7 @@ same calibration as ``magexp calibrate data.path=<out>/stream.txt``, and the sam
 
 from __future__ import annotations
 
+import re
 import shutil
 import signal
 import threading
@@ -210,9 +211,9 @@ def live_check(rec, calibrate, *, estimator, model: str, thresholds: dict, limit
 
 
 def _short(text: str) -> str:
-    """A refusal's reason without the recording's name, first clause only (the status line's width)."""
+    """A refusal's reason without the recording's name, up to its first parenthesis or colon (the status line's width)."""
     reason = text.split(": ", 1)[-1]
-    return reason.split(": ")[0][:80]
+    return re.split(r" \(|: ", reason, maxsplit=1)[0]
 
 
 @contextmanager
