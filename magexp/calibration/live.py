@@ -386,11 +386,14 @@ def read_live(cfg, calibrate, display: Display | None = None):
     display = Display() if display is None else display
     settings(cfg)
     out_dir = out_folder(cfg)
+    replacing = (out_dir / STREAM).exists()  # only with overwrite=true (out_folder)
     source = open_source(cfg.data)  # before anything is made: a port that cannot be opened leaves nothing behind
     created = first_missing(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     reader = Reader(cfg, out_dir, display, calibrate)
-    display.say(f"reading {source.name} into {out_dir / STREAM} (Ctrl-C stops; the gate then decides)")
+    display.say(f"reading {source.name} into {out_dir / STREAM}"
+                + (" (replacing the earlier one: overwrite=true)" if replacing else "")
+                + " (Ctrl-C stops; the gate then decides)")
     try:
         with kept(reader.stream.path):
             reason = reader.run(source)
