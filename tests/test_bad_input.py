@@ -370,6 +370,11 @@ TABLE = [
     row("calibrate", ["data.path=good.csv", "data.reference_total=abc"], ["reference_total='abc'", "> 0"]),
     row("calibrate", ["data.path=good.csv", "data.reference_total=-1"], ["reference_total=-1", "> 0"]),
     row("calibrate", ["data.path=good.csv", "data.reference_total=1e308"], ["reference_total=1e+308", "1e+15"]),
+    # a live stream (magexp.calibration.live): refused before anything is read
+    row("calibrate", ["data.path=-", "live.margin=1"], ["live.margin=1", "0 <= margin < 1"]),
+    row("calibrate", ["data.path=-", "live.stall_seconds=0"], ["live.stall_seconds=0", "> 0"]),
+    row("calibrate", ["data.serial=/dev/tty0", "data.path=good.csv"], ["data.path='good.csv'", "data.serial"]),
+    row("calibrate", ["data.serial=/dev/magexp-no-such-port"], ["data.serial='/dev/magexp-no-such-port'"]),
     row("calibrate", ["data.path=good.csv", "folds=abc"], ["folds='abc'", "integer >= 0"]),
     row("calibrate", ["data.path=good.csv", "folds=-1"], ["folds=-1", "integer >= 0"]),
     row("calibrate", ["data.path=good.csv", "folds=2.5"], ["folds=2.5", "integer >= 0"]),

@@ -327,6 +327,7 @@ def command(argv: list[str]) -> None:
         check_options(cfg)  # and what run() checks later, before the stream is read
         for key in ("overwrite", "figure", "accept"):
             flag(cfg, key)
+        models_.check_model(cfg.model, cfg.objective)  # the name (the stream's gyroscope is known once it is read)
         build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         cfg = read_live(cfg, calibrate_recording)
         with kept(cfg.data.path):

@@ -16,8 +16,9 @@ the same ``data.*`` options), takes at most ``live.check_readings`` of its readi
 ``model=sphere`` or ``diagonal`` when the command asks for one, else ``full``), the held-out check and the
 acceptance gate (:func:`magexp.calibration.checks.gate`) with its limits tightened by ``live.margin`` ``m``
 (:func:`stop_thresholds`): the held-out spread below ``(1 - m) · gate.heldout_vs_raw`` times the raw spread
-(the check that more directions improve; the others as the gate has them); and every one of the six regions of directions must hold at least :data:`~magexp.calibration.inputs.MIN_READINGS` readings, so that
-each was held out (none untested).
+(the check that more directions improve; the others as the gate has them); and every one of the six regions of
+directions must hold at least :data:`~magexp.calibration.inputs.MIN_READINGS` readings, so that each was held out
+(none untested).
 
 **The stop**: the live check passes; or Ctrl-C (SIGINT while reading: the reading stops and the gate decides on
 what was read); or the stream ends (end of file, the port gone); or no valid reading for ``live.stall_seconds``;
@@ -53,7 +54,7 @@ from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import CELLS, coverage, direction_regions, spread
 from magexp.core.recording import evenly_spaced
 from magexp.core.recordings import load_recording
-from magexp.errors import MagexpError, check_nonnegative, check_positive_int
+from magexp.errors import MagexpError, check_magnitude, check_nonnegative, check_positive_int
 
 from magexp.run.named import estimator_named
 
@@ -196,8 +197,8 @@ def live_check(rec, calibrate, *, estimator, model: str, thresholds: dict, limit
                         raw=spread(np.linalg.norm(sub.readings, axis=1)))
     try:
         with numpy_only(True):  # a closed form: numpy's residuals, not the compiled kernels' load
-            cal = calibrate(sub, estimator, reference_total=reference, folds=6, rng=None, model=model,
-                                      accept=True, gate_overrides=thresholds)
+            cal = calibrate(sub, estimator, reference_total=reference, folds=6, rng=None, model=model, accept=True,
+                            gate_overrides=thresholds)
     except MagexpError as exc:
         progress.waiting = _short(str(exc))
         return progress
@@ -385,6 +386,9 @@ def read_live(cfg, calibrate, display: Display | None = None):
     """
     display = Display() if display is None else display
     settings(cfg)
+    reference = cfg.data.get("reference_total")  # checked now, not once the stream is read (the live check uses it)
+    if reference is not None and not check_magnitude(reference, "data.reference_total") > 0:
+        raise MagexpError(f"data.reference_total={reference!r} is not allowed: it must be a number > 0")
     out_dir = out_folder(cfg)
     replacing = (out_dir / STREAM).exists()  # only with overwrite=true (out_folder)
     source = open_source(cfg.data)  # before anything is made: a port that cannot be opened leaves nothing behind
