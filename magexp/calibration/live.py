@@ -411,7 +411,7 @@ def read_live(cfg, calibrate, display: Display | None = None):
             shutil.rmtree(created, ignore_errors=True)
         raise MagexpError(f"{source.name}: no valid reading arrived ({reason}), nothing written"
                           + (f"; {stream.garbage_line()}" if stream.garbage else ""))
-    display.say(f"stopped after {stream.rows} readings in {time.monotonic() - reader.start:.1f} s: {reason}")
+    display.say(f"stopped after {stream.rows} data rows in {time.monotonic() - reader.start:.1f} s: {reason}")
     if stream.garbage:
         display.say(stream.garbage_line())
     final = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
