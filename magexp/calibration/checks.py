@@ -188,6 +188,9 @@ GATE = {
 ADVICE = {
     "heldout": "the calibration does not hold on readings it was not fitted to: record more orientations "
                "(turn about every axis)",
+    "heldout_shots": "the calibration does not hold on directions it was not fitted to: record more static shots, "
+                     "spread evenly over every direction and away from iron, or fit fewer parameters (model=sphere "
+                     "or diagonal); raw readings already as consistent as the sensor's noise need no calibration",
     "anisotropy": "no magnetometer measured stretches one axis that much (at most 2.25, a QMC5883L: "
                   "docs/calibrate.md): check data.mag_axes and that no iron is fixed beside the sensor; "
                   "gate.max_anisotropy=<limit> accepts it",
@@ -196,7 +199,7 @@ ADVICE = {
     "rms": "the calibrated total still varies more than the readings' noise explains: record slowly, away from "
            "iron and motors",
     "regions": "no held-out check could test the calibration on attitudes there, and it is untested where the data "
-               "stop: record turns that point the sensor so",
+               "stop: record turns (or static shots) that point the sensor so",
 }
 
 
@@ -280,14 +283,15 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     t = GATE if thresholds is None else thresholds
     failed = []
 
-    def fail(check, value, threshold, text):
+    def fail(check, value, threshold, text, advice=None):
         reason = f"check {check!r} failed: {text}"
+        advice = ADVICE[check] if advice is None else advice
         failed.append({"check": check, "value": value, "threshold": threshold, "reason": reason,
-                       "line": f"{reason}: {ADVICE[check]}"})
+                       "line": f"{reason}: {advice}" if advice else reason})
 
     held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
     if held is not None and not (held < t["heldout_vs_raw"] * raw):
-        fail("heldout", held, t["heldout_vs_raw"] * raw, _heldout_text(held, raw))
+        fail("heldout", held, t["heldout_vs_raw"] * raw, *_heldout_text(held, raw, metrics))
     sigma = np.linalg.svd(w, compute_uv=False)
     if sigma[0] > t["max_anisotropy"] * sigma[-1]:
         fail("anisotropy", float(sigma[0] / sigma[-1]), t["max_anisotropy"],
@@ -316,11 +320,16 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     return failed
 
 
-def _heldout_text(held: float, raw: float) -> str:
-    """Why the held-out check failed (:func:`gate`): its spread against the raw one, or no spread at all."""
-    if np.isfinite(held):
-        return f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %"
-    return "the fit on the other regions failed for a held-out region of directions, so no held-out spread"
+def _heldout_text(held: float, raw: float, metrics: dict) -> tuple[str, str | None]:
+    """``(why, advice)`` of a failed held-out check (:func:`gate`): its spread against the raw one, by the design
+    that measured it, or, with no spread, the cause :mod:`magexp.calibration.holdout` found (its own remedy)."""
+    if not np.isfinite(held):
+        return metrics.get("heldout_failure") or "no held-out spread could be measured", ""
+    if metrics.get("heldout_design") == "exclusion":
+        return (f"held-out spread {100 * held:.3g} % of {metrics['heldout_readings']} readings, each calibrated by the "
+                f"fit without the readings within {metrics['heldout_exclusion_deg']:.1f} deg of it, is not below the raw "
+                f"{100 * raw:.3g} %", ADVICE["heldout_shots"])
+    return f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %", None
 
 
 def _region_check(metrics: dict, t: dict) -> tuple | None:

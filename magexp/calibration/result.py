@@ -147,7 +147,8 @@ class Calibration:
 
     def __repr__(self) -> str:
         m = self.metrics
-        held = f", held out {100 * m['heldout_spread']:.3g} %" if "heldout_spread" in m else ""
+        held = (f", held out {100 * m['heldout_spread']:.3g} %" if "heldout_spread" in m
+                else ", held out not measured" if m.get("heldout_design") == "none" else "")
         gate = self.report.get("gate") or {}
         state = "" if not gate else (", gate passed" if gate.get("passed") else ", gate FAILED (accepted)")
         return (f"<Calibration {self.name}: {self.model} model by {self.estimator}, spread "
