@@ -26,7 +26,8 @@ from magexp.errors import MagexpError
 from magexp.paths import SHARED_DATA
 
 #: a soft-iron matrix (inverse of W) and hard-iron offset of the synthetic sensor, mG; field 500 mG
-SOFT, HARD, FIELD = np.array([[1.2, 0.05, 0.02], [0.05, 0.9, -0.04], [0.02, -0.04, 1.05]]), np.array([80.0, -120, 40]), 500.0
+SOFT = np.array([[1.2, 0.05, 0.02], [0.05, 0.9, -0.04], [0.02, -0.04, 1.05]])
+HARD, FIELD = np.array([80.0, -120, 40]), 500.0
 
 
 def sensor(directions: np.ndarray, *, seed: int = 4, noise: float = 0.5, soft=SOFT, hard=HARD) -> np.ndarray:

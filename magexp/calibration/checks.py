@@ -324,7 +324,8 @@ def _heldout_text(held: float, raw: float, metrics: dict) -> tuple[str, str | No
     """``(why, advice)`` of a failed held-out check (:func:`gate`): its spread against the raw one, by the design
     that measured it, or, with no spread, the cause :mod:`magexp.calibration.holdout` found (its own remedy)."""
     if not np.isfinite(held):
-        return metrics.get("heldout_failure") or "no held-out spread could be measured", ""
+        return (metrics.get("heldout_failure")
+                or "no held-out spread could be measured: record more orientations (turn about every axis)"), ""
     if metrics.get("heldout_design") == "exclusion":
         return (f"held-out spread {100 * held:.3g} % of {metrics['heldout_readings']} readings, each calibrated by the "
                 f"fit without the readings within {metrics['heldout_exclusion_deg']:.1f} deg of it, is not below the raw "

@@ -60,19 +60,8 @@ MIN_SHOTS = math.ceil(MIN_READINGS / (5.0 / 6.0)) + 1
 FitOn = Callable[[np.ndarray], "tuple[np.ndarray, np.ndarray] | None"]
 
 
-def directions(readings: np.ndarray) -> np.ndarray:
-    """Unit directions of ``readings`` about the centre of the sphere fitted to them.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(N, 3)`` unit vectors.
-    """
+def _directions(readings: np.ndarray) -> np.ndarray:
+    """Unit directions of ``readings`` about the centre of the sphere fitted to them."""
     centred = readings - fit_sphere(readings)[0]
     return centred / np.maximum(np.linalg.norm(centred, axis=1, keepdims=True), 1e-300)
 
@@ -104,7 +93,7 @@ def exclusion_folds(u: np.ndarray, exclusion_deg: float = EXCLUSION_DEG,
     Parameters
     ----------
     u : numpy.ndarray
-        ``(N, 3)`` unit directions (:func:`directions`).
+        ``(N, 3)`` unit directions of the readings about the centre of the sphere fitted to them.
     exclusion_deg : float
         The exclusion radius, degrees.
     max_folds : int
@@ -172,8 +161,9 @@ def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str 
         ``heldout_spread_max_fold``, the exclusion design ``heldout_exclusion_deg``; a NaN adds ``heldout_failure``.
     """
     design = design_of(labels)
-    folds = region_folds(labels) if design == "regions" else exclusion_folds(directions(readings))
-    record = {"heldout_design": design, "heldout_folds": len(folds), "heldout_readings": int(sum(len(h) for h, _ in folds)),
+    folds = region_folds(labels) if design == "regions" else exclusion_folds(_directions(readings))
+    record = {"heldout_design": design, "heldout_folds": len(folds),
+              "heldout_readings": int(sum(len(h) for h, _ in folds)),
               "heldout_min_kept": int(min(len(k) for _, k in folds))}
     if design == "exclusion":
         record["heldout_exclusion_deg"] = EXCLUSION_DEG
@@ -235,50 +225,36 @@ def _fold_failed(readings: np.ndarray, held: np.ndarray, kept: np.ndarray, desig
             f"the shots cannot determine it: add shots in the directions between{instead}")
 
 
-def describe(metrics: dict) -> str:
-    """What the held-out check measured, in words: the design, its folds and what each fit left out.
+def describe(metrics: dict, *, gate: bool = False) -> str:
+    """What the held-out check measured, in words: the design, its folds and what each fit left out; with
+    ``gate``, the held-out part of a passed gate's line (what beat raw), or that nothing was held out.
 
     Parameters
     ----------
     metrics : dict
-        A calibration's metrics (:func:`measure`'s keys; none of them: not measured).
+        A calibration's metrics (:func:`measure`'s keys; ``heldout_design = "none"`` or none of them: not measured).
+    gate : bool
+        The gate's clause instead of the report's.
 
     Returns
     -------
     str
         One clause.
     """
-    design = metrics.get("heldout_design")
+    design, folds = metrics.get("heldout_design"), metrics.get("heldout_folds", 0)
     if design == "regions":
-        return (f"{metrics['heldout_folds']} regions of directions, each calibrated by the fit on the others "
-                "(held-out design: direction regions)")
+        return ("held out beats raw, every region of directions tested" if gate else
+                f"{folds} regions of directions, each calibrated by the fit on the others (held-out design: "
+                "direction regions)")
     if design == "exclusion":
-        one = metrics["heldout_folds"] == metrics["heldout_readings"]
-        each = "each" if one else f"in {metrics['heldout_folds']} groups of nearby readings, each group"
-        return (f"{metrics['heldout_readings']} readings, {each} calibrated by the fit on the readings more than "
-                f"{metrics['heldout_exclusion_deg']:.1f} deg from its direction (held-out design: "
-                f"{'leave one out' if one else 'leave a group out'}, neighbours excluded)")
-    return f"not measured (folds={metrics.get('heldout_folds', 0)}: no held-out check)"
-
-
-def gate_clause(metrics: dict) -> str:
-    """The held-out part of a passed gate's line: what beat raw, or that nothing was held out.
-
-    Parameters
-    ----------
-    metrics : dict
-        A calibration's metrics.
-
-    Returns
-    -------
-    str
-        One clause.
-    """
-    design = metrics.get("heldout_design")
-    if design == "regions":
-        return "held out beats raw, every region of directions tested"
-    if design == "exclusion":
-        return (f"held out beats raw, each of {metrics['heldout_readings']} readings tested by a fit without the "
-                f"readings within {metrics['heldout_exclusion_deg']:.1f} deg of it")
-    return (f"held-out spread not measured (folds={metrics.get('heldout_folds', 0)}), untested on directions it was "
-            "not fitted to")
+        n, radius = metrics["heldout_readings"], metrics["heldout_exclusion_deg"]
+        if gate:
+            return (f"held out beats raw, each of {n} readings tested by a fit without the readings within "
+                    f"{radius:.1f} deg of it")
+        one = folds == n
+        each = "each" if one else f"in {folds} groups of nearby readings, each group"
+        return (f"{n} readings, {each} calibrated by the fit on the readings more than {radius:.1f} deg from its "
+                f"direction (held-out design: {'leave one out' if one else 'leave a group out'}, neighbours excluded)")
+    if gate:
+        return f"held-out spread not measured (folds={folds}), untested on directions it was not fitted to"
+    return f"not measured (folds={folds}: no held-out check)"

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.export import FILE_NAMES, of_calibration
-from magexp.calibration.holdout import describe as describe_heldout, gate_clause
+from magexp.calibration.holdout import describe as describe_heldout
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
@@ -410,7 +410,7 @@ def _gate_line(record: dict, metrics: dict) -> str:
     if not record:
         return "not checked"
     if record["passed"]:
-        return (f"passed ({gate_clause(metrics)}; W's shape, the radius and the residual RMS plausible)")
+        return f"passed ({describe_heldout(metrics, gate=True)}; W's shape, the radius and the residual RMS plausible)"
     return "FAILED, written because accept=true: " + "; ".join(f.get("reason") or f["line"].split(":")[0]
                                                                 for f in record["failed"])
 
