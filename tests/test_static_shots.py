@@ -261,3 +261,16 @@ def test_24_shots_about_one_axis_are_refused_as_a_plane(tmp_path, name):
     shots = static_shots(rec.readings, window=window, keep=lambda u: np.abs(u[:, 2]) < 0.1)
     line, _ = measured(write_csv(tmp_path / f"{name}_24_plane.csv", shots), unit)
     assert isinstance(line, str) and "lie in one plane" in line and "second axis" in line
+
+
+def test_a_calibration_saved_before_the_designs_still_says_regions():
+    cal = calibrate(sensor(fibonacci_sphere(600)), unit="mG")
+    del cal.metrics["heldout_design"]  # as calibration.json was written before issue 40
+    assert "every region of directions tested" in cal.summary()
+    assert "6 regions of directions, each calibrated by the fit on the others" in cal.summary()
+
+
+def test_a_long_recording_with_a_sparse_region_keeps_the_region_design():
+    labels = np.repeat(np.arange(6), [holdout.MAX_EXCLUSION_READINGS] + [MIN_READINGS] * 4 + [3])
+    assert holdout.design_of(labels) == "regions"  # the 3 readings stay in every fit; the gate's min_region refuses
+    assert [int(labels[h[0]]) for h, _ in holdout.region_folds(labels)] == [0, 1, 2, 3, 4]

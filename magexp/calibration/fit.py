@@ -510,7 +510,7 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
         with saying_onboard(rec, metrics.get("heldout_spread")):
             refuse(rec.name, failed)
     return {"passed": not failed, "failed": failed, "accepted_anyway": bool(failed) and accept,
-            "heldout": holdout.describe(metrics) if metrics.get("heldout_design") else "not measured",
+            "heldout": holdout.describe(metrics),
             "thresholds": {k: list(v) if isinstance(v, tuple) else v for k, v in thresholds.items()}}
 
 

@@ -9,8 +9,9 @@ Both designs fit the model on some readings and calibrate others whose *directio
 the sphere fitted to them are cut into six regions, one about each half-axis ``±v_k`` of their principal axes
 (:func:`magexp.core.identifiability.direction_regions`); each occupied region is calibrated by the fit on the
 other five. Used when every occupied region holds at least :data:`~magexp.calibration.inputs.MIN_READINGS`
-readings (a fold must be fittable on its own and large enough for its spread to mean something): six fits,
-the design of a recording in which the sensor was turned.
+readings (a fold must be large enough for its spread to mean something): six fits, the design of a recording
+in which the sensor was turned. Over :data:`MAX_EXCLUSION_READINGS` readings it is used whatever the regions
+hold, a smaller region's readings staying in every fit (the gate refuses such a region as untested).
 
 **Neighbours excluded** (``heldout_design = "exclusion"``). A recording of a couple of dozen static shots (the
 common hand-held or bench workflow: circuitpython-mag-cal's, MotionCal's fixed points) has about four readings
@@ -41,6 +42,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from magexp.calibration.checks import GATE
 from magexp.calibration.inputs import MIN_READINGS
 from magexp.calibration.models import ORDER
 from magexp.core.ellipsoid import fit_sphere
@@ -52,6 +54,10 @@ EXCLUSION_DEG = math.degrees(math.acos(2.0 / 3.0))
 #: Most folds of the neighbours-excluded design: one per reading up to a couple of dozen static shots (the
 #: common workflow), grouped beyond that so that an iterative estimator runs at most this many fits.
 MAX_EXCLUSION_FOLDS = 24
+#: Most readings held out by the neighbours-excluded design: beyond ``MIN_READINGS / gate.min_region`` (its default
+#: 0.005, :data:`magexp.calibration.checks.GATE`) a region of fewer than :data:`MIN_READINGS` readings is refused by
+#: the gate as untested anyway, and the design's ``N x (readings per fold)`` direction products stay small.
+MAX_EXCLUSION_READINGS = round(MIN_READINGS / GATE["min_region"])
 #: Fewest shots, spread evenly, for which each fit keeps :data:`MIN_READINGS` readings beyond the exclusion cap
 #: (a sixth of them left out with the held-out one): ``ceil(MIN_READINGS / (5/6)) + 1``.
 MIN_SHOTS = math.ceil(MIN_READINGS / (5.0 / 6.0)) + 1
@@ -67,8 +73,8 @@ def _directions(readings: np.ndarray) -> np.ndarray:
 
 
 def design_of(labels: np.ndarray) -> str:
-    """``"regions"`` when every occupied region of ``labels`` (0-5) holds at least :data:`MIN_READINGS` readings,
-    else ``"exclusion"`` (module docstring).
+    """``"exclusion"`` when an occupied region of ``labels`` (0-5) holds fewer than :data:`MIN_READINGS` readings
+    and there are at most :data:`MAX_EXCLUSION_READINGS` readings, else ``"regions"`` (module docstring).
 
     Parameters
     ----------
@@ -81,7 +87,8 @@ def design_of(labels: np.ndarray) -> str:
         The design.
     """
     counts = np.bincount(labels, minlength=6)
-    return "regions" if np.all((counts == 0) | (counts >= MIN_READINGS)) else "exclusion"
+    small = np.any((counts > 0) & (counts < MIN_READINGS))
+    return "exclusion" if small and len(labels) <= MAX_EXCLUSION_READINGS else "regions"
 
 
 def exclusion_folds(u: np.ndarray, exclusion_deg: float = EXCLUSION_DEG,
@@ -123,7 +130,9 @@ def exclusion_folds(u: np.ndarray, exclusion_deg: float = EXCLUSION_DEG,
 
 
 def region_folds(labels: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """``[(held out, kept)]`` of the direction-regions design: each occupied region against the others.
+    """``[(held out, kept)]`` of the direction-regions design: each region of at least :data:`MIN_READINGS`
+    readings against the others (a smaller one's readings, in a recording over :data:`MAX_EXCLUSION_READINGS`,
+    stay in every fit: the gate's ``min_region`` check refuses it as untested).
 
     Parameters
     ----------
@@ -135,7 +144,8 @@ def region_folds(labels: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     list of tuple
         Each fold's held-out and kept indices.
     """
-    return [(np.flatnonzero(labels == k), np.flatnonzero(labels != k)) for k in np.unique(labels)]
+    tested = np.flatnonzero(np.bincount(labels, minlength=6) >= MIN_READINGS)
+    return [(np.flatnonzero(labels == k), np.flatnonzero(labels != k)) for k in tested]
 
 
 def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str = "full") -> dict:
@@ -164,7 +174,7 @@ def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str 
     folds = region_folds(labels) if design == "regions" else exclusion_folds(_directions(readings))
     record = {"heldout_design": design, "heldout_folds": len(folds),
               "heldout_readings": int(sum(len(h) for h, _ in folds)),
-              "heldout_min_kept": int(min(len(k) for _, k in folds))}
+              "heldout_min_kept": int(min((len(k) for _, k in folds), default=0))}
     if design == "exclusion":
         record["heldout_exclusion_deg"] = EXCLUSION_DEG
     failure = _too_few(readings, folds, design) or _too_few_regions(folds, design)
@@ -189,8 +199,8 @@ def _too_few_regions(folds: list, design: str) -> str | None:
     """The failure of a regions design with fewer than two regions to hold out, else None."""
     if design != "regions" or len(folds) >= 2:
         return None
-    return ("the readings' directions fill one region of the six about their principal axes, so none can be held "
-            "out: turn the sensor through as many orientations as you can")
+    return (f"fewer than two of the six regions of directions about the readings' principal axes hold {MIN_READINGS} "
+            "readings, so none can be held out: turn the sensor through as many orientations as you can")
 
 
 def _too_few(readings: np.ndarray, folds: list, design: str) -> str | None:
@@ -232,7 +242,8 @@ def describe(metrics: dict, *, gate: bool = False) -> str:
     Parameters
     ----------
     metrics : dict
-        A calibration's metrics (:func:`measure`'s keys; ``heldout_design = "none"`` or none of them: not measured).
+        A calibration's metrics (:func:`measure`'s keys; ``heldout_design = "none"`` or none of them: not measured;
+        a ``heldout_spread`` without a design: one saved before the designs, by regions).
     gate : bool
         The gate's clause instead of the report's.
 
@@ -241,7 +252,8 @@ def describe(metrics: dict, *, gate: bool = False) -> str:
     str
         One clause.
     """
-    design, folds = metrics.get("heldout_design"), metrics.get("heldout_folds", 0)
+    design = metrics.get("heldout_design") or ("regions" if "heldout_spread" in metrics else "none")  # saved before
+    folds = metrics.get("heldout_folds", 0)
     if design == "regions":
         return ("held out beats raw, every region of directions tested" if gate else
                 f"{folds} regions of directions, each calibrated by the fit on the others (held-out design: "
