@@ -50,6 +50,8 @@ from magexp.calibration.checks import check_fit, check_optimum, check_readings, 
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
 from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
                                       recording_dataset, reference_of)
+from magexp.calibration.export import orientable
+from magexp.calibration.heading import heading_of, worst_left
 from magexp.calibration.quality import gyro_extras, quality, report_of
 from magexp.calibration.result import Calibration
 from magexp.core.dataset import Dataset
@@ -68,6 +70,8 @@ from magexp.scenarios.search import centroid_radius, search_box
 
 #: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full``, ``gyro`` and ``auto``.
 MODELS = models_.MODELS
+#: the key of :func:`heldout`'s record holding each fold's ``(W_k, o_k)`` (taken out of the metrics)
+FITS = "heldout_fits"
 #: The estimator of ``model=gyro`` (:mod:`magexp.calibration.models`): Levenberg-Marquardt from the gyro-aided
 #: problem's two-stage start, whatever ``estimator`` is, its Jacobian from one stacked evaluation
 #: (:func:`magexp.estimators.lm.stacked_jacobian`); at most 200 residual evaluations at a tolerance of
@@ -339,7 +343,8 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
     Returns
     -------
     dict
-        ``heldout_spread`` (pooled), ``heldout_spread_max_fold`` and ``heldout_folds``; {} without folds.
+        ``heldout_spread`` (pooled), ``heldout_spread_max_fold``, ``heldout_folds`` and :data:`FITS` (each
+        fold's ``(W_k, o_k)``, for the heading error: :mod:`magexp.calibration.heading`); {} without folds.
     """
     if folds < 2:
         return {}
@@ -348,7 +353,7 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
     tested = [k for k in range(6) if counts[k] >= MIN_READINGS]
     if len(tested) < 2:
         return {"heldout_spread": float("nan"), "heldout_folds": len(tested)}
-    pooled, per_fold = [], []
+    pooled, per_fold, fits = [], [], []
     for k in tested:
         keep = np.flatnonzero(labels != k)
         train = rec.subset(keep)
@@ -362,8 +367,9 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
         mags = np.linalg.norm((rec.readings[labels == k] - o) @ w.T, axis=1)
         pooled.append(mags)
         per_fold.append(spread(mags))
+        fits.append((w, o))
     return {"heldout_spread": spread(np.concatenate(pooled)), "heldout_spread_max_fold": float(np.max(per_fold)),
-            "heldout_folds": len(tested)}
+            "heldout_folds": len(tested), FITS: fits}
 
 
 @says_onboard
@@ -437,14 +443,18 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(measured_heldout(rec, estimator, objective, reference, folds, rng, model, held, checks=checks))
+    fits = metrics.pop(FITS, [])
     report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]),
               **gyro_extras(model, problem, result), **onboard_of(rec, metrics.get("heldout_spread"))}
     if selection is not None:
         report["model_selection"] = selection
-    report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
-    return Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
-                       reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
-                       report=report)
+    cal = Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
+                      reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
+                      report=report)
+    report["heading"] = heading_of(cal, fits, orient=orientable(cal))  # before the gate: gate.max_heading_deg reads it
+    report["gate"] = gate_of(rec, w, {**metrics, "heading_left_deg": worst_left(report["heading"])}, reference,
+                             thresholds, checks=checks, accept=accept)
+    return cal
 
 
 def numpy_path(compiled: bool | None, estimator) -> bool:

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.export import FILE_NAMES, of_calibration
+from magexp.calibration.heading import summary_lines
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
@@ -459,6 +460,7 @@ def summary(cal) -> dict:
         "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)" + (
             f"; the readings' own noise {m['noise_after']:.6g} {u} (from neighbouring readings)" if m.get("noise_after")
             else ""),
+        **summary_lines(r.get("heading")),
         "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} regions of directions, each "
                             "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
