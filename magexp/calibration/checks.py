@@ -183,7 +183,7 @@ GATE = {
     "max_rms_mG": 16.0,      # RMS of |calibrated| - reference (ArduPilot's COMPASS_CAL_FIT default)
     "max_rms_fraction": 0.032,  # the same, relative to the reference, for a raw-count unit (16 / 500 mG)
     "min_region": 0.005,     # each of the 6 regions of directions holds at least this fraction of the readings
-    "max_heading_deg": 10.0,  # level worst heading error left (14 CFR 25.1327(b), 29.1327(b): 10 deg on any heading)
+    "max_heading_deg": 10.0,  # level worst heading error left, held out (14 CFR 25.1327(b), 29.1327(b): 10 deg on any heading)
 }
 #: what to record instead, by failed check
 ADVICE = {
@@ -273,9 +273,9 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     ``max_rms_fraction`` of the reference for counts); each
     of the six regions of directions (``metrics["direction_regions"]``, :func:`magexp.calibration.fit.regions`)
     holding at least ``min_region`` of the readings: a region below it was never held out, so the
-    calibration is untested on attitudes there; the level worst heading error it leaves
-    (``metrics["heading_left_deg"]``, :func:`magexp.calibration.heading.worst_left`: held out, or what its export
-    leaves out) at most ``max_heading_deg`` (default 10°: the deviation 14 CFR 25.1327(b) and 29.1327(b) allow a
+    calibration is untested on attitudes there; the level worst heading error it leaves on directions it was
+    not fitted to (``metrics["heading_left_deg"]``, :func:`magexp.calibration.heading.worst_left`) at most
+    ``max_heading_deg`` (default 10°: the deviation 14 CFR 25.1327(b) and 29.1327(b) allow a
     compensated aircraft compass, in level flight, on any heading).
 
     Returns
@@ -335,8 +335,8 @@ def _heading_check(metrics: dict, t: dict) -> tuple | None:
     left, limit = metrics.get("heading_left_deg"), t.get("max_heading_deg", GATE["max_heading_deg"])
     if left is None or left <= limit:
         return None
-    return ("heading", left, limit, f"it leaves a heading error of up to {left:.3g} deg (level; held out or as "
-                                    f"exported), over the limit {limit:g} deg")
+    return ("heading", left, limit, f"it leaves a heading error of up to {left:.3g} deg (level, held out), over "
+                                    f"the limit {limit:g} deg")
 
 
 def _region_check(metrics: dict, t: dict) -> tuple | None:

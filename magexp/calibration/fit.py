@@ -450,8 +450,8 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
         report["model_selection"] = selection
     cal = Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
                       reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
-                      report=report)
-    report["heading"] = heading_of(cal, fits, orient=orientable(cal))  # before the gate: gate.max_heading_deg reads it
+                      report=report, heldout_fits=fits)
+    report["heading"] = heading_of(cal, orient=orientable(cal))  # before the gate: gate.max_heading_deg reads it
     report["gate"] = gate_of(rec, w, {**metrics, "heading_left_deg": worst_left(report["heading"])}, reference,
                              thresholds, checks=checks, accept=accept)
     return cal

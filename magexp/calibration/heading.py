@@ -316,7 +316,7 @@ def exported_correction(w, offset, unit: str, *, orient: bool) -> Correction:
 
 
 def heading_record(w, offset, total: float, inclination: tuple[float, str], *, unit: str, fits=(),
-                   orient: bool = False) -> dict:
+                   orient: bool = False, missing: str = "no held-out check (folds=0)") -> dict:
     """The ``heading`` record of a calibration's report (``cal.report["heading"]``, ``calibration.json``).
 
     Parameters
@@ -333,19 +333,21 @@ def heading_record(w, offset, total: float, inclination: tuple[float, str], *, u
         The held-out folds' calibrations (empty: the calibrated heading error is not measured).
     orient : bool
         As :func:`exported_correction`.
+    missing : str
+        Why ``fits`` is empty, if it is.
 
     Returns
     -------
     dict
         ``inclination_deg``, ``inclination_source``, ``tilt_deg``, ``n_headings``, and ``raw``, ``calibrated``
-        (None without folds; with ``folds``), ``exported`` (with ``rotation_left_out_deg``, ``orientation``; or
-        ``refused``: the export's line), each :func:`stats`.
+        (with ``folds``; without fits ``{"not_measured": missing}``), ``exported`` (with ``rotation_left_out_deg``,
+        ``orientation``; or ``refused``: the export's line), each :func:`stats`.
     """
     inc, source = inclination
     out = {"inclination_deg": float(inc), "inclination_source": source, "tilt_deg": TILT_DEG,
            "n_headings": N_HEADINGS, "raw": stats(raw_errors(w, offset, total, inc))}
     out["calibrated"] = ({**stats(heldout_errors(w, offset, fits, total, inc)), "folds": len(fits)} if len(fits)
-                         else None)
+                         else {"not_measured": missing})
     try:
         corr = exported_correction(w, offset, unit, orient=orient)
     except MagexpError as exc:
@@ -357,8 +359,9 @@ def heading_record(w, offset, total: float, inclination: tuple[float, str], *, u
 
 
 def worst_left(record: dict | None) -> float | None:
-    """The level worst heading error a calibration leaves (the gate's ``max_heading_deg`` reads it): the larger
-    of the calibrated (held out) and the as-exported one; None when neither was measured.
+    """The level worst heading error a calibration leaves on directions it was not fitted to (held out): what the
+    gate's ``max_heading_deg`` reads; None when not measured. What an export leaves out is the export's to refuse
+    (``max_rotation_deg``): a whole-``W`` target (``ros``, ``c``) leaves nothing out.
 
     Parameters
     ----------
@@ -370,9 +373,7 @@ def worst_left(record: dict | None) -> float | None:
     float or None
         Degrees.
     """
-    parts = [(record or {}).get(k) or {} for k in ("calibrated", "exported")]
-    values = [p["level_worst_deg"] for p in parts if "level_worst_deg" in p]
-    return max(values) if values else None
+    return ((record or {}).get("calibrated") or {}).get("level_worst_deg")
 
 
 def _deg(value: float) -> str:
@@ -380,18 +381,18 @@ def _deg(value: float) -> str:
     return "<0.001" if value < 1e-3 else f"{value:.3g}"
 
 
-def _pair(part: dict | None) -> str:
+def _pair(part: dict) -> str:
     """``worst/RMS°`` of one stage's record, or why it is missing."""
-    if part is None:
-        return "not measured (folds=0)"
+    if "not_measured" in part:
+        return f"not measured ({part['not_measured']})"
     if "refused" in part:
         return "not exportable (a mirrored W)"
     return f"{_deg(part['level_worst_deg'])}/{_deg(part['level_rms_deg'])}°"
 
 
-def _tilted(part: dict | None) -> str:
+def _tilted(part: dict) -> str:
     """``worst`` over every attitude of one stage, or a dash."""
-    return "-" if part is None or "worst_deg" not in part else f"{_deg(part['worst_deg'])}°"
+    return f"{_deg(part['worst_deg'])}°" if "worst_deg" in part else "-"
 
 
 def summary_lines(record: dict | None) -> dict:
@@ -409,8 +410,8 @@ def summary_lines(record: dict | None) -> dict:
     """
     if not record:
         return {}
-    raw, cal, exp = (record.get(k) for k in ("raw", "calibrated", "exported"))
-    left = "" if not (exp or {}).get("rotation_left_out_deg") else (
+    raw, cal, exp = (record.get(k) or {} for k in ("raw", "calibrated", "exported"))
+    left = "" if not exp.get("rotation_left_out_deg") else (
         f"; the export leaves out a rotation of {exp['rotation_left_out_deg']:.3g}°"
         + (f" beside orientation {exp['orientation']}" if exp.get("orientation") is not None else ""))
     return {
@@ -444,22 +445,42 @@ def export_line(correction: Correction, total: float | None, inclination: tuple[
         return None
     s = stats(export_errors(correction, total, inclination[0]))
     return (f"heading error these parameters leave against the calibration (rotation left out, float32): worst "
-            f"{s['level_worst_deg']:.3g} deg, RMS {s['level_rms_deg']:.2g} deg over headings, level; worst "
-            f"{s['worst_deg']:.3g} deg rolled and pitched +-{TILT_DEG:g} deg; at inclination {inclination[0]:.1f} deg "
+            f"{_deg(s['level_worst_deg'])} deg, RMS {_deg(s['level_rms_deg'])} deg over headings, level; worst "
+            f"{_deg(s['worst_deg'])} deg rolled and pitched +-{TILT_DEG:g} deg; at inclination {inclination[0]:.1f} deg "
             f"from {inclination[1]}")
 
 
+def heldout_note(record: dict | None) -> dict:
+    """An export's note of the heading error the calibration itself leaves (held out), or nothing unmeasured.
 
-def heading_of(cal, fits=(), *, orient: bool = False) -> dict:
-    """:func:`heading_record` of a fitted calibration: its ``W``, offset, reference total and site
-    (:func:`inclination_of` its reference and recording).
+    Parameters
+    ----------
+    record : dict or None
+        :func:`heading_record`'s.
+
+    Returns
+    -------
+    dict
+        ``{key: text}`` (empty without held-out folds).
+    """
+    part = (record or {}).get("calibrated") or {}
+    if "folds" not in part:
+        return {}
+    return {"heading error of the calibration (held out)": (
+        f"worst {_deg(part['level_worst_deg'])} deg, RMS {_deg(part['level_rms_deg'])} deg over headings, level; "
+        f"worst {_deg(part['worst_deg'])} deg rolled and pitched +-{record['tilt_deg']:g} deg (each of "
+        f"{part['folds']} regions of directions calibrated by the fit on the others, against the full calibration)")}
+
+
+
+def heading_of(cal, *, orient: bool = False) -> dict:
+    """:func:`heading_record` of a fitted calibration: its ``W``, offset, held-out folds' calibrations
+    (``cal.heldout_fits``), reference total and site (:func:`inclination_of` its reference and recording).
 
     Parameters
     ----------
     cal : Calibration
         A fitted calibration (:class:`magexp.calibration.result.Calibration`).
-    fits : sequence of (W_k, o_k)
-        Its held-out folds' calibrations.
     orient : bool
         As :func:`exported_correction` (:func:`magexp.calibration.export.orientable` of ``cal``).
 
@@ -468,5 +489,36 @@ def heading_of(cal, fits=(), *, orient: bool = False) -> dict:
     dict
         :func:`heading_record`'s.
     """
+    missing = ("no held-out check (folds=0)" if "heldout_spread" not in cal.metrics
+               else "a region of directions held out could not be fitted")
     return heading_record(cal.w, cal.offset, float(np.mean(cal.reference.total)),
-                          inclination_of(cal.reference, cal.recording), unit=cal.unit, fits=fits, orient=orient)
+                          inclination_of(cal.reference, cal.recording), unit=cal.unit, fits=cal.heldout_fits, orient=orient,
+                          missing=missing)
+
+
+def curves(cal, *, orient: bool = False) -> dict:
+    """The figure's heading error at each heading (:func:`headings`): the worst ``|e|`` over the attitudes (and
+    the folds) of each stage of ``cal.report["heading"]`` (raw, calibrated held out, as exported), at its
+    inclination.
+
+    Parameters
+    ----------
+    cal : Calibration
+        A fitted calibration with its ``heading`` record.
+    orient : bool
+        As :func:`exported_correction`.
+
+    Returns
+    -------
+    dict
+        ``{label: (N_HEADINGS,) degrees}`` of the stages measured.
+    """
+    record, total = cal.report["heading"], float(np.mean(cal.reference.total))
+    inc = record["inclination_deg"]
+    out = {"raw": raw_errors(cal.w, cal.offset, total, inc)}
+    if cal.heldout_fits:
+        out["calibrated (held out)"] = heldout_errors(cal.w, cal.offset, cal.heldout_fits, total, inc)
+    if "refused" not in record["exported"]:
+        out["as exported"] = export_errors(exported_correction(cal.w, cal.offset, cal.unit, orient=orient), total,
+                                           inc)
+    return {label: np.abs(err).max(axis=(0, 1)) for label, err in out.items()}
