@@ -396,6 +396,29 @@ def orientable(cal) -> bool:
     return cal.model == "gyro" and not from_log
 
 
+def firmware_correction(cal) -> Correction | str:
+    """The correction a symmetric-matrix firmware (ArduPilot, PX4) would hold for ``cal``, every rotation allowed
+    (the rotation it leaves out is then what ``max_rotation_deg`` must allow), or the line refusing it (a
+    mirrored ``W``): what :mod:`magexp.calibration.heading` measures as exported.
+
+    Parameters
+    ----------
+    cal : Calibration
+        A fitted or loaded calibration.
+
+    Returns
+    -------
+    Correction or str
+        :func:`~magexp.calibration.firmware.to_firmware`'s (units kept, ``orient`` as :func:`orientable`), or
+        its one-line refusal.
+    """
+    try:
+        return to_firmware(cal.w, cal.offset, cal.unit, None, symmetric=True, max_rotation_deg=180.0,
+                           orient=orientable(cal))
+    except MagexpError as exc:
+        return str(exc)
+
+
 def of_calibration(cal, target: str, **options) -> Export:
     """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.Calibration` ``cal``:
     ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``

@@ -50,11 +50,12 @@ from magexp.calibration.checks import check_fit, check_optimum, check_readings, 
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
 from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
                                       recording_dataset, reference_of)
-from magexp.calibration.export import orientable
+from magexp.calibration.export import firmware_correction
 from magexp.calibration.heading import heading_of, worst_left
 from magexp.calibration.quality import gyro_extras, quality, report_of
 from magexp.calibration.result import Calibration
 from magexp.core.dataset import Dataset
+from magexp.core.field_model import gps_field
 from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import canonical, coverage, direction_regions, spread
 from magexp.core.recording import UNITS, Recording
@@ -451,7 +452,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     cal = Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
                       reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
                       report=report, heldout_fits=fits)
-    report["heading"] = heading_of(cal, orient=orientable(cal))  # before the gate: gate.max_heading_deg reads it
+    report["heading"] = heading_of(cal, firmware_correction(cal), gps=gps_field(rec))  # before the gate: gate.max_heading_deg reads it
     report["gate"] = gate_of(rec, w, {**metrics, "heading_left_deg": worst_left(report["heading"])}, reference,
                              thresholds, checks=checks, accept=accept)
     return cal

@@ -60,10 +60,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.calibration.firmware import Correction, to_firmware
-from magexp.core.field_model import field_of_recording
 from magexp.core.geometry import rot_x, rot_y
-from magexp.errors import MagexpError
 
 #: the inclination (degrees) used when no place is known: mid-latitude, where most drones fly. The IGRF-14
 #: (:mod:`magexp.core.field_model`) gives |I| of about 66° in London and Kansas, 68° in Berlin, 59° in Beijing,
@@ -203,7 +200,7 @@ def heldout_errors(w, offset, fits, total: float, inclination_deg: float, **kw) 
     return errors(a, c, inclination_deg, **kw)
 
 
-def export_errors(correction: Correction, total: float, inclination_deg: float, **kw) -> np.ndarray:
+def export_errors(correction, total: float, inclination_deg: float, **kw) -> np.ndarray:
     """Heading errors of a firmware's correction as exported (:func:`~magexp.calibration.firmware.to_firmware`)
     against the calibration it came from: the rotation ``R`` left out and float32 rounding (module docstring).
 
@@ -250,17 +247,19 @@ def stats(err: np.ndarray) -> dict:
             "level_worst_deg": float(np.max(np.abs(level))), "level_rms_deg": float(np.sqrt(np.mean(level ** 2)))}
 
 
-def inclination_of(reference, rec=None) -> tuple[float, str]:
-    """The site's ``|I|`` and where it comes from: the reference's field model, else the log's GPS through the
-    IGRF (:func:`magexp.core.field_model.field_of_recording`), else the recording's ``# field:`` vector (its
-    nav frame, z vertical), else :data:`DEFAULT_INCLINATION_DEG`.
+def inclination_of(reference, rec=None, gps=None) -> tuple[float, str]:
+    """The site's ``|I|`` and where it comes from: the reference's field model, else ``gps`` (the field model at
+    the log's GPS place and date, :func:`magexp.core.field_model.gps_field`), else the recording's ``# field:``
+    vector (its nav frame, z vertical), else :data:`DEFAULT_INCLINATION_DEG`.
 
     Parameters
     ----------
     reference : Reference
         The calibration's reference (:class:`magexp.calibration.inputs.Reference`; its ``record``).
     rec : Recording or None
-        The recording (its GPS place and date in ``meta``, its ``field``).
+        The recording (its ``field``).
+    gps : ReferenceField or None
+        The field model at the log's GPS (:class:`magexp.core.field_model.ReferenceField`).
 
     Returns
     -------
@@ -272,51 +271,18 @@ def inclination_of(reference, rec=None) -> tuple[float, str]:
         return abs(float(record["inclination_deg"])), (f"{record.get('generation', 'the field model')} at "
                                                        f"{record['latitude']:g}, {record['longitude']:g}, "
                                                        f"{record['date']}")
-    meta = {} if rec is None else rec.meta
-    if "latitude" in meta and "longitude" in meta and "date" in meta:
-        try:
-            model = field_of_recording(rec)
-        except MagexpError:
-            model = None
-        if model is not None:
-            place = model.record()
-            return abs(model.inclination_deg), (f"{model.generation} at the log's GPS {place['latitude']:g}, "
-                                                f"{place['longitude']:g}, {place['date']}")
+    if gps is not None:
+        place = gps.record()
+        return abs(gps.inclination_deg), (f"{gps.generation} at the log's GPS {place['latitude']:g}, "
+                                          f"{place['longitude']:g}, {place['date']}")
     field = None if rec is None else rec.field
     if field is not None and np.linalg.norm(field) > 0:
         return abs(float(np.degrees(np.arctan2(field[2], np.hypot(field[0], field[1]))))), "the '# field:' vector"
     return DEFAULT_INCLINATION_DEG, "the default (no place given: field.latitude=..., field.date=...)"
 
 
-def exported_correction(w, offset, unit: str, *, orient: bool) -> Correction:
-    """The correction a symmetric-matrix firmware (ArduPilot, PX4) would hold, every rotation allowed
-    (what ``max_rotation_deg`` would have to allow is then the rotation left out).
-
-    Parameters
-    ----------
-    w, offset : array_like
-        The calibration.
-    unit : str
-        The readings' unit (kept: heading is unit-free).
-    orient : bool
-        The rotation was determined (:func:`magexp.calibration.export.orientable`): the nearest standard
-        orientation is exported.
-
-    Returns
-    -------
-    Correction
-        :func:`~magexp.calibration.firmware.to_firmware`'s.
-
-    Raises
-    ------
-    MagexpError
-        A mirrored ``W`` (no firmware holds it).
-    """
-    return to_firmware(w, offset, unit, None, symmetric=True, max_rotation_deg=180.0, orient=orient)
-
-
-def heading_record(w, offset, total: float, inclination: tuple[float, str], *, unit: str, fits=(),
-                   orient: bool = False, missing: str = "no held-out check (folds=0)") -> dict:
+def heading_record(w, offset, total: float, inclination: tuple[float, str], *, exported, fits=(),
+                   missing: str = "no held-out check (folds=0)") -> dict:
     """The ``heading`` record of a calibration's report (``cal.report["heading"]``, ``calibration.json``).
 
     Parameters
@@ -327,12 +293,11 @@ def heading_record(w, offset, total: float, inclination: tuple[float, str], *, u
         The reference total, ``B``'s unit.
     inclination : tuple
         :func:`inclination_of`'s ``(degrees, source)``.
-    unit : str
-        The readings' unit.
+    exported : Correction or str
+        The correction a symmetric-matrix firmware holds (:func:`magexp.calibration.export.firmware_correction`),
+        or the line refusing it.
     fits : sequence of (W_k, o_k)
         The held-out folds' calibrations (empty: the calibrated heading error is not measured).
-    orient : bool
-        As :func:`exported_correction`.
     missing : str
         Why ``fits`` is empty, if it is.
 
@@ -348,13 +313,11 @@ def heading_record(w, offset, total: float, inclination: tuple[float, str], *, u
            "n_headings": N_HEADINGS, "raw": stats(raw_errors(w, offset, total, inc))}
     out["calibrated"] = ({**stats(heldout_errors(w, offset, fits, total, inc)), "folds": len(fits)} if len(fits)
                          else {"not_measured": missing})
-    try:
-        corr = exported_correction(w, offset, unit, orient=orient)
-    except MagexpError as exc:
-        out["exported"] = {"refused": str(exc)}
+    if isinstance(exported, str):
+        out["exported"] = {"refused": exported}
     else:
-        out["exported"] = {**stats(export_errors(corr, total, inc)), "rotation_left_out_deg": corr.rotation_deg,
-                           "orientation": corr.orientation}
+        out["exported"] = {**stats(export_errors(exported, total, inc)), "rotation_left_out_deg": exported.rotation_deg,
+                           "orientation": exported.orientation}
     return out
 
 
@@ -423,7 +386,7 @@ def summary_lines(record: dict | None) -> dict:
     }
 
 
-def export_line(correction: Correction, total: float | None, inclination: tuple[float, str] | None) -> str | None:
+def export_line(correction, total: float | None, inclination: tuple[float, str] | None) -> str | None:
     """An export file's comment on the heading error its parameters leave against the calibration
     (:func:`export_errors`), or None without a site.
 
@@ -473,7 +436,7 @@ def heldout_note(record: dict | None) -> dict:
 
 
 
-def heading_of(cal, *, orient: bool = False) -> dict:
+def heading_of(cal, exported, *, gps=None) -> dict:
     """:func:`heading_record` of a fitted calibration: its ``W``, offset, held-out folds' calibrations
     (``cal.heldout_fits``), reference total and site (:func:`inclination_of` its reference and recording).
 
@@ -481,8 +444,10 @@ def heading_of(cal, *, orient: bool = False) -> dict:
     ----------
     cal : Calibration
         A fitted calibration (:class:`magexp.calibration.result.Calibration`).
-    orient : bool
-        As :func:`exported_correction` (:func:`magexp.calibration.export.orientable` of ``cal``).
+    exported : Correction or str
+        As :func:`heading_record`.
+    gps : ReferenceField or None
+        As :func:`inclination_of`.
 
     Returns
     -------
@@ -492,11 +457,11 @@ def heading_of(cal, *, orient: bool = False) -> dict:
     missing = ("no held-out check (folds=0)" if "heldout_spread" not in cal.metrics
                else "a region of directions held out could not be fitted")
     return heading_record(cal.w, cal.offset, float(np.mean(cal.reference.total)),
-                          inclination_of(cal.reference, cal.recording), unit=cal.unit, fits=cal.heldout_fits, orient=orient,
+                          inclination_of(cal.reference, cal.recording, gps), exported=exported, fits=cal.heldout_fits,
                           missing=missing)
 
 
-def curves(cal, *, orient: bool = False) -> dict:
+def curves(cal, exported) -> dict:
     """The figure's heading error at each heading (:func:`headings`): the worst ``|e|`` over the attitudes (and
     the folds) of each stage of ``cal.report["heading"]`` (raw, calibrated held out, as exported), at its
     inclination.
@@ -505,8 +470,8 @@ def curves(cal, *, orient: bool = False) -> dict:
     ----------
     cal : Calibration
         A fitted calibration with its ``heading`` record.
-    orient : bool
-        As :func:`exported_correction`.
+    exported : Correction or str
+        As :func:`heading_record`.
 
     Returns
     -------
@@ -518,7 +483,6 @@ def curves(cal, *, orient: bool = False) -> dict:
     out = {"raw": raw_errors(cal.w, cal.offset, total, inc)}
     if cal.heldout_fits:
         out["calibrated (held out)"] = heldout_errors(cal.w, cal.offset, cal.heldout_fits, total, inc)
-    if "refused" not in record["exported"]:
-        out["as exported"] = export_errors(exported_correction(cal.w, cal.offset, cal.unit, orient=orient), total,
-                                           inc)
+    if not isinstance(exported, str):
+        out["as exported"] = export_errors(exported, total, inc)
     return {label: np.abs(err).max(axis=(0, 1)) for label, err in out.items()}

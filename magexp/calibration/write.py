@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.calibration.export import FILE_NAMES, of_calibration, orientable
+from magexp.calibration.export import FILE_NAMES, firmware_correction, of_calibration
 from magexp.calibration.heading import curves as heading_curves, summary_lines
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
@@ -266,7 +266,7 @@ def figure(cal):
     title = f"{cal.name}: {cal.model} by {cal.estimator} ({cal.objective}), spread " \
             f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
     record = cal.report.get("heading")
-    panel = None if not record else (heading_curves(cal, orient=orientable(cal)),
+    panel = None if not record else (heading_curves(cal, firmware_correction(cal)),
                                      f"heading error at inclination {record['inclination_deg']:.1f}° "
                                      f"({record['inclination_source']})")
     return calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.field_unit,
