@@ -125,9 +125,9 @@ def errors(matrix, offset, inclination_deg: float, *, tilt_deg: float = TILT_DEG
     psi = np.radians(headings(n_headings))
     inc = np.radians(inclination_deg)
     h = np.stack([np.cos(inc) * np.cos(psi), -np.cos(inc) * np.sin(psi), np.full_like(psi, np.sin(inc))], axis=1)
-    body = np.einsum("aji,kj->aki", tilt, h)  # b = T_a^T h
-    seen = np.einsum("mij,akj->maki", a, body) + c[:, None, None, :]
-    level = np.einsum("aij,makj->maki", tilt, seen)
+    body = h @ tilt  # (A, K, 3): b = T_a^T h, as rows
+    seen = body[None] @ a.transpose(0, 2, 1)[:, None] + c[:, None, None, :]  # (M, A, K, 3): A b + c
+    level = seen @ tilt.transpose(0, 2, 1)[None]  # T_a b̂
     err = np.degrees(np.arctan2(-level[..., 1], level[..., 0])) - np.degrees(psi)
     return -((-err + 180.0) % 360.0 - 180.0)  # wrapped to (-180, 180]
 
