@@ -374,7 +374,7 @@ def summary_lines(record: dict | None) -> dict:
     if not record:
         return {}
     raw, cal, exp = (record.get(k) or {} for k in ("raw", "calibrated", "exported"))
-    left = "" if not exp.get("rotation_left_out_deg") else (
+    left = "" if not exp.get("rotation_left_out_deg", 0.0) >= 1e-3 else (
         f"; the export leaves out a rotation of {exp['rotation_left_out_deg']:.3g}°"
         + (f" beside orientation {exp['orientation']}" if exp.get("orientation") is not None else ""))
     return {
