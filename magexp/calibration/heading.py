@@ -378,7 +378,7 @@ def summary_lines(record: dict | None) -> dict:
         f"; the export leaves out a rotation of {exp['rotation_left_out_deg']:.3g}°"
         + (f" beside orientation {exp['orientation']}" if exp.get("orientation") is not None else ""))
     return {
-        "heading error": (f"raw {_pair(raw)} -> calibrated (held out) {_pair(cal)} -> as exported {_pair(exp)} "
+        "heading error": (f"raw {_pair(raw)} -> calibrated (held out) {_pair(cal)} -> as exported to ArduPilot/PX4 {_pair(exp)} "
                           f"(worst/RMS over {record['n_headings']} headings, level; at inclination "
                           f"{record['inclination_deg']:.1f}° from {record['inclination_source']}){left}"),
         "heading error tilted": (f"raw {_tilted(raw)} -> calibrated {_tilted(cal)} -> as exported {_tilted(exp)} "
