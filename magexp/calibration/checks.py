@@ -183,6 +183,7 @@ GATE = {
     "max_rms_mG": 16.0,      # RMS of |calibrated| - reference (ArduPilot's COMPASS_CAL_FIT default)
     "max_rms_fraction": 0.032,  # the same, relative to the reference, for a raw-count unit (16 / 500 mG)
     "min_region": 0.005,     # each of the 6 regions of directions holds at least this fraction of the readings
+    "max_heading_deg": 10.0,  # level worst heading error left, held out (14 CFR 25.1327(b), 29.1327(b): 10 deg on any heading)
 }
 #: what to record instead, by failed check
 ADVICE = {
@@ -198,6 +199,8 @@ ADVICE = {
     "radius": "the readings' radius is not an Earth field: check data.unit and that the readings are raw",
     "rms": "the calibrated total still varies more than the readings' noise explains: record slowly, away from "
            "iron and motors",
+    "heading": "the compass would be off by more than the limit on some heading: record more orientations "
+               "(turn about every axis); gate.max_heading_deg=<degrees> sets the limit",
     "regions": "no held-out check could test the calibration on attitudes there, and it is untested where the data "
                "stop: record turns (or static shots) that point the sensor so",
 }
@@ -273,7 +276,10 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     ``max_rms_fraction`` of the reference for counts); each
     of the six regions of directions (``metrics["direction_regions"]``, :func:`magexp.calibration.fit.regions`)
     holding at least ``min_region`` of the readings: a region below it was never held out, so the
-    calibration is untested on attitudes there.
+    calibration is untested on attitudes there; the level worst heading error it leaves on directions it was
+    not fitted to (``metrics["heading_left_deg"]``, :func:`magexp.calibration.heading.worst_left`) at most
+    ``max_heading_deg`` (default 10°: the deviation 14 CFR 25.1327(b) and 29.1327(b) allow a
+    compensated aircraft compass, in level flight, on any heading).
 
     Returns
     -------
@@ -314,7 +320,7 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
                  f"radius {raw_radius:.4g} is {raw_radius / reference:.3g} times the reference {reference:.4g} "
                  f"(allowed [{low:g}, {high:g}])")
     for check in (_rms_check(metrics["rms_after"], reference, to_mg, t, metrics.get("noise_after", 0.0)),
-                  _region_check(metrics, t)):
+                  _region_check(metrics, t), _heading_check(metrics, t)):
         if check:
             fail(*check)
     return failed
@@ -331,6 +337,16 @@ def _heldout_text(held: float, raw: float, metrics: dict) -> tuple[str, str | No
                 f"fit without the readings within {metrics['heldout_exclusion_deg']:.1f} deg of it, is not below the raw "
                 f"{100 * raw:.3g} %", ADVICE["heldout_shots"])
     return f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %", None
+
+
+def _heading_check(metrics: dict, t: dict) -> tuple | None:
+    """``(check, value, threshold, text)`` when the level worst heading error the calibration leaves
+    (``metrics["heading_left_deg"]``: :func:`magexp.calibration.heading.worst_left`) exceeds ``max_heading_deg``."""
+    left, limit = metrics.get("heading_left_deg"), t.get("max_heading_deg", GATE["max_heading_deg"])
+    if left is None or left <= limit:
+        return None
+    return ("heading", left, limit, f"it leaves a heading error of up to {left:.3g} deg (level, held out), over "
+                                    f"the limit {limit:g} deg")
 
 
 def _region_check(metrics: dict, t: dict) -> tuple | None:

@@ -53,9 +53,12 @@ from magexp.calibration.checks import check_fit, check_optimum, check_readings, 
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
 from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
                                       recording_dataset, reference_of)
+from magexp.calibration.export import firmware_correction
+from magexp.calibration.heading import heading_of, worst_left
 from magexp.calibration.quality import gyro_extras, quality, report_of
 from magexp.calibration.result import Calibration
 from magexp.core.dataset import Dataset
+from magexp.core.field_model import gps_field
 from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import canonical, coverage, direction_regions, spread
 from magexp.core.recording import UNITS, Recording
@@ -347,7 +350,8 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
     -------
     dict
         :func:`magexp.calibration.holdout.measure`'s record (``heldout_spread`` pooled, ``heldout_design``,
-        ``heldout_folds``, ...); without folds ``heldout_design = "none"`` and ``heldout_folds``.
+        ``heldout_folds``, :data:`~magexp.calibration.holdout.FITS` (each fold's ``(W_k, o_k)``, for the heading
+        error: :mod:`magexp.calibration.heading`), ...); without folds ``heldout_design = "none"`` and ``heldout_folds``.
     """
     if folds < 2:
         return {"heldout_design": "none", "heldout_folds": folds}
@@ -435,14 +439,18 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(measured_heldout(rec, estimator, objective, reference, folds, rng, model, held, checks=checks))
+    fits = metrics.pop(holdout.FITS, [])
     report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]),
               **gyro_extras(model, problem, result), **onboard_of(rec, metrics.get("heldout_spread"))}
     if selection is not None:
         report["model_selection"] = selection
-    report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
-    return Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
-                       reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
-                       report=report)
+    cal = Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
+                      reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
+                      report=report, heldout_fits=fits)
+    report["heading"] = heading_of(cal, firmware_correction(cal), gps=gps_field(rec))  # before the gate: gate.max_heading_deg reads it
+    report["gate"] = gate_of(rec, w, {**metrics, "heading_left_deg": worst_left(report["heading"])}, reference,
+                             thresholds, checks=checks, accept=accept)
+    return cal
 
 
 def numpy_path(compiled: bool | None, estimator) -> bool:

@@ -58,6 +58,9 @@ MAX_EXCLUSION_FOLDS = 24
 #: 0.005, :data:`magexp.calibration.checks.GATE`) a region of fewer than :data:`MIN_READINGS` readings is refused by
 #: the gate as untested anyway, and the design's ``N x (readings per fold)`` direction products stay small.
 MAX_EXCLUSION_READINGS = round(MIN_READINGS / GATE["min_region"])
+#: The key of :func:`measure`'s record holding each fold's ``(W_k, o_k)`` (for the heading error,
+#: :mod:`magexp.calibration.heading`; the pipeline takes it out of the metrics).
+FITS = "heldout_fits"
 #: Fewest shots, spread evenly, for which each fit keeps :data:`MIN_READINGS` readings beyond the exclusion cap
 #: (a sixth of them left out with the held-out one): ``ceil(MIN_READINGS / (5/6)) + 1``.
 MIN_SHOTS = math.ceil(MIN_READINGS / (5.0 / 6.0)) + 1
@@ -167,7 +170,8 @@ def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str 
     -------
     dict
         ``heldout_spread`` (NaN when a fold gives none), ``heldout_folds``, ``heldout_design``, ``heldout_readings``
-        (how many were held out), ``heldout_min_kept`` (the fewest any fit kept); the regions design adds
+        (how many were held out), ``heldout_min_kept`` (the fewest any fit kept), :data:`FITS` (each fold's
+        ``(W_k, o_k)``, measured folds only); the regions design adds
         ``heldout_spread_max_fold``, the exclusion design ``heldout_exclusion_deg``; a NaN adds ``heldout_failure``.
     """
     design = design_of(labels)
@@ -178,18 +182,20 @@ def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str 
     if design == "exclusion":
         record["heldout_exclusion_deg"] = EXCLUSION_DEG
     failure = _too_few(readings, folds, design) or _too_few_regions(folds, design)
-    pooled, per_fold = [], []
+    pooled, per_fold, fits = [], [], []
     for held, kept in ([] if failure else folds):
         fitted = fit_on(kept)
         if fitted is None:
             failure = _fold_failed(readings, held, kept, design, model)
             break
         w, o = fitted
+        fits.append(fitted)
         pooled.append(np.linalg.norm((readings[held] - o) @ w.T, axis=1))
         per_fold.append(spread(pooled[-1]))
     if failure:
         return {**record, "heldout_spread": float("nan"), "heldout_failure": failure}
     record["heldout_spread"] = spread(np.concatenate(pooled))
+    record[FITS] = fits
     if design == "regions":
         record["heldout_spread_max_fold"] = float(np.max(per_fold))
     return record

@@ -76,6 +76,9 @@ class GateOptions:
                                                         "(16 of 500 mGauss)")
     min_region: float = _gate("min_region", "each of the 6 regions of directions holds this fraction of the readings "
                                             "(else untested)")
+    max_heading_deg: float = _gate("max_heading_deg", "level worst heading error the calibration leaves on directions "
+                                                      "it was not fitted to (held out), degrees (14 CFR 25.1327(b): 10 "
+                                                      "on any heading)")
 
 
 @dataclass

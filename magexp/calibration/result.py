@@ -47,6 +47,7 @@ class Calibration:
     seed: int = 0
     config: dict = field(default_factory=dict)  # the settings it was made with (the command's config, the call's)
     saved: dict | None = None  # the JSON it was loaded from (:meth:`load`)
+    heldout_fits: list = field(default_factory=list)  # each held-out fold's (W_k, o_k) (magexp.calibration.heading)
 
     @property
     def unit(self) -> str:

@@ -29,7 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.calibration.export import FILE_NAMES, of_calibration
+from magexp.calibration.export import FILE_NAMES, firmware_correction, of_calibration
+from magexp.calibration.heading import curves as heading_curves, summary_lines
 from magexp.calibration.holdout import describe as describe_heldout
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
@@ -265,8 +266,12 @@ def figure(cal):
 
     title = f"{cal.name}: {cal.model} by {cal.estimator} ({cal.objective}), spread " \
             f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
+    record = cal.report.get("heading")
+    panel = None if not record else (heading_curves(cal, firmware_correction(cal)),
+                                     f"heading error at inclination {record['inclination_deg']:.1f}° "
+                                     f"({record['inclination_source']})")
     return calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.field_unit,
-                              title=title, centre=cal.offset)
+                              title=title, centre=cal.offset, heading=panel)
 
 
 def export_name(target: str) -> str:
@@ -459,6 +464,7 @@ def summary(cal) -> dict:
         "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)" + (
             f"; the readings' own noise {m['noise_after']:.6g} {u} (from neighbouring readings)" if m.get("noise_after")
             else ""),
+        **summary_lines(r.get("heading")),
         "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({describe_heldout(m)})" if "heldout_spread" in m
                             else describe_heldout(m)),
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
