@@ -49,7 +49,7 @@ def test_repr_is_short_and_summary_has_the_numbers(cal):
 
 def test_plot_returns_a_figure_and_export_writes_beside(cal, tmp_path):
     fig = cal.plot()
-    assert type(fig).__name__ == "Figure" and len(fig.axes) == 6
+    assert type(fig).__name__ == "Figure" and len(fig.axes) == 7  # the heading-error panel too
     cells = round(cal.metrics["coverage_cells"] * 32)  # the map shows the report's coverage of the raw directions
     assert f"coverage: {cells} of 32 cells" in [ax.get_title() for ax in fig.axes]
     path = cal.export("ros", tmp_path)

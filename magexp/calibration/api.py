@@ -123,7 +123,8 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
         The reference total field (the readings' unit); None: the recording's, else estimated
         (:func:`magexp.calibration.fit.reference_of`).
     folds : int
-        The held-out check: 0 none; 2 or more, each region of directions calibrated by the fit on the others.
+        The held-out check: 0 none; 2 or more, each region of directions calibrated by the fit on the others (a few
+        static shots: each reading by the fit without its neighbours, :mod:`magexp.calibration.holdout`).
     seed : int
         The estimator's random generator derives from it (:func:`magexp.core.seeding.run_generators`).
     checks : bool

@@ -183,11 +183,15 @@ GATE = {
     "max_rms_mG": 16.0,      # RMS of |calibrated| - reference (ArduPilot's COMPASS_CAL_FIT default)
     "max_rms_fraction": 0.032,  # the same, relative to the reference, for a raw-count unit (16 / 500 mG)
     "min_region": 0.005,     # each of the 6 regions of directions holds at least this fraction of the readings
+    "max_heading_deg": 10.0,  # level worst heading error left, held out (14 CFR 25.1327(b), 29.1327(b): 10 deg on any heading)
 }
 #: what to record instead, by failed check
 ADVICE = {
     "heldout": "the calibration does not hold on readings it was not fitted to: record more orientations "
                "(turn about every axis)",
+    "heldout_shots": "the calibration does not hold on directions it was not fitted to: record more static shots, "
+                     "spread evenly over every direction and away from iron, or fit fewer parameters (model=sphere "
+                     "or diagonal); raw readings already as consistent as the sensor's noise need no calibration",
     "anisotropy": "no magnetometer measured stretches one axis that much (at most 2.25, a QMC5883L: "
                   "docs/calibrate.md): check data.mag_axes and that no iron is fixed beside the sensor; "
                   "gate.max_anisotropy=<limit> accepts it",
@@ -195,8 +199,10 @@ ADVICE = {
     "radius": "the readings' radius is not an Earth field: check data.unit and that the readings are raw",
     "rms": "the calibrated total still varies more than the readings' noise explains: record slowly, away from "
            "iron and motors",
+    "heading": "the compass would be off by more than the limit on some heading: record more orientations "
+               "(turn about every axis); gate.max_heading_deg=<degrees> sets the limit",
     "regions": "no held-out check could test the calibration on attitudes there, and it is untested where the data "
-               "stop: record turns that point the sensor so",
+               "stop: record turns (or static shots) that point the sensor so",
 }
 
 
@@ -270,7 +276,10 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     ``max_rms_fraction`` of the reference for counts); each
     of the six regions of directions (``metrics["direction_regions"]``, :func:`magexp.calibration.fit.regions`)
     holding at least ``min_region`` of the readings: a region below it was never held out, so the
-    calibration is untested on attitudes there.
+    calibration is untested on attitudes there; the level worst heading error it leaves on directions it was
+    not fitted to (``metrics["heading_left_deg"]``, :func:`magexp.calibration.heading.worst_left`) at most
+    ``max_heading_deg`` (default 10°: the deviation 14 CFR 25.1327(b) and 29.1327(b) allow a
+    compensated aircraft compass, in level flight, on any heading).
 
     Returns
     -------
@@ -280,14 +289,15 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     t = GATE if thresholds is None else thresholds
     failed = []
 
-    def fail(check, value, threshold, text):
+    def fail(check, value, threshold, text, advice=None):
         reason = f"check {check!r} failed: {text}"
+        advice = ADVICE[check] if advice is None else advice
         failed.append({"check": check, "value": value, "threshold": threshold, "reason": reason,
-                       "line": f"{reason}: {ADVICE[check]}"})
+                       "line": f"{reason}: {advice}" if advice else reason})
 
     held, raw = metrics.get("heldout_spread"), metrics["spread_before"]
     if held is not None and not (held < t["heldout_vs_raw"] * raw):
-        fail("heldout", held, t["heldout_vs_raw"] * raw, _heldout_text(held, raw))
+        fail("heldout", held, t["heldout_vs_raw"] * raw, *_heldout_text(held, raw, metrics))
     sigma = np.linalg.svd(w, compute_uv=False)
     if sigma[0] > t["max_anisotropy"] * sigma[-1]:
         fail("anisotropy", float(sigma[0] / sigma[-1]), t["max_anisotropy"],
@@ -310,17 +320,33 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
                  f"radius {raw_radius:.4g} is {raw_radius / reference:.3g} times the reference {reference:.4g} "
                  f"(allowed [{low:g}, {high:g}])")
     for check in (_rms_check(metrics["rms_after"], reference, to_mg, t, metrics.get("noise_after", 0.0)),
-                  _region_check(metrics, t)):
+                  _region_check(metrics, t), _heading_check(metrics, t)):
         if check:
             fail(*check)
     return failed
 
 
-def _heldout_text(held: float, raw: float) -> str:
-    """Why the held-out check failed (:func:`gate`): its spread against the raw one, or no spread at all."""
-    if np.isfinite(held):
-        return f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %"
-    return "the fit on the other regions failed for a held-out region of directions, so no held-out spread"
+def _heldout_text(held: float, raw: float, metrics: dict) -> tuple[str, str | None]:
+    """``(why, advice)`` of a failed held-out check (:func:`gate`): its spread against the raw one, by the design
+    that measured it, or, with no spread, the cause :mod:`magexp.calibration.holdout` found (its own remedy)."""
+    if not np.isfinite(held):
+        return (metrics.get("heldout_failure")
+                or "no held-out spread could be measured: record more orientations (turn about every axis)"), ""
+    if metrics.get("heldout_design") == "exclusion":
+        return (f"held-out spread {100 * held:.3g} % of {metrics['heldout_readings']} readings, each calibrated by the "
+                f"fit without the readings within {metrics['heldout_exclusion_deg']:.1f} deg of it, is not below the raw "
+                f"{100 * raw:.3g} %", ADVICE["heldout_shots"])
+    return f"held-out spread {100 * held:.3g} % is not below the raw {100 * raw:.3g} %", None
+
+
+def _heading_check(metrics: dict, t: dict) -> tuple | None:
+    """``(check, value, threshold, text)`` when the level worst heading error the calibration leaves
+    (``metrics["heading_left_deg"]``: :func:`magexp.calibration.heading.worst_left`) exceeds ``max_heading_deg``."""
+    left, limit = metrics.get("heading_left_deg"), t.get("max_heading_deg", GATE["max_heading_deg"])
+    if left is None or left <= limit:
+        return None
+    return ("heading", left, limit, f"it leaves a heading error of up to {left:.3g} deg (level, held out), over "
+                                    f"the limit {limit:g} deg")
 
 
 def _region_check(metrics: dict, t: dict) -> tuple | None:

@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from magexp.calibration.heading import export_line, heldout_note
 from magexp.calibration.firmware import (MAX_ROTATION_DEG, STANDARD_ROTATIONS, Correction, check_counts_nt,
                                          check_max_rotation, to_firmware)
 from magexp.core.atomic import write_text
@@ -77,7 +78,9 @@ class Export:
 
 
 
-def _comments(notes: dict | None, convention: str, correction: Correction, marker: str) -> list[str]:
+def _comments(notes: dict | None, convention: str, correction: Correction, marker: str, site=None) -> list[str]:
+    """The file's head comment lines: the convention, the orientation and rotation, the heading error (with a
+    ``site``: :func:`magexp.calibration.heading.export_line`), the notes."""
     lines = [f"{marker} magexp magnetometer calibration", f"{marker} {convention}"]
     if correction.orientation is not None:
         roll, pitch, yaw = STANDARD_ROTATIONS[correction.orientation]
@@ -87,6 +90,8 @@ def _comments(notes: dict | None, convention: str, correction: Correction, marke
     if correction.rotation_deg > 0:
         lines.append(f"{marker} W = R S (polar decomposition): S exported, R turns by "
                      f"{correction.rotation_deg:.3g} deg (the firmware's field is R^T times magexp's)")
+    heading = export_line(correction, *(site or (None, None)))
+    lines += [f"{marker} {heading}"] if heading else []
     for key, value in (notes or {}).items():
         text = " ".join(str(value).split())  # one line
         lines.append(f"{marker} {key}: {text}")
@@ -94,7 +99,8 @@ def _comments(notes: dict | None, convention: str, correction: Correction, marke
 
 
 def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0,
-              max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False, notes: dict | None = None) -> Export:
+              max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False, notes: dict | None = None,
+              site=None) -> Export:
     """ArduPilot parameters (a Mission Planner / MAVProxy ``.param`` file, ``NAME,VALUE`` lines).
 
     Convention (``AP_Compass_Backend::correct_field``): ``B = M (s (r + OFS))``, mGauss, ``r`` the
@@ -113,6 +119,10 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
         The compass, 0, 1 or 2.
     notes : dict, optional
         ``key: text`` comment lines written at the file's head.
+    site : tuple, optional
+        ``(total, (inclination_deg, source))``: the reference total (the calibration's field unit) and the site's
+        inclination (:func:`magexp.calibration.heading.inclination_of`), for a comment line on the heading error
+        these parameters leave against the calibration (:func:`magexp.calibration.heading.export_line`); None: none.
 
     Returns
     -------
@@ -149,14 +159,15 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
         warnings.append(f"an offset of {np.max(np.abs(ofs)):.6g} mGauss exceeds COMPASS_OFFS_MAX's default "
                         f"{ARDUPILOT_OFFSET_MAX:g} (a pre-arm check)")
     head = _comments(notes, "ArduPilot: B = M (COMPASS_SCALE (raw + COMPASS_OFS)), M = [[DIA_X, ODI_X, ODI_Y], "
-                            "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#")
+                            "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#", site)
     head += [f"# WARNING: {text}" for text in warnings]
     text = "\n".join(head + [f"{k},{v!r}" for k, v in values.items()]) + "\n"
     return Export("ardupilot", text, values, tuple(warnings))
 
 
 def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0, rotation=None,
-        max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False, notes: dict | None = None) -> Export:
+        max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False, notes: dict | None = None,
+        site=None) -> Export:
     """PX4 parameters (a QGroundControl ``.params`` file: ``vehicle component name value type``).
 
     Convention (``Magnetometer::Correct``): ``B = R S (r − OFF)``, gauss; ``S`` from ``SCALE`` and
@@ -176,7 +187,7 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
         The slot ``n`` of ``CAL_MAGn_*``, 0-3.
     rotation : array_like, shape (3, 3), optional
         PX4's ``R`` (board or ``CAL_MAGn_ROT``) taken out of ``W`` first: ``Rᵀ W`` is exported.
-    notes : dict, optional
+    notes, site : optional
         Comment lines, as :func:`ardupilot`'s.
 
     Returns
@@ -208,7 +219,7 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
         values[ORIENTATION_KEYS["px4"].format(n=n)] = c.orientation
     head = _comments(notes, "PX4: B = R S (raw - CAL_MAGn_OFF), S = [[XSCALE, XODIAG, YODIAG], [XODIAG, YSCALE, "
                             "ZODIAG], [YODIAG, ZODIAG, ZSCALE]]; gauss; keep CAL_MAGn_ID"
-                            + ("" if c.orientation is not None else " and CAL_MAGn_ROT"), c, "#")
+                            + ("" if c.orientation is not None else " and CAL_MAGn_ROT"), c, "#", site)
     head.append("# Vehicle-Id Component-Id Name Value Type")
     text = "\n".join(head + [f"1\t1\t{k}\t{v!r}\t{INT32 if isinstance(v, int) else REAL32}"
                              for k, v in values.items()]) + "\n"
@@ -216,7 +227,7 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
 
 
 def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/**",
-        namespace: str = "magnetometer_calibration", notes: dict | None = None) -> Export:
+        namespace: str = "magnetometer_calibration", notes: dict | None = None, site=None) -> Export:
     """A ROS 2 parameter file: ``<node>: ros__parameters: <namespace>: {convention, unit, offset,
     matrix}``; ``B = W (r − o)`` in tesla (``sensor_msgs/MagneticField``'s unit), ``matrix`` the
     full ``W`` row-major (9 numbers), ``offset`` 3 numbers.
@@ -229,7 +240,7 @@ def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/
         The node the parameters are for (``/**``: every node).
     namespace : str
         The parameters' namespace under ``ros__parameters``.
-    notes : dict, optional
+    notes, site : optional
         Comment lines, as :func:`ardupilot`'s.
 
     Returns
@@ -245,7 +256,7 @@ def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/
     c = to_firmware(w, offset, unit, TARGET_UNITS["ros"], field_unit=field_unit, counts_nt=counts_nt)
     values = {"convention": "B = W (r - o), W row-major", "unit": "T",
               "offset": [float(v) for v in c.offset], "matrix": [float(v) for v in c.matrix.ravel()]}
-    head = _comments(notes, "ROS: B = W (r - o), tesla (sensor_msgs/MagneticField), matrix row-major", c, "#")
+    head = _comments(notes, "ROS: B = W (r - o), tesla (sensor_msgs/MagneticField), matrix row-major", c, "#", site)
     body = yaml.safe_dump({node: {"ros__parameters": {namespace: values}}}, sort_keys=False, width=200)
     return Export("ros", "\n".join(head) + "\n" + body, values)
 
@@ -253,7 +264,8 @@ def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
-def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", notes: dict | None = None) -> Export:
+def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", notes: dict | None = None,
+             site=None) -> Export:
     """A C header: ``static const float <NAME>_OFFSET[3]``, ``<NAME>_MATRIX[3][3]`` (row-major) and
     ``static inline void <name>_apply(const float raw[3], float out[3])`` computing ``out = W (raw − o)``,
     in the recording's units (the raw unit in, ``field_unit`` out), float32 literals (``%.9g``).
@@ -266,6 +278,8 @@ def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", no
         A C identifier: the arrays' prefix (upper case) and the function's (lower case).
     notes : dict, optional
         Comment lines in the header's opening comment.
+    site : tuple, optional
+        As :func:`ardupilot`'s.
 
     Returns
     -------
@@ -283,7 +297,7 @@ def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", no
     up, low = str(name).upper(), str(name).lower()
     lit = lambda v: f"{v:.9g}f" if "." in f"{v:.9g}" or "e" in f"{v:.9g}" else f"{v:.9g}.0f"  # noqa: E731
     head = _comments(notes, f"B = W (r - o): r raw ({c.unit}), o offset ({c.unit}), B calibrated ({c.field_unit}); "
-                            "W row-major: B[i] = sum_j W[i][j] (r[j] - o[j])", c, " *")
+                            "W row-major: B[i] = sum_j W[i][j] (r[j] - o[j])", c, " *", site)
     rows = ",\n    ".join("{" + ", ".join(lit(v) for v in row) + "}" for row in c.matrix)
     text = "\n".join([
         "/*", *head, " */", f"#ifndef {up}_H", f"#define {up}_H", "",
@@ -382,6 +396,29 @@ def orientable(cal) -> bool:
     return cal.model == "gyro" and not from_log
 
 
+def firmware_correction(cal) -> Correction | str:
+    """The correction a symmetric-matrix firmware (ArduPilot, PX4) would hold for ``cal``, every rotation allowed
+    (the rotation it leaves out is then what ``max_rotation_deg`` must allow), or the line refusing it (a
+    mirrored ``W``): what :mod:`magexp.calibration.heading` measures as exported.
+
+    Parameters
+    ----------
+    cal : Calibration
+        A fitted or loaded calibration.
+
+    Returns
+    -------
+    Correction or str
+        :func:`~magexp.calibration.firmware.to_firmware`'s (units kept, ``orient`` as :func:`orientable`), or
+        its one-line refusal.
+    """
+    try:
+        return to_firmware(cal.w, cal.offset, cal.unit, None, symmetric=True, max_rotation_deg=180.0,
+                           orient=orientable(cal))
+    except MagexpError as exc:
+        return str(exc)
+
+
 def of_calibration(cal, target: str, **options) -> Export:
     """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.Calibration` ``cal``:
     ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``
@@ -394,7 +431,8 @@ def of_calibration(cal, target: str, **options) -> Export:
     target : str
         One of :data:`TARGETS`.
     **options
-        As :func:`render`; ``orient`` defaults to :func:`orientable` where the target takes it.
+        As :func:`render`; ``orient`` defaults to :func:`orientable` where the target takes it, ``site`` to the
+        calibration's reference total and inclination (``report["heading"]``).
 
     Returns
     -------
@@ -409,8 +447,13 @@ def of_calibration(cal, target: str, **options) -> Export:
     options.setdefault("field_unit", cal.field_unit)
     if "orient" in options_of(target):
         options.setdefault("orient", orientable(cal))
+    record = cal.report.get("heading")
     notes = options.pop("notes", None) or {"recording": cal.name, "estimator": cal.estimator,
-                                             "objective": cal.objective, "magexp unit": cal.unit}
+                                             "objective": cal.objective, "magexp unit": cal.unit,
+                                             **heldout_note(record)}
+    if record:  # the heading error the file's parameters leave, at the calibration's site
+        options.setdefault("site", (float(np.mean(cal.reference.total)),
+                                    (record["inclination_deg"], record["inclination_source"])))
     return render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
 
 

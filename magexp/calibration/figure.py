@@ -8,6 +8,8 @@ show nothing more."""
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 
 from magexp.artifacts.plots.style import plt
@@ -130,10 +132,43 @@ def coverage_map(ax, raw: np.ndarray, centre: np.ndarray) -> None:
               handletextpad=0.2, columnspacing=0.8, frameon=False)
 
 
+#: the floor of the heading-error panel's log axis (degrees): smaller errors (float32 rounding) are drawn on it
+HEADING_FLOOR = 1e-3
+
+
+def heading_panel(ax, curves: dict, note: str) -> None:
+    """Heading error against heading, log scale: the worst ``|e|`` over attitudes (and folds) of each stage
+    (:func:`magexp.calibration.heading.curves`), at the floor :data:`HEADING_FLOOR` where smaller.
+
+    Parameters
+    ----------
+    ax : Axes
+        The panel's axes.
+    curves : dict
+        ``{label: (K,) degrees}`` at headings ``360 k / K``.
+    note : str
+        The panel's title (the inclination and its source).
+    """
+    colours = {"raw": "0.5", "calibrated (held out)": "C0", "as exported": "C1"}
+    for label, err in curves.items():
+        psi = 360.0 * np.arange(len(err)) / len(err)
+        ax.plot(psi, np.maximum(err, HEADING_FLOOR), color=colours.get(label),
+                label=f"{label}: worst {err.max():.3g}°" if err.max() >= HEADING_FLOOR else f"{label}: < {HEADING_FLOOR:g}°")
+    ax.set_yscale("log")
+    ax.set_ylim(HEADING_FLOOR / 2, 360)
+    ax.set_xlim(0, 360)
+    ax.set_xticks([0, 90, 180, 270, 360])
+    ax.set_xlabel("heading (deg)")
+    ax.set_ylabel("worst heading error (deg)")
+    ax.set_title("\n".join(textwrap.wrap(note, 48)), fontsize="small")
+    ax.legend(loc="best", fontsize="x-small")
+
+
 def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, *, unit: str, title: str,
-                       centre: np.ndarray | None = None):
+                       centre: np.ndarray | None = None, heading: tuple[dict, str] | None = None):
     """The whole figure: projections and (with the fitted ``centre``) the coverage map on top,
-    magnitude trace and histogram below; returns it.
+    magnitude trace and histogram (and with ``heading`` the heading error, :func:`heading_panel`) below;
+    returns it.
 
     Parameters
     ----------
@@ -145,6 +180,8 @@ def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.nd
         The figure's title.
     centre : numpy.ndarray or None
         The fitted centre (the coverage map).
+    heading : tuple or None
+        ``(curves, note)`` of :func:`heading_panel`.
 
     Returns
     -------
@@ -158,6 +195,12 @@ def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.nd
                 unit)
     if centre is not None:
         coverage_map(fig.add_subplot(grid[0, 3]), raw, centre)
-    magnitudes(fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2:]), raw, calibrated, reference, unit)
+    columns = 4 if centre is not None else 3
+    if heading is None:
+        magnitudes(fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2:]), raw, calibrated, reference, unit)
+    else:
+        magnitudes(fig.add_subplot(grid[1, :columns - 2]), fig.add_subplot(grid[1, columns - 2]), raw, calibrated,
+                   reference, unit)
+        heading_panel(fig.add_subplot(grid[1, columns - 1]), *heading)
     fig.suptitle(title)
     return fig

@@ -76,6 +76,7 @@ class Correction:
     field_unit: str
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     orientation: int | None = None
+    field_scale: float = 1.0  # k_out: the target's field unit per the calibration's (module docstring)
 
     @property
     def rotation_deg(self) -> float:
@@ -289,4 +290,5 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
                               f"max_rotation_deg={np.ceil(angle * 10) / 10:g} to export S alone")
         w = s
     return Correction(matrix=(k_out / k_in) * w, offset=k_in * offset, unit=target_unit or unit,
-                      field_unit=target_unit or field_unit, rotation=rotation, orientation=orientation)
+                      field_unit=target_unit or field_unit, rotation=rotation, orientation=orientation,
+                      field_scale=k_out)

@@ -29,14 +29,17 @@ Degenerate data (identical readings, a plane, one attitude, too few distinct dir
 estimator reporting failure raise one :class:`~magexp.errors.MagexpError` line that says why and
 what to record instead (:mod:`magexp.calibration.checks`); the command then writes nothing.
 
-Held-out check (:func:`heldout`): the readings' directions about the centre of the sphere fitted to them
-are cut into six regions, one about each half-axis ``±v_k`` of their principal axes
-(:func:`magexp.core.identifiability.direction_regions`); each region holding at least :data:`MIN_READINGS`
-readings is calibrated by the fit on the others, and ``heldout_spread`` is the spread of the pooled
-held-out magnitudes. Every region is thus tested on attitudes outside its fit (contiguous time blocks,
-the earlier folds, lie in the plane of the rest on a turn about one axis and passed a calibration that
-made the sensor's other recordings worse than raw). A region holding less than ``gate.min_region`` of
-the readings was never tested: the gate refuses the calibration (:func:`magexp.calibration.checks.gate`).
+Held-out check (:func:`heldout`, its designs in :mod:`magexp.calibration.holdout`): the readings' directions
+about the centre of the sphere fitted to them are cut into six regions, one about each half-axis ``±v_k`` of
+their principal axes (:func:`magexp.core.identifiability.direction_regions`); where each occupied region holds at
+least :data:`MIN_READINGS` readings, each is calibrated by the fit on the others, and ``heldout_spread`` is the
+spread of the pooled held-out magnitudes. Every region is thus tested on attitudes outside its fit (contiguous
+time blocks, the earlier folds, lie in the plane of the rest on a turn about one axis and passed a calibration that
+made the sensor's other recordings worse than raw). Where a region is too small to be a fold (a couple of dozen
+static shots), each reading is calibrated by the fit on the readings more than
+:data:`~magexp.calibration.holdout.EXCLUSION_DEG` from its direction (a gap as large as a region). A region
+holding less than ``gate.min_region`` of the readings was never tested: the gate refuses the calibration
+(:func:`magexp.calibration.checks.gate`).
 """
 
 from __future__ import annotations
@@ -45,14 +48,17 @@ import os
 
 import numpy as np
 
-from magexp.calibration import models as models_
+from magexp.calibration import holdout, models as models_
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
 from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
                                       recording_dataset, reference_of)
+from magexp.calibration.export import firmware_correction
+from magexp.calibration.heading import heading_of, worst_left
 from magexp.calibration.quality import gyro_extras, quality, report_of
 from magexp.calibration.result import Calibration
 from magexp.core.dataset import Dataset
+from magexp.core.field_model import gps_field
 from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import canonical, coverage, direction_regions, spread
 from magexp.core.recording import UNITS, Recording
@@ -136,6 +142,10 @@ def select_model(rec: Recording, estimator, objective: str, reference: Reference
     unusable = models_.gyro_unusable(rec.gyro_rates())
     held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
             for m in models_.candidates(objective, gyro=not unusable)}
+    failures = [r.get("heldout_failure") for r in held.values()]
+    if all(failures):  # no candidate held out: the simplest one's cause is the recording's
+        raise MagexpError(f"{rec.name}: model=auto: no model could be tested on readings it was not fitted to, "
+                          f"nothing written: {failures[0]}")
     model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
                                       models_.check_margin(margin), gyro=not unusable,
                                       dropped={"gyro": unusable} if unusable and objective == "scalar" else {})
@@ -314,10 +324,10 @@ def regions(readings: np.ndarray) -> tuple[np.ndarray, dict]:
 
 def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
             model: str = "full") -> dict:
-    """Spread of each region of directions calibrated by the fit on the others (module docstring): the
-    regions of :func:`regions` holding at least :data:`MIN_READINGS` readings are held out one at a time
-    (a smaller one's readings stay in every fit). ``folds`` < 2: no check. NaN when fewer than two
-    regions can be held out or a fold cannot be fitted.
+    """Spread of readings calibrated by fits that have not seen their directions (module docstring): by regions of
+    directions, or, where a region is too small to be a fold (a few static shots), each reading by the fit
+    without its neighbours in direction (:mod:`magexp.calibration.holdout`). ``folds`` < 2: no check. NaN, with
+    ``heldout_failure`` saying why, when a fold cannot be fitted.
 
     Parameters
     ----------
@@ -330,7 +340,7 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
     reference : Reference
         The reference total field (:func:`reference_of`).
     folds : int
-        The held-out check: < 2 none, else by regions of directions (:func:`heldout`).
+        The held-out check: < 2 none, else by the design :func:`magexp.calibration.holdout.design_of` picks.
     rng : numpy.random.Generator or None
         The estimator's random generator.
     model : str
@@ -339,31 +349,22 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
     Returns
     -------
     dict
-        ``heldout_spread`` (pooled), ``heldout_spread_max_fold`` and ``heldout_folds``; {} without folds.
+        :func:`magexp.calibration.holdout.measure`'s record (``heldout_spread`` pooled, ``heldout_design``,
+        ``heldout_folds``, :data:`~magexp.calibration.holdout.FITS` (each fold's ``(W_k, o_k)``, for the heading
+        error: :mod:`magexp.calibration.heading`), ...); without folds ``heldout_design = "none"`` and ``heldout_folds``.
     """
     if folds < 2:
-        return {}
-    labels, _ = regions(rec.readings)
-    counts = np.bincount(labels, minlength=6)
-    tested = [k for k in range(6) if counts[k] >= MIN_READINGS]
-    if len(tested) < 2:
-        return {"heldout_spread": float("nan"), "heldout_folds": len(tested)}
-    pooled, per_fold = [], []
-    for k in tested:
-        keep = np.flatnonzero(labels != k)
-        train = rec.subset(keep)
+        return {"heldout_design": "none", "heldout_folds": folds}
+
+    def fit_on(keep):
         ref = Reference(reference.total[keep], reference.source, reference.estimated)
         try:
-            w, o, _, _, result, _ = _fit(train, estimator, objective, ref, rng, model)
+            w, o, _, _, result, _ = _fit(rec.subset(keep), estimator, objective, ref, rng, model)
         except MagexpError:
-            result = None
-        if result is None or not result.success:  # a fold the model cannot fit: the model is not supported
-            return {"heldout_spread": float("nan"), "heldout_folds": len(tested)}
-        mags = np.linalg.norm((rec.readings[labels == k] - o) @ w.T, axis=1)
-        pooled.append(mags)
-        per_fold.append(spread(mags))
-    return {"heldout_spread": spread(np.concatenate(pooled)), "heldout_spread_max_fold": float(np.max(per_fold)),
-            "heldout_folds": len(tested)}
+            return None
+        return (w, o) if result.success else None  # a fold the model cannot fit: the model is not supported
+
+    return holdout.measure(rec.readings, regions(rec.readings)[0], fit_on, model)
 
 
 @says_onboard
@@ -380,7 +381,8 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     objective : ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
     reference_total : overrides the recording's reference total field (its unit), a number or a
         :class:`Reference` (with its source).
-    folds : the held-out check: 0 or 1 none; 2 or more, by regions of directions (:func:`heldout`).
+    folds : the held-out check: 0 or 1 none; 2 or more, by regions of directions or, for a few static shots, each
+        reading without its neighbours (:func:`heldout`).
     rng : the estimator's random generator.
     checks : refuse degenerate data, failed fits and calibrations failing the acceptance gate
         (:mod:`magexp.calibration.checks`); False measures them anyway.
@@ -437,14 +439,18 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     if objective == "vector":
         metrics["vector_rms"] = float(np.sqrt(np.mean(np.sum((problem.reference - calibrated) ** 2, axis=1))))
     metrics.update(measured_heldout(rec, estimator, objective, reference, folds, rng, model, held, checks=checks))
+    fits = metrics.pop(holdout.FITS, [])
     report = {**report_of(problem.objective, w, o, problem, model, extra=result.x[12:]),
               **gyro_extras(model, problem, result), **onboard_of(rec, metrics.get("heldout_spread"))}
     if selection is not None:
         report["model_selection"] = selection
-    report["gate"] = gate_of(rec, w, metrics, reference, thresholds, checks=checks, accept=accept)
-    return Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
-                       reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
-                       report=report)
+    cal = Calibration(recording=rec, estimator=name, objective=problem.objective, w=w, offset=o,
+                      reference=reference, search=box, fit=result, calibrated=calibrated, metrics=metrics,
+                      report=report, heldout_fits=fits)
+    report["heading"] = heading_of(cal, firmware_correction(cal), gps=gps_field(rec))  # before the gate: gate.max_heading_deg reads it
+    report["gate"] = gate_of(rec, w, {**metrics, "heading_left_deg": worst_left(report["heading"])}, reference,
+                             thresholds, checks=checks, accept=accept)
+    return cal
 
 
 def numpy_path(compiled: bool | None, estimator) -> bool:
@@ -497,7 +503,8 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
     Returns
     -------
     dict
-        ``{passed, failed, accepted_anyway, thresholds}``.
+        ``{passed, failed, accepted_anyway, heldout, thresholds}`` (``heldout``: what the held-out check
+        measured, :func:`magexp.calibration.holdout.describe`, or that it measured nothing).
 
     Raises
     ------
@@ -511,6 +518,7 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
         with saying_onboard(rec, metrics.get("heldout_spread")):
             refuse(rec.name, failed)
     return {"passed": not failed, "failed": failed, "accepted_anyway": bool(failed) and accept,
+            "heldout": holdout.describe(metrics),
             "thresholds": {k: list(v) if isinstance(v, tuple) else v for k, v in thresholds.items()}}
 
 

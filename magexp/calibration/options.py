@@ -79,6 +79,9 @@ class GateOptions:
                                                         "(16 of 500 mGauss)")
     min_region: float = _gate("min_region", "each of the 6 regions of directions holds this fraction of the readings "
                                             "(else untested)")
+    max_heading_deg: float = _gate("max_heading_deg", "level worst heading error the calibration leaves on directions "
+                                                      "it was not fitted to (held out), degrees (14 CFR 25.1327(b): 10 "
+                                                      "on any heading)")
 
 
 @dataclass
@@ -154,8 +157,8 @@ class CalibrateOptions:
     accept: bool = option(False, "true: write a calibration that fails the acceptance gate, its failures recorded")
     gate: GateOptions = option(None, "the acceptance gate (magexp/calibration/checks.py): a calibration failing one "
                                      "is refused (exit 2)", factory=GateOptions)
-    folds: int = option(6, "held-out check: each of the 6 regions of directions calibrated by the fit on the others "
-                           "(0: none)")
+    folds: int = option(6, "held-out check: each of the 6 regions of directions calibrated by the fit on the others, "
+                           "or for a few static shots each reading by the fit without its neighbours (0: none)")
     out: str | None = option(None, "output folder (null: calibration_<recording stem> in the working folder)")
     overwrite: bool = option(False, "true: replace the files of an earlier calibration in out (never silently)")
     figure: bool = option(False, "true: draw calibration.png and .pdf (drawing takes longer than the calibration "

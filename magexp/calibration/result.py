@@ -47,6 +47,7 @@ class Calibration:
     seed: int = 0
     config: dict = field(default_factory=dict)  # the settings it was made with (the command's config, the call's)
     saved: dict | None = None  # the JSON it was loaded from (:meth:`load`)
+    heldout_fits: list = field(default_factory=list)  # each held-out fold's (W_k, o_k) (magexp.calibration.heading)
 
     @property
     def unit(self) -> str:
@@ -147,7 +148,8 @@ class Calibration:
 
     def __repr__(self) -> str:
         m = self.metrics
-        held = f", held out {100 * m['heldout_spread']:.3g} %" if "heldout_spread" in m else ""
+        held = (f", held out {100 * m['heldout_spread']:.3g} %" if "heldout_spread" in m
+                else ", held out not measured" if m.get("heldout_design") == "none" else "")
         gate = self.report.get("gate") or {}
         state = "" if not gate else (", gate passed" if gate.get("passed") else ", gate FAILED (accepted)")
         return (f"<Calibration {self.name}: {self.model} model by {self.estimator}, spread "

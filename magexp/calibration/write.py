@@ -29,7 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.calibration.export import FILE_NAMES, of_calibration
+from magexp.calibration.export import FILE_NAMES, firmware_correction, of_calibration
+from magexp.calibration.heading import curves as heading_curves, summary_lines
+from magexp.calibration.holdout import describe as describe_heldout
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import write_text
 from magexp.core.identifiability import CELLS
@@ -264,8 +266,12 @@ def figure(cal):
 
     title = f"{cal.name}: {cal.model} by {cal.estimator} ({cal.objective}), spread " \
             f"{100 * cal.metrics['spread_before']:.2f} % -> {100 * cal.metrics['spread_after']:.2f} %"
+    record = cal.report.get("heading")
+    panel = None if not record else (heading_curves(cal, firmware_correction(cal)),
+                                     f"heading error at inclination {record['inclination_deg']:.1f}° "
+                                     f"({record['inclination_source']})")
     return calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.field_unit,
-                              title=title, centre=cal.offset)
+                              title=title, centre=cal.offset, heading=panel)
 
 
 def export_name(target: str) -> str:
@@ -404,13 +410,12 @@ def _fit_line(fit, saved) -> str:
     return f"{'success' if success else 'FAILED'}: {message}"
 
 
-def _gate_line(record: dict) -> str:
-    """The acceptance gate's outcome in one line."""
+def _gate_line(record: dict, metrics: dict) -> str:
+    """The acceptance gate's outcome in one line, saying what the held-out check measured (``metrics``)."""
     if not record:
         return "not checked"
     if record["passed"]:
-        return ("passed (held out beats raw, every region of directions tested; W's shape, the radius and the residual "
-                "RMS plausible)")
+        return f"passed ({describe_heldout(metrics, gate=True)}; W's shape, the radius and the residual RMS plausible)"
     return "FAILED, written because accept=true: " + "; ".join(f.get("reason") or f["line"].split(":")[0]
                                                                 for f in record["failed"])
 
@@ -450,7 +455,7 @@ def summary(cal) -> dict:
                                                         f"readings, {u}; loaded)"),
         "estimator": f"{cal.estimator} ({cal.objective} objective)",
         "model": (r.get("model_selection") or {}).get("why") or r.get("model", ""),
-        "gate": _gate_line(r.get("gate") or {}),
+        "gate": _gate_line(r.get("gate") or {}, m),
         "reference": cal.reference.describe(),
         **_onboard_lines(r),
         "spread before": f"{100 * m['spread_before']:.3f} % (std/mean of |raw|, mean {m['mean_before']:.6g} {u})",
@@ -459,8 +464,9 @@ def summary(cal) -> dict:
         "rms after": f"{m['rms_after']:.6g} {u} (|calibrated| - reference)" + (
             f"; the readings' own noise {m['noise_after']:.6g} {u} (from neighbouring readings)" if m.get("noise_after")
             else ""),
-        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({m['heldout_folds']} regions of directions, each "
-                            "calibrated by the fit on the others)") if "heldout_spread" in m else "not measured",
+        **summary_lines(r.get("heading")),
+        "held-out spread": (f"{100 * m['heldout_spread']:.3f} % ({describe_heldout(m)})" if "heldout_spread" in m
+                            else describe_heldout(m)),
         "W": "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in cal.w) + f"] ({r.get('w_form', '')})",
         "W std errors": "[" + "; ".join(", ".join(f"{float(v):.2g}" for v in row) for row in r["W_standard_errors"]) + "]",
         "offset": "[" + ", ".join(f"{v:.6g}" for v in cal.offset) + f"] {u}",

@@ -325,6 +325,31 @@ def field_of_recording(rec: Recording, *, model: str = "igrf", latitude=None, lo
                            model=model, sources=sources, prefix=prefix)
 
 
+def gps_field(rec: Recording, model: str = "igrf") -> ReferenceField | None:
+    """The ``model`` field at the log's GPS place and date (:func:`field_of_recording`), or None without a GPS
+    place and date (or with one the model refuses): the site of a calibration's heading error
+    (:mod:`magexp.calibration.heading`) where no field model gave the reference.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (its ``meta``'s GPS).
+    model : str
+        ``igrf`` or ``wmm``.
+
+    Returns
+    -------
+    ReferenceField or None
+        The model's field, or None.
+    """
+    if not {"latitude", "longitude", "date"} <= set(place_of(rec)):
+        return None
+    try:
+        return field_of_recording(rec, model=model)
+    except MagexpError:
+        return None
+
+
 def field_in(reference: ReferenceField, unit: str) -> np.ndarray:
     """The model's NED vector in ``unit`` (a key of :data:`magexp.core.recordings.UNITS`): a log's
     ``Recording.field`` for the vector objective (its attitudes are NED). A raw unit (``counts``)
