@@ -44,6 +44,7 @@ from omegaconf import OmegaConf, open_dict
 
 from magexp.calibration.checks import gate_thresholds
 from magexp.calibration.export import TARGETS as EXPORT_TARGETS
+from magexp.calibration.heading import worst_left
 from magexp.calibration.inputs import MIN_READINGS
 from magexp.calibration.live_display import Display, Progress, axis_names
 from magexp.calibration.live_stream import POLL, LineCutter, StreamFile, open_source
@@ -203,6 +204,8 @@ def live_check(rec, calibrate, *, estimator, model: str, thresholds: dict, limit
         progress.waiting = _short(str(exc))
         return progress
     progress.heldout, progress.raw = cal.metrics.get("heldout_spread", float("nan")), cal.metrics["spread_before"]
+    left = worst_left(cal.report.get("heading"))
+    progress.heading = float("nan") if left is None else left
     short = [axis for axis, c in zip(progress.names, counts) if c < MIN_READINGS]
     failed = [f["check"] for f in cal.report["gate"]["failed"]]
     progress.waiting = "; ".join(([f"{MIN_READINGS} readings toward {', '.join(short)}"] if short else [])

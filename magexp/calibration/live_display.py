@@ -2,7 +2,8 @@
 per live check (:class:`Progress`), in the style of a progress bar (``tqdm``'s): the readings and their rate,
 how many readings each of the six regions of directions holds (each named by the sensor axis nearest its
 half-axis, :func:`magexp.core.identifiability.direction_regions`), the sphere cells reached
-(:func:`magexp.core.identifiability.coverage`) as a bar, the held-out spread beside the raw one, and what
+(:func:`magexp.core.identifiability.coverage`) as a bar, the held-out spread beside the raw one, the
+worst heading error expected on unseen directions (held out, level), and what
 the stop rule still waits for. On a terminal the line is redrawn in place (a carriage return and an ANSI
 erase-line); elsewhere (a pipe, a log file) each check prints a line of its own.
 """
@@ -34,6 +35,8 @@ class Progress:
     names : each region's nearest sensor axis (``+x``, ``-z``...).
     cells : sphere cells (of :data:`~magexp.core.identifiability.CELLS`) the directions reach.
     heldout, raw : the held-out and the raw spread (std / mean of ``|B|``), NaN when not measured.
+    heading : the worst level heading error the calibration so far leaves on directions it was not fitted to
+        (held out, degrees: :func:`magexp.calibration.heading.worst_left`), NaN when not measured.
     passed : the stop rule passed.
     waiting : what the stop rule still waits for (empty when passed).
     """
@@ -45,6 +48,7 @@ class Progress:
     cells: int = 0
     heldout: float = float("nan")
     raw: float = float("nan")
+    heading: float = float("nan")
     passed: bool = False
     waiting: str = ""
 
@@ -110,9 +114,10 @@ def status(p: Progress) -> str:
     regions = " ".join(f"{n} {c}" for n, c in zip(p.names, p.regions))
     reached = sum(c > 0 for c in p.regions)
     state = "gate passes" if p.passed else f"waiting: {p.waiting}"
+    heading = f"{p.heading:.2g}°" if np.isfinite(p.heading) else "-"
     return (f"{p.readings} readings {rate} {p.seconds:.0f} s | regions {reached}/6: {regions} | "
             f"cells |{bar(p.cells / CELLS)}| {p.cells}/{CELLS} | held-out {_percent(p.heldout)} "
-            f"(raw {_percent(p.raw)}) | {state}")
+            f"(raw {_percent(p.raw)}) | heading ±{heading} | {state}")
 
 
 class Display:
