@@ -130,7 +130,7 @@ def plan(folder: Path, names, *, overwrite: bool, known=(), option: str = "out")
     if not folder.is_dir():
         return Plan()
     where = f"{option}={str(folder)!r} is not allowed"
-    taken = [n for n in names if (folder / n).exists() or (folder / n).is_symlink()]
+    taken = [n for n in names if _present(folder / n)]
     if taken and not overwrite:
         raise MagexpError(f"{where}: it already holds {', '.join(taken)} (never overwritten unless overwrite=true), "
                           "choose another folder")
@@ -139,13 +139,31 @@ def plan(folder: Path, names, *, overwrite: bool, known=(), option: str = "out")
     if foreign:
         raise MagexpError(f"{where}: {foreign[0]} is in the way and no calibration wrote it (or it changed since), "
                           "so overwrite=true does not replace it: move it away or choose another folder")
-    earlier = set(listed or ()) if listed else set(known) if listed is not None else set()
-    left = sorted(n for n in earlier - set(names) if (folder / n).exists() or (folder / n).is_symlink())
+    return Plan(tuple(taken), _leftovers(folder, names, listed, known, where))
+
+
+def _leftovers(folder: Path, names: list, listed: dict | None, known, where: str) -> tuple:
+    """The earlier calibration's files in ``folder`` that ``names`` does not write again (a listed one changed
+    since: one line refusing it; an unlisted one without a mark: left alone)."""
+    left = sorted(n for n in _earlier(listed, known) - set(names) if _present(folder / n))
     changed = [n for n in left if not is_calibrations(folder / n, listed)]
     if changed and listed:
         raise MagexpError(f"{where}: {changed[0]} was written by the calibration in it and changed since, so "
                           "overwrite=true does not remove it: move it away or choose another folder")
-    return Plan(tuple(taken), tuple(n for n in left if n not in changed))
+    return tuple(n for n in left if n not in changed)
+
+
+def _present(path: Path) -> bool:
+    """Whether there is an entry at ``path`` (a dangling symbolic link included)."""
+    return path.exists() or path.is_symlink()
+
+
+def _earlier(listed: dict | None, known) -> set:
+    """The names of the earlier calibration's set: its manifest's, else (a ``calibration.json`` without one)
+    ``known``, else (no calibration) none."""
+    if listed:
+        return set(listed)
+    return set(known) if listed is not None else set()
 
 
 def recording_files(rec) -> list[Path]:
@@ -216,7 +234,7 @@ def check_file(path: Path, *, overwrite: bool, recording=(), option: str = "path
         An existing file without ``overwrite``, one no calibration wrote, or (a link to) the recording.
     """
     path = Path(path)
-    if not (path.exists() or path.is_symlink()):
+    if not _present(path):
         return
     where = f"{option} {str(path)!r} is not allowed"
     if any(f.exists() and os.path.samefile(path, f) for f in map(Path, recording)):
