@@ -40,7 +40,18 @@ HEAD = 512
 
 
 def digest(path: Path) -> str:
-    """The SHA-256 of the file ``path``, read in 1 MiB blocks."""
+    """The SHA-256 of the file ``path``, read in 1 MiB blocks.
+
+    Parameters
+    ----------
+    path : Path
+        A file.
+
+    Returns
+    -------
+    str
+        Its digest, in hexadecimal.
+    """
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -49,8 +60,19 @@ def digest(path: Path) -> str:
 
 
 def manifest(folder: Path) -> dict | None:
-    """``{name: sha256}`` of the files the calibration in ``folder`` wrote (``{}`` for a ``calibration.json``
-    written before the manifest), or None when ``folder`` holds no calibration's ``calibration.json``."""
+    """The manifest of the calibration in ``folder`` (its ``calibration.json``'s :data:`MANIFEST`).
+
+    Parameters
+    ----------
+    folder : Path
+        An output folder.
+
+    Returns
+    -------
+    dict or None
+        ``{name: sha256}`` of the files the calibration wrote (``{}`` for a ``calibration.json`` written
+        before the manifest), or None when ``folder`` holds no calibration's ``calibration.json``.
+    """
     path = Path(folder) / PARAMETERS
     if path.is_symlink() or not path.is_file():
         return None
@@ -167,7 +189,18 @@ def _earlier(listed: dict | None, known) -> set:
 
 
 def recording_files(rec) -> list[Path]:
-    """The files a :class:`~magexp.core.recording.Recording` was read from (both of a two-stream recording)."""
+    """The files a recording was read from (both of a two-stream recording).
+
+    Parameters
+    ----------
+    rec : Recording or None
+        A :class:`~magexp.core.recording.Recording` (None, or one made from an array: no file).
+
+    Returns
+    -------
+    list of Path
+        Its files, as given (not resolved).
+    """
     if rec is None or rec.path is None:
         return []
     path = Path(rec.path)

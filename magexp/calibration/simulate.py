@@ -74,7 +74,18 @@ def simulate(n: int, seed: int) -> tuple[str, np.ndarray, np.ndarray]:
 
 def command(argv: list[str]) -> None:
     """``python -m magexp.calibration.simulate PATH [--readings N] [--seed S]``: write the recording to ``PATH``
-    (never over an existing file) and print where."""
+    (never over an existing file) and print where.
+
+    Parameters
+    ----------
+    argv : list of str
+        The arguments.
+
+    Raises
+    ------
+    MagexpError
+        An existing ``PATH``, a missing folder, a count under 12 or a negative seed: one line.
+    """
     parser = argparse.ArgumentParser(prog="python -m magexp.calibration.simulate", description=__doc__.splitlines()[0])
     parser.add_argument("path", help="the recording to write (magexp-recording v1)")
     parser.add_argument("--readings", default=400, help="how many readings (default 400)")
@@ -98,17 +109,17 @@ def _integer(text):
 
 
 def main(argv: list[str] | None = None) -> int:
-    """The command's exit code: 0, or 2 with one line on bad input.
+    """Run :func:`command` as a process does (:func:`magexp.errors.exit_code`).
 
     Parameters
     ----------
     argv : list of str or None
-        The arguments (None: ``sys.argv[1:]``).
+        PATH and the options; None reads ``sys.argv[1:]``.
 
     Returns
     -------
     int
-        The exit code.
+        0 when the file was written, 2 with one line on stderr for bad input.
     """
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 

@@ -73,7 +73,7 @@ def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = No
     Returns
     -------
     Plan
-        The earlier calibration's files replaced and removed.
+        :func:`~magexp.calibration.folder.plan` of the files this run writes, in ``out_dir``.
 
     Raises
     ------
@@ -92,10 +92,10 @@ def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = No
     if not os.access(existing, os.W_OK):
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is not writable")
     check_recording(out_dir, recording)
-    return plan(out_dir, output_names(draw, export), overwrite=overwrite, known=KNOWN)
+    return plan(out_dir, _output_names(draw, export), overwrite=overwrite, known=KNOWN)
 
 
-def output_names(draw: bool, export: str | None) -> list[str]:
+def _output_names(draw: bool, export: str | None) -> list[str]:
     """The names of the files :func:`write` writes: the parameters, the readings, the figure (``draw``), the export."""
     return [FILES["parameters"], FILES["readings"], *((FILES["figure"], FILES["figure_vector"]) if draw else ()),
             *([export_name(export)] if export else [])]
