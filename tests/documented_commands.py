@@ -163,7 +163,7 @@ COMMANDS: dict[str, tuple] = {
     "out=calib_ardupilot/": (RUN_FULL, "draws the figure", {"shared": True}),
     ".venv/bin/python -m magexp calibrate data.path=../shared/data/hmc5883l_full-sphere field.latitude=52.2 "
     "field.longitude=0.1 field.date=2024-05-01": (RUN_FULL, "a recording", {"shared": True}),
-    ".venv/bin/python -m magexp.calibration.simulate attitudes.csv": (RUN, "writes a recording with attitudes"),
+    ".venv/bin/python -m magexp.calibration.simulate attitudes.csv": (RUN_FULL, "writes a recording with attitudes: 1.5 s"),
     ".venv/bin/python -m magexp calibrate data.path=attitudes.csv objective=vector estimator=lm":
         (RUN_FULL, "2 s", {"files": {"attitudes.csv": MINE_ATTITUDES}}),
     ".venv/bin/python -m magexp scenario=yan2022_mockup scenario.path=/path/to/mine.csv estimator=kf":
