@@ -94,6 +94,14 @@ def test_a_folder_written_before_the_manifest_is_replaced_by_its_marks(cal, tmp_
     assert paths.removed == (out / FILE_NAMES["ardupilot"],) and (out / FILES["figure"]).exists()
 
 
+def test_an_export_written_beside_by_the_api_goes_with_the_set(cal, tmp_path):
+    out = tmp_path / "out"
+    write(cal, out, export="px4")
+    cal.export("ros", out)  # not in the manifest, but magexp's own file
+    paths = write(cal, out, overwrite=True, export="px4")
+    assert paths.removed == (out / FILE_NAMES["ros"],)
+
+
 def test_a_failure_while_writing_leaves_the_earlier_calibration_whole(cal, tmp_path, monkeypatch):
     out = tmp_path / "out"
     write(cal, out, export="ardupilot")

@@ -8,7 +8,7 @@ them: its ``files`` key (:data:`MANIFEST`) maps the name of every other file the
 * the manifest lists it and its content is unchanged (the digest matches); a listed file changed since
   is the user's;
 * else (a folder written before the manifest, or a file written by ``Calibration.save`` or
-  ``Calibration.export`` alone) its first bytes carry magexp's mark (:data:`MARKS`: the exports' opening
+  ``Calibration.export``) its first bytes carry magexp's mark (:data:`MARKS`: the exports' opening
   comment, the calibrated readings' source line, ``calibration.json``'s format line);
 
 never a symbolic link (magexp writes none). ``overwrite=true`` replaces the earlier calibration's whole
@@ -132,8 +132,7 @@ def plan(folder: Path, names, *, overwrite: bool, known=(), option: str = "out")
     overwrite : bool
         Replace the calibration in ``folder``; without it any file in the way is refused.
     known : iterable of str
-        The names a calibration may have written: in a folder whose ``calibration.json`` has no manifest,
-        those carrying a mark are its set.
+        The names a calibration may write: beside the manifest's, those carrying a mark are the earlier set.
     option : str
         The option that named the folder, for the message.
 
@@ -165,27 +164,22 @@ def plan(folder: Path, names, *, overwrite: bool, known=(), option: str = "out")
 
 
 def _leftovers(folder: Path, names: list, listed: dict | None, known, where: str) -> tuple:
-    """The earlier calibration's files in ``folder`` that ``names`` does not write again (a listed one changed
-    since: one line refusing it; an unlisted one without a mark: left alone)."""
-    left = sorted(n for n in _earlier(listed, known) - set(names) if _present(folder / n))
-    changed = [n for n in left if not is_calibrations(folder / n, listed)]
-    if changed and listed:
+    """The earlier calibration's files in ``folder`` that ``names`` does not write again: those its manifest
+    lists (one changed since: one line refusing it) and the ``known`` names carrying a mark (an export
+    written beside it by ``Calibration.export``, a folder written before the manifest); nothing else."""
+    if listed is None:
+        return ()
+    left = sorted(n for n in (set(listed) | set(known)) - set(names) if _present(folder / n))
+    changed = [n for n in left if n in listed and not is_calibrations(folder / n, listed)]
+    if changed:
         raise MagexpError(f"{where}: {changed[0]} was written by the calibration in it and changed since, so "
                           "overwrite=true does not remove it: move it away or choose another folder")
-    return tuple(n for n in left if n not in changed)
+    return tuple(n for n in left if is_calibrations(folder / n, listed))
 
 
 def _present(path: Path) -> bool:
     """Whether there is an entry at ``path`` (a dangling symbolic link included)."""
     return path.exists() or path.is_symlink()
-
-
-def _earlier(listed: dict | None, known) -> set:
-    """The names of the earlier calibration's set: its manifest's, else (a ``calibration.json`` without one)
-    ``known``, else (no calibration) none."""
-    if listed:
-        return set(listed)
-    return set(known) if listed is not None else set()
 
 
 def recording_files(rec) -> list[Path]:
