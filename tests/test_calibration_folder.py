@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 
 import numpy as np
 import pytest
@@ -114,6 +115,24 @@ def test_a_failure_while_writing_leaves_the_earlier_calibration_whole(cal, tmp_p
     with pytest.raises(KeyboardInterrupt):
         write(cal, out, overwrite=True, export="px4")
     assert snapshot(out) == before
+
+
+def test_ctrl_c_during_the_swap_waits_for_the_whole_new_set(cal, tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    write(cal, out, export="ardupilot")
+    replace = os.replace
+
+    def interrupted(src, dst):  # Ctrl-C as each file moves into place (not while staged)
+        if os.path.dirname(dst) == str(out):
+            os.kill(os.getpid(), signal.SIGINT)
+        replace(src, dst)
+
+    monkeypatch.setattr(write_mod.os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write(cal, out, overwrite=True, export="px4")
+    monkeypatch.setattr(write_mod.os, "replace", replace)
+    assert sorted(p.name for p in out.iterdir()) == sorted([FILES["parameters"], FILES["readings"], FILE_NAMES["px4"]])
+    assert sorted(manifest(out)) == sorted([FILES["readings"], FILE_NAMES["px4"]])
 
 
 def test_the_command_refuses_an_out_folder_holding_the_recording(tmp_path, capsys):

@@ -379,6 +379,7 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
             _place(stage, [*list(paths.values())[1:], paths["parameters"]], placed=placed)
             for name in todo.removes:
                 (out_dir / name).unlink(missing_ok=True)
+            placed, created = [], None  # done: a stop delivered as the block ends undoes nothing
     except BaseException:  # failed or interrupted: what this call made goes, nothing else
         for path in placed:
             path.unlink(missing_ok=True)
