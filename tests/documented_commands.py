@@ -46,22 +46,28 @@ def _is_inline_command(span: str) -> bool:
     return bool(words) and not (len(words) == 1 and words[0] in SUBCOMMANDS)
 
 
+def fenced_lines(text: str):
+    """``(line number, command, its trailing comment)`` of every line of ``text``'s shell blocks, in order."""
+    for fence in FENCE.finditer(text):
+        if fence.group(1) not in SHELLS:
+            continue
+        line0 = text[: fence.start(2)].count("\n") + 1
+        body = re.sub(r"\\\n\s*", "", fence.group(2))
+        for k, line in enumerate(body.splitlines()):
+            line = (line[2:] if fence.group(1) == "console" and line.startswith("$ ") else line).strip()
+            command = _strip_comment(line)
+            if command:
+                yield line0 + k, command, line[len(command):].strip()
+
+
 def collect() -> dict[str, list[str]]:
     """``{command: [where it is documented, ...]}`` of every documented command (module docstring)."""
     found: dict[str, list[str]] = {}
     for doc in DOCS:
         text = doc.read_text()
         name = doc.relative_to(ROOT).as_posix()
-        for fence in FENCE.finditer(text):
-            if fence.group(1) not in SHELLS:
-                continue
-            line0 = text[: fence.start(2)].count("\n") + 1
-            body = re.sub(r"\\\n\s*", "", fence.group(2))
-            for k, line in enumerate(body.splitlines()):
-                line = line[2:] if fence.group(1) == "console" and line.startswith("$ ") else line
-                command = _strip_comment(line.strip())
-                if command:
-                    found.setdefault(command, []).append(f"{name}:{line0 + k}")
+        for number, command, _ in fenced_lines(text):
+            found.setdefault(command, []).append(f"{name}:{number}")
         outside = FENCE.sub(lambda m: "\n" * m.group(0).count("\n"), text)
         for span in SPAN.finditer(outside):
             if _is_inline_command(span.group(1)):
@@ -96,7 +102,7 @@ HISTORY = "history"
 #: files a command names that are the reader's own: the test writes them into the clone first
 MINE = "mine.csv (a simulated magexp-recording v1 in uT, 400 readings)"
 MOCKUP_COPY = "a copy of data/yan2022_mockup.csv (the format the page describes)"
-MINE_ATTITUDES = "mine_with_attitudes.csv (a simulated magexp-recording v1 with heading, roll, trim and the field)"
+MINE_ATTITUDES = "attitudes.csv (a simulated magexp-recording v1 with heading, roll, trim and the field)"
 
 #: ``command: (how, why)`` plus, for some, ``{"exit": code, "shared": True, "files": {...}, "replace": {...}}``:
 #: ``shared``: it reads ../shared/data (skipped cleanly without it); ``files``: what the test writes
@@ -146,16 +152,20 @@ COMMANDS: dict[str, tuple] = {
     "magexp -m estimator=ellipsoid,lm scenario.noise=0,5": (RUN_FULL, "4 closed-form runs: 2.4 s"),
     # calibrate your own recording
     ".venv/bin/python -m magexp calibrate --help": (RUN, "every key"),
-    ".venv/bin/python -m magexp calibrate data.path=mine.csv data.unit=uT estimator=lm out=calib/":
-        (RUN_FULL, "2 s", {"files": {"mine.csv": MINE}}),
-    ".venv/bin/python -m magexp calibrate data.path=mine.csv field.latitude=52.2 field.longitude=0.1 "
-    "field.date=2024-05-01": (RUN_FULL, "2 s", {"files": {"mine.csv": MINE}}),
-    ".venv/bin/python -m magexp calibrate data.path=mine.csv estimator=ipso estimator.n_iterations=3000 seed=1":
-        (RUN_FULL, "ipso and its held-out fits (800 iterations stop short of the closed form on this recording: refused as not converged)", {"files": {"mine.csv": MINE}}),
-    ".venv/bin/python -m magexp calibrate data.path=mine.csv export=ardupilot figure=true":
-        (RUN_FULL, "draws the figure", {"files": {"mine.csv": MINE}}),
-    ".venv/bin/python -m magexp calibrate data.path=mine_with_attitudes.csv objective=vector estimator=lm":
-        (RUN_FULL, "2 s", {"files": {"mine_with_attitudes.csv": MINE_ATTITUDES}}),
+    ".venv/bin/python -m magexp calibrate data.path=../shared/data/fxos8700_mag_readings.txt data.unit=uT estimator=lm "
+    "out=calib/": (RUN_FULL, "a recording", {"shared": True}),
+    ".venv/bin/python -m magexp calibrate data.path=../shared/data/fxos8700_mag_readings.txt data.unit=uT estimator=ipso "
+    "estimator.n_iterations=3000 seed=1 out=calib_ipso/": (RUN_FULL, "ipso and its held-out fits", {"shared": True}),
+    ".venv/bin/python -m magexp calibrate data.path=../shared/data/fxos8700_mag_readings.txt data.unit=uT "
+    "field.latitude=52.2 field.longitude=0.1 field.date=2024-05-01 out=calib_igrf/": (RUN_FULL, "a recording",
+                                                                                     {"shared": True}),
+    ".venv/bin/python -m magexp calibrate data.path=../shared/data/hmc5883l_full-sphere export=ardupilot figure=true "
+    "out=calib_ardupilot/": (RUN_FULL, "draws the figure", {"shared": True}),
+    ".venv/bin/python -m magexp calibrate data.path=../shared/data/hmc5883l_full-sphere field.latitude=52.2 "
+    "field.longitude=0.1 field.date=2024-05-01": (RUN_FULL, "a recording", {"shared": True}),
+    ".venv/bin/python -m magexp.calibration.simulate attitudes.csv": (RUN_FULL, "writes a recording with attitudes: 1.5 s"),
+    ".venv/bin/python -m magexp calibrate data.path=attitudes.csv objective=vector estimator=lm":
+        (RUN_FULL, "2 s", {"files": {"attitudes.csv": MINE_ATTITUDES}}),
     ".venv/bin/python -m magexp scenario=yan2022_mockup scenario.path=/path/to/mine.csv estimator=kf":
         (RUN_FULL, "1 s", {"replace": {"/path/to/mine.csv": "mine_mockup.csv"},
                            "files": {"mine_mockup.csv": MOCKUP_COPY}}),

@@ -44,10 +44,10 @@ def test_an_existing_export_file_survives_a_refused_run(tmp_path, calibrate, tar
     assert proc.returncode == 2 and "never overwritten" in proc.stderr and proc.stderr.count("\n") == 1, proc.stderr
     assert FILE_NAMES[target] in proc.stderr
     assert snapshot(out) == before  # byte for byte, and no new file (nor a staging folder)
+    # overwrite=true replaces a calibration's files only: the user's own is refused, named, untouched (issue 40)
     proc = calibrate(f"data.path={path}", f"out={out}", f"export={target}", "overwrite=true", cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr
-    assert (out / FILE_NAMES[target]).read_bytes() != before[FILE_NAMES[target]]
-    assert sorted(snapshot(out)) == sorted([FILES["parameters"], FILES["readings"], FILE_NAMES[target]])
+    assert proc.returncode == 2 and "no calibration wrote it" in proc.stderr and FILE_NAMES[target] in proc.stderr
+    assert proc.stderr.count("\n") == 1 and snapshot(out) == before
 
 
 @pytest.mark.parametrize("target", ["ardupilot", "px4", "ros"])

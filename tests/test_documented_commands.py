@@ -90,10 +90,9 @@ def write_with_attitudes(path):
                     "bx,by,bz,heading,roll,trim\n" + rows)
 
 
-def make_clone(tmp_path, command: str):
+def bare_clone(tmp_path):
     """A folder that looks like a fresh clone after ``make venv``: every top-level entry of the checkout
-    linked into it (its own writes stay in it), ``../shared/data`` beside it when the recordings exist,
-    and the reader's files of ``command`` written into it."""
+    linked into it (its own writes stay in it), ``../shared/data`` beside it when the recordings exist."""
     clone = tmp_path / "clone"
     clone.mkdir()
     for entry in ROOT.iterdir():
@@ -102,6 +101,12 @@ def make_clone(tmp_path, command: str):
     if SHARED_DATA.is_dir():
         (tmp_path / "shared").mkdir()
         (tmp_path / "shared" / "data").symlink_to(SHARED_DATA)
+    return clone
+
+
+def make_clone(tmp_path, command: str):
+    """:func:`bare_clone` with the reader's files of ``command`` written into it."""
+    clone = bare_clone(tmp_path)
     for name, what in options(command).get("files", {}).items():
         target = clone / name
         target.parent.mkdir(parents=True, exist_ok=True)

@@ -72,7 +72,8 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
     name : str
         The recording's name, which the line names.
     estimator : str
-        The estimator's (or the closed-form fit's) name.
+        The estimator's name, or the fit's own (``"gyro fit"``, ``"sphere fit"``: a model fitted whatever
+        ``estimator`` is, named as such, not as an estimator the user did not run).
     success : bool
         The fit's success.
     message : str
@@ -87,13 +88,14 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
     MagexpError
         A failed or collapsed fit.
     """
+    who = estimator if estimator.endswith(" fit") else f"estimator={estimator!r}"
     if not success:
         why = message.splitlines()[0] if message else "no message"
         if raw_cover["coverage_cells"] < PARTIAL:
-            raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({why}), nothing written: the readings "
+            raise MagexpError(f"{name}: {who} reports failure ({why}), nothing written: the readings "
                               f"cover {100 * raw_cover['coverage_cells']:.0f} % of the sphere, too little for W: record the "
                               "missing orientations, or fit model=sphere (offset and one scale)")
-        raise MagexpError(f"{name}: estimator={estimator!r} reports failure ({why}), nothing written: "
+        raise MagexpError(f"{name}: {who} reports failure ({why}), nothing written: "
                           "try another estimator (ellipsoid, lm), or record more orientations")
     cells, raw_cells = round(cover["coverage_cells"] * CELLS), round(raw_cover["coverage_cells"] * CELLS)
     one = cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG
@@ -103,12 +105,12 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
              f"{cover['direction_max_angle_deg']:.1f} deg of one direction; limits {MIN_CELLS} cells, "
              f"{ONE_ATTITUDE_DEG:g} deg), about the centre of the sphere fitted to them into {raw_cells}")
     if raw_cover["coverage_cells"] >= PARTIAL:  # the readings cover the sphere: the fit collapsed
-        raise MagexpError(f"{name}: estimator={estimator!r} did not converge, nothing written: {where}: the fit "
+        raise MagexpError(f"{name}: {who} did not converge, nothing written: {where}: the fit "
                           "collapsed, not the recording; use estimator=ellipsoid (the closed-form fit) or model=full")
     if one and raw_cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG:
         raise MagexpError(f"{name}: every calibrated direction lies within {cover['direction_max_angle_deg']:.1f} deg "
                           f"of one, under the limit {ONE_ATTITUDE_DEG:g} deg (a single attitude): {RECORD}")
-    raise MagexpError(f"{name}: estimator={estimator!r}: too few distinct directions, nothing written: {where} "
+    raise MagexpError(f"{name}: {who}: too few distinct directions, nothing written: {where} "
                       f"({100 * raw_cover['coverage_cells']:.0f} % of the sphere, under {100 * PARTIAL:g} %): record the "
                       "missing orientations, or fit model=sphere (offset and one scale)")
 

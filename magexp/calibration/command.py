@@ -17,6 +17,7 @@ from magexp.calibration import models as models_
 from magexp.calibration.export import TARGETS as EXPORT_TARGETS, options_of as export_options_of, render as render_export
 from magexp.calibration.firmware import check_counts_nt, check_max_rotation
 from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
+from magexp.calibration.folder import recording_files
 from magexp.calibration.options import help_text
 from magexp.calibration.inputs import Reference
 from magexp.calibration.live import is_live, kept, read_live, settings as live_settings
@@ -155,7 +156,7 @@ def run(cfg) -> Calibration:
     check_destination(out_dir if out is None else out, "out")
     overwrite, draw = flag(cfg, "overwrite"), flag(cfg, "figure")
     target, options = export_of(cfg, rec)
-    check_out(out_dir, overwrite=overwrite, export=target)
+    check_out(out_dir, overwrite=overwrite, export=target, draw=draw, recording=recording_files(rec))
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
@@ -170,7 +171,9 @@ def run(cfg) -> Calibration:
     paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=target, export_options=options)
     print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
                  + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
-                 + ("" if draw else "; no figure (figure=true draws it)")}))
+                 + ("" if draw else "; no figure (figure=true draws it)"),
+                 **({"removed": ", ".join(str(p) for p in paths.removed) + " (the earlier calibration's, not written "
+                                "by this one)"} if paths.removed else {})}))
     return cal
 
 

@@ -47,6 +47,7 @@ import yaml
 from magexp.calibration.heading import export_line, heldout_note
 from magexp.calibration.firmware import (MAX_ROTATION_DEG, STANDARD_ROTATIONS, Correction, check_counts_nt,
                                          check_max_rotation, to_firmware)
+from magexp.calibration.folder import check_file, recording_files
 from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
 from magexp.run.guard import check_destination
@@ -457,9 +458,10 @@ def of_calibration(cal, target: str, **options) -> Export:
     return render(target, cal.w, cal.offset, cal.unit, notes=notes, **options)
 
 
-def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
+def export(cal, target: str, path: str | Path | None = None, *, overwrite: bool = False, **options) -> Path:
     """Write ``target``'s file for the :class:`~magexp.calibration.Calibration` ``cal`` to ``path``
-    (a folder: :data:`FILE_NAMES` inside it; None: the working folder); never overwrites a file.
+    (a folder: :data:`FILE_NAMES` inside it; None: the working folder); an existing file is replaced only
+    with ``overwrite`` and only if a calibration wrote it, never the recording (:func:`write`).
 
     Parameters
     ----------
@@ -468,6 +470,8 @@ def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
     target : str
         One of :data:`TARGETS`.
     path : str or Path, optional
+        As :func:`write`'s.
+    overwrite : bool
         As :func:`write`'s.
     **options
         As :func:`of_calibration`.
@@ -482,12 +486,14 @@ def export(cal, target: str, path: str | Path | None = None, **options) -> Path:
     MagexpError
         As :func:`of_calibration` and :func:`write`; nothing is written then.
     """
-    return write(of_calibration(cal, target, **options), path)
+    return write(of_calibration(cal, target, **options), path, overwrite=overwrite,
+                 recording=recording_files(cal.recording))
 
 
-def write(out: Export, path: str | Path | None = None) -> Path:
+def write(out: Export, path: str | Path | None = None, *, overwrite: bool = False, recording=()) -> Path:
     """Write the rendered ``out`` to ``path`` (a folder: its default name inside; None: the working
-    folder), atomically; refuse, in one line, a file that exists already (never overwritten).
+    folder), atomically; refuse, in one line, a file that exists already unless ``overwrite``, and then one
+    that no calibration wrote or that is the recording (:func:`magexp.calibration.folder.check_file`).
 
     Parameters
     ----------
@@ -495,6 +501,10 @@ def write(out: Export, path: str | Path | None = None) -> Path:
         A rendered export.
     path : str or Path, optional
         The file, or a folder (:data:`FILE_NAMES` of ``out.target`` inside), or None (the working folder).
+    overwrite : bool
+        Replace an existing file a calibration wrote (:func:`magexp.calibration.folder.is_calibrations`).
+    recording : iterable of Path
+        The files of the recording calibrated, never written over.
 
     Returns
     -------
@@ -504,16 +514,15 @@ def write(out: Export, path: str | Path | None = None) -> Path:
     Raises
     ------
     MagexpError
-        One line for a file that exists already, a folder that does not exist, or a destination
-        :func:`magexp.run.guard.check_destination` refuses.
+        One line for a file that exists already (without ``overwrite``, or not a calibration's), the
+        recording, a folder that does not exist, or a destination :func:`magexp.run.guard.check_destination`
+        refuses.
     """
     path = Path(".") if path is None else Path(path)
     if path.is_dir():
         path = path / FILE_NAMES[out.target]
     check_destination(path, "export path")
-    if path.exists():
-        raise MagexpError(f"export path {str(path)!r} is not allowed: it exists already (never overwritten), "
-                          "choose another")
+    check_file(path, overwrite=overwrite, recording=recording, option="export path")
     if not path.parent.is_dir():
         raise MagexpError(f"export path {str(path)!r} is not allowed: its folder {str(path.parent)!r} does not exist")
     return write_text(path, out.text)

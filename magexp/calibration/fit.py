@@ -110,7 +110,8 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
     result = estimator.fit(problem, rng=rng)
     w, o = (a[0] for a in problem.unpack(result.x))
     if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
-        raise MagexpError(f"{rec.name}: estimator={estimator.name!r} gave a non-finite calibration, nothing written: "
+        who = "the gyro fit (model=gyro)" if model == "gyro" else f"estimator={estimator.name!r}"
+        raise MagexpError(f"{rec.name}: {who} gave a non-finite calibration, nothing written: "
                           "try estimator=ellipsoid or estimator=lm")
     if objective == "scalar":
         w = canonical(w)
@@ -433,7 +434,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
             else GYRO_ESTIMATOR["name"] if model == "gyro" else estimator.name)
     if checks:
         check_converged(rec, estimator, objective, model, result, calibrated, reference, dataset)
-        check_fit(rec.name, name, bool(result.success), result.message, cover,
+        check_fit(rec.name, "gyro fit" if model == "gyro" else name, bool(result.success), result.message, cover,
                   coverage(rec.readings - fit_sphere(rec.readings)[0]))
     metrics = {**quality(rec.readings, calibrated, reference.total), **cover, **regions(rec.readings)[1]}
     if objective == "vector":

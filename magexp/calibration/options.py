@@ -160,7 +160,8 @@ class CalibrateOptions:
     folds: int = option(6, "held-out check: each of the 6 regions of directions calibrated by the fit on the others, "
                            "or for a few static shots each reading by the fit without its neighbours (0: none)")
     out: str | None = option(None, "output folder (null: calibration_<recording stem> in the working folder)")
-    overwrite: bool = option(False, "true: replace the files of an earlier calibration in out (never silently)")
+    overwrite: bool = option(False, "true: replace the earlier calibration in out, its whole set (what it wrote "
+                                          "and this one does not is removed and named); never a file no calibration wrote")
     figure: bool = option(False, "true: draw calibration.png and .pdf (drawing takes longer than the calibration "
                                  "itself)")
     export: str | None = option(None, "also write the firmware's file beside calibration.json: ardupilot | px4 | "

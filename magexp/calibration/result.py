@@ -103,7 +103,8 @@ class Calibration:
 
     def save(self, path, *, overwrite: bool = False) -> Path:
         """Write ``calibration.json`` content (versioned, with provenance) to ``path``; an existing
-        file is refused in one line unless ``overwrite``. :meth:`load` reads it back exactly.
+        file is refused in one line unless ``overwrite``, and then replaced only if a calibration wrote it,
+        never the recording. :meth:`load` reads it back exactly.
 
         Parameters
         ----------
@@ -184,8 +185,10 @@ class Calibration:
                               "recording again, or plot cal.apply(readings) yourself")
         return figure(self)
 
-    def export(self, target: str, path=None, **options) -> Path:
-        """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`).
+    def export(self, target: str, path=None, *, overwrite: bool = False, **options) -> Path:
+        """Write ``target``'s file (``ardupilot``, ``px4``, ``ros``, ``c``: :mod:`magexp.calibration.export`); an
+        existing file is refused in one line unless ``overwrite``, and then replaced only if a calibration
+        wrote it (:func:`magexp.calibration.folder.is_calibrations`), never the recording.
 
         Parameters
         ----------
@@ -193,6 +196,8 @@ class Calibration:
             ``ardupilot``, ``px4``, ``ros`` or ``c``.
         path : str, Path or None
             The folder or file (None: the working folder).
+        overwrite : bool
+            Replace an existing file a calibration wrote.
         **options
             The target's options (:func:`magexp.calibration.export.options_of`).
 
@@ -206,5 +211,5 @@ class Calibration:
         MagexpError
             An export the target refuses (:func:`magexp.calibration.export.render`), in one line.
         """
-        return export(self, target, path, **options)
+        return export(self, target, path, overwrite=overwrite, **options)
 

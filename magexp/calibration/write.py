@@ -15,8 +15,10 @@ Files, in the output folder (``out=...``, default Hydra's run folder):
   total field per reading and its histogram, before and after;
 * with ``export=<target>``, the firmware's file (:mod:`magexp.calibration.export`).
 
-An existing file is never overwritten (``overwrite=true`` replaces an earlier calibration's files,
-and says so), and nothing is written under ``results/``.
+A folder holds one calibration (:mod:`magexp.calibration.folder`): ``calibration.json`` lists the other files
+it wrote (``files``, their SHA-256). An existing file is never overwritten; ``overwrite=true`` replaces the
+earlier calibration's whole set (what it wrote and this one does not is removed, and named), never a file
+no calibration wrote, and a folder holding the recording is refused. Nothing is written under ``results/``.
 """
 
 from __future__ import annotations
@@ -30,10 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.export import FILE_NAMES, firmware_correction, of_calibration
+from magexp.calibration.folder import MANIFEST, Plan, check_file, check_recording, digest, plan, recording_files
 from magexp.calibration.heading import curves as heading_curves, summary_lines
 from magexp.calibration.holdout import describe as describe_heldout
 from magexp.calibration.onboard import onboard_line
-from magexp.core.atomic import write_text
+from magexp.core.atomic import _stops_held as stops_held, write_text
 from magexp.core.identifiability import CELLS
 from magexp.run.guard import check_destination
 from magexp.core.formats import VERSION_LINE
@@ -44,26 +47,38 @@ from magexp.run.provenance import provenance
 
 FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png",
          "figure_vector": "calibration.pdf"}  # the figure and its vector twin (magexp.artifacts.plots.style.save)
+#: every name a calibration may write into its folder (the earlier set of a folder written before the manifest)
+KNOWN = (*FILES.values(), *FILE_NAMES.values())
 
 
-def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = None) -> None:
-    """Refuse, in one line, an output folder under ``results/`` or one that holds an output file
-    (:data:`FILES`, and the file of the ``export`` target; unless ``overwrite``: then the files of an
-    earlier calibration are replaced).
+def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = None, draw: bool = True,
+              recording=()) -> Plan:
+    """Refuse, in one line, an output folder under ``results/``, one that holds the recording being read, or
+    one whose files are in the way (:func:`magexp.calibration.folder.plan`: without ``overwrite`` any output
+    file there; with it a file no calibration wrote); else what writing there replaces and removes.
 
     Parameters
     ----------
     out_dir : Path
         The output folder.
     overwrite : bool
-        Replace an earlier calibration's files.
+        Replace the earlier calibration in it (its whole set).
     export : str or None
         The export target, whose file counts too.
+    draw : bool
+        The figure is drawn (its two files count too).
+    recording : iterable of Path
+        The recording's files (:func:`magexp.calibration.folder.recording_files`).
+
+    Returns
+    -------
+    Plan
+        :func:`~magexp.calibration.folder.plan` of the files this run writes, in ``out_dir``.
 
     Raises
     ------
     MagexpError
-        A folder under results/ or holding an output file.
+        A folder under results/, holding the recording, or holding a file in the way.
     """
     out_dir = Path(out_dir).resolve()
     if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
@@ -76,11 +91,14 @@ def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = No
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is a file, not a folder")
     if not os.access(existing, os.W_OK):
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: {str(existing)!r} is not writable")
-    names = [*FILES.values(), *([export_name(export)] if export else [])]
-    taken = [name for name in names if (out_dir / name).exists()]
-    if taken and not overwrite:
-        raise MagexpError(f"out={str(out_dir)!r} is not allowed: it already holds {', '.join(taken)} "
-                          "(never overwritten unless overwrite=true), choose another folder")
+    check_recording(out_dir, recording)
+    return plan(out_dir, _output_names(draw, export), overwrite=overwrite, known=KNOWN)
+
+
+def _output_names(draw: bool, export: str | None) -> list[str]:
+    """The names of the files :func:`write` writes: the parameters, the readings, the figure (``draw``), the export."""
+    return [FILES["parameters"], FILES["readings"], *((FILES["figure"], FILES["figure_vector"]) if draw else ()),
+            *([export_name(export)] if export else [])]
 
 
 #: the format line of ``calibration.json`` (:func:`parameters`) and the ones :func:`read_parameters` reads
@@ -140,7 +158,8 @@ def parameters(cal, *, seed: int | None = None) -> dict:
 
 def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
     """Write :func:`parameters` of ``cal`` to ``path`` atomically; an existing file is refused in one
-    line unless ``overwrite``.
+    line unless ``overwrite``, and then only a file a calibration wrote
+    (:func:`magexp.calibration.folder.is_calibrations`).
 
     Parameters
     ----------
@@ -149,7 +168,7 @@ def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
     path : str or Path
         The file.
     overwrite : bool
-        Replace an existing file.
+        Replace an existing file written by a calibration.
 
     Returns
     -------
@@ -159,14 +178,13 @@ def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
     Raises
     ------
     MagexpError
-        An existing file without ``overwrite``.
+        An existing file without ``overwrite``, or one no calibration wrote.
     """
     path = Path(path)
     check_destination(path, "path")
-    if path.exists() and not overwrite:
-        raise MagexpError(f"path {str(path)!r} is not allowed: it exists already (never overwritten unless "
-                          "overwrite=True)")
-    return write_text(path, json.dumps(parameters(cal), indent=2) + "\n")
+    check_file(path, overwrite=overwrite, recording=recording_files(cal.recording), option="path")
+    saved = {k: v for k, v in parameters(cal).items() if k != MANIFEST}  # the manifest is its folder's, not copied
+    return write_text(path, json.dumps(saved, indent=2) + "\n")
 
 
 def read_parameters(path) -> dict:
@@ -290,17 +308,26 @@ def export_name(target: str) -> str:
     return FILE_NAMES[target]
 
 
+class Written(dict):
+    """``{kind: path}`` of the files :func:`write` wrote, and ``removed``: the earlier calibration's files it
+    removed (those of its set this one does not write)."""
+
+    removed: tuple = ()
+
+
 def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, overwrite: bool = False,
-          export: str | None = None, export_options: dict | None = None) -> dict:
+          export: str | None = None, export_options: dict | None = None) -> Written:
     """Write ``calibration.json``, ``calibrated.csv`` and, with ``draw``, the figure into ``out_dir``
-    (checked by :func:`check_out`; ``overwrite`` replaces the files of an earlier calibration), and
+    (checked by :func:`check_out`; ``overwrite`` replaces the earlier calibration's whole set there), and
     with ``export`` the firmware file of that target beside them (:mod:`magexp.calibration.export`,
-    ``export_options`` as :func:`magexp.calibration.export.render`); return their paths.
+    ``export_options`` as :func:`magexp.calibration.export.render`); ``calibration.json`` lists the others
+    with their SHA-256 (its ``files``); return their paths.
 
     Never destroys: the export is rendered first (its refusals, e.g. a rotation or a raw unit without
     ``counts_nt``, come before any file is touched); every file is written into a hidden staging folder
-    inside ``out_dir`` and moved into place only once all are complete, a file that exists being
-    replaced only with ``overwrite``. A failure or an interruption removes the staging folder and
+    inside ``out_dir``; only once all are complete is the folder checked again and, with Ctrl-C and
+    ``kill`` held back, each moved into place (``os.replace``, ``calibration.json`` last) and the earlier
+    calibration's files this one does not write removed. A failure removes the staging folder and
     whatever this call created (the folders made for ``out_dir``, a file already moved into place),
     nothing else. The figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings.
 
@@ -315,7 +342,7 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
     draw : bool
         Draw the figure.
     overwrite : bool
-        Replace an earlier calibration's files.
+        Replace the earlier calibration's files.
     export : str or None
         An export target.
     export_options : dict or None
@@ -323,8 +350,8 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
 
     Returns
     -------
-    dict
-        ``{kind: path}`` of the files written.
+    Written
+        ``{kind: path}`` of the files written; ``.removed``, the paths of the earlier calibration's files removed.
 
     Raises
     ------
@@ -332,12 +359,13 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
         A refused folder, file or export; nothing is left behind.
     """
     out_dir = Path(out_dir)
-    check_out(out_dir, overwrite=overwrite, export=export)
+    recording = recording_files(cal.recording)
+    check_out(out_dir, overwrite=overwrite, export=export, draw=draw, recording=recording)
     rendered = None
     if export:
         rendered = of_calibration(cal, export, **(export_options or {}))
     keys = ("parameters", "readings", *(("figure", "figure_vector") if draw else ()))
-    paths = {key: out_dir / FILES[key] for key in keys}
+    paths = Written({key: out_dir / FILES[key] for key in keys})
     if export:
         paths["export"] = out_dir / export_name(export)
     created, placed = first_missing(out_dir), []
@@ -346,7 +374,12 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
     try:
         _stage(cal, stage, seed=seed, draw=draw, export=None if rendered is None else (paths["export"].name,
                                                                                         rendered.text))
-        _place(stage, list(paths.values()), overwrite=overwrite, placed=placed)
+        with stops_held():  # the swap whole: an interrupted one would leave a mixed folder
+            todo = check_out(out_dir, overwrite=overwrite, export=export, draw=draw, recording=recording)
+            _place(stage, [*list(paths.values())[1:], paths["parameters"]], placed=placed)
+            for name in todo.removes:
+                (out_dir / name).unlink(missing_ok=True)
+            placed, created = [], None  # done: a stop delivered as the block ends undoes nothing
     except BaseException:  # failed or interrupted: what this call made goes, nothing else
         for path in placed:
             path.unlink(missing_ok=True)
@@ -355,15 +388,13 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
         raise
     finally:
         shutil.rmtree(stage, ignore_errors=True)
-    if overwrite:  # an earlier calibration's file this one did not replace (a figure) would be stale
-        for name in set(FILES.values()) - {p.name for p in paths.values()}:
-            (out_dir / name).unlink(missing_ok=True)
+    paths.removed = tuple(out_dir / name for name in todo.removes)
     return paths
 
 
 def _stage(cal, stage: Path, *, seed, draw: bool, export: tuple[str, str] | None) -> None:
-    """Write every file of :func:`write` into the folder ``stage``: ``export`` is ``(name, text)``."""
-    write_text(stage / FILES["parameters"], json.dumps(parameters(cal, seed=seed), indent=2) + "\n")
+    """Write every file of :func:`write` into the folder ``stage``, ``calibration.json`` last with the others'
+    digests (its ``files``): ``export`` is ``(name, text)``."""
     with open(stage / FILES["readings"], "w") as fh:
         write_readings(cal, fh)
     if draw:
@@ -372,16 +403,16 @@ def _stage(cal, stage: Path, *, seed, draw: bool, export: tuple[str, str] | None
         save(figure(cal), stage / FILES["figure"])
     if export is not None:
         write_text(stage / export[0], export[1])
+    files = {p.name: digest(p) for p in sorted(stage.iterdir()) if p.is_file() and not p.name.startswith(".")}
+    write_text(stage / FILES["parameters"], json.dumps({**parameters(cal, seed=seed), MANIFEST: files}, indent=2)
+               + "\n")
 
 
-def _place(stage: Path, paths: list[Path], *, overwrite: bool, placed: list[Path]) -> None:
-    """Move each staged file onto its path (``os.replace``); a file there is replaced only with ``overwrite``
-    (one that appeared since :func:`check_out` is refused). ``placed`` gets each path this call created."""
+def _place(stage: Path, paths: list[Path], *, placed: list[Path]) -> None:
+    """Move each staged file onto its path (``os.replace``; what is there was checked just before).
+    ``placed`` gets each path this call created."""
     for path in paths:
         existed = path.exists()
-        if existed and not overwrite:
-            raise MagexpError(f"out={str(path.parent)!r} is not allowed: {path.name} appeared in it while "
-                              "calibrating (never overwritten unless overwrite=true)")
         os.replace(stage / path.name, path)
         placed += [] if existed else [path]
 
