@@ -129,7 +129,7 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
                      record=inputs)
 
 
-def run(cfg) -> Calibration:
+def run(cfg, *, live: bool = False) -> Calibration:
     """Load, calibrate, check and write as ``cfg`` says; print the summary.
 
     Parameters
@@ -137,6 +137,9 @@ def run(cfg) -> Calibration:
     cfg : DictConfig
         The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`), checked here first
         (:func:`check_options`).
+    live : bool
+        ``data.path`` is the stream a live run kept in ``out`` (:func:`magexp.calibration.live.read_live`):
+        written by this run, beside the outputs by design, so not refused as a recording inside ``out``.
 
     Returns
     -------
@@ -156,7 +159,8 @@ def run(cfg) -> Calibration:
     check_destination(out_dir if out is None else out, "out")
     overwrite, draw = flag(cfg, "overwrite"), flag(cfg, "figure")
     target, options = export_of(cfg, rec)
-    check_out(out_dir, overwrite=overwrite, export=target, draw=draw, recording=recording_files(rec))
+    protected = [] if live else recording_files(rec)
+    check_out(out_dir, overwrite=overwrite, export=target, draw=draw, recording=protected)
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
     seed = check_positive_int(cfg.seed, "seed", minimum=0)
     _, est_rng = run_generators(seed)
@@ -168,7 +172,8 @@ def run(cfg) -> Calibration:
                                   folds=cfg.folds, rng=est_rng, model=cfg.model, accept=flag(cfg, "accept"),
                                   gate_overrides=cfg.get("gate"), auto_margin=cfg.get("auto_margin", models_.MARGIN))
     cal.seed, cal.config = seed, OmegaConf.to_container(cfg, resolve=True)
-    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=target, export_options=options)
+    paths = write(cal, out_dir, draw=draw, overwrite=overwrite, export=target, export_options=options,
+                  recording=protected)
     print(table({**summary(cal), "written to": ", ".join(str(p) for p in paths.values())
                  + (" (replacing the earlier calibration's files: overwrite=true)" if overwrite else "")
                  + ("" if draw else "; no figure (figure=true draws it)"),
@@ -334,7 +339,7 @@ def command(argv: list[str]) -> None:
         build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         cfg = read_live(cfg, calibrate_recording)
         with kept(cfg.data.path):
-            run(cfg)
+            run(cfg, live=True)
         return
     run(cfg)
 

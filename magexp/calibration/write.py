@@ -316,7 +316,7 @@ class Written(dict):
 
 
 def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, overwrite: bool = False,
-          export: str | None = None, export_options: dict | None = None) -> Written:
+          export: str | None = None, export_options: dict | None = None, recording=None) -> Written:
     """Write ``calibration.json``, ``calibrated.csv`` and, with ``draw``, the figure into ``out_dir``
     (checked by :func:`check_out`; ``overwrite`` replaces the earlier calibration's whole set there), and
     with ``export`` the firmware file of that target beside them (:mod:`magexp.calibration.export`,
@@ -347,6 +347,9 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
         An export target.
     export_options : dict or None
         Its options.
+    recording : iterable of Path or None
+        The files never written over and refused inside ``out_dir`` (None: the recording's,
+        :func:`magexp.calibration.folder.recording_files`; a live stream kept beside the outputs: none).
 
     Returns
     -------
@@ -359,7 +362,7 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
         A refused folder, file or export; nothing is left behind.
     """
     out_dir = Path(out_dir)
-    recording = recording_files(cal.recording)
+    recording = recording_files(cal.recording) if recording is None else recording
     check_out(out_dir, overwrite=overwrite, export=export, draw=draw, recording=recording)
     rendered = None
     if export:
