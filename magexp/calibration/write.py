@@ -126,7 +126,7 @@ def parameters(cal, *, seed: int | None = None) -> dict:
                       "per_reading": bool(np.ptp(cal.reference.total) > 0), "source": cal.reference.source,
                       "estimated": cal.reference.estimated, "unit": cal.reference.unit,
                       "field_model": cal.reference.record, "how": cal.reference.describe()},
-        "search": {"diag": list(box.diag), "offdiag": list(box.offdiag), "offset": list(box.offset)},
+        "search": box.record(),
         "metrics": cal.metrics,
         "quality": _finite(cal.report),
         "fit": {"fun": float(cal.fit.fun), "nit": int(cal.fit.nit), "nfev": int(cal.fit.nfev),
