@@ -473,4 +473,5 @@ def summary(cal) -> dict:
         "coverage": f"{100 * m['coverage_cells']:.0f} % of {CELLS} sphere cells; smallest direction-scatter "
                     f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
         "fit": _fit_line(cal.fit, cal.saved),
+        **({"search box": cal.search.how} if not getattr(cal.search, "centred", True) else {}),
     }
