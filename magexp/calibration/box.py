@@ -21,19 +21,20 @@ all keep the optimum inside, where the box of the readings' range
 (:func:`magexp.scenarios.search.search_box`, kept for the papers' scenarios) clips it: its diagonal
 ``[0.5 s, 1.5 s]`` excluded the QMC5883L log's ``W_22 = 1.67 s`` (anisotropy 2.25). The offset's width is
 bounded for a second reason: the scalar objective has a valley of false minima with the offset far from
-the readings and ``W`` flattening the cloud along that direction (every magnitude then nearly ``B``), and
-an offset box as wide as the readings' range (up to 2.3 radii from the centre on the FXOS8700 recording) let the swarms end
-there, on the offset's faces, on the held-out regions' fits. The matrix's width is bounded for the same
-reason: the faces cut the orbit ``{Q W_e}`` of equal cost, and a rotated optimum pressed onto them is a false
-minimum. With ``W`` within 0.5 ``λ_max`` CMA-ES ended so on a held-out region of the QMC5883L log (four
-entries of ``W`` on faces, objective 78.54 against the optimum's 77.35); within 0.25 ``λ_max`` (rotations up to
-about 14 degrees inside) it did not. The algebraic fit differs from the
-objective's least-squares optimum by far less than these margins on any recording an ellipsoid fits
-(tests/test_calibrate_swarms.py checks Levenberg-Marquardt's optimum is inside).
+the readings and ``W`` flattening the cloud along that direction (every magnitude then nearly ``B``), and an
+offset box as wide as the readings' range (up to 2.3 radii from the centre on the FXOS8700 recording) let
+the swarms end there, on the offset's faces, on the held-out regions' fits. The matrix's width is bounded
+for a like reason: the faces cut the orbit ``{Q W_e}`` of equal cost, and a rotated optimum pressed onto
+them is a false minimum. With ``W`` within 0.5 ``λ_max`` CMA-ES ended so on a held-out region of the
+QMC5883L log (four entries of ``W`` on faces, objective 78.54 against the optimum's 77.35); within 0.25
+``λ_max`` (rotations up to about 14 degrees inside) it did not. On the shared recordings the ellipsoid
+calibrates, and on each of their held-out regions' fits, the objective's least-squares optimum lies within
+a sixth of these margins of the algebraic fit (tests/test_calibrate_swarms.py checks it lies in the box's
+inner half).
 
-When the closed form fails (the readings do not lie on an ellipsoid) or its centre is not inside a
-finite box, the box is the readings' range (:func:`~magexp.scenarios.search.search_box`) and
-:attr:`CalibrationBox.how` says so in one line; such readings are refused by the checks anyway.
+When the closed form fails (the readings do not lie on an ellipsoid) or gives no finite box around its
+centre, the box is the readings' range (:func:`~magexp.scenarios.search.search_box`) and
+:attr:`CalibrationBox.how` says so in one line, which the printed report shows.
 """
 
 from __future__ import annotations
