@@ -430,6 +430,11 @@ def _gyro_lines(report: dict, unit: str) -> dict:
                          f"{report['vector_rms']:.3g} {unit} (model=gyro)"}
 
 
+def _box_lines(box) -> dict:
+    """The line of a search box that could not be centred on the closed form (:mod:`magexp.calibration.box`)."""
+    return {"search box": box.how} if not getattr(box, "centred", True) else {}
+
+
 def summary(cal) -> dict:
     """The key numbers to print, in order.
 
@@ -473,5 +478,5 @@ def summary(cal) -> dict:
         "coverage": f"{100 * m['coverage_cells']:.0f} % of {CELLS} sphere cells; smallest direction-scatter "
                     f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
         "fit": _fit_line(cal.fit, cal.saved),
-        **({"search box": cal.search.how} if not getattr(cal.search, "centred", True) else {}),
+        **_box_lines(cal.search),
     }
