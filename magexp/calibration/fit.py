@@ -54,9 +54,9 @@ import os
 import numpy as np
 
 from magexp.calibration import models as models_
-from magexp.calibration.box import calibration_box
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
+from magexp.calibration.box import calibration_box
 from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
                                       recording_dataset, reference_of)
 from magexp.calibration.quality import gyro_extras, quality, report_of
