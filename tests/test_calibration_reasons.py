@@ -3,6 +3,8 @@ residual RMS less the readings' own noise, an estimator short of the closed-form
 that collapsed not blamed on the recording, and the gyro-aided model refused for a saturated gyroscope; and
 model=auto (item 7) reporting every candidate, a gyro-aided one that cannot succeed dropped before its fit."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -81,10 +83,12 @@ def test_an_unconverged_swarm_is_named_with_the_closed_form_fit(tmp_path, capsys
 
 @_present(SPHERE)
 def test_an_unconverged_swarm_under_auto_is_named_by_its_held_out_spread(tmp_path, capsys):
-    """model=auto (the default): the swarm's full model failed on the folds (26 % held out); auto would otherwise
-    have fallen back to the diagonal model (2.83 %) without a word."""
+    """model=auto (the default): the swarm's full model failed on the folds (13.5 % held out in the box centred on
+    the closed form, 26 % in the readings' range box); auto would otherwise have fallen back to the diagonal model
+    (2.83 %) without a word."""
     line = _refused(tmp_path, capsys, f"data.path={SPHERE}", "estimator=ipso", "estimator.n_iterations=3")
-    assert "estimator='ipso' did not converge" in line and "its held-out spread 26 %" in line
+    held = re.search(r"its held-out spread ([0-9.]+) %", line)
+    assert "estimator='ipso' did not converge" in line and held and float(held.group(1)) > 1.1 * 0.707
     assert "closed-form ellipsoid fit's 0.707 % (limit 1.1 times)" in line
 
 

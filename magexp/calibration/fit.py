@@ -20,10 +20,18 @@ the sphere fitted to the raw readings (:func:`~magexp.scenarios.search.centroid_
 the mean calibrated magnitude equals ``R0``. The shape of the calibration (and the spread
 std/mean) does not depend on this choice; the absolute scale does, and the output says so.
 
-Search box of swarm estimators (:func:`search_box`), derived from the data: each offset
-within the range of the readings, ``[min, max]`` over all three axes; matrix entries scaled
-by ``s = reference / R0``: diagonal in ``[0.5 s, 1.5 s]``, off-diagonal in ``[-0.5 s, 0.5 s]``
-(``1 / s`` instead of ``s`` for the vector objective, whose parameters are ``S = W^-1``: Yuan 2018).
+Search box (:func:`search_box_of`). The scalar ``model=full`` fit of an iterative estimator (the swarms, the
+black-box baselines) searches a box centred on the closed-form ellipsoid fit of the same readings, ``W``
+within :data:`~magexp.calibration.box.MATRIX_MARGIN` times its largest eigenvalue and the offset within
+:data:`~magexp.calibration.box.OFFSET_MARGIN` times its shortest semi-axis
+(:func:`magexp.calibration.box.calibration_box`): it holds the optimum whatever the unit, the offset or the
+anisotropy, where the readings' range box below clipped it, and it keeps the swarms out of the scalar
+objective's valley of far offsets. Where the closed form fails, the box is the readings' range, and the
+box's record says so. Every other fit (a closed form, the vector objectives) has the readings' range box
+(:func:`magexp.scenarios.search.search_box`): each offset within the range of the readings, ``[min, max]``
+over all three axes; matrix entries scaled by ``s = reference / R0``: diagonal in ``[0.5 s, 1.5 s]``,
+off-diagonal in ``[-0.5 s, 0.5 s]`` (``1 / s`` instead of ``s`` for the vector objective, whose parameters
+are ``S = W^-1``: Yuan 2018). Each held-out fold derives its box from its own fitted readings.
 
 Degenerate data (identical readings, a plane, one attitude, too few distinct directions) and an
 estimator reporting failure raise one :class:`~magexp.errors.MagexpError` line that says why and
@@ -51,6 +59,7 @@ import numpy as np
 from magexp.calibration import holdout, models as models_
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
+from magexp.calibration.box import calibration_box
 from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
                                       recording_dataset, reference_of)
 from magexp.calibration.export import firmware_correction
@@ -102,7 +111,7 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
     if model == "gyro":  # its own problem and estimator (magexp.calibration.models)
         objective, dataset, estimator = "gyro", gyro_dataset(rec, reference), gyro_estimator()
     dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
-    box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective != "scalar")
+    box = search_box_of(rec.readings, float(np.mean(reference.total)), estimator, objective, model)
     problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
     if model in models_.CLOSED_FORM:
         w, o, calibrated, result = _closed_form(rec, model, reference)
@@ -120,6 +129,32 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
         w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
         calibrated = (rec.readings - o) @ w.T
     return w, o, calibrated, problem, result, box
+
+
+def search_box_of(readings: np.ndarray, radius: float, estimator, objective: str, model: str):
+    """The box of a fit (module docstring): an iterative estimator's scalar ``model=full`` search, the box centred
+    on the closed-form ellipsoid fit (:func:`magexp.calibration.box.calibration_box`); any other fit, the
+    readings' range (:func:`magexp.scenarios.search.search_box`; ``S = W^-1`` for the vector objectives), which
+    a closed form or a start from it does not search.
+
+    Parameters
+    ----------
+    readings : numpy.ndarray
+        ``(N, 3)`` the readings fitted.
+    radius : float
+        The fit's radius (the mean reference total).
+    estimator, objective, model
+        As in :func:`heldout` (``objective`` ``gyro`` for the gyro-aided model).
+
+    Returns
+    -------
+    CalibrationBox or SearchBox
+        The box.
+    """
+    searched = getattr(estimator, "iterative", True) and model not in models_.CLOSED_FORM
+    if objective == "scalar" and searched:
+        return calibration_box(readings, radius)
+    return search_box(readings, radius, forward=objective != "scalar")
 
 
 def select_model(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.calibration.box import CalibrationBox
 from magexp.calibration.export import export
 from magexp.calibration.inputs import Reference
 from magexp.calibration.write import figure, read_parameters, save_parameters, summary, table
@@ -39,7 +40,7 @@ class Calibration:
     w: np.ndarray
     offset: np.ndarray
     reference: Reference
-    search: SearchBox | None
+    search: CalibrationBox | SearchBox | None
     fit: FitResult | None
     calibrated: np.ndarray
     metrics: dict = field(default_factory=dict)

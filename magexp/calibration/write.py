@@ -146,7 +146,7 @@ def parameters(cal, *, seed: int | None = None) -> dict:
                       "per_reading": bool(np.ptp(cal.reference.total) > 0), "source": cal.reference.source,
                       "estimated": cal.reference.estimated, "unit": cal.reference.unit,
                       "field_model": cal.reference.record, "how": cal.reference.describe()},
-        "search": {"diag": list(box.diag), "offdiag": list(box.offdiag), "offset": list(box.offset)},
+        "search": box.record(),
         "metrics": cal.metrics,
         "quality": _finite(cal.report),
         "fit": {"fun": float(cal.fit.fun), "nit": int(cal.fit.nit), "nfev": int(cal.fit.nfev),
@@ -469,6 +469,11 @@ def _gyro_lines(report: dict, unit: str) -> dict:
                          f"{report['vector_rms']:.3g} {unit} (model=gyro)"}
 
 
+def _box_lines(box) -> dict:
+    """The line of a search box that could not be centred on the closed form (:mod:`magexp.calibration.box`)."""
+    return {"search box": box.how} if not getattr(box, "centred", True) else {}
+
+
 def summary(cal) -> dict:
     """The key numbers to print, in order.
 
@@ -513,4 +518,5 @@ def summary(cal) -> dict:
         "coverage": f"{100 * m['coverage_cells']:.0f} % of {CELLS} sphere cells; smallest direction-scatter "
                     f"eigenvalue {m['coverage_lambda_min']:.3f} (1/3 = full sphere, 0 = plane)",
         "fit": _fit_line(cal.fit, cal.saved),
+        **_box_lines(cal.search),
     }

@@ -104,6 +104,16 @@ class SearchBox:
         hi = np.where(eye, self.diag[1], self.offdiag[1])
         return (np.concatenate([lo, np.full(3, self.offset[0])]), np.concatenate([hi, np.full(3, self.offset[1])]))
 
+    def record(self) -> dict:
+        """The box for a calibration's JSON.
+
+        Returns
+        -------
+        dict
+            ``{diag, offdiag, offset}``, each ``[low, high]``.
+        """
+        return {"diag": list(self.diag), "offdiag": list(self.offdiag), "offset": list(self.offset)}
+
 
 @dataclass
 class SearchConf:
