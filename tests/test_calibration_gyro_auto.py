@@ -15,7 +15,7 @@ from magexp.core.geometry import attitude_at, rot_x, rot_y, rot_z
 from magexp.core.identifiability import spread
 from magexp.core.recordings import Recording
 from magexp.errors import MagexpError
-from magexp.estimators.marquardt import minimise_numpy, stacked_jacobian
+from magexp.core.marquardt import minimise_numpy, stacked_jacobian
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 ROLL_AND_TILT = DATA / "hmc5883l_roll-and-tilt-at-45-90"

@@ -146,6 +146,16 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     if c.custom is not None:  # AP_CustomRotations: Matrix3::from_euler(roll, pitch, yaw), shared by the board's sensors
         values["CUST_ROT_ENABLE"] = 1
         values.update({f"CUST_ROT1_{k}": v for k, v in zip(("ROLL", "PITCH", "YAW"), euler_321(c.custom))})
+    warnings = _ardupilot_warnings(values, ofs)
+    head = _comments(notes, "ArduPilot: B = M (COMPASS_SCALE (raw + COMPASS_OFS)), M = [[DIA_X, ODI_X, ODI_Y], "
+                            "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#")
+    head += [f"# WARNING: {text}" for text in warnings]
+    text = "\n".join(head + [f"{k},{v!r}" for k, v in values.items()]) + "\n"
+    return Export("ardupilot", text, values, tuple(warnings))
+
+
+def _ardupilot_warnings(values: dict, ofs: np.ndarray) -> list[str]:
+    """The values of an ArduPilot export outside its calibrator's ranges (:func:`ardupilot`)."""
     warnings = []
     for key, value in values.items():
         if "_DIA" in key and not ARDUPILOT_DIAGONAL[0] <= value <= ARDUPILOT_DIAGONAL[1]:
@@ -155,11 +165,7 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     if np.max(np.abs(ofs)) > ARDUPILOT_OFFSET_MAX:
         warnings.append(f"an offset of {np.max(np.abs(ofs)):.6g} mGauss exceeds COMPASS_OFFS_MAX's default "
                         f"{ARDUPILOT_OFFSET_MAX:g} (a pre-arm check)")
-    head = _comments(notes, "ArduPilot: B = M (COMPASS_SCALE (raw + COMPASS_OFS)), M = [[DIA_X, ODI_X, ODI_Y], "
-                            "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#")
-    head += [f"# WARNING: {text}" for text in warnings]
-    text = "\n".join(head + [f"{k},{v!r}" for k, v in values.items()]) + "\n"
-    return Export("ardupilot", text, values, tuple(warnings))
+    return warnings
 
 
 def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0, rotation=None,

@@ -299,34 +299,37 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
         k_in = _factor(unit, target_unit, counts_nt, "unit")
         k_out = _factor(field_unit, target_unit, counts_nt, "field_unit")
     limit = check_max_rotation(max_rotation_deg)
-    rotation, orientation = np.eye(3), None
+    rotation, orientation, turn = np.eye(3), None, None
     if symmetric:
-        if np.linalg.det(w) <= 0:
-            raise MagexpError(f"W with determinant {np.linalg.det(w):.3g} is not allowed for a firmware's symmetric "
-                              "matrix: it mirrors an axis; set the magnetometer's orientation in the firmware first")
-        rotation, s = polar(w)
-        angle = float(np.rad2deg(rotation_angle(rotation)))
-        turn = None
-        if orient:
-            orientation, residual = nearest_orientation(rotation)
-            if residual > limit and custom:
-                orientation, turn = CUSTOM_ORIENTATION, rotation
-            elif residual > limit:
-                roll, pitch, yaw = STANDARD_ROTATIONS[orientation]
-                raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation), {residual:.2f} deg "
-                                  f"from the nearest of the firmware's standard orientations ({orientation}: roll {roll}, "
-                                  f"pitch {pitch}, yaw {yaw}), over the limit {limit:g}: the heading would be off by up "
-                                  f"to that much (CAL_MAGn_ROT holds only the standard orientations; ArduPilot's "
-                                  f"COMPASS_ORIENT=101 with CUST_ROT1_* holds any); allow it with "
-                                  f"max_rotation_deg={np.ceil(residual * 10) / 10:g} to export orientation {orientation} and S")
-            rotation, s = polar((standard_rotation(orientation) if turn is None else turn).T @ w)
-        elif angle > limit:
-            raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation): the firmware's symmetric "
-                              f"matrix holds S only, so its heading would be off by up to that much; set the "
-                              f"magnetometer's orientation to R in the firmware, or allow it with "
-                              f"max_rotation_deg={np.ceil(angle * 10) / 10:g} to export S alone")
-        w = s
-    else:
-        turn = None
+        w, rotation, orientation, turn = _symmetrised(w, limit, orient=orient, custom=custom)
     return Correction(matrix=(k_out / k_in) * w, offset=k_in * offset, unit=target_unit or unit,
                       field_unit=target_unit or field_unit, rotation=rotation, orientation=orientation, custom=turn)
+
+
+def _symmetrised(w: np.ndarray, limit: float, *, orient: bool, custom: bool) -> tuple:
+    """``(S, R left out, orientation, custom rotation or None)`` of :func:`to_firmware`'s symmetric branch."""
+    if np.linalg.det(w) <= 0:
+        raise MagexpError(f"W with determinant {np.linalg.det(w):.3g} is not allowed for a firmware's symmetric "
+                          "matrix: it mirrors an axis; set the magnetometer's orientation in the firmware first")
+    rotation, s = polar(w)
+    angle = float(np.rad2deg(rotation_angle(rotation)))
+    orientation, turn = None, None
+    if orient:
+        orientation, residual = nearest_orientation(rotation)
+        if residual > limit and custom:
+            orientation, turn = CUSTOM_ORIENTATION, rotation
+        elif residual > limit:
+            roll, pitch, yaw = STANDARD_ROTATIONS[orientation]
+            raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation), {residual:.2f} deg "
+                              f"from the nearest of the firmware's standard orientations ({orientation}: roll {roll}, "
+                              f"pitch {pitch}, yaw {yaw}), over the limit {limit:g}: the heading would be off by up "
+                              f"to that much (CAL_MAGn_ROT holds only the standard orientations; ArduPilot's "
+                              f"COMPASS_ORIENT=101 with CUST_ROT1_* holds any); allow it with "
+                              f"max_rotation_deg={np.ceil(residual * 10) / 10:g} to export orientation {orientation} and S")
+        rotation, s = polar((standard_rotation(orientation) if turn is None else turn).T @ w)
+    elif angle > limit:
+        raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation): the firmware's symmetric "
+                          f"matrix holds S only, so its heading would be off by up to that much; set the "
+                          f"magnetometer's orientation to R in the firmware, or allow it with "
+                          f"max_rotation_deg={np.ceil(angle * 10) / 10:g} to export S alone")
+    return s, rotation, orientation, turn

@@ -71,7 +71,7 @@ from magexp.scenarios.search import centroid_radius, search_box
 MODELS = models_.MODELS
 #: The estimator of ``model=gyro`` (:mod:`magexp.calibration.models`): Levenberg-Marquardt from the gyro-aided
 #: problem's closed-form start, whatever ``estimator`` is, its Jacobian from one stacked evaluation
-#: (:func:`magexp.estimators.marquardt.stacked_jacobian`); at most 200 residual evaluations at a tolerance of
+#: (:func:`magexp.core.marquardt.stacked_jacobian`); at most 200 residual evaluations at a tolerance of
 #: 1e-10 (documented defaults: a good recording converges well within them; one whose gyroscope does not
 #: carry the attitude, e.g. a saturated one, stops there instead of running 2000 evaluations per fold).
 GYRO_ESTIMATOR = {"name": "lm", "max_nfev": 200, "tol": 1e-10, "jacobian": "stacked", "solver": "numpy"}

@@ -43,7 +43,7 @@ from magexp.core.identifiability import canonical, identifiability
 from magexp.errors import check, check_positive_int
 from magexp.estimators.base import Stop, applies_to, stopper
 from magexp.estimators.ellipsoid import EllipsoidFit
-from magexp.estimators.marquardt import minimise_numpy, stacked_jacobian
+from magexp.core.marquardt import minimise_numpy, stacked_jacobian
 from magexp.problems.symmetric import UPPER, expand
 from magexp.estimators.result import FitResult
 
@@ -80,7 +80,7 @@ class LevenbergMarquardt:
         where the problem has one; several times faster where one evaluation costs more in numpy's
         per-call overhead than in arithmetic (the gyro-aided problem's prefix scan).
     solver : str
-        ``minpack`` (default): ``scipy.optimize.least_squares``; ``numpy``: :func:`magexp.estimators.marquardt.minimise_numpy`
+        ``minpack`` (default): ``scipy.optimize.least_squares``; ``numpy``: :func:`magexp.core.marquardt.minimise_numpy`
         (no scipy import: 0.45-0.5 CPU-s saved; it needs ``jacobian: stacked`` and a problem with ``residual_swarm``;
         the callback is not called).
 

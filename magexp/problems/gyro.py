@@ -48,7 +48,7 @@ from magexp.core.ellipsoid import fit_ellipsoid
 from magexp.core.geometry import attitude_with_bias
 from magexp.core.identifiability import canonical, identifiability, spread
 from magexp.core.metrics import total_field_rms
-from magexp.estimators.marquardt import minimise_numpy, stacked_jacobian
+from magexp.core.marquardt import minimise_numpy, stacked_jacobian
 from magexp.problems.base import CalibrationProblem
 
 #: the projected problem's Levenberg-Marquardt (:meth:`GyroAidedCalibration.initial_estimate`): tolerance and evaluations
