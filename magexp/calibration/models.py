@@ -35,7 +35,10 @@ The choice, the reason and every candidate's held-out spread go into the output
 (``quality.model_selection``). ``gyro`` is a candidate where the recording has a gyroscope
 (:func:`candidates`): its held-out spread is measured the same way (magnitudes of held-out regions, which
 no rotation changes), so it is chosen only where the attitude the gyroscope adds makes the magnitudes of
-readings the fit has not seen more consistent.
+readings the fit has not seen more consistent. Its folds stop once the least pooled spread the remaining folds
+could give (:func:`spread_bound`) is not below the current choice's times ``1 - margin`` (:func:`stopped`): it
+cannot win, its spread is recorded as a lower bound, and the choice is the one the whole check would make. A
+fold whose offset collapses the readings' directions (:func:`collapsed`) is a failed fold.
 
 A vector (attitude-aided) objective fits ``full`` only: it determines the whole ``W``.
 """
