@@ -100,7 +100,8 @@ def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, m
         objective, dataset, estimator = "gyro", gyro_dataset(rec, reference), gyro_estimator()
     dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
     box = search_box(rec.readings, float(np.mean(reference.total)), forward=objective != "scalar")
-    problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
+    problem = make_problem(objective, dataset, box,  # each objective's own parameterisation; gyro from the closed form
+                           **({"start": "projected"} if model == "gyro" else {}))
     if model in models_.CLOSED_FORM:
         w, o, calibrated, result = _closed_form(rec, model, reference)
         return w, o, calibrated, problem, result, box

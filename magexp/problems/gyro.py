@@ -20,7 +20,7 @@ in the starting frame unknown:
 
 Parameters (17): ``θ = [vec(S) (9, row-major), b (3), a, e (rad), b_g (3, deg/s)]``.
 
-Closed-form start (:meth:`GyroAidedCalibration.initial_estimate`): the ellipsoid fit gives ``W = Q P`` up to
+Closed-form start (:meth:`GyroAidedCalibration.projected_start`, ``magexp calibrate``'s): the ellipsoid fit gives ``W = Q P`` up to
 the rotation ``Q`` and ``u_j = P (B_j - b)``; with the attitude ``R_j`` integrated at zero bias, every reading
 says ``R_j Q u_j = h``, linear in ``vec(Q)``. Eliminating ``h`` (the mean of ``R_j Q u_j``),
 
@@ -45,12 +45,15 @@ from types import SimpleNamespace
 import numpy as np
 
 from magexp.core.ellipsoid import fit_ellipsoid
-from magexp.core.geometry import attitude_with_bias
+from magexp.core.geometry import attitude_with_bias, exp_so3
 from magexp.core.identifiability import canonical, identifiability, spread
 from magexp.core.metrics import total_field_rms
+from magexp.errors import check
 from magexp.core.marquardt import minimise_numpy, stacked_jacobian
 from magexp.problems.base import CalibrationProblem
 
+#: the starts of :meth:`GyroAidedCalibration.initial_estimate`
+STARTS = ("two-stage", "projected")
 #: the projected problem's Levenberg-Marquardt (:meth:`GyroAidedCalibration.initial_estimate`): tolerance and evaluations
 PROJECTED_TOL, PROJECTED_NFEV = 1e-10, 100
 EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro_bias_z")
@@ -70,15 +73,21 @@ class GyroAidedCalibration(CalibrationProblem):
         As :class:`magexp.problems.base.CalibrationProblem` (``search`` bounds ``S`` and ``b``).
     bias_bound_deg_s : float
         The gyro-bias bound of the search, deg/s.
+    start : str
+        :meth:`initial_estimate`'s start: ``two-stage`` (the default) or ``projected`` (``magexp calibrate``).
     """
 
     objective = "gyro"
     objective_is_rms = False
     n_params = 17
 
-    def __init__(self, dataset, search, *, parameterisation: str = "forward", bias_bound_deg_s: float = 10.0):
+    def __init__(self, dataset, search, *, parameterisation: str = "forward", bias_bound_deg_s: float = 10.0,
+                 start: str = "two-stage"):
         super().__init__(dataset, search, parameterisation=parameterisation)
-        self.options = {"parameterisation": parameterisation, "bias_bound_deg_s": bias_bound_deg_s}
+        check(start in STARTS, f"start={start!r} is not allowed for the gyro-aided problem: choose one of {', '.join(STARTS)}")
+        self.start = start
+        self.options = {"parameterisation": parameterisation, "bias_bound_deg_s": bias_bound_deg_s,
+                        **({"start": start} if start != "two-stage" else {})}
         self.delta, self.jac = dataset.extra["preintegration"]
         self.total = float(np.mean(dataset.reference_norm))
         b = float(bias_bound_deg_s)
@@ -262,6 +271,43 @@ class GyroAidedCalibration(CalibrationProblem):
         return self.cost_direct(theta)
 
     def initial_estimate(self) -> np.ndarray:
+        """The start of the fit: ``start="projected"`` :meth:`projected_start`, ``"two-stage"`` (the default, the
+        papers' runs) :meth:`two_stage_start`.
+
+        Returns
+        -------
+        ndarray, shape (17,)
+            The starting parameter vector.
+        """
+        return self.projected_start() if self.start == "projected" else self.two_stage_start()
+
+    def two_stage_start(self) -> np.ndarray:
+        """Two-stage start. The ellipsoid fit gives ``W`` up to a rotation, ``W = Q P`` (``P``
+        canonical) and the offset; with them fixed, least squares over the 8 numbers of ``Q``
+        (rotation vector), the field direction and the gyro bias (from zero, and the field direction
+        of the first calibrated reading, ``R_0 = I``) fits ``R_jᵀ h = Q P (B_j - b)``; the full
+        problem starts from there. From ``Q = I`` it can stall where few directions are left (a
+        calibration's held-out fold): ``magexp calibrate`` starts from :meth:`projected_start`.
+
+        Returns
+        -------
+        ndarray, shape (17,)
+            The starting parameter vector.
+        """
+        # lazy: scipy.optimize costs 0.45-0.5 CPU-s to import, which magexp calibrate's gyro fits do not need
+        from scipy.optimize import least_squares
+
+        base = self._ellipsoid_start()
+        w0, o0 = (a[0] for a in self.unpack(base))
+
+        def full(z):
+            return np.concatenate([self.pack(exp_so3(z[:3]) @ w0, o0), z[3:]])
+
+        z0 = np.concatenate([np.zeros(3), base[12:]])
+        sol = least_squares(lambda z: self.residuals(full(z)), z0, method="lm", max_nfev=400)
+        return full(sol.x)
+
+    def projected_start(self) -> np.ndarray:
         """Closed-form start, then the projected problem (module docstring): the ellipsoid fit gives
         ``W = Q P`` up to a rotation ``Q`` and the offset; ``Q`` and the field ``h`` are the least-squares
         solution of ``R_j Q P (B_j - b) = h`` with the gyroscope's attitude at zero bias (:func:`rotation_start`);
