@@ -194,11 +194,17 @@ COMMANDS: dict[str, tuple] = {
          {"shared": True, "replace": {"data.serial=/dev/ttyUSB0": "data.path=- <../shared/data/fxos8700_mag_readings.txt"}}),
     ".venv/bin/python -m magexp calibrate data.path=- data.unit=uT out=calib_stdin/ < ../shared/data/fxos8700_mag_readings.txt":
         (RUN_FULL, "a recording piped in", {"shared": True}),
+    ".venv/bin/python -m magexp calibrate data.path=../shared/data/hmc5883l_roll-and-tilt-at-45-90 model=gyro "
+    "accept=true export=ardupilot out=calib_gyro/":
+        (RUN_FULL, "the gyro-aided export (test_calibration_gyro_auto applies ArduPilot's equations to it)",
+         {"shared": True}),
     # the benches and the warm-up
     # docs/results.md, Sample sizes: the planned seeds of each comparison (planning only, no run: 2 s)
     "python -m magexp.artifacts.sample_sizes yuan2018": (RUN_FULL, "prints each comparison's effect, level, seeds and power"),
     "python -m magexp.perf.bench --help": (RUN_FULL, "prints the options (two interpreters: one BLAS thread)"),
     "python -m magexp.perf.warmup": (RUN_FULL, "the kernels compiled once (make venv)"),
+    "python -m magexp.perf.autocost": (RUN_FULL, "auto beside full on every shared recording with a gyroscope: 80 s",
+                                       {"shared": True}),
     "python -m magexp.perf.crosstable": (RUN_FULL, "every HMC5883L calibration on every HMC5883L recording: 30 s",
                                          {"shared": True}),
     ".venv/bin/python -m magexp.perf.peers.bench --redraw --out results/peers":

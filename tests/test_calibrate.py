@@ -6,7 +6,7 @@ import pytest
 from hydra.utils import instantiate
 
 from magexp.calibration.fit import calibrate_recording
-from magexp.calibration.inputs import MIN_READINGS
+from magexp.calibration.checks import MIN_READINGS
 from magexp.calibration.inputs import attitude_of
 from magexp.scenarios.search import search_box
 from magexp.calibration.write import FILES, check_out

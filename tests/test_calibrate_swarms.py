@@ -10,7 +10,8 @@ import pytest
 import magexp
 from magexp.calibration.box import MATRIX_MARGIN, OFFSET_MARGIN, calibration_box
 from magexp.calibration.checks import OPTIMUM_FACTOR
-from magexp.calibration.fit import regions, search_box_of
+from magexp.calibration.fit import regions
+from magexp.calibration.model_fit import search_box_of
 from magexp.calibration.inputs import Reference, recording_dataset
 from magexp.calibration.write import summary
 from magexp.core.ellipsoid import fit_ellipsoid

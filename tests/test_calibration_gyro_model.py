@@ -70,7 +70,8 @@ def test_the_stacked_jacobian_is_scipys_forward_difference_from_one_call():
 
     from magexp.calibration.inputs import gyro_dataset
     from magexp.calibration.inputs import Reference
-    from magexp.estimators.lm import LevenbergMarquardt, stacked_jacobian
+    from magexp.estimators.lm import LevenbergMarquardt
+    from magexp.core.marquardt import stacked_jacobian
     from magexp.problems import make_problem
     from magexp.scenarios.search import SearchBox
 

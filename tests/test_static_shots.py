@@ -18,7 +18,7 @@ import pytest
 
 from magexp.calibration import holdout
 from magexp.calibration.api import calibrate
-from magexp.calibration.inputs import MIN_READINGS
+from magexp.calibration.checks import MIN_READINGS
 from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import fibonacci_sphere
 from magexp.core.recordings import load_recording

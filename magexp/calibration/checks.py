@@ -15,6 +15,9 @@ import numpy as np
 from magexp.core.identifiability import CELLS
 from magexp.errors import MagexpError
 
+#: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
+MIN_READINGS = 12
+
 #: Degenerate-data thresholds (see :func:`check_readings` and :func:`check_fit`).
 MIN_DISTINCT = 12
 PLANE_RATIO = 0.2    # sqrt(λ_min / λ_max) of the raw readings' covariance below it: one plane (docs/calibrate.md)

@@ -46,7 +46,7 @@ import yaml
 
 from magexp.calibration.heading import export_line, heldout_note
 from magexp.calibration.firmware import (MAX_ROTATION_DEG, STANDARD_ROTATIONS, Correction, check_counts_nt,
-                                         check_max_rotation, to_firmware)
+                                         check_max_rotation, euler_321, to_firmware)
 from magexp.calibration.folder import check_file, recording_files
 from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
@@ -84,8 +84,10 @@ def _comments(notes: dict | None, convention: str, correction: Correction, marke
     ``site``: :func:`magexp.calibration.heading.export_line`), the notes."""
     lines = [f"{marker} magexp magnetometer calibration", f"{marker} {convention}"]
     if correction.orientation is not None:
-        roll, pitch, yaw = STANDARD_ROTATIONS[correction.orientation]
-        lines.append(f"{marker} orientation {correction.orientation} (roll {roll}, pitch {pitch}, yaw {yaw} deg) from the "
+        roll, pitch, yaw = (STANDARD_ROTATIONS.get(correction.orientation) or
+                            tuple(float(f"{a:.6g}") for a in euler_321(correction.custom)))
+        kind = "custom: CUST_ROT1_* of ArduPilot 4.2 or later, " if correction.custom is not None else ""
+        lines.append(f"{marker} orientation {correction.orientation} ({kind}roll {roll}, pitch {pitch}, yaw {yaw} deg) from the "
                      "gyro-aided fit: the magnetometer's axes as recorded to the gyroscope's; the firmware applies it to "
                      "an external magnetometer only (an internal one follows the board orientation)")
     if correction.rotation_deg > 0:
@@ -110,7 +112,9 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     log's ``MAG`` instance, :func:`magexp.core.readers.dataflash.read_dataflash`): the names
     ``COMPASS_OFS_X``, ``COMPASS_OFS2_X``, ``COMPASS_OFS3_X`` (``DIA``, ``ODI``, ``SCALE`` alike).
     ``orient``: ``W``'s rotation was determined (:func:`to_firmware`); its standard rotation ``R_n`` is
-    written as ``COMPASS_ORIENT`` (applied before the offsets): ``M = R_n S' R_n^T``, ``OFS = −R_n o'``.
+    written as ``COMPASS_ORIENT`` (applied before the offsets): ``M = R_n S' R_n^T``, ``OFS = −R_n o'``; farther than
+    ``max_rotation_deg`` from every standard one, ``R`` itself as the custom rotation (``COMPASS_ORIENT=101``,
+    ``CUST_ROT_ENABLE=1``, ``CUST_ROT1_ROLL``/``_PITCH``/``_YAW``; :data:`~magexp.calibration.firmware.CUSTOM_ORIENTATION`).
 
     Parameters
     ----------
@@ -140,7 +144,7 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     if instance not in (0, 1, 2):
         raise MagexpError(f"instance={instance!r} is not allowed for ardupilot: choose 0, 1 or 2 (the compass)")
     c = to_firmware(w, offset, unit, TARGET_UNITS["ardupilot"], field_unit=field_unit, counts_nt=counts_nt, symmetric=True,
-                    max_rotation_deg=max_rotation_deg, orient=orient)
+                    max_rotation_deg=max_rotation_deg, orient=orient, custom=True)
     n = "" if instance == 0 else str(instance + 1)
     turn = c.orientation_matrix
     m, ofs = turn @ c.matrix @ turn.T, -(turn @ c.offset)
@@ -150,6 +154,19 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
               f"COMPASS_SCALE{n}": 1.0}
     if c.orientation is not None:
         values[ORIENTATION_KEYS["ardupilot"].format(n=n)] = c.orientation
+    if c.custom is not None:  # AP_CustomRotations: Matrix3::from_euler(roll, pitch, yaw), shared by the board's sensors
+        values["CUST_ROT_ENABLE"] = 1
+        values.update({f"CUST_ROT1_{k}": v for k, v in zip(("ROLL", "PITCH", "YAW"), euler_321(c.custom))})
+    warnings = _ardupilot_warnings(values, ofs)
+    head = _comments(notes, "ArduPilot: B = M (COMPASS_SCALE (raw + COMPASS_OFS)), M = [[DIA_X, ODI_X, ODI_Y], "
+                            "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#", site)
+    head += [f"# WARNING: {text}" for text in warnings]
+    text = "\n".join(head + [f"{k},{v!r}" for k, v in values.items()]) + "\n"
+    return Export("ardupilot", text, values, tuple(warnings))
+
+
+def _ardupilot_warnings(values: dict, ofs: np.ndarray) -> list[str]:
+    """The values of an ArduPilot export outside its calibrator's ranges (:func:`ardupilot`)."""
     warnings = []
     for key, value in values.items():
         if "_DIA" in key and not ARDUPILOT_DIAGONAL[0] <= value <= ARDUPILOT_DIAGONAL[1]:
@@ -159,11 +176,7 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     if np.max(np.abs(ofs)) > ARDUPILOT_OFFSET_MAX:
         warnings.append(f"an offset of {np.max(np.abs(ofs)):.6g} mGauss exceeds COMPASS_OFFS_MAX's default "
                         f"{ARDUPILOT_OFFSET_MAX:g} (a pre-arm check)")
-    head = _comments(notes, "ArduPilot: B = M (COMPASS_SCALE (raw + COMPASS_OFS)), M = [[DIA_X, ODI_X, ODI_Y], "
-                            "[ODI_X, DIA_Y, ODI_Z], [ODI_Y, ODI_Z, DIA_Z]]; mGauss, body frame", c, "#", site)
-    head += [f"# WARNING: {text}" for text in warnings]
-    text = "\n".join(head + [f"{k},{v!r}" for k, v in values.items()]) + "\n"
-    return Export("ardupilot", text, values, tuple(warnings))
+    return warnings
 
 
 def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int = 0, rotation=None,

@@ -36,7 +36,11 @@ rotation (the residual, at most ``max_rotation_deg``) left out. PX4 applies the 
 applies it first, ``B = M (R_n r + OFS)``: ``COMPASS_ORIENT = n``, ``M = R_n S R_n^T``,
 ``OFS = −R_n o``. Both firmwares use that parameter for an external magnetometer only (an internal
 one follows the board's orientation); the file says so. Farther than ``max_rotation_deg`` from every
-standard rotation, the export refuses in one line naming ``max_rotation_deg=`` with the residual.
+standard rotation, ArduPilot takes ``R`` itself as its custom rotation (``COMPASS_ORIENT=101``,
+``CUST_ROT_ENABLE=1``, ``CUST_ROT1_ROLL``/``_PITCH``/``_YAW`` its Euler angles, ``R = R_z(yaw) R_y(pitch) R_x(roll)``:
+:func:`euler_321`; ArduPilot 4.2 or later), and nothing is left out; PX4's ``CAL_MAGn_ROT`` holds only the
+standard rotations, so its export refuses in one line naming ``max_rotation_deg=`` with the residual, which
+would be left out.
 """
 
 from __future__ import annotations
@@ -63,6 +67,9 @@ STANDARD_ROTATIONS = {
     25: (0, 270, 0), 26: (0, 180, 90), 27: (0, 180, 270), 28: (90, 90, 0), 29: (180, 90, 0), 30: (270, 90, 0),
     31: (90, 180, 0), 32: (270, 180, 0), 33: (90, 270, 0), 34: (180, 270, 0), 35: (270, 270, 0),
     36: (90, 180, 90), 37: (90, 0, 270), 39: (0, 315, 0), 40: (90, 315, 0)}
+#: ArduPilot's ``ROTATION_CUSTOM_1`` (``COMPASS_ORIENT=101``): the rotation of ``CUST_ROT1_ROLL``, ``_PITCH``,
+#: ``_YAW`` (ArduPilot 4.2 and later, ``CUST_ROT_ENABLE=1``; ``AP_CustomRotations``), any rotation
+CUSTOM_ORIENTATION = 101
 
 
 @dataclass(frozen=True)
@@ -77,6 +84,7 @@ class Correction:
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     orientation: int | None = None
     field_scale: float = 1.0  # k_out: the target's field unit per the calibration's (module docstring)
+    custom: np.ndarray | None = None
 
     @property
     def rotation_deg(self) -> float:
@@ -85,7 +93,9 @@ class Correction:
 
     @property
     def orientation_matrix(self) -> np.ndarray:
-        """``R_n`` of :attr:`orientation` (the identity when none is exported)."""
+        """``R_n`` of :attr:`orientation`, the :attr:`custom` rotation, or the identity when none is exported."""
+        if self.custom is not None:
+            return self.custom
         return np.eye(3) if self.orientation is None else standard_rotation(self.orientation)
 
 
@@ -128,6 +138,25 @@ def standard_rotation(index: int) -> np.ndarray:
     """
     roll, pitch, yaw = np.radians(STANDARD_ROTATIONS[index])
     return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
+
+
+def euler_321(rotation: np.ndarray) -> tuple[float, float, float]:
+    """``(roll, pitch, yaw)`` in degrees with ``rotation = R_z(yaw) R_y(pitch) R_x(roll)`` (ArduPilot's
+    ``Matrix3::from_euler``, the order of its ``CUST_ROTn_*``; pitch in [-90, 90]).
+
+    Parameters
+    ----------
+    rotation : ndarray, shape (3, 3)
+        A rotation matrix.
+
+    Returns
+    -------
+    tuple of float
+        The three angles, degrees.
+    """
+    r = np.asarray(rotation, float)
+    return (float(np.degrees(np.arctan2(r[2, 1], r[2, 2]))), float(np.degrees(-np.arcsin(np.clip(r[2, 0], -1, 1)))),
+            float(np.degrees(np.arctan2(r[1, 0], r[0, 0]))))
 
 
 def nearest_orientation(rotation: np.ndarray) -> tuple[int, float]:
@@ -219,7 +248,8 @@ def _factor(unit: str, target_unit: str, counts_nt, what: str) -> float:
 
 
 def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: str | None = None, counts_nt=None,
-                symmetric: bool = False, max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False) -> Correction:
+                symmetric: bool = False, max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False,
+                custom: bool = False) -> Correction:
     """magexp's ``B = W (r − o)`` in a target's unit and form.
 
     Parameters
@@ -240,6 +270,10 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
         With ``symmetric``: ``R`` was determined (the gyro-aided model), so a rotation beyond
         ``max_rotation_deg`` is exported as the standard rotation ``R_n`` nearest to it
         (:func:`nearest_orientation`) when the residual ``R_n^T R`` is within ``max_rotation_deg``.
+    custom : bool
+        With ``orient``: the target can hold any rotation (ArduPilot's ``CUST_ROT1_*``): farther than
+        ``max_rotation_deg`` from every standard rotation, ``R`` itself is the orientation
+        (:data:`CUSTOM_ORIENTATION`, :attr:`Correction.custom`) and nothing is left out.
 
     Returns
     -------
@@ -266,29 +300,38 @@ def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: st
         k_in = _factor(unit, target_unit, counts_nt, "unit")
         k_out = _factor(field_unit, target_unit, counts_nt, "field_unit")
     limit = check_max_rotation(max_rotation_deg)
-    rotation, orientation = np.eye(3), None
+    rotation, orientation, turn = np.eye(3), None, None
     if symmetric:
-        if np.linalg.det(w) <= 0:
-            raise MagexpError(f"W with determinant {np.linalg.det(w):.3g} is not allowed for a firmware's symmetric "
-                              "matrix: it mirrors an axis; set the magnetometer's orientation in the firmware first")
-        rotation, s = polar(w)
-        angle = float(np.rad2deg(rotation_angle(rotation)))
-        if orient:
-            orientation, residual = nearest_orientation(rotation)
-            if residual > limit:
-                roll, pitch, yaw = STANDARD_ROTATIONS[orientation]
-                raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation), {residual:.2f} deg "
-                                  f"from the nearest of the firmware's standard orientations ({orientation}: roll {roll}, "
-                                  f"pitch {pitch}, yaw {yaw}), over the limit {limit:g}: the heading would be off by up "
-                                  f"to that much; allow it with max_rotation_deg={np.ceil(residual * 10) / 10:g} to "
-                                  f"export orientation {orientation} and S")
-            rotation, s = polar(standard_rotation(orientation).T @ w)
-        elif angle > limit:
-            raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation): the firmware's symmetric "
-                              f"matrix holds S only, so its heading would be off by up to that much; set the "
-                              f"magnetometer's orientation to R in the firmware, or allow it with "
-                              f"max_rotation_deg={np.ceil(angle * 10) / 10:g} to export S alone")
-        w = s
+        w, rotation, orientation, turn = _symmetrised(w, limit, orient=orient, custom=custom)
     return Correction(matrix=(k_out / k_in) * w, offset=k_in * offset, unit=target_unit or unit,
                       field_unit=target_unit or field_unit, rotation=rotation, orientation=orientation,
-                      field_scale=k_out)
+                      field_scale=k_out, custom=turn)
+
+
+def _symmetrised(w: np.ndarray, limit: float, *, orient: bool, custom: bool) -> tuple:
+    """``(S, R left out, orientation, custom rotation or None)`` of :func:`to_firmware`'s symmetric branch."""
+    if np.linalg.det(w) <= 0:
+        raise MagexpError(f"W with determinant {np.linalg.det(w):.3g} is not allowed for a firmware's symmetric "
+                          "matrix: it mirrors an axis; set the magnetometer's orientation in the firmware first")
+    rotation, s = polar(w)
+    angle = float(np.rad2deg(rotation_angle(rotation)))
+    orientation, turn = None, None
+    if orient:
+        orientation, residual = nearest_orientation(rotation)
+        if residual > limit and custom:
+            orientation, turn = CUSTOM_ORIENTATION, rotation
+        elif residual > limit:
+            roll, pitch, yaw = STANDARD_ROTATIONS[orientation]
+            raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation), {residual:.2f} deg "
+                              f"from the nearest of the firmware's standard orientations ({orientation}: roll {roll}, "
+                              f"pitch {pitch}, yaw {yaw}), over the limit {limit:g}: the heading would be off by up "
+                              f"to that much (CAL_MAGn_ROT holds only the standard orientations; ArduPilot's "
+                              f"COMPASS_ORIENT=101 with CUST_ROT1_* holds any); allow it with "
+                              f"max_rotation_deg={np.ceil(residual * 10) / 10:g} to export orientation {orientation} and S")
+        rotation, s = polar((standard_rotation(orientation) if turn is None else turn).T @ w)
+    elif angle > limit:
+        raise MagexpError(f"W turns the field by {angle:.2f} deg (W = R S, R a rotation): the firmware's symmetric "
+                          f"matrix holds S only, so its heading would be off by up to that much; set the "
+                          f"magnetometer's orientation to R in the firmware, or allow it with "
+                          f"max_rotation_deg={np.ceil(angle * 10) / 10:g} to export S alone")
+    return s, rotation, orientation, turn

@@ -20,7 +20,7 @@ the sphere fitted to the raw readings (:func:`~magexp.scenarios.search.centroid_
 the mean calibrated magnitude equals ``R0``. The shape of the calibration (and the spread
 std/mean) does not depend on this choice; the absolute scale does, and the output says so.
 
-Search box (:func:`search_box_of`). The scalar ``model=full`` fit of an iterative estimator (the swarms, the
+Search box (:func:`magexp.calibration.model_fit.search_box_of`). The scalar ``model=full`` fit of an iterative estimator (the swarms, the
 black-box baselines) searches a box centred on the closed-form ellipsoid fit of the same readings, ``W``
 within :data:`~magexp.calibration.box.MATRIX_MARGIN` times its largest eigenvalue and the offset within
 :data:`~magexp.calibration.box.OFFSET_MARGIN` times its shortest semi-axis
@@ -40,7 +40,7 @@ what to record instead (:mod:`magexp.calibration.checks`); the command then writ
 Held-out check (:func:`heldout`, its designs in :mod:`magexp.calibration.holdout`): the readings' directions
 about the centre of the sphere fitted to them are cut into six regions, one about each half-axis ``±v_k`` of
 their principal axes (:func:`magexp.core.identifiability.direction_regions`); where each occupied region holds at
-least :data:`MIN_READINGS` readings, each is calibrated by the fit on the others, and ``heldout_spread`` is the
+least :data:`~magexp.calibration.checks.MIN_READINGS` readings, each is calibrated by the fit on the others, and ``heldout_spread`` is the
 spread of the pooled held-out magnitudes. Every region is thus tested on attitudes outside its fit (contiguous
 time blocks, the earlier folds, lie in the plane of the rest on a turn about one axis and passed a calibration that
 made the sensor's other recordings worse than raw). Where a region is too small to be a fold (a couple of dozen
@@ -59,102 +59,29 @@ import numpy as np
 from magexp.calibration import holdout, models as models_
 from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
-from magexp.calibration.box import calibration_box
-from magexp.calibration.inputs import (MIN_READINGS, OBJECTIVES, Reference, check_size, gyro_dataset,
-                                      recording_dataset, reference_of)
+from magexp.calibration.inputs import OBJECTIVES, Reference, check_size, recording_dataset, reference_of
 from magexp.calibration.export import firmware_correction
 from magexp.calibration.heading import heading_of, worst_left
+from magexp.calibration.model_fit import GYRO_ESTIMATOR, fit_model, fold_fit
 from magexp.calibration.quality import gyro_extras, quality, report_of
 from magexp.calibration.result import Calibration
 from magexp.core.dataset import Dataset
 from magexp.core.field_model import gps_field
 from magexp.core.ellipsoid import fit_sphere
-from magexp.core.identifiability import canonical, coverage, direction_regions, spread
+from magexp.core.identifiability import coverage, direction_regions, spread
 from magexp.core.recording import UNITS, Recording
 from magexp.errors import MagexpError
 from magexp.estimators.base import check_applies
 from magexp.estimators.result import FitResult
-from magexp.problems import make_problem, problem_class
+from magexp.problems import problem_class
 from magexp.run.budget import check_calibration
 from magexp.run.compose import options, target_class
 from magexp.run.named import estimator_named
 from magexp.run.guard import check_folds
-from magexp.scenarios.search import centroid_radius, search_box
+from magexp.scenarios.search import centroid_radius
 
 #: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full``, ``gyro`` and ``auto``.
 MODELS = models_.MODELS
-#: The estimator of ``model=gyro`` (:mod:`magexp.calibration.models`): Levenberg-Marquardt from the gyro-aided
-#: problem's two-stage start, whatever ``estimator`` is, its Jacobian from one stacked evaluation
-#: (:func:`magexp.estimators.lm.stacked_jacobian`); at most 200 residual evaluations at a tolerance of
-#: 1e-10 (documented defaults: a good recording converges well within them; one whose gyroscope does not
-#: carry the attitude, e.g. a saturated one, stops there instead of running 2000 evaluations per fold).
-GYRO_ESTIMATOR = {"name": "lm", "max_nfev": 200, "tol": 1e-10, "jacobian": "stacked"}
-
-
-def gyro_estimator():
-    """The estimator of ``model=gyro``: ``conf/estimator/lm.yaml``'s class with :data:`GYRO_ESTIMATOR`.
-
-    Returns
-    -------
-    LevenbergMarquardt
-        The estimator, built fresh.
-    """
-    return target_class("estimator", "lm")(**GYRO_ESTIMATOR)
-
-
-def _fit(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",
-         dataset: Dataset | None = None) -> tuple:
-    """``(W, o, calibrated, problem, result, box)`` of one fit (W canonical for a scalar objective);
-    ``dataset``: the recording's :func:`recording_dataset`, when the caller has it already. ``problem``
-    is the objective's, in its own parameterisation (the sphere model's residuals are the scalar
-    problem's at ``W = s I``)."""
-    if model == "gyro":  # its own problem and estimator (magexp.calibration.models)
-        objective, dataset, estimator = "gyro", gyro_dataset(rec, reference), gyro_estimator()
-    dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
-    box = search_box_of(rec.readings, float(np.mean(reference.total)), estimator, objective, model)
-    problem = make_problem(objective, dataset, box)  # each objective's own parameterisation
-    if model in models_.CLOSED_FORM:
-        w, o, calibrated, result = _closed_form(rec, model, reference)
-        return w, o, calibrated, problem, result, box
-    result = estimator.fit(problem, rng=rng)
-    w, o = (a[0] for a in problem.unpack(result.x))
-    if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
-        who = "the gyro fit (model=gyro)" if model == "gyro" else f"estimator={estimator.name!r}"
-        raise MagexpError(f"{rec.name}: {who} gave a non-finite calibration, nothing written: "
-                          "try estimator=ellipsoid or estimator=lm")
-    if objective == "scalar":
-        w = canonical(w)
-    calibrated = (rec.readings - o) @ w.T
-    if reference.estimated:  # the scale is free: the mean calibrated magnitude is the reference
-        w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
-        calibrated = (rec.readings - o) @ w.T
-    return w, o, calibrated, problem, result, box
-
-
-def search_box_of(readings: np.ndarray, radius: float, estimator, objective: str, model: str):
-    """The box of a fit (module docstring): an iterative estimator's scalar ``model=full`` search, the box centred
-    on the closed-form ellipsoid fit (:func:`magexp.calibration.box.calibration_box`); any other fit, the
-    readings' range (:func:`magexp.scenarios.search.search_box`; ``S = W^-1`` for the vector objectives), which
-    a closed form or a start from it does not search.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` the readings fitted.
-    radius : float
-        The fit's radius (the mean reference total).
-    estimator, objective, model
-        As in :func:`heldout` (``objective`` ``gyro`` for the gyro-aided model).
-
-    Returns
-    -------
-    CalibrationBox or SearchBox
-        The box.
-    """
-    searched = getattr(estimator, "iterative", True) and model not in models_.CLOSED_FORM
-    if objective == "scalar" and searched:
-        return calibration_box(readings, radius)
-    return search_box(readings, radius, forward=objective != "scalar")
 
 
 def select_model(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
@@ -176,15 +103,23 @@ def select_model(rec: Recording, estimator, objective: str, reference: Reference
         ``(model, selection record, {model: heldout record})``.
     """
     unusable = models_.gyro_unusable(rec.gyro_rates())
-    held = {m: heldout(rec, estimator, objective, reference, folds, rng, m)
-            for m in models_.candidates(objective, gyro=not unusable)}
-    failures = [r.get("heldout_failure") for r in held.values()]
-    if all(failures):  # no candidate held out: the simplest one's cause is the recording's
-        raise MagexpError(f"{rec.name}: model=auto: no model could be tested on readings it was not fitted to, "
-                          f"nothing written: {failures[0]}")
-    model, selection = models_.select(lambda m: held[m].get("heldout_spread", float("nan")), objective,
-                                      models_.check_margin(margin), gyro=not unusable,
-                                      dropped={"gyro": unusable} if unusable and objective == "scalar" else {})
+    held = {}
+
+    def measure(m, beat):  # only gyro's folds stop once it cannot win: the others' records are checked and reported
+        held[m] = heldout(rec, estimator, objective, reference, folds, rng, m,
+                         beat=beat if m in models_.NEEDS_GYRO else None)
+        return held[m].get("heldout_spread", float("nan")), held[m].get("heldout_stopped", False)
+
+    try:
+        model, selection = models_.select(measure, objective, models_.check_margin(margin), gyro=not unusable,
+                                          dropped={"gyro": unusable} if unusable and objective == "scalar" else {},
+                                          bounded=True)
+    except MagexpError:
+        failures = [r.get("heldout_failure") for r in held.values()]
+        if held and all(failures):  # no candidate held out: the simplest one's cause is the recording's
+            raise MagexpError(f"{rec.name}: model=auto: no model could be tested on readings it was not fitted to, "
+                              f"nothing written: {failures[0]}") from None
+        raise
     return model, selection, held
 
 
@@ -312,29 +247,11 @@ def closed_form_spread(rec: Recording, reference: Reference, dataset: Dataset) -
         The spread (std / mean of ``|B|``), or None.
     """
     try:
-        _, _, calibrated, _, result, _ = _fit(rec, estimator_named("ellipsoid"), "scalar", reference, None, "full",
+        _, _, calibrated, _, result, _ = fit_model(rec, estimator_named("ellipsoid"), "scalar", reference, None, "full",
                                               dataset)
     except MagexpError:
         return None
     return spread(np.linalg.norm(calibrated, axis=1)) if result.success else None
-
-
-def _closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
-    """``(W, o, calibrated, result)`` of a closed-form model (:data:`magexp.calibration.models.CLOSED_FORM`)."""
-    radius = float(np.mean(reference.total))
-    fitted = models_.CLOSED_FORM[model](rec.readings, radius)
-    if fitted is None:
-        raise MagexpError(f"{rec.name}: model={model!r}: the readings do not lie on an axis-aligned ellipsoid, "
-                          "nothing written: try model=sphere, or record more orientations")
-    w, centre = fitted
-    result = FitResult(x=np.concatenate([w.ravel(), centre]), fun=float("nan"), nit=1, nfev=1,
-                       history=np.zeros(1), history_nfev=np.ones(1), success=True,
-                       message=f"closed-form {model} fit (no estimator)")
-    calibrated = (rec.readings - centre) @ w.T
-    if reference.estimated and model != "sphere":  # the scale is free: the mean calibrated magnitude is the reference
-        w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
-        calibrated = (rec.readings - centre) @ w.T
-    return w, centre, calibrated, result
 
 
 def regions(readings: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -359,11 +276,12 @@ def regions(readings: np.ndarray) -> tuple[np.ndarray, dict]:
 
 
 def heldout(rec: Recording, estimator, objective: str, reference: Reference, folds: int, rng,
-            model: str = "full") -> dict:
+            model: str = "full", beat: float | None = None) -> dict:
     """Spread of readings calibrated by fits that have not seen their directions (module docstring): by regions of
     directions, or, where a region is too small to be a fold (a few static shots), each reading by the fit
     without its neighbours in direction (:mod:`magexp.calibration.holdout`). ``folds`` < 2: no check. NaN, with
-    ``heldout_failure`` saying why, when a fold cannot be fitted.
+    ``heldout_failure`` saying why, when a fold cannot be fitted (or, gyro-aided, collapsed:
+    :func:`magexp.calibration.models.collapsed`); stopped early once it cannot pool below ``beat``.
 
     Parameters
     ----------
@@ -381,26 +299,35 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
         The estimator's random generator.
     model : str
         ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
+    beat : float, optional
+        The held-out spread ``model=auto`` needs ``model`` to get below: the folds stop once
+        the least pooled spread the rest could give (:func:`magexp.calibration.models.spread_bound`) is not below it.
 
     Returns
     -------
     dict
         :func:`magexp.calibration.holdout.measure`'s record (``heldout_spread`` pooled, ``heldout_design``,
         ``heldout_folds``, :data:`~magexp.calibration.holdout.FITS` (each fold's ``(W_k, o_k)``, for the heading
-        error: :mod:`magexp.calibration.heading`), ...); without folds ``heldout_design = "none"`` and ``heldout_folds``.
+        error: :mod:`magexp.calibration.heading`), ...); without folds ``heldout_design = "none"`` and
+        ``heldout_folds``; stopped by ``beat``: ``heldout_spread`` the bound, ``heldout_stopped`` True and
+        ``heldout_folds_done`` (:func:`magexp.calibration.models.stopped`).
     """
     if folds < 2:
         return {"heldout_design": "none", "heldout_folds": folds}
 
     def fit_on(keep):
+        train = rec.subset(keep)
         ref = Reference(reference.total[keep], reference.source, reference.estimated)
         try:
-            w, o, _, _, result, _ = _fit(rec.subset(keep), estimator, objective, ref, rng, model)
+            w, o, result = fold_fit(train, estimator, objective, ref, rng, model)
         except MagexpError:
             return None
-        return (w, o) if result.success else None  # a fold the model cannot fit: the model is not supported
+        if not result.success or (model == "gyro" and models_.collapsed(train.readings, o)):
+            return None  # a fold the model cannot fit: the model is not supported
+        return w, o
 
-    return holdout.measure(rec.readings, regions(rec.readings)[0], fit_on, model)
+    return holdout.measure(rec.readings, regions(rec.readings)[0], fit_on, model,
+                           stop=lambda pooled, total, n: models_.stopped(pooled, total, beat, n))
 
 
 @says_onboard
@@ -463,7 +390,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
                                     "margin": auto_margin, "heldout_spread": {}}
     if model == "auto":
         model, selection, held = select_model(rec, estimator, objective, reference, folds, rng, auto_margin)
-    w, o, calibrated, problem, result, box = _fit(rec, estimator, objective, reference, rng, model, dataset)
+    w, o, calibrated, problem, result, box = fit_model(rec, estimator, objective, reference, rng, model, dataset)
     cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
     name = (f"{model} fit" if model in models_.CLOSED_FORM
             else GYRO_ESTIMATOR["name"] if model == "gyro" else estimator.name)

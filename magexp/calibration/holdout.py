@@ -8,7 +8,7 @@ Both designs fit the model on some readings and calibrate others whose *directio
 **Direction regions** (``heldout_design = "regions"``). The readings' directions ``u_i`` about the centre of
 the sphere fitted to them are cut into six regions, one about each half-axis ``±v_k`` of their principal axes
 (:func:`magexp.core.identifiability.direction_regions`); each occupied region is calibrated by the fit on the
-other five. Used when every occupied region holds at least :data:`~magexp.calibration.inputs.MIN_READINGS`
+other five. Used when every occupied region holds at least :data:`~magexp.calibration.checks.MIN_READINGS`
 readings (a fold must be large enough for its spread to mean something): six fits, the design of a recording
 in which the sensor was turned. Over :data:`MAX_EXCLUSION_READINGS` readings it is used whatever the regions
 hold, a smaller region's readings staying in every fit (the gate refuses such a region as untested).
@@ -30,7 +30,7 @@ grouped into that many folds, by the nearest of as many directions spread by far
 fold's fit leaves out every reading within :data:`EXCLUSION_DEG` of any of its readings, so an iterative
 estimator runs at most that many fits at its budget (a closed-form one takes milliseconds for all of them).
 
-A fold whose fit keeps fewer than :data:`~magexp.calibration.inputs.MIN_READINGS` readings, or whose fit fails,
+A fold whose fit keeps fewer than :data:`~magexp.calibration.checks.MIN_READINGS` readings, or whose fit fails,
 gives no held-out spread (NaN); the record then says why in ``heldout_failure`` (too few readings, or shots
 too clumped in direction, with what to record), which the gate quotes (:mod:`magexp.calibration.checks`).
 """
@@ -42,8 +42,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from magexp.calibration.checks import GATE
-from magexp.calibration.inputs import MIN_READINGS
+from magexp.calibration.checks import GATE, MIN_READINGS
 from magexp.calibration.models import ORDER
 from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import spread
@@ -151,7 +150,7 @@ def region_folds(labels: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     return [(np.flatnonzero(labels == k), np.flatnonzero(labels != k)) for k in tested]
 
 
-def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str = "full") -> dict:
+def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str = "full", stop=None) -> dict:
     """The held-out record of the design :func:`design_of` picks: each fold's held-out readings calibrated by
     ``fit_on`` of its kept ones, pooled (module docstring).
 
@@ -165,6 +164,9 @@ def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str 
         ``kept indices -> (W, o)`` or None when the fit fails.
     model : str
         The model ``fit_on`` fits (:data:`magexp.calibration.models.ORDER`), which a failure names.
+    stop : callable or None
+        ``(held-out magnitudes of each fold so far, readings of every fold, folds) -> record or None``: a record
+        ends the check early (:func:`magexp.calibration.models.stopped`: a candidate that can no longer win).
 
     Returns
     -------
@@ -192,6 +194,9 @@ def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str 
         fits.append(fitted)
         pooled.append(np.linalg.norm((readings[held] - o) @ w.T, axis=1))
         per_fold.append(spread(pooled[-1]))
+        cut = None if stop is None else stop(pooled, record["heldout_readings"], len(folds))
+        if cut:
+            return {**record, **cut}
     if failure:
         return {**record, "heldout_spread": float("nan"), "heldout_failure": failure}
     record["heldout_spread"] = spread(np.concatenate(pooled))

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from magexp.calibration import models as models_
+from magexp.calibration.checks import MIN_READINGS
 from magexp.core.dataset import Dataset
 from magexp.core.recording import Recording, evenly_spaced, recording_dataset as dataset_of
 from magexp.errors import LARGEST, MagexpError
@@ -55,8 +56,6 @@ class Reference:
 
 #: Objectives a recording can be calibrated with.
 OBJECTIVES = ("scalar", "vector")
-#: Fewest readings accepted: the 12 parameters of ``W`` and ``o`` (a scalar fit identifies 9).
-MIN_READINGS = 12
 
 #: ``model=gyro`` fits at most this many readings, evenly spaced in time (the gyroscope integrated between
 #: them), as the ``real_hmc5883l_*`` scenarios do (``n_readings: 300``): a documented default that bounds

@@ -17,7 +17,7 @@ the same ``data.*`` options), takes at most ``live.check_readings`` of its readi
 acceptance gate (:func:`magexp.calibration.checks.gate`) with its limits tightened by ``live.margin`` ``m``
 (:func:`stop_thresholds`): the held-out spread below ``(1 - m) · gate.heldout_vs_raw`` times the raw spread
 (the check that more directions improve; the others as the gate has them); and every one of the six regions of
-directions must hold at least :data:`~magexp.calibration.inputs.MIN_READINGS` readings, so that each was held out
+directions must hold at least :data:`~magexp.calibration.checks.MIN_READINGS` readings, so that each was held out
 (none untested).
 
 **The stop**: the live check passes; or Ctrl-C (SIGINT while reading: the reading stops and the gate decides on
@@ -45,7 +45,7 @@ from omegaconf import OmegaConf, open_dict
 from magexp.calibration.checks import gate_thresholds
 from magexp.calibration.export import TARGETS as EXPORT_TARGETS
 from magexp.calibration.heading import worst_left
-from magexp.calibration.inputs import MIN_READINGS
+from magexp.calibration.checks import MIN_READINGS
 from magexp.calibration.live_display import Display, Progress, axis_names
 from magexp.calibration.live_stream import POLL, LineCutter, StreamFile, open_source
 from magexp.calibration.write import check_out

@@ -35,7 +35,10 @@ The choice, the reason and every candidate's held-out spread go into the output
 (``quality.model_selection``). ``gyro`` is a candidate where the recording has a gyroscope
 (:func:`candidates`): its held-out spread is measured the same way (magnitudes of held-out regions, which
 no rotation changes), so it is chosen only where the attitude the gyroscope adds makes the magnitudes of
-readings the fit has not seen more consistent.
+readings the fit has not seen more consistent. Its folds stop once the least pooled spread the remaining folds
+could give (:func:`spread_bound`) is not below the current choice's times ``1 - margin`` (:func:`stopped`): it
+cannot win, its spread is recorded as a lower bound, and the choice is the one the whole check would make. A
+fold whose offset collapses the readings' directions (:func:`collapsed`) is a failed fold.
 
 A vector (attitude-aided) objective fits ``full`` only: it determines the whole ``W``.
 """
@@ -44,7 +47,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from magexp.calibration.checks import CELLS, MIN_CELLS, ONE_ATTITUDE_DEG
 from magexp.core.ellipsoid import LINEAR_TWICE, normalise, quadratic_features, quadric_calibration
+from magexp.core.identifiability import coverage
 from magexp.errors import MagexpError
 from magexp.core.ellipsoid import fit_sphere
 
@@ -157,6 +162,32 @@ def gyro_unusable(stream) -> str | None:
     return f"the gyroscope saturates ({where}): the rotation beyond its range is lost"
 
 
+def collapsed(readings: np.ndarray, offset: np.ndarray) -> bool:
+    """Whether a fit collapsed: about its ``offset`` the ``readings`` point one way (within
+    :data:`~magexp.calibration.checks.ONE_ATTITUDE_DEG`) or into fewer than
+    :data:`~magexp.calibration.checks.MIN_CELLS` cells, where about the centre of their sphere they do not
+    (:func:`magexp.calibration.checks.check_fit`'s refusal of the whole fit, asked of a fold). An offset far
+    outside the readings makes every ``W (r - o)`` nearly one vector, whose magnitudes agree on any held-out
+    region: the gyro-aided fit of a recording whose attitude barely turns (``R_jᵀ h`` nearly constant) does so.
+
+    Parameters
+    ----------
+    readings : numpy.ndarray
+        ``(N, 3)`` the fold's raw readings.
+    offset : numpy.ndarray
+        ``(3,)`` its fitted offset.
+
+    Returns
+    -------
+    bool
+        True: collapsed.
+    """
+    def narrow(cover):
+        return cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG or round(cover["coverage_cells"] * CELLS) < MIN_CELLS
+
+    return narrow(coverage(readings - offset)) and not narrow(coverage(readings - fit_sphere(readings)[0]))
+
+
 #: the closed-form models: ``readings, radius -> (W, o)`` or None
 CLOSED_FORM = {"sphere": fit_sphere_model, "diagonal": fit_diagonal}
 
@@ -245,40 +276,41 @@ def check_margin(margin) -> float:
 
 
 def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = False,
-           dropped: dict | None = None) -> tuple[str, dict]:
+           dropped: dict | None = None, bounded: bool = False) -> tuple[str, dict]:
     """The model ``auto`` chooses, and the record of the choice.
 
     Parameters
     ----------
-    heldout_of : ``model -> held-out spread`` (NaN or a :class:`MagexpError` when the fit fails).
+    heldout_of : ``model -> held-out spread`` (NaN or a :class:`MagexpError` when the fit fails); with
+        ``bounded``, ``(model, beat) -> (held-out spread, stopped)``: ``beat`` the spread the model must get
+        below to be chosen (None for the first), ``stopped`` True when its folds stopped once it could not
+        (the spread is then a lower bound: :func:`spread_bound`).
     objective : ``scalar`` (all of :data:`ORDER`) or ``vector`` (``full`` only): :func:`candidates`.
     margin : a richer model must have a held-out spread below ``(1 - margin)`` times the current choice's.
     gyro : the recording has a gyroscope (``gyro`` is a candidate).
     dropped : ``{model: reason}`` of the models dropped before any fit, because they cannot succeed
         (:func:`gyro_unusable`); they are not fitted, and the record says why.
+    bounded : call ``heldout_of`` with the spread to beat (above).
 
     Returns
     -------
     (model, record)
         ``record``: ``chosen``, ``why`` (every candidate: its held-out spread, or why it was dropped),
-        ``margin``, ``heldout_spread`` of each fitted candidate (None: the fit failed) and ``dropped``.
+        ``margin``, ``heldout_spread`` of each fitted candidate (None: the fit failed), ``dropped`` and
+        ``stopped`` (the candidates whose folds stopped once they could not win).
     """
     tried = candidates(objective, gyro=gyro)
-    spreads = {}
+    spreads, stopped, chosen, why = {}, [], None, ""
     for name in tried:
-        try:
-            value = float(heldout_of(name))
-        except MagexpError:
-            value = float("nan")
-        spreads[name] = value if np.isfinite(value) else None
-    chosen, why = None, ""
-    for name in tried:
-        value = spreads[name]
-        if value is None:
+        beat = None if chosen is None else (1 - margin) * spreads[chosen]
+        value, cut = _measured(heldout_of, name, beat, bounded)
+        spreads[name] = value
+        stopped += [name] if cut else []
+        if value is None or cut:
             continue
         if chosen is None:
             chosen, why = name, f"{name}: the simplest model that fits"
-        elif value < (1 - margin) * spreads[chosen]:
+        elif value < beat:
             why = (f"{name}: held-out spread {100 * value:.3g} % beats {chosen}'s {100 * spreads[chosen]:.3g} % by "
                    f"more than the margin {100 * margin:g} %")
             chosen = name
@@ -286,13 +318,79 @@ def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = F
     if chosen is None:
         raise MagexpError("model=auto: no model could be fitted with a region of directions held out (" + ", ".join(tried) + " "
                           "all failed): record again while turning the sensor through as many orientations as you can")
-    return chosen, {"chosen": chosen, "why": f"{why} ({candidates_text(chosen, spreads, dropped)})", "margin": margin,
-                    "heldout_spread": spreads, "dropped": dropped}
+    return chosen, {"chosen": chosen, "why": f"{why} ({candidates_text(chosen, spreads, dropped, stopped)})",
+                    "margin": margin, "heldout_spread": spreads, "dropped": dropped, "stopped": stopped}
 
 
-def candidates_text(chosen: str, spreads: dict, dropped: dict) -> str:
-    """Every candidate of :func:`select`, the chosen first: its held-out spread, that its fit failed with a
-    region held out, or why it was dropped before any fit.
+def _measured(heldout_of, name: str, beat, bounded: bool) -> tuple:
+    """``(held-out spread or None, stopped)`` of ``name`` by :func:`select`'s ``heldout_of``."""
+    try:
+        value, cut = heldout_of(name, beat) if bounded else (heldout_of(name), False)
+        value = float(value)
+    except MagexpError:
+        value, cut = float("nan"), False
+    return (value if np.isfinite(value) else None), bool(cut)
+
+
+def spread_bound(done: np.ndarray, rest: int) -> float:
+    """The least pooled spread (std / mean) of the magnitudes ``done`` and ``rest`` more of any positive values.
+
+    With the rest's mean ``x`` (their own scatter only adds), the pooled variance is
+    ``(n_d v + n_d n_r (m - x)² / N) / N`` over the mean ``(n_d m + n_r x) / N`` (``m``, ``v``: the mean and
+    variance of ``done``); its ratio is least at ``x = m (1 + v / m²)``, where it is evaluated.
+
+    Parameters
+    ----------
+    done : numpy.ndarray
+        The magnitudes measured so far.
+    rest : int
+        How many are still to come.
+
+    Returns
+    -------
+    float
+        The bound.
+    """
+    n_d, m, v = len(done), float(np.mean(done)), float(np.var(done))
+    n = n_d + rest
+    x = m * (1 + v / m**2)
+    variance = (n_d * v + n_d * rest / n * (m - x) ** 2) / n
+    return float(np.sqrt(variance) / ((n_d * m + rest * x) / n))
+
+
+def stopped(pooled: list, total: int, beat: float | None, folds: int) -> dict | None:
+    """The record of a held-out check stopped early (:func:`magexp.calibration.fit.heldout`), or None to go on:
+    the folds ``pooled`` so far (their magnitudes) of ``folds`` holding ``total`` readings cannot, whatever
+    the rest give, pool below ``beat`` (:func:`spread_bound`).
+
+    Parameters
+    ----------
+    pooled : list of numpy.ndarray
+        The held-out magnitudes of each fold done.
+    total : int
+        The readings of every fold.
+    beat : float or None
+        The spread to get below (None: never stopped).
+    folds : int
+        The folds in all.
+
+    Returns
+    -------
+    dict or None
+        ``{heldout_spread: the bound, heldout_stopped: True, heldout_folds_done, heldout_folds}``, or None.
+    """
+    if beat is None or len(pooled) == folds:
+        return None
+    done = np.concatenate(pooled)
+    low = spread_bound(done, total - len(done))
+    if low < beat:
+        return None
+    return {"heldout_spread": low, "heldout_stopped": True, "heldout_folds_done": len(pooled), "heldout_folds": folds}
+
+
+def candidates_text(chosen: str, spreads: dict, dropped: dict, stopped=()) -> str:
+    """Every candidate of :func:`select`, the chosen first: its held-out spread (at least, where its folds
+    stopped once it could not win), that its fit failed with a region held out, or why it was dropped before any fit.
 
     Parameters
     ----------
@@ -302,6 +400,8 @@ def candidates_text(chosen: str, spreads: dict, dropped: dict) -> str:
         ``{model: held-out spread or None}``.
     dropped : dict
         ``{model: reason}`` of the models not fitted.
+    stopped : collection of str
+        The models whose spread is a lower bound (:func:`stopped`).
 
     Returns
     -------
@@ -310,7 +410,10 @@ def candidates_text(chosen: str, spreads: dict, dropped: dict) -> str:
     """
     def one(name):
         value = spreads[name]
-        return (f"{name} {100 * value:.3g} %" if value is not None
-                else f"{name}: its fit failed with a region of directions held out")
+        if value is None:
+            return f"{name}: its fit failed with a region of directions held out"
+        if name in stopped:
+            return f"{name} at least {100 * value:.3g} % (its folds stopped once it could not win)"
+        return f"{name} {100 * value:.3g} %"
     held = [one(chosen)] + [one(n) for n in spreads if n != chosen]
     return "held out: " + ", ".join(held) + "".join(f"; {n} not fitted: {why}" for n, why in dropped.items())

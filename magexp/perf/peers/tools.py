@@ -37,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 import magexp
-from magexp.calibration.fit import MIN_READINGS, regions
+from magexp.calibration.checks import MIN_READINGS
+from magexp.calibration.fit import regions
 from magexp.core.identifiability import spread
 from magexp.core.recordings import load_recording
 from magexp.errors import MagexpError
