@@ -20,7 +20,7 @@ CALIB = "# magexp-recording v1\n# unit: nT\nbx,by,bz\n"
 @pytest.fixture
 def started(monkeypatch):
     """Counts of what a command started: runs (``executor.run_batch``), fits of a calibration
-    (``calibration._fit``), reproduction plans (``artifacts.plan_artifact``), recordings read."""
+    (``calibration.fit.fit_model`` and ``fold_fit``), reproduction plans (``artifacts.plan_artifact``), recordings read."""
     import magexp.artifacts.plan
     import magexp.calibration.fit
     import magexp.core.recordings
@@ -38,7 +38,8 @@ def started(monkeypatch):
         monkeypatch.setattr(module, name, wrapper)
 
     counted(magexp.run.executor, "run_batch", "runs")
-    counted(magexp.calibration.fit, "_fit", "fits")
+    counted(magexp.calibration.fit, "fit_model", "fits")  # the whole recording's fit
+    counted(magexp.calibration.fit, "fold_fit", "fits")  # a held-out fold's
     counted(magexp.artifacts.plan, "plan_artifact", "plans")
     counted(magexp.core.recordings, "load_recording", "reads")
     return counts
