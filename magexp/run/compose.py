@@ -147,9 +147,15 @@ def schema_classes(group: str) -> list[type]:
 
 
 @functools.cache
-def register_schemas() -> dict:
+def register_schemas(groups: tuple[str, ...] = GROUPS) -> dict:
     """Store the schema of every class of :func:`schema_classes` in Hydra's ConfigStore (group
-    ``schema/<group>``, named after the class), once.
+    ``schema/<group>``, named after the class).
+
+    Parameters
+    ----------
+    groups : tuple of str
+        The config groups whose schemas are stored (all of :data:`GROUPS` by default; a primary config
+        composes only its own: :func:`primary_groups`).
 
     Returns
     -------
@@ -157,7 +163,7 @@ def register_schemas() -> dict:
         ``{class name: schema}``.
     """
     store, schemas = ConfigStore.instance(), {}
-    for group in GROUPS:
+    for group in groups:
         for cls in schema_classes(group):
             schemas[cls.__name__] = schema = schema_of(cls)
             store.store(group=f"schema/{group}", name=cls.__name__, node=schema)
@@ -344,11 +350,31 @@ def bad_value(key: str, value: str, exc: BaseException) -> MagexpError:
 # ---------------------------------------------------------------------------------------------
 # composing
 
+@functools.cache
+def primary_groups(config_name: str) -> tuple[str, ...]:
+    """The groups of :data:`GROUPS` that ``conf/<config_name>.yaml``'s defaults list chooses from: the schemas its
+    composing needs (``calibrate``: the estimators only, which spares importing every scenario class).
+
+    Parameters
+    ----------
+    config_name : str
+        A primary config of ``conf/`` (``config``, ``calibrate``).
+
+    Returns
+    -------
+    tuple of str
+        Its groups, in the order of :data:`GROUPS`.
+    """
+    defaults = OmegaConf.load(CONF / f"{config_name}.yaml").get("defaults") or []
+    chosen = {key for item in defaults if isinstance(item, Mapping) or OmegaConf.is_dict(item) for key in item}
+    return tuple(g for g in GROUPS if g in chosen)
+
+
 @contextlib.contextmanager
-def _hydra():
-    """Hydra initialised on ``conf/`` with magexp's schemas (the caller's own initialisation if Hydra
-    runs already: a job of Hydra's own launchers)."""
-    register_schemas()
+def _hydra(config_name: str = PRIMARY):
+    """Hydra initialised on ``conf/`` with the schemas ``config_name`` composes (:func:`primary_groups`; the caller's
+    own initialisation if Hydra runs already: a job of Hydra's own launchers)."""
+    register_schemas(primary_groups(config_name))
     if GlobalHydra.instance().is_initialized():
         yield GlobalHydra.instance()
     else:
@@ -376,7 +402,7 @@ def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *
         The composed config.
     """
     try:
-        with _hydra():
+        with _hydra(config_name):
             return compose(config_name, overrides=list(overrides), return_hydra_config=with_hydra)
     except MagexpError:
         raise
