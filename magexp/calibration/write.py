@@ -287,7 +287,7 @@ def figure(cal):
     record = cal.report.get("heading")
     panel = None if not record else (heading_curves(cal, firmware_correction(cal)),
                                      f"heading error at inclination {record['inclination_deg']:.1f}° "
-                                     f"({record['inclination_source']})")
+                                     f"({record['inclination_source'].split(' (')[0]})")  # the summary says why
     return calibration_figure(cal.recording.readings, cal.calibrated, cal.reference.total, unit=cal.field_unit,
                               title=title, centre=cal.offset, heading=panel)
 
