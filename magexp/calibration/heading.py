@@ -376,7 +376,9 @@ def summary_lines(record: dict | None) -> dict:
     raw, cal, exp = (record.get(k) or {} for k in ("raw", "calibrated", "exported"))
     left = "" if not exp.get("rotation_left_out_deg", 0.0) >= 1e-3 else (
         f"; the export leaves out a rotation of {exp['rotation_left_out_deg']:.3g}°"
-        + (f" beside orientation {exp['orientation']}" if exp.get("orientation") is not None else ""))
+        + (f" beside orientation {exp['orientation']}" if exp.get("orientation") is not None else "")
+        + " (PX4's CAL_MAGn_ROT holds standard orientations only; export=ardupilot carries the rotation whole as its "
+          "custom rotation, COMPASS_ORIENT=101, and its file states the heading error it leaves)")
     return {
         "heading error": (f"raw {_pair(raw)} -> calibrated (held out) {_pair(cal)} -> as exported to ArduPilot/PX4 {_pair(exp)} "
                           f"(worst/RMS over {record['n_headings']} headings, level; at inclination "
