@@ -117,6 +117,15 @@ def row(entry, args, words, code=2, patch=None):
 
 
 TABLE = [
+    # ---- a device or a FIFO where a recording is read: refused before it is opened (reading /dev/zero never
+    # ends; opening a FIFO without a writer never returns)
+    row("calibrate", ["data.path=/dev/zero", "data.unit=uT"], ["data.path='/dev/zero'", "character device", "data.path=-"]),
+    row("calibrate", ["data.path=pipe.fifo", "data.unit=uT"], ["pipe.fifo", "a FIFO"]),
+    row("run", ["estimator=lm", "scenario=real_fxos8700", "scenario.file=/dev/zero"], ["scenario.file='/dev/zero'",
+                                                                                        "character device"]),
+    row("run", ["scenario=yan2022_mockup", "scenario.path=pipe.fifo"], ["scenario.path", "a FIFO"]),
+    row("api", api(readings="pipe.fifo"), ["readings=", "a FIFO"]),
+    row("api", lambda: __import__("magexp").Calibration.load("pipe.fifo"), ["path=", "a FIFO"]),
     # ---- run: config groups and keys
     row("run", ["estimator=foo"], ["'foo'", "ipso"]),
     row("run", ["scenario=nope"], ["'nope'", "ding2024_exp1"]),
@@ -656,6 +665,7 @@ def make_workdir(folder: Path) -> Path:
     (folder / "binary.csv").write_bytes(BINARY)
     (folder / "environ").write_bytes(ENVIRON)
     (folder / "random.bin").write_bytes(np.random.default_rng(0).bytes(4096))  # a .bin file: read as a log
+    os.mkfifo(folder / "pipe.fifo")  # a FIFO: a plain open of it blocks until a writer comes, which none does
     if DATAFLASH.is_file():  # the recordings of others: absent from a clone without ../shared/data
         log = bytearray(DATAFLASH.read_bytes())
         log[log.index(b"\xa3\x95", len(log) // 3)] ^= 0x10  # a flipped bit in a message's header, a third of the way in

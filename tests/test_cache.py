@@ -127,6 +127,18 @@ def test_invalid_entries_are_misses_said_once_in_one_line(tmp_path):
     assert cache.say_notes() == []  # said once
 
 
+def test_a_fifo_in_place_of_an_entry_is_a_miss_not_a_hang(tmp_path):
+    """A FIFO planted where an entry would be: ``exists`` and ``load`` answer at once (a plain open of it would
+    wait for a writer forever), and storing the run replaces it."""
+    path = cache.entry_path("k1", tmp_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    os.mkfifo(path)
+    assert cache.exists("k1", tmp_path) is False
+    assert cache.load("k1", tmp_path) is None
+    cache.say_notes()
+    assert cache.store("k1", a_run(), tmp_path) and cache.exists("k1", tmp_path) and path.is_file()
+
+
 def test_only_one_process_claims_a_run():
     first = cache.claim("k1")
     assert first is not None and first.fd is not None

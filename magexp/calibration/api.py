@@ -18,10 +18,11 @@ from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
 from magexp.core.recording import Recording, check_unit
-from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording
+from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check_positive_int
 from magexp.problems.kernels import numpy_only
+from magexp.run.budget import check_recording_file
 from magexp.run.compose import options
 from magexp.run.guard import readings_array
 
@@ -79,6 +80,7 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
     if isinstance(readings, Recording):
         return readings
     if isinstance(readings, (str, Path)):
+        check_recording_file(resolve(readings), "readings")  # no device or FIFO, within the limits: before it is read
         return load_recording(readings, unit=unit)
     pandas = sys.modules.get("pandas")  # a DataFrame exists only if pandas is loaded: not importing it saves
     if pandas is not None and isinstance(readings, pandas.DataFrame):  # 240 ms (-X importtime) per calibration

@@ -512,9 +512,9 @@ def exists(key: str, root: Path | None = None) -> bool:
     ----------
     key, root : str, pathlib.Path or None
     """
-    try:
-        with entry_path(key, root).open("rb") as fh:
-            return fh.read(len(MAGIC)) == MAGIC
+    try:  # not blocking: a FIFO planted in the cache would hold a plain open forever; only a regular file is an entry
+        with os.fdopen(os.open(entry_path(key, root), os.O_RDONLY | os.O_NONBLOCK), "rb") as fh:
+            return stat.S_ISREG(os.fstat(fh.fileno()).st_mode) and fh.read(len(MAGIC)) == MAGIC
     except OSError:
         return False
 
@@ -529,8 +529,8 @@ def store(key: str, value, root: Path | None = None) -> bool:
     """
     root = CACHE if root is None else Path(root)
     path = entry_path(key, root)
-    try:  # an entry this user cannot read belongs to another user: never replaced
-        os.close(os.open(path, os.O_RDONLY))
+    try:  # an entry this user cannot read belongs to another user: never replaced (not blocking on a FIFO there)
+        os.close(os.open(path, os.O_RDONLY | os.O_NONBLOCK))
     except PermissionError:
         note(root, key, "unreadable")
         return False

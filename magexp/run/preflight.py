@@ -5,7 +5,8 @@
   distinct scenario and estimator built, so that each value is checked by its constructor
   before the first job starts; the data of each distinct scenario is checked against the
   problem's parameter count, and each run's and the whole sweep's memory and work against
-  the limits of :mod:`magexp.run.budget`;
+  the limits of :mod:`magexp.run.budget`, and each file a recording scenario reads (:func:`check_scenario_files`:
+  no device or FIFO, its size within the readings limit) before it is read;
 * :func:`check_jobs`: a sweep that selects no job is refused, naming the override.
 """
 
@@ -13,13 +14,16 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
+from magexp.core.recordings import resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check, check_positive_int
 from magexp.problems import make_problem
-from magexp.run.budget import Tally, check_run, check_sweep
+from magexp.paths import SHARED_DATA
+from magexp.run.budget import Tally, check_recording_file, check_run, check_sweep
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
                                  sweep_jobs)
 from magexp.run.guard import check_run_values
@@ -169,10 +173,37 @@ def _check_config(cfg, seen: set, estimates: dict):
         build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         seen.add(e_key)
     if s_key not in seen:
+        check_scenario_files(plain["scenario"])  # before the scenario reads them
         scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
         check_problem(cfg, scenario)
         seen.add(s_key)
     return estimates[s_key, e_key]
+
+
+#: a recording scenario's keys naming a file it reads when built, and the folder a relative one is read from
+#: (None: :func:`magexp.core.recordings.resolve`'s, the working folder then ``data/``)
+SCENARIO_FILES = {"file": SHARED_DATA, "rest_file": SHARED_DATA, "path": None}
+
+
+def check_scenario_files(scenario: dict) -> None:
+    """Refuse, before the scenario is built, a file it would read that is a device, a FIFO or a socket, or too big
+    for the readings or memory limit (:func:`magexp.run.budget.check_recording_file`, as ``magexp calibrate``'s).
+
+    Parameters
+    ----------
+    scenario : dict
+        The resolved ``scenario`` node of a run.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the key.
+    """
+    for key, folder in SCENARIO_FILES.items():
+        value = scenario.get(key)
+        if isinstance(value, str) and value:
+            path = resolve(value) if folder is None else (Path(value) if Path(value).is_absolute() else folder / value)
+            check_recording_file(path, f"scenario.{key}")
 
 
 def check_schedules(node: dict, prefix: str = "estimator") -> None:
