@@ -228,7 +228,7 @@ def recording_of(cfg) -> Recording:
     data = cfg.data
     if data.get("path") is None or not str(data.path).strip():
         raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
-    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
+    check_recording_file(resolve(data.path), format=data.get("format") or "auto")  # the file gate, before it is read
     instance = cfg.get("instance")
     instance = None if instance is None else check_positive_int(instance, "instance", minimum=0)
     return load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",

@@ -48,8 +48,6 @@ reproduction stays two orders of magnitude below them.
 from __future__ import annotations
 
 import math
-import os
-import stat
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -61,6 +59,7 @@ from magexp.core.limits import refuse_over, show
 from magexp.errors import MagexpError
 from magexp.problems import problem_class
 from magexp.problems.base import CalibrationProblem
+from magexp.run.files import check_recording, check_regular  # noqa: F401 (check_regular: imported from here too)
 
 #: float64 numbers a run keeps per reading (readings, reference field, attitude, calibrated
 #: readings, problem features, the bound's Jacobians); per particle of a swarm (its state and
@@ -427,40 +426,10 @@ def estimate_file_readings(path: Path) -> int:
     return size // mean
 
 
-#: the kinds of file that are not a recording: reading one never ends (``/dev/zero``) or blocks (a FIFO)
-SPECIAL_FILES = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"),
-                 (stat.S_ISSOCK, "a socket"))
-
-
-def check_regular(path, what: str) -> None:
-    """Refuse, in one line and without opening it, a ``path`` that is a device, a FIFO or a socket (following
-    links): its size says nothing of what reading it costs, and reading it may never end or never start.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        A file about to be read (one that does not exist passes: its reader says so).
-    what : str
-        The key naming it in the message.
-
-    Raises
-    ------
-    MagexpError
-        A special file.
-    """
-    try:
-        mode = os.stat(path).st_mode
-    except (OSError, ValueError):
-        return
-    for test, kind in SPECIAL_FILES:
-        if test(mode):
-            stream = " (a live stream: data.serial=PORT, or data.path=- for standard input)" if what == "data.path" else ""
-            raise MagexpError(f"{what}={str(path)!r} is not allowed: it is {kind}, not a file; give a file{stream}")
-
-
-def check_recording_file(path, what: str = "data.path") -> int:
-    """Refuse a device, FIFO or socket (:func:`check_regular`), a recording file whose estimated readings exceed
-    the readings limit, or whose calibration would exceed the memory limit
+def check_recording_file(path, what: str = "data.path", format: str | None = "auto") -> int:
+    """Refuse what the file gate refuses (:func:`magexp.run.files.check_recording`: a device, FIFO or socket, a
+    file over the size, line or reading-memory limits, of each file the recording names), a recording file whose
+    estimated readings exceed the readings limit, or whose calibration would exceed the memory limit
     (:data:`CALIBRATION_FLOATS_PER_READING` a reading), before it is read; returns the estimated readings.
 
     Parameters
@@ -469,6 +438,8 @@ def check_recording_file(path, what: str = "data.path") -> int:
         The recording file.
     what : str
         The key naming it in messages.
+    format : str or None
+        ``data.format`` (``auto``: from the file's name, then its first lines).
 
     Returns
     -------
@@ -476,7 +447,7 @@ def check_recording_file(path, what: str = "data.path") -> int:
         The estimated readings.
     """
     path = Path(path)
-    check_regular(path, what)
+    check_recording(path, what, format)
     if not path.is_file():
         return 0
     n = estimate_file_readings(path)

@@ -167,13 +167,14 @@ def _check_config(cfg, seen: set, estimates: dict):
     check_schedules(plain.get("estimator") or {})
     s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
     e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
+    if s_key not in seen:
+        check_scenario_files(plain["scenario"])  # before its size is estimated or the scenario reads them
     if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
         estimates[s_key, e_key] = check_run(plain)
     if e_key not in seen:
         build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         seen.add(e_key)
     if s_key not in seen:
-        check_scenario_files(plain["scenario"])  # before the scenario reads them
         scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
         check_problem(cfg, scenario)
         seen.add(s_key)
@@ -203,7 +204,7 @@ def check_scenario_files(scenario: dict) -> None:
         value = scenario.get(key)
         if isinstance(value, str) and value:
             path = resolve(value) if folder is None else (Path(value) if Path(value).is_absolute() else folder / value)
-            check_recording_file(path, f"scenario.{key}")
+            check_recording_file(path, f"scenario.{key}", scenario.get("format") if key != "path" else "auto")
 
 
 def check_schedules(node: dict, prefix: str = "estimator") -> None:
