@@ -565,6 +565,43 @@ TABLE = [
         ["max_rotation_deg=-1"]),
     row("api", load("random.bin"), ["random.bin", "byte 0"]),
     row("api", load("flipped.bin"), ["flipped.bin", "damaged"]),
+    # ---- issue 41, files and verify (items 1 and 4): one gate for every file read (a device, a FIFO, a /proc
+    # file, a 10 MB line, each through every path that reads a file); every MAGEXP_MAX_* checked by every command,
+    # an empty value included; verify reads only results folders and reproduces only where it is told
+    *[row("calibrate", [f"data.path={path}", "data.unit=uT"], [f"data.path='{path}'", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"))],
+    *[row("run", [*MOCKUP, f"scenario.path={path}"], [f"scenario.path='{path}'", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"),
+                            ("/dev/zero", "character device"))],
+    row("run", ["estimator=lm", "scenario=real_fxos8700", "scenario.file=pipe.fifo"], ["scenario.file=", "a FIFO"]),
+    row("run", ["estimator=lm", "scenario=real_fxos8700", "scenario.file=/proc/self/status"],
+        ["scenario.file='/proc/self/status'", "size is unknown"]),
+    row("run", ["scenario=real_hmc5883l_full_sphere", "estimator=lm", "scenario.rest_file=/proc/self/status"],
+        ["scenario.rest_file=", "size is unknown"]),
+    *[row("api", api(readings=path), ["readings=", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"),
+                            ("/dev/zero", "character device"))],
+    *[row("api", lambda path=path: __import__("magexp").Calibration.load(path), ["path=", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"),
+                            ("/dev/zero", "character device"), ("a_folder", "a folder"))],
+    *[row(entry, args, [f"{name}={value!r}", "number > 0"], patch=[
+        ("magexp.core.limits.os", __import__("types").SimpleNamespace(environ={name: value}))])
+      for name in ("MAGEXP_MAX_RUN_MEMORY", "MAGEXP_MAX_RUN_WORK", "MAGEXP_MAX_RUNS", "MAGEXP_MAX_WORK",
+                   "MAGEXP_MAX_READINGS", "MAGEXP_MAX_FILE", "MAGEXP_MAX_LINE")
+      for value, (entry, args) in zip(("", "-5", "abc", "0", "1e999", " ", "nan"), (
+          ("run", ["seed=1"]), ("calibrate", ["data.path=good.csv"]), ("sweep", ["-m", "seed=1,2"]),
+          ("reproduce", ["yuan2018"]), ("api", api()), ("run", ["verify", "--against", "a_folder"]),
+          ("run", ["calibrate", "data.path=plain.txt", "data.unit=uT"])))],
+    row("api", api(), ["MAGEXP_MAX_READINGS=''"],
+        patch=[("magexp.core.limits.os", __import__("types").SimpleNamespace(environ={"MAGEXP_MAX_READINGS": ""}))]),
+    *[row("run", ["verify", option, folder], [f"{option} '{folder}'", allowed])
+      for option in ("--committed", "--against")
+      for folder, allowed in (("/etc", "not a results folder"), ("a_folder", "not a results folder"),
+                              ("a_file", "not a folder"), ("pipe.fifo", "not a folder"), ("/dev/zero", "not a folder"))],
+    row("run", ["verify", "--into", "taken"], ["--into 'taken'", "no reproduction's", "new or empty"]),
+    row("run", ["verify", "--into", "/etc"], ["--into '/etc'", "no reproduction's"]),
+    row("run", ["verify", "--into", "results/x"], ["--into", "results"]),
+    row("run", ["verify", "--against", R(), "--into", "a_folder"], ["--into 'a_folder'", "with --against"]),
 ]
 
 
@@ -670,6 +707,7 @@ def make_workdir(folder: Path) -> Path:
         log = bytearray(DATAFLASH.read_bytes())
         log[log.index(b"\xa3\x95", len(log) // 3)] ^= 0x10  # a flipped bit in a message's header, a third of the way in
         (folder / "flipped.bin").write_bytes(bytes(log))
+    (folder / "one_line.txt").write_text("1," * 5_000_000)  # 10 MB, one line: read whole, it took 2.4 GB (issue 41)
     (folder / "a_file").write_text("not a folder\n")
     (folder / "a_folder").mkdir()
     (folder / "taken").mkdir()

@@ -271,8 +271,7 @@ def results_folder(text: str, what: str) -> Path:
         Anything but a results folder.
     """
     path = Path(text).expanduser()
-    check_file(path, what, folder=True)  # not a device, FIFO or socket
-    if not path.is_dir():
+    if not path.is_dir():  # a device, FIFO or socket too: refused unopened
         raise MagexpError(f"{what} {text!r} is not allowed: it is not a folder (give a results folder: "
                           f"one holding {' and '.join(RESULTS_FILES)}, as magexp reproduce writes)")
     missing = [name for name in RESULTS_FILES if not (path / name).is_file()]
