@@ -573,7 +573,6 @@ TABLE = [
     *[row("run", [*MOCKUP, f"scenario.path={path}"], [f"scenario.path='{path}'", allowed])
       for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"),
                             ("/dev/zero", "character device"))],
-    row("run", ["estimator=lm", "scenario=real_fxos8700", "scenario.file=pipe.fifo"], ["scenario.file=", "a FIFO"]),
     row("run", ["estimator=lm", "scenario=real_fxos8700", "scenario.file=/proc/self/status"],
         ["scenario.file='/proc/self/status'", "size is unknown"]),
     row("run", ["scenario=real_hmc5883l_full_sphere", "estimator=lm", "scenario.rest_file=/proc/self/status"],

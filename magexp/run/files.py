@@ -34,6 +34,8 @@ import os
 import stat
 from pathlib import Path
 
+import numpy as np
+
 from magexp.core.datafiles import BAG_MARKER, TWO_STREAM
 from magexp.core.formats import LOG_SUFFIXES, detect
 from magexp.core.limits import LIMITS, limit, refuse_over, show
@@ -161,8 +163,8 @@ def _check_known_size(path, subject: str, size: int) -> None:
 
 def scan_lines(path, subject: str, size: int) -> int:
     """Refuse a text file with a line longer than the line limit, or that reads more than its ``size`` (a file
-    of ``/proc``, or one growing while read), scanning it in blocks of :data:`CHUNK` bytes; returns its longest
-    line's length.
+    of ``/proc``, or one growing while read), scanning it in blocks of :data:`CHUNK` bytes (each block's line ends
+    found by numpy: a byte a byte and 16 bytes a line end of it held beside it, under 6 blocks in all); returns its longest line's length.
 
     Parameters
     ----------
@@ -191,11 +193,13 @@ def scan_lines(path, subject: str, size: int) -> int:
                 _check_known_size(path, subject, 0)  # says it is a /proc-like file when size is 0
                 raise MagexpError(f"{subject} is not allowed: it grows while it is read (more than its "
                                   f"{show(size, 'bytes')}); give a file that is complete")
-            head, newline, tail = block.partition(b"\n")
-            current += len(head)
-            if newline:
-                longest = max(longest, current, *map(len, tail.split(b"\n")[:-1]))
-                current = len(tail) - tail.rfind(b"\n") - 1
+            ends = np.flatnonzero(np.frombuffer(block, np.uint8) == ord("\n"))
+            if ends.size:
+                inner = int(np.diff(ends).max()) - 1 if ends.size > 1 else 0
+                longest = max(longest, current + int(ends[0]), inner)
+                current = len(block) - int(ends[-1]) - 1
+            else:
+                current += len(block)
             if max(longest, current) > bound:
                 raise MagexpError(f"{subject} is not allowed: it has a line longer than {show(bound, 'bytes')}, the "
                                   f"line limit ({LIMITS['line'].env}=... raises it); a recording has a reading a line")
