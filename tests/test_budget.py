@@ -276,7 +276,7 @@ def test_a_sparse_recording_is_refused_by_its_size_unread(tmp_path):
     import time
 
     from magexp.errors import MagexpError
-    from magexp.run.budget import check_recording_file
+    from magexp.run.files import check_recording_file
 
     big = tmp_path / "big.csv"
     with open(big, "wb") as fh:

@@ -20,7 +20,7 @@ from magexp.core.limits import LIMITS, check_limits
 from magexp.errors import MagexpError
 from magexp.paths import DATA, ROOT, SHARED_DATA
 from magexp.run import files
-from magexp.run.budget import check_recording_file
+from magexp.run.files import check_recording_file
 from magexp.run.files import READ_MEMORY, check_file, recording_files, scan_lines
 
 ONE_LINE = "1," * 5_000_000  # 10 MB of one line: read whole by a reader, it took 2.4 GB (issue 41)

@@ -23,7 +23,7 @@ from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, re
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check_positive_int
 from magexp.problems.kernels import numpy_only
-from magexp.run.budget import check_recording_file
+from magexp.run.files import check_recording_file
 from magexp.run.compose import options
 from magexp.run.guard import readings_array
 

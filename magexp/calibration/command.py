@@ -29,7 +29,7 @@ from magexp.core.recordings import load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check_positive_int, exit_code
 from magexp.problems.kernels import numpy_only
-from magexp.run.budget import check_recording_file
+from magexp.run.files import check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options
 from magexp.run.guard import check_destination, check_hydra_keys, check_override_targets, check_override_values
 from magexp.run.runner import build

@@ -59,7 +59,6 @@ from magexp.core.limits import refuse_over, show
 from magexp.errors import MagexpError
 from magexp.problems import problem_class
 from magexp.problems.base import CalibrationProblem
-from magexp.run.files import check_recording, check_regular  # noqa: F401 (check_regular: imported from here too)
 
 #: float64 numbers a run keeps per reading (readings, reference field, attitude, calibrated
 #: readings, problem features, the bound's Jacobians); per particle of a swarm (its state and
@@ -424,38 +423,6 @@ def estimate_file_readings(path: Path) -> int:
     ends = head.count(b"\n")
     mean = max(SHORTEST_LINE, head.rfind(b"\n") // ends) if ends else SHORTEST_LINE
     return size // mean
-
-
-def check_recording_file(path, what: str = "data.path", format: str | None = "auto") -> int:
-    """Refuse what the file gate refuses (:func:`magexp.run.files.check_recording`: a device, FIFO or socket, a
-    file over the size, line or reading-memory limits, of each file the recording names), a recording file whose
-    estimated readings exceed the readings limit, or whose calibration would exceed the memory limit
-    (:data:`CALIBRATION_FLOATS_PER_READING` a reading), before it is read; returns the estimated readings.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The recording file.
-    what : str
-        The key naming it in messages.
-    format : str or None
-        ``data.format`` (``auto``: from the file's name, then its first lines).
-
-    Returns
-    -------
-    int
-        The estimated readings.
-    """
-    path = Path(path)
-    check_recording(path, what, format)
-    if not path.is_file():
-        return 0
-    n = estimate_file_readings(path)
-    subject, size = f"{what}={str(path)!r}", show(path.stat().st_size, "bytes")
-    refuse_over(n, "readings", subject, f"its {size} hold")
-    refuse_over(8 * n * CALIBRATION_FLOATS_PER_READING, "run_memory", subject,
-                f"its {size} (about {n} readings) need to calibrate")
-    return n
 
 
 def check_calibration(n_readings: int, folds: int, estimator, problem=CalibrationProblem) -> Estimate:

@@ -40,6 +40,7 @@ from magexp.core.datafiles import BAG_MARKER, TWO_STREAM
 from magexp.core.formats import LOG_SUFFIXES, detect
 from magexp.core.limits import LIMITS, limit, refuse_over, show
 from magexp.errors import MagexpError
+from magexp.run.budget import CALIBRATION_FLOATS_PER_READING, estimate_file_readings
 
 #: bytes the line scan reads at a time (and so holds)
 CHUNK = 1 << 20
@@ -259,3 +260,35 @@ def check_recording(path, what: str, format: str | None = "auto") -> int:
         kind = key if key in BINARY_FORMATS or key == "plain" else "text" if key else "recording"
         sizes.append(check_file(file, what, kind=kind, folder=file == path))
     return max(sizes)
+
+
+def check_recording_file(path, what: str = "data.path", format: str | None = "auto") -> int:
+    """Refuse what the file gate refuses (:func:`magexp.run.files.check_recording`: a device, FIFO or socket, a
+    file over the size, line or reading-memory limits, of each file the recording names), a recording file whose
+    estimated readings exceed the readings limit, or whose calibration would exceed the memory limit
+    (:data:`CALIBRATION_FLOATS_PER_READING` a reading), before it is read; returns the estimated readings.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The recording file.
+    what : str
+        The key naming it in messages.
+    format : str or None
+        ``data.format`` (``auto``: from the file's name, then its first lines).
+
+    Returns
+    -------
+    int
+        The estimated readings.
+    """
+    path = Path(path)
+    check_recording(path, what, format)
+    if not path.is_file():
+        return 0
+    n = estimate_file_readings(path)
+    subject, size = f"{what}={str(path)!r}", show(path.stat().st_size, "bytes")
+    refuse_over(n, "readings", subject, f"its {size} hold")
+    refuse_over(8 * n * CALIBRATION_FLOATS_PER_READING, "run_memory", subject,
+                f"its {size} (about {n} readings) need to calibrate")
+    return n

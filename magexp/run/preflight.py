@@ -23,7 +23,8 @@ from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check, check_positive_int
 from magexp.problems import make_problem
 from magexp.paths import SHARED_DATA
-from magexp.run.budget import Tally, check_recording_file, check_run, check_sweep
+from magexp.run.budget import Tally, check_run, check_sweep
+from magexp.run.files import check_recording_file
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
                                  sweep_jobs)
 from magexp.run.guard import check_run_values
@@ -188,7 +189,7 @@ SCENARIO_FILES = {"file": SHARED_DATA, "rest_file": SHARED_DATA, "path": None}
 
 def check_scenario_files(scenario: dict) -> None:
     """Refuse, before the scenario is built, a file it would read that is a device, a FIFO or a socket, or too big
-    for the readings or memory limit (:func:`magexp.run.budget.check_recording_file`, as ``magexp calibrate``'s).
+    for the readings or memory limit (:func:`magexp.run.files.check_recording_file`, as ``magexp calibrate``'s).
 
     Parameters
     ----------
