@@ -306,7 +306,14 @@ def check_run_values(plain: dict) -> None:
     for group in ("scenario", "estimator"):
         for key, value in _numbers(plain.get(group) or {}, group):
             check_number(value, key)
-    field = (plain.get("scenario") or {}).get("field")
+    _check_field((plain.get("scenario") or {}).get("field"))
+    history = plain.get("write_history", True)
+    if not isinstance(history, bool):
+        raise MagexpError(f"write_history={history!r} is not allowed: choose true or false")
+
+
+def _check_field(field) -> None:
+    """``scenario.field``: a vector not zero, or ``total`` > 0 and the angles in their ranges."""
     if isinstance(field, list) and not any(v != 0 for v in field if isinstance(v, (int, float))):
         raise MagexpError(f"scenario.field={field!r} is not allowed: the field vector must not be zero (nT)")
     if isinstance(field, dict):
@@ -319,9 +326,6 @@ def check_run_values(plain: dict) -> None:
             if isinstance(value, (int, float)) and not lo <= value <= hi:
                 raise MagexpError(f"scenario.field.{name}={value!r} is not allowed: it must be in [{lo:g}, {hi:g}] "
                                   "degrees")
-    history = plain.get("write_history", True)
-    if not isinstance(history, bool):
-        raise MagexpError(f"write_history={history!r} is not allowed: choose true or false")
 
 
 def check_scheduler_address(scheduler) -> None:

@@ -195,6 +195,17 @@ def check_value(value, hint, key: str) -> None:
         if not optional:
             raise MagexpError(f"{key}=null is not allowed: give a value ({getattr(kind, '__name__', kind)})")
         return
+    _check_scalar(value, kind, key, optional)
+    if typing.get_origin(kind) is tuple:
+        items = typing.get_args(kind)
+        if not isinstance(value, (list, tuple)) or len(value) != len(items):
+            raise MagexpError(f"{key}={value!r} is not allowed: it must be a list of {len(items)} numbers")
+        for i, (item, item_hint) in enumerate(zip(value, items)):
+            check_value(item, item_hint, f"{key}[{i}]")
+
+
+def _check_scalar(value, kind, key: str, optional: bool) -> None:
+    """``value`` (not None) of a flag, number or text key by :func:`check_value`'s rules."""
     if kind is bool and not isinstance(value, bool):
         raise MagexpError(f"{key}={value!r} is not allowed: it must be true or false")
     if kind in (int, float):
@@ -203,12 +214,6 @@ def check_value(value, hint, key: str) -> None:
         check_number(value, key, integer=kind is int)
     if kind is str and (not isinstance(value, (str, int, float)) or isinstance(value, str) and not value.strip()):
         raise MagexpError(f"{key}={value!r} is not allowed: it must be a non-empty text{' (or null)' if optional else ''}")
-    if typing.get_origin(kind) is tuple:
-        items = typing.get_args(kind)
-        if not isinstance(value, (list, tuple)) or len(value) != len(items):
-            raise MagexpError(f"{key}={value!r} is not allowed: it must be a list of {len(items)} numbers")
-        for i, (item, item_hint) in enumerate(zip(value, items)):
-            check_value(item, item_hint, f"{key}[{i}]")
 
 
 def check_schema(node: dict, schema, prefix: str = "") -> None:
