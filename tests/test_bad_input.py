@@ -601,6 +601,40 @@ TABLE = [
     row("run", ["verify", "--into", "/etc"], ["--into '/etc'", "no reproduction's"]),
     row("run", ["verify", "--into", "results/x"], ["--into", "results"]),
     row("run", ["verify", "--against", R(), "--into", "a_folder"], ["--into 'a_folder'", "with --against"]),
+    # ---- issue 41, every key validated by its schema: duplicates, text for numbers, integer bounds, empty names,
+    # subnormal numbers, format names, axis maps, a field model's date without a place, list shapes, a zero field
+    row("run", ["scenario.noise=1", "scenario.noise=2"], ["scenario.noise given twice"]),
+    row("run", ["seed=1", "seed=2"], ["seed given twice"]),
+    row("run", ["hydra.run.dir=a", "hydra.run.dir=b"], ["hydra.run.dir given twice"]),
+    row("sweep", ["-m", "scenario.noise=1,2", "scenario.noise=3"], ["scenario.noise given twice"]),
+    row("calibrate", ["data.path=good.csv", "data.unit=uT", "data.unit=nT"], ["data.unit given twice"]),
+    row("run", ["scenario.noise='1'"], ["scenario.noise='1'", "a number", "not a text"]),
+    row("run", ["estimator.n_particles='30'"], ["estimator.n_particles='30'", "an integer"]),
+    row("run", ["seed=99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
+    row("sweep", ["-m", "seed=1,99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
+    row("run", ["objective="], ["objective=''", "give a value"]),
+    row("run", ["estimator.name="], ["estimator.name=''", "give a value"]),
+    row("run", ["estimator=pso", "estimator.velocity_limit=1e-320"], ["estimator.velocity_limit=1e-320", "1e-100"]),
+    row("run", ["estimator=cmaes", "estimator.sigma0=1e-320"], ["estimator.sigma0=1e-320", "1e-100"]),
+    row("run", ["estimator=cmaes", "estimator.sigma0=-1e-320"], ["estimator.sigma0=-1e-320", "1e-100"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.window=[0,0,0]"], ["scenario.window=", "start, end"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.window=[0,10]"], ["scenario.window=", "no reading times"]),
+    row("run", ["scenario=real_hmc5883l_full_sphere", "estimator=lm", "scenario.window=[5,3]"], ["scenario.window=", "start < end"]),
+    row("run", ["scenario=yan2022_sim", "estimator=lm", "scenario.field=[0,0,0]"], ["scenario.field=", "not be zero"]),
+    row("run", ["scenario=yan2022_sim", "estimator=lm", "scenario.field=[1,2]"], ["scenario.field=[1,2]", "3 numbers"]),
+    row("run", ["scenario.search.offset=[1,2,3]"], ["scenario.search.offset=[1,2,3]", "2 numbers"]),
+    row("calibrate", ["data.path=good.csv", "data.format="], ["data.format=''", "give a value"]),
+    row("calibrate", ["data.path=good.csv", "data.format=zzz"], ["data.format='zzz'", "magexp-v1"]),
+    row("calibrate", ["data.path=good.csv", "data.gyro_axes=zz"], ["data.gyro_axes='zz'", "x, y, z"]),
+    row("calibrate", ["data.path=good.csv", "data.unit=uT", "field.date=2020-01-01"], ["field.date='2020-01-01'",
+                                                                                        "field.latitude"]),
+    row("calibrate", ["data.path=good.csv", "data.unit=uT", "field.longitude=10"], ["field.longitude=10", "place"]),
+    row("calibrate", ["data.path=good.csv", "data.format=rosbag"], ["data.format='rosbag'", ".mcap"]),
+    row("calibrate", ["data.path=[a,b]"], ["data.path=['a', 'b']", "text"]),
+    row("calibrate", ["data.path=good.csv", "seed=99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
+    row("calibrate", ["data.path=good.csv", "objective="], ["objective=''"]),
+    row("calibrate", ["data.path=good.csv", "gate.scale_range=[1,2,3]"], ["gate.scale_range=[1,2,3]", "2 numbers"]),
+    row("calibrate", ["data.path=good.csv", "estimator=cmaes", "estimator.sigma0=1e-320"], ["estimator.sigma0=1e-320"]),
 ]
 
 
@@ -659,7 +693,7 @@ def generated_rows() -> list:
     for group, others in (("estimator", []), ("scenario", ["estimator=lm"])):
         for name in options(group):
             node = OmegaConf.to_container(compose_config([f"{group}={name}", *others])[group], resolve=True)
-            for key, _ in numeric_keys(node, f"{group}."):
+            for key, value in numeric_keys(node, f"{group}."):
                 target = str(node.get("_target_"))
                 if (target, key) in seen:
                     continue
@@ -667,6 +701,7 @@ def generated_rows() -> list:
                 for typed, shown in bad_values(key, target):
                     rows.append(row("run", [f"{group}={name}", *others, f"{key}={typed}"],
                                     [f"{PART_NAMED.get(key, key)}=", shown]))
+                rows += schema_rows(group, name, others, key, value)
                 if group == "estimator" and key.count(".") == 1 and name in API_ESTIMATORS:
                     option = key.partition(".")[2]
                     for typed, shown in bad_values(key, target):
@@ -676,11 +711,40 @@ def generated_rows() -> list:
     return rows
 
 
+def schema_rows(group: str, name: str, others: list, key: str, value) -> list:
+    """Issue 41's generated rows of one numeric key: a quoted number (a text), and, by its type, 1e30 for an
+    integer, 1e-320 (a subnormal) for a float."""
+    head = [f"{group}={name}", *others]
+    out = [row("run", [*head, f"{key}='1'"], [f"{key}='1'", "not a text"])]
+    if isinstance(value, int):
+        return out + [row("run", [*head, f"{key}=1e30"], [f"{key}=", "1e+15"])]
+    return out + [row("run", [*head, f"{key}=1e-320"], [f"{key}=1e-320", "1e-100"])]
+
+
+def calibrate_rows() -> list:
+    """Issue 41's generated rows of ``magexp calibrate``: every key of its schema given twice and, by its type,
+    an integer 1e30, a float 1e-320 or an empty text."""
+    from magexp.calibration.options import rows as option_rows
+
+    out = []
+    for key, kind, default, _ in option_rows():
+        head = ["data.path=good.csv", "data.unit=uT"] if key != "data.unit" else ["data.path=good.csv"]
+        if kind == "group" or key in ("data.path", "data.serial", "out"):
+            continue
+        bad = {"int": "1e30", "float": "1e-320", "float or null": "1e-320", "int or null": "1e30"}.get(kind, "")
+        shown = {"1e30": "1e+15", "1e-320": "1e-100", "": "''"}[bad]
+        if kind.startswith("[") or kind == "bool":
+            continue
+        out.append(row("calibrate", [*head, f"{key}={bad}"], [f"{key}=", shown]))
+    out.append(row("calibrate", ["data.path=good.csv", "folds=2", "folds=3"], ["folds given twice"]))
+    return out
+
+
 #: the estimators that calibrate a recording (the scalar objective's), each given bad options through the API
 API_ESTIMATORS = ("cmaes", "de", "ellipsoid_specific", "ipso", "lm", "local", "ml_scalar", "pso", "rdpso",
                   "triangular", "twostep")
 
-TABLE += generated_rows()
+TABLE += generated_rows() + calibrate_rows()
 
 CATEGORIES = ("clean", "not one line", "wrote something", "wrong result")
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.recordings import resolve
+from magexp.core.recordings import exists, load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check, check_positive_int
 from magexp.problems import make_problem
@@ -28,6 +28,7 @@ from magexp.run.files import check_recording_file
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
                                  sweep_jobs)
 from magexp.run.guard import check_run_values
+from magexp.run.keys import check_number, shape
 from magexp.run.runner import build
 
 #: the module of the swarm's coefficient schedules (:func:`check_schedules`)
@@ -98,14 +99,15 @@ def check_problem(cfg, scenario) -> None:
 
 
 def check_seed(seed) -> None:
-    """Refuse a seed that is not an integer >= 0, in one line.
+    """Refuse a seed that is not an integer in [0, :data:`magexp.errors.LARGEST`], in one line (every integer key's
+    bound, :func:`magexp.run.keys.check_number`).
 
     Parameters
     ----------
     seed : object
         The ``seed`` value.
     """
-    check_positive_int(seed, "seed", minimum=0)
+    check_number(check_positive_int(seed, "seed", minimum=0), "seed", integer=True)
 
 
 def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
@@ -176,6 +178,7 @@ def _check_config(cfg, seen: set, estimates: dict):
         build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         seen.add(e_key)
     if s_key not in seen:
+        check_window(plain["scenario"])  # after the file gate: it reads the recording's times
         scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
         check_problem(cfg, scenario)
         seen.add(s_key)
@@ -206,6 +209,33 @@ def check_scenario_files(scenario: dict) -> None:
         if isinstance(value, str) and value:
             path = resolve(value) if folder is None else (Path(value) if Path(value).is_absolute() else folder / value)
             check_recording_file(path, f"scenario.{key}", scenario.get("format") if key != "path" else "auto")
+
+
+def check_window(scenario: dict) -> None:
+    """A recording scenario's ``window`` (null: the whole recording) refused unless it is ``[start, end]`` seconds,
+    ``0 <= start < end``, of a recording that has reading times (read here, before the scenario cuts it).
+
+    Parameters
+    ----------
+    scenario : dict
+        The resolved ``scenario`` node of a run.
+
+    Raises
+    ------
+    MagexpError
+        One line naming ``scenario.window``.
+    """
+    window, file = scenario.get("window"), scenario.get("file")
+    if window is None or not isinstance(file, str):
+        return
+    if shape(window) != (2,) or not 0 <= window[0] < window[1]:
+        raise MagexpError(f"scenario.window={window!r} is not allowed: give [start, end] seconds from the first "
+                          "reading, 0 <= start < end (null: the whole recording)")
+    path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
+    options = {k: scenario.get(k) for k in ("unit", "format", "mag_axes", "gyro_axes")}
+    if exists(path) and load_recording(path, **options).reading_times() is None:
+        raise MagexpError(f"scenario.window={window!r} is not allowed: {file} has no reading times to cut "
+                          "(scenario.window=null)")
 
 
 def check_schedules(node: dict, prefix: str = "estimator") -> None:
