@@ -137,6 +137,7 @@ def test_artifact_runs_tiny(tmp_path, path, figures_not_rendered):
 
 
 @pytest.mark.slow
+@pytest.mark.full  # make test: each artifact kind's smoke run (test_artifact_runs_tiny) and test_report.py
 def test_whole_paper_runs_tiny(tmp_path, figures_not_rendered):
     """Every artifact of one paper in one reproduction (one pass over all their runs, one seed: the
     intervals over seeds are the other artifacts' smoke runs'), each keeping the contract; the paper's

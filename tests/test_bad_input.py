@@ -874,11 +874,11 @@ def test_valid_edges_are_accepted(workdir, cli):
 
 @pytest.mark.parametrize("args", [
     ["-m", "magexp", "calibrate", "data.path=good.csv", "folds=abc"],
-    ["-m", "magexp.artifacts.reproduce", "ding2024", "--jobs", "abc"],
+    pytest.param(["-m", "magexp.artifacts.reproduce", "ding2024", "--jobs", "abc"], marks=pytest.mark.full),
     # pymavlink's indexer prints on the file descriptors themselves, which only a process shows
-    ["-m", "magexp", "calibrate", "data.path=random.bin"],
+    pytest.param(["-m", "magexp", "calibrate", "data.path=random.bin"], marks=pytest.mark.full),
     ["-m", "magexp", "calibrate", "data.path=flipped.bin"],
-], ids=lambda a: " ".join(a[1:]))
+], ids=lambda a: " ".join(a[1:]))  # make test: a command line and a DataFlash log; test-full: all
 def test_bad_input_in_a_process(workdir, args):
     """The process boundary: the same one line, exit 2, from a real ``python -m ...``."""
     needs_recordings(args)

@@ -377,6 +377,7 @@ for case, results in seeded_fits(lambda *o: compose_config(list(o))).items():
 """
 
 
+@pytest.mark.full  # a fresh interpreter fitting every seeded case; make test: the same bits within this process
 def test_a_seed_gives_the_same_bits_in_a_fresh_process(make_cfg):
     """Same seed, same host, same path (this environment's ``MAGEXP_NUMBA``, ``NUMBA_CPU_NAME``...):
     ``x``, ``fun`` and the history of every seeded case are the same bytes in a fresh interpreter as
