@@ -26,6 +26,7 @@ def files_of(root: Path) -> dict[str, bytes]:
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
 
 
+@pytest.mark.full  # make test: test_reproduce.py::test_redraw_rebuilds_figures_summary_and_report_without_a_run
 def test_redraw_rewrites_to_the_byte_what_a_reproduction_wrote(tmp_path):
     """A reproduction, then ``--redraw --force`` of a copy of what it wrote (every figure drawn again,
     every summary row recomputed from the CSVs, the report rebuilt): no file differs, none is added."""
