@@ -133,14 +133,13 @@ def _dense_cramer_rao(problem, theta: np.ndarray | None = None, *, analytic: boo
 
 
 def _bound_cases() -> list:
-    """``(scenario, analytic, rtol)``: every scenario with the analytic derivatives in make test; with the
-    central differences, the first scenario of each paper in make test and the others in make test-full."""
+    """``(scenario, analytic, rtol)``: every scenario with the central differences (the cheaper dense computation) in
+    make test; with the analytic derivatives, the first scenario of each paper in make test, the others in make test-full."""
     cases, papers = [], set()
     for name in SCENARIOS:
         paper = name.partition("_")[0]
-        cases += [pytest.param(name, True, 1e-9, id=f"{name}-analytic"),
-                  pytest.param(name, False, 1e-6, id=f"{name}-differences",
-                               marks=[pytest.mark.full] if paper in papers else [])]
+        cases += [pytest.param(name, True, 1e-9, id=f"{name}-analytic", marks=[pytest.mark.full] if paper in papers else []),
+                  pytest.param(name, False, 1e-6, id=f"{name}-differences")]
         papers.add(paper)
     return cases
 
