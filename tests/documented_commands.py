@@ -170,8 +170,8 @@ COMMANDS: dict[str, tuple] = {
         (RUN_FULL, "1 s", {"replace": {"/path/to/mine.csv": "mine_mockup.csv"},
                            "files": {"mine_mockup.csv": MOCKUP_COPY}}),
     ".venv/bin/python -m magexp scenario=yan2022_mockup estimator=kf estimator.p0=1000 estimator.n_steps=120":
-        (RUN, "12 readings, a filter"),
-    "python -m magexp scenario=yan2022_mockup estimator=kf +analysis=field_kalman": (RUN, "12 readings, the field filter"),
+        (RUN_FULL, "12 readings, a filter"),
+    "python -m magexp scenario=yan2022_mockup estimator=kf +analysis=field_kalman": (RUN_FULL, "12 readings, the field filter"),
     # the public recordings (../shared/data)
     ".venv/bin/python -m magexp calibrate data.path=../shared/data/fxos8700_mag_readings.txt data.unit=uT export=px4":
         (RUN_FULL, "a recording", {"shared": True}),

@@ -27,7 +27,7 @@ ARTIFACTS = [p for paper in papers() if paper != WHOLE_PAPER for p in artifact_p
 KIND_SMOKE = {"convergence": "ding2024_fig5", "field": "ding2024_fig2", "final": "benchmark_readings",
               "heatmap": "benchmark_objective", "parameters": "yuan2018_table4", "recording": "real_table7",
               "recording_spread": "real_benchmark", "speed": "benchmark_speed", "sphere": "yuan2018_fig4",
-              "tuning": "ding2024_ext_boundary"}
+              "tuning": "ding2024_ext_pso_tuning"}  # tuning: the cheapest of its kind
 
 #: the cases a smoke run keeps, by artifact: ``benchmark_speed`` draws the 104 cells of ``benchmark_heatmap``
 #: (a ``full`` case, every cell) coloured by paper: one scenario of each paper exercises all it does
@@ -137,6 +137,7 @@ def test_artifact_runs_tiny(tmp_path, path, figures_not_rendered):
 
 
 @pytest.mark.slow
+@pytest.mark.full  # make test: each artifact kind's smoke run (test_artifact_runs_tiny) and test_report.py
 def test_whole_paper_runs_tiny(tmp_path, figures_not_rendered):
     """Every artifact of one paper in one reproduction (one pass over all their runs, one seed: the
     intervals over seeds are the other artifacts' smoke runs'), each keeping the contract; the paper's

@@ -165,7 +165,8 @@ def test_pso9_expands_a_symmetric_matrix():
     np.testing.assert_array_equal(x, [0, 1, 2, 1, 3, 4, 2, 4, 5, 6, 7, 8])
 
 
-@pytest.mark.parametrize("name", ["twostep", "triangular", "ml_scalar", "ellipsoid_specific", "pso9"])
+@pytest.mark.parametrize("name", ["twostep", "ellipsoid_specific"] + [pytest.param(name, marks=pytest.mark.full) for name in (
+    "triangular", "ml_scalar", "pso9")])  # make test: the two cheapest
 def test_baseline_reaches_the_bound_on_ding(make_cfg, name):
     """Median over seeds of the error / Cramér-Rao bound of W^T W and of the offset within
     [0.5, 1.3] on both of Ding's simulations (A = 5 nT)."""

@@ -23,9 +23,11 @@ def ding1():
 
 
 ESTIMATORS = [CMAES(max_evaluations=8000), DifferentialEvolution(max_evaluations=20000, popsize=5)]
+#: the whole runs: cma's in make test-full, de's (the cheaper) in make test
+WHOLE_RUNS = [pytest.param(e, id=e.name, marks=[pytest.mark.full] if e.name == "cmaes" else []) for e in ESTIMATORS]
 
 
-@pytest.mark.parametrize("estimator", ESTIMATORS, ids=lambda e: e.name)
+@pytest.mark.parametrize("estimator", WHOLE_RUNS)
 def test_reaches_the_least_squares_optimum(ding1, estimator):
     problem, optimum = ding1
     result = estimator.fit(problem, rng=np.random.default_rng(1))
@@ -36,7 +38,7 @@ def test_reaches_the_least_squares_optimum(ding1, estimator):
     assert np.all(result.x >= problem.lower) and np.all(result.x <= problem.upper)
 
 
-@pytest.mark.parametrize("estimator", ESTIMATORS, ids=lambda e: e.name)
+@pytest.mark.parametrize("estimator", WHOLE_RUNS)
 def test_same_seed_same_run(ding1, estimator):
     problem, _ = ding1
     short = type(estimator)(max_evaluations=2000)

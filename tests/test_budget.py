@@ -183,6 +183,7 @@ def test_a_fused_cost_needs_memory_of_order_n_plus_p(fused, monkeypatch):
     assert small.memory < 2 ** 30 and large.memory - small.memory < 8 * 500 * 1000
 
 
+@pytest.mark.full  # two child processes of 200 000 readings; make test: the estimate's arithmetic above
 def test_the_memory_estimate_of_a_fused_run_bounds_its_measured_peak():
     """The guard's estimate of a command-line ipso run (200 000 readings, 500 particles) is at
     least its peak resident memory above the baseline and at most twice it, both measured in

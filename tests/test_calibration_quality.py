@@ -36,6 +36,7 @@ def test_canonical_form_is_the_symmetric_polar_factor():
     np.testing.assert_allclose(p.T @ p, np.linalg.inv(M).T @ np.linalg.inv(M), atol=1e-12)
 
 
+@pytest.mark.full  # two full calibrations, one by a swarm
 def test_ipso_w_equals_ellipsoid_w_up_to_the_noise():
     r = sphere_readings()
     ell = magexp.calibrate(r, unit="uT", estimator="ellipsoid", reference_total=50.0, folds=0)

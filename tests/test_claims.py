@@ -82,6 +82,7 @@ def test_bad_claims_fail_with_one_line():
         Claim(id="x", text="", kind="winner", cells=[{}])
 
 
+@pytest.mark.full  # a check of the committed results (make reproduce judges them); make test: the claims' logic above
 def test_no_claim_the_report_states_is_false():
     """Every ``by: magexp`` claim holds on the committed results (skipped where they are absent or
     predate the success column, i.e. were made by an older magexp: regenerate them)."""

@@ -58,6 +58,7 @@ def test_site_builds_strictly(tmp_path):
         assert html.is_file(), f"{page} was not built"
 
 
+@pytest.mark.full  # a second whole build; make test: the strict build itself
 def test_strict_build_fails_on_a_broken_link(tmp_path):
     """The strict build is a check: a link to a missing heading fails it (mkdocs.yml's validation)."""
     shutil.copytree(DOCS, tmp_path / "docs")

@@ -26,6 +26,7 @@ def files_of(root: Path) -> dict[str, bytes]:
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
 
 
+@pytest.mark.full  # make test: test_reproduce.py::test_redraw_rebuilds_figures_summary_and_report_without_a_run
 def test_redraw_rewrites_to_the_byte_what_a_reproduction_wrote(tmp_path):
     """A reproduction, then ``--redraw --force`` of a copy of what it wrote (every figure drawn again,
     every summary row recomputed from the CSVs, the report rebuilt): no file differs, none is added."""
@@ -119,7 +120,8 @@ def recomputed_rows(paper: str) -> list[tuple]:
     return out
 
 
-@pytest.mark.parametrize("paper", ["ding2024", "yuan2018", "yan2022", "real"])  # benchmark: no summary row
+@pytest.mark.parametrize("paper", [pytest.param(p, marks=pytest.mark.full) for p in ("ding2024", "yuan2018", "yan2022")]
+                         + ["real"])  # benchmark: no summary row; make test: the cheapest paper
 def test_every_summary_median_recomputes_from_the_runs_csv_it_names(paper):
     """Each median row of the committed ``summary.csv`` (the ratios included: Ding's PSO/IPSO ratio at
     A = 0 divides by the round-off floor the runs CSV writes) against the same number recomputed with

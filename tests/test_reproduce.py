@@ -139,6 +139,7 @@ sys.exit(main(sys.argv[1:]))
 
 
 @pytest.mark.slow
+@pytest.mark.full  # a real process; make test: Ctrl-C in-process (tests/test_bad_input.py, exit 130)
 def test_ctrl_c_ends_in_one_line_and_a_clean_state(tmp_path):
     out = tmp_path / "res"
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}

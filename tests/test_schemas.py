@@ -9,10 +9,12 @@ import subprocess
 import sys
 
 import pytest
+import yaml
 from hydra.utils import get_class
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from magexp.errors import MagexpError
+from magexp.paths import CONF
 from magexp.run import compose
 from magexp.run.compose import compose_config, hydra_compose, options, schema_of
 
@@ -46,6 +48,17 @@ def numeric_keys(node, prefix: str) -> list[tuple[str, str]]:
 CONFIGS = [(group, name) for group in GROUPS for name in options(group)]
 
 
+def _first_of_its_schema(configs) -> list:
+    """``configs`` as parameters: the first config of each schema (the first entry of its defaults list: its
+    typed schema, or the base config it extends) in make test, the others, typed alike, in make test-full."""
+    seen, out = set(), []
+    for group, name in configs:
+        schema = (group, str((yaml.safe_load((CONF / group / f"{name}.yaml").read_text()) or {}).get("defaults")[:1]))
+        out.append(pytest.param(group, name, id=name, marks=[pytest.mark.full] if schema in seen else []))
+        seen.add(schema)
+    return out
+
+
 def test_every_config_is_typed_by_its_class():
     assert len(options("scenario")) == 22 and len(options("estimator")) == 18  # Yuan's mode 3 about X-Z and Y-Z
     for group, name in CONFIGS:
@@ -53,7 +66,7 @@ def test_every_config_is_typed_by_its_class():
         assert OmegaConf.get_type(node) is schema_of(get_class(node._target_)), (group, name)
 
 
-@pytest.mark.parametrize("group, name", CONFIGS, ids=[n for _, n in CONFIGS])
+@pytest.mark.parametrize("group, name", _first_of_its_schema(CONFIGS))
 def test_a_wrong_type_for_any_numeric_key_is_refused_at_compose(group, name):
     """Every numeric key of the config (from Hydra's compose of it): ``key=abc`` (``[abc]`` for a list of
     numbers) is refused by the composer in one line naming it."""
@@ -75,12 +88,12 @@ def test_a_typo_in_a_nested_strategy_node_names_the_keys_that_exist():
         compose_config(["estimator=pso", "estimator.velocity.inertai.start=0.5"])
 
 
-FULL = pytest.mark.full  # a fresh interpreter each (~1.2 s CPU): two in make test, the rest in make test-full
+FULL = pytest.mark.full  # a fresh interpreter each (~1.2 s CPU): one in make test, the rest in make test-full
 
 
 @pytest.mark.parametrize("args", [
     ["scenario=ding2024_exp1", "estimator=pso", "estimator.n_particles=abc", "seed=0"],
-    ["estimator=ipso", "estimator.velocity.c1.start=[1]"],
+    pytest.param(["estimator=ipso", "estimator.velocity.c1.start=[1]"], marks=FULL),
     pytest.param(["scenario=real_qmc5883l", "estimator=lm", "scenario.offset_width=wide"], marks=FULL),
     pytest.param(["scenario=yuan2018_mode1", "estimator=rdpso", "estimator.velocity.alpha.rate=fast"], marks=FULL),
     pytest.param(["scenario=yan2022_sim", "estimator=kf", "estimator.n_steps=1.5"], marks=FULL),

@@ -145,9 +145,15 @@ SWARM_CASES = [("ipso", "ding2024_exp1", None, None), ("pso", "ding2024_exp1", N
                ("pso9", "ding2024_exp1", "scalar", None), ("ipso", "yuan2018_mode1", None, "inverse")]
 
 
-@pytest.mark.parametrize("draw_block", [None, 7 * 4 * 20 * 12])  # default; a few iterations per draw, a remainder
-@pytest.mark.parametrize("boundary", ["clip", "reflect", "random"])
-@pytest.mark.parametrize("estimator, scenario, objective, parameterisation", SWARM_CASES)
+def _step_cases() -> list:
+    """Every case of :data:`SWARM_CASES` by every boundary and draw block (the default; a few iterations per draw,
+    a remainder): in make test each case with ``clip`` and the default draws, and the first case with all of them."""
+    return [pytest.param(*case, boundary, draw_block,
+                         marks=[] if case == SWARM_CASES[0] or (boundary, draw_block) == ("clip", None) else [pytest.mark.full])
+            for case in SWARM_CASES for boundary in ("clip", "reflect", "random") for draw_block in (None, 7 * 4 * 20 * 12)]
+
+
+@pytest.mark.parametrize("estimator, scenario, objective, parameterisation, boundary, draw_block", _step_cases())
 def test_compiled_steps_give_the_numpy_path_bit_for_bit(make_cfg, monkeypatch, estimator, scenario, objective,
                                                          parameterisation, boundary, draw_block):
     """Same seed, same problem: the compiled swarm steps (and the compiled run with the cost inside)
@@ -377,6 +383,7 @@ for case, results in seeded_fits(lambda *o: compose_config(list(o))).items():
 """
 
 
+@pytest.mark.full  # a fresh interpreter fitting every seeded case; make test: the same bits within this process
 def test_a_seed_gives_the_same_bits_in_a_fresh_process(make_cfg):
     """Same seed, same host, same path (this environment's ``MAGEXP_NUMBA``, ``NUMBA_CPU_NAME``...):
     ``x``, ``fun`` and the history of every seeded case are the same bytes in a fresh interpreter as
@@ -394,6 +401,7 @@ def test_a_seed_gives_the_same_bits_in_a_fresh_process(make_cfg):
         assert fresh[case] == here[case], case
 
 
+@pytest.mark.full  # whole fits both ways; make test: the steps bit for bit (test_compiled_steps_give_the_numpy_path_bit_for_bit)
 def test_the_compiled_and_numpy_paths_give_the_same_fits(make_cfg, monkeypatch):
     """The whole compiled path (steps, the cost compiled into the loop, the Circle map) and the whole
     numpy path (``MAGEXP_NUMBA=0``: numpy steps and the numpy fallback costs) from the same seeds:

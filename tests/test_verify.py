@@ -224,6 +224,7 @@ def _committed(tmp_path: Path, paper: str, artifact: str) -> tuple[Path, list[st
 
 
 @pytest.mark.slow
+@pytest.mark.full  # make test: the comparison itself, by the cheap cases above
 def test_another_processor_agrees_with_the_committed_artifact(tmp_path):
     """One artifact reproduced twice from nothing, as on another processor (numba compiled for a
     generic CPU; numpy instead of numba), agrees with its committed CSVs (read from git) within the
@@ -245,6 +246,7 @@ OTHER_KERNELS = {"NPY_DISABLE_CPU_FEATURES": " ".join(AVX512_TARGETS), "OPENBLAS
 
 
 @pytest.mark.slow
+@pytest.mark.full
 @pytest.mark.parametrize("spec", [EXPERIMENTS / "real" / "real_modes.yaml"], ids=["real_modes"])
 def test_another_processors_numpy_and_blas_kernels_agree_on_lm(tmp_path, spec):
     """``real_modes`` (five lm fits on recordings) reproduced with numpy's AVX-512 loops disabled and
