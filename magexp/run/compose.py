@@ -79,8 +79,16 @@ def _typed(hint):
     return hint if hint in (int, float, str, bool) else Any
 
 
+class _Derived(types.SimpleNamespace):
+    """The derived schemas; one looked up before any is derived (a worker unpickling a config) derives them."""
+
+    def __getattr__(self, name):
+        register_schemas()
+        return object.__getattribute__(self, name)
+
+
 #: the schemas :func:`schema_of` derives, by name: a derived dataclass lives here, so that it pickles
-DERIVED = types.SimpleNamespace()
+DERIVED = _Derived()
 
 
 @functools.cache

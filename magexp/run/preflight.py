@@ -27,6 +27,7 @@ from magexp.run.budget import Tally, check_recording_file, check_run, check_swee
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
                                  sweep_jobs)
 from magexp.run.guard import check_run_values
+from magexp.run.hydra_cli import check_nested
 from magexp.run.runner import build
 
 #: the module of the swarm's coefficient schedules (:func:`check_schedules`)
@@ -52,6 +53,7 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
         if ov.is_sweep_override() and not ov.is_discrete_sweep():
             raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
                               "group's glob() can be swept")
+    check_nested(parsed)
     check_sweep(parsed, lambda key: options(key) if key in GROUPS else [])
     return sweep_jobs(overrides)
 
