@@ -377,7 +377,13 @@ def canonical_needs(chosen: list[str] | None = None) -> dict:
 
 def print_limits(chosen: list[str] | None = None) -> None:
     """``magexp reproduce [PAPER] --limits``: the limits in force beside what ``make reproduce`` needs of each
-    (of the ``chosen`` papers' reproduction; None: every paper's)."""
+    (of the ``chosen`` papers' reproduction).
+
+    Parameters
+    ----------
+    chosen : list of str or None
+        The papers (None: every paper).
+    """
     need = canonical_needs(chosen)
     for name, lim in LIMITS.items():
         value = need.get(name, None)

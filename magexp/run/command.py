@@ -210,7 +210,7 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
     for arg in it:
         if arg.startswith("--") and "=" in arg and arg.partition("=")[0] in (*HYDRA_OPTIONS, "--info"):  # --cfg=job
             flags[arg.partition("=")[0]] = arg.partition("=")[2]
-        elif arg == "--info" and next_is(args, arg, INFO_CHOICES):
+        elif arg == "--info" and _next_is(args, arg, INFO_CHOICES):
             flags[arg] = next(it)
         elif arg in HYDRA_SWITCHES:
             flags[arg] = True
@@ -228,7 +228,7 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
     return user, hyd, flags
 
 
-def next_is(args: list[str], arg: str, choices) -> bool:
+def _next_is(args: list[str], arg: str, choices) -> bool:
     """Whether the argument after ``arg`` in ``args`` is one of ``choices`` (an optional value)."""
     i = args.index(arg)
     return i + 1 < len(args) and args[i + 1] in choices
@@ -345,9 +345,7 @@ def run_command(args: list[str]) -> None:
     cfg_flag = flags.get("--cfg") or flags.get("-c")
     multirun = flags.get("-m") or flags.get("--multirun")
     others = {k: v for k, v in flags.items() if k not in ("-m", "--multirun", "--cfg", "-c", "--resolve", "-r", "--run")}
-    package = flags.get("--package", flags.get("-p"))
-    if cfg_flag and package is not None:
-        check_package(package, cfg_flag, user, hyd)
+    check_package(flags, user, hyd)
     if cfg_flag == "job" and not others and not multirun:
         return print(OmegaConf.to_yaml(compose_config(user), resolve=bool(flags.get("--resolve"))), end="")
     if cfg_flag or others:

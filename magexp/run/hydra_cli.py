@@ -65,24 +65,28 @@ def check_commands(flags: dict) -> None:
     if len(given) > 1:
         raise MagexpError(f"{given[0]} and {given[1]} are not allowed together: Hydra does one of --run, --multirun "
                           "(-m), --cfg, --info and --shell-completion (-sc) at a time")
-    helps = any(f in flags for f in ("-h", "--help", "--hydra-help"))
-    cfg = "--cfg" in given
-    if "--resolve" in flags and not cfg and not helps:
-        raise MagexpError("--resolve is not allowed without --cfg: it resolves the interpolations of the config "
-                          "--cfg prints (magexp --cfg job --resolve)")
-    for flag in ("--package", "-p"):
-        if flag in flags and not cfg and not helps:
-            raise MagexpError(f"{flag} {flags[flag]!r} is not allowed without --cfg: it names the part of the config "
-                              "--cfg prints (magexp --cfg job --package scenario)")
+    if "--cfg" not in given and not any(f in flags for f in ("-h", "--help", "--hydra-help")):
+        _without_cfg(flags)
     info = flags.get("--info")
     if isinstance(info, str) and info not in INFO_CHOICES:
         raise MagexpError(f"--info {info!r} is not allowed: choose one of {', '.join(INFO_CHOICES)}")
     for flag in ("--shell-completion", "-sc"):
         if flag in flags:
-            check_completion(flag, flags[flag])
+            _check_completion(flag, flags[flag])
 
 
-def check_completion(flag: str, value: str) -> None:
+def _without_cfg(flags: dict) -> None:
+    """Refuse ``--resolve`` and ``--package`` without ``--cfg`` (Hydra's: they change what ``--cfg`` prints)."""
+    if "--resolve" in flags:
+        raise MagexpError("--resolve is not allowed without --cfg: it resolves the interpolations of the config "
+                          "--cfg prints (magexp --cfg job --resolve)")
+    for flag in ("--package", "-p"):
+        if flag in flags:
+            raise MagexpError(f"{flag} {flags[flag]!r} is not allowed without --cfg: it names the part of the config "
+                              "--cfg prints (magexp --cfg job --package scenario)")
+
+
+def _check_completion(flag: str, value: str) -> None:
     """``--shell-completion`` with ``install|uninstall|query=bash|fish|zsh``; ``query`` only where the
     shell's completion sets ``COMP_LINE``."""
     command, _, shell = str(value).partition("=")
@@ -94,16 +98,15 @@ def check_completion(flag: str, value: str) -> None:
                           f"COMP_LINE); install it with eval \"$(magexp {flag} install={shell})\"")
 
 
-def check_package(package: str, kind: str, user: list[str], hydra_overrides: list[str]) -> None:
-    """``--package`` naming a node of the config ``--cfg kind`` prints (Hydra prints only a node), else one
-    line naming the nodes there are.
+def check_package(flags: dict, user: list[str], hydra_overrides: list[str]) -> None:
+    """``--package`` (``-p``) naming a node of the config ``--cfg kind`` prints (Hydra prints only a node), else
+    one line naming the nodes there are.
 
     Parameters
     ----------
-    package : str
-        The ``--package`` value (``scenario``, ``scenario.field``, ``hydra.launcher``...).
-    kind : str
-        The ``--cfg`` value: ``job``, ``hydra`` or ``all``.
+    flags : dict
+        Each ``--name`` flag to its value: ``--package`` (``scenario``, ``scenario.field``, ``hydra.launcher``...)
+        and ``--cfg`` (``job``, ``hydra`` or ``all``).
     user, hydra_overrides : list of str
         The command line's overrides: the config's and the ``hydra.*`` ones.
 
@@ -112,14 +115,15 @@ def check_package(package: str, kind: str, user: list[str], hydra_overrides: lis
     MagexpError
         A package that is not a node of that config.
     """
+    package, kind = flags.get("--package", flags.get("-p")), flags.get("--cfg") or flags.get("-c")
+    if package is None or not kind or package == "_global_":  # _global_: Hydra's name of the whole config
+        return
     if kind == "job":
         cfg = compose_config(user)
     else:
         cfg = hydra_compose(tuple([*user, *hydra_overrides]), with_hydra=True)
         if kind == "hydra":
             cfg = OmegaConf.masked_copy(cfg, ["hydra"])
-    if package == "_global_":  # Hydra's name of the whole config
-        return
     node = OmegaConf.select(cfg, package, default=None, throw_on_missing=False) if package else None
     if not isinstance(node, DictConfig):
         nodes = [k for k, v in cfg.items_ex(resolve=False) if isinstance(v, DictConfig)]
@@ -210,6 +214,11 @@ def check_joblib(launcher) -> None:
         if key not in JOBLIB_SETTINGS and launcher.get(key) != defaults.get(key):
             raise MagexpError(f"hydra.launcher.{key}={launcher.get(key)!r} is not allowed with hydra/launcher=joblib: "
                               f"magexp sets only {', '.join(f'hydra.launcher.{k}' for k in JOBLIB_SETTINGS)}")
+    _joblib_values(launcher)
+
+
+def _joblib_values(launcher) -> None:
+    """Refuse joblib's ``n_jobs``, ``verbose``, ``timeout`` or ``batch_size`` out of range (:func:`check_joblib`)."""
     n, cores = launcher.get("n_jobs"), _cores()
     if isinstance(n, bool) or not isinstance(n, int) or n == 0 or not -cores <= n <= cores:
         raise MagexpError(f"hydra.launcher.n_jobs={n!r} is not allowed: this machine gives {cores} cores; give 1 to "
