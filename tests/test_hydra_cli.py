@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
     (["--cfg", "all", "-p", "estimator"], "# @package estimator"),
     (["--cfg=job", "--resolve"], "seed: 0"),
     (["--info", "plugins"], "MagexpLauncher"),
+    (["-i", "config", "estimator=lm"], "LevenbergMarquardt"),
     (["--hydra-help"], "--shell-completion"),
     (["-sc", "install=bash"], "hydra_bash_completion"),
     (["--shell-completion", "uninstall=fish"], "complete"),
@@ -42,6 +43,18 @@ def test_sweeper_params_are_the_sweep_that_runs(tmp_path, cli):
         rows = list(csv.DictReader(fh))
     assert [(r["seed"], r["job"]) for r in rows] == [("1", "0"), ("2", "1")]
     assert all("noise: 3" in (tmp_path / "s" / r["job"] / "config.yaml").read_text() for r in rows)
+
+
+def test_every_hydra_key_magexp_takes_runs_with_a_good_value(tmp_path, cli):
+    """The hydra.* keys a sweep takes, each with a good value, in one sweep of Hydra's basic sweeper and launcher."""
+    proc = cli("-m", "estimator=ellipsoid", "seed=1,2", "hydra/sweeper=basic", "hydra/launcher=basic",
+               "hydra/job_logging=disabled", "hydra/hydra_logging=disabled", "hydra.sweeper.max_batch_size=1",
+               "hydra.sweep.dir=s", "hydra.sweep.subdir=${hydra.job.name}_${hydra.job.override_dirname}",
+               "hydra.job.name=mine", "hydra.job.chdir=false", "hydra.verbose=false",
+               "hydra.job.config.override_dirname.kv_sep=-", "hydra.job.config.override_dirname.exclude_keys=[estimator]",
+               "hydra.run.dir=unused_by_a_sweep", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(p.parent.name for p in (tmp_path / "s").glob("*/metrics.csv")) == ["mine_seed-1", "mine_seed-2"]
 
 
 @pytest.mark.full  # loky's worker processes: 3 s

@@ -34,7 +34,7 @@ from magexp.run.compose import GROUPS, compose_config, options, parse_overrides,
 from magexp.run.guard import (check_destination, check_flags, check_hydra_keys, check_output_folder,
                               check_override_targets, check_override_values, check_subdir, create_unique,
                               first_missing, removed_on_failure)
-from magexp.run.hydra_cli import INFO_CHOICES, check_commands, check_hydra_overrides, check_package, sweep_spelling
+from magexp.run.hydra_cli import check_commands, check_hydra_overrides, check_package, sweep_spelling
 from magexp.run.outputs import execute, print_table
 from magexp.run.preflight import check_jobs, expand_sweep, validate_runs
 from magexp.run.provenance import version_line
@@ -49,7 +49,8 @@ LAUNCHER_EXTRAS = {"slurm": ("hydra_plugins.hydra_submitit_launcher", "cluster")
                    "joblib": ("hydra_plugins.hydra_joblib_launcher", None),
                    "magexp": ("hydra_plugins.magexp_launcher", None)}
 #: Hydra's own flags: those that stand alone, and those that take a value
-HYDRA_SWITCHES = ("-m", "--multirun", "-r", "--run", "-h", "--help", "--version", "--resolve", "--info", "--hydra-help")
+HYDRA_SWITCHES = ("-m", "--multirun", "-r", "--run", "-h", "--help", "--version", "--resolve", "--info", "-i",
+                  "--hydra-help")
 HYDRA_OPTIONS = ("--cfg", "-c", "--package", "-p", "--config-name", "-cn", "--config-dir", "-cd",
                  "--config-path", "-cp", "--experimental-rerun", "--shell-completion", "-sc")
 
@@ -210,7 +211,7 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
     for arg in it:
         if arg.startswith("--") and "=" in arg and arg.partition("=")[0] in (*HYDRA_OPTIONS, "--info"):  # --cfg=job
             flags[arg.partition("=")[0]] = arg.partition("=")[2]
-        elif arg == "--info" and _next_is(args, arg, INFO_CHOICES):
+        elif arg in ("--info", "-i") and _next_is(args, arg):  # an optional value, as Hydra's argparse reads it
             flags[arg] = next(it)
         elif arg in HYDRA_SWITCHES:
             flags[arg] = True
@@ -228,10 +229,10 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
     return user, hyd, flags
 
 
-def _next_is(args: list[str], arg: str, choices) -> bool:
-    """Whether the argument after ``arg`` in ``args`` is one of ``choices`` (an optional value)."""
+def _next_is(args: list[str], arg: str) -> bool:
+    """Whether an argument that is not a flag follows ``arg`` in ``args`` (its optional value)."""
     i = args.index(arg)
-    return i + 1 < len(args) and args[i + 1] in choices
+    return i + 1 < len(args) and not args[i + 1].startswith("-")
 
 
 def run_one(user: list[str], hyd: list[str]) -> None:

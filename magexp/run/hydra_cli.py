@@ -33,7 +33,7 @@ from magexp.run.compose import compose_config, hydra_compose
 
 #: Hydra's commands: one at a time (aliases map to the long name)
 COMMANDS = {"--run": "--run", "-r": "--run", "--multirun": "--multirun", "-m": "--multirun", "--cfg": "--cfg",
-            "-c": "--cfg", "--info": "--info", "--shell-completion": "--shell-completion",
+            "-c": "--cfg", "--info": "--info", "-i": "--info", "--shell-completion": "--shell-completion",
             "-sc": "--shell-completion"}
 #: what ``--info`` may show (Hydra's choices)
 INFO_CHOICES = ("all", "config", "defaults", "defaults-tree", "plugins", "searchpath")
@@ -67,7 +67,7 @@ def check_commands(flags: dict) -> None:
                           "(-m), --cfg, --info and --shell-completion (-sc) at a time")
     if "--cfg" not in given and not any(f in flags for f in ("-h", "--help", "--hydra-help")):
         _without_cfg(flags)
-    info = flags.get("--info")
+    info = flags.get("--info", flags.get("-i"))
     if isinstance(info, str) and info not in INFO_CHOICES:
         raise MagexpError(f"--info {info!r} is not allowed: choose one of {', '.join(INFO_CHOICES)}")
     for flag in ("--shell-completion", "-sc"):
