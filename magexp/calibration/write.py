@@ -38,7 +38,7 @@ from magexp.calibration.holdout import describe as describe_heldout
 from magexp.calibration.onboard import onboard_line
 from magexp.core.atomic import _stops_held as stops_held, write_text
 from magexp.core.identifiability import CELLS
-from magexp.run.budget import check_regular
+from magexp.run.files import check_file as check_readable
 from magexp.run.guard import check_destination
 from magexp.core.formats import VERSION_LINE
 from magexp.errors import MagexpError
@@ -208,7 +208,7 @@ def read_parameters(path) -> dict:
         An unreadable or malformed file.
     """
     path = Path(path)
-    check_regular(path, "path")  # a FIFO would block the read, a device never end it
+    check_readable(path, "path", kind="json")  # the file gate: a FIFO would block the read, a device never end it
     try:
         data = json.loads(path.read_text())
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:

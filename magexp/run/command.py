@@ -35,6 +35,7 @@ from magexp.run.guard import (check_destination, check_flags, check_hydra_keys, 
                               check_override_targets, check_override_values, check_subdir, create_unique,
                               first_missing, removed_on_failure)
 from magexp.run.hydra_cli import check_commands, check_hydra_overrides, check_package, sweep_spelling
+from magexp.run.keys import check_duplicates
 from magexp.run.outputs import execute, print_table
 from magexp.run.preflight import check_jobs, expand_sweep, validate_runs
 from magexp.run.provenance import version_line
@@ -330,6 +331,7 @@ def run_command(args: list[str]) -> None:
     None
     """
     user, hyd, flags = split_args(args)
+    check_duplicates(user + hyd)  # Hydra would keep the last silently
     check_flags(flags)
     check_commands(flags)
     check_hydra_keys(hyd)  # no code from an override: before anything reads them

@@ -7,9 +7,9 @@ before it expands.
   the config shown); ``--info`` takes one of :data:`INFO_CHOICES`; ``--shell-completion`` one of
   ``install|uninstall|query=bash|fish|zsh`` (``query`` only from the shell's completion, which sets
   ``COMP_LINE``);
-* :func:`check_hydra_overrides`: each ``hydra.*`` setting given once, and no interpolation in its value
-  (resolved later, it could read the environment or point anywhere), but Hydra's own job keys in
-  ``hydra.sweep.subdir`` (:data:`JOB_KEYS`);
+* :func:`check_hydra_overrides`: no interpolation in a ``hydra.*`` setting's value (resolved later, it could
+  read the environment or point anywhere), but Hydra's own job keys in ``hydra.sweep.subdir``
+  (:data:`JOB_KEYS`); a setting given twice is refused with every key (:func:`magexp.run.keys.check_duplicates`);
 * :func:`check_hydra_node`: the ``hydra`` node Hydra composes from them: a launcher node,
   ``hydra.sweeper.max_batch_size`` null or an integer >= 1, ``hydra.job.chdir`` false (magexp's runs
   read and write by absolute paths), joblib's launcher settings bounded (:func:`check_joblib`);
@@ -132,8 +132,8 @@ def check_package(flags: dict, user: list[str], hydra_overrides: list[str]) -> N
 
 
 def check_hydra_overrides(hydra_overrides: list[str]) -> None:
-    """Each ``hydra.*`` setting given once, with no ``${...}`` in its value but Hydra's own job keys in
-    ``hydra.sweep.subdir`` (:data:`JOB_KEYS`).
+    """No ``${...}`` in a ``hydra.*`` setting's value but Hydra's own job keys in ``hydra.sweep.subdir``
+    (:data:`JOB_KEYS`).
 
     Parameters
     ----------
@@ -145,13 +145,9 @@ def check_hydra_overrides(hydra_overrides: list[str]) -> None:
     MagexpError
         One line naming the setting.
     """
-    seen = set()
     for ov in hydra_overrides:
         key, _, value = ov.partition("=")
         name = key.lstrip("+~")
-        if name in seen:
-            raise MagexpError(f"{name} given twice ({ov}): give each hydra.* setting once (only the last would count)")
-        seen.add(name)
         if "${" not in value or (name == "hydra.sweep.subdir" and "${" not in JOB_KEYS.sub("", value)):
             continue
         allowed = ("a job's folder may hold ${hydra.job.num}, ${hydra.job.id}, ${hydra.job.name} or "
