@@ -43,6 +43,7 @@ from omegaconf import MISSING, DictConfig, OmegaConf
 
 from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
+from magexp.run.derived import Derived
 from magexp.run.keys import check_override
 from magexp.run.targets import check_target
 
@@ -80,16 +81,8 @@ def _typed(hint):
     return hint if hint in (int, float, str, bool) else Any
 
 
-class _Derived(types.SimpleNamespace):
-    """The derived schemas; one looked up before any is derived (a worker unpickling a config) derives them."""
-
-    def __getattr__(self, name):
-        register_schemas()
-        return object.__getattribute__(self, name)
-
-
 #: the schemas :func:`schema_of` derives, by name: a derived dataclass lives here, so that it pickles
-DERIVED = _Derived()
+DERIVED = Derived(lambda: register_schemas())  # a lambda: register_schemas is defined below
 
 
 @functools.cache
