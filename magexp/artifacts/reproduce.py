@@ -82,6 +82,11 @@ def check_canonical(out, *, seeds, tiny: bool) -> Path:
     seeds : int or None
     tiny : bool
     """
+    text = str(out)
+    if "${" in text or any(ord(c) < 32 for c in text):
+        raise MagexpError(f"--out={text!r} is not allowed: interpolations (${{...}}) are not expanded here and a folder "
+                          "name holds no control characters; give the folder itself")
+    out = Path(text).expanduser() if text.strip() else text  # ~/x: the folder check_destination checks
     flags = [f for f, on in (("--seeds", seeds is not None), ("--tiny", tiny)) if on]
     if flags and str(out).strip() and Path(out).resolve() == RESULTS.resolve():
         raise MagexpError(f"{' '.join(flags)} explores: give --out DIR other than results/ "
@@ -353,11 +358,12 @@ def check_reproduction(selected: Mapping, seeds: int | None) -> int:
     return runs
 
 
-def canonical_needs() -> dict:
-    """The estimates of every canonical reproduction's runs: ``runs``, the largest run's ``memory``
-    and ``run_work`` (each with its artifact), the ``work`` of all (keys of :data:`magexp.core.limits.LIMITS`)."""
+def canonical_needs(chosen: list[str] | None = None) -> dict:
+    """The estimates of the canonical reproduction's runs of the ``chosen`` papers (None: every paper):
+    ``runs``, the largest run's ``memory`` and ``run_work`` (each with its artifact), the ``work`` of all
+    (keys of :data:`magexp.core.limits.LIMITS`)."""
     out = {"runs": 0, "work": 0, "run_memory": (0, ""), "run_work": (0, "")}
-    for paper in papers():
+    for paper in chosen or papers():
         for spec in paper_specs(paper):
             plan = plan_with_effects(spec)
             for cfg in plan.configs:
@@ -369,9 +375,16 @@ def canonical_needs() -> dict:
     return out
 
 
-def print_limits() -> None:
-    """``magexp reproduce --limits``: the limits in force beside what ``make reproduce`` needs of each."""
-    need = canonical_needs()
+def print_limits(chosen: list[str] | None = None) -> None:
+    """``magexp reproduce [PAPER] --limits``: the limits in force beside what ``make reproduce`` needs of each
+    (of the ``chosen`` papers' reproduction).
+
+    Parameters
+    ----------
+    chosen : list of str or None
+        The papers (None: every paper).
+    """
+    need = canonical_needs(chosen)
     for name, lim in LIMITS.items():
         value = need.get(name, None)
         if isinstance(value, tuple):
@@ -414,16 +427,25 @@ def main(argv=None) -> int:
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 
+#: the options ``--limits`` ignores (it prints, and runs nothing), with their defaults
+NOT_WITH_LIMITS = {"only": None, "seeds": None, "tiny": False, "out": str(RESULTS), "force": False, "redraw": False,
+                   "executor": "local", "scheduler": None, "jobs": 0}
+
+
 def _main(args) -> int:
-    if args.limits:
-        print_limits()
-        return 0
-    if args.paper is None:
+    if args.paper is None and not args.limits:
         raise MagexpError("a paper is needed: magexp reproduce all, or one of " + ", ".join(available_papers()))
-    papers = available_papers() if args.paper == "all" else [args.paper]
+    papers = available_papers() if args.paper in ("all", None) else [args.paper]
     for paper in papers:
         if paper not in available_papers():
             raise MagexpError(f"paper={paper!r} is not allowed: choose all or one of {', '.join(available_papers())}")
+    if args.limits:
+        given = [f"--{k}" for k, default in NOT_WITH_LIMITS.items() if getattr(args, k) != default]
+        if given:
+            raise MagexpError(f"--limits is not allowed with {given[0]}: it prints the limits beside what a paper's "
+                              "reproduction needs and runs nothing (magexp reproduce [PAPER] --limits)")
+        print_limits(None if args.paper in ("all", None) else papers)
+        return 0
     check_executor(args.executor, args.jobs, args.scheduler)
     if args.seeds is not None and args.seeds < 1:
         raise MagexpError(f"--seeds {args.seeds} is not allowed: it must be an integer >= 1")

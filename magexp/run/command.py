@@ -34,6 +34,7 @@ from magexp.run.compose import GROUPS, compose_config, options, parse_overrides,
 from magexp.run.guard import (check_destination, check_flags, check_hydra_keys, check_output_folder,
                               check_override_targets, check_override_values, check_subdir, create_unique,
                               first_missing, removed_on_failure)
+from magexp.run.hydra_cli import check_commands, check_hydra_overrides, check_package, sweep_spelling
 from magexp.run.keys import check_duplicates
 from magexp.run.outputs import execute, print_table
 from magexp.run.preflight import check_jobs, expand_sweep, validate_runs
@@ -49,7 +50,8 @@ LAUNCHER_EXTRAS = {"slurm": ("hydra_plugins.hydra_submitit_launcher", "cluster")
                    "joblib": ("hydra_plugins.hydra_joblib_launcher", None),
                    "magexp": ("hydra_plugins.magexp_launcher", None)}
 #: Hydra's own flags: those that stand alone, and those that take a value
-HYDRA_SWITCHES = ("-m", "--multirun", "-h", "--help", "--version", "--resolve", "--info", "--hydra-help")
+HYDRA_SWITCHES = ("-m", "--multirun", "-r", "--run", "-h", "--help", "--version", "--resolve", "--info", "-i",
+                  "--hydra-help")
 HYDRA_OPTIONS = ("--cfg", "-c", "--package", "-p", "--config-name", "-cn", "--config-dir", "-cd",
                  "--config-path", "-cp", "--experimental-rerun", "--shell-completion", "-sc")
 
@@ -165,7 +167,9 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
     for ov in hydra_overrides:  # each job's folder inside the sweep's
         if ov.startswith("hydra.sweep.subdir="):
             check_subdir(ov.partition("=")[2])
-    check_hydra_settings([o for o in hydra_overrides if not o.startswith("hydra.sweep.dir=")])
+    node = check_hydra_settings([o for o in hydra_overrides if not o.startswith("hydra.sweep.dir=")])
+    user = check_override_values(sweep_spelling(node, user))  # hydra.sweeper.params counted and checked too
+    hydra_overrides = [o for o in hydra_overrides if o.partition("=")[0].lstrip("+") != "hydra.sweeper.params"]
     jobs = expand_sweep(user)
     check_jobs(user, jobs)
     validate_runs(jobs, keep=False)
@@ -206,7 +210,11 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
     user, hyd, flags = [], [], {}
     it = iter(args)
     for arg in it:
-        if arg in HYDRA_SWITCHES:
+        if arg.startswith("--") and "=" in arg and arg.partition("=")[0] in (*HYDRA_OPTIONS, "--info"):  # --cfg=job
+            flags[arg.partition("=")[0]] = arg.partition("=")[2]
+        elif arg in ("--info", "-i") and _next_is(args, arg):  # an optional value, as Hydra's argparse reads it
+            flags[arg] = next(it)
+        elif arg in HYDRA_SWITCHES:
             flags[arg] = True
         elif arg in HYDRA_OPTIONS:
             value = next(it, None)
@@ -220,6 +228,12 @@ def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
         else:
             user.append(arg)
     return user, hyd, flags
+
+
+def _next_is(args: list[str], arg: str) -> bool:
+    """Whether an argument that is not a flag follows ``arg`` in ``args`` (its optional value)."""
+    i = args.index(arg)
+    return i + 1 < len(args) and not args[i + 1].startswith("-")
 
 
 def run_one(user: list[str], hyd: list[str]) -> None:
@@ -319,9 +333,11 @@ def run_command(args: list[str]) -> None:
     user, hyd, flags = split_args(args)
     check_duplicates(user + hyd)  # Hydra would keep the last silently
     check_flags(flags)
+    check_commands(flags)
     check_hydra_keys(hyd)  # no code from an override: before anything reads them
     check_override_targets(user + hyd)
     checked = folder_overrides(hyd)
+    check_hydra_overrides(checked)
     args = [dict(zip(hyd, checked)).get(a, a) for a in args]
     hyd = checked
     user = check_override_values(user)
@@ -331,7 +347,8 @@ def run_command(args: list[str]) -> None:
         return print(version_line())
     cfg_flag = flags.get("--cfg") or flags.get("-c")
     multirun = flags.get("-m") or flags.get("--multirun")
-    others = {k: v for k, v in flags.items() if k not in ("-m", "--multirun", "--cfg", "-c", "--resolve")}
+    others = {k: v for k, v in flags.items() if k not in ("-m", "--multirun", "--cfg", "-c", "--resolve", "-r", "--run")}
+    check_package(flags, user, hyd)
     if cfg_flag == "job" and not others and not multirun:
         return print(OmegaConf.to_yaml(compose_config(user), resolve=bool(flags.get("--resolve"))), end="")
     if cfg_flag or others:

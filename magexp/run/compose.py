@@ -43,6 +43,7 @@ from omegaconf import MISSING, DictConfig, OmegaConf
 
 from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
+from magexp.run.derived import Derived
 from magexp.run.keys import check_override
 from magexp.run.targets import check_target
 
@@ -81,7 +82,7 @@ def _typed(hint):
 
 
 #: the schemas :func:`schema_of` derives, by name: a derived dataclass lives here, so that it pickles
-DERIVED = types.SimpleNamespace()
+DERIVED = Derived(lambda: register_schemas())  # a lambda: register_schemas is defined below
 
 
 @functools.cache

@@ -539,9 +539,10 @@ def check_hydra_keys(overrides: list[str]) -> None:
         if key.endswith("._target_"):  # checked by check_override_targets
             continue
         if not any(key == k or (k.endswith(".") and key.startswith(k)) or key == k.rstrip(".") for k in HYDRA_KEYS):
-            raise MagexpError(f"{ov.partition('=')[0]} is not allowed on the command line: it would name code or "
-                              "where configs come from; magexp takes hydra.run.dir, hydra.sweep.dir|subdir, "
-                              "hydra.launcher.*, hydra.sweeper.params and hydra/launcher=...")
+            raise MagexpError(f"{ov.partition('=')[0]} is not allowed on the command line: magexp takes hydra.run.dir, "
+                              "hydra.sweep.dir|subdir, hydra.launcher.*, hydra.sweeper.params|max_batch_size, "
+                              "hydra.job.name|chdir, hydra.job.config.override_dirname.*, hydra.verbose and "
+                              "hydra/launcher|sweeper|job_logging|hydra_logging=... (docs/guide/limits.md)")
 
 
 def check_override_targets(overrides: list[str]) -> None:

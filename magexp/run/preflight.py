@@ -28,6 +28,7 @@ from magexp.run.files import check_recording_file
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
                                  sweep_jobs)
 from magexp.run.guard import check_run_values
+from magexp.run.hydra_cli import check_nested
 from magexp.run.keys import check_number, shape
 from magexp.run.runner import build
 
@@ -54,6 +55,7 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
         if ov.is_sweep_override() and not ov.is_discrete_sweep():
             raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
                               "group's glob() can be swept")
+    check_nested(parsed)
     check_sweep(parsed, lambda key: options(key) if key in GROUPS else [])
     return sweep_jobs(overrides)
 

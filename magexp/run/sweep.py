@@ -39,6 +39,7 @@ from magexp.errors import MagexpError
 from magexp.run.compose import apply_overrides, compose_config, hydra_compose, resolved
 from magexp.run.executor import check_executor, make_executor, run_many
 from magexp.run.guard import check_job_folders
+from magexp.run.hydra_cli import check_hydra_node
 from magexp.run.outputs import write_outputs
 from magexp.run.preflight import swept_keys
 from magexp.run.progress import Progress
@@ -129,7 +130,7 @@ def check_settings(settings: dict) -> None:
         raise MagexpError(message) from None
 
 
-def check_hydra_settings(settings: list[str]) -> None:
+def check_hydra_settings(settings: list[str]):
     """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one):
     Hydra composes its own node with them, then magexp's launcher settings are checked if it is the
     launcher chosen.
@@ -138,11 +139,19 @@ def check_hydra_settings(settings: list[str]) -> None:
     ----------
     settings : list of str
         The ``hydra.*`` overrides.
+
+    Returns
+    -------
+    DictConfig
+        The composed ``hydra`` node (:func:`magexp.run.hydra_cli.check_hydra_node` checked).
     """
 
-    launcher = hydra_compose(tuple(settings), with_hydra=True).hydra.launcher
+    node = hydra_compose(tuple(settings), with_hydra=True).hydra
+    check_hydra_node(node)
+    launcher = node.launcher
     if str(launcher.get("_target_", "")).startswith("hydra_plugins.magexp_launcher."):
         check_settings({key: launcher.get(key) for key in SETTINGS})
+    return node
 
 
 def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
