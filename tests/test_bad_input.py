@@ -853,7 +853,7 @@ def generated_rows() -> list:
                 for typed, shown in bad_values(key, target):
                     rows.append(row("run", [f"{group}={name}", *others, f"{key}={typed}"],
                                     [f"{PART_NAMED.get(key, key)}=", shown]))
-                rows += schema_rows(group, name, others, key, value)
+                rows += schema_rows(group, name, others, key, value) + sweep_rows(group, name, others, key, value)
                 if group == "estimator" and key.count(".") == 1 and name in API_ESTIMATORS:
                     option = key.partition(".")[2]
                     for typed, shown in bad_values(key, target):
@@ -873,6 +873,14 @@ def schema_rows(group: str, name: str, others: list, key: str, value) -> list:
     return out + [row("run", [*head, f"{key}=1e-320"], [f"{key}=1e-320", "1e-100"])]
 
 
+def sweep_rows(group: str, name: str, others: list, key: str, value) -> list:
+    """Issue 41's generated sweep rows of one numeric key: its default and a bad value in one ``-m`` list (a text,
+    NaN), refused before the first job runs, naming the bad job's value."""
+    head = ["-m", f"{group}={name}", *others]
+    return [row("sweep", [*head, f"{key}={value!r},{typed}"], [f"{PART_NAMED.get(key, key)}=", typed])
+            for typed in ("abc", "nan")]
+
+
 def calibrate_rows() -> list:
     """Issue 41's generated rows of ``magexp calibrate``: every key of its schema given twice and, by its type,
     an integer 1e30, a float 1e-320 or an empty text."""
@@ -888,6 +896,8 @@ def calibrate_rows() -> list:
         if kind.startswith("[") or kind == "bool":
             continue
         out.append(row("calibrate", [*head, f"{key}={bad}"], [f"{key}=", shown]))
+        if kind in ("int", "float", "int or null", "float or null"):
+            out.append(row("calibrate", [*head, f"{key}=abc"], [f"{key}=", "abc"]))
     out.append(row("calibrate", ["data.path=good.csv", "folds=2", "folds=3"], ["folds given twice"]))
     return out
 
