@@ -60,7 +60,7 @@ def test_plot_returns_a_figure_and_export_writes_beside(cal, tmp_path):
 
 @pytest.mark.parametrize("text, message", [("[1, 2]", "format 'list' is not allowed"),
                                            ('{"format": "magexp-calibration v3", "W": [1], "offset": [0]}',
-                                            "W must be 3 x 3"), ("not json", "not a calibration.json")])
+                                            "the key .model. is missing"), ("not json", "not a calibration.json")])
 def test_load_refuses_bad_files_in_one_line(tmp_path, text, message):
     (tmp_path / "bad.json").write_text(text)
     with pytest.raises(MagexpError, match=message):

@@ -47,7 +47,7 @@ import yaml
 from magexp.calibration.heading import export_line, heldout_note
 from magexp.calibration.firmware import (MAX_ROTATION_DEG, STANDARD_ROTATIONS, Correction, check_counts_nt,
                                          check_max_rotation, euler_321, to_firmware)
-from magexp.calibration.folder import check_file, recording_files
+from magexp.calibration.folder import check_file, file_path, recording_files
 from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
 from magexp.run.guard import check_destination
@@ -531,7 +531,7 @@ def write(out: Export, path: str | Path | None = None, *, overwrite: bool = Fals
         recording, a folder that does not exist, or a destination :func:`magexp.run.guard.check_destination`
         refuses.
     """
-    path = Path(".") if path is None else Path(path)
+    path = Path(".") if path is None else file_path(path, "export path")
     if path.is_dir():
         path = path / FILE_NAMES[out.target]
     check_destination(path, "export path")

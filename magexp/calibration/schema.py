@@ -1,0 +1,467 @@
+"""The schema of ``calibration.json`` (what :meth:`Calibration.save <magexp.calibration.result.Calibration.save>`
+and ``magexp calibrate`` write), and the bounded reading that :meth:`Calibration.load
+<magexp.calibration.result.Calibration.load>` checks every key of before it builds anything.
+
+Reading a file (:func:`read_json`) is bounded before it starts: a regular file only (no device, FIFO or
+socket: :func:`magexp.run.budget.check_regular`), of at most the bytes whose parsed form fits the memory
+limit (:data:`PARSE_FACTOR` bytes of Python objects a byte of JSON, against ``MAGEXP_MAX_RUN_MEMORY``),
+nested at most :data:`MAX_DEPTH` deep, and each number at most :data:`MAX_DIGITS` characters long.
+
+Every key is then checked (:func:`check_parameters`): the format, the model, the units (those of
+:data:`magexp.core.recording.UNITS`), the names (non-empty, one line), the counts (integers in range), ``W``
+(3 x 3 finite numbers of magnitude <= :data:`magexp.errors.LARGEST`, invertible, its condition number at most
+:data:`MAX_CONDITION`), the offset (3 such numbers), the reference (a finite total > 0), the search box, the
+metrics and quality records the summary reads, the fit's outcome, and no key the format does not have.
+Every refusal is one :class:`~magexp.errors.MagexpError` line naming the file, the key and what is allowed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from magexp.calibration.models import ORDER
+from magexp.core.limits import refuse_over
+from magexp.core.recording import RAW_UNITS, UNITS, check_unit
+from magexp.errors import LARGEST, MagexpError
+from magexp.run.budget import check_regular
+
+#: the deepest nesting of lists and objects a ``calibration.json`` may have (the format nests four deep)
+MAX_DEPTH = 64
+#: the most characters of one JSON number (a float64 needs 24)
+MAX_DIGITS = 64
+#: the largest condition number of ``W`` (ratio of its largest to smallest singular value) a calibration may
+#: have: a magnetometer's axes differ in gain by a few times, never by a million
+MAX_CONDITION = 1e6
+#: bytes of Python objects one byte of JSON may become when parsed (an upper estimate: a list of empty
+#: objects ``[{},{},...]``, the costliest spelling, takes 24): the file's size times it is held to the memory limit
+PARSE_FACTOR = 32
+#: the longest name or path (``recording``, ``estimator``...) a calibration holds
+MAX_TEXT = 4096
+#: the format's keys: those of every readable format, and those ``v3`` added (optional in ``v2``)
+KEYS = ("format", "model", "recording", "n_readings", "unit", "estimator", "objective", "seed", "W", "W_form",
+        "offset", "reference", "search", "metrics", "quality", "fit")
+V3_KEYS = ("field_unit", "config", "provenance")
+#: optional in every format: the manifest of the folder's other files (:data:`magexp.calibration.folder.MANIFEST`)
+OPTIONAL = ("files",)
+#: the metrics the summary reads, each a finite number >= 0
+METRICS = ("mean_before", "spread_before", "rms_before", "mean_after", "spread_after", "rms_after",
+           "coverage_cells", "coverage_lambda_min")
+OBJECTIVES = ("scalar", "vector")
+#: the formats magexp reads (the newest is the one it writes)
+FORMATS = ("magexp-calibration v2", "magexp-calibration v3")
+MODEL = "B = W (reading - offset)"
+
+
+class Bad(Exception):
+    """A value that breaks the schema: ``str`` of it says what is allowed (made into one line by :func:`_check`)."""
+
+
+def _shown(value) -> str:
+    """``value`` for a message: its ``repr``, at most 40 characters."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _number(text: str):
+    """A JSON number's token as a Python number, refusing one longer than :data:`MAX_DIGITS` characters."""
+    if len(text) > MAX_DIGITS:
+        raise Bad(f"a number of {len(text)} characters; at most {MAX_DIGITS}")
+    return float(text) if any(c in text for c in ".eE") else int(text)
+
+
+def _depth(text: str) -> int:
+    """The deepest nesting of ``[`` and ``{`` in the JSON ``text`` (brackets inside strings not counted)."""
+    raw = np.frombuffer(text.encode("utf-8", "surrogatepass"), np.uint8)
+    quote = raw == ord('"')
+    escaped = np.zeros_like(quote)
+    backslash = np.flatnonzero(raw == ord("\\"))
+    if backslash.size:  # a quote after an odd run of backslashes is inside the string
+        escaped = _escaped(raw, backslash)
+    inside = np.cumsum(quote & ~escaped) % 2 == 1
+    step = (np.isin(raw, (ord("["), ord("{"))).astype(np.int64) - np.isin(raw, (ord("]"), ord("}"))))
+    step[inside] = 0
+    return int(np.cumsum(step).max(initial=0))
+
+
+def _escaped(raw: np.ndarray, backslash: np.ndarray) -> np.ndarray:
+    """Which bytes of ``raw`` follow an odd run of backslashes (``backslash``: their positions)."""
+    escaped = np.zeros(raw.size, bool)
+    run_start = np.r_[True, np.diff(backslash) != 1]
+    starts = backslash[run_start]
+    lengths = np.diff(np.r_[np.flatnonzero(run_start), backslash.size])
+    ends = starts + lengths
+    odd = (lengths % 2 == 1) & (ends < raw.size)
+    escaped[ends[odd]] = True
+    return escaped
+
+
+def read_json(path, what: str = "path"):
+    """The content of the JSON file ``path``, read within bounds (module docstring): one line refusing a special
+    file, one that does not exist or is a folder, one too large, too deep, with a number too long, or not JSON.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        The argument that named it, for the message.
+
+    Returns
+    -------
+    object
+        The parsed JSON.
+
+    Raises
+    ------
+    MagexpError
+        One line for a file that cannot be read within the bounds.
+    """
+    if not isinstance(path, (str, Path)) or not str(path).strip():
+        raise MagexpError(f"{what}={_shown(path)} is not allowed: give the path of a calibration.json")
+    path = Path(path)
+    check_regular(path, what)  # a FIFO would block the read, a device never end it
+    if not path.is_file():
+        kind = "a folder" if path.is_dir() else "a file that does not exist"
+        raise MagexpError(f"{what}={str(path)!r} is not allowed: it is {kind}; give a calibration.json")
+    size = path.stat().st_size
+    refuse_over(size * PARSE_FACTOR, "run_memory", f"{what}={str(path)!r}", f"parsing its {size} bytes needs")
+    try:
+        text = path.read_text(encoding="utf-8")
+        if _depth(text) > MAX_DEPTH:
+            raise Bad(f"nested deeper than {MAX_DEPTH}")
+        return json.loads(text, parse_int=_number, parse_float=_number)
+    except (UnicodeDecodeError, json.JSONDecodeError, Bad, RecursionError) as exc:
+        why = exc if isinstance(exc, Bad) else type(exc).__name__
+        raise MagexpError(f"{path.name}: not a calibration.json ({why}): give a file written by magexp calibrate "
+                          "or Calibration.save") from None
+
+
+# ---------------------------------------------------------------------------------------------
+# the checks of one value: each returns nothing or raises Bad saying what is allowed
+
+def _is_number(value) -> bool:
+    """Whether ``value`` is a JSON number (not a bool)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def finite(lo: float = -LARGEST, hi: float = LARGEST):
+    """A check of a finite number in ``[lo, hi]``.
+
+    Parameters
+    ----------
+    lo, hi : float
+        The range allowed.
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    def check(value):
+        if not _is_number(value) or not (lo <= value <= hi):
+            raise Bad(f"a finite number in [{lo:g}, {hi:g}]")
+    return check
+
+
+def positive(value) -> None:
+    """A check of a finite number > 0 of magnitude <= :data:`LARGEST`."""
+    if not _is_number(value) or not 0 < value <= LARGEST:
+        raise Bad(f"a finite number > 0 and <= {LARGEST:g}")
+
+
+def integer(lo: int, hi: int):
+    """A check of an integer in ``[lo, hi]`` (not a bool, not a float).
+
+    Parameters
+    ----------
+    lo, hi : int
+        The range allowed.
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    def check(value):
+        if not isinstance(value, int) or isinstance(value, bool) or not lo <= value <= hi:
+            raise Bad(f"an integer in [{lo}, {hi:.0f}]" if hi < 1e15 else f"an integer >= {lo}")
+    return check
+
+
+def text(empty: bool = False):
+    """A check of a one-line string of at most :data:`MAX_TEXT` characters (``empty``: it may be ``""``).
+
+    Parameters
+    ----------
+    empty : bool
+        Whether ``""`` is allowed.
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    def check(value):
+        if not isinstance(value, str) or len(value) > MAX_TEXT or "\n" in value or not (empty or value.strip()):
+            raise Bad(f"a {'' if empty else 'non-empty '}one-line string of at most {MAX_TEXT} characters")
+    return check
+
+
+def choice(options):
+    """A check of one of ``options``.
+
+    Parameters
+    ----------
+    options : iterable
+        The values allowed.
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    options = tuple(options)
+
+    def check(value):
+        if not isinstance(value, str) or value not in options:
+            raise Bad(f"one of {', '.join(map(str, options))}")
+    return check
+
+
+def flag(value) -> None:
+    """A check of ``true`` or ``false``."""
+    if not isinstance(value, bool):
+        raise Bad("true or false")
+
+
+def unit(value) -> None:
+    """A check of a unit's name (:func:`magexp.core.recording.check_unit`)."""
+    if not isinstance(value, str):
+        raise Bad(f"one of {', '.join((*UNITS, *RAW_UNITS))}")
+    try:
+        check_unit(value, "unit")
+    except MagexpError:
+        raise Bad(f"one of {', '.join((*UNITS, *RAW_UNITS))}") from None
+
+
+def optional(check):
+    """``check``, or ``null``.
+
+    Parameters
+    ----------
+    check : callable
+        The check of a value that is not ``null``.
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    def either(value):
+        if value is not None:
+            check(value)
+    return either
+
+
+def matrix(shape: tuple, extra=()):
+    """A check of an array of ``shape`` of finite numbers of magnitude <= :data:`LARGEST` (``extra``: the
+    strings also allowed in place of a number, e.g. ``"inf"`` for an undetermined standard error).
+
+    Parameters
+    ----------
+    shape : tuple
+        The shape required.
+    extra : tuple of str
+        Strings allowed in place of a number.
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    what = " x ".join(map(str, shape))
+
+    def check(value):
+        cells = _cells(value, shape)
+        if cells is None or not all((_is_number(c) and abs(c) <= LARGEST) or c in extra for c in cells):
+            raise Bad(f"{what} finite numbers of magnitude <= {LARGEST:g}")
+    return check
+
+
+def _cells(value, shape: tuple):
+    """The entries of the nested lists ``value`` if it has ``shape``, else None."""
+    if not shape:
+        return [value]
+    if not isinstance(value, list) or len(value) != shape[0]:
+        return None
+    cells = []
+    for item in value:
+        inner = _cells(item, shape[1:])
+        if inner is None:
+            return None
+        cells += inner
+    return cells
+
+
+def mapping(schema: dict | None = None, *, exact: bool = True, absent=()):
+    """A check of a JSON object whose keys ``schema`` checks (each ``{key: check}``; ``exact``: no other key;
+    ``absent``: the keys that may be missing).
+
+    Parameters
+    ----------
+    schema : dict or None
+        ``{key: check}`` of its keys (None: any object).
+    exact : bool
+        Refuse keys the schema does not have.
+    absent : iterable of str
+        The keys of ``schema`` that may be missing (those an older format does not have).
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    schema = schema or {}
+
+    def check(value):
+        if not isinstance(value, dict):
+            raise Bad("an object {...}")
+        for key, each in schema.items():
+            if key not in value and key in absent:
+                continue
+            if key not in value:
+                raise Bad(f"an object with the key {key!r}")
+            try:
+                each(value[key])
+            except Bad as exc:
+                raise Bad(f"{key}={_shown(value[key])} given; {key} must be {exc}") from None
+        extra = sorted(set(value) - set(schema)) if exact and schema else []
+        if extra:
+            raise Bad(f"an object without {extra[0]!r} (its keys: {', '.join(schema)})")
+    return check
+
+
+def number_or(*names):
+    """A check of a finite number or one of the strings ``names`` (``"inf"``: how JSON keeps an infinity).
+
+    Parameters
+    ----------
+    *names : str
+        The strings allowed.
+
+    Returns
+    -------
+    callable
+        The check.
+    """
+    def check(value):
+        if not ((_is_number(value) and math.isfinite(value)) or value in names):
+            raise Bad(f"a finite number or one of {', '.join(names)}")
+    return check
+
+
+def _weakest(value) -> None:
+    """A check of the quality report's weakest combinations: a non-empty list of ``{combination, value}``."""
+    if not isinstance(value, list) or not value:
+        raise Bad("a non-empty list")
+    each = mapping({"combination": text(), "relative_singular_value": number_or("inf", "nan")})
+    for item in value:
+        each(item)
+
+
+def _names(value) -> None:
+    """A check of a list of strings."""
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise Bad("a list of strings")
+
+
+#: the checks of each key of the format
+SCHEMA = {
+    "format": choice(FORMATS),
+    "model": choice((MODEL,)),
+    "recording": text(),
+    "n_readings": integer(1, 2 ** 53),
+    "unit": unit,
+    "field_unit": unit,
+    "estimator": text(),
+    "objective": choice(OBJECTIVES),
+    "seed": integer(0, 2 ** 63 - 1),
+    "W": matrix((3, 3)),
+    "W_form": text(empty=True),
+    "offset": matrix((3,)),
+    "reference": mapping({"total": positive, "per_reading": flag, "source": text(), "estimated": flag,
+                          "unit": optional(unit), "field_model": optional(mapping(exact=False)), "how": text()},
+                         absent=("unit", "field_model")),
+    "search": optional(mapping()),
+    "metrics": mapping({key: finite(0, LARGEST) for key in METRICS}, exact=False),
+    "quality": mapping({"W_standard_errors": matrix((3, 3), ("inf", "nan")),
+                        "offset_standard_errors": matrix((3,), ("inf", "nan")),
+                        "condition_number": number_or("inf", "nan"), "undetermined": _names,
+                        "weakest_combinations": _weakest, "model": choice(ORDER),
+                        "heading": optional(mapping(exact=False)), "gate": optional(mapping(exact=False))},
+                       exact=False),
+    "fit": mapping({"fun": number_or("inf", "nan"), "nit": integer(0, 2 ** 53), "nfev": integer(0, 2 ** 53),
+                    "success": flag, "message": text(empty=True)}),
+    "config": mapping(exact=False),
+    "provenance": mapping(exact=False),
+    "files": mapping(exact=False),
+}
+
+
+def check_parameters(data, name: str) -> dict:
+    """``data``, the parsed ``calibration.json`` called ``name``, checked against :data:`SCHEMA` (module docstring).
+
+    Parameters
+    ----------
+    data : object
+        The parsed JSON.
+    name : str
+        The file's name, for the message.
+
+    Returns
+    -------
+    dict
+        ``data``.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the first key that breaks the schema and what it allows.
+    """
+    if not isinstance(data, dict) or data.get("format") not in FORMATS:
+        found = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise MagexpError(f"{name}: format {_shown(found)} is not allowed: magexp reads {', '.join(FORMATS)}")
+    required = KEYS + (V3_KEYS if data["format"].endswith("v3") else ())
+    missing = [key for key in required if key not in data]
+    if missing:
+        raise MagexpError(f"{name}: the key {missing[0]!r} is missing: a calibration.json holds "
+                          f"{', '.join(required)}")
+    extra = sorted(set(data) - set(KEYS + V3_KEYS + OPTIONAL))
+    if extra:
+        raise MagexpError(f"{name}: the key {extra[0]!r} is not allowed: a calibration.json holds "
+                          f"{', '.join(KEYS + V3_KEYS + OPTIONAL)}")
+    for key, check in SCHEMA.items():
+        if key in data:
+            _check(check, data[key], key, name)
+    _check(_conditioned, data["W"], "W", name)
+    return data
+
+
+def _check(check, value, key: str, name: str) -> None:
+    """Run ``check`` on ``value``, turning its :class:`Bad` into one line naming ``name`` and ``key``."""
+    try:
+        check(value)
+    except Bad as exc:
+        raise MagexpError(f"{name}: {key}={_shown(value)} is not allowed: it must be {exc}") from None
+
+
+def _conditioned(w) -> None:
+    """A check of ``W`` invertible, with a condition number at most :data:`MAX_CONDITION`."""
+    s = np.linalg.svd(np.array(w, float), compute_uv=False)
+    if not s[-1] > 0 or s[0] / s[-1] > MAX_CONDITION:
+        raise Bad(f"invertible, with a condition number (largest / smallest singular value) at most "
+                  f"{MAX_CONDITION:g}")
