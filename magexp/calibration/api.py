@@ -80,6 +80,9 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
     if isinstance(readings, Recording):
         return readings
     if isinstance(readings, (str, Path)):
+        if not str(readings).strip():
+            raise MagexpError(f"readings={str(readings)!r} is not allowed: give a recording's path, an (N, 3) array "
+                              "or a DataFrame")
         check_recording_file(resolve(readings), "readings")  # no device or FIFO, within the limits: before it is read
         return load_recording(readings, unit=unit)
     pandas = sys.modules.get("pandas")  # a DataFrame exists only if pandas is loaded: not importing it saves
@@ -95,6 +98,47 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
     return Recording(readings=values, angles=None, field=None, unit=check_unit(unit, "unit"),
                      meta={"format": "array", "name": "readings"})
 
+
+
+#: the largest seed (numpy's generators take any integer >= 0; a seed is kept as a signed 64-bit integer)
+MAX_SEED = 2 ** 63 - 1
+
+
+def check_arguments(seed, reference_total, estimator_options: dict) -> int:
+    """Refuse, in one line, the arguments of :func:`calibrate` no later check reads as the command does: a seed
+    that is not an integer in ``[0, MAX_SEED]``, a reference total that is not a number (a string, a bool), an
+    estimator option ``name`` (the estimator is ``estimator=``); returns the seed as an int.
+
+    Parameters
+    ----------
+    seed : object
+        :func:`calibrate`'s ``seed``.
+    reference_total : object
+        Its ``reference_total``.
+    estimator_options : dict
+        Its ``**estimator_options``.
+
+    Returns
+    -------
+    int
+        The seed.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the argument.
+    """
+    seed = check_positive_int(seed, "seed", minimum=0)
+    if seed > MAX_SEED:
+        raise MagexpError(f"seed={seed} is not allowed: it must be an integer in [0, 2**63 - 1]")
+    if reference_total is not None and (isinstance(reference_total, (bool, str, bytes)) or
+                                        not isinstance(reference_total, (int, float, np.number))):
+        raise MagexpError(f"reference_total={reference_total!r} is not allowed: give a number > 0 (the readings' "
+                          "unit) or None")
+    if "name" in estimator_options:
+        raise MagexpError(f"name={estimator_options['name']!r} is not allowed as an estimator option: choose the "
+                          "estimator with estimator=...")
+    return seed
 
 
 def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objective: str = DEFAULTS.objective,
@@ -162,8 +206,8 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
     if not isinstance(estimator, str) and not callable(getattr(estimator, "fit", None)):
         raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
                           f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
+    seed = check_arguments(seed, reference_total, estimator_options)
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
-    seed = check_positive_int(seed, "seed", minimum=0)
     _, rng = run_generators(seed)
     with numpy_only(numpy_path(compiled, est)):
         cal = calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,

@@ -380,10 +380,14 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
     Raises
     ------
     MagexpError
-        One line for an unknown ``target``, a bad ``counts_nt`` or ``max_rotation_deg``, or as the renderer.
+        One line for an unknown ``target`` or option, a bad ``counts_nt`` or ``max_rotation_deg``, or as the renderer.
     """
-    if target not in RENDERERS:
+    if not isinstance(target, str) or target not in RENDERERS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
+    unknown = sorted(set(options) - set(options_of(target)))
+    if unknown:
+        raise MagexpError(f"{unknown[0]}={options[unknown[0]]!r} is not allowed: export={target!r} takes "
+                          f"{', '.join(options_of(target))}")
     for key, check_value in (("counts_nt", check_counts_nt), ("max_rotation_deg", check_max_rotation)):
         if options.get(key) is not None:
             check_value(options[key])

@@ -16,6 +16,7 @@ import numpy as np
 
 from magexp.calibration import models as models_
 from magexp.calibration.box import calibration_box
+from magexp.calibration.checks import estimator_failed, estimator_name
 from magexp.calibration.inputs import Reference, gyro_dataset, recording_dataset
 from magexp.core.dataset import Dataset
 from magexp.core.identifiability import canonical
@@ -106,23 +107,6 @@ def fit_model(rec: Recording, estimator, objective: str, reference: Reference, r
     return w, o, calibrated, problem, result, box
 
 
-def estimator_name(estimator) -> str:
-    """The name of ``estimator`` for a message: its ``name``, else its class's (a user's estimator may have none).
-
-    Parameters
-    ----------
-    estimator : object
-        An estimator.
-
-    Returns
-    -------
-    str
-        Its name.
-    """
-    name = getattr(estimator, "name", None)
-    return name if isinstance(name, str) and name else type(estimator).__name__
-
-
 def searched(estimator, problem, rng) -> tuple:
     """``(result, (W, o))`` of ``estimator.fit(problem, rng=rng)``. A user's estimator (one not of magexp) that
     fails, or returns something other than a :class:`~magexp.estimators.result.FitResult` of the problem's
@@ -158,15 +142,15 @@ def searched(estimator, problem, rng) -> tuple:
         raise
     except Exception as exc:  # a user's code: whatever it raises is its failure, named
         first = (str(exc).splitlines() or [""])[0][:200]
-        raise MagexpError(f"{who} failed: its fit raised {type(exc).__name__}: {first}") from exc
+        raise estimator_failed(f"{who} failed: its fit raised {type(exc).__name__}: {first}") from exc
     if not isinstance(result, FitResult):
-        raise MagexpError(f"{who} is not allowed: its fit returned {type(result).__name__}, not a FitResult "
+        raise estimator_failed(f"{who} is not allowed: its fit returned {type(result).__name__}, not a FitResult "
                           "(magexp.estimators.result.FitResult)")
     _check_outcome(result, who)
     try:
         x = np.asarray(result.x, float).reshape(1, problem.n_params)
     except (TypeError, ValueError) as exc:
-        raise MagexpError(f"{who} is not allowed: its FitResult.x is not the problem's {problem.n_params} "
+        raise estimator_failed(f"{who} is not allowed: its FitResult.x is not the problem's {problem.n_params} "
                           f"numbers ({type(exc).__name__})") from exc
     return result, tuple(a[0] for a in problem.unpack(x))
 
@@ -179,7 +163,7 @@ def _check_outcome(result: FitResult, who: str) -> None:
         value = getattr(result, key)
         if not isinstance(value, kind) or (key != "success" and isinstance(value, (bool, np.bool_))) or (
                 key in ("nit", "nfev") and value < 0):
-            raise MagexpError(f"{who} is not allowed: its FitResult.{key}={value!r} is not "
+            raise estimator_failed(f"{who} is not allowed: its FitResult.{key}={value!r} is not "
                               f"{'an integer >= 0' if key in ('nit', 'nfev') else kind[0].__name__}")
 
 

@@ -188,7 +188,7 @@ def integer(lo: int, hi: int):
     """
     def check(value):
         if not isinstance(value, int) or isinstance(value, bool) or not lo <= value <= hi:
-            raise Bad(f"an integer in [{lo}, {hi:.0f}]" if hi < 1e15 else f"an integer >= {lo}")
+            raise Bad(f"an integer in [{lo}, {hi}]")
     return check
 
 
@@ -379,6 +379,32 @@ def _names(value) -> None:
         raise Bad("a list of strings")
 
 
+def _search(value) -> None:
+    """A check of the search box's record: ``{diag, offdiag, offset}`` each ``[low, high]``, or the calibration
+    box's ``{lower, upper, how}`` (:mod:`magexp.calibration.box`)."""
+    if not isinstance(value, dict):
+        raise Bad("an object {...}")
+    if set(value) == {"lower", "upper", "how"}:
+        mapping({"lower": _numbers, "upper": _numbers, "how": text(empty=True)})(value)
+    elif set(value) == {"diag", "offdiag", "offset"}:
+        mapping({key: matrix((2,)) for key in ("diag", "offdiag", "offset")})(value)
+    else:
+        raise Bad("an object with the keys diag, offdiag, offset or lower, upper, how")
+
+
+def _numbers(value) -> None:
+    """A check of a list of finite numbers of magnitude <= :data:`LARGEST`."""
+    if not isinstance(value, list) or not all(_is_number(v) and abs(v) <= LARGEST for v in value):
+        raise Bad(f"a list of finite numbers of magnitude <= {LARGEST:g}")
+
+
+def _provenance(value) -> None:
+    """A check of the provenance record: an object naming the magexp version, each value a string or null."""
+    mapping({"magexp_version": text()}, exact=False)(value)
+    if not all(v is None or isinstance(v, str) for v in value.values()):
+        raise Bad("an object of strings (the versions that made the calibration)")
+
+
 #: the checks of each key of the format
 SCHEMA = {
     "format": choice(FORMATS),
@@ -396,7 +422,7 @@ SCHEMA = {
     "reference": mapping({"total": positive, "per_reading": flag, "source": text(), "estimated": flag,
                           "unit": optional(unit), "field_model": optional(mapping(exact=False)), "how": text()},
                          absent=("unit", "field_model")),
-    "search": optional(mapping()),
+    "search": optional(_search),
     "metrics": mapping({key: finite(0, LARGEST) for key in METRICS}, exact=False),
     "quality": mapping({"W_standard_errors": matrix((3, 3), ("inf", "nan")),
                         "offset_standard_errors": matrix((3,), ("inf", "nan")),
@@ -407,7 +433,7 @@ SCHEMA = {
     "fit": mapping({"fun": number_or("inf", "nan"), "nit": integer(0, 2 ** 53), "nfev": integer(0, 2 ** 53),
                     "success": flag, "message": text(empty=True)}),
     "config": mapping(exact=False),
-    "provenance": mapping(exact=False),
+    "provenance": _provenance,
     "files": mapping(exact=False),
 }
 
