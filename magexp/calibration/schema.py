@@ -167,7 +167,7 @@ def finite(lo: float = -LARGEST, hi: float = LARGEST):
     return check
 
 
-def positive(value) -> None:
+def _positive(value) -> None:
     """A check of a finite number > 0 of magnitude <= :data:`LARGEST`."""
     if not _is_number(value) or not 0 < value <= LARGEST:
         raise Bad(f"a finite number > 0 and <= {LARGEST:g}")
@@ -232,13 +232,13 @@ def choice(options):
     return check
 
 
-def flag(value) -> None:
+def _flag(value) -> None:
     """A check of ``true`` or ``false``."""
     if not isinstance(value, bool):
         raise Bad("true or false")
 
 
-def unit(value) -> None:
+def _unit(value) -> None:
     """A check of a unit's name (:func:`magexp.core.recording.check_unit`)."""
     if not isinstance(value, str):
         raise Bad(f"one of {', '.join((*UNITS, *RAW_UNITS))}")
@@ -411,16 +411,16 @@ SCHEMA = {
     "model": choice((MODEL,)),
     "recording": text(),
     "n_readings": integer(1, 2 ** 53),
-    "unit": unit,
-    "field_unit": unit,
+    "unit": _unit,
+    "field_unit": _unit,
     "estimator": text(),
     "objective": choice(OBJECTIVES),
     "seed": integer(0, 2 ** 63 - 1),
     "W": matrix((3, 3)),
     "W_form": text(empty=True),
     "offset": matrix((3,)),
-    "reference": mapping({"total": positive, "per_reading": flag, "source": text(), "estimated": flag,
-                          "unit": optional(unit), "field_model": optional(mapping(exact=False)), "how": text()},
+    "reference": mapping({"total": _positive, "per_reading": _flag, "source": text(), "estimated": _flag,
+                          "unit": optional(_unit), "field_model": optional(mapping(exact=False)), "how": text()},
                          absent=("unit", "field_model")),
     "search": optional(_search),
     "metrics": mapping({key: finite(0, LARGEST) for key in METRICS}, exact=False),
@@ -431,7 +431,7 @@ SCHEMA = {
                         "heading": optional(mapping(exact=False)), "gate": optional(mapping(exact=False))},
                        exact=False),
     "fit": mapping({"fun": number_or("inf", "nan"), "nit": integer(0, 2 ** 53), "nfev": integer(0, 2 ** 53),
-                    "success": flag, "message": text(empty=True)}),
+                    "success": _flag, "message": text(empty=True)}),
     "config": mapping(exact=False),
     "provenance": _provenance,
     "files": mapping(exact=False),
