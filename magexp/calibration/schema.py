@@ -148,47 +148,32 @@ def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def finite(lo: float = -LARGEST, hi: float = LARGEST):
-    """A check of a finite number in ``[lo, hi]``.
-
-    Parameters
-    ----------
-    lo, hi : float
-        The range allowed.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
-    def check(value):
-        if not _is_number(value) or not (lo <= value <= hi):
-            raise Bad(f"a finite number in [{lo:g}, {hi:g}]")
-    return check
-
-
 def _positive(value) -> None:
     """A check of a finite number > 0 of magnitude <= :data:`LARGEST`."""
     if not _is_number(value) or not 0 < value <= LARGEST:
         raise Bad(f"a finite number > 0 and <= {LARGEST:g}")
 
 
-def integer(lo: int, hi: int):
-    """A check of an integer in ``[lo, hi]`` (not a bool, not a float).
+def ranged(lo: float, hi: float, *, whole: bool = False):
+    """A check of a number in ``[lo, hi]`` (not a bool; ``whole``: an integer, not a float).
 
     Parameters
     ----------
-    lo, hi : int
+    lo, hi : float
         The range allowed.
+    whole : bool
+        Only integers.
 
     Returns
     -------
     callable
         The check.
     """
+    kind = (int,) if whole else (int, float)
+
     def check(value):
-        if not isinstance(value, int) or isinstance(value, bool) or not lo <= value <= hi:
-            raise Bad(f"an integer in [{lo}, {hi}]")
+        if not isinstance(value, kind) or isinstance(value, bool) or not lo <= value <= hi:
+            raise Bad(f"an integer in [{lo}, {hi}]" if whole else f"a finite number in [{lo:g}, {hi:g}]")
     return check
 
 
@@ -410,12 +395,12 @@ SCHEMA = {
     "format": choice(FORMATS),
     "model": choice((MODEL,)),
     "recording": text(),
-    "n_readings": integer(1, 2 ** 53),
+    "n_readings": ranged(1, 2 ** 53, whole=True),
     "unit": _unit,
     "field_unit": _unit,
     "estimator": text(),
     "objective": choice(OBJECTIVES),
-    "seed": integer(0, 2 ** 63 - 1),
+    "seed": ranged(0, 2 ** 63 - 1, whole=True),
     "W": matrix((3, 3)),
     "W_form": text(empty=True),
     "offset": matrix((3,)),
@@ -423,14 +408,14 @@ SCHEMA = {
                           "unit": optional(_unit), "field_model": optional(mapping(exact=False)), "how": text()},
                          absent=("unit", "field_model")),
     "search": optional(_search),
-    "metrics": mapping({key: finite(0, LARGEST) for key in METRICS}, exact=False),
+    "metrics": mapping({key: ranged(0, LARGEST) for key in METRICS}, exact=False),
     "quality": mapping({"W_standard_errors": matrix((3, 3), ("inf", "nan")),
                         "offset_standard_errors": matrix((3,), ("inf", "nan")),
                         "condition_number": number_or("inf", "nan"), "undetermined": _names,
                         "weakest_combinations": _weakest, "model": choice(ORDER),
                         "heading": optional(mapping(exact=False)), "gate": optional(mapping(exact=False))},
                        exact=False),
-    "fit": mapping({"fun": number_or("inf", "nan"), "nit": integer(0, 2 ** 53), "nfev": integer(0, 2 ** 53),
+    "fit": mapping({"fun": number_or("inf", "nan"), "nit": ranged(0, 2 ** 53, whole=True), "nfev": ranged(0, 2 ** 53, whole=True),
                     "success": _flag, "message": text(empty=True)}),
     "config": mapping(exact=False),
     "provenance": _provenance,
