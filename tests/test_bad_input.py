@@ -720,6 +720,13 @@ def _sparse(size: int) -> str:
     return str(path)
 
 
+def _simulate(n, seed):
+    """``magexp.calibration.simulate.simulate(n, seed)``."""
+    from magexp.calibration.simulate import simulate
+
+    return simulate(n, seed)
+
+
 _LOAD = lambda path: lambda: __import__("magexp").Calibration.load(path() if callable(path) else path)  # noqa: E731
 _GOOD_W = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
 
@@ -863,6 +870,15 @@ TABLE += corrupted_rows() + [
     row("api", api(readings=np.r_[SPHERE, [[np.inf, 0, 0]]]), ["NaN or infinite"]),
     row("api", api(readings=(x for x in SPHERE)), ["readings"]),
     row("api", api(readings=["1,2,3"] * 60), ["readings", "number"]),
+    # ---- the simulated recording of the docs (magexp.calibration.simulate.simulate)
+    row("api", lambda: _simulate(-1, 0), ["n=-1", "integer >= 12"]),
+    row("api", lambda: _simulate("a", 0), ["n='a'"]),
+    row("api", lambda: _simulate(None, 0), ["n=None"]),
+    row("api", lambda: _simulate(2.5, 0), ["n=2.5"]),
+    row("api", lambda: _simulate(10 ** 12, 0), ["n=1000000000000", "MAGEXP_MAX_READINGS"]),
+    row("api", lambda: _simulate(12, -1), ["seed=-1"]),
+    row("api", lambda: _simulate(12, 2 ** 64), ["seed=18446744073709551616", "2**63 - 1"]),
+    row("api", lambda: _simulate(12, "x"), ["seed='x'"]),
 ]
 
 

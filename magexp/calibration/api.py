@@ -17,10 +17,11 @@ from magexp.calibration.fit import calibrate_recording, numpy_path
 from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
+from magexp.calibration.schema import check_seed
 from magexp.core.recording import Recording, check_unit
 from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_positive_int
+from magexp.errors import MagexpError
 from magexp.problems.kernels import numpy_only
 from magexp.run.budget import check_recording_file
 from magexp.run.compose import options
@@ -99,15 +100,11 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
                      meta={"format": "array", "name": "readings"})
 
 
-
-#: the largest seed (numpy's generators take any integer >= 0; a seed is kept as a signed 64-bit integer)
-MAX_SEED = 2 ** 63 - 1
-
-
 def check_arguments(seed, reference_total, estimator_options: dict) -> int:
     """Refuse, in one line, the arguments of :func:`calibrate` no later check reads as the command does: a seed
-    that is not an integer in ``[0, MAX_SEED]``, a reference total that is not a number (a string, a bool), an
-    estimator option ``name`` (the estimator is ``estimator=``); returns the seed as an int.
+    that is not an integer in ``[0, 2**63 - 1]`` (:func:`~magexp.calibration.schema.check_seed`), a reference
+    total that is not a number (a string, a bool), an estimator option ``name`` (the estimator is
+    ``estimator=``); returns the seed as an int.
 
     Parameters
     ----------
@@ -128,9 +125,7 @@ def check_arguments(seed, reference_total, estimator_options: dict) -> int:
     MagexpError
         One line naming the argument.
     """
-    seed = check_positive_int(seed, "seed", minimum=0)
-    if seed > MAX_SEED:
-        raise MagexpError(f"seed={seed} is not allowed: it must be an integer in [0, 2**63 - 1]")
+    seed = check_seed(seed)
     if reference_total is not None and (isinstance(reference_total, (bool, str, bytes)) or
                                         not isinstance(reference_total, (int, float, np.number))):
         raise MagexpError(f"reference_total={reference_total!r} is not allowed: give a number > 0 (the readings' "

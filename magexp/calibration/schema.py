@@ -26,7 +26,7 @@ import numpy as np
 from magexp.calibration.models import ORDER
 from magexp.core.limits import refuse_over
 from magexp.core.recording import RAW_UNITS, UNITS, check_unit
-from magexp.errors import LARGEST, MagexpError
+from magexp.errors import LARGEST, MagexpError, check_positive_int
 from magexp.run.budget import check_regular
 
 #: the deepest nesting of lists and objects a ``calibration.json`` may have (the format nests four deep)
@@ -39,6 +39,8 @@ MAX_CONDITION = 1e6
 #: bytes of Python objects one byte of JSON may become when parsed (an upper estimate: a list of empty
 #: objects ``[{},{},...]``, the costliest spelling, takes 24): the file's size times it is held to the memory limit
 PARSE_FACTOR = 32
+#: the largest seed (numpy's generators take any integer >= 0; a seed is kept as a signed 64-bit integer)
+MAX_SEED = 2 ** 63 - 1
 #: the longest name or path (``recording``, ``estimator``...) a calibration holds
 MAX_TEXT = 4096
 #: the format's keys: those of every readable format, and those ``v3`` added (optional in ``v2``)
@@ -54,6 +56,32 @@ OBJECTIVES = ("scalar", "vector")
 #: the formats magexp reads (the newest is the one it writes)
 FORMATS = ("magexp-calibration v2", "magexp-calibration v3")
 MODEL = "B = W (reading - offset)"
+
+
+def check_seed(seed, name: str = "seed") -> int:
+    """``seed`` as an int: an integer in ``[0, MAX_SEED]`` (not a bool, not a string), else one line naming ``name``.
+
+    Parameters
+    ----------
+    seed : object
+        A seed given to the API.
+    name : str
+        The argument that gave it.
+
+    Returns
+    -------
+    int
+        The seed.
+
+    Raises
+    ------
+    MagexpError
+        A seed that is not such an integer.
+    """
+    seed = check_positive_int(seed, name, minimum=0)
+    if seed > MAX_SEED:
+        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, 2**63 - 1]")
+    return seed
 
 
 class Bad(Exception):
@@ -400,7 +428,7 @@ SCHEMA = {
     "field_unit": _unit,
     "estimator": text(),
     "objective": choice(OBJECTIVES),
-    "seed": ranged(0, 2 ** 63 - 1, whole=True),
+    "seed": ranged(0, MAX_SEED, whole=True),
     "W": matrix((3, 3)),
     "W_form": text(empty=True),
     "offset": matrix((3,)),
