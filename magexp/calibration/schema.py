@@ -52,7 +52,8 @@ OPTIONAL = ("files",)
 #: the metrics the summary reads, each a finite number >= 0
 METRICS = ("mean_before", "spread_before", "rms_before", "mean_after", "spread_after", "rms_after",
            "coverage_cells", "coverage_lambda_min")
-OBJECTIVES = ("scalar", "vector")
+#: the objectives a calibration records: the two a user chooses, and ``gyro`` (``model=gyro``'s own)
+OBJECTIVES = ("scalar", "vector", "gyro")
 #: the formats magexp reads (the newest is the one it writes)
 FORMATS = ("magexp-calibration v2", "magexp-calibration v3")
 MODEL = "B = W (reading - offset)"
@@ -442,7 +443,7 @@ SCHEMA = {
                         "condition_number": number_or("inf", "nan"), "undetermined": _names,
                         "weakest_combinations": _weakest, "model": choice(ORDER),
                         "heading": optional(mapping(exact=False)), "gate": optional(mapping(exact=False))},
-                       exact=False),
+                       exact=False, absent=("model", "heading", "gate")),  # none in a file older than them
     "fit": mapping({"fun": number_or("inf", "nan"), "nit": ranged(0, 2 ** 53, whole=True), "nfev": ranged(0, 2 ** 53, whole=True),
                     "success": _flag, "message": text(empty=True)}),
     "config": mapping(exact=False),
