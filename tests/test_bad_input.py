@@ -569,6 +569,76 @@ TABLE = [
         ["max_rotation_deg=-1"]),
     row("api", load("random.bin"), ["random.bin", "byte 0"]),
     row("api", load("flipped.bin"), ["flipped.bin", "damaged"]),
+    # ---- issue 41, files and verify (items 1 and 4): one gate for every file read (a device, a FIFO, a /proc
+    # file, a 10 MB line, each through every path that reads a file); every MAGEXP_MAX_* checked by every command,
+    # an empty value included; verify reads only results folders and reproduces only where it is told
+    *[row("calibrate", [f"data.path={path}", "data.unit=uT"], [f"data.path='{path}'", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"))],
+    *[row("run", [*MOCKUP, f"scenario.path={path}"], [f"scenario.path='{path}'", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"),
+                            ("/dev/zero", "character device"))],
+    row("run", ["estimator=lm", "scenario=real_fxos8700", "scenario.file=/proc/self/status"],
+        ["scenario.file='/proc/self/status'", "size is unknown"]),
+    row("run", ["scenario=real_hmc5883l_full_sphere", "estimator=lm", "scenario.rest_file=/proc/self/status"],
+        ["scenario.rest_file=", "size is unknown"]),
+    *[row("api", api(readings=path), ["readings=", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"),
+                            ("/dev/zero", "character device"))],
+    *[row("api", lambda path=path: __import__("magexp").Calibration.load(path), ["path=", allowed])
+      for path, allowed in (("one_line.txt", "MAGEXP_MAX_LINE"), ("/proc/self/status", "size is unknown"),
+                            ("/dev/zero", "character device"), ("a_folder", "a folder"))],
+    *[row(entry, args, [f"{name}={value!r}", "number > 0"], patch=[
+        ("magexp.core.limits.os", __import__("types").SimpleNamespace(environ={name: value}))])
+      for name in ("MAGEXP_MAX_RUN_MEMORY", "MAGEXP_MAX_RUN_WORK", "MAGEXP_MAX_RUNS", "MAGEXP_MAX_WORK",
+                   "MAGEXP_MAX_READINGS", "MAGEXP_MAX_FILE", "MAGEXP_MAX_LINE")
+      for value, (entry, args) in zip(("", "-5", "abc", "0", "1e999", " ", "nan"), (
+          ("run", ["seed=1"]), ("calibrate", ["data.path=good.csv"]), ("sweep", ["-m", "seed=1,2"]),
+          ("reproduce", ["yuan2018"]), ("api", api()), ("run", ["verify", "--against", "a_folder"]),
+          ("run", ["calibrate", "data.path=plain.txt", "data.unit=uT"])))],
+    row("api", api(), ["MAGEXP_MAX_READINGS=''"],
+        patch=[("magexp.core.limits.os", __import__("types").SimpleNamespace(environ={"MAGEXP_MAX_READINGS": ""}))]),
+    *[row("run", ["verify", option, folder], [f"{option} '{folder}'", allowed])
+      for option in ("--committed", "--against")
+      for folder, allowed in (("/etc", "not a results folder"), ("a_folder", "not a results folder"),
+                              ("a_file", "not a folder"), ("pipe.fifo", "not a folder"), ("/dev/zero", "not a folder"))],
+    row("run", ["verify", "--into", "taken"], ["--into 'taken'", "no reproduction's", "new or empty"]),
+    row("run", ["verify", "--into", "/etc"], ["--into '/etc'", "no reproduction's"]),
+    row("run", ["verify", "--into", "results/x"], ["--into", "results"]),
+    row("run", ["verify", "--against", R(), "--into", "a_folder"], ["--into 'a_folder'", "with --against"]),
+    # ---- issue 41, every key validated by its schema: duplicates, text for numbers, integer bounds, empty names,
+    # subnormal numbers, format names, axis maps, a field model's date without a place, list shapes, a zero field
+    row("run", ["scenario.noise=1", "scenario.noise=2"], ["scenario.noise given twice"]),
+    row("run", ["seed=1", "seed=2"], ["seed given twice"]),
+    row("run", ["hydra.run.dir=a", "hydra.run.dir=b"], ["hydra.run.dir given twice"]),
+    row("sweep", ["-m", "scenario.noise=1,2", "scenario.noise=3"], ["scenario.noise given twice"]),
+    row("calibrate", ["data.path=good.csv", "data.unit=uT", "data.unit=nT"], ["data.unit given twice"]),
+    row("run", ["scenario.noise='1'"], ["scenario.noise='1'", "a number", "not a text"]),
+    row("run", ["estimator.n_particles='30'"], ["estimator.n_particles='30'", "an integer"]),
+    row("run", ["seed=99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
+    row("sweep", ["-m", "seed=1,99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
+    row("run", ["objective="], ["objective=''", "give a value"]),
+    row("run", ["estimator.name="], ["estimator.name=''", "give a value"]),
+    row("run", ["estimator=pso", "estimator.velocity_limit=1e-320"], ["estimator.velocity_limit=1e-320", "1e-100"]),
+    row("run", ["estimator=cmaes", "estimator.sigma0=1e-320"], ["estimator.sigma0=1e-320", "1e-100"]),
+    row("run", ["estimator=cmaes", "estimator.sigma0=-1e-320"], ["estimator.sigma0=-1e-320", "1e-100"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.window=[0,0,0]"], ["scenario.window=", "start, end"]),
+    row("run", ["scenario=real_fxos8700", "estimator=lm", "scenario.window=[0,10]"], ["scenario.window=", "no reading times"]),
+    row("run", ["scenario=real_hmc5883l_full_sphere", "estimator=lm", "scenario.window=[5,3]"], ["scenario.window=", "start < end"]),
+    row("run", ["scenario=yan2022_sim", "estimator=lm", "scenario.field=[0,0,0]"], ["scenario.field=", "not be zero"]),
+    row("run", ["scenario=yan2022_sim", "estimator=lm", "scenario.field=[1,2]"], ["scenario.field=[1,2]", "3 numbers"]),
+    row("run", ["scenario.search.offset=[1,2,3]"], ["scenario.search.offset=[1,2,3]", "2 numbers"]),
+    row("calibrate", ["data.path=good.csv", "data.format="], ["data.format=''", "give a value"]),
+    row("calibrate", ["data.path=good.csv", "data.format=zzz"], ["data.format='zzz'", "magexp-v1"]),
+    row("calibrate", ["data.path=good.csv", "data.gyro_axes=zz"], ["data.gyro_axes='zz'", "x, y, z"]),
+    row("calibrate", ["data.path=good.csv", "data.unit=uT", "field.date=2020-01-01"], ["field.date='2020-01-01'",
+                                                                                        "field.latitude"]),
+    row("calibrate", ["data.path=good.csv", "data.unit=uT", "field.longitude=10"], ["field.longitude=10", "place"]),
+    row("calibrate", ["data.path=good.csv", "data.format=rosbag"], ["data.format='rosbag'", ".mcap"]),
+    row("calibrate", ["data.path=[a,b]"], ["data.path=['a', 'b']", "text"]),
+    row("calibrate", ["data.path=good.csv", "seed=99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
+    row("calibrate", ["data.path=good.csv", "objective="], ["objective=''"]),
+    row("calibrate", ["data.path=good.csv", "gate.scale_range=[1,2,3]"], ["gate.scale_range=[1,2,3]", "2 numbers"]),
+    row("calibrate", ["data.path=good.csv", "estimator=cmaes", "estimator.sigma0=1e-320"], ["estimator.sigma0=1e-320"]),
 ]
 
 
@@ -756,16 +826,19 @@ TABLE += corrupted_rows() + [
     row("api", load_edited(_set("reference", "unit", value="furlong")), ["reference=", "unit"]),
     row("api", load_edited(_set("files", value=[])), ["files=", "object"]),
     # ---- files Calibration.load reads within bounds: one line, never a traceback, a hang or memory spent
-    row("api", _LOAD(lambda: crafted("[" * 100_000 + "]" * 100_000)), ["nested deeper than 64"]),
-    row("api", _LOAD(lambda: crafted('{"format": "magexp-calibration v3", "seed": ' + "9" * 100_000 + "}")),
-        ["a number of 100000 characters", "at most 64"]),
+    row("api", _LOAD(lambda: crafted("[\n" * 100_000 + "]\n" * 100_000)), ["nested deeper than 64"]),
+    row("api", _LOAD(lambda: crafted('{"format": "magexp-calibration v3", "seed": ' + "9" * 60_000 + "}")),
+        ["a number of 60000 characters", "at most 64"]),
+    row("api", _LOAD(lambda: crafted("[" * 100_000 + "]" * 100_000)), ["path=", "line", "MAGEXP_MAX_LINE"]),
+    row("api", _LOAD(lambda: crafted('{"seed": ' + "9" * 100_000 + "}")), ["path=", "line", "MAGEXP_MAX_LINE"]),
     row("api", _LOAD(lambda: crafted(saved_calibration().replace('"W": [[', '"W": [[1e999, '))), ["W=", "finite"]),
     row("api", _LOAD(lambda: crafted("")), ["not a calibration.json", "JSONDecodeError"]),
     row("api", _LOAD(lambda: crafted("null")), ["format 'NoneType'", "magexp-calibration v3"]),
     row("api", _LOAD(lambda: crafted('"magexp-calibration v3"')), ["format 'str'"]),
     row("api", _LOAD(lambda: crafted('{"format": "magexp-calibration v3"}{}')), ["not a calibration.json"]),
     row("api", _LOAD(lambda: crafted("\ufeff{}")), ["not a calibration.json"]),
-    row("api", _LOAD(lambda: _sparse(2 ** 30)), ["parsing its 1073741824 bytes", "MAGEXP_MAX_RUN_MEMORY"]),
+    row("api", _LOAD(lambda: _sparse(2 ** 30)), ["path=", "MAGEXP_MAX_RUN_MEMORY"]),
+    row("api", _LOAD(lambda: _sparse(3 * 2 ** 30)), ["path=", "MAGEXP_MAX_FILE"]),
     row("api", _LOAD("/dev/zero"), ["path='/dev/zero'", "character device"]),
     row("api", _LOAD("missing.json"), ["path='missing.json'", "does not exist"]),
     row("api", _LOAD("a_folder"), ["path='a_folder'", "a folder"]),
@@ -937,7 +1010,7 @@ def generated_rows() -> list:
     for group, others in (("estimator", []), ("scenario", ["estimator=lm"])):
         for name in options(group):
             node = OmegaConf.to_container(compose_config([f"{group}={name}", *others])[group], resolve=True)
-            for key, _ in numeric_keys(node, f"{group}."):
+            for key, value in numeric_keys(node, f"{group}."):
                 target = str(node.get("_target_"))
                 if (target, key) in seen:
                     continue
@@ -945,6 +1018,7 @@ def generated_rows() -> list:
                 for typed, shown in bad_values(key, target):
                     rows.append(row("run", [f"{group}={name}", *others, f"{key}={typed}"],
                                     [f"{PART_NAMED.get(key, key)}=", shown]))
+                rows += schema_rows(group, name, others, key, value)
                 if group == "estimator" and key.count(".") == 1 and name in API_ESTIMATORS:
                     option = key.partition(".")[2]
                     for typed, shown in bad_values(key, target):
@@ -954,11 +1028,40 @@ def generated_rows() -> list:
     return rows
 
 
+def schema_rows(group: str, name: str, others: list, key: str, value) -> list:
+    """Issue 41's generated rows of one numeric key: a quoted number (a text), and, by its type, 1e30 for an
+    integer, 1e-320 (a subnormal) for a float."""
+    head = [f"{group}={name}", *others]
+    out = [row("run", [*head, f"{key}='1'"], [f"{key}='1'", "not a text"])]
+    if isinstance(value, int):
+        return out + [row("run", [*head, f"{key}=1e30"], [f"{key}=", "1e+15"])]
+    return out + [row("run", [*head, f"{key}=1e-320"], [f"{key}=1e-320", "1e-100"])]
+
+
+def calibrate_rows() -> list:
+    """Issue 41's generated rows of ``magexp calibrate``: every key of its schema given twice and, by its type,
+    an integer 1e30, a float 1e-320 or an empty text."""
+    from magexp.calibration.options import rows as option_rows
+
+    out = []
+    for key, kind, default, _ in option_rows():
+        head = ["data.path=good.csv", "data.unit=uT"] if key != "data.unit" else ["data.path=good.csv"]
+        if kind == "group" or key in ("data.path", "data.serial", "out"):
+            continue
+        bad = {"int": "1e30", "float": "1e-320", "float or null": "1e-320", "int or null": "1e30"}.get(kind, "")
+        shown = {"1e30": "1e+15", "1e-320": "1e-100", "": "''"}[bad]
+        if kind.startswith("[") or kind == "bool":
+            continue
+        out.append(row("calibrate", [*head, f"{key}={bad}"], [f"{key}=", shown]))
+    out.append(row("calibrate", ["data.path=good.csv", "folds=2", "folds=3"], ["folds given twice"]))
+    return out
+
+
 #: the estimators that calibrate a recording (the scalar objective's), each given bad options through the API
 API_ESTIMATORS = ("cmaes", "de", "ellipsoid_specific", "ipso", "lm", "local", "ml_scalar", "pso", "rdpso",
                   "triangular", "twostep")
 
-TABLE += generated_rows()
+TABLE += generated_rows() + calibrate_rows()
 
 CATEGORIES = ("clean", "not one line", "wrote something", "wrong result")
 
@@ -984,6 +1087,7 @@ def make_workdir(folder: Path) -> Path:
         log = bytearray(DATAFLASH.read_bytes())
         log[log.index(b"\xa3\x95", len(log) // 3)] ^= 0x10  # a flipped bit in a message's header, a third of the way in
         (folder / "flipped.bin").write_bytes(bytes(log))
+    (folder / "one_line.txt").write_text("1," * 5_000_000)  # 10 MB, one line: read whole, it took 2.4 GB (issue 41)
     (folder / "a_file").write_text("not a folder\n")
     (folder / "a_folder").mkdir()
     (folder / "taken").mkdir()

@@ -36,7 +36,7 @@ from magexp.artifacts.summary import COLUMNS
 from magexp import paths
 from magexp.errors import MagexpError, exit_code
 from magexp.paths import RESULTS
-from magexp.core.limits import LIMITS, refuse_over, show
+from magexp.core.limits import LIMITS, check_limits, refuse_over, show
 from magexp.run.budget import estimate_run
 from magexp.run.executor import Outputs, check_executor, make_executor, run_many
 from magexp.run.guard import OneLineParser, check_destination, check_output_folder, removed_on_failure
@@ -404,6 +404,7 @@ def parser() -> argparse.ArgumentParser:
 def command(argv: list[str]) -> int:
     """``magexp reproduce PAPER [OPTIONS]``: errors are raised (the one error path,
     :func:`magexp.errors.guarded`, turns them into one line and an exit code)."""
+    check_limits()
     return _main(parser().parse_args(argv))
 
 

@@ -10,11 +10,17 @@ within a tolerance, texts up to their numbers, figures through their data, what 
 design) are :mod:`magexp.artifacts.compare`'s.
 
 The reproduction is ``--against DIR`` if given; else ``results/`` when it differs from the committed
-one (after ``make reproduce``); else a reproduction of every paper into :func:`scratch` (beside the run
-cache, never ``results/``: only the runs the cache lacks are computed). The committed side is
+one (after ``make reproduce``); else a reproduction of every paper into ``--into DIR``, by default
+:func:`scratch` (``verify/`` beside the run cache: ``.cache/verify`` in a checkout; never ``results/``: only
+the runs the cache lacks are computed), named on the screen before it starts. The committed side is
 ``--committed DIR`` or ``results/`` of the last commit, read from git (``git archive``), so it is
-there after ``make reproduce`` overwrote ``results/``. Exit code 0: it agrees; 1: it does not; 2: bad
-input (no git, a folder that does not exist).
+there after ``make reproduce`` overwrote ``results/``.
+
+``--against`` and ``--committed`` are results folders (:func:`results_folder`: they hold
+:data:`RESULTS_FILES`, every file of them passing the file gate :func:`magexp.run.files.check_file`); the folder
+a reproduction is computed into is new, empty or a results folder of an earlier one (:func:`reproduction_folder`),
+whose files it replaces. Anything else is refused in one line before anything is read or computed.
+Exit code 0: it agrees; 1: it does not; 2: bad input (no git, a folder that is not a results folder).
 """
 
 from __future__ import annotations
@@ -33,10 +39,16 @@ import numpy as np
 from magexp import paths
 from magexp.artifacts.compare import FIGURES, PATH_DIAGNOSTICS, RTOL, Comparison, Difference, compare
 from magexp.errors import MagexpError, exit_code
+from magexp.core.limits import check_limits
+from magexp.run.files import check_file
 from magexp.run.guard import OneLineParser, check_destination
 
 #: how many disagreements the screen lists (the count says how many there are)
 SHOWN = 20
+#: the files every results folder holds (what ``magexp reproduce`` writes at its top, and verify counts verdicts in)
+RESULTS_FILES = ("summary.csv", "claims.csv")
+#: the most files a results folder may hold (the committed one holds a few hundred)
+MAX_FILES = 100_000
 
 
 # ---------------------------------------------------------------------------------------------
@@ -111,8 +123,9 @@ def scratch() -> Path:
     return paths.CACHE.parent / "verify"
 
 
-def reproduce_scratch(jobs: int) -> Path:
-    """Reproduce every paper into :func:`scratch` (runs from the run cache where it has them). The
+def reproduce_scratch(jobs: int, out: Path) -> Path:
+    """Reproduce every paper into ``out`` (:func:`scratch` unless ``--into``; runs from the run cache where it has
+    them). The
     figures of the last such reproduction are kept, so that an unchanged figure is not drawn again
     (:mod:`magexp.artifacts.plots.memo`); every other file is written afresh, and a figure whose CSV
     was not written again is removed. (The reproduction takes the committed ``results/peers/`` with it:
@@ -122,13 +135,14 @@ def reproduce_scratch(jobs: int) -> Path:
     ----------
     jobs : int
         Worker processes (0: one per core).
+    out : Path
+        The folder, checked by :func:`reproduction_folder`.
 
     Returns
     -------
     Path
-        The scratch results folder.
+        The reproduced results folder.
     """
-    out = scratch()
     if out.is_dir():
         for path in [p for p in out.rglob("*") if p.is_file() and p.suffix not in FIGURES]:
             path.unlink()
@@ -221,20 +235,87 @@ def parser() -> argparse.ArgumentParser:
     """
     p = OneLineParser(prog="magexp verify", description=__doc__.splitlines()[0])
     p.add_argument("--against", "--out", dest="against", default=None,
-                   help="the reproduction to check (default: results/ if it differs from the committed one, "
-                        "else a fresh reproduction into .cache/verify)")
-    p.add_argument("--committed", default=None, help="the published results (default: results/ of git's HEAD)")
+                   help="the reproduction to check, a results folder (default: results/ if it differs from the "
+                        "committed one, else a fresh reproduction into --into)")
+    p.add_argument("--committed", default=None,
+                   help="the published results, a results folder (default: results/ of git's HEAD)")
+    p.add_argument("--into", default=None,
+                   help="where a fresh reproduction is computed: a new or empty folder, or an earlier one's "
+                        "(default: verify/ beside the run cache, .cache/verify in a checkout)")
     p.add_argument("--rtol", type=float, default=RTOL, help=f"relative tolerance of a number (default {RTOL:g})")
     p.add_argument("--all", action="store_true", dest="every", help="list every disagreement, one a line")
-    p.add_argument("--jobs", type=int, default=0, help="processes of a reproduction into .cache/verify (0: all cores)")
+    p.add_argument("--jobs", type=int, default=0, help="processes of a fresh reproduction (0: all cores)")
     return p
 
 
-def _folder(text: str, what: str) -> Path:
+def results_folder(text: str, what: str) -> Path:
+    """The results folder ``text`` given as ``what`` (``--against``, ``--committed``): a folder holding
+    :data:`RESULTS_FILES`, at most :data:`MAX_FILES` files, each passing the file gate
+    (:func:`magexp.run.files.check_file`: no device or FIFO, within the size and line limits); else one line.
+
+    Parameters
+    ----------
+    text : str
+        The folder as given.
+    what : str
+        The option naming it.
+
+    Returns
+    -------
+    Path
+        The folder.
+
+    Raises
+    ------
+    MagexpError
+        Anything but a results folder.
+    """
     path = Path(text).expanduser()
-    if not path.is_dir():
-        raise MagexpError(f"{what} {text!r} is not allowed: it is not a folder (give a results folder)")
+    if not path.is_dir():  # a device, FIFO or socket too: refused unopened
+        raise MagexpError(f"{what} {text!r} is not allowed: it is not a folder (give a results folder: "
+                          f"one holding {' and '.join(RESULTS_FILES)}, as magexp reproduce writes)")
+    missing = [name for name in RESULTS_FILES if not (path / name).is_file()]
+    if missing:
+        raise MagexpError(f"{what} {text!r} is not allowed: it is not a results folder (it has no "
+                          f"{' and no '.join(missing)}); give results/ or a folder magexp reproduce --out wrote")
+    for n, file in enumerate(path.rglob("*")):
+        if n >= MAX_FILES:
+            raise MagexpError(f"{what} {text!r} is not allowed: it holds more than {MAX_FILES} files, "
+                              "and a results folder a few hundred")
+        check_file(file, what, kind="figure" if file.suffix in FIGURES else "text", folder=True)
     return path
+
+
+def reproduction_folder(text: str | None) -> Path:
+    """The folder a reproduction is computed into: ``--into`` (``text``) or :func:`scratch`; it must be new,
+    empty or a results folder of an earlier reproduction (:func:`reproduce_scratch` replaces its files), and a
+    folder a command may write (:func:`magexp.run.guard.check_destination`: not inside ``results/``).
+
+    Parameters
+    ----------
+    text : str or None
+        ``--into`` as given (None: the default).
+
+    Returns
+    -------
+    Path
+        The folder.
+
+    Raises
+    ------
+    MagexpError
+        A folder holding anything but an earlier reproduction.
+    """
+    what = "--into" if text is not None else "the reproduction's default folder (--into)"
+    folder = Path(text).expanduser() if text is not None else scratch()
+    check_destination(folder, what)
+    if folder.exists() and not (folder.is_dir() and not any(folder.iterdir())):
+        try:
+            results_folder(str(folder), what)
+        except MagexpError:
+            raise MagexpError(f"{what} {str(folder)!r} is not allowed: it holds files that are no reproduction's, "
+                              "which verify would replace; give a new or empty folder with --into DIR") from None
+    return folder
 
 
 def command(argv: list[str]) -> int:
@@ -251,24 +332,30 @@ def command(argv: list[str]) -> int:
     int
         The exit code.
     """
+    check_limits()
     args = parser().parse_args(argv)
     if not 0 <= args.rtol < 1:
         raise MagexpError(f"--rtol {args.rtol!r} is not allowed: it must be a number >= 0 and < 1")
     if args.jobs < 0:
         raise MagexpError(f"--jobs {args.jobs} is not allowed: it must be an integer >= 0")
-    ours = _folder(args.against, "--against") if args.against is not None else None
+    ours = results_folder(args.against, "--against") if args.against is not None else None
+    committed = results_folder(args.committed, "--committed") if args.committed is not None else None
+    if ours is not None and args.into is not None:
+        raise MagexpError(f"--into {args.into!r} is not allowed with --against: verify reproduces into a folder only "
+                          "when it is given no reproduction to check")
+    working = ours is None and args.into is None and changed_results()
+    into = reproduction_folder(args.into) if ours is None and not working else None
     with tempfile.TemporaryDirectory(prefix="magexp-verify-") as tmp:
-        if args.committed is not None:
-            committed, named = _folder(args.committed, "--committed"), f"{args.committed} (--committed)"
+        if committed is not None:
+            named = f"{args.committed} (--committed)"
         else:
             named = committed_results(Path(tmp))
             committed = Path(tmp) / "results"
-        if ours is None and changed_results():
+        if working:
             ours, label = paths.RESULTS, "results/ (the working tree: it differs from the committed one)"
         elif ours is None:
-            check_destination(scratch(), "the scratch reproduction")
-            print(f"results/ is the committed one: reproducing every paper into {scratch()} first")
-            ours = reproduce_scratch(args.jobs)
+            print(f"results/ is the committed one: reproducing every paper into {into} first", flush=True)
+            ours = reproduce_scratch(args.jobs, into)
             label = f"{ours} (reproduced now: results/ is the committed one)"
         else:
             label = str(ours)

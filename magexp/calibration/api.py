@@ -18,12 +18,13 @@ from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
 from magexp.calibration.schema import check_seed
+from magexp.core.limits import check_limits
 from magexp.core.recording import Recording, check_unit
 from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError
 from magexp.problems.kernels import numpy_only
-from magexp.run.budget import check_recording_file
+from magexp.run.files import check_recording_file
 from magexp.run.compose import options
 from magexp.run.guard import readings_array
 
@@ -197,6 +198,7 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
     MagexpError
         One line for degenerate data, a failed estimator or bad input.
     """
+    check_limits()
     rec = as_recording(readings, unit=unit)
     if not isinstance(estimator, str) and not callable(getattr(estimator, "fit", None)):
         raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("

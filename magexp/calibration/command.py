@@ -18,20 +18,25 @@ from magexp.calibration.export import TARGETS as EXPORT_TARGETS, options_of as e
 from magexp.calibration.firmware import check_counts_nt, check_max_rotation
 from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
 from magexp.calibration.folder import recording_files
-from magexp.calibration.options import help_text
-from magexp.calibration.inputs import Reference
+from magexp.calibration.options import CalibrateOptions, help_text
+from magexp.calibration.inputs import Reference, check_reference_total
 from magexp.calibration.live import is_live, kept, read_live, settings as live_settings
 from magexp.calibration.result import Calibration
 from magexp.calibration.write import check_out, summary, table, write
 from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
 from magexp.core.recording import UNITS, Recording
-from magexp.core.recordings import load_recording, resolve
+from magexp.core.datafiles import BAG_MARKER
+from magexp.core.formats import LOG_SUFFIXES, detect
+from magexp.core.geometry import axis_map
+from magexp.core.recordings import READERS, load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check_positive_int, exit_code
 from magexp.problems.kernels import numpy_only
-from magexp.run.budget import check_recording_file
+from magexp.run.files import check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options
-from magexp.run.guard import check_destination, check_hydra_keys, check_override_targets, check_override_values
+from magexp.run.guard import (check_destination, check_folds, check_hydra_keys, check_override_targets,
+                              check_override_values, check_run_values)
+from magexp.run.keys import check_duplicates, check_schema
 from magexp.run.runner import build
 
 
@@ -58,13 +63,18 @@ def calibrate_config(argv: list[str]):
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
                           "(e.g. data.path=mine.csv data.unit=uT estimator=lm)")
+    check_duplicates(argv)
     check_hydra_keys(argv)
     check_override_targets(argv)  # no code from an override, before the recording is read
     argv = check_override_values(argv)
     for arg in argv:
         if arg.partition("=")[0] in GROUPS:
             check_choice(*arg.split("=", 1))
-    return compose_config(argv, config_name="calibrate")
+        elif arg.partition("=")[0] == "out" and not arg.partition("=")[2].strip():  # refused as a folder, not a text
+            check_destination("", "out")
+    cfg = compose_config(argv, config_name="calibrate")
+    check_run_values({"estimator": OmegaConf.to_container(cfg.estimator, resolve=True)})  # its numbers, as a run's
+    return cfg
 
 
 def field_keys(cfg) -> dict:
@@ -117,6 +127,10 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
         The model's total per reading, its source and record, or None.
     """
     place = field_keys(cfg)
+    given = unplaced(place, place_of(rec))
+    if given:
+        raise MagexpError(f"{given} is not allowed without a place: give field.latitude and field.longitude "
+                          f"({rec.path.name} has no GPS place)")
     if place.get("latitude") is None and not {"latitude", "date"} <= set(place_of(rec)):
         return None
     ref = field_of_recording(rec, model=place.get("model") or "igrf", latitude=place.get("latitude"),
@@ -186,7 +200,9 @@ def check_options(cfg) -> None:
     """The keys that a run may not use checked before anything is read: every given ``field.*`` and
     ``igrf.*`` value (used only when a place is known, and not at all beside ``data.reference_total``),
     ``counts_nt`` and ``max_rotation_deg`` (used only by some exports), ``auto_margin`` (only by
-    ``model=auto``), ``live.*`` (only by a live stream): a bad value is refused in one line, not ignored.
+    ``model=auto``), ``live.*`` (only by a live stream), ``folds``, ``data.reference_total``: a bad value is
+    refused in one line, not ignored. Then every key against its schema
+    (:func:`magexp.run.keys.check_schema`: type, number range, non-empty text, a pair's length).
 
     Parameters
     ----------
@@ -205,6 +221,11 @@ def check_options(cfg) -> None:
         check_max_rotation(cfg.max_rotation_deg)
     models_.check_margin(cfg.get("auto_margin", models_.MARGIN))
     live_settings(cfg)  # live.*, data.serial and data.baud, used only by a live stream
+    check_folds(cfg.get("folds"))
+    if cfg.data.get("reference_total") is not None:
+        check_reference_total(cfg.data.reference_total)
+    # then every key by its type, after the checks above that name a key's range
+    check_schema(OmegaConf.to_container(cfg, resolve=True), CalibrateOptions)
 
 
 def recording_of(cfg) -> Recording:
@@ -228,11 +249,71 @@ def recording_of(cfg) -> Recording:
     data = cfg.data
     if data.get("path") is None or not str(data.path).strip():
         raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
-    check_recording_file(resolve(data.path))  # its size within the readings limit, before it is read
+    file = resolve(data.path)
+    check_data_options(cfg, file)  # its format and options, before the file is opened
+    check_recording_file(file, format=data.get("format") or "auto")  # the file gate, before it is read
     instance = cfg.get("instance")
     instance = None if instance is None else check_positive_int(instance, "instance", minimum=0)
     return load_recording(data.path, unit=data.get("unit"), format=data.get("format") or "auto",
                           mag_axes=data.get("mag_axes"), gyro_axes=data.get("gyro_axes"), instance=instance)
+
+
+#: the formats whose logs may carry a GPS place and date (:func:`magexp.core.field_model.place_of`)
+GPS_FORMATS = ("ulog", "dataflash", "rosbag")
+
+
+def unplaced(place: dict, known: dict | None = None) -> str | None:
+    """The first ``field.*`` key given (``longitude``, ``altitude_km``, ``date``) when no latitude is, neither in
+    ``place`` nor in ``known`` (a log's GPS), else None: a field model needs a place.
+
+    Parameters
+    ----------
+    place : dict
+        :func:`field_keys` of the command line.
+    known : dict or None
+        What the recording's log gives (:func:`magexp.core.field_model.place_of`).
+
+    Returns
+    -------
+    str or None
+        ``key=value`` of the first such key.
+    """
+    if place.get("latitude") is not None or (known or {}).get("latitude") is not None:
+        return None
+    given = [f"field.{k}={place[k]!r}" for k in ("longitude", "altitude_km", "date") if place.get(k) is not None]
+    return given[0] if given else None
+
+
+def check_data_options(cfg, file: Path) -> None:
+    """``data.*`` and ``field.*`` checked before the recording ``file`` is read: ``data.format`` a format of
+    :data:`magexp.core.recordings.READERS` (``rosbag``: a bag's file or folder), the axis maps, and a field
+    model's date or longitude only with a place (a recording of a format that cannot carry a GPS place).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
+    file : Path
+        The recording's path (:func:`magexp.core.recordings.resolve`).
+
+    Raises
+    ------
+    MagexpError
+        One line naming the key.
+    """
+    data, fmt = cfg.data, cfg.data.get("format") or "auto"
+    if fmt not in ("auto", *READERS):
+        raise MagexpError(f"data.format={fmt!r} is not allowed: choose one of auto, {', '.join(READERS)}")
+    bag = LOG_SUFFIXES.get(file.suffix.lower()) == "rosbag" or (file / BAG_MARKER).is_file()
+    if fmt == "rosbag" and not bag:
+        raise MagexpError(f"data.format='rosbag' is not allowed for {file.name!r}: a ROS bag is a .bag, .mcap or .db3 "
+                          "file or a ROS 2 bag folder (with metadata.yaml); set data.format to the file's format")
+    for key in ("mag_axes", "gyro_axes"):
+        axis_map(data.get(key), f"data.{key}")
+    given = None if data.get("reference_total") is not None else unplaced(field_keys(cfg))
+    if given and (fmt if fmt != "auto" else detect(file)) not in GPS_FORMATS:
+        raise MagexpError(f"{given} is not allowed without a place: give field.latitude and field.longitude (a "
+                          f"{file.suffix or 'text'} recording has no GPS to give them)")
 
 
 def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:

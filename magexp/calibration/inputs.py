@@ -63,6 +63,29 @@ OBJECTIVES = ("scalar", "vector")
 GYRO_READINGS = 300
 
 
+def check_reference_total(override) -> float:
+    """``data.reference_total`` as a float, or one line unless it is a number > 0 and <= LARGEST.
+
+    Parameters
+    ----------
+    override : object
+        The value given.
+
+    Returns
+    -------
+    float
+        The reference total (the recording's unit).
+    """
+    try:
+        value = float("nan") if isinstance(override, bool) else float(override)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not (np.isfinite(value) and 0 < value <= LARGEST):
+        raise MagexpError(f"data.reference_total={override!r} is not allowed: it must be a number > 0 and "
+                          f"<= {LARGEST:g}")
+    return value
+
+
 def reference_of(rec: Recording, override=None) -> Reference:
     """The reference total field of ``rec`` (see the module docstring for the order).
 
@@ -85,14 +108,7 @@ def reference_of(rec: Recording, override=None) -> Reference:
     """
     n = rec.n
     if override is not None:
-        try:
-            value = float("nan") if isinstance(override, bool) else float(override)
-        except (TypeError, ValueError):
-            value = float("nan")
-        if not (np.isfinite(value) and 0 < value <= LARGEST):
-            raise MagexpError(f"data.reference_total={override!r} is not allowed: it must be a number > 0 and "
-                              f"<= {LARGEST:g}")
-        return Reference(np.full(n, value), "data.reference_total")
+        return Reference(np.full(n, check_reference_total(override)), "data.reference_total")
     if rec.total is not None:
         return Reference(np.asarray(rec.total, float), "the total column")
     if rec.reference_total is not None:

@@ -2,10 +2,9 @@
 and ``magexp calibrate`` write), and the bounded reading that :meth:`Calibration.load
 <magexp.calibration.result.Calibration.load>` checks every key of before it builds anything.
 
-Reading a file (:func:`read_json`) is bounded before it starts: a regular file only (no device, FIFO or
-socket: :func:`magexp.run.budget.check_regular`), of at most the bytes whose parsed form fits the memory
-limit (:data:`PARSE_FACTOR` bytes of Python objects a byte of JSON, against ``MAGEXP_MAX_RUN_MEMORY``),
-nested at most :data:`MAX_DEPTH` deep, and each number at most :data:`MAX_DIGITS` characters long.
+Reading a file (:func:`read_json`) is bounded before it starts: the file gate (:func:`magexp.run.files.check_file`:
+a regular file, its size, its lines and the memory its parse takes within the limits), then nesting at most
+:data:`MAX_DEPTH` deep and each number at most :data:`MAX_DIGITS` characters long.
 
 Every key is then checked (:func:`check_parameters`): the format, the model, the units (those of
 :data:`magexp.core.recording.UNITS`), the names (non-empty, one line), the counts (integers in range), ``W``
@@ -24,10 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.models import ORDER
-from magexp.core.limits import refuse_over
 from magexp.core.recording import RAW_UNITS, UNITS, check_unit
 from magexp.errors import LARGEST, MagexpError, check_positive_int
-from magexp.run.budget import check_regular
+from magexp.run.files import check_file
 
 #: the deepest nesting of lists and objects a ``calibration.json`` may have (the format nests four deep)
 MAX_DEPTH = 64
@@ -36,9 +34,6 @@ MAX_DIGITS = 64
 #: the largest condition number of ``W`` (ratio of its largest to smallest singular value) a calibration may
 #: have: a magnetometer's axes differ in gain by a few times, never by a million
 MAX_CONDITION = 1e6
-#: bytes of Python objects one byte of JSON may become when parsed (an upper estimate: a list of empty
-#: objects ``[{},{},...]``, the costliest spelling, takes 24): the file's size times it is held to the memory limit
-PARSE_FACTOR = 32
 #: the largest seed (numpy's generators take any integer >= 0; a seed is kept as a signed 64-bit integer)
 MAX_SEED = 2 ** 63 - 1
 #: the longest name or path (``recording``, ``estimator``...) a calibration holds
@@ -152,12 +147,9 @@ def read_json(path, what: str = "path"):
     if not isinstance(path, (str, Path)) or not str(path).strip():
         raise MagexpError(f"{what}={_shown(path)} is not allowed: give the path of a calibration.json")
     path = Path(path)
-    check_regular(path, what)  # a FIFO would block the read, a device never end it
+    check_file(path, what, kind="json")  # the file gate: no device or FIFO, its size, lines and parse memory bounded
     if not path.is_file():
-        kind = "a folder" if path.is_dir() else "a file that does not exist"
-        raise MagexpError(f"{what}={str(path)!r} is not allowed: it is {kind}; give a calibration.json")
-    size = path.stat().st_size
-    refuse_over(size * PARSE_FACTOR, "run_memory", f"{what}={str(path)!r}", f"parsing its {size} bytes needs")
+        raise MagexpError(f"{what}={str(path)!r} is not allowed: it does not exist; give a calibration.json")
     try:
         text = path.read_text(encoding="utf-8")
         if _depth(text) > MAX_DEPTH:
@@ -443,7 +435,7 @@ SCHEMA = {
                         "condition_number": number_or("inf", "nan"), "undetermined": _names,
                         "weakest_combinations": _weakest, "model": choice(ORDER),
                         "heading": optional(mapping(exact=False)), "gate": optional(mapping(exact=False))},
-                       exact=False, absent=("model", "heading", "gate")),  # none in a file older than them
+                       exact=False, absent=("heading", "gate")),  # none in a file older than them
     "fit": mapping({"fun": number_or("inf", "nan"), "nit": ranged(0, 2 ** 53, whole=True), "nfev": ranged(0, 2 ** 53, whole=True),
                     "success": _flag, "message": text(empty=True)}),
     "config": mapping(exact=False),

@@ -36,15 +36,16 @@ class Limit:
         Raises
         ------
         MagexpError
-            One line for an environment value that is not an amount > 0.
+            One line for an environment value that is not an amount > 0 (an empty one included: unset the
+            variable for the default).
         """
         text = os.environ.get(self.env)
-        if text is None or not text.strip():
+        if text is None:
             return self.default
         value = parse_amount(text)
         if value is None or not value > 0:
-            raise MagexpError(f"{self.env}={text!r} is not allowed: give a number > 0 "
-                              f"(e.g. {show(self.default, self.unit)})")
+            raise MagexpError(f"{self.env}={text!r} is not allowed: give a number > 0, optionally with k, M, G, T "
+                              f"or KiB, MiB, GiB, TiB (or unset it for the default, {show(self.default, self.unit)})")
         return value
 
 
@@ -60,6 +61,10 @@ LIMITS = {limit.name: limit for limit in (
           "work of one command (every run of a sweep or reproduction, every fit of a calibration)"),
     Limit("readings", "MAGEXP_MAX_READINGS", 5e7, "readings",
           "readings of a calibrated recording (counted from the file size before it is read)"),
+    Limit("file_size", "MAGEXP_MAX_FILE", 2 * 2 ** 30, "bytes",
+          "size of a file read (a recording, a calibration, a results file)"),
+    Limit("line", "MAGEXP_MAX_LINE", 2 ** 16, "bytes",
+          "length of a line of a text file read (a recording, a calibration, a results file)"),
 )}
 
 _AMOUNT = re.compile(r"\s*([0-9.eE+-]+)\s*([KMGT]i?B?|[kMG]|B)?\s*")
@@ -130,6 +135,19 @@ def limit(name: str) -> float:
         :meth:`Limit.value`.
     """
     return LIMITS[name].value()
+
+
+def check_limits() -> None:
+    """Refuse, in one line naming the variable, any limit's environment variable that is set to anything but an
+    amount > 0 (an empty value included), at the start of every command, whether or not the command consults it.
+
+    Raises
+    ------
+    MagexpError
+        The first bad variable of :data:`LIMITS`.
+    """
+    for lim in LIMITS.values():
+        lim.value()
 
 
 def refuse_over(value: float, name: str, subject: str, need: str) -> None:

@@ -48,8 +48,6 @@ reproduction stays two orders of magnitude below them.
 from __future__ import annotations
 
 import math
-import os
-import stat
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -425,66 +423,6 @@ def estimate_file_readings(path: Path) -> int:
     ends = head.count(b"\n")
     mean = max(SHORTEST_LINE, head.rfind(b"\n") // ends) if ends else SHORTEST_LINE
     return size // mean
-
-
-#: the kinds of file that are not a recording: reading one never ends (``/dev/zero``) or blocks (a FIFO)
-SPECIAL_FILES = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"),
-                 (stat.S_ISSOCK, "a socket"))
-
-
-def check_regular(path, what: str) -> None:
-    """Refuse, in one line and without opening it, a ``path`` that is a device, a FIFO or a socket (following
-    links): its size says nothing of what reading it costs, and reading it may never end or never start.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        A file about to be read (one that does not exist passes: its reader says so).
-    what : str
-        The key naming it in the message.
-
-    Raises
-    ------
-    MagexpError
-        A special file.
-    """
-    try:
-        mode = os.stat(path).st_mode
-    except (OSError, ValueError):
-        return
-    for test, kind in SPECIAL_FILES:
-        if test(mode):
-            stream = " (a live stream: data.serial=PORT, or data.path=- for standard input)" if what == "data.path" else ""
-            raise MagexpError(f"{what}={str(path)!r} is not allowed: it is {kind}, not a file; give a file{stream}")
-
-
-def check_recording_file(path, what: str = "data.path") -> int:
-    """Refuse a device, FIFO or socket (:func:`check_regular`), a recording file whose estimated readings exceed
-    the readings limit, or whose calibration would exceed the memory limit
-    (:data:`CALIBRATION_FLOATS_PER_READING` a reading), before it is read; returns the estimated readings.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The recording file.
-    what : str
-        The key naming it in messages.
-
-    Returns
-    -------
-    int
-        The estimated readings.
-    """
-    path = Path(path)
-    check_regular(path, what)
-    if not path.is_file():
-        return 0
-    n = estimate_file_readings(path)
-    subject, size = f"{what}={str(path)!r}", show(path.stat().st_size, "bytes")
-    refuse_over(n, "readings", subject, f"its {size} hold")
-    refuse_over(8 * n * CALIBRATION_FLOATS_PER_READING, "run_memory", subject,
-                f"its {size} (about {n} readings) need to calibrate")
-    return n
 
 
 def check_calibration(n_readings: int, folds: int, estimator, problem=CalibrationProblem) -> Estimate:

@@ -34,6 +34,7 @@ from magexp.run.compose import GROUPS, compose_config, options, parse_overrides,
 from magexp.run.guard import (check_destination, check_flags, check_hydra_keys, check_output_folder,
                               check_override_targets, check_override_values, check_subdir, create_unique,
                               first_missing, removed_on_failure)
+from magexp.run.keys import check_duplicates
 from magexp.run.outputs import execute, print_table
 from magexp.run.preflight import check_jobs, expand_sweep, validate_runs
 from magexp.run.provenance import version_line
@@ -316,6 +317,7 @@ def run_command(args: list[str]) -> None:
     None
     """
     user, hyd, flags = split_args(args)
+    check_duplicates(user + hyd)  # Hydra would keep the last silently
     check_flags(flags)
     check_hydra_keys(hyd)  # no code from an override: before anything reads them
     check_override_targets(user + hyd)

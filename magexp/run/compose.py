@@ -43,6 +43,7 @@ from omegaconf import MISSING, DictConfig, OmegaConf
 
 from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
+from magexp.run.keys import check_override
 from magexp.run.targets import check_target
 
 GROUPS = ("scenario", "estimator")
@@ -468,6 +469,11 @@ def _apply(cfg: DictConfig, overrides: list[Override], config_name: str) -> Dict
         text = override.get_value_element_as_str()
         if OmegaConf.select(cfg, key, default="__missing__") == "__missing__":
             raise unknown_key(cfg, key, text, config_name)
+        try:  # text for a number, an empty name, a list's shape
+            check_override(cfg, key, override.value(), text)
+        except MagexpError:
+            raise_if_stopped()  # a stop received meanwhile ends the command as the signal asks
+            raise
         try:
             ConfigLoaderImpl._apply_overrides_to_config([override], cfg)
         except Exception as exc:  # the schema refused the value's type

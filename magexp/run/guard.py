@@ -32,7 +32,6 @@ import argparse
 import contextlib
 import functools
 import itertools
-import math
 import os
 import re
 import shutil
@@ -43,7 +42,8 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 
 from magexp import paths
-from magexp.errors import LARGEST, MagexpError, check_magnitude, check_positive_int
+from magexp.errors import LARGEST, MagexpError, check_positive_int
+from magexp.run.keys import check_number
 from magexp.run.targets import check_target, check_targets
 
 #: The geomagnetic field's ranges (degrees): inclination from the horizontal, declination from north.
@@ -292,8 +292,9 @@ def check_run_values(plain: dict) -> None:
     """Values of a resolved run config that no constructor checks, refused in one line.
 
     * every number of ``scenario`` and ``estimator`` finite, of magnitude <= :data:`LARGEST`
-      (``hard_iron=[1e308,0,0]`` would overflow the simulation into a singular matrix);
-    * ``scenario.field``: ``total`` > 0, ``inclination`` in :data:`INCLINATION`,
+      (``hard_iron=[1e308,0,0]`` would overflow the simulation into a singular matrix), zero or of
+      magnitude >= :data:`magexp.run.keys.SMALLEST` (:func:`magexp.run.keys.check_number`);
+    * ``scenario.field``: a vector not zero; ``total`` > 0, ``inclination`` in :data:`INCLINATION`,
       ``declination`` in :data:`DECLINATION` (degrees);
     * ``write_history``: true or false.
 
@@ -304,10 +305,17 @@ def check_run_values(plain: dict) -> None:
     """
     for group in ("scenario", "estimator"):
         for key, value in _numbers(plain.get(group) or {}, group):
-            if isinstance(value, float) and not math.isfinite(value):
-                raise MagexpError(f"{key}={value!r} is not allowed: it must be a finite number")
-            check_magnitude(value, key)
-    field = (plain.get("scenario") or {}).get("field")
+            check_number(value, key)
+    _check_field((plain.get("scenario") or {}).get("field"))
+    history = plain.get("write_history", True)
+    if not isinstance(history, bool):
+        raise MagexpError(f"write_history={history!r} is not allowed: choose true or false")
+
+
+def _check_field(field) -> None:
+    """``scenario.field``: a vector not zero, or ``total`` > 0 and the angles in their ranges."""
+    if isinstance(field, list) and not any(v != 0 for v in field if isinstance(v, (int, float))):
+        raise MagexpError(f"scenario.field={field!r} is not allowed: the field vector must not be zero (nT)")
     if isinstance(field, dict):
         total = field.get("total")
         if isinstance(total, (int, float)) and not total > 0:
@@ -318,9 +326,6 @@ def check_run_values(plain: dict) -> None:
             if isinstance(value, (int, float)) and not lo <= value <= hi:
                 raise MagexpError(f"scenario.field.{name}={value!r} is not allowed: it must be in [{lo:g}, {hi:g}] "
                                   "degrees")
-    history = plain.get("write_history", True)
-    if not isinstance(history, bool):
-        raise MagexpError(f"write_history={history!r} is not allowed: choose true or false")
 
 
 def check_scheduler_address(scheduler) -> None:

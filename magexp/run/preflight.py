@@ -18,15 +18,17 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.recordings import resolve
+from magexp.core.recordings import exists, load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check, check_positive_int
 from magexp.problems import make_problem
 from magexp.paths import SHARED_DATA
-from magexp.run.budget import Tally, check_recording_file, check_run, check_sweep
+from magexp.run.budget import Tally, check_run, check_sweep
+from magexp.run.files import check_recording_file
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
                                  sweep_jobs)
 from magexp.run.guard import check_run_values
+from magexp.run.keys import check_number, shape
 from magexp.run.runner import build
 
 #: the module of the swarm's coefficient schedules (:func:`check_schedules`)
@@ -97,14 +99,15 @@ def check_problem(cfg, scenario) -> None:
 
 
 def check_seed(seed) -> None:
-    """Refuse a seed that is not an integer >= 0, in one line.
+    """Refuse a seed that is not an integer in [0, :data:`magexp.errors.LARGEST`], in one line (every integer key's
+    bound, :func:`magexp.run.keys.check_number`).
 
     Parameters
     ----------
     seed : object
         The ``seed`` value.
     """
-    check_positive_int(seed, "seed", minimum=0)
+    check_number(check_positive_int(seed, "seed", minimum=0), "seed", integer=True)
 
 
 def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
@@ -167,13 +170,15 @@ def _check_config(cfg, seen: set, estimates: dict):
     check_schedules(plain.get("estimator") or {})
     s_key = json.dumps([plain["scenario"], plain.get("objective")], sort_keys=True, default=str)
     e_key = json.dumps(plain["estimator"], sort_keys=True, default=str)
+    if s_key not in seen:
+        check_scenario_files(plain["scenario"])  # before its size is estimated or the scenario reads them
     if (s_key, e_key) not in estimates:  # its memory and work first: nothing built for a run refused
         estimates[s_key, e_key] = check_run(plain)
     if e_key not in seen:
         build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
         seen.add(e_key)
     if s_key not in seen:
-        check_scenario_files(plain["scenario"])  # before the scenario reads them
+        check_window(plain["scenario"])  # after the file gate: it reads the recording's times
         scenario = build(cfg.scenario, f"scenario {cfg.scenario.get('name')!r}")
         check_problem(cfg, scenario)
         seen.add(s_key)
@@ -187,7 +192,7 @@ SCENARIO_FILES = {"file": SHARED_DATA, "rest_file": SHARED_DATA, "path": None}
 
 def check_scenario_files(scenario: dict) -> None:
     """Refuse, before the scenario is built, a file it would read that is a device, a FIFO or a socket, or too big
-    for the readings or memory limit (:func:`magexp.run.budget.check_recording_file`, as ``magexp calibrate``'s).
+    for the readings or memory limit (:func:`magexp.run.files.check_recording_file`, as ``magexp calibrate``'s).
 
     Parameters
     ----------
@@ -203,7 +208,34 @@ def check_scenario_files(scenario: dict) -> None:
         value = scenario.get(key)
         if isinstance(value, str) and value:
             path = resolve(value) if folder is None else (Path(value) if Path(value).is_absolute() else folder / value)
-            check_recording_file(path, f"scenario.{key}")
+            check_recording_file(path, f"scenario.{key}", scenario.get("format") if key != "path" else "auto")
+
+
+def check_window(scenario: dict) -> None:
+    """A recording scenario's ``window`` (null: the whole recording) refused unless it is ``[start, end]`` seconds,
+    ``0 <= start < end``, of a recording that has reading times (read here, before the scenario cuts it).
+
+    Parameters
+    ----------
+    scenario : dict
+        The resolved ``scenario`` node of a run.
+
+    Raises
+    ------
+    MagexpError
+        One line naming ``scenario.window``.
+    """
+    window, file = scenario.get("window"), scenario.get("file")
+    if window is None or not isinstance(file, str):
+        return
+    if shape(window) != (2,) or not 0 <= window[0] < window[1]:
+        raise MagexpError(f"scenario.window={window!r} is not allowed: give [start, end] seconds from the first "
+                          "reading, 0 <= start < end (null: the whole recording)")
+    path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
+    options = {k: scenario.get(k) for k in ("unit", "format", "mag_axes", "gyro_axes")}
+    if exists(path) and load_recording(path, **options).reading_times() is None:
+        raise MagexpError(f"scenario.window={window!r} is not allowed: {file} has no reading times to cut "
+                          "(scenario.window=null)")
 
 
 def check_schedules(node: dict, prefix: str = "estimator") -> None:
