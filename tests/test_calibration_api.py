@@ -60,7 +60,7 @@ def test_plot_returns_a_figure_and_export_writes_beside(cal, tmp_path):
 
 @pytest.mark.parametrize("text, message", [("[1, 2]", "format 'list' is not allowed"),
                                            ('{"format": "magexp-calibration v3", "W": [1], "offset": [0]}',
-                                            "W must be 3 x 3"), ("not json", "not a calibration.json")])
+                                            "the key .model. is missing"), ("not json", "not a calibration.json")])
 def test_load_refuses_bad_files_in_one_line(tmp_path, text, message):
     (tmp_path / "bad.json").write_text(text)
     with pytest.raises(MagexpError, match=message):
@@ -213,3 +213,45 @@ def test_the_kernels_path_is_an_argument_not_the_environment(monkeypatch):
     assert fit.numpy_path(True, object()) is False and fit.numpy_path(None, object()) is False  # iterative: compiled
     with pytest.raises(MagexpError, match="compiled='yes' is not allowed: give compiled=true or compiled=false"):
         magexp.calibrate(readings, unit="uT", compiled="yes")
+
+
+class _Broken:
+    """A user's estimator whose fit raises its own error."""
+
+    name = "broken"
+
+    def fit(self, problem, rng=None):
+        raise KeyError("its own bug")
+
+
+@pytest.mark.parametrize("model, folds", [("full", 0), ("full", 6), ("auto", 6)])
+def test_a_user_estimators_failure_is_one_line_naming_it_with_its_cause(cal, model, folds):
+    """Issue 41 item 6: whatever the fit is (the whole recording, a held-out fold, ``model=auto``'s candidates), a
+    user's estimator that raises is one MagexpError naming it, its own exception the ``__cause__`` (not an unfit
+    fold counted as 'did not converge', nor a KeyError escaping)."""
+    with pytest.raises(MagexpError, match="estimator='broken' failed: its fit raised KeyError") as err:
+        magexp.calibrate(cal.recording.readings, unit="uT", estimator=_Broken(), model=model, folds=folds)
+    assert isinstance(err.value.__cause__, KeyError) and len(str(err.value).splitlines()) == 1
+
+
+def test_every_file_a_loaded_calibration_came_from_reloads_and_a_resave_round_trips(cal, tmp_path):
+    """The schema accepts the calibration.json magexp writes and the copy saved again from the loaded calibration."""
+    first = Calibration.load(cal.save(tmp_path / "a.json"))
+    again = Calibration.load(first.save(tmp_path / "b.json"))
+    assert np.array_equal(again.w, cal.w) and again.saved == first.saved
+
+
+@pytest.mark.full
+def test_load_in_a_process_never_waits_on_a_fifo_nor_reads_a_device(tmp_path):
+    """A FIFO or ``/dev/zero`` given to ``Calibration.load`` in a real process: one MagexpError line, at once."""
+    import os
+    import subprocess
+    import sys
+
+    os.mkfifo(tmp_path / "pipe.json")
+    script = ("import sys, magexp\nfrom magexp.errors import MagexpError\nfor p in sys.argv[1:]:\n"
+              "    try:\n        magexp.Calibration.load(p)\n    except MagexpError as e:\n        print(e)\n")
+    done = subprocess.run([sys.executable, "-c", script, str(tmp_path / "pipe.json"), "/dev/zero"],
+                          capture_output=True, text=True, timeout=60)
+    lines = done.stdout.splitlines()
+    assert len(lines) == 2 and "a FIFO" in lines[0] and "character device" in lines[1], done.stdout + done.stderr

@@ -17,11 +17,12 @@ from magexp.calibration.fit import calibrate_recording, numpy_path
 from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
+from magexp.calibration.schema import check_seed
 from magexp.core.limits import check_limits
 from magexp.core.recording import Recording, check_unit
 from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_positive_int
+from magexp.errors import MagexpError
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import options
@@ -81,6 +82,9 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
     if isinstance(readings, Recording):
         return readings
     if isinstance(readings, (str, Path)):
+        if not str(readings).strip():
+            raise MagexpError(f"readings={str(readings)!r} is not allowed: give a recording's path, an (N, 3) array "
+                              "or a DataFrame")
         check_recording_file(resolve(readings), "readings")  # no device or FIFO, within the limits: before it is read
         return load_recording(readings, unit=unit)
     pandas = sys.modules.get("pandas")  # a DataFrame exists only if pandas is loaded: not importing it saves
@@ -96,6 +100,41 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
     return Recording(readings=values, angles=None, field=None, unit=check_unit(unit, "unit"),
                      meta={"format": "array", "name": "readings"})
 
+
+def check_arguments(seed, reference_total, estimator_options: dict) -> int:
+    """Refuse, in one line, the arguments of :func:`calibrate` no later check reads as the command does: a seed
+    that is not an integer in ``[0, 2**63 - 1]`` (:func:`~magexp.calibration.schema.check_seed`), a reference
+    total that is not a number (a string, a bool), an estimator option ``name`` (the estimator is
+    ``estimator=``); returns the seed as an int.
+
+    Parameters
+    ----------
+    seed : object
+        :func:`calibrate`'s ``seed``.
+    reference_total : object
+        Its ``reference_total``.
+    estimator_options : dict
+        Its ``**estimator_options``.
+
+    Returns
+    -------
+    int
+        The seed.
+
+    Raises
+    ------
+    MagexpError
+        One line naming the argument.
+    """
+    seed = check_seed(seed)
+    if reference_total is not None and (isinstance(reference_total, (bool, str, bytes)) or
+                                        not isinstance(reference_total, (int, float, np.number))):
+        raise MagexpError(f"reference_total={reference_total!r} is not allowed: give a number > 0 (the readings' "
+                          "unit) or None")
+    if "name" in estimator_options:
+        raise MagexpError(f"name={estimator_options['name']!r} is not allowed as an estimator option: choose the "
+                          "estimator with estimator=...")
+    return seed
 
 
 def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objective: str = DEFAULTS.objective,
@@ -164,8 +203,8 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
     if not isinstance(estimator, str) and not callable(getattr(estimator, "fit", None)):
         raise MagexpError(f"estimator={estimator!r} is not allowed: give an estimator's name ("
                           f"{', '.join(options('estimator'))}) or an object with a fit(problem, rng=...) method")
+    seed = check_arguments(seed, reference_total, estimator_options)
     est = estimator_named(estimator, **estimator_options) if isinstance(estimator, str) else estimator
-    seed = check_positive_int(seed, "seed", minimum=0)
     _, rng = run_generators(seed)
     with numpy_only(numpy_path(compiled, est)):
         cal = calibrate_recording(rec, est, objective=objective, reference_total=reference_total, folds=folds,

@@ -143,6 +143,59 @@ def budget_key(estimator) -> str | None:
     return next((k for k in BUDGET_KEYS if hasattr(estimator, k)), None)
 
 
+def estimator_failed(message: str) -> MagexpError:
+    """The :class:`MagexpError` of a user's estimator that failed (:func:`magexp.calibration.model_fit.searched`),
+    marked ``broken_estimator``: a broken estimator, not a model the readings cannot support, so the held-out check
+    and ``model=auto`` (:func:`is_broken_estimator`) let it through instead of counting an unfit fold.
+
+    Parameters
+    ----------
+    message : str
+        The one line.
+
+    Returns
+    -------
+    MagexpError
+        The error, to be raised (``from`` the estimator's own exception).
+    """
+    error = MagexpError(message)
+    error.broken_estimator = True
+    return error
+
+
+def is_broken_estimator(error: BaseException) -> bool:
+    """Whether ``error`` is :func:`estimator_failed`'s (a user's estimator failed).
+
+    Parameters
+    ----------
+    error : BaseException
+        A caught error.
+
+    Returns
+    -------
+    bool
+        True for a broken estimator's error.
+    """
+    return bool(getattr(error, "broken_estimator", False))
+
+
+def estimator_name(estimator) -> str:
+    """The name of ``estimator`` for a message: its ``name``, else its class's (a user's estimator may have none).
+
+    Parameters
+    ----------
+    estimator : object
+        An estimator.
+
+    Returns
+    -------
+    str
+        Its name.
+    """
+    name = getattr(estimator, "name", None)
+    return name if isinstance(name, str) and name else type(estimator).__name__
+
+
 def check_optimum(name: str, estimator, value: float, closed_form: float | None, what: str = "spread") -> None:
     """Fail in one line if an iterative ``estimator`` stopped short of the optimum: its ``what`` (the in-sample
     spread, or the held-out spread of ``model=full``) over :data:`OPTIMUM_FACTOR` times that of the closed-form
@@ -173,7 +226,7 @@ def check_optimum(name: str, estimator, value: float, closed_form: float | None,
     mine = (f"its {what} {100 * value:.3g} % is {value / closed_form:.3g} times" if np.isfinite(value)
             else f"its fit failed for a region of directions held out ({what} NaN), against")
     key = budget_key(estimator)
-    raise MagexpError(f"{name}: estimator={estimator.name!r} did not converge, nothing written: {mine} the closed-form "
+    raise MagexpError(f"{name}: estimator={estimator_name(estimator)!r} did not converge, nothing written: {mine} the closed-form "
                       f"ellipsoid fit's {100 * closed_form:.3g} % (limit {OPTIMUM_FACTOR:g} times): use estimator=ellipsoid"
                       + (f", or give it a larger budget (estimator.{key}=..., now {getattr(estimator, key)})" if key else ""))
 

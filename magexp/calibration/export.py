@@ -47,7 +47,7 @@ import yaml
 from magexp.calibration.heading import export_line, heldout_note
 from magexp.calibration.firmware import (MAX_ROTATION_DEG, STANDARD_ROTATIONS, Correction, check_counts_nt,
                                          check_max_rotation, euler_321, to_firmware)
-from magexp.calibration.folder import check_file, recording_files
+from magexp.calibration.folder import check_file, file_path, recording_files
 from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
 from magexp.run.guard import check_destination
@@ -380,10 +380,14 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
     Raises
     ------
     MagexpError
-        One line for an unknown ``target``, a bad ``counts_nt`` or ``max_rotation_deg``, or as the renderer.
+        One line for an unknown ``target`` or option, a bad ``counts_nt`` or ``max_rotation_deg``, or as the renderer.
     """
-    if target not in RENDERERS:
+    if not isinstance(target, str) or target not in RENDERERS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
+    unknown = sorted(set(options) - set(options_of(target)))
+    if unknown:
+        raise MagexpError(f"{unknown[0]}={options[unknown[0]]!r} is not allowed: export={target!r} takes "
+                          f"{', '.join(options_of(target))}")
     for key, check_value in (("counts_nt", check_counts_nt), ("max_rotation_deg", check_max_rotation)):
         if options.get(key) is not None:
             check_value(options[key])
@@ -531,7 +535,7 @@ def write(out: Export, path: str | Path | None = None, *, overwrite: bool = Fals
         recording, a folder that does not exist, or a destination :func:`magexp.run.guard.check_destination`
         refuses.
     """
-    path = Path(".") if path is None else Path(path)
+    path = Path(".") if path is None else file_path(path, "export path")
     if path.is_dir():
         path = path / FILE_NAMES[out.target]
     check_destination(path, "export path")

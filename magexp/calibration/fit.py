@@ -57,7 +57,8 @@ import os
 import numpy as np
 
 from magexp.calibration import holdout, models as models_
-from magexp.calibration.checks import check_fit, check_optimum, check_readings, gate, gate_thresholds, refuse
+from magexp.calibration.checks import (check_fit, check_optimum, check_readings, estimator_name, gate, gate_thresholds,
+                                      is_broken_estimator, refuse)
 from magexp.calibration.onboard import onboard_of, saying_onboard, says_onboard
 from magexp.calibration.inputs import OBJECTIVES, Reference, check_size, recording_dataset, reference_of
 from magexp.calibration.export import firmware_correction
@@ -320,7 +321,9 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
         ref = Reference(reference.total[keep], reference.source, reference.estimated)
         try:
             w, o, result = fold_fit(train, estimator, objective, ref, rng, model)
-        except MagexpError:
+        except MagexpError as exc:
+            if is_broken_estimator(exc):  # a broken estimator, not a fold the model cannot fit
+                raise
             return None
         if not result.success or (model == "gyro" and models_.collapsed(train.readings, o)):
             return None  # a fold the model cannot fit: the model is not supported
@@ -393,7 +396,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     w, o, calibrated, problem, result, box = fit_model(rec, estimator, objective, reference, rng, model, dataset)
     cover = coverage(rec.readings - o)  # the raw directions about the fitted centre: what the recording covered
     name = (f"{model} fit" if model in models_.CLOSED_FORM
-            else GYRO_ESTIMATOR["name"] if model == "gyro" else estimator.name)
+            else GYRO_ESTIMATOR["name"] if model == "gyro" else estimator_name(estimator))
     if checks:
         check_converged(rec, estimator, objective, model, result, calibrated, reference, dataset)
         check_fit(rec.name, "gyro fit" if model == "gyro" else name, bool(result.success), result.message, cover,

@@ -23,6 +23,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -240,6 +241,44 @@ def check_recording(folder: Path, files, *, option: str = "out") -> None:
                           f"({held[0].name}), which a calibration never writes over: choose another folder")
 
 
+def file_path(path, option: str = "path") -> Path:
+    """``path``, a file a calibration is about to write, as a :class:`~pathlib.Path`; one line refusing anything
+    else (a number, None, an empty string).
+
+    Parameters
+    ----------
+    path : object
+        What the caller gave.
+    option : str
+        The argument that named it, for the message.
+
+    Returns
+    -------
+    Path
+        The path.
+
+    Raises
+    ------
+    MagexpError
+        A value that is not a non-empty ``str`` or ``Path``.
+    """
+    if not isinstance(path, (str, os.PathLike)) or not str(os.fspath(path)).strip() or "\0" in str(os.fspath(path)):
+        raise MagexpError(f"{option}={path!r} is not allowed: give a file's path (a str or a Path)")
+    return Path(path)
+
+
+def _kind(path: Path) -> str | None:
+    """What the entry ``path`` is when it is not a regular file a calibration may replace (None: it is one, or absent)."""
+    if path.is_symlink():
+        return "a symbolic link (magexp writes none, and replaces none)"
+    if not path.exists():
+        return None
+    mode = path.stat().st_mode
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"))
+    return next((kind for test, kind in kinds if test(mode)), None)
+
+
 def check_file(path: Path, *, overwrite: bool, recording=(), option: str = "path") -> None:
     """Refuse, in one line, writing the single file ``path`` (``Calibration.save``, ``Calibration.export``) over
     an existing file without ``overwrite``, over one no calibration wrote (:func:`plan`), or over the recording.
@@ -258,12 +297,22 @@ def check_file(path: Path, *, overwrite: bool, recording=(), option: str = "path
     Raises
     ------
     MagexpError
-        An existing file without ``overwrite``, one no calibration wrote, or (a link to) the recording.
+        An existing file without ``overwrite``, one no calibration wrote, (a link to) the recording, an entry
+        that is not a regular file (a folder, a device, a FIFO, a socket, a symbolic link), a folder that does
+        not exist, or an ``overwrite`` that is not a bool.
     """
     path = Path(path)
+    where = f"{option} {str(path)!r} is not allowed"
+    if not isinstance(overwrite, bool):
+        raise MagexpError(f"overwrite={overwrite!r} is not allowed: give True or False")
+    if not path.parent.is_dir():
+        raise MagexpError(f"{where}: its folder {str(path.parent)!r} does not exist or is not a folder (a calibration "
+                          "creates none here): create it first or choose another")
     if not _present(path):
         return
-    where = f"{option} {str(path)!r} is not allowed"
+    if (kind := _kind(path)) is not None:
+        raise MagexpError(f"{where}: it is {kind}, not a file a calibration wrote; a calibration replaces only "
+                          "its own regular files: choose another")
     if any(f.exists() and os.path.samefile(path, f) for f in map(Path, recording)):
         raise MagexpError(f"{where}: it is the recording being read, which a calibration never writes over: "
                           "choose another file")

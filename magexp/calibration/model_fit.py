@@ -16,6 +16,7 @@ import numpy as np
 
 from magexp.calibration import models as models_
 from magexp.calibration.box import calibration_box
+from magexp.calibration.checks import estimator_failed, estimator_name
 from magexp.calibration.inputs import Reference, gyro_dataset, recording_dataset
 from magexp.core.dataset import Dataset
 from magexp.core.identifiability import canonical
@@ -89,12 +90,14 @@ def fit_model(rec: Recording, estimator, objective: str, reference: Reference, r
     if model in models_.CLOSED_FORM:
         w, o, calibrated, result = closed_form(rec, model, reference)
         return w, o, calibrated, problem, result, box
-    result = estimator.fit(problem, rng=rng)
-    w, o = (a[0] for a in problem.unpack(result.x))
+    result, (w, o) = searched(estimator, problem, rng)
+    who = "the gyro fit (model=gyro)" if model == "gyro" else f"estimator={estimator_name(estimator)!r}"
     if not np.all(np.isfinite(w)) or not np.all(np.isfinite(o)):
-        who = "the gyro fit (model=gyro)" if model == "gyro" else f"estimator={estimator.name!r}"
         raise MagexpError(f"{rec.name}: {who} gave a non-finite calibration, nothing written: "
                           "try estimator=ellipsoid or estimator=lm")
+    if not abs(np.linalg.det(w)) > 0:
+        raise MagexpError(f"{rec.name}: {who} gave a singular W (it maps every reading onto a plane), nothing "
+                          "written: try estimator=ellipsoid or estimator=lm")
     if objective == "scalar":
         w = canonical(w)
     calibrated = (rec.readings - o) @ w.T
@@ -102,6 +105,66 @@ def fit_model(rec: Recording, estimator, objective: str, reference: Reference, r
         w = w * reference.total[0] / np.linalg.norm(calibrated, axis=1).mean()
         calibrated = (rec.readings - o) @ w.T
     return w, o, calibrated, problem, result, box
+
+
+def searched(estimator, problem, rng) -> tuple:
+    """``(result, (W, o))`` of ``estimator.fit(problem, rng=rng)``. A user's estimator (one not of magexp) that
+    fails, or returns something other than a :class:`~magexp.estimators.result.FitResult` of the problem's
+    parameters, is refused in one line naming it (its own exception is the line's ``__cause__``); magexp's own
+    estimators raise as they do (a failure of theirs is a bug, not bad input).
+
+    Parameters
+    ----------
+    estimator : object
+        An object with ``fit(problem, rng=...)``.
+    problem : CalibrationProblem
+        The problem it searches.
+    rng : numpy.random.Generator or None
+        Its draws.
+
+    Returns
+    -------
+    tuple
+        ``(result, (W, o))``: the fit's result and its best parameters unpacked.
+
+    Raises
+    ------
+    MagexpError
+        A user's estimator that fails or returns something else.
+    """
+    if type(estimator).__module__.split(".")[0] == "magexp":
+        result = estimator.fit(problem, rng=rng)
+        return result, tuple(a[0] for a in problem.unpack(result.x))
+    who = f"estimator={estimator_name(estimator)!r}"
+    try:
+        result = estimator.fit(problem, rng=rng)
+    except MagexpError:
+        raise
+    except Exception as exc:  # a user's code: whatever it raises is its failure, named
+        first = (str(exc).splitlines() or [""])[0][:200]
+        raise estimator_failed(f"{who} failed: its fit raised {type(exc).__name__}: {first}") from exc
+    if not isinstance(result, FitResult):
+        raise estimator_failed(f"{who} is not allowed: its fit returned {type(result).__name__}, not a FitResult "
+                          "(magexp.estimators.result.FitResult)")
+    _check_outcome(result, who)
+    try:
+        x = np.asarray(result.x, float).reshape(1, problem.n_params)
+    except (TypeError, ValueError) as exc:
+        raise estimator_failed(f"{who} is not allowed: its FitResult.x is not the problem's {problem.n_params} "
+                          f"numbers ({type(exc).__name__})") from exc
+    return result, tuple(a[0] for a in problem.unpack(x))
+
+
+def _check_outcome(result: FitResult, who: str) -> None:
+    """Refuse a user's :class:`FitResult` whose ``fun``, ``nit``, ``nfev``, ``success`` or ``message`` is of a wrong type."""
+    kinds = {"fun": (float, int, np.floating, np.integer), "nit": (int, np.integer), "nfev": (int, np.integer),
+             "success": (bool, np.bool_), "message": (str,)}
+    for key, kind in kinds.items():
+        value = getattr(result, key)
+        if not isinstance(value, kind) or (key != "success" and isinstance(value, (bool, np.bool_))) or (
+                key in ("nit", "nfev") and value < 0):
+            raise estimator_failed(f"{who} is not allowed: its FitResult.{key}={value!r} is not "
+                              f"{'an integer >= 0' if key in ('nit', 'nfev') else kind[0].__name__}")
 
 
 def search_box_of(readings: np.ndarray, radius: float, estimator, objective: str, model: str):

@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from magexp.calibration.checks import CELLS, MIN_CELLS, ONE_ATTITUDE_DEG
+from magexp.calibration.checks import CELLS, MIN_CELLS, ONE_ATTITUDE_DEG, is_broken_estimator
 from magexp.core.ellipsoid import LINEAR_TWICE, normalise, quadratic_features, quadric_calibration
 from magexp.core.identifiability import coverage
 from magexp.errors import MagexpError
@@ -327,7 +327,9 @@ def _measured(heldout_of, name: str, beat, bounded: bool) -> tuple:
     try:
         value, cut = heldout_of(name, beat) if bounded else (heldout_of(name), False)
         value = float(value)
-    except MagexpError:
+    except MagexpError as exc:
+        if is_broken_estimator(exc):  # a broken estimator, not a model the readings cannot support
+            raise
         value, cut = float("nan"), False
     return (value if np.isfinite(value) else None), bool(cut)
 

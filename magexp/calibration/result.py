@@ -95,11 +95,15 @@ class Calibration:
         Raises
         ------
         MagexpError
-            Readings of another shape.
+            Readings of another shape or type, or not finite (the first such row named).
         """
         r = readings_array(readings)
         if r.shape[-1:] != (3,) or r.ndim > 2:
             raise MagexpError(f"readings of shape {r.shape} are not allowed: give (N, 3) or (3,) raw readings")
+        bad = np.flatnonzero(~np.isfinite(r.reshape(-1, 3)).all(axis=1))
+        if bad.size:
+            raise MagexpError(f"readings row {bad[0]} = {r.reshape(-1, 3)[bad[0]].tolist()} is not allowed: every "
+                              f"reading must be finite ({bad.size} rows hold NaN or infinity)")
         return (r - self.offset) @ self.w.T
 
     def save(self, path, *, overwrite: bool = False) -> Path:
@@ -143,10 +147,17 @@ class Calibration:
         reference = Reference(np.array([ref["total"]]), ref["source"], ref["estimated"], ref.get("unit"),
                               ref.get("field_model"))
         quality = data.get("quality", {})
-        return cls(recording=None, estimator=data["estimator"], objective=data["objective"],
-                   w=np.array(data["W"], float), offset=np.array(data["offset"], float), reference=reference,
-                   search=None, fit=None, calibrated=np.zeros((0, 3)), metrics=data.get("metrics", {}),
-                   report=quality, seed=data.get("seed", 0), config=data.get("config", {}), saved=data)
+        cal = cls(recording=None, estimator=data["estimator"], objective=data["objective"],
+                  w=np.array(data["W"], float), offset=np.array(data["offset"], float), reference=reference,
+                  search=None, fit=None, calibrated=np.zeros((0, 3)), metrics=data.get("metrics", {}),
+                  report=quality, seed=data.get("seed", 0), config=data.get("config", {}), saved=data)
+        try:  # the records the summary reads beyond the schema's keys (the heading's, the gate's)
+            summary(cal)
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+            raise MagexpError(f"{Path(path).name}: its quality or metrics record is not one a calibration writes "
+                              f"({type(exc).__name__} {str(exc)[:60]}): give a file written by magexp calibrate or "
+                              "Calibration.save") from None
+        return cal
 
     def __repr__(self) -> str:
         m = self.metrics

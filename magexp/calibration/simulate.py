@@ -26,9 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from magexp.calibration.schema import check_seed
 from magexp.core.atomic import write_text
 from magexp.core.formats import VERSION_LINE
 from magexp.core.geometry import ship_attitude
+from magexp.core.limits import refuse_over
 from magexp.core.recordings import load_recording
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check_positive_int, exit_code
@@ -58,7 +60,15 @@ def simulate(n: int, seed: int) -> tuple[str, np.ndarray, np.ndarray]:
         The ``magexp-recording v1`` file.
     w, offset : numpy.ndarray
         The calibration that undoes the distortion: ``B = W (r - o)`` (nT).
+
+    Raises
+    ------
+    MagexpError
+        ``n`` not an integer >= 12 or over the readings limit (``MAGEXP_MAX_READINGS``), ``seed`` not an integer
+        in [0, 2**63 - 1]: one line.
     """
+    n = check_readings(n, "n")
+    seed = check_seed(seed)
     rng, _ = run_generators(seed)
     field = load_recording(DATA / "yan2022_mockup.csv").field
     angles = np.column_stack([rng.uniform(0, 2 * np.pi, n), rng.uniform(-np.pi / 2, np.pi / 2, n),
@@ -91,8 +101,8 @@ def command(argv: list[str]) -> None:
     parser.add_argument("--readings", default=400, help="how many readings (default 400)")
     parser.add_argument("--seed", default=0, help="the seed of the draws (default 0)")
     args = parser.parse_args(argv)
-    n = check_positive_int(_integer(args.readings), "--readings", minimum=12)
-    seed = check_positive_int(_integer(args.seed), "--seed", minimum=0)
+    n = check_readings(_integer(args.readings), "--readings")
+    seed = check_seed(_integer(args.seed), "--seed")
     path = Path(args.path)
     if path.exists():
         raise MagexpError(f"path {str(path)!r} is not allowed: it exists already (never overwritten), choose another")
@@ -101,6 +111,26 @@ def command(argv: list[str]) -> None:
     text, _, _ = simulate(n, seed)
     write_text(path, text)
     print(f"wrote {path}: {n} readings with heading, roll, trim and the field (seed {seed})")
+
+
+def check_readings(n, name: str) -> int:
+    """``n`` as an int: an integer >= 12 within the readings limit (``MAGEXP_MAX_READINGS``), else one line naming ``name``.
+
+    Parameters
+    ----------
+    n : object
+        The number of readings asked for.
+    name : str
+        The argument that gave it.
+
+    Returns
+    -------
+    int
+        ``n``.
+    """
+    n = check_positive_int(n, name, minimum=12)
+    refuse_over(n, "readings", f"{name}={n}", "it makes")
+    return n
 
 
 def _integer(text):

@@ -32,13 +32,14 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.export import FILE_NAMES, firmware_correction, of_calibration
-from magexp.calibration.folder import MANIFEST, Plan, check_file, check_recording, digest, plan, recording_files
+from magexp.calibration.folder import (MANIFEST, Plan, check_file, check_recording, digest, file_path, plan,
+                                      recording_files)
 from magexp.calibration.heading import curves as heading_curves, summary_lines
 from magexp.calibration.holdout import describe as describe_heldout
 from magexp.calibration.onboard import onboard_line
+from magexp.calibration.schema import FORMATS, check_parameters, read_json
 from magexp.core.atomic import _stops_held as stops_held, write_text
 from magexp.core.identifiability import CELLS
-from magexp.run.files import check_file as check_readable
 from magexp.run.guard import check_destination
 from magexp.core.formats import VERSION_LINE
 from magexp.errors import MagexpError
@@ -103,8 +104,8 @@ def _output_names(draw: bool, export: str | None) -> list[str]:
 
 
 #: the format line of ``calibration.json`` (:func:`parameters`) and the ones :func:`read_parameters` reads
-FORMAT = "magexp-calibration v3"
-READABLE = ("magexp-calibration v2", FORMAT)
+FORMAT = FORMATS[-1]
+READABLE = FORMATS
 
 
 def parameters(cal, *, seed: int | None = None) -> dict:
@@ -181,7 +182,7 @@ def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
     MagexpError
         An existing file without ``overwrite``, or one no calibration wrote.
     """
-    path = Path(path)
+    path = file_path(path, "path")
     check_destination(path, "path")
     check_file(path, overwrite=overwrite, recording=recording_files(cal.recording), option="path")
     saved = {k: v for k, v in parameters(cal).items() if k != MANIFEST}  # the manifest is its folder's, not copied
@@ -189,8 +190,9 @@ def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
 
 
 def read_parameters(path) -> dict:
-    """The content of a ``calibration.json``, checked: its format one of :data:`READABLE`, ``W`` 3 x 3
-    and the offset 3 finite numbers (JSON: nothing read can run code); else one line.
+    """The content of a ``calibration.json``, read within bounds and checked against the schema ``save`` writes
+    (:mod:`magexp.calibration.schema`: every key's type, range and finiteness, ``W`` invertible and
+    well-conditioned; JSON: nothing read can run code); else one line.
 
     Parameters
     ----------
@@ -207,24 +209,7 @@ def read_parameters(path) -> dict:
     MagexpError
         An unreadable or malformed file.
     """
-    path = Path(path)
-    check_readable(path, "path", kind="json")  # the file gate: a FIFO would block the read, a device never end it
-    try:
-        data = json.loads(path.read_text())
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise MagexpError(f"{path.name}: not a calibration.json ({type(exc).__name__}): give a file written by "
-                          "magexp calibrate or Calibration.save") from None
-    if not isinstance(data, dict) or data.get("format") not in READABLE:
-        found = data.get("format") if isinstance(data, dict) else type(data).__name__
-        raise MagexpError(f"{path.name}: format {found!r} is not allowed: magexp reads {', '.join(READABLE)}")
-    try:
-        w, offset = np.array(data["W"], float), np.array(data["offset"], float)
-    except (KeyError, TypeError, ValueError):
-        w = offset = np.zeros(0)
-    if w.shape != (3, 3) or offset.shape != (3,) or not (np.isfinite(w).all() and np.isfinite(offset).all()):
-        raise MagexpError(f"{path.name}: its W and offset are not allowed: W must be 3 x 3 and the offset 3 "
-                          "numbers, all finite")
-    return data
+    return check_parameters(read_json(path, "path"), Path(path).name)
 
 
 def _finite(value):
