@@ -196,3 +196,16 @@ def mockup_reproduction(tmp_path_factory):
              for p in sorted((root / "out").rglob("*")) if p.is_file()}
     return SimpleNamespace(args=list(MOCKUP_ARGS), runs=root / "runs", out=root / "out", files=files,
                            reproduce_into=reproduce_into)
+
+
+def pytest_terminal_summary(terminalreporter):
+    """The architecture report (the largest modules, the deepest import chains) at the end of a session that
+    ran ``tests/test_architecture.py``, in one process or several: signals a reviewer reads, not limits."""
+    ran = any("test_architecture.py::" in getattr(r, "nodeid", "")
+              for reports in terminalreporter.stats.values() for r in reports)
+    if ran:
+        from test_architecture import report  # the test module's own measure, imported only when it ran
+
+        terminalreporter.write_sep("-", "architecture report (tests/test_architecture.py)")
+        for line in report():
+            terminalreporter.write_line(line)

@@ -48,12 +48,12 @@ def test_no_function_is_too_complex():
 
 # ---------------------------------------------------------------------------------------------
 # the import graph: every import of one magexp module by another, at module top or inside a
-# function (a lazy import is still a dependency); and the size of a module
+# function (a lazy import is still a dependency). Its layers and the absence of cycles are rules; the
+# size of a module and the depth of an import chain are signals (issue 42): :func:`report` prints the
+# largest and the deepest, and a module is split where a concept ends, never to fit a number
 
 #: the modules allowed directly in magexp/ beside the packages
 TOP_MODULES = {"__init__", "__main__", "_version", "errors", "paths"}
-#: the longest chain of imports from the entry point down to a leaf, in modules (issue 20)
-MAX_DEPTH = 10
 #: what each package may import (besides magexp.errors, magexp.paths, magexp._version and itself): data flows one way
 MAY_IMPORT = {
     "core": set(),
@@ -104,10 +104,6 @@ def import_graph() -> dict[str, set[str]]:
                        for target in _resolve(node, name, path.name == "__init__.py", set(paths))
                        if target not in (name, "magexp")}
     return graph
-
-
-#: the most lines a module may have (issue 35): a longer one holds more than one concept
-MAX_LINES = 600
 
 
 def test_at_most_five_modules_sit_beside_the_packages():
@@ -162,28 +158,41 @@ def _depths(graph) -> dict[str, tuple[str, ...]]:
     return chains
 
 
-def test_no_module_is_too_long():
-    sizes = {p.relative_to(ROOT).as_posix(): len(p.read_text().splitlines()) for p in (ROOT / "magexp").rglob("*.py")}
-    assert len(sizes) > 100  # the walk saw the package
-    over = {path: n for path, n in sizes.items() if n > MAX_LINES}
-    assert not over, f"modules over {MAX_LINES} lines (split them by concept): " + ", ".join(
-        f"{path} ({n})" for path, n in sorted(over.items()))
-
-
 def test_the_import_graph_has_no_cycle():
     cycles = _cycles(import_graph())
     assert not cycles, "import cycles (imports inside functions count): " + "; ".join(" <-> ".join(c) for c in cycles)
 
 
-def test_the_import_graph_is_shallow():
-    """No chain of imports, from any module (the entry point ``magexp.__main__`` among them) down to a leaf, is
-    longer than :data:`MAX_DEPTH` modules, counting every import (inside functions too)."""
-    graph = import_graph()
-    chains = _depths(graph)
-    assert len(chains["magexp.__main__"]) > 3  # the entry point reaches down the layers
-    deep = {m: c for m, c in chains.items() if len(c) > MAX_DEPTH}
-    assert not deep, f"import chains over {MAX_DEPTH} modules: " + "; ".join(
-        " -> ".join(c) for c in sorted(deep.values(), key=len, reverse=True)[:3])
+#: how many modules and chains :func:`report` lists
+REPORTED = 10
+
+
+def module_sizes() -> dict[str, int]:
+    """``{path under the repository: lines}`` of every module of the package."""
+    return {p.relative_to(ROOT).as_posix(): len(p.read_text().splitlines()) for p in (ROOT / "magexp").rglob("*.py")}
+
+
+def report() -> list[str]:
+    """The lines of the architecture report: the :data:`REPORTED` largest modules and the :data:`REPORTED`
+    deepest import chains (counting every import, inside functions too), printed by the architecture test
+    (``pytest -s``) and at the end of a session that ran it (``tests/conftest.py``)."""
+    sizes = sorted(module_sizes().items(), key=lambda item: (-item[1], item[0]))[:REPORTED]
+    chains = sorted(_depths(import_graph()).values(), key=lambda c: (-len(c), c))[:REPORTED]
+    return ([f"the {REPORTED} largest modules (lines):"] + [f"  {n:5d}  {path}" for path, n in sizes]
+            + [f"the {REPORTED} deepest import chains (modules):"] + [f"  {len(c):5d}  {' -> '.join(c)}" for c in chains])
+
+
+def test_the_report_lists_the_largest_modules_and_the_deepest_chains():
+    """A report, not a limit: a module's size and an import chain's depth are printed for a reviewer to
+    read; the test fails only if the report cannot be made or misses what it measures."""
+    sizes, chains = module_sizes(), _depths(import_graph())
+    assert len(sizes) > 100 and len(chains["magexp.__main__"]) > 3  # the walks saw the package and its layers
+    lines = report()
+    largest = max(sizes.items(), key=lambda item: item[1])
+    deepest = max(chains.values(), key=len)
+    assert len(lines) == 2 * REPORTED + 2 and largest[0] in lines[1] and str(largest[1]) in lines[1]
+    assert lines[REPORTED + 2].split()[0] == str(len(deepest))
+    print("\n" + "\n".join(lines))
 
 
 def test_the_architecture_checks_find_what_they_look_for():
