@@ -22,6 +22,7 @@ import sys
 from magexp import paths
 from magexp.core.limits import check_limits
 from magexp.errors import guarded, stop_on_signals
+from magexp.run.folders import check_cache_folder
 from magexp.run.threads import one_blas_thread
 
 
@@ -54,8 +55,6 @@ def main(argv: list[str] | None = None) -> None:
 def start(name: str, args: list[str]) -> None:
     """Subcommand ``name`` on ``args``, once the limits' variables are numbers and the run cache's folder is
     allowed (not inside ``results/``)."""
-    from magexp.run.guard import check_cache_folder  # imports numpy: after one_blas_thread()
-
     check_limits()  # every MAGEXP_MAX_* a number > 0, whether or not this command consults it
     check_cache_folder(str(paths.CACHE))
     command(name)(args)

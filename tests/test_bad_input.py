@@ -1489,7 +1489,7 @@ def test_valid_edges_are_accepted(workdir, cli):
     """The guards refuse only what they name: a folder beside results/ whose name starts the same,
     an inclination of exactly 90 degrees, folds=0 and a sweep sub-folder with no '..'."""
     beside = RESULTS.parent / f"{RESULTS.name}_not_inside"
-    from magexp.run.guard import check_destination
+    from magexp.run.folders import check_destination
 
     assert check_destination(beside, "--out") == beside.resolve()
     assert check_destination(RESULTS, "--out", canonical=True) == RESULTS.resolve()

@@ -39,7 +39,8 @@ from magexp.paths import RESULTS
 from magexp.core.limits import LIMITS, check_limits, refuse_over, show
 from magexp.run.budget import estimate_run
 from magexp.run.executor import Outputs, check_executor, make_executor, run_many
-from magexp.run.guard import OneLineParser, check_destination, check_output_folder, removed_on_failure
+from magexp.run.flags import OneLineParser
+from magexp.run.folders import check_destination, check_output_folder, removed_on_failure
 from magexp.run.progress import Progress
 
 
@@ -74,7 +75,7 @@ def select(papers: list[str], only: str | None) -> dict[str, list]:
 def check_canonical(out, *, seeds, tiny: bool) -> Path:
     """The folder ``--out`` names, if this reproduction may write there: exploration (``--seeds``,
     ``--tiny``) never into the canonical ``results/``, and no reproduction into a folder inside it
-    (:func:`magexp.run.guard.check_destination`: resolved paths).
+    (:func:`magexp.run.folders.check_destination`: resolved paths).
 
     Parameters
     ----------

@@ -41,7 +41,8 @@ from magexp.artifacts.compare import FIGURES, PATH_DIAGNOSTICS, RTOL, Comparison
 from magexp.errors import MagexpError, exit_code
 from magexp.core.limits import check_limits
 from magexp.run.files import check_file
-from magexp.run.guard import OneLineParser, check_destination
+from magexp.run.flags import OneLineParser
+from magexp.run.folders import check_destination
 
 #: how many disagreements the screen lists (the count says how many there are)
 SHOWN = 20
@@ -289,7 +290,7 @@ def results_folder(text: str, what: str) -> Path:
 def reproduction_folder(text: str | None) -> Path:
     """The folder a reproduction is computed into: ``--into`` (``text``) or :func:`scratch`; it must be new,
     empty or a results folder of an earlier reproduction (:func:`reproduce_scratch` replaces its files), and a
-    folder a command may write (:func:`magexp.run.guard.check_destination`: not inside ``results/``).
+    folder a command may write (:func:`magexp.run.folders.check_destination`: not inside ``results/``).
 
     Parameters
     ----------

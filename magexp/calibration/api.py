@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.calibration.fit import calibrate_recording, numpy_path
+from magexp.calibration.inputs import readings_array
 from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
@@ -26,7 +27,6 @@ from magexp.errors import MagexpError
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import options
-from magexp.run.guard import readings_array
 
 
 def frame_readings(frame) -> np.ndarray:

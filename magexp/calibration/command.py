@@ -18,6 +18,7 @@ from magexp.calibration.export import TARGETS as EXPORT_TARGETS, options_of as e
 from magexp.calibration.firmware import check_counts_nt, check_max_rotation
 from magexp.calibration.fit import calibrate_recording, check_flag, numpy_path
 from magexp.calibration.folder import recording_files
+from magexp.calibration.holdout import check_folds
 from magexp.calibration.options import CalibrateOptions, help_text
 from magexp.calibration.inputs import Reference, check_reference_total
 from magexp.calibration.live import is_live, kept, read_live, settings as live_settings
@@ -34,8 +35,9 @@ from magexp.errors import MagexpError, check_positive_int, exit_code
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options
-from magexp.run.guard import (check_destination, check_folds, check_hydra_keys, check_override_targets,
-                              check_override_values, check_run_values)
+from magexp.run.folders import check_destination
+from magexp.run.overrides import check_hydra_keys, check_override_targets, check_override_values
+from magexp.run.values import check_run_values
 from magexp.run.keys import check_duplicates, check_schema
 from magexp.run.runner import build
 

@@ -50,7 +50,7 @@ from magexp.calibration.firmware import (MAX_ROTATION_DEG, STANDARD_ROTATIONS, C
 from magexp.calibration.folder import check_file, file_path, recording_files
 from magexp.core.atomic import write_text
 from magexp.errors import MagexpError
-from magexp.run.guard import check_destination
+from magexp.run.folders import check_destination
 
 #: the export targets
 TARGETS = ("ardupilot", "px4", "ros", "c")
@@ -532,7 +532,7 @@ def write(out: Export, path: str | Path | None = None, *, overwrite: bool = Fals
     ------
     MagexpError
         One line for a file that exists already (without ``overwrite``, or not a calibration's), the
-        recording, a folder that does not exist, or a destination :func:`magexp.run.guard.check_destination`
+        recording, a folder that does not exist, or a destination :func:`magexp.run.folders.check_destination`
         refuses.
     """
     path = Path(".") if path is None else file_path(path, "export path")

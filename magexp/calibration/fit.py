@@ -78,7 +78,6 @@ from magexp.problems import problem_class
 from magexp.run.budget import check_calibration
 from magexp.run.compose import options, target_class
 from magexp.run.named import estimator_named
-from magexp.run.guard import check_folds
 from magexp.scenarios.search import centroid_radius
 
 #: Calibration models (:mod:`magexp.calibration.models`): ``sphere``, ``diagonal``, ``full``, ``gyro`` and ``auto``.
@@ -373,7 +372,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
     check_size(rec)
     checks, accept = check_flag(checks, "checks"), check_flag(accept, "accept")
     models_.check_margin(auto_margin)
-    folds = check_folds(folds)
+    folds = holdout.check_folds(folds)
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
     check_calibration(rec.n, folds, estimator, problem_class(objective))  # readings, folds, memory and work within magexp.run.budget's limits

@@ -46,6 +46,7 @@ from magexp.calibration.checks import GATE, MIN_READINGS
 from magexp.calibration.models import ORDER
 from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import spread
+from magexp.errors import MagexpError, check_positive_int
 
 #: Angular exclusion radius of the neighbours-excluded design (module docstring): ``arccos(2/3)`` in degrees,
 #: the half-angle of a cap holding a sixth of the sphere, as much as one of the six direction regions.
@@ -281,3 +282,21 @@ def describe(metrics: dict, *, gate: bool = False) -> str:
     if gate:
         return f"held-out spread not measured (folds={folds}), untested on directions it was not fitted to"
     return f"not measured (folds={folds}: no held-out check)"
+
+
+def check_folds(folds) -> int:
+    """The held-out check's folds: an integer >= 0 (0 or 1: no held-out check).
+
+    Parameters
+    ----------
+    folds : object
+        The folds setting.
+
+    Returns
+    -------
+    int
+        The folds.
+    """
+    if isinstance(folds, str):
+        raise MagexpError(f"folds={folds!r} is not allowed: it must be an integer >= 0 (0: no held-out check)")
+    return check_positive_int(folds, "folds", minimum=0)

@@ -201,3 +201,43 @@ def check_size(rec: Recording) -> None:
         raise MagexpError(f"{rec.name}: {rec.n} readings is not allowed: a calibration needs at least "
                           f"{MIN_READINGS} (the 12 parameters of W and the offset)")
 
+
+def readings_array(readings):
+    """``readings`` as a float array, or one line: complex numbers and masked arrays are refused
+    (their imaginary part and their mask would be dropped silently), as is anything that is not
+    numbers.
+
+    Parameters
+    ----------
+    readings : array_like
+        The readings.
+
+    Returns
+    -------
+    numpy.ndarray
+        The readings as floats.
+    """
+    if np.ma.isMaskedArray(readings):
+        raise MagexpError("masked readings are not allowed: a masked array's hidden values would be used; give "
+                          "only the valid readings (readings[~readings.mask.any(axis=1)].data)")
+    if readings is None or isinstance(readings, (bytes, dict, set)):
+        raise MagexpError(f"readings of type {type(readings).__name__} are not allowed: give an (N, 3) array, "
+                          "a DataFrame or a recording's path")
+    try:
+        raw = np.asarray(readings)
+    except (TypeError, ValueError) as exc:
+        raise MagexpError(f"readings are not allowed: they are not an array of numbers ({str(exc)[:80]})") from None
+    if np.iscomplexobj(raw):
+        raise MagexpError("complex readings are not allowed: a magnetometer reading is real; give the real (N, 3) "
+                          "array")
+    if raw.dtype.kind not in "biuf":
+        try:
+            raw = raw.astype(float)
+        except (TypeError, ValueError):
+            raise MagexpError(f"readings of type {raw.dtype} are not allowed: every value must be a number") from None
+        if np.iscomplexobj(raw):
+            raise MagexpError("complex readings are not allowed: a magnetometer reading is real")
+    values = raw.astype(float)
+    if values.size and not np.all(np.abs(values[np.isfinite(values)]) <= LARGEST):
+        raise MagexpError(f"readings larger than {LARGEST:g} in magnitude are not allowed")
+    return values

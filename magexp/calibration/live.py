@@ -50,7 +50,7 @@ from magexp.calibration.live_display import Display, Progress, axis_names
 from magexp.calibration.live_stream import POLL, LineCutter, StreamFile, open_source
 from magexp.calibration.write import check_out
 from magexp.problems.kernels import numpy_only
-from magexp.run.guard import check_destination, first_missing
+from magexp.run.folders import check_destination, first_missing
 from magexp.core.ellipsoid import fit_sphere
 from magexp.core.identifiability import CELLS, coverage, direction_regions, spread
 from magexp.core.recording import evenly_spaced

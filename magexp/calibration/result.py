@@ -13,12 +13,11 @@ import numpy as np
 
 from magexp.calibration.box import CalibrationBox
 from magexp.calibration.export import export
-from magexp.calibration.inputs import Reference
+from magexp.calibration.inputs import Reference, readings_array
 from magexp.calibration.write import figure, read_parameters, save_parameters, summary, table
 from magexp.core.recording import Recording
 from magexp.errors import MagexpError
 from magexp.estimators.result import FitResult
-from magexp.run.guard import readings_array
 from magexp.scenarios.search import SearchBox
 
 

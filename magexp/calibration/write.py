@@ -40,11 +40,10 @@ from magexp.calibration.onboard import onboard_line
 from magexp.calibration.schema import FORMATS, check_parameters, read_json
 from magexp.core.atomic import _stops_held as stops_held, write_text
 from magexp.core.identifiability import CELLS
-from magexp.run.guard import check_destination
+from magexp.run.folders import check_destination, first_missing
 from magexp.core.formats import VERSION_LINE
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
-from magexp.run.guard import first_missing
 from magexp.run.provenance import provenance
 
 FILES = {"parameters": "calibration.json", "readings": "calibrated.csv", "figure": "calibration.png",

@@ -52,7 +52,7 @@ from magexp.core.formats import reader_of
 from magexp.paths import CACHE
 from magexp.problems import OBJECTIVES
 from magexp.run.codekey import code_hash, default_objective, source_stamp
-from magexp.run.guard import check_cache_folder
+from magexp.run.folders import check_cache_folder
 
 
 # ---------------------------------------------------------------------------------------------
@@ -375,7 +375,7 @@ def _folder(path: Path, root: Path) -> None:
 def write(path: Path, data: bytes, root: Path) -> None:
     """Write ``data`` to ``path`` (inside the cache folder ``root``) atomically
     (:func:`magexp.core.atomic.write_bytes`), with the permissions of :func:`_modes`. Raises ``OSError``,
-    or MagexpError for a cache folder inside ``results/`` (:func:`magexp.run.guard.check_cache_folder`)."""
+    or MagexpError for a cache folder inside ``results/`` (:func:`magexp.run.folders.check_cache_folder`)."""
     check_cache_folder(str(root))
     _folder(path.parent, root)
     write_bytes(path, data, mode=_modes(root)[0])

@@ -31,9 +31,10 @@ from omegaconf import OmegaConf
 from magexp.errors import MagexpError, guarded
 from magexp.paths import CONF
 from magexp.run.compose import GROUPS, compose_config, options, parse_overrides, register_schemas
-from magexp.run.guard import (check_destination, check_flags, check_hydra_keys, check_output_folder,
-                              check_override_targets, check_override_values, check_subdir, create_unique,
-                              first_missing, removed_on_failure)
+from magexp.run.folders import (check_destination, check_output_folder, check_subdir, create_unique, first_missing,
+                                removed_on_failure)
+from magexp.run.flags import check_flags
+from magexp.run.overrides import check_hydra_keys, check_override_targets, check_override_values
 from magexp.run.hydra_cli import check_commands, check_hydra_overrides, check_package, sweep_spelling
 from magexp.run.keys import check_duplicates
 from magexp.run.outputs import execute, print_table

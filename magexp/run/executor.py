@@ -46,6 +46,7 @@ import math
 import multiprocessing
 import os
 import pkgutil
+import re
 import signal
 import sys
 import threading
@@ -60,7 +61,6 @@ import numpy as np
 from magexp.run import cache
 from magexp.run.budget import check_runs
 from magexp.errors import MagexpError
-from magexp.run.guard import check_scheduler_address
 from magexp.run.runner import run_batch
 
 EXECUTORS = ("local", "dask")
@@ -228,7 +228,10 @@ class LocalExecutor(InlineExecutor):
         self.close()
 
 
+#: the cluster systems ``--scheduler`` may name instead of an address, each with its ``dask-jobqueue`` class
 JOBQUEUES = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster"}
+#: a Dask scheduler's address: an optional protocol, a host (a name, an IPv4 or a bracketed IPv6 address) and a port
+_ADDRESS = re.compile(r"(?:(?:tcp|tls|ucx|ws|wss)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):([0-9]{1,5})/?")
 
 
 class DaskExecutor(InlineExecutor):
@@ -294,6 +297,23 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
     if scheduler is not None and kind != "dask":
         raise MagexpError(f"--scheduler {scheduler!r} needs --executor dask")
     check_scheduler_address(scheduler)
+
+
+def check_scheduler_address(scheduler) -> None:
+    """A Dask scheduler: None (a local cluster), a cluster system (slurm, pbs, sge) or an address
+    with a port (``tcp://host:8786``, ``host:8786``).
+
+    Parameters
+    ----------
+    scheduler : str or None
+        The scheduler setting.
+    """
+    if scheduler is None or scheduler in JOBQUEUES:
+        return
+    match = _ADDRESS.fullmatch(str(scheduler))
+    if not match or not 0 < int(match.group(2)) < 65536:
+        raise MagexpError(f"--scheduler {scheduler!r} is not allowed: give tcp://HOST:PORT (e.g. tcp://node1:8786), "
+                          f"or one of {', '.join(JOBQUEUES)}")
 
 
 def jobqueue_cluster(system: str):

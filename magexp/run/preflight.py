@@ -27,7 +27,7 @@ from magexp.run.budget import Tally, check_run, check_sweep
 from magexp.run.files import check_recording_file
 from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
                                  sweep_jobs)
-from magexp.run.guard import check_run_values
+from magexp.run.values import check_run_values
 from magexp.run.hydra_cli import check_nested
 from magexp.run.keys import check_number, shape
 from magexp.run.runner import build

@@ -38,7 +38,7 @@ from magexp.core.atomic import atomic_open, write_text
 from magexp.errors import MagexpError
 from magexp.run.compose import apply_overrides, compose_config, hydra_compose, resolved
 from magexp.run.executor import check_executor, make_executor, run_many
-from magexp.run.guard import check_job_folders
+from magexp.run.folders import check_job_folders
 from magexp.run.hydra_cli import check_hydra_node
 from magexp.run.outputs import write_outputs
 from magexp.run.preflight import swept_keys
