@@ -4,7 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED, Claim, adjust, evaluate, interpolate
+from magexp.artifacts.claims import NO_RUNS, Claim, evaluate, interpolate
+from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, adjust
 from magexp.artifacts.significance import (detect_rise, detectable_paired, fisher_greater, holm, permutation_less,
                                            wilcoxon_less)
 from magexp.errors import MagexpError
@@ -100,7 +101,7 @@ def test_no_claim_the_report_states_is_false():
 def test_cell_settings_are_each_cells_first_row():
     import pandas as pd
 
-    from magexp.artifacts.claims import cell_settings
+    from magexp.artifacts.selection import cell_settings
 
     def by_groupby(table):  # the reference: a groupby over cells, each cell's first row
         out = {}

@@ -15,7 +15,7 @@ import itertools
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import HOLDS
+from magexp.artifacts.comparisons import HOLDS
 from magexp.artifacts.paper_spec import artifact_paths, papers
 from magexp.artifacts.spec import load
 from magexp.paths import RESULTS

@@ -88,7 +88,7 @@ def test_peer_round_trip_recovers_an_exact_ellipsoid(tmp_path):
 def test_compare_and_winner_use_the_report_vocabulary():
     import pandas as pd
 
-    from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
+    from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
     from magexp.perf.peers import claims
 
     idx = pd.MultiIndex.from_arrays([[str(s) for s in range(5)], ["all"] * 5])

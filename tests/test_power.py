@@ -9,7 +9,8 @@ import pytest
 from scipy.stats import binom, fisher_exact, norm
 
 from magexp.artifacts import power
-from magexp.artifacts.claims import NO_DIFFERENCE, Claim
+from magexp.artifacts.claims import Claim
+from magexp.artifacts.comparisons import NO_DIFFERENCE
 from magexp.artifacts.paper_spec import load_paper, papers
 from magexp.artifacts.families import claim_families
 from magexp.artifacts.plan import ArtifactPlan, paper_specs

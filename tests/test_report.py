@@ -5,7 +5,8 @@ import re
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, NO_RUNS, UNDECIDED
+from magexp.artifacts.claims import FAILS, NO_RUNS
+from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.artifacts.formats import markdown_table

@@ -10,7 +10,8 @@ import pytest
 from hydra.utils import instantiate
 
 from magexp.artifacts.censoring import cell_quartiles, censor_row, censored_statistic
-from magexp.artifacts.claims import Claim, evaluate, interpolate, values
+from magexp.artifacts.claims import Claim, evaluate, interpolate
+from magexp.artifacts.selection import values
 from magexp.artifacts.paper_spec import artifact_paths, load_paper
 from magexp.artifacts.spec import load
 from magexp.estimators.kalman import observed_step

@@ -41,19 +41,8 @@ better than every other) hold only when a test separates the two sides (``test:`
   estimator-side keys (``estimator``, ``estimator.*``, ``objective``) and have the same seeds,
   ``unpaired`` otherwise.
 
-Each comparison carries its ``p`` (of the claimed direction; for several pairs the largest: every
-pair must hold), the smallest ``p_min`` its test can give at its n (a signed-rank test of n
-non-zero differences: ``2^-n``; Fisher's: the most extreme table of its margins), and, where it
-detects no difference, ``detectable``: the smallest difference it would detect with
-:data:`POWER` probability at the level Holm's rule judged it at, with its own test (Fisher's by exact
-enumeration, :func:`~magexp.artifacts.significance.detect_rise`; the signed-rank test's "not computable
-(k of n ties)" where its scale is degenerate, :func:`~magexp.artifacts.significance.detect_paired`;
-:func:`~magexp.artifacts.significance.detect_unpaired`), beside the ``observed`` effect in its units. Within a paper the ``p`` of its comparison claims (sanity checks
-apart) are adjusted by Holm's step-down rule (:func:`holm`, :func:`adjust`): a comparison
-``holds`` when its ``p_adjusted`` is below :data:`ALPHA`, is ``contradicted`` when the converse's
-is, ``cannot be decided`` when ``p_min`` is not below :data:`ALPHA` (the test cannot reach it at
-this n, whatever the data), else ``no difference detected``; a threshold's or a success rate's
-outcome is ``holds`` or ``does not hold``.
+Each comparison is decided by :mod:`magexp.artifacts.comparisons` (its ``p``, ``p_min``,
+``detectable`` and Holm's adjustment within its family).
 
 Notes interpolate measured values with ``{stat:metric@key=value,key=value:format}``, e.g.
 ``{median:fun@estimator=ipso,scenario.noise=2:.3g}`` (:func:`interpolate`); a field whose
@@ -63,7 +52,6 @@ row filter (``succeeded=0``, ``seeds=10``) leaves no value prints :data:`NO_RUNS
 
 from __future__ import annotations
 
-import functools
 import operator
 import re
 from dataclasses import dataclass, field
@@ -71,11 +59,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.censoring import censored_mask, censored_statistic, censored_text, with_censored
+from magexp.artifacts.censoring import censored_mask, censored_statistic, censored_text
+from magexp.artifacts.comparisons import HOLDS, combined, compare, decide
 from magexp.artifacts.schema import Float, typed
-from magexp.artifacts.significance import (ALPHA, POWER, detect_paired, detect_rise, detect_unpaired, effect_error,
-                                          fisher_greater, holm, permutation_less, wilcoxon_less)
-from magexp.artifacts.tables import STATS, interval, matches, same, statistic
+from magexp.artifacts.selection import cell_settings, restrict, select, values
+from magexp.artifacts.significance import effect_error
+from magexp.artifacts.tables import STATS, interval, matches
 from magexp.errors import MagexpError
 
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
@@ -87,11 +76,9 @@ KINDS = ("threshold", "success", "ordering", "winner")
 #: chosen because its runs resemble the paper's numbers, shown but never counted nor tested in a family
 ROLES = ("finding", "sanity", "exploratory")
 TESTS = ("auto", "fisher", "paired", "unpaired", "intervals")
-#: outcomes of a claim; the first is the only one that counts as holding
-HOLDS, FAILS, CONTRADICTED, NO_DIFFERENCE = "holds", "does not hold", "contradicted", "no difference detected"
-UNDECIDED = "cannot be decided"
-#: cell keys that choose the method, not the readings: cells that differ only in these share their data
-ESTIMATOR_SIDE = ("estimator", "objective")
+#: the outcome of a threshold or a success rate that does not hold (a comparison's verdicts, :data:`HOLDS`
+#: the only one that counts as holding: :mod:`magexp.artifacts.comparisons`)
+FAILS = "does not hold"
 
 
 @typed
@@ -146,12 +133,12 @@ class Claim:
 
 @dataclass
 class Outcome:
-    """A claim's outcome (``result``: :data:`HOLDS`, :data:`FAILS`, :data:`CONTRADICTED`,
-    :data:`NO_DIFFERENCE` or :data:`UNDECIDED`) with its evidence: ``short`` (the numbers) and
+    """A claim's outcome (``result``: :data:`HOLDS`, :data:`FAILS`, or a comparison's other verdicts of
+    :mod:`magexp.artifacts.comparisons`) with its evidence: ``short`` (the numbers) and
     ``evidence`` (all of them). A comparison also has ``p`` (its claimed direction), ``p_contra``
     (the converse), ``p_min`` (the smallest its test can give), ``n`` (its smallest sample; of a
     threshold: the fewest runs of a selected cell),
-    ``detectable`` (module docstring) and, once :func:`adjust` has seen its family, ``family`` (its name,
+    ``detectable`` (module docstring) and, once :func:`~magexp.artifacts.comparisons.adjust` has seen its family, ``family`` (its name,
 :mod:`magexp.artifacts.families`), ``family_size``, ``p_adjusted`` and ``level``: the raw-p level Holm's
 rule judged it at, at which ``detectable`` (and ``detectable_words``) is then computed with its own test;
 ``observed``: the deciding pair's effect in the units of ``detectable`` (positive: the claimed direction)."""
@@ -172,7 +159,7 @@ rule judged it at, at which ``detectable`` (and ``detectable_words``) is then co
     family_size: int = 0
     level: float = float("nan")
     observed: float = float("nan")
-    detect: object = None  # level -> (detectable, its words): the deciding pair's (Test.detect)
+    detect: object = None  # level -> (detectable, its words): the deciding pair's (comparisons.Test.detect)
     detectable_words: str = ""
 
     def __post_init__(self):
@@ -182,65 +169,6 @@ rule judged it at, at which ``detectable`` (and ``detectable_words``) is then co
     @property
     def is_comparison(self) -> bool:
         return bool(np.isfinite(self.p))
-
-
-def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
-    """``{cell: {key: value}}`` of a runs table: its ``setting`` pairs, estimator and objective."""
-    if "cell" not in table or not len(table):
-        return {}
-    cell = table["cell"].to_numpy()
-    rows = np.flatnonzero(pd.notna(cell))
-    cells, first = np.unique(cell[rows], return_index=True)  # each cell's first row: its setting is the cell's
-    named = [k for k in ("estimator", "objective", "scenario", "case") if k in table]
-    columns = {c: table[c].to_numpy()[rows[first]].tolist() for c in ["setting", *named] if c in table}
-    records = [dict(zip(columns, values)) for values in zip(*columns.values())] if columns else [{}] * len(cells)
-    out = {}
-    for ci, first in zip(cells.tolist(), records):
-        pairs = dict(p.split("=", 1) for p in str(first.get("setting", "") or "").split(";") if "=" in p)
-        for key in named:
-            if key not in pairs:
-                pairs[key] = first[key]
-        out[int(ci)] = pairs
-    return out
-
-
-def _restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict, dict]:
-    """Apply the row filters of ``where``; return the rows, the rest of ``where`` (the cell settings
-    to match) and the cells' settings (:func:`cell_settings`, the same for any of a cell's rows):
-    ``seeds: n`` keeps the first ``n`` seeds (a conclusion at n and 2n seeds), ``succeeded: 1`` the
-    successful runs (any runs column that is not a setting filters rows by its value)."""
-    where = dict(where)
-    if "seeds" in where:
-        table = table[table.seed < int(where.pop("seeds"))]
-    settings = cell_settings(table)
-    keys = {k for s in settings.values() for k in s}
-    for key in [k for k in where if k not in keys and k in table]:
-        value = where.pop(key)
-        table = table[[same(v, value) for v in table[key]]]
-    return table, where, settings
-
-
-def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
-    """The runs of every cell whose settings include every ``key: value`` of ``where`` (after the
-    row filters of :func:`_restrict`)."""
-    table, where, settings = _restrict(table, where)
-    keep = [ci for ci, s in settings.items() if matches(where, s)]
-    return table[table.cell.isin(keep)]
-
-
-def values(runs: pd.DataFrame, metric: str, stat: str) -> np.ndarray:
-    """The per-seed values a statistic is taken over (``succeeded`` for ``success_rate``); a censored
-    value (:mod:`magexp.artifacts.censoring`) is ``+inf``, never dropped."""
-    if stat == "success_rate":
-        column = runs["succeeded"] if "succeeded" in runs else pd.Series(dtype=float)
-        return column.dropna().astype(float).to_numpy()
-    frame = with_censored(runs)
-    try:
-        v = frame[metric] if metric in frame else frame.eval(metric)
-    except Exception as exc:
-        raise MagexpError(f"metric {metric!r} is not a column or an expression of the runs' columns: {exc}") from None
-    v = np.asarray(v, float)
-    return v[np.isfinite(v) | censored_mask(runs, metric)]
 
 
 def _name(where: dict) -> str:
@@ -257,124 +185,6 @@ def _describe(where: dict, v: np.ndarray, stat: str) -> tuple[float, tuple, str]
     lo, hi = interval(v, stat=stat)
     shown = f" [95 % CI {lo:.4g}, {hi:.4g}]" if np.isfinite(lo) and np.isfinite(hi) else ""
     return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g}{shown} (n={len(v)})"
-
-
-def _paired(table: pd.DataFrame, a: dict, b: dict, metric: str) -> tuple[np.ndarray, np.ndarray] | None:
-    """Per-seed values of ``metric`` of the single cells ``a`` and ``b`` matched on seed, when they
-    share their seeds and differ only in :data:`ESTIMATOR_SIDE` keys (then a seed is the same
-    readings for both); else None."""
-    ta, tb = select(table, a), select(table, b)
-    if ta.cell.nunique() != 1 or tb.cell.nunique() != 1 or ta.cell.iloc[0] == tb.cell.iloc[0]:
-        return None
-    settings = cell_settings(table)
-    sa, sb = settings[int(ta.cell.iloc[0])], settings[int(tb.cell.iloc[0])]
-    data_side = lambda s: {k: v for k, v in s.items() if k not in ESTIMATOR_SIDE and not k.startswith("estimator.")}
-    if data_side(sa) != data_side(sb) or set(ta.seed) != set(tb.seed):
-        return None
-    va = pd.Series(_column(ta, metric), index=ta.seed)
-    vb = pd.Series(_column(tb, metric), index=tb.seed).reindex(va.index)
-    return va.to_numpy(float), vb.to_numpy(float)
-
-
-def _column(runs: pd.DataFrame, metric: str) -> np.ndarray:
-    """``metric`` per run (NaN kept: pairs stay aligned)."""
-    try:
-        return np.asarray(runs[metric] if metric in runs else runs.eval(metric), float)
-    except Exception as exc:
-        raise MagexpError(f"metric {metric!r} is not a column or an expression of the runs' columns: {exc}") from None
-
-
-@dataclass(frozen=True)
-class Test:
-    """One pair's test: the one-sided p of the claim (``p_hold``) and of its converse (``p_contra``),
-    the smallest p the test can give at its n (``p_min``), the pair's smallest sample ``n``, the
-    observed effect in the claimed direction (``observed``: a success-rate rise, a per-seed shift, a
-    difference of the statistic), a text, and ``detect``: ``level -> (detectable, words)``, the
-    difference it would detect with :data:`POWER` at that level (in the units of ``observed``)."""
-
-    name: str
-    p_hold: float
-    p_contra: float
-    p_min: float
-    n: int
-    observed: float
-    text: str
-    detect: object
-
-
-def decide(p: float, p_contra: float, p_min: float, alpha: float = ALPHA) -> str:
-    """The outcome of a comparison from its p-values (module docstring): :data:`UNDECIDED` when even
-    the smallest attainable p is not below ``alpha``."""
-    if not p_min < alpha:
-        return UNDECIDED
-    if p < alpha:
-        return HOLDS
-    return CONTRADICTED if p_contra < alpha else NO_DIFFERENCE
-
-
-def compare(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, stats: tuple, cis: tuple) -> Test:
-    """The test of "the cells ``better`` beat the cells ``worse``" by the claim's ``test``."""
-    test, pair = _test_of(claim, table, better, worse)
-    if test == "fisher":
-        return _fisher_test(claim, table, better, worse)
-    if test == "paired":
-        return _paired_test(claim, pair or _paired(table, better, worse, claim.metric))
-    return _unpaired_test(claim, table, better, worse, cis)
-
-
-def _test_of(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> tuple[str, tuple | None]:
-    """The test of a comparison and the paired values ``test: auto`` found: ``fisher`` for success
-    rates, ``paired`` for two single cells with the same seeds and scenario, else ``unpaired``."""
-    if claim.test != "auto":
-        return claim.test, None
-    if claim.stat == "success_rate":
-        return "fisher", None
-    pair = _paired(table, better, worse, claim.metric)
-    return ("paired" if pair is not None else "unpaired"), pair
-
-
-def _fisher_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict) -> Test:
-    """Fisher's exact test of the success counts; its smallest p: the most extreme table of its margins."""
-    ka, kb = (values(select(table, w), claim.metric, "success_rate") for w in (better, worse))
-    if claim.better == "lower":  # fewer successes is better: swap the roles
-        ka, kb = kb, ka
-    (a, na), (b, nb) = (int(ka.sum()), len(ka)), (int(kb.sum()), len(kb))
-    p_hold, p_contra = fisher_greater(a, na, b, nb), fisher_greater(b, nb, a, na)
-    top = min(na, a + b)
-    p_min = fisher_greater(top, na, a + b - top, nb)
-    rise = a / na - b / nb if na and nb else np.nan
-    return Test("fisher", p_hold, p_contra, p_min, min(na, nb), rise,
-                f"{a} of {na} vs {b} of {nb} seeds succeed, Fisher p = {p_hold:.3g}",
-                functools.partial(detect_rise, b / nb if nb else np.nan, na, nb))
-
-
-def _paired_test(claim: Claim, pair: tuple | None) -> Test:
-    """The one-sided Wilcoxon signed-rank test of the per-seed differences of ``pair`` (the two
-    cells' values on the same seeds); its smallest p: ``2^-n`` for n non-zero differences."""
-    if pair is None:
-        raise MagexpError(f"claim {claim.id!r}: test: paired needs two single cells with the same seeds and scenario")
-    sign = 1 if claim.better == "lower" else -1
-    d = sign * (pair[0] - pair[1])  # below zero: the first is better
-    d = d[np.isfinite(d)]
-    p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
-    wins, losses = int((d < 0).sum()), int((d > 0).sum())
-    return Test("paired", p_hold, p_contra, 0.5 ** (wins + losses), d.size, -float(np.median(d)) if d.size else np.nan,
-                f"paired Wilcoxon p = {p_hold:.3g} (first better on {wins}, worse on {losses}, "
-                f"equal on {d.size - wins - losses} of {d.size} seeds)", functools.partial(detect_paired, d))
-
-
-def _unpaired_test(claim: Claim, table: pd.DataFrame, better: dict, worse: dict, cis: tuple) -> Test:
-    """The one-sided permutation test (:func:`permutation_less`) of ``stat`` of two sets of runs that
-    share no readings."""
-    a, b = (values(select(table, w), claim.metric, claim.stat) for w in (better, worse))
-    if min(len(a), len(b)) < 1:
-        raise MagexpError(f"claim {claim.id!r}: a side of the comparison has no runs")
-    p_less, p_more, p_min = permutation_less(a, b, claim.stat)
-    p_hold, p_contra = (p_less, p_more) if claim.better == "lower" else (p_more, p_less)
-    sign = 1 if claim.better == "lower" else -1
-    return Test("unpaired", p_hold, p_contra, p_min, min(len(a), len(b)),
-                sign * (statistic(b, claim.stat) - statistic(a, claim.stat)),
-                f"permutation p = {p_hold:.3g} (n = {len(a)}, {len(b)})", functools.partial(detect_unpaired, *cis))
 
 
 def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
@@ -395,7 +205,7 @@ def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
 
 def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
     """``kind: threshold | success``: ``stat`` of every selected cell against ``op value``."""
-    table, where, cells = _restrict(table, claim.where)
+    table, where, cells = restrict(table, claim.where)
     present = set(table.cell.unique().tolist())  # cells with rows left after the row filters
     chosen = [ci for ci, s in cells.items() if matches(where, s) and ci in present]
     if not chosen:
@@ -430,87 +240,14 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
              else [(0, j) for j in range(1, len(stats))])
     tests = [compare(claim, table, claim.cells[i], claim.cells[j], (stats[i], stats[j]), (cis[i], cis[j]))
              for i, j in pairs]
-    combined = _combined(tests)
-    result = decide(combined["p"], combined["p_contra"], combined["p_min"])
+    joined = combined(tests)
+    result = decide(joined["p"], joined["p_contra"], joined["p_min"])
     head = f"{stat} of {claim.metric} ({claim.better} is better): "
     what = "" if stat == "success_rate" else f"{STAT_WORDS.get(stat, stat)} {claim.metric} "
     short = "; ".join(t.text if t.name == "fisher" else f"{what}{_short_value(stats[i])} vs {_short_value(stats[j])}, {t.text}"
                       for (i, j), t in zip(pairs, tests))
     return Outcome(claim, result == HOLDS, head + "; ".join(parts) + "; one-sided tests: " + "; ".join(t.text for t in tests),
-                   result=result, short=short, **combined)
-
-
-def _combined(tests: list[Test]) -> dict:
-    """The :class:`Outcome` fields of a claim of several pairs: every pair must hold (``p``: the
-    largest), one the other way contradicts it (``p_contra``: the smallest times the number of
-    pairs), the largest ``p_min``, the smallest ``n``; the deciding pair's (the largest p) test,
-    observed effect and ``detectable``, at :data:`ALPHA` until :func:`adjust` knows its level."""
-    deciding = max(tests, key=lambda t: t.p_hold)
-    detectable, words = deciding.detect(ALPHA)
-    return {"p": deciding.p_hold, "p_contra": min(1.0, len(tests) * min(t.p_contra for t in tests)),
-            "p_min": max(t.p_min for t in tests), "n": min(t.n for t in tests), "detectable": detectable,
-            "detectable_words": words, "test": deciding.name, "observed": deciding.observed, "detect": deciding.detect}
-
-
-def adjust(outcomes: list[Outcome], families: list[str] | None = None) -> list[Outcome]:
-    """Holm's correction within each family of comparisons (``families``: each outcome's family,
-    :func:`magexp.artifacts.families.claim_families`; default: one family of every comparison that is not a
-    sanity check). A sanity check or an exploratory claim keeps its own p. Each comparison gets its
-    ``family``, ``family_size``, ``p_adjusted`` and ``level`` (``alpha / (m - rank)``, its step of Holm's
-    rule); its result is decided again on ``p_adjusted`` (:func:`decide`) and its evidence names the family.
-
-    Parameters
-    ----------
-    outcomes : list of Outcome
-        One paper's outcomes.
-    families : list of str, optional
-        The family of each outcome, in order.
-
-    Returns
-    -------
-    list of Outcome
-        ``outcomes``, changed in place.
-    """
-    for o, name in zip(outcomes, families or [""] * len(outcomes)):
-        o.family = name or ("sanity" if o.claim.role == "sanity" else "primary")
-    groups: dict[str, list[Outcome]] = {}
-    for o in (o for o in outcomes if o.is_comparison):
-        groups.setdefault(o.family, []).append(o)
-    for name, family in groups.items():
-        _adjust_family(family, alone=name in ALONE)
-    return outcomes
-
-
-def _adjust_family(family: list[Outcome], alone: bool) -> None:
-    """Holm's rule over one family's comparisons (each at its own p when ``alone``), in place."""
-    m = 1 if alone else len(family)
-    p_adj = [o.p for o in family] if alone else holm([o.p for o in family])
-    p_con = [o.p_contra for o in family] if alone else holm([o.p_contra for o in family])
-    rank = {id(o): r for r, o in enumerate(sorted(family, key=lambda o: o.p))}
-    for o, p, pc in zip(family, p_adj, p_con):
-        o.family_size, o.p_adjusted, o.level = m, p, ALPHA / (1 if alone else m - rank[id(o)])
-        if o.detect is not None:
-            o.detectable, o.detectable_words = o.detect(o.level)
-        o.result = decide(p, pc, o.p_min)
-        o.holds = o.result == HOLDS
-        note = _adjusted_note(o, m)
-        o.short, o.evidence = f"{o.short}; {note}", f"{o.evidence}; {note}"
-
-
-#: families whose comparisons are judged alone, each at its own p (never in a Holm family)
-ALONE = ("sanity", "exploratory")
-
-
-def _adjusted_note(o: Outcome, m: int) -> str:
-    """What the evidence of a comparison adds once its family is known: the adjusted p, and what it
-    could detect (no difference) or why it cannot decide."""
-    note = f"{o.p_adjusted:.3g} after Holm over {m} {o.family} tests" if m > 1 else f"p = {o.p:.3g}"
-    if o.result == UNDECIDED:
-        return f"{note}; cannot be decided at n = {o.n}: its smallest p is {o.p_min:.3g}"
-    if o.result == NO_DIFFERENCE and o.detectable_words:
-        return (f"{note}; detectable at {POWER:.0%} power at its level {o.level:.3g}: {o.detectable_words} "
-                f"(observed: {_short_value(o.observed)})")
-    return note
+                   result=result, short=short, **joined)
 
 
 def _short_value(v: float) -> str:

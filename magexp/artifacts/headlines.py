@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import HOLDS, NO_DIFFERENCE, adjust, evaluate, interpolate
+from magexp.artifacts.claims import evaluate, interpolate
+from magexp.artifacts.comparisons import HOLDS, NO_DIFFERENCE, adjust
 from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
@@ -53,7 +54,7 @@ def runs_reader(root: Path, paper: str):
 def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
     """``(artifact, Outcome)`` of every claim of ``specs`` (one paper) whose runs table (``runs(name)``)
     has rows, Holm-adjusted within its family (:func:`magexp.artifacts.families.claim_families`,
-    :func:`magexp.artifacts.claims.adjust`).
+    :func:`magexp.artifacts.comparisons.adjust`).
 
     Parameters
     ----------

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from magexp.artifacts.claims import ALONE, ESTIMATOR_SIDE
+from magexp.artifacts.comparisons import ALONE, ESTIMATOR_SIDE
 from magexp.artifacts.significance import ALPHA, N_PERM, POWER, effect_kind, effect_words, fisher_power
 from magexp.artifacts.tables import STATS
 
@@ -61,7 +61,7 @@ def comparison_test(claim) -> str:
     """The test a comparison claim will be judged with, read from the claim alone: ``fisher`` for a
     success rate, ``unpaired`` or ``paired`` where the claim says so; under ``test: auto``, ``paired``
     when its cells differ only in method keys (``estimator``, ``estimator.*``, ``objective``: the same
-    readings), else ``unpaired`` (:func:`magexp.artifacts.claims.compare`).
+    readings), else ``unpaired`` (:func:`magexp.artifacts.comparisons.compare`).
 
     Parameters
     ----------

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from magexp.artifacts.claims import CONTRADICTED, FAILS, HOLDS, NO_DIFFERENCE, UNDECIDED
+from magexp.artifacts.claims import FAILS
+from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
 from magexp.artifacts.formats import markdown_table, write_csv
 from magexp.artifacts.paper_spec import HEADLINE_VERDICTS
 from magexp.artifacts.plots import readings as readings_plot

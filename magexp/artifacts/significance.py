@@ -207,7 +207,7 @@ def holm(p: list[float]) -> list[float]:
 
 def fisher_reject(n1: int, n2: int, level: float) -> np.ndarray:
     """The rejection region of the one-sided Fisher test at ``level``: ``R[k1, k2]`` is True where
-    :func:`fisher_greater` ``(k1, n1, k2, n2) < level`` (the rule of :func:`magexp.artifacts.claims.decide`),
+    :func:`fisher_greater` ``(k1, n1, k2, n2) < level`` (the rule of :func:`magexp.artifacts.comparisons.decide`),
     every table of both margins at once: the hypergeometric probabilities of ``k1`` given each total
     ``t = k1 + k2``, ``C(t, k1) C(N - t, n1 - k1) / C(N, n1)`` with ``N = n1 + n2`` (log-gamma, on the
     grid), summed from ``k1`` up (no loop over tables).

@@ -26,7 +26,7 @@ import functools
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, Test, decide
+from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, Test, decide
 from magexp.artifacts.significance import ALPHA, detect_paired, holm, wilcoxon_less
 from magexp.artifacts.tables import interval
 
@@ -216,7 +216,7 @@ def adjust(claims: list[dict]) -> list[dict]:
         note = f"{t.text}; Holm p = {p:.2g} of {len(claims)}"
         if c["result"] == UNDECIDED:
             note += f"; cannot be decided at n = {t.n}: its smallest p is {t.p_min:.2g}"
-        elif c["result"] == NO_DIFFERENCE:  # at its step of Holm's rule (magexp.artifacts.claims.adjust)
+        elif c["result"] == NO_DIFFERENCE:  # at its step of Holm's rule (magexp.artifacts.comparisons.adjust)
             level = ALPHA / (len(claims) - rank[id(t)])
             note += f"; detectable at 80% power at its level {level:.2g}: {t.detect(level)[1]}"
         c["evidence"] = f"{c['evidence']}; {note}"

@@ -6,7 +6,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt  # the Agg backend: chosen by magexp.artifacts.plots.style (imported with the report)
 import numpy as np
 
-from magexp.artifacts.claims import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
+from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
 from magexp.artifacts.report import PEERS_MARK
 from magexp.perf.peers import claims as peer_claims
 from magexp.perf.peers import measures
@@ -205,7 +205,7 @@ SHOWN = ("magexp_lm_gyro", "magexp_ellipsoid", "magyc_nls", "magyc_nls_sg", "mag
 
 
 def _claim(text: str, test, evidence: str, **tags) -> dict:
-    """A claim: its text, its test (:class:`magexp.artifacts.claims.Test`, decided by
+    """A claim: its text, its test (:class:`magexp.artifacts.comparisons.Test`, decided by
     :func:`magexp.perf.peers.claims.adjust`) and evidence, and ``tags`` the headline picks claims by."""
     return {"text": text, "test": test, "result": "", "evidence": evidence, **tags}
 

@@ -1,0 +1,140 @@
+"""The runs a claim or a note field is about: each cell's settings (:func:`cell_settings`), the rows of the
+cells a selection names (:func:`select`, after its row filters: :func:`restrict`), and the per-seed values a
+statistic is taken over (:func:`values`; a censored value is ``+inf``, never dropped).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.censoring import censored_mask, with_censored
+from magexp.artifacts.tables import matches, same
+from magexp.errors import MagexpError
+
+
+def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
+    """``{cell: {key: value}}`` of a runs table: its ``setting`` pairs, estimator and objective.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The runs table (a ``cell`` column; ``setting``, ``estimator``, ``objective``, ``scenario``, ``case``).
+
+    Returns
+    -------
+    dict of int to dict
+        Each cell's settings, read from its first row.
+    """
+    if "cell" not in table or not len(table):
+        return {}
+    cell = table["cell"].to_numpy()
+    rows = np.flatnonzero(pd.notna(cell))
+    cells, first = np.unique(cell[rows], return_index=True)  # each cell's first row: its setting is the cell's
+    named = [k for k in ("estimator", "objective", "scenario", "case") if k in table]
+    columns = {c: table[c].to_numpy()[rows[first]].tolist() for c in ["setting", *named] if c in table}
+    records = [dict(zip(columns, values)) for values in zip(*columns.values())] if columns else [{}] * len(cells)
+    out = {}
+    for ci, first in zip(cells.tolist(), records):
+        pairs = dict(p.split("=", 1) for p in str(first.get("setting", "") or "").split(";") if "=" in p)
+        for key in named:
+            if key not in pairs:
+                pairs[key] = first[key]
+        out[int(ci)] = pairs
+    return out
+
+
+def restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict, dict]:
+    """Apply the row filters of ``where``; return the rows, the rest of ``where`` (the cell settings
+    to match) and the cells' settings (:func:`cell_settings`, the same for any of a cell's rows):
+    ``seeds: n`` keeps the first ``n`` seeds (a conclusion at n and 2n seeds), ``succeeded: 1`` the
+    successful runs (any runs column that is not a setting filters rows by its value).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The runs table.
+    where : dict
+        A selection: cell settings and row filters.
+
+    Returns
+    -------
+    tuple
+        ``(rows, settings to match, cell settings)``.
+    """
+    where = dict(where)
+    if "seeds" in where:
+        table = table[table.seed < int(where.pop("seeds"))]
+    settings = cell_settings(table)
+    keys = {k for s in settings.values() for k in s}
+    for key in [k for k in where if k not in keys and k in table]:
+        value = where.pop(key)
+        table = table[[same(v, value) for v in table[key]]]
+    return table, where, settings
+
+
+def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
+    """The runs of every cell whose settings include every ``key: value`` of ``where`` (after the
+    row filters of :func:`restrict`).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The runs table.
+    where : dict
+        The selection.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The selected rows.
+    """
+    table, where, settings = restrict(table, where)
+    keep = [ci for ci, s in settings.items() if matches(where, s)]
+    return table[table.cell.isin(keep)]
+
+
+def values(runs: pd.DataFrame, metric: str, stat: str) -> np.ndarray:
+    """The per-seed values a statistic is taken over (``succeeded`` for ``success_rate``); a censored
+    value (:mod:`magexp.artifacts.censoring`) is ``+inf``, never dropped.
+
+    Parameters
+    ----------
+    runs : pandas.DataFrame
+        The selected runs.
+    metric : str
+        A runs column or an expression of columns (``pandas.eval``).
+    stat : str
+        The statistic (:data:`magexp.artifacts.tables.STATS`, or ``success_rate``).
+
+    Returns
+    -------
+    numpy.ndarray
+        The values, censored ones as ``+inf``.
+    """
+    if stat == "success_rate":
+        succeeded = runs["succeeded"] if "succeeded" in runs else pd.Series(dtype=float)
+        return succeeded.dropna().astype(float).to_numpy()
+    v = column(with_censored(runs), metric)
+    return v[np.isfinite(v) | censored_mask(runs, metric)]
+
+
+def column(runs: pd.DataFrame, metric: str) -> np.ndarray:
+    """``metric`` per run (NaN kept: pairs stay aligned).
+
+    Parameters
+    ----------
+    runs : pandas.DataFrame
+        The runs.
+    metric : str
+        A runs column or an expression of columns.
+
+    Returns
+    -------
+    numpy.ndarray
+        One float per run.
+    """
+    try:
+        return np.asarray(runs[metric] if metric in runs else runs.eval(metric), float)
+    except Exception as exc:
+        raise MagexpError(f"metric {metric!r} is not a column or an expression of the runs' columns: {exc}") from None
