@@ -22,6 +22,8 @@ import re
 import numpy as np
 import pandas as pd
 
+from magexp.core.metrics import rms
+
 #: a statistic over the seeds of a selection (claims, note fields, bootstrap intervals)
 STATS = {
     "median": lambda v, axis=None: np.median(v, axis=axis),
@@ -29,7 +31,7 @@ STATS = {
     "max": lambda v, axis=None: np.max(v, axis=axis),
     "min": lambda v, axis=None: np.min(v, axis=axis),
     # RMS over seeds (of error / sqrt(tr CRB) it is 1 for an efficient estimator)
-    "rms": lambda v, axis=None: np.sqrt(np.mean(np.square(v), axis=axis)),
+    "rms": lambda v, axis=None: rms(v, axis=axis),
     "lo": lambda v, axis=None: np.quantile(v, 0.025, axis=axis),
     "hi": lambda v, axis=None: np.quantile(v, 0.975, axis=axis),
     "q25": lambda v, axis=None: np.quantile(v, 0.25, axis=axis),
