@@ -14,9 +14,6 @@ paper's findings no power.
 
 from __future__ import annotations
 
-#: the families, in the order the report lists them
-FAMILIES = ("primary", "sensitivity", "magexp", "sanity", "exploratory")
-
 
 def claim_families(headlines: list, specs: list) -> dict[str, str]:
     """``{"<artifact>.<claim id>": family}`` of every claim of a paper (module docstring).

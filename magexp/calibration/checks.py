@@ -423,7 +423,7 @@ def _region_check(metrics: dict, t: dict) -> tuple | None:
 
 def _rms_check(rms: float, reference: float, to_mg, t: dict, noise: float = 0.0) -> tuple | None:
     """``(check, value, threshold, text)`` when the residual RMS, less the readings' own noise ``noise``
-    (the RMS of the calibrated magnitudes' reading-to-reading noise, :func:`magexp.calibration.fit.noise_of`;
+    (the RMS of the calibrated magnitudes' reading-to-reading noise, :func:`magexp.calibration.quality.noise_of`;
     ``sqrt(rms² - noise²)``: what a calibration could still remove), exceeds its threshold (:func:`gate`)."""
     left = float(np.sqrt(max(rms**2 - noise**2, 0.0)))
     if to_mg is not None and left * to_mg > t["max_rms_mG"]:

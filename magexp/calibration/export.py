@@ -438,7 +438,7 @@ def firmware_correction(cal) -> Correction | str:
 
 
 def of_calibration(cal, target: str, **options) -> Export:
-    """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.Calibration` ``cal``:
+    """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.result.Calibration` ``cal``:
     ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``
     to the calibration's. Refuses (one line) before anything is written: a caller renders first.
 
@@ -476,7 +476,7 @@ def of_calibration(cal, target: str, **options) -> Export:
 
 
 def export(cal, target: str, path: str | Path | None = None, *, overwrite: bool = False, **options) -> Path:
-    """Write ``target``'s file for the :class:`~magexp.calibration.Calibration` ``cal`` to ``path``
+    """Write ``target``'s file for the :class:`~magexp.calibration.result.Calibration` ``cal`` to ``path``
     (a folder: :data:`FILE_NAMES` inside it; None: the working folder); an existing file is replaced only
     with ``overwrite`` and only if a calibration wrote it, never the recording (:func:`write`).
 

@@ -102,9 +102,9 @@ def _output_names(draw: bool, export: str | None) -> list[str]:
             *([export_name(export)] if export else [])]
 
 
-#: the format line of ``calibration.json`` (:func:`parameters`) and the ones :func:`read_parameters` reads
+#: the format line of ``calibration.json`` (:func:`parameters`); :func:`read_parameters` reads every one of
+#: :data:`~magexp.calibration.schema.FORMATS`
 FORMAT = FORMATS[-1]
-READABLE = FORMATS
 
 
 def parameters(cal, *, seed: int | None = None) -> dict:

@@ -124,7 +124,7 @@ def schema_of(cls) -> type:
 
 def schema_classes(group: str) -> list[type]:
     """Every class a ``_target_`` of ``conf/<group>/`` names (nested nodes and base configs included) that
-    :func:`magexp.run.guard.check_target` allows, imported: the classes whose schemas are registered.
+    :func:`magexp.run.targets.check_target` allows, imported: the classes whose schemas are registered.
 
     Parameters
     ----------
@@ -170,22 +170,6 @@ def register_schemas(groups: tuple[str, ...] = GROUPS) -> dict:
             schemas[cls.__name__] = schema = schema_of(cls)
             store.store(group=f"schema/{group}", name=cls.__name__, node=schema)
     return schemas
-
-
-class _Schemas(Mapping):
-    """``{name: schema}`` of :func:`register_schemas`, registered on first use."""
-
-    def __getitem__(self, name):
-        return register_schemas()[name]
-
-    def __iter__(self):
-        return iter(register_schemas())
-
-    def __len__(self):
-        return len(register_schemas())
-
-
-SCHEMAS = _Schemas()
 
 
 # ---------------------------------------------------------------------------------------------

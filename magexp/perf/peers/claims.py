@@ -32,8 +32,6 @@ from magexp.artifacts.tables import interval
 
 #: the combined error of a simulated run (module docstring)
 ERROR = "worse_error"
-#: the methods a winner is chosen among: every one but the bounds and the raw readings
-NOT_METHODS = ("none", "bound")
 
 
 def frame_of(rows) -> pd.DataFrame:
