@@ -24,6 +24,7 @@ import functools
 import importlib
 import importlib.util
 import inspect
+import itertools
 import re
 import types
 import typing
@@ -32,8 +33,6 @@ from dataclasses import field as _field, make_dataclass
 from typing import Any, Dict, List, Optional
 
 from hydra import compose, initialize_config_dir
-from hydra._internal.config_loader_impl import ConfigLoaderImpl
-from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
 from hydra.core.config_store import ConfigStore
 from hydra.core.global_hydra import GlobalHydra
 from hydra.core.override_parser.overrides_parser import OverridesParser
@@ -476,12 +475,21 @@ def _apply(cfg: DictConfig, overrides: list[Override], config_name: str) -> Dict
             raise_if_stopped()  # a stop received meanwhile ends the command as the signal asks
             raise
         try:
-            ConfigLoaderImpl._apply_overrides_to_config([override], cfg)
+            _update(cfg, override)
         except Exception as exc:  # the schema refused the value's type
             raise_if_stopped()  # ...or OmegaConf swallowed a SIGTERM that arrived during the update
             if not _assigned(cfg, key, override.value()):
                 raise bad_value(key, text, exc) from None
     return cfg
+
+
+def _update(cfg: DictConfig, override: Override) -> None:
+    """Hydra's override step for a ``key=value`` of a key ``cfg`` has: OmegaConf's merging update (the
+    schema's type checks the value), a ``key@package`` refused as Hydra refuses it."""
+    if override.package is not None:
+        raise ValueError(f"Override {override.input_line} looks like a config group override, but config group "
+                         f"'{override.key_or_group}' does not exist.")
+    OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
 
 
 def _assigned(cfg: DictConfig, key: str, value) -> bool:
@@ -537,10 +545,31 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
     return _apply(cfg, [ov for ov in parsed if _is_value(ov)], config_name)
 
 
+def check_discrete(parsed: list[Override]) -> None:
+    """Refuse, in one line, a swept override whose values cannot be listed (``interval(...)``: a sweep
+    lists its jobs).
+
+    Parameters
+    ----------
+    parsed : list of Override
+        Hydra's parsed overrides (:func:`parse_overrides`).
+
+    Raises
+    ------
+    MagexpError
+        One line naming the override.
+    """
+    for ov in parsed:
+        if ov.is_sweep_override() and not ov.is_discrete_sweep():
+            raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
+                              "group's glob() can be swept")
+
+
 def sweep_jobs(overrides: list[str]) -> list[list[str]]:
-    """The jobs of a ``-m`` sweep as Hydra's basic sweeper forms them (its ``split_arguments``): the
-    cartesian product of every override's values, first key slowest; ``a,b``, ``range(...)``,
-    ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's config loader).
+    """The jobs of a ``-m`` sweep: the cartesian product of every override's values, first key slowest,
+    a key given twice keeping its place and its last values (Hydra's basic sweeper's order); ``a,b``,
+    ``range(...)``, ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's
+    config loader), each enumerated by Hydra's parser.
 
     Parameters
     ----------
@@ -551,11 +580,21 @@ def sweep_jobs(overrides: list[str]) -> list[list[str]]:
     -------
     list of list of str
         Each job's overrides.
+
+    Raises
+    ------
+    MagexpError
+        An override whose values cannot be listed (``interval(...)``).
     """
     with _hydra() as hydra:
         parsed = parse_overrides(overrides, parser=OverridesParser.create(config_loader=hydra.config_loader()))
-        (jobs,) = BasicSweeper.split_arguments(parsed, None)
-    return jobs
+        check_discrete(parsed)
+        values = {}
+        for ov in parsed:
+            key = ov.get_key_element()
+            texts = ov.sweep_string_iterator() if ov.is_sweep_override() else [ov.get_value_element_as_str()]
+            values[key] = [f"{key}={text}" for text in texts]
+    return [list(job) for job in itertools.product(*values.values())]
 
 
 def resolved(cfg: DictConfig) -> dict:

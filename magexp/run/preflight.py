@@ -1,6 +1,6 @@
 """Checks made before any computation, so that a user mistake is one line and nothing is written.
 
-* :func:`expand_sweep`: every job of a ``-m`` sweep, as Hydra's basic sweeper forms them, within the runs limit;
+* :func:`expand_sweep`: every job of a ``-m`` sweep, the jobs magexp's sweeper launches, within the runs limit;
 * :func:`validate_runs`: every job composed (:func:`magexp.run.compose.compose_config`) and every
   distinct scenario and estimator built, so that each value is checked by its constructor
   before the first job starts; the data of each distinct scenario is checked against the
@@ -25,8 +25,8 @@ from magexp.problems import make_problem
 from magexp.paths import SHARED_DATA
 from magexp.run.budget import Tally, check_run, check_sweep
 from magexp.run.files import check_recording_file
-from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
-                                 sweep_jobs)
+from magexp.run.compose import (GROUPS, check_choice, check_discrete, compose_config, options, override_value,
+                                 parse_overrides, resolved, sweep_jobs)
 from magexp.run.guard import check_run_values
 from magexp.run.hydra_cli import check_nested
 from magexp.run.keys import check_number, shape
@@ -37,7 +37,7 @@ SCHEDULES = "magexp.estimators.schedules."
 
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
-    """The jobs of a sweep (Hydra's basic sweeper: :func:`magexp.run.compose.sweep_jobs`), once their
+    """The jobs of a sweep (:func:`magexp.run.compose.sweep_jobs`, in the order Hydra's basic sweeper gives), once their
     count is within the runs limit (:func:`magexp.run.budget.check_sweep`).
 
     Parameters
@@ -51,10 +51,7 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
         As :func:`magexp.run.compose.sweep_jobs`.
     """
     parsed = parse_overrides(overrides)
-    for ov in parsed:
-        if ov.is_sweep_override() and not ov.is_discrete_sweep():
-            raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
-                              "group's glob() can be swept")
+    check_discrete(parsed)
     check_nested(parsed)
     check_sweep(parsed, lambda key: options(key) if key in GROUPS else [])
     return sweep_jobs(overrides)
