@@ -69,12 +69,12 @@ def planned_jobs(overrides: list[str]) -> list[list[str]]:
     Parameters
     ----------
     overrides : list of str
-        The sweep's overrides.
+        As :func:`plan_jobs`.
 
     Returns
     -------
     list of list of str
-        Each job's overrides.
+        As :func:`magexp.run.preflight.sweep_jobs`.
     """
     jobs = _PLANNED.pop(tuple(overrides), None)
     return jobs if jobs is not None else expand_sweep(overrides)
