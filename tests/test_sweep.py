@@ -209,7 +209,7 @@ def test_bad_launcher_settings_are_one_line_before_anything_is_written(tmp_path,
 
 
 def test_a_sweep_composes_each_cell_once_and_each_job_reads_hydras_config(tmp_path, cli, monkeypatch):
-    """``-m scenario=ding2024_exp1 estimator=ellipsoid,lm seed=0,1``: two cells of two seeds, each cell
+    """``-m scenario=ding2024_exp1 estimator=ellipsoid,lm seed=0,1``: two cells of two seeds, each group choice
     composed by Hydra at most once in the process (its checks and its launch share it); every job's
     ``config.yaml`` is ``hydra.compose`` of that job's own overrides."""
     from omegaconf import OmegaConf
@@ -228,14 +228,37 @@ def test_a_sweep_composes_each_cell_once_and_each_job_reads_hydras_config(tmp_pa
     proc = cli("-m", "scenario=ding2024_exp1", "estimator=ellipsoid,lm", "seed=0,1", f"hydra.sweep.dir={tmp_path / 's'}",
                cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    cells = {("scenario=ding2024_exp1", "estimator=ellipsoid"), ("scenario=ding2024_exp1", "estimator=lm")}
-    assert len(set(composed)) == len(composed) and set(composed) <= cells  # none twice (once, unless before)
+    choices = {(), ("scenario=ding2024_exp1",), ("estimator=ellipsoid",), ("estimator=lm",)}  # the defaults, each choice
+    assert len(set(composed)) == len(composed) and set(composed) <= choices  # none twice (once, unless before)
     for job in (["scenario=ding2024_exp1", f"estimator={e}", f"seed={s}"] for e in ("ellipsoid", "lm") for s in (0, 1)):
         folder = next(p.parent.parent for p in (tmp_path / "s").glob("*/.hydra/overrides.yaml")
                       if yaml.safe_load(p.read_text()) == job)
         expected = compose.resolved(hydra_compose(tuple(job)))
         assert yaml.safe_load((folder / "config.yaml").read_text()) == expected
         assert OmegaConf.to_yaml(expected) == (folder / "config.yaml").read_text()
+
+
+def test_a_sweep_is_expanded_once_and_its_checked_jobs_are_launched_in_batches(tmp_path, cli, monkeypatch):
+    """``magexp -m``: the sweep's jobs are listed once (the list every job was checked against), and magexp's
+    sweeper launches that list, ``hydra.sweeper.max_batch_size`` jobs at a time, numbered across batches."""
+    from magexp.run import preflight
+    from magexp.run.preflight import sweep_jobs
+
+    expansions = []
+
+    def counted(overrides):
+        expansions.append(list(overrides))
+        return sweep_jobs(overrides)
+
+    monkeypatch.setattr(preflight, "sweep_jobs", counted)
+    proc = cli("-m", "estimator=ellipsoid,lm", "seed=0,1", "hydra.sweeper.max_batch_size=3",
+               f"hydra.sweep.dir={tmp_path / 's'}", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert expansions == [["estimator=ellipsoid,lm", "seed=0,1"]]
+    launched = {p.parent.parent.name: yaml.safe_load(p.read_text())
+                for p in (tmp_path / "s").glob("*/.hydra/overrides.yaml")}
+    assert launched == {str(n): job for n, job in enumerate(sweep_jobs(expansions[0]))}
+    assert (tmp_path / "s" / "multirun.yaml").is_file() and len(read_csv(tmp_path / "s" / "sweep.csv")) == 4
 
 
 def test_hydra_sweep_syntax_is_expanded_as_hydras_sweeper_does(tmp_path, cli):

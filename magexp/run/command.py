@@ -40,7 +40,7 @@ from magexp.run.keys import check_duplicates
 from magexp.run.outputs import execute, print_table
 from magexp.run.preflight import check_jobs, expand_sweep, validate_runs
 from magexp.run.provenance import version_line
-from magexp.run.sweep import check_hydra_settings
+from magexp.run.sweep import check_hydra_settings, plan_jobs
 
 RUN_DIR = "outputs/%Y-%m-%d/%H-%M-%S"     # a single run's folder (strftime), made unique
 SWEEP_DIR = "multirun/%Y-%m-%d/%H-%M-%S"  # a sweep's folder, made unique
@@ -182,6 +182,7 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
         check_output_folder(folder, "sweep folder")
         folder, created = create_unique(folder)
         hydra_overrides = [*hydra_overrides, f"hydra.sweep.dir={folder}"]
+    plan_jobs(user, jobs)  # the jobs checked are the jobs launched: the sweep expanded once
     with removed_on_failure(folder, created):  # a failed or interrupted sweep leaves nothing behind
         hydra_app(["-m", *user, *hydra_overrides])
 

@@ -2,13 +2,13 @@
 
 A run config is Hydra's composition of ``conf/config.yaml`` with one choice per config group
 (``conf/scenario/*.yaml``, ``conf/estimator/*.yaml``) and ``key=value`` overrides:
-:func:`compose_config` is ``hydra.compose``, in two of Hydra's own steps. Hydra composes the
-defaults tree of the group choices (and of any ``+key``, ``~key`` or ``hydra.*`` override) once
-per process; each ``key=value`` override is then applied to a copy by Hydra's own override step
-(:func:`apply_overrides`), as ``hydra.compose`` applies it after the defaults. An artifact's cells
-share a few group choices (``make reproduce``: 688 cells, 144 sets of choices): a Hydra compose
-of each cell (75 ms: its defaults list and a dozen YAML files read again) took 68 s of CPU to plan
-it, this 16 s (``docs/measurements.md``, "Speed twins").
+:func:`compose_config` is ``hydra.compose``, in two steps. Hydra composes each group choice once per
+process, and a set of choices takes each group's node from its own choice's composition (no config
+of a group writes outside its package); a set with a ``+key``, ``~key`` or ``hydra.*`` override is
+composed whole, once. Each ``key=value`` override is then applied to a copy with OmegaConf's update
+against the composed schema (:func:`apply_overrides`), as ``hydra.compose`` applies it after the
+defaults. The planning of ``make reproduce`` composes each scenario and each estimator once, not each
+of its sets of choices (``docs/measurements.md``, "Speed twins").
 
 Structured schemas (:func:`register_schemas`, Hydra's ConfigStore) type the scenario and estimator configs:
 a typo such as ``scenario.nosie=2`` or a value of the wrong type fails here, at compose time,
@@ -32,8 +32,6 @@ from dataclasses import field as _field, make_dataclass
 from typing import Any, Dict, List, Optional
 
 from hydra import compose, initialize_config_dir
-from hydra._internal.config_loader_impl import ConfigLoaderImpl
-from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
 from hydra.core.config_store import ConfigStore
 from hydra.core.global_hydra import GlobalHydra
 from hydra.core.override_parser.overrides_parser import OverridesParser
@@ -45,12 +43,10 @@ from magexp.errors import MagexpError, raise_if_stopped
 from magexp.paths import CONF
 from magexp.run.derived import Derived
 from magexp.run.keys import check_override
+from magexp.run.override_errors import PRIMARY, bad_value, unknown_key
 from magexp.run.targets import check_target
 
 GROUPS = ("scenario", "estimator")
-PRIMARY = "config"
-#: keys that belonged to the simulation command before calibration got its own
-CALIBRATE_KEYS = ("task", "data", "out")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -180,6 +176,12 @@ def _override_parser():
     return OverridesParser.create()
 
 
+@functools.lru_cache(maxsize=4096)
+def _parsed(text: str) -> Override:
+    """Hydra's parse of one override, kept (an :class:`Override` is not changed by its readers)."""
+    return _override_parser().parse_overrides([text])[0]
+
+
 def parse_overrides(overrides: list[str], *, parser: OverridesParser | None = None) -> list[Override]:
     """Hydra's parsed overrides (its grammar types every value), or one MagexpError line.
 
@@ -196,7 +198,9 @@ def parse_overrides(overrides: list[str], *, parser: OverridesParser | None = No
         The parsed overrides.
     """
     try:
-        return (parser or _override_parser()).parse_overrides(list(overrides))
+        if parser is None:  # each override parsed once per process: the planning of make reproduce reads 1,578
+            return [_parsed(text) for text in overrides]
+        return parser.parse_overrides(list(overrides))
     except Exception as exc:
         raise MagexpError(f"could not parse the overrides {' '.join(overrides)!r}: "
                           f"{str(exc).splitlines()[0]}") from None
@@ -270,69 +274,6 @@ def check_choice(group: str, choice: str) -> None:
         raise MagexpError(f"{group}={choice!r} is not allowed: choose one of {', '.join(names)}")
 
 
-def _keys_of(cfg: DictConfig, key: str) -> tuple[str, list[str]]:
-    """The deepest existing parent of dotted ``key`` and its keys."""
-    parts = key.split(".")
-    node, path = cfg, []
-    for part in parts[:-1]:
-        child = node.get(part) if isinstance(node, DictConfig) else None
-        if not isinstance(child, DictConfig):
-            break
-        node, path = child, path + [part]
-    return ".".join(path) or "the config", sorted(str(k) for k in node.keys()) if isinstance(node, DictConfig) else []
-
-
-def unknown_key(cfg: DictConfig, key: str, value: str, config_name: str = PRIMARY) -> MagexpError:
-    """The one-line error of an override whose key is not in the config.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config.
-    key, value : str
-        The override's key and value.
-    config_name : str
-        The primary config.
-
-    Returns
-    -------
-    MagexpError
-        The error.
-    """
-    if config_name == PRIMARY and key.split(".")[0] in CALIBRATE_KEYS:
-        return MagexpError(f"{key}={value} is not allowed: the simulation command has no {key.split('.')[0]!r}; "
-                           "calibrate a recording with `magexp calibrate data.path=<file> ...`")
-    where, keys = _keys_of(cfg, key)
-    return MagexpError(f"{key}={value} is not allowed: {where} has no key {key.split('.')[-1]!r} "
-                       f"(keys: {', '.join(keys)})")
-
-
-def bad_value(key: str, value: str, exc: BaseException) -> MagexpError:
-    """A value the schema's type refuses: one line naming the key, the value and the type wanted.
-
-    Parameters
-    ----------
-    key : str
-        The dotted key (``estimator.n_particles``).
-    value : str
-        The value as given.
-    exc : BaseException
-        OmegaConf's or Hydra's refusal (its first line, or the type it wanted, is named).
-
-    Returns
-    -------
-    MagexpError
-        The one line.
-    """
-    while exc.__cause__ is not None:  # Hydra keeps OmegaConf's reason in the cause
-        exc = exc.__cause__
-    msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-    for name, wanted in (("Integer", "an integer"), ("Float", "a number"), ("Boolean", "true or false")):
-        if f"converted to {name}" in msg:
-            return MagexpError(f"{key}={value} is not allowed: it must be {wanted}")
-    return MagexpError(f"{key}={value} is not allowed: {msg}")
-
-
 # ---------------------------------------------------------------------------------------------
 # composing
 
@@ -366,6 +307,18 @@ def _hydra(config_name: str = PRIMARY):
     else:
         with initialize_config_dir(config_dir=str(CONF), version_base=None):
             yield GlobalHydra.instance()
+
+
+def config_loader():
+    """Hydra's config loader on ``conf/`` (it lists a config group's options, which a ``glob(...)`` sweep reads).
+
+    Returns
+    -------
+    hydra.core.config_loader.ConfigLoader
+        The loader.
+    """
+    with _hydra() as hydra:
+        return hydra.config_loader()
 
 
 def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *,
@@ -419,8 +372,8 @@ def _groups() -> frozenset:
 
 
 def apply_overrides(cfg: DictConfig, overrides: list[str], *, config_name: str = PRIMARY) -> DictConfig:
-    """Apply ``key=value`` overrides to ``cfg`` with Hydra's own override step (its parser types each
-    value, OmegaConf checks it against the config's schema).
+    """Apply ``key=value`` overrides to ``cfg`` as Hydra's override step does (Hydra's parser types each
+    value, OmegaConf's update checks it against the config's schema).
 
     Parameters
     ----------
@@ -460,12 +413,21 @@ def _apply(cfg: DictConfig, overrides: list[Override], config_name: str) -> Dict
             raise_if_stopped()  # a stop received meanwhile ends the command as the signal asks
             raise
         try:
-            ConfigLoaderImpl._apply_overrides_to_config([override], cfg)
+            _update(cfg, override)
         except Exception as exc:  # the schema refused the value's type
             raise_if_stopped()  # ...or OmegaConf swallowed a SIGTERM that arrived during the update
             if not _assigned(cfg, key, override.value()):
                 raise bad_value(key, text, exc) from None
     return cfg
+
+
+def _update(cfg: DictConfig, override: Override) -> None:
+    """Hydra's override step for a ``key=value`` of a key ``cfg`` has: OmegaConf's merging update (the
+    schema's type checks the value), a ``key@package`` refused as Hydra refuses it."""
+    if override.package is not None:
+        raise ValueError(f"Override {override.input_line} looks like a config group override, but config group "
+                         f"'{override.key_or_group}' does not exist.")
+    OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
 
 
 def _assigned(cfg: DictConfig, key: str, value) -> bool:
@@ -484,6 +446,7 @@ def _assigned(cfg: DictConfig, key: str, value) -> bool:
 
 
 _COMPOSED: dict = {}  # (config name, the overrides Hydra composes with) -> Hydra's config, never handed out
+_OWN: dict = {}  # (config name, group, choice) -> whether the choice writes only its group's node (_own_package)
 
 
 def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: str = PRIMARY) -> DictConfig:
@@ -516,30 +479,51 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
         for ov in parsed:
             if ov.key_or_group in GROUPS and not ov.is_sweep_override():
                 check_choice(ov.key_or_group, ov.get_value_element_as_str())
-        _COMPOSED[config_name, defaults] = hydra_compose(defaults, config_name)
+        choices = _choices([ov for ov in parsed if not _is_value(ov)])
+        separate = choices and all(_own_package(config_name, group, choice) for group, choice in choices.items())
+        _COMPOSED[config_name, defaults] = (_assembled(choices, config_name) if separate
+                                             else hydra_compose(defaults, config_name))
     cfg = copy.deepcopy(_COMPOSED[config_name, defaults])
     return _apply(cfg, [ov for ov in parsed if _is_value(ov)], config_name)
 
 
-def sweep_jobs(overrides: list[str]) -> list[list[str]]:
-    """The jobs of a ``-m`` sweep as Hydra's basic sweeper forms them (its ``split_arguments``): the
-    cartesian product of every override's values, first key slowest; ``a,b``, ``range(...)``,
-    ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's config loader).
+def _choices(parsed: list[Override]) -> dict | None:
+    """``{group: choice}`` when ``parsed`` holds only one plain choice per group of :data:`GROUPS`, else None."""
+    plain = all(ov.key_or_group in GROUPS and ov.type == OverrideType.CHANGE and ov.package is None
+                and not ov.is_sweep_override() for ov in parsed)
+    choices = {ov.key_or_group: ov.get_value_element_as_str() for ov in parsed} if plain else {}
+    return choices if len(choices) > 1 and len(choices) == len(parsed) else None
 
-    Parameters
-    ----------
-    overrides : list of str
-        The sweep's overrides.
 
-    Returns
-    -------
-    list of list of str
-        Each job's overrides.
-    """
-    with _hydra() as hydra:
-        parsed = parse_overrides(overrides, parser=OverridesParser.create(config_loader=hydra.config_loader()))
-        (jobs,) = BasicSweeper.split_arguments(parsed, None)
-    return jobs
+def _own_package(config_name: str, group: str, choice: str) -> bool:
+    """Whether ``group=choice`` changes nothing of the default composition outside its group's node: then its node
+    is its whole contribution, and :func:`_assembled` may take it into a set of choices."""
+    def apart(cfg):
+        return {k: v for k, v in OmegaConf.to_container(cfg, resolve=False).items() if k != group}
+    if (config_name, group, choice) not in _OWN:
+        _OWN[config_name, group, choice] = (apart(_group_composed(config_name, group, choice))
+                                            == apart(_group_composed(config_name)))
+    return _OWN[config_name, group, choice]
+
+
+def _assembled(choices: dict, config_name: str) -> DictConfig:
+    """The composition of several group choices from one Hydra composition per choice, each of which writes only
+    its own group's node (:func:`_own_package`): the first group's composition takes each other group's node from
+    that group's own (``make reproduce``: each scenario and each estimator composed once)."""
+    (first, choice), *rest = choices.items()
+    cfg = copy.deepcopy(_group_composed(config_name, first, choice))
+    for group, choice in rest:
+        cfg[group] = _group_composed(config_name, group, choice)[group]
+    return cfg
+
+
+def _group_composed(config_name: str, group: str | None = None, choice: str | None = None) -> DictConfig:
+    """Hydra's composition of the single choice ``group=choice`` (None: the defaults), once per process (never
+    handed out)."""
+    key = (config_name, (f"{group}={choice}",) if group else ())
+    if key not in _COMPOSED:
+        _COMPOSED[key] = hydra_compose(key[1], config_name)
+    return _COMPOSED[key]
 
 
 def resolved(cfg: DictConfig) -> dict:

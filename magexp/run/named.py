@@ -7,7 +7,8 @@ from __future__ import annotations
 from omegaconf import OmegaConf
 
 from magexp.errors import MagexpError, raise_if_stopped
-from magexp.run.compose import bad_value, check_choice, compose_config
+from magexp.run.compose import check_choice, compose_config
+from magexp.run.override_errors import bad_value
 from magexp.run.runner import build
 
 

@@ -1,6 +1,6 @@
 """Checks made before any computation, so that a user mistake is one line and nothing is written.
 
-* :func:`expand_sweep`: every job of a ``-m`` sweep, as Hydra's basic sweeper forms them, within the runs limit;
+* :func:`expand_sweep`: every job of a ``-m`` sweep, the jobs magexp's sweeper launches, within the runs limit;
 * :func:`validate_runs`: every job composed (:func:`magexp.run.compose.compose_config`) and every
   distinct scenario and estimator built, so that each value is checked by its constructor
   before the first job starts; the data of each distinct scenario is checked against the
@@ -12,11 +12,14 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
 
 import numpy as np
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.core.override_parser.types import Override
 
 from magexp.core.recordings import exists, load_recording, resolve
 from magexp.core.seeding import run_generators
@@ -25,19 +28,70 @@ from magexp.problems import make_problem
 from magexp.paths import SHARED_DATA
 from magexp.run.budget import Tally, check_run, check_sweep
 from magexp.run.files import check_recording_file
-from magexp.run.compose import (GROUPS, check_choice, compose_config, options, override_value, parse_overrides, resolved,
-                                 sweep_jobs)
+from magexp.run.compose import (GROUPS, check_choice, compose_config, config_loader, options, override_value,
+                                 parse_overrides, resolved)
 from magexp.run.values import check_run_values
 from magexp.run.hydra_cli import check_nested
 from magexp.run.keys import check_number, shape
 from magexp.run.runner import build
+
+def check_discrete(parsed: list[Override]) -> None:
+    """Refuse, in one line, a swept override whose values cannot be listed (``interval(...)``: a sweep
+    lists its jobs).
+
+    Parameters
+    ----------
+    parsed : list of Override
+        Hydra's parsed overrides (:func:`parse_overrides`).
+
+    Raises
+    ------
+    MagexpError
+        One line naming the override.
+    """
+    for ov in parsed:
+        if ov.is_sweep_override() and not ov.is_discrete_sweep():
+            raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
+                              "group's glob() can be swept")
+
+
+def sweep_jobs(overrides: list[str]) -> list[list[str]]:
+    """The jobs of a ``-m`` sweep: the cartesian product of every override's values, first key slowest,
+    a key given twice keeping its place and its last values (Hydra's basic sweeper's order); ``a,b``,
+    ``range(...)``, ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's
+    config loader), each enumerated by Hydra's parser.
+
+    Parameters
+    ----------
+    overrides : list of str
+        The sweep's overrides.
+
+    Returns
+    -------
+    list of list of str
+        Each job's overrides.
+
+    Raises
+    ------
+    MagexpError
+        An override whose values cannot be listed (``interval(...)``).
+    """
+    parsed = parse_overrides(overrides, parser=OverridesParser.create(config_loader=config_loader()))
+    check_discrete(parsed)
+    values = {}
+    for ov in parsed:
+        key = ov.get_key_element()
+        texts = ov.sweep_string_iterator() if ov.is_sweep_override() else [ov.get_value_element_as_str()]
+        values[key] = [f"{key}={text}" for text in texts]
+    return [list(job) for job in itertools.product(*values.values())]
+
 
 #: the module of the swarm's coefficient schedules (:func:`check_schedules`)
 SCHEDULES = "magexp.estimators.schedules."
 
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
-    """The jobs of a sweep (Hydra's basic sweeper: :func:`magexp.run.compose.sweep_jobs`), once their
+    """The jobs of a sweep (:func:`sweep_jobs`, in the order Hydra's basic sweeper gives), once their
     count is within the runs limit (:func:`magexp.run.budget.check_sweep`).
 
     Parameters
@@ -48,13 +102,10 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
     Returns
     -------
     list of list of str
-        As :func:`magexp.run.compose.sweep_jobs`.
+        As :func:`sweep_jobs`.
     """
     parsed = parse_overrides(overrides)
-    for ov in parsed:
-        if ov.is_sweep_override() and not ov.is_discrete_sweep():
-            raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
-                              "group's glob() can be swept")
+    check_discrete(parsed)
     check_nested(parsed)
     check_sweep(parsed, lambda key: options(key) if key in GROUPS else [])
     return sweep_jobs(overrides)

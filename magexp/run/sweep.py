@@ -41,10 +41,43 @@ from magexp.run.executor import check_executor, make_executor, run_many
 from magexp.run.folders import check_job_folders
 from magexp.run.hydra_cli import check_hydra_node
 from magexp.run.outputs import write_outputs
-from magexp.run.preflight import swept_keys
+from magexp.run.preflight import expand_sweep, swept_keys
 from magexp.run.progress import Progress
 
 TABLE = "sweep.csv"
+#: the jobs of the sweep under way, by its overrides: the list magexp checked, which its sweeper launches
+_PLANNED: dict[tuple[str, ...], list[list[str]]] = {}
+
+
+def plan_jobs(overrides: list[str], jobs: list[list[str]]) -> None:
+    """Hand the jobs of a checked sweep to the sweeper that launches them (:func:`planned_jobs`).
+
+    Parameters
+    ----------
+    overrides : list of str
+        The sweep's overrides, as Hydra passes them to its sweeper.
+    jobs : list of list of str
+        Their jobs (:func:`magexp.run.preflight.expand_sweep`), each checked.
+    """
+    _PLANNED[tuple(overrides)] = jobs
+
+
+def planned_jobs(overrides: list[str]) -> list[list[str]]:
+    """The jobs of the sweep of ``overrides``: those :func:`plan_jobs` handed over (the sweep expanded once),
+    else expanded and counted now (a sweep Hydra started without magexp's command).
+
+    Parameters
+    ----------
+    overrides : list of str
+        As :func:`plan_jobs`.
+
+    Returns
+    -------
+    list of list of str
+        As :func:`magexp.run.preflight.sweep_jobs`.
+    """
+    jobs = _PLANNED.pop(tuple(overrides), None)
+    return jobs if jobs is not None else expand_sweep(overrides)
 
 
 def _job_overrides(job_dir: Path) -> dict[str, str]:
