@@ -148,7 +148,7 @@ COMMANDS: dict[str, tuple] = {
     "pip install .": (PIP, "installs into the reader's environment"),
     "pip install -e '.[cluster]'": (PIP, "installs dask-jobqueue"),
     "cd ~/anywhere": (SHELL, "the reader's folder"),
-    "magexp scenario=yan2022_mockup estimator=ls": (RUN, "12 readings, closed form"),
+    "magexp scenario=yan2022_mockup estimator=ls": (RUN_FULL, "12 readings, closed form: a process of 1 CPU-s"),
     "magexp -m estimator=ellipsoid,lm scenario.noise=0,5": (RUN_FULL, "4 closed-form runs: 2.4 s"),
     # calibrate your own recording
     ".venv/bin/python -m magexp calibrate --help": (RUN, "every key"),

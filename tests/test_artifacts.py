@@ -19,15 +19,22 @@ from magexp.run.compose import GROUPS, check_choice
 WHOLE_PAPER = "yan2022"  # its artifacts run once, together, through reproduce_paper (test_whole_paper_runs_tiny)
 ARTIFACTS = [p for paper in papers() if paper != WHOLE_PAPER for p in artifact_paths(paper)]
 
-#: the artifact whose smoke run stands for its plot kind in ``make test`` (the cheapest of the kind);
-#: every other artifact's smoke run is a ``full`` case (``make test-full``), its configs' names checked
-#: in ``make test`` by test_every_artifact_names_configs_that_exist and its figure, drawn from its
-#: committed CSV, by tests/test_figure_defects.py; the yan2022 kinds (estimates, trace) run in
-#: test_whole_paper_runs_tiny
+#: the artifact whose smoke run stands for its plot kind (the cheapest of the kind); in ``make test`` only
+#: those of the kinds of :data:`IN_MAKE_TEST`, one per plot family. Every other smoke run is a ``full`` case
+#: (``make test-full``): its configs' names are checked in ``make test`` by
+#: test_every_artifact_names_configs_that_exist and every kind's figure, drawn from its committed CSV, by
+#: tests/test_figure_defects.py; the yan2022 kinds (estimates, trace) run in test_whole_paper_runs_tiny
 KIND_SMOKE = {"convergence": "ding2024_fig5", "field": "ding2024_fig2", "final": "benchmark_readings",
               "heatmap": "benchmark_objective", "parameters": "yuan2018_table4", "recording": "real_table7",
               "recording_spread": "real_benchmark", "speed": "benchmark_speed", "sphere": "yuan2018_fig4",
               "tuning": "ding2024_ext_pso_tuning"}  # tuning: the cheapest of its kind
+
+#: the plot families (what a kind's table aggregates): the readings of one run, a quantity per step, final
+#: values per case and estimator, the fits of a recording
+FAMILIES = {"readings": ("field", "sphere", "parameters"), "steps": ("convergence",),
+            "final values": ("final", "heatmap", "speed", "tuning"), "recordings": ("recording", "recording_spread")}
+#: the kind whose smoke run stands for its family in ``make test`` (the cheapest run of the family)
+IN_MAKE_TEST = {"readings": "field", "steps": "convergence", "final values": "final", "recordings": "recording"}
 
 #: the cases a smoke run keeps, by artifact: ``benchmark_speed`` draws the 104 cells of ``benchmark_heatmap``
 #: (a ``full`` case, every cell) coloured by paper: one scenario of each paper exercises all it does
@@ -72,15 +79,20 @@ OWN_CHECKS = {"real_modes": check_real_modes}
 
 
 def _smoke(path):
-    """``path`` as a parameter: a ``full`` case unless it stands for its kind (:data:`KIND_SMOKE`)."""
-    return pytest.param(path, id=path.stem, marks=[] if path.stem in KIND_SMOKE.values() else [pytest.mark.full])
+    """``path`` as a parameter: a ``full`` case unless it stands for its family (:data:`IN_MAKE_TEST`)."""
+    in_make_test = path.stem in {KIND_SMOKE[kind] for kind in IN_MAKE_TEST.values()}
+    return pytest.param(path, id=path.stem, marks=[] if in_make_test else [pytest.mark.full])
 
 
-def test_every_kind_has_a_smoke_run_in_make_test():
-    """A new plot kind needs its representative in :data:`KIND_SMOKE`; each one is of its kind."""
+def test_every_kind_has_a_smoke_run_and_every_family_one_in_make_test():
+    """A new plot kind needs its representative in :data:`KIND_SMOKE`, each one of its kind, and its family in
+    :data:`FAMILIES`; each family's kind in :data:`IN_MAKE_TEST` is one of the family."""
     kind_of = {p.stem: load(p).kind for p in ARTIFACTS}
     assert set(KIND_SMOKE) == set(kind_of.values())
     assert all(kind_of[name] == kind for kind, name in KIND_SMOKE.items())
+    families = [kind for kinds in FAMILIES.values() for kind in kinds]
+    assert sorted(families) == sorted(KIND_SMOKE)  # each kind in one family
+    assert set(IN_MAKE_TEST) == set(FAMILIES) and all(IN_MAKE_TEST[f] in FAMILIES[f] for f in FAMILIES)
 
 
 def test_every_artifact_names_configs_that_exist():

@@ -1227,7 +1227,7 @@ TABLE += generated_rows() + calibrate_rows()
 CATEGORIES = ("clean", "not one line", "wrote something", "wrong result")
 
 #: the rows of each entry point that make test runs at most, evenly spaced over the table (:func:`in_make_test`)
-QUOTA = {"run": 50, "sweep": 5, "calibrate": 20, "reproduce": 10, "api": 25}
+QUOTA = {"run": 20, "sweep": 3, "calibrate": 8, "reproduce": 4, "api": 10}
 
 
 def family(case) -> tuple:

@@ -4,6 +4,7 @@ import inspect
 
 import numpy as np
 import pytest
+import yaml
 from hydra.utils import instantiate
 
 from magexp.core import bounds
@@ -133,14 +134,16 @@ def _dense_cramer_rao(problem, theta: np.ndarray | None = None, *, analytic: boo
 
 
 def _bound_cases() -> list:
-    """``(scenario, analytic, rtol)``: every scenario with the central differences (the cheaper dense computation) in
-    make test; with the analytic derivatives, the first scenario of each paper in make test, the others in make test-full."""
-    cases, papers = [], set()
+    """``(scenario, analytic, rtol)``: the first scenario of each paper and objective (its config's ``objective``), with
+    the analytic derivatives and with the central differences, in make test; the other scenarios in make test-full."""
+    cases, seen = [], set()
     for name in SCENARIOS:
-        paper = name.partition("_")[0]
-        cases += [pytest.param(name, True, 1e-9, id=f"{name}-analytic", marks=[pytest.mark.full] if paper in papers else []),
-                  pytest.param(name, False, 1e-6, id=f"{name}-differences")]
-        papers.add(paper)
+        config = yaml.safe_load((CONF / "scenario" / f"{name}.yaml").read_text()) or {}
+        family = name.partition("_")[0], config.get("objective")
+        marks = [pytest.mark.full] if family in seen else []
+        cases += [pytest.param(name, True, 1e-9, id=f"{name}-analytic", marks=marks),
+                  pytest.param(name, False, 1e-6, id=f"{name}-differences", marks=marks)]
+        seen.add(family)
     return cases
 
 

@@ -67,6 +67,9 @@ def test_fxos8700_spread_below_2_3_percent(name):
     np.testing.assert_allclose(cal.metrics["mean_after"], cal.reference.total[0])
 
 
+@pytest.mark.full  # 4 CPU-s (make test-full); make test: the command's files, overwrite=true and export in
+# tests/test_calibration_files.py and test_calibration_folder.py, the figure drawn and saved beside in
+# test_calibration_api.py, this recording's spread in test_fxos8700_spread_below_2_3_percent
 @needs_fxos
 def test_cli_end_to_end(tmp_path, magexp):
     results_before = sorted(p for p in RESULTS.rglob("*")) if RESULTS.exists() else []

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import pytest
 import yaml
 
 from magexp.__main__ import main as magexp_main
@@ -65,6 +66,7 @@ def test_runs_in_the_same_second_get_their_own_folders(tmp_path, monkeypatch, ca
     assert seeds == ["1", "2", "3"]
 
 
+@pytest.mark.full  # two interpreters (make test-full); make test: test_runs_in_the_same_second_get_their_own_folders
 def test_two_processes_started_together_keep_separate_folders(tmp_path):
     env = {**os.environ, "MAGEXP_CACHE": str(tmp_path / "cache")}
     procs = [subprocess.Popen([sys.executable, "-m", "magexp", "estimator=ellipsoid", f"seed={s}"], cwd=tmp_path,

@@ -15,14 +15,19 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+#: a switch whose run takes a second or more (it composes every config or lists every group) in make test-full;
+#: make test passes the same switch, or the same kind of switch, in a cheaper case
+FULL = pytest.mark.full
+
+
 @pytest.mark.parametrize("args, printed", [
     (["--cfg", "job", "--package", "scenario.field"], "# @package scenario.field"),
     (["--cfg", "hydra", "--package", "hydra.launcher"], "MagexpLauncher"),
     (["--cfg", "all", "-p", "estimator"], "# @package estimator"),
     (["--cfg=job", "--resolve"], "seed: 0"),
     (["--info", "plugins"], "MagexpLauncher"),
-    (["-i", "config", "estimator=lm"], "LevenbergMarquardt"),
-    (["--hydra-help"], "--shell-completion"),
+    pytest.param(["-i", "config", "estimator=lm"], "LevenbergMarquardt", marks=FULL),  # make test: --info plugins
+    pytest.param(["--hydra-help"], "--shell-completion", marks=FULL),  # make test: the other switches Hydra parses
     (["-sc", "install=bash"], "hydra_bash_completion"),
     (["--shell-completion", "uninstall=fish"], "complete"),
 ], ids=lambda a: " ".join(a) if isinstance(a, list) else "")

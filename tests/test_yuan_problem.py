@@ -70,7 +70,10 @@ def test_lm_problem_start_recovers_truth(make_cfg):
     assert np.allclose(p.initial_estimate(), p.truth_theta(), atol=1e-8)
 
 
-@pytest.mark.parametrize("scenario", YUAN_SCENARIOS)
+#: the first scenario's tiny run in make test, the others' in make test-full (each one composed and generated in
+#: make test: tests/test_configs.py)
+@pytest.mark.parametrize("scenario", [YUAN_SCENARIOS[0], *(pytest.param(name, marks=pytest.mark.full)
+                                                          for name in YUAN_SCENARIOS[1:])])
 def test_every_yuan_scenario_runs_tiny(make_cfg, scenario):
     cfg = make_cfg(f"scenario={scenario}", "estimator=rdpso", "estimator.n_particles=6", "estimator.n_iterations=4")
     out = run(cfg)
