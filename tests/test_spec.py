@@ -40,7 +40,6 @@ BASE = {"title": "t", "kind": "final", "grid": {"estimator": ["lm"]}, "plot": {"
     ({"plot": {"x": "a", "hue_key": "b"}}, ["'hue_key'", "kind final", "hue"]),
     ({"plot": {"x": "a", "linthresh": "wide"}}, ["plot (kind final).linthresh='wide'", "float"]),  # a typed key
     ({"plot": {"x": "a", "xscale": "logarithmic"}}, ["plot.xscale='logarithmic'", "linear, log, symlog"]),
-    ({"plot": {"metric": "fun"}}, ["plot (kind final)", "missing key 'x'"]),
     ({"kind": "heatmap", "plot": {"x": "a"}}, ["kind heatmap", "'x'", "metric"]),  # a key of another kind
     ({"summarise": [{"quantity": "q", "metrik": "fun"}]}, ["summarise[0]", "'metrik'", "metric"]),
     ({"reported": [{"quantity": "q", "vaule": 1.0}]}, ["reported[0]", "'vaule'", "value"]),

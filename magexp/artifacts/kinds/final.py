@@ -22,7 +22,7 @@ class Plot(CommonPlot):
     (one flag or ``{metric: flag}``), ``names`` (``{value: legend text}``), ``levels`` (a paper's values
     as lines: ``label``, ``match``, ``value``, ``metrics``)."""
 
-    x: str
+    x: str | None = None  # the swept key (a final figure needs it; a table alone does not)
     hue: str | list[str] = "estimator"
     ylabel: str = "final total-field RMS (nT)"
     metric: str | list[str] = "fun"
