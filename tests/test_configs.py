@@ -8,7 +8,7 @@ from omegaconf import OmegaConf
 from magexp.artifacts.plan import cells, load_spec, overrides_of
 from magexp.run.compose import options
 from magexp.paths import EXPERIMENTS
-from magexp.artifacts.plots import kind_module
+from magexp.artifacts.kinds import kind
 from magexp.artifacts.claims import matches
 from magexp.artifacts.summary import reported_entries
 
@@ -46,7 +46,7 @@ def test_artifact_spec_is_well_formed(path):
     and runs: tests/test_artifacts.py, whose smoke runs plan every cell of every artifact)."""
     spec = load_spec(path)
     assert spec.name == path.stem and spec.paper == path.parent.name
-    kind_module(spec.kind)
+    kind(spec.kind)
     grid = cells(spec)
     assert grid, "an artifact needs at least one cell"
     settings = [dict(o.split("=", 1) for o in overrides_of(spec, cell)) for cell in grid]

@@ -12,8 +12,8 @@ from omegaconf import OmegaConf
 
 from magexp.artifacts.plan import paper_specs
 from magexp.paths import RESULTS
-from magexp.artifacts.plots import kind_module
-from magexp.artifacts.kind_tables import bound_ratio
+from magexp.artifacts.kinds import kind
+from magexp.artifacts.kinds.heatmap import bound_ratio
 from magexp.artifacts.plots.check import colorbar_mismatch, defects, empty_axes, legend_defects, overlapping_text, raw_legends
 from magexp.artifacts.plots.final import level_span
 from magexp.artifacts.plots.style import colorbar, drawn_from, plt, shared_legend
@@ -38,7 +38,7 @@ def committed():
 @pytest.mark.parametrize("spec", committed())
 def test_figure_has_no_visible_defect(spec):
     frame = pd.read_csv(RESULTS / spec.paper / f"{spec.name}.csv")
-    fig = kind_module(spec.kind).draw(frame, spec)
+    fig = kind(spec.kind).draw(frame, spec)
     try:
         assert defects(fig) == []
     finally:
@@ -64,7 +64,7 @@ def test_a_reproduction_into_results_names_each_defect_of_a_figure_it_draws(tmp_
     monkeypatch.setattr(reproduce, "RESULTS", tmp_path / "results")
     monkeypatch.setattr(memo, "root", lambda: tmp_path / "figures-cache")
     monkeypatch.setattr(style, "save", lambda fig, path: plt.close(fig) or [])
-    module = kind_module(spec.kind)
+    module = kind(spec.kind)
     real_draw = module.draw
 
     def with_a_defect(frame, spec):
@@ -165,7 +165,7 @@ def test_final_draws_the_papers_values_and_ratios():
              "q25": 0.5 * a, "q75": 0.7 * a} for a in (2, 5) for e in ("pso", "ipso")]
     rows += [{"scenario.noise": a, "estimator": "pso / ipso", "objective": "scalar", "metric": "improvement_ratio",
               "median": 1.0, "q25": 0.9, "q75": 1.1} for a in (2, 5)]
-    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    fig = kind("final").draw(pd.DataFrame(rows), spec)
     rms, ratio = fig.axes[:2]
     diamonds = [ln for ax in (rms, ratio) for ln in ax.lines if ln.get_marker() == "D"]
     assert sorted(float(ln.get_ydata()[0]) for ln in diamonds) == [8.35, 14.4]
@@ -182,7 +182,7 @@ def test_final_sets_log_axes_per_metric_and_draws_the_floors_over_the_lines():
     rows = [{"scenario.noise": a, "estimator": e, "objective": "scalar", "metric": m, "noise_floor": 0.3 * a,
              "rms_bound": 0.29 * a, "median": 0.3 * a if m == "fun" else 1.01, "q25": 0.29 * a if m == "fun" else 0.98,
              "q75": 0.31 * a if m == "fun" else 1.03} for a in (2, 5, 10) for e in ("pso", "lm") for m in ("fun", "rms_ratio")]
-    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    fig = kind("final").draw(pd.DataFrame(rows), spec)
     rms, ratio = fig.axes[:2]
     assert (rms.get_yscale(), ratio.get_yscale()) == ("log", "linear")
     floor = [ln for ln in ratio.lines if ln.get_label() == "Cramér-Rao floor (Gaussian)"]
@@ -203,7 +203,7 @@ def test_tuning_gives_every_setting_its_own_named_tick(per_family):
     rows = [{"scenario": "s", "family": fam, "family_label": fam.upper(), "label": f"w = {k}" if per_family > 1 else fam,
              "median": 1.0 + k, "q25": 0.9, "q75": 2.0, "success_rate": 0.9, "n_seeds": 30, "default": False, "role": "",
              "metric": "fun"} for fam in ("pso", "ipso", "ipso_w") for k in range(per_family)]
-    fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
+    fig = kind("tuning").draw(pd.DataFrame(rows), spec)
     assert [t.get_text() for legend in fig.legends for t in legend.get_texts()] == []
     families = [t.get_text() for t in fig.axes[0].get_xticklabels()]
     settings = [t.get_text() for t in fig.axes[0].get_xticklabels(minor=True)]
@@ -228,7 +228,7 @@ def test_tuning_words_stay_apart_with_long_labels_titles_and_many_settings():
              "default": k == 0, "role": "", "metric": "fun"}
             for j in range(3) for fam, words in (("rdpso", "RDPSO"), ("local", "optimum of eq 8"))
             for k, (b, n) in enumerate((("reflect", 400), ("clip", 800), ("random", 1600)))]
-    fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
+    fig = kind("tuning").draw(pd.DataFrame(rows), spec)
     assert defects(fig) == []
     assert fig.axes[0].get_title() == "X, then Y (mode 3)"
     assert [t.get_text() for t in fig.axes[0].get_xticklabels(minor=True)][:3] == ["reflect\n400", "clip\n800", "random\n1600"]
@@ -243,7 +243,7 @@ def test_tuning_draws_a_success_rate_of_zero_and_marks_the_default():
     rows = [{"scenario": "s", "family": "rdpso", "family_label": "RDPSO", "label": f"arc (deg) = {a}", "median": m,
              "q25": m / 2, "q75": m * 2, "success_rate": r, "n_seeds": 30, "default": a == 180, "role": "", "metric": "fun"}
             for a, m, r in ((90, 30.0, 0.0), (180, 0.2, 0.7), (270, 0.2, 0.9))]
-    fig = kind_module("tuning").draw(pd.DataFrame(rows), spec)
+    fig = kind("tuning").draw(pd.DataFrame(rows), spec)
     top, bottom = fig.axes[0], fig.axes[1]
     assert [t.get_text() for t in bottom.texts] == ["0 of 30"]
     zero_x = bottom.get_xticks(minor=True)[0]
@@ -261,7 +261,7 @@ def test_tuning_draws_a_success_rate_of_zero_and_marks_the_default():
 def test_a_calibration_figure_shows_a_successful_run_and_says_so():
     from types import SimpleNamespace
 
-    from magexp.artifacts.kind_tables import shown_seed
+    from magexp.artifacts.kinds.field import shown_seed
 
     table = pd.DataFrame({"cell": [0, 0, 0, 1, 1], "seed": [0, 1, 2, 0, 1],
                           "succeeded": [0.0, 1.0, 1.0, 0.0, 0.0]})
@@ -275,7 +275,7 @@ def test_a_calibration_figure_shows_a_successful_run_and_says_so():
 def test_scenario_names_are_readable_in_legends_and_ticks():
     """yuan2018_table3 printed ``rdpso, yuan2018_mode1``: one readable name for every kind that labels
     a scenario (the parameter tables and the recordings' figures)."""
-    from magexp.artifacts.kind_tables import cell_label
+    from magexp.artifacts.kinds.parameters import cell_label
     from magexp.artifacts.plots.style import scenario_label
 
     spec = OmegaConf.create({"plot": {}})
@@ -297,7 +297,7 @@ def test_a_symlog_axis_from_zero_ticks_zero_then_the_decades_above_linthresh():
                              "summarise": [{"quantity": "F_g", "metric": "fg"}]})
     rows = [{"scenario.noise": a, "estimator": "local", "objective": "vector", "metric": "fg", "median": 1 + a,
              "q25": 0.9 + a, "q75": 1.1 + a} for a in (0, 0.05, 0.1, 1, 2)]
-    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    fig = kind("final").draw(pd.DataFrame(rows), spec)
     ax = fig.axes[0]
     assert list(ax.get_xticks()) == [0.0, 0.1, 1.0]
     legends = [*fig.legends, *(a.get_legend() for a in fig.axes if a.get_legend() is not None)]
@@ -345,7 +345,7 @@ def test_a_marker_cut_by_the_axes_edge_is_found_and_a_padded_symlog_axis_draws_i
                              "reported": [{"quantity": "k_error", "match": {"scenario.noise": 100}, "value": 1e-4}]})
     rows = [{"scenario.noise": a, "estimator": "kf", "objective": "ship", "metric": "k_error", "median": 1e-6 * (1 + a),
              "q25": 0.9e-6 * (1 + a), "q75": 1.1e-6 * (1 + a)} for a in (0, 0.3, 1, 10, 100)]
-    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    fig = kind("final").draw(pd.DataFrame(rows), spec)
     assert defects(fig) == [] and fig.axes[0].get_xlim()[0] < 0
     plt.close(fig)
 
@@ -393,7 +393,7 @@ def _heatmap_frame():
 def test_a_heat_map_colours_each_cell_by_the_ratio_it_prints_on_a_bar_labelled_in_ratios():
     """benchmark_heatmap coloured log10 of the ratio, printed the ratio in 6 pt and kept a column of "—"."""
     spec = OmegaConf.create({"title": "t", "kind": "heatmap", "plot": {"metric": "bound_ratio"}})
-    fig = kind_module("heatmap").draw(_heatmap_frame(), spec)
+    fig = kind("heatmap").draw(_heatmap_frame(), spec)
     ax, bar = fig.axes
     image = ax.images[0]
     printed = [float(t.get_text().split("\n")[0]) for t in ax.texts]
@@ -410,7 +410,7 @@ def test_a_panel_of_round_off_errors_draws_zero_and_says_so():
     spec = OmegaConf.create({"title": "t", "kind": "field", "plot": {"panels": "scenario.noise", "quantity": "error"}})
     frame = pd.DataFrame({"scenario.noise": [0] * 4 + [2] * 4, "reading": list(range(4)) * 2, "seed": 0,
                           "outcome": "succeeded", "error": [1e-9, -1e-9, 0.0, 1e-9, 0.5, -1.2, 0.3, 0.9]})
-    fig = kind_module("field").draw(frame, spec)
+    fig = kind("field").draw(frame, spec)
     exact, noisy = fig.axes
     assert list(exact.lines[0].get_ydata()) == [0.0] * 4 and "round-off" in exact.get_title()
     assert exact.get_ylim() == noisy.get_ylim() and "RMS" in noisy.get_title()
@@ -425,7 +425,7 @@ def test_a_table_prints_a_stated_value_in_the_estimators_cell_and_no_empty_colum
     frame = pd.DataFrame([{"estimator": e, "quantity": q, "median": v, "q25": v, "q75": v, "truth": t, "n_seeds": 30}
                           for e, q, v, t in (("paper_sim", "K11", 0.9499, 0.95), ("kf", "K11", 0.95, 0.95),
                                              ("paper_sim", "k_error", 6e-4, np.nan), ("kf", "k_error", 4e-3, np.nan))])
-    fig = kind_module("estimates").draw(frame, spec)
+    fig = kind("estimates").draw(frame, spec)
     cells = fig.axes[0].tables[0].get_celld()
     header = [cells[(0, c)].get_text().get_text() for c in range(3)]
     assert header == ["truth", "paper's estimate", "kf"]
@@ -441,7 +441,7 @@ def test_final_draws_a_papers_levels_in_the_panels_they_match():
                                                  {"label": "paper's PSO value", "match": {"scenario.noise": 5}, "value": 87.7}]}})
     rows = [{"w": w, "scenario.noise": a, "estimator": "pso", "objective": "scalar", "metric": "fun", "median": a * w,
              "q25": a * w, "q75": a * w} for a in (2, 5, 10) for w in (0.4, 0.9)]
-    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    fig = kind("final").draw(pd.DataFrame(rows), spec)
     drawn = [[ln.get_ydata()[0] for ln in ax.lines if ln.get_label() == "paper's PSO value"] for ax in fig.axes[:3]]
     assert drawn == [[8.35], [87.7], []] and defects(fig) == []
     plt.close(fig)
@@ -455,7 +455,7 @@ def test_final_draws_a_level_of_one_x_at_that_x_only_and_keeps_the_x_range():
                                                  for a, v in ((2, 8.35), (5, 87.7), (10, 162.26))]}})
     rows = [{"scenario.noise": a, "estimator": "pso", "objective": "scalar", "metric": "fun", "median": 10.0 * a,
              "q25": 9.0 * a, "q75": 11.0 * a} for a in (2, 5, 10)]
-    fig = kind_module("final").draw(pd.DataFrame(rows), spec)
+    fig = kind("final").draw(pd.DataFrame(rows), spec)
     ax = fig.axes[0]
     spans = sorted((ln.get_xdata()[0], ln.get_xdata()[1], ln.get_ydata()[0]) for ln in ax.lines
                    if ln.get_label() == "paper's PSO value")

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 from omegaconf import OmegaConf
 
-from magexp.artifacts.plots import kind_module
+from magexp.artifacts.kinds import kind
 from magexp.artifacts.plots.style import panels, save
 
 
@@ -28,7 +28,7 @@ def digest(path):
 
 
 def test_save_writes_a_deterministic_pdf_twin(tmp_path):
-    draw = kind_module("convergence").draw
+    draw = kind("convergence").draw
     first = save(draw(frame(), SPEC), tmp_path / "a.png")
     second = save(draw(frame(), SPEC), tmp_path / "b.png")
     assert [p.name for p in first] == ["a.png", "a.pdf"]
@@ -41,7 +41,7 @@ def test_save_writes_a_deterministic_pdf_twin(tmp_path):
 def test_a_kind_draws_into_the_callers_axes():
     fig, (left, right) = plt.subplots(1, 2)
     right.plot([0, 1], [0, 1])
-    out = kind_module("convergence").draw(frame(), SPEC, axes=[left])
+    out = kind("convergence").draw(frame(), SPEC, axes=[left])
     assert out is fig
     assert len(left.get_lines()) >= 2 and len(right.get_lines()) == 1  # only the given axes were drawn in
     assert left.get_yscale() == "log"
@@ -65,7 +65,7 @@ def test_math_text_parsed_once_for_every_figure_gives_the_same_bytes(tmp_path, m
 
     shared = mathtext.MathTextParser._parse_cached
     assert shared.shared  # in place once magexp.artifacts.plots.style is imported
-    draw = kind_module("convergence").draw  # log axes: math text tick labels
+    draw = kind("convergence").draw  # log axes: math text tick labels
     hits = shared.cache_info().hits
     save(draw(frame(), SPEC), tmp_path / "shared.png")
     save(draw(frame(), SPEC), tmp_path / "again.png")

@@ -71,7 +71,7 @@ def test_real_table7_box_holds_the_lm_optimum_and_its_twin():
 def test_canonical_sign_returns_the_member_with_positive_determinant():
     names = [f"S{i}{j}" for i in range(1, 4) for j in range(1, 4)] + ["b1", "b2", "b3", "field_azimuth",
                                                                        "field_elevation", "gx", "gy", "gz"]
-    from magexp.artifacts.kind_tables import canonical_sign
+    from magexp.artifacts.kinds.recording import canonical_sign
 
     x = np.concatenate([np.diag([-1.0, 1.0, 1.0]).ravel(), [0.1, 0.2, 0.3], [2.5, 0.4], [1.0, 2.0, 3.0]])
     y = canonical_sign(names, x)
@@ -108,7 +108,7 @@ def test_block_bootstrap_interval_holds_the_spread_and_widens_with_noise():
 
 
 def _recording_frame():
-    from magexp.artifacts.kind_tables import RUN_QUANTITIES
+    from magexp.artifacts.kinds.recording import RUN_QUANTITIES
     from magexp.artifacts.plots.real import ESTIMATE_PANELS
 
     rows = []
@@ -127,12 +127,12 @@ def _recording_frame():
 
 
 def test_recording_figure_draws_every_panel_without_a_truth():
-    from magexp.artifacts.plots import kind_module
+    from magexp.artifacts.kinds import kind
     from magexp.artifacts.spec import parse
 
     spec = parse({"title": "t", "kind": "recording", "plot": {"metric": "fg"},
                   "success": {"metric": "fg", "reference": "best"}}, Path("real_x.yaml"))
-    fig = kind_module("recording").draw(_recording_frame(), spec)
+    fig = kind("recording").draw(_recording_frame(), spec)
     shown = [ax for ax in fig.axes if ax.get_visible()]
     assert len(shown) == 6 and all(ax.lines or ax.collections for ax in shown)
     texts = " ".join(ax.get_title() + ax.get_ylabel() for ax in shown)

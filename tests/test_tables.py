@@ -26,7 +26,7 @@ def aggregating_calls(path: Path) -> list[str]:
     ``frame.groupby(...)``, ``quantiles(...)``), but those of :mod:`magexp.artifacts.tables` itself."""
     tree = ast.parse(path.read_text())
     tables = {a.asname or a.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
-              and node.module in ("magexp.artifacts.tables", "magexp.artifacts.kind_tables") for a in node.names}
+              and node.module in ("magexp.artifacts.tables",) for a in node.names}
     found = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Call):

@@ -5,7 +5,7 @@ verdicts and claims, drawn, and written up in ``results/REPORT.md``.
 Lives here: :mod:`~magexp.artifacts.spec` (the typed spec), :mod:`~magexp.artifacts.plan` (spec → runs →
 tidy rows), :mod:`~magexp.artifacts.reproduce` (``magexp reproduce``), :mod:`~magexp.artifacts.tables`
 (every aggregation over runs: medians, quantiles, success fractions, the one interval helper) and
-:mod:`~magexp.artifacts.kind_tables` (the table behind each figure), :mod:`~magexp.artifacts.summary`
+:mod:`~magexp.artifacts.kinds` (one module per artifact kind: its plot keys, its table, its figure), :mod:`~magexp.artifacts.summary`
 (verdicts), :mod:`~magexp.artifacts.claims`, :mod:`~magexp.artifacts.headlines` (a paper's headline claims
 judged), :mod:`~magexp.artifacts.report`, :mod:`~magexp.artifacts.formats` (the results files' CSV and table
 formats), :mod:`~magexp.artifacts.verify` (``magexp verify``) and :mod:`~magexp.artifacts.compare` (two results

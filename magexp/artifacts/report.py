@@ -23,7 +23,7 @@ import pandas as pd
 from magexp.artifacts.claims import interpolate
 from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, write_csv
 from magexp.artifacts.headlines import claim_rows, headlines, paper_outcomes, runs_reader
-from magexp.artifacts.kind_tables import winners
+from magexp.artifacts.kinds.heatmap import winners
 from magexp.artifacts.report_claims import (bold, counts, draw_readings, findings_table, headline_list, link,
                                             readings_section)
 from magexp.artifacts.spec import load

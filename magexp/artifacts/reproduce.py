@@ -24,10 +24,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from magexp.artifacts.kind_tables import tabulate
+from magexp.artifacts.kinds import kind, tabulate
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs
 from magexp.artifacts.sample_sizes import plan_with_effects
-from magexp.artifacts.plots import VECTOR, kind_module
+from magexp.artifacts.plots import VECTOR
 from magexp.artifacts.formats import MEASURED, write_csv
 from magexp.artifacts.report import build
 from magexp.artifacts.paper_spec import papers
@@ -126,7 +126,7 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     key = memo.key(spec, Path(csv).read_bytes())
     if not force and memo.current(key, files):
         return False
-    fig = kind_module(spec.kind).draw(pd.read_csv(csv), spec)
+    fig = kind(spec.kind).draw(pd.read_csv(csv), spec)
     save(fig, png)  # first: the check's layout pass would move what is saved by a pixel
     if Path(out).resolve().is_relative_to(RESULTS.resolve()):
         for found in defects(fig):

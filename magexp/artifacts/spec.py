@@ -5,13 +5,13 @@ An artifact is a paper's figure or table as data::
     name: ding2024_fig5          # <firstauthor><year>_<fig|table><N> (default: the file stem)
     paper: ding2024              # the folder (default)
     title: ...
-    kind: convergence            # a plot kind of magexp.artifacts.plots.KINDS
+    kind: convergence            # a module of magexp.artifacts.kinds
     seeds: 30
     base: [scenario=ding2024_exp1, "?estimator.n_iterations=800"]   # overrides of every run ("?": if the key exists)
     cases: [[scenario=yuan2018_mode1], [scenario=yuan2018_mode3]]     # override lists, each crossed with the grid
     grid: {estimator: [pso, ipso], scenario.noise: [0, 2, 5, 10]}   # cartesian product
     skip_inapplicable: false     # drop cells whose estimator does not apply to the objective
-    plot: {x: scenario.noise, hue: estimator, metric: fun, xscale: log}   # keys of the kind (PLOT_KEYS)
+    plot: {x: scenario.noise, hue: estimator, metric: fun, xscale: log}   # the keys of the kind's Plot
     summarise: [{quantity: final_rms, metric: fun}, {mode: parameters}]  # summary rows per cell
     ratios: [{quantity: improvement_ratio, metric: fun, numerator: {estimator: pso}, denominator: {estimator: ipso}}]
     success: {metric: fun, reference: truth_fun, factor: 1.1, floor: 1.0e-9}   # a run succeeds if metric <= factor reference + floor
@@ -44,10 +44,9 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from omegaconf import DictConfig, OmegaConf
 
 from magexp.artifacts.claims import Claim
-from magexp.artifacts.plots import KINDS
+from magexp.artifacts import kinds
 from magexp.artifacts.schema import Bool, Float, Int, allowed, build, typed, unknown
 from magexp.core.outcomes import ROUNDOFF_FLOOR, SUCCESS_FACTOR
 from magexp.errors import MagexpError
@@ -57,26 +56,6 @@ MAX_SEEDS = 400
 #: minimum number of seeds of a cell whose interval is compared with a paper number
 MIN_SEEDS_COMPARED = 30
 
-#: plot keys each kind understands (one vocabulary: ``metric`` names the column(s) drawn,
-#: ``xscale`` the x scale; ``labels``/``ylabel`` the axis texts)
-_COMMON = {"labels", "ylabel", "panels", "hue"}
-PLOT_KEYS = {
-    "convergence": _COMMON,
-    "field": _COMMON | {"quantity", "unit"},
-    "final": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names", "levels"},
-    "sweep": _COMMON | {"x", "metric", "bound", "xscale", "linthresh", "targets", "ylabels", "ylog", "names", "levels"},
-    "sphere": _COMMON | {"unit"},
-    "parameters": _COMMON | {"unit"},
-    "trace": _COMMON | {"groups", "trace", "start", "names", "relative_to", "tolerances"},
-    "estimates": _COMMON | {"rows", "names"},
-    "heatmap": _COMMON | {"metric"},
-    "speed": _COMMON | {"metric"},
-    "tuning": _COMMON | {"metric", "label", "default", "names"},
-    "recording": _COMMON | {"metric"},
-    "recording_spread": _COMMON | {"metric"},
-}
-#: old plot keys, still read: each becomes its canonical key at load
-_PLOT_ALIASES = {"value": "metric", "metrics": "metric"}
 #: sections of an artifact that an empty value (``success:``, ``reported: []``...) leaves at their default
 _DEFAULTED_WHEN_EMPTY = ("success", "tolerance", "summarise", "ratios", "reported", "claims")
 
@@ -222,8 +201,8 @@ class Success:
 @typed
 @dataclass
 class Artifact:
-    """A validated artifact spec (see the module docstring). ``plot`` stays an OmegaConf node
-    (its keys are checked against :data:`PLOT_KEYS` of the kind)."""
+    """A validated artifact spec (see the module docstring). ``plot`` is the ``Plot`` dataclass of
+    its kind's module (:func:`magexp.artifacts.kinds.plot_of`)."""
 
     name: str
     paper: str
@@ -295,21 +274,6 @@ def _normalised(data: dict, path: Path) -> dict:
     return data
 
 
-def _plot(kind: str, data, where: str) -> DictConfig:
-    """The ``plot:`` mapping with its old keys renamed, its keys checked against :data:`PLOT_KEYS` of ``kind``."""
-    data = dict(data or {})
-    for old, new in _PLOT_ALIASES.items():
-        if old in data:
-            data[new] = data.pop(old)
-    if data.pop("logx", False):
-        data["xscale"] = "log"
-    allowed = PLOT_KEYS[kind]
-    for key in data:
-        if key not in allowed:
-            raise MagexpError(f"{where}: unknown key {key!r} for kind {kind}: allowed keys are {', '.join(sorted(allowed))}")
-    return OmegaConf.create(data)
-
-
 def _check_fixed_tolerances(art: Artifact, where: str) -> None:
     """Every fixed tolerance says why; every reported number without one is compared over
     :data:`MIN_SEEDS_COMPARED` seeds at least (a least-squares interval, ``interval: ls``, needs no seeds)."""
@@ -359,12 +323,12 @@ def parse(data: dict, path: Path) -> Artifact:
     data = _normalised(data, path)
     if "path" in data:
         raise MagexpError(unknown(where, "path", Artifact))
-    if data.get("kind") not in KINDS:
-        raise MagexpError(f"{where}.kind={data.get('kind')!r} is not allowed: choose one of {', '.join(sorted(KINDS))}")
+    if data.get("kind") not in kinds.names():
+        raise MagexpError(f"{where}.kind={data.get('kind')!r} is not allowed: choose one of {', '.join(kinds.names())}")
     plot = data.pop("plot", None)
     art = build(Artifact, data, where)
     art.path = path
-    art.plot = _plot(art.kind, plot, f"{where}.plot")
+    art.plot = kinds.plot_of(art.kind, plot, where)
     _check_fixed_tolerances(art, where)
     check_unique_ids(art.claims, f"{where}.claims")
     if art.max_seeds < art.seeds:

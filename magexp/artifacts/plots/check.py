@@ -40,7 +40,7 @@ from matplotlib.patches import Rectangle
 from matplotlib.table import Table
 from matplotlib.text import Text
 
-from magexp.artifacts.kind_tables import column_label
+from magexp.artifacts.columns import column_label
 from magexp.artifacts.plots.style import COLUMN_ATTR
 
 #: two texts overlap when their window extents share more than this many pixels in each direction

@@ -1,5 +1,5 @@
 """RMS (objective) of the best particle vs iteration: median over seeds with an interquartile band
-(the table: :func:`magexp.artifacts.kind_tables.convergence_table`).
+(the table: :func:`magexp.artifacts.kinds.convergence.table`).
 
 A triangle on each curve marks the median, over the successful runs, of the iterations a run took to
 come within 1.1 x its own final value (``iterations_to_1.1``): how fast it converged, whatever the
@@ -19,7 +19,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.convergence_table`.
+        The table of :func:`magexp.artifacts.kinds.convergence.table`.
     spec : Artifact
         The artifact: ``plot.panels`` splits the panels, ``plot.hue`` the lines.
     axes : sequence of Axes, optional

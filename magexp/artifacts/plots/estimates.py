@@ -8,7 +8,7 @@ cell (``paper: 0.0001``), unless the row prints it already (a column of the pape
 one stated for none gets a ``paper states`` column (only then: a column
 empty on most rows says nothing). The CSV is long: one row per (quantity, cell). The figure renders
 the table, each row as tall as its cell of most lines (the table:
-:func:`magexp.artifacts.kind_tables.estimates_table`).
+:func:`magexp.artifacts.kinds.estimates.table`).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.estimates_table`.
+        The table of :func:`magexp.artifacts.kinds.estimates.table`.
     spec : Artifact
         The artifact: ``plot.rows`` adds quantities, ``plot.names`` gives the cells words.
     axes : Axes, optional

@@ -11,7 +11,7 @@ and says so in its title: the floor is not data.
 
 The seed shown is the first whose run succeeded (the artifact's ``success:`` rule); where none
 did, or none is judged, the first seed. The CSV's ``seed`` and ``outcome`` columns and each panel's
-title say which (the table: :func:`magexp.artifacts.kind_tables.field_table`).
+title say which (the table: :func:`magexp.artifacts.kinds.field.table`).
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.field_table`.
+        The table of :func:`magexp.artifacts.kinds.field.table`.
     spec : Artifact
         The artifact: ``plot.quantity`` (``sphere`` or ``magnitude``), ``plot.panels``.
     axes : sequence of Axes, optional

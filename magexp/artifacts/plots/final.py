@@ -25,7 +25,7 @@ with "k/n" censored (its median too when ``k >= n/2``), and the earliest and lat
 ``reported:`` entries of the quantities summarised from the metric) are open diamonds in the colour of
 their line. Each of the artifact's ``ratios:`` (per seed, numerator over denominator cell) adds a row
 of panels: its median and quartiles over seeds, with the paper's ratios and the line of equality.
-The table: :func:`magexp.artifacts.kind_tables.final_table`.
+The table: :func:`magexp.artifacts.kinds.final.table`.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import FixedLocator
 
-from magexp.artifacts.kind_tables import metric_list
+from magexp.artifacts.plot_keys import metric_list
 from magexp.artifacts.plots.style import (group_values, label, legend_entries, panels, paper_values, plt, scenario_label,
                                          shared_legend, tidy_log_axes)
 from magexp.artifacts.tables import matches
@@ -176,7 +176,7 @@ def _levels(ax, spec, sub: pd.DataFrame, metric: str, x_key: str) -> None:
     xs = sorted(set(sub[x_key].astype(float))) if x_key in sub else []
     for level in levels:
         style = styles.setdefault(str(level["label"]), LEVEL_STYLES[len(styles) % len(LEVEL_STYLES)])
-        if metric not in list(level.get("metrics", metric_list(spec)[:1])):
+        if metric not in list(level.get("metrics", metric_list(spec.plot)[:1])):
             continue
         match = dict(level.get("match", {}) or {})
         if not (all(k in sub for k in match) and any(matches(match, row) for row in sub.to_dict("records"))):
@@ -248,7 +248,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.final_table`.
+        The table of :func:`magexp.artifacts.kinds.final.table`.
     spec : Artifact
         The artifact: ``plot.x``, ``plot.panels``, ``plot.hue``, ``plot.ylog`` and its ``ratios``.
     axes : sequence of Axes, optional
@@ -261,7 +261,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     """
     x_key, panel_key = spec.plot.x, spec.plot.get("panels")
     frame, hue_key = _with_hue(frame, spec, spec.plot.get("hue", "estimator"))
-    metrics = metric_list(spec) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
+    metrics = metric_list(spec.plot) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
     columns = group_values(frame, panel_key)
     colours = _colours(frame, hue_key)
     fig, axes = panels(len(metrics) * len(columns), rows=len(metrics) if len(columns) > 1 else 1,

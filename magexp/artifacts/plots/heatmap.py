@@ -3,7 +3,7 @@
 Colour and text on one scale: each cell is coloured by the value it prints, on a logarithmic colour
 scale symmetric about 1 (the efficient value): at or below 1 green, above it yellow to red; the
 colour bar is labelled in the ratio itself (0.5, 1, 2), not in its logarithm. The bound ratio is
-computed over the successful runs only (:func:`magexp.artifacts.kind_tables.benchmark_table`); failures
+computed over the successful runs only (:func:`magexp.artifacts.kinds.heatmap.table`); failures
 never enter a colour: a cell with failed runs is hatched (``//`` when some failed, ``xx`` when fewer
 than half succeeded, :func:`magexp.core.outcomes.failed_majority`) and prints how many. Each cell prints the value, its 95 % interval (where the table
 has one) and the failures, in :data:`CELL_POINTS` type. A case where no estimator has a value (no
@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.colors import LogNorm
 from matplotlib.patches import Rectangle
 
-from magexp.artifacts.kind_tables import column_label
+from magexp.artifacts.columns import column_label
 from magexp.artifacts.plots.style import colorbar, drawn_from, narrow_log_ticks, plt
 from magexp.core.outcomes import failed_majority
 
@@ -93,7 +93,7 @@ def draw(frame, spec, ax=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.benchmark_table`.
+        The table of :func:`magexp.artifacts.kinds.heatmap.table`.
     spec : Artifact
         The artifact: ``plot.metric`` (default ``bound_ratio``) colours the cells.
     ax : Axes, optional

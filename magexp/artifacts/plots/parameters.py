@@ -4,14 +4,14 @@ Where the runs measure F_g (eq 8 at the estimate, the ``fg`` column), one more r
 its median and quartiles over every seed (parameter ``F_g``). The figure shows errors against the
 truth, and F_g in a third panel with the paper's F_g; the legend gives each cell's success rate. The
 offsets and F_g are in the readings' unit (``plot.unit``, :func:`magexp.artifacts.plots.style.unit`);
-the matrix entries have none. The table: :func:`magexp.artifacts.kind_tables.parameters_table`."""
+the matrix entries have none. The table: :func:`magexp.artifacts.kinds.parameters.table`."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.kind_tables import FIT
+from magexp.artifacts.plot_keys import FIT
 from magexp.artifacts.plots.style import panels, shared_legend, tidy_log_axes, unit
 
 
@@ -56,7 +56,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.parameters_table`.
+        The table of :func:`magexp.artifacts.kinds.parameters.table`.
     spec : Artifact
         The artifact (``plot.unit`` of the offsets, its title).
     axes : sequence of Axes, optional

@@ -16,8 +16,8 @@ recording (the hue):
 
 The gyro-aided objective cannot tell ``(S, b, h)`` from ``(-S, b, -h)`` (both give the same residual
 norm), so each estimate is shown as the member of the pair with ``det S > 0``
-(:func:`magexp.artifacts.kind_tables.canonical_sign`; the tables:
-:func:`magexp.artifacts.kind_tables.recording_table` and :func:`~magexp.artifacts.kind_tables.spread_table`).
+(:func:`magexp.artifacts.kinds.recording.canonical_sign`; the tables:
+:func:`magexp.artifacts.kinds.recording.table` and :func:`~magexp.artifacts.kinds.recording_spread.table`).
 
 Kind ``recording_spread`` (``real_benchmark``, scalar objective on every recording) draws per
 recording the spread of the raw readings, of the calibrated fitted readings and of the calibrated
@@ -99,7 +99,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.recording_table`.
+        The table of :func:`magexp.artifacts.kinds.recording.table`.
     spec : Artifact
         The artifact (``plot.metric``, its success rule and title).
     axes : sequence of Axes, optional

@@ -8,9 +8,9 @@ of the seeds' block-bootstrap intervals (:func:`magexp.core.identifiability.bloc
 the data's own uncertainty, which one recording cannot average away, and the seeds' differences).
 ``success_rate``: the share of runs where the estimator reports success and the calibrated spread
 is below the raw one (:func:`magexp.core.outcomes.recording_succeeded`, as
-:func:`magexp.artifacts.kind_tables.benchmark_table`; this table: :func:`magexp.artifacts.kind_tables.spread_table`).
+:func:`magexp.artifacts.kinds.heatmap.table`; this table: :func:`magexp.artifacts.kinds.recording_spread.table`).
 The winner per recording
-(:func:`magexp.artifacts.kind_tables.winners` on ``heldout_spread``) is named only where its interval
+(:func:`magexp.artifacts.kinds.heatmap.winners` on ``heldout_spread``) is named only where its interval
 lies below every other estimator's.
 """
 
@@ -31,7 +31,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.spread_table`.
+        The table of :func:`magexp.artifacts.kinds.recording_spread.table`.
     spec : Artifact
         The artifact (its title).
     axes : sequence of Axes, optional

@@ -6,7 +6,7 @@ to 1.8 is labelled at 0.9, 1, 1.2 and 1.5)."""
 from __future__ import annotations
 
 
-from magexp.artifacts.kind_tables import column_label
+from magexp.artifacts.columns import column_label
 from magexp.artifacts.plots.style import plt, tidy_log_axes
 
 MARKERS = "osD^v<>PX*hp"
@@ -18,7 +18,7 @@ def draw(frame, spec, ax=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.benchmark_table`.
+        The table of :func:`magexp.artifacts.kinds.heatmap.table`.
     spec : Artifact
         The artifact: ``plot.metric`` (default ``bound_ratio``) on the log axis.
     ax : Axes, optional

@@ -15,7 +15,7 @@ measured against. A second row of panels then draws, on a log axis, per paramete
 over seeds, interquartile band), the distance of every other estimate from it (the paper's: dash-dot;
 the truth: dashed) and ``plot.tolerances`` (one per group: the accuracy at which the caption calls the
 trace converged) as a black line: differences of 1e-4 that the estimates' own scale hides.
-The table: :func:`magexp.artifacts.kind_tables.trace_table`.
+The table: :func:`magexp.artifacts.kinds.trace.table`.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.trace_table`.
+        The table of :func:`magexp.artifacts.kinds.trace.table`.
     spec : Artifact
         The artifact: ``plot.groups`` of parameters, ``plot.start``, ``plot.trace``.
     axes : sequence of Axes, optional

@@ -23,7 +23,7 @@ left out. Each family gets the same room, wide enough for its words (:func:`_pan
 breaks at its ``;``, a long title wraps to the figure's width. With more settings, the top
 panel shows every setting's median as a dot, the best / median / worst ones with their own markers
 and the default as a star; below, the success rates of the median and best settings and the default
-(of the one setting where a family has only one), under the family's words. The table: :func:`magexp.artifacts.kind_tables.tuning_table`.
+(of the one setting where a family has only one), under the family's words. The table: :func:`magexp.artifacts.kinds.tuning.table`.
 """
 
 from __future__ import annotations
@@ -166,7 +166,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kind_tables.tuning_table`.
+        The table of :func:`magexp.artifacts.kinds.tuning.table`.
     spec : Artifact
         The artifact: ``plot.metric``, ``plot.names``, ``plot.labels``.
     axes : sequence of Axes, optional

@@ -1,0 +1,79 @@
+"""Every estimator's spread on every recording, fitted and held out."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from magexp.artifacts.plot_keys import CommonPlot
+from magexp.artifacts.schema import typed
+from magexp.artifacts.tables import cell_runs, median, fraction, scenario_label
+from magexp.core.outcomes import recording_succeeded
+
+
+@typed
+@dataclass(frozen=True, kw_only=True)
+class Plot(CommonPlot):
+    """The ``plot:`` keys of ``recording_spread``: ``metric`` (the column the report ranks by)."""
+
+    metric: str | None = None
+
+
+#: the per-cell medians of the ``recording_spread`` table
+SPREAD_COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_cells", "wall_time")
+
+
+def table(runs, plot) -> pd.DataFrame:
+    """Per (recording, estimator): the medians of :data:`SPREAD_COLUMNS`, the widest of the seeds'
+    held-out spread intervals and the success rate (reported success and a spread below the raw one)
+    (:mod:`magexp.artifacts.plots.real_spread`).
+
+    Parameters
+    ----------
+    runs : ArtifactRuns
+        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
+    plot : Plot
+        Its ``plot:`` keys.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The ``recording_spread`` table, written as the artifact's CSV.
+    """
+    rows = []
+    for ci in range(len(runs.cells)):
+        sub = cell_runs(runs, ci)
+        row = {"case": scenario_label(sub.scenario.iloc[0]), "scenario": sub.scenario.iloc[0],
+               "estimator": sub.estimator.iloc[0], "objective": sub.objective.iloc[0],
+               "setting": sub.setting.iloc[0], "n_seeds": len(sub)}
+        row.update({c: median(sub[c]) if c in sub else np.nan for c in SPREAD_COLUMNS})
+        lo, hi = (sub[c].to_numpy(float) if c in sub else np.array([np.nan])
+                  for c in ("heldout_spread_lo", "heldout_spread_hi"))
+        row["heldout_spread_lo"] = float(np.min(lo)) if np.isfinite(lo).all() else np.nan
+        row["heldout_spread_hi"] = float(np.max(hi)) if np.isfinite(hi).all() else np.nan
+        row["success_rate"] = fraction(recording_succeeded(sub.optimizer_flag, sub.spread_before, sub.spread_after))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def draw(table, spec, axes=None):
+    """The figure of the ``recording_spread`` table (:func:`magexp.artifacts.plots.real_spread.draw`; matplotlib loads only here).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The table :func:`table` wrote (the artifact's CSV, read back).
+    spec : Artifact
+        The artifact: its title, its typed ``plot`` and what it compares.
+    axes : matplotlib Axes or list of them, optional
+        The caller's panels (default: a new figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    from magexp.artifacts.plots import real_spread
+    return real_spread.draw(table, spec, axes)
