@@ -4,7 +4,9 @@ Read from the source (the AST), with a small parser of numpydoc sections (numpyd
 dependency): a function that takes parameters has a ``Parameters`` section naming each of them
 (``name : type`` or ``name1, name2 : type``; ``*args``, ``**settings``), one that returns a value a
 ``Returns`` (or ``Yields``) section, and a public class with a constructor of its own names the
-constructor's parameters in its docstring (numpydoc's convention) or in the constructor's.
+constructor's parameters in its docstring (numpydoc's convention) or in the constructor's. A protocol
+implementation (:data:`PROTOCOLS`: a kind's ``table`` and ``draw``) is checked against the sections its
+package's docstring gives the protocol, and needs only its own first line.
 """
 
 import ast
@@ -49,6 +51,11 @@ PENDING = {
         'Outputs.was_cached', 'cost_hint', 'jobqueue_cluster', 'make_executor', 'plan_tasks', 'run_many',
         'run_row'},
 }
+
+#: protocol implementations (issue 42): functions that every module of a package defines with one
+#: signature, documented once, in full, by the package's docstring (its sections "Parameters of ``name``"
+#: and "Returns of ``name``"); an implementation needs only a first line saying what it does
+PROTOCOLS = {"artifacts/kinds": ("table", "draw")}
 
 
 def sections(doc: str) -> dict[str, list[str]]:
@@ -110,12 +117,28 @@ def _returns_value(node) -> bool:
     return False
 
 
-def missing_sections(source: str) -> list[str]:
+def protocol_docs(path: Path) -> dict[str, str]:
+    """``{name: numpydoc}`` of the protocol functions a module implements, from its package's docstring."""
+    package = path.parent.relative_to(PACKAGE).as_posix()
+    if package not in PROTOCOLS or path.name == "__init__.py":
+        return {}
+    found = sections(ast.get_docstring(ast.parse((path.parent / "__init__.py").read_text())))
+    return {name: "\n".join(["Parameters", "----------", *found.get(f"Parameters of ``{name}``", []),
+                             "Returns", "-------", *found.get(f"Returns of ``{name}``", [])])
+            for name in PROTOCOLS[package]}
+
+
+def missing_sections(source: str, protocol: dict[str, str] | None = None) -> list[str]:
     """``"name: what"`` of each public function of ``source`` lacking a section it needs, or a parameter
-    its ``Parameters`` section does not name."""
+    its ``Parameters`` section does not name; a function of ``protocol`` needs its own first line only,
+    its sections are the protocol's (:func:`protocol_docs`)."""
     missing = []
     for name, node, owner in _public_functions(ast.parse(source)):
         doc = ast.get_docstring(node) or ""
+        if name in (protocol or {}):
+            if not doc.strip():
+                missing.append(f"{name}: first line")
+            doc = protocol[name]
         wanted = _parameters(node)
         if name.endswith("__init__"):  # numpydoc: the class documents its constructor
             doc = owner + "\n\n" + doc if sections(doc).get("Parameters") is None else doc
@@ -194,6 +217,32 @@ def _private(z):
                                         "Thing.__init__: Parameters (colour)", "Thing.apply: Parameters"]
 
 
+def test_a_protocol_implementation_needs_its_first_line_only():
+    protocol = {"table": "Summary.\n\nParameters\n----------\nruns : ArtifactRuns\nplot : Plot\n\n"
+                         "Returns\n-------\npandas.DataFrame\n"}
+    source = '''
+def table(runs, plot):
+    """One row per cell."""
+    return runs
+
+
+def table_too(runs, plot):
+    """Not in the protocol: full sections."""
+    return runs
+'''
+    assert missing_sections(source, protocol) == ["table_too: Parameters", "table_too: Returns"]
+    assert missing_sections(source.replace('"""One row per cell."""', "pass"), protocol)[0] == "table: first line"
+    assert missing_sections(source.replace("table(runs, plot)", "table(runs, plot, extra)"), protocol)[0] \
+        == "table: Parameters (extra)"  # the protocol must name what an implementation takes
+
+
+def test_the_kinds_protocol_is_documented_by_its_package():
+    docs = protocol_docs(PACKAGE / "artifacts" / "kinds" / "final.py")
+    assert documented(docs["table"]) == {"runs", "plot"} and documented(docs["draw"]) == {"table", "spec", "axes"}
+    assert all(sections(doc)["Returns"] for doc in docs.values())
+    assert protocol_docs(PACKAGE / "artifacts" / "kinds" / "__init__.py") == {}
+
+
 def test_the_parser_reads_numpydoc():
     doc = """Summary.
 
@@ -222,6 +271,6 @@ def test_every_package_is_checked():
 
 @pytest.mark.parametrize("path", MODULES, ids=lambda p: p.relative_to(PACKAGE).as_posix())
 def test_every_public_function_has_its_numpydoc_sections(path):
-    missing = missing_sections(path.read_text())
+    missing = missing_sections(path.read_text(), protocol_docs(path))
     left = PENDING.get(path.relative_to(PACKAGE).as_posix(), set())
     assert [m for m in missing if m.split(":")[0] not in left] == []

@@ -3,7 +3,7 @@
 A kind module ``<kind>.py`` holds all of its kind:
 
 * its first docstring line: what the kind draws (the table of kinds in ``docs/extending.md`` is
-  generated from it, :mod:`magexp.artifacts.kinds._docs`);
+  generated from it, :func:`docs_section`);
 * ``Plot``: a frozen dataclass of its ``plot:`` keys with their defaults (the keys of every kind come
   from :class:`magexp.artifacts.plot_keys.CommonPlot`); a spec's ``plot:`` is validated against
   it when the spec is loaded (:func:`plot_of`), so a wrong key or type fails there;
@@ -13,6 +13,39 @@ A kind module ``<kind>.py`` holds all of its kind:
   :mod:`magexp.artifacts.plots`, imported only when a figure is drawn).
 
 Adding a kind is adding one module here; modules whose name starts with ``_`` are not kinds.
+
+``table`` and ``draw`` are documented here, once: a kind's own docstrings say in a line or two what
+its table holds and what its figure draws (``tests/test_docstrings.py`` checks these sections and that
+every kind's ``table`` and ``draw`` take the parameters they name).
+
+Parameters of ``table``
+-----------------------
+runs : ArtifactRuns
+    The artifact's runs (:func:`magexp.artifacts.plan.collect`): ``runs.spec`` the artifact,
+    ``runs.cells`` its cells, ``runs.table`` one row per (cell, seed) with its metrics and
+    ``runs.outputs`` each run's output, read from the run cache on access.
+plot : Plot
+    The artifact's ``plot:`` keys, an instance of the kind's ``Plot`` (:func:`plot_of`).
+
+Returns of ``table``
+--------------------
+pandas.DataFrame
+    The table behind the figure, written as the artifact's CSV: every number the figure shows.
+
+Parameters of ``draw``
+----------------------
+table : pandas.DataFrame
+    The table ``table`` wrote (the artifact's CSV, read back): the figure aggregates nothing.
+spec : Artifact
+    The artifact (:class:`magexp.artifacts.spec.Artifact`): its title, its typed ``plot`` and
+    what it compares.
+axes : matplotlib Axes or list of them, optional
+    The caller's panels (default: a new figure).
+
+Returns of ``draw``
+-------------------
+matplotlib.figure.Figure
+    The figure (matplotlib is imported only by ``draw``).
 """
 
 from __future__ import annotations

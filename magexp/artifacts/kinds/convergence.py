@@ -31,22 +31,8 @@ def _count(sub: pd.DataFrame, column: str) -> int:
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """Per cell and iteration: the quartiles over seeds of the best objective, the median evaluations,
-    the floors, the success counts, and the median iterations to 1.1 x the final value over the
-    successful runs (:mod:`magexp.artifacts.plots.convergence`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``convergence`` table, written as the artifact's CSV.
-    """
+    """Per cell and iteration: quartiles over seeds of the best objective, median evaluations, floors,
+    success counts and the median iterations to 1.1 x the final value (:mod:`magexp.artifacts.plots.convergence`)."""
     frames = []
     for ci, cell in enumerate(runs.cells):
         seeds = sorted(s for (c, s) in runs.outputs if c == ci)
@@ -68,21 +54,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``convergence`` table (:func:`magexp.artifacts.plots.convergence.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws the best objective against iteration, median and interquartile band per cell
+    (:func:`magexp.artifacts.plots.convergence.draw`)."""
     from magexp.artifacts.plots import convergence
     return convergence.draw(table, spec, axes)

@@ -24,20 +24,7 @@ class Plot(CommonPlot):
 
 def table(runs, plot) -> pd.DataFrame:
     """Per cell and quantity (the run's parameters, then ``plot.rows``): quartiles over seeds and the
-    median truth (:mod:`magexp.artifacts.plots.estimates`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``estimates`` table, written as the artifact's CSV.
-    """
+    median truth (:mod:`magexp.artifacts.plots.estimates`)."""
     names = list(next(iter(runs.outputs.values())).parameter_names) + list(plot.rows)
     rows = []
     for ci, cell in enumerate(runs.cells):
@@ -51,21 +38,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``estimates`` table (:func:`magexp.artifacts.plots.estimates.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws the fitted values per estimator beside the truth, as a table figure
+    (:func:`magexp.artifacts.plots.estimates.draw`)."""
     from magexp.artifacts.plots import estimates
     return estimates.draw(table, spec, axes)

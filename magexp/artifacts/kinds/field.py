@@ -51,22 +51,8 @@ def shown_seed(runs, ci: int) -> tuple[int, str]:
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """Per reading of the shown seed of each cell (:func:`shown_seed`): raw and calibrated vectors and
-    total fields, the reference total field and the error of the calibrated one
-    (:mod:`magexp.artifacts.plots.field`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``field`` table, written as the artifact's CSV.
-    """
+    """Per reading of each cell's :func:`shown_seed`: raw and calibrated vectors and total fields, the
+    reference total field and the calibrated one's error (:mod:`magexp.artifacts.plots.field`)."""
     frames = []
     for ci, cell in enumerate(runs.cells):
         seed, outcome = shown_seed(runs, ci)
@@ -84,21 +70,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``field`` table (:func:`magexp.artifacts.plots.field.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws the shown seed's total field against the reference, or its readings in 3-D against the sphere
+    (:func:`magexp.artifacts.plots.field.draw`)."""
     from magexp.artifacts.plots import field
     return field.draw(table, spec, axes)

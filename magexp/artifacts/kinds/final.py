@@ -69,23 +69,8 @@ def _ratio_rows(runs) -> list[dict]:
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """Per cell and metric: quartiles (of a censored metric also its extremes and censoring,
-    :func:`magexp.artifacts.censoring.cell_quartiles`), the success rate and converged fraction, the floors
-    (``noise_floor``, ``truth_fun``, ``rms_bound``) and the median of ``plot.bound``; then the ratios
-    (:mod:`magexp.artifacts.plots.final`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``final`` table, written as the artifact's CSV.
-    """
+    """Per cell and metric: quartiles (censored ones with extremes, :func:`magexp.artifacts.censoring.cell_quartiles`),
+    success and converged rates, the floors and the median of ``plot.bound``; then the ratios."""
     bound = plot.bound
     rows = []
     for ci, cell in enumerate(runs.cells):
@@ -105,21 +90,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``final`` table (:func:`magexp.artifacts.plots.final.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws each metric's median and quartiles against the swept key, with floors and levels
+    (:func:`magexp.artifacts.plots.final.draw`)."""
     from magexp.artifacts.plots import final
     return final.draw(table, spec, axes)

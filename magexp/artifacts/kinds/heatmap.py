@@ -55,23 +55,8 @@ def bound_ratio(sub: pd.DataFrame) -> tuple[float, float, float]:
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """One row per (case, estimator): medians (of the accuracy columns over the successful runs), the
-    bound ratio with its interval, the success rate and the failures (module docstring of
-    :mod:`magexp.artifacts.plots.heatmap`). Where no run is judged (recordings), the fit's own
-    verdict and a spread below the raw one decide success.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``heatmap`` table, written as the artifact's CSV.
-    """
+    """Per (case, estimator): accuracy medians over the successful runs, the bound ratio with its interval,
+    success rate and failures (success on recordings: the fit's verdict and a spread below the raw one)."""
     grid_keys = set(runs.spec.grid)
     rows = []
     for ci, cell in enumerate(runs.cells):
@@ -124,21 +109,7 @@ def winners(frame: pd.DataFrame, by: str = "bound_ratio") -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``heatmap`` table (:func:`magexp.artifacts.plots.heatmap.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws estimator against case, coloured by ``plot.metric`` (default the bound ratio)
+    (:func:`magexp.artifacts.plots.heatmap.draw`)."""
     from magexp.artifacts.plots import heatmap
     return heatmap.draw(table, spec, axes)

@@ -46,22 +46,8 @@ def cell_label(cell: dict, estimator: str, spec) -> str:
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """Per cell and parameter: quartiles over the successful seeds (failures counted in ``n_failed``),
-    the truth and the paper's value; F_g over every seed where the runs measure it
-    (:mod:`magexp.artifacts.plots.parameters`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``parameters`` table, written as the artifact's CSV.
-    """
+    """Per cell and parameter: quartiles over the successful seeds (``n_failed`` counts the rest), the truth
+    and the paper's value; F_g over every seed that measures it (:mod:`magexp.artifacts.plots.parameters`)."""
     rows = []
     for ci, cell in enumerate(runs.cells):
         sub = cell_runs(runs, ci)
@@ -88,21 +74,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``parameters`` table (:func:`magexp.artifacts.plots.parameters.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws each parameter's estimate minus truth per cell (median, IQR), beside the paper's value
+    (:func:`magexp.artifacts.plots.parameters.draw`)."""
     from magexp.artifacts.plots import parameters
     return parameters.draw(table, spec, axes)

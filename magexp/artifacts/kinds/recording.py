@@ -67,21 +67,8 @@ def _hue_labels(runs) -> list[str]:
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """Rows ``row = run`` (a per-run quantity of one seed) and ``row = estimate`` (a parameter: median
-    over the successful seeds, and the median of their standard errors) (:mod:`magexp.artifacts.plots.real`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``recording`` table, written as the artifact's CSV.
-    """
+    """Rows ``row = run`` (a per-run quantity of one seed) and ``row = estimate`` (a parameter: median over the
+    successful seeds, and of their standard errors) (:mod:`magexp.artifacts.plots.real`)."""
     rows = []
     for ci, label in enumerate(_hue_labels(runs)):
         sub = cell_runs(runs, ci, by_seed=True)
@@ -103,21 +90,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``recording`` table (:func:`magexp.artifacts.plots.real.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws per recording the objective, the spread and the estimates with their standard errors
+    (:func:`magexp.artifacts.plots.real.draw`)."""
     from magexp.artifacts.plots import real
     return real.draw(table, spec, axes)

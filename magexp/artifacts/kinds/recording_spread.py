@@ -26,22 +26,8 @@ SPREAD_COLUMNS = ("spread_before", "spread_after", "heldout_spread", "coverage_c
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """Per (recording, estimator): the medians of :data:`SPREAD_COLUMNS`, the widest of the seeds'
-    held-out spread intervals and the success rate (reported success and a spread below the raw one)
-    (:mod:`magexp.artifacts.plots.real_spread`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``recording_spread`` table, written as the artifact's CSV.
-    """
+    """Per (recording, estimator): medians of :data:`SPREAD_COLUMNS`, the widest held-out spread interval
+    of the seeds and the success rate (reported success and a spread below the raw one)."""
     rows = []
     for ci in range(len(runs.cells)):
         sub = cell_runs(runs, ci)
@@ -59,21 +45,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``recording_spread`` table (:func:`magexp.artifacts.plots.real_spread.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws each estimator's fitted and held-out spread on every recording
+    (:func:`magexp.artifacts.plots.real_spread.draw`)."""
     from magexp.artifacts.plots import real_spread
     return real_spread.draw(table, spec, axes)

@@ -18,21 +18,7 @@ class Plot(CommonPlot):
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``speed`` table (:func:`magexp.artifacts.plots.speed.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws ``plot.metric`` against wall time per estimator and case, on log axes
+    (:func:`magexp.artifacts.plots.speed.draw`)."""
     from magexp.artifacts.plots import speed
     return speed.draw(table, spec, axes)

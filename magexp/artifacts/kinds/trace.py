@@ -84,22 +84,8 @@ def _distances(runs, key: str, names: list[str], traced: set) -> list[pd.DataFra
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """Per traced cell, parameter and step: quartiles over seeds of ``trace[plot.trace]``; the truth
-    and the untraced cells' estimates as levels; the distances from ``plot.relative_to``
-    (:mod:`magexp.artifacts.plots.trace`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``trace`` table, written as the artifact's CSV.
-    """
+    """Per traced cell, parameter and step: quartiles over seeds of ``trace[plot.trace]``; the truth and
+    the untraced cells' estimates as levels; the distances from ``plot.relative_to``."""
     key = plot.trace
     traced = {ci for (ci, s), out in runs.outputs.items() if key in out.trace}
     names = _names(runs.outputs[min(k for k in runs.outputs if k[0] in traced)], key) if traced else []
@@ -122,21 +108,7 @@ def table(runs, plot) -> pd.DataFrame:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``trace`` table (:func:`magexp.artifacts.plots.trace.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws each parameter's quartiles against filter step, with the levels and distances
+    (:func:`magexp.artifacts.plots.trace.draw`)."""
     from magexp.artifacts.plots import trace
     return trace.draw(table, spec, axes)

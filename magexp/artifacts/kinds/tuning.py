@@ -33,20 +33,7 @@ def _rate(values) -> float:
 
 def table(runs, plot) -> pd.DataFrame:
     """One row per setting (cell), with per (family, scenario) the ``best``, ``median`` and ``worst``
-    setting by the median metric (:mod:`magexp.artifacts.plots.tuning`).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    plot : Plot
-        Its ``plot:`` keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The ``tuning`` table, written as the artifact's CSV.
-    """
+    setting by the median metric (:mod:`magexp.artifacts.plots.tuning`)."""
     spec = runs.spec
     defaults = {k: {kk: str(vv) for kk, vv in v.items()} for k, v in plot.default.items()}
     frame = pd.DataFrame([_setting_row(runs, ci, defaults) for ci in range(len(runs.cells))])
@@ -102,21 +89,7 @@ def _setting_row(runs, ci: int, defaults: dict) -> dict:
 
 
 def draw(table, spec, axes=None):
-    """The figure of the ``tuning`` table (:func:`magexp.artifacts.plots.tuning.draw`; matplotlib loads only here).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table :func:`table` wrote (the artifact's CSV, read back).
-    spec : Artifact
-        The artifact: its title, its typed ``plot`` and what it compares.
-    axes : matplotlib Axes or list of them, optional
-        The caller's panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """Draws the distribution of the metric over the settings of one method, beside its default
+    (:func:`magexp.artifacts.plots.tuning.draw`)."""
     from magexp.artifacts.plots import tuning
     return tuning.draw(table, spec, axes)
