@@ -90,41 +90,13 @@ class Plot(CommonPlot):
 
 
 def table(runs, plot) -> pd.DataFrame:
-    """One row per cell: the median of ``plot.metric`` over its seeds.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs.
-    plot : Plot
-        Its plot keys.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns ``cell`` and ``median``.
-    """
+    """One row per cell: the median of ``plot.metric`` over its seeds."""
     return pd.DataFrame([{"cell": ci, "median": median(cell_runs(runs, ci)[plot.metric])}
                          for ci in range(len(runs.cells))])
 
 
 def draw(table, spec, axes=None):
-    """The medians as dots against the cell.
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The table of :func:`table`.
-    spec : Artifact
-        The artifact (its title).
-    axes : matplotlib Axes, optional
-        Ignored: the dots get a figure of their own.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """The medians as dots against the cell, on a figure of its own."""
     from magexp.artifacts.plots.style import plt
     fig, ax = plt.subplots()
     ax.plot(table["cell"], table["median"], "o")
