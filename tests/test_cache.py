@@ -356,6 +356,13 @@ def edit(path: Path, old: str, new: str) -> None:
     codekey.forget_code()
 
 
+def code_edit(path: Path) -> None:
+    """Add a statement to ``path`` (a docstring edit is no code edit); this process then forgets what it read."""
+    with path.open("a") as fh:
+        fh.write("\nEDITED = 1\n")
+    codekey.forget_code()
+
+
 def changed(before: dict, after: dict) -> set:
     return {run for run in before if before[run] != after[run]}
 
@@ -386,15 +393,25 @@ def test_an_unused_module_changes_no_key_and_a_plot_edit_none_either(sources, ke
 
 def test_an_estimator_edit_changes_the_keys_of_its_runs_and_of_its_importers_only(sources, keyed):
     before = keys_of(keyed)
-    edit(sources / "magexp/estimators/lm.py", '"""Levenberg-Marquardt refinement', '"""Levenberg-Marquardt (LM) refinement')
+    code_edit(sources / "magexp/estimators/lm.py")
     assert changed(before, keys_of(keyed)) == {("yuan2018_mode1", "lm"), ("yuan2018_mode1", "local")}  # local imports lm
 
 
 def test_a_core_edit_changes_every_key(sources, keyed):
     before = keys_of(keyed)
-    with (sources / "magexp/core/bounds.py").open("a") as fh:
-        fh.write("\n# a change upstream of every run\n")
-    codekey.forget_code()
+    code_edit(sources / "magexp/core/bounds.py")
+    assert changed(before, keys_of(keyed)) == set(keyed)
+
+
+def test_docstrings_comments_and_layout_change_no_key_but_code_does(sources, keyed):
+    before = keys_of(keyed)
+    path = sources / "magexp/core/bounds.py"
+    text = path.read_text()
+    first = text.index('"""', text.index("\ndef ")) + 3  # the first function's docstring
+    path.write_text(text[:first] + "Rewritten. " + text[first:].replace("\n\n\n", "\n\n\n# a comment\n\n", 1))
+    edit(sources / "magexp/estimators/lm.py", '"""Levenberg-Marquardt refinement', '"""Levenberg-Marquardt (LM) refinement')
+    assert keys_of(keyed) == before
+    code_edit(path)
     assert changed(before, keys_of(keyed)) == set(keyed)
 
 
@@ -426,13 +443,13 @@ def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sourc
     before = keys_of(runs)
     assert "toypkg" not in sys.modules  # found from its source, not imported
     assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(codekey.code_files(cache.run_targets(runs["docs"])))
-    edit(package / "methods.py", "under another name", "under a new name")
+    code_edit(package / "methods.py")
     assert changed(before, keys_of(runs)) == {"docs", "module"}
     again = keys_of(runs)
     (package / "unused.py").write_text('"""Edited, still imported by nothing."""\n')
     codekey.forget_code()
     assert keys_of(runs) == again
-    edit(sources / "magexp/estimators/lm.py", '"""Levenberg-Marquardt refinement', '"""Levenberg-Marquardt (LM) refinement')
+    code_edit(sources / "magexp/estimators/lm.py")
     assert changed(again, keys_of(runs)) == {"docs", "module"}  # magexp code it imports is its code too
     again = keys_of(runs)
     edit(package / "methods.py", "class MyMethod(", "class MyMethod((")  # not Python: keyed all the same
@@ -449,7 +466,7 @@ def test_code_versions_are_kept_under_the_sources_stamp(sources, keyed):
     assert kept == {"|".join(targets): version}
     memo.write_text(json.dumps({stamp: {"|".join(targets): "kept"}}))
     assert cache.code_version(targets) == "kept"  # read back, not worked out
-    edit(sources / "magexp/estimators/swarm.py", '"""The one swarm', '"""An edit. The one swarm')
+    code_edit(sources / "magexp/estimators/swarm.py")
     new = cache.code_version(targets)
     assert new not in ("kept", version)  # a new stamp: worked out again
     assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == {
@@ -481,15 +498,15 @@ def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sour
     (sources / "magexp/core/readers/new.py").write_text('"""A reader of a new format."""\n')
     codekey.forget_code()
     assert keys_of(runs) == before  # a new reader reruns nothing
-    edit(sources / "magexp/core/readers/ulog.py", '"""PX4 ULog (``.ulg``) logs', '"""PX4 ULog (``.ulg``) flight logs')
+    code_edit(sources / "magexp/core/readers/ulog.py")
     assert changed(before, after := keys_of(runs)) == {"ulog", "named ulog"}
-    edit(sources / "magexp/core/readers/dataflash.py", '"""ArduPilot DataFlash', '"""The ArduPilot DataFlash')
+    code_edit(sources / "magexp/core/readers/dataflash.py")
     assert changed(after, again := keys_of(runs)) == {"dataflash"}
-    edit(sources / "magexp/core/readers/rosbag.py", '"""ROS 1 bags', '"""The ROS 1 bags')
+    code_edit(sources / "magexp/core/readers/rosbag.py")
     assert changed(again, again := keys_of(runs)) == {"ros2 bag"}
     (bag / "bag_0.db3").write_bytes(b"SQLite format 3\x00\x01")
     assert changed(again, again := keys_of(runs)) == {"ros2 bag"}  # a bag folder's files are its data
-    edit(sources / "magexp/core/readers/__init__.py", '"""Readers of the flight', '"""Readers of the drone, flight')
+    code_edit(sources / "magexp/core/readers/__init__.py")
     assert changed(again, keys_of(runs)) == {"ulog", "named ulog", "dataflash", "ros2 bag"}  # what they all import
     assert {m for m in sys.modules if m.startswith("magexp.core.readers")} == imported  # named, never imported
 

@@ -11,8 +11,10 @@ and of the estimators importing its module, an unused new module reruns nothing,
 key. Which targets a run names (its ``_target_`` strings, the readers of its data files, its problem class) is
 :func:`magexp.run.cache.run_targets`'s.
 
-:func:`code_hash` hashes the name and content of each of those files; :mod:`magexp.run.cache` keeps the hashes
-(``code-version.json``, under the sources' :func:`source_stamp`) and puts them in every run's key.
+:func:`code_hash` hashes the name and the executed content of each of those files (the syntax tree without
+docstrings and comments: editing a docstring, a comment or a line's layout reruns nothing);
+:mod:`magexp.run.cache` keeps the hashes (``code-version.json``, under the sources' :func:`source_stamp`) and
+puts them in every run's key.
 """
 
 from __future__ import annotations
@@ -201,13 +203,32 @@ def default_objective(target: str) -> str | None:
     return None
 
 
+class _NoDocstrings(ast.NodeTransformer):
+    """Drops the docstring of a module, class or function: text a run does not execute."""
+
+    def generic_visit(self, node):
+        body = getattr(node, "body", None)
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and body \
+                and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
+                and isinstance(body[0].value.value, str):
+            node.body = body[1:] or [ast.Pass()]
+        return super().generic_visit(node)
+
+
 @lru_cache(maxsize=None)
 def _digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    """The hash of what ``path`` executes: its syntax tree without docstrings, line numbers or comments (so
+    documenting or reformatting a module reruns nothing); of its bytes if it is not valid Python source."""
+    data = path.read_bytes()
+    try:
+        tree = ast.parse(data, filename=str(path))
+    except (SyntaxError, ValueError):
+        return hashlib.sha256(data).hexdigest()
+    return hashlib.sha256(ast.dump(_NoDocstrings().visit(tree)).encode()).hexdigest()
 
 
 def code_hash(targets: tuple[str, ...]) -> str:
-    """Hash of the name and content of each file of :func:`code_files`.
+    """Hash of the name and executed content (:func:`_digest`) of each file of :func:`code_files`.
 
     Parameters
     ----------
