@@ -29,21 +29,3 @@ CACHE = Path(os.environ.get("MAGEXP_CACHE") or _default_cache)  # finished runs,
 SHARED_DATA = Path(os.environ["MAGEXP_DATA"]) if os.environ.get("MAGEXP_DATA") else next(
     (p for p in (ROOT.parent / "shared" / "data", ROOT.parent.parent / "shared" / "data") if p.is_dir()),
     ROOT.parent / "shared" / "data")
-
-
-def paper_results(paper: str) -> Path:
-    """``results/<paper>/``, created on demand.
-
-    Parameters
-    ----------
-    paper : str
-        The folder's name (``ding2024``, ``yuan2018``, ``yan2022``, ``benchmark``...).
-
-    Returns
-    -------
-    pathlib.Path
-        The folder, existing.
-    """
-    path = RESULTS / paper
-    path.mkdir(parents=True, exist_ok=True)
-    return path
