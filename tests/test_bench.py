@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from magexp.perf.bench import reach, row, wilson
+from magexp.perf.measuring import row
+from magexp.perf.peertable import reach, wilson
 
 
 def test_wilson_interval_of_all_and_none():

@@ -187,8 +187,8 @@ def test_a_fused_cost_needs_memory_of_order_n_plus_p(fused, monkeypatch):
 def test_the_memory_estimate_of_a_fused_run_bounds_its_measured_peak():
     """The guard's estimate of a command-line ipso run (200 000 readings, 500 particles) is at
     least its peak resident memory above the baseline and at most twice it, both measured in
-    child processes (:func:`magexp.perf.bench.memory_check`; make bench does it at 1e6)."""
-    from magexp.perf.bench import memory_check
+    child processes (:func:`magexp.perf.footprint.memory_check`; make bench does it at 1e6)."""
+    from magexp.perf.footprint import memory_check
 
     m = memory_check(200_000, 500, 3)
     assert 1.0 <= m["ratio"] <= 2.0, m
