@@ -56,18 +56,6 @@ def atomic_path(path: Path | str, *, mode: int | None = None) -> Iterator[Path]:
     """A temporary path beside ``path``: renamed onto ``path`` when the block ends, removed if it raises
     (a stop signal included: :func:`_stops_held`). ``mode``: the file's permissions (default: ``0666``
     less the umask).
-
-    Parameters
-    ----------
-    path : Path or str
-        The target file (its folder must exist).
-    mode : int, optional
-        The file's permission bits.
-
-    Yields
-    ------
-    Path
-        The temporary file to write.
     """
     path = Path(path)
     tmp = None
@@ -86,65 +74,20 @@ def atomic_path(path: Path | str, *, mode: int | None = None) -> Iterator[Path]:
 
 @contextmanager
 def atomic_open(path: Path | str, mode: str = "w", **kwargs) -> Iterator:
-    """``open(path, mode)`` onto a temporary file that replaces ``path`` once closed without error.
-
-    Parameters
-    ----------
-    path : Path or str
-        The target file.
-    mode : str
-        :func:`open`'s mode (a writing one).
-    **kwargs
-        :func:`open`'s other keywords (``encoding``, ``newline``, ...).
-
-    Yields
-    ------
-    file object
-        The open temporary file.
-    """
+    """``open(path, mode)`` onto a temporary file that replaces ``path`` once closed without error."""
     with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
         yield fh
 
 
 def write_text(path: Path | str, text: str, encoding: str = "utf-8") -> Path:
-    """``Path.write_text``, atomically; returns ``path``.
-
-    Parameters
-    ----------
-    path : Path or str
-        The target file.
-    text : str
-        Its content.
-    encoding : str
-        The text's encoding.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
+    """``Path.write_text``, atomically; returns ``path``."""
     with atomic_open(path, "w", encoding=encoding) as fh:
         fh.write(text)
     return Path(path)
 
 
 def write_bytes(path: Path | str, data: bytes, *, mode: int | None = None) -> Path:
-    """``Path.write_bytes``, atomically (``mode``: as :func:`atomic_path`); returns ``path``.
-
-    Parameters
-    ----------
-    path : Path or str
-        The target file.
-    data : bytes
-        Its content.
-    mode : int, optional
-        The file's permission bits.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
+    """``Path.write_bytes``, atomically (``mode``: as :func:`atomic_path`); returns ``path``."""
     with atomic_path(path, mode=mode) as tmp:
         Path(tmp).write_bytes(data)
     return Path(path)

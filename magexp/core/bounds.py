@@ -40,20 +40,6 @@ _INVARIANT_JACOBIANS: OrderedDict = OrderedDict()
 def central_differences(fun, theta: np.ndarray, steps: np.ndarray) -> np.ndarray:
     """Jacobian of ``fun`` (one vector in, ``(n,)`` out) at ``theta`` by central differences of the
     given ``steps``, one row per parameter, returned transposed (``(n, p)``, column-major).
-
-    Parameters
-    ----------
-    fun : callable
-        ``theta -> (n,)`` array.
-    theta : ndarray, shape (p,)
-        The point.
-    steps : ndarray, shape (p,)
-        Each parameter's step ``h_k``: ``(f(θ + h_k e_k) − f(θ − h_k e_k)) / 2 h_k``.
-
-    Returns
-    -------
-    ndarray, shape (n, p)
-        The Jacobian.
     """
     rows = None
     for k in range(theta.size):
@@ -94,22 +80,6 @@ def jacobians(problem, theta: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray
     """``(J, G)``: ``J = ∂r/∂θ`` ``(N m, p)`` and ``G_i = ∂r_i/∂x_i`` ``(N, m, 3)``, the problem's
     analytic ones (``problem.jacobians``) when it has them, else central differences
     (:func:`central_differences`, :func:`finite_difference_noise_blocks`).
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem (its ``residuals``, and ``jacobians`` when it has them).
-    theta : ndarray, shape (p,)
-        The point.
-    steps : ndarray, shape (p,)
-        The central-difference steps (used without an analytic form).
-
-    Returns
-    -------
-    J : ndarray, shape (N m, p)
-        ``∂r/∂θ``.
-    G : ndarray, shape (N, m, 3)
-        ``∂r_i/∂x_i``.
     """
     both = problem.jacobians(theta) if hasattr(problem, "jacobians") else None
     if both is not None:
@@ -124,22 +94,6 @@ def invariant_jacobian(problem, theta: np.ndarray, steps: np.ndarray, keep: int 
     ``h`` is a function of ``θ`` alone, fixed by the problem's class and constructor options (its
     parameterisation), not by its readings; so ``H`` is kept per (class, options, ``θ``, steps)
     in this process: every seed of a scenario shares its truth, and computes ``H`` once.
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem (its ``invariants`` and ``options``).
-    theta : ndarray, shape (p,)
-        The point.
-    steps : ndarray, shape (p,)
-        The central-difference steps.
-    keep : int
-        How many Jacobians this process keeps (least recently used dropped).
-
-    Returns
-    -------
-    ndarray, shape (k, p)
-        ``H``, read-only.
     """
     key = (type(problem), json.dumps(problem.options, sort_keys=True, default=str), theta.tobytes(), steps.tobytes())
     if key in _INVARIANT_JACOBIANS:
@@ -154,20 +108,7 @@ def invariant_jacobian(problem, theta: np.ndarray, steps: np.ndarray, keep: int 
 
 
 def finite_difference_noise_blocks(problem, theta: np.ndarray) -> np.ndarray:
-    """``G_i = ∂r_i/∂x_i`` by central differences of the readings (six residual evaluations).
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem, rebuilt on readings shifted by ``±1e-6`` of their largest size along each axis.
-    theta : ndarray, shape (p,)
-        The point.
-
-    Returns
-    -------
-    ndarray, shape (N, m, 3)
-        ``G_i`` of every reading.
-    """
+    """``G_i = ∂r_i/∂x_i`` by central differences of the readings (six residual evaluations)."""
     ds = problem.dataset
     scale = max(float(ds.readings.max()), -float(ds.readings.min()), 1.0) * 1e-6
     blocks = None
@@ -191,26 +132,16 @@ class _Box:
         self._b = (problem.lower, problem.upper)
 
     def bounds(self):
+        """``(lower, upper)`` of the box, as the problem it stands in for gives them."""
         return self._b
 
 
 def noise_free(problem):
-    """The same problem on the noise-free readings, when the scenario knows them.
+    """The same problem on the noise-free readings ``W^-1 B_true + o``, when the scenario knows them (else ``problem``).
 
     The Fisher information is an expectation: its Jacobian belongs at the noise-free data. On
     noisy readings a direction the data cannot identify (e.g. two planar rings of readings for a
     scalar fit) would look weakly identified by the noise itself.
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        A problem on a dataset.
-
-    Returns
-    -------
-    CalibrationProblem
-        The problem rebuilt on ``W^-1 B_true + o`` (the truth applied backwards to the noise-free field),
-        or ``problem`` itself when the dataset has no truth or no noise-free field (a recording).
     """
     ds = problem.dataset
     if ds.field_body_true is None or ds.truth is None:
@@ -220,21 +151,8 @@ def noise_free(problem):
 
 
 def cramer_rao(problem, theta: np.ndarray | None = None) -> dict | None:
-    """See :func:`_cramer_rao`; infinities of unidentifiable problems are expected, not warned about.
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem (its dataset's noise, truth and residuals).
-    theta : ndarray, shape (p,), optional
-        The point (default: the truth).
-
-    Returns
-    -------
-    dict or None
-        As :func:`_cramer_rao`: ``rms_floor``, ``invariant_cov`` and the expected error sizes; None when
-        the noise or the point is unknown.
-    """
+    """See :func:`_cramer_rao` (at ``theta``, default the truth; None when the noise or the point is unknown);
+    infinities of unidentifiable problems are expected, not warned about."""
     with np.errstate(all="ignore"):
         return _cramer_rao(problem, theta)
 

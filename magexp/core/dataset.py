@@ -55,4 +55,5 @@ class Dataset:
 
     @property
     def n(self) -> int:
+        """The number of readings."""
         return int(self.readings.shape[0])

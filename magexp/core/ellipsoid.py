@@ -27,20 +27,6 @@ import numpy as np
 def normalise(readings: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """``(c, s, u)``: the readings' mean ``c``, RMS distance ``s`` from it, and ``u = (r - c)/s``
     (well-conditioned quadratic features, whatever the reading units).
-
-    Parameters
-    ----------
-    readings : ndarray, shape (N, 3)
-        The raw readings ``r``.
-
-    Returns
-    -------
-    c : ndarray, shape (3,)
-        Their mean.
-    s : float
-        Their RMS distance from it (1 when all are equal).
-    u : ndarray, shape (N, 3)
-        ``(r - c) / s``.
     """
     c = readings.mean(axis=0)
     s = float(np.sqrt(((readings - c) ** 2).sum(axis=1).mean())) or 1.0
@@ -48,18 +34,7 @@ def normalise(readings: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
 
 
 def quadratic_features(u: np.ndarray) -> np.ndarray:
-    """Features ``[x², y², z², 2xy, 2xz, 2yz, x, y, z, 1]`` of readings ``u`` (N, 3).
-
-    Parameters
-    ----------
-    u : ndarray, shape (N, 3)
-        Readings (normalised, :func:`normalise`).
-
-    Returns
-    -------
-    ndarray, shape (N, 10)
-        The features of each reading.
-    """
+    """Features ``[x², y², z², 2xy, 2xz, 2yz, x, y, z, 1]`` of readings ``u`` (N, 3)."""
     x, y, z = u.T
     return np.column_stack([x * x, y * y, z * z, 2 * x * y, 2 * x * z, 2 * y * z, x, y, z, np.ones_like(x)])
 
@@ -71,18 +46,6 @@ def fit_sphere(readings: np.ndarray) -> tuple[np.ndarray, float]:
     """Centre and radius of the sphere that best fits ``readings``: linear least squares of
     ``|r|² = 2 cᵀr + (R² - |c|²)`` (Pratt 1987), on readings centred on their mean. Not a sphere
     (readings on a line): the centroid and the mean distance from it.
-
-    Parameters
-    ----------
-    readings : array_like, shape (N, 3)
-        The readings.
-
-    Returns
-    -------
-    centre : ndarray, shape (3,)
-        The sphere's centre ``c``.
-    radius : float
-        Its radius ``R``.
     """
     r = np.asarray(readings, float)
     shift = r.mean(axis=0)
@@ -96,21 +59,7 @@ def fit_sphere(readings: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def fit_ellipsoid(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(W, o)`` mapping ``readings`` onto the sphere of ``radius``; None if not an ellipsoid.
-
-    Parameters
-    ----------
-    readings : ndarray, shape (N, 3)
-        The raw readings.
-    radius : float
-        The sphere's radius (the reference total field).
-
-    Returns
-    -------
-    tuple of ndarray or None
-        ``(W, o)``, ``W`` (3, 3) symmetric positive definite and ``o`` (3,), with
-        ``|W (r - o)| ≈ radius`` (:func:`quadric_calibration`), or None.
-    """
+    """``(W, o)`` mapping ``readings`` onto the sphere of ``radius``; None if not an ellipsoid."""
     c, s, u = normalise(readings)
     design = quadratic_features(u) * LINEAR_TWICE  # [u², v², w², 2uv, 2uw, 2vw, 2u, 2v, 2w, 1]
     p = np.linalg.svd(design, full_matrices=False)[2][-1]
@@ -119,18 +68,7 @@ def fit_ellipsoid(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.n
 
 #: Li & Griffiths' constraint ``k J - I² = v1^T C1 v1`` on ``v1 = [A11, A22, A33, A12, A13, A23]`` (k = 4).
 def constraint_matrix(k: float = 4.0) -> np.ndarray:
-    """``C1`` with ``v1^T C1 v1 = k J - I²``, ``I = a + b + c``, ``J = ab + bc + ca - f² - g² - h²``.
-
-    Parameters
-    ----------
-    k : float
-        The constraint's ``k`` (4: Li & Griffiths 2004).
-
-    Returns
-    -------
-    ndarray, shape (6, 6)
-        ``C1``.
-    """
+    """``C1`` with ``v1^T C1 v1 = k J - I²``, ``I = a + b + c``, ``J = ab + bc + ca - f² - g² - h²``."""
     c1 = np.full((3, 3), k / 2 - 1) - (k / 2) * np.eye(3)
     return np.block([[c1, np.zeros((3, 3))], [np.zeros((3, 3)), -k * np.eye(3)]])
 
@@ -143,18 +81,6 @@ def fit_ellipsoid_specific(readings: np.ndarray, radius: float, k: float = 4.0) 
     ``C1^{-1}(S11 - S12 S22^{-1} S12^T)`` of the one positive eigenvalue (the one with ``v1^T C1 v1 > 0``) and
     ``v2 = -S22^{-1} S12^T v1`` (Li & Griffiths 2004, eqs 13-17). With ``k = 4`` the solution
     is an ellipsoid whenever its short radius is at least half its long one, whatever the data.
-
-    Parameters
-    ----------
-    readings, radius
-        As :func:`fit_ellipsoid`.
-    k : float
-        The constraint's ``k`` (:func:`constraint_matrix`).
-
-    Returns
-    -------
-    tuple of ndarray or None
-        ``(W, o)`` as :func:`fit_ellipsoid`, or None (no ellipsoid, a singular scatter).
     """
     c, s, u = normalise(readings)
     design = quadratic_features(u) * LINEAR_TWICE
@@ -181,22 +107,6 @@ def fit_ellipsoid_specific(readings: np.ndarray, radius: float, k: float = 4.0) 
 def quadric_calibration(p: np.ndarray, c: np.ndarray, s: float, radius: float):
     """``(W, o)`` from the quadric ``u^T A u + 2 b^T u + d = 0``, ``p = [A11, A22, A33, A12, A13, A23,
     b, d]`` in the normalised readings ``u = (r - c)/s``; None if it is not an ellipsoid.
-
-    Parameters
-    ----------
-    p : ndarray, shape (10,)
-        The quadric's coefficients.
-    c : ndarray, shape (3,)
-        The normalisation's centre (:func:`normalise`).
-    s : float
-        The normalisation's scale.
-    radius : float
-        The sphere's radius.
-
-    Returns
-    -------
-    tuple of ndarray or None
-        ``(W, o)``, or None when ``Q`` is not positive definite.
     """
     a = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
     try:

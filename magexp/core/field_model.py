@@ -74,46 +74,23 @@ class ReferenceField:
 
     @property
     def declination_deg(self) -> float:
+        """``D``, degrees east of north."""
         return float(np.rad2deg(np.arctan2(self.ned[1], self.ned[0])))
 
     @property
     def inclination_deg(self) -> float:
+        """``I``, degrees below the horizontal."""
         return float(np.rad2deg(np.arctan2(self.ned[2], np.hypot(self.ned[0], self.ned[1]))))
 
     def record(self) -> dict:
-        """What an output records: the model, generation, inputs and the field (JSON-ready).
-
-        Returns
-        -------
-        dict
-            ``model``, ``generation``, the inputs, ``ned_nT``, ``total_nT``, ``declination_deg``,
-            ``inclination_deg``.
-        """
+        """What an output records: the model, generation, inputs and the field (JSON-ready)."""
         return {"model": self.model, "generation": self.generation, **self.inputs,
                 "ned_nT": [float(v) for v in self.ned], "total_nT": self.total,
                 "declination_deg": self.declination_deg, "inclination_deg": self.inclination_deg}
 
 
 def check_model(model: str, prefix: str = "field") -> str:
-    """``model`` lower-cased if it is one of :data:`MODELS`, else one line.
-
-    Parameters
-    ----------
-    model : str
-        A model's name (any case).
-    prefix : str
-        The config key named in the refusal.
-
-    Returns
-    -------
-    str
-        The model's name, lower case.
-
-    Raises
-    ------
-    MagexpError
-        One line for a model not in :data:`MODELS`.
-    """
+    """``model`` lower-cased if it is one of :data:`MODELS`, else one line."""
     text = str(model).strip().lower()
     if text not in MODELS:
         raise MagexpError(f"{prefix}.model={model!r} is not allowed: choose one of {', '.join(MODELS)}")
@@ -125,18 +102,6 @@ def check_given(place: dict, prefix: str = "field") -> None:
     given (not None) checked on its own, before the log's GPS fills in the others: a value is refused
     in one line even when no field model is used (no latitude given, none in the log), not ignored.
     Numbers within :data:`PLACE_RANGES`, a date ``YYYY-MM-DD`` within the model's :data:`SPANS`.
-
-    Parameters
-    ----------
-    place : dict
-        The given values (None: not given).
-    prefix : str
-        The config key named in a refusal.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the first value out of its range, or a bad date.
     """
     model = check_model(place.get("model") or "igrf", prefix)
     for key, (low, high) in PLACE_RANGES.items():
@@ -159,13 +124,7 @@ def check_given(place: dict, prefix: str = "field") -> None:
 
 
 def igrf_generation() -> str:
-    """``IGRF-<n>`` of the coefficient file ppigrf evaluates (its ``shc_fn``, e.g. ``IGRF14.shc``).
-
-    Returns
-    -------
-    str
-        E.g. ``IGRF-14``.
-    """
+    """``IGRF-<n>`` of the coefficient file ppigrf evaluates (its ``shc_fn``, e.g. ``IGRF14.shc``)."""
     import ppigrf  # lazy: 181 ms CPU to import (min of 5, after numpy; as in magexp.core.igrf)
 
     stem = Path(ppigrf.ppigrf.shc_fn).stem.upper()
@@ -174,31 +133,7 @@ def igrf_generation() -> str:
 
 def wmm_field(latitude: float, longitude: float, altitude_km: float, when: _dt.datetime,
               prefix: str = "field") -> tuple[np.ndarray, str]:
-    """``(NED nT, generation)`` of the WMM epoch holding ``when`` (:data:`WMM_FILES`).
-
-    Parameters
-    ----------
-    latitude, longitude : float
-        Geodetic degrees.
-    altitude_km : float
-        Above the WGS84 ellipsoid, within [-1, 850] km (the WMM's range).
-    when : datetime
-        The date.
-    prefix : str
-        The config key named in a refusal.
-
-    Returns
-    -------
-    ned : ndarray, shape (3,)
-        North, east, down (nT).
-    generation : str
-        The model's name and epoch, e.g. ``WMM-2025``.
-
-    Raises
-    ------
-    MagexpError
-        One line for a date outside the shipped epochs or an altitude outside [-1, 850] km.
-    """
+    """``(NED nT, generation)`` of the WMM epoch holding ``when`` (:data:`WMM_FILES`)."""
     epoch = next((y for y in sorted(WMM_FILES, reverse=True) if y <= when.year < y + 5), None)
     if epoch is None:
         raise MagexpError(f"{prefix}.date={when.date().isoformat()!r} is not allowed for model=wmm: the WMM "
@@ -215,32 +150,6 @@ def reference_field(latitude, longitude, altitude_km=0.0, date=None, *, model: s
                     sources: dict | None = None, prefix: str = "field") -> ReferenceField:
     """The ``model`` field at geodetic ``latitude``, ``longitude`` (degrees), ``altitude_km`` above
     the WGS84 ellipsoid, on ``date`` (``YYYY-MM-DD``, a date or datetime).
-
-    Parameters
-    ----------
-    latitude, longitude : float
-        Geodetic degrees (latitude in [-90, 90], longitude in [-180, 360]).
-    altitude_km : float
-        Above the WGS84 ellipsoid.
-    date : str, date or datetime
-        ``YYYY-MM-DD`` (None is refused: there is no default date).
-    model : str
-        ``igrf`` (1900-2030) or ``wmm`` (2010-2030).
-    sources : dict, optional
-        Where each input came from (``{"latitude": "log GPS", ...}``; default ``given``).
-    prefix : str
-        The config key named in error messages (``field.latitude=...``).
-
-    Returns
-    -------
-    ReferenceField
-        The field, the model's generation and the inputs with their sources.
-
-    Raises
-    ------
-    MagexpError
-        One line naming a bad input (a latitude outside [-90, 90], a non-finite value, a bad date,
-        a date outside the model's span) or an unknown model.
     """
     model = check_model(model, prefix)
     lat, lon, alt, when = check_place(latitude, longitude, altitude_km, date, prefix=prefix)
@@ -255,18 +164,7 @@ def reference_field(latitude, longitude, altitude_km=0.0, date=None, *, model: s
 
 
 def place_of(rec: Recording) -> dict:
-    """``{latitude, longitude, altitude_km, date}`` a log's reader stored in ``rec.meta`` (those present).
-
-    Parameters
-    ----------
-    rec : Recording
-        A recording (its ``meta``).
-
-    Returns
-    -------
-    dict
-        The keys present, the numbers as floats.
-    """
+    """``{latitude, longitude, altitude_km, date}`` a log's reader stored in ``rec.meta`` (those present)."""
     out = {}
     for key in ("latitude", "longitude", "altitude_km"):
         if key in rec.meta:
@@ -281,31 +179,6 @@ def field_of_recording(rec: Recording, *, model: str = "igrf", latitude=None, lo
     """The ``model`` field where and when ``rec`` was recorded: each of ``latitude``,
     ``longitude``, ``altitude_km``, ``date`` as given, else from the log's GPS (:func:`place_of`);
     ``altitude_km`` defaults to 0.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (its ``meta``'s GPS place and date).
-    model : str
-        ``igrf`` or ``wmm``.
-    latitude, longitude : float, optional
-        Geodetic degrees (default: the log's GPS).
-    altitude_km : float, optional
-        Above the WGS84 ellipsoid (default: the log's GPS, else 0).
-    date : str or date, optional
-        ``YYYY-MM-DD`` (default: the log's GPS date).
-    prefix : str
-        The config key named in a refusal.
-
-    Returns
-    -------
-    ReferenceField
-        As :func:`reference_field`, each input's source recorded.
-
-    Raises
-    ------
-    MagexpError
-        One line naming what is missing (``field.latitude=None is not allowed ...``).
     """
     logged = place_of(rec)
     given = {"latitude": latitude, "longitude": longitude, "altitude_km": altitude_km, "date": date}
@@ -329,18 +202,6 @@ def gps_field(rec: Recording, model: str = "igrf") -> ReferenceField | None:
     """The ``model`` field at the log's GPS place and date (:func:`field_of_recording`), or None without a GPS
     place and date (or with one the model refuses): the site of a calibration's heading error
     (:mod:`magexp.calibration.heading`) where no field model gave the reference.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (its ``meta``'s GPS).
-    model : str
-        ``igrf`` or ``wmm``.
-
-    Returns
-    -------
-    ReferenceField or None
-        The model's field, or None.
     """
     if not {"latitude", "longitude", "date"} <= set(place_of(rec)):
         return None
@@ -354,23 +215,6 @@ def field_in(reference: ReferenceField, unit: str) -> np.ndarray:
     """The model's NED vector in ``unit`` (a key of :data:`magexp.core.recordings.UNITS`): a log's
     ``Recording.field`` for the vector objective (its attitudes are NED). A raw unit (``counts``)
     has no factor: one line saying to calibrate to the model's field in nT instead.
-
-    Parameters
-    ----------
-    reference : ReferenceField
-        The model field.
-    unit : str
-        A key of :data:`UNITS`.
-
-    Returns
-    -------
-    ndarray, shape (3,)
-        The NED field in ``unit``.
-
-    Raises
-    ------
-    MagexpError
-        One line for a raw unit or an unknown one.
     """
     if unit in RAW_UNITS or unit not in UNITS:
         raise MagexpError(f"unit {unit!r} has no known factor to nT: calibrate to the model's total "
@@ -379,16 +223,5 @@ def field_in(reference: ReferenceField, unit: str) -> np.ndarray:
 
 
 def total_in(reference: ReferenceField, unit: str) -> float:
-    """The model's total in ``unit`` (:func:`field_in`'s norm; the same refusal for ``counts``).
-
-    Parameters
-    ----------
-    reference, unit
-        As :func:`field_in`.
-
-    Returns
-    -------
-    float
-        ``|B|`` in ``unit``.
-    """
+    """The model's total in ``unit`` (:func:`field_in`'s norm; the same refusal for ``counts``)."""
     return float(np.linalg.norm(field_in(reference, unit)))

@@ -24,23 +24,9 @@ from magexp.errors import MagexpError
 
 
 def field_ned(total: float, declination_deg: float, inclination_deg: float) -> np.ndarray:
-    """Geomagnetic field vector in the local North-East-Down frame.
+    """Geomagnetic field vector in the local North-East-Down frame (``D`` east of north, ``I`` below the horizontal).
 
     .. math:: \\mathbf F = F\\,[\\cos I\\cos D,\\ \\cos I\\sin D,\\ \\sin I]
-
-    Parameters
-    ----------
-    total : float
-        The total field ``F``.
-    declination_deg : float
-        ``D``, degrees east of north.
-    inclination_deg : float
-        ``I``, degrees below the horizontal.
-
-    Returns
-    -------
-    ndarray, shape (3,)
-        North, east, down, in the unit of ``total`` (Ding 2024's field, sec 1: 51 500 nT, D = −7°, I = 52°).
     """
     d, i = np.deg2rad(declination_deg), np.deg2rad(inclination_deg)
     return total * np.array([np.cos(i) * np.cos(d), np.cos(i) * np.sin(d), np.sin(i)])
@@ -50,18 +36,6 @@ def random_rotations(n: int, *, rng: np.random.Generator) -> np.ndarray:
     """``n`` rotation matrices drawn uniformly (Haar measure) on SO(3).
 
     Uses normalised 4-D Gaussian vectors as unit quaternions (Shoemake 1992).
-
-    Parameters
-    ----------
-    n : int
-        How many.
-    rng : numpy.random.Generator
-        The source of the draws (derived from the run's seed).
-
-    Returns
-    -------
-    ndarray, shape (n, 3, 3)
-        The rotation matrices.
     """
     q = rng.standard_normal((n, 4))
     q /= np.linalg.norm(q, axis=1, keepdims=True)
@@ -69,18 +43,7 @@ def random_rotations(n: int, *, rng: np.random.Generator) -> np.ndarray:
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices from unit quaternions ``[w, x, y, z]`` of shape ``(n, 4)``.
-
-    Parameters
-    ----------
-    q : array_like, shape (..., 4)
-        Unit quaternions, scalar first.
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        The rotation matrices.
-    """
+    """Rotation matrices from unit quaternions ``[w, x, y, z]`` of shape ``(n, 4)``."""
     w, x, y, z = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
     return np.stack(
         [
@@ -93,6 +56,7 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
 
 
 def _axis_rotation(angle, i: int, j: int) -> np.ndarray:
+    """Active rotations by ``angle`` in the plane of axes ``i``, ``j``: the one body of :func:`rot_x`, :func:`rot_y`, :func:`rot_z`."""
     a = np.asarray(angle, dtype=float)
     c, s = np.cos(a), np.sin(a)
     r = np.zeros(a.shape + (3, 3))
@@ -106,66 +70,22 @@ def _axis_rotation(angle, i: int, j: int) -> np.ndarray:
 
 
 def rot_x(angle) -> np.ndarray:
-    """Active rotation about x by ``angle`` radians (scalar or array).
-
-    Parameters
-    ----------
-    angle : float or array_like
-        Radians about x.
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        ``[[1, 0, 0], [0, cos, -sin], [0, sin, cos]]``.
-    """
+    """Active rotation about x by ``angle`` radians (scalar or array)."""
     return _axis_rotation(angle, 1, 2)
 
 
 def rot_y(angle) -> np.ndarray:
-    """Active rotation about y by ``angle`` radians (scalar or array).
-
-    Parameters
-    ----------
-    angle : float or array_like
-        Radians about y; an array gives one matrix per angle.
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        ``[[cos, 0, sin], [0, 1, 0], [-sin, 0, cos]]``.
-    """
+    """Active rotation about y by ``angle`` radians (scalar or array)."""
     return _axis_rotation(angle, 2, 0)
 
 
 def rot_z(angle) -> np.ndarray:
-    """Active rotation about z by ``angle`` radians (scalar or array).
-
-    Parameters
-    ----------
-    angle : float or array_like
-        Radians about z (an array: a stack of matrices).
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        ``[[cos, -sin, 0], [sin, cos, 0], [0, 0, 1]]``.
-    """
+    """Active rotation about z by ``angle`` radians (scalar or array)."""
     return _axis_rotation(angle, 0, 1)
 
 
 def rotation_angle(r: np.ndarray) -> np.ndarray:
-    """Angle (radians) of rotation matrices, robust near 0 and pi.
-
-    Parameters
-    ----------
-    r : ndarray, shape (..., 3, 3)
-        Rotation matrices.
-
-    Returns
-    -------
-    ndarray, shape (...)
-        ``arccos((tr R - 1) / 2)``, the argument clipped to [-1, 1].
-    """
+    """Angle (radians) of rotation matrices, ``arccos((tr R - 1) / 2)`` clipped: robust near 0 and pi."""
     tr = np.trace(r, axis1=-2, axis2=-1)
     return np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0))
 
@@ -176,34 +96,13 @@ def ship_attitude(heading, roll, trim) -> np.ndarray:
 
     As printed, ``R_y`` is an active rotation and ``R_x``, ``R_z`` passive ones:
     ``A = rot_y(trim) rot_x(-roll) rot_z(-heading)``.
-
-    Parameters
-    ----------
-    heading, roll, trim : float or array_like
-        ψ, θ, φ of Yan & Zhou 2022's Table 1 (radians), broadcast together.
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        ``A``.
     """
     return rot_y(trim) @ rot_x(-np.asarray(roll, float)) @ rot_z(-np.asarray(heading, float))
 
 
 # -- rotation vectors and strapdown integration ----------------------------------------------------
 def skew(w: np.ndarray) -> np.ndarray:
-    """Cross-product matrices ``[w]×`` of vectors ``w`` of shape ``(..., 3)``.
-
-    Parameters
-    ----------
-    w : array_like, shape (..., 3)
-        Vectors.
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        ``[w]×``, with ``[w]× v = w × v``.
-    """
+    """Cross-product matrices ``[w]×`` of vectors ``w`` of shape ``(..., 3)``."""
     w = np.asarray(w, float)
     z = np.zeros(w.shape[:-1])
     x, y, c = w[..., 0], w[..., 1], w[..., 2]
@@ -217,16 +116,6 @@ def exp_so3(phi: np.ndarray) -> np.ndarray:
               + \\frac{1 - \\cos\\theta}{\\theta^2}[\\varphi]_\\times^2,\\quad \\theta = \\lVert\\varphi\\rVert
 
     with the Taylor series of both coefficients for ``θ < 1e-4`` (exact to round-off).
-
-    Parameters
-    ----------
-    phi : array_like, shape (..., 3)
-        Rotation vectors (radians).
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        The rotation matrices.
     """
     phi = np.asarray(phi, float)
     theta = np.linalg.norm(phi, axis=-1)[..., None, None]
@@ -243,18 +132,6 @@ def cumulative_product(mats: np.ndarray, axis: int = 0) -> np.ndarray:
 
     Hillis-Steele prefix scan: after the pass with stride ``d`` every ``P_k`` holds the product of
     the ``min(2d, k+1)`` matrices ending at ``k``; ``ceil(log2 K)`` vectorised passes in all.
-
-    Parameters
-    ----------
-    mats : array_like
-        A stack of 3 × 3 matrices.
-    axis : int
-        The axis of the stack along which to multiply.
-
-    Returns
-    -------
-    ndarray
-        The products, the shape of ``mats``.
     """
     out = np.moveaxis(np.array(mats, dtype=float), axis, 0)
     d = 1
@@ -268,20 +145,6 @@ def integrate_rates(rates: np.ndarray, dt, start: np.ndarray | None = None) -> n
     """Body-to-nav rotations ``R_0..R_K`` from body rates ``(K, 3)`` (rad/s) held over each step.
 
     ``dt`` is one step length or one per step ``(K,)``. ``R_0`` is ``start`` (default identity).
-
-    Parameters
-    ----------
-    rates : array_like, shape (K, 3)
-        Body rates (rad/s).
-    dt : float or array_like, shape (K,)
-        The steps' lengths (s).
-    start : ndarray, shape (3, 3), optional
-        ``R_0``.
-
-    Returns
-    -------
-    ndarray, shape (K + 1, 3, 3)
-        ``R_{k+1} = R_k exp([ω_k dt_k]×)`` (:func:`exp_so3`).
     """
     rates = np.asarray(rates, float)
     steps = exp_so3(rates * np.broadcast_to(np.asarray(dt, float), rates.shape[:1])[:, None])
@@ -295,24 +158,6 @@ def merged_steps(gyro_times: np.ndarray, rates: np.ndarray, at: np.ndarray):
     Returns ``(rates_k, dt_k, index)``: the rate and length of every step of the merged grid from
     ``at[0]`` to ``at[-1]``, and for every time of ``at`` the number of steps before it. A gyro
     sample is held until the next one; times before the first sample use the first sample.
-
-    Parameters
-    ----------
-    gyro_times : array_like, shape (G,)
-        The gyro's sample times (s), increasing.
-    rates : array_like, shape (G, 3)
-        Its rates (rad/s).
-    at : array_like, shape (M,)
-        The times wanted (s), increasing.
-
-    Returns
-    -------
-    rates_k : ndarray, shape (K, 3)
-        The rate held over each step.
-    dt_k : ndarray, shape (K,)
-        Each step's length.
-    index : ndarray, shape (M,)
-        The steps before each time of ``at``.
     """
     gyro_times, at = np.asarray(gyro_times, float), np.asarray(at, float)
     grid = np.union1d(gyro_times[(gyro_times > at[0]) & (gyro_times < at[-1])], at)
@@ -328,20 +173,6 @@ def attitude_at(gyro_times: np.ndarray, rates: np.ndarray, at: np.ndarray, *, bi
     attitude at a time between two gyro samples includes the fraction of the step up to it.
     ``bias`` (rad/s, in the gyro's axes) is subtracted from every rate. The start frame is the body
     frame at ``at[0]`` (``R = I`` there).
-
-    Parameters
-    ----------
-    gyro_times, rates : array_like, shapes (G,) and (G, 3)
-        The gyro's sample times (s) and rates (rad/s), as :func:`merged_steps` takes them.
-    at : array_like, shape (M,)
-        The times wanted (s), increasing.
-    bias : array_like, shape (3,), optional
-        The gyro bias (rad/s).
-
-    Returns
-    -------
-    ndarray, shape (M, 3, 3)
-        ``R(at_j)``, the gyro-integrated attitude ``C_i^b`` (transposed) of Yuan 2018's eq 8.
     """
     r, dt, index = merged_steps(gyro_times, rates, at)
     if bias is not None:
@@ -361,20 +192,6 @@ def preintegrate(gyro_times: np.ndarray, rates: np.ndarray, at: np.ndarray) -> t
     with ``G_k`` the product of the gyro steps from the start through step ``k``, ``e`` the last
     step of the interval. Returns ``(ΔR (M-1, 3, 3), J (M-1, 3, 3))``; with them a bias changes
     the attitude of every reading without re-integrating the gyro stream.
-
-    Parameters
-    ----------
-    gyro_times, rates
-        As :func:`attitude_at`.
-    at : array_like, shape (M,)
-        The readings' times (s), increasing.
-
-    Returns
-    -------
-    delta : ndarray, shape (M - 1, 3, 3)
-        ``ΔR_j``.
-    jac : ndarray, shape (M - 1, 3, 3)
-        ``J_j`` (per rad/s of bias).
     """
     r, dt, index = merged_steps(gyro_times, rates, at)
     g = integrate_rates(r, dt)  # G_0 = I .. G_K
@@ -389,20 +206,6 @@ def attitude_with_bias(delta: np.ndarray, jac: np.ndarray, bias: np.ndarray) -> 
 
     ``R_0 = I`` and ``R_{j+1} = R_j ΔR_j exp(-[J_j b]×)`` (:func:`preintegrate`), a prefix scan
     over readings for every bias at once.
-
-    Parameters
-    ----------
-    delta : ndarray, shape (M - 1, 3, 3)
-        ``ΔR_j`` of :func:`preintegrate`.
-    jac : ndarray, shape (M - 1, 3, 3)
-        ``J_j`` of :func:`preintegrate`.
-    bias : array_like, shape (n, 3) or (3,)
-        Gyro biases (rad/s).
-
-    Returns
-    -------
-    ndarray, shape (n, M, 3, 3)
-        ``R_j`` for every bias and reading.
     """
     bias = np.atleast_2d(np.asarray(bias, float))
     steps = delta[None] @ exp_so3(-np.einsum("mij,nj->nmi", jac, bias))
@@ -420,23 +223,6 @@ def axis_map(spec: str | None, what: str = "axes") -> np.ndarray:
     Entry ``i`` of ``spec`` names the sensor axis (with its sign) that becomes common axis ``i``:
     ``"-x,y,z"`` flips x (a gyro whose x is positive clockwise), ``"y,x,-z"`` swaps x and y and
     flips z. ``None`` or ``"x,y,z"`` is the identity.
-
-    Parameters
-    ----------
-    spec : str or None
-        Three comma-separated signed axes.
-    what : str
-        The config key named in a refusal.
-
-    Returns
-    -------
-    ndarray, shape (3, 3)
-        ``P``.
-
-    Raises
-    ------
-    MagexpError
-        One line for a spec that is not a signed permutation of x, y, z.
     """
     if spec is None:
         return np.eye(3)

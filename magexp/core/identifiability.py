@@ -42,35 +42,13 @@ CELLS = 32
 UNDETERMINED = 1e-8
 
 def canonical(w: np.ndarray) -> np.ndarray:
-    """The symmetric positive-definite polar factor ``P = V Σ Vᵀ`` of ``W = U Σ Vᵀ`` (``W = (U Vᵀ) P``).
-
-    Parameters
-    ----------
-    w : ndarray, shape (3, 3)
-        A calibration matrix.
-
-    Returns
-    -------
-    ndarray, shape (3, 3)
-        ``P = (WᵀW)^{1/2}``, symmetric (made exactly so).
-    """
+    """The symmetric positive-definite polar factor ``P = V Σ Vᵀ`` of ``W = U Σ Vᵀ`` (``W = (U Vᵀ) P``)."""
     _, s, vt = np.linalg.svd(w)
     return (vt.T * s) @ vt
 
 
 def fibonacci_sphere(n: int) -> np.ndarray:
-    """``n`` nearly evenly spread unit vectors (golden-angle spiral); nearest-point cells are nearly equal-area.
-
-    Parameters
-    ----------
-    n : int
-        How many.
-
-    Returns
-    -------
-    ndarray, shape (n, 3)
-        Unit vectors.
-    """
+    """``n`` nearly evenly spread unit vectors (golden-angle spiral); nearest-point cells are nearly equal-area."""
     k = np.arange(n) + 0.5
     z = 1 - 2 * k / n
     phi = np.pi * (1 + 5**0.5) * k
@@ -84,18 +62,6 @@ def direction_regions(centred: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ``k = 0`` the smallest) on which ``u`` has its largest component, and ``axes`` ``(6, 3)``, the
     half-axis ``±v_k`` of each region. Independent of the sensor's axes: a turn about any one axis
     fills the four regions around it, not the two along it.
-
-    Parameters
-    ----------
-    centred : ndarray, shape (N, 3)
-        Readings less a centre.
-
-    Returns
-    -------
-    labels : ndarray, shape (N,)
-        Each reading's region, 0-5.
-    axes : ndarray, shape (6, 3)
-        Each region's half-axis.
     """
     u = centred / np.maximum(np.linalg.norm(centred, axis=1, keepdims=True), 1e-300)
     vectors = np.linalg.eigh(u.T @ u / len(u))[1]
@@ -106,20 +72,7 @@ def direction_regions(centred: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def coverage(calibrated: np.ndarray) -> dict:
-    """Direction coverage of calibrated readings (module docstring).
-
-    Parameters
-    ----------
-    calibrated : ndarray, shape (N, 3)
-        Calibrated readings.
-
-    Returns
-    -------
-    dict
-        ``coverage_cells`` (the fraction of :data:`CELLS` cells holding a reading), ``coverage_lambda_min``
-        (``λ_min`` of the direction scatter) and ``direction_max_angle_deg`` (the largest angle from the mean
-        direction).
-    """
+    """Direction coverage of calibrated readings (module docstring)."""
     u = calibrated / np.maximum(np.linalg.norm(calibrated, axis=1, keepdims=True), 1e-300)
     cells = np.unique(np.argmax(u @ fibonacci_sphere(CELLS).T, axis=1))
     scatter = np.linalg.eigvalsh(u.T @ u / len(u))
@@ -137,24 +90,7 @@ def _jacobian(fun, theta: np.ndarray) -> np.ndarray:
 
 
 def identifiability(fun, theta: np.ndarray, names: list[str]) -> dict:
-    """Standard errors, condition number and undetermined combinations (module docstring).
-
-    Parameters
-    ----------
-    fun : callable
-        ``(n, p) -> (n, m)``, the residuals of a stack of parameter vectors.
-    theta : ndarray, shape (p,)
-        The estimate.
-    names : list of str
-        The parameters' names.
-
-    Returns
-    -------
-    dict
-        ``standard_errors`` (name -> value, ``inf`` where undetermined), ``residual_std`` (``σ``),
-        ``condition_number``, ``undetermined`` (the combinations below :data:`UNDETERMINED`) and
-        ``weakest_combinations`` (the three weakest, with their relative singular values).
-    """
+    """Standard errors, condition number and undetermined combinations (module docstring)."""
     e = fun(theta[None])[0]
     jac = _jacobian(fun, theta)
     m, p = jac.shape
@@ -180,40 +116,16 @@ def identifiability(fun, theta: np.ndarray, names: list[str]) -> dict:
 
 
 def spread(magnitudes) -> float:
-    """Relative spread ``std / mean`` of total-field magnitudes (NaN for none).
-
-    Parameters
-    ----------
-    magnitudes : array_like
-        Total-field magnitudes.
-
-    Returns
-    -------
-    float
-        ``std / mean``.
-    """
+    """Relative spread ``std / mean`` of total-field magnitudes (NaN for none)."""
     mags = np.asarray(magnitudes, float)
     return float(mags.std() / mags.mean()) if mags.size else float("nan")
 
 
 def recording_metrics(problem, theta) -> dict:
-    """Spread of a recording before and after the fitted calibration, on the fit's readings and on
-    the held-out block, and the direction coverage of the calibrated readings (a fit that sends every
-    reading to nearly one direction has a tiny spread and is wrong); the held-out block (``dataset.extra["heldout"]``, :class:`magexp.scenarios.recording.RecordingScenario`).
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem of a recording (its ``dataset.extra``: ``all_readings``, ``heldout``).
-    theta : ndarray
-        The fitted parameter vector.
-
-    Returns
-    -------
-    dict
-        ``spread_before``, ``spread_after``, ``coverage_cells`` and, with a held-out block,
-        ``heldout_spread`` with its interval (``heldout_spread_lo``, ``heldout_spread_hi``); empty for a
-        simulated dataset.
+    """Spread of a recording before and after the fit, on the fit's readings and on the held-out block
+    (``dataset.extra["heldout"]``, :class:`magexp.scenarios.recording.RecordingScenario`), and the direction
+    coverage of the calibrated readings (a fit sending every reading to one direction has a tiny spread and is
+    wrong); empty for a simulated dataset.
     """
     extra = problem.dataset.extra
     if "all_readings" not in extra:
@@ -242,18 +154,6 @@ def block_bootstrap_spread(magnitudes, level: float = 0.95) -> tuple[float, floa
     single readings are not resampled) and the blocks drawn with replacement :data:`SPREAD_RESAMPLES`
     times, from a fixed generator (the interval describes the data, it is the same on every run;
     as :func:`magexp.artifacts.tables.interval`). NaN for fewer readings than blocks.
-
-    Parameters
-    ----------
-    magnitudes : array_like
-        Total-field magnitudes in time order.
-    level : float
-        The interval's coverage.
-
-    Returns
-    -------
-    lo, hi : float
-        The interval's ends.
     """
     mags = np.asarray(magnitudes, float)
     if mags.size < SPREAD_BLOCKS:

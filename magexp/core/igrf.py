@@ -30,42 +30,31 @@ class Field:
 
     @property
     def total(self) -> float:
+        """``|B|`` (nT)."""
         return float(np.sqrt(self.north**2 + self.east**2 + self.down**2))
 
     @property
     def ned(self) -> np.ndarray:
+        """North, east, down (nT)."""
         return np.array([self.north, self.east, self.down])
 
     @property
     def enu(self) -> np.ndarray:
+        """East, north, up (nT)."""
         return np.array([self.east, self.north, -self.down])
 
     @property
     def declination_deg(self) -> float:
+        """``D``, degrees east of north."""
         return float(np.rad2deg(np.arctan2(self.east, self.north)))
 
     @property
     def inclination_deg(self) -> float:
+        """``I``, degrees below the horizontal."""
         return float(np.rad2deg(np.arctan2(self.down, np.hypot(self.north, self.east))))
 
     def vector(self, frame: str = "NED") -> np.ndarray:
-        """The field in ``frame`` (``NED`` or ``ENU``).
-
-        Parameters
-        ----------
-        frame : str
-            ``NED`` or ``ENU`` (any case).
-
-        Returns
-        -------
-        ndarray, shape (3,)
-            The components in nT.
-
-        Raises
-        ------
-        MagexpError
-            One line for another frame.
-        """
+        """The field in ``frame`` (``NED`` or ``ENU``)."""
         frames = {"NED": self.ned, "ENU": self.enu}
         if str(frame).upper() not in frames:
             raise MagexpError(f"frame={frame!r} is not allowed: choose NED or ENU")
@@ -73,6 +62,7 @@ class Field:
 
 
 def _date(date, prefix: str = "igrf") -> _dt.datetime:
+    """``date`` (a date, datetime or ``YYYY-MM-DD``) as a datetime, else one line naming ``<prefix>.date``."""
     if isinstance(date, _dt.datetime):
         return date
     if isinstance(date, _dt.date):
@@ -86,27 +76,6 @@ def _date(date, prefix: str = "igrf") -> _dt.datetime:
 def check_place(latitude, longitude, altitude_km=0.0, date=None, *, prefix: str = "igrf"):
     """``(latitude, longitude, altitude_km, datetime)`` checked: finite numbers, ``|latitude| <= 90``,
     a date ``YYYY-MM-DD`` (a date or datetime); one line naming ``<prefix>.<key>`` otherwise.
-
-    Parameters
-    ----------
-    latitude, longitude : float
-        Geodetic degrees.
-    altitude_km : float
-        Above the WGS84 ellipsoid.
-    date : str, date or datetime
-        ``YYYY-MM-DD`` (None is refused).
-    prefix : str
-        The config key named in a refusal.
-
-    Returns
-    -------
-    tuple
-        ``(latitude, longitude, altitude_km)`` as floats and the date as a datetime.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the first bad value.
     """
     values = {}
     for name, value in (("latitude", latitude), ("longitude", longitude), ("altitude_km", altitude_km)):
@@ -124,22 +93,6 @@ def check_place(latitude, longitude, altitude_km=0.0, date=None, *, prefix: str 
 def field_at(latitude, longitude, altitude_km=0.0, date=None, *, prefix: str = "igrf") -> Field:
     """IGRF field at a geodetic ``latitude``, ``longitude`` (degrees), ``altitude_km`` above the
     WGS84 ellipsoid, on ``date`` (``YYYY-MM-DD``, a date or datetime; within the model's 1900-2030 span).
-
-    Parameters
-    ----------
-    latitude, longitude, altitude_km, date, prefix
-        As :func:`check_place`; the date within the IGRF's 1900-2030.
-
-    Returns
-    -------
-    Field
-        The IGRF field (ppigrf's evaluation of the model's spherical harmonics), north, east, down in nT.
-
-    Raises
-    ------
-    MagexpError
-        One line for a latitude outside [-90, 90], a non-finite value or a bad date (naming
-        ``<prefix>.<key>``).
     """
     import ppigrf  # lazy: 280 ms CPU to import (min of 5, after numpy), paid only where a place is given
 

@@ -26,19 +26,7 @@ class Limit:
     what: str
 
     def value(self) -> float:
-        """The limit in force: the environment variable, else the default.
-
-        Returns
-        -------
-        float
-            The bound, in :attr:`unit`.
-
-        Raises
-        ------
-        MagexpError
-            One line for an environment value that is not an amount > 0 (an empty one included: unset the
-            variable for the default).
-        """
+        """The limit in force: the environment variable, else the default."""
         text = os.environ.get(self.env)
         if text is None:
             return self.default
@@ -75,19 +63,7 @@ _FACTORS = {"": 1, "B": 1, "k": 1e3, "K": 1e3, "M": 1e6, "G": 1e9, "T": 1e12,
 
 
 def parse_amount(text: str) -> float | None:
-    """``"4GiB"`` -> 4294967296, ``"2e5"`` -> 200000.0, ``"10M"`` -> 1e7; None if not an amount.
-
-    Parameters
-    ----------
-    text : str
-        A number with an optional SI (``k``, ``M``, ``G``, ``T``) or binary (``Ki``...``Ti``) suffix and an
-        optional ``B``.
-
-    Returns
-    -------
-    float or None
-        The amount.
-    """
+    """``"4GiB"`` -> 4294967296, ``"2e5"`` -> 200000.0, ``"10M"`` -> 1e7; None if not an amount."""
     m = _AMOUNT.fullmatch(str(text))
     if not m:
         return None
@@ -99,20 +75,7 @@ def parse_amount(text: str) -> float | None:
 
 
 def show(value: float, unit: str) -> str:
-    """``value`` for a message: bytes in KiB..TiB, counts as integers or in ``e`` notation.
-
-    Parameters
-    ----------
-    value : float
-        The amount.
-    unit : str
-        ``bytes`` or a count's noun.
-
-    Returns
-    -------
-    str
-        E.g. ``4 GiB``, ``200000 runs``, ``1e+11 reading-evaluations``.
-    """
+    """``value`` for a message: bytes in KiB..TiB, counts as integers or in ``e`` notation."""
     if unit == "bytes":
         for name, factor in (("TiB", 2 ** 40), ("GiB", 2 ** 30), ("MiB", 2 ** 20), ("KiB", 2 ** 10)):
             if value >= factor:
@@ -122,29 +85,13 @@ def show(value: float, unit: str) -> str:
 
 
 def limit(name: str) -> float:
-    """The value in force of the limit ``name`` (:data:`LIMITS`).
-
-    Parameters
-    ----------
-    name : str
-        A key of :data:`LIMITS`.
-
-    Returns
-    -------
-    float
-        :meth:`Limit.value`.
-    """
+    """The value in force of the limit ``name`` (:data:`LIMITS`)."""
     return LIMITS[name].value()
 
 
 def check_limits() -> None:
     """Refuse, in one line naming the variable, any limit's environment variable that is set to anything but an
     amount > 0 (an empty value included), at the start of every command, whether or not the command consults it.
-
-    Raises
-    ------
-    MagexpError
-        The first bad variable of :data:`LIMITS`.
     """
     for lim in LIMITS.values():
         lim.value()
@@ -153,22 +100,6 @@ def check_limits() -> None:
 def refuse_over(value: float, name: str, subject: str, need: str) -> None:
     """Raise ``"<subject> is not allowed: <need> about X, over the limit L (ENV)"`` if ``value``
     exceeds the limit ``name``.
-
-    Parameters
-    ----------
-    value : float
-        The estimated amount, in the limit's unit.
-    name : str
-        A key of :data:`LIMITS` (its environment variable is named).
-    subject : str
-        What is refused, e.g. ``population=5000``.
-    need : str
-        What it needs, e.g. ``a memory of``.
-
-    Raises
-    ------
-    MagexpError
-        That line, when ``value`` is over the limit in force.
     """
     lim = LIMITS[name]
     bound = lim.value()

@@ -24,27 +24,8 @@ import numpy as np
 
 
 def minimise_numpy(residuals, x0, *, jac, tol: float = 1e-12, max_nfev: int = 2000):
-    """Levenberg-Marquardt on ``residuals`` with the Jacobian ``jac`` (module docstring).
-
-    Parameters
-    ----------
-    residuals : callable
-        ``residuals(theta) -> (m,)``.
-    x0 : array_like
-        The start ``(p,)``.
-    jac : callable
-        ``jac(theta) -> (m, p)``.
-    tol : float
-        The relative tolerances on ``F``, the step and the gradient.
-    max_nfev : int
-        Cap on residual evaluations.
-
-    Returns
-    -------
-    tuple
-        ``(x, status, message, history)`` as :func:`magexp.estimators.lm.minimise_residuals`: status > 0 success,
-        0 the evaluations ran out; ``history`` the best RMS residual after every evaluation.
-    """
+    """Levenberg-Marquardt on ``residuals`` with the Jacobian ``jac`` (module docstring): ``(x, status, message,
+    history)`` as :func:`magexp.estimators.lm.minimise_residuals`."""
     x = np.asarray(x0, float).copy()
     r = residuals(x)
     value = 0.5 * float(r @ r) if np.all(np.isfinite(r)) else np.inf
@@ -94,16 +75,6 @@ def stacked_jacobian(problem):
     """``theta -> J`` (``(m, p)``) by forward differences from one :meth:`residual_swarm` call on ``theta``
     and its ``p`` steps ``h_i = sqrt(eps) max(1, |theta_i|)`` stacked:
     ``J[:, i] = (r(theta + h_i e_i) - r(theta)) / h_i``.
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        One with ``residual_swarm``.
-
-    Returns
-    -------
-    callable
-        ``jac(theta) -> (m, p)``.
     """
 
     def jac(theta):

@@ -19,18 +19,6 @@ def rms(values, axis: int = -1):
     """Root mean square of ``values`` along ``axis``.
 
     .. math:: \\mathrm{RMS}(e) = \\sqrt{\\tfrac1N \\textstyle\\sum_i e_i^2}
-
-    Parameters
-    ----------
-    values : array_like
-        Residuals, the reduced axis of length ``N``.
-    axis : int
-        The axis reduced (default: the last).
-
-    Returns
-    -------
-    float or numpy.ndarray
-        A float for a 1-D ``values``, else an array of the other axes' shape.
     """
     v = np.asarray(values, float)
     out = np.sqrt(np.mean(v * v, axis=axis))
@@ -44,18 +32,6 @@ def total_field_rms(calibrated, reference):
     .. math:: \\mathrm{RMS} = \\sqrt{\\tfrac1N \\textstyle\\sum_i \\big(\\lVert \\mathbf b_i\\rVert - B_{a,i}\\big)^2}
 
     Vectorised over leading axes: a stack of calibrations (e.g. one per particle) in one call.
-
-    Parameters
-    ----------
-    calibrated : array_like, shape (..., N, 3)
-        Calibrated readings ``b_i = W (r_i - o)``.
-    reference : float or array_like, shape (N,)
-        The reference total field ``B_a`` at each reading (or one value for all).
-
-    Returns
-    -------
-    float or numpy.ndarray
-        A float for one calibration ``(N, 3)``, else an array of shape ``(...)``.
     """
     return rms(np.linalg.norm(np.asarray(calibrated, float), axis=-1) - np.asarray(reference, float))
 
@@ -65,16 +41,6 @@ def truth_cost(problem) -> float | None:
     true calibration reaches on the same readings. It depends on the problem's data only, so it is
     computed once per problem object and shared by every estimator fitted to it (and by the
     problem's own metrics, e.g. the vector objective's noise floor).
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        A problem whose dataset may know its truth.
-
-    Returns
-    -------
-    float or None
-        ``problem.cost_direct(problem.truth_theta())``.
     """
     if problem not in _TRUTH_COST:
         truth = problem.truth_theta()
@@ -90,18 +56,6 @@ def noise_floor(dataset, n_identifiable: int = 9) -> float | None:
     with ``σ`` the per-axis noise standard deviation (``A/√12`` for Ding's
     uniform noise, whose radial component has the same variance) and ``p = 9``
     identifiable parameters of a scalar fit.
-
-    Parameters
-    ----------
-    dataset : Dataset
-        Its readings' count ``N`` and noise (``noise_std``).
-    n_identifiable : int
-        ``p``.
-
-    Returns
-    -------
-    float or None
-        The floor, or None when the noise is unknown (a recording).
     """
     if dataset.noise_std is None:
         return None
@@ -114,21 +68,6 @@ def evaluate(problem, result, crb=None) -> dict:
 
     ``crb``: the problem's :func:`problem_bound`, when the caller shares it between the estimators
     of one dataset (it depends on the data and the truth only); None computes it here.
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem fitted.
-    result : FitResult
-        The estimator's result (its ``x``, ``nit``, ``nfev``, ``history``).
-    crb : dict or bool, optional
-        The problem's bound.
-
-    Returns
-    -------
-    dict
-        Metric name -> value: ``fun`` (the objective by its direct formula, e.g. Ding 2024's eq 17 or
-        Yuan 2018's eq 8), ``nit``, ``nfev``, the problem's own metrics, the floor and the bound ratios.
     """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _evaluate(problem, result, problem_bound(problem) if crb is None else crb)
@@ -165,18 +104,6 @@ def evaluations_to(result, level: float) -> float:
     """Objective evaluations spent when the best value first came within ``level`` (NaN if never):
     with ``level = 1.01 x`` the true calibration's objective, the cost of reaching the floor.
     Only meaningful for a history of the problem's own objective (a monotone one).
-
-    Parameters
-    ----------
-    result : FitResult
-        With ``history`` (best value per iteration) and ``history_nfev``.
-    level : float
-        The objective's level.
-
-    Returns
-    -------
-    float
-        The evaluations, or NaN.
     """
     hist = np.asarray(result.history, float)
     reached = np.flatnonzero(hist <= level)
@@ -185,20 +112,7 @@ def evaluations_to(result, level: float) -> float:
 
 def time_to_reach(result, factor: float = 1.1) -> dict:
     """Iterations and objective evaluations until the best value first came within
-    ``factor`` times its final value (``history[k] <= factor * history[-1]``).
-
-    Parameters
-    ----------
-    result : FitResult
-        With ``history`` and ``history_nfev``.
-    factor : float
-        The multiple of the final value.
-
-    Returns
-    -------
-    dict
-        ``iterations_to_1.1`` and ``nfev_to_1.1`` (named after the default ``factor``); empty for no or a
-        non-finite history.
+    ``factor`` times its final value: ``iterations_to_1.1`` and ``nfev_to_1.1`` (empty without a finite history).
     """
     hist = np.asarray(result.history, float)
     if hist.size == 0 or not np.isfinite(hist[-1]):
@@ -210,16 +124,6 @@ def time_to_reach(result, factor: float = 1.1) -> dict:
 def problem_bound(problem) -> dict | bool:
     """The Cramér-Rao bound of ``problem`` at its truth (:func:`magexp.core.bounds.cramer_rao`), or False
     when it has none. It depends on the dataset and the truth only, not on the estimator.
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem.
-
-    Returns
-    -------
-    dict or bool
-        :func:`~magexp.core.bounds.cramer_rao`'s dict, or False.
     """
     if not hasattr(problem, "invariants") or not hasattr(problem, "options"):
         return False
@@ -229,21 +133,6 @@ def problem_bound(problem) -> dict | bool:
 def bound_metrics(problem, measured: dict, crb: dict | bool | None = None) -> dict:
     """The Cramér-Rao bound of the run's problem (``crb``: :func:`problem_bound`, computed here if
     None) and each error as a ratio to it.
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        The problem.
-    measured : dict
-        The run's metrics (``x`` and the ``<name>_error`` values).
-    crb : dict or bool, optional
-        The problem's bound.
-
-    Returns
-    -------
-    dict
-        ``rms_bound`` (or ``residual_rms_bound`` for an objective that is not an RMS), ``identifiable``,
-        ``rms_ratio``, the ``<name>_bound`` and ``<name>_error_ratio`` values; empty without a bound.
     """
     if crb is None:
         crb = problem_bound(problem)

@@ -43,44 +43,14 @@ FACE_TOL = 1.0e-9
 
 
 def success_threshold(reference, factor: float = SUCCESS_FACTOR, floor: float = ROUNDOFF_FLOOR):
-    """The largest objective of a successful run.
-
-    Parameters
-    ----------
-    reference : float or array_like
-        The objective of the true calibration on the same readings (or the best any run reached).
-    factor, floor : float
-        The artifact's ``success.factor`` and ``success.floor`` (:data:`SUCCESS_FACTOR`,
-        :data:`ROUNDOFF_FLOOR`).
-
-    Returns
-    -------
-    float or numpy.ndarray
-        ``factor * reference + floor``.
-    """
+    """The largest objective of a successful run."""
     out = factor * np.asarray(reference, float) + floor
     return float(out) if out.ndim == 0 else out
 
 
 def succeeded(metric, reference, factor: float = SUCCESS_FACTOR, floor: float = ROUNDOFF_FLOOR) -> np.ndarray:
-    """Per run, whether it succeeded: ``metric <= factor * reference + floor``.
-
-    Parameters
-    ----------
-    metric : array_like
-        Each run's objective (the artifact's ``success.metric``).
-    reference : array_like
-        Each run's reference: the true calibration's objective on the same readings, or the best
-        value reached on the same data (same shape as ``metric``).
-    factor, floor : float
-        See :func:`success_threshold`.
-
-    Returns
-    -------
-    numpy.ndarray
-        1.0 (succeeded), 0.0 (failed; a diverged, NaN, metric fails) or NaN where the reference is
-        unknown (the run is not judged).
-    """
+    """Per run, whether it succeeded (``metric <= factor * reference + floor``): 1.0, 0.0 (a NaN metric fails),
+    or NaN where the reference is unknown (the run is not judged)."""
     metric, reference = np.asarray(metric, float), np.asarray(reference, float)
     with np.errstate(invalid="ignore"):
         ok = (metric <= success_threshold(reference, factor, floor)).astype(float)
@@ -90,34 +60,12 @@ def succeeded(metric, reference, factor: float = SUCCESS_FACTOR, floor: float = 
 def reach_level(truth_fun: float) -> float:
     """The objective at which a run has reached the floor: ``REACHED_FACTOR * truth_fun + ROUNDOFF_FLOOR``
     (:data:`REACHED_FACTOR`), with ``truth_fun`` the true calibration's objective on the same readings.
-
-    Parameters
-    ----------
-    truth_fun : float
-        The true calibration's objective.
-
-    Returns
-    -------
-    float
-        The level.
     """
     return REACHED_FACTOR * float(truth_fun) + ROUNDOFF_FLOOR
 
 
 def failed_majority(success_rate):
-    """Whether fewer than half of a cell's judged runs succeeded (``success_rate < MAJORITY``).
-
-    Parameters
-    ----------
-    success_rate : float or array_like
-        The fraction of succeeded runs; NaN where none is judged.
-
-    Returns
-    -------
-    bool or numpy.ndarray
-        True below :data:`MAJORITY`; False at or above it and where the rate is NaN (nothing judged
-        has not failed).
-    """
+    """Whether fewer than half of a cell's judged runs succeeded (``success_rate < MAJORITY``)."""
     with np.errstate(invalid="ignore"):
         out = np.asarray(success_rate, float) < MAJORITY
     return bool(out) if out.ndim == 0 else out
@@ -126,16 +74,6 @@ def failed_majority(success_rate):
 def succeeded_majority(success_rate):
     """Whether at least half of a cell's judged runs succeeded (``success_rate >= MAJORITY``; False
     where the rate is NaN: nothing judged has not succeeded either). Same shapes as :func:`failed_majority`.
-
-    Parameters
-    ----------
-    success_rate : float or array_like
-        As :func:`failed_majority`'s.
-
-    Returns
-    -------
-    bool or numpy.ndarray
-        True at or above :data:`MAJORITY`.
     """
     with np.errstate(invalid="ignore"):
         out = np.asarray(success_rate, float) >= MAJORITY
@@ -143,19 +81,8 @@ def succeeded_majority(success_rate):
 
 
 def on_face(x, low, high) -> np.ndarray:
-    """Which coordinates of ``x`` sit on a face of the box ``[low, high]``.
-
-    Parameters
-    ----------
-    x, low, high : array_like
-        Coordinates and the box's faces, broadcast together; a face may be infinite.
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        ``|x - low| <= FACE_TOL (high - low)`` or the same at ``high`` (:data:`FACE_TOL`); a coordinate
-        equal to an infinite face counts too (there the tolerance is NaN).
-    """
+    """Which coordinates of ``x`` sit on a face of the box ``[low, high]``: within :data:`FACE_TOL` of its width,
+    or equal to an infinite face."""
     x, low, high = (np.asarray(a, float) for a in (x, low, high))
     with np.errstate(invalid="ignore"):
         atol = FACE_TOL * (high - low)
@@ -167,17 +94,6 @@ def recording_succeeded(optimizer_flag, spread_before, spread_after) -> np.ndarr
     calibration narrowed the spread of the total field (``spread_after < spread_before``). The
     fallback of a benchmark of recordings whose artifact has no ``success: {reference: best}``: a
     calibration must not widen the spread it fits.
-
-    Parameters
-    ----------
-    optimizer_flag : array_like of bool
-        The runs' ``optimizer_flag`` column.
-    spread_before, spread_after : array_like
-        The relative spread ``std/mean`` of ``|B|`` before and after the calibration.
-
-    Returns
-    -------
-    numpy.ndarray of bool
     """
     with np.errstate(invalid="ignore"):
         narrowed = np.asarray(spread_after, float) < np.asarray(spread_before, float)

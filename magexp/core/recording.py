@@ -63,21 +63,16 @@ class Recording:
 
     @property
     def n(self) -> int:
+        """The number of readings."""
         return int(self.readings.shape[0])
 
     @property
     def name(self) -> str:
+        """The file's name, else ``meta['name']``, else ``readings``: how messages name it."""
         return self.path.name if self.path is not None else self.meta.get("name", "readings")
 
     def gyro_rates(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """``(times, rates)`` of the gyroscope and the reading times, or None without one.
-
-        Returns
-        -------
-        tuple of ndarray or None
-            ``(times (G,), rates (G, 3))`` (rad/s): a separate gyro stream's, or the per-reading gyro at
-            ``sample_time`` steps.
-        """
+        """``(times, rates)`` of the gyroscope and the reading times, or None without one."""
         if self.gyro_stream is not None:
             return self.gyro_stream
         if self.gyro is not None:
@@ -85,13 +80,7 @@ class Recording:
         return None
 
     def reading_times(self) -> np.ndarray | None:
-        """The readings' times (s): the recorded ones, else ``sample_time`` steps from 0.
-
-        Returns
-        -------
-        ndarray, shape (N,) or None
-            The times, or None without either.
-        """
+        """The readings' times (s): the recorded ones, else ``sample_time`` steps from 0."""
         if self.times is not None:
             return self.times
         return None if self.sample_time is None else np.arange(self.n) * self.sample_time
@@ -100,17 +89,6 @@ class Recording:
         """Navigation -> sensor rotations ``(N, 3, 3)`` from the angles, else from the gyroscope
         integrated at the reading times (the sensor frame at the first reading is the navigation
         frame; ``bias`` rad/s subtracted), else None.
-
-        Parameters
-        ----------
-        bias : array_like, shape (3,), optional
-            The gyro bias (rad/s) subtracted before integrating.
-
-        Returns
-        -------
-        ndarray, shape (N, 3, 3) or None
-            From the angles: Yan & Zhou 2022's eq 2 (:func:`magexp.core.geometry.ship_attitude`); from the
-            gyroscope: the transposed :func:`magexp.core.geometry.attitude_at` (Yuan 2018's ``C_i^b``).
         """
         if self.angles is not None:
             return ship_attitude(*self.angles.T)
@@ -120,19 +98,7 @@ class Recording:
         return np.transpose(attitude_at(*stream, self.reading_times(), bias=bias), (0, 2, 1))
 
     def subset(self, index) -> "Recording":
-        """The readings ``index`` (a slice or index array), with their attitudes' sources.
-
-        Parameters
-        ----------
-        index : slice or array_like
-            The readings kept.
-
-        Returns
-        -------
-        Recording
-            A copy holding those readings, their angles, totals, columns and times; the gyroscope kept whole
-            as a stream (:meth:`gyro_rates`), so the attitude is still integrated over every sample.
-        """
+        """The readings ``index`` (a slice or index array), with their attitudes' sources."""
         pick = lambda a: None if a is None else np.asarray(a)[index]  # noqa: E731
         times = self.reading_times()
         return replace(self, readings=self.readings[index], angles=pick(self.angles), total=pick(self.total),
@@ -140,25 +106,7 @@ class Recording:
                        times=pick(times), gyro_stream=self.gyro_rates())
 
 def check_unit(unit: str, what: str) -> str:
-    """``unit`` spelled as in :data:`UNITS`, or a one-line error naming ``what``.
-
-    Parameters
-    ----------
-    unit : str
-        A unit's name (any case).
-    what : str
-        What it is the unit of, named in the refusal.
-
-    Returns
-    -------
-    str
-        The key of :data:`UNITS` or :data:`RAW_UNITS`.
-
-    Raises
-    ------
-    MagexpError
-        One line for an unknown unit.
-    """
+    """``unit`` spelled as in :data:`UNITS`, or a one-line error naming ``what``."""
     text = str(unit).strip()
     text = _ALIASES.get(text.lower(), text)
     if text not in UNITS and text not in RAW_UNITS:
@@ -172,20 +120,7 @@ OBJECTIVES = ("scalar", "vector", "gyro")
 
 
 def evenly_spaced(n: int, count: int | None) -> np.ndarray:
-    """Indices of ``count`` of ``n`` readings evenly spaced in order, first and last included.
-
-    Parameters
-    ----------
-    n : int
-        How many readings there are.
-    count : int or None
-        How many to keep; None, or at least ``n``: every one.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``round(k (n - 1) / (count - 1))`` for ``k = 0 .. count - 1`` (strictly increasing), or ``0 .. n - 1``.
-    """
+    """Indices of ``count`` of ``n`` readings evenly spaced in order, first and last included."""
     if count is None or count >= n:
         return np.arange(n)
     return np.round(np.linspace(0, n - 1, count)).astype(int)
@@ -193,34 +128,9 @@ def evenly_spaced(n: int, count: int | None) -> np.ndarray:
 
 def recording_dataset(rec: Recording, reference_norm, objective: str = "scalar", *, keep=None,
                       meta: dict | None = None, extra: dict | None = None) -> Dataset:
-    """The :class:`~magexp.core.dataset.Dataset` of the readings ``keep`` of ``rec`` for ``objective``.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording.
-    reference_norm : float or numpy.ndarray
-        The reference total field: one number, or one per reading of ``rec`` (``(N,)``, its unit).
-    objective : str
-        ``scalar`` (the readings and their reference total), ``vector`` (and the attitudes of
-        :meth:`Recording.attitude` with the ``# field:`` vector) or ``gyro`` (and the gyroscope
-        preintegrated between the kept readings' times, ``extra["preintegration"]``,
-        :func:`magexp.core.geometry.preintegrate`, for :class:`magexp.problems.gyro.GyroAidedCalibration`).
-    keep : index array, slice or None
-        The readings used (None: all, not copied).
-    meta, extra : dict or None
-        Added to the dataset's ``meta`` (after ``recording`` and the recording's own metadata) and ``extra``.
-
-    Returns
-    -------
-    Dataset
-        Readings, reference totals (and attitudes and field, or the preintegration) of the kept readings.
-
-    Raises
-    ------
-    MagexpError
-        One line: an objective not of :data:`OBJECTIVES`, or one whose data the recording lacks.
-    """
+    """The :class:`~magexp.core.dataset.Dataset` of the readings ``keep`` (None: all) of ``rec`` for ``objective``:
+    ``scalar``, ``vector`` (with :meth:`Recording.attitude`) or ``gyro`` (with the gyroscope preintegrated between the
+    kept readings, ``extra["preintegration"]``); ``reference`` is one total or one per reading."""
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(OBJECTIVES)}")
     keep = slice(None) if keep is None else keep

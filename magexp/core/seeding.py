@@ -14,16 +14,6 @@ from magexp.errors import MagexpError
 def stream_key(stream) -> int:
     """A stable 32-bit key of a scenario: CRC-32 of its name, or of its whole config (a mapping,
     as JSON with sorted keys).
-
-    Parameters
-    ----------
-    stream : str or mapping
-        A scenario's name or config.
-
-    Returns
-    -------
-    int
-        The key.
     """
     text = json.dumps(stream, sort_keys=True, default=str) if isinstance(stream, dict) else str(stream)
     return zlib.crc32(text.encode())
@@ -32,16 +22,6 @@ def stream_key(stream) -> int:
 def scenario_stream(scenario_cfg) -> dict:
     """The stream of a run: its scenario's whole resolved config (name and settings), so two
     scenarios, or one scenario at two settings (e.g. two noise levels), never share their draws.
-
-    Parameters
-    ----------
-    scenario_cfg : mapping
-        The scenario's resolved config.
-
-    Returns
-    -------
-    dict
-        The config as a plain dict (the stream of :func:`run_generators`).
     """
     if isinstance(scenario_cfg, DictConfig):
         return OmegaConf.to_container(scenario_cfg, resolve=True)
@@ -55,18 +35,6 @@ def run_generators(seed, stream=None) -> tuple[np.random.Generator, np.random.Ge
     so two scenarios never share their draws (a lucky draw does not repeat across cases), while every
     estimator of a (scenario, seed) sees the same readings (common random numbers: paired
     comparisons). ``stream=None`` is the scenario-free sequence of ``seed``.
-
-    Parameters
-    ----------
-    seed : int
-        The run's seed.
-    stream : str or mapping, optional
-        The scenario's stream.
-
-    Returns
-    -------
-    data, estimator : numpy.random.Generator
-        The two generators.
     """
     data, est = run_sequences(seed, stream)
     return np.random.default_rng(data), np.random.default_rng(est)
@@ -76,16 +44,6 @@ def run_sequences(seed, stream=None) -> tuple[np.random.SeedSequence, np.random.
     """The seed sequences behind :func:`run_generators` (data, estimator). ``default_rng`` of a
     sequence does not change it, so a batch derives them once per (scenario, seed) and gives each
     estimator a fresh generator with the same draws.
-
-    Parameters
-    ----------
-    seed, stream
-        As :func:`run_generators`.
-
-    Returns
-    -------
-    data, estimator : numpy.random.SeedSequence
-        The two sequences (the two children of the run's sequence).
     """
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise MagexpError(f"seed={seed!r} is not allowed: it must be an integer >= 0")

@@ -36,22 +36,7 @@ RECORDINGS = ("xio_fusion_sensor_data.csv", "hmc5883l_full-sphere", "hmc5883l_ro
 
 
 def command_cpu(path: Path, model: str, out: Path) -> tuple[float, str]:
-    """``(CPU seconds, outcome)`` of one ``magexp calibrate`` command on ``path`` with ``model``.
-
-    Parameters
-    ----------
-    path : Path
-        The recording.
-    model : str
-        ``auto`` or ``full``.
-    out : Path
-        The output folder (must not exist).
-
-    Returns
-    -------
-    tuple
-        The child's user + system CPU time, and ``accepted`` or the refusal's first words.
-    """
+    """``(CPU seconds, outcome)`` of one ``magexp calibrate`` command on ``path`` with ``model``."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     done = subprocess.run([sys.executable, "-m", "magexp", "calibrate", f"data.path={path}", f"model={model}",
@@ -63,18 +48,7 @@ def command_cpu(path: Path, model: str, out: Path) -> tuple[float, str]:
 
 
 def choice(path: Path) -> str:
-    """What ``model=auto`` chooses on ``path`` and why (every candidate's held-out spread), or why nothing is chosen.
-
-    Parameters
-    ----------
-    path : Path
-        The recording.
-
-    Returns
-    -------
-    str
-        ``quality.model_selection``'s ``why``, or the refusal before any choice.
-    """
+    """What ``model=auto`` chooses on ``path`` and why (every candidate's held-out spread), or why nothing is chosen."""
     import magexp
 
     try:
@@ -86,18 +60,6 @@ def choice(path: Path) -> str:
 def measure(names, repeats: int) -> list[dict]:
     """One row per recording of ``names`` present: the median CPU of ``auto`` and ``full`` (interleaved
     ``repeats`` times), their ratio, the outcomes and ``auto``'s choice.
-
-    Parameters
-    ----------
-    names : iterable of str
-        Recordings of :data:`RECORDINGS`.
-    repeats : int
-        Runs of each command.
-
-    Returns
-    -------
-    list of dict
-        The rows.
     """
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -117,18 +79,7 @@ def measure(names, repeats: int) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print the cost of ``model=auto`` beside ``model=full`` on the shared recordings with a gyroscope.
-
-    Parameters
-    ----------
-    argv : list of str or None
-        ``[--repeats N] [--only NAME ...]`` (None: ``sys.argv``).
-
-    Returns
-    -------
-    int
-        0.
-    """
+    """Print the cost of ``model=auto`` beside ``model=full`` on the shared recordings with a gyroscope."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="runs of each command (default 3)")
     parser.add_argument("--only", nargs="*", default=None, help="recordings of RECORDINGS to measure")

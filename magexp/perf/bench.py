@@ -70,12 +70,7 @@ SECTIONS = ("cost", "engine", "pyswarms", "peers", "bound", "first-call", "memor
 
 
 def measure(sections=SECTIONS, rounds: int = 7, seeds: int = 20) -> list[dict]:
-    """The long-format rows of the bench's ``sections`` (module docstring), in one list.
-
-    Parameters
-    ----------
-    sections, rounds, seeds : sequence of str (of :data:`SECTIONS`), int, int
-    """
+    """The long-format rows of the bench's ``sections`` (module docstring), in one list."""
     rows = []
     if "memory" in sections:
         rows += memory_rows()
@@ -95,6 +90,7 @@ def measure(sections=SECTIONS, rounds: int = 7, seeds: int = 20) -> list[dict]:
 
 
 def main(argv=None) -> int:
+    """Run the bench's sections (``--help``) in a process with one BLAS thread; write and print the rows."""
     if any(os.environ.get(var) != "1" for var in BLAS_THREADS):  # one BLAS thread, set before numpy loads it
         env = dict(os.environ, **dict.fromkeys(BLAS_THREADS, "1"))
         argv = sys.argv[1:] if argv is None else list(argv)

@@ -41,13 +41,7 @@ TRIED = (("auto", "ellipsoid"), ("sphere", "ellipsoid"), ("diagonal", "ellipsoid
 
 
 def recordings() -> dict:
-    """``{sequence: Recording}`` of every HMC5883L two-stream recording in the shared data.
-
-    Returns
-    -------
-    dict
-        The recordings by sequence name (``hmc5883l_`` prefix dropped).
-    """
+    """``{sequence: Recording}`` of every HMC5883L two-stream recording in the shared data."""
     stems = sorted(p.name[: -len("_mag.csv")] for p in SHARED_DATA.glob("hmc5883l_*_mag.csv"))
     return {stem.removeprefix("hmc5883l_"): load_recording(SHARED_DATA / stem) for stem in stems}
 
@@ -55,16 +49,6 @@ def recordings() -> dict:
 def single_attitude(readings: np.ndarray) -> bool:
     """Whether every raw reading lies within :data:`~magexp.calibration.checks.ONE_ATTITUDE_DEG` of their mean
     direction (the sensor did not turn).
-
-    Parameters
-    ----------
-    readings : numpy.ndarray, shape (N, 3)
-        A recording's raw readings, any order.
-
-    Returns
-    -------
-    bool
-        True when the widest angle from the mean direction is under the limit.
     """
     mean = readings.mean(axis=0)
     cosine = readings @ mean / (np.linalg.norm(readings, axis=1) * np.linalg.norm(mean))
@@ -74,20 +58,6 @@ def single_attitude(readings: np.ndarray) -> bool:
 def carried_noise(cal, readings: np.ndarray) -> float:
     """The total-field spread that the raw scatter of a single-attitude recording has once carried through the
     calibration's linear map (first order).
-
-    Parameters
-    ----------
-    cal : Calibration
-        ``B = W (m - o)`` (its ``w`` and :meth:`apply`).
-    readings : ndarray, shape (n, 3)
-        Raw readings at one attitude.
-
-    Returns
-    -------
-    float
-        ``sqrt(u^T W Σ W^T u) / |W (m̄ - o)|``, with ``Σ`` the readings' covariance, ``m̄`` their mean and
-        ``u = W (m̄ - o) / |W (m̄ - o)|``: the standard deviation of ``|B|`` over its mean when ``|B|`` varies only
-        through the scatter of the readings.
     """
     w = cal.w
     centre = cal.apply(readings.mean(axis=0))
@@ -98,20 +68,6 @@ def carried_noise(cal, readings: np.ndarray) -> float:
 def rows(recs: dict, tried=TRIED, *, seed: int = 0) -> list[dict]:
     """One row per (source recording, model, estimator, target recording): accepted or refused, the
     spread of the target's readings raw and calibrated (spreads as fractions).
-
-    Parameters
-    ----------
-    recs : dict
-        ``{sequence: Recording}`` (:func:`recordings`).
-    tried : sequence
-        The (model, estimator) calibrations tried.
-    seed : int
-        Seed of the estimators' draws.
-
-    Returns
-    -------
-    list of dict
-        The long-format rows.
     """
     out = []
     for source, rec in recs.items():
@@ -136,17 +92,7 @@ def rows(recs: dict, tried=TRIED, *, seed: int = 0) -> list[dict]:
 
 
 def worse(row: dict) -> bool:
-    """An accepted calibration's spread on a target that turns exceeds the target's raw spread.
-
-    Parameters
-    ----------
-    row : dict
-        A row of :func:`rows` (``calibrated`` and ``raw`` spreads).
-
-    Returns
-    -------
-    bool
-    """
+    """An accepted calibration's spread on a target that turns exceeds the target's raw spread."""
     return row["calibrated"] is not None and not row["single_attitude"] and row["calibrated"] > row["raw"]
 
 
@@ -159,18 +105,7 @@ def _cell(row: dict, raw: float) -> str:
 
 
 def markdown(table: list[dict]) -> str:
-    """The recording × recording table: a row per tried calibration, a column per target recording.
-
-    Parameters
-    ----------
-    table : list of dict
-        The rows of :func:`rows`.
-
-    Returns
-    -------
-    str
-        The markdown table.
-    """
+    """The recording × recording table: a row per tried calibration, a column per target recording."""
     targets = list(dict.fromkeys(r["target"] for r in table))
     raw = {r["target"]: r["raw"] for r in table}
     lines = ["| source | model (chosen) | estimator | " + " | ".join(targets) + " |",
@@ -189,18 +124,7 @@ def markdown(table: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print the table of the shared recordings (and write its rows to ``--csv``).
-
-    Parameters
-    ----------
-    argv : list of str or None
-        ``[--csv PATH]`` (None: ``sys.argv``).
-
-    Returns
-    -------
-    int
-        0.
-    """
+    """Print the table of the shared recordings (and write its rows to ``--csv``)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--csv", help="also write the long-format rows here")
     args = parser.parse_args(argv)

@@ -31,12 +31,7 @@ print(time.perf_counter() - start)
 
 
 def first_call_rows(repeat: int = 3) -> list[dict]:
-    """numba import + first calls of both costs in a fresh process, cache warm and cold.
-
-    Parameters
-    ----------
-    repeat : int
-    """
+    """numba import + first calls of both costs in a fresh process, cache warm and cold."""
     rows = []
     for label, cache in (("warm cache", None), ("cold, compiling", "fresh")):
         values = []
@@ -74,10 +69,6 @@ def run_peak(overrides) -> tuple[int, float]:
     The peak is that process's own ``ru_maxrss`` (``os.wait4`` in :data:`LAUNCH`: no other process
     counts); its output folder and its run cache are temporary, so it computes (never reads a
     cached result) and leaves nothing behind. A failed run raises, with the end of its error output.
-
-    Parameters
-    ----------
-    overrides : sequence of str
     """
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, MAGEXP_CACHE=str(Path(tmp) / "cache"))
@@ -100,10 +91,6 @@ def memory_check(n_readings: int, n_particles: int, n_iterations: int) -> dict:
     interpreter, imports, compiled kernels and steps, on negligible data); ``measured = peak -
     baseline``, the part the estimate models (it leaves out the interpreter and its libraries);
     ``ratio = estimate / measured``.
-
-    Parameters
-    ----------
-    n_readings, n_particles, n_iterations : int
     """
     sizes = [f"estimator.n_particles={n_particles}", f"estimator.n_iterations={n_iterations}"]
     overrides = [*MEMORY_RUN, f"scenario.n_readings={n_readings}", *sizes]
@@ -116,12 +103,7 @@ def memory_check(n_readings: int, n_particles: int, n_iterations: int) -> dict:
 
 
 def memory_rows(n_readings: int = 1_000_000, n_particles: int = 500, n_iterations: int = 3) -> list[dict]:
-    """Peak memory of a command-line ``ipso`` run beside the run guard's estimate (:func:`memory_check`).
-
-    Parameters
-    ----------
-    n_readings, n_particles, n_iterations : int
-    """
+    """Peak memory of a command-line ``ipso`` run beside the run guard's estimate (:func:`memory_check`)."""
     m = memory_check(n_readings, n_particles, n_iterations)
     size = f"{n_readings} readings x {n_particles} particles, {n_iterations} iterations"
     mib = 2.0 ** 20

@@ -7,12 +7,7 @@ import time
 import numpy as np
 
 def row(measure: str, estimator: str, values, unit: str) -> dict:
-    """One long-format row: the median of ``values`` and their interquartile range.
-
-    Parameters
-    ----------
-    measure, estimator, values, unit : str, str, sequence of float, str
-    """
+    """One long-format row: the median of ``values`` and their interquartile range."""
     values = np.asarray(values, float)
     if values.size == 0 or not np.any(np.isfinite(values)):
         return {"measure": measure, "estimator": estimator, "value": np.nan, "unit": unit, "lo": np.nan, "hi": np.nan}
@@ -27,10 +22,6 @@ def side_by_side(variants: dict, rounds: int, target: float = 0.05, clock=time.p
     result maps each name to its ``rounds`` batch means, by ``clock`` (wall clock by default;
     ``time.process_time``: this process's CPU time, which leaves out waiting for a core on a
     shared machine).
-
-    Parameters
-    ----------
-    variants, rounds, target, clock : dict of callables, int, float, callable
     """
     number = {}
     for name, fn in variants.items():

@@ -33,6 +33,7 @@ class Recorded:
         return getattr(self._problem, name)
 
     def cost(self, thetas):
+        """The problem's cost, the call counted and the best so far stamped with its time."""
         f = self._problem.cost(thetas)
         self._nfev += len(f)
         self._best = min(self._best, float(np.min(f)))
@@ -41,6 +42,7 @@ class Recorded:
 
 
 def peer_estimators():
+    """``{name: estimator}`` of :data:`PEERS` with the bench's budget (pyswarms left out when absent)."""
     out = {}
     for name in PEERS:
         if name in ("ipso", "pso", "rdpso"):
@@ -56,10 +58,6 @@ def peer_estimators():
 def run_peer(estimator, problem, rng) -> dict:
     """One run: final cost (direct formula), evaluations, wall time, and the trace of
     ``(evaluations so far, best so far, seconds since the start)`` after every cost call.
-
-    Parameters
-    ----------
-    estimator, problem, rng : estimator, CalibrationProblem, numpy.random.Generator
     """
     rec = Recorded(problem)
     rec.start = time.perf_counter()
@@ -78,10 +76,6 @@ def reach(run: dict, target: float) -> tuple[float, float]:
     """Evaluations and seconds until the best cost first came within ``target`` (nan if never).
 
     A closed form (no cost calls) reaches it with all its evaluations and its whole wall time.
-
-    Parameters
-    ----------
-    run, target : dict (of :func:`run_peer`), float
     """
     if not run["trace"]:
         return (run["nfev"], run["wall"]) if run["fun"] <= target else (np.nan, np.nan)
@@ -89,12 +83,7 @@ def reach(run: dict, target: float) -> tuple[float, float]:
 
 
 def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95 % Wilson score interval of a success rate.
-
-    Parameters
-    ----------
-    successes, n, z : int, int, float
-    """
+    """95 % Wilson score interval of a success rate."""
     if n == 0:
         return np.nan, np.nan
     p = successes / n
@@ -104,6 +93,7 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
 
 
 def peer_rows(seeds: int) -> list[dict]:
+    """The peer table's rows over ``seeds`` seeds (module docstring)."""
     estimators = peer_estimators()
     names = list(estimators)
     runs = {name: [] for name in names}

@@ -36,6 +36,7 @@ def _sqrt_pass():
 
 
 def cost_rows(rounds: int) -> list[dict]:
+    """Section 1's rows: the costs' throughput beside their floors at both :data:`~magexp.perf.workloads.SIZES`."""
     sqrt_pass = _sqrt_pass()
     rows = []
     for n, n_p in SIZES:
@@ -76,6 +77,7 @@ def cost_rows(rounds: int) -> list[dict]:
 
 
 def engine_rows(rounds: int) -> list[dict]:
+    """Section 2's rows: ``ipso``'s time per iteration over one bare cost call."""
     rows = []
     for (n, n_p), iterations in zip(SIZES, (200, 4)):
         problem, _ = ding_problem(n)
@@ -105,6 +107,7 @@ class PyswarmsPSO:
         self.options = {"w": rule.inertia(1, 1), "c1": rule.c1(1, 1), "c2": rule.c2(1, 1)}
 
     def fit(self, problem, *, rng: np.random.Generator):
+        """``(best cost, best position)`` of pyswarms on ``problem``."""
         logging.getLogger("pyswarms").setLevel(logging.ERROR)
         np.random.seed(int(rng.integers(2**31 - 1)))
         vmax = self.clamp * (problem.upper - problem.lower)
@@ -118,6 +121,7 @@ class PyswarmsPSO:
 
 
 def pyswarms_rows(rounds: int) -> list[dict]:
+    """Section 3's rows: pyswarms' time per iteration beside ``pso``'s (one row saying so when absent)."""
     if pyswarms is None:
         return [row("engine vs pyswarms", "pyswarms", [], "not installed (pip install '.[bench]')")]
     rows = []
@@ -138,10 +142,6 @@ def pyswarms_rows(rounds: int) -> list[dict]:
 def bound_rows(rounds: int, n_readings: int = 100_000) -> list[dict]:
     """Seconds per bound, wall clock and CPU (the process's own CPU time: what the call costs an
     idle core; on a shared machine the wall clock also counts waiting for one).
-
-    Parameters
-    ----------
-    rounds, n_readings : int
     """
     problem, _ = ding_problem(n_readings)
     cramer_rao(problem)

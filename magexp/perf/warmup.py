@@ -44,13 +44,7 @@ FITS = (
 
 
 def main() -> int:
-    """Compile and store every numba kernel: run :data:`FITS` and the scalar residuals (``make venv`` calls it).
-
-    Returns
-    -------
-    int
-        The exit code, 0.
-    """
+    """Compile and store every numba kernel: run :data:`FITS` and the scalar residuals (``make venv`` calls it)."""
     if kernels.compiled() is None:
         print("warm-up: numba is not in use (MAGEXP_NUMBA=0 or not installed); nothing to compile")
         return 0

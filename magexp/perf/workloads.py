@@ -19,22 +19,12 @@ BUDGET_PARTICLES, BUDGET_ITERATIONS = 50, 800  # every iterative peer: 50 x 801 
 
 
 def compose(overrides: list[str]):
-    """The run config of ``overrides`` (the project's one composer).
-
-    Parameters
-    ----------
-    overrides : list of str
-    """
+    """The run config of ``overrides`` (the project's one composer)."""
     return compose_config(overrides)
 
 
 def ding_problem(n_readings: int, seed: int = 0, *overrides: str):
-    """Ding 2024 simulation 1 with ``n_readings`` readings (data of ``seed``) and its scenario.
-
-    Parameters
-    ----------
-    n_readings, seed, *overrides : int, int, str
-    """
+    """Ding 2024 simulation 1 with ``n_readings`` readings (data of ``seed``) and its scenario."""
     cfg = compose(["scenario=ding2024_exp1", f"scenario.n_readings={n_readings}", *overrides])
     scenario = build(cfg.scenario, "scenario")
     dataset = scenario.generate(rng=run_generators(seed)[0])
@@ -44,10 +34,6 @@ def ding_problem(n_readings: int, seed: int = 0, *overrides: str):
 def vector_problem(n_readings: int):
     """A vector problem (Yuan 2018 eq 8) of any size: Ding's readings with their true body-frame field as the
     reference vectors (identity attitudes: only shapes matter; Yuan's trajectories are too short for 3e4 readings).
-
-    Parameters
-    ----------
-    n_readings : int
     """
     problem, scenario = ding_problem(n_readings)
     ds = problem.dataset
@@ -56,11 +42,13 @@ def vector_problem(n_readings: int):
 
 
 def swarm_in_box(problem, n_particles: int, seed: int = 0) -> np.ndarray:
+    """``n_particles`` positions drawn uniformly in the problem's box."""
     rng = np.random.default_rng(seed)
     return problem.lower + rng.random((n_particles, problem.n_params)) * (problem.upper - problem.lower)
 
 
 def swarm_estimator(name: str, n_particles: int = BUDGET_PARTICLES, n_iterations: int = BUDGET_ITERATIONS):
+    """The configured swarm estimator ``name`` with the given population and iterations."""
     cfg = compose([f"estimator={name}", f"estimator.n_particles={n_particles}",
                    f"estimator.n_iterations={n_iterations}"])
     return build(cfg.estimator, "estimator")

@@ -31,20 +31,6 @@ def nonorthogonality(phi_deg: float, theta_deg: float, psi_deg: float) -> np.nda
               0 & \\cos\\psi & \\sin\\psi\\\\ 0 & 0 & 1\\end{bmatrix}
 
     (Ding 2024, the ``C`` of eqs 1-8.)
-
-    Parameters
-    ----------
-    phi_deg : float
-        ``φ`` (degrees).
-    theta_deg : float
-        ``θ`` (degrees).
-    psi_deg : float
-        ``ψ`` (degrees).
-
-    Returns
-    -------
-    numpy.ndarray, shape (3, 3)
-        ``C``, upper triangular.
     """
     ph, th, ps = np.deg2rad([phi_deg, theta_deg, psi_deg])
     return np.array(
@@ -57,6 +43,7 @@ def nonorthogonality(phi_deg: float, theta_deg: float, psi_deg: float) -> np.nda
 
 
 def _vector(value, name: str, shape) -> np.ndarray:
+    """``value`` as finite floats of ``shape``, else one line naming ``name``."""
     arr = np.asarray(value, dtype=float)
     if arr.shape != shape or not np.all(np.isfinite(arr)):
         raise MagexpError(f"{name}={value!r} is not allowed: it must be {shape} finite numbers")
@@ -67,31 +54,6 @@ def error_model(*, scale, nonorthogonality_deg, soft_iron, hard_iron, bias) -> t
     """``(M, I)`` from Ding's physical error parameters (eqs 1-8).
 
     Ding 2024's error model ``Br = M B + I`` with ``M = K C (E + S)`` and ``I = K C Bh + b``.
-
-    Parameters
-    ----------
-    scale : array_like, shape (3,)
-        The scale factors ``k`` of ``K = diag(k)``, each non-zero.
-    nonorthogonality_deg : array_like, shape (3,)
-        ``(φ, θ, ψ)`` in degrees, the angles of :func:`nonorthogonality`.
-    soft_iron : array_like, shape (3, 3)
-        The soft-iron matrix ``S``.
-    hard_iron : array_like, shape (3,)
-        The hard-iron field ``Bh`` (nT).
-    bias : array_like, shape (3,)
-        The sensor bias ``b`` (nT).
-
-    Returns
-    -------
-    M : numpy.ndarray, shape (3, 3)
-        The error matrix ``K C (E + S)``.
-    I : numpy.ndarray, shape (3,)
-        The offset ``K C Bh + b``.
-
-    Raises
-    ------
-    MagexpError
-        When a value is not finite or of the wrong shape, a scale is 0, or ``M`` is singular.
     """
     k = _vector(scale, "errors.scale", (3,))
     c = nonorthogonality(*_vector(nonorthogonality_deg, "errors.nonorthogonality_deg", (3,)))
@@ -139,19 +101,7 @@ class DingScenarioConf(SimulationConf):
 
 
 class DingScenario:
-    """Random 3-D rotations of a sensor with Ding's error model.
-
-    Parameters
-    ----------
-    name : config name (``ding2024_exp1``...).
-    field : ``{total, declination, inclination}`` in nT and degrees.
-    errors : ``{scale, nonorthogonality_deg, soft_iron, hard_iron, bias}`` (Tables 1-2).
-    noise : maximum amplitude ``A`` (nT) of the per-axis noise ``A (U - 0.5)``.
-    noise_kind : ``uniform`` (default, see :class:`~magexp.scenarios.noise.Noise`) or ``gaussian``.
-    n_readings : number of random attitudes.
-    search : search box of the calibration parameters (see :class:`SearchBox`).
-    objective : the problem used by default (``scalar``).
-    """
+    """Random 3-D rotations of a sensor with Ding's error model."""
 
     Config = DingScenarioConf
 
@@ -166,19 +116,7 @@ class DingScenario:
         self.objective = objective
 
     def generate(self, *, rng: np.random.Generator) -> Dataset:
-        """Simulate ``n_readings`` readings at uniformly random attitudes.
-
-        Parameters
-        ----------
-        rng : numpy.random.Generator
-            The run's generator (the attitudes, then the noise).
-
-        Returns
-        -------
-        Dataset
-            The readings ``M B + I + noise``, the reference total field, the attitudes and the truth
-            ``(M^-1, I)``.
-        """
+        """Simulate ``n_readings`` readings at uniformly random attitudes."""
         r = random_rotations(self.n_readings, rng=rng)  # nav -> body
         body = r @ self.field
         readings = body @ self.m.T + self.i + self.noise.sample(body.shape, rng=rng)

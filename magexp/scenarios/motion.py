@@ -45,25 +45,6 @@ def segments_of(mode: str | None, segments, partial_arc_deg: float) -> list[tupl
     """The list of ``(axis, arc_deg)`` of a preset ``mode`` or of explicit ``segments``.
 
     Yuan 2018's rotation modes (sec 3.2, :data:`MODES`).
-
-    Parameters
-    ----------
-    mode : str or None
-        A preset of :data:`MODES` (``mode1``..``mode4``); unused when ``segments`` are given.
-    segments : list of dict or None
-        Explicit ``[{axis: x, arc_deg: 360}, ...]`` (override ``mode``).
-    partial_arc_deg : float
-        The arc of an incomplete turn (mode 3).
-
-    Returns
-    -------
-    list of tuple of (str, float)
-        ``(axis, arc_deg)`` of each turn, the axis one of ``x``, ``y``, ``z``.
-
-    Raises
-    ------
-    MagexpError
-        When ``mode`` is unknown (without ``segments``), an axis is not x, y or z, or an arc is not > 0.
     """
     if segments:
         out = [(str(s["axis"]).lower(), float(s["arc_deg"])) for s in segments]
@@ -90,17 +71,7 @@ class RotationConf:
 
 
 class Trajectory:
-    """Turns about body axes in sequence, each at ``rate_deg_s``, sampled every ``sample_period`` s.
-
-    Parameters
-    ----------
-    mode : a preset of :data:`MODES` (``mode1``..``mode4``), or None with ``segments``.
-    segments : explicit ``[{axis: x, arc_deg: 360}, ...]`` (overrides ``mode``).
-    partial_arc_deg : the arc of an incomplete turn (mode 3; not stated in the paper).
-    rate_deg_s : turn rate; 36 °/s makes a full turn 1000 samples at 0.01 s, so three
-        turns are the paper's 3000 samples.
-    sample_period : seconds (0.01 in the paper's simulations, 1/205 for the ADIS16488).
-    """
+    """Turns about body axes in sequence, each at ``rate_deg_s``, sampled every ``sample_period`` s."""
 
     def __init__(self, *, mode: str | None = "mode1", segments=None, partial_arc_deg: float = 180.0,
                  rate_deg_s: float = 36.0, sample_period: float = 0.01):
@@ -115,23 +86,11 @@ class Trajectory:
                     "its turns at this rate and period are samples")  # counted before any array is made
 
     def samples(self) -> float:
-        """The number of steps of :meth:`rates`, counted without making them.
-
-        Returns
-        -------
-        int
-            The steps of every segment, at least one each.
-        """
+        """The number of steps of :meth:`rates`, counted without making them."""
         return sum(max(round(arc / (self.rate * self.dt)), 1) for _, arc in self.segments)
 
     def rates(self) -> np.ndarray:
-        """True body rates of every step.
-
-        Returns
-        -------
-        numpy.ndarray, shape (K, 3)
-            rad/s, one row per step of ``dt``; each segment turns exactly its arc.
-        """
+        """True body rates of every step."""
         parts = []
         for ax, arc in self.segments:
             n = max(int(round(arc / (self.rate * self.dt))), 1)
@@ -141,13 +100,7 @@ class Trajectory:
         return np.concatenate(parts)
 
     def duration(self) -> float:
-        """The trajectory's length in time.
-
-        Returns
-        -------
-        float
-            Seconds: the steps of :meth:`rates` times ``dt``.
-        """
+        """The trajectory's length in time."""
         return len(self.rates()) * self.dt
 
 
@@ -166,14 +119,7 @@ class GyroConf:
 
 
 class Gyro:
-    """A rate gyro: true rate + constant drift + white noise.
-
-    Parameters
-    ----------
-    drift_deg_h : magnitude of the constant drift (°/h), along ``drift_axis``.
-    drift_axis : direction of the drift (normalised; default equal on the three axes).
-    noise_deg_s : standard deviation of the white noise of each sample (°/s).
-    """
+    """A rate gyro: true rate + constant drift + white noise."""
 
     def __init__(self, *, drift_deg_h: float = 6.25, drift_axis=(1.0, 1.0, 1.0), noise_deg_s: float = 0.0):
         self.drift_deg_h = check_nonnegative(drift_deg_h, "scenario.gyro.drift_deg_h")
@@ -191,43 +137,13 @@ class Gyro:
         """Gyro output (rad/s) for true ``rates`` ``(K, 3)``.
 
         Yuan 2018's gyro ``ω_m = ω + d + n`` (module docstring).
-
-        Parameters
-        ----------
-        rates : numpy.ndarray, shape (K, 3)
-            True body rates ``ω`` (rad/s).
-        rng : numpy.random.Generator
-            The run's generator (the white noise ``n``; not drawn from when ``noise_deg_s`` is 0).
-
-        Returns
-        -------
-        numpy.ndarray, shape (K, 3)
-            The measured rates ``ω_m`` (rad/s).
         """
         noise = np.deg2rad(self.noise_deg_s) * rng.standard_normal(rates.shape) if self.noise_deg_s > 0 else 0.0
         return rates + self.drift + noise
 
 
 def even_subsample(n_total: int, n: int) -> np.ndarray:
-    """``n`` evenly spaced indices of ``0..n_total-1`` (first and last included).
-
-    Parameters
-    ----------
-    n_total : int
-        The number of samples of the trajectory.
-    n : int
-        The number of indices wanted, ``1 <= n <= n_total``.
-
-    Returns
-    -------
-    numpy.ndarray of int, shape (n,)
-        The indices, increasing.
-
-    Raises
-    ------
-    MagexpError
-        When ``n`` is not a positive integer or exceeds ``n_total``.
-    """
+    """``n`` evenly spaced indices of ``0..n_total-1`` (first and last included)."""
     n = check_positive_int(n, "scenario.n_readings")
     check(n <= n_total, f"scenario.n_readings={n} is not allowed: the trajectory has only {n_total} samples")
     return np.round(np.linspace(0, n_total - 1, n)).astype(int)

@@ -16,15 +16,6 @@ class Noise:
     ``[-A/2, A/2]`` (Ding 2024's "random noise of maximum amplitude A"; the
     convention that reproduces its RMS values), standard deviation ``A/sqrt(12)``.
     ``kind="gaussian"``: zero-mean normal with standard deviation ``amplitude``.
-
-    Parameters
-    ----------
-    amplitude : float
-        ``A`` (>= 0), in the readings' unit.
-    kind : str
-        ``"uniform"`` or ``"gaussian"``.
-    name : str
-        The config key named by a refusal.
     """
 
     def __init__(self, amplitude: float, kind: str = "uniform", name: str = "scenario.noise"):
@@ -35,23 +26,11 @@ class Noise:
 
     @property
     def std(self) -> float:
+        """The per-axis standard deviation: ``A/√12`` for uniform noise of amplitude ``A``."""
         return self.amplitude / np.sqrt(12.0) if self.kind == "uniform" else self.amplitude
 
     def sample(self, shape, *, rng: np.random.Generator) -> np.ndarray:
-        """Draw the noise of ``shape`` readings' axes.
-
-        Parameters
-        ----------
-        shape : int or tuple of int
-            The shape of the noise array, e.g. ``(N, 3)``.
-        rng : numpy.random.Generator
-            The run's generator.
-
-        Returns
-        -------
-        numpy.ndarray
-            Uniform on ``[-A/2, A/2]`` or normal of standard deviation ``A``, of ``shape``.
-        """
+        """Draw the noise of ``shape`` readings' axes."""
         if self.kind == "uniform":
             return self.amplitude * (rng.random(shape) - 0.5)
         return self.amplitude * rng.standard_normal(shape)

@@ -42,23 +42,36 @@ AUTO_BOX = {"scalar": "aligned", "gyro": "signed"}
 
 
 class RecordingScenario:
-    """Parameters
+    """A scenario read from a recorded file (``conf/scenario/real_*.yaml``): its keys are the constructor's.
+
+    Parameters
     ----------
-    name : scenario name.
-    file : the recording, relative to the shared data folder (or absolute).
-    objective : ``scalar`` or ``gyro``.
-    unit, format, mag_axes, gyro_axes : as :func:`magexp.core.recordings.load_recording`.
-    window : ``[start, end]`` seconds from the first reading (null: all).
-    n_readings : readings used by the fit (evenly spaced; null: all).
-    folds, heldout_fold : contiguous blocks, and the one held out of the fit (scalar; folds 0: none).
-    bias_bound_deg_s : half-width of the gyro-bias search interval (gyro).
-    rest_file : a recording of the same gyroscope at rest (gyro): its mean rate, in the same axes,
-        is reported beside the estimated bias (``gyro_bias_rest_*``, ``gyro_bias_difference``).
-    box : ``aligned``, ``signed`` or ``auto`` (:data:`AUTO_BOX`: ``signed`` for ``gyro``, ``aligned``
-        for ``scalar``); the shapes are those of :func:`magexp.scenarios.search.search_box`.
-    matrix_bound, offset_width : the widths of the ``signed`` box (Yuan 2018 Table 1: 3; the offset
-        within the readings' range when ``offset_width`` is None, else within that fraction of the
-        readings' sphere radius of its centre, Yuan's 100 mG of 527 mG being 0.19).
+    name : str
+        The scenario's name.
+    file : str
+        The recording, relative to the shared data folder (or absolute).
+    objective : str
+        ``scalar`` or ``gyro``.
+    unit, format, mag_axes, gyro_axes
+        As :func:`magexp.core.recordings.load_recording`.
+    window : list of float or None
+        ``[start, end]`` seconds from the first reading (None: all).
+    n_readings : int or None
+        Readings used by the fit, evenly spaced (None: all).
+    folds, heldout_fold : int
+        Contiguous blocks, and the one held out of the fit (scalar; folds 0: none).
+    bias_bound_deg_s : float
+        Half-width of the gyro-bias search interval (gyro).
+    rest_file : str or None
+        A recording of the same gyroscope at rest (gyro): its mean rate, in the same axes, is reported
+        beside the estimated bias (``gyro_bias_rest_*``, ``gyro_bias_difference``).
+    box : str
+        ``aligned``, ``signed`` or ``auto`` (:data:`AUTO_BOX`); the shapes are those of
+        :func:`magexp.scenarios.search.search_box`.
+    matrix_bound, offset_width : float
+        The widths of the ``signed`` box (Yuan 2018 Table 1: 3; the offset within the readings' range when
+        ``offset_width`` is None, else within that fraction of the readings' sphere radius of its centre,
+        Yuan's 100 mG of 527 mG being 0.19).
     """
 
     def __init__(self, *, name: str, file: str, objective: str = "scalar", unit: str | None = None,
@@ -88,24 +101,7 @@ class RecordingScenario:
         self._data = None
 
     def recording(self, file=None):
-        """The loaded recording (``file``, default the scenario's), cut to the window.
-
-        Parameters
-        ----------
-        file : str or None
-            A recording relative to the shared data folder (or absolute); None: the scenario's ``file``
-            (the only one cut to ``window``).
-
-        Returns
-        -------
-        Recording
-            As :func:`magexp.core.recordings.load_recording` reads it.
-
-        Raises
-        ------
-        MagexpError
-            When the file does not exist or the window holds fewer than 12 readings.
-        """
+        """The loaded recording (``file``, default the scenario's), cut to the window."""
         file = file or self.file
         path = Path(file) if Path(file).is_absolute() else SHARED_DATA / file
         if not exists(path):
@@ -122,6 +118,7 @@ class RecordingScenario:
         return rec
 
     def _prepare(self):
+        """Load the recording once: its folds, held-out block, dataset and search box."""
         rec = self.recording()
         n = rec.n
         heldout = np.zeros(n, bool)
@@ -147,41 +144,18 @@ class RecordingScenario:
 
     @property
     def search(self):
+        """The search box, derived from the readings (:meth:`_prepare`)."""
         if self._data is None:
             self._prepare()
         return self._search
 
     @search.setter
     def search(self, box):
-        """Set the search box (the one :meth:`_prepare` derives from the readings).
-
-        Parameters
-        ----------
-        box : SearchBox
-            The box of the calibration parameters.
-        """
+        """Set the search box (the one :meth:`_prepare` derives from the readings)."""
         self._search = box
 
     def generate(self, *, rng: np.random.Generator | None = None) -> Dataset:
-        """The recording's dataset (loaded and prepared once, then shared).
-
-        Parameters
-        ----------
-        rng : numpy.random.Generator or None
-            Unused: a recording is what it is (the seed seeds the estimator only).
-
-        Returns
-        -------
-        Dataset
-            The readings of the fit, the reference total (the fitted sphere's radius), no truth;
-            ``extra`` holds the held-out block.
-
-        Raises
-        ------
-        MagexpError
-            When the first call's loading fails (:meth:`recording`), ``folds`` exceeds the readings, or
-            the ``gyro`` objective's recording has no gyroscope.
-        """
+        """The recording's dataset (loaded and prepared once, then shared)."""
         if self._data is None:
             self._prepare()
         return self._data

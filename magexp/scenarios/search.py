@@ -38,6 +38,7 @@ from magexp.errors import LARGEST, MagexpError
 
 
 def _interval(value, name: str) -> tuple[float, float]:
+    """``value`` as a finite ``(low, high)``, low < high, within :data:`LARGEST`; else one line naming ``search.<name>``."""
     try:
         lo, hi = (float(v) for v in value)
     except (TypeError, ValueError):
@@ -51,13 +52,7 @@ def _interval(value, name: str) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class SearchBox:
-    """Bounds for ``[vec(matrix) (row-major, 9), offset (3)]``.
-
-    Parameters
-    ----------
-    diag, offdiag : [low, high] for the diagonal / off-diagonal matrix entries.
-    offset : [low, high] for the three offset entries (reading units).
-    """
+    """Bounds for ``[vec(matrix) (row-major, 9), offset (3)]``."""
 
     diag: tuple[float, float]
     offdiag: tuple[float, float]
@@ -65,24 +60,7 @@ class SearchBox:
 
     @classmethod
     def from_config(cls, cfg) -> "SearchBox":
-        """The box of a scenario's ``search:`` node (:class:`SearchConf`).
-
-        Parameters
-        ----------
-        cfg : mapping
-            ``{diag, offdiag, offset}``, each ``[low, high]`` finite with ``low < high``.
-
-        Returns
-        -------
-        SearchBox
-            The box.
-
-        Raises
-        ------
-        MagexpError
-            When ``cfg`` is None, misses a key, or an interval is not finite, ordered and within
-            :data:`~magexp.errors.LARGEST`.
-        """
+        """The box of a scenario's ``search:`` node (:class:`SearchConf`)."""
         if cfg is None:
             raise MagexpError("search=None is not allowed: the scenario must give search.diag, .offdiag, .offset")
         missing = [k for k in ("diag", "offdiag", "offset") if k not in cfg]
@@ -91,27 +69,14 @@ class SearchBox:
         return cls(*(_interval(cfg[k], k) for k in ("diag", "offdiag", "offset")))
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """The box as bound vectors.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (12,)
-            ``[vec(W) row-major, o]``: ``diag`` on the matrix's diagonal, ``offdiag`` off it, ``offset``
-            for the offset.
-        """
+        """The box as bound vectors."""
         eye = np.eye(3, dtype=bool).ravel()
         lo = np.where(eye, self.diag[0], self.offdiag[0])
         hi = np.where(eye, self.diag[1], self.offdiag[1])
         return (np.concatenate([lo, np.full(3, self.offset[0])]), np.concatenate([hi, np.full(3, self.offset[1])]))
 
     def record(self) -> dict:
-        """The box for a calibration's JSON.
-
-        Returns
-        -------
-        dict
-            ``{diag, offdiag, offset}``, each ``[low, high]``.
-        """
+        """The box for a calibration's JSON."""
         return {"diag": list(self.diag), "offdiag": list(self.offdiag), "offset": list(self.offset)}
 
 
@@ -145,16 +110,6 @@ class SimulationConf(ScenarioConf):
 def centroid_radius(readings: np.ndarray) -> float:
     """Radius of the sphere fitted to ``readings`` (:func:`magexp.core.ellipsoid.fit_sphere`): unlike the
     mean distance from the centroid it stays right when the readings cover only part of the sphere.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray, shape (N, 3)
-        Raw readings.
-
-    Returns
-    -------
-    float
-        The fitted sphere's radius ``R0`` (reading units).
     """
     return fit_sphere(readings)[1]
 
@@ -171,31 +126,6 @@ def search_box(readings: np.ndarray, reference: float, *, forward: bool = False,
     which the ``ekf`` state uses), so their scale is ``1 / s``. ``shape``: ``aligned`` or ``signed``;
     ``matrix_bound`` (``m``) and ``offset_width`` (relative to ``R0``; None: the readings' range):
     the widths of ``signed``.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray, shape (N, 3)
-        Raw readings (their fitted sphere gives ``R0`` and the centre, their range the offsets).
-    reference : float
-        The reference total field; ``s = reference / R0``.
-    forward : bool
-        Scale the matrix entries by ``1 / s`` (parameters ``S = W^-1``).
-    shape : str
-        ``aligned`` or ``signed`` (:data:`BOXES`).
-    matrix_bound : float
-        ``m`` of ``signed`` (Yuan 2018 Table 1: 3), >= 1.
-    offset_width : float or None
-        ``signed``'s offset half-width relative to ``R0`` about the sphere centre; None: the readings' range.
-
-    Returns
-    -------
-    SearchBox
-        The box of ``[vec(matrix), offset]``.
-
-    Raises
-    ------
-    MagexpError
-        When ``shape`` is unknown or a width is out of its range.
     """
     if shape not in BOXES:
         raise MagexpError(f"box={shape!r} is not allowed: choose one of {', '.join(BOXES)}")

@@ -36,6 +36,7 @@ from magexp.scenarios.search import ScenarioConf, SearchBox, SimulationConf
 
 
 def _array(value, name: str, shape) -> np.ndarray:
+    """``value`` as finite floats of ``shape``, else one line naming ``name``."""
     arr = np.asarray(value, dtype=float)
     if arr.shape != shape or not np.all(np.isfinite(arr)):
         raise MagexpError(f"{name}={value!r} is not allowed: it must be {shape} finite numbers")
@@ -43,6 +44,7 @@ def _array(value, name: str, shape) -> np.ndarray:
 
 
 def _range(value, name: str) -> tuple[float, float]:
+    """``value`` as ``(low, high)`` with low <= high (:func:`_array`)."""
     lo, hi = _array(value, name, (2,))
     if lo > hi:
         raise MagexpError(f"{name}={value!r} is not allowed: it must be [low, high] with low <= high")
@@ -54,25 +56,6 @@ def bounded_noise(bound: float, kind: str, name: str) -> Noise:
     ``gaussian`` with standard deviation ``bound`` (not bounded; for comparison).
 
     Yan & Zhou 2022's errors "at most" 100 nT and 0.05° (sec 2.2).
-
-    Parameters
-    ----------
-    bound : float
-        The bound (>= 0), in the units of the noisy quantity.
-    kind : str
-        ``uniform`` or ``gaussian``.
-    name : str
-        The config key named by an error message.
-
-    Returns
-    -------
-    Noise
-        The noise model.
-
-    Raises
-    ------
-    MagexpError
-        When ``bound`` is negative or not finite, or ``kind`` is unknown.
     """
     bound = check_nonnegative(bound, name)
     return Noise(2.0 * bound if kind == "uniform" else bound, kind, name)
@@ -83,28 +66,6 @@ def ship_dataset(readings, angles, field, *, angles_true=None, truth=None, noise
     ``[heading, roll, trim]``, ``field_nav`` the ambient field per reading.
 
     The attitude ``A`` is Yan & Zhou 2022's eq 2 (:func:`magexp.core.geometry.ship_attitude`).
-
-    Parameters
-    ----------
-    readings : array_like, shape (N, 3)
-        The sensor's readings ``B`` (nT).
-    angles : array_like, shape (N, 3)
-        Recorded ``[heading, roll, trim]`` (radians).
-    field : array_like, shape (3,)
-        ``Be`` (nT), geographic frame.
-    angles_true : array_like, shape (N, 3), optional
-        The true angles (default: ``angles``).
-    truth : Truth, optional
-        The true calibration (None: unknown, a recording).
-    noise : Noise, optional
-        The reading noise (its standard deviation and kind are recorded).
-    meta : dict, optional
-        Recorded as the dataset's ``meta``.
-
-    Returns
-    -------
-    Dataset
-        The dataset; ``extra`` holds ``angles``, ``angles_true`` and ``field``.
     """
     angles = np.asarray(angles, float)
     angles_true = angles if angles_true is None else np.asarray(angles_true, float)
@@ -142,21 +103,7 @@ class ShipSimulationConf(SimulationConf):
 
 
 class ShipSimulation:
-    """Yan & Zhou's simulation (sec 2.2): random attitudes, ``B = K A Be + Bp`` plus noise.
-
-    Parameters
-    ----------
-    name : config name (``yan2022_sim``).
-    field : ``Be`` (nT), geographic frame.
-    K, Bp : true induced matrix (3x3) and permanent vector (nT).
-    heading_deg, roll_deg, trim_deg : [low, high] ranges of the uniformly drawn angles.
-    n_readings : number of attitudes (12 in the paper).
-    noise : bound (nT) of the error on each component of ``B`` ("at most 100 nT").
-    angle_noise_deg : bound (degrees) of the error on each recorded angle ("at most 0.05°").
-    noise_kind : ``uniform`` (on ``[-bound, bound]``: "at most" reads as a bounded error)
-        or ``gaussian`` (standard deviation = bound).
-    search : box of ``[vec(K), Bp]`` (for swarm estimators).
-    """
+    """Yan & Zhou's simulation (sec 2.2): random attitudes, ``B = K A Be + Bp`` plus noise."""
 
     Config = ShipSimulationConf
     objective = "ship"
@@ -179,16 +126,6 @@ class ShipSimulation:
         """Draw ``n_readings`` attitudes, the exact readings, then the reading and angle errors.
 
         Yan & Zhou 2022's model ``B = K A Be + Bp`` (eqs 1-2).
-
-        Parameters
-        ----------
-        rng : numpy.random.Generator
-            The run's generator (the angles, the reading noise, then the angle noise).
-
-        Returns
-        -------
-        Dataset
-            The noisy readings and angles, the true angles and the truth ``(K^-1, Bp)``.
         """
         lo, hi = self.ranges.T
         angles_true = lo + (hi - lo) * rng.random((self.n_readings, 3))
@@ -210,17 +147,7 @@ class ShipRecordingConf(ScenarioConf):
 
 
 class ShipRecording:
-    """A recorded ship dataset (Yan & Zhou's mock-up, Table 1, or a user's own file).
-
-    Parameters
-    ----------
-    name : config name (``yan2022_mockup``).
-    path : a ``magexp-recording v1`` CSV (see :mod:`magexp.core.recordings`), relative to ``data/``.
-    field : ``Be`` (nT); ``null`` to take the file's ``# field:`` line.
-    search : box of ``[vec(K), Bp]`` (for swarm estimators).
-
-    The data are fixed: ``generate`` ignores ``rng``, and the truth is unknown.
-    """
+    """A recorded ship dataset (Yan & Zhou's mock-up, Table 1, or a user's own file)."""
 
     Config = ShipRecordingConf
     objective = "ship"
@@ -238,17 +165,6 @@ class ShipRecording:
         self.search = SearchBox.from_config(search)
 
     def generate(self, *, rng: np.random.Generator | None = None) -> Dataset:
-        """The recording's dataset (Yan & Zhou 2022 Table 1, or a user's file).
-
-        Parameters
-        ----------
-        rng : numpy.random.Generator or None
-            Unused: the data are fixed.
-
-        Returns
-        -------
-        Dataset
-            The recorded readings and angles, no truth.
-        """
+        """The recording's dataset (Yan & Zhou 2022 Table 1, or a user's file)."""
         rec = self.recording
         return ship_dataset(rec.readings, rec.angles, self.field, meta={"scenario": self.name, **rec.meta})

@@ -34,6 +34,7 @@ from magexp.scenarios.search import SearchBox, SimulationConf
 
 
 def _array(value, name: str, shape) -> np.ndarray:
+    """``value`` as finite floats of ``shape``, else one line naming ``name``."""
     arr = np.asarray(value, dtype=float)
     if arr.shape != shape or not np.all(np.isfinite(arr)):
         raise MagexpError(f"{name}={value!r} is not allowed: it must be {shape} finite numbers")
@@ -55,22 +56,7 @@ class YuanScenarioConf(SimulationConf):
 
 
 class YuanScenario:
-    """Turns of a sensor with a full error matrix, and a drifting gyro.
-
-    Parameters
-    ----------
-    name : config name (``yuan2018_...``).
-    field : nav-frame field vector (mG).
-    field_scale : ``[start, end]`` factor on the field magnitude, linear over the run.
-    S, b : true error matrix and offset (mG).
-    rotation : keyword arguments of :class:`~magexp.scenarios.motion.Trajectory`.
-    gyro : keyword arguments of :class:`~magexp.scenarios.motion.Gyro`.
-    noise : per-axis standard deviation of the Gaussian reading noise (mG).
-    n_readings : readings used, evenly spaced over the run (30 in the paper).
-    search : search box of ``[vec(S), b]``.
-    objective : default problem (``vector``); ``problem_options`` selects the
-        forward parameterisation ``[vec(S), b]``.
-    """
+    """Turns of a sensor with a full error matrix, and a drifting gyro."""
 
     Config = YuanScenarioConf
     problem_options = {"parameterisation": "forward"}
@@ -96,22 +82,6 @@ class YuanScenario:
         """Simulate the run and keep ``n_readings`` evenly spaced readings.
 
         Yuan 2018's model ``B_b = S C_i^b H_i + b + ε`` (eq 1) along the trajectory.
-
-        Parameters
-        ----------
-        rng : numpy.random.Generator
-            The run's generator (the gyro noise, then the reading noise).
-
-        Returns
-        -------
-        Dataset
-            The readings, the true and gyro-integrated attitudes, the field per reading and the truth
-            ``(S^-1, b)``.
-
-        Raises
-        ------
-        MagexpError
-            When ``n_readings`` is not a positive integer or exceeds the trajectory's samples.
         """
         rates = self.trajectory.rates()
         dt = self.trajectory.dt

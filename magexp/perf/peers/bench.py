@@ -52,17 +52,7 @@ FULL_SPHERE_MAPS = ("aligned", "recorded", "authors")
 
 
 def parse(argv) -> argparse.Namespace:
-    """The bench's command-line options.
-
-    Parameters
-    ----------
-    argv : list of str or None
-        Command-line arguments (None: ``sys.argv``).
-
-    Returns
-    -------
-    argparse.Namespace
-    """
+    """The bench's command-line options."""
     p = argparse.ArgumentParser(prog="python -m magexp.perf.peers.bench", description=__doc__.splitlines()[0])
     p.add_argument("--out", required=True, type=Path, help="folder of peers.csv, peers_summary.csv, peers.png, peers.md")
     p.add_argument("--seeds", type=int, default=5, help="seeds of MAGYC's generator per motion level (5)")
@@ -101,35 +91,13 @@ NOTEBOOK_METHODS = ("magyc_ls", "magyc_nls")
 
 
 def notebook_side(ds: exchange.NeutralDataset) -> exchange.NeutralDataset:
-    """``ds`` with the sidecar of the peer's example-notebook recipe (:data:`NOTEBOOK`).
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        A dataset of the bench (its sidecar is copied, not changed).
-
-    Returns
-    -------
-    NeutralDataset
-    """
+    """``ds`` with the sidecar of the peer's example-notebook recipe (:data:`NOTEBOOK`)."""
     side = dict(ds.side, **NOTEBOOK, methods=[m for m in NOTEBOOK_METHODS if m in ds.side["methods"]])
     return exchange.NeutralDataset(ds.t, ds.mag, ds.gyro, side, ds.truth)
 
 
 def simulated_sets(args, work: Path) -> list[exchange.NeutralDataset]:
-    """MAGYC's synthetic datasets and Yuan's streams.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        ``--seeds``, ``--levels``, ``--nsamples``, ``--yuan-seeds`` of the bench.
-    work : pathlib.Path
-        Where MAGYC's generator writes its files.
-
-    Returns
-    -------
-    list of NeutralDataset
-    """
+    """MAGYC's synthetic datasets and Yuan's streams."""
     levels = args.levels.split(",")
     out = []
     for seed in range(args.seeds):
@@ -143,17 +111,7 @@ def simulated_sets(args, work: Path) -> list[exchange.NeutralDataset]:
 
 
 def recorded_fits(args) -> list[tuple[exchange.NeutralDataset, exchange.NeutralDataset | None, str]]:
-    """``(fit on, held out, fit_on label)`` of every recording, axis map and part.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The bench's options (the recordings' axis maps and parts).
-
-    Returns
-    -------
-    list of tuple
-    """
+    """``(fit on, held out, fit_on label)`` of every recording, axis map and part."""
     fits = []
     variants = [(m, False) for m in FULL_SPHERE_MAPS] + [(FULL_SPHERE_MAPS[0], True)]
     for seq in data.SEQUENCES:
@@ -171,15 +129,6 @@ def recorded_fits(args) -> list[tuple[exchange.NeutralDataset, exchange.NeutralD
 def jobs_of(args, work: Path) -> list[tuple]:
     """``(dataset, held out, fit_on label, axis map)`` of every fit, each dataset naming the peer's methods; the
     work is counted and bounded (:data:`MAX_READINGS`) first.
-
-    Parameters
-    ----------
-    args, work : argparse.Namespace, pathlib.Path
-        The bench's options and work folder (:func:`simulated_sets`).
-
-    Returns
-    -------
-    list of tuple
     """
     sims = simulated_sets(args, work)
     fits = [] if args.no_real else recorded_fits(args)
@@ -199,18 +148,6 @@ def answered(datasets: list[exchange.NeutralDataset], work: Path) -> list[dict]:
     """The peer's answer to each of ``datasets``. Files are named by what the answer depends on
     (:func:`.exchange.digest`): a kept work folder (``--work``) keeps the answers, and a dataset whose answer is
     there is not sent again.
-
-    Parameters
-    ----------
-    datasets : list of NeutralDataset
-        The datasets sent to the peer.
-    work : pathlib.Path
-        Folder of the neutral files and the answers.
-
-    Returns
-    -------
-    list of dict
-        The answers, in order.
     """
     pairs = [(work / "in" / f"{d[:20]}.npz", work / "out" / f"{d[:20]}.json")
              for d in map(exchange.digest, datasets)]
@@ -228,20 +165,6 @@ def peer_answers(args, jobs: list[tuple], work: Path) -> list[dict]:
     """The peer's answer for every job, computed where ``work`` does not hold it yet; with the example notebook's
     recipe (:data:`NOTEBOOK`) the peer runs once more on its own data and the recordings, those methods named
     ``*_sg`` (not on :data:`.magexp_side.SUBSET`: its 50-sample window is 5 s of the 10 Hz stream, 100 s of readings 2 s apart).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The bench's options.
-    jobs : list of tuple
-        The jobs of :func:`jobs_of`.
-    work : pathlib.Path
-        Folder of the neutral files and the answers (:func:`answered`).
-
-    Returns
-    -------
-    list of dict
-        The answers, in order.
     """
     notebook = [] if args.no_notebook else [(k, notebook_side(ds)) for k, (ds, _, label, _) in enumerate(jobs)
                                             if ds.side["kind"] in ("magyc_synthetic", "recording") and label != magexp_side.SUBSET]
@@ -254,21 +177,6 @@ def peer_answers(args, jobs: list[tuple], work: Path) -> list[dict]:
 def job_rows(args, job: tuple, answer: dict, rests: dict) -> list[dict]:
     """The long rows of one fit: both sides' measures, the raw spread (recordings) or the Cramér-Rao floor
     (simulations).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The bench's options.
-    job : tuple
-        One job of :func:`jobs_of`.
-    answer : dict
-        The peer's answer to it.
-    rests : dict
-        The rest recording's gyro bias of each axis map.
-
-    Returns
-    -------
-    list of dict
     """
     ds, held, label, axis_map = job
     estimates = [("magyc", exchange.Estimate.from_peer(r)) for r in answer["results"]]
@@ -292,17 +200,7 @@ def job_rows(args, job: tuple, answer: dict, rests: dict) -> list[dict]:
 
 
 def run(args, work: Path) -> list[dict]:
-    """Every dataset, both sides: the long-format rows.
-
-    Parameters
-    ----------
-    args, work : argparse.Namespace, pathlib.Path
-        The bench's options and work folder (:func:`jobs_of`).
-
-    Returns
-    -------
-    list of dict
-    """
+    """Every dataset, both sides: the long-format rows."""
     jobs = jobs_of(args, work)
     answers = peer_answers(args, jobs, work)
     rests = {m: data.rest_bias(m) for m in {j[3] for j in jobs if j[3]}}
@@ -312,16 +210,6 @@ def run(args, work: Path) -> list[dict]:
 def summarise(rows: list[dict]) -> list[dict]:
     """Mean, median and 95 % interval of the median (:func:`magexp.artifacts.tables.interval`) of every measure over seeds (simulations) or over the
     two held-out halves (recordings), per dataset, axis map and method.
-
-    Parameters
-    ----------
-    rows : list of dict
-        The long-format rows of :func:`run`.
-
-    Returns
-    -------
-    list of dict
-        The summary rows.
     """
     groups: dict[tuple, list[float]] = {}
     for r in rows:
@@ -340,17 +228,7 @@ def summarise(rows: list[dict]) -> list[dict]:
 
 
 def write_csv(path: Path, rows: list[dict], columns) -> None:
-    """Write ``rows`` to ``path`` as CSV with the ``columns`` (floats with 6 significant digits).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The file.
-    rows : list of dict
-        The rows.
-    columns : iterable of str
-        The columns, in order.
-    """
+    """Write ``rows`` to ``path`` as CSV with the ``columns`` (floats with 6 significant digits)."""
     with open(path, "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(columns), lineterminator="\n")
         writer.writeheader()
@@ -359,17 +237,7 @@ def write_csv(path: Path, rows: list[dict], columns) -> None:
 
 
 def read_rows(path: Path) -> list[dict]:
-    """The long rows of a bench's ``peers.csv``.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The ``peers.csv`` file.
-
-    Returns
-    -------
-    list of dict
-    """
+    """The long rows of a bench's ``peers.csv``."""
     if not path.is_file():
         raise MagexpError(f"--redraw needs {path}: run `make peers-bench` first")
     with open(path, newline="") as fh:
@@ -377,17 +245,7 @@ def read_rows(path: Path) -> list[dict]:
 
 
 def measured(args) -> list[dict]:
-    """The rows of a bench run, its neutral files and the peer's answers in ``--work`` or a temporary folder.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The bench's options (``--work``: the folder kept).
-
-    Returns
-    -------
-    list of dict
-    """
+    """The rows of a bench run, its neutral files and the peer's answers in ``--work`` or a temporary folder."""
     if args.work is not None:
         return run(args, args.work)
     with tempfile.TemporaryDirectory(prefix="magexp-peers-") as tmp:
@@ -397,13 +255,6 @@ def measured(args) -> list[dict]:
 def write(args, rows: list[dict]) -> None:
     """``peers.csv``, ``peers_summary.csv``, ``peers.png`` and ``peers.md`` in ``args.out``; everything after
     ``peers.csv`` is drawn from it as written (rounded), so that ``--redraw`` writes the same bytes.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The bench's options (``--out``: the folder written).
-    rows : list of dict
-        The long-format rows.
     """
     args.out.mkdir(parents=True, exist_ok=True)
     write_csv(args.out / "peers.csv", rows, COLUMNS)
@@ -417,18 +268,7 @@ def write(args, rows: list[dict]) -> None:
 
 
 def main(argv=None) -> int:
-    """Run the bench (or redraw its outputs with ``--redraw``).
-
-    Parameters
-    ----------
-    argv : list of str or None
-        The options of :func:`parse`.
-
-    Returns
-    -------
-    int
-        0 (also when the peer is absent: skipped), 2 on a bad value.
-    """
+    """Run the bench (or redraw its outputs with ``--redraw``): 0, also when the peer is absent; 2 on a bad value."""
     try:
         args = parse(argv)
         if args.redraw:

@@ -24,17 +24,6 @@ from magexp.perf.peers.measures import log_shape
 def gyro_floor(ds: NeutralDataset, n_fit: int) -> dict:
     """``{soft_iron_error, hard_iron_error, gyro_bias_error}`` floors on ``n_fit`` evenly spaced readings of ``ds``
     (``{}`` without the truth it needs).
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        A simulated dataset with its truth.
-    n_fit : int
-        Readings fitted.
-
-    Returns
-    -------
-    dict
     """
     truth = ds.truth
     if "truth_field_start" not in truth:

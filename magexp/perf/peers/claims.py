@@ -35,17 +35,7 @@ ERROR = "worse_error"
 
 
 def frame_of(rows) -> pd.DataFrame:
-    """The long rows as a frame with float values and, per simulated run, the combined :data:`ERROR`.
-
-    Parameters
-    ----------
-    rows : list of dict
-        The long-format rows (``peers.csv``).
-
-    Returns
-    -------
-    pandas.DataFrame
-    """
+    """The long rows as a frame with float values and, per simulated run, the combined :data:`ERROR`."""
     frame = pd.DataFrame(list(rows)).astype({"value": float, "seed": str, "axis_map": str})
     frame["axis_map"] = frame.axis_map.replace("nan", "")
     key = ["kind", "dataset", "seed", "fit_on", "axis_map", "side", "method"]
@@ -55,21 +45,7 @@ def frame_of(rows) -> pd.DataFrame:
 
 
 def values(frame: pd.DataFrame, metric: str, **where) -> pd.Series:
-    """The finite values of ``metric`` in the cell ``where``, indexed by their pair key (seed, part).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The rows (:func:`frame_of`).
-    metric : str
-        The measure.
-    **where
-        Column values selecting the cell.
-
-    Returns
-    -------
-    pandas.Series
-    """
+    """The finite values of ``metric`` in the cell ``where``, indexed by their pair key (seed, part)."""
     sel = frame[frame.metric == metric]
     for k, v in where.items():
         sel = sel[sel[k].isin(v) if isinstance(v, tuple) else sel[k] == v]
@@ -78,6 +54,7 @@ def values(frame: pd.DataFrame, metric: str, **where) -> pd.Series:
 
 
 def _median_ci(v: pd.Series) -> tuple[float, float, float]:
+    """``(median, lo, hi)`` of ``v``: its 95 % bootstrap interval (NaN for fewer than two values)."""
     lo, hi = interval(v.to_numpy(), stat="median") if len(v) > 1 else (np.nan, np.nan)
     return float(np.median(v)) if len(v) else np.nan, lo, hi
 
@@ -85,19 +62,6 @@ def _median_ci(v: pd.Series) -> tuple[float, float, float]:
 def said(v: pd.Series, scale: float = 1.0, unit: str = "") -> str:
     """``median [lo, hi]`` of ``v`` (3 significant digits): the 95 % bootstrap interval of the median
     over seeds; two values (a recording's halves) are printed as two values, not as an interval.
-
-    Parameters
-    ----------
-    v : pandas.Series
-        The values.
-    scale : float
-        Factor applied before printing.
-    unit : str
-        Unit printed after the values.
-
-    Returns
-    -------
-    str
     """
     if len(v) == 2:
         a, b = sorted(float(x) * scale for x in v)
@@ -107,17 +71,7 @@ def said(v: pd.Series, scale: float = 1.0, unit: str = "") -> str:
 
 
 def tested(better: pd.Series, worse: pd.Series) -> Test:
-    """The paired test of "``better`` is lower than ``worse``" (module docstring), unadjusted.
-
-    Parameters
-    ----------
-    better, worse : pandas.Series
-        Paired values (:func:`values`).
-
-    Returns
-    -------
-    Test
-    """
+    """The paired test of "``better`` is lower than ``worse``" (module docstring), unadjusted."""
     d = (better - worse).dropna().to_numpy(float) if len(better) and len(worse) else np.zeros(0)
     d = d[np.isfinite(d)]
     p_hold, p_contra = wilcoxon_less(d), wilcoxon_less(-d)
@@ -128,18 +82,7 @@ def tested(better: pd.Series, worse: pd.Series) -> Test:
 
 
 def compare(better: pd.Series, worse: pd.Series) -> tuple[str, str]:
-    """The unadjusted outcome of "``better`` is lower than ``worse``" and its test (module docstring).
-
-    Parameters
-    ----------
-    better, worse : pandas.Series
-        As in :func:`tested`.
-
-    Returns
-    -------
-    tuple of str
-        ``(outcome, evidence)``.
-    """
+    """The unadjusted outcome of "``better`` is lower than ``worse``" and its test (module docstring)."""
     if not len(better) or not len(worse):
         return NO_DIFFERENCE, "a side has no values"
     t = tested(better, worse)
@@ -149,21 +92,6 @@ def compare(better: pd.Series, worse: pd.Series) -> tuple[str, str]:
 def winner_test(frame: pd.DataFrame, metric: str, methods: list[str], **where) -> tuple[str, Test, list[str]]:
     """``(best method, its test, methods not separated from it)`` of the lowest median of ``metric``: the
     test's p is the largest of the best's comparisons with every other (each must hold).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The rows (:func:`frame_of`).
-    metric : str
-        The measure compared (lower is better).
-    methods : list of str
-        The methods compared.
-    **where
-        Column values selecting the cell.
-
-    Returns
-    -------
-    tuple of (str, Test, list of str)
     """
     cells = {m: values(frame, metric, method=m, **where) for m in methods}
     cells = {m: v for m, v in cells.items() if len(v)}
@@ -178,17 +106,7 @@ def winner_test(frame: pd.DataFrame, metric: str, methods: list[str], **where) -
 
 
 def winner(frame: pd.DataFrame, metric: str, methods: list[str], **where) -> tuple[str, str, list[str]]:
-    """``(best method, outcome, methods not separated from it)`` of the lowest median of ``metric`` (unadjusted).
-
-    Parameters
-    ----------
-    frame, metric, methods, **where : pandas.DataFrame, str, list of str, column values
-        As in :func:`winner_test`.
-
-    Returns
-    -------
-    tuple of (str, str, list of str)
-    """
+    """``(best method, outcome, methods not separated from it)`` of the lowest median of ``metric`` (unadjusted)."""
     best, t, tied = winner_test(frame, metric, methods, **where)
     return best, HOLDS if not tied else NO_DIFFERENCE, tied
 
@@ -197,15 +115,6 @@ def adjust(claims: list[dict]) -> list[dict]:
     """Holm's correction over the section's claims (each with its ``test``, :class:`Test`): ``result`` decided
     again on the adjusted p-values, the evidence saying them (and, where no difference is detected, the
     detectable shift; where the test cannot decide, its smallest p). Returns ``claims`` (changed in place).
-
-    Parameters
-    ----------
-    claims : list of dict
-        The section's claims.
-
-    Returns
-    -------
-    list of dict
     """
     tests = [c["test"] for c in claims]
     rank = {id(t): r for r, t in enumerate(sorted(tests, key=lambda t: t.p_hold))}

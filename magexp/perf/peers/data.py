@@ -55,19 +55,6 @@ def rates_at(gyro_times: np.ndarray, rates: np.ndarray, at: np.ndarray) -> np.nd
     ``(len(at), 3)``; the first row repeats the second.
 
     .. math:: \\bar\\omega_k = \\frac{1}{t_k - t_{k-1}} \\int_{t_{k-1}}^{t_k} \\omega(t)\\,dt
-
-    Parameters
-    ----------
-    gyro_times : numpy.ndarray, shape (M,)
-        Gyro sample times (s).
-    rates : numpy.ndarray, shape (M, 3)
-        Gyro rates.
-    at : numpy.ndarray, shape (K,)
-        Reading times (s).
-
-    Returns
-    -------
-    numpy.ndarray, shape (K, 3)
     """
     r, dt, index = merged_steps(gyro_times, rates, at)
     cum = np.concatenate([np.zeros((1, 3)), np.cumsum(r * dt[:, None], axis=0)])[index]
@@ -77,46 +64,14 @@ def rates_at(gyro_times: np.ndarray, rates: np.ndarray, at: np.ndarray) -> np.nd
 
 def side(name: str, kind: str, *, seed, mag_unit: str, mag_noise_std: float, reference_total: float, axes: str,
          alignment: str, **more) -> dict:
-    """A sidecar (:mod:`.exchange`).
-
-    Parameters
-    ----------
-    name, kind : str
-        The dataset's name and kind.
-    seed : int or None
-        Its seed.
-    mag_unit : str
-        Unit of the readings.
-    mag_noise_std : float
-        Readings' noise standard deviation.
-    reference_total : float
-        The reference total field.
-    axes, alignment : str
-        The sensors' axes and how a gyro sample aligns with the readings, in words.
-    **more
-        Other sidecar fields.
-
-    Returns
-    -------
-    dict
-    """
+    """A sidecar (:mod:`.exchange`)."""
     return {"format": FORMAT, "name": name, "kind": kind, "seed": seed, "mag_unit": mag_unit, "gyro_unit": "rad/s",
             "time_unit": "s", "mag_noise_std": float(mag_noise_std), "reference_total": float(reference_total),
             "axes": axes, "alignment": alignment, **more}
 
 
 def with_reference(ds: NeutralDataset) -> NeutralDataset:
-    """``reference_total``: the radius of the sphere fitted to the readings (no method gets the truth's).
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        A dataset whose ``reference_total`` is set.
-
-    Returns
-    -------
-    NeutralDataset
-    """
+    """``reference_total``: the radius of the sphere fitted to the readings (no method gets the truth's)."""
     ds.side["reference_total"] = centroid_radius(ds.mag)
     return ds
 
@@ -127,17 +82,6 @@ def yuan_stream(scenario: str, seed: int) -> NeutralDataset:
     Every sample ``k`` of the trajectory is a reading ``B_k = S C_k H_k + b + ε_k`` (:mod:`magexp.scenarios.yuan`,
     eq 1) and the gyro rate ``ω_k + drift + noise`` held over ``[t_k, t_{k+1}]`` (:class:`~magexp.scenarios.motion.Gyro`);
     the truth is ``D = S``, ``h = b``, the gyro bias the drift vector.
-
-    Parameters
-    ----------
-    scenario : str
-        A Yuan scenario.
-    seed : int
-        Seed of its noise.
-
-    Returns
-    -------
-    NeutralDataset
     """
     cfg = compose_config([f"scenario={scenario}"])
     scen = build(cfg.scenario, "scenario")
@@ -162,18 +106,7 @@ def yuan_stream(scenario: str, seed: int) -> NeutralDataset:
 
 
 def constant_rate(times: np.ndarray) -> np.ndarray:
-    """A constant-rate clock fitted to ``times`` (least squares of time on sample index).
-
-    Parameters
-    ----------
-    times : numpy.ndarray
-        Recorded timestamps.
-
-    Returns
-    -------
-    numpy.ndarray
-        The fitted clock.
-    """
+    """A constant-rate clock fitted to ``times`` (least squares of time on sample index)."""
     k = np.arange(len(times))
     return np.polyval(np.polyfit(k, times, 1), k)
 
@@ -185,19 +118,6 @@ def recording(sequence: str, axis_map: str = "aligned", *, retime: bool = False)
     recorded timestamps are arrival times of buffered bursts (median spacing about 3 ms, gaps up to 250 ms, for
     sensors sampling at 77 and 99 Hz): a method that differentiates the readings over their timestamps sees
     nonsense rates; one that integrates the gyroscope between them sees attitudes off by up to one gap.
-
-    Parameters
-    ----------
-    sequence : str
-        The recording's name.
-    axis_map : str
-        A key of :data:`AXIS_MAPS`.
-    retime : bool
-        Replace the timestamps by constant-rate clocks.
-
-    Returns
-    -------
-    NeutralDataset
     """
     if axis_map not in AXIS_MAPS:
         raise MagexpError(f"axis_map={axis_map!r} is not allowed: choose one of {', '.join(AXIS_MAPS)}")
@@ -222,17 +142,7 @@ def recording(sequence: str, axis_map: str = "aligned", *, retime: bool = False)
 
 
 def rest_bias(axis_map: str = "aligned") -> np.ndarray:
-    """The mean rate (rad/s) of the 10-minute rest recording in the gyroscope axes of ``axis_map``.
-
-    Parameters
-    ----------
-    axis_map : str
-        The gyroscope axes (a key of :data:`AXIS_MAPS`).
-
-    Returns
-    -------
-    numpy.ndarray, shape (3,)
-    """
+    """The mean rate (rad/s) of the 10-minute rest recording in the gyroscope axes of ``axis_map``."""
     mag_axes, gyro_axes = AXIS_MAPS[axis_map]
     rec = load_recording(SHARED_DATA / f"hmc5883l_{REST}", mag_axes=mag_axes, gyro_axes=gyro_axes)
     return rec.gyro_rates()[1].mean(axis=0)

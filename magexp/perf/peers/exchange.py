@@ -53,36 +53,17 @@ class NeutralDataset:
 
     @property
     def name(self) -> str:
+        """The dataset's name, from its sidecar."""
         return str(self.side["name"])
 
     def part(self, index, suffix: str) -> "NeutralDataset":
-        """The readings ``index`` (a contiguous slice: the gyro rates stay those of each reading's interval).
-
-        Parameters
-        ----------
-        index, suffix : slice, str
-            The readings kept; the suffix of the part's name.
-
-        Returns
-        -------
-        NeutralDataset
-        """
+        """The readings ``index`` (a contiguous slice: the gyro rates stay those of each reading's interval)."""
         side = dict(self.side, name=f"{self.side['name']}{suffix}")
         return NeutralDataset(self.t[index], self.mag[index], self.gyro[index], side, dict(self.truth))
 
 
 def check(ds: NeutralDataset) -> NeutralDataset:
-    """One line naming what is wrong with a dataset, else the dataset.
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        The dataset checked.
-
-    Returns
-    -------
-    NeutralDataset
-    """
+    """One line naming what is wrong with a dataset, else the dataset."""
     n = len(ds.t)
     if ds.side.get("format") != FORMAT:
         raise MagexpError(f"{ds.side.get('name', '?')}: format={ds.side.get('format')!r} is not allowed: "
@@ -97,19 +78,7 @@ def check(ds: NeutralDataset) -> NeutralDataset:
 
 
 def write(ds: NeutralDataset, stem: Path) -> Path:
-    """``<stem>.npz`` and ``<stem>.json``; returns the ``.npz`` path.
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        The dataset written.
-    stem : pathlib.Path
-        The files' path without suffix.
-
-    Returns
-    -------
-    pathlib.Path
-    """
+    """``<stem>.npz`` and ``<stem>.json``; returns the ``.npz`` path."""
     check(ds)
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
@@ -120,17 +89,7 @@ def write(ds: NeutralDataset, stem: Path) -> Path:
 
 
 def read(path: Path) -> NeutralDataset:
-    """The dataset of ``<stem>.npz`` and its sidecar.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The ``.npz`` file.
-
-    Returns
-    -------
-    NeutralDataset
-    """
+    """The dataset of ``<stem>.npz`` and its sidecar."""
     path = Path(path)
     side = json.loads(path.with_suffix(".json").read_text())
     with np.load(path, allow_pickle=False) as npz:
@@ -143,18 +102,7 @@ def read(path: Path) -> NeutralDataset:
 
 
 def digest(ds: NeutralDataset) -> str:
-    """What the peer's answer depends on: the arrays it reads and the methods asked for (sha256).
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        A dataset to send to the peer.
-
-    Returns
-    -------
-    str
-        Hex digest.
-    """
+    """What the peer's answer depends on: the arrays it reads and the methods asked for (sha256)."""
     h = hashlib.sha256()
     for arr in (ds.t, ds.mag, ds.gyro):
         h.update(np.ascontiguousarray(arr, float).tobytes())
@@ -165,12 +113,7 @@ def digest(ds: NeutralDataset) -> str:
 
 
 def available() -> str | None:
-    """None when the peer's environment is there, else the one line saying why not.
-
-    Returns
-    -------
-    str or None
-    """
+    """None when the peer's environment is there, else the one line saying why not."""
     python = PEER_VENV / "bin" / "python"
     if not (PEER_VENV / ".installed").exists() or not python.exists():
         return f"MAGYC's environment {PEER_VENV} is absent (make peers builds it): the peer is skipped"
@@ -190,17 +133,7 @@ def _peer(args: list[str], what: str, timeout: float) -> None:
 
 
 def read_answer(out: Path) -> dict:
-    """The peer's answer in ``out`` (module docstring).
-
-    Parameters
-    ----------
-    out : pathlib.Path
-        The answer's file.
-
-    Returns
-    -------
-    dict
-    """
+    """The peer's answer in ``out`` (module docstring)."""
     answer = json.loads(Path(out).read_text())
     if answer.get("format") != FORMAT:
         raise MagexpError(f"{out}: format={answer.get('format')!r} is not allowed: expected {FORMAT!r}")
@@ -210,38 +143,13 @@ def read_answer(out: Path) -> dict:
 def run_peer(pairs: list[tuple[Path, Path]], *, timeout: float = 3600.0) -> list[dict]:
     """Run :mod:`.magyc_side` on every ``(npz, out)`` of ``pairs`` in one process of the peer's interpreter;
     its answers (module docstring), in order.
-
-    Parameters
-    ----------
-    pairs : list of tuple of pathlib.Path
-        ``(npz, out)`` of each dataset.
-    timeout : float
-        Seconds allowed to the peer's process.
-
-    Returns
-    -------
-    list of dict
     """
     _peer([str(p) for pair in pairs for p in pair], f"{len(pairs)} datasets", timeout)
     return [read_answer(out) for _, out in pairs]
 
 
 def synthesise(out_dir: Path, seed: int, nsamples: int, *, timeout: float = 600.0) -> list[Path]:
-    """MAGYC's own generator in the peer's environment (:func:`.magyc_side.synth`): the ``.npz`` files made.
-
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Folder of the files.
-    seed, nsamples : int
-        The generator's seed and readings.
-    timeout : float
-        Seconds allowed to the peer's process.
-
-    Returns
-    -------
-    list of pathlib.Path
-    """
+    """MAGYC's own generator in the peer's environment (:func:`.magyc_side.synth`): the ``.npz`` files made."""
     _peer(["synth", str(out_dir), str(int(seed)), str(int(nsamples))], f"its generator (seed {seed})", timeout)
     return sorted(Path(out_dir).glob(f"magyc_*_s{int(seed)}.npz"))
 
@@ -261,17 +169,7 @@ class Estimate:
 
     @classmethod
     def from_peer(cls, result: dict) -> "Estimate":
-        """The peer's JSON result (:mod:`.magyc_side`), its ``correction`` matrices inverted.
-
-        Parameters
-        ----------
-        result : dict
-            One method's result.
-
-        Returns
-        -------
-        Estimate
-        """
+        """The peer's JSON result (:mod:`.magyc_side`), its ``correction`` matrices inverted."""
         if result.get("error"):
             return cls(result["method"], None, None, None, float("nan"), result["error"])
         soft = None if result.get("soft_iron") is None else np.asarray(result["soft_iron"], float)

@@ -57,19 +57,7 @@ DEFAULT = ("magexp_lm_gyro", "magexp_ellipsoid", "magexp_twostep")
 
 
 def fit_indices(n: int, n_fit: int = N_FIT) -> np.ndarray:
-    """The indices of ``n_fit`` readings evenly spaced over ``n`` (all of them when ``n_fit >= n``).
-
-    Parameters
-    ----------
-    n : int
-        Readings available.
-    n_fit : int
-        Readings wanted.
-
-    Returns
-    -------
-    numpy.ndarray
-    """
+    """The indices of ``n_fit`` readings evenly spaced over ``n`` (all of them when ``n_fit >= n``)."""
     return np.unique(np.round(np.linspace(0, n - 1, min(n_fit, n))).astype(int))
 
 
@@ -78,17 +66,6 @@ def subset(ds: NeutralDataset, n_fit: int = N_FIT) -> NeutralDataset:
     mean rate over the interval since the previous one, ``log(ΔR) / Δt`` of the rotation preintegrated over every
     gyro sample between them (:func:`magexp.core.geometry.preintegrate`; the generator's own convention, a rate
     held over the interval that reproduces ``ΔR`` exactly); the first reading keeps its rate.
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        The whole dataset.
-    n_fit : int
-        Readings kept.
-
-    Returns
-    -------
-    NeutralDataset
     """
     fit = fit_indices(len(ds.t), n_fit)
     delta, _ = preintegrate(ds.t[:-1], ds.gyro[1:], ds.t[fit])
@@ -99,19 +76,7 @@ def subset(ds: NeutralDataset, n_fit: int = N_FIT) -> NeutralDataset:
 
 
 def gyro_problem(ds: NeutralDataset, n_fit: int = N_FIT):
-    """The gyro-aided problem on ``n_fit`` evenly spaced readings of ``ds`` (module docstring).
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        The readings and gyro rates.
-    n_fit : int
-        Readings fitted.
-
-    Returns
-    -------
-    CalibrationProblem
-    """
+    """The gyro-aided problem on ``n_fit`` evenly spaced readings of ``ds`` (module docstring)."""
     fit = fit_indices(len(ds.t), n_fit)
     radius = float(ds.side["reference_total"])
     # gyro[k] is the rate over [t[k-1], t[k]]: held from t[k-1] on
@@ -123,17 +88,7 @@ def gyro_problem(ds: NeutralDataset, n_fit: int = N_FIT):
 
 
 def scalar_problem(ds: NeutralDataset):
-    """The total-field problem on every reading of ``ds``.
-
-    Parameters
-    ----------
-    ds : NeutralDataset
-        The readings and their ``reference_total``.
-
-    Returns
-    -------
-    CalibrationProblem
-    """
+    """The total-field problem on every reading of ``ds``."""
     radius = float(ds.side["reference_total"])
     data = Dataset(readings=ds.mag, reference_norm=np.full(len(ds.t), radius), unit=ds.side["mag_unit"],
                    noise_std=float(ds.side["mag_noise_std"]), meta={"scenario": ds.name})
@@ -141,23 +96,7 @@ def scalar_problem(ds: NeutralDataset):
 
 
 def fit(method: str, ds: NeutralDataset, *, seed: int = 0, n_fit: int = N_FIT) -> Estimate:
-    """magexp's ``method`` of :data:`METHODS` on ``ds``.
-
-    Parameters
-    ----------
-    method : str
-        A key of :data:`METHODS`.
-    ds : NeutralDataset
-        The dataset fitted.
-    seed : int
-        Seed of the estimator's draws.
-    n_fit : int
-        Readings of the gyro-aided fit.
-
-    Returns
-    -------
-    Estimate
-    """
+    """magexp's ``method`` of :data:`METHODS` on ``ds``."""
     objective, name, overrides = METHODS[method]
     estimator = estimator_named(name, **overrides)
     _, rng = run_generators(int(seed), f"peers/{ds.name}")

@@ -78,6 +78,7 @@ def need_magyc() -> None:
 
 
 def _spread(vectors) -> float:
+    """``std / mean`` of the vectors' norms (NaN for none): the peer's side of :func:`.measures.field_spread`."""
     mags = np.linalg.norm(np.asarray(vectors, float).reshape(-1, 3), axis=1)
     return float(mags.std() / mags.mean()) if mags.size else float("nan")
 
@@ -86,18 +87,6 @@ def prepare(data: dict, side: dict) -> dict:
     """The peer's own preprocessing, as its example notebook (``example/20241107_sim_calibration.ipynb``) does
     before every method: a Savitzky-Golay filter of ``savgol_window`` samples and order ``savgol_order`` on the
     magnetometer and the gyroscope (none when the sidecar sets no window).
-
-    Parameters
-    ----------
-    data : dict
-        ``t``, ``mag`` and ``gyro`` arrays.
-    side : dict
-        The sidecar.
-
-    Returns
-    -------
-    dict
-        The data filtered.
     """
     window = side.get("savgol_window")
     if not window:
@@ -114,17 +103,6 @@ def prepare(data: dict, side: dict) -> dict:
 def call(method: str, data, side: dict) -> dict:
     """One MAGYC method on ``data`` (``t``, ``mag``, ``gyro``) -> its estimates as plain lists. MAGYC-BFG and
     -IFG take the sidecar's ``measurements_window`` (their example notebook: the sample rate in Hz).
-
-    Parameters
-    ----------
-    method : str
-        A MAGYC method.
-    data, side : dict
-        The (prepared: :func:`prepare`) arrays and the sidecar.
-
-    Returns
-    -------
-    dict
     """
     needs, returns = METHODS[method]
     mag, gyro, t = data["mag"], data["gyro"], data["t"]
@@ -151,13 +129,7 @@ def call(method: str, data, side: dict) -> dict:
 
 
 def run(path_in: str, path_out: str) -> None:
-    """Every method of the sidecar's ``methods`` on ``path_in``; the estimates to ``path_out``.
-
-    Parameters
-    ----------
-    path_in, path_out : str
-        The dataset's ``.npz`` and the answer's file.
-    """
+    """Every method of the sidecar's ``methods`` on ``path_in``; the estimates to ``path_out``."""
     need_magyc()
     side = json.loads(Path(path_in).with_suffix(".json").read_text())
     if side.get("format") != FORMAT:
@@ -179,15 +151,7 @@ def run(path_in: str, path_out: str) -> None:
 
 
 def synth(out_dir: str, seed: str, nsamples: str) -> None:
-    """MAGYC's generator, one simulation per motion level, exported as neutral datasets with the truth.
-
-    Parameters
-    ----------
-    out_dir : str
-        Folder of the datasets.
-    seed, nsamples : str
-        The generator's seed and readings (command-line strings).
-    """
+    """MAGYC's generator, one simulation per motion level, exported as neutral datasets with the truth."""
     need_magyc()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -39,17 +39,7 @@ HORIZON_S = 1.0  # s, the gyro-consistency horizon
 
 
 def log_shape(d: np.ndarray) -> np.ndarray:
-    """``log P`` of the unit-determinant ``P = (D Dᵀ)^{1/2} / det(...)^{1/3}`` (module docstring).
-
-    Parameters
-    ----------
-    d : numpy.ndarray, shape (3, 3)
-        A soft-iron matrix ``D``.
-
-    Returns
-    -------
-    numpy.ndarray, shape (3, 3)
-    """
+    """``log P`` of the unit-determinant ``P = (D Dᵀ)^{1/2} / det(...)^{1/3}`` (module docstring)."""
     vals, vecs = np.linalg.eigh(d @ d.T)
     logs = 0.5 * np.log(np.maximum(vals, 1e-300))
     logs = logs - logs.mean()
@@ -57,72 +47,25 @@ def log_shape(d: np.ndarray) -> np.ndarray:
 
 
 def soft_iron_error(estimate: np.ndarray | None, truth: np.ndarray) -> float:
-    """:math:`e_{SI}` of the module docstring (the identity for a method without a soft iron).
-
-    Parameters
-    ----------
-    estimate : numpy.ndarray or None
-        The estimated ``D``.
-    truth : numpy.ndarray
-        The true ``D``.
-
-    Returns
-    -------
-    float
-    """
+    """:math:`e_{SI}` of the module docstring (the identity for a method without a soft iron)."""
     est = np.eye(3) if estimate is None else estimate
     return float(np.linalg.norm(log_shape(est) - log_shape(truth)))
 
 
 def calibrated(est: Estimate, mag: np.ndarray) -> np.ndarray:
-    """``D^{-1} (r - h)`` of every reading.
-
-    Parameters
-    ----------
-    est : Estimate
-        A fitted calibration.
-    mag : numpy.ndarray, shape (N, 3)
-        Raw readings.
-
-    Returns
-    -------
-    numpy.ndarray, shape (N, 3)
-    """
+    """``D^{-1} (r - h)`` of every reading."""
     d = np.eye(3) if est.soft_iron is None else est.soft_iron
     return np.linalg.solve(d, (mag - est.hard_iron).T).T
 
 
 def field_spread(est: Estimate, mag: np.ndarray) -> float:
-    """Spread of the calibrated total field (std / mean).
-
-    Parameters
-    ----------
-    est, mag : Estimate, numpy.ndarray of shape (N, 3)
-        As in :func:`calibrated`.
-
-    Returns
-    -------
-    float
-    """
+    """Spread of the calibrated total field (std / mean)."""
     return spread(np.linalg.norm(calibrated(est, mag), axis=1))
 
 
 def gyro_consistency(est: Estimate, ds: NeutralDataset, bias: np.ndarray) -> float:
     """Median angle (°) between the calibrated directions and the gyroscope's prediction ``HORIZON_S`` ahead
     (module docstring); ``bias`` (rad/s) is subtracted from the rates.
-
-    Parameters
-    ----------
-    est : Estimate
-        A fitted calibration.
-    ds : NeutralDataset
-        The readings and gyro rates.
-    bias : numpy.ndarray, shape (3,)
-        Gyro bias (rad/s).
-
-    Returns
-    -------
-    float
     """
     rot = attitude_at(ds.t[:-1], ds.gyro[1:] - bias, ds.t)  # body -> start frame at every reading
     n = int(np.searchsorted(ds.t, ds.t[0] + HORIZON_S))
@@ -137,19 +80,7 @@ def gyro_consistency(est: Estimate, ds: NeutralDataset, bias: np.ndarray) -> flo
 
 
 def simulated(est: Estimate, ds: NeutralDataset) -> dict:
-    """Errors against the truth, the success flag, the in-sample spread and the time.
-
-    Parameters
-    ----------
-    est : Estimate
-        A fitted calibration.
-    ds : NeutralDataset
-        The simulated dataset with its truth.
-
-    Returns
-    -------
-    dict
-    """
+    """Errors against the truth, the success flag, the in-sample spread and the time."""
     if est.error:
         return {"failed": 1.0, "success": 0.0}
     radius = float(ds.side["reference_total"])
@@ -167,23 +98,7 @@ def simulated(est: Estimate, ds: NeutralDataset) -> dict:
 
 
 def recorded(est: Estimate, fit_on: NeutralDataset, held_out: NeutralDataset | None, rest: np.ndarray) -> dict:
-    """Spread in sample and on ``held_out``, the gyro bias (deg/s) and its distance from the rest recording's.
-
-    Parameters
-    ----------
-    est : Estimate
-        A fitted calibration.
-    fit_on : NeutralDataset
-        The readings fitted.
-    held_out : NeutralDataset or None
-        The other half, if any.
-    rest : numpy.ndarray, shape (3,)
-        The rest recording's gyro bias (rad/s).
-
-    Returns
-    -------
-    dict
-    """
+    """Spread in sample and on ``held_out``, the gyro bias (deg/s) and its distance from the rest recording's."""
     if est.error:
         return {"failed": 1.0}
     out = {"spread_in_sample": field_spread(est, fit_on.mag), "seconds": est.seconds, "failed": 0.0,

@@ -29,50 +29,18 @@ LEVELS = {"magyc_high": "WAM (high)", "magyc_mid": "MAM (mid)", "magyc_low": "LA
 
 
 def pick(summary, **match) -> list[dict]:
-    """The summary rows whose fields equal ``match``.
-
-    Parameters
-    ----------
-    summary : list of dict
-        The summary rows (``peers_summary.csv``).
-    **match
-        Field values wanted.
-
-    Returns
-    -------
-    list of dict
-    """
+    """The summary rows whose fields equal ``match``."""
     return [r for r in summary if all(r.get(k) == v for k, v in match.items())]
 
 
 def one(summary, **match) -> dict | None:
-    """The first summary row whose fields equal ``match`` (:func:`pick`), else None.
-
-    Parameters
-    ----------
-    summary, **match : list of dict, field values
-        As in :func:`pick`.
-
-    Returns
-    -------
-    dict or None
-    """
+    """The first summary row whose fields equal ``match`` (:func:`pick`), else None."""
     rows = pick(summary, **match)
     return rows[0] if rows else None
 
 
 def methods_of(summary) -> list[str]:
-    """The methods of :data:`LABELS` the summary holds (bounds left out), in their order.
-
-    Parameters
-    ----------
-    summary : list of dict
-        The summary rows, bounds included.
-
-    Returns
-    -------
-    list of str
-    """
+    """The methods of :data:`LABELS` the summary holds (bounds left out), in their order."""
     present = {r["method"] for r in summary if r["side"] not in ("none", "bound")}
     return [m for m in LABELS if m in present]
 
@@ -81,25 +49,6 @@ def fmt(row: dict | None, stat: str = "median", digits: int = 3, interval: bool 
         halves: bool = False) -> str:
     """``median [lo, hi]`` of a summary row (``–`` for none); ``halves``: a recording's two halves, whose
     ``lo`` and ``hi`` are the two values, printed as ``median (halves lo and hi)``, never as an interval.
-
-    Parameters
-    ----------
-    row : dict or None
-        A summary row.
-    stat : str
-        The statistic printed.
-    digits : int
-        Significant digits.
-    interval : bool
-        Print the interval.
-    percent : bool
-        Print as a percentage.
-    halves : bool
-        The row is a recording's two halves.
-
-    Returns
-    -------
-    str
     """
     if row is None or not np.isfinite(row[stat]):
         return "–"
@@ -157,13 +106,6 @@ def _recording_panel(ax, summary, methods: list[str]) -> None:
 def figure(summary, path) -> None:
     """Three panels: soft-iron and hard-iron error on MAGYC's data per motion level, held-out spread on the
     full-sphere recording.
-
-    Parameters
-    ----------
-    summary : list of dict
-        The summary rows drawn.
-    path : pathlib.Path
-        The figure's file.
     """
     methods = methods_of(summary)
     levels = [d for d in LEVELS if pick(summary, dataset=d)]
@@ -211,17 +153,7 @@ def _claim(text: str, test, evidence: str, **tags) -> dict:
 
 
 def bases(args) -> dict[str, str]:
-    """The two comparisons on MAGYC's data, ``fit_on`` -> the readings both sides were given, in words.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The bench's options (``--n-fit``).
-
-    Returns
-    -------
-    dict of str to str
-    """
+    """The two comparisons on MAGYC's data, ``fit_on`` -> the readings both sides were given, in words."""
     return {"all": f"the same {args.nsamples:,} readings", SUBSET: f"the same {args.n_fit:,} readings"}
 
 
@@ -229,19 +161,6 @@ def simulated_claims(frame, summary, args) -> list[dict]:
     """Per comparison (:func:`bases`: every reading to both sides, and magexp's readings to both) and motion level
     of MAGYC's data: the most accurate method, and magexp lm (gyro) against MAGYC-NLS (called directly, and, on
     every reading, as its example notebook calls it).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The rows (:func:`.claims.frame_of`).
-    summary : list of dict
-        The summary rows.
-    args : argparse.Namespace
-        The bench's options.
-
-    Returns
-    -------
-    list of dict
     """
     out = []
     for basis, readings in bases(args).items():
@@ -266,21 +185,13 @@ def simulated_claims(frame, summary, args) -> list[dict]:
 
 
 def _held(frame, dataset: str, method: str, metric: str = "spread_held_out"):
+    """The held-out spreads of ``method`` on ``dataset``, one per recording half."""
     return peer_claims.values(frame, metric, dataset=dataset, method=method, **HALVES)
 
 
 def recording_claims(frame) -> list[dict]:
     """The full sphere (axes aligned), fitted on each half: magexp lm (gyro) against MAGYC-NLS as its notebook
     calls it, with the timestamps as recorded and retimed; what retiming does to each; the gyro bias.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The rows (:func:`.claims.frame_of`), the recordings' read.
-
-    Returns
-    -------
-    list of dict
     """
     out = []
     pct = {"scale": 100.0, "unit": " %"}
@@ -305,22 +216,13 @@ def recording_claims(frame) -> list[dict]:
 
 
 def _cell(row: dict | None, **opts) -> str:
+    """A table cell of ``row`` without its interval."""
     return fmt(row, interval=False, **opts)
 
 
 def spread_table(summary) -> list[str]:
     """The full sphere (axes aligned) per method: spread in sample and held out, recorded and retimed clocks, and
     the gyro bias against the rest recording.
-
-    Parameters
-    ----------
-    summary : list of dict
-        The summary rows (the full sphere's are read).
-
-    Returns
-    -------
-    list of str
-        Markdown lines.
     """
     lines = ["| method | in sample | held out, recorded | held out, retimed | ‖bias − rest‖ (°/s), recorded → retimed |",
              "|---|---|---|---|---|"]
@@ -385,35 +287,12 @@ def _recording_headline(claims: list[dict], frame, summary) -> str:
 
 
 def headline(claims: list[dict], frame, summary, args) -> str:
-    """The section's first paragraph: the claims' outcomes in words, every number read from the rows.
-
-    Parameters
-    ----------
-    claims : list of dict
-        The section's claims.
-    frame, summary, args : pandas.DataFrame, list of dict, argparse.Namespace
-        As in :func:`simulated_claims`.
-
-    Returns
-    -------
-    str
-    """
+    """The section's first paragraph: the claims' outcomes in words, every number read from the rows."""
     return "**Headline.** " + _simulated_headline(claims, args) + _recording_headline(claims, frame, summary)
 
 
 def notes(frame, summary) -> list[str]:
-    """The two magyc 1.0.0 bugs the bench found, and what magexp should learn, every number read from the rows.
-
-    Parameters
-    ----------
-    frame, summary : pandas.DataFrame, list of dict
-        The rows (:func:`.claims.frame_of`) and their summary, read for the numbers quoted.
-
-    Returns
-    -------
-    list of str
-        Markdown lines.
-    """
+    """The two magyc 1.0.0 bugs the bench found, and what magexp should learn, every number read from the rows."""
     out = []
     real = {"dataset": RETIMED, "axis_map": "aligned", "fit_on": "all", "method": "magyc_nls"}
     own, applied = one(summary, metric="own_output_spread", **real), one(summary, metric="spread_in_sample", **real)
@@ -454,18 +333,6 @@ def notes(frame, summary) -> list[str]:
 def top(rows, summary, args) -> list[str]:
     """The part of the section the report shows (:data:`magexp.artifacts.report.PEERS_MARK` ends it): the
     headline, the claims with their outcomes, the full sphere's spreads and the notes.
-
-    Parameters
-    ----------
-    rows, summary : list of dict
-        The long-format rows and their summary.
-    args : argparse.Namespace
-        The bench's options (the claims' comparisons).
-
-    Returns
-    -------
-    list of str
-        Markdown lines.
     """
     frame = peer_claims.frame_of(rows)
     claims = peer_claims.adjust(simulated_claims(frame, summary, args) + recording_claims(frame))
@@ -483,17 +350,7 @@ def top(rows, summary, args) -> list[str]:
 
 
 def section(rows, summary, args) -> str:
-    """The markdown of the section "magexp beside MAGYC".
-
-    Parameters
-    ----------
-    rows, summary, args : list of dict, list of dict, argparse.Namespace
-        As in :func:`top`.
-
-    Returns
-    -------
-    str
-    """
+    """The markdown of the section "magexp beside MAGYC"."""
     methods = methods_of(summary)
     levels = {d: LEVELS[d] for d in LEVELS if pick(summary, dataset=d)}
     yuan = {d: d.removeprefix("yuan2018_") for d in sorted({r["dataset"] for r in pick(summary, kind="yuan_stream")})}

@@ -54,17 +54,7 @@ COLUMNS = ("recording", "n", "side", "version", "outcome", "spread_raw", "spread
 
 
 def recordings(folder: Path = SHARED_DATA) -> list[Path]:
-    """Every recording of the shared data folder: a two-stream recording by its stem, the others by file.
-
-    Parameters
-    ----------
-    folder : pathlib.Path
-        The shared data folder.
-
-    Returns
-    -------
-    list of pathlib.Path
-    """
+    """Every recording of the shared data folder: a two-stream recording by its stem, the others by file."""
     out = []
     for path in sorted(Path(folder).iterdir()):
         if path.name.endswith("_imu.csv") or path.suffix.lower() == ".md":
@@ -74,31 +64,14 @@ def recordings(folder: Path = SHARED_DATA) -> list[Path]:
 
 
 def available() -> str | None:
-    """None when the tools' environment is there, else the one line saying why not.
-
-    Returns
-    -------
-    str or None
-    """
+    """None when the tools' environment is there, else the one line saying why not."""
     if not (TOOLS_VENV / ".installed").exists():
         return f"the tools' environment {TOOLS_VENV} is absent (make peers-tools builds it): nothing written"
     return None
 
 
 def magexp_row(path: Path, *, accept: bool = False) -> dict:
-    """magexp's default calibration of ``path`` (``accept``: written whatever the gate says).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        A recording.
-    accept : bool
-        Write the calibration whatever the gate says.
-
-    Returns
-    -------
-    dict
-    """
+    """magexp's default calibration of ``path`` (``accept``: written whatever the gate says)."""
     start = time.process_time()
     try:
         cal = magexp.calibrate(path, unit=UNITS.get(path.name), accept=accept)
@@ -115,20 +88,7 @@ def magexp_row(path: Path, *, accept: bool = False) -> dict:
 
 
 def run_tools(readings: np.ndarray, work: Path) -> tuple[dict, list[int], np.ndarray]:
-    """The tools' answer (:mod:`.tools_side`) on ``readings``, the folds held out and each reading's region.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray, shape (N, 3)
-        Raw readings.
-    work : pathlib.Path
-        The work folder.
-
-    Returns
-    -------
-    tuple
-        ``(answer, folds, labels)``.
-    """
+    """The tools' answer (:mod:`.tools_side`) on ``readings``, the folds held out and each reading's region."""
     labels, _ = regions(readings)
     folds = [k for k in range(6) if np.count_nonzero(labels == k) >= MIN_READINGS]
     folds = folds if len(folds) >= 2 else []  # fewer than two: nothing held out (as magexp's heldout)
@@ -145,25 +105,7 @@ def run_tools(readings: np.ndarray, work: Path) -> tuple[dict, list[int], np.nda
 
 
 def tool_row(name: str, fits: dict, readings: np.ndarray, folds: list[int], labels: np.ndarray) -> dict:
-    """One tool's row (module docstring) from its fits on every reading and on each fold.
-
-    Parameters
-    ----------
-    name : str
-        The tool.
-    fits : dict
-        Its fits, on every reading (``all``) and on each fold.
-    readings : numpy.ndarray, shape (N, 3)
-        Raw readings.
-    folds : list of int
-        The folds held out.
-    labels : numpy.ndarray, shape (N,)
-        Each reading's region.
-
-    Returns
-    -------
-    dict
-    """
+    """One tool's row (module docstring) from its fits on every reading and on each fold."""
     whole = fits["all"]
     row = {"side": name, "seconds": whole["seconds"]}
     if whole["error"]:
@@ -197,17 +139,7 @@ def _tool_heldout(fits: dict, readings: np.ndarray, folds: list[int], labels: np
 
 
 def rows_of(path: Path) -> list[dict]:
-    """Every side's row on one recording.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        A recording.
-
-    Returns
-    -------
-    list of dict
-    """
+    """Every side's row on one recording."""
     try:
         readings = load_recording(path, unit=UNITS.get(path.name)).readings
     except MagexpError as exc:
@@ -223,32 +155,12 @@ def rows_of(path: Path) -> list[dict]:
 
 
 def percent(value) -> str:
-    """``value`` in percent (3 significant digits); empty for none.
-
-    Parameters
-    ----------
-    value : float or None
-        A fraction.
-
-    Returns
-    -------
-    str
-    """
+    """``value`` in percent (3 significant digits); empty for none."""
     return "" if value is None or value == "" else ("NaN" if not np.isfinite(value) else f"{100 * value:.3g}")
 
 
 def table(rows: list[dict]) -> str:
-    """The markdown table of ``rows``.
-
-    Parameters
-    ----------
-    rows : list of dict
-        The rows.
-
-    Returns
-    -------
-    str
-    """
+    """The markdown table of ``rows``."""
     lines = ["| recording | n | side | outcome | raw % | after % | held out % | CPU s |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['recording']} | {r.get('n', '')} | {r['side']} | {r['outcome'].replace('|', '/')} | "
@@ -258,18 +170,7 @@ def table(rows: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Compare the tools on every shared recording; ``tools.csv`` and ``tools.md`` in ``--out``.
-
-    Parameters
-    ----------
-    argv : list of str or None
-        ``--out FOLDER`` (None: ``sys.argv``).
-
-    Returns
-    -------
-    int
-        0, or 2 when the tools' environment is absent.
-    """
+    """Compare the tools on every shared recording; ``tools.csv`` and ``tools.md`` in ``--out``."""
     p = argparse.ArgumentParser(prog="python -m magexp.perf.peers.tools", description=__doc__.splitlines()[0])
     p.add_argument("--out", required=True, type=Path, help="folder of tools.csv and tools.md")
     args = p.parse_args(argv)

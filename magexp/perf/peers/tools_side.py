@@ -31,13 +31,7 @@ from magcal.core import MagnetometerCalibrator  # it imports pyplot (and pyseria
 
 
 def load() -> dict:
-    """The tools' fit functions (their modules are imported with this file, before any timing).
-
-    Returns
-    -------
-    dict
-        ``{tool: fit}``, each ``fit(data)`` returning ``(W, o)``.
-    """
+    """The tools' fit functions (their modules are imported with this file, before any timing)."""
     def fit_magcal(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(W, o)`` of magcal's ellipsoid method (module docstring); its refusal raised as it raises it."""
         cal = MagnetometerCalibrator()
@@ -56,19 +50,7 @@ def load() -> dict:
 
 
 def one(fit, data: np.ndarray) -> dict:
-    """One fit's answer: ``W``, ``o``, ``seconds``, or the tool's ``error``.
-
-    Parameters
-    ----------
-    fit : callable
-        The tool's fit.
-    data : numpy.ndarray, shape (N, 3)
-        Raw readings.
-
-    Returns
-    -------
-    dict
-    """
+    """One fit's answer: ``W``, ``o``, ``seconds``, or the tool's ``error``."""
     start = time.process_time()
     try:
         w, o = fit(data)
@@ -80,18 +62,7 @@ def one(fit, data: np.ndarray) -> dict:
 
 
 def main(argv: list[str]) -> int:
-    """Fit every tool on the readings of ``source`` and on each fold's complement; the answers to ``out``.
-
-    Parameters
-    ----------
-    argv : list of str
-        ``[source, out]``: the ``.npz`` of readings and the answer's JSON file.
-
-    Returns
-    -------
-    int
-        Exit code.
-    """
+    """Fit every tool on the readings of ``source`` and on each fold's complement; the answers to ``out``."""
     source, out = argv
     with np.load(source, allow_pickle=False) as npz:
         mag, labels, folds = (np.asarray(npz[k]) for k in ("mag", "labels", "folds"))
