@@ -72,9 +72,9 @@ def _step(a: np.ndarray, g: np.ndarray, damping: np.ndarray) -> np.ndarray | Non
 
 
 def stacked_jacobian(problem):
-    """``theta -> J`` (``(m, p)``) by forward differences from one :meth:`residual_swarm` call on ``theta``
-    and its ``p`` steps ``h_i = sqrt(eps) max(1, |theta_i|)`` stacked:
-    ``J[:, i] = (r(theta + h_i e_i) - r(theta)) / h_i``.
+    """``theta -> J`` (``(m, p)``) by forward differences, ``J[:, i] = (r(theta + h_i e_i) - r(theta)) / h_i`` with
+    ``h_i = sqrt(eps) max(1, |theta_i|)``, from one call of the problem's ``residual_swarm`` on ``theta`` and its
+    ``p`` steps stacked (:meth:`magexp.problems.gyro.GyroAidedCalibration.residual_swarm`).
     """
 
     def jac(theta):

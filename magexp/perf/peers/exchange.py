@@ -6,7 +6,7 @@ A dataset is two files with one stem:
     ``t`` (N,) seconds; ``mag`` (N, 3) magnetometer readings in ``mag_unit``; ``gyro`` (N, 3) angular rate in
     rad/s *at the magnetometer's times*: ``gyro[k]`` is the rate over ``[t[k-1], t[k]]`` (the interval that the
     backward difference ``(m[k] - m[k-1]) / (t[k] - t[k-1])`` spans; ``gyro[0]`` repeats ``gyro[1]``); both in the
-    one body frame of :data:`AXES_NOTE`. Simulations add the truth: ``truth_soft_iron`` (3, 3) and
+    one body frame the sidecar's ``axes`` names. Simulations add the truth: ``truth_soft_iron`` (3, 3) and
     ``truth_hard_iron`` (3,) of ``m = D m_true + h``, ``truth_gyro_bias`` (3,) rad/s, ``truth_field`` (3,) and
     ``truth_field_start`` (3,), the noise-free field in the body frame at ``t[0]``.
 ``<stem>.json``
