@@ -43,7 +43,9 @@ means one core.
    ratio (estimate / measured; kept within 1 to 2 by ``tests/test_budget.py``).
 
 Writes ``results/bench.csv`` in long format (``measure, estimator, value, unit, lo, hi``) and
-prints it.
+prints it. Where each part lives: sections 1, 2, 3 and 5 in :mod:`~magexp.perf.throughput`, 4 in
+:mod:`~magexp.perf.peertable`, 6 and 7 in :mod:`~magexp.perf.footprint`; the timing side by side in
+:mod:`~magexp.perf.measuring`, the problems and estimators measured in :mod:`~magexp.perf.workloads`.
 """
 
 from __future__ import annotations
