@@ -101,7 +101,27 @@ class DingScenarioConf(SimulationConf):
 
 
 class DingScenario:
-    """Random 3-D rotations of a sensor with Ding's error model."""
+    """Random 3-D rotations of a sensor with Ding's error model (``conf/scenario/ding2024_*.yaml``).
+
+    Parameters
+    ----------
+    name : str
+        The config's name (``ding2024_exp1``...).
+    field : dict
+        ``{total, declination, inclination}`` in nT and degrees.
+    errors : dict
+        ``{scale, nonorthogonality_deg, soft_iron, hard_iron, bias}`` (Ding 2024 Tables 1-2).
+    noise : float
+        Maximum amplitude ``A`` (nT) of the per-axis noise ``A (U - 0.5)``.
+    n_readings : int
+        Number of random attitudes.
+    search : dict
+        The search box of the calibration parameters (:class:`~magexp.scenarios.search.SearchBox`).
+    noise_kind : str
+        ``uniform`` (:class:`~magexp.scenarios.noise.Noise`) or ``gaussian``.
+    objective : str
+        The problem used by default.
+    """
 
     Config = DingScenarioConf
 

@@ -71,7 +71,21 @@ class RotationConf:
 
 
 class Trajectory:
-    """Turns about body axes in sequence, each at ``rate_deg_s``, sampled every ``sample_period`` s."""
+    """Turns about body axes in sequence, each at ``rate_deg_s``, sampled every ``sample_period`` s.
+
+    Parameters
+    ----------
+    mode : str or None
+        A preset of :data:`MODES` (``mode1``..``mode4``), or None with ``segments``.
+    segments : list of dict, optional
+        Explicit ``[{axis: x, arc_deg: 360}, ...]`` (overrides ``mode``).
+    partial_arc_deg : float
+        The arc of an incomplete turn (mode 3; not stated in the paper).
+    rate_deg_s : float
+        Turn rate; 36 °/s makes a full turn 1000 samples at 0.01 s, so three turns are the paper's 3000 samples.
+    sample_period : float
+        Seconds (0.01 in the paper's simulations, 1/205 for the ADIS16488).
+    """
 
     def __init__(self, *, mode: str | None = "mode1", segments=None, partial_arc_deg: float = 180.0,
                  rate_deg_s: float = 36.0, sample_period: float = 0.01):
@@ -119,7 +133,17 @@ class GyroConf:
 
 
 class Gyro:
-    """A rate gyro: true rate + constant drift + white noise."""
+    """A rate gyro: true rate + constant drift + white noise.
+
+    Parameters
+    ----------
+    drift_deg_h : float
+        Magnitude of the constant drift (°/h), along ``drift_axis``.
+    drift_axis : sequence of float
+        Direction of the drift (normalised; default equal on the three axes).
+    noise_deg_s : float
+        Standard deviation of the white noise of each sample (°/s).
+    """
 
     def __init__(self, *, drift_deg_h: float = 6.25, drift_axis=(1.0, 1.0, 1.0), noise_deg_s: float = 0.0):
         self.drift_deg_h = check_nonnegative(drift_deg_h, "scenario.gyro.drift_deg_h")

@@ -15,7 +15,8 @@ class Noise:
     ``kind="uniform"``: ``amplitude * (U(0,1) - 0.5)``, i.e. uniform on
     ``[-A/2, A/2]`` (Ding 2024's "random noise of maximum amplitude A"; the
     convention that reproduces its RMS values), standard deviation ``A/sqrt(12)``.
-    ``kind="gaussian"``: zero-mean normal with standard deviation ``amplitude``.
+    ``kind="gaussian"``: zero-mean normal with standard deviation ``amplitude``. ``amplitude`` (``A`` >= 0)
+    is in the readings' unit; ``name`` is the config key a refusal names.
     """
 
     def __init__(self, amplitude: float, kind: str = "uniform", name: str = "scenario.noise"):

@@ -52,7 +52,8 @@ def _interval(value, name: str) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class SearchBox:
-    """Bounds for ``[vec(matrix) (row-major, 9), offset (3)]``."""
+    """Bounds for ``[vec(matrix) (row-major, 9), offset (3)]``: ``diag`` and ``offdiag`` ``(low, high)`` of the
+    diagonal and off-diagonal matrix entries, ``offset`` of the three offset entries (reading units)."""
 
     diag: tuple[float, float]
     offdiag: tuple[float, float]

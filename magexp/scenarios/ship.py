@@ -103,7 +103,30 @@ class ShipSimulationConf(SimulationConf):
 
 
 class ShipSimulation:
-    """Yan & Zhou's simulation (sec 2.2): random attitudes, ``B = K A Be + Bp`` plus noise."""
+    """Yan & Zhou's simulation (sec 2.2): random attitudes, ``B = K A Be + Bp`` plus noise.
+
+    Parameters
+    ----------
+    name : str
+        The config's name (``yan2022_sim``).
+    field : sequence of float
+        ``Be`` (nT), geographic frame.
+    K, Bp : array_like
+        The true induced matrix (3x3) and permanent vector (nT).
+    heading_deg, roll_deg, trim_deg : [low, high]
+        Ranges of the uniformly drawn angles.
+    n_readings : int
+        Number of attitudes (12 in the paper).
+    noise : float
+        Bound (nT) of the error on each component of ``B`` ("at most 100 nT").
+    angle_noise_deg : float
+        Bound (degrees) of the error on each recorded angle ("at most 0.05°").
+    search : dict
+        The box of ``[vec(K), Bp]`` (for swarm estimators).
+    noise_kind : str
+        ``uniform`` (on ``[-bound, bound]``: "at most" reads as a bounded error) or ``gaussian`` (standard
+        deviation = bound).
+    """
 
     Config = ShipSimulationConf
     objective = "ship"
@@ -147,7 +170,20 @@ class ShipRecordingConf(ScenarioConf):
 
 
 class ShipRecording:
-    """A recorded ship dataset (Yan & Zhou's mock-up, Table 1, or a user's own file)."""
+    """A recorded ship dataset (Yan & Zhou's mock-up, Table 1, or a user's own file). The data are fixed:
+    ``generate`` ignores ``rng``, and the truth is unknown.
+
+    Parameters
+    ----------
+    name : str
+        The config's name (``yan2022_mockup``).
+    path : str
+        A ``magexp-recording v1`` CSV (:mod:`magexp.core.recordings`), relative to ``data/``.
+    search : dict
+        As :class:`ShipSimulation`.
+    field : sequence of float or None
+        ``Be`` (nT); None to take the file's ``# field:`` line.
+    """
 
     Config = ShipRecordingConf
     objective = "ship"

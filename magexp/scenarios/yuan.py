@@ -56,7 +56,31 @@ class YuanScenarioConf(SimulationConf):
 
 
 class YuanScenario:
-    """Turns of a sensor with a full error matrix, and a drifting gyro."""
+    """Turns of a sensor with a full error matrix, and a drifting gyro.
+
+    Parameters
+    ----------
+    name : str
+        The config's name (``yuan2018_...``).
+    field : sequence of float
+        The navigation-frame field vector (mG).
+    S, b : array_like
+        The true error matrix and offset (mG).
+    rotation : dict
+        Keyword arguments of :class:`~magexp.scenarios.motion.Trajectory`.
+    gyro : dict
+        Keyword arguments of :class:`~magexp.scenarios.motion.Gyro`.
+    noise : float
+        Per-axis standard deviation of the Gaussian reading noise (mG).
+    n_readings : int
+        Readings used, evenly spaced over the run (30 in the paper).
+    search : dict
+        The search box of ``[vec(S), b]``.
+    field_scale : [start, end]
+        Factor on the field magnitude, linear over the run.
+    objective : str
+        The default problem; ``problem_options`` selects the forward parameterisation ``[vec(S), b]``.
+    """
 
     Config = YuanScenarioConf
     problem_options = {"parameterisation": "forward"}
