@@ -197,6 +197,7 @@ TABLE = [
     row("run", ["seed=-1"], ["seed=-1"]),
     row("run", ["seed=abc"], ["abc"]),
     row("run", ["seed=1.5"], ["seed=1.5"]),
+    row("run", ["seed=9223372036854775808"], ["seed=9223372036854775808", "2**63 - 1"]),  # the API's bound
     # ---- run: recordings read by a scenario
     row("run", [*MOCKUP, "scenario.path=missing.csv"], ["missing.csv", "does not exist"]),
     row("run", [*MOCKUP, "scenario.path=a_folder"], ["a_folder", "is a directory"]),

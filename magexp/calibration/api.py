@@ -18,12 +18,11 @@ from magexp.calibration.inputs import readings_array
 from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
-from magexp.calibration.schema import check_seed
 from magexp.core.limits import check_limits
 from magexp.core.recording import Recording, check_unit
 from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError
+from magexp.errors import MagexpError, check_seed
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import options

@@ -24,7 +24,7 @@ import numpy as np
 
 from magexp.calibration.models import ORDER
 from magexp.core.recording import RAW_UNITS, UNITS, check_unit
-from magexp.errors import LARGEST, MagexpError, check_positive_int
+from magexp.errors import LARGEST, MAX_SEED, MagexpError
 from magexp.run.files import check_file
 
 #: the deepest nesting of lists and objects a ``calibration.json`` may have (the format nests four deep)
@@ -34,8 +34,6 @@ MAX_DIGITS = 64
 #: the largest condition number of ``W`` (ratio of its largest to smallest singular value) a calibration may
 #: have: a magnetometer's axes differ in gain by a few times, never by a million
 MAX_CONDITION = 1e6
-#: the largest seed (numpy's generators take any integer >= 0; a seed is kept as a signed 64-bit integer)
-MAX_SEED = 2 ** 63 - 1
 #: the longest name or path (``recording``, ``estimator``...) a calibration holds
 MAX_TEXT = 4096
 #: the format's keys: those of every readable format, and those ``v3`` added (optional in ``v2``)
@@ -52,32 +50,6 @@ OBJECTIVES = ("scalar", "vector", "gyro")
 #: the formats magexp reads (the newest is the one it writes)
 FORMATS = ("magexp-calibration v2", "magexp-calibration v3")
 MODEL = "B = W (reading - offset)"
-
-
-def check_seed(seed, name: str = "seed") -> int:
-    """``seed`` as an int: an integer in ``[0, MAX_SEED]`` (not a bool, not a string), else one line naming ``name``.
-
-    Parameters
-    ----------
-    seed : object
-        A seed given to the API.
-    name : str
-        The argument that gave it.
-
-    Returns
-    -------
-    int
-        The seed.
-
-    Raises
-    ------
-    MagexpError
-        A seed that is not such an integer.
-    """
-    seed = check_positive_int(seed, name, minimum=0)
-    if seed > MAX_SEED:
-        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, 2**63 - 1]")
-    return seed
 
 
 class Bad(Exception):
