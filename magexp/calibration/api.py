@@ -30,23 +30,7 @@ from magexp.run.compose import options
 
 def frame_readings(frame) -> np.ndarray:
     """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``mx, my, mz``, ``x, y, z``:
-    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The readings' table.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(N, 3)`` float readings.
-
-    Raises
-    ------
-    MagexpError
-        Columns that are neither named nor three numeric ones.
-    """
+    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns."""
     cols = [str(c).strip().lower() for c in frame.columns]
     check_unique(cols, "readings")
     pick = next((names for names in MAG_COLUMNS if all(n in cols for n in names)), None)
@@ -59,25 +43,7 @@ def frame_readings(frame) -> np.ndarray:
 
 def as_recording(readings, *, unit: str | None = None) -> Recording:
     """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
-    ``x, y, z``, else its three numeric columns), a path or a Recording.
-
-    Parameters
-    ----------
-    readings : array_like, DataFrame, str, Path or Recording
-        As :func:`calibrate`'s.
-    unit : str or None
-        The unit of an array or DataFrame (required), of a path (``data.unit``).
-
-    Returns
-    -------
-    Recording
-        The recording (an array's: format ``array``, name ``readings``).
-
-    Raises
-    ------
-    MagexpError
-        A shape other than (N, 3), a value not finite, an array without a unit.
-    """
+    ``x, y, z``, else its three numeric columns), a path or a Recording."""
     if isinstance(readings, Recording):
         return readings
     if isinstance(readings, (str, Path)):
@@ -104,27 +70,7 @@ def check_arguments(seed, reference_total, estimator_options: dict) -> int:
     """Refuse, in one line, the arguments of :func:`calibrate` no later check reads as the command does: a seed
     that is not an integer in ``[0, 2**63 - 1]`` (:func:`~magexp.calibration.schema.check_seed`), a reference
     total that is not a number (a string, a bool), an estimator option ``name`` (the estimator is
-    ``estimator=``); returns the seed as an int.
-
-    Parameters
-    ----------
-    seed : object
-        :func:`calibrate`'s ``seed``.
-    reference_total : object
-        Its ``reference_total``.
-    estimator_options : dict
-        Its ``**estimator_options``.
-
-    Returns
-    -------
-    int
-        The seed.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the argument.
-    """
+    ``estimator=``); returns the seed as an int."""
     seed = check_seed(seed)
     if reference_total is not None and (isinstance(reference_total, (bool, str, bytes)) or
                                         not isinstance(reference_total, (int, float, np.number))):

@@ -97,25 +97,7 @@ def _escaped(raw: np.ndarray, backslash: np.ndarray) -> np.ndarray:
 
 def read_json(path, what: str = "path"):
     """The content of the JSON file ``path``, read within bounds (module docstring): one line refusing a special
-    file, one that does not exist or is a folder, one too large, too deep, with a number too long, or not JSON.
-
-    Parameters
-    ----------
-    path : str or Path
-        The file.
-    what : str
-        The argument that named it, for the message.
-
-    Returns
-    -------
-    object
-        The parsed JSON.
-
-    Raises
-    ------
-    MagexpError
-        One line for a file that cannot be read within the bounds.
-    """
+    file, one that does not exist or is a folder, one too large, too deep, with a number too long, or not JSON."""
     if not isinstance(path, (str, Path)) or not str(path).strip():
         raise MagexpError(f"{what}={_shown(path)} is not allowed: give the path of a calibration.json")
     path = Path(path)
@@ -148,20 +130,7 @@ def _positive(value) -> None:
 
 
 def ranged(lo: float, hi: float, *, whole: bool = False):
-    """A check of a number in ``[lo, hi]`` (not a bool; ``whole``: an integer, not a float).
-
-    Parameters
-    ----------
-    lo, hi : float
-        The range allowed.
-    whole : bool
-        Only integers.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of a number in ``[lo, hi]`` (not a bool; ``whole``: an integer, not a float)."""
     kind = (int,) if whole else (int, float)
 
     def check(value):
@@ -171,18 +140,7 @@ def ranged(lo: float, hi: float, *, whole: bool = False):
 
 
 def text(empty: bool = False):
-    """A check of a one-line string of at most :data:`MAX_TEXT` characters (``empty``: it may be ``""``).
-
-    Parameters
-    ----------
-    empty : bool
-        Whether ``""`` is allowed.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of a one-line string of at most :data:`MAX_TEXT` characters (``empty``: it may be ``""``)."""
     def check(value):
         if not isinstance(value, str) or len(value) > MAX_TEXT or "\n" in value or not (empty or value.strip()):
             raise Bad(f"a {'' if empty else 'non-empty '}one-line string of at most {MAX_TEXT} characters")
@@ -190,18 +148,7 @@ def text(empty: bool = False):
 
 
 def choice(options):
-    """A check of one of ``options``.
-
-    Parameters
-    ----------
-    options : iterable
-        The values allowed.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of one of ``options``."""
     options = tuple(options)
 
     def check(value):
@@ -227,18 +174,7 @@ def _unit(value) -> None:
 
 
 def optional(check):
-    """``check``, or ``null``.
-
-    Parameters
-    ----------
-    check : callable
-        The check of a value that is not ``null``.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """``check``, or ``null``."""
     def either(value):
         if value is not None:
             check(value)
@@ -247,20 +183,7 @@ def optional(check):
 
 def matrix(shape: tuple, extra=()):
     """A check of an array of ``shape`` of finite numbers of magnitude <= :data:`LARGEST` (``extra``: the
-    strings also allowed in place of a number, e.g. ``"inf"`` for an undetermined standard error).
-
-    Parameters
-    ----------
-    shape : tuple
-        The shape required.
-    extra : tuple of str
-        Strings allowed in place of a number.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    strings also allowed in place of a number, e.g. ``"inf"`` for an undetermined standard error)."""
     what = " x ".join(map(str, shape))
 
     def check(value):
@@ -287,22 +210,7 @@ def _cells(value, shape: tuple):
 
 def mapping(schema: dict | None = None, *, exact: bool = True, absent=()):
     """A check of a JSON object whose keys ``schema`` checks (each ``{key: check}``; ``exact``: no other key;
-    ``absent``: the keys that may be missing).
-
-    Parameters
-    ----------
-    schema : dict or None
-        ``{key: check}`` of its keys (None: any object).
-    exact : bool
-        Refuse keys the schema does not have.
-    absent : iterable of str
-        The keys of ``schema`` that may be missing (those an older format does not have).
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    ``absent``: the keys that may be missing)."""
     schema = schema or {}
 
     def check(value):
@@ -324,18 +232,7 @@ def mapping(schema: dict | None = None, *, exact: bool = True, absent=()):
 
 
 def number_or(*names):
-    """A check of a finite number or one of the strings ``names`` (``"inf"``: how JSON keeps an infinity).
-
-    Parameters
-    ----------
-    *names : str
-        The strings allowed.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of a finite number or one of the strings ``names`` (``"inf"``: how JSON keeps an infinity)."""
     def check(value):
         if not ((_is_number(value) and math.isfinite(value)) or value in names):
             raise Bad(f"a finite number or one of {', '.join(names)}")
@@ -417,25 +314,7 @@ SCHEMA = {
 
 
 def check_parameters(data, name: str) -> dict:
-    """``data``, the parsed ``calibration.json`` called ``name``, checked against :data:`SCHEMA` (module docstring).
-
-    Parameters
-    ----------
-    data : object
-        The parsed JSON.
-    name : str
-        The file's name, for the message.
-
-    Returns
-    -------
-    dict
-        ``data``.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the first key that breaks the schema and what it allows.
-    """
+    """``data``, the parsed ``calibration.json`` called ``name``, checked against :data:`SCHEMA` (module docstring)."""
     if not isinstance(data, dict) or data.get("format") not in FORMATS:
         found = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise MagexpError(f"{name}: format {_shown(found)} is not allowed: magexp reads {', '.join(FORMATS)}")
