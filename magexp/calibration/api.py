@@ -68,7 +68,7 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
 
 def check_arguments(seed, reference_total, estimator_options: dict) -> int:
     """Refuse, in one line, the arguments of :func:`calibrate` no later check reads as the command does: a seed
-    that is not an integer in ``[0, 2**63 - 1]`` (:func:`~magexp.calibration.schema.check_seed`), a reference
+    that is not an integer in ``[0, 2**63 - 1]`` (:func:`~magexp.errors.check_seed`), a reference
     total that is not a number (a string, a bool), an estimator option ``name`` (the estimator is
     ``estimator=``); returns the seed as an int."""
     seed = check_seed(seed)
@@ -89,9 +89,18 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
               **estimator_options) -> Calibration:
     """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
 
-    Fits ``B = W (r - o)`` (the total field ``|B|`` against the reference, Ding 2024 eq 18 as the
-    objective; or the vector field, Yuan 2018 eq 8) with the model ``model=auto`` chooses by held-out
-    spread, then checks it (the acceptance gate, :mod:`magexp.calibration.checks`).
+    Fits the calibration ``B_i = W (r_i - o)`` of raw readings ``r_i`` (Ding 2024 eq 9, ``W = M^-1`` and
+    ``o = I``; Yuan 2018's ``W = S^-1``, ``o = b``) by minimising, with ``objective="scalar"``, the total-field
+    RMS against the reference ``B_a`` (Ding 2024 eqs 17-18)
+
+    .. math:: \\mathrm{RMS} = \\sqrt{\\tfrac1N \\sum_i (\\lVert W (\\mathbf r_i - \\mathbf o) \\rVert - B_a)^2}
+
+    or, with ``objective="vector"``, the vector misfit to the attitudes' reference vectors (Yuan 2018 eq 8)
+
+    .. math:: F = \\sum_i \\lVert C_i^b \\mathbf H_i - W (\\mathbf r_i - \\mathbf o) \\rVert
+
+    with the model ``model=auto`` chooses by held-out spread (:mod:`magexp.calibration.models`), then checks
+    it (the acceptance gate, :func:`magexp.calibration.checks.gate`).
 
     Parameters
     ----------
@@ -141,7 +150,20 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
     Raises
     ------
     MagexpError
-        One line for degenerate data, a failed estimator or bad input.
+        One line for bad input (any argument above, a seed outside ``[0, 2**63 - 1]``, an unreadable
+        recording), degenerate data, a failed estimator or, with ``checks``, a calibration failing the gate.
+
+    See Also
+    --------
+    magexp.calibration.result.Calibration.load : read back a saved calibration.
+
+    References
+    ----------
+    Ding Xuezhen, *Integrated calibration of sensor errors with improved PSO algorithm*, Digital Ocean &
+    Underwater Warfare 7(3):285-292, 2024 (eqs 9, 17, 18).
+
+    Yuan Yujia, Wang Wei, Chen Xingbang, *Particle swarm optimization with MEMS gyro-aided for magnetometer
+    calibration*, Navigation Positioning & Timing 5(6):92-98, 2018 (eqs 1, 8).
     """
     check_limits()
     rec = as_recording(readings, unit=unit)

@@ -167,7 +167,9 @@ def _factor(unit: str, target_unit: str, counts_nt, what: str) -> float:
 def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: str | None = None, counts_nt=None,
                 symmetric: bool = False, max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False,
                 custom: bool = False) -> Correction:
-    """magexp's ``B = W (r − o)`` in a target's unit and form."""
+    """magexp's ``B = W (r − o)`` in a target's unit and form: with ``symmetric``, ``W = R S`` (:func:`polar`) and
+    ``S`` exported, ``R`` refused beyond ``max_rotation_deg`` unless ``orient`` (``R`` determined: the nearest
+    standard rotation, or with ``custom`` ``R`` itself, becomes the sensor's orientation)."""
     w, offset = np.asarray(w, float), np.asarray(offset, float)
     if w.shape != (3, 3) or offset.shape != (3,) or not (np.all(np.isfinite(w)) and np.all(np.isfinite(offset))):
         raise MagexpError(f"a calibration with W of shape {w.shape} and offset of shape {offset.shape} is not allowed: "

@@ -36,7 +36,7 @@ class Reference:
     source: str
     estimated: bool = False
     unit: str | None = None  # the reference's unit when it is not the recording's (counts calibrated to nT)
-    record: dict | None = None  # a field model's name, generation and inputs (:meth:`ReferenceField.record`)
+    record: dict | None = None  # a field model's name, generation and inputs (:meth:`magexp.core.field_model.ReferenceField.record`)
 
     def describe(self) -> str:
         """The reference in one line, as the summary prints it."""
