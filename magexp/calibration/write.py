@@ -84,7 +84,7 @@ FORMAT = FORMATS[-1]
 
 
 def parameters(cal, *, seed: int | None = None) -> dict:
-    """The JSON content of a :class:`~magexp.calibration.fit.Calibration` (format :data:`FORMAT`):
+    """The JSON content of a :class:`~magexp.calibration.result.Calibration` (format :data:`FORMAT`):
     ``W`` and the offset, the units, the reference and the field model it came from (generation,
     latitude, longitude, altitude, date), the metrics, the quality report (with the acceptance
     gate and the model selection), the fit's outcome, the config and the provenance (magexp
