@@ -8,9 +8,9 @@ import sys
 #: the largest magnitude a reading, noise amplitude or search bound may have: squares and
 #: products of a few such numbers stay far from float64 overflow (1.8e308)
 LARGEST = 1e15
-#: the largest seed, for the command line and the API alike: numpy's ``SeedSequence`` takes any integer
-#: >= 0, and a seed is kept as a signed 64-bit integer (a table's ``seed`` column)
-MAX_SEED = 2 ** 63 - 1
+#: the largest seed, for every command and the API alike: the bound of every integer key of a command line
+#: (:data:`LARGEST`), so a seed that works in Python works on the command line (numpy takes any integer >= 0)
+MAX_SEED = int(LARGEST)
 
 
 class MagexpError(ValueError):
@@ -43,7 +43,7 @@ def check_seed(seed, name: str = "seed") -> int:
     one seed check of the command line and the API."""
     seed = check_positive_int(seed, name, minimum=0)
     if seed > MAX_SEED:
-        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, 2**63 - 1]")
+        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, {LARGEST:g}]")
     return seed
 
 

@@ -31,7 +31,7 @@ from magexp.core.formats import LOG_SUFFIXES, detect
 from magexp.core.geometry import axis_map
 from magexp.core.recordings import READERS, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_positive_int, exit_code
+from magexp.errors import MagexpError, check_positive_int, check_seed, exit_code
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options
@@ -113,7 +113,7 @@ def run(cfg, *, live: bool = False) -> Calibration:
     protected = [] if live else recording_files(rec)
     check_out(out_dir, overwrite=overwrite, export=target, draw=draw, recording=protected)
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    seed = check_positive_int(cfg.seed, "seed", minimum=0)
+    seed = check_seed(cfg.seed)
     _, est_rng = run_generators(seed)
     reference = data.get("reference_total")
     if reference is None:
