@@ -57,11 +57,5 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    """The module's names with the public API's (:data:`__all__`).
-
-    Returns
-    -------
-    list of str
-        Sorted names.
-    """
+    """The module's names with the public API's (:data:`__all__`)."""
     return sorted({*globals(), *__all__})

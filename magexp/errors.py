@@ -8,6 +8,9 @@ import sys
 #: the largest magnitude a reading, noise amplitude or search bound may have: squares and
 #: products of a few such numbers stay far from float64 overflow (1.8e308)
 LARGEST = 1e15
+#: the largest seed, for every command and the API alike: the bound of every integer key of a command line
+#: (:data:`LARGEST`), so a seed that works in Python works on the command line (numpy takes any integer >= 0)
+MAX_SEED = int(LARGEST)
 
 
 class MagexpError(ValueError):
@@ -19,46 +22,13 @@ class MagexpError(ValueError):
 
 
 def check(condition: bool, message: str) -> None:
-    """Raise :class:`MagexpError` with ``message`` unless ``condition`` holds.
-
-    Parameters
-    ----------
-    condition : bool
-        What must hold.
-    message : str
-        The one-line message (names the value and what is allowed).
-
-    Raises
-    ------
-    MagexpError
-        When ``condition`` is false.
-    """
+    """Raise :class:`MagexpError` with ``message`` unless ``condition`` holds."""
     if not condition:
         raise MagexpError(message)
 
 
 def check_positive_int(value, name: str, minimum: int = 1) -> int:
-    """Return ``value`` as an int, or fail if it is not an integer >= ``minimum``.
-
-    Parameters
-    ----------
-    value : object
-        A count from a config (an int, or a float of integral value; not a bool).
-    name : str
-        The config key the message names (``scenario.n_readings``...).
-    minimum : int
-        The smallest value allowed.
-
-    Returns
-    -------
-    int
-        ``value`` as an int.
-
-    Raises
-    ------
-    MagexpError
-        When ``value`` is not an integer >= ``minimum``.
-    """
+    """Return ``value`` as an int, or fail if it is not an integer >= ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, (int,)) and not (
         isinstance(value, float) and value.is_integer()
     ):
@@ -68,26 +38,17 @@ def check_positive_int(value, name: str, minimum: int = 1) -> int:
     return int(value)
 
 
+def check_seed(seed, name: str = "seed") -> int:
+    """``seed`` as an int in ``[0, MAX_SEED]`` (not a bool, not a string), else one line naming ``name``: the
+    one seed check of the command line and the API."""
+    seed = check_positive_int(seed, name, minimum=0)
+    if seed > MAX_SEED:
+        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, {LARGEST:g}]")
+    return seed
+
+
 def check_nonnegative(value, name: str) -> float:
-    """Return ``value`` as a float, or fail if it is negative, NaN or infinite.
-
-    Parameters
-    ----------
-    value : object
-        A number from a config (a noise level, a rate, a width).
-    name : str
-        The config key the message names (``scenario.noise``...).
-
-    Returns
-    -------
-    float
-        The finite ``value``, >= 0.
-
-    Raises
-    ------
-    MagexpError
-        When ``value`` is not a finite number >= 0.
-    """
+    """Return ``value`` as a float, or fail if it is negative, NaN or infinite."""
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -98,25 +59,7 @@ def check_nonnegative(value, name: str) -> float:
 
 
 def check_magnitude(value, name: str) -> float:
-    """Return ``value`` as a float, or fail if it is not finite or larger than :data:`LARGEST` in magnitude.
-
-    Parameters
-    ----------
-    value : object
-        A reading, noise amplitude or search bound.
-    name : str
-        The key or column the message names.
-
-    Returns
-    -------
-    float
-        The ``value``, of magnitude <= :data:`LARGEST`.
-
-    Raises
-    ------
-    MagexpError
-        When ``value`` is not a number or is NaN, infinite or too large.
-    """
+    """Return ``value`` as a float, or fail if it is not finite or larger than :data:`LARGEST` in magnitude."""
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -134,18 +77,7 @@ EXCERPT = 6
 def excerpt(text) -> str:
     """``text`` read from a file, quoted for an error message: at most :data:`EXCERPT` characters,
     each one not printable shown as ``?`` (a message never prints a file's content beyond a short,
-    printable excerpt).
-
-    Parameters
-    ----------
-    text : object
-        Content read from a file (converted with ``str``).
-
-    Returns
-    -------
-    str
-        The quoted excerpt (``...`` appended when ``text`` is longer).
-    """
+    printable excerpt)."""
     text = str(text).strip()
     shown = "".join(c if c.isprintable() else "?" for c in text[:EXCERPT])
     return repr(shown + ("..." if len(text) > EXCERPT else ""))
@@ -160,13 +92,7 @@ INTERRUPTED = "interrupted (Ctrl-C); finished runs are cached, rerun the same co
 
 class Terminated(KeyboardInterrupt):
     """A command stopped by a signal other than Ctrl-C (``SIGTERM``, :func:`stop_on_signals`): it ends as
-    Ctrl-C does (every cleanup that undoes an interrupted command runs), with exit code ``128 + signum``.
-
-    Parameters
-    ----------
-    signum : int
-        The signal's number.
-    """
+    Ctrl-C does (every cleanup that undoes an interrupted command runs), with exit code ``128 + signum``."""
 
     def __init__(self, signum: int):
         super().__init__(signum)
@@ -178,6 +104,7 @@ _STOPPED: list[int] = []
 
 
 def _stopping(signum: int) -> KeyboardInterrupt:
+    """The exception a signal raises: Ctrl-C's ``KeyboardInterrupt``, or :class:`Terminated` for any other."""
     return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
 
 
@@ -205,15 +132,7 @@ def stop_on_signals() -> None:
 
 
 def fail(message: str, code: int = EXIT_BAD_INPUT) -> None:
-    """One line on stderr (``error: ...``), then exit with ``code``.
-
-    Parameters
-    ----------
-    message : str
-        The line printed after ``error: ``.
-    code : int
-        The exit code (default :data:`EXIT_BAD_INPUT`).
-    """
+    """One line on stderr (``error: ...``), then exit with ``code``."""
     print(f"error: {message}", file=sys.stderr)
     sys.exit(code)
 
@@ -231,20 +150,7 @@ def guarded(func, *args):
     :data:`EXIT_BAD_INPUT`, and so does a missing optional package (the line names its extra,
     :data:`EXTRAS`); Ctrl-C exits :data:`EXIT_INTERRUPTED` with one line; anything else is a
     bug: one line and :data:`EXIT_BUG` (``MAGEXP_DEBUG=1`` shows the traceback). An error raised after a
-    stop signal was received is that stop (:func:`raise_if_stopped`): the signal decides how it ends.
-
-    Parameters
-    ----------
-    func : callable
-        The command's body (``main``, a launcher...).
-    *args
-        The arguments ``func`` is called with.
-
-    Returns
-    -------
-    object
-        What ``func`` returns, when it raises nothing (any error exits instead).
-    """
+    stop signal was received is that stop (:func:`raise_if_stopped`): the signal decides how it ends."""
     try:
         try:
             return func(*args)
@@ -280,20 +186,7 @@ def _bug(exc: BaseException) -> None:
 
 def exit_code(func, *args) -> int:
     """:func:`guarded` ``func(*args)``, returning its exit code (0 when it returns) instead of exiting: the
-    ``main(argv) -> int`` of a command that a caller (a test, a script) runs in its own process.
-
-    Parameters
-    ----------
-    func : callable
-        The command run, as :func:`guarded` runs it.
-    *args
-        Its arguments (e.g. ``argv``).
-
-    Returns
-    -------
-    int
-        0 when ``func`` returns, else the exit code :func:`guarded` chose.
-    """
+    ``main(argv) -> int`` of a command that a caller (a test, a script) runs in its own process."""
     try:
         guarded(func, *args)
     except SystemExit as exc:

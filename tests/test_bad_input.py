@@ -747,6 +747,7 @@ TABLE = [
     row("run", ["scenario.noise='1'"], ["scenario.noise='1'", "a number", "not a text"]),
     row("run", ["estimator.n_particles='30'"], ["estimator.n_particles='30'", "an integer"]),
     row("run", ["seed=99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
+    row("run", ["seed=1000000000000001"], ["seed=1000000000000001", "1e+15"]),  # the API's bound too (MAX_SEED)
     row("sweep", ["-m", "seed=1,99999999999999999999"], ["seed=99999999999999999999", "1e+15"]),
     row("run", ["objective="], ["objective=''", "give a value"]),
     row("run", ["estimator.name="], ["estimator.name=''", "give a value"]),
@@ -1042,7 +1043,8 @@ TABLE += corrupted_rows() + [
     row("api", api(folds=None), ["folds=None", "integer >= 0"]),
     row("api", api(folds=[2]), ["folds=[2]"]),
     row("api", api(folds=float("nan")), ["folds=nan"]),
-    row("api", api(seed=2 ** 64), ["seed=18446744073709551616", "2**63 - 1"]),
+    row("api", api(seed=2 ** 64), ["seed=18446744073709551616", "1e+15"]),
+    row("api", api(seed=10 ** 15 + 1), ["seed=1000000000000001", "1e+15"]),  # the command line's bound (MAX_SEED)
     row("api", api(seed="1"), ["seed='1'"]),
     row("api", api(seed=None), ["seed=None"]),
     row("api", api(seed=float("inf")), ["seed=inf"]),
@@ -1082,7 +1084,7 @@ TABLE += corrupted_rows() + [
     row("api", lambda: _simulate(2.5, 0), ["n=2.5"]),
     row("api", lambda: _simulate(10 ** 12, 0), ["n=1000000000000", "MAGEXP_MAX_READINGS"]),
     row("api", lambda: _simulate(12, -1), ["seed=-1"]),
-    row("api", lambda: _simulate(12, 2 ** 64), ["seed=18446744073709551616", "2**63 - 1"]),
+    row("api", lambda: _simulate(12, 2 ** 64), ["seed=18446744073709551616", "1e+15"]),
     row("api", lambda: _simulate(12, "x"), ["seed='x'"]),
 ]
 

@@ -18,12 +18,11 @@ from magexp.calibration.inputs import readings_array
 from magexp.run.named import estimator_named
 from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
-from magexp.calibration.schema import check_seed
 from magexp.core.limits import check_limits
 from magexp.core.recording import Recording, check_unit
 from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError
+from magexp.errors import MagexpError, check_seed
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import options
@@ -31,23 +30,7 @@ from magexp.run.compose import options
 
 def frame_readings(frame) -> np.ndarray:
     """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``mx, my, mz``, ``x, y, z``:
-    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The readings' table.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(N, 3)`` float readings.
-
-    Raises
-    ------
-    MagexpError
-        Columns that are neither named nor three numeric ones.
-    """
+    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns."""
     cols = [str(c).strip().lower() for c in frame.columns]
     check_unique(cols, "readings")
     pick = next((names for names in MAG_COLUMNS if all(n in cols for n in names)), None)
@@ -60,25 +43,7 @@ def frame_readings(frame) -> np.ndarray:
 
 def as_recording(readings, *, unit: str | None = None) -> Recording:
     """A :class:`Recording` from an ``(N, 3)`` array, a DataFrame (columns ``bx, by, bz`` or
-    ``x, y, z``, else its three numeric columns), a path or a Recording.
-
-    Parameters
-    ----------
-    readings : array_like, DataFrame, str, Path or Recording
-        As :func:`calibrate`'s.
-    unit : str or None
-        The unit of an array or DataFrame (required), of a path (``data.unit``).
-
-    Returns
-    -------
-    Recording
-        The recording (an array's: format ``array``, name ``readings``).
-
-    Raises
-    ------
-    MagexpError
-        A shape other than (N, 3), a value not finite, an array without a unit.
-    """
+    ``x, y, z``, else its three numeric columns), a path or a Recording."""
     if isinstance(readings, Recording):
         return readings
     if isinstance(readings, (str, Path)):
@@ -103,29 +68,9 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
 
 def check_arguments(seed, reference_total, estimator_options: dict) -> int:
     """Refuse, in one line, the arguments of :func:`calibrate` no later check reads as the command does: a seed
-    that is not an integer in ``[0, 2**63 - 1]`` (:func:`~magexp.calibration.schema.check_seed`), a reference
+    that is not an integer in ``[0, MAX_SEED]`` (:func:`~magexp.errors.check_seed`), a reference
     total that is not a number (a string, a bool), an estimator option ``name`` (the estimator is
-    ``estimator=``); returns the seed as an int.
-
-    Parameters
-    ----------
-    seed : object
-        :func:`calibrate`'s ``seed``.
-    reference_total : object
-        Its ``reference_total``.
-    estimator_options : dict
-        Its ``**estimator_options``.
-
-    Returns
-    -------
-    int
-        The seed.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the argument.
-    """
+    ``estimator=``); returns the seed as an int."""
     seed = check_seed(seed)
     if reference_total is not None and (isinstance(reference_total, (bool, str, bytes)) or
                                         not isinstance(reference_total, (int, float, np.number))):
@@ -144,9 +89,18 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
               **estimator_options) -> Calibration:
     """Calibrate readings from a notebook: ``magexp.calibrate(readings, unit="uT", estimator="lm")``.
 
-    Fits ``B = W (r - o)`` (the total field ``|B|`` against the reference, Ding 2024 eq 18 as the
-    objective; or the vector field, Yuan 2018 eq 8) with the model ``model=auto`` chooses by held-out
-    spread, then checks it (the acceptance gate, :mod:`magexp.calibration.checks`).
+    Fits the calibration ``B_i = W (r_i - o)`` of raw readings ``r_i`` (Ding 2024 eq 9, ``W = M^-1`` and
+    ``o = I``; Yuan 2018's ``W = S^-1``, ``o = b``) by minimising, with ``objective="scalar"``, the total-field
+    RMS against the reference ``B_a`` (Ding 2024 eqs 17-18)
+
+    .. math:: \\mathrm{RMS} = \\sqrt{\\tfrac1N \\sum_i (\\lVert W (\\mathbf r_i - \\mathbf o) \\rVert - B_a)^2}
+
+    or, with ``objective="vector"``, the vector misfit to the attitudes' reference vectors (Yuan 2018 eq 8)
+
+    .. math:: F = \\sum_i \\lVert C_i^b \\mathbf H_i - W (\\mathbf r_i - \\mathbf o) \\rVert
+
+    with the model ``model=auto`` chooses by held-out spread (:mod:`magexp.calibration.models`), then checks
+    it (the acceptance gate, :func:`magexp.calibration.checks.gate`).
 
     Parameters
     ----------
@@ -196,7 +150,20 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
     Raises
     ------
     MagexpError
-        One line for degenerate data, a failed estimator or bad input.
+        One line for bad input (any argument above, a seed outside ``[0, MAX_SEED]`` (:data:`magexp.errors.MAX_SEED`), an unreadable
+        recording), degenerate data, a failed estimator or, with ``checks``, a calibration failing the gate.
+
+    See Also
+    --------
+    magexp.calibration.result.Calibration.load : read back a saved calibration.
+
+    References
+    ----------
+    Ding Xuezhen, *Integrated calibration of sensor errors with improved PSO algorithm*, Digital Ocean &
+    Underwater Warfare 7(3):285-292, 2024 (eqs 9, 17, 18).
+
+    Yuan Yujia, Wang Wei, Chen Xingbang, *Particle swarm optimization with MEMS gyro-aided for magnetometer
+    calibration*, Navigation Positioning & Timing 5(6):92-98, 2018 (eqs 1, 8).
     """
     check_limits()
     rec = as_recording(readings, unit=unit)

@@ -54,17 +54,7 @@ OFFSET_MARGIN = 0.5
 
 @dataclass(frozen=True)
 class CalibrationBox:
-    """Per-entry bounds of ``[vec(W) (row-major, 9), o (3)]`` and how they were derived.
-
-    Parameters
-    ----------
-    lower, upper : numpy.ndarray
-        ``(12,)`` bounds.
-    how : str
-        One line: the centre and the margins, or why the closed form could not centre the box.
-    centred : bool
-        Whether the box is centred on the closed-form fit (False: the readings' range).
-    """
+    """Per-entry bounds of ``[vec(W) (row-major, 9), o (3)]`` and how they were derived."""
 
     lower: np.ndarray
     upper: np.ndarray
@@ -72,58 +62,22 @@ class CalibrationBox:
     centred: bool = True
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """The box as bound vectors (copies).
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (12,)
-            ``[vec(W) row-major, o]``.
-        """
+        """The box as bound vectors (copies)."""
         return self.lower.copy(), self.upper.copy()
 
     def contains(self, x: np.ndarray) -> bool:
-        """Whether ``x`` lies inside the box (faces included).
-
-        Parameters
-        ----------
-        x : numpy.ndarray
-            ``(12,)`` parameters.
-
-        Returns
-        -------
-        bool
-            ``lower <= x <= upper`` in every entry.
-        """
+        """Whether ``x`` lies inside the box (faces included)."""
         return bool(np.all((self.lower <= x) & (x <= self.upper)))
 
     def record(self) -> dict:
-        """The box for ``calibration.json``.
-
-        Returns
-        -------
-        dict
-            ``{lower, upper, how}``.
-        """
+        """The box for ``calibration.json``."""
         return {"lower": self.lower.tolist(), "upper": self.upper.tolist(), "how": self.how}
 
 
 def closed_form(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
     """``(W, o)`` of the algebraic ellipsoid fit (:func:`magexp.core.ellipsoid.fit_ellipsoid`'s quadric), its
     null vector from the 10 x 10 scatter of the normalised features (5 ms on 22 744 readings, 90 ms by an
-    SVD of the whole design); None when it is not an ellipsoid.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    radius : float
-        The fit's radius (the mean reference total).
-
-    Returns
-    -------
-    tuple or None
-        ``(W (3, 3) symmetric positive definite, o (3,))``, or None.
-    """
+    SVD of the whole design); None when it is not an ellipsoid."""
     c, s, u = normalise(readings)
     design = quadratic_features(u) * LINEAR_TWICE
     p = np.linalg.eigh(design.T @ design)[1][:, 0]
@@ -140,20 +94,7 @@ def _range_box(readings: np.ndarray, radius: float, why: str) -> CalibrationBox:
 def calibration_box(readings: np.ndarray, radius: float) -> CalibrationBox:
     """The search box of a scalar calibration fit (module docstring): the closed-form ellipsoid fit of
     ``readings`` at ``radius``, ``W`` within :data:`MATRIX_MARGIN` ``λ_max`` and ``o`` within
-    :data:`OFFSET_MARGIN` ``a_min`` of it; the readings' range where that fit fails.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    radius : float
-        The fit's radius (the mean reference total, or the estimated ``R0``).
-
-    Returns
-    -------
-    CalibrationBox
-        The box, its closed-form centre inside it (checked), and how it was derived.
-    """
+    :data:`OFFSET_MARGIN` ``a_min`` of it; the readings' range where that fit fails."""
     fitted = closed_form(readings, radius)
     if fitted is None:
         return _range_box(readings, radius, "the closed-form ellipsoid fit failed (the readings do not lie on an "

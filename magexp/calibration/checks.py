@@ -31,20 +31,7 @@ RECORD = "record again while turning the sensor slowly through as many orientati
 def check_readings(readings: np.ndarray, name: str) -> None:
     """Fail in one line if the raw readings cannot determine a calibration: too few distinct
     readings, readings that barely move (one attitude; an offset over ~20 times the field would
-    look the same), or readings in one plane.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    name : str
-        The recording's name, which the line names.
-
-    Raises
-    ------
-    MagexpError
-        Degenerate readings.
-    """
+    look the same), or readings in one plane."""
     ordered = readings[np.lexsort(readings.T)]  # distinct rows by a sort: np.unique(axis=0) took 70 ms on 22 k readings
     distinct = int(np.any(np.diff(ordered, axis=0) != 0, axis=1).sum()) + 1 if len(ordered) else 0
     if distinct < MIN_DISTINCT:
@@ -69,29 +56,7 @@ def check_fit(name: str, estimator: str, success: bool, message: str, cover: dic
     or too few distinct directions. ``raw_cover``: the coverage of the raw readings about the
     centre of their fitted sphere (what a failed fit's message quotes). Where the raw readings cover
     at least :data:`PARTIAL` of the sphere about that centre and only the fit's centre makes them look like one
-    attitude or too few directions, the fit collapsed, and the line says so instead of blaming the recording.
-
-    Parameters
-    ----------
-    name : str
-        The recording's name, which the line names.
-    estimator : str
-        The estimator's name, or the fit's own (``"gyro fit"``, ``"sphere fit"``: a model fitted whatever
-        ``estimator`` is, named as such, not as an estimator the user did not run).
-    success : bool
-        The fit's success.
-    message : str
-        The fit's message.
-    cover : dict
-        :func:`magexp.core.identifiability.coverage` of the calibrated directions.
-    raw_cover : dict
-        The same of the raw readings about their sphere's centre.
-
-    Raises
-    ------
-    MagexpError
-        A failed or collapsed fit.
-    """
+    attitude or too few directions, the fit collapsed, and the line says so instead of blaming the recording."""
     who = estimator if estimator.endswith(" fit") else f"estimator={estimator!r}"
     if not success:
         why = message.splitlines()[0] if message else "no message"
@@ -128,70 +93,26 @@ BUDGET_KEYS = ("n_iterations", "max_evaluations", "max_nfev", "max_iter")
 
 
 def budget_key(estimator) -> str | None:
-    """The option of ``estimator`` that gives it more iterations (:data:`BUDGET_KEYS`), or None.
-
-    Parameters
-    ----------
-    estimator : estimator
-        The estimator.
-
-    Returns
-    -------
-    str or None
-        The key (``n_iterations``, ``max_evaluations``, ...).
-    """
+    """The option of ``estimator`` that gives it more iterations (:data:`BUDGET_KEYS`), or None."""
     return next((k for k in BUDGET_KEYS if hasattr(estimator, k)), None)
 
 
 def estimator_failed(message: str) -> MagexpError:
     """The :class:`MagexpError` of a user's estimator that failed (:func:`magexp.calibration.model_fit.searched`),
     marked ``broken_estimator``: a broken estimator, not a model the readings cannot support, so the held-out check
-    and ``model=auto`` (:func:`is_broken_estimator`) let it through instead of counting an unfit fold.
-
-    Parameters
-    ----------
-    message : str
-        The one line.
-
-    Returns
-    -------
-    MagexpError
-        The error, to be raised (``from`` the estimator's own exception).
-    """
+    and ``model=auto`` (:func:`is_broken_estimator`) let it through instead of counting an unfit fold."""
     error = MagexpError(message)
     error.broken_estimator = True
     return error
 
 
 def is_broken_estimator(error: BaseException) -> bool:
-    """Whether ``error`` is :func:`estimator_failed`'s (a user's estimator failed).
-
-    Parameters
-    ----------
-    error : BaseException
-        A caught error.
-
-    Returns
-    -------
-    bool
-        True for a broken estimator's error.
-    """
+    """Whether ``error`` is :func:`estimator_failed`'s (a user's estimator failed)."""
     return bool(getattr(error, "broken_estimator", False))
 
 
 def estimator_name(estimator) -> str:
-    """The name of ``estimator`` for a message: its ``name``, else its class's (a user's estimator may have none).
-
-    Parameters
-    ----------
-    estimator : object
-        An estimator.
-
-    Returns
-    -------
-    str
-        Its name.
-    """
+    """The name of ``estimator`` for a message: its ``name``, else its class's (a user's estimator may have none)."""
     name = getattr(estimator, "name", None)
     return name if isinstance(name, str) and name else type(estimator).__name__
 
@@ -201,26 +122,7 @@ def check_optimum(name: str, estimator, value: float, closed_form: float | None,
     spread, or the held-out spread of ``model=full``) over :data:`OPTIMUM_FACTOR` times that of the closed-form
     ellipsoid fit of the same readings (``closed_form``; None or NaN when that fit is not an ellipsoid, and
     nothing is checked). The line names the closed-form fit that reached it, not the recording, and the
-    estimator's budget option (:func:`budget_key`).
-
-    Parameters
-    ----------
-    name : str
-        The recording's name, which the line names.
-    estimator : estimator
-        The iterative estimator.
-    value : float
-        Its spread.
-    closed_form : float or None
-        The closed-form ellipsoid fit's.
-    what : str
-        What is compared, for the line.
-
-    Raises
-    ------
-    MagexpError
-        ``value`` over :data:`OPTIMUM_FACTOR` times ``closed_form``.
-    """
+    estimator's budget option (:func:`budget_key`)."""
     if closed_form is None or not np.isfinite(closed_form) or value <= OPTIMUM_FACTOR * closed_form:
         return
     mine = (f"its {what} {100 * value:.3g} % is {value / closed_form:.3g} times" if np.isfinite(value)
@@ -266,6 +168,7 @@ ADVICE = {
 
 
 def _pair(value, key: str) -> tuple[float, float]:
+    """``(low, high)`` of a range threshold ``gate.<key>`` with ``0 <= low < high``, else one line."""
     try:
         low, high = (float(v) for v in value)
     except (TypeError, ValueError):
@@ -276,23 +179,7 @@ def _pair(value, key: str) -> tuple[float, float]:
 
 
 def gate_thresholds(overrides=None) -> dict:
-    """:data:`GATE` with ``overrides`` (a mapping of ``gate.*``), each checked; unknown keys refused.
-
-    Parameters
-    ----------
-    overrides : mapping or None
-        ``gate.*`` values.
-
-    Returns
-    -------
-    dict
-        The thresholds.
-
-    Raises
-    ------
-    MagexpError
-        An unknown key or a bad value.
-    """
+    """:data:`GATE` with ``overrides`` (a mapping of ``gate.*``), each checked; unknown keys refused."""
     out = dict(GATE)
     if overrides is not None and not isinstance(overrides, Mapping):
         raise MagexpError(f"gate={overrides!r} is not allowed: give a mapping of the gate's keys to thresholds "
@@ -314,18 +201,9 @@ def gate_thresholds(overrides=None) -> dict:
 
 def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, estimated: bool, to_mg,
          thresholds: dict | None = None) -> list[dict]:
-    """The acceptance gate: the checks a calibration fails, each ``{check, value, threshold, line}``.
-
-    Parameters
-    ----------
-    w : the calibration's ``W``.
-    metrics : its spreads (``spread_before``, ``heldout_spread`` if measured, ``rms_after``).
-    raw_radius : radius of the sphere fitted to the raw readings (recording's unit).
-    reference : the mean reference total (recording's unit).
-    estimated : True when no reference was given (the radius-versus-reference check is skipped).
-    to_mg : mGauss per unit of the recording, or None for a raw-count unit (absolute checks skipped;
-        the RMS is checked relative to the reference).
-    thresholds : :func:`gate_thresholds` (default :data:`GATE`).
+    """The acceptance gate: the checks a calibration fails, each ``{check, value, threshold, line}``; ``metrics``
+    its spreads, ``raw_radius`` and ``reference`` in the recording's unit, ``to_mg`` mGauss per unit (None for
+    counts: absolute checks skipped, the RMS checked relative to the reference), ``estimated`` no reference given.
 
     Checks (thresholds in :data:`GATE`): the held-out spread below ``heldout_vs_raw`` times the raw
     spread; ``W``'s singular values ``σ`` with ``σ_max / σ_min <= max_anisotropy`` and each
@@ -339,11 +217,6 @@ def gate(w: np.ndarray, metrics: dict, *, raw_radius: float, reference: float, e
     not fitted to (``metrics["heading_left_deg"]``, :func:`magexp.calibration.heading.worst_left`) at most
     ``max_heading_deg`` (default 10°: the deviation 14 CFR 25.1327(b) and 29.1327(b) allow a
     compensated aircraft compass, in level flight, on any heading).
-
-    Returns
-    -------
-    list of dict
-        The failed checks (empty: the gate passed).
     """
     t = GATE if thresholds is None else thresholds
     failed = []
@@ -438,19 +311,6 @@ def _rms_check(rms: float, reference: float, to_mg, t: dict, noise: float = 0.0)
 
 
 def refuse(name: str, failed: list[dict]) -> None:
-    """Raise the gate's one line: every failed check, then how to override.
-
-    Parameters
-    ----------
-    name : str
-        The recording's name, which the line names.
-    failed : list of dict
-        :func:`gate`'s failed checks.
-
-    Raises
-    ------
-    MagexpError
-        Always: the one line.
-    """
+    """Raise the gate's one line: every failed check, then how to override."""
     raise MagexpError(f"{name}: calibration refused, nothing written: " + "; ".join(f["line"] for f in failed)
                       + "; accept=true writes it anyway, with these failures recorded")

@@ -31,7 +31,7 @@ from magexp.core.formats import LOG_SUFFIXES, detect
 from magexp.core.geometry import axis_map
 from magexp.core.recordings import READERS, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_positive_int, exit_code
+from magexp.errors import MagexpError, check_positive_int, check_seed, exit_code
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options
@@ -44,23 +44,7 @@ from magexp.run.runner import build
 
 def calibrate_config(argv: list[str]):
     """The config of ``conf/calibrate.yaml`` with the ``KEY=VALUE`` overrides ``argv``, composed as every
-    command's config is (:func:`magexp.run.compose.compose_config`).
-
-    Parameters
-    ----------
-    argv : list of str
-        The ``KEY=VALUE`` overrides.
-
-    Returns
-    -------
-    DictConfig
-        The composed config.
-
-    Raises
-    ------
-    MagexpError
-        An argument without ``=``, a Hydra key, a code target or value, an unknown choice.
-    """
+    command's config is (:func:`magexp.run.compose.compose_config`)."""
     bad = [a for a in argv if "=" not in a]
     if bad:
         raise MagexpError(f"argument {bad[0]!r} is not allowed: magexp calibrate takes KEY=VALUE overrides "
@@ -80,23 +64,7 @@ def calibrate_config(argv: list[str]):
 
 
 def field_keys(cfg) -> dict:
-    """``field.*`` of ``cfg``, with the older ``igrf.*`` keys as aliases (``field.model=igrf``).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The command's config; its ``field.*`` and ``igrf.*`` keys are read.
-
-    Returns
-    -------
-    dict
-        ``model``, ``latitude``, ``longitude``, ``altitude_km``, ``date``.
-
-    Raises
-    ------
-    MagexpError
-        Both ``igrf.*`` and ``field.*`` given, or a bad value.
-    """
+    """``field.*`` of ``cfg``, with the older ``igrf.*`` keys as aliases (``field.model=igrf``)."""
     place = {k: v for k, v in dict(cfg.get("field") or {}).items()}
     old = {k: v for k, v in dict(cfg.get("igrf") or {}).items() if v is not None and k != "altitude_km"}
     if old:
@@ -114,20 +82,7 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
     """The field model's total where and when ``rec`` was recorded (:mod:`magexp.core.field_model`):
     ``field.latitude/longitude/altitude_km/date`` (each, if not given, from the log's GPS), or None
     when neither the command line nor the log gives a place. In the recording's unit; a raw-count
-    recording is calibrated to the model's total in nT (``W`` then maps counts to nT).
-
-    Parameters
-    ----------
-    cfg
-        As in :func:`run`.
-    rec : Recording
-        The recording, whose log may give the place and date (its GPS).
-
-    Returns
-    -------
-    Reference or None
-        The model's total per reading, its source and record, or None.
-    """
+    recording is calibrated to the model's total in nT (``W`` then maps counts to nT)."""
     place = field_keys(cfg)
     given = unplaced(place, place_of(rec))
     if given:
@@ -146,27 +101,7 @@ def reference_from_field(cfg, rec: Recording) -> Reference | None:
 
 
 def run(cfg, *, live: bool = False) -> Calibration:
-    """Load, calibrate, check and write as ``cfg`` says; print the summary.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`), checked here first
-        (:func:`check_options`).
-    live : bool
-        ``data.path`` is the stream a live run kept in ``out`` (:func:`magexp.calibration.live.read_live`):
-        written by this run, beside the outputs by design, so not refused as a recording inside ``out``.
-
-    Returns
-    -------
-    Calibration
-        The calibration written.
-
-    Raises
-    ------
-    MagexpError
-        Bad input, degenerate data, a failed fit or a refused one; nothing is written.
-    """
+    """Load, calibrate, check and write as ``cfg`` says; print the summary."""
     data = cfg.data
     check_options(cfg)
     rec = recording_of(cfg)
@@ -178,7 +113,7 @@ def run(cfg, *, live: bool = False) -> Calibration:
     protected = [] if live else recording_files(rec)
     check_out(out_dir, overwrite=overwrite, export=target, draw=draw, recording=protected)
     estimator = build(cfg.estimator, f"estimator {cfg.estimator.get('name')!r}")
-    seed = check_positive_int(cfg.seed, "seed", minimum=0)
+    seed = check_seed(cfg.seed)
     _, est_rng = run_generators(seed)
     reference = data.get("reference_total")
     if reference is None:
@@ -204,18 +139,7 @@ def check_options(cfg) -> None:
     ``counts_nt`` and ``max_rotation_deg`` (used only by some exports), ``auto_margin`` (only by
     ``model=auto``), ``live.*`` (only by a live stream), ``folds``, ``data.reference_total``: a bad value is
     refused in one line, not ignored. Then every key against its schema
-    (:func:`magexp.run.keys.check_schema`: type, number range, non-empty text, a pair's length).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
-
-    Raises
-    ------
-    MagexpError
-        A bad value of those keys.
-    """
+    (:func:`magexp.run.keys.check_schema`: type, number range, non-empty text, a pair's length)."""
     field_keys(cfg)
     if cfg.get("counts_nt") is not None:
         check_counts_nt(cfg.counts_nt)
@@ -231,23 +155,7 @@ def check_options(cfg) -> None:
 
 
 def recording_of(cfg) -> Recording:
-    """The recording ``data.*`` names (its size checked before it is read; ``instance``: a DataFlash log's compass).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
-
-    Returns
-    -------
-    Recording
-        The recording read (:func:`magexp.core.recordings.load_recording`).
-
-    Raises
-    ------
-    MagexpError
-        No ``data.path``, a file over the readings limit, or a malformed file.
-    """
+    """The recording ``data.*`` names (its size checked before it is read; ``instance``: a DataFlash log's compass)."""
     data = cfg.data
     if data.get("path") is None or not str(data.path).strip():
         raise MagexpError(f"data.path={data.get('path')!r} is not allowed: give data.path=<recording file>")
@@ -266,20 +174,7 @@ GPS_FORMATS = ("ulog", "dataflash", "rosbag")
 
 def unplaced(place: dict, known: dict | None = None) -> str | None:
     """The first ``field.*`` key given (``longitude``, ``altitude_km``, ``date``) when no latitude is, neither in
-    ``place`` nor in ``known`` (a log's GPS), else None: a field model needs a place.
-
-    Parameters
-    ----------
-    place : dict
-        :func:`field_keys` of the command line.
-    known : dict or None
-        What the recording's log gives (:func:`magexp.core.field_model.place_of`).
-
-    Returns
-    -------
-    str or None
-        ``key=value`` of the first such key.
-    """
+    ``place`` nor in ``known`` (a log's GPS), else None: a field model needs a place."""
     if place.get("latitude") is not None or (known or {}).get("latitude") is not None:
         return None
     given = [f"field.{k}={place[k]!r}" for k in ("longitude", "altitude_km", "date") if place.get(k) is not None]
@@ -289,20 +184,7 @@ def unplaced(place: dict, known: dict | None = None) -> str | None:
 def check_data_options(cfg, file: Path) -> None:
     """``data.*`` and ``field.*`` checked before the recording ``file`` is read: ``data.format`` a format of
     :data:`magexp.core.recordings.READERS` (``rosbag``: a bag's file or folder), the axis maps, and a field
-    model's date or longitude only with a place (a recording of a format that cannot carry a GPS place).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
-    file : Path
-        The recording's path (:func:`magexp.core.recordings.resolve`).
-
-    Raises
-    ------
-    MagexpError
-        One line naming the key.
-    """
+    model's date or longitude only with a place (a recording of a format that cannot carry a GPS place)."""
     data, fmt = cfg.data, cfg.data.get("format") or "auto"
     if fmt not in ("auto", *READERS):
         raise MagexpError(f"data.format={fmt!r} is not allowed: choose one of auto, {', '.join(READERS)}")
@@ -321,25 +203,7 @@ def check_data_options(cfg, file: Path) -> None:
 def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
     """``(target, options)`` of ``export=<target>`` (``(None, None)`` without one), checked before the fit:
     the target's name, and its options on an identity calibration (``counts_nt`` for raw counts, the
-    rotation limit, the slot: :func:`export_options`).
-
-    Parameters
-    ----------
-    cfg
-        As in :func:`run`.
-    rec : Recording
-        The recording: its unit, and a ULog's calibration slot.
-
-    Returns
-    -------
-    tuple
-        ``(target or None, options or None)``.
-
-    Raises
-    ------
-    MagexpError
-        An unknown target or a refused option.
-    """
+    rotation limit, the slot: :func:`export_options`)."""
     target = cfg.get("export")
     if target is None:
         return None, None
@@ -353,22 +217,7 @@ def export_of(cfg, rec: Recording) -> tuple[str | None, dict | None]:
 def export_options(cfg, target: str, rec: Recording) -> dict:
     """The options of ``export=<target>`` from the command line (those the target takes,
     :func:`magexp.calibration.export.options_of`): ``counts_nt``, ``max_rotation_deg`` and ``instance``, the
-    parameter slot (null: a ULog's calibration slot, else 0; a DataFlash log's instance is the one read).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
-    target : str
-        The export target.
-    rec : Recording
-        The recording whose calibration is exported (a ULog's slot: ``meta["calibration_slot"]``).
-
-    Returns
-    -------
-    dict
-        The options ``target`` takes, given.
-    """
+    parameter slot (null: a ULog's calibration slot, else 0; a DataFlash log's instance is the one read)."""
     slot = cfg.get("instance")
     given = {"counts_nt": cfg.get("counts_nt"), "max_rotation_deg": cfg.get("max_rotation_deg"),
              "instance": int(rec.meta.get("calibration_slot", 0)) if slot is None else slot}
@@ -376,25 +225,7 @@ def export_options(cfg, target: str, rec: Recording) -> dict:
 
 
 def flag(cfg, key: str) -> bool:
-    """A true/false key of ``cfg`` (default false), else one line.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config of ``conf/calibrate.yaml`` (:func:`calibrate_config`).
-    key : str
-        A true/false key.
-
-    Returns
-    -------
-    bool
-        Its value.
-
-    Raises
-    ------
-    MagexpError
-        A value that is not true or false.
-    """
+    """A true/false key of ``cfg`` (default false), else one line."""
     return check_flag(cfg.get(key, False), key)
 
 
@@ -403,13 +234,7 @@ def flag(cfg, key: str) -> bool:
 def command(argv: list[str]) -> None:
     """``magexp calibrate KEY=VALUE ...``: compose, check, calibrate, write; errors are raised (the
     one error path, :func:`magexp.errors.guarded`, turns them into one line and an exit code).
-    ``--help`` (``-h``) prints :func:`help_text`.
-
-    Parameters
-    ----------
-    argv : list of str
-        The arguments after ``calibrate``.
-    """
+    ``--help`` (``-h``) prints :func:`help_text`."""
     if any(a in ("--help", "-h") for a in argv):
         print(help_text(options("estimator")))
         return
@@ -429,18 +254,7 @@ def command(argv: list[str]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m magexp.calibration.command KEY=VALUE ...`` (= ``magexp calibrate``): 0 on success; one
-    line on stderr and exit 2 on bad input or degenerate data (nothing written), 3 on a bug.
-
-    Parameters
-    ----------
-    argv : list of str or None
-        The arguments after ``calibrate`` (None: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        The exit code.
-    """
+    line on stderr and exit 2 on bad input or degenerate data (nothing written), 3 on a bug."""
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 

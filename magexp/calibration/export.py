@@ -115,31 +115,6 @@ def ardupilot(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance
     written as ``COMPASS_ORIENT`` (applied before the offsets): ``M = R_n S' R_n^T``, ``OFS = −R_n o'``; farther than
     ``max_rotation_deg`` from every standard one, ``R`` itself as the custom rotation (``COMPASS_ORIENT=101``,
     ``CUST_ROT_ENABLE=1``, ``CUST_ROT1_ROLL``/``_PITCH``/``_YAW``; :data:`~magexp.calibration.firmware.CUSTOM_ORIENTATION`).
-
-    Parameters
-    ----------
-    w, offset, unit, field_unit, counts_nt, max_rotation_deg, orient
-        As :func:`to_firmware` (``symmetric=True``; ``orient``: ``COMPASS_ORIENT`` written).
-    instance : int
-        The compass, 0, 1 or 2.
-    notes : dict, optional
-        ``key: text`` comment lines written at the file's head.
-    site : tuple, optional
-        ``(total, (inclination_deg, source))``: the reference total (the calibration's field unit) and the site's
-        inclination (:func:`magexp.calibration.heading.inclination_of`), for a comment line on the heading error
-        these parameters leave against the calibration (:func:`magexp.calibration.heading.export_line`); None: none.
-
-    Returns
-    -------
-    Export
-        Target ``"ardupilot"``, the ``.param`` text, ``values`` (parameter name -> number) and ``warnings``
-        (values outside ArduPilot's calibrator ranges, :data:`ARDUPILOT_DIAGONAL`,
-        :data:`ARDUPILOT_OFFDIAGONAL`, :data:`ARDUPILOT_OFFSET_MAX`).
-
-    Raises
-    ------
-    MagexpError
-        One line for an ``instance`` not in 0-2, and as :func:`to_firmware` (``symmetric=True``).
     """
     if instance not in (0, 1, 2):
         raise MagexpError(f"instance={instance!r} is not allowed for ardupilot: choose 0, 1 or 2 (the compass)")
@@ -191,31 +166,7 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
     of a ULog's readings, :func:`magexp.core.readers.onboard_rotation_of`); None: the identity (a
     total-field calibration, or readings in the body frame). ``instance``: the slot ``n`` of
     ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``). ``orient`` (without ``rotation``): ``W``'s rotation
-    was determined (:func:`to_firmware`); its standard rotation is written as ``CAL_MAGn_ROT``.
-
-    Parameters
-    ----------
-    w, offset, unit, field_unit, counts_nt, max_rotation_deg, orient
-        As :func:`to_firmware` (``symmetric=True``; ``orient``: ``CAL_MAGn_ROT`` written, not with ``rotation``).
-    instance : int
-        The slot ``n`` of ``CAL_MAGn_*``, 0-3.
-    rotation : array_like, shape (3, 3), optional
-        PX4's ``R`` (board or ``CAL_MAGn_ROT``) taken out of ``W`` first: ``Rᵀ W`` is exported.
-    notes, site : optional
-        Comment lines, as :func:`ardupilot`'s.
-
-    Returns
-    -------
-    Export
-        Target ``"px4"``, the ``.params`` text (``vehicle component name value type``, type
-        :data:`REAL32` or :data:`INT32`) and ``values`` (parameter name -> number).
-
-    Raises
-    ------
-    MagexpError
-        One line for an ``instance`` not in 0-3, a ``rotation`` that is not a 3 × 3 rotation matrix, and as
-        :func:`to_firmware` (``symmetric=True``).
-    """
+    was determined (:func:`to_firmware`); its standard rotation is written as ``CAL_MAGn_ROT``."""
     if instance not in (0, 1, 2, 3):
         raise MagexpError(f"instance={instance!r} is not allowed for px4: choose 0, 1, 2 or 3 (CAL_MAGn)")
     if rotation is not None:
@@ -244,29 +195,7 @@ def ros(w, offset, unit: str, *, field_unit=None, counts_nt=None, node: str = "/
         namespace: str = "magnetometer_calibration", notes: dict | None = None, site=None) -> Export:
     """A ROS 2 parameter file: ``<node>: ros__parameters: <namespace>: {convention, unit, offset,
     matrix}``; ``B = W (r − o)`` in tesla (``sensor_msgs/MagneticField``'s unit), ``matrix`` the
-    full ``W`` row-major (9 numbers), ``offset`` 3 numbers.
-
-    Parameters
-    ----------
-    w, offset, unit, field_unit, counts_nt
-        As :func:`to_firmware` (the target unit tesla, ``W`` kept whole).
-    node : str
-        The node the parameters are for (``/**``: every node).
-    namespace : str
-        The parameters' namespace under ``ros__parameters``.
-    notes, site : optional
-        Comment lines, as :func:`ardupilot`'s.
-
-    Returns
-    -------
-    Export
-        Target ``"ros"``, the YAML text and ``values`` (``convention``, ``unit``, ``offset``, ``matrix``).
-
-    Raises
-    ------
-    MagexpError
-        As :func:`to_firmware` (a non-finite calibration, a unit without a factor to tesla).
-    """
+    full ``W`` row-major (9 numbers), ``offset`` 3 numbers."""
     c = to_firmware(w, offset, unit, TARGET_UNITS["ros"], field_unit=field_unit, counts_nt=counts_nt)
     values = {"convention": "B = W (r - o), W row-major", "unit": "T",
               "offset": [float(v) for v in c.offset], "matrix": [float(v) for v in c.matrix.ravel()]}
@@ -282,29 +211,7 @@ def c_header(w, offset, unit: str, *, field_unit=None, name: str = "MAG_CAL", no
              site=None) -> Export:
     """A C header: ``static const float <NAME>_OFFSET[3]``, ``<NAME>_MATRIX[3][3]`` (row-major) and
     ``static inline void <name>_apply(const float raw[3], float out[3])`` computing ``out = W (raw − o)``,
-    in the recording's units (the raw unit in, ``field_unit`` out), float32 literals (``%.9g``).
-
-    Parameters
-    ----------
-    w, offset, unit, field_unit
-        As :func:`to_firmware` (units kept: no target unit).
-    name : str
-        A C identifier: the arrays' prefix (upper case) and the function's (lower case).
-    notes : dict, optional
-        Comment lines in the header's opening comment.
-    site : tuple, optional
-        As :func:`ardupilot`'s.
-
-    Returns
-    -------
-    Export
-        Target ``"c"``, the header text and ``values`` (``offset``, ``matrix`` as lists).
-
-    Raises
-    ------
-    MagexpError
-        One line for a ``name`` that is not a C identifier, and as :func:`to_firmware`.
-    """
+    in the recording's units (the raw unit in, ``field_unit`` out), float32 literals (``%.9g``)."""
     if not _IDENTIFIER.match(str(name)):
         raise MagexpError(f"name={name!r} is not allowed: it must be a C identifier (letters, digits, _)")
     c = to_firmware(w, offset, unit, TARGET_UNITS["c"], field_unit=field_unit)
@@ -332,23 +239,7 @@ RENDERERS = {"ardupilot": ardupilot, "px4": px4, "ros": ros, "c": c_header}
 
 
 def options_of(target: str) -> tuple[str, ...]:
-    """The keyword options ``target``'s renderer takes (:data:`RENDERERS`), e.g. ``counts_nt``, ``instance``.
-
-    Parameters
-    ----------
-    target : str
-        One of :data:`TARGETS`.
-
-    Returns
-    -------
-    tuple of str
-        The names of the renderer's keyword-only parameters.
-
-    Raises
-    ------
-    MagexpError
-        One line for a ``target`` not in :data:`TARGETS`.
-    """
+    """The keyword options ``target``'s renderer takes (:data:`RENDERERS`), e.g. ``counts_nt``, ``instance``."""
     if target not in RENDERERS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
     return tuple(p.name for p in inspect.signature(RENDERERS[target]).parameters.values() if p.kind == p.KEYWORD_ONLY)
@@ -358,30 +249,7 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
     """The :class:`Export` of ``target`` (:data:`TARGETS`) for ``B = W (r − o)`` in ``unit``;
     ``options``: the target function's keywords (``field_unit``, ``counts_nt``, ``instance``,
     ``max_rotation_deg``, ``notes``, ...); ``counts_nt`` and ``max_rotation_deg`` checked even where unused
-    (a unit with a factor, a target without the rotation limit): a bad value is refused, not ignored.
-
-    Parameters
-    ----------
-    target : str
-        One of :data:`TARGETS`.
-    w, offset : array_like
-        ``W`` (3 × 3) and ``o`` (3,) of magexp's ``B = W (r − o)``.
-    unit : str
-        The readings' unit.
-    **options
-        The renderer's keyword options (:func:`options_of`).
-
-    Returns
-    -------
-    Export
-        The target renderer's result (:func:`ardupilot`, :func:`px4`, :func:`ros`, :func:`c_header`; each
-        implements the firmware's convention of the module docstring).
-
-    Raises
-    ------
-    MagexpError
-        One line for an unknown ``target`` or option, a bad ``counts_nt`` or ``max_rotation_deg``, or as the renderer.
-    """
+    (a unit with a factor, a target without the rotation limit): a bad value is refused, not ignored."""
     if not isinstance(target, str) or target not in RENDERERS:
         raise MagexpError(f"export={target!r} is not allowed: choose one of {', '.join(TARGETS)}")
     unknown = sorted(set(options) - set(options_of(target)))
@@ -395,21 +263,7 @@ def render(target: str, w, offset, unit: str, **options) -> Export:
 
 
 def orientable(cal) -> bool:
-    """Whether the rotation of ``cal``'s ``W`` is the magnetometer's orientation (``orient`` of :func:`to_firmware`).
-
-    Parameters
-    ----------
-    cal : Calibration
-        A fitted or loaded calibration.
-
-    Returns
-    -------
-    bool
-        True for the gyro-aided model (it determines ``R``, the rotation from the magnetometer's axes to
-        the gyroscope's) on readings in the magnetometer's own axes; False for a total-field model
-        (``R`` is the identity) and for a flight log's readings (the firmware had already turned them by
-        its orientation parameter, which ``R`` would have to be composed with).
-    """
+    """Whether the rotation of ``cal``'s ``W`` is the magnetometer's orientation (``orient`` of :func:`to_firmware`)."""
     from_log = "onboard_calibration" in cal.report or (cal.recording is not None and "corrected" in cal.recording.meta)
     return cal.model == "gyro" and not from_log
 
@@ -417,19 +271,7 @@ def orientable(cal) -> bool:
 def firmware_correction(cal) -> Correction | str:
     """The correction a symmetric-matrix firmware (ArduPilot, PX4) would hold for ``cal``, every rotation allowed
     (the rotation it leaves out is then what ``max_rotation_deg`` must allow), or the line refusing it (a
-    mirrored ``W``): what :mod:`magexp.calibration.heading` measures as exported.
-
-    Parameters
-    ----------
-    cal : Calibration
-        A fitted or loaded calibration.
-
-    Returns
-    -------
-    Correction or str
-        :func:`~magexp.calibration.firmware.to_firmware`'s (units kept, ``orient`` as :func:`orientable`), or
-        its one-line refusal.
-    """
+    mirrored ``W``): what :mod:`magexp.calibration.heading` measures as exported."""
     try:
         return to_firmware(cal.w, cal.offset, cal.unit, None, symmetric=True, max_rotation_deg=180.0,
                            orient=orientable(cal))
@@ -440,28 +282,7 @@ def firmware_correction(cal) -> Correction | str:
 def of_calibration(cal, target: str, **options) -> Export:
     """The :class:`Export` of ``target`` for the :class:`~magexp.calibration.result.Calibration` ``cal``:
     ``options`` as :func:`render`; ``notes`` defaults to the recording, estimator and unit, ``field_unit``
-    to the calibration's. Refuses (one line) before anything is written: a caller renders first.
-
-    Parameters
-    ----------
-    cal : Calibration
-        A fitted or loaded calibration (its ``w``, ``offset``, ``unit``, ``field_unit``).
-    target : str
-        One of :data:`TARGETS`.
-    **options
-        As :func:`render`; ``orient`` defaults to :func:`orientable` where the target takes it, ``site`` to the
-        calibration's reference total and inclination (``report["heading"]``).
-
-    Returns
-    -------
-    Export
-        The rendered file, not yet written.
-
-    Raises
-    ------
-    MagexpError
-        As :func:`render`.
-    """
+    to the calibration's. Refuses (one line) before anything is written: a caller renders first."""
     options.setdefault("field_unit", cal.field_unit)
     if "orient" in options_of(target):
         options.setdefault("orient", orientable(cal))
@@ -478,31 +299,7 @@ def of_calibration(cal, target: str, **options) -> Export:
 def export(cal, target: str, path: str | Path | None = None, *, overwrite: bool = False, **options) -> Path:
     """Write ``target``'s file for the :class:`~magexp.calibration.result.Calibration` ``cal`` to ``path``
     (a folder: :data:`FILE_NAMES` inside it; None: the working folder); an existing file is replaced only
-    with ``overwrite`` and only if a calibration wrote it, never the recording (:func:`write`).
-
-    Parameters
-    ----------
-    cal : Calibration
-        A fitted or loaded calibration.
-    target : str
-        One of :data:`TARGETS`.
-    path : str or Path, optional
-        As :func:`write`'s.
-    overwrite : bool
-        As :func:`write`'s.
-    **options
-        As :func:`of_calibration`.
-
-    Returns
-    -------
-    Path
-        :func:`write`'s path.
-
-    Raises
-    ------
-    MagexpError
-        As :func:`of_calibration` and :func:`write`; nothing is written then.
-    """
+    with ``overwrite`` and only if a calibration wrote it, never the recording (:func:`write`)."""
     return write(of_calibration(cal, target, **options), path, overwrite=overwrite,
                  recording=recording_files(cal.recording))
 
@@ -510,31 +307,7 @@ def export(cal, target: str, path: str | Path | None = None, *, overwrite: bool 
 def write(out: Export, path: str | Path | None = None, *, overwrite: bool = False, recording=()) -> Path:
     """Write the rendered ``out`` to ``path`` (a folder: its default name inside; None: the working
     folder), atomically; refuse, in one line, a file that exists already unless ``overwrite``, and then one
-    that no calibration wrote or that is the recording (:func:`magexp.calibration.folder.check_file`).
-
-    Parameters
-    ----------
-    out : Export
-        A rendered export.
-    path : str or Path, optional
-        The file, or a folder (:data:`FILE_NAMES` of ``out.target`` inside), or None (the working folder).
-    overwrite : bool
-        Replace an existing file a calibration wrote (:func:`magexp.calibration.folder.is_calibrations`).
-    recording : iterable of Path
-        The files of the recording calibrated, never written over.
-
-    Returns
-    -------
-    Path
-        ``path``, or the file made in the folder ``path``.
-
-    Raises
-    ------
-    MagexpError
-        One line for a file that exists already (without ``overwrite``, or not a calibration's), the
-        recording, a folder that does not exist, or a destination :func:`magexp.run.folders.check_destination`
-        refuses.
-    """
+    that no calibration wrote or that is the recording (:func:`magexp.calibration.folder.check_file`)."""
     path = Path(".") if path is None else file_path(path, "export path")
     if path.is_dir():
         path = path / FILE_NAMES[out.target]

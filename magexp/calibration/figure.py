@@ -21,39 +21,12 @@ MAX_POINTS = 20_000
 
 
 def drawn(n: int, most: int = MAX_POINTS) -> np.ndarray:
-    """Indices of the readings drawn out of ``n``: all, or ``most`` evenly spaced ones.
-
-    Parameters
-    ----------
-    n : int
-        How many readings.
-    most : int
-        The most drawn.
-
-    Returns
-    -------
-    numpy.ndarray
-        The indices.
-    """
+    """Indices of the readings drawn out of ``n``: all, or ``most`` evenly spaced ones."""
     return np.arange(n) if n <= most else np.unique(np.linspace(0, n - 1, most).round().astype(int))
 
 
 def projections(axes, raw: np.ndarray, calibrated: np.ndarray, radius: float, unit: str) -> None:
-    """Three plane projections: raw and calibrated readings, and the reference circle.
-
-    Parameters
-    ----------
-    axes : sequence of Axes
-        Three axes.
-    raw : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    calibrated : numpy.ndarray
-        ``(N, 3)`` calibrated readings.
-    radius : float
-        The reference circle's radius.
-    unit : str
-        The unit of the axes.
-    """
+    """Three plane projections: raw and calibrated readings, and the reference circle."""
     t = np.linspace(0, 2 * np.pi, 200)
     for ax, (i, j, a, b) in zip(axes, PAIRS):
         ax.scatter(raw[:, i], raw[:, j], s=4, color="0.6", label="raw")
@@ -66,23 +39,7 @@ def projections(axes, raw: np.ndarray, calibrated: np.ndarray, radius: float, un
 
 
 def magnitudes(ax_trace, ax_hist, raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray, unit: str) -> None:
-    """Total field per reading, and its histogram, before and after.
-
-    Parameters
-    ----------
-    ax_trace : Axes
-        The trace's axes.
-    ax_hist : Axes
-        The histogram's axes.
-    raw : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    calibrated : numpy.ndarray
-        ``(N, 3)`` calibrated readings.
-    reference : numpy.ndarray
-        ``(N,)`` reference totals.
-    unit : str
-        The unit of the axes.
-    """
+    """Total field per reading, and its histogram, before and after."""
     before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
     k = drawn(len(before))
     ax_trace.plot(k, before[k], ".", ms=3, color="0.6", label="raw")
@@ -102,17 +59,7 @@ def magnitudes(ax_trace, ax_hist, raw: np.ndarray, calibrated: np.ndarray, refer
 def coverage_map(ax, raw: np.ndarray, centre: np.ndarray) -> None:
     """The sphere's :data:`~magexp.core.identifiability.CELLS` equal-area cells (their centres, in
     azimuth and ``z = sin(elevation)``, an equal-area map), filled where the raw directions about the
-    fitted centre reach: what the recording covered (the report's ``coverage_cells``).
-
-    Parameters
-    ----------
-    ax : Axes
-        The map's axes.
-    raw : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    centre : numpy.ndarray
-        ``(3,)`` the fitted centre.
-    """
+    fitted centre reach: what the recording covered (the report's ``coverage_cells``)."""
     u = raw - centre
     u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
     cells = fibonacci_sphere(CELLS)
@@ -138,17 +85,7 @@ HEADING_FLOOR = 1e-3
 
 def heading_panel(ax, curves: dict, note: str) -> None:
     """Heading error against heading, log scale: the worst ``|e|`` over attitudes (and folds) of each stage
-    (:func:`magexp.calibration.heading.curves`), at the floor :data:`HEADING_FLOOR` where smaller.
-
-    Parameters
-    ----------
-    ax : Axes
-        The panel's axes.
-    curves : dict
-        ``{label: (K,) degrees}`` at headings ``360 k / K``.
-    note : str
-        The panel's title (the inclination and its source).
-    """
+    (:func:`magexp.calibration.heading.curves`), at the floor :data:`HEADING_FLOOR` where smaller."""
     colours = {"raw": "0.5", "calibrated (held out)": "C0", "as exported": "C1"}
     for label, err in curves.items():
         psi = 360.0 * np.arange(len(err)) / len(err)
@@ -168,26 +105,7 @@ def calibration_figure(raw: np.ndarray, calibrated: np.ndarray, reference: np.nd
                        centre: np.ndarray | None = None, heading: tuple[dict, str] | None = None):
     """The whole figure: projections and (with the fitted ``centre``) the coverage map on top,
     magnitude trace and histogram (and with ``heading`` the heading error, :func:`heading_panel`) below;
-    returns it.
-
-    Parameters
-    ----------
-    raw, calibrated, reference
-        As :func:`magnitudes` (every reading: :func:`drawn` chooses those drawn).
-    unit : str
-        The calibrated field's unit.
-    title : str
-        The figure's title.
-    centre : numpy.ndarray or None
-        The fitted centre (the coverage map).
-    heading : tuple or None
-        ``(curves, note)`` of :func:`heading_panel`.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    returns it."""
     fig = plt.figure(figsize=(13.5 if centre is not None else 10.5, 6.6), layout="constrained")
     grid = fig.add_gridspec(2, 4 if centre is not None else 3)
     k = drawn(len(raw))

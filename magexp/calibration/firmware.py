@@ -102,79 +102,28 @@ class Correction:
 
 
 def polar(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(R, S)`` with ``W = R S``, ``R`` orthogonal, ``S`` symmetric positive semi-definite (SVD).
-
-    Parameters
-    ----------
-    w : array_like, shape (3, 3)
-        The calibration matrix ``W``.
-
-    Returns
-    -------
-    R : ndarray, shape (3, 3)
-        ``U Vᵀ`` of the SVD ``W = U Σ Vᵀ``: orthogonal (a rotation when ``det W > 0``).
-    S : ndarray, shape (3, 3)
-        ``V Σ Vᵀ``, symmetric (made exactly so) positive semi-definite; ``W = R S`` (the module
-        docstring's "Symmetrising W").
-    """
+    """``(R, S)`` with ``W = R S``, ``R`` orthogonal, ``S`` symmetric positive semi-definite (SVD)."""
     u, sigma, vt = np.linalg.svd(np.asarray(w, float))
     s = vt.T @ np.diag(sigma) @ vt
     return u @ vt, (s + s.T) / 2
 
 
 def standard_rotation(index: int) -> np.ndarray:
-    """The rotation matrix of a firmware's standard rotation.
-
-    Parameters
-    ----------
-    index : int
-        A key of :data:`STANDARD_ROTATIONS` (``COMPASS_ORIENT``, ``CAL_MAGn_ROT``).
-
-    Returns
-    -------
-    ndarray, shape (3, 3)
-        ``R_z(yaw) R_y(pitch) R_x(roll)`` (PX4's ``Dcmf{Eulerf{roll, pitch, yaw}}``; ArduPilot's
-        ``Vector3f::rotate``): a reading in the sensor's axes times it is the reading in the body's.
-    """
+    """The rotation matrix of a firmware's standard rotation."""
     roll, pitch, yaw = np.radians(STANDARD_ROTATIONS[index])
     return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
 
 
 def euler_321(rotation: np.ndarray) -> tuple[float, float, float]:
     """``(roll, pitch, yaw)`` in degrees with ``rotation = R_z(yaw) R_y(pitch) R_x(roll)`` (ArduPilot's
-    ``Matrix3::from_euler``, the order of its ``CUST_ROTn_*``; pitch in [-90, 90]).
-
-    Parameters
-    ----------
-    rotation : ndarray, shape (3, 3)
-        A rotation matrix.
-
-    Returns
-    -------
-    tuple of float
-        The three angles, degrees.
-    """
+    ``Matrix3::from_euler``, the order of its ``CUST_ROTn_*``; pitch in [-90, 90])."""
     r = np.asarray(rotation, float)
     return (float(np.degrees(np.arctan2(r[2, 1], r[2, 2]))), float(np.degrees(-np.arcsin(np.clip(r[2, 0], -1, 1)))),
             float(np.degrees(np.arctan2(r[1, 0], r[0, 0]))))
 
 
 def nearest_orientation(rotation: np.ndarray) -> tuple[int, float]:
-    """The standard rotation nearest to ``rotation`` and the angle left between them.
-
-    Parameters
-    ----------
-    rotation : ndarray, shape (3, 3)
-        A rotation matrix (``R`` of ``W = R S``).
-
-    Returns
-    -------
-    index : int
-        The key of :data:`STANDARD_ROTATIONS` minimising the angle of ``R_n^T R`` (the lowest on a tie:
-        ArduPilot's 26 and 27 equal 14 and 10).
-    residual_deg : float
-        That angle in degrees.
-    """
+    """The standard rotation nearest to ``rotation`` and the angle left between them."""
     indices = list(STANDARD_ROTATIONS)
     angles = np.rad2deg(rotation_angle(np.stack([standard_rotation(i).T @ rotation for i in indices])))
     best = int(np.argmin(angles))
@@ -187,23 +136,7 @@ def _number(value) -> float:
 
 
 def check_counts_nt(counts_nt) -> float:
-    """``counts_nt`` (nT per count) as a float, else one line.
-
-    Parameters
-    ----------
-    counts_nt : object
-        The nanotesla per count of the firmware's magnetometer driver (a raw-count recording's factor).
-
-    Returns
-    -------
-    float
-        ``counts_nt`` as a float.
-
-    Raises
-    ------
-    MagexpError
-        One line when ``counts_nt`` is not a finite number > 0 (a bool is not a number here).
-    """
+    """``counts_nt`` (nT per count) as a float, else one line."""
     value = _number(counts_nt)
     if not (np.isfinite(value) and value > 0):
         raise MagexpError(f"counts_nt={counts_nt!r} is not allowed: it must be a number > 0 (nT per count)")
@@ -211,23 +144,7 @@ def check_counts_nt(counts_nt) -> float:
 
 
 def check_max_rotation(max_rotation_deg) -> float:
-    """``max_rotation_deg`` as a float in [0, 180], else one line.
-
-    Parameters
-    ----------
-    max_rotation_deg : object
-        The largest rotation ``R`` of ``W = R S`` a symmetric-only target may leave out (degrees).
-
-    Returns
-    -------
-    float
-        ``max_rotation_deg`` as a float.
-
-    Raises
-    ------
-    MagexpError
-        One line when it is not a number in [0, 180] (NaN and bools included).
-    """
+    """``max_rotation_deg`` as a float in [0, 180], else one line."""
     limit = _number(max_rotation_deg)
     if not 0 <= limit <= 180:
         raise MagexpError(f"max_rotation_deg={max_rotation_deg!r} is not allowed: it must be a number of degrees in "
@@ -250,45 +167,9 @@ def _factor(unit: str, target_unit: str, counts_nt, what: str) -> float:
 def to_firmware(w, offset, unit: str, target_unit: str | None, *, field_unit: str | None = None, counts_nt=None,
                 symmetric: bool = False, max_rotation_deg: float = MAX_ROTATION_DEG, orient: bool = False,
                 custom: bool = False) -> Correction:
-    """magexp's ``B = W (r − o)`` in a target's unit and form.
-
-    Parameters
-    ----------
-    w, offset : array_like
-        ``W`` (3 × 3) and ``o`` (3,), ``r`` in ``unit``.
-    unit, target_unit : str
-        The readings' unit and the target's (None: unchanged).
-    field_unit : str, optional
-        The unit of ``B`` (default ``unit``).
-    counts_nt : float, optional
-        nT per count, for a raw-count ``unit``.
-    symmetric : bool
-        Symmetrise: ``W = R S`` (:func:`polar`), ``S`` exported (module docstring).
-    max_rotation_deg : float
-        The largest rotation left out of a symmetrised ``W``.
-    orient : bool
-        With ``symmetric``: ``R`` was determined (the gyro-aided model), so a rotation beyond
-        ``max_rotation_deg`` is exported as the standard rotation ``R_n`` nearest to it
-        (:func:`nearest_orientation`) when the residual ``R_n^T R`` is within ``max_rotation_deg``.
-    custom : bool
-        With ``orient``: the target can hold any rotation (ArduPilot's ``CUST_ROT1_*``): farther than
-        ``max_rotation_deg`` from every standard rotation, ``R`` itself is the orientation
-        (:data:`CUSTOM_ORIENTATION`, :attr:`Correction.custom`) and nothing is left out.
-
-    Returns
-    -------
-    Correction
-        ``B_t = matrix (r_t − offset)`` in ``target_unit``, ``matrix = (k_out / k_in) S``,
-        ``offset = k_in o`` (module docstring), in the sensor's axes when an ``orientation`` is set
-        (``B_t = R_n matrix (r_t − offset)``).
-
-    Raises
-    ------
-    MagexpError
-        One line for a non-finite calibration, a unit without a factor, a mirrored ``W``, or (with
-        ``symmetric``) a rotation part over ``max_rotation_deg`` (with ``orient``: its residual from
-        the nearest standard rotation).
-    """
+    """magexp's ``B = W (r − o)`` in a target's unit and form: with ``symmetric``, ``W = R S`` (:func:`polar`) and
+    ``S`` exported, ``R`` refused beyond ``max_rotation_deg`` unless ``orient`` (``R`` determined: the nearest
+    standard rotation, or with ``custom`` ``R`` itself, becomes the sensor's orientation)."""
     w, offset = np.asarray(w, float), np.asarray(offset, float)
     if w.shape != (3, 3) or offset.shape != (3,) or not (np.all(np.isfinite(w)) and np.all(np.isfinite(offset))):
         raise MagexpError(f"a calibration with W of shape {w.shape} and offset of shape {offset.shape} is not allowed: "

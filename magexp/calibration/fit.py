@@ -88,20 +88,7 @@ def select_model(rec: Recording, estimator, objective: str, reference: Reference
                  margin: float) -> tuple[str, dict, dict]:
     """``model=auto`` (:func:`magexp.calibration.models.select`): ``(model, record, held-out of each fitted
     candidate)``. ``gyro`` is dropped before any fit where it cannot succeed (no gyroscope, or a saturated one:
-    :func:`magexp.calibration.models.gyro_unusable`), and the record says why.
-
-    Parameters
-    ----------
-    rec, estimator, objective, reference, folds, rng
-        As in :func:`heldout`.
-    margin : float
-        ``auto_margin``.
-
-    Returns
-    -------
-    tuple
-        ``(model, selection record, {model: heldout record})``.
-    """
+    :func:`magexp.calibration.models.gyro_unusable`), and the record says why."""
     unusable = models_.gyro_unusable(rec.gyro_rates())
     held = {}
 
@@ -125,20 +112,7 @@ def select_model(rec: Recording, estimator, objective: str, reference: Reference
 
 def check_gyro(rec: Recording, model: str) -> None:
     """Refuse ``model=gyro`` in one line, before any fit, where it cannot succeed
-    (:func:`magexp.calibration.models.gyro_unusable`: a saturated gyroscope); other models pass.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    model : str
-        The model asked for.
-
-    Raises
-    ------
-    MagexpError
-        ``model=gyro`` with a saturated gyroscope.
-    """
+    (:func:`magexp.calibration.models.gyro_unusable`: a saturated gyroscope); other models pass."""
     why = models_.gyro_unusable(rec.gyro_rates()) if model == "gyro" else None
     if why:
         raise MagexpError(f"{rec.name}: model='gyro' cannot succeed, nothing fitted: {why}: choose model=full, "
@@ -148,26 +122,7 @@ def check_gyro(rec: Recording, model: str) -> None:
 def check_converged(rec: Recording, estimator, objective: str, model: str, result: FitResult, calibrated: np.ndarray,
                     reference: Reference, dataset: Dataset) -> None:
     """An iterative estimator's successful ``model=full`` scalar fit must reach the closed-form optimum
-    (:func:`magexp.calibration.checks.check_optimum`); other fits are not checked.
-
-    Parameters
-    ----------
-    rec, estimator, objective, model
-        As in :func:`heldout`.
-    result : FitResult
-        The fit's result.
-    calibrated : numpy.ndarray
-        ``(N, 3)`` the calibrated readings.
-    reference : Reference
-        The reference total field (:func:`reference_of`).
-    dataset : Dataset
-        The recording's dataset (:func:`recording_dataset`).
-
-    Raises
-    ------
-    MagexpError
-        The fit's spread over :data:`~magexp.calibration.checks.OPTIMUM_FACTOR` times the closed form's.
-    """
+    (:func:`magexp.calibration.checks.check_optimum`); other fits are not checked."""
     if not (result.success and model == "full" and objective == "scalar" and getattr(estimator, "iterative", True)):
         return
     check_optimum(rec.name, estimator, spread(np.linalg.norm(calibrated, axis=1)),
@@ -178,22 +133,7 @@ def measured_heldout(rec: Recording, estimator, objective: str, reference: Refer
                      held: dict, *, checks: bool) -> dict:
     """The held-out record of ``model`` (:func:`heldout`; ``held``: those ``model=auto`` measured already), after,
     with ``checks``, the held-out spread of ``model=full`` has been checked against the closed-form optimum
-    (:func:`check_heldout_converged`).
-
-    Parameters
-    ----------
-    rec, estimator, objective, reference, folds, rng, model
-        As in :func:`heldout`.
-    held : dict
-        ``{model: heldout record}`` measured by ``model=auto`` (empty otherwise).
-    checks : bool
-        Check ``model=full``'s held-out spread against the closed form's.
-
-    Returns
-    -------
-    dict
-        :func:`heldout`'s record of ``model``.
-    """
+    (:func:`check_heldout_converged`)."""
     record = held.get(model) or heldout(rec, estimator, objective, reference, folds, rng, model)
     if checks:
         check_heldout_converged(rec, estimator, objective, held.get("full") or {model: record}.get("full", {}),
@@ -207,20 +147,6 @@ def check_heldout_converged(rec: Recording, estimator, objective: str, full: dic
     model, the candidate's under ``model=auto``; empty for another model) must be within
     :data:`~magexp.calibration.checks.OPTIMUM_FACTOR` of the closed-form ellipsoid fit's, measured on the same
     regions (:func:`magexp.calibration.checks.check_optimum`): a swarm that fails on the folds is named, not the data.
-
-    Parameters
-    ----------
-    rec, estimator, objective
-        As in :func:`heldout`.
-    full : dict
-        :func:`heldout`'s record of ``model=full`` (empty: nothing checked).
-    reference, folds, rng
-        As in :func:`heldout`.
-
-    Raises
-    ------
-    MagexpError
-        The held-out spread over the closed form's by more than the factor.
     """
     value = full.get("heldout_spread")
     if value is None or objective != "scalar" or not getattr(estimator, "iterative", True):
@@ -232,20 +158,7 @@ def check_heldout_converged(rec: Recording, estimator, objective: str, full: dic
 def closed_form_spread(rec: Recording, reference: Reference, dataset: Dataset) -> float | None:
     """The spread of the closed-form ellipsoid fit (``estimator=ellipsoid``, ``model=full``) of ``rec``, or
     None where it is not an ellipsoid: the optimum an iterative estimator must reach
-    (:func:`magexp.calibration.checks.check_optimum`). Milliseconds beside any iterative fit.
-
-    Parameters
-    ----------
-    rec, reference
-        As in :func:`heldout`.
-    dataset : Dataset
-        The recording's dataset (:func:`recording_dataset`).
-
-    Returns
-    -------
-    float or None
-        The spread (std / mean of ``|B|``), or None.
-    """
+    (:func:`magexp.calibration.checks.check_optimum`). Milliseconds beside any iterative fit."""
     try:
         _, _, calibrated, _, result, _ = fit_model(rec, estimator_named("ellipsoid"), "scalar", reference, None, "full",
                                               dataset)
@@ -258,18 +171,7 @@ def regions(readings: np.ndarray) -> tuple[np.ndarray, dict]:
     """``(labels, record)``: the region of directions of each reading
     (:func:`magexp.core.identifiability.direction_regions` about the centre of the sphere fitted to them)
     and ``{direction_regions: fraction of the readings in each, region_axes: each region's half-axis}``
-    (what the gate's ``min_region`` check reads).
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-
-    Returns
-    -------
-    tuple
-        ``(labels (N,) in 0..5, record)``.
-    """
+    (what the gate's ``min_region`` check reads)."""
     labels, axes = direction_regions(readings - fit_sphere(readings)[0])
     fractions = np.bincount(labels, minlength=6) / len(readings)
     return labels, {"direction_regions": fractions.tolist(), "region_axes": axes.tolist()}
@@ -281,37 +183,7 @@ def heldout(rec: Recording, estimator, objective: str, reference: Reference, fol
     directions, or, where a region is too small to be a fold (a few static shots), each reading by the fit
     without its neighbours in direction (:mod:`magexp.calibration.holdout`). ``folds`` < 2: no check. NaN, with
     ``heldout_failure`` saying why, when a fold cannot be fitted (or, gyro-aided, collapsed:
-    :func:`magexp.calibration.models.collapsed`); stopped early once it cannot pool below ``beat``.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    estimator : estimator
-        The estimator object (``fit(problem, *, rng)``).
-    objective : str
-        ``scalar`` or ``vector``.
-    reference : Reference
-        The reference total field (:func:`reference_of`).
-    folds : int
-        The held-out check: < 2 none, else by the design :func:`magexp.calibration.holdout.design_of` picks.
-    rng : numpy.random.Generator or None
-        The estimator's random generator.
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
-    beat : float, optional
-        The held-out spread ``model=auto`` needs ``model`` to get below: the folds stop once
-        the least pooled spread the rest could give (:func:`magexp.calibration.models.spread_bound`) is not below it.
-
-    Returns
-    -------
-    dict
-        :func:`magexp.calibration.holdout.measure`'s record (``heldout_spread`` pooled, ``heldout_design``,
-        ``heldout_folds``, :data:`~magexp.calibration.holdout.FITS` (each fold's ``(W_k, o_k)``, for the heading
-        error: :mod:`magexp.calibration.heading`), ...); without folds ``heldout_design = "none"`` and
-        ``heldout_folds``; stopped by ``beat``: ``heldout_spread`` the bound, ``heldout_stopped`` True and
-        ``heldout_folds_done`` (:func:`magexp.calibration.models.stopped`).
-    """
+    :func:`magexp.calibration.models.collapsed`); stopped early once it cannot pool below ``beat``."""
     if folds < 2:
         return {"heldout_design": "none", "heldout_folds": folds}
 
@@ -337,38 +209,7 @@ def calibrate_recording(rec: Recording, estimator, *, objective: str = "scalar",
                         folds: int = 6, rng: np.random.Generator, checks: bool = True,
                         model: str = "full", accept: bool = False, gate_overrides=None,
                         auto_margin: float = models_.MARGIN) -> Calibration:
-    """Fit ``estimator`` to the recording ``rec``, measure how good the fit is and gate it.
-
-    Parameters
-    ----------
-    rec : a loaded :class:`~magexp.core.recordings.Recording`.
-    estimator : any estimator object (``fit(problem, *, rng)``) that applies to ``objective``.
-    objective : ``scalar`` (total field) or ``vector`` (needs attitudes and ``# field:``).
-    reference_total : overrides the recording's reference total field (its unit), a number or a
-        :class:`Reference` (with its source).
-    folds : the held-out check: 0 or 1 none; 2 or more, by regions of directions or, for a few static shots, each
-        reading without its neighbours (:func:`heldout`).
-    rng : the estimator's random generator.
-    checks : refuse degenerate data, failed fits and calibrations failing the acceptance gate
-        (:mod:`magexp.calibration.checks`); False measures them anyway.
-    model : ``sphere``, ``diagonal``, ``full`` or ``auto`` (:mod:`magexp.calibration.models`;
-        all but ``full`` need the scalar objective).
-    accept : keep a calibration that fails the acceptance gate, its failures recorded in
-        ``report["gate"]``.
-    gate_overrides : ``gate.*`` thresholds (:func:`magexp.calibration.checks.gate_thresholds`).
-    auto_margin : the parsimony margin of ``model=auto``.
-
-    Returns
-    -------
-    Calibration
-        ``W`` (canonical form), offset, calibrated readings, the reference used, the spread
-        metrics, the quality report, the gate's outcome and (``auto``) the model selection.
-
-    Raises
-    ------
-    MagexpError
-        One line: bad input, degenerate data, a failed fit, or (unless ``accept``) every failed check of the gate.
-    """
+    """Fit ``estimator`` to the recording ``rec``, measure how good the fit is and gate it."""
     check_size(rec)
     checks, accept = check_flag(checks, "checks"), check_flag(accept, "accept")
     models_.check_margin(auto_margin)
@@ -422,22 +263,7 @@ def numpy_path(compiled: bool | None, estimator) -> bool:
     """Whether a calibration by ``estimator`` takes the kernels' numpy path (:func:`magexp.problems.kernels.numpy_only`).
 
     A closed-form fit evaluates a few residual vectors, which numpy computes in milliseconds: loading the
-    compiled kernels for them costs 0.75 s (numba import and cache load; cProfile, QMC5883L recording).
-
-    Parameters
-    ----------
-    compiled : bool or None
-        The caller's choice: False numpy, True the compiled kernels (where installed and not turned off by
-        ``MAGEXP_NUMBA=0``); None numpy for an estimator that is not ``iterative`` (a closed form) unless
-        the user set ``MAGEXP_NUMBA``, else compiled.
-    estimator : object
-        The estimator (its ``iterative`` flag; an object without one counts as iterative).
-
-    Returns
-    -------
-    bool
-        True: numpy.
-    """
+    compiled kernels for them costs 0.75 s (numba import and cache load; cProfile, QMC5883L recording)."""
     if compiled is None:
         return not getattr(estimator, "iterative", True) and "MAGEXP_NUMBA" not in os.environ
     return not check_flag(compiled, "compiled")
@@ -446,36 +272,7 @@ def numpy_path(compiled: bool | None, estimator) -> bool:
 def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: dict, *, checks: bool,
             accept: bool) -> dict:
     """The acceptance gate's outcome (:func:`magexp.calibration.checks.gate`): refused in one line
-    unless ``accept`` (or ``checks`` is False); ``{passed, failed, accepted_anyway, thresholds}``.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    w : numpy.ndarray
-        ``(3, 3)`` the calibration's ``W``.
-    metrics : dict
-        Its metrics (:func:`quality`, coverage, regions, held out).
-    reference : Reference
-        The reference total field (:func:`reference_of`).
-    thresholds : dict
-        :func:`magexp.calibration.checks.gate_thresholds`.
-    checks : bool
-        Refuse a failing calibration (False: record only).
-    accept : bool
-        Keep a failing calibration, its failures recorded.
-
-    Returns
-    -------
-    dict
-        ``{passed, failed, accepted_anyway, heldout, thresholds}`` (``heldout``: what the held-out check
-        measured, :func:`magexp.calibration.holdout.describe`, or that it measured nothing).
-
-    Raises
-    ------
-    MagexpError
-        Every failed check, unless ``accept`` or not ``checks``.
-    """
+    unless ``accept`` (or ``checks`` is False); ``{passed, failed, accepted_anyway, thresholds}``."""
     failed = gate(w, metrics, raw_radius=centroid_radius(rec.readings), reference=float(np.mean(reference.total)),
                   estimated=reference.estimated or reference.unit is not None, to_mg=UNITS[rec.unit] / 100.0 if rec.unit in UNITS else None,
                   thresholds=thresholds)
@@ -488,25 +285,7 @@ def gate_of(rec: Recording, w, metrics: dict, reference: Reference, thresholds: 
 
 
 def check_flag(value, key: str) -> bool:
-    """``value`` if it is a bool (``"yes"``, ``1`` or ``"no"`` are not: a string is always true), else one line.
-
-    Parameters
-    ----------
-    value : object
-        The value given.
-    key : str
-        Its key, which the line names.
-
-    Returns
-    -------
-    bool
-        ``value``.
-
-    Raises
-    ------
-    MagexpError
-        A value that is not a bool.
-    """
+    """``value`` if it is a bool (``"yes"``, ``1`` or ``"no"`` are not: a string is always true), else one line."""
     if not isinstance(value, (bool, np.bool_)):
         raise MagexpError(f"{key}={value!r} is not allowed: give {key}=true or {key}=false")
     return bool(value)

@@ -41,18 +41,7 @@ HEAD = 512
 
 
 def digest(path: Path) -> str:
-    """The SHA-256 of the file ``path``, read in 1 MiB blocks.
-
-    Parameters
-    ----------
-    path : Path
-        A file.
-
-    Returns
-    -------
-    str
-        Its digest, in hexadecimal.
-    """
+    """The SHA-256 of the file ``path``, read in 1 MiB blocks."""
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -61,19 +50,7 @@ def digest(path: Path) -> str:
 
 
 def manifest(folder: Path) -> dict | None:
-    """The manifest of the calibration in ``folder`` (its ``calibration.json``'s :data:`MANIFEST`).
-
-    Parameters
-    ----------
-    folder : Path
-        An output folder.
-
-    Returns
-    -------
-    dict or None
-        ``{name: sha256}`` of the files the calibration wrote (``{}`` for a ``calibration.json`` written
-        before the manifest), or None when ``folder`` holds no calibration's ``calibration.json``.
-    """
+    """The manifest of the calibration in ``folder`` (its ``calibration.json``'s :data:`MANIFEST`)."""
     path = Path(folder) / PARAMETERS
     if path.is_symlink() or not path.is_file():
         return None
@@ -88,20 +65,7 @@ def manifest(folder: Path) -> dict | None:
 
 
 def is_calibrations(path: Path, listed: dict | None = None) -> bool:
-    """Whether the file ``path`` was written by a calibration and is unchanged since (module docstring).
-
-    Parameters
-    ----------
-    path : Path
-        A file.
-    listed : dict or None
-        The manifest of its folder (:func:`manifest`), None without one.
-
-    Returns
-    -------
-    bool
-        True for a calibration's file: listed with its digest, or (not listed) carrying a mark.
-    """
+    """Whether the file ``path`` was written by a calibration and is unchanged since (module docstring)."""
     path = Path(path)
     if path.is_symlink() or not path.is_file():
         return False
@@ -122,32 +86,7 @@ class Plan:
 
 
 def plan(folder: Path, names, *, overwrite: bool, known=(), option: str = "out") -> Plan:
-    """The :class:`Plan` of writing the files ``names`` into ``folder``, or one line refusing it.
-
-    Parameters
-    ----------
-    folder : Path
-        The output folder (it need not exist).
-    names : iterable of str
-        The files the new calibration writes.
-    overwrite : bool
-        Replace the calibration in ``folder``; without it any file in the way is refused.
-    known : iterable of str
-        The names a calibration may write: beside the manifest's, those carrying a mark are the earlier set.
-    option : str
-        The option that named the folder, for the message.
-
-    Returns
-    -------
-    Plan
-        The earlier calibration's files replaced and removed.
-
-    Raises
-    ------
-    MagexpError
-        A file in the way without ``overwrite``; with it, a file in the way that no calibration wrote, or a
-        file of the earlier calibration changed since it was written.
-    """
+    """The :class:`Plan` of writing the files ``names`` into ``folder``, or one line refusing it."""
     folder, names = Path(folder), list(names)
     if not folder.is_dir():
         return Plan()
@@ -184,18 +123,7 @@ def _present(path: Path) -> bool:
 
 
 def recording_files(rec) -> list[Path]:
-    """The files a recording was read from (both of a two-stream recording).
-
-    Parameters
-    ----------
-    rec : Recording or None
-        A :class:`~magexp.core.recording.Recording` (None, or one made from an array: no file).
-
-    Returns
-    -------
-    list of Path
-        Its files, as given (not resolved).
-    """
+    """The files a recording was read from (both of a two-stream recording)."""
     if rec is None or rec.path is None:
         return []
     path = Path(rec.path)
@@ -210,22 +138,7 @@ def recording_files(rec) -> list[Path]:
 def check_recording(folder: Path, files, *, option: str = "out") -> None:
     """Refuse, in one line, an output ``folder`` that holds one of the recording's ``files``: the file itself
     (as given or resolved through symbolic links) or, among the folder's entries, a link to it (hard or
-    symbolic).
-
-    Parameters
-    ----------
-    folder : Path
-        The output folder (it need not exist).
-    files : iterable of Path
-        The recording's files (:func:`recording_files`).
-    option : str
-        The option that named the folder, for the message.
-
-    Raises
-    ------
-    MagexpError
-        A folder holding the recording.
-    """
+    symbolic)."""
     folder = Path(folder)
     files = [Path(f) for f in files if Path(f).exists()]
     if not files:
@@ -243,25 +156,7 @@ def check_recording(folder: Path, files, *, option: str = "out") -> None:
 
 def file_path(path, option: str = "path") -> Path:
     """``path``, a file a calibration is about to write, as a :class:`~pathlib.Path`; one line refusing anything
-    else (a number, None, an empty string).
-
-    Parameters
-    ----------
-    path : object
-        What the caller gave.
-    option : str
-        The argument that named it, for the message.
-
-    Returns
-    -------
-    Path
-        The path.
-
-    Raises
-    ------
-    MagexpError
-        A value that is not a non-empty ``str`` or ``Path``.
-    """
+    else (a number, None, an empty string)."""
     if not isinstance(path, (str, os.PathLike)) or not str(os.fspath(path)).strip() or "\0" in str(os.fspath(path)):
         raise MagexpError(f"{option}={path!r} is not allowed: give a file's path (a str or a Path)")
     return Path(path)
@@ -281,26 +176,7 @@ def _kind(path: Path) -> str | None:
 
 def check_file(path: Path, *, overwrite: bool, recording=(), option: str = "path") -> None:
     """Refuse, in one line, writing the single file ``path`` (``Calibration.save``, ``Calibration.export``) over
-    an existing file without ``overwrite``, over one no calibration wrote (:func:`plan`), or over the recording.
-
-    Parameters
-    ----------
-    path : Path
-        The file to write.
-    overwrite : bool
-        Replace an existing file a calibration wrote.
-    recording : iterable of Path
-        The recording's files (:func:`recording_files`), never written over.
-    option : str
-        The argument that named the file, for the message.
-
-    Raises
-    ------
-    MagexpError
-        An existing file without ``overwrite``, one no calibration wrote, (a link to) the recording, an entry
-        that is not a regular file (a folder, a device, a FIFO, a socket, a symbolic link), a folder that does
-        not exist, or an ``overwrite`` that is not a bool.
-    """
+    an existing file without ``overwrite``, over one no calibration wrote (:func:`plan`), or over the recording."""
     path = Path(path)
     where = f"{option} {str(path)!r} is not allowed"
     if not isinstance(overwrite, bool):

@@ -75,19 +75,7 @@ N_HEADINGS = 360
 
 
 def attitudes(tilt_deg: float = TILT_DEG) -> np.ndarray:
-    """The tilts ``T_a`` (body to heading-level frame) the heading error is evaluated at (module docstring).
-
-    Parameters
-    ----------
-    tilt_deg : float
-        The roll and pitch of the tilted attitudes (0: level only, each way up).
-
-    Returns
-    -------
-    ndarray, shape (A, 3, 3)
-        Level, rolled ``±tilt_deg``, pitched ``±tilt_deg`` (the level one first), each with the sensor's z
-        axis down, then the same with it up (turned over about x). With ``tilt_deg`` 0: the two level ones.
-    """
+    """The tilts ``T_a`` (body to heading-level frame) the heading error is evaluated at (module docstring)."""
     t = np.radians(tilt_deg)
     tilts = [np.eye(3)] + ([rot_x(t), rot_x(-t), rot_y(t), rot_y(-t)] if tilt_deg else [])
     flip = rot_x(np.pi)
@@ -99,26 +87,7 @@ def errors(matrix, offset, inclination_deg: float, *, tilt_deg: float = TILT_DEG
     """Heading errors of corrections ``b̂ = A b + c`` of the unit field ``b`` (module docstring), in degrees.
 
     .. math:: e_{m a k} = \\operatorname{wrap}\\big(\\operatorname{atan2}(-\\hat h_y, \\hat h_x) - \\psi_k\\big),
-              \\quad \\hat{\\mathbf h} = T_a (A_m T_a^T \\mathbf h(\\psi_k) + \\mathbf c_m)
-
-    Parameters
-    ----------
-    matrix : array_like, shape (M, 3, 3) or (3, 3)
-        ``A`` of each correction.
-    offset : array_like, shape (M, 3) or (3,)
-        ``c`` of each, in units of the total field (``|b| = 1``).
-    inclination_deg : float
-        The site's inclination ``I``.
-    tilt_deg : float
-        :func:`attitudes`'s.
-    n_headings : int
-        Headings ``ψ_k = 360° k / n``.
-
-    Returns
-    -------
-    ndarray, shape (M, A, n_headings)
-        ``e`` in degrees, in ``(-180, 180]``; ``M`` 1 for a single correction.
-    """
+              \\quad \\hat{\\mathbf h} = T_a (A_m T_a^T \\mathbf h(\\psi_k) + \\mathbf c_m)"""
     a = np.asarray(matrix, float).reshape(-1, 3, 3)
     c = np.asarray(offset, float).reshape(-1, 3)
     tilt = attitudes(tilt_deg)
@@ -133,66 +102,19 @@ def errors(matrix, offset, inclination_deg: float, *, tilt_deg: float = TILT_DEG
 
 
 def headings(n_headings: int = N_HEADINGS) -> np.ndarray:
-    """The headings evaluated, ``360° k / n`` for ``k = 0 … n − 1`` (degrees).
-
-    Parameters
-    ----------
-    n_headings : int
-        How many.
-
-    Returns
-    -------
-    ndarray, shape (n_headings,)
-        Degrees.
-    """
+    """The headings evaluated, ``360° k / n`` for ``k = 0 … n − 1`` (degrees)."""
     return 360.0 * np.arange(n_headings) / n_headings
 
 
 def raw_errors(w, offset, total: float, inclination_deg: float, **kw) -> np.ndarray:
     """Heading errors of the raw readings of a sensor whose calibration is ``(W, o)`` (module docstring):
-    ``A = W^{-1}``, ``c = o / F``.
-
-    Parameters
-    ----------
-    w, offset : array_like
-        The calibration's ``W`` (3 × 3) and ``o`` (3,), the readings' unit in, ``B``'s out.
-    total : float
-        ``F``, the reference total in ``B``'s unit.
-    inclination_deg : float
-        The site's inclination.
-    **kw
-        :func:`errors`'s ``tilt_deg``, ``n_headings``.
-
-    Returns
-    -------
-    ndarray, shape (1, A, n_headings)
-        Degrees.
-    """
+    ``A = W^{-1}``, ``c = o / F``."""
     return errors(np.linalg.inv(w), np.asarray(offset, float) / total, inclination_deg, **kw)
 
 
 def heldout_errors(w, offset, fits, total: float, inclination_deg: float, **kw) -> np.ndarray:
     """Heading errors of each held-out fold's calibration ``(W_k, o_k)`` against the full ``(W, o)``:
-    ``A = W_k W^{-1}``, ``c = W_k (o − o_k) / F`` (module docstring).
-
-    Parameters
-    ----------
-    w, offset : array_like
-        The full calibration.
-    fits : sequence of (W_k, o_k)
-        The folds' calibrations (:func:`magexp.calibration.fit.heldout`'s ``fits``), at least one.
-    total : float
-        ``F`` in ``B``'s unit.
-    inclination_deg : float
-        The site's inclination.
-    **kw
-        :func:`errors`'s ``tilt_deg``, ``n_headings``.
-
-    Returns
-    -------
-    ndarray, shape (K, A, n_headings)
-        Degrees, one row per fold.
-    """
+    ``A = W_k W^{-1}``, ``c = W_k (o − o_k) / F`` (module docstring)."""
     wk = np.array([np.asarray(f[0], float) for f in fits])
     ok = np.array([np.asarray(f[1], float) for f in fits])
     a = wk @ np.linalg.inv(w)
@@ -202,24 +124,7 @@ def heldout_errors(w, offset, fits, total: float, inclination_deg: float, **kw) 
 
 def export_errors(correction, total: float, inclination_deg: float, **kw) -> np.ndarray:
     """Heading errors of a firmware's correction as exported (:func:`~magexp.calibration.firmware.to_firmware`)
-    against the calibration it came from: the rotation ``R`` left out and float32 rounding (module docstring).
-
-    Parameters
-    ----------
-    correction : Correction
-        The exported correction (``matrix`` ``S``, ``offset``, ``rotation`` ``R``, ``orientation`` ``R_n``).
-    total : float
-        ``F``, the reference total in the calibration's field unit (times ``correction.field_scale``: the firmware's).
-    inclination_deg : float
-        The site's inclination.
-    **kw
-        :func:`errors`'s ``tilt_deg``, ``n_headings``.
-
-    Returns
-    -------
-    ndarray, shape (1, A, n_headings)
-        Degrees.
-    """
+    against the calibration it came from: the rotation ``R`` left out and float32 rounding (module docstring)."""
     s, off = correction.matrix, correction.offset
     s32, off32 = s.astype(np.float32).astype(float), off.astype(np.float32).astype(float)
     turn, rot = correction.orientation_matrix, correction.rotation
@@ -229,19 +134,7 @@ def export_errors(correction, total: float, inclination_deg: float, **kw) -> np.
 
 
 def stats(err: np.ndarray) -> dict:
-    """Worst and RMS of heading errors over everything, and over the level attitudes only.
-
-    Parameters
-    ----------
-    err : ndarray, shape (M, A, K)
-        :func:`errors`'s output (attitudes as :func:`attitudes`: the level ones at 0 and ``A / 2``).
-
-    Returns
-    -------
-    dict
-        ``worst_deg``, ``rms_deg`` (every correction, attitude and heading), ``level_worst_deg``,
-        ``level_rms_deg`` (level attitudes, either way up).
-    """
+    """Worst and RMS of heading errors over everything, and over the level attitudes only."""
     level = err[:, [0, err.shape[1] // 2], :]
     return {"worst_deg": float(np.max(np.abs(err))), "rms_deg": float(np.sqrt(np.mean(err ** 2))),
             "level_worst_deg": float(np.max(np.abs(level))), "level_rms_deg": float(np.sqrt(np.mean(level ** 2)))}
@@ -250,22 +143,7 @@ def stats(err: np.ndarray) -> dict:
 def inclination_of(reference, rec=None, gps=None) -> tuple[float, str]:
     """The site's ``|I|`` and where it comes from: the reference's field model, else ``gps`` (the field model at
     the log's GPS place and date, :func:`magexp.core.field_model.gps_field`), else the recording's ``# field:``
-    vector (its nav frame, z vertical), else :data:`DEFAULT_INCLINATION_DEG`.
-
-    Parameters
-    ----------
-    reference : Reference
-        The calibration's reference (:class:`magexp.calibration.inputs.Reference`; its ``record``).
-    rec : Recording or None
-        The recording (its ``field``).
-    gps : ReferenceField or None
-        The field model at the log's GPS (:class:`magexp.core.field_model.ReferenceField`).
-
-    Returns
-    -------
-    tuple
-        ``(|I| in degrees, its source in words)``.
-    """
+    vector (its nav frame, z vertical), else :data:`DEFAULT_INCLINATION_DEG`."""
     record = reference.record or {}
     if "inclination_deg" in record:
         return abs(float(record["inclination_deg"])), (f"{record.get('generation', 'the field model')} at "
@@ -283,31 +161,7 @@ def inclination_of(reference, rec=None, gps=None) -> tuple[float, str]:
 
 def heading_record(w, offset, total: float, inclination: tuple[float, str], *, exported, fits=(),
                    missing: str = "no held-out check (folds=0)") -> dict:
-    """The ``heading`` record of a calibration's report (``cal.report["heading"]``, ``calibration.json``).
-
-    Parameters
-    ----------
-    w, offset : array_like
-        The calibration ``B = W (r − o)``.
-    total : float
-        The reference total, ``B``'s unit.
-    inclination : tuple
-        :func:`inclination_of`'s ``(degrees, source)``.
-    exported : Correction or str
-        The correction a symmetric-matrix firmware holds (:func:`magexp.calibration.export.firmware_correction`),
-        or the line refusing it.
-    fits : sequence of (W_k, o_k)
-        The held-out folds' calibrations (empty: the calibrated heading error is not measured).
-    missing : str
-        Why ``fits`` is empty, if it is.
-
-    Returns
-    -------
-    dict
-        ``inclination_deg``, ``inclination_source``, ``tilt_deg``, ``n_headings``, and ``raw``, ``calibrated``
-        (with ``folds``; without fits ``{"not_measured": missing}``), ``exported`` (with ``rotation_left_out_deg``,
-        ``orientation``; or ``refused``: the export's line), each :func:`stats`.
-    """
+    """The ``heading`` record of a calibration's report (``cal.report["heading"]``, ``calibration.json``)."""
     inc, source = inclination
     out = {"inclination_deg": float(inc), "inclination_source": source, "tilt_deg": TILT_DEG,
            "n_headings": N_HEADINGS, "raw": stats(raw_errors(w, offset, total, inc))}
@@ -324,18 +178,7 @@ def heading_record(w, offset, total: float, inclination: tuple[float, str], *, e
 def worst_left(record: dict | None) -> float | None:
     """The level worst heading error a calibration leaves on directions it was not fitted to (held out): what the
     gate's ``max_heading_deg`` reads; None when not measured. What an export leaves out is the export's to refuse
-    (``max_rotation_deg``): a whole-``W`` target (``ros``, ``c``) leaves nothing out.
-
-    Parameters
-    ----------
-    record : dict or None
-        :func:`heading_record`'s.
-
-    Returns
-    -------
-    float or None
-        Degrees.
-    """
+    (``max_rotation_deg``): a whole-``W`` target (``ros``, ``c``) leaves nothing out."""
     return ((record or {}).get("calibrated") or {}).get("level_worst_deg")
 
 
@@ -359,18 +202,7 @@ def _tilted(part: dict) -> str:
 
 
 def summary_lines(record: dict | None) -> dict:
-    """The printed summary's heading-error lines (nothing for a calibration without a record).
-
-    Parameters
-    ----------
-    record : dict or None
-        :func:`heading_record`'s.
-
-    Returns
-    -------
-    dict
-        ``{key: text}``.
-    """
+    """The printed summary's heading-error lines (nothing for a calibration without a record)."""
     if not record:
         return {}
     raw, cal, exp = (record.get(k) or {} for k in ("raw", "calibrated", "exported"))
@@ -390,22 +222,7 @@ def summary_lines(record: dict | None) -> dict:
 
 def export_line(correction, total: float | None, inclination: tuple[float, str] | None) -> str | None:
     """An export file's comment on the heading error its parameters leave against the calibration
-    (:func:`export_errors`), or None without a site.
-
-    Parameters
-    ----------
-    correction : Correction
-        The exported correction.
-    total : float or None
-        The reference total in the calibration's field unit.
-    inclination : tuple or None
-        :func:`inclination_of`'s ``(degrees, source)``.
-
-    Returns
-    -------
-    str or None
-        One line.
-    """
+    (:func:`export_errors`), or None without a site."""
     if inclination is None or total is None:
         return None
     s = stats(export_errors(correction, total, inclination[0]))
@@ -416,18 +233,7 @@ def export_line(correction, total: float | None, inclination: tuple[float, str] 
 
 
 def heldout_note(record: dict | None) -> dict:
-    """An export's note of the heading error the calibration itself leaves (held out), or nothing unmeasured.
-
-    Parameters
-    ----------
-    record : dict or None
-        :func:`heading_record`'s.
-
-    Returns
-    -------
-    dict
-        ``{key: text}`` (empty without held-out folds).
-    """
+    """An export's note of the heading error the calibration itself leaves (held out), or nothing unmeasured."""
     part = (record or {}).get("calibrated") or {}
     if "folds" not in part:
         return {}
@@ -440,22 +246,7 @@ def heldout_note(record: dict | None) -> dict:
 
 def heading_of(cal, exported, *, gps=None) -> dict:
     """:func:`heading_record` of a fitted calibration: its ``W``, offset, held-out folds' calibrations
-    (``cal.heldout_fits``), reference total and site (:func:`inclination_of` its reference and recording).
-
-    Parameters
-    ----------
-    cal : Calibration
-        A fitted calibration (:class:`magexp.calibration.result.Calibration`).
-    exported : Correction or str
-        As :func:`heading_record`.
-    gps : ReferenceField or None
-        As :func:`inclination_of`.
-
-    Returns
-    -------
-    dict
-        :func:`heading_record`'s.
-    """
+    (``cal.heldout_fits``), reference total and site (:func:`inclination_of` its reference and recording)."""
     missing = ("no held-out check (folds=0)" if "heldout_spread" not in cal.metrics
                else "a region of directions held out could not be fitted")
     return heading_record(cal.w, cal.offset, float(np.mean(cal.reference.total)),
@@ -466,20 +257,7 @@ def heading_of(cal, exported, *, gps=None) -> dict:
 def curves(cal, exported) -> dict:
     """The figure's heading error at each heading (:func:`headings`): the worst ``|e|`` over the attitudes (and
     the folds) of each stage of ``cal.report["heading"]`` (raw, calibrated held out, as exported), at its
-    inclination.
-
-    Parameters
-    ----------
-    cal : Calibration
-        A fitted calibration with its ``heading`` record.
-    exported : Correction or str
-        As :func:`heading_record`.
-
-    Returns
-    -------
-    dict
-        ``{label: (N_HEADINGS,) degrees}`` of the stages measured.
-    """
+    inclination."""
     record, total = cal.report["heading"], float(np.mean(cal.reference.total))
     inc = record["inclination_deg"]
     out = {"raw": raw_errors(cal.w, cal.offset, total, inc)}

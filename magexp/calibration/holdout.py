@@ -77,18 +77,7 @@ def _directions(readings: np.ndarray) -> np.ndarray:
 
 def design_of(labels: np.ndarray) -> str:
     """``"exclusion"`` when an occupied region of ``labels`` (0-5) holds fewer than :data:`MIN_READINGS` readings
-    and there are at most :data:`MAX_EXCLUSION_READINGS` readings, else ``"regions"`` (module docstring).
-
-    Parameters
-    ----------
-    labels : numpy.ndarray
-        ``(N,)`` each reading's region of directions (:func:`magexp.calibration.fit.regions`).
-
-    Returns
-    -------
-    str
-        The design.
-    """
+    and there are at most :data:`MAX_EXCLUSION_READINGS` readings, else ``"regions"`` (module docstring)."""
     counts = np.bincount(labels, minlength=6)
     small = np.any((counts > 0) & (counts < MIN_READINGS))
     return "exclusion" if small and len(labels) <= MAX_EXCLUSION_READINGS else "regions"
@@ -98,22 +87,7 @@ def exclusion_folds(u: np.ndarray, exclusion_deg: float = EXCLUSION_DEG,
                     max_folds: int = MAX_EXCLUSION_FOLDS) -> list[tuple[np.ndarray, np.ndarray]]:
     """``[(held out, kept)]`` index arrays of the neighbours-excluded design: one reading per fold up to
     ``max_folds`` readings, else the readings nearest each of ``max_folds`` farthest-point directions; a fold
-    keeps the readings more than ``exclusion_deg`` from every reading it holds out.
-
-    Parameters
-    ----------
-    u : numpy.ndarray
-        ``(N, 3)`` unit directions of the readings about the centre of the sphere fitted to them.
-    exclusion_deg : float
-        The exclusion radius, degrees.
-    max_folds : int
-        The most folds.
-
-    Returns
-    -------
-    list of tuple
-        Each fold's held-out and kept indices.
-    """
+    keeps the readings more than ``exclusion_deg`` from every reading it holds out."""
     n = len(u)
     if n <= max_folds:
         groups = np.arange(n)
@@ -135,48 +109,14 @@ def exclusion_folds(u: np.ndarray, exclusion_deg: float = EXCLUSION_DEG,
 def region_folds(labels: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     """``[(held out, kept)]`` of the direction-regions design: each region of at least :data:`MIN_READINGS`
     readings against the others (a smaller one's readings, in a recording over :data:`MAX_EXCLUSION_READINGS`,
-    stay in every fit: the gate's ``min_region`` check refuses it as untested).
-
-    Parameters
-    ----------
-    labels : numpy.ndarray
-        ``(N,)`` each reading's region (0-5).
-
-    Returns
-    -------
-    list of tuple
-        Each fold's held-out and kept indices.
-    """
+    stay in every fit: the gate's ``min_region`` check refuses it as untested)."""
     tested = np.flatnonzero(np.bincount(labels, minlength=6) >= MIN_READINGS)
     return [(np.flatnonzero(labels == k), np.flatnonzero(labels != k)) for k in tested]
 
 
 def measure(readings: np.ndarray, labels: np.ndarray, fit_on: FitOn, model: str = "full", stop=None) -> dict:
     """The held-out record of the design :func:`design_of` picks: each fold's held-out readings calibrated by
-    ``fit_on`` of its kept ones, pooled (module docstring).
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    labels : numpy.ndarray
-        ``(N,)`` their regions of directions (:func:`magexp.calibration.fit.regions`).
-    fit_on : callable
-        ``kept indices -> (W, o)`` or None when the fit fails.
-    model : str
-        The model ``fit_on`` fits (:data:`magexp.calibration.models.ORDER`), which a failure names.
-    stop : callable or None
-        ``(held-out magnitudes of each fold so far, readings of every fold, folds) -> record or None``: a record
-        ends the check early (:func:`magexp.calibration.models.stopped`: a candidate that can no longer win).
-
-    Returns
-    -------
-    dict
-        ``heldout_spread`` (NaN when a fold gives none), ``heldout_folds``, ``heldout_design``, ``heldout_readings``
-        (how many were held out), ``heldout_min_kept`` (the fewest any fit kept), :data:`FITS` (each fold's
-        ``(W_k, o_k)``, measured folds only); the regions design adds
-        ``heldout_spread_max_fold``, the exclusion design ``heldout_exclusion_deg``; a NaN adds ``heldout_failure``.
-    """
+    ``fit_on`` of its kept ones, pooled (module docstring)."""
     design = design_of(labels)
     folds = region_folds(labels) if design == "regions" else exclusion_folds(_directions(readings))
     record = {"heldout_design": design, "heldout_folds": len(folds),
@@ -249,21 +189,7 @@ def _fold_failed(readings: np.ndarray, held: np.ndarray, kept: np.ndarray, desig
 
 def describe(metrics: dict, *, gate: bool = False) -> str:
     """What the held-out check measured, in words: the design, its folds and what each fit left out; with
-    ``gate``, the held-out part of a passed gate's line (what beat raw), or that nothing was held out.
-
-    Parameters
-    ----------
-    metrics : dict
-        A calibration's metrics (:func:`measure`'s keys; ``heldout_design = "none"`` or none of them: not measured;
-        a ``heldout_spread`` without a design: one saved before the designs, by regions).
-    gate : bool
-        The gate's clause instead of the report's.
-
-    Returns
-    -------
-    str
-        One clause.
-    """
+    ``gate``, the held-out part of a passed gate's line (what beat raw), or that nothing was held out."""
     design = metrics.get("heldout_design") or ("regions" if "heldout_spread" in metrics else "none")  # saved before
     folds = metrics.get("heldout_folds", 0)
     if design == "regions":
@@ -285,18 +211,7 @@ def describe(metrics: dict, *, gate: bool = False) -> str:
 
 
 def check_folds(folds) -> int:
-    """The held-out check's folds: an integer >= 0 (0 or 1: no held-out check).
-
-    Parameters
-    ----------
-    folds : object
-        The folds setting.
-
-    Returns
-    -------
-    int
-        The folds.
-    """
+    """The held-out check's folds: an integer >= 0 (0 or 1: no held-out check)."""
     if isinstance(folds, str):
         raise MagexpError(f"folds={folds!r} is not allowed: it must be an integer >= 0 (0: no held-out check)")
     return check_positive_int(folds, "folds", minimum=0)

@@ -36,16 +36,10 @@ class Reference:
     source: str
     estimated: bool = False
     unit: str | None = None  # the reference's unit when it is not the recording's (counts calibrated to nT)
-    record: dict | None = None  # a field model's name, generation and inputs (:meth:`ReferenceField.record`)
+    record: dict | None = None  # a field model's name, generation and inputs (:meth:`magexp.core.field_model.ReferenceField.record`)
 
     def describe(self) -> str:
-        """The reference in one line, as the summary prints it.
-
-        Returns
-        -------
-        str
-            The mean total and its source, or how it was estimated.
-        """
+        """The reference in one line, as the summary prints it."""
         mean = float(np.mean(self.total))
         if self.estimated:
             return (f"none given: estimated as the mean calibrated magnitude, scale fixed to the radius of the "
@@ -64,18 +58,7 @@ GYRO_READINGS = 300
 
 
 def check_reference_total(override) -> float:
-    """``data.reference_total`` as a float, or one line unless it is a number > 0 and <= LARGEST.
-
-    Parameters
-    ----------
-    override : object
-        The value given.
-
-    Returns
-    -------
-    float
-        The reference total (the recording's unit).
-    """
+    """``data.reference_total`` as a float, or one line unless it is a number > 0 and <= LARGEST."""
     try:
         value = float("nan") if isinstance(override, bool) else float(override)
     except (TypeError, ValueError):
@@ -87,25 +70,7 @@ def check_reference_total(override) -> float:
 
 
 def reference_of(rec: Recording, override=None) -> Reference:
-    """The reference total field of ``rec`` (see the module docstring for the order).
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    override : float, str or None
-        ``data.reference_total`` (the recording's unit), else None.
-
-    Returns
-    -------
-    Reference
-        The total per reading, its source, and whether it was estimated.
-
-    Raises
-    ------
-    MagexpError
-        ``override`` not a number > 0 and <= LARGEST.
-    """
+    """The reference total field of ``rec`` (see the module docstring for the order)."""
     n = rec.n
     if override is not None:
         return Reference(np.full(n, check_reference_total(override)), "data.reference_total")
@@ -119,40 +84,13 @@ def reference_of(rec: Recording, override=None) -> Reference:
 
 
 def attitude_of(rec: Recording) -> np.ndarray | None:
-    """Navigation -> sensor rotations ``(N, 3, 3)`` (:meth:`Recording.attitude`), or None.
-
-    Parameters
-    ----------
-    rec : Recording
-        A recording with angles or a gyroscope (or neither).
-
-    Returns
-    -------
-    numpy.ndarray or None
-        The rotations, or None without attitudes or a gyroscope.
-    """
+    """Navigation -> sensor rotations ``(N, 3, 3)`` (:meth:`Recording.attitude`), or None."""
     return rec.attitude()
 
 
 def recording_dataset(rec: Recording, reference: Reference, objective: str) -> Dataset:
     """The :class:`Dataset` of ``rec`` for ``objective`` (attitudes and field for ``vector``): the one path
-    from a recording to a Dataset, :func:`magexp.core.recording.recording_dataset`, which the scenarios take too.
-
-    Parameters
-    ----------
-    rec, reference, objective
-        As in :func:`heldout`.
-
-    Returns
-    -------
-    Dataset
-        The readings with their reference totals (and attitudes and field).
-
-    Raises
-    ------
-    MagexpError
-        An objective not of :data:`OBJECTIVES`, or ``vector`` without attitudes and a field.
-    """
+    from a recording to a Dataset, :func:`magexp.core.recording.recording_dataset`, which the scenarios take too."""
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed for magexp calibrate: choose one of "
                           f"{', '.join(OBJECTIVES)}")
@@ -162,41 +100,14 @@ def recording_dataset(rec: Recording, reference: Reference, objective: str) -> D
 def gyro_dataset(rec: Recording, reference: Reference) -> Dataset:
     """The :class:`Dataset` of ``model=gyro`` (:class:`~magexp.problems.gyro.GyroAidedCalibration`): the
     readings (at most :data:`GYRO_READINGS`, evenly spaced), the reference total (the field's magnitude ``F``)
-    and the gyroscope's rotation increments between their times (:func:`magexp.core.geometry.preintegrate`).
-
-    Parameters
-    ----------
-    rec, reference
-        As in :func:`heldout`.
-
-    Returns
-    -------
-    Dataset
-        The dataset of :class:`~magexp.problems.gyro.GyroAidedCalibration`.
-
-    Raises
-    ------
-    MagexpError
-        A recording without a gyroscope.
-    """
+    and the gyroscope's rotation increments between their times (:func:`magexp.core.geometry.preintegrate`)."""
     if rec.gyro_rates() is None or rec.reading_times() is None:
         models_.check_model("gyro", "scalar", gyro=False)
     return dataset_of(rec, reference.total, "gyro", keep=evenly_spaced(rec.n, GYRO_READINGS))
 
 
 def check_size(rec: Recording) -> None:
-    """At least :data:`MIN_READINGS` readings.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-
-    Raises
-    ------
-    MagexpError
-        Fewer than :data:`MIN_READINGS` readings.
-    """
+    """At least :data:`MIN_READINGS` readings."""
     if rec.n < MIN_READINGS:
         raise MagexpError(f"{rec.name}: {rec.n} readings is not allowed: a calibration needs at least "
                           f"{MIN_READINGS} (the 12 parameters of W and the offset)")
@@ -205,18 +116,7 @@ def check_size(rec: Recording) -> None:
 def readings_array(readings):
     """``readings`` as a float array, or one line: complex numbers and masked arrays are refused
     (their imaginary part and their mask would be dropped silently), as is anything that is not
-    numbers.
-
-    Parameters
-    ----------
-    readings : array_like
-        The readings.
-
-    Returns
-    -------
-    numpy.ndarray
-        The readings as floats.
-    """
+    numbers."""
     if np.ma.isMaskedArray(readings):
         raise MagexpError("masked readings are not allowed: a masked array's hidden values would be used; give "
                           "only the valid readings (readings[~readings.mask.any(axis=1)].data)")

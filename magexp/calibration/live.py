@@ -82,18 +82,7 @@ class Settings:
 
 
 def is_live(cfg) -> bool:
-    """Whether the command reads a live stream: ``data.serial`` given, or ``data.path=-``.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The command's config.
-
-    Returns
-    -------
-    bool
-        True for a stream.
-    """
+    """Whether the command reads a live stream: ``data.serial`` given, or ``data.path=-``."""
     return cfg.data.get("serial") is not None or str(cfg.data.get("path")).strip() == "-"
 
 
@@ -106,23 +95,7 @@ def _seconds(value, key: str) -> float:
 
 
 def settings(cfg) -> Settings:
-    """``live.*`` and ``data.baud`` of ``cfg``, each checked; ``data.serial`` with ``data.path`` refused.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The command's config.
-
-    Returns
-    -------
-    Settings
-        The checked values.
-
-    Raises
-    ------
-    MagexpError
-        A bad value, in one line.
-    """
+    """``live.*`` and ``data.baud`` of ``cfg``, each checked; ``data.serial`` with ``data.path`` refused."""
     live, data = cfg.live, cfg.data
     if data.get("serial") is not None and data.get("path") is not None:
         raise MagexpError(f"data.path={data.path!r} is not allowed with data.serial={data.serial!r}: give one source")
@@ -142,53 +115,14 @@ def settings(cfg) -> Settings:
 
 def stop_thresholds(gate_overrides, margin: float) -> dict:
     """The gate's thresholds (:func:`magexp.calibration.checks.gate_thresholds` of ``gate.*``) with the held-out
-    limit times ``1 - margin``: what the live check passes (module docstring).
-
-    Parameters
-    ----------
-    gate_overrides : mapping or None
-        ``gate.*``.
-    margin : float
-        ``live.margin``.
-
-    Returns
-    -------
-    dict
-        The tightened thresholds.
-    """
+    limit times ``1 - margin``: what the live check passes (module docstring)."""
     t = gate_thresholds(gate_overrides)
     return {**t, "heldout_vs_raw": t["heldout_vs_raw"] * (1 - margin)}
 
 
 def live_check(rec, calibrate, *, estimator, model: str, thresholds: dict, limit: int, seconds: float,
                reference=None) -> Progress:
-    """The live check of the readings so far (module docstring): coverage, held-out spread, the stop rule.
-
-    Parameters
-    ----------
-    rec : Recording
-        The stream read back (:func:`magexp.core.recordings.load_recording`).
-    calibrate : callable
-        The pipeline, :func:`magexp.calibration.fit.calibrate_recording` (passed by the command, which
-        imports it: the import graph stays shallow).
-    estimator : object
-        The closed-form ellipsoid (``estimator=ellipsoid``).
-    model : str
-        The model fitted (:data:`CLOSED`, else ``full``).
-    thresholds : dict
-        :func:`stop_thresholds`.
-    limit : int
-        ``live.check_readings``.
-    seconds : float
-        Seconds since the stream began.
-    reference : float or None
-        ``data.reference_total``.
-
-    Returns
-    -------
-    Progress
-        What the display shows, and whether the stop rule passed.
-    """
+    """The live check of the readings so far (module docstring): coverage, held-out spread, the stop rule."""
     sub = rec.subset(evenly_spaced(rec.n, limit))
     centred = sub.readings - fit_sphere(sub.readings)[0]  # about the sphere's centre, as the held-out check cuts them
     labels, axes = direction_regions(centred)
@@ -235,19 +169,7 @@ def _sigint_stops():
 
 
 class Reader:
-    """One live read (:func:`read_live`): the source, the stream file, the checks and the stop.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The command's config.
-    out_dir : Path
-        The output folder (``stream.txt`` goes there).
-    display : Display
-        Where the progress goes.
-    calibrate : callable
-        The pipeline (:func:`live_check`).
-    """
+    """One live read (:func:`read_live`): the source, the stream file, the checks and the stop."""
 
     def __init__(self, cfg, out_dir: Path, display: Display, calibrate):
         self.cfg, self.s, self.display, self.calibrate = cfg, settings(cfg), display, calibrate
@@ -262,18 +184,7 @@ class Reader:
         self.progress: Progress | None = None
 
     def step(self, data: bytes | None) -> str | None:
-        """Take ``data`` (None: the stream ended); the reason to stop, or None.
-
-        Parameters
-        ----------
-        data : bytes or None
-            What the source gave.
-
-        Returns
-        -------
-        str or None
-            Why the reading stops.
-        """
+        """Take ``data`` (None: the stream ended); the reason to stop, or None."""
         now = time.monotonic()
         if data is None:
             self.stream.add(self.cutter.flush())
@@ -309,18 +220,7 @@ class Reader:
         return None
 
     def run(self, source) -> str:
-        """Read ``source`` until a stop (module docstring); the reason.
-
-        Parameters
-        ----------
-        source : StdinSource or SerialSource
-            The opened source.
-
-        Returns
-        -------
-        str
-            Why the reading stopped.
-        """
+        """Read ``source`` until a stop (module docstring); the reason."""
         with _sigint_stops() as stopped:
             while True:
                 reason = "Ctrl-C: the gate decides on what was read" if stopped else self.step(source.read(POLL))
@@ -331,23 +231,7 @@ class Reader:
 def out_folder(cfg) -> Path:
     """The output folder of a live read, checked before anything is read: ``out`` (default
     ``calibration_<port name>`` or ``calibration_stdin``), which must not hold a calibration's files nor a
-    ``stream.txt`` (unless ``overwrite=true``).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The command's config.
-
-    Returns
-    -------
-    Path
-        The folder.
-
-    Raises
-    ------
-    MagexpError
-        A refused folder.
-    """
+    ``stream.txt`` (unless ``overwrite=true``)."""
     out = cfg.get("out")
     serial = cfg.data.get("serial")
     default = f"calibration_{Path(str(serial)).name}" if serial is not None else "calibration_stdin"
@@ -365,28 +249,7 @@ def out_folder(cfg) -> Path:
 def read_live(cfg, calibrate, display: Display | None = None):
     """Read the live stream ``cfg`` names into ``<out>/stream.txt`` until a stop (module docstring), saying why in
     one line (and the garbage in one more); return the config that calibrates the stream kept
-    (``data.path=<out>/stream.txt``, its format, ``out``).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The command's config (``data.serial`` or ``data.path=-``).
-    calibrate : callable
-        The pipeline, :func:`magexp.calibration.fit.calibrate_recording` (:func:`live_check`).
-    display : Display or None
-        Where the progress goes (None: standard output).
-
-    Returns
-    -------
-    DictConfig
-        ``cfg`` reading the stream file.
-
-    Raises
-    ------
-    MagexpError
-        A bad option or folder before anything is read, a port that cannot be opened, a stream that is not a
-        recording, or no valid reading at all (then nothing is kept).
-    """
+    (``data.path=<out>/stream.txt``, its format, ``out``)."""
     display = Display() if display is None else display
     settings(cfg)
     reference = cfg.data.get("reference_total")  # checked now, not once the stream is read (the live check uses it)
@@ -426,17 +289,7 @@ def read_live(cfg, calibrate, display: Display | None = None):
 
 @contextmanager
 def kept(path: Path):
-    """A :class:`MagexpError` raised inside says, in its one line, that the stream read is kept in ``path``.
-
-    Parameters
-    ----------
-    path : Path
-        The stream file.
-
-    Yields
-    ------
-    None
-    """
+    """A :class:`MagexpError` raised inside says, in its one line, that the stream read is kept in ``path``."""
     try:
         yield
     except MagexpError as exc:

@@ -54,18 +54,7 @@ class Progress:
 
 
 def axis_names(axes: np.ndarray) -> list[str]:
-    """The sensor axis nearest each half-axis of ``axes`` (``(6, 3)``): ``+x``, ``-z``...
-
-    Parameters
-    ----------
-    axes : numpy.ndarray
-        ``(6, 3)`` unit half-axes.
-
-    Returns
-    -------
-    list of str
-        Six names.
-    """
+    """The sensor axis nearest each half-axis of ``axes`` (``(6, 3)``): ``+x``, ``-z``..."""
     axes = np.asarray(axes, float)
     k = np.argmax(np.abs(axes), axis=1)
     sign = np.where(axes[np.arange(len(axes)), k] > 0, "+", "-")
@@ -73,20 +62,7 @@ def axis_names(axes: np.ndarray) -> list[str]:
 
 
 def bar(fraction: float, width: int = BAR) -> str:
-    """A progress bar of ``width`` characters, eighths of a block resolved.
-
-    Parameters
-    ----------
-    fraction : float
-        0 to 1.
-    width : int
-        Characters.
-
-    Returns
-    -------
-    str
-        The bar.
-    """
+    """A progress bar of ``width`` characters, eighths of a block resolved."""
     eighths = int(round(min(max(fraction, 0.0), 1.0) * width * 8))
     full, part = divmod(eighths, 8)
     return ("█" * full + (_BLOCKS[part] if part else "")).ljust(width)
@@ -98,18 +74,7 @@ def _percent(value: float) -> str:
 
 
 def status(p: Progress) -> str:
-    """The status line of ``p`` (module docstring).
-
-    Parameters
-    ----------
-    p : Progress
-        A live check.
-
-    Returns
-    -------
-    str
-        One line.
-    """
+    """The status line of ``p`` (module docstring)."""
     rate = f"{p.readings / p.seconds:.0f}/s" if p.seconds >= 1 else "-/s"
     regions = " ".join(f"{n} {c}" for n, c in zip(p.names, p.regions))
     reached = sum(c > 0 for c in p.regions)
@@ -121,13 +86,7 @@ def status(p: Progress) -> str:
 
 
 class Display:
-    """Shows :class:`Progress` (module docstring) on ``out``.
-
-    Parameters
-    ----------
-    out : file or None
-        Where to write (None: standard output).
-    """
+    """Shows :class:`Progress` (module docstring) on ``out``."""
 
     def __init__(self, out=None):
         self.out = sys.stdout if out is None else out
@@ -135,13 +94,7 @@ class Display:
         self.drawn = False
 
     def show(self, progress: Progress) -> None:
-        """Draw ``progress``: in place on a terminal, else a line of its own.
-
-        Parameters
-        ----------
-        progress : Progress
-            A live check.
-        """
+        """Draw ``progress``: in place on a terminal, else a line of its own."""
         line = status(progress)
         if self.tty:
             width = shutil.get_terminal_size((120, 24)).columns
@@ -152,13 +105,7 @@ class Display:
         self.out.flush()
 
     def say(self, line: str) -> None:
-        """A line of its own below the status line (which stays, as a finished bar does).
-
-        Parameters
-        ----------
-        line : str
-            The line.
-        """
+        """A line of its own below the status line (which stays, as a finished bar does)."""
         if self.drawn:
             self.out.write("\n")
             self.drawn = False

@@ -31,13 +31,7 @@ POLL = 0.1
 
 
 class StdinSource:
-    """Standard input (``data.path=-``) read without blocking longer than a timeout (``select``).
-
-    Parameters
-    ----------
-    fd : int
-        The file descriptor (0: standard input).
-    """
+    """Standard input (``data.path=-``) read without blocking longer than a timeout (``select``)."""
 
     name = "standard input"
 
@@ -45,18 +39,7 @@ class StdinSource:
         self.fd = fd
 
     def read(self, timeout: float) -> bytes | None:
-        """The bytes available within ``timeout`` seconds (``b""``: none yet), None at the end of the stream.
-
-        Parameters
-        ----------
-        timeout : float
-            Seconds to wait for data.
-
-        Returns
-        -------
-        bytes or None
-            The bytes read, or None at the end.
-        """
+        """The bytes available within ``timeout`` seconds (``b""``: none yet), None at the end of the stream."""
         ready, _, _ = select.select([self.fd], [], [], timeout)
         if not ready:
             return b""
@@ -72,15 +55,7 @@ class StdinSource:
 
 class SerialSource:
     """A serial port read with pyserial (``data.serial``, ``data.baud``): a USB-serial adapter, a board's
-    CDC port, or a pseudo-terminal.
-
-    Parameters
-    ----------
-    port : str
-        The device path (``/dev/ttyUSB0``, ``COM3``).
-    baud : int
-        The baud rate.
-    """
+    CDC port, or a pseudo-terminal."""
 
     def __init__(self, port: str, baud: int):
         try:
@@ -98,18 +73,7 @@ class SerialSource:
 
     def read(self, timeout: float) -> bytes | None:
         """As :meth:`StdinSource.read`, waiting :data:`POLL` seconds at most (the port's own timeout, set once:
-        ``timeout`` is not used); a port that went away (unplugged) ends the stream.
-
-        Parameters
-        ----------
-        timeout : float
-            Not used (the port's timeout is :data:`POLL`).
-
-        Returns
-        -------
-        bytes or None
-            The bytes read (``b""``: none within the timeout), or None at the end.
-        """
+        ``timeout`` is not used); a port that went away (unplugged) ends the stream."""
         try:
             return self.port.read(max(1, min(self.port.in_waiting, CHUNK)))
         except self._errors:  # the device reports readiness but gives nothing: disconnected
@@ -121,23 +85,7 @@ class SerialSource:
 
 
 def open_source(data) -> StdinSource | SerialSource:
-    """The source ``data.*`` names: ``data.serial`` (with ``data.baud``), else standard input (``data.path=-``).
-
-    Parameters
-    ----------
-    data : DictConfig
-        The ``data`` group of the command's config.
-
-    Returns
-    -------
-    StdinSource or SerialSource
-        The opened source.
-
-    Raises
-    ------
-    MagexpError
-        A port that cannot be opened, or pyserial not installed.
-    """
+    """The source ``data.*`` names: ``data.serial`` (with ``data.baud``), else standard input (``data.path=-``)."""
     if data.get("serial") is None:
         return StdinSource(sys.stdin.fileno())
     return SerialSource(str(data.serial), int(data.baud))
@@ -145,31 +93,14 @@ def open_source(data) -> StdinSource | SerialSource:
 
 class LineCutter:
     """Bytes into complete lines, none longer than ``max_line`` bytes (a longer one is cut off at its end
-    and returned as ``None``: garbage, whatever followed it on that line dropped).
-
-    Parameters
-    ----------
-    max_line : int
-        The longest line kept, in bytes.
-    """
+    and returned as ``None``: garbage, whatever followed it on that line dropped)."""
 
     def __init__(self, max_line: int):
         self.max_line, self.tail, self.skipping = max_line, b"", False
 
     def feed(self, data: bytes) -> list[bytes | None]:
         """The complete lines of ``data`` after what came before (their end-of-line removed); None for a line
-        over the limit.
-
-        Parameters
-        ----------
-        data : bytes
-            The bytes just read.
-
-        Returns
-        -------
-        list
-            The lines, in order.
-        """
+        over the limit."""
         parts = (self.tail + data).split(b"\n")
         self.tail = parts.pop()
         lines: list[bytes | None] = []
@@ -183,26 +114,14 @@ class LineCutter:
         return lines
 
     def flush(self) -> list[bytes | None]:
-        """The last line when the stream ends without an end-of-line.
-
-        Returns
-        -------
-        list
-            That line, or nothing.
-        """
+        """The last line when the stream ends without an end-of-line."""
         tail, self.tail = self.tail, b""
         return [] if self.skipping or not tail.strip() else [tail.rstrip(b"\r")]
 
 
 class StreamFile:
     """The stream's lines judged and kept (module docstring): the header lines, then the data rows, written to
-    ``path`` as they arrive; the garbage counted, the first one named.
-
-    Parameters
-    ----------
-    path : Path
-        The stream file written (``<out>/stream.txt``).
-    """
+    ``path`` as they arrive; the garbage counted, the first one named."""
 
     def __init__(self, path: Path):
         self.path = Path(path)
@@ -216,18 +135,7 @@ class StreamFile:
         self.first_garbage: str | None = None
 
     def add(self, lines: list[bytes | None]) -> int:
-        """Judge ``lines`` and keep the good ones (written and flushed); return how many data rows were kept.
-
-        Parameters
-        ----------
-        lines : list of bytes or None
-            Complete lines (:class:`LineCutter`; None: a line over the limit).
-
-        Returns
-        -------
-        int
-            The data rows kept.
-        """
+        """Judge ``lines`` and keep the good ones (written and flushed); return how many data rows were kept."""
         rows = []
         for raw in lines:
             self.lines += 1
@@ -313,13 +221,7 @@ class StreamFile:
             self.first_garbage = f"line {line or self.lines} {excerpt(text)}"
 
     def garbage_line(self) -> str | None:
-        """The one line about the garbage (None: there was none).
-
-        Returns
-        -------
-        str or None
-            How many lines were skipped, the first named, what a line must hold.
-        """
+        """The one line about the garbage (None: there was none)."""
         if not self.garbage:
             return None
         what = "3 numbers x y z" if self.format == "plain" else f"{self.ncols} numbers, as the header names"

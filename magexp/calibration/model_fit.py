@@ -38,49 +38,14 @@ GYRO_ESTIMATOR = {"name": "lm", "max_nfev": 200, "tol": 1e-10, "jacobian": "stac
 def gyro_estimator():
     """The estimator of ``model=gyro``: :class:`~magexp.estimators.lm.LevenbergMarquardt` with :data:`GYRO_ESTIMATOR`
     (built directly: composing ``conf/estimator/lm.yaml`` for each of a held-out check's folds cost 0.17 CPU-s a fold;
-    the numpy solver spares the 0.45-0.5 CPU-s import of ``scipy.optimize``).
-
-    Returns
-    -------
-    LevenbergMarquardt
-        The estimator, built fresh.
-    """
+    the numpy solver spares the 0.45-0.5 CPU-s import of ``scipy.optimize``)."""
     return LevenbergMarquardt(**GYRO_ESTIMATOR)
 
 
 def fit_model(rec: Recording, estimator, objective: str, reference: Reference, rng, model: str = "full",
               dataset: Dataset | None = None) -> tuple:
     """One fit of ``model`` to ``rec`` (module docstring): ``W`` canonical for a scalar objective, rescaled to the
-    reference when it is estimated.
-
-    Parameters
-    ----------
-    rec : Recording
-        The readings fitted.
-    estimator : object
-        An estimator with ``fit(problem, rng=...)`` (ignored by a closed form and by ``model=gyro``).
-    objective : str
-        ``scalar`` or ``vector``.
-    reference : Reference
-        The reference total of each reading (:class:`magexp.calibration.inputs.Reference`).
-    rng : numpy.random.Generator or None
-        The estimator's draws.
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:data:`magexp.calibration.models.MODELS`).
-    dataset : Dataset or None
-        The recording's :func:`~magexp.calibration.inputs.recording_dataset`, when the caller has it already.
-
-    Returns
-    -------
-    tuple
-        ``(W, o, calibrated, problem, result, box)``; ``problem`` is the objective's, in its own
-        parameterisation (the sphere model's residuals are the scalar problem's at ``W = s I``).
-
-    Raises
-    ------
-    MagexpError
-        A closed form the readings do not support, or an estimator giving a non-finite calibration.
-    """
+    reference when it is estimated."""
     if model == "gyro":  # its own problem and estimator (magexp.calibration.models)
         objective, dataset, estimator = "gyro", gyro_dataset(rec, reference), gyro_estimator()
     dataset = recording_dataset(rec, reference, objective) if dataset is None else dataset
@@ -111,27 +76,7 @@ def searched(estimator, problem, rng) -> tuple:
     """``(result, (W, o))`` of ``estimator.fit(problem, rng=rng)``. A user's estimator (one not of magexp) that
     fails, or returns something other than a :class:`~magexp.estimators.result.FitResult` of the problem's
     parameters, is refused in one line naming it (its own exception is the line's ``__cause__``); magexp's own
-    estimators raise as they do (a failure of theirs is a bug, not bad input).
-
-    Parameters
-    ----------
-    estimator : object
-        An object with ``fit(problem, rng=...)``.
-    problem : CalibrationProblem
-        The problem it searches.
-    rng : numpy.random.Generator or None
-        Its draws.
-
-    Returns
-    -------
-    tuple
-        ``(result, (W, o))``: the fit's result and its best parameters unpacked.
-
-    Raises
-    ------
-    MagexpError
-        A user's estimator that fails or returns something else.
-    """
+    estimators raise as they do (a failure of theirs is a bug, not bad input)."""
     if type(estimator).__module__.split(".")[0] == "magexp":
         result = estimator.fit(problem, rng=rng)
         return result, tuple(a[0] for a in problem.unpack(result.x))
@@ -171,22 +116,7 @@ def search_box_of(readings: np.ndarray, radius: float, estimator, objective: str
     """The box of a fit (module docstring): an iterative estimator's scalar ``model=full`` search, the box centred
     on the closed-form ellipsoid fit (:func:`magexp.calibration.box.calibration_box`); any other fit, the
     readings' range (:func:`magexp.scenarios.search.search_box`; ``S = W^-1`` for the vector objectives), which
-    a closed form or a start from it does not search.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` the readings fitted.
-    radius : float
-        The fit's radius (the mean reference total).
-    estimator, objective, model
-        As in :func:`magexp.calibration.fit.heldout` (``objective`` ``gyro`` for the gyro-aided model).
-
-    Returns
-    -------
-    CalibrationBox or SearchBox
-        The box.
-    """
+    a closed form or a start from it does not search."""
     searched = getattr(estimator, "iterative", True) and model not in models_.CLOSED_FORM
     if objective == "scalar" and searched:
         return calibration_box(readings, radius)
@@ -195,27 +125,7 @@ def search_box_of(readings: np.ndarray, radius: float, estimator, objective: str
 
 def closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
     """A closed-form model's fit (:data:`magexp.calibration.models.CLOSED_FORM`), with the
-    :class:`~magexp.estimators.result.FitResult` an estimator would give.
-
-    Parameters
-    ----------
-    rec : Recording
-        The readings fitted.
-    model : str
-        ``sphere`` or ``diagonal``.
-    reference : Reference
-        The reference total (its mean is the radius).
-
-    Returns
-    -------
-    tuple
-        ``(W, o, calibrated, result)``.
-
-    Raises
-    ------
-    MagexpError
-        Readings that do not lie on an axis-aligned ellipsoid (``diagonal``).
-    """
+    :class:`~magexp.estimators.result.FitResult` an estimator would give."""
     radius = float(np.mean(reference.total))
     fitted = models_.CLOSED_FORM[model](rec.readings, radius)
     if fitted is None:
@@ -234,20 +144,7 @@ def closed_form(rec: Recording, model: str, reference: Reference) -> tuple:
 
 def fold_fit(train: Recording, estimator, objective: str, reference: Reference, rng, model: str) -> tuple:
     """A held-out fold's fit: a closed form directly (no problem or search box: 19 of them took 0.2 CPU-s on the
-    QMC5883L's 22 744 readings), else :func:`fit_model`.
-
-    Parameters
-    ----------
-    train : Recording
-        The fold's kept readings.
-    estimator, objective, reference, rng, model
-        As :func:`fit_model` (``reference`` the kept readings').
-
-    Returns
-    -------
-    tuple
-        ``(W, o, result)``.
-    """
+    QMC5883L's 22 744 readings), else :func:`fit_model`."""
     if model in models_.CLOSED_FORM:
         w, o, _, result = closed_form(train, model, reference)
         return w, o, result

@@ -66,20 +66,7 @@ DIAGONAL_COLUMNS = [0, 1, 2, 6, 7, 8, 9]
 
 def fit_diagonal(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
     """``(W, o)`` of the axis-aligned ellipsoid through ``readings`` mapped onto the sphere of
-    ``radius`` (``W`` diagonal); None if the fit is not an ellipsoid (module docstring).
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` raw readings.
-    radius : float
-        The reference total.
-
-    Returns
-    -------
-    tuple or None
-        ``(W (3, 3) diagonal, o (3,))``, or None.
-    """
+    ``radius`` (``W`` diagonal); None if the fit is not an ellipsoid (module docstring)."""
     c, s, u = normalise(readings)
     design = (quadratic_features(u) * LINEAR_TWICE)[:, DIAGONAL_COLUMNS]
     p7 = np.linalg.svd(design, full_matrices=False)[2][-1]
@@ -88,18 +75,7 @@ def fit_diagonal(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.nd
 
 
 def fit_sphere_model(readings: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(s I, centre)`` of the sphere through ``readings`` scaled onto ``radius``.
-
-    Parameters
-    ----------
-    readings, radius
-        As :func:`fit_diagonal`.
-
-    Returns
-    -------
-    tuple
-        ``(s I, centre)``.
-    """
+    """``(s I, centre)`` of the sphere through ``readings`` scaled onto ``radius``."""
     centre, fitted = fit_sphere(readings)
     return np.eye(3) * radius / fitted, centre
 
@@ -116,18 +92,7 @@ CLIP_TOLERANCE = 1e-3
 
 
 def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
-    """``(axis, limit in deg/s, readings there)`` of each clipped axis of the gyroscope's ``rates`` (rad/s).
-
-    Parameters
-    ----------
-    rates : numpy.ndarray
-        ``(K, 3)`` gyroscope rates, rad/s.
-
-    Returns
-    -------
-    list of tuple
-        One per clipped axis.
-    """
+    """``(axis, limit in deg/s, readings there)`` of each clipped axis of the gyroscope's ``rates`` (rad/s)."""
     out = []
     for k, axis in enumerate("xyz"):
         size = np.abs(rates[:, k])
@@ -141,18 +106,7 @@ def clipped(rates: np.ndarray) -> list[tuple[str, float, int]]:
 def gyro_unusable(stream) -> str | None:
     """Why the gyro-aided model cannot succeed on the gyroscope ``stream`` (``(times, rates)``,
     :meth:`~magexp.core.recordings.Recording.gyro_rates`), or None: a clipped axis (:func:`clipped`)
-    loses the rotation beyond its limit, so the attitude it integrates is wrong from the first clip on.
-
-    Parameters
-    ----------
-    stream : tuple or None
-        ``(times, rates)``, or None without a gyroscope.
-
-    Returns
-    -------
-    str or None
-        The reason, or None.
-    """
+    loses the rotation beyond its limit, so the attitude it integrates is wrong from the first clip on."""
     if stream is None:
         return "the recording has no gyroscope"
     clips = clipped(np.asarray(stream[1], float))
@@ -168,20 +122,7 @@ def collapsed(readings: np.ndarray, offset: np.ndarray) -> bool:
     :data:`~magexp.calibration.checks.MIN_CELLS` cells, where about the centre of their sphere they do not
     (:func:`magexp.calibration.checks.check_fit`'s refusal of the whole fit, asked of a fold). An offset far
     outside the readings makes every ``W (r - o)`` nearly one vector, whose magnitudes agree on any held-out
-    region: the gyro-aided fit of a recording whose attitude barely turns (``R_jᵀ h`` nearly constant) does so.
-
-    Parameters
-    ----------
-    readings : numpy.ndarray
-        ``(N, 3)`` the fold's raw readings.
-    offset : numpy.ndarray
-        ``(3,)`` its fitted offset.
-
-    Returns
-    -------
-    bool
-        True: collapsed.
-    """
+    region: the gyro-aided fit of a recording whose attitude barely turns (``R_jᵀ h`` nearly constant) does so."""
     def narrow(cover):
         return cover["direction_max_angle_deg"] < ONE_ATTITUDE_DEG or round(cover["coverage_cells"] * CELLS) < MIN_CELLS
 
@@ -194,27 +135,7 @@ CLOSED_FORM = {"sphere": fit_sphere_model, "diagonal": fit_diagonal}
 
 def check_model(model: str, objective: str, *, gyro: bool = True) -> str:
     """``model`` if it is one of :data:`MODELS`, fits ``objective`` and (``gyro``: the recording has a
-    gyroscope) the data, else one line.
-
-    Parameters
-    ----------
-    model : str
-        The model asked for.
-    objective : str
-        ``scalar`` or ``vector``.
-    gyro : bool
-        The recording has a gyroscope.
-
-    Returns
-    -------
-    str
-        ``model``.
-
-    Raises
-    ------
-    MagexpError
-        An unknown model, or one the objective or data cannot have.
-    """
+    gyroscope) the data, else one line."""
     if model not in MODELS:
         raise MagexpError(f"model={model!r} is not allowed: choose one of {', '.join(MODELS)}")
     if (model in CLOSED_FORM or model in NEEDS_GYRO) and objective != "scalar":
@@ -228,43 +149,14 @@ def check_model(model: str, objective: str, *, gyro: bool = True) -> str:
 
 def candidates(objective: str, *, gyro: bool = False) -> tuple[str, ...]:
     """The models ``auto`` tries, simplest first: all of :data:`ORDER` for the scalar objective
-    (``gyro`` only with a gyroscope), ``full`` for the vector one (it determines the whole ``W``).
-
-    Parameters
-    ----------
-    objective : str
-        ``scalar`` or ``vector``.
-    gyro : bool
-        The recording has a usable gyroscope.
-
-    Returns
-    -------
-    tuple of str
-        The candidates, simplest first.
-    """
+    (``gyro`` only with a gyroscope), ``full`` for the vector one (it determines the whole ``W``)."""
     if objective != "scalar":
         return ("full",)
     return tuple(m for m in ORDER if gyro or m not in NEEDS_GYRO)
 
 
 def check_margin(margin) -> float:
-    """``auto_margin`` as a float in ``[0, 1)``, else one line.
-
-    Parameters
-    ----------
-    margin : object
-        ``auto_margin``.
-
-    Returns
-    -------
-    float
-        The margin.
-
-    Raises
-    ------
-    MagexpError
-        A value outside [0, 1).
-    """
+    """``auto_margin`` as a float in ``[0, 1)``, else one line."""
     try:
         value = float(margin)
     except (TypeError, ValueError):
@@ -277,28 +169,7 @@ def check_margin(margin) -> float:
 
 def select(heldout_of, objective: str, margin: float = MARGIN, *, gyro: bool = False,
            dropped: dict | None = None, bounded: bool = False) -> tuple[str, dict]:
-    """The model ``auto`` chooses, and the record of the choice.
-
-    Parameters
-    ----------
-    heldout_of : ``model -> held-out spread`` (NaN or a :class:`MagexpError` when the fit fails); with
-        ``bounded``, ``(model, beat) -> (held-out spread, stopped)``: ``beat`` the spread the model must get
-        below to be chosen (None for the first), ``stopped`` True when its folds stopped once it could not
-        (the spread is then a lower bound: :func:`spread_bound`).
-    objective : ``scalar`` (all of :data:`ORDER`) or ``vector`` (``full`` only): :func:`candidates`.
-    margin : a richer model must have a held-out spread below ``(1 - margin)`` times the current choice's.
-    gyro : the recording has a gyroscope (``gyro`` is a candidate).
-    dropped : ``{model: reason}`` of the models dropped before any fit, because they cannot succeed
-        (:func:`gyro_unusable`); they are not fitted, and the record says why.
-    bounded : call ``heldout_of`` with the spread to beat (above).
-
-    Returns
-    -------
-    (model, record)
-        ``record``: ``chosen``, ``why`` (every candidate: its held-out spread, or why it was dropped),
-        ``margin``, ``heldout_spread`` of each fitted candidate (None: the fit failed), ``dropped`` and
-        ``stopped`` (the candidates whose folds stopped once they could not win).
-    """
+    """The model ``auto`` chooses, and the record of the choice."""
     tried = candidates(objective, gyro=gyro)
     spreads, stopped, chosen, why = {}, [], None, ""
     for name in tried:
@@ -339,20 +210,7 @@ def spread_bound(done: np.ndarray, rest: int) -> float:
 
     With the rest's mean ``x`` (their own scatter only adds), the pooled variance is
     ``(n_d v + n_d n_r (m - x)² / N) / N`` over the mean ``(n_d m + n_r x) / N`` (``m``, ``v``: the mean and
-    variance of ``done``); its ratio is least at ``x = m (1 + v / m²)``, where it is evaluated.
-
-    Parameters
-    ----------
-    done : numpy.ndarray
-        The magnitudes measured so far.
-    rest : int
-        How many are still to come.
-
-    Returns
-    -------
-    float
-        The bound.
-    """
+    variance of ``done``); its ratio is least at ``x = m (1 + v / m²)``, where it is evaluated."""
     n_d, m, v = len(done), float(np.mean(done)), float(np.var(done))
     n = n_d + rest
     x = m * (1 + v / m**2)
@@ -363,24 +221,7 @@ def spread_bound(done: np.ndarray, rest: int) -> float:
 def stopped(pooled: list, total: int, beat: float | None, folds: int) -> dict | None:
     """The record of a held-out check stopped early (:func:`magexp.calibration.fit.heldout`), or None to go on:
     the folds ``pooled`` so far (their magnitudes) of ``folds`` holding ``total`` readings cannot, whatever
-    the rest give, pool below ``beat`` (:func:`spread_bound`).
-
-    Parameters
-    ----------
-    pooled : list of numpy.ndarray
-        The held-out magnitudes of each fold done.
-    total : int
-        The readings of every fold.
-    beat : float or None
-        The spread to get below (None: never stopped).
-    folds : int
-        The folds in all.
-
-    Returns
-    -------
-    dict or None
-        ``{heldout_spread: the bound, heldout_stopped: True, heldout_folds_done, heldout_folds}``, or None.
-    """
+    the rest give, pool below ``beat`` (:func:`spread_bound`)."""
     if beat is None or len(pooled) == folds:
         return None
     done = np.concatenate(pooled)
@@ -392,24 +233,7 @@ def stopped(pooled: list, total: int, beat: float | None, folds: int) -> dict | 
 
 def candidates_text(chosen: str, spreads: dict, dropped: dict, stopped=()) -> str:
     """Every candidate of :func:`select`, the chosen first: its held-out spread (at least, where its folds
-    stopped once it could not win), that its fit failed with a region held out, or why it was dropped before any fit.
-
-    Parameters
-    ----------
-    chosen : str
-        The chosen model.
-    spreads : dict
-        ``{model: held-out spread or None}``.
-    dropped : dict
-        ``{model: reason}`` of the models not fitted.
-    stopped : collection of str
-        The models whose spread is a lower bound (:func:`stopped`).
-
-    Returns
-    -------
-    str
-        One clause per candidate.
-    """
+    stopped once it could not win), that its fit failed with a region held out, or why it was dropped before any fit."""
     def one(name):
         value = spreads[name]
         if value is None:

@@ -24,18 +24,7 @@ from magexp.errors import MagexpError
 
 def parameters_of(rec: Recording) -> str:
     """The firmware and parameters of ``rec``'s onboard calibration (``PX4 CAL_MAG0_*``, ``ArduPilot
-    COMPASS_OFS_*, ...``), from what its reader recorded (``meta``).
-
-    Parameters
-    ----------
-    rec : Recording
-        A log's recording whose reader undid an onboard calibration.
-
-    Returns
-    -------
-    str
-        The firmware and its parameters' names.
-    """
+    COMPASS_OFS_*, ...``), from what its reader recorded (``meta``)."""
     if rec.meta.get("format") == "ulog":
         return f"PX4 CAL_MAG{rec.meta.get('calibration_slot', '0')}_*"
     instance = re.search(r"instance (\d+)", rec.meta.get("source", ""))
@@ -48,20 +37,7 @@ def onboard_of(rec: Recording, heldout_spread: float | None) -> dict:
     """``{"onboard_calibration": {...}}`` of a log whose reader undid an onboard calibration, else ``{}``:
     its firmware and parameters, that it was undone and how (the reader's equation), and the spreads of
     the readings as logged (its held-out spread), raw, and held out from magexp's calibration
-    (``heldout_spread``; None when not measured).
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    heldout_spread : float or None
-        magexp's held-out spread.
-
-    Returns
-    -------
-    dict
-        The record, or {}.
-    """
+    (``heldout_spread``; None when not measured)."""
     if not all(c in rec.columns for c in LOGGED):
         return {}
     logged = np.column_stack([rec.columns[c] for c in LOGGED])
@@ -74,18 +50,7 @@ def onboard_of(rec: Recording, heldout_spread: float | None) -> dict:
 
 
 def onboard_line(record: dict | None) -> str:
-    """The report's line of :func:`onboard_of`'s record ('' without one).
-
-    Parameters
-    ----------
-    record : dict
-        :func:`onboard_of`'s record (or {}).
-
-    Returns
-    -------
-    str
-        The line.
-    """
+    """The report's line of :func:`onboard_of`'s record ('' without one)."""
     if not record:
         return ""
     held = record["heldout_spread_magexp"]
@@ -101,15 +66,7 @@ SAID = "the log's onboard calibration ("
 @contextmanager
 def saying_onboard(rec: Recording, heldout_spread: float | None = None):
     """Within the block, a refusal (:class:`~magexp.errors.MagexpError`) of a log whose onboard calibration was
-    undone ends with :func:`onboard_line`: what the firmware already did, and how good it was (once).
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording (:class:`~magexp.core.recording.Recording`).
-    heldout_spread : float or None
-        magexp's held-out spread, when measured.
-    """
+    undone ends with :func:`onboard_line`: what the firmware already did, and how good it was (once)."""
     try:
         yield
     except MagexpError as exc:
@@ -121,16 +78,6 @@ def saying_onboard(rec: Recording, heldout_spread: float | None = None):
 
 def says_onboard(calibrate):
     """``calibrate(rec, ...)`` whose every refusal of a log says what its firmware already did (:func:`saying_onboard`).
-
-    Parameters
-    ----------
-    calibrate : callable
-        A function whose first argument is the recording.
-
-    Returns
-    -------
-    callable
-        The wrapped function.
     """
     @functools.wraps(calibrate)
     def wrapped(rec: Recording, *args, **kwargs):

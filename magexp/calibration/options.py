@@ -36,28 +36,14 @@ CONFIG = CONF / "calibrate.yaml"
 
 
 def option(default, text: str, *, factory=None):
-    """A schema field: its ``default`` (or ``factory`` for a group) and its sentence ``text``.
-
-    Parameters
-    ----------
-    default : object
-        The default (None for a group).
-    text : str
-        The key's sentence (``--help``, the YAML comment).
-    factory : type or None
-        A group's dataclass.
-
-    Returns
-    -------
-    dataclasses.Field
-        The field.
-    """
+    """A schema field: its ``default`` (or ``factory`` for a group) and its sentence ``text``."""
     if factory is not None:
         return field(default_factory=factory, metadata={"help": text})
     return field(default=default, metadata={"help": text})
 
 
 def _gate(key: str, text: str):
+    """The option of ``gate.<key>``, its default :data:`magexp.calibration.checks.GATE`'s: one home for the thresholds."""
     return option(GATE[key], text)
 
 
@@ -199,20 +185,7 @@ def _type_name(annotation) -> str:
 
 
 def rows(schema=CalibrateOptions, prefix: str = "") -> list[tuple[str, str, object, str]]:
-    """``(dotted key, type, default, sentence)`` of every key of ``schema``, a group before its keys.
-
-    Parameters
-    ----------
-    schema : type
-        A dataclass of the schema (:class:`CalibrateOptions` or one of its groups).
-    prefix : str
-        The dotted path of ``schema`` (``""`` at the top, ``"gate."`` for :class:`GateOptions`).
-
-    Returns
-    -------
-    list of tuple
-        One row per key, in the schema's order; a group's default is None.
-    """
+    """``(dotted key, type, default, sentence)`` of every key of ``schema``, a group before its keys."""
     out = []
     for f in dataclasses.fields(schema):
         kind = _type_name(f.type)
@@ -237,13 +210,7 @@ def _yaml_value(value) -> str:
 
 def yaml_text() -> str:
     """``conf/calibrate.yaml``: the defaults list (the estimator), then every key of the schema with its default
-    and its sentence as a comment (long sentences continued on comment lines).
-
-    Returns
-    -------
-    str
-        The file's text; the tests check that the file holds it (``--write`` rewrites it).
-    """
+    and its sentence as a comment (long sentences continued on comment lines)."""
     lines = ["# magexp calibrate: calibrate a recording (magexp/calibration/command.py). Its own primary config,",
              "# generated from the typed schema magexp/calibration/options.py (python -m magexp.calibration.options "
              "--write):",
@@ -265,18 +232,7 @@ def yaml_text() -> str:
 
 def help_text(estimators=()) -> str:
     """``magexp calibrate --help``: every key of the schema (dotted), its type, default and sentence, then
-    the estimators to choose from.
-
-    Parameters
-    ----------
-    estimators : iterable of str
-        The names of ``conf/estimator/*.yaml`` (:func:`magexp.run.compose.options`).
-
-    Returns
-    -------
-    str
-        The text printed.
-    """
+    the estimators to choose from."""
     table = [(key, kind, "(group)" if kind == "group" else _yaml_value(default), text)
              for key, kind, default, text in rows()]
     width, kinds = max(len(r[0]) for r in table), max(len(r[1]) for r in table)
@@ -291,18 +247,7 @@ def help_text(estimators=()) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m magexp.calibration.options [--write]``: print :func:`yaml_text`, or write it to
-    ``conf/calibrate.yaml``.
-
-    Parameters
-    ----------
-    argv : list of str or None
-        The arguments (None: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        0.
-    """
+    ``conf/calibrate.yaml``."""
     parser = argparse.ArgumentParser(description="conf/calibrate.yaml from the calibrate options' schema")
     parser.add_argument("--write", action="store_true", help=f"write {CONFIG} instead of printing it")
     args = parser.parse_args(argv)

@@ -36,20 +36,7 @@ def noise_of(raw: np.ndarray, calibrated: np.ndarray) -> float:
     not close in time. The gate's RMS check discounts it (:func:`magexp.calibration.checks.gate`): a
     noisy sensor (the QMC5883L log: 6.04 % of 6.27 %) is not a bad calibration.
 
-    .. math:: \\hat\\sigma = \\sqrt{\\tfrac{1}{6}\\,\\overline{(|B|_{i+1} - 2|B|_i + |B|_{i-1})^2}}
-
-    Parameters
-    ----------
-    raw : numpy.ndarray
-        ``(N, 3)`` raw readings in time order.
-    calibrated : numpy.ndarray
-        ``(N, 3)`` the calibrated readings.
-
-    Returns
-    -------
-    float
-        ``sqrt(mean(Δ²|B|)² / 6)`` in the calibrated unit, or 0.
-    """
+    .. math:: \\hat\\sigma = \\sqrt{\\tfrac{1}{6}\\,\\overline{(|B|_{i+1} - 2|B|_i + |B|_{i-1})^2}}"""
     if len(raw) < 3 or np.linalg.norm(np.diff(raw, axis=0), axis=1).mean() > SERIES_STEP * centroid_radius(raw):
         return 0.0
     return float(np.sqrt(np.mean(np.diff(np.linalg.norm(calibrated, axis=1), 2) ** 2) / 6))
@@ -57,19 +44,6 @@ def noise_of(raw: np.ndarray, calibrated: np.ndarray) -> float:
 
 def quality(raw: np.ndarray, calibrated: np.ndarray, reference: np.ndarray) -> dict:
     """Magnitude statistics before and after, the RMS against the reference and the readings' noise (:func:`noise_of`).
-
-    Parameters
-    ----------
-    raw, calibrated
-        As :func:`noise_of`.
-    reference : numpy.ndarray
-        ``(N,)`` reference total per reading.
-
-    Returns
-    -------
-    dict
-        ``mean_*``, ``std_*``, ``spread_*`` (std / mean), ``rms_*`` (of ``|B| - reference``) before and after, and
-        ``noise_after``.
     """
     before, after = np.linalg.norm(raw, axis=1), np.linalg.norm(calibrated, axis=1)
     return {"mean_before": float(before.mean()), "std_before": float(before.std()), "spread_before": spread(before),
@@ -85,29 +59,7 @@ def report_of(objective: str, w, o, problem, model: str = "full", extra=()) -> d
     (:meth:`~magexp.problems.base.CalibrationProblem.residual_stack`): ``[s, o]`` (``W = s I``) for the
     sphere model, the 6 upper entries of the symmetric ``W`` and ``o`` for the scalar objective,
     ``[vec W, o]`` for the vector one, ``[vec W, o]`` and ``extra`` (the field direction and gyro bias
-    of the fit) for the gyro-aided model.
-
-    Parameters
-    ----------
-    objective : str
-        ``scalar`` or ``vector``.
-    w : numpy.ndarray
-        ``(3, 3)`` the reported ``W``.
-    o : numpy.ndarray
-        ``(3,)`` the offset.
-    problem : CalibrationProblem
-        The fit's own problem.
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
-    extra : array_like
-        The gyro-aided fit's further parameters (field direction, gyro bias).
-
-    Returns
-    -------
-    dict
-        :func:`magexp.core.identifiability.identifiability`'s report, with ``W_standard_errors``,
-        ``offset_standard_errors``, ``w_form`` and ``model``.
-    """
+    of the fit) for the gyro-aided model."""
     if model == "sphere":
         theta = np.concatenate([[w[0, 0]], o])
         names = ["s", "o1", "o2", "o3"]
@@ -145,22 +97,7 @@ def gyro_extras(model: str, problem, result) -> dict:
     """What the gyro-aided model reports beside ``W`` and ``o`` (nothing for the others): the field
     direction (rad) and the gyroscope's bias (deg/s) it fitted, and ``vector_rms``, the RMS of
     ``R_jᵀ h - W (r_j - o)`` over the readings the fit used (against the field the gyroscope carries to
-    each reading; the recording's unit).
-
-    Parameters
-    ----------
-    model : str
-        ``sphere``, ``diagonal``, ``full`` or ``gyro`` (:mod:`magexp.calibration.models`).
-    problem : GyroAidedCalibration
-        The gyro-aided problem.
-    result : FitResult
-        Its fit.
-
-    Returns
-    -------
-    dict
-        ``field_azimuth``, ``field_elevation`` (rad), ``gyro_bias_deg_s``, ``vector_rms``; {} for another model.
-    """
+    each reading; the recording's unit)."""
     if model != "gyro":
         return {}
     x = result.x

@@ -25,12 +25,41 @@ from magexp.scenarios.search import SearchBox
 class Calibration:
     """A fitted calibration ``B = W (reading - offset)`` of a recording, and how good it is.
 
-    ``w`` is in the canonical form of :data:`FORMS` (``report["w_form"]``); ``metrics`` holds the
+    ``w`` is in the canonical form of :data:`~magexp.calibration.quality.FORMS` (``report["w_form"]``); ``metrics`` holds the
     spreads before, after and held out; ``report`` the standard errors, conditioning, the
     undetermined combinations, the direction coverage (:mod:`magexp.core.identifiability`), the
     acceptance gate's outcome and the model selection. A calibration read back by :meth:`load`
     has no recording (``recording`` None): it applies, exports and summarises, but has no
     readings to plot.
+
+    Made by :func:`magexp.calibrate` (or read back by :meth:`load`), not by hand.
+
+    Attributes
+    ----------
+    recording : Recording or None
+        The readings calibrated (None for a loaded calibration).
+    estimator, objective : str
+        The estimator's name and the objective fitted (``scalar``, ``vector`` or ``gyro``).
+    w, offset : numpy.ndarray
+        ``W`` (3 × 3, canonical form) and ``o`` (3,) of ``B = W (r - o)``: ``o`` in the raw unit.
+    reference : Reference
+        The reference total field fitted to (:class:`magexp.calibration.inputs.Reference`).
+    search : CalibrationBox, SearchBox or None
+        The search box of the fit (None: loaded).
+    fit : FitResult or None
+        The estimator's result (None: loaded).
+    calibrated : numpy.ndarray
+        ``(N, 3)`` calibrated readings, in :attr:`field_unit`.
+    metrics, report : dict
+        The spreads before, after and held out; the quality report (standard errors, conditioning, gate, model).
+    seed : int
+        The seed the estimator's generator derived from.
+    config : dict
+        The settings it was made with.
+    saved : dict or None
+        The JSON it was loaded from.
+    heldout_fits : list
+        Each held-out fold's ``(W_k, o_k)``.
     """
 
     recording: Recording | None
@@ -61,16 +90,12 @@ class Calibration:
 
     @property
     def name(self) -> str:
-        """The recording's file name (a loaded calibration's: the one it was made from).
-
-        """
+        """The recording's file name (a loaded calibration's: the one it was made from)."""
         return self.recording.name if self.recording is not None else Path(self.saved["recording"]).name
 
     @property
     def model(self) -> str:
-        """The model fitted (``report['model']``: ``sphere``, ``diagonal``, ``full`` or ``gyro``).
-
-        """
+        """The model fitted (``report['model']``: ``sphere``, ``diagonal``, ``full`` or ``gyro``)."""
         return self.report.get("model", "full")
 
     def apply(self, readings) -> np.ndarray:
@@ -112,13 +137,20 @@ class Calibration:
 
         Parameters
         ----------
-        path, overwrite
-            As :func:`magexp.calibration.write.save_parameters` (which writes it).
+        path : str or Path
+            The file to write (conventionally ``calibration.json``).
+        overwrite : bool
+            Replace an existing file a calibration wrote (never the recording, never another file).
 
         Returns
         -------
         Path
             ``path``.
+
+        Raises
+        ------
+        MagexpError
+            An existing file without ``overwrite``, or one no calibration wrote.
         """
         return save_parameters(self, path, overwrite=overwrite)
 
@@ -128,8 +160,9 @@ class Calibration:
 
         Parameters
         ----------
-        path
-            As :func:`magexp.calibration.write.read_parameters` (which reads and checks it).
+        path : str or Path
+            A ``calibration.json`` (formats :data:`magexp.calibration.schema.FORMATS`), checked key by key
+            (:func:`magexp.calibration.write.read_parameters`) before anything is built from it.
 
         Returns
         -------
@@ -208,9 +241,14 @@ class Calibration:
         path : str, Path or None
             The folder or file (None: the working folder).
         overwrite : bool
-            Replace an existing file a calibration wrote.
+            As in :meth:`save`.
         **options
-            The target's options (:func:`magexp.calibration.export.options_of`).
+            The target's options (:func:`magexp.calibration.export.options_of` lists them): ``instance``, the
+            compass or slot (``ardupilot`` 0-2, ``px4`` 0-3); ``counts_nt``, nT per count of a raw-count
+            recording; ``max_rotation_deg``, the largest rotation of ``W = R S`` a symmetric-only target
+            (ArduPilot, PX4) may leave out; ``orient``, write ``W``'s determined rotation as the board
+            orientation; ``rotation``, PX4's ``R`` taken out of ``W`` first; ``node``, ``namespace`` (``ros``);
+            ``name``, the C identifier (``c``); ``notes``, comment lines at the file's head.
 
         Returns
         -------

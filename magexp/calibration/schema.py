@@ -24,7 +24,7 @@ import numpy as np
 
 from magexp.calibration.models import ORDER
 from magexp.core.recording import RAW_UNITS, UNITS, check_unit
-from magexp.errors import LARGEST, MagexpError, check_positive_int
+from magexp.errors import LARGEST, MAX_SEED, MagexpError
 from magexp.run.files import check_file
 
 #: the deepest nesting of lists and objects a ``calibration.json`` may have (the format nests four deep)
@@ -34,8 +34,6 @@ MAX_DIGITS = 64
 #: the largest condition number of ``W`` (ratio of its largest to smallest singular value) a calibration may
 #: have: a magnetometer's axes differ in gain by a few times, never by a million
 MAX_CONDITION = 1e6
-#: the largest seed (numpy's generators take any integer >= 0; a seed is kept as a signed 64-bit integer)
-MAX_SEED = 2 ** 63 - 1
 #: the longest name or path (``recording``, ``estimator``...) a calibration holds
 MAX_TEXT = 4096
 #: the format's keys: those of every readable format, and those ``v3`` added (optional in ``v2``)
@@ -52,32 +50,6 @@ OBJECTIVES = ("scalar", "vector", "gyro")
 #: the formats magexp reads (the newest is the one it writes)
 FORMATS = ("magexp-calibration v2", "magexp-calibration v3")
 MODEL = "B = W (reading - offset)"
-
-
-def check_seed(seed, name: str = "seed") -> int:
-    """``seed`` as an int: an integer in ``[0, MAX_SEED]`` (not a bool, not a string), else one line naming ``name``.
-
-    Parameters
-    ----------
-    seed : object
-        A seed given to the API.
-    name : str
-        The argument that gave it.
-
-    Returns
-    -------
-    int
-        The seed.
-
-    Raises
-    ------
-    MagexpError
-        A seed that is not such an integer.
-    """
-    seed = check_positive_int(seed, name, minimum=0)
-    if seed > MAX_SEED:
-        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, 2**63 - 1]")
-    return seed
 
 
 class Bad(Exception):
@@ -125,25 +97,7 @@ def _escaped(raw: np.ndarray, backslash: np.ndarray) -> np.ndarray:
 
 def read_json(path, what: str = "path"):
     """The content of the JSON file ``path``, read within bounds (module docstring): one line refusing a special
-    file, one that does not exist or is a folder, one too large, too deep, with a number too long, or not JSON.
-
-    Parameters
-    ----------
-    path : str or Path
-        The file.
-    what : str
-        The argument that named it, for the message.
-
-    Returns
-    -------
-    object
-        The parsed JSON.
-
-    Raises
-    ------
-    MagexpError
-        One line for a file that cannot be read within the bounds.
-    """
+    file, one that does not exist or is a folder, one too large, too deep, with a number too long, or not JSON."""
     if not isinstance(path, (str, Path)) or not str(path).strip():
         raise MagexpError(f"{what}={_shown(path)} is not allowed: give the path of a calibration.json")
     path = Path(path)
@@ -176,20 +130,7 @@ def _positive(value) -> None:
 
 
 def ranged(lo: float, hi: float, *, whole: bool = False):
-    """A check of a number in ``[lo, hi]`` (not a bool; ``whole``: an integer, not a float).
-
-    Parameters
-    ----------
-    lo, hi : float
-        The range allowed.
-    whole : bool
-        Only integers.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of a number in ``[lo, hi]`` (not a bool; ``whole``: an integer, not a float)."""
     kind = (int,) if whole else (int, float)
 
     def check(value):
@@ -199,18 +140,7 @@ def ranged(lo: float, hi: float, *, whole: bool = False):
 
 
 def text(empty: bool = False):
-    """A check of a one-line string of at most :data:`MAX_TEXT` characters (``empty``: it may be ``""``).
-
-    Parameters
-    ----------
-    empty : bool
-        Whether ``""`` is allowed.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of a one-line string of at most :data:`MAX_TEXT` characters (``empty``: it may be ``""``)."""
     def check(value):
         if not isinstance(value, str) or len(value) > MAX_TEXT or "\n" in value or not (empty or value.strip()):
             raise Bad(f"a {'' if empty else 'non-empty '}one-line string of at most {MAX_TEXT} characters")
@@ -218,18 +148,7 @@ def text(empty: bool = False):
 
 
 def choice(options):
-    """A check of one of ``options``.
-
-    Parameters
-    ----------
-    options : iterable
-        The values allowed.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of one of ``options``."""
     options = tuple(options)
 
     def check(value):
@@ -255,18 +174,7 @@ def _unit(value) -> None:
 
 
 def optional(check):
-    """``check``, or ``null``.
-
-    Parameters
-    ----------
-    check : callable
-        The check of a value that is not ``null``.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """``check``, or ``null``."""
     def either(value):
         if value is not None:
             check(value)
@@ -275,20 +183,7 @@ def optional(check):
 
 def matrix(shape: tuple, extra=()):
     """A check of an array of ``shape`` of finite numbers of magnitude <= :data:`LARGEST` (``extra``: the
-    strings also allowed in place of a number, e.g. ``"inf"`` for an undetermined standard error).
-
-    Parameters
-    ----------
-    shape : tuple
-        The shape required.
-    extra : tuple of str
-        Strings allowed in place of a number.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    strings also allowed in place of a number, e.g. ``"inf"`` for an undetermined standard error)."""
     what = " x ".join(map(str, shape))
 
     def check(value):
@@ -315,22 +210,7 @@ def _cells(value, shape: tuple):
 
 def mapping(schema: dict | None = None, *, exact: bool = True, absent=()):
     """A check of a JSON object whose keys ``schema`` checks (each ``{key: check}``; ``exact``: no other key;
-    ``absent``: the keys that may be missing).
-
-    Parameters
-    ----------
-    schema : dict or None
-        ``{key: check}`` of its keys (None: any object).
-    exact : bool
-        Refuse keys the schema does not have.
-    absent : iterable of str
-        The keys of ``schema`` that may be missing (those an older format does not have).
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    ``absent``: the keys that may be missing)."""
     schema = schema or {}
 
     def check(value):
@@ -352,18 +232,7 @@ def mapping(schema: dict | None = None, *, exact: bool = True, absent=()):
 
 
 def number_or(*names):
-    """A check of a finite number or one of the strings ``names`` (``"inf"``: how JSON keeps an infinity).
-
-    Parameters
-    ----------
-    *names : str
-        The strings allowed.
-
-    Returns
-    -------
-    callable
-        The check.
-    """
+    """A check of a finite number or one of the strings ``names`` (``"inf"``: how JSON keeps an infinity)."""
     def check(value):
         if not ((_is_number(value) and math.isfinite(value)) or value in names):
             raise Bad(f"a finite number or one of {', '.join(names)}")
@@ -445,25 +314,7 @@ SCHEMA = {
 
 
 def check_parameters(data, name: str) -> dict:
-    """``data``, the parsed ``calibration.json`` called ``name``, checked against :data:`SCHEMA` (module docstring).
-
-    Parameters
-    ----------
-    data : object
-        The parsed JSON.
-    name : str
-        The file's name, for the message.
-
-    Returns
-    -------
-    dict
-        ``data``.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the first key that breaks the schema and what it allows.
-    """
+    """``data``, the parsed ``calibration.json`` called ``name``, checked against :data:`SCHEMA` (module docstring)."""
     if not isinstance(data, dict) or data.get("format") not in FORMATS:
         found = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise MagexpError(f"{name}: format {_shown(found)} is not allowed: magexp reads {', '.join(FORMATS)}")

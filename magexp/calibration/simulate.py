@@ -26,14 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.calibration.schema import check_seed
 from magexp.core.atomic import write_text
 from magexp.core.formats import VERSION_LINE
 from magexp.core.geometry import ship_attitude
 from magexp.core.limits import refuse_over
 from magexp.core.recordings import load_recording
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_positive_int, exit_code
+from magexp.errors import MagexpError, check_positive_int, check_seed, exit_code
 from magexp.paths import DATA
 
 #: the standard deviation of each entry of ``E`` in ``W^-1 = I + E`` (soft iron and a misalignment)
@@ -45,28 +44,7 @@ NOISE_NT = 20.0
 
 
 def simulate(n: int, seed: int) -> tuple[str, np.ndarray, np.ndarray]:
-    """The text of a simulated recording with attitudes (module docstring), and its true ``W`` and offset.
-
-    Parameters
-    ----------
-    n : int
-        The number of readings.
-    seed : int
-        The seed of the draws.
-
-    Returns
-    -------
-    text : str
-        The ``magexp-recording v1`` file.
-    w, offset : numpy.ndarray
-        The calibration that undoes the distortion: ``B = W (r - o)`` (nT).
-
-    Raises
-    ------
-    MagexpError
-        ``n`` not an integer >= 12 or over the readings limit (``MAGEXP_MAX_READINGS``), ``seed`` not an integer
-        in [0, 2**63 - 1]: one line.
-    """
+    """The text of a simulated recording with attitudes (module docstring), and its true ``W`` and offset."""
     n = check_readings(n, "n")
     seed = check_seed(seed)
     rng, _ = run_generators(seed)
@@ -84,18 +62,7 @@ def simulate(n: int, seed: int) -> tuple[str, np.ndarray, np.ndarray]:
 
 def command(argv: list[str]) -> None:
     """``python -m magexp.calibration.simulate PATH [--readings N] [--seed S]``: write the recording to ``PATH``
-    (never over an existing file) and print where.
-
-    Parameters
-    ----------
-    argv : list of str
-        The arguments.
-
-    Raises
-    ------
-    MagexpError
-        An existing ``PATH``, a missing folder, a count under 12 or a negative seed: one line.
-    """
+    (never over an existing file) and print where."""
     parser = argparse.ArgumentParser(prog="python -m magexp.calibration.simulate", description=__doc__.splitlines()[0])
     parser.add_argument("path", help="the recording to write (magexp-recording v1)")
     parser.add_argument("--readings", default=400, help="how many readings (default 400)")
@@ -115,18 +82,6 @@ def command(argv: list[str]) -> None:
 
 def check_readings(n, name: str) -> int:
     """``n`` as an int: an integer >= 12 within the readings limit (``MAGEXP_MAX_READINGS``), else one line naming ``name``.
-
-    Parameters
-    ----------
-    n : object
-        The number of readings asked for.
-    name : str
-        The argument that gave it.
-
-    Returns
-    -------
-    int
-        ``n``.
     """
     n = check_positive_int(n, name, minimum=12)
     refuse_over(n, "readings", f"{name}={n}", "it makes")
@@ -139,18 +94,7 @@ def _integer(text):
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run :func:`command` as a process does (:func:`magexp.errors.exit_code`).
-
-    Parameters
-    ----------
-    argv : list of str or None
-        PATH and the options; None reads ``sys.argv[1:]``.
-
-    Returns
-    -------
-    int
-        0 when the file was written, 2 with one line on stderr for bad input.
-    """
+    """Run :func:`command` as a process does (:func:`magexp.errors.exit_code`)."""
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 

@@ -56,31 +56,7 @@ def check_out(out_dir: Path, *, overwrite: bool = False, export: str | None = No
               recording=()) -> Plan:
     """Refuse, in one line, an output folder under ``results/``, one that holds the recording being read, or
     one whose files are in the way (:func:`magexp.calibration.folder.plan`: without ``overwrite`` any output
-    file there; with it a file no calibration wrote); else what writing there replaces and removes.
-
-    Parameters
-    ----------
-    out_dir : Path
-        The output folder.
-    overwrite : bool
-        Replace the earlier calibration in it (its whole set).
-    export : str or None
-        The export target, whose file counts too.
-    draw : bool
-        The figure is drawn (its two files count too).
-    recording : iterable of Path
-        The recording's files (:func:`magexp.calibration.folder.recording_files`).
-
-    Returns
-    -------
-    Plan
-        :func:`~magexp.calibration.folder.plan` of the files this run writes, in ``out_dir``.
-
-    Raises
-    ------
-    MagexpError
-        A folder under results/, holding the recording, or holding a file in the way.
-    """
+    file there; with it a file no calibration wrote); else what writing there replaces and removes."""
     out_dir = Path(out_dir).resolve()
     if out_dir == RESULTS.resolve() or RESULTS.resolve() in out_dir.parents:
         raise MagexpError(f"out={str(out_dir)!r} is not allowed: results/ holds the reproduced papers only, "
@@ -108,25 +84,12 @@ FORMAT = FORMATS[-1]
 
 
 def parameters(cal, *, seed: int | None = None) -> dict:
-    """The JSON content of a :class:`~magexp.calibration.fit.Calibration` (format :data:`FORMAT`):
+    """The JSON content of a :class:`~magexp.calibration.result.Calibration` (format :data:`FORMAT`):
     ``W`` and the offset, the units, the reference and the field model it came from (generation,
     latitude, longitude, altitude, date), the metrics, the quality report (with the acceptance
     gate and the model selection), the fit's outcome, the config and the provenance (magexp
     version, commit, libraries: :func:`magexp.run.provenance.provenance`). A loaded calibration
-    gives back the JSON it was read from.
-
-    Parameters
-    ----------
-    cal : Calibration
-        The calibration.
-    seed : int or None
-        Its seed (None: ``cal.seed``).
-
-    Returns
-    -------
-    dict
-        The JSON content.
-    """
+    gives back the JSON it was read from."""
     if cal.saved is not None:
         return cal.saved
     rec, box = cal.recording, cal.search
@@ -160,27 +123,7 @@ def parameters(cal, *, seed: int | None = None) -> dict:
 def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
     """Write :func:`parameters` of ``cal`` to ``path`` atomically; an existing file is refused in one
     line unless ``overwrite``, and then only a file a calibration wrote
-    (:func:`magexp.calibration.folder.is_calibrations`).
-
-    Parameters
-    ----------
-    cal : Calibration
-        The calibration.
-    path : str or Path
-        The file.
-    overwrite : bool
-        Replace an existing file written by a calibration.
-
-    Returns
-    -------
-    Path
-        The file written.
-
-    Raises
-    ------
-    MagexpError
-        An existing file without ``overwrite``, or one no calibration wrote.
-    """
+    (:func:`magexp.calibration.folder.is_calibrations`)."""
     path = file_path(path, "path")
     check_destination(path, "path")
     check_file(path, overwrite=overwrite, recording=recording_files(cal.recording), option="path")
@@ -191,23 +134,7 @@ def save_parameters(cal, path, *, overwrite: bool = False) -> Path:
 def read_parameters(path) -> dict:
     """The content of a ``calibration.json``, read within bounds and checked against the schema ``save`` writes
     (:mod:`magexp.calibration.schema`: every key's type, range and finiteness, ``W`` invertible and
-    well-conditioned; JSON: nothing read can run code); else one line.
-
-    Parameters
-    ----------
-    path : str or Path
-        A ``calibration.json``.
-
-    Returns
-    -------
-    dict
-        Its content.
-
-    Raises
-    ------
-    MagexpError
-        An unreadable or malformed file.
-    """
+    well-conditioned; JSON: nothing read can run code); else one line."""
     return check_parameters(read_json(path, "path"), Path(path).name)
 
 
@@ -228,15 +155,7 @@ ROWS_PER_BLOCK = 1 << 16
 
 def write_readings(cal, fh) -> None:
     """The calibrated readings as a ``magexp-recording v1`` CSV, into the text file ``fh``: a block of
-    :data:`ROWS_PER_BLOCK` rows at a time, each block one ``%``-format in C (``%.10g`` per value).
-
-    Parameters
-    ----------
-    cal : Calibration
-        The calibration.
-    fh : text file
-        Where to write.
-    """
+    :data:`ROWS_PER_BLOCK` rows at a time, each block one ``%``-format in C (``%.10g`` per value)."""
     raw, cal_b = cal.recording.readings, cal.calibrated
     head = [VERSION_LINE, f"# source: {cal.recording.name} calibrated by magexp "
                           f"(estimator {cal.estimator}, objective {cal.objective})", f"# unit: {cal.field_unit}"]
@@ -252,18 +171,7 @@ def write_readings(cal, fh) -> None:
 
 
 def figure(cal):
-    """The before/after figure of ``cal`` (:func:`magexp.calibration.figure.calibration_figure`).
-
-    Parameters
-    ----------
-    cal : Calibration
-        A calibration with its recording.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
+    """The before/after figure of ``cal`` (:func:`magexp.calibration.figure.calibration_figure`)."""
     # lazy: matplotlib only when a figure is drawn; the Python API and magexp calibrate without
     # figure=true never pay for it (these cost 478 ms CPU to import after magexp.calibration.fit, min of 5)
     from magexp.calibration.figure import calibration_figure
@@ -279,18 +187,7 @@ def figure(cal):
 
 
 def export_name(target: str) -> str:
-    """The file name ``export=<target>`` writes (:data:`magexp.calibration.export.FILE_NAMES`).
-
-    Parameters
-    ----------
-    target : str
-        An export target.
-
-    Returns
-    -------
-    str
-        Its file name.
-    """
+    """The file name ``export=<target>`` writes (:data:`magexp.calibration.export.FILE_NAMES`)."""
     return FILE_NAMES[target]
 
 
@@ -315,38 +212,7 @@ def write(cal, out_dir: Path, *, seed: int | None = None, draw: bool = False, ov
     ``kill`` held back, each moved into place (``os.replace``, ``calibration.json`` last) and the earlier
     calibration's files this one does not write removed. A failure removes the staging folder and
     whatever this call created (the folders made for ``out_dir``, a file already moved into place),
-    nothing else. The figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings.
-
-    Parameters
-    ----------
-    cal : Calibration
-        The calibration.
-    out_dir : Path
-        The output folder.
-    seed : int or None
-        Its seed (None: ``cal.seed``).
-    draw : bool
-        Draw the figure.
-    overwrite : bool
-        Replace the earlier calibration's files.
-    export : str or None
-        An export target.
-    export_options : dict or None
-        Its options.
-    recording : iterable of Path or None
-        The files never written over and refused inside ``out_dir`` (None: the recording's,
-        :func:`magexp.calibration.folder.recording_files`; a live stream kept beside the outputs: none).
-
-    Returns
-    -------
-    Written
-        ``{kind: path}`` of the files written; ``.removed``, the paths of the earlier calibration's files removed.
-
-    Raises
-    ------
-    MagexpError
-        A refused folder, file or export; nothing is left behind.
-    """
+    nothing else. The figure draws at most :data:`magexp.calibration.figure.MAX_POINTS` readings."""
     out_dir = Path(out_dir)
     recording = recording_files(cal.recording) if recording is None else recording
     check_out(out_dir, overwrite=overwrite, export=export, draw=draw, recording=recording)
@@ -407,18 +273,7 @@ def _place(stage: Path, paths: list[Path], *, placed: list[Path]) -> None:
 
 
 def table(rows: dict) -> str:
-    """``key  value`` lines, keys aligned (the printed summary).
-
-    Parameters
-    ----------
-    rows : dict
-        ``{key: value}``.
-
-    Returns
-    -------
-    str
-        The lines.
-    """
+    """``key  value`` lines, keys aligned (the printed summary)."""
     width = max(len(k) for k in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows.items())
 
@@ -461,18 +316,7 @@ def _box_lines(box) -> dict:
 
 
 def summary(cal) -> dict:
-    """The key numbers to print, in order.
-
-    Parameters
-    ----------
-    cal : Calibration
-        The calibration.
-
-    Returns
-    -------
-    dict
-        ``{key: text}`` in print order.
-    """
+    """The key numbers to print, in order."""
     m, u, r = cal.metrics, cal.unit, cal.report
     return {
         "recording": (f"{cal.recording.path or cal.recording.name} ({cal.recording.n} readings, {u})"

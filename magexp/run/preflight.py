@@ -23,7 +23,7 @@ from hydra.core.override_parser.types import Override
 
 from magexp.core.recordings import exists, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check, check_positive_int
+from magexp.errors import MagexpError, check, check_seed
 from magexp.problems import make_problem
 from magexp.paths import SHARED_DATA
 from magexp.run.budget import Tally, check_run, check_sweep
@@ -32,7 +32,7 @@ from magexp.run.compose import (GROUPS, check_choice, compose_config, config_loa
                                  parse_overrides, resolved)
 from magexp.run.values import check_run_values
 from magexp.run.hydra_cli import check_nested
-from magexp.run.keys import check_number, shape
+from magexp.run.keys import shape
 from magexp.run.runner import build
 
 def check_discrete(parsed: list[Override]) -> None:
@@ -149,18 +149,6 @@ def check_problem(cfg, scenario) -> None:
           f"scenario.n_readings={dataset.n} is not allowed with objective {objective!r}: {dataset.n} readings give "
           f"{n_res} residuals for {problem.n_params} parameters; use at least "
           f"{-(-problem.n_params * dataset.n // max(n_res, 1))} readings")
-
-
-def check_seed(seed) -> None:
-    """Refuse a seed that is not an integer in [0, :data:`magexp.errors.LARGEST`], in one line (every integer key's
-    bound, :func:`magexp.run.keys.check_number`).
-
-    Parameters
-    ----------
-    seed : object
-        The ``seed`` value.
-    """
-    check_number(check_positive_int(seed, "seed", minimum=0), "seed", integer=True)
 
 
 def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
