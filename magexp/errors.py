@@ -8,9 +8,6 @@ import sys
 #: the largest magnitude a reading, noise amplitude or search bound may have: squares and
 #: products of a few such numbers stay far from float64 overflow (1.8e308)
 LARGEST = 1e15
-#: the largest seed, for every command and the API alike: the bound of every integer key of a command line
-#: (:data:`LARGEST`), so a seed that works in Python works on the command line (numpy takes any integer >= 0)
-MAX_SEED = int(LARGEST)
 
 
 class MagexpError(ValueError):
@@ -36,15 +33,6 @@ def check_positive_int(value, name: str, minimum: int = 1) -> int:
     if int(value) < minimum:
         raise MagexpError(f"{name}={value!r} is not allowed: it must be an integer >= {minimum}")
     return int(value)
-
-
-def check_seed(seed, name: str = "seed") -> int:
-    """``seed`` as an int in ``[0, MAX_SEED]`` (not a bool, not a string), else one line naming ``name``: the
-    one seed check of the command line and the API."""
-    seed = check_positive_int(seed, name, minimum=0)
-    if seed > MAX_SEED:
-        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, {LARGEST:g}]")
-    return seed
 
 
 def check_nonnegative(value, name: str) -> float:

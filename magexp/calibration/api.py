@@ -22,7 +22,8 @@ from magexp.core.limits import check_limits
 from magexp.core.recording import Recording, check_unit
 from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_seed
+from magexp.errors import MagexpError
+from magexp.run.keys import check_seed
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import options
@@ -68,7 +69,7 @@ def as_recording(readings, *, unit: str | None = None) -> Recording:
 
 def check_arguments(seed, reference_total, estimator_options: dict) -> int:
     """Refuse, in one line, the arguments of :func:`calibrate` no later check reads as the command does: a seed
-    that is not an integer in ``[0, MAX_SEED]`` (:func:`~magexp.errors.check_seed`), a reference
+    that is not an integer in ``[0, MAX_SEED]`` (:func:`~magexp.run.keys.check_seed`), a reference
     total that is not a number (a string, a bool), an estimator option ``name`` (the estimator is
     ``estimator=``); returns the seed as an int."""
     seed = check_seed(seed)
@@ -150,7 +151,7 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
     Raises
     ------
     MagexpError
-        One line for bad input (any argument above, a seed outside ``[0, MAX_SEED]`` (:data:`magexp.errors.MAX_SEED`), an unreadable
+        One line for bad input (any argument above, a seed outside ``[0, MAX_SEED]`` (:data:`magexp.run.keys.MAX_SEED`), an unreadable
         recording), degenerate data, a failed estimator or, with ``checks``, a calibration failing the gate.
 
     See Also

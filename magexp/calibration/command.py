@@ -31,14 +31,14 @@ from magexp.core.formats import LOG_SUFFIXES, detect
 from magexp.core.geometry import axis_map
 from magexp.core.recordings import READERS, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_positive_int, check_seed, exit_code
+from magexp.errors import MagexpError, check_positive_int, exit_code
 from magexp.problems.kernels import numpy_only
 from magexp.run.files import check_recording_file
 from magexp.run.compose import GROUPS, check_choice, compose_config, options
 from magexp.run.folders import check_destination
 from magexp.run.overrides import check_hydra_keys, check_override_targets, check_override_values
 from magexp.run.values import check_run_values
-from magexp.run.keys import check_duplicates, check_schema
+from magexp.run.keys import check_duplicates, check_schema, check_seed
 from magexp.run.runner import build
 
 

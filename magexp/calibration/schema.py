@@ -24,7 +24,8 @@ import numpy as np
 
 from magexp.calibration.models import ORDER
 from magexp.core.recording import RAW_UNITS, UNITS, check_unit
-from magexp.errors import LARGEST, MAX_SEED, MagexpError
+from magexp.errors import LARGEST, MagexpError
+from magexp.run.keys import MAX_SEED
 from magexp.run.files import check_file
 
 #: the deepest nesting of lists and objects a ``calibration.json`` may have (the format nests four deep)

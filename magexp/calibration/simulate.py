@@ -32,7 +32,8 @@ from magexp.core.geometry import ship_attitude
 from magexp.core.limits import refuse_over
 from magexp.core.recordings import load_recording
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check_positive_int, check_seed, exit_code
+from magexp.errors import MagexpError, check_positive_int, exit_code
+from magexp.run.keys import check_seed
 from magexp.paths import DATA
 
 #: the standard deviation of each entry of ``E`` in ``W^-1 = I + E`` (soft iron and a misalignment)

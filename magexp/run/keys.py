@@ -29,11 +29,24 @@ import typing
 
 from omegaconf import BooleanNode, DictConfig, FloatNode, IntegerNode, ListConfig, OmegaConf
 
-from magexp.errors import LARGEST, MagexpError
+from magexp.errors import LARGEST, MagexpError, check_positive_int
 
 #: the smallest magnitude a non-zero number of a config may have: products of a few such numbers stay far above
 #: float64's smallest normal number (2.2e-308), below which a step, a scale or a limit silently becomes zero
 SMALLEST = 1e-100
+
+#: the largest seed, for every command and the API alike: the bound of every integer key of a command line
+#: (:data:`LARGEST`), so a seed that works in Python works on the command line (numpy takes any integer >= 0)
+MAX_SEED = int(LARGEST)
+
+
+def check_seed(seed, name: str = "seed") -> int:
+    """``seed`` as an int in ``[0, MAX_SEED]`` (not a bool, not a string), else one line naming ``name``: the
+    one seed check of the command line and the API."""
+    seed = check_positive_int(seed, name, minimum=0)
+    if seed > MAX_SEED:
+        raise MagexpError(f"{name}={seed} is not allowed: it must be an integer in [0, {LARGEST:g}]")
+    return seed
 
 
 def check_duplicates(overrides: list[str]) -> None:

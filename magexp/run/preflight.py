@@ -23,7 +23,7 @@ from hydra.core.override_parser.types import Override
 
 from magexp.core.recordings import exists, load_recording, resolve
 from magexp.core.seeding import run_generators
-from magexp.errors import MagexpError, check, check_seed
+from magexp.errors import MagexpError, check
 from magexp.problems import make_problem
 from magexp.paths import SHARED_DATA
 from magexp.run.budget import Tally, check_run, check_sweep
@@ -32,7 +32,7 @@ from magexp.run.compose import (GROUPS, check_choice, compose_config, config_loa
                                  parse_overrides, resolved)
 from magexp.run.values import check_run_values
 from magexp.run.hydra_cli import check_nested
-from magexp.run.keys import shape
+from magexp.run.keys import check_seed, shape
 from magexp.run.runner import build
 
 def check_discrete(parsed: list[Override]) -> None:
