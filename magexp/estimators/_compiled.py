@@ -62,22 +62,7 @@ def _settle(x, vel, vmax, lower, upper, clip_box):
 
 @_jit
 def update_best(x, cost, pbest, pcost):
-    """The personal bests where ``cost < pcost``, in place, and the global best.
-
-    Parameters
-    ----------
-    x : ndarray, shape (n, d)
-        Positions whose costs are ``cost``.
-    cost : ndarray, shape (n,)
-        Their costs.
-    pbest, pcost : ndarray, shapes (n, d), (n,)
-        Personal bests and their costs, updated where ``cost < pcost`` (strictly).
-
-    Returns
-    -------
-    int
-        The first index of the smallest ``pcost`` (the first NaN if there is one, as ``argmin``).
-    """
+    """The personal bests where ``cost < pcost``, in place, and the global best."""
     n, d = x.shape
     for i in range(n):
         if cost[i] < pcost[i]:
@@ -95,20 +80,7 @@ def update_best(x, cost, pbest, pcost):
 
 @_jit
 def mean_best(pbest, out):
-    """The mean personal best (Yuan 2018 eq 13), :math:`M_j = \\frac1n \\sum_i p_{ij}`.
-
-    Parameters
-    ----------
-    pbest : ndarray, shape (n, d)
-        Personal bests.
-    out : ndarray, shape (d,)
-        Where to write ``M``.
-
-    Returns
-    -------
-    ndarray, shape (d,)
-        ``out``: the sum row by row, then the division, as ``pbest.mean(axis=0)`` (the same bits).
-    """
+    """The mean personal best (Yuan 2018 eq 13), :math:`M_j = \\frac1n \\sum_i p_{ij}`."""
     n, d = pbest.shape
     for j in range(d):
         out[j] = pbest[0, j]
@@ -121,19 +93,7 @@ def mean_best(pbest, out):
 
 
 def source_of(*objects) -> bytes:
-    """The sources of ``objects`` for :func:`_keyed_on`.
-
-    Parameters
-    ----------
-    *objects : module or function
-        What a compiled function calls into.
-
-    Returns
-    -------
-    bytes
-        Their source files, each followed by the object's qualified name (two kernels of one
-        module differ by it).
-    """
+    """The sources of ``objects`` for :func:`_keyed_on`."""
     return b"".join(Path(inspect.getfile(o)).read_bytes() + getattr(o, "__qualname__", "").encode()
                     for o in objects)
 
@@ -145,18 +105,6 @@ def _keyed_on(dispatcher, *sources: bytes):
     closes over, which for a compiled function differs in every process (the closure would then
     compile again in every process). Here the key is the target, the signature, the bytecode and
     ``sources``: the same in every process, and an edit of any of them recompiles.
-
-    Parameters
-    ----------
-    dispatcher : numba Dispatcher
-        A function compiled with ``cache=True``.
-    *sources : bytes
-        What its machine code depends on besides its own bytecode (:func:`source_of`).
-
-    Returns
-    -------
-    numba Dispatcher
-        ``dispatcher``, its key replaced (unchanged if this numba keeps its cache otherwise).
     """
     stored = getattr(dispatcher, "_cache", None)
     if getattr(stored, "_index_key", None) is not None:
@@ -174,18 +122,6 @@ def engine(kernel, needs_mean: bool = False):
     element inside the loops below, which close over it: one specialisation per rule, the kernel
     inlined, stored on disk under :func:`_keyed_on`'s key (the kernel's source and name, this
     module's, and for ``run`` the costs').
-
-    Parameters
-    ----------
-    kernel : function
-        ``kernel(i, j, x, v, pbest, g, mean, r, c) -> v_ij``.
-    needs_mean : bool
-        Whether the kernel reads ``mean`` (:func:`mean_best`; otherwise ``mean`` is NaN).
-
-    Returns
-    -------
-    SimpleNamespace
-        ``move``, ``step`` and ``run``, compiled (their docstrings).
     """
     rule = _jit(kernel)
     key = source_of(kernel, sys.modules[__name__]) + bytes([needs_mean])
@@ -241,22 +177,7 @@ def engine(kernel, needs_mean: bool = False):
 
 @_jit
 def circle_sequence(z0, n, burn_in, printed):
-    """The Circle-map sequence (:meth:`magexp.estimators.initialisers.CircleMap.sequence`).
-
-    Parameters
-    ----------
-    z0 : ndarray, shape (d,)
-        The seed.
-    n, burn_in : int
-        Iterates kept, after ``burn_in`` steps.
-    printed : bool
-        Ding 2024 eq 15 as printed, or the usual form (the same functions, compiled).
-
-    Returns
-    -------
-    ndarray, shape (n, d)
-        The iterates as rows; coordinate by coordinate, as numpy's element-wise steps.
-    """
+    """The Circle-map sequence (:meth:`magexp.estimators.initialisers.CircleMap.sequence`)."""
     z = z0.copy()
     out = np.empty((n, z.size))
     for k in range(burn_in + n):

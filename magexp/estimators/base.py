@@ -87,19 +87,6 @@ def applies_to(estimator, problem) -> tuple[bool, str]:
 
     An estimator may also be bound to one objective (``only_objective``, e.g. a paper's printed
     solution of one model).
-
-    Parameters
-    ----------
-    estimator : Estimator class or instance
-        Its ``needs`` (default ``("cost",)``) and ``only_objective`` are read.
-    problem : Problem class or instance
-        Its ``capabilities`` and ``objective`` are read.
-
-    Returns
-    -------
-    tuple of (bool, str)
-        ``(True, "")`` or ``(False, reason)``, the reason one line naming what the estimator needs
-        and what the problem offers.
     """
     name = name_of(estimator)
     objective = getattr(problem, "objective", "?")
@@ -120,38 +107,13 @@ def applies_to(estimator, problem) -> tuple[bool, str]:
 
 
 def name_of(estimator) -> str:
-    """The config name of ``estimator``: its ``name``, else its class's name.
-
-    Parameters
-    ----------
-    estimator : Estimator class or instance
-
-    Returns
-    -------
-    str
-    """
+    """The config name of ``estimator``: its ``name``, else its class's name."""
     name = getattr(estimator, "name", None)
     return name if isinstance(name, str) else getattr(estimator, "__name__", type(estimator).__name__)
 
 
 def check_applies(estimator, problem, where: str = "", alternatives=None) -> None:
-    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes.
-
-    Parameters
-    ----------
-    estimator, problem : class or instance
-        As :func:`applies_to`.
-    where : str
-        Named in the error (e.g. the scenario).
-    alternatives : callable, optional
-        Returns ``{name: estimator class}``, called only on failure: the error then names the
-        estimators that do apply (``magexp calibrate``: every ``conf/estimator/*.yaml``).
-
-    Raises
-    ------
-    MagexpError
-        Naming the estimator, the problem's objective, ``where`` and the reason.
-    """
+    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes."""
     ok, reason = applies_to(estimator, problem)
     if ok:
         return
@@ -168,21 +130,7 @@ class Stop(Exception):
 
 
 def stopper(callback: Callback | None, best: dict):
-    """A recorder for library optimisers (``least_squares``, ``minimize``...).
-
-    Parameters
-    ----------
-    callback : callable or None
-        ``callback(k, best x, best fun)`` after each record ``k``; a true return raises :class:`Stop`.
-    best : dict
-        Filled by the recorder: ``best["x"]``, ``best["fun"]`` (the best seen) and ``best["history"]``
-        (the best after each record).
-
-    Returns
-    -------
-    callable
-        ``record(x, fun)``.
-    """
+    """A recorder for library optimisers (``least_squares``, ``minimize``...)."""
     best.setdefault("history", [])
     best.setdefault("fun", np.inf)
 

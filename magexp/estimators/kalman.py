@@ -44,28 +44,7 @@ from magexp.estimators.result import FitResult
 
 
 def kalman_update(x, p, h, y, q, sigma2: float):
-    """One step (1)-(4) of the module docstring (Yan & Zhou 2022, sec 2.1).
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        The state ``x(n-1)`` (s, c).
-    p : numpy.ndarray
-        Its covariance ``P(n-1)`` (s, s).
-    h : numpy.ndarray
-        The observation matrix ``H`` (k, s).
-    y : numpy.ndarray
-        The observation ``y(n)`` (k, c).
-    q : numpy.ndarray
-        The process noise ``Q`` (s, s).
-    sigma2 : float
-        The observation noise variance ``σ²``.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The new state ``x(n)`` (s, c) and ``P(n)`` (s, s).
-    """
+    """One step (1)-(4) of the module docstring (Yan & Zhou 2022, sec 2.1)."""
     r = p + q
     rh = r @ h.T
     m = np.linalg.solve(h @ rh + sigma2 * np.eye(h.shape[0]), rh.T).T
@@ -74,31 +53,7 @@ def kalman_update(x, p, h, y, q, sigma2: float):
 
 
 def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
-    """Run :func:`kalman_update` over a sequence of observations.
-
-    Parameters
-    ----------
-    h : numpy.ndarray
-        Observation matrices (T, k, s).
-    y : numpy.ndarray
-        Observations (T, k, c).
-    p0 : numpy.ndarray
-        ``P(0)`` (s, s).
-    q : numpy.ndarray
-        ``Q`` (s, s).
-    sigma2 : float
-        ``σ²``.
-    x0 : numpy.ndarray
-        The initial state (s, c).
-    stop : callable, optional
-        ``stop(n, x)`` after step ``n``; a true return ends the run.
-
-    Returns
-    -------
-    numpy.ndarray
-        The state at every step, ``(T + 1, s, c)`` (``[0]`` is ``x0``), or up to the step at which
-        ``stop`` first returned a true value.
-    """
+    """Run :func:`kalman_update` over a sequence of observations."""
     states = np.empty((len(h) + 1,) + np.shape(x0))
     x, p = np.asarray(x0, float), np.asarray(p0, float)
     states[0] = x
@@ -111,36 +66,12 @@ def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
 
 
 def cyclic(n_rows: int, n_steps: int) -> np.ndarray:
-    """Row index of every filter step: the readings reused in order, ``0, 1, ..., N-1, 0, ...``.
-
-    Parameters
-    ----------
-    n_rows : int
-        Readings ``N``.
-    n_steps : int
-        Filter steps.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n_steps,)`` row indices.
-    """
+    """Row index of every filter step: the readings reused in order, ``0, 1, ..., N-1, 0, ...``."""
     return np.arange(n_steps) % n_rows
 
 
 def settled_since(distance: np.ndarray) -> int:
-    """The first step from which ``distance`` stays False.
-
-    Parameters
-    ----------
-    distance : numpy.ndarray of bool
-        Per step, True while the state is still apart.
-
-    Returns
-    -------
-    int
-        That step's index, -1 if the last step is still apart.
-    """
+    """The first step from which ``distance`` stays False."""
     apart = np.flatnonzero(distance)
     if apart.size == 0:
         return 0
@@ -150,44 +81,13 @@ def settled_since(distance: np.ndarray) -> int:
 def observed_step(step: float, horizon: int) -> tuple[float, float]:
     """A step of convergence measured over ``horizon`` steps, censored by the doubling rule (module
     docstring).
-
-    Parameters
-    ----------
-    step : float
-        The first step from which the state stays within tolerance through ``horizon`` (NaN: the
-        state is apart at the horizon).
-    horizon : int
-        The last step observed.
-
-    Returns
-    -------
-    tuple of float
-        ``(step, 0.0)`` when ``step <= horizon / 2``; else ``(nan, horizon / 2)``: the step is
-        only known to be later than ``horizon / 2``.
     """
     bound = horizon / 2
     return (float(step), 0.0) if np.isfinite(step) and step <= bound else (np.nan, float(bound))
 
 
 def checked_tuning(p0: float, q: float, sigma2: float, n_steps: int, group: str) -> tuple:
-    """The shared filter settings, checked.
-
-    Parameters
-    ----------
-    p0, q : float
-        ``P(0)`` and ``Q`` scales, >= 0.
-    sigma2 : float
-        Observation noise variance, > 0.
-    n_steps : int
-        Filter steps, > 0.
-    group : str
-        The config group named in an error (``estimator``, ``analysis``).
-
-    Returns
-    -------
-    tuple
-        ``(p0, q, sigma2, n_steps)`` as numbers.
-    """
+    """The shared filter settings, checked."""
     check(check_nonnegative(sigma2, f"{group}.sigma2") > 0,
           f"{group}.sigma2={sigma2!r} is not allowed: the noise variance must be > 0")
     return (check_nonnegative(p0, f"{group}.p0"), check_nonnegative(q, f"{group}.q"), float(sigma2),
@@ -308,42 +208,12 @@ class KalmanFilter(_Tuning):
 
 
 def direct_field(k: np.ndarray, bp: np.ndarray, attitude: np.ndarray, readings: np.ndarray) -> np.ndarray:
-    """Eq 4 for every reading: ``Be_i = (K A_i)^-1 (B_i - Bp)``.
-
-    Parameters
-    ----------
-    k : numpy.ndarray
-        ``K`` (3, 3).
-    bp : numpy.ndarray
-        ``Bp`` (3,).
-    attitude : numpy.ndarray
-        ``A_i`` (N, 3, 3).
-    readings : numpy.ndarray
-        ``B_i`` (N, 3).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``Be_i`` (N, 3).
-    """
+    """Eq 4 for every reading: ``Be_i = (K A_i)^-1 (B_i - Bp)``."""
     return np.linalg.solve(k @ attitude, (readings - bp)[..., None])[..., 0]
 
 
 def field_errors(estimates: np.ndarray, field: np.ndarray) -> tuple[float, float]:
-    """How far field estimates are from the true field.
-
-    Parameters
-    ----------
-    estimates : numpy.ndarray
-        Estimates of ``Be`` (..., 3).
-    field : numpy.ndarray
-        The true ``Be`` (3,).
-
-    Returns
-    -------
-    tuple of float
-        The RMS error over all components (nT) and the largest component error relative to ``|Be|``.
-    """
+    """How far field estimates are from the true field."""
     err = np.asarray(estimates) - field
     return float(np.sqrt(np.mean(err**2))), float(np.max(np.abs(err)) / np.linalg.norm(field))
 
@@ -356,22 +226,6 @@ class FieldKalmanFilter:
     ``P(0) = p0 E``, ``Q = q E``; readings reused cyclically. Called as
     ``step(problem, result) -> result`` after the run's estimator: ``K``, ``Bp`` are the
     estimate ``result.x`` (e.g. ``kf``'s, or the paper's through ``yan2022_paper_mockup``).
-
-    Parameters
-    ----------
-    name : str
-        Config name.
-    p0, q, sigma2 : float
-        As :class:`KalmanFilter` (``P(0)``, ``Q`` in nT²).
-    n_steps : int
-        Filter steps.
-    settle : float
-        Fraction of the steps after which the solution counts as converged (the paper's "stable
-        solution after convergence"): errors are measured over the last ``1 - settle``.
-
-    The returned result is ``result`` with ``trace["be"]`` (``Be`` at every step) and ``metrics``
-    ``be_rms``, ``be_max_rel`` (filter) and ``be_direct_rms``, ``be_direct_max_rel`` (eq 4 on
-    every reading), with ``Be1..3`` and ``truth_Be1..3`` added.
     """
 
     references = "Yan & Zhou 2022, sec 3.2, Fig 4"
@@ -384,20 +238,7 @@ class FieldKalmanFilter:
         self.settle = min(check_nonnegative(settle, "analysis.settle"), 1.0)
 
     def __call__(self, problem, result: FitResult) -> FitResult:
-        """Recompute ``Be`` from ``result``'s ``K``, ``Bp`` (the class docstring).
-
-        Parameters
-        ----------
-        problem : magexp.problems.base.LinearProblem
-            The ship problem whose dataset holds the attitudes and readings.
-        result : FitResult
-            The run's estimate.
-
-        Returns
-        -------
-        FitResult
-            ``result`` with the field estimates added to its ``trace`` and ``metrics``.
-        """
+        """Recompute ``Be`` from ``result``'s ``K``, ``Bp`` (the class docstring)."""
         check_applies(self, problem)
         w, bp = (a[0] for a in problem.unpack(result.x))  # B = K u + Bp  <=>  u = K^-1 (B - Bp)
         k = np.linalg.inv(w)

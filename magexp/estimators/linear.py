@@ -16,6 +16,7 @@ from magexp.estimators.result import FitResult
 
 
 def _result(problem, x: np.ndarray, message: str) -> FitResult:
+    """The :class:`FitResult` of a closed-form solution ``x``: one evaluation, one iteration."""
     fun = problem.cost_direct(x)
     return FitResult(x=x, fun=fun, nit=1, nfev=1, history=np.array([fun]), history_nfev=np.array([1]), message=message)
 

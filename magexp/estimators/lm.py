@@ -200,6 +200,7 @@ class LevenbergMarquardt:
         Parameters
         ----------
         problem : magexp.problems.base.Problem
+            The problem fitted (its :meth:`~magexp.problems.base.Problem.cost_direct` is the reported cost).
         x : numpy.ndarray
             The solution; refused (one line) when not finite.
         status : int
@@ -212,6 +213,12 @@ class LevenbergMarquardt:
         Returns
         -------
         FitResult
+            ``fun`` the textbook cost of ``x``, ``success`` when ``status > 0``.
+
+        Raises
+        ------
+        MagexpError
+            When ``x`` is not finite (lm diverged).
         """
         check(np.all(np.isfinite(x)), "lm diverged: the residuals became non-finite")
         return FitResult(x=x, fun=problem.cost_direct(x), nit=len(history), nfev=len(history),
@@ -230,18 +237,6 @@ def offset_check(problem, q: np.ndarray) -> dict:
     ``offset_determined``: it is below the RMS distance of the readings from their centroid
     (:func:`magexp.core.ellipsoid.normalise`): the data locate the centre of the readings'
     ellipsoid to better than the ellipsoid's own size.
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        A total-field problem (its ``residual_stack`` and dataset).
-    q : numpy.ndarray
-        The gauge-fixed fit (9,).
-
-    Returns
-    -------
-    dict
-        ``offset_standard_error`` (float) and ``offset_determined`` (bool).
     """
     def fun(qs):  # identifiability evaluates a stack of 2 x 9 perturbed vectors
         return problem.residual_stack(qs, of=lambda q: expand(q)[0])
@@ -258,18 +253,6 @@ def polar(problem, x: np.ndarray) -> np.ndarray:
     ``(W^T W)^{1/2}`` (:func:`magexp.core.identifiability.canonical`): the same total field, no rotation.
     A symmetric positive-definite matrix part is kept bit for bit (it is already that factor), and so
     is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of).
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        Its ``unpack`` and ``pack``.
-    x : numpy.ndarray
-        ``(12,)`` parameters.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(12,)`` parameters of the same total field.
     """
     x = np.asarray(x, float)
     mat = x[:9].reshape(3, 3)
@@ -287,30 +270,6 @@ def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 200
     """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``.
 
     Shared by every least-squares refinement.
-
-    Parameters
-    ----------
-    residuals : callable
-        ``residuals(theta) -> (m,)``.
-    x0 : array_like
-        The start.
-    tol : float
-        ``xtol = ftol = gtol``.
-    max_nfev : int
-        Cap on evaluations.
-    callback : callable, optional
-        ``callback(k, best x, best value)`` after each evaluation; a true return stops the fit.
-    measure : callable, optional
-        ``measure(theta)``, the value recorded (default: the RMS of the residuals; an estimator
-        minimising a weighted criterion reports its problem's objective).
-    jac : callable, optional
-        ``theta -> (m, p)`` Jacobian (default: scipy's forward differences).
-
-    Returns
-    -------
-    tuple
-        ``(x, status, message, history)``: scipy's solution (the best ``x`` evaluated when the
-        callback stopped it: status ``-2``), its message, and the best value after every evaluation.
     """
     # lazy: scipy.optimize, measured 0.40 s CPU to import (min of 5, after numpy); every command imports this module
     # to register its typed schema (magexp.run.compose.register_schemas), and only a least-squares run needs it

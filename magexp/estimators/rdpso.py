@@ -31,26 +31,6 @@ def random_drift(i, j, x, v, pbest, g, mean, r, c):
     .. math:: v_{ij} = \\alpha \\lvert M_j - x_{ij}\\rvert \\varphi_{ij}
               + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij}),\\qquad
               \\varphi_{ij} = \\pm \\ln(1/u_{ij}),\\ + \\text{ where } s_{ij} > 0.5
-
-    Parameters
-    ----------
-    i, j : int or slice
-        Particle and dimension (:data:`magexp.estimators.velocity.ALL` for every one).
-    x, v, pbest : ndarray, shape (n, d)
-        Positions, velocities (unused: no inertia) and personal bests.
-    g : int
-        Index of the global best.
-    mean : ndarray, shape (d,)
-        ``M``, the mean personal best (eq 13).
-    r : ndarray, shape (4, n, d)
-        ``r1, r2, s`` and ``ln(1/u)`` (:func:`drift_factors`).
-    c : sequence of 3 floats
-        ``α, c1, c2``.
-
-    Returns
-    -------
-    float or ndarray
-        The new velocity before the clamp.
     """
     phi = (2.0 * (r[2, i, j] > 0.5) - 1.0) * r[3, i, j]  # ±1 times ln(1/u): exact, on a number or an array
     return c[0] * np.abs(mean[j] - x[i, j]) * phi + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) \
@@ -58,19 +38,7 @@ def random_drift(i, j, x, v, pbest, g, mean, r, c):
 
 
 def drift_factors(r: np.ndarray) -> np.ndarray:
-    """The random factors of :func:`random_drift` from its draws (eq 14).
-
-    Parameters
-    ----------
-    r : ndarray, shape (m, 4, n, d)
-        ``U(0, 1)`` draws of ``m`` iterations: ``r1, r2, s`` and ``1 - u``.
-
-    Returns
-    -------
-    ndarray, shape (m, 4, n, d)
-        ``r`` with ``r[:, 3]`` replaced, in place, by ``ln(1/u)``, ``u = 1 - r[:, 3]`` in
-        ``(0, 1]`` (finite): numpy's ``log`` on the whole block, for both paths.
-    """
+    """The random factors of :func:`random_drift` from its draws (eq 14)."""
     np.log(1.0 / (1.0 - r[:, 3]), out=r[:, 3])
     return r
 

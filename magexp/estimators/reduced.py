@@ -25,13 +25,7 @@ from magexp.problems.symmetric import UPPER, expand
 
 
 class SymmetricView:
-    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector).
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        A 12-parameter problem ``[vec(M), o]``.
-    """
+    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector)."""
 
     def __init__(self, problem):
         self.problem = problem
@@ -40,18 +34,7 @@ class SymmetricView:
         self.n_params = 9
 
     def cost(self, q: np.ndarray) -> np.ndarray:
-        """The problem's cost of the expanded vectors.
-
-        Parameters
-        ----------
-        q : numpy.ndarray
-            ``(n, 9)`` vectors.
-
-        Returns
-        -------
-        numpy.ndarray
-            ``(n,)`` costs.
-        """
+        """The problem's cost of the expanded vectors."""
         return self.problem.cost(expand(q))
 
 

@@ -50,28 +50,7 @@ _NO_MOVE = (False, np.empty((0, 0, 0)), np.zeros(3))  # the step after the last 
 
 
 def _draw_blocks(rng: np.random.Generator, rule, shape: tuple, t_max: int, block: int):
-    """The random factors of iterations ``1..t_max``, drawn ``block`` iterations per call.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The run's generator.
-    rule : VelocityRule
-        Draws ``rule.n_draws`` numbers per particle and dimension, turned into its kernel's
-        factors by ``rule.factors``.
-    shape : tuple
-        ``(n, d)``.
-    t_max, block : int
-        Iterations, and iterations per draw.
-
-    Yields
-    ------
-    ndarray, shape (k, ·, n, d)
-        The factors of ``k <= block`` iterations: the same stream as one ``rng.random`` per
-        iteration (a generator fills an array in order), with less overhead per call. Every block
-        is drawn into the same buffer (no fresh pages per block): a block is used up before the
-        next is drawn.
-    """
+    """The random factors of iterations ``1..t_max``, drawn ``block`` iterations per call."""
     buffer = np.empty((min(block, t_max), rule.n_draws, *shape))
     for start in range(1, t_max + 1, block):
         yield rule.factors(rng.random(out=buffer[: min(block, t_max + 1 - start)]))
@@ -82,35 +61,6 @@ def numpy_step(kernel, needs_mean, x, v, pbest, pcost, cost, moves, r, c, limits
 
     The numpy twin of the compiled step (:func:`magexp.estimators._compiled.engine`), with the
     same kernel called once on whole arrays (``i = j =`` :data:`~magexp.estimators.velocity.ALL`).
-
-    Parameters
-    ----------
-    kernel : function
-        The velocity rule's kernel.
-    needs_mean : bool
-        Whether it reads the mean personal best (else it is given None).
-    x, v : ndarray, shape (n, d)
-        Positions and velocities, moved in place: ``v <- min(max(kernel, -v_max), v_max)``,
-        ``x <- x + v``.
-    pbest, pcost : ndarray, shapes (n, d), (n,)
-        Personal bests and their costs, updated in place where ``cost < pcost``.
-    cost : ndarray, shape (n,)
-        The costs of ``x``.
-    moves : bool
-        Whether to move (not after the last iteration).
-    r : ndarray, shape (k, n, d)
-        The kernel's random factors.
-    c : ndarray, shape (3,)
-        Its coefficients.
-    limits : ndarray, shape (3, d)
-        ``v_max``, lower, upper.
-    clip_box : bool
-        Unused: the boundary is applied after the step (``SwarmOptimizer.boundary``).
-
-    Returns
-    -------
-    int
-        The global best's index (before the move).
     """
     better = cost < pcost
     np.copyto(pbest, x, where=better[:, None])
@@ -125,41 +75,19 @@ def numpy_step(kernel, needs_mean, x, v, pbest, pcost, cost, moves, r, c, limits
 
 @cache
 def compiled():
-    """The compiled swarm steps, if numba is in use.
-
-    Returns
-    -------
-    module or None
-        :mod:`magexp.estimators._compiled`, or None when numba is unavailable or
-        ``MAGEXP_NUMBA=0`` (the switch of :func:`magexp.problems.kernels.compiled`).
-    """
+    """The compiled swarm steps, if numba is in use."""
     if kernels.compiled() is None:
         return None
-    # lazy: numba, measured 205 ms CPU to import (min of 5, after numpy); this module is imported by every lm run
-    # (magexp.estimators.reduced), which must not pay for it
+    # lazy: _compiled imports numba at its top (measured 205 ms CPU to import, min of 5, after numpy); building a
+    # swarm estimator (pso, ipso, rdpso, pso9) imports this module, and a numpy-only run (MAGEXP_NUMBA=0, no numba)
+    # must neither pay for numba nor fail without it. Reached only when kernels.compiled() has loaded numba already.
     from magexp.estimators import _compiled
 
     return _compiled
 
 
 def check_speed(value, name: str, per: str) -> float:
-    """A velocity limit, refused unless finite and > 0.
-
-    Parameters
-    ----------
-    value : float
-        The configured number.
-    name : str
-        Its key (``estimator.velocity_clamp``), named in the error.
-    per : str
-        What it multiplies (``(upper - lower)``), or ``""``.
-
-    Returns
-    -------
-    float
-        ``value``; a ``v_max`` of 0 (or none) is refused: it leaves the velocity unbounded, and its
-        uniform initial draw ``U(-inf, inf)`` is not a number.
-    """
+    """A velocity limit, refused unless finite and > 0."""
     v = check_nonnegative(value, name)
     check(v > 0, f"{name}={value!r} is not allowed: it must be a number > 0 (v_max = {name.rpartition('.')[2]}"
                  f"{' x ' + per if per else ''}; 0 leaves the velocity unbounded)")
@@ -246,26 +174,6 @@ class SwarmOptimizer:
         From the initial move (iteration 0, on the costs in ``pcost``) to the last iteration (no
         move), which joins the last block's call; the same numbers as one step and one
         ``problem.cost`` per iteration.
-
-        Parameters
-        ----------
-        run : numba Dispatcher
-            The rule's compiled ``run`` (:func:`magexp.estimators._compiled.engine`).
-        problem : tuple
-            The compiled cost's arguments (:func:`magexp.problems.base.swarm_kernel`).
-        x, v, pbest, pcost, history : ndarray
-            The swarm, moved and updated in place, and the best cost of every iteration.
-        blocks : iterator of ndarray
-            The random factors (:func:`_draw_blocks`).
-        coef : ndarray, shape (t_max, 3)
-            Row ``t``: the coefficients of the move at time ``t + 1``.
-        limits : ndarray, shape (3, d)
-            ``v_max``, lower, upper.
-
-        Returns
-        -------
-        int
-            The global best's index.
         """
         t, t_max = 0, len(history) - 1
         for r in blocks:

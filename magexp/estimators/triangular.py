@@ -52,18 +52,6 @@ def triangular_factor(gram: np.ndarray, form: str = "lower") -> np.ndarray:
 
     ``upper``: ``W = L^T`` of the Cholesky factor ``gram = L L^T``; ``lower``: the same on the
     axes in reverse order (``P`` the reversal), ``W = P (chol(P gram P))^T P``.
-
-    Parameters
-    ----------
-    gram : numpy.ndarray
-        A symmetric positive-definite (3, 3).
-    form : str
-        ``lower`` or ``upper``.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``W`` (3, 3).
     """
     if form == "upper":
         return np.linalg.cholesky(gram).T
@@ -72,20 +60,7 @@ def triangular_factor(gram: np.ndarray, form: str = "lower") -> np.ndarray:
 
 
 def merayo_matrix(gains, angles) -> np.ndarray:
-    """``S T`` of Merayo's model: rows ``s_i e_i`` (module docstring).
-
-    Parameters
-    ----------
-    gains : array_like
-        ``s_1, s_2, s_3``.
-    angles : array_like
-        ``u_1, u_2, u_3`` in radians.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``S T`` (3, 3), lower triangular.
-    """
+    """``S T`` of Merayo's model: rows ``s_i e_i`` (module docstring)."""
     u1, u2, u3 = angles
     t = np.array([[1.0, 0.0, 0.0], [np.sin(u1), np.cos(u1), 0.0],
                   [np.sin(u2), np.sin(u3) * np.cos(u2), np.cos(u3) * np.cos(u2)]])
@@ -93,18 +68,7 @@ def merayo_matrix(gains, angles) -> np.ndarray:
 
 
 def merayo_parameters(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Merayo's parameters of a calibration.
-
-    Parameters
-    ----------
-    w : numpy.ndarray
-        A lower-triangular ``W = (S T)^{-1}`` (3, 3).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The gains ``s_i`` and the angles ``(u_1, u_2, u_3)`` (radians).
-    """
+    """Merayo's parameters of a calibration."""
     m = np.linalg.inv(w)
     gains = np.linalg.norm(m, axis=1)  # every row of T is a unit vector
     t = m / gains[:, None]

@@ -54,40 +54,14 @@ UPPER = (np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2]))  # E11 E22 
 
 
 def sym(e6: np.ndarray) -> np.ndarray:
-    """The symmetric matrix of six entries.
-
-    Parameters
-    ----------
-    e6 : numpy.ndarray
-        ``[E11, E22, E33, E12, E13, E23]``.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``E`` (3, 3).
-    """
+    """The symmetric matrix of six entries."""
     e = np.zeros((3, 3))
     e[UPPER] = e6
     return e + np.triu(e, 1).T
 
 
 def measurement(b: np.ndarray, h_norm: np.ndarray, sigma: float):
-    """The scalar measurements of the module docstring.
-
-    Parameters
-    ----------
-    b : numpy.ndarray
-        Readings ``B_k`` (N, 3).
-    h_norm : numpy.ndarray
-        Reference magnitudes ``|H_k|`` (N,).
-    sigma : float
-        Reading noise per axis.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(z - mu, L, w)``: the measurements, their regressors ``L_k`` and weights ``1/sigma_k²``.
-    """
+    """The scalar measurements of the module docstring."""
     z = (b * b).sum(axis=1) - h_norm**2
     mu = -3.0 * sigma**2
     var = 4.0 * sigma**2 * h_norm**2 + 6.0 * sigma**4
@@ -108,18 +82,6 @@ def centred_estimate(z: np.ndarray, lmat: np.ndarray, w: np.ndarray, b: np.ndarr
     .. math:: \\lambda = \\frac{\\overline{|\\mathbf H|^2 - 3\\sigma^2}}
               {\\overline{\\mathbf B^T F_0\\mathbf B} - 2\\mathbf c_0^T\\overline{\\mathbf B}
                + \\mathbf c_0^T F_0^{-1}\\mathbf c_0}
-
-    Parameters
-    ----------
-    z, lmat, w : numpy.ndarray
-        As :func:`measurement` returns them.
-    b : numpy.ndarray
-        The readings (N, 3).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``θ̃`` (9,).
     """
     wn = w / w.sum()
     zt, lt = z - wn @ z, lmat - wn @ lmat
@@ -139,20 +101,7 @@ def centred_estimate(z: np.ndarray, lmat: np.ndarray, w: np.ndarray, b: np.ndarr
 
 
 def residual_and_jacobian(theta: np.ndarray, z, lmat, w):
-    """Step 2's weighted residuals ``sqrt(w) (z - L theta + c^T (I+E)^-1 c)`` and their Jacobian.
-
-    Parameters
-    ----------
-    theta : numpy.ndarray
-        ``[c; E11, E22, E33, E12, E13, E23]`` (9,).
-    z, lmat, w : numpy.ndarray
-        As :func:`measurement` returns them.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The residuals (N,) and the Jacobian (N, 9).
-    """
+    """Step 2's weighted residuals ``sqrt(w) (z - L theta + c^T (I+E)^-1 c)`` and their Jacobian."""
     c, e = theta[:3], sym(theta[3:])
     g = np.linalg.solve(np.eye(3) + e, c)  # (I+E)^-1 c
     sw = np.sqrt(w)
@@ -164,18 +113,7 @@ def residual_and_jacobian(theta: np.ndarray, z, lmat, w):
 
 
 def calibration(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The calibration of ``θ``: ``(W, o) = ((I+E)^{1/2}, (I+E)^{-1} c)``.
-
-    Parameters
-    ----------
-    theta : numpy.ndarray
-        ``[c; E11, E22, E33, E12, E13, E23]`` (9,).
-
-    Returns
-    -------
-    tuple of numpy.ndarray or None
-        ``(W, o)``; None if ``I + E`` is not positive definite.
-    """
+    """The calibration of ``θ``: ``(W, o) = ((I+E)^{1/2}, (I+E)^{-1} c)``."""
     f = np.eye(3) + sym(theta[3:])
     val, vec = np.linalg.eigh(f)
     if not np.all(val > 0):

@@ -37,47 +37,12 @@ def inertia(i, j, x, v, pbest, g, mean, r, c):
     """Global-best PSO velocity with inertia weight (Kennedy & Eberhart 1995; Ding 2024 eq 10).
 
     .. math:: v_{ij} \\leftarrow w\\,v_{ij} + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij})
-
-    Parameters
-    ----------
-    i, j : int or slice
-        Particle and dimension (:data:`ALL` for every one).
-    x, v, pbest : ndarray, shape (n, d)
-        Positions, velocities and personal bests.
-    g : int
-        Index of the global best.
-    mean : ndarray, shape (d,), or None
-        Mean personal best (unused by this rule).
-    r : ndarray, shape (2, n, d)
-        ``r1, r2 ~ U(0, 1)``.
-    c : sequence of 3 floats
-        ``w, c1, c2``.
-
-    Returns
-    -------
-    float or ndarray
-        The new velocity before the clamp.
     """
     return c[0] * v[i, j] + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j])
 
 
 def check_schedule(schedule, role: str):
-    """``schedule`` of the coefficient ``role``, refused if negative.
-
-    Parameters
-    ----------
-    schedule : Constant or Linear
-        The schedule; a value it is given (``value``, ``start``, ``end``: a linear schedule's
-        extremes) must be >= 0: a negative inertia reverses the velocity every step, a negative
-        learning factor drives a particle away from the best position found.
-    role : str
-        ``inertia``, ``c1`` or ``c2`` (named in the error).
-
-    Returns
-    -------
-    Constant or Linear
-        ``schedule`` itself.
-    """
+    """``schedule`` of the coefficient ``role``, refused if negative."""
     for part in ("value", "start", "end"):
         v = getattr(schedule, part, None)
         if isinstance(v, float) and v < 0:
@@ -109,37 +74,12 @@ class VelocityRule:
     needs_mean = False
 
     def schedule(self, t: np.ndarray, t_max: int) -> np.ndarray:
-        """The coefficients at every time of ``t``.
-
-        Parameters
-        ----------
-        t : ndarray of int
-            Iteration numbers ``1..t_max``, as :func:`~magexp.estimators.schedules.values` takes them.
-        t_max : int
-            Number of iterations.
-
-        Returns
-        -------
-        ndarray, shape (len(t), 3)
-            Row ``k``: the coefficients ``c`` at time ``t[k]``, the floats ``s(t_k, t_max)`` one
-            call at a time would give (:func:`magexp.estimators.schedules.values`).
-        """
+        """The coefficients at every time of ``t``."""
         return np.stack([values(getattr(self, name), t, t_max) for name in self.coefficients], axis=1)
 
     @staticmethod
     def factors(r: np.ndarray) -> np.ndarray:
-        """The kernel's random factors from the uniform draws (here: the draws themselves).
-
-        Parameters
-        ----------
-        r : ndarray, shape (m, n_draws, n, d)
-            The draws of ``m`` iterations, each ``U(0, 1)``.
-
-        Returns
-        -------
-        ndarray, shape (m, k, n, d)
-            The factors ``r`` of each iteration's kernel call (may be ``r``, changed in place).
-        """
+        """The kernel's random factors from the uniform draws (here: the draws themselves)."""
         return r
 
 

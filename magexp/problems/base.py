@@ -169,34 +169,13 @@ class LinearProblem(Problem, Protocol):
 
 
 def describe(capabilities) -> str:
-    """The capabilities in words, joined by ``, ``.
-
-    Parameters
-    ----------
-    capabilities : iterable of str
-        Keys of :data:`CAPABILITIES`.
-
-    Returns
-    -------
-    str
-        Their descriptions, sorted by key.
-    """
+    """The capabilities in words, joined by ``, ``."""
     return ", ".join(CAPABILITIES[c] for c in sorted(capabilities))
 
 
 def inverse(mats: np.ndarray) -> np.ndarray:
     """Inverses of a stack of 3x3 matrices; an exactly singular one (a swarm clipped onto
     the box edges can make one) gets its pseudo-inverse instead of stopping the run.
-
-    Parameters
-    ----------
-    mats : ndarray, shape (..., 3, 3)
-        The matrices.
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        Their inverses (pseudo-inverses, for the whole stack, when one is singular).
     """
     try:
         return np.linalg.inv(mats)
@@ -208,18 +187,6 @@ def defining_class(obj, name: str):
     """The class in ``type(obj)``'s method resolution order that defines attribute ``name``
     (None if none does): whether two methods belong together (e.g. a derivative and the function
     it differentiates) after subclassing.
-
-    Parameters
-    ----------
-    obj : object
-        Any object.
-    name : str
-        An attribute's name.
-
-    Returns
-    -------
-    type or None
-        The first class of ``type(obj).__mro__`` whose own namespace holds ``name``.
     """
     return next((c for c in type(obj).__mro__ if name in vars(c)), None)
 
@@ -230,16 +197,6 @@ def swarm_kernel(problem) -> tuple | None:
     offered (a problem without :meth:`CalibrationProblem.swarm_kernel`, numba off, a forward
     parameterisation), or one not defined beside the class's ``cost`` (a subclass that changes
     the cost, e.g. :class:`magexp.problems.vector.VectorLeastSquares`, gets the generic path).
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        A problem.
-
-    Returns
-    -------
-    tuple or None
-        ``(kind, data, reference, params)``, or None.
     """
     if defining_class(problem, "swarm_kernel") is not defining_class(problem, "cost"):
         return None
@@ -247,18 +204,7 @@ def swarm_kernel(problem) -> tuple | None:
 
 
 def reference_vectors(dataset) -> np.ndarray:
-    """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field.
-
-    Parameters
-    ----------
-    dataset : Dataset
-        With ``attitude`` (N, 3, 3) and ``field_nav`` (N, 3).
-
-    Returns
-    -------
-    ndarray, shape (N, 3)
-        ``v_i = C_i^b H_i``, the reference vectors of Yuan 2018's eq 8.
-    """
+    """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field."""
     return np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)
 
 
@@ -267,11 +213,18 @@ class CalibrationProblem:
 
     Parameters
     ----------
-    dataset : :class:`magexp.core.dataset.Dataset`.
-    search : :class:`magexp.scenarios.search.SearchBox` (bounds of the parameters).
-    parameterisation : ``"inverse"``: ``theta = [vec(W), o]`` (Ding 2024: ``W = M^-1``, ``o = I``);
-        ``"forward"``: ``theta = [vec(S), b]`` with ``W = S^-1`` (Yuan 2018).
-        ``vec`` is row-major.
+    dataset : magexp.core.dataset.Dataset
+        The readings (and, by problem, the attitudes, gyro rates or reference field) to calibrate.
+    search : magexp.scenarios.search.SearchBox
+        The search box: its ``bounds()`` are ``lower`` and ``upper``.
+    parameterisation : {"inverse", "forward"}, optional
+        ``"inverse"``: ``theta = [vec(W), o]`` (Ding 2024: ``W = M^-1``, ``o = I``);
+        ``"forward"``: ``theta = [vec(S), b]`` with ``W = S^-1`` (Yuan 2018). ``vec`` is row-major.
+
+    Raises
+    ------
+    MagexpError
+        When ``parameterisation`` is neither.
     """
 
     n_params = 12

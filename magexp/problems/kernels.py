@@ -70,11 +70,6 @@ _COMPILED_ALLOWED = ContextVar("magexp_compiled_allowed", default=True)
 def fused_enabled() -> bool:
     """Whether the compiled kernels are wanted and installed (``MAGEXP_NUMBA`` not ``0``, numba
     findable, not within :func:`numpy_only`), without importing numba: the path :func:`compiled` takes.
-
-    Returns
-    -------
-    bool
-        True when :func:`compiled` would return the numba kernels.
     """
     return (_COMPILED_ALLOWED.get() and os.environ.get("MAGEXP_NUMBA", "1") != "0"
             and importlib.util.find_spec("numba") is not None)
@@ -89,20 +84,6 @@ def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None
     ``max(CHUNK, rows P)`` particle-readings (a chunk holds at least one reading of every particle's
     ``rows`` components), beside ten features or seven columns of each of its readings, and
     :data:`FALLBACK_FLOATS_PER_PARTICLE` a particle for the coefficients.
-
-    Parameters
-    ----------
-    n_particles : int
-        The swarm's size ``P``.
-    rows : int
-        The components of a reading's residual: 1 (scalar cost) or 3 (vector cost).
-    fused : bool, optional
-        The path: None, the one :func:`fused_enabled` says; True, compiled; False, numpy.
-
-    Returns
-    -------
-    int
-        The float64 numbers held.
     """
     if fused_enabled() if fused is None else fused:
         return FUSED_FLOATS_PER_PARTICLE * n_particles
@@ -116,11 +97,6 @@ def numpy_only(on: bool = True):
     """Within the block (this thread or task only), :func:`compiled` is None when ``on``: the caller's
     choice of the numpy path for the kernels it calls (``magexp calibrate``'s ``compiled=False``), an
     argument rather than the process's environment; afterwards the choice is as it was.
-
-    Parameters
-    ----------
-    on : bool
-        True: numpy within the block; False: the choice is left as it is.
     """
     token = _COMPILED_ALLOWED.set(_COMPILED_ALLOWED.get() and not on)
     try:
@@ -132,11 +108,6 @@ def numpy_only(on: bool = True):
 def compiled():
     """The numba kernels (a namespace), or None when numba is unavailable, ``MAGEXP_NUMBA=0``, or within
     :func:`numpy_only`.
-
-    Returns
-    -------
-    module or None
-        :mod:`magexp.problems._compiled`, or None (the numpy path).
     """
     return _loaded() if _COMPILED_ALLOWED.get() else None
 
@@ -161,23 +132,6 @@ def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
     ``kernel = (kind, data, reference, params)``, a problem's arguments prepared once
     (:meth:`magexp.problems.base.CalibrationProblem.swarm_kernel`); no per-call conversion but
     making ``thetas`` a C-contiguous float array (2-D), which an engine's swarm already is.
-
-    Parameters
-    ----------
-    kernel : tuple
-        ``(kind, data, reference, params)`` of a problem's :meth:`swarm_kernel`.
-    thetas : ndarray, shape (P, 12)
-        The particles (one 12-vector is taken as one particle).
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Every particle's cost: Ding 2024's eq 17 or Yuan 2018's eq 8 (module docstring).
-
-    Raises
-    ------
-    MagexpError
-        One line for parameter vectors without 12 columns.
     """
     thetas = np.ascontiguousarray(thetas, float)
     if thetas.ndim != 2:
@@ -191,23 +145,6 @@ def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
 def scalar_coefficients(w: np.ndarray, o: np.ndarray, centre: np.ndarray, scale: float) -> np.ndarray:
     """The ten quadratic-form coefficients of every particle, shape ``(P, 10)`` (module docstring),
     element by element in the compiled kernel's order (no sum left to a library).
-
-    Parameters
-    ----------
-    w : ndarray, shape (P, 3, 3)
-        Every particle's ``W``.
-    o : ndarray, shape (P, 3)
-        Every particle's offset.
-    centre : ndarray, shape (3,)
-        The readings' centre ``c``.
-    scale : float
-        The readings' scale ``s``.
-
-    Returns
-    -------
-    ndarray, shape (P, 10)
-        ``[A00, A11, A22, A01, A02, A12, -2 (A o')_0..2, o'^T A o']`` with ``A = s² W^T W``,
-        ``o' = (o - c) / s``.
     """
     a = scale * scale * (w[:, 0, :, None] * w[:, 0, None, :] + w[:, 1, :, None] * w[:, 1, None, :]
                          + w[:, 2, :, None] * w[:, 2, None, :])
@@ -218,6 +155,7 @@ def scalar_coefficients(w: np.ndarray, o: np.ndarray, centre: np.ndarray, scale:
 
 
 def _chunks(n: int, n_particles: int):
+    """Slices of the ``n`` readings, at most :data:`CHUNK` particle-readings each: the numpy fallback's bound on memory."""
     step = max(1, CHUNK // max(n_particles, 1))
     return (slice(k, min(k + step, n)) for k in range(0, n, step))
 
@@ -239,16 +177,6 @@ def scalar_cost_numpy(w, o, centre, scale, u, reference) -> np.ndarray:
     in its order, element by element over (readings, particles) arrays (the ten products added left
     to right, the squared errors summed reading after reading, :func:`_add_rows`). A particle's cost
     does not depend on the particles evaluated with it (a BLAS product's would).
-
-    Parameters
-    ----------
-    w, o, centre, scale, u, reference
-        As :func:`scalar_cost`.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Every particle's total-field RMS (Ding 2024, eq 17).
     """
     coef = scalar_coefficients(w, o, centre, scale).T.copy()  # (10, P), contiguous rows
     acc = np.zeros(coef.shape[1])
@@ -266,26 +194,6 @@ def scalar_cost_numpy(w, o, centre, scale, u, reference) -> np.ndarray:
 def scalar_cost(w, o, centre, scale, u, reference) -> np.ndarray:
     """Total-field RMS of every particle, ``(P,)``, from ``W`` (P, 3, 3), ``o`` (P, 3), the
     normalisation ``centre``, ``scale``, the normalised readings ``u`` (N, 3) and ``B_a`` (N,).
-
-    Parameters
-    ----------
-    w : ndarray, shape (P, 3, 3)
-        Every particle's ``W``.
-    o : ndarray, shape (P, 3)
-        Every particle's offset ``o``.
-    centre : ndarray, shape (3,)
-        The readings' centre ``c`` (:func:`magexp.core.ellipsoid.normalise`).
-    scale : float
-        The readings' scale ``s``.
-    u : ndarray, shape (N, 3)
-        The normalised readings ``(r - c) / s``.
-    reference : ndarray, shape (N,)
-        The reference total field ``B_a,i``.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        ``RMS_p`` of Ding 2024's eq 17 (module docstring).
     """
     nb = compiled()
     if nb is None:
@@ -295,24 +203,7 @@ def scalar_cost(w, o, centre, scale, u, reference) -> np.ndarray:
 
 
 def scalar_residuals(w, o, readings, reference) -> np.ndarray:
-    """``|W (r_i - o)| - B_a,i`` of one calibration, ``(N,)`` (compiled for large ``N``).
-
-    Parameters
-    ----------
-    w : ndarray, shape (3, 3)
-        The calibration matrix ``W``.
-    o : ndarray, shape (3,)
-        The offset ``o``.
-    readings : ndarray, shape (N, 3)
-        The raw readings ``r_i``.
-    reference : ndarray, shape (N,)
-        The reference total field ``B_a,i``.
-
-    Returns
-    -------
-    ndarray, shape (N,)
-        The residuals of Ding 2024's eq 17.
-    """
+    """``|W (r_i - o)| - B_a,i`` of one calibration, ``(N,)`` (compiled for large ``N``)."""
     nb = compiled() if len(readings) >= COMPILE_MIN_READINGS else None
     if nb is None:
         return np.linalg.norm((readings - o) @ w.T, axis=1) - reference
@@ -326,18 +217,6 @@ def vector_cost_numpy(w, o, readings, reference, *, squared: bool = False) -> np
     ``e_j = v_ij - (W_j0 d_0 + W_j1 d_1 + W_j2 d_2)``, ``|e|`` summed reading after reading,
     :func:`_add_rows`), so a particle's ``F`` does not depend on the particles evaluated with it.
     ``squared=True`` sums ``|e_i|^2`` instead of ``|e_i|`` (the least-squares form).
-
-    Parameters
-    ----------
-    w, o, readings, reference
-        As :func:`vector_cost`.
-    squared : bool
-        Sum ``|e_i|²`` instead of ``|e_i|``.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Every particle's ``F`` (Yuan 2018, eq 8), or its sum of squares.
     """
     acc = np.zeros(len(w))
     for rows in _chunks(len(readings), len(w)):
@@ -358,20 +237,6 @@ def vector_cost_numpy(w, o, readings, reference, *, squared: bool = False) -> np
 def vector_cost(w, o, readings, reference) -> np.ndarray:
     """``F`` of every particle, ``(P,)``, from ``W`` (P, 3, 3), ``o`` (P, 3), readings and
     reference vectors ``v_i`` (N, 3); non-finite values become ``inf``.
-
-    Parameters
-    ----------
-    w, o : ndarray, shapes (P, 3, 3) and (P, 3)
-        Every particle's calibration ``W (r - o)``.
-    readings : ndarray, shape (N, 3)
-        The raw readings ``r_i``.
-    reference : ndarray, shape (N, 3)
-        The reference vectors ``v_i = C_i^b H_i``.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        ``F_p = sum_i |v_i - W_p (r_i - o_p)|`` (Yuan 2018, eq 8), ``inf`` where not finite.
     """
     nb = compiled()
     with np.errstate(invalid="ignore", over="ignore"):

@@ -53,13 +53,6 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
 
     ``residuals`` stacks the ``3N`` components for ``lm``; :meth:`least_squares` is the
     closed-form solution the filter converges to when rows are reused.
-
-    Parameters
-    ----------
-    dataset : Dataset
-        The ship's readings, attitudes and field (Yan & Zhou 2022 eq 1).
-    search : SearchBox
-        The bounds of ``K`` and ``Bp``.
     """
 
     objective = "ship"
@@ -75,76 +68,27 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         self._target = z.ravel()  # vec(Z)
 
     def parameter_names(self) -> list[str]:
-        """The names of the 12 parameters, in ``theta``'s order.
-
-        Returns
-        -------
-        list of str
-            ``K11``...``K33``, ``Bp1``...``Bp3`` (Yan & Zhou 2022's ``K`` and ``Bp``).
-        """
+        """The names of the 12 parameters, in ``theta``'s order."""
         return [f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"Bp{i + 1}" for i in range(3)]
 
     def predict(self, thetas: np.ndarray) -> np.ndarray:
-        """Modelled readings ``C x`` for every particle, shape ``(n, N, 3)``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 12) or (12,)
-            Parameter vectors ``[vec(K), Bp]``.
-
-        Returns
-        -------
-        ndarray, shape (n, N, 3)
-            ``K A_i Be + Bp`` (eq 1) of every particle and reading.
-        """
+        """Modelled readings ``C x`` for every particle, shape ``(n, N, 3)``."""
         return np.einsum("ij,njk->nik", self._c, theta_to_state(thetas))
 
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """48 float64 numbers per particle, whatever the readings (``R x - Z`` and its squares;
         tracemalloc's peak of one call: 37 to 39 a particle, 50 and 200 particles).
-
-        Parameters
-        ----------
-        n_readings, n_particles : int
-            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (the QR form).
-
-        Returns
-        -------
-        int
-            ``48 n_particles``.
         """
         return 48 * n_particles
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
-        """Fit residual RMS of every particle, ``(n, 12) -> (n,)`` (class docstring: QR form).
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 12)
-            Parameter vectors ``[vec(K), Bp]``.
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            ``sqrt(|C x - Y|_F² / 3N)`` of each (eqs 1 and 6).
-        """
+        """Fit residual RMS of every particle, ``(n, 12) -> (n,)`` (class docstring: QR form)."""
         d = np.atleast_2d(thetas) @ self._map - self._target
         return np.sqrt((np.einsum("nk,nk->n", d, d) + self._floor) / self._y.size)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
-        """``K A_i Be + Bp - B_i`` for every reading, stacked (3N,), by eq 1 directly.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            ``[vec(K), Bp]`` (row-major).
-
-        Returns
-        -------
-        ndarray, shape (3N,)
-            The residuals of Yan & Zhou 2022's eq 1.
-        """
+        """``K A_i Be + Bp - B_i`` for every reading, stacked (3N,), by eq 1 directly."""
         k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
         body = np.einsum("nij,nj->ni", self.dataset.attitude, self.dataset.field_nav)
         return (body @ k.T + bp - self._y).ravel()
@@ -152,18 +96,6 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
     def jacobians(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(J, G)`` of :meth:`residuals` (linear: independent of ``theta``): ``J`` ``(3N, 12)``
         with ``∂r_i/∂K_jk = e_j (A_i Be)_k`` and ``∂r_i/∂Bp = I``; ``G_i = ∂r_i/∂B_i = -I``.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            A parameter vector (the model is linear: unused).
-
-        Returns
-        -------
-        J : ndarray, shape (3N, 12)
-            ``∂r/∂θ``.
-        G : ndarray, shape (N, 3, 3)
-            ``∂r_i/∂B_i``.
         """
         body = self._c[:, :3]  # (A_i Be)^T, the regressors of eq 6
         n = len(body)
@@ -173,34 +105,13 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         return jac.reshape(3 * n, 12), np.broadcast_to(-np.eye(3), (n, 3, 3))
 
     def cost_direct(self, theta: np.ndarray) -> float:
-        """Fit residual RMS (nT) of one parameter vector.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The magnetization, as :meth:`residuals` takes it.
-
-        Returns
-        -------
-        float
-            The RMS of the residuals of Yan & Zhou 2022's eq 1.
-        """
+        """Fit residual RMS (nT) of one parameter vector."""
         return rms(self.residuals(theta))
 
     def metrics(self, theta: np.ndarray) -> dict:
         """``fit_rms`` (nT); the estimate per parameter (``K11``...``Bp3``); its distance to the
         least-squares solution (``k_vs_ls`` max abs, ``bp_vs_ls`` max abs nT) and ``ls_fit_rms``;
         with a known truth ``k_error`` (max abs), ``bp_error`` (max abs, nT) and ``truth_<name>``.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The filter's (or any estimator's) ``[vec(K), Bp]``.
-
-        Returns
-        -------
-        dict
-            The keys above, floats.
         """
         theta = np.asarray(theta, float)
         ls = self.least_squares()
