@@ -38,7 +38,8 @@ class Estimator(Protocol):
     Attributes
     ----------
     name : str
-        Its config name (the constructor's ``name``).
+        Its config name (the constructor's ``name``: every estimator class takes one, as
+        ``name: str``, and the result tables name the run by it).
     needs : tuple of str
         Capabilities the problem must offer (:data:`magexp.problems.base.CAPABILITIES`).
     iterative : bool

@@ -39,7 +39,7 @@ class CMAES:
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     max_evaluations : int
         Budget of cost evaluations (default: the swarms' 50 × 801), at least 2.
     popsize : int

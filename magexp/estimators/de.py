@@ -36,7 +36,7 @@ class DifferentialEvolution:
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     max_evaluations : int
         Budget of cost evaluations (default: the swarms' 50 × 801): at least two populations.
     popsize : int

@@ -65,10 +65,14 @@ def ekf_step(theta, p, reference, reading, *, q, r, form=forward_measurement):
 class ExtendedKalmanFilter:
     """EKF calibration (``fit(problem, rng=...) -> FitResult``, history indexed by filter step).
 
+    State ``θ = [vec(S), b]``, measurement ``B_{b,i} = S u_i + b`` (Yuan 2018 eq 1, ``form: forward``)
+    or ``u_i = S^{-1}(B_{b,i} - b)`` (eq 3, ``form: inverse``), ``u_i = C_i^b H_i``; the step is the
+    module docstring's.
+
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     form : str
         Measurement form, ``forward`` or ``inverse`` (see the module docstring).
     n_steps : int

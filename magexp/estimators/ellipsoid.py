@@ -25,7 +25,7 @@ class EllipsoidFit:
     Parameters
     ----------
     name : str
-        Config name (``ellipsoid``).
+        As in :class:`~magexp.estimators.base.Estimator` (``ellipsoid``).
 
     References
     ----------
@@ -90,7 +90,7 @@ class EllipsoidSpecificFit(EllipsoidFit):
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     k : float
         The constraint's ``k`` (4: Li & Griffiths' choice), > 0.
 

@@ -109,13 +109,16 @@ class _Tuning:
 class KalmanFilter(_Tuning):
     """Yan & Zhou's filter for ``x = [K Bp]^T`` (``kf``).
 
+    The recursion of Yan 2022 sec 2.1, steps (1)-(4) (module docstring), on the rows
+    ``C(n) = [Be^T A^T, 1]`` and observations ``y(n) = B^T`` of the model ``B = K A Be + Bp`` (eqs 1-2).
+
     ``x(0) = 0``. The result's ``trace["x"]`` is the state at every step as ``theta``
     (``n_steps + 1``, 12), ``history`` the fit RMS at every step.
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     p0 : float
         ``P(0) = p0 diag(1, 1, 1, offset_scale^2)`` (the paper: a diagonal matrix).
     q : float

@@ -27,7 +27,7 @@ class LeastSquares:
     Parameters
     ----------
     name : str
-        Config name (``ls``).
+        As in :class:`~magexp.estimators.base.Estimator` (``ls``).
 
     References
     ----------
@@ -66,7 +66,7 @@ class FixedParameters:
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     x : list of float
         The parameter vector, in the problem's order (``problem.parameter_names()``).
     source : str

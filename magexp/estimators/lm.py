@@ -54,12 +54,16 @@ SOLVERS = ("minpack", "numpy")
 
 
 class LevenbergMarquardt:
-    """Least-squares refinement.
+    """Least-squares refinement: ``θ* = argmin_θ Σ_i r_i(θ)²`` over the problem's residuals.
+
+    On the scalar problem ``r_i = |W(r_i - o)| - B_a`` (Ding 2024 eq 17's RMS, minimised in the
+    gauge of the module docstring); on the vector problem the components of
+    ``C_i H_i - W(r_i - o)`` (Yuan 2018 eq 8's terms, squared).
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     start : str
         ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the
         linear least-squares fit of the vector problem), else the ellipsoid fit (scalar objective),

@@ -34,7 +34,7 @@ class LocalMinimiser:
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     start : str
         As :class:`~magexp.estimators.lm.LevenbergMarquardt` (``problem``, ``ellipsoid``, ``centre``).
     max_iter : int

@@ -26,12 +26,7 @@ from magexp.estimators.velocity import VelocityRule
 
 
 def random_drift(i, j, x, v, pbest, g, mean, r, c):
-    """RDPSO velocity (eqs 14, 16): the kernel of :class:`RandomDriftVelocity`.
-
-    .. math:: v_{ij} = \\alpha \\lvert M_j - x_{ij}\\rvert \\varphi_{ij}
-              + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij}),\\qquad
-              \\varphi_{ij} = \\pm \\ln(1/u_{ij}),\\ + \\text{ where } s_{ij} > 0.5
-    """
+    """RDPSO velocity (Yuan 2018 eqs 14, 16): the kernel of :class:`RandomDriftVelocity` (its equation there)."""
     phi = (2.0 * (r[2, i, j] > 0.5) - 1.0) * r[3, i, j]  # ±1 times ln(1/u): exact, on a number or an array
     return c[0] * np.abs(mean[j] - x[i, j]) * phi + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) \
         + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j])
@@ -77,6 +72,13 @@ class ThermalCoefficient:
 
 class RandomDriftVelocity(VelocityRule):
     """The RDPSO velocity rule: the kernel :func:`random_drift` on the draws ``r1, r2, s, u``.
+
+    .. math:: v_{ij} = \\alpha \\lvert M_j - x_{ij}\\rvert \\varphi_{ij}
+              + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij}),\\qquad
+              \\varphi_{ij} = \\pm \\ln(1/u_{ij}),\\ + \\text{ where } s_{ij} > 0.5
+
+    with ``M`` the mean personal best and ``α`` the thermal coefficient (Yuan 2018 eqs 10-17, the
+    kernel eqs 14 and 16).
 
     Parameters
     ----------

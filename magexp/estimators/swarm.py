@@ -98,10 +98,19 @@ class SwarmOptimizer:
     """Global-best particle swarm over a box-bounded problem (Kennedy & Eberhart 1995; the engine
     of Ding 2024's PSO and IPSO and of Yuan 2018's RDPSO).
 
+    Every iteration moves each particle by its new velocity (Ding 2024 eqs 10-11, eq 11's ``v^t``
+    read as the new velocity; Yuan 2018 eqs 10-11 for RDPSO), then updates the bests:
+
+    .. math:: v_{ij} \\leftarrow \\mathrm{clip}(\\mathrm{rule}_{ij}, -v_{max}, v_{max}),\\quad
+              x_{ij} \\leftarrow x_{ij} + v_{ij}
+
+    with the velocity rule of ``velocity`` (Ding 2024 eq 10: :class:`~magexp.estimators.velocity.InertiaVelocity`;
+    Yuan 2018 eqs 10-17: :class:`~magexp.estimators.rdpso.RandomDriftVelocity`).
+
     Parameters
     ----------
     name : str
-        Config name of this estimator.
+        As in :class:`~magexp.estimators.base.Estimator`.
     n_particles, n_iterations : int
         Swarm size and number of iterations.
     velocity : VelocityRule, optional

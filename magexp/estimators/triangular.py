@@ -84,7 +84,7 @@ class TriangularCalibration:
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     form : str
         ``lower`` (Merayo's: the first sensor axis is the reference, the second in the plane of
         the first two) or ``upper`` (the same with the axes in reverse order).

@@ -127,7 +127,7 @@ class TwoStep:
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     max_iter : int
         Gauss-Newton iterations at most (step 2).
     tol : float
