@@ -119,13 +119,10 @@ class ExtendedKalmanFilter:
 
         Parameters
         ----------
-        problem : magexp.problems.base.LinearProblem
-            Its linear design: the reference vectors and the readings.
-        rng : numpy.random.Generator, optional
-            Unused (the filter draws nothing).
-        callback : callable, optional
-            ``callback(step, x, None)`` after every step (``x`` in the problem's parameters); a true
-            return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its linear design: the
+            reference vectors and the readings. ``rng``: unused (the filter draws nothing). ``callback``:
+            ``callback(step, x, None)`` after every step (``x`` in the problem's parameters).
 
         Returns
         -------

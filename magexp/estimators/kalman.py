@@ -168,12 +168,10 @@ class KalmanFilter(_Tuning):
 
         Parameters
         ----------
-        problem : magexp.problems.base.LinearProblem
-            Its linear design ``C x = Y`` and least-squares solution.
-        rng : numpy.random.Generator, optional
-            Unused (the filter draws nothing).
-        callback : callable, optional
-            ``callback(step, x, None)`` after every step; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its linear design ``C x = Y``
+            and least-squares solution. ``rng``: unused (the filter draws nothing). ``callback``:
+            ``callback(step, x, None)`` after every step.
 
         Returns
         -------

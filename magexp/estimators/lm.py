@@ -143,13 +143,11 @@ class LevenbergMarquardt:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its ``residuals`` (and ``residual_swarm`` for ``jacobian: stacked``).
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, best x, best RMS)`` after each residual evaluation ``k``; a true return stops
-            it (the best point so far is returned).
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its ``residuals`` (and
+            ``residual_swarm`` for ``jacobian: stacked``). ``rng``: unused (the fit draws nothing).
+            ``callback``: ``callback(k, best x, best RMS)`` after each residual evaluation ``k`` (a stop
+            returns the best point so far).
 
         Returns
         -------

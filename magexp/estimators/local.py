@@ -64,12 +64,10 @@ class LocalMinimiser:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its ``cost`` and box.
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, best x, best cost)`` after every cost evaluation ``k``; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its ``cost`` and box. ``rng``:
+            unused (the fit draws nothing). ``callback``: ``callback(k, best x, best cost)`` after every
+            cost evaluation ``k``.
 
         Returns
         -------

@@ -60,12 +60,10 @@ class SymmetricSwarm(SwarmOptimizer):
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            A total-field problem of 12 parameters ``[vec(M), o]``.
-        rng : numpy.random.Generator
-            The run's estimator stream.
-        callback : callable, optional
-            ``callback(t, x, fun)`` after every iteration, ``x`` expanded to 12; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a total-field problem of 12
+            parameters ``[vec(M), o]``. ``rng``: the run's estimator stream. ``callback``: ``callback(t, x,
+            fun)`` after every iteration, ``x`` expanded to 12.
 
         Returns
         -------

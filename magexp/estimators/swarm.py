@@ -196,13 +196,10 @@ class SwarmOptimizer:
 
         Parameters
         ----------
-        problem : Problem
-            ``cost(thetas: (n, p)) -> (n,)``, ``lower``, ``upper``.
-        rng : numpy.random.Generator
-            Every random number of the run (initial swarm, rule, boundary).
-        callback : callable, optional
-            ``callback(t, gbest, gbest_cost)`` after every iteration; a true return value stops
-            the run.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: ``cost(thetas: (n, p)) ->
+            (n,)``, ``lower``, ``upper``. ``rng``: every random number of the run (initial swarm, rule,
+            boundary). ``callback``: ``callback(t, gbest, gbest_cost)`` after every iteration.
 
         Returns
         -------

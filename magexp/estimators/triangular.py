@@ -178,12 +178,10 @@ class TriangularCalibration:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            A total-field problem.
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, x, fun)`` after each residual evaluation; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a total-field problem. ``rng``:
+            unused (the fit draws nothing). ``callback``: ``callback(k, x, fun)`` after each residual
+            evaluation.
 
         Returns
         -------

@@ -160,12 +160,10 @@ class TwoStep:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            A total-field problem (readings, reference magnitudes, the dataset's noise).
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, x, fun)`` after every Gauss-Newton step; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a total-field problem
+            (readings, reference magnitudes, the dataset's noise). ``rng``: unused (the fit draws nothing).
+            ``callback``: ``callback(k, x, fun)`` after every Gauss-Newton step.
 
         Returns
         -------
