@@ -1,37 +1,26 @@
 """Levenberg-Marquardt refinement of the problem's residuals (``scipy.optimize.least_squares``).
 
-Minimises ``sum(problem.residuals(theta)**2)`` with MINPACK's LM, started from the problem's
-closed-form estimate (or the ellipsoid fit, or the centre of the search box). For the scalar
-problem the residuals are ``|W(r_i - o)| - B_a``: the maximum-likelihood fit under Gaussian noise.
-
 **The rotation gauge of a scalar objective.** ``|Q W (r - o)| = |W (r - o)|`` for every orthogonal
-``Q`` (Ding 2024, eq 17 sees only ``W^T W`` and ``o``), so over the 12 entries of ``[vec W, o]``
-the residuals have an exact 3-dimensional valley and their Jacobian has three exactly dependent
-columns. MINPACK's pivoted QR then works on an exactly rank-deficient matrix, and where along the
-valley it ends can depend on more than the data: with bit-identical residuals at every evaluation,
-its iterates have been seen to differ in the last bits with the contents of memory left by earlier
-work in the process, and the difference to grow along the valley to the 3rd-4th significant digit of
-``W`` (and of ``o`` when the data also leave the offset weakly determined). On a total-field problem this
-estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits the 9 parameters
+``Q`` (Ding 2024 eq 17 sees only ``W^T W`` and ``o``), so over ``[vec W, o]`` the residuals have an
+exact 3-dimensional valley and a Jacobian with three dependent columns. MINPACK's pivoted QR on that
+rank-deficient matrix can end anywhere along the valley: with bit-identical residuals its iterates
+have been seen to differ with the memory left by earlier work in the process, up to the 3rd-4th digit
+of ``W``. On a total-field problem this estimator therefore fixes the gauge (``gauge: symmetric``,
+the default) and fits the 9 parameters
 
 .. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad M = M^T
 
-(``M`` the matrix part of the problem's parameters: ``W``, or ``S = W^{-1}`` in the forward form;
-:mod:`magexp.estimators.reduced`), whose Jacobian has full rank wherever the data determine
-``W^T W`` and ``o``. A symmetric positive-definite ``W`` is the polar factor ``P = (W^T W)^{1/2}``
-of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form ``magexp calibrate`` reports),
-so the fit returns that unique member of the valley: the same numbers in every process, and
-parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
-parameters as before (kept to compare; ``tests/test_determinism.py`` churns the memory of a fresh
-process and checks that the gauge-fixed fit gives the same bits through it).
+(``M`` the matrix part of the problem's parameters, as in :mod:`magexp.estimators.reduced`), whose
+Jacobian has full rank wherever the data determine ``W^T W`` and ``o``. The result is the polar factor
+``P = (W^T W)^{1/2}`` of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form
+``magexp calibrate`` reports): the same numbers in every process (``tests/test_determinism.py``).
+``gauge: free`` fits all 12 parameters, kept to compare.
 
-**Its path is a diagnostic.** ``xtol = ftol = gtol = 1e-12`` are met where the steps and reductions
-are at round-off level, so on another processor (numpy's SIMD loops, BLAS kernels, numba target) the
-test is met an iteration earlier or later: ``nit``/``nfev`` move by one Jacobian (``p + 1``
-evaluations: 40 vs 53 on Yuan's vector problem) while the fit agrees to its 6th digit. ``magexp verify``
-compares them as path diagnostics (:data:`magexp.artifacts.compare.PATH_DIAGNOSTICS`). A fit the data
-leave undetermined (``real_xio_fusion``: offset standard error 4 800 of offsets 25 000) walks its flat
-valley until the evaluation budget, and where it stops moves with the round-off (2e-3 relative measured).
+**Its path is a diagnostic.** The default tolerances are met at round-off level, so on another
+processor the test is met an iteration earlier or later: ``nit``/``nfev`` move by one Jacobian while
+the fit agrees to its 6th digit, and ``magexp verify`` compares them as path diagnostics
+(:data:`magexp.artifacts.compare.PATH_DIAGNOSTICS`). A fit the data leave undetermined walks its flat
+valley to the evaluation budget, and where it stops moves with the round-off.
 """
 
 from __future__ import annotations

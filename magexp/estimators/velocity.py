@@ -52,21 +52,18 @@ def check_schedule(schedule, role: str):
 
 
 class VelocityRule:
-    """What the swarm engine needs of a velocity rule; a new rule subclasses it.
+    """What the swarm engine needs of a velocity rule; a new rule subclasses it and sets ``kernel``.
 
     Attributes
     ----------
     kernel : function
-        The rule, set by the subclass (a ``staticmethod``): ``kernel(i, j, x, v, pbest, g, mean,
-        r, c)``, arithmetic and indexing only (the module docstring), compiled by numba as it is.
+        ``kernel(i, j, x, v, pbest, g, mean, r, c)`` (the module docstring), a ``staticmethod``.
     n_draws : int
         Uniform numbers ``U(0, 1)`` drawn per particle and dimension in one iteration.
     coefficients : tuple of 3 str
-        The attributes holding the three coefficients ``c`` (each a schedule
-        ``s(t, t_max)`` or a number).
+        The attributes holding the three coefficients ``c`` (each a schedule ``s(t, t_max)`` or a number).
     needs_mean : bool
-        Whether the kernel reads ``mean`` (the engine computes it only then: it costs 3 % of a
-        numpy iteration of 50 particles).
+        Whether the kernel reads ``mean`` (computed only then: it costs 3 % of a numpy iteration).
     """
 
     n_draws = 2

@@ -20,22 +20,20 @@ in the starting frame unknown:
 
 Parameters (17): ``θ = [vec(S) (9, row-major), b (3), a, e (rad), b_g (3, deg/s)]``.
 
-Closed-form start (:meth:`GyroAidedCalibration.projected_start`, ``magexp calibrate``'s): the ellipsoid fit gives ``W = Q P`` up to
-the rotation ``Q`` and ``u_j = P (B_j - b)``; with the attitude ``R_j`` integrated at zero bias, every reading
-says ``R_j Q u_j = h``, linear in ``vec(Q)``. Eliminating ``h`` (the mean of ``R_j Q u_j``),
+Closed-form start (:meth:`GyroAidedCalibration.projected_start`, ``magexp calibrate``'s): the ellipsoid
+fit gives ``W = Q P`` up to the rotation ``Q`` and ``u_j = P (B_j - b)``; with the attitude ``R_j`` at zero
+bias every reading says ``R_j Q u_j = h``, linear in ``vec(Q)``. Eliminating ``h`` (the mean of ``R_j Q u_j``),
 
 .. math:: \\min_{\\lVert \\operatorname{vec} Q \\rVert = 1} \\sum_j \\big\\lVert (A_j - \\bar A) \\operatorname{vec} Q \\big\\rVert^2,
           \\qquad A_j \\operatorname{vec} Q = R_j Q \\mathbf u_j,
 
-is the eigenvector of the smallest eigenvalue of ``Σ (A_j - Ā)ᵀ (A_j - Ā)``, projected onto the nearest
-rotation (SVD; ``-Q`` with ``-h`` fits equally, the proper one is kept), and ``h`` the mean of ``R_j Q u_j``
-(Wahba's problem with the field unknown; Markley 1988 for the projection). No iteration, so no local
-minimum of a rotation search: an iterative start from ``Q = I`` stalled on a recording with two thirds of its
-readings held out, and cost 7 of the 10 CPU-s of a gyro held-out check on a recording the gyroscope cannot help.
+is the smallest eigenvector of ``Σ (A_j - Ā)ᵀ (A_j - Ā)``, projected onto the nearest proper rotation
+(SVD; Wahba's problem with the field unknown, Markley 1988). No iteration, so no local minimum of a
+rotation search (an iterative start from ``Q = I`` stalled on a recording with most readings held out).
+
 Rotation modes: turns about one body axis only leave the component of ``h`` along that axis
 constant in the body frame, so as in Yuan's mode 4 the column of ``S`` along it cannot be told
-from ``b`` (the data determine only their combination), and the bias about the other axes
-trades against the field direction.
+from ``b``, and the bias about the other axes trades against the field direction.
 """
 
 from __future__ import annotations
@@ -120,10 +118,8 @@ class GyroAidedCalibration(CalibrationProblem):
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """48 float64 numbers per particle-reading: the ``(n, M, 3, 3)`` rotations of
-        :func:`~magexp.core.geometry.attitude_with_bias` and their intermediates, the references and
-        residuals (tracemalloc's peak of one call: 46.2 to 46.6 a particle-reading, 300 readings, 50
-        and 200 particles).
-        """
+        :func:`~magexp.core.geometry.attitude_with_bias`, their intermediates, the references and residuals."""
+        # tracemalloc's peak of one call: 46.2 to 46.6 a particle-reading (300 readings, 50 and 200 particles)
         return 48 * n_readings * n_particles
 
     def cost(self, thetas) -> np.ndarray:
@@ -151,13 +147,8 @@ class GyroAidedCalibration(CalibrationProblem):
         return self.projected_start() if self.start == "projected" else self.two_stage_start()
 
     def two_stage_start(self) -> np.ndarray:
-        """Two-stage start. The ellipsoid fit gives ``W`` up to a rotation, ``W = Q P`` (``P``
-        canonical) and the offset; with them fixed, least squares over the 8 numbers of ``Q``
-        (rotation vector), the field direction and the gyro bias (from zero, and the field direction
-        of the first calibrated reading, ``R_0 = I``) fits ``R_jᵀ h = Q P (B_j - b)``; the full
-        problem starts from there. From ``Q = I`` it can stall where few directions are left (a
-        calibration's held-out fold): ``magexp calibrate`` starts from :meth:`projected_start`.
-        """
+        """The ellipsoid fit's ``W = Q P`` and offset, then least squares over ``Q``, the field direction and the bias
+        from ``Q = I`` (it can stall where few directions are left: ``magexp calibrate`` uses :meth:`projected_start`)."""
         # lazy: scipy.optimize costs 0.45-0.5 CPU-s to import, which magexp calibrate's gyro fits do not need
         from scipy.optimize import least_squares
 
@@ -172,12 +163,8 @@ class GyroAidedCalibration(CalibrationProblem):
         return full(sol.x)
 
     def projected_start(self) -> np.ndarray:
-        """Closed-form start, then the projected problem (module docstring): the ellipsoid fit gives
-        ``W = Q P`` up to a rotation ``Q`` and the offset; ``Q`` and the field ``h`` are the least-squares
-        solution of ``R_j Q P (B_j - b) = h`` with the gyroscope's attitude at zero bias (:func:`rotation_start`);
-        from that field direction and a zero bias, Levenberg-Marquardt over those 5 numbers with ``W`` and the
-        offset solved linearly at each (:meth:`projected`) reaches the optimum, where the full problem starts.
-        """
+        """The module docstring's closed-form start (:func:`rotation_start`), then Levenberg-Marquardt over the
+        field direction and gyro bias with ``W`` and the offset solved linearly at each (:meth:`projected`)."""
         base = self._ellipsoid_start()
         w0, o0 = (a[0] for a in self.unpack(base))
         u = (self.dataset.readings - o0) @ w0.T

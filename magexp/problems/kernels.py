@@ -1,22 +1,19 @@
 """Fused (single-pass) swarm costs: every particle's objective in one pass over the readings.
 
 Each kernel reads every reading once, keeps one accumulator per particle and never forms an
-``N × P`` array: memory is ``O(P + N)`` whatever the swarm and the data. Two implementations
-compute the same numbers:
+``N × P`` array (memory ``O(P + N)``). Two implementations compute the same numbers:
 
-* a compiled one (``numba.njit``; reading loop outside, particle loop inside, so the inner
-  loop vectorises without reassociating any sum: no ``fastmath``, no threads, the same bits in
-  every process; ``cache=True`` stores the machine code beside this module);
+* a compiled one (``numba.njit``; reading loop outside, particle loop inside, so the inner loop
+  vectorises without reassociating any sum: no ``fastmath``, no threads, the same bits in every
+  process; ``cache=True`` stores the machine code beside this module);
 * a pure-numpy fallback, chunked over readings (at most :data:`CHUNK` particle-readings per
-  temporary), used when numba is missing or ``MAGEXP_NUMBA=0``: the compiled kernel's operations
-  in its order, element by element (no BLAS product, whose sums depend on the shape of the whole
-  swarm), so that in both a particle's cost does not depend on the particles evaluated with it nor
-  on the chunks (checked bit for bit; a fitted ``fun`` is ``cost(x)``); the tests compare the two
-  implementations to 1e-9 (they gave the same bits on the machines measured).
+  temporary), used when numba is missing or ``MAGEXP_NUMBA=0``: the compiled kernel's operations in
+  its order, element by element (no BLAS product, whose sums depend on the shape of the swarm), so
+  that a particle's cost depends neither on the particles evaluated with it nor on the chunks.
 
 numba is imported on the first swarm-cost call only: a closed-form run (``ellipsoid``, ``lm``) on
 fewer than :data:`COMPILE_MIN_READINGS` readings never pays for it; from that size on, the scalar
-residuals are compiled too (the O(N) bound evaluates them 30 times).
+residuals are compiled too (the O(N) bound evaluates them many times).
 
 Scalar objective (Ding 2024, eq 17), with readings centred and scaled, ``u = (r - c)/s``:
 
@@ -25,7 +22,8 @@ Scalar objective (Ding 2024, eq 17), with readings centred and scaled, ``u = (r 
           \\mathbf f_i = [x^2, y^2, z^2, 2xy, 2xz, 2yz, x, y, z, 1]_i
 
 and ``a_p`` the ten coefficients of ``|W_p (r - o_p)|² = u^T A u - 2 o'^T A u + o'^T A o'``
-(``A = s² W^T W``, ``o' = (o - c)/s``; :func:`scalar_coefficients`).
+(``A = s² W^T W``, ``o' = (o - c)/s``; :func:`scalar_coefficients`): ten multiply-adds and one square
+root per particle-reading.
 
 Vector objective (Yuan 2018, eq 8):
 

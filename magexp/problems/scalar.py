@@ -21,15 +21,10 @@ from magexp.problems.base import SCALAR, CalibrationProblem
 
 
 class ScalarCalibration(CalibrationProblem):
-    """Total-field RMS of the calibrated readings against the reference field.
+    """Total-field RMS of the calibrated readings against the reference field (Ding 2024 eqs 17-18).
 
-    ``cost`` evaluates a whole swarm in one pass over the readings
-    (:func:`magexp.problems.kernels.scalar_cost`): with the readings centred and scaled,
-    ``u = (r - c)/s``, the squared calibrated magnitude
-    ``|W (r - o)|² = u^T A u - 2 o'^T A u + o'^T A o'`` (``A = s² W^T W``,
-    ``o' = (o - c)/s``) is linear in the ten quadratic features of ``u``, so each
-    particle-reading costs ten multiply-adds and one square root, and memory is ``O(P + N)``.
-    ``cost_direct`` evaluates the textbook formula and is used for reported numbers.
+    ``cost`` is the fused swarm cost of :mod:`magexp.problems.kernels` (the ten quadratic features of the
+    centred readings, memory ``O(P + N)``); ``cost_direct`` the textbook formula, used for reported numbers.
     """
 
     objective = "scalar"

@@ -26,33 +26,17 @@ from magexp.problems.vector import LinearVectorModel, theta_to_state
 
 
 class ShipMagnetization(LinearVectorModel, CalibrationProblem):
-    """Fit residual of ``B = K A Be + Bp`` over the readings.
+    """Fit residual of ``B = K A Be + Bp`` (Yan 2022 eqs 1-2): ``cost`` the RMS of the ``3N`` components of ``C x - Y``.
 
-    ``cost`` is the RMS over the ``3N`` components of ``C x - Y``; its swarm evaluation does
-    not depend on ``N``. With the thin QR factorisation ``C = Q R`` (``R`` 4 × 4) and
-    ``Z = Q^T Y`` (4 × 3), Pythagoras splits the residual into the part in the column space
-    of ``C`` and the least-squares residual, which no particle can change:
+    The swarm cost does not depend on ``N``: with ``C = Q R`` (thin QR) and ``Z = Q^T Y``, Pythagoras
+    splits off the least-squares residual ``rho`` no particle can change,
 
-    .. math:: \\lVert C x - Y\\rVert_F^2 = \\lVert R x - Z\\rVert_F^2
-              + \\lVert (I - Q Q^T) Y\\rVert_F^2,\\qquad
-              \\mathrm{cost}(x) = \\sqrt{\\tfrac{1}{3N}\\big(\\lVert R x - Z\\rVert_F^2 + \\rho\\big)}
+    .. math:: \\mathrm{cost}(x) = \\sqrt{\\tfrac{1}{3N}\\big(\\lVert R x - Z\\rVert_F^2 + \\rho\\big)},\\qquad
+              \\rho = \\lVert (I - Q Q^T) Y\\rVert_F^2
 
-    ``vec(R x)`` is linear in ``theta``, so ``(n × 12) @ (12 × 12)`` gives every particle's
-    ``R x`` at once; ``rho`` is computed once, as a sum of squares of residuals. Both terms
-    are sums of squares, so nothing cancels: the result is exact to rounding even for a
-    perfect fit (``~1e-11`` nT, like the direct formula). The Gram expansion
-    ``tr(x^T C^T C x) - 2 tr(x^T C^T Y) + ||Y||^2`` is as fast but subtracts numbers of
-    ``||Y||^2 ~ 1e12`` nT²: relative error ~1e-10 with 100 nT noise and an RMS of ~1e-3 nT
-    (instead of ~1e-11) at a noise-free truth.
-
-    Measured (``python -m magexp.perf.bench``, population 50, 300 readings, one BLAS thread):
-    1.4e9 to 2.5e9 particle-readings/s against 1.9e7 to 2.4e7 for the batched ``einsum`` of
-    :meth:`predict` (65x to 130x; at the paper's 12 readings about 4x, call overhead then
-    dominates);
-    largest relative difference from :meth:`cost_direct` ~3e-15 on random particles.
-
-    ``residuals`` stacks the ``3N`` components for ``lm``; :meth:`least_squares` is the
-    closed-form solution the filter converges to when rows are reused.
+    and ``vec(R x)`` is linear in ``theta`` (one ``(n × 12) @ (12 × 12)`` product for the swarm). Both
+    terms are sums of squares, so nothing cancels (the Gram expansion ``tr(x^T C^T C x) - 2 tr(x^T C^T Y)
+    + ||Y||^2`` would subtract numbers of ``||Y||^2`` and lose the noise-free optimum to rounding).
     """
 
     objective = "ship"

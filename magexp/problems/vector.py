@@ -81,17 +81,9 @@ class LinearVectorModel:
 class VectorCalibration(LinearVectorModel, CalibrationProblem):
     """Sum of vector-residual norms against the gyro reference (Yuan 2018, eq 8).
 
-    ``cost`` evaluates a whole swarm in one pass over the readings
-    (:func:`magexp.problems.kernels.vector_cost`): each particle-reading forms the three
-    components of ``e_i = v_i - W (B_i - o)`` (``v_i = C_i H_i``) as in the direct formula and adds
-    ``sqrt(e_i . e_i)`` to the particle's sum; memory is ``O(P + N)``. No squared-norm expansion:
-    ``|v|² - 2 v^T W B + 2 v^T W o + |W(B - o)|²`` would cancel terms of hundreds of mG² and put
-    ``F`` at the noise-free truth near 1e-3 mG instead of rounding, so a swarm could not reach the
-    noise-free optimum.
-
-    ``cost_direct`` is the textbook loop over readings.
-    ``metrics`` sets ``noise_floor`` to ``F`` of the true calibration on the same
-    readings (what a perfect fit reaches), since the scalar floor does not apply.
+    ``cost`` forms each ``e_i = v_i - W (B_i - o)`` as the direct formula does and sums ``|e_i|`` per
+    particle in one pass (:func:`magexp.problems.kernels.vector_cost`, memory ``O(P + N)``): a squared-norm
+    expansion would cancel terms of hundreds of mG² and keep a swarm from the noise-free optimum.
     """
 
     objective = "vector"
@@ -149,10 +141,8 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         return self.least_squares()
 
     def metrics(self, theta: np.ndarray) -> dict:
-        """:meth:`CalibrationProblem.metrics`, the noise floor, and ``field_rms``: the total-field RMS of
-        the calibrated readings against the reference (:func:`magexp.core.metrics.total_field_rms`), which
-        a vector fit does not minimise (on a scalar problem it is the objective ``fun`` itself).
-        """
+        """:meth:`CalibrationProblem.metrics`, ``noise_floor`` (``F`` of the true calibration on these readings:
+        what a perfect fit reaches) and ``field_rms`` (the total-field RMS, which a vector fit does not minimise)."""
         out = super().metrics(theta)
         out["field_rms"] = total_field_rms(self.calibrate(theta), self.dataset.reference_norm)
         floor = truth_cost(self)  # F at the truth, once per problem
