@@ -6,14 +6,11 @@ exact 3-dimensional valley and a Jacobian with three dependent columns. MINPACK'
 rank-deficient matrix can end anywhere along the valley: with bit-identical residuals its iterates
 have been seen to differ with the memory left by earlier work in the process, up to the 3rd-4th digit
 of ``W``. On a total-field problem this estimator therefore fixes the gauge (``gauge: symmetric``,
-the default) and fits the 9 parameters
-
-.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad M = M^T
-
-(``M`` the matrix part of the problem's parameters, as in :mod:`magexp.estimators.reduced`), whose
-Jacobian has full rank wherever the data determine ``W^T W`` and ``o``. The result is the polar factor
-``P = (W^T W)^{1/2}`` of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form
-``magexp calibrate`` reports): the same numbers in every process (``tests/test_determinism.py``).
+the default) and fits the 9 parameters ``q`` of :mod:`magexp.estimators.reduced` (a symmetric
+matrix part ``M = M^T`` of the problem's parameters, and ``o``), whose Jacobian has full rank
+wherever the data determine ``W^T W`` and ``o``. The result is the polar factor ``P = (W^T W)^{1/2}``
+of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form ``magexp calibrate``
+reports): the same numbers in every process (``tests/test_determinism.py``).
 ``gauge: free`` fits all 12 parameters, kept to compare.
 
 **Its path is a diagnostic.** The default tolerances are met at round-off level, so on another
