@@ -110,10 +110,8 @@ class KalmanFilter(_Tuning):
     """Yan & Zhou's filter for ``x = [K Bp]^T`` (``kf``).
 
     The recursion of Yan 2022 sec 2.1, steps (1)-(4) (module docstring), on the rows
-    ``C(n) = [Be^T A^T, 1]`` and observations ``y(n) = B^T`` of the model ``B = K A Be + Bp`` (eqs 1-2).
-
-    ``x(0) = 0``. The result's ``trace["x"]`` is the state at every step as ``theta``
-    (``n_steps + 1``, 12), ``history`` the fit RMS at every step.
+    ``C(n) = [Be^T A^T, 1]`` and observations ``y(n) = B^T`` of the model ``B = K A Be + Bp`` (eqs 1-2),
+    from ``x(0) = 0``.
 
     Parameters
     ----------
@@ -130,13 +128,9 @@ class KalmanFilter(_Tuning):
     n_steps : int
         Filter steps; the readings are reused cyclically.
     agree_k, agree_bp : float
-        Tolerances of the ``steps_to_ls`` diagnostic: the first step, at the end of a full pass over
-        the readings, after which the state at every later pass end through ``horizon`` stays within
-        them of the least-squares solution. Within a pass the readings are unequally
-        weighted, so the state fluctuates around that solution; ``steps_to_ls_every_step`` is the
-        same at every step from the end of the first pass (the state within a pass too). Both are
-        censored (NaN, with ``steps_to_ls_censored`` etc. the censoring point) when later than
-        ``horizon / 2`` (:func:`observed_step`).
+        Tolerances on ``K`` and ``Bp`` of the ``steps_to_ls`` diagnostic (module docstring): the first
+        pass end from which the state stays within them of the least-squares solution through
+        ``horizon``; ``steps_to_ls_every_step`` the same at every step after the first pass.
     horizon : int
         Steps over which the step of convergence is observed; the filter runs on to
         ``max(n_steps, horizon)``, its estimate and trace stay those of step ``n_steps``. 0 (default):
@@ -176,7 +170,8 @@ class KalmanFilter(_Tuning):
         Returns
         -------
         FitResult
-            ``trace["x"]`` the state at every step; ``metrics`` ``steps_to_ls``, ``steps_to_ls_every_step``.
+            ``history`` the fit RMS and ``trace["x"]`` the state as ``theta`` (``n_steps + 1``, 12) at every
+            step; ``metrics`` ``steps_to_ls``, ``steps_to_ls_every_step``.
         """
         c, y = problem.design()
         rows = cyclic(len(c), self.horizon)
