@@ -124,6 +124,9 @@ def calibration(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class TwoStep:
     """TWOSTEP complete scalar calibration (``twostep``): the module docstring's two steps.
 
+    Both fit the attitude-free measurement ``z_k = |B_k|² - |H_k|² = L_k θ - c^T (I + E)^{-1} c + v_k``
+    (Alonso & Shuster 2002): step 1 centred and linear, step 2 Gauss-Newton on its weighted squares.
+
     Parameters
     ----------
     name : str
