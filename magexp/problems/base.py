@@ -242,16 +242,14 @@ class CalibrationProblem:
 
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
-        """float64 numbers one :meth:`cost` call on ``n_particles`` holds beyond the problem's data
-        (what :mod:`magexp.run.budget` adds to a run's memory); here, for a problem that does not
-        say, :data:`FLOATS_PER_PARTICLE_READING` per particle-reading.
+        """float64 numbers one :meth:`cost` call holds beyond the problem's data (what :mod:`magexp.run.budget`
+        adds to a run's memory); here, for a problem that does not say, :data:`FLOATS_PER_PARTICLE_READING`
+        per particle-reading.
 
         Parameters
         ----------
-        n_readings : int
-            The readings ``N``.
-        n_particles : int
-            The particles ``P`` of one call.
+        n_readings, n_particles : int
+            The readings ``N`` and the particles ``P`` of one call.
 
         Returns
         -------
@@ -261,9 +259,9 @@ class CalibrationProblem:
         return FLOATS_PER_PARTICLE_READING * n_readings * n_particles
 
     def swarm_kernel(self) -> tuple | None:
-        """``(kind, data, reference, params)``: the arguments, prepared once, of the compiled
-        swarm cost (:func:`magexp.problems.kernels.swarm_cost`) equal to :meth:`cost` bit for bit,
-        or None (here: a problem without one). Read it through :func:`swarm_kernel`.
+        """``(kind, data, reference, params)``: the arguments, prepared once, of the compiled swarm cost
+        (:func:`magexp.problems.kernels.swarm_cost`) equal to :meth:`cost` bit for bit, or None (here: a
+        problem without one). Read it through :func:`swarm_kernel`.
 
         Returns
         -------
@@ -274,19 +272,17 @@ class CalibrationProblem:
 
     # -- parameters <-> model ---------------------------------------------------------------
     def unpack(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(W, o)`` of shapes ``(n, 3, 3)``, ``(n, 3)`` from ``thetas`` of shape ``(n, 12)``.
+        """:meth:`Problem.unpack` for ``p = 12``.
 
         Parameters
         ----------
         thetas : ndarray, shape (n, 12) or (12,)
-            Parameter vectors: ``[vec(W), o]`` (inverse) or ``[vec(S), b]`` with ``W = S^-1`` (forward), row-major.
+            ``[vec(W), o]`` (inverse) or ``[vec(S), b]`` with ``W = S^-1`` (forward), row-major.
 
         Returns
         -------
-        W : ndarray, shape (n, 3, 3)
-            The calibration matrices.
-        o : ndarray, shape (n, 3)
-            The offsets.
+        W, o : ndarray, shapes (n, 3, 3) and (n, 3)
+            As in :meth:`Problem.unpack`.
         """
         thetas = np.atleast_2d(thetas)
         mat = thetas[:, :9].reshape(-1, 3, 3)
@@ -295,14 +291,12 @@ class CalibrationProblem:
         return mat, thetas[:, 9:]
 
     def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray:
-        """The parameter vector of the calibration ``B = w (reading - o)``.
+        """:meth:`Problem.pack` for ``p = 12``, the inverse of :meth:`unpack`.
 
         Parameters
         ----------
-        w : ndarray, shape (3, 3)
-            The calibration matrix ``W``.
-        o : ndarray, shape (3,)
-            The offset.
+        w, o
+            As in :meth:`Problem.pack`.
 
         Returns
         -------
@@ -324,7 +318,7 @@ class CalibrationProblem:
         return None if t is None else self.pack(t.matrix, t.offset)
 
     def calibrate(self, theta: np.ndarray, readings: np.ndarray | None = None) -> np.ndarray:
-        """Calibrated readings ``W (reading - o)``, shape ``(N, 3)``.
+        """Calibrated readings ``W (r_i - o)``.
 
         Parameters
         ----------
@@ -343,18 +337,17 @@ class CalibrationProblem:
         return (readings - o[0]) @ w[0].T
 
     def residual_stack(self, thetas: np.ndarray, of=None) -> np.ndarray:
-        """:meth:`residuals` of each parameter vector of a stack, ``(n, p) -> (n, m)``: the residual
-        function :func:`magexp.core.identifiability.identifiability` takes. ``of`` maps a row of the
-        stack, in another parameterisation, to this problem's vector (e.g. the 9 parameters of a
-        symmetric matrix part, :func:`magexp.problems.symmetric.expand`; ``magexp calibrate``'s
-        ``[vec W, o]`` or ``[s, o]``).
+        """:meth:`residuals` of each parameter vector of a stack: the residual function
+        :func:`magexp.core.identifiability.identifiability` takes.
 
         Parameters
         ----------
         thetas : ndarray, shape (n, p)
             Parameter vectors (this problem's, or ``of``'s).
         of : callable, optional
-            ``row -> theta``, from another parameterisation to this problem's.
+            ``row -> theta``, from another parameterisation to this problem's (e.g. the 9 parameters of a
+            symmetric matrix part, :func:`magexp.problems.symmetric.expand`; ``magexp calibrate``'s
+            ``[vec W, o]`` or ``[s, o]``).
 
         Returns
         -------
