@@ -99,13 +99,8 @@ def source_of(*objects) -> bytes:
 
 
 def _keyed_on(dispatcher, *sources: bytes):
-    """``dispatcher`` with an on-disk cache key made of its bytecode and ``sources``.
-
-    numba keys a stored function by its own bytecode and, for a closure, by a pickle of what it
-    closes over, which for a compiled function differs in every process (the closure would then
-    compile again in every process). Here the key is the target, the signature, the bytecode and
-    ``sources``: the same in every process, and an edit of any of them recompiles.
-    """
+    """``dispatcher`` cached on disk under its target, signature, bytecode and ``sources``: numba's own key
+    pickles a closure's compiled values, which differ in every process (it would recompile in each)."""
     stored = getattr(dispatcher, "_cache", None)
     if getattr(stored, "_index_key", None) is not None:
         code = hashlib.sha256(dispatcher.py_func.__code__.co_code).hexdigest()
@@ -116,24 +111,14 @@ def _keyed_on(dispatcher, *sources: bytes):
 
 @cache
 def engine(kernel, needs_mean: bool = False):
-    """The compiled steps of the swarm engine around one velocity rule's kernel.
-
-    The kernel (:mod:`magexp.estimators.velocity`) is compiled as it is and called for every
-    element inside the loops below, which close over it: one specialisation per rule, the kernel
-    inlined, stored on disk under :func:`_keyed_on`'s key (the kernel's source and name, this
-    module's, and for ``run`` the costs').
-    """
+    """The compiled steps of the swarm engine around one velocity rule's kernel: one specialisation per rule,
+    the kernel inlined, cached under :func:`_keyed_on`'s key (the kernel's source, this module's, the costs')."""
     rule = _jit(kernel)
     key = source_of(kernel, sys.modules[__name__]) + bytes([needs_mean])
 
     def move(x, v, pbest, g, r, c, limits, clip_box):
-        """The move of every particle in place (Ding 2024 eqs 10-11; Yuan 2018 eqs 16-17).
-
-        ``v_ij`` = the kernel with the global best ``g``, the mean personal best, the random
-        factors ``r`` (k, n, d) and the coefficients ``c`` (3,); then the clamp to
-        ``limits[0]`` (``v_max``), ``x_ij + v_ij`` and, if ``clip_box``, the clip to
-        ``limits[1]``, ``limits[2]`` (lower, upper).
-        """
+        """Every particle moved in place (Ding 2024 eqs 10-11; Yuan 2018 eqs 16-17): the kernel, the clamp to
+        ``limits[0]`` (``v_max``), ``x + v`` and, if ``clip_box``, the clip to ``limits[1:3]`` (lower, upper)."""
         n, d = x.shape
         mean = mean_best(pbest, np.empty(d)) if needs_mean else np.full(d, np.nan)  # NaN: read, it shows
         coef = (c[0], c[1], c[2])  # scalars: read once, not once per element (c may alias v for all numba knows)
@@ -153,13 +138,9 @@ def engine(kernel, needs_mean: bool = False):
         return g
 
     def run(x, v, pbest, pcost, history, t, n_iterations, r, coef, limits, clip_box, problem):
-        """Iterations ``t .. t + n_iterations - 1`` in one call.
-
-        Each: the cost of every particle (:func:`magexp.problems._compiled.swarm_cost` with
-        ``problem = (kind, data, reference, params)``; iteration 0, the initial swarm, has its
-        costs in ``pcost`` already), :func:`update_best`, ``history[t] = pcost[g]`` and, for the
-        first ``len(coef)`` of them, ``move`` with ``r[k]`` and ``coef[k]``. Returns the global
-        best's index.
+        """The global best's index after iterations ``t .. t + n_iterations - 1`` in one call: each the cost
+        (iteration 0's already in ``pcost``), :func:`update_best`, ``history``, and for the first ``len(coef)``
+        a move.
         """
         kind, data, reference, params = problem
         g = 0

@@ -84,11 +84,8 @@ class Estimator(Protocol):
 
 
 def applies_to(estimator, problem) -> tuple[bool, str]:
-    """Whether ``estimator`` applies to ``problem``: what it ``needs`` against what the problem offers.
-
-    An estimator may also be bound to one objective (``only_objective``, e.g. a paper's printed
-    solution of one model).
-    """
+    """Whether ``estimator`` applies to ``problem``: what it ``needs`` against what the problem offers, and its
+    ``only_objective`` if it is bound to one (e.g. a paper's printed solution of one model)."""
     name = name_of(estimator)
     objective = getattr(problem, "objective", "?")
     needs = tuple(getattr(estimator, "needs", ("cost",)))

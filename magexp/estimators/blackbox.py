@@ -16,12 +16,8 @@ def child_seed(rng: np.random.Generator) -> int:
 
 
 class RecordedCost:
-    """``problem.cost`` on whole populations, counting evaluations and recording the best so far.
-
-    One call of :meth:`__call__` is one generation: ``history[k]`` is the best cost after call
-    ``k`` (``history[0]`` after the first population, as the swarms' ``history``) and
-    ``history_nfev[k]`` the evaluations spent by then. Non-finite costs become ``inf``.
-    """
+    """``problem.cost`` on whole populations (one call a generation), counting evaluations and recording the
+    best so far as the swarms' ``history`` and ``history_nfev``; non-finite costs become ``inf``."""
 
     def __init__(self, problem):
         self.problem = problem

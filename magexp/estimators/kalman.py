@@ -215,13 +215,9 @@ def field_errors(estimates: np.ndarray, field: np.ndarray) -> tuple[float, float
 
 
 class FieldKalmanFilter:
-    """Recompute ``Be`` from a fitted ``K``, ``Bp`` (Yan & Zhou Fig 4): an analysis step on a fitted
-    result, not an estimator (``+analysis=field_kalman`` on the command line or in an artifact).
-
-    State ``Be`` (3 x 1), ``H(n) = K A(n)``, ``y(n) = B(n) - Bp``, ``Be(0) = 0``,
-    ``P(0) = p0 E``, ``Q = q E``; readings reused cyclically. Called as
-    ``step(problem, result) -> result`` after the run's estimator: ``K``, ``Bp`` are the
-    estimate ``result.x`` (e.g. ``kf``'s, or the paper's through ``yan2022_paper_mockup``).
+    """The analysis step ``field_kalman`` (not an estimator), ``step(problem, result) -> result``: ``Be`` recomputed
+    from the fitted ``K``, ``Bp`` of ``result.x`` (Yan & Zhou Fig 4), state ``Be``, ``H(n) = K A(n)``,
+    ``y(n) = B(n) - Bp``, ``Be(0) = 0``, ``P(0) = p0 E``, ``Q = q E``, readings reused cyclically.
     """
 
     references = "Yan & Zhou 2022, sec 3.2, Fig 4"

@@ -215,16 +215,10 @@ class LevenbergMarquardt:
 
 
 def offset_check(problem, q: np.ndarray) -> dict:
-    """Whether the data determine the offset of the gauge-fixed fit ``q`` of a total-field problem.
-
-    ``offset_standard_error``: ``sqrt(tr Cov(o))`` of the fit's own Gauss-Newton covariance
-    ``σ² (J^T J)^{-1}`` over ``q`` (:func:`magexp.core.identifiability.identifiability`: ``σ²`` from the
-    residuals, ``J`` by central differences, undetermined directions infinite). Readings on two
-    planar rings (turns about two axes only) lie on a one-parameter family of ellipsoids, so a
-    total-field fit cannot place the centre and this error exceeds the size of the data.
-    ``offset_determined``: it is below the RMS distance of the readings from their centroid
-    (:func:`magexp.core.ellipsoid.normalise`): the data locate the centre of the readings'
-    ellipsoid to better than the ellipsoid's own size.
+    """Whether the data determine the offset of the gauge-fixed fit ``q``: ``offset_standard_error``
+    (``sqrt(tr Cov(o))`` of the Gauss-Newton covariance, :func:`magexp.core.identifiability.identifiability`)
+    and ``offset_determined`` (it is below the readings' RMS distance from their centroid: readings on two
+    planar rings cannot place the centre).
     """
     def fun(qs):  # identifiability evaluates a stack of 2 x 9 perturbed vectors
         return problem.residual_stack(qs, of=lambda q: expand(q)[0])
@@ -237,11 +231,8 @@ def offset_check(problem, q: np.ndarray) -> dict:
 
 
 def polar(problem, x: np.ndarray) -> np.ndarray:
-    """``x`` with its ``W`` replaced by the symmetric positive-definite polar factor
-    ``(W^T W)^{1/2}`` (:func:`magexp.core.identifiability.canonical`): the same total field, no rotation.
-    A symmetric positive-definite matrix part is kept bit for bit (it is already that factor), and so
-    is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of).
-    """
+    """``x`` with its ``W`` replaced by the polar factor ``(W^T W)^{1/2}`` (the same total field, no rotation); an
+    SPD matrix part is kept bit for bit (it is that factor already), and so is a singular one (no factor)."""
     x = np.asarray(x, float)
     mat = x[:9].reshape(3, 3)
     if np.array_equal(mat, mat.T) and np.all(np.linalg.eigvalsh(mat) > 0):
@@ -255,10 +246,8 @@ def polar(problem, x: np.ndarray) -> np.ndarray:
 
 def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 2000, callback=None, measure=None,
                        jac=None):
-    """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``.
-
-    Shared by every least-squares refinement.
-    """
+    """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``: every
+    least-squares refinement's."""
     # lazy: scipy.optimize, measured 0.40 s CPU to import (min of 5, after numpy); every command imports this module
     # to register its typed schema (magexp.run.compose.register_schemas), and only a least-squares run needs it
     from scipy.optimize import least_squares

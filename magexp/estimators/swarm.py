@@ -57,11 +57,8 @@ def _draw_blocks(rng: np.random.Generator, rule, shape: tuple, t_max: int, block
 
 
 def numpy_step(kernel, needs_mean, x, v, pbest, pcost, cost, moves, r, c, limits, clip_box) -> int:
-    """One step in numpy: the best updates with ``cost``, then, if ``moves``, the next move.
-
-    The numpy twin of the compiled step (:func:`magexp.estimators._compiled.engine`), with the
-    same kernel called once on whole arrays (``i = j =`` :data:`~magexp.estimators.velocity.ALL`).
-    """
+    """One step in numpy (the best updates with ``cost``, then, if ``moves``, the next move): the twin of the
+    compiled step, the same kernel called once on whole arrays (``i = j =`` :data:`~magexp.estimators.velocity.ALL`)."""
     better = cost < pcost
     np.copyto(pbest, x, where=better[:, None])
     np.copyto(pcost, cost, where=better)
@@ -178,12 +175,8 @@ class SwarmOptimizer:
         return self.velocity_clamp * (hi - lo)
 
     def _run(self, run, problem, x, v, pbest, pcost, history, blocks, coef, limits) -> int:
-        """Every iteration with the cost compiled in, one call per block of draws.
-
-        From the initial move (iteration 0, on the costs in ``pcost``) to the last iteration (no
-        move), which joins the last block's call; the same numbers as one step and one
-        ``problem.cost`` per iteration.
-        """
+        """Every iteration with the cost compiled in, one call per block of draws: the same numbers as one step
+        and one ``problem.cost`` per iteration."""
         t, t_max = 0, len(history) - 1
         for r in blocks:
             k = len(r)

@@ -106,15 +106,10 @@ def vector_cost(w, o, readings, reference):
 
 @_jit
 def swarm_cost(kind, thetas, data, reference, params):
-    """The swarm cost of parameter vectors ``thetas`` (P, 12) ``= [vec(W) (row-major), o]``: one
-    entry for every problem with a compiled cost, so that a compiled caller (the loop that
-    :func:`magexp.estimators._compiled.engine` compiles) takes the cost as data, not as a function.
-
-    ``kind`` :data:`~magexp.problems.base.SCALAR`: :func:`scalar_cost` with ``data`` the normalised readings ``u``,
-    ``reference`` ``B_a`` as a column (N, 1) and ``params = [c, s]``; :data:`~magexp.problems.base.VECTOR`:
-    :func:`vector_cost` with ``data`` the readings and ``reference`` the vectors ``v_i`` (N, 3),
-    non-finite values set to ``inf`` (as :func:`magexp.problems.kernels.vector_cost`).
-    The same numbers as those kernels called on ``W``, ``o`` directly.
+    """The cost of every particle ``thetas`` (P, 12) for ``kind`` :data:`~magexp.problems.base.SCALAR`
+    (:func:`scalar_cost` on ``u``, ``B_a`` (N, 1), ``params = [c, s]``) or :data:`~magexp.problems.base.VECTOR`
+    (:func:`vector_cost`, non-finite values ``inf``): one entry, so that the loop
+    :func:`magexp.estimators._compiled.engine` compiles takes the cost as data, not as a function.
     """
     n_p = thetas.shape[0]
     w = np.empty((n_p, 3, 3))

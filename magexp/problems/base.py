@@ -184,20 +184,14 @@ def inverse(mats: np.ndarray) -> np.ndarray:
 
 
 def defining_class(obj, name: str):
-    """The class in ``type(obj)``'s method resolution order that defines attribute ``name``
-    (None if none does): whether two methods belong together (e.g. a derivative and the function
-    it differentiates) after subclassing.
-    """
+    """The class in ``type(obj)``'s MRO that defines ``name`` (None if none): whether two methods (a derivative and
+    its function) still belong together after subclassing."""
     return next((c for c in type(obj).__mro__ if name in vars(c)), None)
 
 
 def swarm_kernel(problem) -> tuple | None:
-    """The prepared arguments ``(kind, data, reference, params)`` of the compiled swarm cost
-    (:func:`magexp.problems.kernels.swarm_cost`) that computes ``problem.cost``, or None: none
-    offered (a problem without :meth:`CalibrationProblem.swarm_kernel`, numba off, a forward
-    parameterisation), or one not defined beside the class's ``cost`` (a subclass that changes
-    the cost, e.g. :class:`magexp.problems.vector.VectorLeastSquares`, gets the generic path).
-    """
+    """``problem``'s compiled swarm-cost arguments (:meth:`CalibrationProblem.swarm_kernel`), or None where it has none
+    or its ``cost`` is defined elsewhere (a subclass that changes the cost gets the generic path)."""
     if defining_class(problem, "swarm_kernel") is not defining_class(problem, "cost"):
         return None
     return problem.swarm_kernel()

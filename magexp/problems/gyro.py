@@ -58,12 +58,9 @@ EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro
 
 
 class GyroAidedCalibration(CalibrationProblem):
-    """Yuan 2018 eq 8 over ``[vec(S), b, field direction, gyro bias]`` (module docstring).
-
-    ``dataset.extra["preintegration"]`` holds ``(ΔR, J)`` of :func:`magexp.core.geometry.preintegrate` at
-    the readings' times; ``dataset.reference_norm`` the field magnitude ``F`` (fixed).
-    ``search`` bounds ``S`` and ``b``; the field direction spans the sphere and the gyro bias
-    ``±bias_bound_deg_s``.
+    """Yuan 2018 eq 8 over ``[vec(S), b, field direction, gyro bias]`` (module docstring), on the
+    ``dataset.extra["preintegration"]`` of :func:`magexp.core.geometry.preintegrate`; ``search`` bounds
+    ``S`` and ``b``, the gyro bias ``±bias_bound_deg_s``.
     """
 
     objective = "gyro"
@@ -147,8 +144,10 @@ class GyroAidedCalibration(CalibrationProblem):
         return self.projected_start() if self.start == "projected" else self.two_stage_start()
 
     def two_stage_start(self) -> np.ndarray:
-        """The ellipsoid fit's ``W = Q P`` and offset, then least squares over ``Q``, the field direction and the bias
-        from ``Q = I`` (it can stall where few directions are left: ``magexp calibrate`` uses :meth:`projected_start`)."""
+        """The ellipsoid fit's ``W = Q P`` and offset, then least squares over ``Q``, the field direction and the
+        bias from ``Q = I`` (it can stall where few directions are left: ``magexp calibrate`` uses
+        :meth:`projected_start`).
+        """
         # lazy: scipy.optimize costs 0.45-0.5 CPU-s to import, which magexp calibrate's gyro fits do not need
         from scipy.optimize import least_squares
 

@@ -74,14 +74,9 @@ def fused_enabled() -> bool:
 
 
 def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None) -> int:
-    """float64 numbers one swarm-cost call holds beyond the problem's data, on the path it takes
-    (``fused``: None, the compiled kernel if :func:`fused_enabled`; False: the numpy fallback).
-
-    The fused kernel: :data:`FUSED_FLOATS_PER_PARTICLE` per particle,
-    whatever the readings. The numpy fallback: :data:`CHUNK_TEMPORARIES` ``[rows]`` arrays of one chunk,
-    ``max(CHUNK, rows P)`` particle-readings (a chunk holds at least one reading of every particle's
-    ``rows`` components), beside ten features or seven columns of each of its readings, and
-    :data:`FALLBACK_FLOATS_PER_PARTICLE` a particle for the coefficients.
+    """float64 numbers one swarm-cost call holds beyond the problem's data, on the path it takes (``fused``: None
+    as :func:`fused_enabled` says, False the numpy fallback): :data:`FUSED_FLOATS_PER_PARTICLE` a particle
+    compiled; in numpy :data:`CHUNK_TEMPORARIES` chunks of ``max(CHUNK, rows P)`` and the coefficients.
     """
     if fused_enabled() if fused is None else fused:
         return FUSED_FLOATS_PER_PARTICLE * n_particles
@@ -92,10 +87,8 @@ def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None
 
 @contextmanager
 def numpy_only(on: bool = True):
-    """Within the block (this thread or task only), :func:`compiled` is None when ``on``: the caller's
-    choice of the numpy path for the kernels it calls (``magexp calibrate``'s ``compiled=False``), an
-    argument rather than the process's environment; afterwards the choice is as it was.
-    """
+    """Within the block (this thread or task only), :func:`compiled` is None when ``on``: ``magexp calibrate``'s
+    ``compiled=False`` as an argument rather than the process's environment."""
     token = _COMPILED_ALLOWED.set(_COMPILED_ALLOWED.get() and not on)
     try:
         yield
@@ -126,11 +119,8 @@ compiled.cache_clear = _loaded.cache_clear  # MAGEXP_NUMBA read again (the tests
 
 
 def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
-    """The cost of every particle ``thetas`` (P, 12) ``= [vec(W), o]`` in one compiled call:
-    ``kernel = (kind, data, reference, params)``, a problem's arguments prepared once
-    (:meth:`magexp.problems.base.CalibrationProblem.swarm_kernel`); no per-call conversion but
-    making ``thetas`` a C-contiguous float array (2-D), which an engine's swarm already is.
-    """
+    """The cost of every particle ``thetas`` (P, 12) in one compiled call on a problem's prepared ``kernel``
+    (:meth:`magexp.problems.base.CalibrationProblem.swarm_kernel`), with no per-call conversion."""
     thetas = np.ascontiguousarray(thetas, float)
     if thetas.ndim != 2:
         thetas = thetas.reshape(1, -1)
@@ -153,16 +143,17 @@ def scalar_coefficients(w: np.ndarray, o: np.ndarray, centre: np.ndarray, scale:
 
 
 def _chunks(n: int, n_particles: int):
-    """Slices of the ``n`` readings, at most :data:`CHUNK` particle-readings each: the numpy fallback's bound on memory."""
+    """Slices of the ``n`` readings, at most :data:`CHUNK` particle-readings each: the numpy fallback's
+    bound on memory."""
     step = max(1, CHUNK // max(n_particles, 1))
     return (slice(k, min(k + step, n)) for k in range(0, n, step))
 
 
 def _add_rows(acc: np.ndarray, terms: np.ndarray) -> None:
-    """``acc += terms[0] + terms[1] + ...`` column by column, one row after another: the order of the
-    compiled kernels' accumulators (one reading after another), so a particle's sum depends neither on
-    the particles beside it nor on the chunks. ``terms`` (rows, P) is overwritten. numpy reduces the
-    rows of several columns one after another, but a lone column pairwise: that one is accumulated."""
+    """``acc += terms[0] + terms[1] + ...`` row after row, the compiled accumulators' order (``terms`` overwritten),
+    so a particle's sum depends on neither its neighbours nor the chunks; a lone column, which numpy would
+    sum pairwise, is accumulated.
+    """
     terms[0] += acc
     if terms.shape[1] == 1:
         acc[0] = np.add.accumulate(terms[:, 0])[-1]
@@ -171,11 +162,8 @@ def _add_rows(acc: np.ndarray, terms: np.ndarray) -> None:
 
 
 def scalar_cost_numpy(w, o, centre, scale, u, reference) -> np.ndarray:
-    """Total-field RMS of every particle (fallback), chunk by chunk: the compiled kernel's operations
-    in its order, element by element over (readings, particles) arrays (the ten products added left
-    to right, the squared errors summed reading after reading, :func:`_add_rows`). A particle's cost
-    does not depend on the particles evaluated with it (a BLAS product's would).
-    """
+    """Total-field RMS of every particle (fallback), chunk by chunk, in the compiled kernel's order element by
+    element (no BLAS product, whose sums would depend on the other particles; :func:`_add_rows`)."""
     coef = scalar_coefficients(w, o, centre, scale).T.copy()  # (10, P), contiguous rows
     acc = np.zeros(coef.shape[1])
     for rows in _chunks(len(u), coef.shape[1]):
@@ -210,12 +198,8 @@ def scalar_residuals(w, o, readings, reference) -> np.ndarray:
 
 # -- vector objective ----------------------------------------------------------------------------
 def vector_cost_numpy(w, o, readings, reference, *, squared: bool = False) -> np.ndarray:
-    """``F`` of every particle (fallback), chunk by chunk: the compiled kernel's operations in its
-    order, element by element over (readings, particles) arrays (``d = r_i - o``,
-    ``e_j = v_ij - (W_j0 d_0 + W_j1 d_1 + W_j2 d_2)``, ``|e|`` summed reading after reading,
-    :func:`_add_rows`), so a particle's ``F`` does not depend on the particles evaluated with it.
-    ``squared=True`` sums ``|e_i|^2`` instead of ``|e_i|`` (the least-squares form).
-    """
+    """``F`` of every particle (fallback), chunk by chunk, in the compiled kernel's order element by element
+    (:func:`_add_rows`); ``squared=True`` sums ``|e_i|^2`` instead of ``|e_i|`` (the least-squares form)."""
     acc = np.zeros(len(w))
     for rows in _chunks(len(readings), len(w)):
         r, v = readings[rows], reference[rows]
