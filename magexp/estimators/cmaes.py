@@ -67,14 +67,14 @@ class CMAES:
         self.start = start
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
-        """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]`` (module docstring).
+        """CMA-ES within the budget (the class docstring), from ``m_0`` by ``start``.
 
         Parameters
         ----------
         problem, rng, callback
-            As :meth:`magexp.estimators.base.Estimator.fit`: the cost and its finite box; the library's
-            generator seeded from ``rng`` (:func:`~magexp.estimators.blackbox.child_seed`); ``callback``
-            after every generation (``popsize`` candidates).
+            As :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a cost with a finite box; ``rng``
+            seeds cma's ``randn`` (:func:`~magexp.estimators.blackbox.child_seed`); ``callback`` after every
+            generation of ``popsize`` candidates.
 
         Returns
         -------
