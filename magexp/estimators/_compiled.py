@@ -1,23 +1,15 @@
 """Compiled (numba) steps of the swarm engine (:mod:`magexp.estimators.swarm`; imported on first
 use when numba is available and ``MAGEXP_NUMBA`` is not ``0``).
 
-:func:`engine` compiles the steps around one velocity rule's kernel
-(:mod:`magexp.estimators.velocity`): one call per iteration updates the personal bests with the
-last costs, finds the global best and then moves the whole swarm in place for the next iteration,
-element by element: the rule's kernel, the velocity clamp, the move ``x <- x + v`` and (for
-``clip`` boundaries) the clip to the box. It computes exactly the numbers of the numpy path
-(:func:`magexp.estimators.swarm.numpy_step`: the same kernel on whole arrays,
-``np.minimum(np.maximum(.))``, ``np.clip``, ``np.copyto``, ``argmin``), operation by operation
-and in the same order: no ``fastmath``, so no reassociation and no fused multiply-add, and the
-random numbers are drawn by numpy from the run's generator in the same order. A test runs both
-paths from one seed, for every rule, and compares ``x`` and ``fun`` bit for bit.
-
-The engine's ``run`` goes further: a block of iterations in one call, each with the problem's
-compiled cost (:func:`magexp.problems._compiled.swarm_cost`). :func:`circle_sequence` compiles
-the Circle-map initialiser's own step functions (:mod:`magexp.estimators.circle`). numba's
-on-disk cache keys a function by its own file and bytecode, not by the functions it calls (and
-inlines) from other modules: :func:`_keyed_on` puts those sources in the key, so an edit there
-recompiles instead of loading stale machine code.
+:func:`engine` compiles the steps around one velocity rule's kernel: the best updates, then the
+kernel, the clamp, ``x <- x + v`` and (for ``clip``) the clip, element by element, with exactly the
+numbers of the numpy path (:func:`magexp.estimators.swarm.numpy_step`): the same operations in the
+same order, no ``fastmath`` (no reassociation, no fused multiply-add), the random numbers drawn by
+numpy in the same order. A test runs both paths from one seed, for every rule, bit for bit. Its
+``run`` takes a block of iterations with the problem's compiled cost
+(:func:`magexp.problems._compiled.swarm_cost`); :func:`circle_sequence` compiles the Circle-map
+initialiser (:mod:`magexp.estimators.circle`). numba's disk cache keys a function by its own bytecode,
+not the functions it inlines from other modules: :func:`_keyed_on` adds their sources to the key.
 """
 
 from __future__ import annotations

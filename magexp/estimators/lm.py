@@ -42,37 +42,35 @@ SOLVERS = ("minpack", "numpy")
 class LevenbergMarquardt:
     """Least-squares refinement: ``θ* = argmin_θ Σ_i r_i(θ)²`` over the problem's residuals.
 
-    On the scalar problem ``r_i = |W(r_i - o)| - B_a`` (Ding 2024 eq 17's RMS, minimised in the
-    gauge of the module docstring); on the vector problem the components of
-    ``C_i H_i - W(r_i - o)`` (Yuan 2018 eq 8's terms, squared).
+    On the scalar problem ``r_i = |W(B_i - o)| - B_a`` (Ding 2024 eq 17's RMS, minimised in the gauge of
+    the module docstring); on the vector problem the components of ``C_i H_i - W(B_i - o)`` (Yuan 2018
+    eq 8's terms, squared).
 
     Parameters
     ----------
     name : str
         As in :class:`~magexp.estimators.base.Estimator`.
     start : str
-        ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the
-        linear least-squares fit of the vector problem), else the ellipsoid fit (scalar objective),
-        else the centre of the search box; ``ellipsoid``: the ellipsoid fit, else the centre;
-        ``centre``.
+        ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the linear
+        least-squares fit of the vector problem), else the ellipsoid fit, else the centre of the search
+        box; ``ellipsoid``: the ellipsoid fit, else the centre; ``centre``.
     max_nfev : int
         Cap on residual evaluations.
     tol : float
         ``xtol = ftol = gtol`` of ``least_squares``, in (machine epsilon, 1).
     gauge : str
-        On a total-field (scalar) problem, ``symmetric`` (default) fits the 9 parameters of a
-        symmetric matrix part and returns the polar factor (module docstring); ``free`` fits all 12
-        (its ``W`` carries an arbitrary rotation). Other problems always fit all 12.
+        On a total-field problem, ``symmetric`` (default) fits the 9 parameters of a symmetric matrix
+        part and returns the polar factor (module docstring); ``free`` fits all 12 (its ``W`` carries an
+        arbitrary rotation). Other problems always fit all 12.
     jacobian : str
-        ``2-point`` (default): scipy's forward differences, one residual evaluation per
-        parameter; ``stacked``: the same forward differences (step ``sqrt(eps) max(1, |x_i|)``) from
-        one call of the problem's ``residual_swarm`` on the ``p + 1`` points stacked (:func:`stacked_jacobian`),
-        where the problem has one; several times faster where one evaluation costs more in numpy's
-        per-call overhead than in arithmetic (the gyro-aided problem's prefix scan).
+        ``2-point`` (default): scipy's forward differences, one residual evaluation per parameter;
+        ``stacked``: the same differences from one call of the problem's ``residual_swarm`` on the
+        ``p + 1`` points (:func:`magexp.core.marquardt.stacked_jacobian`), where it has one: faster where
+        numpy's per-call overhead dominates an evaluation (the gyro-aided problem's prefix scan).
     solver : str
-        ``minpack`` (default): ``scipy.optimize.least_squares``; ``numpy``: :func:`magexp.core.marquardt.minimise_numpy`
-        (no scipy import: 0.45-0.5 CPU-s saved; it needs ``jacobian: stacked`` and a problem with ``residual_swarm``;
-        the callback is not called).
+        ``minpack`` (default): ``scipy.optimize.least_squares``; ``numpy``:
+        :func:`magexp.core.marquardt.minimise_numpy` (no scipy import; it needs ``jacobian: stacked`` and a
+        problem with ``residual_swarm``; the callback is not called).
 
     References
     ----------
@@ -92,6 +90,7 @@ class LevenbergMarquardt:
         check(gauge in GAUGES, f"estimator.gauge={gauge!r} is not allowed: choose one of {', '.join(GAUGES)}")
         check(jacobian in JACOBIANS,
               f"estimator.jacobian={jacobian!r} is not allowed: choose one of {', '.join(JACOBIANS)}")
+        # solver numpy: no scipy import, measured 0.45-0.5 CPU-s saved per process
         check(solver in SOLVERS, f"estimator.solver={solver!r} is not allowed: choose one of {', '.join(SOLVERS)}")
         self.jacobian = jacobian
         self.solver = solver
@@ -188,20 +187,17 @@ class LevenbergMarquardt:
         Parameters
         ----------
         problem : magexp.problems.base.Problem
-            The problem fitted (its :meth:`~magexp.problems.base.Problem.cost_direct` is the reported cost).
+            The problem fitted: ``fun`` is its ``cost_direct(x)``.
         x : numpy.ndarray
-            The solution; refused (one line) when not finite.
-        status : int
-            scipy's status (> 0: success).
-        message : str
-            scipy's message.
+            The solution.
+        status, message : int, str
+            scipy's status (> 0: success) and message.
         history : numpy.ndarray
             The best value after every evaluation.
 
         Returns
         -------
         FitResult
-            ``fun`` the textbook cost of ``x``, ``success`` when ``status > 0``.
 
         Raises
         ------

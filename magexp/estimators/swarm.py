@@ -1,31 +1,20 @@
-"""The one swarm engine behind every PSO variant in magexp.
+"""The one swarm engine behind every PSO variant in magexp (:class:`SwarmOptimizer`, whose docstring has
+the iteration's equation).
 
 Variants differ only by small strategy pieces passed in: the velocity rule
 (:mod:`magexp.estimators.velocity`: one kernel per rule), its coefficient schedules
-(:mod:`magexp.estimators.schedules`) and the initialiser
-(:mod:`magexp.estimators.initialisers`). One iteration is
-
-.. math::
-
-    v &\\leftarrow \\mathrm{clip}(\\mathrm{rule}(x, v, p, g, t), -v_{max}, v_{max}) \\\\
-    (x, v) &\\leftarrow \\mathrm{boundary}(x + v, v, l, u)
-
-(the new velocity moves the particle: Ding 2024 eq 11 prints ``v^t``, a typo; the boundary
-handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
-followed by the personal-best and global-best updates. The whole swarm is
+(:mod:`magexp.estimators.schedules`), the initialiser (:mod:`magexp.estimators.initialisers`) and the
+boundary handling (:mod:`magexp.estimators.boundaries`, ``clip`` unless configured). The whole swarm is
 evaluated with one call of ``problem.cost``.
 
 Each step (the best updates, then the next iteration's move) runs one of two ways, from the same
-kernel: in numpy (:func:`numpy_step`, the kernel on whole arrays) or, with numba
-(:func:`compiled`), in one compiled call per iteration (:func:`magexp.estimators._compiled.engine`,
-the kernel element by element), on random numbers drawn several iterations per call
-(:func:`_draw_blocks`; the same stream either way): the same numbers, bit for bit. numpy runs when
-``MAGEXP_NUMBA=0`` or numba is missing.
-
-When, besides, the problem offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`),
-the boundary is ``clip`` and no callback watches the iterations, the cost joins the compiled call
-and one call runs a whole block of draws' iterations (:meth:`SwarmOptimizer._run`): no Python, no
-dispatch and no argument conversion per iteration, and again the same numbers, bit for bit.
+kernel: in numpy (:func:`numpy_step`, the kernel on whole arrays) or, with numba (:func:`compiled`),
+in one compiled call per iteration (:func:`magexp.estimators._compiled.engine`, the kernel element by
+element), on random numbers drawn several iterations per call (:func:`_draw_blocks`; the same stream
+either way): the same numbers, bit for bit. numpy runs when ``MAGEXP_NUMBA=0`` or numba is missing.
+When, besides, the problem offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`), the
+boundary is ``clip`` and no callback watches, the cost joins the compiled call and one call runs a
+whole block of iterations (:meth:`SwarmOptimizer._run`): again the same numbers, bit for bit.
 """
 
 from __future__ import annotations

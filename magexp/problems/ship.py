@@ -1,19 +1,12 @@
 """Yan & Zhou 2022: a ship's magnetization parameters ``K`` and ``Bp`` from known ``Be`` and attitudes.
 
-Model (eq 1): :math:`\\mathbf B_i = \\mathbf K\\mathbf A_i\\mathbf B_e + \\mathbf B_p`, linear in
-``theta = [vec(K) (row-major), Bp]``. With the regressor row (eq 6)
-
-.. math:: \\mathbf C_i = [\\mathbf B_e^T\\mathbf A_i^T,\\ 1]\\quad(1\\times4),\\qquad
-          \\mathbf y_i = \\mathbf B_i^T = \\mathbf C_i\\,\\mathbf x,\\qquad
-          \\mathbf x = [\\mathbf K\\ \\mathbf B_p]^T\\ (4\\times3)
-
-every reading is one row of ``Y = C x``. This is the forward form of the vector problem
-(Yuan 2018 eq 1 with ``S = K``, ``b = Bp``, ``u_i = A_i Be``): the design, least squares and the
-state <-> parameter maps come from :class:`~magexp.problems.vector.LinearVectorModel`, shared
-with :class:`~magexp.problems.vector.VectorCalibration`; only the objective differs (here the
-RMS of the forward residuals, there Yuan's eq 8). In the calibration form of :class:`~magexp.problems.base.CalibrationProblem` this is the
-``forward`` parameterisation ``reading = S b + o`` with ``S = K``, ``o = Bp``, so
-:meth:`calibrate` returns ``K^-1 (B - Bp) = A Be``, the ambient field in the ship frame.
+Model (eq 1): :math:`\\mathbf B_i = \\mathbf K\\mathbf A_i\\mathbf B_e + \\mathbf B_p`, the forward form of
+the vector problem (Yuan 2018 eq 1 with ``S = K``, ``b = Bp``, ``u_i = A_i Be``): every reading is one row
+of ``Y = C x`` with ``C_i = [Be^T A_i^T, 1]`` (eq 6), and the design, least squares and the state <->
+parameter maps come from :class:`~magexp.problems.vector.LinearVectorModel`; only the objective differs
+(here the RMS of the forward residuals, there Yuan's eq 8). In the ``forward`` parameterisation of
+:class:`~magexp.problems.base.CalibrationProblem`, :meth:`~magexp.problems.base.CalibrationProblem.calibrate` returns
+``K^-1 (B - Bp) = A Be``, the ambient field in the ship frame.
 """
 
 from __future__ import annotations
