@@ -6,10 +6,6 @@ An estimator declares what it needs from a problem as ``needs``, a tuple of capa
 compares the two and is the one answer used by ``task=run`` (:mod:`magexp.run.runner`), the
 artifacts (:func:`magexp.artifacts.plan.applicable`), ``calibrate`` and the contract test. It works on
 classes as well as instances, so an artifact can skip a cell before simulating anything.
-
-An iterative estimator (``iterative = True``) calls ``callback(t, x, fun)`` after every
-iteration (``t`` = 1, 2, ...; ``x`` its current best or state; ``fun`` its objective, or
-``None`` where the estimator does not evaluate one) and stops when it returns a true value.
 """
 
 from __future__ import annotations
@@ -73,7 +69,9 @@ class Estimator(Protocol):
         rng : numpy.random.Generator
             The run's estimator stream (:mod:`magexp.core.seeding`): every random draw comes from it.
         callback : callable, optional
-            ``callback(t, x, fun)`` after every iteration of an iterative estimator; a true return stops it.
+            :data:`Callback` ``callback(t, x, fun)`` after every iteration of an iterative estimator (``t`` =
+            1, 2, ...; ``x`` its current best or state; ``fun`` its objective, or None where it evaluates
+            none); a true return stops it.
 
         Returns
         -------

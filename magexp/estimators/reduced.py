@@ -6,14 +6,12 @@ with the body frame, reducing the 12 unknowns to 9" (their refs [12, 13]); its T
 is exactly symmetric (``S12 = S21``, ``S13 = S31``, ``S23 = S32``). :class:`SymmetricSwarm` runs
 the shared swarm engine over
 
-.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad
-          M = M^T
+.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad M = M^T
 
-(:func:`magexp.problems.symmetric.expand`; ``M`` the matrix part of the problem's own parameters:
-Yuan's ``S`` in the forward form, ``W`` in the inverse one) with the problem's total-field cost of
-the expanded 12-vector. The box of each ``q`` entry is the box of its entry of the 12-vector. A symmetric ``W`` is the unique
-symmetric root of ``W^T W`` (what a scalar fit identifies), so on a scalar problem the rotation
-valley is gone; a non-symmetric truth (Yuan's ``S``) cannot be reached.
+(:func:`magexp.problems.symmetric.expand`; ``M`` the matrix part of the problem's parameters, Yuan's
+``S`` or ``W``; each ``q`` entry boxed as its entry of the 12-vector). A symmetric ``W`` is the unique
+symmetric root of ``W^T W`` (what a scalar fit identifies), so the rotation valley is gone; a
+non-symmetric truth (Yuan's ``S``) cannot be reached.
 """
 
 from __future__ import annotations

@@ -17,10 +17,9 @@ with arithmetic and ``[i, j]`` indexing only, and runs two ways, as pyswarms'
   whole array and ``pbest[g, j]`` the global best's row, so the same expression computes every
   element at once, with the same IEEE operations in the same order.
 
-A rule is a :class:`VelocityRule`: its kernel, how many uniform numbers it draws per particle and
-dimension (``n_draws``), the names of its three coefficients (schedules or numbers), and, if its
-random factors are not the uniform draws themselves, :meth:`VelocityRule.factors` (numpy, run on
-whole blocks of draws, so that both paths use the same ``log``).
+A rule is a :class:`VelocityRule` (its attributes: what else the engine needs);
+:meth:`VelocityRule.factors` turns the draws into the kernel's random factors in numpy, on whole
+blocks of draws, so that both paths use the same ``log``.
 """
 
 from __future__ import annotations

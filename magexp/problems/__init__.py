@@ -1,15 +1,6 @@
-"""Calibration problems: a parameter vector <-> a calibration, and a vectorised cost.
-
-Every problem exposes
-
-* ``n_params``, ``lower``, ``upper`` (the search box),
-* ``cost(thetas)``: ``(n, p) -> (n,)``, the objective for a whole swarm at once,
-* ``cost_direct(theta)``: the same objective by its textbook formula (for reporting),
-* ``residuals(theta)``: residual vector whose sum of squares is minimised by least squares,
-* ``pack`` / ``unpack`` between parameters and model matrices,
-* ``capabilities``: what it offers an estimator (:class:`magexp.problems.base.Problem`).
-
-Problems are made with :func:`make_problem` from a dataset and an objective name.
+"""Calibration problems: a parameter vector <-> a calibration, and a vectorised cost (the protocol:
+:class:`magexp.problems.base.Problem`). Problems are made with :func:`make_problem` from a dataset and
+an objective name (:data:`OBJECTIVES`).
 """
 
 from __future__ import annotations
