@@ -53,7 +53,8 @@ def kalman_update(x, p, h, y, q, sigma2: float):
 
 
 def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
-    """Run :func:`kalman_update` over a sequence of observations."""
+    """The state at every step, ``(T + 1, s, c)`` with ``[0] = x0``, of :func:`kalman_update` over a sequence
+    of observations (cut at the step where ``stop(n, x)`` first returns true)."""
     states = np.empty((len(h) + 1,) + np.shape(x0))
     x, p = np.asarray(x0, float), np.asarray(p0, float)
     states[0] = x
@@ -71,7 +72,7 @@ def cyclic(n_rows: int, n_steps: int) -> np.ndarray:
 
 
 def settled_since(distance: np.ndarray) -> int:
-    """The first step from which ``distance`` stays False."""
+    """The first step from which ``distance`` (True while apart) stays False; -1 if the last step is apart."""
     apart = np.flatnonzero(distance)
     if apart.size == 0:
         return 0
@@ -79,9 +80,8 @@ def settled_since(distance: np.ndarray) -> int:
 
 
 def observed_step(step: float, horizon: int) -> tuple[float, float]:
-    """A step of convergence measured over ``horizon`` steps, censored by the doubling rule (module
-    docstring).
-    """
+    """``(step, 0.0)`` when ``step <= horizon / 2``, else ``(nan, horizon / 2)``: a step of convergence censored
+    by the doubling rule (module docstring)."""
     bound = horizon / 2
     return (float(step), 0.0) if np.isfinite(step) and step <= bound else (np.nan, float(bound))
 
@@ -209,7 +209,7 @@ def direct_field(k: np.ndarray, bp: np.ndarray, attitude: np.ndarray, readings: 
 
 
 def field_errors(estimates: np.ndarray, field: np.ndarray) -> tuple[float, float]:
-    """How far field estimates are from the true field."""
+    """The RMS error (nT) of field estimates and their largest component error relative to ``|Be|``."""
     err = np.asarray(estimates) - field
     return float(np.sqrt(np.mean(err**2))), float(np.max(np.abs(err)) / np.linalg.norm(field))
 
@@ -218,6 +218,8 @@ class FieldKalmanFilter:
     """The analysis step ``field_kalman`` (not an estimator), ``step(problem, result) -> result``: ``Be`` recomputed
     from the fitted ``K``, ``Bp`` of ``result.x`` (Yan & Zhou Fig 4), state ``Be``, ``H(n) = K A(n)``,
     ``y(n) = B(n) - Bp``, ``Be(0) = 0``, ``P(0) = p0 E``, ``Q = q E``, readings reused cyclically.
+    Errors are measured after the fraction ``settle`` of the steps (the paper's "stable solution after
+    convergence"): ``trace["be"]``, metrics ``be_rms``, ``be_max_rel`` and ``be_direct_*`` (eq 4), ``Be1..3``.
     """
 
     references = "Yan & Zhou 2022, sec 3.2, Fig 4"

@@ -13,7 +13,8 @@ from magexp.errors import MagexpError
 
 
 def values(schedule, t: np.ndarray, t_max: int) -> np.ndarray:
-    """``schedule`` at every iteration of ``t`` in one vectorised call."""
+    """``schedule`` at every iteration of ``t`` in one vectorised call: the same floats as one call per ``t_k``
+    (the same IEEE operations, each exact ``int -> float`` conversion included)."""
     out = schedule(t, t_max) if callable(schedule) else schedule
     return out if isinstance(out, np.ndarray) else np.full(t.shape, out, float)  # a constant: one float
 

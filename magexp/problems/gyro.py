@@ -60,7 +60,7 @@ EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro
 class GyroAidedCalibration(CalibrationProblem):
     """Yuan 2018 eq 8 over ``[vec(S), b, field direction, gyro bias]`` (module docstring), on the
     ``dataset.extra["preintegration"]`` of :func:`magexp.core.geometry.preintegrate`; ``search`` bounds
-    ``S`` and ``b``, the gyro bias ``±bias_bound_deg_s``.
+    ``S`` and ``b``, the gyro bias ``±bias_bound_deg_s`` (deg/s); ``start`` is :meth:`initial_estimate`'s.
     """
 
     objective = "gyro"
