@@ -32,13 +32,13 @@ from magexp.problems.vector import theta_to_state
 
 
 def forward_measurement(theta: np.ndarray, reference: np.ndarray, reading: np.ndarray):
-    """The forward form's measurement: ``z = B``, ``h = S u + b`` (Yuan 2018 eq 1)."""
+    """``(z, h, ∂h/∂θ)`` of the forward form: ``z = B``, ``h = S u + b`` (Yuan 2018 eq 1)."""
     h = theta[:9].reshape(3, 3) @ reference + theta[9:]
     return reading, h, np.hstack([np.kron(np.eye(3), reference[None, :]), np.eye(3)])
 
 
 def inverse_measurement(theta: np.ndarray, reference: np.ndarray, reading: np.ndarray):
-    """The inverse form's measurement: ``z = u``, ``h = S^{-1}(B - b)`` (Yuan 2018 eq 3)."""
+    """``(z, h, ∂h/∂θ)`` of the inverse form: ``z = u``, ``h = S^{-1}(B - b)`` (Yuan 2018 eq 3)."""
     w = np.linalg.inv(theta[:9].reshape(3, 3))
     h = w @ (reading - theta[9:])
     return reference, h, np.hstack([-np.kron(w, h[None, :]), -w])

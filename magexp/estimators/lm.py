@@ -242,8 +242,10 @@ def polar(problem, x: np.ndarray) -> np.ndarray:
 
 def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 2000, callback=None, measure=None,
                        jac=None):
-    """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``: every
-    least-squares refinement's."""
+    """``(x, status, message, history)`` of Levenberg-Marquardt (MINPACK, ``scipy.optimize.least_squares``) on
+    ``residuals``, every least-squares refinement's: ``history`` the best ``measure`` (default the RMS) after each
+    evaluation; a stop by ``callback`` returns the best ``x`` evaluated with status ``-2``.
+    """
     # lazy: scipy.optimize, measured 0.40 s CPU to import (min of 5, after numpy); every command imports this module
     # to register its typed schema (magexp.run.compose.register_schemas), and only a least-squares run needs it
     from scipy.optimize import least_squares
