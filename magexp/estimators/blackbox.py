@@ -11,7 +11,7 @@ from magexp.estimators.result import FitResult
 
 
 def child_seed(rng: np.random.Generator) -> int:
-    """A seed for a library that takes an integer, drawn from the run's generator."""
+    """A seed in ``[1, 2**31 - 1)`` for a library that takes an integer, drawn from the run's generator."""
     return int(rng.integers(1, 2**31 - 1))
 
 

@@ -61,7 +61,8 @@ def sym(e6: np.ndarray) -> np.ndarray:
 
 
 def measurement(b: np.ndarray, h_norm: np.ndarray, sigma: float):
-    """The scalar measurements of the module docstring."""
+    """``(z - mu, L, w)`` of the module docstring: the scalar measurements, their regressors and weights ``1/σ_k²``.
+    """
     z = (b * b).sum(axis=1) - h_norm**2
     mu = -3.0 * sigma**2
     var = 4.0 * sigma**2 * h_norm**2 + 6.0 * sigma**4
@@ -113,7 +114,8 @@ def residual_and_jacobian(theta: np.ndarray, z, lmat, w):
 
 
 def calibration(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The calibration of ``θ``: ``(W, o) = ((I+E)^{1/2}, (I+E)^{-1} c)``."""
+    """The calibration of ``θ``, ``(W, o) = ((I+E)^{1/2}, (I+E)^{-1} c)``; None if ``I + E`` is not positive definite.
+    """
     f = np.eye(3) + sym(theta[3:])
     val, vec = np.linalg.eigh(f)
     if not np.all(val > 0):
