@@ -50,6 +50,13 @@ class Estimator(Protocol):
         The paper(s) the method comes from.
     monotone_history : bool, optional
         False where the history need not decrease (a filter's objective per step); default True.
+
+    Raises
+    ------
+    MagexpError
+        From every estimator's constructor, for a hyper-parameter outside what its class docstring
+        allows (one line naming the value and what is allowed); a problem lacking what the estimator
+        needs is refused in one line too (:func:`check_applies`).
     """
 
     name: str

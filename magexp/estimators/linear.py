@@ -22,7 +22,9 @@ def _result(problem, x: np.ndarray, message: str) -> FitResult:
 
 
 class LeastSquares:
-    """Ordinary linear least squares through ``problem.least_squares()``.
+    """Ordinary linear least squares through ``problem.least_squares()``: ``x̂ = argmin_x ||C x - Y||_F`` over
+    the rows ``C_i = [u_i^T, 1]``, ``Y_i = B_i^T`` of the forward model ``B_i = S u_i + b`` (Yuan 2018 eq 1;
+    Yan & Zhou 2022 eqs 1 and 6, the solution their filter converges to when the readings are reused).
 
     Parameters
     ----------
@@ -71,6 +73,11 @@ class FixedParameters:
         The parameter vector, in the problem's order (``problem.parameter_names()``).
     source : str
         Where the numbers come from (shown in the result message).
+
+    Raises
+    ------
+    MagexpError
+        When ``x`` is not a list of finite numbers.
     """
 
     references = ""  # an instance's: its source
@@ -93,12 +100,17 @@ class FixedParameters:
         Parameters
         ----------
         problem, rng, callback
-            As :meth:`magexp.estimators.base.Estimator.fit`: its ``n_params`` must be the length of ``x``.
+            As :meth:`magexp.estimators.base.Estimator.fit` (one evaluation, nothing drawn, no iteration).
 
         Returns
         -------
         FitResult
             One evaluation, ``x``.
+
+        Raises
+        ------
+        MagexpError
+            When the problem's ``n_params`` is not the length of ``x``.
         """
         if self.x.size != problem.n_params:
             raise MagexpError(f"estimator.x has {self.x.size} values: the problem needs {problem.n_params}")

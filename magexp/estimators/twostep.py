@@ -1,9 +1,7 @@
 """TWOSTEP (Alonso & Shuster 2002): a centred linear estimate, then Gauss-Newton.
 
-Model (Alonso & Shuster 2002, *TWOSTEP: a fast robust algorithm for attitude-independent
-magnetometer-bias determination*, J. Astronaut. Sci. 50(4), and its complete-calibration
-extension, *Complete linear attitude-independent magnetometer calibration*, same issue; Ding
-2024's ref. [17])
+Model (Alonso & Shuster 2002 and its complete-calibration extension, :class:`TwoStep`'s
+References; Ding 2024's ref. [17])
 
 .. math:: \\mathbf B_k = (I + D)^{-1}(O^T A_k \\mathbf H_k + \\mathbf b + \\boldsymbol\\varepsilon_k),
           \\qquad D = D^T
