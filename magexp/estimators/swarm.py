@@ -85,7 +85,7 @@ class SwarmOptimizer:
     of Ding 2024's PSO and IPSO and of Yuan 2018's RDPSO).
 
     Every iteration moves each particle by its new velocity (Ding 2024 eqs 10-11, eq 11's ``v^t``
-    read as the new velocity; Yuan 2018 eqs 10-11 for RDPSO), then updates the bests:
+    read as the new velocity; Yuan 2018 eqs 16-17 for RDPSO), then updates the bests:
 
     .. math:: v_{ij} \\leftarrow \\mathrm{clip}(\\mathrm{rule}_{ij}, -v_{max}, v_{max}),\\quad
               x_{ij} \\leftarrow x_{ij} + v_{ij}
@@ -109,16 +109,15 @@ class SwarmOptimizer:
         the first uniform initial velocity ``U(-inf, inf)`` is not a number).
     initial_velocity : str
         ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
-    references : str
-        The paper(s) the variant comes from.
     velocity_limit : float, optional
         Absolute ``v_max``, the same for every dimension (Yuan 2018 Table 1: 1.5), > 0; when
         given it replaces ``velocity_clamp``.
     boundary : str
         What a particle leaving the box does: ``clip``, ``reflect`` or ``random``
         (:mod:`magexp.estimators.boundaries`).
-    label : str
-        Its name in the report's row labels (pso, ipso, rdpso: PSO, IPSO, RDPSO); empty: the class's.
+    references, label : str
+        As in :class:`~magexp.estimators.base.Estimator`: each config of the engine sets its own
+        (pso, ipso, rdpso: PSO, IPSO, RDPSO; an empty label: the class's).
     """
 
     needs = ("cost",)
