@@ -9,10 +9,9 @@ particle swarm optimization*, IEEE TEVC 17(2)):
 * ``clip`` (the textbook "nearest" rule; Ding 2024's "positions clipped to the bounds"):
   :math:`x \\leftarrow \\min(\\max(x, l), u)`, velocity unchanged. A particle pushed outward sits
   on the face, so a swarm attracted outward collapses onto the boundary.
-* ``reflect``: the excess is mirrored back into the box,
-  :math:`x \\leftarrow l + |\\,((x - l) \\bmod 2w) - w\\,|` mirrored so that
-  ``x = l + y`` for ``y = (x - l) mod 2w`` when ``y <= w`` and ``l + 2w - y`` otherwise
-  (``w = u - l``), and the velocity component reversed (``v <- -v``) where it left.
+* ``reflect``: the excess is mirrored back into the box (any number of widths ``w = u - l``),
+  :math:`x \\leftarrow u - |\\,((x - l) \\bmod 2w) - w\\,|`, and the velocity component reversed
+  (``v <- -v``) where it left.
 * ``random``: a coordinate that left is redrawn uniformly in ``[l, u]`` and its velocity set to
   zero (random re-entry).
 """
