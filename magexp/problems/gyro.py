@@ -8,13 +8,11 @@ in the starting frame unknown:
           \\big\\lVert R_j(\\mathbf b_g)^\\top \\mathbf h - S^{-1}(\\mathbf B_j - \\mathbf b)\\big\\rVert
 
 * ``R_j(b_g)`` (body -> start frame at reading ``j``) is the gyro stream, less the bias ``b_g``,
-  integrated at the magnetometer's times (:func:`magexp.core.geometry.preintegrate`: one
-  preintegrated increment and its first-order bias Jacobian per pair of readings, so a new
-  bias costs a prefix scan over the ``M`` readings, not a re-integration of the gyro stream);
-* ``h`` is the field in the starting frame (the body frame at the first reading),
-  ``h = F [cos e cos a, cos e sin a, sin e]``. Its magnitude ``F`` cannot be separated from the
-  scale of ``S`` (``S -> k S``, ``h -> h / k`` fit equally), so ``F`` is fixed to the dataset's
-  reference total and only the direction ``(a, e)`` is estimated;
+  integrated at the magnetometer's times (:func:`magexp.core.geometry.preintegrate`: with a first-order
+  bias Jacobian per pair of readings, a new bias costs a prefix scan, not a re-integration);
+* ``h = F [cos e cos a, cos e sin a, sin e]`` is the field in the starting frame (the body frame at the
+  first reading); ``F`` cannot be told from the scale of ``S`` (``S -> k S``, ``h -> h / k`` fit equally),
+  so it is fixed to the dataset's reference total and only the direction ``(a, e)`` is estimated;
 * ``S`` absorbs every linear map between the magnetometer's and the gyroscope's axes (their
   misalignment, and a reflection if the axis conventions differ).
 
