@@ -43,10 +43,16 @@ class Problem(Protocol):
 
     Attributes
     ----------
-    objective : its name in :data:`magexp.problems.OBJECTIVES`.
-    capabilities : the subset of :data:`CAPABILITIES` it offers.
-    n_params, lower, upper : parameter count and the search box.
-    dataset : the :class:`~magexp.core.dataset.Dataset` it was built on.
+    objective : str
+        Its name in :data:`magexp.problems.OBJECTIVES`.
+    capabilities : frozenset of str
+        The subset of :data:`CAPABILITIES` it offers.
+    n_params : int
+        The parameter count ``p``.
+    lower, upper : ndarray, shape (p,)
+        The search box.
+    dataset : magexp.core.dataset.Dataset
+        The data it was built on.
     """
 
     objective: str
