@@ -7,14 +7,11 @@ Variants differ only by small strategy pieces passed in: the velocity rule
 boundary handling (:mod:`magexp.estimators.boundaries`, ``clip`` unless configured). The whole swarm is
 evaluated with one call of ``problem.cost``.
 
-Each step (the best updates, then the next iteration's move) runs one of two ways, from the same
-kernel: in numpy (:func:`numpy_step`, the kernel on whole arrays) or, with numba (:func:`compiled`),
-in one compiled call per iteration (:func:`magexp.estimators._compiled.engine`, the kernel element by
-element), on random numbers drawn several iterations per call (:func:`_draw_blocks`; the same stream
-either way): the same numbers, bit for bit. numpy runs when ``MAGEXP_NUMBA=0`` or numba is missing.
-When, besides, the problem offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`), the
-boundary is ``clip`` and no callback watches, the cost joins the compiled call and one call runs a
-whole block of iterations (:meth:`SwarmOptimizer._run`): again the same numbers, bit for bit.
+Each step runs the kernel in numpy (:func:`numpy_step`) or, with numba (:func:`compiled`), in one
+compiled call per iteration (:mod:`magexp.estimators._compiled`), on random numbers drawn several
+iterations per call (:func:`_draw_blocks`): the same numbers either way, bit for bit. When the problem
+also offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`), the boundary is ``clip`` and no
+callback watches, one compiled call runs a whole block of iterations (:meth:`SwarmOptimizer._run`).
 """
 
 from __future__ import annotations

@@ -1,15 +1,11 @@
 """Fused (single-pass) swarm costs: every particle's objective in one pass over the readings.
 
-Each kernel reads every reading once, keeps one accumulator per particle and never forms an
-``N × P`` array (memory ``O(P + N)``). Two implementations compute the same numbers:
-
-* a compiled one (``numba.njit``; reading loop outside, particle loop inside, so the inner loop
-  vectorises without reassociating any sum: no ``fastmath``, no threads, the same bits in every
-  process; ``cache=True`` stores the machine code beside this module);
-* a pure-numpy fallback, chunked over readings (at most :data:`CHUNK` particle-readings per
-  temporary), used when numba is missing or ``MAGEXP_NUMBA=0``: the compiled kernel's operations in
-  its order, element by element (no BLAS product, whose sums depend on the shape of the swarm), so
-  that a particle's cost depends neither on the particles evaluated with it nor on the chunks.
+Each kernel reads every reading once, keeps one accumulator per particle and never forms an ``N × P``
+array (memory ``O(P + N)``). A compiled one (``numba.njit``, ``cache=True``; reading loop outside,
+particle loop inside, so the inner loop vectorises without reassociating any sum: no ``fastmath``, no
+threads) and a pure-numpy fallback (chunks of at most :data:`CHUNK` particle-readings, used when numba
+is missing or ``MAGEXP_NUMBA=0``: the same operations in the same order, no BLAS product) compute the
+same numbers: a particle's cost depends neither on the particles evaluated with it nor on the chunks.
 
 numba is imported on the first swarm-cost call only: a closed-form run (``ellipsoid``, ``lm``) on
 fewer than :data:`COMPILE_MIN_READINGS` readings never pays for it; from that size on, the scalar
@@ -25,13 +21,11 @@ and ``a_p`` the ten coefficients of ``|W_p (r - o_p)|² = u^T A u - 2 o'^T A u +
 (``A = s² W^T W``, ``o' = (o - c)/s``; :func:`scalar_coefficients`): ten multiply-adds and one square
 root per particle-reading.
 
-Vector objective (Yuan 2018, eq 8):
+Vector objective (Yuan 2018, eq 8), each component formed as in the direct formula (no expansion of
+the squared norm), so ``F`` is exact to rounding at a noise-free optimum:
 
 .. math:: F_p = \\textstyle\\sum_i \\lVert \\mathbf v_i - W_p(\\mathbf r_i - \\mathbf o_p)\\rVert,
           \\quad \\mathbf v_i = C_i^b \\mathbf H_i
-
-each component formed as in the direct formula (no expansion of the squared norm), so ``F`` is
-exact to rounding at a noise-free optimum.
 """
 
 from __future__ import annotations
