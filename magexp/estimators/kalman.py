@@ -21,14 +21,12 @@ converges to the least-squares solution of the readings (the prior ``P(0)`` is f
 ``1/passes``); ``Q > 0`` keeps it tracking the latest rows, so it fluctuates around it.
 
 **The step of convergence is a censored time-to-event.** ``steps_to_ls`` is the first step ``s``
-from which the state stays within tolerance of the least-squares solution through the horizon
-``H`` (``horizon``, default ``n_steps``; the filter runs on to it, its estimate stays the state at
-``n_steps``). A state that has just come within tolerance near ``H`` need not stay there, so
-:func:`observed_step` reports ``s`` only when the state stayed within tolerance for at least as
-many steps as it took to get there (``s <= H/2``, the *doubling rule*: with ``Q = 0`` the distance
-from the least-squares solution and its swing within a pass shrink as ``1/n``, so a state within
-tolerance over ``[s, 2s]`` stays within it after ``2s``). Otherwise the step is censored: NaN, and
-``<metric>_censored`` holds the censoring point ``H/2`` (the step is later than it); 0 when observed.
+from which the state stays within tolerance of the least-squares solution through the horizon ``H``
+(``horizon``). A state that has just come within tolerance near ``H`` need not stay there, so
+:func:`observed_step` reports ``s`` only when ``s <= H/2`` (the *doubling rule*: with ``Q = 0`` the
+distance and its swing within a pass shrink as ``1/n``, so a state within tolerance over ``[s, 2s]``
+stays within it after ``2s``). Otherwise the step is censored: NaN, and ``<metric>_censored`` holds
+the censoring point ``H/2`` (the step is later than it); 0 when observed.
 
 References: Yan & Zhou 2022, Chinese Journal of Ship Research, sec 2.1 and 3.2;
 Kalman 1960; Zhang 2002 (the paper's ref. [14]).
