@@ -1,23 +1,15 @@
 """Compiled (numba) steps of the swarm engine (:mod:`magexp.estimators.swarm`; imported on first
 use when numba is available and ``MAGEXP_NUMBA`` is not ``0``).
 
-:func:`engine` compiles the steps around one velocity rule's kernel
-(:mod:`magexp.estimators.velocity`): one call per iteration updates the personal bests with the
-last costs, finds the global best and then moves the whole swarm in place for the next iteration,
-element by element: the rule's kernel, the velocity clamp, the move ``x <- x + v`` and (for
-``clip`` boundaries) the clip to the box. It computes exactly the numbers of the numpy path
-(:func:`magexp.estimators.swarm.numpy_step`: the same kernel on whole arrays,
-``np.minimum(np.maximum(.))``, ``np.clip``, ``np.copyto``, ``argmin``), operation by operation
-and in the same order: no ``fastmath``, so no reassociation and no fused multiply-add, and the
-random numbers are drawn by numpy from the run's generator in the same order. A test runs both
-paths from one seed, for every rule, and compares ``x`` and ``fun`` bit for bit.
-
-The engine's ``run`` goes further: a block of iterations in one call, each with the problem's
-compiled cost (:func:`magexp.problems._compiled.swarm_cost`). :func:`circle_sequence` compiles
-the Circle-map initialiser's own step functions (:mod:`magexp.estimators.circle`). numba's
-on-disk cache keys a function by its own file and bytecode, not by the functions it calls (and
-inlines) from other modules: :func:`_keyed_on` puts those sources in the key, so an edit there
-recompiles instead of loading stale machine code.
+:func:`engine` compiles the steps around one velocity rule's kernel: the best updates, then the
+kernel, the clamp, ``x <- x + v`` and (for ``clip``) the clip, element by element, with exactly the
+numbers of the numpy path (:func:`magexp.estimators.swarm.numpy_step`): the same operations in the
+same order, no ``fastmath`` (no reassociation, no fused multiply-add), the random numbers drawn by
+numpy in the same order. A test runs both paths from one seed, for every rule, bit for bit. Its
+``run`` takes a block of iterations with the problem's compiled cost
+(:func:`magexp.problems._compiled.swarm_cost`); :func:`circle_sequence` compiles the Circle-map
+initialiser (:mod:`magexp.estimators.circle`). numba's disk cache keys a function by its own bytecode,
+not the functions it inlines from other modules: :func:`_keyed_on` adds their sources to the key.
 """
 
 from __future__ import annotations
@@ -62,22 +54,7 @@ def _settle(x, vel, vmax, lower, upper, clip_box):
 
 @_jit
 def update_best(x, cost, pbest, pcost):
-    """The personal bests where ``cost < pcost``, in place, and the global best.
-
-    Parameters
-    ----------
-    x : ndarray, shape (n, d)
-        Positions whose costs are ``cost``.
-    cost : ndarray, shape (n,)
-        Their costs.
-    pbest, pcost : ndarray, shapes (n, d), (n,)
-        Personal bests and their costs, updated where ``cost < pcost`` (strictly).
-
-    Returns
-    -------
-    int
-        The first index of the smallest ``pcost`` (the first NaN if there is one, as ``argmin``).
-    """
+    """The personal bests where ``cost < pcost``, in place, and the global best."""
     n, d = x.shape
     for i in range(n):
         if cost[i] < pcost[i]:
@@ -95,20 +72,7 @@ def update_best(x, cost, pbest, pcost):
 
 @_jit
 def mean_best(pbest, out):
-    """The mean personal best (Yuan 2018 eq 13), :math:`M_j = \\frac1n \\sum_i p_{ij}`.
-
-    Parameters
-    ----------
-    pbest : ndarray, shape (n, d)
-        Personal bests.
-    out : ndarray, shape (d,)
-        Where to write ``M``.
-
-    Returns
-    -------
-    ndarray, shape (d,)
-        ``out``: the sum row by row, then the division, as ``pbest.mean(axis=0)`` (the same bits).
-    """
+    """The mean personal best (Yuan 2018 eq 13), :math:`M_j = \\frac1n \\sum_i p_{ij}`."""
     n, d = pbest.shape
     for j in range(d):
         out[j] = pbest[0, j]
@@ -121,43 +85,14 @@ def mean_best(pbest, out):
 
 
 def source_of(*objects) -> bytes:
-    """The sources of ``objects`` for :func:`_keyed_on`.
-
-    Parameters
-    ----------
-    *objects : module or function
-        What a compiled function calls into.
-
-    Returns
-    -------
-    bytes
-        Their source files, each followed by the object's qualified name (two kernels of one
-        module differ by it).
-    """
+    """The sources of ``objects`` for :func:`_keyed_on`."""
     return b"".join(Path(inspect.getfile(o)).read_bytes() + getattr(o, "__qualname__", "").encode()
                     for o in objects)
 
 
 def _keyed_on(dispatcher, *sources: bytes):
-    """``dispatcher`` with an on-disk cache key made of its bytecode and ``sources``.
-
-    numba keys a stored function by its own bytecode and, for a closure, by a pickle of what it
-    closes over, which for a compiled function differs in every process (the closure would then
-    compile again in every process). Here the key is the target, the signature, the bytecode and
-    ``sources``: the same in every process, and an edit of any of them recompiles.
-
-    Parameters
-    ----------
-    dispatcher : numba Dispatcher
-        A function compiled with ``cache=True``.
-    *sources : bytes
-        What its machine code depends on besides its own bytecode (:func:`source_of`).
-
-    Returns
-    -------
-    numba Dispatcher
-        ``dispatcher``, its key replaced (unchanged if this numba keeps its cache otherwise).
-    """
+    """``dispatcher`` cached on disk under its target, signature, bytecode and ``sources``: numba's own key
+    pickles a closure's compiled values, which differ in every process (it would recompile in each)."""
     stored = getattr(dispatcher, "_cache", None)
     if getattr(stored, "_index_key", None) is not None:
         code = hashlib.sha256(dispatcher.py_func.__code__.co_code).hexdigest()
@@ -168,36 +103,14 @@ def _keyed_on(dispatcher, *sources: bytes):
 
 @cache
 def engine(kernel, needs_mean: bool = False):
-    """The compiled steps of the swarm engine around one velocity rule's kernel.
-
-    The kernel (:mod:`magexp.estimators.velocity`) is compiled as it is and called for every
-    element inside the loops below, which close over it: one specialisation per rule, the kernel
-    inlined, stored on disk under :func:`_keyed_on`'s key (the kernel's source and name, this
-    module's, and for ``run`` the costs').
-
-    Parameters
-    ----------
-    kernel : function
-        ``kernel(i, j, x, v, pbest, g, mean, r, c) -> v_ij``.
-    needs_mean : bool
-        Whether the kernel reads ``mean`` (:func:`mean_best`; otherwise ``mean`` is NaN).
-
-    Returns
-    -------
-    SimpleNamespace
-        ``move``, ``step`` and ``run``, compiled (their docstrings).
-    """
+    """The compiled steps of the swarm engine around one velocity rule's kernel: one specialisation per rule,
+    the kernel inlined, cached under :func:`_keyed_on`'s key (the kernel's source, this module's, the costs')."""
     rule = _jit(kernel)
     key = source_of(kernel, sys.modules[__name__]) + bytes([needs_mean])
 
     def move(x, v, pbest, g, r, c, limits, clip_box):
-        """The move of every particle in place (Ding 2024 eqs 10-11; Yuan 2018 eqs 16-17).
-
-        ``v_ij`` = the kernel with the global best ``g``, the mean personal best, the random
-        factors ``r`` (k, n, d) and the coefficients ``c`` (3,); then the clamp to
-        ``limits[0]`` (``v_max``), ``x_ij + v_ij`` and, if ``clip_box``, the clip to
-        ``limits[1]``, ``limits[2]`` (lower, upper).
-        """
+        """Every particle moved in place (Ding 2024 eqs 10-11; Yuan 2018 eqs 16-17): the kernel, the clamp to
+        ``limits[0]`` (``v_max``), ``x + v`` and, if ``clip_box``, the clip to ``limits[1:3]`` (lower, upper)."""
         n, d = x.shape
         mean = mean_best(pbest, np.empty(d)) if needs_mean else np.full(d, np.nan)  # NaN: read, it shows
         coef = (c[0], c[1], c[2])  # scalars: read once, not once per element (c may alias v for all numba knows)
@@ -217,13 +130,9 @@ def engine(kernel, needs_mean: bool = False):
         return g
 
     def run(x, v, pbest, pcost, history, t, n_iterations, r, coef, limits, clip_box, problem):
-        """Iterations ``t .. t + n_iterations - 1`` in one call.
-
-        Each: the cost of every particle (:func:`magexp.problems._compiled.swarm_cost` with
-        ``problem = (kind, data, reference, params)``; iteration 0, the initial swarm, has its
-        costs in ``pcost`` already), :func:`update_best`, ``history[t] = pcost[g]`` and, for the
-        first ``len(coef)`` of them, ``move`` with ``r[k]`` and ``coef[k]``. Returns the global
-        best's index.
+        """The global best's index after iterations ``t .. t + n_iterations - 1`` in one call: each the cost
+        (iteration 0's already in ``pcost``), :func:`update_best`, ``history``, and for the first ``len(coef)``
+        a move.
         """
         kind, data, reference, params = problem
         g = 0
@@ -241,22 +150,7 @@ def engine(kernel, needs_mean: bool = False):
 
 @_jit
 def circle_sequence(z0, n, burn_in, printed):
-    """The Circle-map sequence (:meth:`magexp.estimators.initialisers.CircleMap.sequence`).
-
-    Parameters
-    ----------
-    z0 : ndarray, shape (d,)
-        The seed.
-    n, burn_in : int
-        Iterates kept, after ``burn_in`` steps.
-    printed : bool
-        Ding 2024 eq 15 as printed, or the usual form (the same functions, compiled).
-
-    Returns
-    -------
-    ndarray, shape (n, d)
-        The iterates as rows; coordinate by coordinate, as numpy's element-wise steps.
-    """
+    """The Circle-map sequence (:meth:`magexp.estimators.initialisers.CircleMap.sequence`)."""
     z = z0.copy()
     out = np.empty((n, z.size))
     for k in range(burn_in + n):

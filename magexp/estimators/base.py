@@ -6,10 +6,6 @@ An estimator declares what it needs from a problem as ``needs``, a tuple of capa
 compares the two and is the one answer used by ``task=run`` (:mod:`magexp.run.runner`), the
 artifacts (:func:`magexp.artifacts.plan.applicable`), ``calibrate`` and the contract test. It works on
 classes as well as instances, so an artifact can skip a cell before simulating anything.
-
-An iterative estimator (``iterative = True``) calls ``callback(t, x, fun)`` after every
-iteration (``t`` = 1, 2, ...; ``x`` its current best or state; ``fun`` its objective, or
-``None`` where the estimator does not evaluate one) and stops when it returns a true value.
 """
 
 from __future__ import annotations
@@ -38,7 +34,8 @@ class Estimator(Protocol):
     Attributes
     ----------
     name : str
-        Its config name (the constructor's ``name``).
+        Its config name (the constructor's ``name``: every estimator class takes one, as
+        ``name: str``, and the result tables name the run by it).
     needs : tuple of str
         Capabilities the problem must offer (:data:`magexp.problems.base.CAPABILITIES`).
     iterative : bool
@@ -53,6 +50,13 @@ class Estimator(Protocol):
         The paper(s) the method comes from.
     monotone_history : bool, optional
         False where the history need not decrease (a filter's objective per step); default True.
+
+    Raises
+    ------
+    MagexpError
+        From every estimator's constructor, for a hyper-parameter outside what its class docstring
+        allows (one line naming the value and what is allowed); a problem lacking what the estimator
+        needs is refused in one line too (:func:`check_applies`).
     """
 
     name: str
@@ -72,7 +76,9 @@ class Estimator(Protocol):
         rng : numpy.random.Generator
             The run's estimator stream (:mod:`magexp.core.seeding`): every random draw comes from it.
         callback : callable, optional
-            ``callback(t, x, fun)`` after every iteration of an iterative estimator; a true return stops it.
+            :data:`Callback` ``callback(t, x, fun)`` after every iteration of an iterative estimator (``t`` =
+            1, 2, ...; ``x`` its current best or state; ``fun`` its objective, or None where it evaluates
+            none); a true return stops it.
 
         Returns
         -------
@@ -83,24 +89,8 @@ class Estimator(Protocol):
 
 
 def applies_to(estimator, problem) -> tuple[bool, str]:
-    """Whether ``estimator`` applies to ``problem``: what it ``needs`` against what the problem offers.
-
-    An estimator may also be bound to one objective (``only_objective``, e.g. a paper's printed
-    solution of one model).
-
-    Parameters
-    ----------
-    estimator : Estimator class or instance
-        Its ``needs`` (default ``("cost",)``) and ``only_objective`` are read.
-    problem : Problem class or instance
-        Its ``capabilities`` and ``objective`` are read.
-
-    Returns
-    -------
-    tuple of (bool, str)
-        ``(True, "")`` or ``(False, reason)``, the reason one line naming what the estimator needs
-        and what the problem offers.
-    """
+    """Whether ``estimator`` applies to ``problem``: what it ``needs`` against what the problem offers, and its
+    ``only_objective`` if it is bound to one (e.g. a paper's printed solution of one model)."""
     name = name_of(estimator)
     objective = getattr(problem, "objective", "?")
     needs = tuple(getattr(estimator, "needs", ("cost",)))
@@ -120,38 +110,13 @@ def applies_to(estimator, problem) -> tuple[bool, str]:
 
 
 def name_of(estimator) -> str:
-    """The config name of ``estimator``: its ``name``, else its class's name.
-
-    Parameters
-    ----------
-    estimator : Estimator class or instance
-
-    Returns
-    -------
-    str
-    """
+    """The config name of ``estimator``: its ``name``, else its class's name."""
     name = getattr(estimator, "name", None)
     return name if isinstance(name, str) else getattr(estimator, "__name__", type(estimator).__name__)
 
 
 def check_applies(estimator, problem, where: str = "", alternatives=None) -> None:
-    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes.
-
-    Parameters
-    ----------
-    estimator, problem : class or instance
-        As :func:`applies_to`.
-    where : str
-        Named in the error (e.g. the scenario).
-    alternatives : callable, optional
-        Returns ``{name: estimator class}``, called only on failure: the error then names the
-        estimators that do apply (``magexp calibrate``: every ``conf/estimator/*.yaml``).
-
-    Raises
-    ------
-    MagexpError
-        Naming the estimator, the problem's objective, ``where`` and the reason.
-    """
+    """Raise a one-line :class:`MagexpError` unless :func:`applies_to` says yes."""
     ok, reason = applies_to(estimator, problem)
     if ok:
         return
@@ -168,21 +133,7 @@ class Stop(Exception):
 
 
 def stopper(callback: Callback | None, best: dict):
-    """A recorder for library optimisers (``least_squares``, ``minimize``...).
-
-    Parameters
-    ----------
-    callback : callable or None
-        ``callback(k, best x, best fun)`` after each record ``k``; a true return raises :class:`Stop`.
-    best : dict
-        Filled by the recorder: ``best["x"]``, ``best["fun"]`` (the best seen) and ``best["history"]``
-        (the best after each record).
-
-    Returns
-    -------
-    callable
-        ``record(x, fun)``.
-    """
+    """A recorder for library optimisers (``least_squares``, ``minimize``...)."""
     best.setdefault("history", [])
     best.setdefault("fun", np.inf)
 

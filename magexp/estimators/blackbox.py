@@ -11,33 +11,13 @@ from magexp.estimators.result import FitResult
 
 
 def child_seed(rng: np.random.Generator) -> int:
-    """A seed for a library that takes an integer, drawn from the run's generator.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The run's estimator stream.
-
-    Returns
-    -------
-    int
-        In ``[1, 2**31 - 1)``.
-    """
+    """A seed in ``[1, 2**31 - 1)`` for a library that takes an integer, drawn from the run's generator."""
     return int(rng.integers(1, 2**31 - 1))
 
 
 class RecordedCost:
-    """``problem.cost`` on whole populations, counting evaluations and recording the best so far.
-
-    One call of :meth:`__call__` is one generation: ``history[k]`` is the best cost after call
-    ``k`` (``history[0]`` after the first population, as the swarms' ``history``) and
-    ``history_nfev[k]`` the evaluations spent by then. Non-finite costs become ``inf``.
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        Its vectorised ``cost`` and its box, which must be finite.
-    """
+    """``problem.cost`` on whole populations (one call a generation), counting evaluations and recording the
+    best so far as the swarms' ``history`` and ``history_nfev``; non-finite costs become ``inf``."""
 
     def __init__(self, problem):
         self.problem = problem
@@ -50,18 +30,7 @@ class RecordedCost:
         self.history_nfev: list[int] = []
 
     def __call__(self, thetas: np.ndarray) -> np.ndarray:
-        """Evaluate one population.
-
-        Parameters
-        ----------
-        thetas : numpy.ndarray
-            ``(n, p)`` parameter vectors.
-
-        Returns
-        -------
-        numpy.ndarray
-            Their costs ``(n,)``, non-finite ones as ``inf``.
-        """
+        """Evaluate one population."""
         f = np.asarray(self.problem.cost(thetas), float)
         f = np.where(np.isfinite(f), f, np.inf)
         k = int(np.argmin(f))
@@ -73,18 +42,7 @@ class RecordedCost:
         return f
 
     def result(self, message: str) -> FitResult:
-        """The best point seen.
-
-        Parameters
-        ----------
-        message : str
-            The result's message (why the run ended).
-
-        Returns
-        -------
-        FitResult
-            With ``nit`` = generations after the first population.
-        """
+        """The best point seen."""
         return FitResult(x=self.best_x, fun=self.best_f, nit=len(self.history) - 1, nfev=self.nfev,
                          history=np.asarray(self.history), history_nfev=np.asarray(self.history_nfev),
                          message=message)

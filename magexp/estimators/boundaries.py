@@ -9,10 +9,9 @@ particle swarm optimization*, IEEE TEVC 17(2)):
 * ``clip`` (the textbook "nearest" rule; Ding 2024's "positions clipped to the bounds"):
   :math:`x \\leftarrow \\min(\\max(x, l), u)`, velocity unchanged. A particle pushed outward sits
   on the face, so a swarm attracted outward collapses onto the boundary.
-* ``reflect``: the excess is mirrored back into the box,
-  :math:`x \\leftarrow l + |\\,((x - l) \\bmod 2w) - w\\,|` mirrored so that
-  ``x = l + y`` for ``y = (x - l) mod 2w`` when ``y <= w`` and ``l + 2w - y`` otherwise
-  (``w = u - l``), and the velocity component reversed (``v <- -v``) where it left.
+* ``reflect``: the excess is mirrored back into the box (any number of widths ``w = u - l``),
+  :math:`x \\leftarrow u - |\\,((x - l) \\bmod 2w) - w\\,|`, and the velocity component reversed
+  (``v <- -v``) where it left.
 * ``random``: a coordinate that left is redrawn uniformly in ``[l, u]`` and its velocity set to
   zero (random re-entry).
 """
@@ -25,41 +24,12 @@ from magexp.errors import MagexpError
 
 
 def clip(x, v, lower, upper, *, rng):
-    """Clip to the box; velocity unchanged.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        The unconstrained new positions ``x_old + v`` (n, d).
-    v : numpy.ndarray
-        Their velocities (n, d).
-    lower, upper : numpy.ndarray
-        The box (d,).
-    rng : numpy.random.Generator
-        The run's estimator stream (unused: only ``random`` draws).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The positions inside the box and the velocities to carry on with.
-    """
+    """Clip to the box; velocity unchanged."""
     return np.clip(x, lower, upper), v
 
 
 def reflect(x, v, lower, upper, *, rng):
-    """Mirror the excess back into the box (any number of widths); reverse the velocity where it left.
-
-
-    Parameters
-    ----------
-    x, v, lower, upper, rng
-        As :func:`clip` (``rng`` unused)
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        As :func:`clip`.
-    """
+    """Mirror the excess back into the box (any number of widths); reverse the velocity where it left."""
     width = upper - lower
     y = np.mod(x - lower, 2.0 * width)
     inside = lower + np.where(y <= width, y, 2.0 * width - y)
@@ -68,19 +38,7 @@ def reflect(x, v, lower, upper, *, rng):
 
 
 def random_reentry(x, v, lower, upper, *, rng):
-    """Redraw a coordinate that left uniformly in its range, with zero velocity.
-
-
-    Parameters
-    ----------
-    x, v, lower, upper, rng
-        As :func:`clip`: the redrawn coordinates come from ``rng``
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        As :func:`clip`.
-    """
+    """Redraw a coordinate that left uniformly in its range, with zero velocity."""
     left = (x < lower) | (x > upper)
     fresh = lower + rng.random(x.shape) * (upper - lower)
     return np.where(left, fresh, x), np.where(left, 0.0, v)
@@ -90,18 +48,7 @@ BOUNDARIES = {"clip": clip, "reflect": reflect, "random": random_reentry}
 
 
 def boundary(name: str):
-    """The strategy called ``name``.
-
-    Parameters
-    ----------
-    name : str
-        A key of :data:`BOUNDARIES`; another is refused in one line naming the allowed ones.
-
-    Returns
-    -------
-    callable
-        ``handle(x, v, lower, upper, rng=rng) -> (x, v)``.
-    """
+    """The strategy called ``name``."""
     if name not in BOUNDARIES:
         raise MagexpError(f"estimator.boundary={name!r} is not allowed: choose one of {', '.join(BOUNDARIES)}")
     return BOUNDARIES[name]

@@ -9,34 +9,12 @@ from magexp.errors import MagexpError
 
 
 def printed_step(z):
-    """Ding 2024 eq 15 as printed (see :func:`circle_map`).
-
-    Parameters
-    ----------
-    z : float or numpy.ndarray
-        Iterates in [0, 1).
-
-    Returns
-    -------
-    float or numpy.ndarray
-        The next iterates.
-    """
+    """Ding 2024 eq 15 as printed (see :func:`circle_map`)."""
     return np.mod(2.0 * z + 0.2 - 0.7 / (2 * np.pi) * np.cos(2 * np.pi * z + 0.5 * np.pi), 1.0)
 
 
 def usual_step(z):
-    """The standard Circle map (see :func:`circle_map`).
-
-    Parameters
-    ----------
-    z
-        As :func:`printed_step`.
-
-    Returns
-    -------
-    float or numpy.ndarray
-        The next iterates of the standard map.
-    """
+    """The standard Circle map (see :func:`circle_map`)."""
     return np.mod(z + 0.2 - 0.5 / (2 * np.pi) * np.sin(2 * np.pi * z), 1.0)
 
 
@@ -44,27 +22,9 @@ FORMS = {"printed": printed_step, "usual": usual_step}
 
 
 def circle_map(z: np.ndarray, form: str = "printed") -> np.ndarray:
-    """One step of the Circle chaotic map, element-wise on ``z`` in [0, 1).
-
-    ``printed`` (Ding 2024, eq 15, as printed):
-
-    .. math:: z_{k+1} = \\mathrm{mod}\\big(2 z_k + 0.2 - \\tfrac{0.7}{2\\pi}\\cos(2\\pi z_k + 0.5\\pi),\\ 1\\big)
-
-    ``usual`` (the standard Circle map):
-
-    .. math:: z_{k+1} = \\mathrm{mod}\\big(z_k + 0.2 - \\tfrac{0.5}{2\\pi}\\sin(2\\pi z_k),\\ 1\\big)
-
-    Parameters
-    ----------
-    z : numpy.ndarray
-        Iterates in [0, 1).
-    form : str
-        ``printed`` or ``usual``.
-
-    Returns
-    -------
-    numpy.ndarray
-        The next iterates.
+    """One step of the Circle chaotic map, element-wise on ``z`` in [0, 1): ``printed`` Ding 2024 eq 15 as
+    printed (its equation: :class:`~magexp.estimators.initialisers.CircleMap`), ``usual`` the standard map
+    ``mod(z + 0.2 - 0.5/(2π) sin(2π z), 1)``.
     """
     if form not in FORMS:
         raise MagexpError(f"circle map form={form!r} is not allowed: choose printed or usual")

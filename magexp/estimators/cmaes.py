@@ -1,25 +1,9 @@
-"""CMA-ES (the ``cma`` package) on the problem's vectorised cost, within the search box.
+"""CMA-ES (the ``cma`` package) on the problem's vectorised cost, within the search box: :class:`CMAES`.
 
-Covariance matrix adaptation evolution strategy (Hansen & Ostermeier 2001; Hansen 2016): each
-generation samples ``λ`` candidates
-
-.. math:: \\mathbf z_k = \\mathbf m + \\sigma\\,\\mathbf B\\mathbf D\\,\\mathbf n_k,\\qquad
-          \\mathbf n_k \\sim \\mathcal N(0, I),\\quad k = 1..λ,
-
-evaluates them with one call of ``problem.cost``, and moves the mean ``m`` to the weighted
-mean of the best ``μ``, adapting the covariance ``C = B D² Bᵀ`` (rank-one and rank-μ updates)
-and the step size ``σ`` (cumulative step-size adaptation). The search runs in box-normalised
-coordinates ``z ∈ [0, 1]^p``, ``θ = l + z (u - l)``, because the parameters differ in scale by
-orders of magnitude (gains ~1, offsets ~10³ nT); the box is enforced by cma's ``BoundTransform``
-(every evaluated candidate is feasible). The normal draws come from a generator seeded from the
-run's ``rng`` (cma's ``randn`` option), so a seed gives the same run bit for bit.
-
-The budget counts cost evaluations, as for the swarms (``n_particles × (n_iterations + 1)``):
-the start ``m_0`` costs one, each generation ``λ``; the run stops when the next generation would
-exceed it, at cma's own termination criteria, or when ``callback`` returns true.
-
-References: Hansen & Ostermeier (2001), Evolutionary Computation 9(2):159-195; Hansen (2016),
-*The CMA Evolution Strategy: A Tutorial*, arXiv:1604.00772; the ``cma`` package (pycma).
+The search runs in box-normalised coordinates ``z ∈ [0, 1]^p``, ``θ = l + z (u - l)``, because the
+parameters differ in scale by orders of magnitude (gains ~1, offsets ~10³ nT); the box is enforced by
+cma's ``BoundTransform`` (every evaluated candidate is feasible). The normal draws come from a
+generator seeded from the run's ``rng`` (cma's ``randn`` option), so a seed gives the same run bit for bit.
 """
 
 from __future__ import annotations
@@ -34,12 +18,23 @@ STARTS = ("uniform", "centre")
 
 
 class CMAES:
-    """CMA-ES with a budget of cost evaluations.
+    """CMA-ES with a budget of cost evaluations (Hansen & Ostermeier 2001; Hansen 2016).
+
+    Each generation samples ``λ`` candidates
+
+    .. math:: \\mathbf z_k = \\mathbf m + \\sigma\\,\\mathbf B\\mathbf D\\,\\mathbf n_k,\\qquad
+              \\mathbf n_k \\sim \\mathcal N(0, I),\\quad k = 1..λ,
+
+    evaluates them with one call of ``problem.cost``, and moves the mean ``m`` to the weighted mean of
+    the best ``μ``, adapting the covariance ``C = B D² Bᵀ`` (rank-one and rank-μ updates) and the step
+    size ``σ`` (cumulative step-size adaptation). The budget counts cost evaluations, as for the swarms:
+    the start ``m_0`` costs one, each generation ``λ``; the run stops when the next generation would
+    exceed it, at cma's own termination criteria, or when ``callback`` returns true.
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     max_evaluations : int
         Budget of cost evaluations (default: the swarms' 50 × 801), at least 2.
     popsize : int
@@ -51,7 +46,8 @@ class CMAES:
 
     References
     ----------
-    Hansen & Ostermeier (2001), Evolutionary Computation 9(2):159-195; Hansen (2016), arXiv:1604.00772.
+    Hansen & Ostermeier (2001), Evolutionary Computation 9(2):159-195; Hansen (2016), The CMA Evolution
+    Strategy: A Tutorial, arXiv:1604.00772; the ``cma`` package (pycma).
     """
 
     references = "Hansen & Ostermeier 2001; Hansen 2016 (arXiv:1604.00772); pycma"
@@ -71,14 +67,14 @@ class CMAES:
         self.start = start
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
-        """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]`` (module docstring).
+        """CMA-ES within the budget (the class docstring), from ``m_0`` by ``start``.
 
         Parameters
         ----------
         problem, rng, callback
-            As :meth:`magexp.estimators.base.Estimator.fit`: the cost and its finite box; the library's
-            generator seeded from ``rng`` (:func:`~magexp.estimators.blackbox.child_seed`); ``callback``
-            after every generation (``popsize`` candidates).
+            As :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a cost with a finite box; ``rng``
+            seeds cma's ``randn`` (:func:`~magexp.estimators.blackbox.child_seed`); ``callback`` after every
+            generation of ``popsize`` candidates.
 
         Returns
         -------

@@ -1,24 +1,10 @@
-"""Differential evolution (``scipy.optimize.differential_evolution``) on the problem's
-vectorised cost, within the search box.
+"""Differential evolution (``scipy.optimize.differential_evolution``) on the problem's vectorised cost,
+within the search box: :class:`DifferentialEvolution`.
 
-Storn & Price (1997), strategy ``best1bin`` with their first-choice ``NP = 10 p`` and
-``CR = 0.9`` by default: for each member ``x_k`` of a population of ``S = popsize · p``, a
-mutant and a binomial crossover
-
-.. math:: \\mathbf y = \\mathbf x_{best} + F\\,(\\mathbf x_{r_1} - \\mathbf x_{r_2}),\\qquad
-          t_j = \\begin{cases} y_j & U_j < CR \\text{ or } j = j_{rand} \\\\ x_{k,j} & \\text{else}\\end{cases}
-
-(``F`` dithered uniformly in ``mutation`` every generation) replaces ``x_k`` if it is no worse.
-With ``updating="deferred"`` and ``vectorized=True`` a generation is one call of
-``problem.cost`` on all ``S`` trials. SciPy's generator is seeded from the run's ``rng``.
-
-The budget counts cost evaluations, as for the swarms: the initial population (Latin hypercube)
-costs ``S``, each generation ``S``, so ``maxiter = ⌊budget / S⌋ - 1``. No polishing step (it
-would spend evaluations outside the budget); ``tol = 0`` by default, so the run uses the whole
-budget unless ``callback`` returns true.
-
-References: Storn & Price (1997), J. Global Optimization 11:341-359; SciPy's
-``differential_evolution``.
+With ``updating="deferred"`` and ``vectorized=True`` a generation is one call of ``problem.cost`` on all
+``S`` trials; SciPy's generator is seeded from the run's ``rng``. The budget counts cost evaluations, as
+for the swarms: the initial population costs ``S``, each generation ``S``, so
+``maxiter = ⌊budget / S⌋ - 1``. No polishing step (it would spend evaluations outside the budget).
 """
 
 from __future__ import annotations
@@ -31,12 +17,20 @@ from magexp.estimators.result import FitResult
 
 
 class DifferentialEvolution:
-    """SciPy's differential evolution with a budget of cost evaluations.
+    """SciPy's differential evolution with a budget of cost evaluations (Storn & Price 1997).
+
+    Strategy ``best1bin`` by default: for each member ``x_k`` of a population of ``S = popsize · p``, a
+    mutant and a binomial crossover
+
+    .. math:: \\mathbf y = \\mathbf x_{best} + F\\,(\\mathbf x_{r_1} - \\mathbf x_{r_2}),\\qquad
+              t_j = \\begin{cases} y_j & U_j < CR \\text{ or } j = j_{rand} \\\\ x_{k,j} & \\text{else}\\end{cases}
+
+    (``F`` dithered uniformly in ``mutation`` every generation) replaces ``x_k`` if it is no worse.
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     max_evaluations : int
         Budget of cost evaluations (default: the swarms' 50 × 801): at least two populations.
     popsize : int
@@ -48,13 +42,14 @@ class DifferentialEvolution:
     recombination : float
         ``CR`` in [0, 1] (0.9: Storn & Price's first choice for non-separable costs; SciPy: 0.7).
     tol : float
-        SciPy's relative convergence tolerance (0: run the whole budget).
+        SciPy's relative convergence tolerance (0, the default: run the whole budget unless ``callback``
+        returns true).
     init : str
         SciPy's initialisation (``latinhypercube``, ``sobol``, ``halton``, ``random``).
 
     References
     ----------
-    Storn & Price (1997), J. Global Optimization 11:341-359.
+    Storn & Price (1997), J. Global Optimization 11:341-359; SciPy's ``differential_evolution``.
     """
 
     references = "Storn & Price 1997; SciPy differential_evolution"
@@ -77,19 +72,19 @@ class DifferentialEvolution:
         self.init = init
 
     def fit(self, problem, *, rng: np.random.Generator, callback=None) -> FitResult:
-        """Minimise ``problem.cost`` within ``[problem.lower, problem.upper]`` (module docstring).
+        """SciPy's ``differential_evolution`` within the budget, one vectorised cost call a generation.
 
         Parameters
         ----------
         problem, rng, callback
-            As :meth:`magexp.estimators.base.Estimator.fit`: the cost and its finite box; the library's
-            generator seeded from ``rng`` (:func:`~magexp.estimators.blackbox.child_seed`); ``callback``
-            after every generation (``popsize · p`` trials).
+            As :meth:`magexp.estimators.base.Estimator.fit`. SciPy's generator is seeded from ``rng``
+            (:func:`~magexp.estimators.blackbox.child_seed`); ``problem`` needs a finite box; ``callback``
+            runs after each generation of ``popsize · p`` trials.
 
         Returns
         -------
         FitResult
-            The best point evaluated; ``history[k]`` the best cost after generation ``k``.
+            The best trial; ``history[k]`` the best cost after generation ``k``.
         """
         # lazy: scipy.optimize, measured 0.40 s CPU to import (min of 5, after numpy); every command imports this module
         # to register its typed schema (magexp.run.compose.register_schemas), and only a de run needs it

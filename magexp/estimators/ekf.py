@@ -32,39 +32,13 @@ from magexp.problems.vector import theta_to_state
 
 
 def forward_measurement(theta: np.ndarray, reference: np.ndarray, reading: np.ndarray):
-    """The forward form's measurement: ``z = B``, ``h = S u + b`` (Yuan 2018 eq 1).
-
-    Parameters
-    ----------
-    theta : numpy.ndarray
-        ``[vec(S), b]`` (12,).
-    reference : numpy.ndarray
-        ``u = C H`` (3,), the reference vector in the body frame.
-    reading : numpy.ndarray
-        ``B`` (3,).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(z, h, J)``: the measurement, its prediction and the Jacobian ``∂h/∂θ`` (3, 12).
-    """
+    """``(z, h, ∂h/∂θ)`` of the forward form: ``z = B``, ``h = S u + b`` (Yuan 2018 eq 1)."""
     h = theta[:9].reshape(3, 3) @ reference + theta[9:]
     return reading, h, np.hstack([np.kron(np.eye(3), reference[None, :]), np.eye(3)])
 
 
 def inverse_measurement(theta: np.ndarray, reference: np.ndarray, reading: np.ndarray):
-    """The inverse form's measurement: ``z = u``, ``h = S^{-1}(B - b)`` (Yuan 2018 eq 3).
-
-    Parameters
-    ----------
-    theta, reference, reading : numpy.ndarray
-        As :func:`forward_measurement`.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(z, h, J)``: the measurement, its prediction and the Jacobian ``∂h/∂θ`` (3, 12).
-    """
+    """``(z, h, ∂h/∂θ)`` of the inverse form: ``z = u``, ``h = S^{-1}(B - b)`` (Yuan 2018 eq 3)."""
     w = np.linalg.inv(theta[:9].reshape(3, 3))
     h = w @ (reading - theta[9:])
     return reference, h, np.hstack([-np.kron(w, h[None, :]), -w])
@@ -81,26 +55,6 @@ def ekf_step(theta, p, reference, reading, *, q, r, form=forward_measurement):
 
     .. math:: \\theta + M (z - h(\\theta)),\\quad M = R J^T (J R J^T + r^2)^{-1},\\quad R = P + Q,
               \\quad P \\leftarrow (E - M J) R
-
-    Parameters
-    ----------
-    theta : numpy.ndarray
-        The state ``[vec(S), b]`` (12,).
-    p : numpy.ndarray
-        Its covariance ``P`` (12, 12).
-    reference, reading : numpy.ndarray
-        ``u_i`` and ``B_i`` (3,) of the reading.
-    q : numpy.ndarray
-        The process noise ``Q`` (12, 12).
-    r : float
-        The (isotropic) measurement variance ``r²``.
-    form : callable
-        :func:`forward_measurement` or :func:`inverse_measurement`.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The new ``(θ, P)``, ``P`` symmetrised.
     """
     z, h, jac = form(theta, reference, reading)
     y = (z - h + jac @ theta)[:, None]
@@ -111,10 +65,14 @@ def ekf_step(theta, p, reference, reading, *, q, r, form=forward_measurement):
 class ExtendedKalmanFilter:
     """EKF calibration (``fit(problem, rng=...) -> FitResult``, history indexed by filter step).
 
+    State ``θ = [vec(S), b]``, measurement ``B_{b,i} = S u_i + b`` (Yuan 2018 eq 1, ``form: forward``)
+    or ``u_i = S^{-1}(B_{b,i} - b)`` (eq 3, ``form: inverse``), ``u_i = C_i^b H_i``; the step is the
+    module docstring's.
+
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     form : str
         Measurement form, ``forward`` or ``inverse`` (see the module docstring).
     n_steps : int
@@ -161,13 +119,10 @@ class ExtendedKalmanFilter:
 
         Parameters
         ----------
-        problem : magexp.problems.base.LinearProblem
-            Its linear design: the reference vectors and the readings.
-        rng : numpy.random.Generator, optional
-            Unused (the filter draws nothing).
-        callback : callable, optional
-            ``callback(step, x, None)`` after every step (``x`` in the problem's parameters); a true
-            return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its linear design: the
+            reference vectors and the readings. ``rng``: unused (the filter draws nothing). ``callback``:
+            ``callback(step, x, None)`` after every step (``x`` in the problem's parameters).
 
         Returns
         -------

@@ -18,14 +18,16 @@ from magexp.estimators.result import FitResult
 class EllipsoidFit:
     """Algebraic ellipsoid fit (``ellipsoid``); returns the calibration in the problem's parameters.
 
-    The radius is the mean reference total field of the dataset. If the fit is
-    not an ellipsoid (too few or degenerate readings) the result has
-    ``success=False`` and ``x`` at the centre of the search box.
+    The readings lie on ``(r - o)^T W^T W (r - o) = B_a^2``: the quadric ``u^T A u + 2 b^T u + d = 0``
+    of the centred readings is fitted in algebraic least squares and ``W`` is its symmetric root
+    (:mod:`magexp.core.ellipsoid`), ``B_a`` the dataset's mean reference total field. If the fit is not
+    an ellipsoid (too few or degenerate readings) the result has ``success=False`` and ``x`` at the
+    centre of the search box.
 
     Parameters
     ----------
     name : str
-        Config name (``ellipsoid``).
+        As in :class:`~magexp.estimators.base.Estimator` (``ellipsoid``).
 
     References
     ----------
@@ -46,8 +48,8 @@ class EllipsoidFit:
 
         Parameters
         ----------
-        readings : numpy.ndarray
-            ``(N, 3)``.
+        readings : numpy.ndarray, shape (N, 3)
+            The raw readings.
         radius : float
             The field magnitude the calibrated readings should have.
 
@@ -90,7 +92,7 @@ class EllipsoidSpecificFit(EllipsoidFit):
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     k : float
         The constraint's ``k`` (4: Li & Griffiths' choice), > 0.
 

@@ -57,7 +57,8 @@ def _compiled_sequence():
     libraries that could differ between numba and numpy on some machine), else None."""
     if kernels.compiled() is None:  # numba off or absent
         return None
-    # lazy: numba, measured 205 ms CPU to import (min of 5, after numpy), only for the swarms that use the circle map
+    # lazy: _compiled imports numba at its top (205 ms CPU to import, min of 5, after numpy), which a numpy-only run
+    # must not pay for nor fail on; reached only once kernels.compiled() has loaded numba
     from magexp.estimators import _compiled as nb
 
     z0 = (np.arange(64) + 0.5) / 64
@@ -69,7 +70,10 @@ def _compiled_sequence():
 class CircleMap:
     """Circle-map chaotic initialisation (Ding 2024, sec 2.2.3).
 
-    A random seed ``z_0 ~ U(0, 1)^d`` is iterated ``burn_in`` times, then particle
+    .. math:: z_{n+1} = \\mathrm{mod}(2 z_n + 0.2 - \\tfrac{0.7}{2\\pi}\\cos(2\\pi z_n + 0.5\\pi), 1)
+
+    (Ding 2024 eq 15 as printed; ``form: usual`` the usual circle map). A random seed
+    ``z_0 ~ U(0, 1)^d`` is iterated ``burn_in`` times, then particle
     ``k`` (k = 1..n) takes the ``k``-th further iterate: ``x_k = lower + z_k (upper - lower)``.
     The map runs along the particles, vectorised over the dimensions (compiled with numba: the
     same numbers, :func:`_compiled_sequence`).

@@ -21,14 +21,12 @@ converges to the least-squares solution of the readings (the prior ``P(0)`` is f
 ``1/passes``); ``Q > 0`` keeps it tracking the latest rows, so it fluctuates around it.
 
 **The step of convergence is a censored time-to-event.** ``steps_to_ls`` is the first step ``s``
-from which the state stays within tolerance of the least-squares solution through the horizon
-``H`` (``horizon``, default ``n_steps``; the filter runs on to it, its estimate stays the state at
-``n_steps``). A state that has just come within tolerance near ``H`` need not stay there, so
-:func:`observed_step` reports ``s`` only when the state stayed within tolerance for at least as
-many steps as it took to get there (``s <= H/2``, the *doubling rule*: with ``Q = 0`` the distance
-from the least-squares solution and its swing within a pass shrink as ``1/n``, so a state within
-tolerance over ``[s, 2s]`` stays within it after ``2s``). Otherwise the step is censored: NaN, and
-``<metric>_censored`` holds the censoring point ``H/2`` (the step is later than it); 0 when observed.
+from which the state stays within tolerance of the least-squares solution through the horizon ``H``
+(``horizon``). A state that has just come within tolerance near ``H`` need not stay there, so
+:func:`observed_step` reports ``s`` only when ``s <= H/2`` (the *doubling rule*: with ``Q = 0`` the
+distance and its swing within a pass shrink as ``1/n``, so a state within tolerance over ``[s, 2s]``
+stays within it after ``2s``). Otherwise the step is censored: NaN, and ``<metric>_censored`` holds
+the censoring point ``H/2`` (the step is later than it); 0 when observed.
 
 References: Yan & Zhou 2022, Chinese Journal of Ship Research, sec 2.1 and 3.2;
 Kalman 1960; Zhang 2002 (the paper's ref. [14]).
@@ -44,28 +42,7 @@ from magexp.estimators.result import FitResult
 
 
 def kalman_update(x, p, h, y, q, sigma2: float):
-    """One step (1)-(4) of the module docstring (Yan & Zhou 2022, sec 2.1).
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        The state ``x(n-1)`` (s, c).
-    p : numpy.ndarray
-        Its covariance ``P(n-1)`` (s, s).
-    h : numpy.ndarray
-        The observation matrix ``H`` (k, s).
-    y : numpy.ndarray
-        The observation ``y(n)`` (k, c).
-    q : numpy.ndarray
-        The process noise ``Q`` (s, s).
-    sigma2 : float
-        The observation noise variance ``σ²``.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The new state ``x(n)`` (s, c) and ``P(n)`` (s, s).
-    """
+    """One step (1)-(4) of the module docstring (Yan & Zhou 2022, sec 2.1)."""
     r = p + q
     rh = r @ h.T
     m = np.linalg.solve(h @ rh + sigma2 * np.eye(h.shape[0]), rh.T).T
@@ -74,31 +51,8 @@ def kalman_update(x, p, h, y, q, sigma2: float):
 
 
 def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
-    """Run :func:`kalman_update` over a sequence of observations.
-
-    Parameters
-    ----------
-    h : numpy.ndarray
-        Observation matrices (T, k, s).
-    y : numpy.ndarray
-        Observations (T, k, c).
-    p0 : numpy.ndarray
-        ``P(0)`` (s, s).
-    q : numpy.ndarray
-        ``Q`` (s, s).
-    sigma2 : float
-        ``σ²``.
-    x0 : numpy.ndarray
-        The initial state (s, c).
-    stop : callable, optional
-        ``stop(n, x)`` after step ``n``; a true return ends the run.
-
-    Returns
-    -------
-    numpy.ndarray
-        The state at every step, ``(T + 1, s, c)`` (``[0]`` is ``x0``), or up to the step at which
-        ``stop`` first returned a true value.
-    """
+    """The state at every step, ``(T + 1, s, c)`` with ``[0] = x0``, of :func:`kalman_update` over a sequence
+    of observations (cut at the step where ``stop(n, x)`` first returns true)."""
     states = np.empty((len(h) + 1,) + np.shape(x0))
     x, p = np.asarray(x0, float), np.asarray(p0, float)
     states[0] = x
@@ -111,36 +65,12 @@ def kalman_filter(h, y, *, p0, q, sigma2: float, x0, stop=None) -> np.ndarray:
 
 
 def cyclic(n_rows: int, n_steps: int) -> np.ndarray:
-    """Row index of every filter step: the readings reused in order, ``0, 1, ..., N-1, 0, ...``.
-
-    Parameters
-    ----------
-    n_rows : int
-        Readings ``N``.
-    n_steps : int
-        Filter steps.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n_steps,)`` row indices.
-    """
+    """Row index of every filter step: the readings reused in order, ``0, 1, ..., N-1, 0, ...``."""
     return np.arange(n_steps) % n_rows
 
 
 def settled_since(distance: np.ndarray) -> int:
-    """The first step from which ``distance`` stays False.
-
-    Parameters
-    ----------
-    distance : numpy.ndarray of bool
-        Per step, True while the state is still apart.
-
-    Returns
-    -------
-    int
-        That step's index, -1 if the last step is still apart.
-    """
+    """The first step from which ``distance`` (True while apart) stays False; -1 if the last step is apart."""
     apart = np.flatnonzero(distance)
     if apart.size == 0:
         return 0
@@ -148,46 +78,14 @@ def settled_since(distance: np.ndarray) -> int:
 
 
 def observed_step(step: float, horizon: int) -> tuple[float, float]:
-    """A step of convergence measured over ``horizon`` steps, censored by the doubling rule (module
-    docstring).
-
-    Parameters
-    ----------
-    step : float
-        The first step from which the state stays within tolerance through ``horizon`` (NaN: the
-        state is apart at the horizon).
-    horizon : int
-        The last step observed.
-
-    Returns
-    -------
-    tuple of float
-        ``(step, 0.0)`` when ``step <= horizon / 2``; else ``(nan, horizon / 2)``: the step is
-        only known to be later than ``horizon / 2``.
-    """
+    """``(step, 0.0)`` when ``step <= horizon / 2``, else ``(nan, horizon / 2)``: a step of convergence censored
+    by the doubling rule (module docstring)."""
     bound = horizon / 2
     return (float(step), 0.0) if np.isfinite(step) and step <= bound else (np.nan, float(bound))
 
 
 def checked_tuning(p0: float, q: float, sigma2: float, n_steps: int, group: str) -> tuple:
-    """The shared filter settings, checked.
-
-    Parameters
-    ----------
-    p0, q : float
-        ``P(0)`` and ``Q`` scales, >= 0.
-    sigma2 : float
-        Observation noise variance, > 0.
-    n_steps : int
-        Filter steps, > 0.
-    group : str
-        The config group named in an error (``estimator``, ``analysis``).
-
-    Returns
-    -------
-    tuple
-        ``(p0, q, sigma2, n_steps)`` as numbers.
-    """
+    """The shared filter settings, checked."""
     check(check_nonnegative(sigma2, f"{group}.sigma2") > 0,
           f"{group}.sigma2={sigma2!r} is not allowed: the noise variance must be > 0")
     return (check_nonnegative(p0, f"{group}.p0"), check_nonnegative(q, f"{group}.q"), float(sigma2),
@@ -209,13 +107,14 @@ class _Tuning:
 class KalmanFilter(_Tuning):
     """Yan & Zhou's filter for ``x = [K Bp]^T`` (``kf``).
 
-    ``x(0) = 0``. The result's ``trace["x"]`` is the state at every step as ``theta``
-    (``n_steps + 1``, 12), ``history`` the fit RMS at every step.
+    The recursion of Yan 2022 sec 2.1, steps (1)-(4) (module docstring), on the rows
+    ``C(n) = [Be^T A^T, 1]`` and observations ``y(n) = B^T`` of the model ``B = K A Be + Bp`` (eqs 1-2),
+    from ``x(0) = 0``.
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     p0 : float
         ``P(0) = p0 diag(1, 1, 1, offset_scale^2)`` (the paper: a diagonal matrix).
     q : float
@@ -227,13 +126,9 @@ class KalmanFilter(_Tuning):
     n_steps : int
         Filter steps; the readings are reused cyclically.
     agree_k, agree_bp : float
-        Tolerances of the ``steps_to_ls`` diagnostic: the first step, at the end of a full pass over
-        the readings, after which the state at every later pass end through ``horizon`` stays within
-        them of the least-squares solution. Within a pass the readings are unequally
-        weighted, so the state fluctuates around that solution; ``steps_to_ls_every_step`` is the
-        same at every step from the end of the first pass (the state within a pass too). Both are
-        censored (NaN, with ``steps_to_ls_censored`` etc. the censoring point) when later than
-        ``horizon / 2`` (:func:`observed_step`).
+        Tolerances on ``K`` and ``Bp`` of the ``steps_to_ls`` diagnostic (module docstring): the first
+        pass end from which the state stays within them of the least-squares solution through
+        ``horizon``; ``steps_to_ls_every_step`` the same at every step after the first pass.
     horizon : int
         Steps over which the step of convergence is observed; the filter runs on to
         ``max(n_steps, horizon)``, its estimate and trace stay those of step ``n_steps``. 0 (default):
@@ -265,17 +160,16 @@ class KalmanFilter(_Tuning):
 
         Parameters
         ----------
-        problem : magexp.problems.base.LinearProblem
-            Its linear design ``C x = Y`` and least-squares solution.
-        rng : numpy.random.Generator, optional
-            Unused (the filter draws nothing).
-        callback : callable, optional
-            ``callback(step, x, None)`` after every step; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its linear design ``C x = Y``
+            and least-squares solution. ``rng``: unused (the filter draws nothing). ``callback``:
+            ``callback(step, x, None)`` after every step.
 
         Returns
         -------
         FitResult
-            ``trace["x"]`` the state at every step; ``metrics`` ``steps_to_ls``, ``steps_to_ls_every_step``.
+            ``history`` the fit RMS and ``trace["x"]`` the state as ``theta`` (``n_steps + 1``, 12) at every
+            step; ``metrics`` ``steps_to_ls``, ``steps_to_ls_every_step``.
         """
         c, y = problem.design()
         rows = cyclic(len(c), self.horizon)
@@ -308,70 +202,22 @@ class KalmanFilter(_Tuning):
 
 
 def direct_field(k: np.ndarray, bp: np.ndarray, attitude: np.ndarray, readings: np.ndarray) -> np.ndarray:
-    """Eq 4 for every reading: ``Be_i = (K A_i)^-1 (B_i - Bp)``.
-
-    Parameters
-    ----------
-    k : numpy.ndarray
-        ``K`` (3, 3).
-    bp : numpy.ndarray
-        ``Bp`` (3,).
-    attitude : numpy.ndarray
-        ``A_i`` (N, 3, 3).
-    readings : numpy.ndarray
-        ``B_i`` (N, 3).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``Be_i`` (N, 3).
-    """
+    """Eq 4 for every reading: ``Be_i = (K A_i)^-1 (B_i - Bp)``."""
     return np.linalg.solve(k @ attitude, (readings - bp)[..., None])[..., 0]
 
 
 def field_errors(estimates: np.ndarray, field: np.ndarray) -> tuple[float, float]:
-    """How far field estimates are from the true field.
-
-    Parameters
-    ----------
-    estimates : numpy.ndarray
-        Estimates of ``Be`` (..., 3).
-    field : numpy.ndarray
-        The true ``Be`` (3,).
-
-    Returns
-    -------
-    tuple of float
-        The RMS error over all components (nT) and the largest component error relative to ``|Be|``.
-    """
+    """The RMS error (nT) of field estimates and their largest component error relative to ``|Be|``."""
     err = np.asarray(estimates) - field
     return float(np.sqrt(np.mean(err**2))), float(np.max(np.abs(err)) / np.linalg.norm(field))
 
 
 class FieldKalmanFilter:
-    """Recompute ``Be`` from a fitted ``K``, ``Bp`` (Yan & Zhou Fig 4): an analysis step on a fitted
-    result, not an estimator (``+analysis=field_kalman`` on the command line or in an artifact).
-
-    State ``Be`` (3 x 1), ``H(n) = K A(n)``, ``y(n) = B(n) - Bp``, ``Be(0) = 0``,
-    ``P(0) = p0 E``, ``Q = q E``; readings reused cyclically. Called as
-    ``step(problem, result) -> result`` after the run's estimator: ``K``, ``Bp`` are the
-    estimate ``result.x`` (e.g. ``kf``'s, or the paper's through ``yan2022_paper_mockup``).
-
-    Parameters
-    ----------
-    name : str
-        Config name.
-    p0, q, sigma2 : float
-        As :class:`KalmanFilter` (``P(0)``, ``Q`` in nT²).
-    n_steps : int
-        Filter steps.
-    settle : float
-        Fraction of the steps after which the solution counts as converged (the paper's "stable
-        solution after convergence"): errors are measured over the last ``1 - settle``.
-
-    The returned result is ``result`` with ``trace["be"]`` (``Be`` at every step) and ``metrics``
-    ``be_rms``, ``be_max_rel`` (filter) and ``be_direct_rms``, ``be_direct_max_rel`` (eq 4 on
-    every reading), with ``Be1..3`` and ``truth_Be1..3`` added.
+    """The analysis step ``field_kalman`` (not an estimator), ``step(problem, result) -> result``: ``Be`` recomputed
+    from the fitted ``K``, ``Bp`` of ``result.x`` (Yan & Zhou Fig 4), state ``Be``, ``H(n) = K A(n)``,
+    ``y(n) = B(n) - Bp``, ``Be(0) = 0``, ``P(0) = p0 E``, ``Q = q E``, readings reused cyclically.
+    Errors are measured after the fraction ``settle`` of the steps (the paper's "stable solution after
+    convergence"): ``trace["be"]``, metrics ``be_rms``, ``be_max_rel`` and ``be_direct_*`` (eq 4), ``Be1..3``.
     """
 
     references = "Yan & Zhou 2022, sec 3.2, Fig 4"
@@ -384,20 +230,7 @@ class FieldKalmanFilter:
         self.settle = min(check_nonnegative(settle, "analysis.settle"), 1.0)
 
     def __call__(self, problem, result: FitResult) -> FitResult:
-        """Recompute ``Be`` from ``result``'s ``K``, ``Bp`` (the class docstring).
-
-        Parameters
-        ----------
-        problem : magexp.problems.base.LinearProblem
-            The ship problem whose dataset holds the attitudes and readings.
-        result : FitResult
-            The run's estimate.
-
-        Returns
-        -------
-        FitResult
-            ``result`` with the field estimates added to its ``trace`` and ``metrics``.
-        """
+        """Recompute ``Be`` from ``result``'s ``K``, ``Bp`` (the class docstring)."""
         check_applies(self, problem)
         w, bp = (a[0] for a in problem.unpack(result.x))  # B = K u + Bp  <=>  u = K^-1 (B - Bp)
         k = np.linalg.inv(w)

@@ -16,17 +16,20 @@ from magexp.estimators.result import FitResult
 
 
 def _result(problem, x: np.ndarray, message: str) -> FitResult:
+    """The :class:`FitResult` of a closed-form solution ``x``: one evaluation, one iteration."""
     fun = problem.cost_direct(x)
     return FitResult(x=x, fun=fun, nit=1, nfev=1, history=np.array([fun]), history_nfev=np.array([1]), message=message)
 
 
 class LeastSquares:
-    """Ordinary linear least squares through ``problem.least_squares()``.
+    """Ordinary linear least squares through ``problem.least_squares()``: ``x̂ = argmin_x ||C x - Y||_F`` over
+    the rows ``C_i = [u_i^T, 1]``, ``Y_i = B_i^T`` of the forward model ``B_i = S u_i + b`` (Yuan 2018 eq 1;
+    Yan & Zhou 2022 eqs 1 and 6, the solution their filter converges to when the readings are reused).
 
     Parameters
     ----------
     name : str
-        Config name (``ls``).
+        As in :class:`~magexp.estimators.base.Estimator` (``ls``).
 
     References
     ----------
@@ -65,11 +68,16 @@ class FixedParameters:
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     x : list of float
         The parameter vector, in the problem's order (``problem.parameter_names()``).
     source : str
         Where the numbers come from (shown in the result message).
+
+    Raises
+    ------
+    MagexpError
+        When ``x`` is not a list of finite numbers.
     """
 
     references = ""  # an instance's: its source
@@ -92,12 +100,17 @@ class FixedParameters:
         Parameters
         ----------
         problem, rng, callback
-            As :meth:`magexp.estimators.base.Estimator.fit`: its ``n_params`` must be the length of ``x``.
+            As :meth:`magexp.estimators.base.Estimator.fit` (one evaluation, nothing drawn, no iteration).
 
         Returns
         -------
         FitResult
             One evaluation, ``x``.
+
+        Raises
+        ------
+        MagexpError
+            When the problem's ``n_params`` is not the length of ``x``.
         """
         if self.x.size != problem.n_params:
             raise MagexpError(f"estimator.x has {self.x.size} values: the problem needs {problem.n_params}")

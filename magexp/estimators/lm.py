@@ -1,37 +1,23 @@
 """Levenberg-Marquardt refinement of the problem's residuals (``scipy.optimize.least_squares``).
 
-Minimises ``sum(problem.residuals(theta)**2)`` with MINPACK's LM, started from the problem's
-closed-form estimate (or the ellipsoid fit, or the centre of the search box). For the scalar
-problem the residuals are ``|W(r_i - o)| - B_a``: the maximum-likelihood fit under Gaussian noise.
-
 **The rotation gauge of a scalar objective.** ``|Q W (r - o)| = |W (r - o)|`` for every orthogonal
-``Q`` (Ding 2024, eq 17 sees only ``W^T W`` and ``o``), so over the 12 entries of ``[vec W, o]``
-the residuals have an exact 3-dimensional valley and their Jacobian has three exactly dependent
-columns. MINPACK's pivoted QR then works on an exactly rank-deficient matrix, and where along the
-valley it ends can depend on more than the data: with bit-identical residuals at every evaluation,
-its iterates have been seen to differ in the last bits with the contents of memory left by earlier
-work in the process, and the difference to grow along the valley to the 3rd-4th significant digit of
-``W`` (and of ``o`` when the data also leave the offset weakly determined). On a total-field problem this
-estimator therefore fixes the gauge (``gauge: symmetric``, the default): it fits the 9 parameters
+``Q`` (Ding 2024 eq 17 sees only ``W^T W`` and ``o``), so over ``[vec W, o]`` the residuals have an
+exact 3-dimensional valley and a Jacobian with three dependent columns. MINPACK's pivoted QR on that
+rank-deficient matrix can end anywhere along the valley: with bit-identical residuals its iterates
+have been seen to differ with the memory left by earlier work in the process, up to the 3rd-4th digit
+of ``W``. On a total-field problem this estimator therefore fixes the gauge (``gauge: symmetric``,
+the default) and fits the 9 parameters ``q`` of :mod:`magexp.estimators.reduced` (a symmetric
+matrix part ``M = M^T`` of the problem's parameters, and ``o``), whose Jacobian has full rank
+wherever the data determine ``W^T W`` and ``o``. The result is the polar factor ``P = (W^T W)^{1/2}``
+of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form ``magexp calibrate``
+reports): the same numbers in every process (``tests/test_determinism.py``).
+``gauge: free`` fits all 12 parameters, kept to compare.
 
-.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad M = M^T
-
-(``M`` the matrix part of the problem's parameters: ``W``, or ``S = W^{-1}`` in the forward form;
-:mod:`magexp.estimators.reduced`), whose Jacobian has full rank wherever the data determine
-``W^T W`` and ``o``. A symmetric positive-definite ``W`` is the polar factor ``P = (W^T W)^{1/2}``
-of every ``W = Q P`` (:func:`magexp.core.identifiability.canonical`, the form ``magexp calibrate`` reports),
-so the fit returns that unique member of the valley: the same numbers in every process, and
-parameters (``S_ij``) that mean the same thing in every run. ``gauge: free`` fits all 12
-parameters as before (kept to compare; ``tests/test_determinism.py`` churns the memory of a fresh
-process and checks that the gauge-fixed fit gives the same bits through it).
-
-**Its path is a diagnostic.** ``xtol = ftol = gtol = 1e-12`` are met where the steps and reductions
-are at round-off level, so on another processor (numpy's SIMD loops, BLAS kernels, numba target) the
-test is met an iteration earlier or later: ``nit``/``nfev`` move by one Jacobian (``p + 1``
-evaluations: 40 vs 53 on Yuan's vector problem) while the fit agrees to its 6th digit. ``magexp verify``
-compares them as path diagnostics (:data:`magexp.artifacts.compare.PATH_DIAGNOSTICS`). A fit the data
-leave undetermined (``real_xio_fusion``: offset standard error 4 800 of offsets 25 000) walks its flat
-valley until the evaluation budget, and where it stops moves with the round-off (2e-3 relative measured).
+**Its path is a diagnostic.** The default tolerances are met at round-off level, so on another
+processor the test is met an iteration earlier or later: ``nit``/``nfev`` move by one Jacobian while
+the fit agrees to its 6th digit, and ``magexp verify`` compares them as path diagnostics
+(:data:`magexp.artifacts.compare.PATH_DIAGNOSTICS`). A fit the data leave undetermined walks its flat
+valley to the evaluation budget, and where it stops moves with the round-off.
 """
 
 from __future__ import annotations
@@ -54,35 +40,37 @@ SOLVERS = ("minpack", "numpy")
 
 
 class LevenbergMarquardt:
-    """Least-squares refinement.
+    """Least-squares refinement: ``θ* = argmin_θ Σ_i r_i(θ)²`` over the problem's residuals.
+
+    On the scalar problem ``r_i = |W(B_i - o)| - B_a`` (Ding 2024 eq 17's RMS, minimised in the gauge of
+    the module docstring); on the vector problem the components of ``C_i H_i - W(B_i - o)`` (Yuan 2018
+    eq 8's terms, squared).
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     start : str
-        ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the
-        linear least-squares fit of the vector problem), else the ellipsoid fit (scalar objective),
-        else the centre of the search box; ``ellipsoid``: the ellipsoid fit, else the centre;
-        ``centre``.
+        ``problem`` (default): the problem's own closed-form ``initial_estimate()`` (e.g. the linear
+        least-squares fit of the vector problem), else the ellipsoid fit, else the centre of the search
+        box; ``ellipsoid``: the ellipsoid fit, else the centre; ``centre``.
     max_nfev : int
         Cap on residual evaluations.
     tol : float
         ``xtol = ftol = gtol`` of ``least_squares``, in (machine epsilon, 1).
     gauge : str
-        On a total-field (scalar) problem, ``symmetric`` (default) fits the 9 parameters of a
-        symmetric matrix part and returns the polar factor (module docstring); ``free`` fits all 12
-        (its ``W`` carries an arbitrary rotation). Other problems always fit all 12.
+        On a total-field problem, ``symmetric`` (default) fits the 9 parameters of a symmetric matrix
+        part and returns the polar factor (module docstring); ``free`` fits all 12 (its ``W`` carries an
+        arbitrary rotation). Other problems always fit all 12.
     jacobian : str
-        ``2-point`` (default): scipy's forward differences, one residual evaluation per
-        parameter; ``stacked``: the same forward differences (step ``sqrt(eps) max(1, |x_i|)``) from
-        one call of the problem's ``residual_swarm`` on the ``p + 1`` points stacked (:func:`stacked_jacobian`),
-        where the problem has one; several times faster where one evaluation costs more in numpy's
-        per-call overhead than in arithmetic (the gyro-aided problem's prefix scan).
+        ``2-point`` (default): scipy's forward differences, one residual evaluation per parameter;
+        ``stacked``: the same differences from one call of the problem's ``residual_swarm`` on the
+        ``p + 1`` points (:func:`magexp.core.marquardt.stacked_jacobian`), where it has one: faster where
+        numpy's per-call overhead dominates an evaluation (the gyro-aided problem's prefix scan).
     solver : str
-        ``minpack`` (default): ``scipy.optimize.least_squares``; ``numpy``: :func:`magexp.core.marquardt.minimise_numpy`
-        (no scipy import: 0.45-0.5 CPU-s saved; it needs ``jacobian: stacked`` and a problem with ``residual_swarm``;
-        the callback is not called).
+        ``minpack`` (default): ``scipy.optimize.least_squares``; ``numpy``:
+        :func:`magexp.core.marquardt.minimise_numpy` (no scipy import; it needs ``jacobian: stacked`` and a
+        problem with ``residual_swarm``; the callback is not called).
 
     References
     ----------
@@ -102,6 +90,7 @@ class LevenbergMarquardt:
         check(gauge in GAUGES, f"estimator.gauge={gauge!r} is not allowed: choose one of {', '.join(GAUGES)}")
         check(jacobian in JACOBIANS,
               f"estimator.jacobian={jacobian!r} is not allowed: choose one of {', '.join(JACOBIANS)}")
+        # solver numpy: no scipy import, measured 0.45-0.5 CPU-s saved per process
         check(solver in SOLVERS, f"estimator.solver={solver!r} is not allowed: choose one of {', '.join(SOLVERS)}")
         self.jacobian = jacobian
         self.solver = solver
@@ -139,13 +128,11 @@ class LevenbergMarquardt:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its ``residuals`` (and ``residual_swarm`` for ``jacobian: stacked``).
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, best x, best RMS)`` after each residual evaluation ``k``; a true return stops
-            it (the best point so far is returned).
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its ``residuals`` (and
+            ``residual_swarm`` for ``jacobian: stacked``). ``rng``: unused (the fit draws nothing).
+            ``callback``: ``callback(k, best x, best RMS)`` after each residual evaluation ``k`` (a stop
+            returns the best point so far).
 
         Returns
         -------
@@ -200,18 +187,22 @@ class LevenbergMarquardt:
         Parameters
         ----------
         problem : magexp.problems.base.Problem
+            The problem fitted: ``fun`` is its ``cost_direct(x)``.
         x : numpy.ndarray
-            The solution; refused (one line) when not finite.
-        status : int
-            scipy's status (> 0: success).
-        message : str
-            scipy's message.
+            The solution.
+        status, message : int, str
+            scipy's status (> 0: success) and message.
         history : numpy.ndarray
             The best value after every evaluation.
 
         Returns
         -------
         FitResult
+
+        Raises
+        ------
+        MagexpError
+            When ``x`` is not finite (lm diverged).
         """
         check(np.all(np.isfinite(x)), "lm diverged: the residuals became non-finite")
         return FitResult(x=x, fun=problem.cost_direct(x), nit=len(history), nfev=len(history),
@@ -220,28 +211,10 @@ class LevenbergMarquardt:
 
 
 def offset_check(problem, q: np.ndarray) -> dict:
-    """Whether the data determine the offset of the gauge-fixed fit ``q`` of a total-field problem.
-
-    ``offset_standard_error``: ``sqrt(tr Cov(o))`` of the fit's own Gauss-Newton covariance
-    ``σ² (J^T J)^{-1}`` over ``q`` (:func:`magexp.core.identifiability.identifiability`: ``σ²`` from the
-    residuals, ``J`` by central differences, undetermined directions infinite). Readings on two
-    planar rings (turns about two axes only) lie on a one-parameter family of ellipsoids, so a
-    total-field fit cannot place the centre and this error exceeds the size of the data.
-    ``offset_determined``: it is below the RMS distance of the readings from their centroid
-    (:func:`magexp.core.ellipsoid.normalise`): the data locate the centre of the readings'
-    ellipsoid to better than the ellipsoid's own size.
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        A total-field problem (its ``residual_stack`` and dataset).
-    q : numpy.ndarray
-        The gauge-fixed fit (9,).
-
-    Returns
-    -------
-    dict
-        ``offset_standard_error`` (float) and ``offset_determined`` (bool).
+    """Whether the data determine the offset of the gauge-fixed fit ``q``: ``offset_standard_error``
+    (``sqrt(tr Cov(o))`` of the Gauss-Newton covariance, :func:`magexp.core.identifiability.identifiability`)
+    and ``offset_determined`` (it is below the readings' RMS distance from their centroid: readings on two
+    planar rings cannot place the centre).
     """
     def fun(qs):  # identifiability evaluates a stack of 2 x 9 perturbed vectors
         return problem.residual_stack(qs, of=lambda q: expand(q)[0])
@@ -254,23 +227,8 @@ def offset_check(problem, q: np.ndarray) -> dict:
 
 
 def polar(problem, x: np.ndarray) -> np.ndarray:
-    """``x`` with its ``W`` replaced by the symmetric positive-definite polar factor
-    ``(W^T W)^{1/2}`` (:func:`magexp.core.identifiability.canonical`): the same total field, no rotation.
-    A symmetric positive-definite matrix part is kept bit for bit (it is already that factor), and so
-    is a singular one (e.g. the centre of a box around zero: no calibration to take the factor of).
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        Its ``unpack`` and ``pack``.
-    x : numpy.ndarray
-        ``(12,)`` parameters.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(12,)`` parameters of the same total field.
-    """
+    """``x`` with its ``W`` replaced by the polar factor ``(W^T W)^{1/2}`` (the same total field, no rotation); an
+    SPD matrix part is kept bit for bit (it is that factor already), and so is a singular one (no factor)."""
     x = np.asarray(x, float)
     mat = x[:9].reshape(3, 3)
     if np.array_equal(mat, mat.T) and np.all(np.linalg.eigvalsh(mat) > 0):
@@ -284,33 +242,9 @@ def polar(problem, x: np.ndarray) -> np.ndarray:
 
 def minimise_residuals(residuals, x0, *, tol: float = 1e-15, max_nfev: int = 2000, callback=None, measure=None,
                        jac=None):
-    """Levenberg-Marquardt (MINPACK through ``scipy.optimize.least_squares``) on ``residuals``.
-
-    Shared by every least-squares refinement.
-
-    Parameters
-    ----------
-    residuals : callable
-        ``residuals(theta) -> (m,)``.
-    x0 : array_like
-        The start.
-    tol : float
-        ``xtol = ftol = gtol``.
-    max_nfev : int
-        Cap on evaluations.
-    callback : callable, optional
-        ``callback(k, best x, best value)`` after each evaluation; a true return stops the fit.
-    measure : callable, optional
-        ``measure(theta)``, the value recorded (default: the RMS of the residuals; an estimator
-        minimising a weighted criterion reports its problem's objective).
-    jac : callable, optional
-        ``theta -> (m, p)`` Jacobian (default: scipy's forward differences).
-
-    Returns
-    -------
-    tuple
-        ``(x, status, message, history)``: scipy's solution (the best ``x`` evaluated when the
-        callback stopped it: status ``-2``), its message, and the best value after every evaluation.
+    """``(x, status, message, history)`` of Levenberg-Marquardt (MINPACK, ``scipy.optimize.least_squares``) on
+    ``residuals``, every least-squares refinement's: ``history`` the best ``measure`` (default the RMS) after each
+    evaluation; a stop by ``callback`` returns the best ``x`` evaluated with status ``-2``.
     """
     # lazy: scipy.optimize, measured 0.40 s CPU to import (min of 5, after numpy); every command imports this module
     # to register its typed schema (magexp.run.compose.register_schemas), and only a least-squares run needs it

@@ -1,21 +1,15 @@
-"""The problem's own objective minimised by a local quasi-Newton method (``local``).
+"""The problem's own objective minimised by a local quasi-Newton method (``local``): :class:`LocalMinimiser`.
 
-``scipy.optimize.minimize(method="BFGS")`` (Broyden-Fletcher-Goldfarb-Shanno; Nocedal & Wright,
-*Numerical Optimization*, ch. 6) on ``problem.cost`` with finite-difference gradients, from the
-closed-form start of :class:`~magexp.estimators.lm.LevenbergMarquardt` (the vector problem's
-linear least squares, else the ellipsoid fit). Where that start lies in the basin of the global
-minimum (every simulated scenario of magexp with full rotations), this is the objective
-minimised *exactly*, whatever it is: eq 8's sum of norms, its least-squares twin, the scalar RMS.
-It separates the effect of an objective from that of the optimiser that minimises it
-(``experiments/benchmark/benchmark_objective.yaml``).
+Where the closed-form start lies in the basin of the global minimum (every simulated scenario of
+magexp with full rotations), this is the objective minimised *exactly*, whatever it is: eq 8's sum
+of norms, its least-squares twin, the scalar RMS. It separates the effect of an objective from that
+of the optimiser that minimises it (``experiments/benchmark/benchmark_objective.yaml``).
 
 **Where it stops.** With finite-difference gradients on these scaled variables the gradient test
-(``gtol``) is not reached (measured: a largest gradient component of 34 at the end on eq 8, where the
-minimum is a kink of the sum of norms): BFGS ends when its line search can no longer decrease the cost
-at double precision ("precision loss"), after a number of evaluations that depends on the round-off
-(791 vs 2131 between two processors, ``nit``/``nfev``: path diagnostics of ``magexp verify``), at a
-point whose cost agrees to ~1e-7 relative and whose parameters agree to ~1e-6 of their size (an error
-metric, ``|b - b_true|`` at 0.1 of ``|b|`` = 40, so to ~1e-3 of itself).
+(``gtol``) is not reached (on eq 8 the minimum is a kink of the sum of norms): BFGS ends when its line
+search can no longer decrease the cost at double precision ("precision loss"), after a number of
+evaluations that depends on the round-off (``nit``/``nfev``: path diagnostics of ``magexp verify``), at
+a point whose cost and parameters agree between processors far below the error metrics' resolution.
 """
 
 from __future__ import annotations
@@ -29,12 +23,16 @@ from magexp.estimators.result import FitResult
 
 
 class LocalMinimiser:
-    """BFGS on ``problem.cost`` from the closed-form start.
+    """BFGS on ``problem.cost`` from the closed-form start (``scipy.optimize.minimize(method="BFGS")``).
+
+    Minimises the problem's own objective (Ding 2024 eq 17, Yuan 2018 eq 8 or its least-squares twin)
+    with finite-difference gradients, from the start of :class:`~magexp.estimators.lm.LevenbergMarquardt`
+    (the vector problem's linear least squares, else the ellipsoid fit).
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     start : str
         As :class:`~magexp.estimators.lm.LevenbergMarquardt` (``problem``, ``ellipsoid``, ``centre``).
     max_iter : int
@@ -64,12 +62,10 @@ class LocalMinimiser:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            Its ``cost`` and box.
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, best x, best cost)`` after every cost evaluation ``k``; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: its ``cost`` and box. ``rng``:
+            unused (the fit draws nothing). ``callback``: ``callback(k, best x, best cost)`` after every
+            cost evaluation ``k``.
 
         Returns
         -------

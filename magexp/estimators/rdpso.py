@@ -1,20 +1,6 @@
-"""Random drift PSO (RDPSO) velocity rule, Yuan 2018 eqs 10-16 (after Sun et al.'s RDPSO).
-
-A particle's velocity is a random thermal motion plus a directed drift:
-
-.. math::
-
-    v_{ij} &= \\alpha\\,\\lvert M_j - x_{ij}\\rvert\\,\\varphi_{ij}
-             + r_1 c_1 (p_{ij} - x_{ij}) + r_2 c_2 (g_j - x_{ij}) \\\\
-    \\alpha &= 0.3 + 0.6 / (1 + 4 k / k_{max}) \\quad\\text{(eq 12, as printed)} \\\\
-    M_j &= \\frac1m \\sum_i p_{ij} \\quad\\text{(mean personal best, eq 13)} \\\\
-    \\varphi_{ij} &= \\pm \\ln(1/u_{ij}),\\ u \\sim U(0, 1],\\ + \\text{ if } s_{ij} > 0.5 \\quad\\text{(eq 14)}
-
-with ``r_1, r_2, s ~ U(0, 1)`` per particle and dimension; the position moves by
-the new velocity (eq 17). The swarm engine clamps velocity and position.
-
-References: Yuan, Wang & Chen (2018), Navigation Positioning & Timing 5(6):92-98;
-Sun, Wu, Palade et al. (2015), *Random drift particle swarm optimization algorithm*.
+"""Random drift PSO (RDPSO) velocity rule, Yuan 2018 eqs 10-17 (after Sun et al.'s RDPSO): a
+particle's velocity is a random thermal motion plus a directed drift (:class:`RandomDriftVelocity`);
+the swarm engine clamps velocity and position.
 """
 
 from __future__ import annotations
@@ -26,64 +12,26 @@ from magexp.estimators.velocity import VelocityRule
 
 
 def random_drift(i, j, x, v, pbest, g, mean, r, c):
-    """RDPSO velocity (eqs 14, 16): the kernel of :class:`RandomDriftVelocity`.
-
-    .. math:: v_{ij} = \\alpha \\lvert M_j - x_{ij}\\rvert \\varphi_{ij}
-              + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij}),\\qquad
-              \\varphi_{ij} = \\pm \\ln(1/u_{ij}),\\ + \\text{ where } s_{ij} > 0.5
-
-    Parameters
-    ----------
-    i, j : int or slice
-        Particle and dimension (:data:`magexp.estimators.velocity.ALL` for every one).
-    x, v, pbest : ndarray, shape (n, d)
-        Positions, velocities (unused: no inertia) and personal bests.
-    g : int
-        Index of the global best.
-    mean : ndarray, shape (d,)
-        ``M``, the mean personal best (eq 13).
-    r : ndarray, shape (4, n, d)
-        ``r1, r2, s`` and ``ln(1/u)`` (:func:`drift_factors`).
-    c : sequence of 3 floats
-        ``α, c1, c2``.
-
-    Returns
-    -------
-    float or ndarray
-        The new velocity before the clamp.
-    """
+    """RDPSO velocity (Yuan 2018 eq 16): the kernel of :class:`RandomDriftVelocity`."""
     phi = (2.0 * (r[2, i, j] > 0.5) - 1.0) * r[3, i, j]  # ±1 times ln(1/u): exact, on a number or an array
     return c[0] * np.abs(mean[j] - x[i, j]) * phi + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) \
         + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j])
 
 
 def drift_factors(r: np.ndarray) -> np.ndarray:
-    """The random factors of :func:`random_drift` from its draws (eq 14).
-
-    Parameters
-    ----------
-    r : ndarray, shape (m, 4, n, d)
-        ``U(0, 1)`` draws of ``m`` iterations: ``r1, r2, s`` and ``1 - u``.
-
-    Returns
-    -------
-    ndarray, shape (m, 4, n, d)
-        ``r`` with ``r[:, 3]`` replaced, in place, by ``ln(1/u)``, ``u = 1 - r[:, 3]`` in
-        ``(0, 1]`` (finite): numpy's ``log`` on the whole block, for both paths.
-    """
+    """The random factors of :func:`random_drift` from its draws (eq 14)."""
     np.log(1.0 / (1.0 - r[:, 3]), out=r[:, 3])
     return r
 
 
 class ThermalCoefficient:
-    """``α(k) = base + span / (1 + rate k / k_max)`` (eq 12 with base 0.3, span 0.6, rate 4).
-
-    Decreases from ``base + span`` (0.9) at ``k = 0`` to ``base + span / (1 + rate)`` (0.42).
+    """``α(k) = base + span / (1 + rate k / k_max)`` (Yuan 2018 eq 12), from ``base + span`` at ``k = 0``
+    down to ``base + span / (1 + rate)``.
 
     Parameters
     ----------
     base, span, rate : float
-        The constants of eq 12, >= 0 (Yuan 2018 eq 12 as printed: 0.3, 0.6, 4).
+        The constants of eq 12, >= 0 (as printed: 0.3, 0.6, 4).
     """
 
     def __init__(self, base: float = 0.3, span: float = 0.6, rate: float = 4.0):
@@ -110,6 +58,17 @@ class ThermalCoefficient:
 class RandomDriftVelocity(VelocityRule):
     """The RDPSO velocity rule: the kernel :func:`random_drift` on the draws ``r1, r2, s, u``.
 
+    .. math::
+
+        v_{ij} &= \\alpha\\,\\lvert M_j - x_{ij}\\rvert\\,\\varphi_{ij}
+                 + r_1 c_1 (p_{ij} - x_{ij}) + r_2 c_2 (g_j - x_{ij}) \\quad\\text{(eq 16)} \\\\
+        \\alpha &= 0.3 + 0.6 / (1 + 4 k / k_{max}) \\quad\\text{(eq 12, as printed)} \\\\
+        M_j &= \\frac1m \\sum_i p_{ij} \\quad\\text{(mean personal best, eq 13)} \\\\
+        \\varphi_{ij} &= \\pm \\ln(1/u_{ij}),\\ u \\sim U(0, 1],\\ + \\text{ if } s_{ij} > 0.5 \\quad\\text{(eq 14)}
+
+    with ``r_1, r_2, s ~ U(0, 1)`` per particle and dimension; the position moves by the new velocity
+    (eq 17).
+
     Parameters
     ----------
     c1, c2 : float
@@ -119,8 +78,8 @@ class RandomDriftVelocity(VelocityRule):
 
     References
     ----------
-    Yuan, Wang & Chen (2018), eqs 10-17; Sun, Wu, Palade et al. (2015), Random drift particle swarm
-    optimization algorithm.
+    Yuan, Wang & Chen (2018), Navigation Positioning & Timing 5(6):92-98, eqs 10-17; Sun, Wu, Palade
+    et al. (2015), Random drift particle swarm optimization algorithm.
     """
 
     kernel = staticmethod(random_drift)

@@ -6,14 +6,12 @@ with the body frame, reducing the 12 unknowns to 9" (their refs [12, 13]); its T
 is exactly symmetric (``S12 = S21``, ``S13 = S31``, ``S23 = S32``). :class:`SymmetricSwarm` runs
 the shared swarm engine over
 
-.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad
-          M = M^T
+.. math:: \\mathbf q = [M_{11}, M_{12}, M_{13}, M_{22}, M_{23}, M_{33}, \\mathbf o],\\qquad M = M^T
 
-(:func:`magexp.problems.symmetric.expand`; ``M`` the matrix part of the problem's own parameters:
-Yuan's ``S`` in the forward form, ``W`` in the inverse one) with the problem's total-field cost of
-the expanded 12-vector. The box of each ``q`` entry is the box of its entry of the 12-vector. A symmetric ``W`` is the unique
-symmetric root of ``W^T W`` (what a scalar fit identifies), so on a scalar problem the rotation
-valley is gone; a non-symmetric truth (Yuan's ``S``) cannot be reached.
+(:func:`magexp.problems.symmetric.expand`; ``M`` the matrix part of the problem's parameters, Yuan's
+``S`` or ``W``; each ``q`` entry boxed as its entry of the 12-vector). A symmetric ``W`` is the unique
+symmetric root of ``W^T W`` (what a scalar fit identifies), so the rotation valley is gone; a
+non-symmetric truth (Yuan's ``S``) cannot be reached.
 """
 
 from __future__ import annotations
@@ -25,13 +23,7 @@ from magexp.problems.symmetric import UPPER, expand
 
 
 class SymmetricView:
-    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector).
-
-    Parameters
-    ----------
-    problem : magexp.problems.base.Problem
-        A 12-parameter problem ``[vec(M), o]``.
-    """
+    """The problem seen through the 9 parameters ``q`` (box and cost of the expanded vector)."""
 
     def __init__(self, problem):
         self.problem = problem
@@ -40,18 +32,7 @@ class SymmetricView:
         self.n_params = 9
 
     def cost(self, q: np.ndarray) -> np.ndarray:
-        """The problem's cost of the expanded vectors.
-
-        Parameters
-        ----------
-        q : numpy.ndarray
-            ``(n, 9)`` vectors.
-
-        Returns
-        -------
-        numpy.ndarray
-            ``(n,)`` costs.
-        """
+        """The problem's cost of the expanded vectors."""
         return self.problem.cost(expand(q))
 
 
@@ -77,12 +58,10 @@ class SymmetricSwarm(SwarmOptimizer):
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            A total-field problem of 12 parameters ``[vec(M), o]``.
-        rng : numpy.random.Generator
-            The run's estimator stream.
-        callback : callable, optional
-            ``callback(t, x, fun)`` after every iteration, ``x`` expanded to 12; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a total-field problem of 12
+            parameters ``[vec(M), o]``. ``rng``: the run's estimator stream. ``callback``: ``callback(t, x,
+            fun)`` after every iteration, ``x`` expanded to 12.
 
         Returns
         -------

@@ -13,15 +13,26 @@ class FitResult:
 
     Attributes
     ----------
-    x : best parameter vector.
-    fun : objective at ``x``.
-    nit : iterations (swarm iterations, filter steps, or least-squares evaluations).
-    nfev : objective evaluations (one particle = one evaluation).
-    history : best objective after each iteration, ``history[0]`` before the first.
-    history_nfev : evaluations spent when each ``history`` entry was recorded.
-    trace : optional per-iteration arrays (e.g. a filter's state at every step).
-    metrics : optional estimator-specific scalar outcomes, added to the run's metrics.
-    success, message : as in scipy.
+    x : numpy.ndarray, shape (p,)
+        The best parameter vector, in the problem's parameters (``problem.parameter_names()``).
+    fun : float
+        The problem's objective at ``x`` by its textbook formula (``problem.cost_direct(x)``).
+    nit : int
+        Iterations: swarm iterations, filter steps, or least-squares evaluations.
+    nfev : int
+        Objective evaluations (one particle = one evaluation).
+    history : numpy.ndarray
+        The best objective after each iteration, ``history[0]`` before the first.
+    history_nfev : numpy.ndarray
+        The evaluations spent when each ``history`` entry was recorded.
+    trace : dict of str to numpy.ndarray
+        Optional per-iteration arrays (e.g. a filter's state at every step).
+    metrics : dict of str to float
+        Optional estimator-specific scalar outcomes, added to the run's metrics.
+    success : bool
+        Whether the estimator met its own criterion (as in scipy).
+    message : str
+        Why it stopped (as in scipy).
     """
 
     x: np.ndarray

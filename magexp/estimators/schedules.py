@@ -13,28 +13,14 @@ from magexp.errors import MagexpError
 
 
 def values(schedule, t: np.ndarray, t_max: int) -> np.ndarray:
-    """``schedule`` at every iteration of ``t`` in one vectorised call.
-
-    Parameters
-    ----------
-    schedule : callable or float
-        A schedule ``s(t, t_max)`` or a constant number.
-    t : ndarray of int
-        Iteration numbers.
-    t_max : int
-        Number of iterations.
-
-    Returns
-    -------
-    ndarray, shape t.shape
-        The same floats as ``schedule(t_k, t_max)`` one by one (the same IEEE operations, each
-        exact ``int -> float`` conversion included).
-    """
+    """``schedule`` at every iteration of ``t`` in one vectorised call: the same floats as one call per ``t_k``
+    (the same IEEE operations, each exact ``int -> float`` conversion included)."""
     out = schedule(t, t_max) if callable(schedule) else schedule
     return out if isinstance(out, np.ndarray) else np.full(t.shape, out, float)  # a constant: one float
 
 
 def _number(value, name: str) -> float:
+    """``value`` as a finite float, else one line naming ``name``: a schedule refuses what is not a number."""
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -45,29 +31,13 @@ def _number(value, name: str) -> float:
 
 
 class Constant:
-    """A fixed coefficient (traditional PSO).
-
-    Parameters
-    ----------
-    value : float
-        The coefficient, finite.
-    """
+    """A fixed coefficient (traditional PSO)."""
 
     def __init__(self, value: float):
         self.value = _number(value, "schedule value")
 
     def __call__(self, t: int, t_max: int) -> float:
-        """The coefficient, whatever the iteration.
-
-        Parameters
-        ----------
-        t, t_max : int
-            The iteration and the last one (unused).
-
-        Returns
-        -------
-        float
-        """
+        """The coefficient, whatever the iteration."""
         return self.value
 
 

@@ -1,31 +1,17 @@
-"""The one swarm engine behind every PSO variant in magexp.
+"""The one swarm engine behind every PSO variant in magexp (:class:`SwarmOptimizer`, whose docstring has
+the iteration's equation).
 
 Variants differ only by small strategy pieces passed in: the velocity rule
 (:mod:`magexp.estimators.velocity`: one kernel per rule), its coefficient schedules
-(:mod:`magexp.estimators.schedules`) and the initialiser
-(:mod:`magexp.estimators.initialisers`). One iteration is
-
-.. math::
-
-    v &\\leftarrow \\mathrm{clip}(\\mathrm{rule}(x, v, p, g, t), -v_{max}, v_{max}) \\\\
-    (x, v) &\\leftarrow \\mathrm{boundary}(x + v, v, l, u)
-
-(the new velocity moves the particle: Ding 2024 eq 11 prints ``v^t``, a typo; the boundary
-handling, :mod:`magexp.estimators.boundaries`, is ``clip`` unless configured),
-followed by the personal-best and global-best updates. The whole swarm is
+(:mod:`magexp.estimators.schedules`), the initialiser (:mod:`magexp.estimators.initialisers`) and the
+boundary handling (:mod:`magexp.estimators.boundaries`, ``clip`` unless configured). The whole swarm is
 evaluated with one call of ``problem.cost``.
 
-Each step (the best updates, then the next iteration's move) runs one of two ways, from the same
-kernel: in numpy (:func:`numpy_step`, the kernel on whole arrays) or, with numba
-(:func:`compiled`), in one compiled call per iteration (:func:`magexp.estimators._compiled.engine`,
-the kernel element by element), on random numbers drawn several iterations per call
-(:func:`_draw_blocks`; the same stream either way): the same numbers, bit for bit. numpy runs when
-``MAGEXP_NUMBA=0`` or numba is missing.
-
-When, besides, the problem offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`),
-the boundary is ``clip`` and no callback watches the iterations, the cost joins the compiled call
-and one call runs a whole block of draws' iterations (:meth:`SwarmOptimizer._run`): no Python, no
-dispatch and no argument conversion per iteration, and again the same numbers, bit for bit.
+Each step runs the kernel in numpy (:func:`numpy_step`) or, with numba (:func:`compiled`), in one
+compiled call per iteration (:mod:`magexp.estimators._compiled`), on random numbers drawn several
+iterations per call (:func:`_draw_blocks`): the same numbers either way, bit for bit. When the problem
+also offers a compiled cost (:func:`magexp.problems.base.swarm_kernel`), the boundary is ``clip`` and no
+callback watches, one compiled call runs a whole block of iterations (:meth:`SwarmOptimizer._run`).
 """
 
 from __future__ import annotations
@@ -50,68 +36,15 @@ _NO_MOVE = (False, np.empty((0, 0, 0)), np.zeros(3))  # the step after the last 
 
 
 def _draw_blocks(rng: np.random.Generator, rule, shape: tuple, t_max: int, block: int):
-    """The random factors of iterations ``1..t_max``, drawn ``block`` iterations per call.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The run's generator.
-    rule : VelocityRule
-        Draws ``rule.n_draws`` numbers per particle and dimension, turned into its kernel's
-        factors by ``rule.factors``.
-    shape : tuple
-        ``(n, d)``.
-    t_max, block : int
-        Iterations, and iterations per draw.
-
-    Yields
-    ------
-    ndarray, shape (k, ·, n, d)
-        The factors of ``k <= block`` iterations: the same stream as one ``rng.random`` per
-        iteration (a generator fills an array in order), with less overhead per call. Every block
-        is drawn into the same buffer (no fresh pages per block): a block is used up before the
-        next is drawn.
-    """
+    """The random factors of iterations ``1..t_max``, drawn ``block`` iterations per call."""
     buffer = np.empty((min(block, t_max), rule.n_draws, *shape))
     for start in range(1, t_max + 1, block):
         yield rule.factors(rng.random(out=buffer[: min(block, t_max + 1 - start)]))
 
 
 def numpy_step(kernel, needs_mean, x, v, pbest, pcost, cost, moves, r, c, limits, clip_box) -> int:
-    """One step in numpy: the best updates with ``cost``, then, if ``moves``, the next move.
-
-    The numpy twin of the compiled step (:func:`magexp.estimators._compiled.engine`), with the
-    same kernel called once on whole arrays (``i = j =`` :data:`~magexp.estimators.velocity.ALL`).
-
-    Parameters
-    ----------
-    kernel : function
-        The velocity rule's kernel.
-    needs_mean : bool
-        Whether it reads the mean personal best (else it is given None).
-    x, v : ndarray, shape (n, d)
-        Positions and velocities, moved in place: ``v <- min(max(kernel, -v_max), v_max)``,
-        ``x <- x + v``.
-    pbest, pcost : ndarray, shapes (n, d), (n,)
-        Personal bests and their costs, updated in place where ``cost < pcost``.
-    cost : ndarray, shape (n,)
-        The costs of ``x``.
-    moves : bool
-        Whether to move (not after the last iteration).
-    r : ndarray, shape (k, n, d)
-        The kernel's random factors.
-    c : ndarray, shape (3,)
-        Its coefficients.
-    limits : ndarray, shape (3, d)
-        ``v_max``, lower, upper.
-    clip_box : bool
-        Unused: the boundary is applied after the step (``SwarmOptimizer.boundary``).
-
-    Returns
-    -------
-    int
-        The global best's index (before the move).
-    """
+    """One step in numpy (the best updates with ``cost``, then, if ``moves``, the next move): the twin of the
+    compiled step, the same kernel called once on whole arrays (``i = j =`` :data:`~magexp.estimators.velocity.ALL`)."""
     better = cost < pcost
     np.copyto(pbest, x, where=better[:, None])
     np.copyto(pcost, cost, where=better)
@@ -125,41 +58,19 @@ def numpy_step(kernel, needs_mean, x, v, pbest, pcost, cost, moves, r, c, limits
 
 @cache
 def compiled():
-    """The compiled swarm steps, if numba is in use.
-
-    Returns
-    -------
-    module or None
-        :mod:`magexp.estimators._compiled`, or None when numba is unavailable or
-        ``MAGEXP_NUMBA=0`` (the switch of :func:`magexp.problems.kernels.compiled`).
-    """
+    """The compiled swarm steps, if numba is in use."""
     if kernels.compiled() is None:
         return None
-    # lazy: numba, measured 205 ms CPU to import (min of 5, after numpy); this module is imported by every lm run
-    # (magexp.estimators.reduced), which must not pay for it
+    # lazy: _compiled imports numba at its top (measured 205 ms CPU to import, min of 5, after numpy); building a
+    # swarm estimator (pso, ipso, rdpso, pso9) imports this module, and a numpy-only run (MAGEXP_NUMBA=0, no numba)
+    # must neither pay for numba nor fail without it. Reached only when kernels.compiled() has loaded numba already.
     from magexp.estimators import _compiled
 
     return _compiled
 
 
 def check_speed(value, name: str, per: str) -> float:
-    """A velocity limit, refused unless finite and > 0.
-
-    Parameters
-    ----------
-    value : float
-        The configured number.
-    name : str
-        Its key (``estimator.velocity_clamp``), named in the error.
-    per : str
-        What it multiplies (``(upper - lower)``), or ``""``.
-
-    Returns
-    -------
-    float
-        ``value``; a ``v_max`` of 0 (or none) is refused: it leaves the velocity unbounded, and its
-        uniform initial draw ``U(-inf, inf)`` is not a number.
-    """
+    """A velocity limit, refused unless finite and > 0."""
     v = check_nonnegative(value, name)
     check(v > 0, f"{name}={value!r} is not allowed: it must be a number > 0 (v_max = {name.rpartition('.')[2]}"
                  f"{' x ' + per if per else ''}; 0 leaves the velocity unbounded)")
@@ -170,10 +81,19 @@ class SwarmOptimizer:
     """Global-best particle swarm over a box-bounded problem (Kennedy & Eberhart 1995; the engine
     of Ding 2024's PSO and IPSO and of Yuan 2018's RDPSO).
 
+    Every iteration moves each particle by its new velocity (Ding 2024 eqs 10-11, eq 11's ``v^t``
+    read as the new velocity; Yuan 2018 eqs 16-17 for RDPSO), then updates the bests:
+
+    .. math:: v_{ij} \\leftarrow \\mathrm{clip}(\\mathrm{rule}_{ij}, -v_{max}, v_{max}),\\quad
+              x_{ij} \\leftarrow x_{ij} + v_{ij}
+
+    with the velocity rule of ``velocity`` (Ding 2024 eq 10: :class:`~magexp.estimators.velocity.InertiaVelocity`;
+    Yuan 2018 eqs 10-17: :class:`~magexp.estimators.rdpso.RandomDriftVelocity`).
+
     Parameters
     ----------
     name : str
-        Config name of this estimator.
+        As in :class:`~magexp.estimators.base.Estimator`.
     n_particles, n_iterations : int
         Swarm size and number of iterations.
     velocity : VelocityRule, optional
@@ -186,16 +106,15 @@ class SwarmOptimizer:
         the first uniform initial velocity ``U(-inf, inf)`` is not a number).
     initial_velocity : str
         ``"uniform"`` (``U(-v_max, v_max)``) or ``"zero"``.
-    references : str
-        The paper(s) the variant comes from.
     velocity_limit : float, optional
         Absolute ``v_max``, the same for every dimension (Yuan 2018 Table 1: 1.5), > 0; when
         given it replaces ``velocity_clamp``.
     boundary : str
         What a particle leaving the box does: ``clip``, ``reflect`` or ``random``
         (:mod:`magexp.estimators.boundaries`).
-    label : str
-        Its name in the report's row labels (pso, ipso, rdpso: PSO, IPSO, RDPSO); empty: the class's.
+    references, label : str
+        As in :class:`~magexp.estimators.base.Estimator`: each config of the engine sets its own
+        (pso, ipso, rdpso: PSO, IPSO, RDPSO; an empty label: the class's).
     """
 
     needs = ("cost",)
@@ -241,32 +160,8 @@ class SwarmOptimizer:
         return self.velocity_clamp * (hi - lo)
 
     def _run(self, run, problem, x, v, pbest, pcost, history, blocks, coef, limits) -> int:
-        """Every iteration with the cost compiled in, one call per block of draws.
-
-        From the initial move (iteration 0, on the costs in ``pcost``) to the last iteration (no
-        move), which joins the last block's call; the same numbers as one step and one
-        ``problem.cost`` per iteration.
-
-        Parameters
-        ----------
-        run : numba Dispatcher
-            The rule's compiled ``run`` (:func:`magexp.estimators._compiled.engine`).
-        problem : tuple
-            The compiled cost's arguments (:func:`magexp.problems.base.swarm_kernel`).
-        x, v, pbest, pcost, history : ndarray
-            The swarm, moved and updated in place, and the best cost of every iteration.
-        blocks : iterator of ndarray
-            The random factors (:func:`_draw_blocks`).
-        coef : ndarray, shape (t_max, 3)
-            Row ``t``: the coefficients of the move at time ``t + 1``.
-        limits : ndarray, shape (3, d)
-            ``v_max``, lower, upper.
-
-        Returns
-        -------
-        int
-            The global best's index.
-        """
+        """Every iteration with the cost compiled in, one call per block of draws: the same numbers as one step
+        and one ``problem.cost`` per iteration."""
         t, t_max = 0, len(history) - 1
         for r in blocks:
             k = len(r)
@@ -279,13 +174,10 @@ class SwarmOptimizer:
 
         Parameters
         ----------
-        problem : Problem
-            ``cost(thetas: (n, p)) -> (n,)``, ``lower``, ``upper``.
-        rng : numpy.random.Generator
-            Every random number of the run (initial swarm, rule, boundary).
-        callback : callable, optional
-            ``callback(t, gbest, gbest_cost)`` after every iteration; a true return value stops
-            the run.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: ``cost(thetas: (n, p)) ->
+            (n,)``, ``lower``, ``upper``. ``rng``: every random number of the run (initial swarm, rule,
+            boundary). ``callback``: ``callback(t, gbest, gbest_cost)`` after every iteration.
 
         Returns
         -------

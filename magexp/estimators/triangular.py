@@ -5,34 +5,15 @@ A scalar reference identifies only ``W^T W`` and ``o`` (9 numbers): ``Q W`` fits
 for every rotation ``Q``. A 12-parameter search wanders along that valley; a triangular ``W`` with
 a positive diagonal is a unique factor of ``W^T W`` (Cholesky), so the valley is gone.
 
-**Merayo's model** (Merayo, Brauer, Primdahl et al. 2000, *Scalar calibration of vector
-magnetometers*, Meas. Sci. Technol. 11:120-132; the Ørsted magnetometer): the sensor axes are
-unit vectors ``e_1 = (1, 0, 0)``, ``e_2 = (\\sin u_1, \\cos u_1, 0)``,
-``e_3 = (\\sin u_2, \\sin u_3\\cos u_2, \\cos u_3\\cos u_2)`` of an orthogonal frame (rows of ``T``),
-with gains ``S = diag(s_i)`` and offsets ``O``:
+**Merayo's model** (the Ørsted magnetometer): the sensor axes are unit vectors ``e_1 = (1, 0, 0)``,
+``e_2 = (\\sin u_1, \\cos u_1, 0)``, ``e_3 = (\\sin u_2, \\sin u_3\\cos u_2, \\cos u_3\\cos u_2)`` of an
+orthogonal frame (rows of ``T``), with gains ``S = diag(s_i)`` and offsets ``O``:
 
 .. math:: \\mathbf E = S\\,T\\,\\mathbf B + \\mathbf O,\\qquad
           \\mathbf B = W(\\mathbf E - \\mathbf O),\\quad W = T^{-1}S^{-1}
 
-``T`` is lower triangular, so ``W`` is: 6 entries plus 3 offsets, the 9 parameters
-(3 gains, 3 angles, 3 offsets) of Merayo's calibration. :class:`TriangularCalibration` minimises
-
-.. math:: \\sum_k \\big(\\lVert W(\\mathbf r_k - \\mathbf o)\\rVert - B_{a,k}\\big)^2
-
-by Levenberg-Marquardt from the ellipsoid fit (whose ``W^T W`` gives the start by Cholesky).
-
-**Noise-weighted ML** (Vasconcelos, Elkaim, Silvestre, Oliveira & Cardeira 2011, *Geometric
-approach to strapdown magnetometer calibration in sensor frame*, IEEE TAES 47(2):1293-1306):
-with isotropic reading noise ``σ``, to first order the residual
-``e_k = ||u_k|| - B_{a,k}``, ``u_k = W(r_k - o)``, has the variance
-
-.. math:: \\sigma_k^2 = \\sigma^2\\,\\frac{\\lVert W^T\\mathbf u_k\\rVert^2}{\\lVert\\mathbf u_k\\rVert^2}
-
-(the gradient of ``||W(r - o)||`` with respect to ``r`` is ``W^T u_k / ||u_k||``), and the
-maximum-likelihood estimate minimises :math:`\\sum_k e_k^2/\\sigma_k^2` (``σ`` is a common factor):
-:class:`MaximumLikelihoodScalar`, same parameters and start. The weighting matters when the
-gains differ between axes; with ``W`` a multiple of a rotation all weights are equal and it is
-the triangular least squares.
+``T`` is lower triangular, so ``W`` is: 6 entries plus 3 offsets, the 9 parameters (3 gains,
+3 angles, 3 offsets) of Merayo's calibration.
 """
 
 from __future__ import annotations
@@ -52,18 +33,6 @@ def triangular_factor(gram: np.ndarray, form: str = "lower") -> np.ndarray:
 
     ``upper``: ``W = L^T`` of the Cholesky factor ``gram = L L^T``; ``lower``: the same on the
     axes in reverse order (``P`` the reversal), ``W = P (chol(P gram P))^T P``.
-
-    Parameters
-    ----------
-    gram : numpy.ndarray
-        A symmetric positive-definite (3, 3).
-    form : str
-        ``lower`` or ``upper``.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``W`` (3, 3).
     """
     if form == "upper":
         return np.linalg.cholesky(gram).T
@@ -72,20 +41,7 @@ def triangular_factor(gram: np.ndarray, form: str = "lower") -> np.ndarray:
 
 
 def merayo_matrix(gains, angles) -> np.ndarray:
-    """``S T`` of Merayo's model: rows ``s_i e_i`` (module docstring).
-
-    Parameters
-    ----------
-    gains : array_like
-        ``s_1, s_2, s_3``.
-    angles : array_like
-        ``u_1, u_2, u_3`` in radians.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``S T`` (3, 3), lower triangular.
-    """
+    """``S T`` of Merayo's model: rows ``s_i e_i`` (module docstring)."""
     u1, u2, u3 = angles
     t = np.array([[1.0, 0.0, 0.0], [np.sin(u1), np.cos(u1), 0.0],
                   [np.sin(u2), np.sin(u3) * np.cos(u2), np.cos(u3) * np.cos(u2)]])
@@ -93,18 +49,7 @@ def merayo_matrix(gains, angles) -> np.ndarray:
 
 
 def merayo_parameters(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Merayo's parameters of a calibration.
-
-    Parameters
-    ----------
-    w : numpy.ndarray
-        A lower-triangular ``W = (S T)^{-1}`` (3, 3).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The gains ``s_i`` and the angles ``(u_1, u_2, u_3)`` (radians).
-    """
+    """Merayo's parameters of a calibration."""
     m = np.linalg.inv(w)
     gains = np.linalg.norm(m, axis=1)  # every row of T is a unit vector
     t = m / gains[:, None]
@@ -115,19 +60,23 @@ def merayo_parameters(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 class TriangularCalibration:
-    """Scalar calibration with a triangular ``W`` (``triangular``; Merayo et al. 2000).
+    """Scalar calibration with a triangular ``W`` (``triangular``; Merayo et al. 2000, module docstring).
+
+    Levenberg-Marquardt from the ellipsoid fit (whose ``W^T W`` gives the start by Cholesky) on
+
+    .. math:: \\sum_k \\big(\\lVert W(\\mathbf r_k - \\mathbf o)\\rVert - B_{a,k}\\big)^2
+
+    over the 6 entries of the triangle of ``W`` and ``o``.
 
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     form : str
         ``lower`` (Merayo's: the first sensor axis is the reference, the second in the plane of
         the first two) or ``upper`` (the same with the axes in reverse order).
-    max_nfev : int
-        Cap on residual evaluations of the Levenberg-Marquardt refinement.
-    tol : float
-        Its ``xtol = ftol = gtol``.
+    max_nfev, tol
+        As in :class:`~magexp.estimators.lm.LevenbergMarquardt` (the refinement's).
 
     References
     ----------
@@ -152,8 +101,8 @@ class TriangularCalibration:
 
         Parameters
         ----------
-        q : numpy.ndarray
-            ``[triangle of W (row-major), o]`` (9,).
+        q : numpy.ndarray, shape (9,)
+            ``[triangle of W (row-major), o]``.
 
         Returns
         -------
@@ -174,8 +123,8 @@ class TriangularCalibration:
 
         Returns
         -------
-        numpy.ndarray
-            ``(9,)``.
+        numpy.ndarray, shape (9,)
+            ``[triangle of W, o]`` (:meth:`unpack`).
         """
         ds = problem.dataset
         fitted = fit_ellipsoid(ds.readings, float(np.mean(ds.reference_norm)))
@@ -183,7 +132,7 @@ class TriangularCalibration:
         return np.concatenate([triangular_factor(w.T @ w, self.form)[FORMS[self.form]], o])
 
     def residuals_of(self, problem):
-        """The residual function of the 9 parameters (module docstring; weighted for the ML variant).
+        """The residual function of the 9 parameters (the class docstring's; weighted for the ML variant).
 
         Parameters
         ----------
@@ -214,12 +163,10 @@ class TriangularCalibration:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            A total-field problem.
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, x, fun)`` after each residual evaluation; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a total-field problem. ``rng``:
+            unused (the fit draws nothing). ``callback``: ``callback(k, x, fun)`` after each residual
+            evaluation.
 
         Returns
         -------
@@ -245,6 +192,15 @@ class TriangularCalibration:
 class MaximumLikelihoodScalar(TriangularCalibration):
     """Noise-weighted maximum-likelihood scalar calibration (``ml_scalar``; Vasconcelos et al. 2011).
 
+    With isotropic reading noise ``σ``, to first order the residual ``e_k = ||u_k|| - B_{a,k}``,
+    ``u_k = W(r_k - o)``, has the variance (the gradient of ``||W(r - o)||`` in ``r`` is ``W^T u_k / ||u_k||``)
+
+    .. math:: \\sigma_k^2 = \\sigma^2\\,\\frac{\\lVert W^T\\mathbf u_k\\rVert^2}{\\lVert\\mathbf u_k\\rVert^2}
+
+    and the estimate minimises :math:`\\sum_k e_k^2/\\sigma_k^2` (``σ`` a common factor) with the
+    parameters and start of :class:`TriangularCalibration`. With ``W`` a multiple of a rotation all
+    weights are equal and it is the triangular least squares.
+
     Parameters
     ----------
     name, form, max_nfev, tol
@@ -252,7 +208,8 @@ class MaximumLikelihoodScalar(TriangularCalibration):
 
     References
     ----------
-    Vasconcelos, Elkaim, Silvestre, Oliveira & Cardeira (2011), IEEE TAES 47(2):1293-1306.
+    Vasconcelos, Elkaim, Silvestre, Oliveira & Cardeira (2011), Geometric approach to strapdown
+    magnetometer calibration in sensor frame, IEEE TAES 47(2):1293-1306.
     """
 
     references = "Vasconcelos et al. 2011, IEEE TAES 47(2):1293-1306"

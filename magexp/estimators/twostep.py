@@ -1,9 +1,7 @@
 """TWOSTEP (Alonso & Shuster 2002): a centred linear estimate, then Gauss-Newton.
 
-Model (Alonso & Shuster 2002, *TWOSTEP: a fast robust algorithm for attitude-independent
-magnetometer-bias determination*, J. Astronaut. Sci. 50(4), and its complete-calibration
-extension, *Complete linear attitude-independent magnetometer calibration*, same issue; Ding
-2024's ref. [17])
+Model (Alonso & Shuster 2002 and its complete-calibration extension, :class:`TwoStep`'s
+References; Ding 2024's ref. [17])
 
 .. math:: \\mathbf B_k = (I + D)^{-1}(O^T A_k \\mathbf H_k + \\mathbf b + \\boldsymbol\\varepsilon_k),
           \\qquad D = D^T
@@ -54,39 +52,14 @@ UPPER = (np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2]))  # E11 E22 
 
 
 def sym(e6: np.ndarray) -> np.ndarray:
-    """The symmetric matrix of six entries.
-
-    Parameters
-    ----------
-    e6 : numpy.ndarray
-        ``[E11, E22, E33, E12, E13, E23]``.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``E`` (3, 3).
-    """
+    """The symmetric matrix of six entries."""
     e = np.zeros((3, 3))
     e[UPPER] = e6
     return e + np.triu(e, 1).T
 
 
 def measurement(b: np.ndarray, h_norm: np.ndarray, sigma: float):
-    """The scalar measurements of the module docstring.
-
-    Parameters
-    ----------
-    b : numpy.ndarray
-        Readings ``B_k`` (N, 3).
-    h_norm : numpy.ndarray
-        Reference magnitudes ``|H_k|`` (N,).
-    sigma : float
-        Reading noise per axis.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(z - mu, L, w)``: the measurements, their regressors ``L_k`` and weights ``1/sigma_k²``.
+    """``(z - mu, L, w)`` of the module docstring: the scalar measurements, their regressors and weights ``1/σ_k²``.
     """
     z = (b * b).sum(axis=1) - h_norm**2
     mu = -3.0 * sigma**2
@@ -108,18 +81,6 @@ def centred_estimate(z: np.ndarray, lmat: np.ndarray, w: np.ndarray, b: np.ndarr
     .. math:: \\lambda = \\frac{\\overline{|\\mathbf H|^2 - 3\\sigma^2}}
               {\\overline{\\mathbf B^T F_0\\mathbf B} - 2\\mathbf c_0^T\\overline{\\mathbf B}
                + \\mathbf c_0^T F_0^{-1}\\mathbf c_0}
-
-    Parameters
-    ----------
-    z, lmat, w : numpy.ndarray
-        As :func:`measurement` returns them.
-    b : numpy.ndarray
-        The readings (N, 3).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``θ̃`` (9,).
     """
     wn = w / w.sum()
     zt, lt = z - wn @ z, lmat - wn @ lmat
@@ -139,20 +100,7 @@ def centred_estimate(z: np.ndarray, lmat: np.ndarray, w: np.ndarray, b: np.ndarr
 
 
 def residual_and_jacobian(theta: np.ndarray, z, lmat, w):
-    """Step 2's weighted residuals ``sqrt(w) (z - L theta + c^T (I+E)^-1 c)`` and their Jacobian.
-
-    Parameters
-    ----------
-    theta : numpy.ndarray
-        ``[c; E11, E22, E33, E12, E13, E23]`` (9,).
-    z, lmat, w : numpy.ndarray
-        As :func:`measurement` returns them.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The residuals (N,) and the Jacobian (N, 9).
-    """
+    """Step 2's weighted residuals ``sqrt(w) (z - L theta + c^T (I+E)^-1 c)`` and their Jacobian."""
     c, e = theta[:3], sym(theta[3:])
     g = np.linalg.solve(np.eye(3) + e, c)  # (I+E)^-1 c
     sw = np.sqrt(w)
@@ -164,17 +112,7 @@ def residual_and_jacobian(theta: np.ndarray, z, lmat, w):
 
 
 def calibration(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The calibration of ``θ``: ``(W, o) = ((I+E)^{1/2}, (I+E)^{-1} c)``.
-
-    Parameters
-    ----------
-    theta : numpy.ndarray
-        ``[c; E11, E22, E33, E12, E13, E23]`` (9,).
-
-    Returns
-    -------
-    tuple of numpy.ndarray or None
-        ``(W, o)``; None if ``I + E`` is not positive definite.
+    """The calibration of ``θ``, ``(W, o) = ((I+E)^{1/2}, (I+E)^{-1} c)``; None if ``I + E`` is not positive definite.
     """
     f = np.eye(3) + sym(theta[3:])
     val, vec = np.linalg.eigh(f)
@@ -186,10 +124,13 @@ def calibration(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class TwoStep:
     """TWOSTEP complete scalar calibration (``twostep``): the module docstring's two steps.
 
+    Both fit the attitude-free measurement ``z_k = |B_k|² - |H_k|² = L_k θ - c^T (I + E)^{-1} c + v_k``
+    (Alonso & Shuster 2002): step 1 centred and linear, step 2 Gauss-Newton on its weighted squares.
+
     Parameters
     ----------
     name : str
-        Config name.
+        As in :class:`~magexp.estimators.base.Estimator`.
     max_iter : int
         Gauss-Newton iterations at most (step 2).
     tol : float
@@ -222,12 +163,10 @@ class TwoStep:
 
         Parameters
         ----------
-        problem : magexp.problems.base.Problem
-            A total-field problem (readings, reference magnitudes, the dataset's noise).
-        rng : numpy.random.Generator, optional
-            Unused (the fit draws nothing).
-        callback : callable, optional
-            ``callback(k, x, fun)`` after every Gauss-Newton step; a true return stops it.
+        problem, rng, callback
+            As in :meth:`magexp.estimators.base.Estimator.fit`. ``problem``: a total-field problem
+            (readings, reference magnitudes, the dataset's noise). ``rng``: unused (the fit draws nothing).
+            ``callback``: ``callback(k, x, fun)`` after every Gauss-Newton step.
 
         Returns
         -------

@@ -17,10 +17,9 @@ with arithmetic and ``[i, j]`` indexing only, and runs two ways, as pyswarms'
   whole array and ``pbest[g, j]`` the global best's row, so the same expression computes every
   element at once, with the same IEEE operations in the same order.
 
-A rule is a :class:`VelocityRule`: its kernel, how many uniform numbers it draws per particle and
-dimension (``n_draws``), the names of its three coefficients (schedules or numbers), and, if its
-random factors are not the uniform draws themselves, :meth:`VelocityRule.factors` (numpy, run on
-whole blocks of draws, so that both paths use the same ``log``).
+A rule is a :class:`VelocityRule` (its attributes: what else the engine needs);
+:meth:`VelocityRule.factors` turns the draws into the kernel's random factors in numpy, on whole
+blocks of draws, so that both paths use the same ``log``.
 """
 
 from __future__ import annotations
@@ -37,47 +36,12 @@ def inertia(i, j, x, v, pbest, g, mean, r, c):
     """Global-best PSO velocity with inertia weight (Kennedy & Eberhart 1995; Ding 2024 eq 10).
 
     .. math:: v_{ij} \\leftarrow w\\,v_{ij} + c_1 r_{1,ij} (p_{ij} - x_{ij}) + c_2 r_{2,ij} (p_{gj} - x_{ij})
-
-    Parameters
-    ----------
-    i, j : int or slice
-        Particle and dimension (:data:`ALL` for every one).
-    x, v, pbest : ndarray, shape (n, d)
-        Positions, velocities and personal bests.
-    g : int
-        Index of the global best.
-    mean : ndarray, shape (d,), or None
-        Mean personal best (unused by this rule).
-    r : ndarray, shape (2, n, d)
-        ``r1, r2 ~ U(0, 1)``.
-    c : sequence of 3 floats
-        ``w, c1, c2``.
-
-    Returns
-    -------
-    float or ndarray
-        The new velocity before the clamp.
     """
     return c[0] * v[i, j] + c[1] * r[0, i, j] * (pbest[i, j] - x[i, j]) + c[2] * r[1, i, j] * (pbest[g, j] - x[i, j])
 
 
 def check_schedule(schedule, role: str):
-    """``schedule`` of the coefficient ``role``, refused if negative.
-
-    Parameters
-    ----------
-    schedule : Constant or Linear
-        The schedule; a value it is given (``value``, ``start``, ``end``: a linear schedule's
-        extremes) must be >= 0: a negative inertia reverses the velocity every step, a negative
-        learning factor drives a particle away from the best position found.
-    role : str
-        ``inertia``, ``c1`` or ``c2`` (named in the error).
-
-    Returns
-    -------
-    Constant or Linear
-        ``schedule`` itself.
-    """
+    """``schedule`` of the coefficient ``role``, refused if negative."""
     for part in ("value", "start", "end"):
         v = getattr(schedule, part, None)
         if isinstance(v, float) and v < 0:
@@ -87,21 +51,18 @@ def check_schedule(schedule, role: str):
 
 
 class VelocityRule:
-    """What the swarm engine needs of a velocity rule; a new rule subclasses it.
+    """What the swarm engine needs of a velocity rule; a new rule subclasses it and sets ``kernel``.
 
     Attributes
     ----------
     kernel : function
-        The rule, set by the subclass (a ``staticmethod``): ``kernel(i, j, x, v, pbest, g, mean,
-        r, c)``, arithmetic and indexing only (the module docstring), compiled by numba as it is.
+        ``kernel(i, j, x, v, pbest, g, mean, r, c)`` (the module docstring), a ``staticmethod``.
     n_draws : int
         Uniform numbers ``U(0, 1)`` drawn per particle and dimension in one iteration.
     coefficients : tuple of 3 str
-        The attributes holding the three coefficients ``c`` (each a schedule
-        ``s(t, t_max)`` or a number).
+        The attributes holding the three coefficients ``c`` (each a schedule ``s(t, t_max)`` or a number).
     needs_mean : bool
-        Whether the kernel reads ``mean`` (the engine computes it only then: it costs 3 % of a
-        numpy iteration of 50 particles).
+        Whether the kernel reads ``mean`` (computed only then: it costs 3 % of a numpy iteration).
     """
 
     n_draws = 2
@@ -109,37 +70,12 @@ class VelocityRule:
     needs_mean = False
 
     def schedule(self, t: np.ndarray, t_max: int) -> np.ndarray:
-        """The coefficients at every time of ``t``.
-
-        Parameters
-        ----------
-        t : ndarray of int
-            Iteration numbers ``1..t_max``, as :func:`~magexp.estimators.schedules.values` takes them.
-        t_max : int
-            Number of iterations.
-
-        Returns
-        -------
-        ndarray, shape (len(t), 3)
-            Row ``k``: the coefficients ``c`` at time ``t[k]``, the floats ``s(t_k, t_max)`` one
-            call at a time would give (:func:`magexp.estimators.schedules.values`).
-        """
+        """The coefficients at every time of ``t``."""
         return np.stack([values(getattr(self, name), t, t_max) for name in self.coefficients], axis=1)
 
     @staticmethod
     def factors(r: np.ndarray) -> np.ndarray:
-        """The kernel's random factors from the uniform draws (here: the draws themselves).
-
-        Parameters
-        ----------
-        r : ndarray, shape (m, n_draws, n, d)
-            The draws of ``m`` iterations, each ``U(0, 1)``.
-
-        Returns
-        -------
-        ndarray, shape (m, k, n, d)
-            The factors ``r`` of each iteration's kernel call (may be ``r``, changed in place).
-        """
+        """The kernel's random factors from the uniform draws (here: the draws themselves)."""
         return r
 
 

@@ -1,15 +1,6 @@
-"""Calibration problems: a parameter vector <-> a calibration, and a vectorised cost.
-
-Every problem exposes
-
-* ``n_params``, ``lower``, ``upper`` (the search box),
-* ``cost(thetas)``: ``(n, p) -> (n,)``, the objective for a whole swarm at once,
-* ``cost_direct(theta)``: the same objective by its textbook formula (for reporting),
-* ``residuals(theta)``: residual vector whose sum of squares is minimised by least squares,
-* ``pack`` / ``unpack`` between parameters and model matrices,
-* ``capabilities``: what it offers an estimator (:class:`magexp.problems.base.Problem`).
-
-Problems are made with :func:`make_problem` from a dataset and an objective name.
+"""Calibration problems: a parameter vector <-> a calibration, and a vectorised cost (the protocol:
+:class:`magexp.problems.base.Problem`). Problems are made with :func:`make_problem` from a dataset and
+an objective name (:data:`OBJECTIVES`).
 """
 
 from __future__ import annotations
@@ -28,36 +19,13 @@ OBJECTIVES: dict[str, str] = {
 
 
 def register(name: str, target: str) -> None:
-    """Register an objective ``name`` implemented by ``"module:Class"``.
-
-    Parameters
-    ----------
-    name : str
-        The objective's name (a key of :data:`OBJECTIVES`; an existing one is replaced).
-    target : str
-        ``"module:Class"``, the class imported on first use.
-    """
+    """Register an objective ``name`` implemented by ``"module:Class"``."""
     OBJECTIVES[name] = target
 
 
 def problem_class(objective: str):
     """The class implementing ``objective`` (imported, not built): its ``capabilities`` say which
     estimators apply before any data is simulated.
-
-    Parameters
-    ----------
-    objective : str
-        A key of :data:`OBJECTIVES`.
-
-    Returns
-    -------
-    type
-        The problem class (a :class:`~magexp.problems.base.Problem`).
-
-    Raises
-    ------
-    MagexpError
-        One line for an unknown ``objective``.
     """
     if objective not in OBJECTIVES:
         raise MagexpError(f"objective={objective!r} is not allowed: choose one of {', '.join(sorted(OBJECTIVES))}")
@@ -66,22 +34,5 @@ def problem_class(objective: str):
 
 
 def make_problem(objective: str, dataset, search, **options):
-    """Build the problem ``objective`` on ``dataset`` within ``search`` (a SearchBox).
-
-    Parameters
-    ----------
-    objective : str
-        A key of :data:`OBJECTIVES`.
-    dataset : Dataset
-        The readings, attitudes and reference field (:class:`magexp.core.dataset.Dataset`).
-    search : SearchBox
-        The parameters' bounds (:class:`magexp.scenarios.search.SearchBox`).
-    **options
-        The class's keyword options (e.g. ``parameterisation``).
-
-    Returns
-    -------
-    Problem
-        The problem built.
-    """
+    """Build the problem ``objective`` on ``dataset`` within ``search`` (a SearchBox)."""
     return problem_class(objective)(dataset, search, **options)

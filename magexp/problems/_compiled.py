@@ -48,18 +48,7 @@ def _scalar_coefficients(w, o, centre, scale):
 
 @_jit
 def scalar_cost(w, o, centre, scale, u, reference):
-    """Total-field RMS of every particle in one pass over the readings.
-
-    Parameters
-    ----------
-    w, o, centre, scale, u, reference
-        As :func:`magexp.problems.kernels.scalar_cost`, which calls this kernel.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        ``sqrt(mean_i (|W_p (r_i - o_p)| - B_a,i)²)`` (Ding 2024, eq 17; :mod:`magexp.problems.kernels`).
-    """
+    """Total-field RMS of every particle in one pass over the readings."""
     coef = _scalar_coefficients(w, o, centre, scale)
     # contiguous row views (indexing, not tuple unpacking, which types them non-contiguous):
     # the inner loop then vectorises
@@ -97,18 +86,7 @@ def _vector_coefficients(w, o):
 
 @_jit
 def vector_cost(w, o, readings, reference):
-    """``F = sum_i |v_i - W (r_i - o)|`` of every particle in one pass over the readings.
-
-    Parameters
-    ----------
-    w, o, readings, reference
-        As :func:`magexp.problems.kernels.vector_cost`, which calls this kernel.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        ``F_p`` (Yuan 2018, eq 8).
-    """
+    """``F = sum_i |v_i - W (r_i - o)|`` of every particle in one pass over the readings."""
     c = _vector_coefficients(w, o)
     c0, c1, c2, c3, c4, c5, c6, c7, c8, c9, c10, c11 = c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], \
         c[8], c[9], c[10], c[11]  # contiguous row views, as above
@@ -128,33 +106,10 @@ def vector_cost(w, o, readings, reference):
 
 @_jit
 def swarm_cost(kind, thetas, data, reference, params):
-    """The swarm cost of parameter vectors ``thetas`` (P, 12) ``= [vec(W) (row-major), o]``: one
-    entry for every problem with a compiled cost, so that a compiled caller (the swarm engine's
-    :func:`magexp.estimators._compiled.run`) takes the cost as data, not as a function.
-
-    ``kind`` :data:`SCALAR`: :func:`scalar_cost` with ``data`` the normalised readings ``u``,
-    ``reference`` ``B_a`` as a column (N, 1) and ``params = [c, s]``; :data:`VECTOR`:
-    :func:`vector_cost` with ``data`` the readings and ``reference`` the vectors ``v_i`` (N, 3),
-    non-finite values set to ``inf`` (as :func:`magexp.problems.kernels.vector_cost`).
-    The same numbers as those kernels called on ``W``, ``o`` directly.
-
-    Parameters
-    ----------
-    kind : int
-        :data:`~magexp.problems.base.SCALAR` or :data:`~magexp.problems.base.VECTOR`.
-    thetas : ndarray, shape (P, 12)
-        ``[vec(W) (row-major), o]`` of every particle, C-contiguous.
-    data : ndarray, shape (N, 3)
-        The normalised readings (scalar) or the readings (vector).
-    reference : ndarray
-        ``B_a`` as a column (N, 1) (scalar) or ``v_i`` (N, 3) (vector).
-    params : ndarray, shape (4,)
-        ``[c, s]``, the normalisation (scalar; unused for the vector cost).
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Every particle's cost (Ding 2024 eq 17 or Yuan 2018 eq 8).
+    """The cost of every particle ``thetas`` (P, 12) for ``kind`` :data:`~magexp.problems.base.SCALAR`
+    (:func:`scalar_cost` on ``u``, ``B_a`` (N, 1), ``params = [c, s]``) or :data:`~magexp.problems.base.VECTOR`
+    (:func:`vector_cost`, non-finite values ``inf``): one entry, so that the loop
+    :func:`magexp.estimators._compiled.engine` compiles takes the cost as data, not as a function.
     """
     n_p = thetas.shape[0]
     w = np.empty((n_p, 3, 3))
@@ -176,18 +131,7 @@ def swarm_cost(kind, thetas, data, reference, params):
 
 @_jit
 def scalar_residuals(w, o, readings, reference):
-    """``|W (r_i - o)| - B_a,i`` of one calibration.
-
-    Parameters
-    ----------
-    w, o, readings, reference
-        As :func:`magexp.problems.kernels.scalar_residuals`, which calls this kernel.
-
-    Returns
-    -------
-    ndarray, shape (N,)
-        The residuals of Ding 2024's eq 17.
-    """
+    """``|W (r_i - o)| - B_a,i`` of one calibration."""
     n = readings.shape[0]
     out = np.empty(n)
     for i in range(n):

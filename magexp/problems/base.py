@@ -43,10 +43,16 @@ class Problem(Protocol):
 
     Attributes
     ----------
-    objective : its name in :data:`magexp.problems.OBJECTIVES`.
-    capabilities : the subset of :data:`CAPABILITIES` it offers.
-    n_params, lower, upper : parameter count and the search box.
-    dataset : the :class:`~magexp.core.dataset.Dataset` it was built on.
+    objective : str
+        Its name in :data:`magexp.problems.OBJECTIVES`.
+    capabilities : frozenset of str
+        The subset of :data:`CAPABILITIES` it offers.
+    n_params : int
+        The parameter count ``p``.
+    lower, upper : ndarray, shape (p,)
+        The search box.
+    dataset : magexp.core.dataset.Dataset
+        The data it was built on.
     """
 
     objective: str
@@ -169,34 +175,13 @@ class LinearProblem(Problem, Protocol):
 
 
 def describe(capabilities) -> str:
-    """The capabilities in words, joined by ``, ``.
-
-    Parameters
-    ----------
-    capabilities : iterable of str
-        Keys of :data:`CAPABILITIES`.
-
-    Returns
-    -------
-    str
-        Their descriptions, sorted by key.
-    """
+    """The capabilities in words, joined by ``, ``."""
     return ", ".join(CAPABILITIES[c] for c in sorted(capabilities))
 
 
 def inverse(mats: np.ndarray) -> np.ndarray:
     """Inverses of a stack of 3x3 matrices; an exactly singular one (a swarm clipped onto
     the box edges can make one) gets its pseudo-inverse instead of stopping the run.
-
-    Parameters
-    ----------
-    mats : ndarray, shape (..., 3, 3)
-        The matrices.
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        Their inverses (pseudo-inverses, for the whole stack, when one is singular).
     """
     try:
         return np.linalg.inv(mats)
@@ -205,60 +190,21 @@ def inverse(mats: np.ndarray) -> np.ndarray:
 
 
 def defining_class(obj, name: str):
-    """The class in ``type(obj)``'s method resolution order that defines attribute ``name``
-    (None if none does): whether two methods belong together (e.g. a derivative and the function
-    it differentiates) after subclassing.
-
-    Parameters
-    ----------
-    obj : object
-        Any object.
-    name : str
-        An attribute's name.
-
-    Returns
-    -------
-    type or None
-        The first class of ``type(obj).__mro__`` whose own namespace holds ``name``.
-    """
+    """The class in ``type(obj)``'s MRO that defines ``name`` (None if none): whether two methods (a derivative and
+    its function) still belong together after subclassing."""
     return next((c for c in type(obj).__mro__ if name in vars(c)), None)
 
 
 def swarm_kernel(problem) -> tuple | None:
-    """The prepared arguments ``(kind, data, reference, params)`` of the compiled swarm cost
-    (:func:`magexp.problems.kernels.swarm_cost`) that computes ``problem.cost``, or None: none
-    offered (a problem without :meth:`CalibrationProblem.swarm_kernel`, numba off, a forward
-    parameterisation), or one not defined beside the class's ``cost`` (a subclass that changes
-    the cost, e.g. :class:`magexp.problems.vector.VectorLeastSquares`, gets the generic path).
-
-    Parameters
-    ----------
-    problem : CalibrationProblem
-        A problem.
-
-    Returns
-    -------
-    tuple or None
-        ``(kind, data, reference, params)``, or None.
-    """
+    """``problem``'s compiled swarm-cost arguments (:meth:`CalibrationProblem.swarm_kernel`), or None where it has none
+    or its ``cost`` is defined elsewhere (a subclass that changes the cost gets the generic path)."""
     if defining_class(problem, "swarm_kernel") is not defining_class(problem, "cost"):
         return None
     return problem.swarm_kernel()
 
 
 def reference_vectors(dataset) -> np.ndarray:
-    """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field.
-
-    Parameters
-    ----------
-    dataset : Dataset
-        With ``attitude`` (N, 3, 3) and ``field_nav`` (N, 3).
-
-    Returns
-    -------
-    ndarray, shape (N, 3)
-        ``v_i = C_i^b H_i``, the reference vectors of Yuan 2018's eq 8.
-    """
+    """``C_i^b H_i`` of every reading, shape ``(N, 3)``: the known attitude times the nav field."""
     return np.einsum("nij,nj->ni", dataset.attitude, dataset.field_nav)
 
 
@@ -267,11 +213,18 @@ class CalibrationProblem:
 
     Parameters
     ----------
-    dataset : :class:`magexp.core.dataset.Dataset`.
-    search : :class:`magexp.scenarios.search.SearchBox` (bounds of the parameters).
-    parameterisation : ``"inverse"``: ``theta = [vec(W), o]`` (Ding 2024: ``W = M^-1``, ``o = I``);
-        ``"forward"``: ``theta = [vec(S), b]`` with ``W = S^-1`` (Yuan 2018).
-        ``vec`` is row-major.
+    dataset : magexp.core.dataset.Dataset
+        The readings (and, by problem, the attitudes, gyro rates or reference field) to calibrate.
+    search : magexp.scenarios.search.SearchBox
+        The search box: its ``bounds()`` are ``lower`` and ``upper``.
+    parameterisation : {"inverse", "forward"}, optional
+        ``"inverse"``: ``theta = [vec(W), o]`` (Ding 2024: ``W = M^-1``, ``o = I``);
+        ``"forward"``: ``theta = [vec(S), b]`` with ``W = S^-1`` (Yuan 2018). ``vec`` is row-major.
+
+    Raises
+    ------
+    MagexpError
+        When ``parameterisation`` is neither.
     """
 
     n_params = 12
@@ -289,16 +242,14 @@ class CalibrationProblem:
 
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
-        """float64 numbers one :meth:`cost` call on ``n_particles`` holds beyond the problem's data
-        (what :mod:`magexp.run.budget` adds to a run's memory); here, for a problem that does not
-        say, :data:`FLOATS_PER_PARTICLE_READING` per particle-reading.
+        """float64 numbers one :meth:`cost` call holds beyond the problem's data (what :mod:`magexp.run.budget`
+        adds to a run's memory); here, for a problem that does not say, :data:`FLOATS_PER_PARTICLE_READING`
+        per particle-reading.
 
         Parameters
         ----------
-        n_readings : int
-            The readings ``N``.
-        n_particles : int
-            The particles ``P`` of one call.
+        n_readings, n_particles : int
+            The readings ``N`` and the particles ``P`` of one call.
 
         Returns
         -------
@@ -308,9 +259,9 @@ class CalibrationProblem:
         return FLOATS_PER_PARTICLE_READING * n_readings * n_particles
 
     def swarm_kernel(self) -> tuple | None:
-        """``(kind, data, reference, params)``: the arguments, prepared once, of the compiled
-        swarm cost (:func:`magexp.problems.kernels.swarm_cost`) equal to :meth:`cost` bit for bit,
-        or None (here: a problem without one). Read it through :func:`swarm_kernel`.
+        """``(kind, data, reference, params)``: the arguments, prepared once, of the compiled swarm cost
+        (:func:`magexp.problems.kernels.swarm_cost`) equal to :meth:`cost` bit for bit, or None (here: a
+        problem without one). Read it through :func:`swarm_kernel`.
 
         Returns
         -------
@@ -321,19 +272,17 @@ class CalibrationProblem:
 
     # -- parameters <-> model ---------------------------------------------------------------
     def unpack(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(W, o)`` of shapes ``(n, 3, 3)``, ``(n, 3)`` from ``thetas`` of shape ``(n, 12)``.
+        """:meth:`Problem.unpack` for ``p = 12``.
 
         Parameters
         ----------
         thetas : ndarray, shape (n, 12) or (12,)
-            Parameter vectors: ``[vec(W), o]`` (inverse) or ``[vec(S), b]`` with ``W = S^-1`` (forward), row-major.
+            ``[vec(W), o]`` (inverse) or ``[vec(S), b]`` with ``W = S^-1`` (forward), row-major.
 
         Returns
         -------
-        W : ndarray, shape (n, 3, 3)
-            The calibration matrices.
-        o : ndarray, shape (n, 3)
-            The offsets.
+        W, o : ndarray, shapes (n, 3, 3) and (n, 3)
+            As in :meth:`Problem.unpack`.
         """
         thetas = np.atleast_2d(thetas)
         mat = thetas[:, :9].reshape(-1, 3, 3)
@@ -342,14 +291,12 @@ class CalibrationProblem:
         return mat, thetas[:, 9:]
 
     def pack(self, w: np.ndarray, o: np.ndarray) -> np.ndarray:
-        """The parameter vector of the calibration ``B = w (reading - o)``.
+        """:meth:`Problem.pack` for ``p = 12``, the inverse of :meth:`unpack`.
 
         Parameters
         ----------
-        w : ndarray, shape (3, 3)
-            The calibration matrix ``W``.
-        o : ndarray, shape (3,)
-            The offset.
+        w, o
+            As in :meth:`Problem.pack`.
 
         Returns
         -------
@@ -371,7 +318,7 @@ class CalibrationProblem:
         return None if t is None else self.pack(t.matrix, t.offset)
 
     def calibrate(self, theta: np.ndarray, readings: np.ndarray | None = None) -> np.ndarray:
-        """Calibrated readings ``W (reading - o)``, shape ``(N, 3)``.
+        """Calibrated readings ``W (r_i - o)``.
 
         Parameters
         ----------
@@ -390,18 +337,17 @@ class CalibrationProblem:
         return (readings - o[0]) @ w[0].T
 
     def residual_stack(self, thetas: np.ndarray, of=None) -> np.ndarray:
-        """:meth:`residuals` of each parameter vector of a stack, ``(n, p) -> (n, m)``: the residual
-        function :func:`magexp.core.identifiability.identifiability` takes. ``of`` maps a row of the
-        stack, in another parameterisation, to this problem's vector (e.g. the 9 parameters of a
-        symmetric matrix part, :func:`magexp.problems.symmetric.expand`; ``magexp calibrate``'s
-        ``[vec W, o]`` or ``[s, o]``).
+        """:meth:`residuals` of each parameter vector of a stack: the residual function
+        :func:`magexp.core.identifiability.identifiability` takes.
 
         Parameters
         ----------
         thetas : ndarray, shape (n, p)
             Parameter vectors (this problem's, or ``of``'s).
         of : callable, optional
-            ``row -> theta``, from another parameterisation to this problem's.
+            ``row -> theta``, from another parameterisation to this problem's (e.g. the 9 parameters of a
+            symmetric matrix part, :func:`magexp.problems.symmetric.expand`; ``magexp calibrate``'s
+            ``[vec W, o]`` or ``[s, o]``).
 
         Returns
         -------

@@ -8,34 +8,30 @@ in the starting frame unknown:
           \\big\\lVert R_j(\\mathbf b_g)^\\top \\mathbf h - S^{-1}(\\mathbf B_j - \\mathbf b)\\big\\rVert
 
 * ``R_j(b_g)`` (body -> start frame at reading ``j``) is the gyro stream, less the bias ``b_g``,
-  integrated at the magnetometer's times (:func:`magexp.core.geometry.preintegrate`: one
-  preintegrated increment and its first-order bias Jacobian per pair of readings, so a new
-  bias costs a prefix scan over the ``M`` readings, not a re-integration of the gyro stream);
-* ``h`` is the field in the starting frame (the body frame at the first reading),
-  ``h = F [cos e cos a, cos e sin a, sin e]``. Its magnitude ``F`` cannot be separated from the
-  scale of ``S`` (``S -> k S``, ``h -> h / k`` fit equally), so ``F`` is fixed to the dataset's
-  reference total and only the direction ``(a, e)`` is estimated;
+  integrated at the magnetometer's times (:func:`magexp.core.geometry.preintegrate`: with a first-order
+  bias Jacobian per pair of readings, a new bias costs a prefix scan, not a re-integration);
+* ``h = F [cos e cos a, cos e sin a, sin e]`` is the field in the starting frame (the body frame at the
+  first reading); ``F`` cannot be told from the scale of ``S`` (``S -> k S``, ``h -> h / k`` fit equally),
+  so it is fixed to the dataset's reference total and only the direction ``(a, e)`` is estimated;
 * ``S`` absorbs every linear map between the magnetometer's and the gyroscope's axes (their
   misalignment, and a reflection if the axis conventions differ).
 
 Parameters (17): ``θ = [vec(S) (9, row-major), b (3), a, e (rad), b_g (3, deg/s)]``.
 
-Closed-form start (:meth:`GyroAidedCalibration.projected_start`, ``magexp calibrate``'s): the ellipsoid fit gives ``W = Q P`` up to
-the rotation ``Q`` and ``u_j = P (B_j - b)``; with the attitude ``R_j`` integrated at zero bias, every reading
-says ``R_j Q u_j = h``, linear in ``vec(Q)``. Eliminating ``h`` (the mean of ``R_j Q u_j``),
+Closed-form start (:meth:`GyroAidedCalibration.projected_start`, ``magexp calibrate``'s): the ellipsoid
+fit gives ``W = Q P`` up to the rotation ``Q`` and ``u_j = P (B_j - b)``; with the attitude ``R_j`` at zero
+bias every reading says ``R_j Q u_j = h``, linear in ``vec(Q)``. Eliminating ``h`` (the mean of ``R_j Q u_j``),
 
 .. math:: \\min_{\\lVert \\operatorname{vec} Q \\rVert = 1} \\sum_j \\big\\lVert (A_j - \\bar A) \\operatorname{vec} Q \\big\\rVert^2,
           \\qquad A_j \\operatorname{vec} Q = R_j Q \\mathbf u_j,
 
-is the eigenvector of the smallest eigenvalue of ``Σ (A_j - Ā)ᵀ (A_j - Ā)``, projected onto the nearest
-rotation (SVD; ``-Q`` with ``-h`` fits equally, the proper one is kept), and ``h`` the mean of ``R_j Q u_j``
-(Wahba's problem with the field unknown; Markley 1988 for the projection). No iteration, so no local
-minimum of a rotation search: an iterative start from ``Q = I`` stalled on a recording with two thirds of its
-readings held out, and cost 7 of the 10 CPU-s of a gyro held-out check on a recording the gyroscope cannot help.
+is the smallest eigenvector of ``Σ (A_j - Ā)ᵀ (A_j - Ā)``, projected onto the nearest proper rotation
+(SVD; Wahba's problem with the field unknown, Markley 1988). No iteration, so no local minimum of a
+rotation search (an iterative start from ``Q = I`` stalled on a recording with most readings held out).
+
 Rotation modes: turns about one body axis only leave the component of ``h`` along that axis
 constant in the body frame, so as in Yuan's mode 4 the column of ``S`` along it cannot be told
-from ``b`` (the data determine only their combination), and the bias about the other axes
-trades against the field direction.
+from ``b``, and the bias about the other axes trades against the field direction.
 """
 
 from __future__ import annotations
@@ -60,21 +56,9 @@ EXTRA = ("field_azimuth", "field_elevation", "gyro_bias_x", "gyro_bias_y", "gyro
 
 
 class GyroAidedCalibration(CalibrationProblem):
-    """Yuan 2018 eq 8 over ``[vec(S), b, field direction, gyro bias]`` (module docstring).
-
-    ``dataset.extra["preintegration"]`` holds ``(ΔR, J)`` of :func:`magexp.core.geometry.preintegrate` at
-    the readings' times; ``dataset.reference_norm`` the field magnitude ``F`` (fixed).
-    ``search`` bounds ``S`` and ``b``; the field direction spans the sphere and the gyro bias
-    ``±bias_bound_deg_s``.
-
-    Parameters
-    ----------
-    dataset, search, parameterisation
-        As :class:`magexp.problems.base.CalibrationProblem` (``search`` bounds ``S`` and ``b``).
-    bias_bound_deg_s : float
-        The gyro-bias bound of the search, deg/s.
-    start : str
-        :meth:`initial_estimate`'s start: ``two-stage`` (the default) or ``projected`` (``magexp calibrate``).
+    """Yuan 2018 eq 8 over ``[vec(S), b, field direction, gyro bias]`` (module docstring), on the
+    ``dataset.extra["preintegration"]`` of :func:`magexp.core.geometry.preintegrate`; ``search`` bounds
+    ``S`` and ``b``, the gyro bias ``±bias_bound_deg_s`` (deg/s); ``start`` is :meth:`initial_estimate`'s.
     """
 
     objective = "gyro"
@@ -95,76 +79,24 @@ class GyroAidedCalibration(CalibrationProblem):
         self.upper = np.concatenate([self.upper, [np.pi, np.pi / 2, b, b, b]])
 
     def unpack(self, thetas):
-        """``(W, o)`` of the first 12 parameters (the field direction and gyro bias left out).
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 17) or (17,)
-            Parameter vectors (module docstring).
-
-        Returns
-        -------
-        W : ndarray, shape (n, 3, 3)
-            The calibration matrices (``S^-1`` in the forward form).
-        o : ndarray, shape (n, 3)
-            The offsets ``b``.
-        """
+        """``(W, o)`` of the first 12 parameters (the field direction and gyro bias left out)."""
         w, o = super().unpack(thetas)
         return w, o[:, :3]
 
     def pack_all(self, w, o, field_dir, bias_deg_s) -> np.ndarray:
-        """The 17 parameters from ``W``, ``o``, a field direction vector and a bias (deg/s).
-
-        Parameters
-        ----------
-        w : ndarray, shape (3, 3)
-            The calibration matrix ``W``.
-        o : ndarray, shape (3,)
-            The offset ``b``.
-        field_dir : array_like, shape (3,)
-            The field's direction in the starting frame (any length).
-        bias_deg_s : array_like, shape (3,)
-            The gyro bias ``b_g`` (deg/s).
-
-        Returns
-        -------
-        ndarray, shape (17,)
-            ``[vec(S), b, a, e, b_g]``.
-        """
+        """The 17 parameters from ``W``, ``o``, a field direction vector and a bias (deg/s)."""
         d = np.asarray(field_dir, float) / np.linalg.norm(field_dir)
         return np.concatenate([self.pack(w, o), [np.arctan2(d[1], d[0]), np.arcsin(np.clip(d[2], -1, 1))],
                                bias_deg_s])
 
     def field(self, thetas) -> np.ndarray:
-        """The field ``h`` in the starting frame, ``(n, 3)``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 17) or (17,)
-            Parameter vectors (their ``a``, ``e``: columns 12, 13).
-
-        Returns
-        -------
-        ndarray, shape (n, 3)
-            ``h = F [cos e cos a, cos e sin a, sin e]``, ``F`` the dataset's reference total.
-        """
+        """The field ``h`` in the starting frame, ``(n, 3)``."""
         thetas = np.atleast_2d(thetas)
         a, e = thetas[:, 12], thetas[:, 13]
         return self.total * np.column_stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
 
     def reference_swarm(self, thetas) -> np.ndarray:
-        """``R_j(b_g)ᵀ h`` of every particle and reading, ``(n, M, 3)``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 17) or (17,)
-            Parameter vectors (their ``h`` and ``b_g``).
-
-        Returns
-        -------
-        ndarray, shape (n, M, 3)
-            The reference vectors of Yuan 2018's eq 8 with the attitude from the bias-corrected gyro.
-        """
+        """``R_j(b_g)ᵀ h`` of every particle and reading, ``(n, M, 3)``."""
         thetas = np.atleast_2d(thetas)
         # the attitudes once per distinct bias: a stacked Jacobian's 18 points share 15 (magexp.estimators.lm)
         biases, which = np.unique(thetas[:, 14:17], axis=0, return_inverse=True)
@@ -172,18 +104,7 @@ class GyroAidedCalibration(CalibrationProblem):
         return np.einsum("nmji,nj->nmi", rot, self.field(thetas))
 
     def residual_swarm(self, thetas) -> np.ndarray:
-        """``R_jᵀ h - W (B_j - b)`` of every particle and reading, ``(n, M, 3)``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 17) or (17,)
-            Parameter vectors (all 17 used).
-
-        Returns
-        -------
-        ndarray, shape (n, M, 3)
-            The residual vectors of ``F_g`` (module docstring).
-        """
+        """``R_jᵀ h - W (B_j - b)`` of every particle and reading, ``(n, M, 3)``."""
         w, o = self.unpack(thetas)
         with np.errstate(invalid="ignore", over="ignore"):
             cal = np.einsum("nij,nkj->nki", w, self.dataset.readings[None] - o[:, None, :])
@@ -192,107 +113,38 @@ class GyroAidedCalibration(CalibrationProblem):
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """48 float64 numbers per particle-reading: the ``(n, M, 3, 3)`` rotations of
-        :func:`~magexp.core.geometry.attitude_with_bias` and their intermediates, the references and
-        residuals (tracemalloc's peak of one call: 46.2 to 46.6 a particle-reading, 300 readings, 50
-        and 200 particles).
-
-        Parameters
-        ----------
-        n_readings, n_particles : int
-            As :meth:`CalibrationProblem.cost_floats` (``M`` and ``n`` here).
-
-        Returns
-        -------
-        int
-            ``48 M n``.
-        """
+        :func:`~magexp.core.geometry.attitude_with_bias`, their intermediates, the references and residuals."""
+        # tracemalloc's peak of one call: 46.2 to 46.6 a particle-reading (300 readings, 50 and 200 particles)
         return 48 * n_readings * n_particles
 
     def cost(self, thetas) -> np.ndarray:
-        """``F_g`` of every particle, ``(n, 17) -> (n,)``; non-finite values become ``inf``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 17)
-            The swarm.
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            ``F_g = sum_j |R_j(b_g)^T h - S^-1 (B_j - b)|`` of each (Yuan 2018, eq 8, module docstring).
-        """
+        """``F_g`` of every particle, ``(n, 17) -> (n,)``; non-finite values become ``inf``."""
         err = self.residual_swarm(thetas)
         f = np.sqrt(np.einsum("nmk,nmk->nm", err, err)).sum(axis=1)
         return np.where(np.isfinite(f), f, np.inf)
 
     def cost_direct(self, theta) -> float:
-        """``F_g`` of one parameter vector (:meth:`cost` of a swarm of one).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (17,)
-            One particle of :meth:`cost`'s swarm.
-
-        Returns
-        -------
-        float
-            Its cost.
-        """
+        """``F_g`` of one parameter vector (:meth:`cost` of a swarm of one)."""
         return float(self.cost(np.asarray(theta)[None])[0])
 
     def residuals(self, theta) -> np.ndarray:
-        """The ``3M`` residual components (for least squares).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (17,)
-            ``[vec(S), b, a, e, b_g]``.
-
-        Returns
-        -------
-        ndarray, shape (3M,)
-            The components of ``R_j^T h - W (B_j - b)``, reading by reading.
-        """
+        """The ``3M`` residual components (for least squares)."""
         return self.residual_swarm(np.asarray(theta)[None])[0].ravel()
 
     def fg(self, theta) -> float:
-        """Yuan 2018's ``F_g`` (eq 8) with the estimated field direction and gyro bias: :meth:`cost_direct`.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (17,)
-            The estimate (with its field direction and gyro bias).
-
-        Returns
-        -------
-        float
-            ``F_g``, module docstring.
-        """
+        """Yuan 2018's ``F_g`` (eq 8) with the estimated field direction and gyro bias: :meth:`cost_direct`."""
         return self.cost_direct(theta)
 
     def initial_estimate(self) -> np.ndarray:
         """The start of the fit: ``start="projected"`` :meth:`projected_start`, ``"two-stage"`` (the default, the
         papers' runs) :meth:`two_stage_start`.
-
-        Returns
-        -------
-        ndarray, shape (17,)
-            The starting parameter vector.
         """
         return self.projected_start() if self.start == "projected" else self.two_stage_start()
 
     def two_stage_start(self) -> np.ndarray:
-        """Two-stage start. The ellipsoid fit gives ``W`` up to a rotation, ``W = Q P`` (``P``
-        canonical) and the offset; with them fixed, least squares over the 8 numbers of ``Q``
-        (rotation vector), the field direction and the gyro bias (from zero, and the field direction
-        of the first calibrated reading, ``R_0 = I``) fits ``R_jᵀ h = Q P (B_j - b)``; the full
-        problem starts from there. From ``Q = I`` it can stall where few directions are left (a
-        calibration's held-out fold): ``magexp calibrate`` starts from :meth:`projected_start`.
-
-        Returns
-        -------
-        ndarray, shape (17,)
-            The starting parameter vector.
+        """The ellipsoid fit's ``W = Q P`` and offset, then least squares over ``Q``, the field direction and the
+        bias from ``Q = I`` (it can stall where few directions are left: ``magexp calibrate`` uses
+        :meth:`projected_start`).
         """
         # lazy: scipy.optimize costs 0.45-0.5 CPU-s to import, which magexp calibrate's gyro fits do not need
         from scipy.optimize import least_squares
@@ -308,17 +160,8 @@ class GyroAidedCalibration(CalibrationProblem):
         return full(sol.x)
 
     def projected_start(self) -> np.ndarray:
-        """Closed-form start, then the projected problem (module docstring): the ellipsoid fit gives
-        ``W = Q P`` up to a rotation ``Q`` and the offset; ``Q`` and the field ``h`` are the least-squares
-        solution of ``R_j Q P (B_j - b) = h`` with the gyroscope's attitude at zero bias (:func:`rotation_start`);
-        from that field direction and a zero bias, Levenberg-Marquardt over those 5 numbers with ``W`` and the
-        offset solved linearly at each (:meth:`projected`) reaches the optimum, where the full problem starts.
-
-        Returns
-        -------
-        ndarray, shape (17,)
-            The starting parameter vector.
-        """
+        """The module docstring's closed-form start (:func:`rotation_start`), then Levenberg-Marquardt over the
+        field direction and gyro bias with ``W`` and the offset solved linearly at each (:meth:`projected`)."""
         base = self._ellipsoid_start()
         w0, o0 = (a[0] for a in self.unpack(base))
         u = (self.dataset.readings - o0) @ w0.T
@@ -333,16 +176,6 @@ class GyroAidedCalibration(CalibrationProblem):
     def projected_residuals(self, z) -> np.ndarray:
         """The residuals of the projected problem at the field directions and biases ``z`` ``(n, 5)``: the part of
         ``R_j(b_g)ᵀ h`` no affine map ``W B_j + c`` of the readings reaches, ``(n, 3M)`` (module docstring).
-
-        Parameters
-        ----------
-        z : numpy.ndarray
-            ``(n, 5)`` rows ``[a, e, b_g]`` (parameters 12-16).
-
-        Returns
-        -------
-        numpy.ndarray
-            ``(n, 3M)``.
         """
         z = np.atleast_2d(z)
         y = self.reference_swarm(np.concatenate([np.zeros((len(z), 12)), z], axis=1))
@@ -352,16 +185,6 @@ class GyroAidedCalibration(CalibrationProblem):
     def projected(self, z) -> tuple:
         """``(W, o)`` solved linearly at the field direction and bias ``z`` ``(5,)``: the least-squares
         ``R_jᵀ h = W B_j + c``, ``o = -W⁻¹ c``; ``(None, None)`` where ``W`` is singular.
-
-        Parameters
-        ----------
-        z : numpy.ndarray
-            ``[a, e, b_g]``.
-
-        Returns
-        -------
-        tuple
-            ``(W (3, 3), o (3,))``.
         """
         y = self.reference_swarm(np.concatenate([np.zeros(12), z])[None])[0]
         design = np.column_stack([self.dataset.readings, np.ones(len(y))])
@@ -379,6 +202,7 @@ class GyroAidedCalibration(CalibrationProblem):
         return self._basis
 
     def _ellipsoid_start(self) -> np.ndarray:
+        """A 17-parameter start from an ellipsoid fit of the readings (a sphere about their mean if it fails)."""
         r = self.dataset.readings
         fitted = fit_ellipsoid(r, self.total)
         w, o = fitted if fitted is not None else (np.eye(3) * self.total / np.linalg.norm(r - r.mean(0), axis=1).mean(),
@@ -387,13 +211,7 @@ class GyroAidedCalibration(CalibrationProblem):
         return self.pack_all(w, o, w @ (self.dataset.readings[0] - o), np.zeros(3))
 
     def parameter_names(self) -> list[str]:
-        """The names of the 17 parameters, in :meth:`pack_all`'s order.
-
-        Returns
-        -------
-        list of str
-            :meth:`CalibrationProblem.parameter_names` and :data:`EXTRA`.
-        """
+        """The names of the 17 parameters, in :meth:`pack_all`'s order."""
         return super().parameter_names() + list(EXTRA)
 
     def metrics(self, theta) -> dict:
@@ -404,16 +222,6 @@ class GyroAidedCalibration(CalibrationProblem):
         ``condition_number``, ``weakest_relative_sv`` and ``weakest_combination`` of the column-scaled
         Jacobian, and ``se_<parameter>``, each parameter's standard error from it (``inf`` where the data
         leave it undetermined; :func:`magexp.core.identifiability.identifiability`).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (17,)
-            The estimator's result ``x``.
-
-        Returns
-        -------
-        dict
-            The keys above (floats; ``weakest_combination`` a text).
         """
         theta = np.asarray(theta, float)
         err = self.residual_swarm(theta[None])[0]
@@ -440,36 +248,13 @@ class GyroAidedCalibration(CalibrationProblem):
         return out
 
     def invariants(self, theta):
-        """What the data identify: here every parameter (the weak combinations are reported by :meth:`metrics`).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (17,)
-            The estimate.
-
-        Returns
-        -------
-        ndarray, shape (17,)
-            ``theta`` as floats.
-        """
+        """What the data identify: here every parameter (the weak combinations are reported by :meth:`metrics`)."""
         return np.asarray(theta, float)
 
 
 def rotation_start(rot: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(Q, h)``: the rotation ``Q`` and field ``h`` of the closed-form start (module docstring) from the
     attitudes ``rot`` ``(M, 3, 3)`` (body -> start) and the ellipsoid-calibrated readings ``u`` ``(M, 3)``.
-
-    Parameters
-    ----------
-    rot : numpy.ndarray
-        ``(M, 3, 3)`` the gyroscope's attitudes ``R_j``.
-    u : numpy.ndarray
-        ``(M, 3)`` the readings calibrated up to a rotation, ``P (B_j - b)``.
-
-    Returns
-    -------
-    tuple
-        ``(Q (3, 3) proper rotation, h (3,))``.
     """
     rows = np.einsum("mia,mb->miab", rot, u).reshape(len(u), 3, 9)  # R_j Q u_j = rows_j vec(Q)
     rows = rows - rows.mean(axis=0)

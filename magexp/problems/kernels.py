@@ -1,22 +1,15 @@
 """Fused (single-pass) swarm costs: every particle's objective in one pass over the readings.
 
-Each kernel reads every reading once, keeps one accumulator per particle and never forms an
-``N × P`` array: memory is ``O(P + N)`` whatever the swarm and the data. Two implementations
-compute the same numbers:
-
-* a compiled one (``numba.njit``; reading loop outside, particle loop inside, so the inner
-  loop vectorises without reassociating any sum: no ``fastmath``, no threads, the same bits in
-  every process; ``cache=True`` stores the machine code beside this module);
-* a pure-numpy fallback, chunked over readings (at most :data:`CHUNK` particle-readings per
-  temporary), used when numba is missing or ``MAGEXP_NUMBA=0``: the compiled kernel's operations
-  in its order, element by element (no BLAS product, whose sums depend on the shape of the whole
-  swarm), so that in both a particle's cost does not depend on the particles evaluated with it nor
-  on the chunks (checked bit for bit; a fitted ``fun`` is ``cost(x)``); the tests compare the two
-  implementations to 1e-9 (they gave the same bits on the machines measured).
+Each kernel reads every reading once, keeps one accumulator per particle and never forms an ``N × P``
+array (memory ``O(P + N)``). A compiled one (``numba.njit``, ``cache=True``; reading loop outside,
+particle loop inside, so the inner loop vectorises without reassociating any sum: no ``fastmath``, no
+threads) and a pure-numpy fallback (chunks of at most :data:`CHUNK` particle-readings, used when numba
+is missing or ``MAGEXP_NUMBA=0``: the same operations in the same order, no BLAS product) compute the
+same numbers: a particle's cost depends neither on the particles evaluated with it nor on the chunks.
 
 numba is imported on the first swarm-cost call only: a closed-form run (``ellipsoid``, ``lm``) on
 fewer than :data:`COMPILE_MIN_READINGS` readings never pays for it; from that size on, the scalar
-residuals are compiled too (the O(N) bound evaluates them 30 times).
+residuals are compiled too (the O(N) bound evaluates them many times).
 
 Scalar objective (Ding 2024, eq 17), with readings centred and scaled, ``u = (r - c)/s``:
 
@@ -25,15 +18,14 @@ Scalar objective (Ding 2024, eq 17), with readings centred and scaled, ``u = (r 
           \\mathbf f_i = [x^2, y^2, z^2, 2xy, 2xz, 2yz, x, y, z, 1]_i
 
 and ``a_p`` the ten coefficients of ``|W_p (r - o_p)|² = u^T A u - 2 o'^T A u + o'^T A o'``
-(``A = s² W^T W``, ``o' = (o - c)/s``; :func:`scalar_coefficients`).
+(``A = s² W^T W``, ``o' = (o - c)/s``; :func:`scalar_coefficients`): ten multiply-adds and one square
+root per particle-reading.
 
-Vector objective (Yuan 2018, eq 8):
+Vector objective (Yuan 2018, eq 8), each component formed as in the direct formula (no expansion of
+the squared norm), so ``F`` is exact to rounding at a noise-free optimum:
 
 .. math:: F_p = \\textstyle\\sum_i \\lVert \\mathbf v_i - W_p(\\mathbf r_i - \\mathbf o_p)\\rVert,
           \\quad \\mathbf v_i = C_i^b \\mathbf H_i
-
-each component formed as in the direct formula (no expansion of the squared norm), so ``F`` is
-exact to rounding at a noise-free optimum.
 """
 
 from __future__ import annotations
@@ -70,39 +62,15 @@ _COMPILED_ALLOWED = ContextVar("magexp_compiled_allowed", default=True)
 def fused_enabled() -> bool:
     """Whether the compiled kernels are wanted and installed (``MAGEXP_NUMBA`` not ``0``, numba
     findable, not within :func:`numpy_only`), without importing numba: the path :func:`compiled` takes.
-
-    Returns
-    -------
-    bool
-        True when :func:`compiled` would return the numba kernels.
     """
     return (_COMPILED_ALLOWED.get() and os.environ.get("MAGEXP_NUMBA", "1") != "0"
             and importlib.util.find_spec("numba") is not None)
 
 
 def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None) -> int:
-    """float64 numbers one swarm-cost call holds beyond the problem's data, on the path it takes
-    (``fused``: None, the compiled kernel if :func:`fused_enabled`; False: the numpy fallback).
-
-    The fused kernel: :data:`FUSED_FLOATS_PER_PARTICLE` per particle,
-    whatever the readings. The numpy fallback: :data:`CHUNK_TEMPORARIES` ``[rows]`` arrays of one chunk,
-    ``max(CHUNK, rows P)`` particle-readings (a chunk holds at least one reading of every particle's
-    ``rows`` components), beside ten features or seven columns of each of its readings, and
-    :data:`FALLBACK_FLOATS_PER_PARTICLE` a particle for the coefficients.
-
-    Parameters
-    ----------
-    n_particles : int
-        The swarm's size ``P``.
-    rows : int
-        The components of a reading's residual: 1 (scalar cost) or 3 (vector cost).
-    fused : bool, optional
-        The path: None, the one :func:`fused_enabled` says; True, compiled; False, numpy.
-
-    Returns
-    -------
-    int
-        The float64 numbers held.
+    """float64 numbers one swarm-cost call holds beyond the problem's data, on the path it takes (``fused``: None
+    as :func:`fused_enabled` says, False the numpy fallback): :data:`FUSED_FLOATS_PER_PARTICLE` a particle
+    compiled; in numpy :data:`CHUNK_TEMPORARIES` chunks of ``max(CHUNK, rows P)`` and the coefficients.
     """
     if fused_enabled() if fused is None else fused:
         return FUSED_FLOATS_PER_PARTICLE * n_particles
@@ -113,15 +81,8 @@ def working_floats(n_particles: int, rows: int = 1, *, fused: bool | None = None
 
 @contextmanager
 def numpy_only(on: bool = True):
-    """Within the block (this thread or task only), :func:`compiled` is None when ``on``: the caller's
-    choice of the numpy path for the kernels it calls (``magexp calibrate``'s ``compiled=False``), an
-    argument rather than the process's environment; afterwards the choice is as it was.
-
-    Parameters
-    ----------
-    on : bool
-        True: numpy within the block; False: the choice is left as it is.
-    """
+    """Within the block (this thread or task only), :func:`compiled` is None when ``on``: ``magexp calibrate``'s
+    ``compiled=False`` as an argument rather than the process's environment."""
     token = _COMPILED_ALLOWED.set(_COMPILED_ALLOWED.get() and not on)
     try:
         yield
@@ -132,11 +93,6 @@ def numpy_only(on: bool = True):
 def compiled():
     """The numba kernels (a namespace), or None when numba is unavailable, ``MAGEXP_NUMBA=0``, or within
     :func:`numpy_only`.
-
-    Returns
-    -------
-    module or None
-        :mod:`magexp.problems._compiled`, or None (the numpy path).
     """
     return _loaded() if _COMPILED_ALLOWED.get() else None
 
@@ -157,28 +113,8 @@ compiled.cache_clear = _loaded.cache_clear  # MAGEXP_NUMBA read again (the tests
 
 
 def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
-    """The cost of every particle ``thetas`` (P, 12) ``= [vec(W), o]`` in one compiled call:
-    ``kernel = (kind, data, reference, params)``, a problem's arguments prepared once
-    (:meth:`magexp.problems.base.CalibrationProblem.swarm_kernel`); no per-call conversion but
-    making ``thetas`` a C-contiguous float array (2-D), which an engine's swarm already is.
-
-    Parameters
-    ----------
-    kernel : tuple
-        ``(kind, data, reference, params)`` of a problem's :meth:`swarm_kernel`.
-    thetas : ndarray, shape (P, 12)
-        The particles (one 12-vector is taken as one particle).
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Every particle's cost: Ding 2024's eq 17 or Yuan 2018's eq 8 (module docstring).
-
-    Raises
-    ------
-    MagexpError
-        One line for parameter vectors without 12 columns.
-    """
+    """The cost of every particle ``thetas`` (P, 12) in one compiled call on a problem's prepared ``kernel``
+    (:meth:`magexp.problems.base.CalibrationProblem.swarm_kernel`), with no per-call conversion."""
     thetas = np.ascontiguousarray(thetas, float)
     if thetas.ndim != 2:
         thetas = thetas.reshape(1, -1)
@@ -191,23 +127,6 @@ def swarm_cost(kernel: tuple, thetas: np.ndarray) -> np.ndarray:
 def scalar_coefficients(w: np.ndarray, o: np.ndarray, centre: np.ndarray, scale: float) -> np.ndarray:
     """The ten quadratic-form coefficients of every particle, shape ``(P, 10)`` (module docstring),
     element by element in the compiled kernel's order (no sum left to a library).
-
-    Parameters
-    ----------
-    w : ndarray, shape (P, 3, 3)
-        Every particle's ``W``.
-    o : ndarray, shape (P, 3)
-        Every particle's offset.
-    centre : ndarray, shape (3,)
-        The readings' centre ``c``.
-    scale : float
-        The readings' scale ``s``.
-
-    Returns
-    -------
-    ndarray, shape (P, 10)
-        ``[A00, A11, A22, A01, A02, A12, -2 (A o')_0..2, o'^T A o']`` with ``A = s² W^T W``,
-        ``o' = (o - c) / s``.
     """
     a = scale * scale * (w[:, 0, :, None] * w[:, 0, None, :] + w[:, 1, :, None] * w[:, 1, None, :]
                          + w[:, 2, :, None] * w[:, 2, None, :])
@@ -218,15 +137,17 @@ def scalar_coefficients(w: np.ndarray, o: np.ndarray, centre: np.ndarray, scale:
 
 
 def _chunks(n: int, n_particles: int):
+    """Slices of the ``n`` readings, at most :data:`CHUNK` particle-readings each: the numpy fallback's
+    bound on memory."""
     step = max(1, CHUNK // max(n_particles, 1))
     return (slice(k, min(k + step, n)) for k in range(0, n, step))
 
 
 def _add_rows(acc: np.ndarray, terms: np.ndarray) -> None:
-    """``acc += terms[0] + terms[1] + ...`` column by column, one row after another: the order of the
-    compiled kernels' accumulators (one reading after another), so a particle's sum depends neither on
-    the particles beside it nor on the chunks. ``terms`` (rows, P) is overwritten. numpy reduces the
-    rows of several columns one after another, but a lone column pairwise: that one is accumulated."""
+    """``acc += terms[0] + terms[1] + ...`` row after row, the compiled accumulators' order (``terms`` overwritten),
+    so a particle's sum depends on neither its neighbours nor the chunks; a lone column, which numpy would
+    sum pairwise, is accumulated.
+    """
     terms[0] += acc
     if terms.shape[1] == 1:
         acc[0] = np.add.accumulate(terms[:, 0])[-1]
@@ -235,21 +156,8 @@ def _add_rows(acc: np.ndarray, terms: np.ndarray) -> None:
 
 
 def scalar_cost_numpy(w, o, centre, scale, u, reference) -> np.ndarray:
-    """Total-field RMS of every particle (fallback), chunk by chunk: the compiled kernel's operations
-    in its order, element by element over (readings, particles) arrays (the ten products added left
-    to right, the squared errors summed reading after reading, :func:`_add_rows`). A particle's cost
-    does not depend on the particles evaluated with it (a BLAS product's would).
-
-    Parameters
-    ----------
-    w, o, centre, scale, u, reference
-        As :func:`scalar_cost`.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Every particle's total-field RMS (Ding 2024, eq 17).
-    """
+    """Total-field RMS of every particle (fallback), chunk by chunk, in the compiled kernel's order element by
+    element (no BLAS product, whose sums would depend on the other particles; :func:`_add_rows`)."""
     coef = scalar_coefficients(w, o, centre, scale).T.copy()  # (10, P), contiguous rows
     acc = np.zeros(coef.shape[1])
     for rows in _chunks(len(u), coef.shape[1]):
@@ -266,26 +174,6 @@ def scalar_cost_numpy(w, o, centre, scale, u, reference) -> np.ndarray:
 def scalar_cost(w, o, centre, scale, u, reference) -> np.ndarray:
     """Total-field RMS of every particle, ``(P,)``, from ``W`` (P, 3, 3), ``o`` (P, 3), the
     normalisation ``centre``, ``scale``, the normalised readings ``u`` (N, 3) and ``B_a`` (N,).
-
-    Parameters
-    ----------
-    w : ndarray, shape (P, 3, 3)
-        Every particle's ``W``.
-    o : ndarray, shape (P, 3)
-        Every particle's offset ``o``.
-    centre : ndarray, shape (3,)
-        The readings' centre ``c`` (:func:`magexp.core.ellipsoid.normalise`).
-    scale : float
-        The readings' scale ``s``.
-    u : ndarray, shape (N, 3)
-        The normalised readings ``(r - c) / s``.
-    reference : ndarray, shape (N,)
-        The reference total field ``B_a,i``.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        ``RMS_p`` of Ding 2024's eq 17 (module docstring).
     """
     nb = compiled()
     if nb is None:
@@ -295,24 +183,7 @@ def scalar_cost(w, o, centre, scale, u, reference) -> np.ndarray:
 
 
 def scalar_residuals(w, o, readings, reference) -> np.ndarray:
-    """``|W (r_i - o)| - B_a,i`` of one calibration, ``(N,)`` (compiled for large ``N``).
-
-    Parameters
-    ----------
-    w : ndarray, shape (3, 3)
-        The calibration matrix ``W``.
-    o : ndarray, shape (3,)
-        The offset ``o``.
-    readings : ndarray, shape (N, 3)
-        The raw readings ``r_i``.
-    reference : ndarray, shape (N,)
-        The reference total field ``B_a,i``.
-
-    Returns
-    -------
-    ndarray, shape (N,)
-        The residuals of Ding 2024's eq 17.
-    """
+    """``|W (r_i - o)| - B_a,i`` of one calibration, ``(N,)`` (compiled for large ``N``)."""
     nb = compiled() if len(readings) >= COMPILE_MIN_READINGS else None
     if nb is None:
         return np.linalg.norm((readings - o) @ w.T, axis=1) - reference
@@ -321,24 +192,8 @@ def scalar_residuals(w, o, readings, reference) -> np.ndarray:
 
 # -- vector objective ----------------------------------------------------------------------------
 def vector_cost_numpy(w, o, readings, reference, *, squared: bool = False) -> np.ndarray:
-    """``F`` of every particle (fallback), chunk by chunk: the compiled kernel's operations in its
-    order, element by element over (readings, particles) arrays (``d = r_i - o``,
-    ``e_j = v_ij - (W_j0 d_0 + W_j1 d_1 + W_j2 d_2)``, ``|e|`` summed reading after reading,
-    :func:`_add_rows`), so a particle's ``F`` does not depend on the particles evaluated with it.
-    ``squared=True`` sums ``|e_i|^2`` instead of ``|e_i|`` (the least-squares form).
-
-    Parameters
-    ----------
-    w, o, readings, reference
-        As :func:`vector_cost`.
-    squared : bool
-        Sum ``|e_i|²`` instead of ``|e_i|``.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Every particle's ``F`` (Yuan 2018, eq 8), or its sum of squares.
-    """
+    """``F`` of every particle (fallback), chunk by chunk, in the compiled kernel's order element by element
+    (:func:`_add_rows`); ``squared=True`` sums ``|e_i|^2`` instead of ``|e_i|`` (the least-squares form)."""
     acc = np.zeros(len(w))
     for rows in _chunks(len(readings), len(w)):
         r, v = readings[rows], reference[rows]
@@ -358,20 +213,6 @@ def vector_cost_numpy(w, o, readings, reference, *, squared: bool = False) -> np
 def vector_cost(w, o, readings, reference) -> np.ndarray:
     """``F`` of every particle, ``(P,)``, from ``W`` (P, 3, 3), ``o`` (P, 3), readings and
     reference vectors ``v_i`` (N, 3); non-finite values become ``inf``.
-
-    Parameters
-    ----------
-    w, o : ndarray, shapes (P, 3, 3) and (P, 3)
-        Every particle's calibration ``W (r - o)``.
-    readings : ndarray, shape (N, 3)
-        The raw readings ``r_i``.
-    reference : ndarray, shape (N, 3)
-        The reference vectors ``v_i = C_i^b H_i``.
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        ``F_p = sum_i |v_i - W_p (r_i - o_p)|`` (Yuan 2018, eq 8), ``inf`` where not finite.
     """
     nb = compiled()
     with np.errstate(invalid="ignore", over="ignore"):

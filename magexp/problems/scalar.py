@@ -21,20 +21,10 @@ from magexp.problems.base import SCALAR, CalibrationProblem
 
 
 class ScalarCalibration(CalibrationProblem):
-    """Total-field RMS of the calibrated readings against the reference field.
+    """Total-field RMS of the calibrated readings against the reference field (Ding 2024 eqs 17-18).
 
-    ``cost`` evaluates a whole swarm in one pass over the readings
-    (:func:`magexp.problems.kernels.scalar_cost`): with the readings centred and scaled,
-    ``u = (r - c)/s``, the squared calibrated magnitude
-    ``|W (r - o)|² = u^T A u - 2 o'^T A u + o'^T A o'`` (``A = s² W^T W``,
-    ``o' = (o - c)/s``) is linear in the ten quadratic features of ``u``, so each
-    particle-reading costs ten multiply-adds and one square root, and memory is ``O(P + N)``.
-    ``cost_direct`` evaluates the textbook formula and is used for reported numbers.
-
-    Parameters
-    ----------
-    dataset, search, parameterisation
-        As :class:`magexp.problems.base.CalibrationProblem`.
+    ``cost`` is the fused swarm cost of :mod:`magexp.problems.kernels` (the ten quadratic features of the
+    centred readings, memory ``O(P + N)``); ``cost_direct`` the textbook formula, used for reported numbers.
     """
 
     objective = "scalar"
@@ -52,6 +42,7 @@ class ScalarCalibration(CalibrationProblem):
 
     @cached_property
     def _swarm_kernel(self) -> tuple | None:
+        """The compiled swarm cost's arguments, built once (:meth:`swarm_kernel` returns them)."""
         if self.parameterisation != "inverse" or kernels.compiled() is None:
             return None  # W = S^-1 is inverted by numpy in unpack
         c, s, u = self._normalised
@@ -61,60 +52,22 @@ class ScalarCalibration(CalibrationProblem):
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """The fused cost's working memory (:func:`magexp.problems.kernels.working_floats`): ``O(P)``
         compiled, one chunk in numpy; never ``N × P``.
-
-        Parameters
-        ----------
-        n_readings, n_particles : int
-            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (one pass, no ``N × P`` array).
-
-        Returns
-        -------
-        int
-            ``working_floats(n_particles)``.
         """
         return kernels.working_floats(n_particles)
 
     def swarm_kernel(self) -> tuple | None:
-        """``(SCALAR, u, B_a (N, 1), [c, s])`` in the inverse parameterisation with numba, else None.
-
-        Returns
-        -------
-        tuple or None
-            The compiled swarm cost's arguments, or None.
-        """
+        """``(SCALAR, u, B_a (N, 1), [c, s])`` in the inverse parameterisation with numba, else None."""
         return self._swarm_kernel
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
-        """Total-field RMS of every particle, ``(n, 12) -> (n,)``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 12)
-            The swarm, ``[vec(M^-1), I]`` rows (inverse, Ding 2024's unknowns) or ``[vec(S), b]`` (forward).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            ``RMS(θ) = sqrt(mean_i (|W (r_i - o)| - B_a,i)²)``, Ding 2024's eq 17 (module docstring).
-        """
+        """Total-field RMS of every particle, ``(n, 12) -> (n,)``."""
         if self._swarm_kernel is not None:
             return kernels.swarm_cost(self._swarm_kernel, thetas)
         w, o = self.unpack(thetas)
         return kernels.scalar_cost(w, o, *self._normalised, self._reference)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
-        """``|W (r_i - o)| - B_a,i`` for one parameter vector (direct formula).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            One particle of :meth:`cost`'s swarm.
-
-        Returns
-        -------
-        ndarray, shape (N,)
-            The residuals of Ding 2024's eq 17.
-        """
+        """``|W (r_i - o)| - B_a,i`` for one parameter vector (direct formula)."""
         w, o = self.unpack(theta)
         return kernels.scalar_residuals(w[0], o[0], self.dataset.readings, self._reference)
 
@@ -124,52 +77,19 @@ class ScalarCalibration(CalibrationProblem):
 
     def cost_direct(self, theta: np.ndarray) -> float:
         """Total-field RMS of one parameter vector by the direct formula: the RMS of :meth:`residuals`,
-        :func:`magexp.core.metrics.total_field_rms` with compiled residuals for many readings (it is
-        also :meth:`field_rms`, so the runs carry it once, as ``fun``).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            One particle, as :meth:`residuals` takes it.
-
-        Returns
-        -------
-        float
-            Ding 2024's eq 17 (= its metric, eq 18) at ``theta``.
+        :func:`magexp.core.metrics.total_field_rms` with compiled residuals for many readings (the
+        ``field_rms`` metric the vector problem adds; here the runs carry it once, as ``fun``).
         """
         return rms(self.residuals(theta))
 
     def invariants(self, theta: np.ndarray) -> np.ndarray:
-        """What a scalar fit identifies: the 6 entries of ``W^T W`` (upper triangle) and ``o``.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The calibration (its rotation is not seen).
-
-        Returns
-        -------
-        ndarray, shape (9,)
-            ``[(W^T W)_11, _12, _13, _22, _23, _33, o]``.
-        """
+        """What a scalar fit identifies: the 6 entries of ``W^T W`` (upper triangle) and ``o``."""
         w, o = self.unpack(theta)
         g = w[0].T @ w[0]
         return np.concatenate([g[np.triu_indices(3)], o[0]])
 
     def invariant_bounds(self, theta: np.ndarray, cov: np.ndarray) -> dict:
-        """Expected error sizes from the CRB covariance of :meth:`invariants`.
-
-        Parameters
-        ----------
-        theta, cov : ndarray
-            As :meth:`CalibrationProblem.invariant_bounds`, ``cov`` (9, 9) here.
-
-        Returns
-        -------
-        dict
-            ``offset_bound`` (root of the offset block's trace) and ``gram_bound`` (the expected Frobenius
-            error of ``W^T W`` relative to its norm, off-diagonal variances counted twice).
-        """
+        """Expected error sizes from the CRB covariance of :meth:`invariants`."""
         w, _ = self.unpack(theta)
         g = w[0].T @ w[0]
         return {"offset_bound": float(np.sqrt(np.trace(cov[-3:, -3:]))),

@@ -1,19 +1,12 @@
 """Yan & Zhou 2022: a ship's magnetization parameters ``K`` and ``Bp`` from known ``Be`` and attitudes.
 
-Model (eq 1): :math:`\\mathbf B_i = \\mathbf K\\mathbf A_i\\mathbf B_e + \\mathbf B_p`, linear in
-``theta = [vec(K) (row-major), Bp]``. With the regressor row (eq 6)
-
-.. math:: \\mathbf C_i = [\\mathbf B_e^T\\mathbf A_i^T,\\ 1]\\quad(1\\times4),\\qquad
-          \\mathbf y_i = \\mathbf B_i^T = \\mathbf C_i\\,\\mathbf x,\\qquad
-          \\mathbf x = [\\mathbf K\\ \\mathbf B_p]^T\\ (4\\times3)
-
-every reading is one row of ``Y = C x``. This is the forward form of the vector problem
-(Yuan 2018 eq 1 with ``S = K``, ``b = Bp``, ``u_i = A_i Be``): the design, least squares and the
-state <-> parameter maps come from :class:`~magexp.problems.vector.LinearVectorModel`, shared
-with :class:`~magexp.problems.vector.VectorCalibration`; only the objective differs (here the
-RMS of the forward residuals, there Yuan's eq 8). In the calibration form of :class:`~magexp.problems.base.CalibrationProblem` this is the
-``forward`` parameterisation ``reading = S b + o`` with ``S = K``, ``o = Bp``, so
-:meth:`calibrate` returns ``K^-1 (B - Bp) = A Be``, the ambient field in the ship frame.
+Model (eq 1): :math:`\\mathbf B_i = \\mathbf K\\mathbf A_i\\mathbf B_e + \\mathbf B_p`, the forward form of
+the vector problem (Yuan 2018 eq 1 with ``S = K``, ``b = Bp``, ``u_i = A_i Be``): every reading is one row
+of ``Y = C x`` with ``C_i = [Be^T A_i^T, 1]`` (eq 6), and the design, least squares and the state <->
+parameter maps come from :class:`~magexp.problems.vector.LinearVectorModel`; only the objective differs
+(here the RMS of the forward residuals, there Yuan's eq 8). In the ``forward`` parameterisation of
+:class:`~magexp.problems.base.CalibrationProblem`, :meth:`~magexp.problems.base.CalibrationProblem.calibrate` returns
+``K^-1 (B - Bp) = A Be``, the ambient field in the ship frame.
 """
 
 from __future__ import annotations
@@ -26,40 +19,17 @@ from magexp.problems.vector import LinearVectorModel, theta_to_state
 
 
 class ShipMagnetization(LinearVectorModel, CalibrationProblem):
-    """Fit residual of ``B = K A Be + Bp`` over the readings.
+    """Fit residual of ``B = K A Be + Bp`` (Yan 2022 eqs 1-2): ``cost`` the RMS of the ``3N`` components of ``C x - Y``.
 
-    ``cost`` is the RMS over the ``3N`` components of ``C x - Y``; its swarm evaluation does
-    not depend on ``N``. With the thin QR factorisation ``C = Q R`` (``R`` 4 × 4) and
-    ``Z = Q^T Y`` (4 × 3), Pythagoras splits the residual into the part in the column space
-    of ``C`` and the least-squares residual, which no particle can change:
+    The swarm cost does not depend on ``N``: with ``C = Q R`` (thin QR) and ``Z = Q^T Y``, Pythagoras
+    splits off the least-squares residual ``rho`` no particle can change,
 
-    .. math:: \\lVert C x - Y\\rVert_F^2 = \\lVert R x - Z\\rVert_F^2
-              + \\lVert (I - Q Q^T) Y\\rVert_F^2,\\qquad
-              \\mathrm{cost}(x) = \\sqrt{\\tfrac{1}{3N}\\big(\\lVert R x - Z\\rVert_F^2 + \\rho\\big)}
+    .. math:: \\mathrm{cost}(x) = \\sqrt{\\tfrac{1}{3N}\\big(\\lVert R x - Z\\rVert_F^2 + \\rho\\big)},\\qquad
+              \\rho = \\lVert (I - Q Q^T) Y\\rVert_F^2
 
-    ``vec(R x)`` is linear in ``theta``, so ``(n × 12) @ (12 × 12)`` gives every particle's
-    ``R x`` at once; ``rho`` is computed once, as a sum of squares of residuals. Both terms
-    are sums of squares, so nothing cancels: the result is exact to rounding even for a
-    perfect fit (``~1e-11`` nT, like the direct formula). The Gram expansion
-    ``tr(x^T C^T C x) - 2 tr(x^T C^T Y) + ||Y||^2`` is as fast but subtracts numbers of
-    ``||Y||^2 ~ 1e12`` nT²: relative error ~1e-10 with 100 nT noise and an RMS of ~1e-3 nT
-    (instead of ~1e-11) at a noise-free truth.
-
-    Measured (``python -m magexp.perf.bench``, population 50, 300 readings, one BLAS thread):
-    1.4e9 to 2.5e9 particle-readings/s against 1.9e7 to 2.4e7 for the batched ``einsum`` of
-    :meth:`predict` (65x to 130x; at the paper's 12 readings about 4x, call overhead then
-    dominates);
-    largest relative difference from :meth:`cost_direct` ~3e-15 on random particles.
-
-    ``residuals`` stacks the ``3N`` components for ``lm``; :meth:`least_squares` is the
-    closed-form solution the filter converges to when rows are reused.
-
-    Parameters
-    ----------
-    dataset : Dataset
-        The ship's readings, attitudes and field (Yan & Zhou 2022 eq 1).
-    search : SearchBox
-        The bounds of ``K`` and ``Bp``.
+    and ``vec(R x)`` is linear in ``theta`` (one ``(n × 12) @ (12 × 12)`` product for the swarm). Both
+    terms are sums of squares, so nothing cancels (the Gram expansion ``tr(x^T C^T C x) - 2 tr(x^T C^T Y)
+    + ||Y||^2`` would subtract numbers of ``||Y||^2`` and lose the noise-free optimum to rounding).
     """
 
     objective = "ship"
@@ -75,76 +45,27 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         self._target = z.ravel()  # vec(Z)
 
     def parameter_names(self) -> list[str]:
-        """The names of the 12 parameters, in ``theta``'s order.
-
-        Returns
-        -------
-        list of str
-            ``K11``...``K33``, ``Bp1``...``Bp3`` (Yan & Zhou 2022's ``K`` and ``Bp``).
-        """
+        """The names of the 12 parameters, in ``theta``'s order."""
         return [f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"Bp{i + 1}" for i in range(3)]
 
     def predict(self, thetas: np.ndarray) -> np.ndarray:
-        """Modelled readings ``C x`` for every particle, shape ``(n, N, 3)``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 12) or (12,)
-            Parameter vectors ``[vec(K), Bp]``.
-
-        Returns
-        -------
-        ndarray, shape (n, N, 3)
-            ``K A_i Be + Bp`` (eq 1) of every particle and reading.
-        """
+        """Modelled readings ``C x`` for every particle, shape ``(n, N, 3)``."""
         return np.einsum("ij,njk->nik", self._c, theta_to_state(thetas))
 
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """48 float64 numbers per particle, whatever the readings (``R x - Z`` and its squares;
         tracemalloc's peak of one call: 37 to 39 a particle, 50 and 200 particles).
-
-        Parameters
-        ----------
-        n_readings, n_particles : int
-            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (the QR form).
-
-        Returns
-        -------
-        int
-            ``48 n_particles``.
         """
         return 48 * n_particles
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
-        """Fit residual RMS of every particle, ``(n, 12) -> (n,)`` (class docstring: QR form).
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 12)
-            Parameter vectors ``[vec(K), Bp]``.
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            ``sqrt(|C x - Y|_F² / 3N)`` of each (eqs 1 and 6).
-        """
+        """Fit residual RMS of every particle, ``(n, 12) -> (n,)`` (class docstring: QR form)."""
         d = np.atleast_2d(thetas) @ self._map - self._target
         return np.sqrt((np.einsum("nk,nk->n", d, d) + self._floor) / self._y.size)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
-        """``K A_i Be + Bp - B_i`` for every reading, stacked (3N,), by eq 1 directly.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            ``[vec(K), Bp]`` (row-major).
-
-        Returns
-        -------
-        ndarray, shape (3N,)
-            The residuals of Yan & Zhou 2022's eq 1.
-        """
+        """``K A_i Be + Bp - B_i`` for every reading, stacked (3N,), by eq 1 directly."""
         k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
         body = np.einsum("nij,nj->ni", self.dataset.attitude, self.dataset.field_nav)
         return (body @ k.T + bp - self._y).ravel()
@@ -152,18 +73,6 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
     def jacobians(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(J, G)`` of :meth:`residuals` (linear: independent of ``theta``): ``J`` ``(3N, 12)``
         with ``∂r_i/∂K_jk = e_j (A_i Be)_k`` and ``∂r_i/∂Bp = I``; ``G_i = ∂r_i/∂B_i = -I``.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            A parameter vector (the model is linear: unused).
-
-        Returns
-        -------
-        J : ndarray, shape (3N, 12)
-            ``∂r/∂θ``.
-        G : ndarray, shape (N, 3, 3)
-            ``∂r_i/∂B_i``.
         """
         body = self._c[:, :3]  # (A_i Be)^T, the regressors of eq 6
         n = len(body)
@@ -173,34 +82,13 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         return jac.reshape(3 * n, 12), np.broadcast_to(-np.eye(3), (n, 3, 3))
 
     def cost_direct(self, theta: np.ndarray) -> float:
-        """Fit residual RMS (nT) of one parameter vector.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The magnetization, as :meth:`residuals` takes it.
-
-        Returns
-        -------
-        float
-            The RMS of the residuals of Yan & Zhou 2022's eq 1.
-        """
+        """Fit residual RMS (nT) of one parameter vector."""
         return rms(self.residuals(theta))
 
     def metrics(self, theta: np.ndarray) -> dict:
         """``fit_rms`` (nT); the estimate per parameter (``K11``...``Bp3``); its distance to the
         least-squares solution (``k_vs_ls`` max abs, ``bp_vs_ls`` max abs nT) and ``ls_fit_rms``;
         with a known truth ``k_error`` (max abs), ``bp_error`` (max abs, nT) and ``truth_<name>``.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The filter's (or any estimator's) ``[vec(K), Bp]``.
-
-        Returns
-        -------
-        dict
-            The keys above, floats.
         """
         theta = np.asarray(theta, float)
         ls = self.least_squares()

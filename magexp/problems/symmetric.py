@@ -16,18 +16,6 @@ MIRROR = np.array([0, 1, 2, 1, 3, 4, 2, 4, 5])  # the 9 row-major entries from t
 
 
 def expand(q: np.ndarray) -> np.ndarray:
-    """12-vectors ``[vec(M), o]`` with ``M`` symmetric from 9-vectors ``q``.
-
-    Parameters
-    ----------
-    q : array of shape (n, 9) or (9,)
-        ``[M11, M12, M13, M22, M23, M33, o1, o2, o3]`` per row.
-
-    Returns
-    -------
-    numpy.ndarray of shape (n, 12)
-        ``[M11, M12, M13, M21, M22, M23, M31, M32, M33, o1, o2, o3]``, ``M21 = M12``, ``M31 = M13``,
-        ``M32 = M23``.
-    """
+    """12-vectors ``[vec(M), o]`` with ``M`` symmetric from 9-vectors ``q``."""
     q = np.atleast_2d(q)
     return np.concatenate([q[:, MIRROR], q[:, 6:]], axis=1)

@@ -23,36 +23,14 @@ from magexp.problems.base import VECTOR, CalibrationProblem, inverse, reference_
 
 
 def state_to_theta(x: np.ndarray) -> np.ndarray:
-    """Forward ``theta = [vec(S) (row-major), b]`` (..., 12) from linear states ``x = [S b]^T`` (..., 4, 3).
-
-    Parameters
-    ----------
-    x : array_like, shape (..., 4, 3)
-        Linear states ``[S b]^T`` (Yan & Zhou 2022's ``[K Bp]^T``).
-
-    Returns
-    -------
-    ndarray, shape (..., 12)
-        ``[vec(S), b]``.
-    """
+    """Forward ``theta = [vec(S) (row-major), b]`` (..., 12) from linear states ``x = [S b]^T`` (..., 4, 3)."""
     x = np.asarray(x, float)
     k = np.swapaxes(x[..., :3, :], -1, -2)
     return np.concatenate([k.reshape(*x.shape[:-2], 9), x[..., 3, :]], axis=-1)
 
 
 def theta_to_state(thetas: np.ndarray) -> np.ndarray:
-    """Linear states (n, 4, 3) from forward ``thetas`` (n, 12): the inverse of :func:`state_to_theta`.
-
-    Parameters
-    ----------
-    thetas : array_like, shape (n, 12) or (12,)
-        Forward parameter vectors ``[vec(S), b]``.
-
-    Returns
-    -------
-    ndarray, shape (n, 4, 3)
-        ``[S b]^T`` of each.
-    """
+    """Linear states (n, 4, 3) from forward ``thetas`` (n, 12): the inverse of :func:`state_to_theta`."""
     thetas = np.atleast_2d(np.asarray(thetas, float))
     k = thetas[:, :9].reshape(-1, 3, 3)
     return np.concatenate([np.swapaxes(k, 1, 2), thetas[:, None, 9:]], axis=1)
@@ -77,33 +55,14 @@ class LinearVectorModel:
     capabilities = CalibrationProblem.capabilities | {"linear_design"}
 
     def design(self) -> tuple[np.ndarray, np.ndarray]:
-        """Regressors ``C`` (N, 4) with rows ``[u_i^T, 1]`` and observations ``Y`` (N, 3), the readings.
-
-        Returns
-        -------
-        C : ndarray, shape (N, 4)
-            The regressors (Yan & Zhou 2022, eq 6).
-        Y : ndarray, shape (N, 3)
-            The readings.
-        """
+        """Regressors ``C`` (N, 4) with rows ``[u_i^T, 1]`` and observations ``Y`` (N, 3), the readings."""
         if getattr(self, "_design", None) is None:
             u = reference_vectors(self.dataset)
             self._design = (np.column_stack([u, np.ones(len(u))]), np.asarray(self.dataset.readings, float))
         return self._design
 
     def from_linear(self, states: np.ndarray) -> np.ndarray:
-        """The problem's parameter vectors (..., 12) from linear states ``x`` (..., 4, 3).
-
-        Parameters
-        ----------
-        states : ndarray, shape (..., 4, 3)
-            Linear states ``x = [S b]^T``.
-
-        Returns
-        -------
-        ndarray, shape (..., 12)
-            ``[vec(S), b]`` (forward) or ``[vec(S^-1), b]`` (inverse).
-        """
+        """The problem's parameter vectors (..., 12) from linear states ``x`` (..., 4, 3)."""
         theta = state_to_theta(states)
         if self.parameterisation == "forward":
             return theta
@@ -112,13 +71,7 @@ class LinearVectorModel:
         return np.concatenate([w, theta[..., 9:]], axis=-1)
 
     def least_squares(self) -> np.ndarray:
-        """``theta`` minimising ``||C x - Y||_F`` (``numpy.linalg.lstsq``, columns scaled to unit norm).
-
-        Returns
-        -------
-        ndarray, shape (12,)
-            The problem's parameter vector of the least-squares state (:meth:`from_linear`).
-        """
+        """``theta`` minimising ``||C x - Y||_F`` (``numpy.linalg.lstsq``, columns scaled to unit norm)."""
         c, y = self.design()
         scale = np.linalg.norm(c, axis=0)
         scale[scale == 0] = 1.0
@@ -128,22 +81,9 @@ class LinearVectorModel:
 class VectorCalibration(LinearVectorModel, CalibrationProblem):
     """Sum of vector-residual norms against the gyro reference (Yuan 2018, eq 8).
 
-    ``cost`` evaluates a whole swarm in one pass over the readings
-    (:func:`magexp.problems.kernels.vector_cost`): each particle-reading forms the three
-    components of ``e_i = v_i - W (B_i - o)`` (``v_i = C_i H_i``) as in the direct formula and adds
-    ``sqrt(e_i . e_i)`` to the particle's sum; memory is ``O(P + N)``. No squared-norm expansion:
-    ``|v|² - 2 v^T W B + 2 v^T W o + |W(B - o)|²`` would cancel terms of hundreds of mG² and put
-    ``F`` at the noise-free truth near 1e-3 mG instead of rounding, so a swarm could not reach the
-    noise-free optimum.
-
-    ``cost_direct`` is the textbook loop over readings.
-    ``metrics`` sets ``noise_floor`` to ``F`` of the true calibration on the same
-    readings (what a perfect fit reaches), since the scalar floor does not apply.
-
-    Parameters
-    ----------
-    dataset, search, parameterisation
-        As :class:`magexp.problems.base.CalibrationProblem`.
+    ``cost`` forms each ``e_i = v_i - W (B_i - o)`` as the direct formula does and sums ``|e_i|`` per
+    particle in one pass (:func:`magexp.problems.kernels.vector_cost`, memory ``O(P + N)``): a squared-norm
+    expansion would cancel terms of hundreds of mG² and keep a swarm from the noise-free optimum.
     """
 
     objective = "vector"
@@ -156,6 +96,7 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
 
     @cached_property
     def _swarm_kernel(self) -> tuple | None:
+        """The compiled swarm cost's arguments, built once (:meth:`swarm_kernel` returns them)."""
         if self.parameterisation != "inverse" or kernels.compiled() is None:
             return None  # W = S^-1 is inverted by numpy in unpack
         return VECTOR, self._readings, np.ascontiguousarray(self.reference, float), np.zeros(4)
@@ -164,60 +105,22 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
         """The fused cost's working memory (:func:`magexp.problems.kernels.working_floats`, three
         components a particle-reading): ``O(P)`` compiled, one chunk in numpy; never ``N × P``.
-
-        Parameters
-        ----------
-        n_readings, n_particles : int
-            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (three components a particle-reading, one pass).
-
-        Returns
-        -------
-        int
-            ``working_floats(n_particles, rows=3)``.
         """
         return kernels.working_floats(n_particles, rows=3)
 
     def swarm_kernel(self) -> tuple | None:
-        """``(VECTOR, readings, v_i (N, 3), ·)`` in the inverse parameterisation with numba, else None.
-
-        Returns
-        -------
-        tuple or None
-            The compiled swarm cost's arguments, or None.
-        """
+        """``(VECTOR, readings, v_i (N, 3), ·)`` in the inverse parameterisation with numba, else None."""
         return self._swarm_kernel
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
-        """``F`` of every particle, ``(n, 12) -> (n,)``; non-finite values become ``inf``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 12)
-            The swarm, ``[vec(S), b]`` rows (forward) or ``[vec(S^-1), b]`` (inverse).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            ``F = sum_i |C_i^b H_i - W (B_b,i - b)|`` of each (Yuan 2018, eq 8; module docstring).
-        """
+        """``F`` of every particle, ``(n, 12) -> (n,)``; non-finite values become ``inf``."""
         if self._swarm_kernel is not None:
             return kernels.swarm_cost(self._swarm_kernel, thetas)
         w, o = self.unpack(thetas)
         return kernels.vector_cost(w, o, self._readings, self.reference)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
-        """The stacked ``3N`` components of ``C_i H_i - W (r_i - o)`` (for least squares).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The calibration ``(S, b)`` in the problem's parameterisation.
-
-        Returns
-        -------
-        ndarray, shape (3N,)
-            The components of eq 8's residual vectors, reading by reading.
-        """
+        """The stacked ``3N`` components of ``C_i H_i - W (r_i - o)`` (for least squares)."""
         return (self.reference - self.calibrate(theta)).ravel()
 
     def _dr_db(self, b: np.ndarray) -> np.ndarray:
@@ -225,18 +128,7 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
         return np.broadcast_to(-np.eye(3), (len(b), 3, 3))
 
     def cost_direct(self, theta: np.ndarray) -> float:
-        """``F`` of one parameter vector, reading by reading (eq 8 as printed).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The calibration, as :meth:`residuals` takes it.
-
-        Returns
-        -------
-        float
-            Yuan 2018's ``F`` (eq 8) at ``theta``.
-        """
+        """``F`` of one parameter vector, reading by reading (eq 8 as printed)."""
         s, b = np.reshape(theta[:9], (3, 3)), theta[9:]
         w = np.linalg.inv(s) if self.parameterisation == "forward" else s
         ds = self.dataset
@@ -245,29 +137,12 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
     def initial_estimate(self) -> np.ndarray:
         """Closed-form first estimate: the linear least squares of the forward model
         (:meth:`LinearVectorModel.least_squares`; the start of ``lm`` with ``start: problem``).
-
-        Returns
-        -------
-        ndarray, shape (12,)
-            The least-squares parameter vector.
         """
         return self.least_squares()
 
     def metrics(self, theta: np.ndarray) -> dict:
-        """:meth:`CalibrationProblem.metrics`, the noise floor, and ``field_rms``: the total-field RMS of
-        the calibrated readings against the reference (:func:`magexp.core.metrics.total_field_rms`), which
-        a vector fit does not minimise (on a scalar problem it is the objective ``fun`` itself).
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The estimator's result ``x``.
-
-        Returns
-        -------
-        dict
-            The base metrics, ``field_rms`` and ``noise_floor`` (``F`` of the truth).
-        """
+        """:meth:`CalibrationProblem.metrics`, ``noise_floor`` (``F`` of the true calibration on these readings:
+        what a perfect fit reaches) and ``field_rms`` (the total-field RMS, which a vector fit does not minimise)."""
         out = super().metrics(theta)
         out["field_rms"] = total_field_rms(self.calibrate(theta), self.dataset.reference_norm)
         floor = truth_cost(self)  # F at the truth, once per problem
@@ -293,33 +168,11 @@ class VectorLeastSquares(VectorCalibration):
 
     @classmethod
     def cost_floats(cls, n_readings: int, n_particles: int) -> int:
-        """One chunk of :func:`magexp.problems.kernels.vector_cost_numpy` (always numpy).
-
-        Parameters
-        ----------
-        n_readings, n_particles : int
-            As :meth:`CalibrationProblem.cost_floats`; ``N`` does not count (numpy chunks, never compiled).
-
-        Returns
-        -------
-        int
-            ``working_floats(n_particles, rows=3, fused=False)``.
-        """
+        """One chunk of :func:`magexp.problems.kernels.vector_cost_numpy` (always numpy)."""
         return kernels.working_floats(n_particles, rows=3, fused=False)
 
     def cost(self, thetas: np.ndarray) -> np.ndarray:
-        """RMS of every particle's residual components, ``(n, 12) -> (n,)``; non-finite -> ``inf``.
-
-        Parameters
-        ----------
-        thetas : ndarray, shape (n, 12)
-            The swarm, as :meth:`VectorCalibration.cost`'s.
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            ``RMS(S, b)`` of each (class docstring; eq 8's residuals squared).
-        """
+        """RMS of every particle's residual components, ``(n, 12) -> (n,)``; non-finite -> ``inf``."""
         w, o = self.unpack(thetas)
         with np.errstate(invalid="ignore", over="ignore"):
             f = np.sqrt(kernels.vector_cost_numpy(w, o, self._readings, self.reference, squared=True)
@@ -327,16 +180,5 @@ class VectorLeastSquares(VectorCalibration):
         return np.where(np.isfinite(f), f, np.inf)
 
     def cost_direct(self, theta: np.ndarray) -> float:
-        """RMS of the residual components of one parameter vector.
-
-        Parameters
-        ----------
-        theta : ndarray, shape (12,)
-            The calibration, as :meth:`VectorCalibration.residuals` takes it.
-
-        Returns
-        -------
-        float
-            ``RMS(S, b)`` at ``theta``.
-        """
+        """RMS of the residual components of one parameter vector."""
         return rms(self.residuals(theta))
