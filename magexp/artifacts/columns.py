@@ -27,16 +27,5 @@ DERIVED = {
 
 
 def column_label(column: str) -> str:
-    """What a column of the benchmark table shows, in words.
-
-    Parameters
-    ----------
-    column : str
-        A column of the table of the kind ``heatmap``.
-
-    Returns
-    -------
-    str
-        Its words (:data:`COLUMNS`, :data:`DERIVED`), else its name with spaces.
-    """
+    """What a column of the benchmark table shows, in words."""
     return {**COLUMNS, **DERIVED}.get(column, column.replace("_", " "))

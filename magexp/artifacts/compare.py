@@ -99,12 +99,7 @@ class Difference:
     relative: float = math.nan
 
     def line(self) -> str:
-        """The difference as one line: the file, where in it, both values.
-
-        Returns
-        -------
-        str
-        """
+        """The difference as one line: the file, where in it, both values."""
         where = ", ".join(x for x in (self.row, f"column {self.column}" if self.column else "") if x)
         return f"{self.file}{': ' + where if where else ''}: ours {_quote(self.ours)}, committed {_quote(self.committed)}"
 
@@ -131,34 +126,24 @@ class Comparison:
 
     @property
     def agrees(self) -> bool:
+        """Whether no verdict changed and nothing disagrees beyond the tolerance."""
         return not self.changed and not self.disagreements
 
     def within(self, diff: Difference, count: int = 1) -> None:
-        """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them.
-
-        Parameters
-        ----------
-        diff, count : Difference, int
-            The largest difference counted, and how many differences it stands for.
-        """
+        """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them."""
         self.below[diff.file] = self.below.get(diff.file, 0) + count
         if self.largest is None or diff.relative > self.largest.relative:
             self.largest = diff
 
     def path(self, diff: Difference, count: int = 1) -> None:
-        """Count ``count`` differing path diagnostics in ``diff.file``, ``diff`` the largest of them.
-
-        Parameters
-        ----------
-        diff, count : Difference, int
-            The largest differing path diagnostic, and how many differing diagnostics it stands for.
-        """
+        """Count ``count`` differing path diagnostics in ``diff.file``, ``diff`` the largest of them."""
         self.paths[diff.file] = self.paths.get(diff.file, 0) + count
         if self.path_largest is None or diff.relative > self.path_largest.relative:
             self.path_largest = diff
 
 
 def _quote(text: str, n: int = 60) -> str:
+    """``text`` quoted, cut to ``n`` characters: a value as a difference's line shows it."""
     text = str(text)
     return repr(text if len(text) <= n else text[: n - 3] + "...")
 
@@ -169,17 +154,6 @@ def _quote(text: str, n: int = 60) -> str:
 def tolerance(ours: np.ndarray, committed: np.ndarray, unit: np.ndarray, rtol: float) -> np.ndarray:
     """The largest difference allowed between ``ours`` and ``committed``: ``rtol`` times the larger
     magnitude, or one ``unit`` of the printed precision, whichever is larger.
-
-    Parameters
-    ----------
-    ours, committed, unit : numpy.ndarray
-        The two sides' values, and one unit of the printed precision per value.
-    rtol : float
-        The relative tolerance.
-
-    Returns
-    -------
-    numpy.ndarray
     """
     return np.maximum(rtol * np.maximum(np.abs(ours), np.abs(committed)), unit)
 
@@ -189,15 +163,6 @@ def csv_unit(values: np.ndarray) -> np.ndarray:
     significant digits (``%.6g``: trailing zeros dropped, so the text itself does not tell). Round-off
     is written as ``0`` or ``±ROUNDOFF_FLOOR`` (:func:`magexp.artifacts.formats.tidy`): a value of at most
     that magnitude is printed to within the band ``-floor .. floor``, whose width is its unit.
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        Values as read from a results CSV.
-
-    Returns
-    -------
-    numpy.ndarray
     """
     mag = np.abs(values)
     with np.errstate(divide="ignore"):
@@ -208,15 +173,6 @@ def csv_unit(values: np.ndarray) -> np.ndarray:
 def text_unit(token: str) -> float:
     """One unit of the last printed digit of a number in a text (``0.254`` -> 0.001, ``1.2e-05`` ->
     1e-06, ``30`` -> 1).
-
-    Parameters
-    ----------
-    token : str
-        A number as printed.
-
-    Returns
-    -------
-    float
     """
     mantissa, _, exponent = token.lower().partition("e")
     decimals = len(mantissa.partition(".")[2])
@@ -224,17 +180,7 @@ def text_unit(token: str) -> float:
 
 
 def relative(a: float, b: float) -> float:
-    """``|a - b|`` over the larger magnitude (0 when both are 0).
-
-    Parameters
-    ----------
-    a, b : float
-        The two numbers.
-
-    Returns
-    -------
-    float
-    """
+    """``|a - b|`` over the larger magnitude (0 when both are 0)."""
     scale = max(abs(a), abs(b))
     return abs(a - b) / scale if scale else 0.0
 
@@ -244,15 +190,6 @@ def compare_text(ours: str, committed: str, rtol: float) -> tuple[bool, float, t
     the finer of the two printed precisions: ``1.5`` beside ``1.501`` is one unit of ``0.001``).
     Returns ``(agrees, largest relative difference of a number, (ours, committed) of the first
     disagreement or of the largest difference)``.
-
-    Parameters
-    ----------
-    ours, committed : str
-    rtol : float
-
-    Returns
-    -------
-    tuple
     """
     a, b = NUMBER.split(ours), NUMBER.split(committed)
     if len(a) != len(b) or a[0::2] != b[0::2]:
@@ -281,31 +218,13 @@ def _first_difference(a: str, b: str, context: int = 25) -> tuple[str, str]:
 # files
 
 def read_table(path: Path) -> pd.DataFrame:
-    """A results CSV as text (every cell as written; an empty cell ``""``).
-
-    Parameters
-    ----------
-    path : Path
-
-    Returns
-    -------
-    pandas.DataFrame
-    """
+    """A results CSV as text (every cell as written; an empty cell ``""``)."""
     return pd.read_csv(path, dtype=str, keep_default_na=False)
 
 
 def row_name(frame: pd.DataFrame, i: int) -> str:
     """``row N (key=value, ...)``: the row's number (1 = the first after the header) and its first
     :data:`KEYS` present, each cut to 40 characters.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-    i : int
-
-    Returns
-    -------
-    str
     """
     keys = [c for c in KEYS if c in frame.columns][:3]
     shown = ", ".join(f"{k}={_cut(frame[k].iat[i])}" for k in keys)
@@ -313,6 +232,7 @@ def row_name(frame: pd.DataFrame, i: int) -> str:
 
 
 def _cut(text: str, n: int = 40) -> str:
+    """``text`` cut to ``n`` characters (``...`` marking the cut)."""
     return text if len(text) <= n else text[: n - 3] + "..."
 
 
@@ -320,12 +240,6 @@ def compare_csv(name: str, ours: Path, committed: Path, result: Comparison) -> N
     """Compare two results CSVs cell by cell (by row position; a different row count is one
     disagreement): a ``verdict`` cell exactly, numbers within the tolerance, texts by
     :func:`compare_text`. Only the cells whose text differs are looked at further.
-
-    Parameters
-    ----------
-    name : str
-    ours, committed : Path
-    result : Comparison
     """
     a, b = read_table(ours), read_table(committed)
     columns = _columns(name, a, b, result)
@@ -393,15 +307,6 @@ def _compare_column(name: str, col: str, a: pd.DataFrame, b: pd.DataFrame, rows:
 def text_lines(path: Path, cut: list[str]) -> list[str]:
     """The lines of a text file, without the sections whose heading line starts with one of ``cut``
     (a section ends at the next heading of its level or above).
-
-    Parameters
-    ----------
-    path : Path
-    cut : list of str
-
-    Returns
-    -------
-    list of str
     """
     lines, keep, level = path.read_text(encoding="utf-8").splitlines(), [], 0
     for line in lines:
@@ -416,15 +321,7 @@ def text_lines(path: Path, cut: list[str]) -> list[str]:
 
 
 def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison, cut: list[str]) -> None:
-    """Compare two report or LaTeX files line by line (:func:`compare_text`), without the sections ``cut``.
-
-    Parameters
-    ----------
-    name : str
-    ours, committed : Path
-    result : Comparison
-    cut : list of str
-    """
+    """Compare two report or LaTeX files line by line (:func:`compare_text`), without the sections ``cut``."""
     a, b = text_lines(ours, cut), text_lines(committed, cut)
     result.text_files += 1
     result.lines += len(b)
@@ -446,16 +343,7 @@ def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison
 
 
 def table_cells(line: str) -> list[str]:
-    """The cells of a row of a Markdown (``| a | b |``) or LaTeX (``a & b \\\\``) table, ``\\_`` read as ``_``.
-
-    Parameters
-    ----------
-    line : str
-
-    Returns
-    -------
-    list of str
-    """
+    """The cells of a row of a Markdown (``| a | b |``) or LaTeX (``a & b \\\\``) table, ``\\_`` read as ``_``."""
     if line.startswith("|"):
         return [c.strip() for c in line.strip().strip("|").split("|")]
     return [c.strip().replace("\\_", "_") for c in line.strip().removesuffix("\\\\").split("&")]
@@ -465,14 +353,6 @@ def table_headers(lines: list[str]) -> list[list[str] | None]:
     """For each line, the column names of the table it is a body row of (None outside a table): a
     Markdown table's header is the line above its ``|---|`` rule, a LaTeX table's the line after
     ``\\toprule``; a table ends at a line that is not one of its rows (``\\bottomrule``).
-
-    Parameters
-    ----------
-    lines : list of str
-
-    Returns
-    -------
-    list
     """
     out: list[list[str] | None] = [None] * len(lines)
     header = None
@@ -506,6 +386,7 @@ def _compare_table_row(name: str, i: int, header: list[str], ours: str, committe
 # two folders
 
 def _files(root: Path) -> set[str]:
+    """The files below ``root``, as POSIX paths relative to it."""
     return {p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file()}
 
 
@@ -518,16 +399,6 @@ def compare(ours: Path, committed: Path, *, rtol: float = RTOL, files=None) -> C
     """Compare the reproduction ``ours`` with the committed results ``committed`` (two folders laid
     out as ``results/``), every file but those that differ by design (module docstring); ``files``:
     only these relative paths (e.g. one artifact's).
-
-    Parameters
-    ----------
-    ours, committed : Path
-    rtol : float
-    files : iterable of str, optional
-
-    Returns
-    -------
-    Comparison
     """
     ours, committed = Path(ours), Path(committed)
     result = Comparison(rtol=rtol)

@@ -121,30 +121,15 @@ class Tolerance:
 
     @property
     def kind(self) -> str:
+        """Which of the tolerance's fields is set: ``below``, ``abs``, ``factor`` or ``rel``."""
         return next(k for k in ("below", "abs", "factor", "rel") if getattr(self, k) is not None)
 
     def text(self) -> str:
-        """The tolerance as ``<kind> <value>`` (e.g. ``rel 0.15``).
-
-        Returns
-        -------
-        str
-        """
+        """The tolerance as ``<kind> <value>`` (e.g. ``rel 0.15``)."""
         return f"{self.kind} {getattr(self, self.kind):g}"
 
     def holds(self, value: float, paper: float) -> bool:
-        """Whether ``value`` is within this tolerance of the paper's ``paper``.
-
-        Parameters
-        ----------
-        value, paper : float
-            Our value and the paper's.
-
-        Returns
-        -------
-        bool
-            True when the tolerance holds.
-        """
+        """Whether ``value`` is within this tolerance of the paper's ``paper``."""
         t = getattr(self, self.kind)
         return {"abs": lambda: abs(value - paper) <= t, "below": lambda: value < t and paper < t,
                 "factor": lambda: paper / t <= value <= paper * t,
@@ -173,12 +158,7 @@ class Reported:
             raise MagexpError(f"reported {self.quantity}: compared: false needs a reason (why the number is not compared)")
 
     def half_unit(self) -> float:
-        """Half a unit of the last printed digit: the paper's printing precision.
-
-        Returns
-        -------
-        float
-        """
+        """Half a unit of the last printed digit: the paper's printing precision."""
         if self.decimals is not None:
             return 0.5 * 10.0 ** (-self.decimals)
         exponent = decimal.Decimal(repr(float(self.value))).normalize().as_tuple().exponent
@@ -229,20 +209,7 @@ class Artifact:
     path: Any = field(default=None, metadata={"yaml": False})  # the file it was read from (set by the loader)
 
     def get(self, key: str, default=None):
-        """Mapping-style access (``spec.get("caption")``), for code written against the old node.
-
-        Parameters
-        ----------
-        key : str
-            A field's name.
-        default : object
-            Returned when the field is absent or None.
-
-        Returns
-        -------
-        object
-            The field's value.
-        """
+        """Mapping-style access (``spec.get("caption")``), for code written against the old node."""
         value = getattr(self, key, default)
         return default if value is None else value
 
@@ -288,35 +255,14 @@ def _check_fixed_tolerances(art: Artifact, where: str) -> None:
 
 
 def check_unique_ids(items: list, where: str) -> None:
-    """Raise unless the ``id`` of every item of ``items`` differs from the others.
-
-    Parameters
-    ----------
-    items : list
-        Claims or headlines (anything with an ``id``).
-    where : str
-        Where they were read, for the message.
-    """
+    """Raise unless the ``id`` of every item of ``items`` differs from the others."""
     ids = [item.id for item in items]
     if len(set(ids)) != len(ids):
         raise MagexpError(f"{where}: ids must be unique, got {ids}")
 
 
 def parse(data: dict, path: Path) -> Artifact:
-    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults).
-
-    Parameters
-    ----------
-    data : dict
-        The loaded YAML mapping.
-    path : Path
-        The artifact's file.
-
-    Returns
-    -------
-    Artifact
-        The validated artifact.
-    """
+    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults)."""
     where = path.stem
     if not isinstance(data, dict):
         raise MagexpError(f"artifact {str(path)!r} is not a mapping of keys {', '.join(allowed(Artifact))}")
@@ -343,39 +289,19 @@ _LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 @functools.lru_cache(maxsize=256)
 def _parsed(text: str):
+    """The YAML ``text`` parsed with the safe loader, cached (specs are read again and again)."""
     return yaml.load(text, Loader=_LOADER)  # noqa: S506 (a safe loader)
 
 
 def read_yaml(path: Path):
     """``yaml.safe_load`` of the file ``path``, parsed once per distinct content (a process lists the
     papers and reads every spec many times: planning, summary, claims, report); a fresh copy each call.
-
-    Parameters
-    ----------
-    path : Path
-        A YAML file.
-
-    Returns
-    -------
-    object
-        Its loaded content (a fresh copy).
     """
     return copy.deepcopy(_parsed(Path(path).read_text()))
 
 
 def load(path: Path | str) -> Artifact:
-    """Read and validate an artifact YAML.
-
-    Parameters
-    ----------
-    path : Path or str
-        An artifact YAML.
-
-    Returns
-    -------
-    Artifact
-        The validated artifact.
-    """
+    """Read and validate an artifact YAML."""
     path = Path(path)
     if not path.exists():
         raise MagexpError(f"artifact {str(path)!r} does not exist")

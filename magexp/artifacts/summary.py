@@ -79,13 +79,6 @@ def judge(paper: float | None, lo: float, hi: float, width: float, success_rate:
     """The verdict of one row before the informativeness rules (module docstring, steps 1-3): inside
     or outside first (:func:`inside`), then a failed majority. ``tolerance``: a fixed
     :class:`magexp.artifacts.spec.Tolerance` against ``value`` instead of the interval.
-
-    Parameters
-    ----------
-    paper : float or None
-    lo, hi, width, success_rate, floor : float
-    tolerance : Tolerance, optional
-    value : float
     """
     if paper is None or not np.isfinite(paper):
         return "n/a"
@@ -98,12 +91,6 @@ def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0
            value: float = np.nan) -> bool:
     """Whether the paper's value lies in ``lo``-``hi`` widened by ``width`` (a value below the
     round-off ``floor`` counts as it), or within a fixed ``tolerance`` of ``value``.
-
-    Parameters
-    ----------
-    paper, lo, hi, width, floor : float
-    tolerance : Tolerance, optional
-    value : float
     """
     if tolerance is not None:
         return bool(np.isfinite(value) and tolerance.holds(value, paper))
@@ -112,12 +99,7 @@ def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0
 
 
 def reported_entries(spec) -> list[dict]:
-    """The paper's numbers as plain ``{quantity, match, value}`` mappings.
-
-    Parameters
-    ----------
-    spec : Artifact
-    """
+    """The paper's numbers as plain ``{quantity, match, value}`` mappings."""
     return [{"quantity": e.quantity, "match": dict(e.match), "value": e.value} for e in spec.reported]
 
 
@@ -136,14 +118,6 @@ def uninformative(paper: float, lo: float, hi: float, *, kind: str = "value", se
        tell the entry from values that change the calibration by that much (entries near zero are
        judged on the block's scale, not on their own);
     4. any other row whose interval is wider than the magnitude of the paper's value.
-
-    Parameters
-    ----------
-    paper, lo, hi : float
-    kind : str
-    search_range, block_scale : float, optional
-    mixed_outcome : bool
-    median : float
     """
     width = hi - lo
     if not np.isfinite(width):
@@ -206,10 +180,6 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
 def relative(x: float) -> str:
     """A difference on its block's scale: a percentage with two significant digits below 10 times the
     scale (``0.0003`` -> ``0.03 % of its scale``), else a multiple (``38 times its scale``).
-
-    Parameters
-    ----------
-    x : float
     """
     if not np.isfinite(x):
         return "n/a"
@@ -244,12 +214,6 @@ def paper_scale(spec, quantity: str, settings: dict) -> float:
     """The scale a row's difference is read on: the RMS of the paper's values of the quantities of
     the row's block (:func:`block_of`: ``S11``..``S33`` -> ``S``) reported for the same cell; a
     quantity alone in its block (a final RMS, an F_g) has its own magnitude.
-
-    Parameters
-    ----------
-    spec : Artifact
-    quantity : str
-    settings : dict
     """
     block = block_of(quantity)
     paper = [float(e.value) for e in spec.reported if block_of(e.quantity) == block and matches(e.match, settings)]
@@ -311,13 +275,6 @@ def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, pr
     """A readable row label: estimator, quantity and the settings that tell this cell from the
     artifact's others (``plot.labels`` names a key; a trailing ``(unit)`` moves after the value;
     scenario names lose their paper prefix), e.g. ``IPSO final RMS, exp1, A = 2 nT``.
-
-    Parameters
-    ----------
-    spec : Artifact
-    cells : list of dict
-    ci : int
-    quantity, estimator, prefix : str
     """
     cell = cells[ci] if ci < len(cells) else {}
     varying = [k for k in cell if k != "estimator" and len({str(c.get(k)) for c in cells}) > 1]
@@ -351,24 +308,13 @@ def _name_and_unit(name: str) -> tuple[str, str]:
 
 
 def block_of(name: str) -> str:
-    """The block a parameter belongs to: its name's leading letters (``S13`` -> ``S``, ``Bp1`` -> ``Bp``).
-
-    Parameters
-    ----------
-    name : str
-    """
+    """The block a parameter belongs to: its name's leading letters (``S13`` -> ``S``, ``Bp1`` -> ``Bp``)."""
     m = re.match(r"^[A-Za-z_]*[A-Za-z]", name)
     return m.group(0) if m else name
 
 
 def block_scales(names: list[str], medians: np.ndarray) -> dict[str, float]:
-    """``{block: RMS of its parameters' medians}`` (:func:`block_of`).
-
-    Parameters
-    ----------
-    names : list of str
-    medians : numpy.ndarray
-    """
+    """``{block: RMS of its parameters' medians}`` (:func:`block_of`)."""
     groups: dict[str, list] = {}
     for name, m in zip(names, medians):
         groups.setdefault(block_of(name), []).append(m)
@@ -377,6 +323,7 @@ def block_scales(names: list[str], medians: np.ndarray) -> dict[str, float]:
 
 
 def _cell_ok(runs: ArtifactRuns, ci: int) -> np.ndarray:
+    """The per-seed outcomes (1/0/NaN) of cell ``ci``."""
     return outcomes(cell_runs(runs, ci, by_seed=True))
 
 
@@ -403,11 +350,6 @@ def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
 def search_ranges(runs: ArtifactRuns, ci: int) -> dict[str, float]:
     """``{parameter: upper - lower}`` of cell ``ci``'s search box, as its first run stored it (empty
     where it stored none).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-    ci : int
     """
     out = first_output(runs, ci)
     lower, upper = getattr(out, "lower", None), getattr(out, "upper", None)
@@ -424,12 +366,6 @@ def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> 
     ``t(1 - (1 - level)/2, N - 4)`` standard errors (12 readings: 8 degrees of freedom), the quantile
     from ``scipy.special.stdtrit`` (what ``scipy.stats.t.ppf`` evaluates, without importing
     ``scipy.stats``).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-    ci : int
-    level : float
     """
     gram, coef, rss, n, names = _design_of(runs, ci)  # coef (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
     p = gram.shape[0]
@@ -449,12 +385,6 @@ def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
     """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
     parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
     p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-    ci : int
-    theta : numpy.ndarray
     """
     gram, coef, rss, n, _ = _design_of(runs, ci)
     p = gram.shape[0]
@@ -498,10 +428,6 @@ def _design_of(runs: ArtifactRuns, ci: int) -> tuple:
 
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
     """One row per (summarised quantity, cell) and per ratio group, from ``runs`` as handed (a reproduction: as stored).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
     """
     rows = []
     for item in runs.spec.summarise:
