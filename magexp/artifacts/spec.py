@@ -30,8 +30,9 @@ An artifact is a paper's figure or table as data::
 The schema is the type hints of the dataclasses below, validated by pydantic
 (:func:`magexp.artifacts.schema.build`; that module says why pydantic): a typo fails at load with
 one line naming the key and the allowed ones, a wrong value with one naming the type it must have. The papers are the
-folders of ``experiments/`` that hold an artifact (:func:`papers`); each has a ``paper.yaml``
-(:class:`Paper`: title, intro, order, deviations and its ``headline:`` claims, :class:`Headline`).
+folders of ``experiments/`` that hold an artifact (:func:`magexp.artifacts.paper_spec.papers`); each has a ``paper.yaml``
+(:class:`magexp.artifacts.paper_spec.Paper`: title, intro, order, deviations and its ``headline:`` claims,
+:class:`magexp.artifacts.paper_spec.Headline`).
 """
 
 from __future__ import annotations

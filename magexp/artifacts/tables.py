@@ -3,7 +3,7 @@
 An artifact's runs (:class:`magexp.artifacts.plan.ArtifactRuns`: one row per (cell, seed), and each
 run's stored output) become here
 
-* the table behind its figure (:func:`tabulate`, one builder per kind in :data:`BUILDERS`): medians
+* the table behind its figure (:func:`magexp.artifacts.kinds.tabulate`, each kind's ``table``): medians
   and quartiles over seeds, success fractions, intervals. :mod:`magexp.artifacts.plots` only draws it,
   from the CSV alone;
 * the numbers of a summary row (:func:`row_numbers`) of the runs handed (the runs CSV as written:
