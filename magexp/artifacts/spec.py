@@ -68,7 +68,7 @@ _DEFAULTED_WHEN_EMPTY = ("success", "tolerance", "summarise", "ratios", "reporte
 class Summarise:
     """One summary row per cell of ``metric`` (``mode: parameters``: one row per estimated parameter,
     ``only`` restricting it to some estimators; ``mode: ftest``: per axis the p-value of the F-test of
-    the cell's estimate against the least-squares fit, :func:`magexp.artifacts.summary.f_test`). ``aggregate: mean`` for 0/1 outcomes; ``interval``
+    the cell's estimate against the least-squares fit, :func:`magexp.artifacts.least_squares.f_test`). ``aggregate: mean`` for 0/1 outcomes; ``interval``
     (see :mod:`magexp.artifacts.summary`)."""
 
     quantity: str = ""

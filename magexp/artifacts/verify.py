@@ -37,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from magexp import paths
-from magexp.artifacts.compare import FIGURES, PATH_DIAGNOSTICS, RTOL, Comparison, Difference, compare
+from magexp.artifacts.compare import FIGURES, PATH_DIAGNOSTICS, Comparison, Difference, compare
+from magexp.artifacts.tolerances import RTOL
 from magexp.errors import MagexpError, exit_code
 from magexp.core.limits import check_limits
 from magexp.run.files import check_file
