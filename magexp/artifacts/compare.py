@@ -6,12 +6,13 @@ of some numbers and in the pixels of its figures; it should not differ in a verd
 
 * every verdict identical: the ``verdict`` column of every CSV (each summary row's verdict; in
   ``claims.csv`` each claim's result and each headline verdict);
-* every number within a tolerance (:func:`~magexp.artifacts.tolerances.tolerance`): :data:`~magexp.artifacts.tolerances.RTOL` relative, or one unit of its
-  printed precision, whichever is larger; a column of integers (seeds, cells, counts) is held to
+* every number within a tolerance (:func:`~magexp.artifacts.tolerances.tolerance`):
+  :data:`~magexp.artifacts.tolerances.RTOL` relative, or one unit of its printed precision, whichever is larger;
+  a column of integers (seeds, cells, counts) is held to
   the relative tolerance alone, i.e. exactly;
 * every text identical up to the numbers in it, which are held to the same tolerance
-  (:func:`~magexp.artifacts.tolerances.compare_text`): the CSVs' labels, reasons and evidence, ``REPORT.md``, ``APPENDIX.md``
-  and the LaTeX tables;
+  (:func:`~magexp.artifacts.tolerances.compare_text`): the CSVs' labels, reasons and evidence,
+  ``REPORT.md``, ``APPENDIX.md`` and the LaTeX tables;
 * a path diagnostic (:data:`PATH_DIAGNOSTICS`: how many iterations or evaluations a minimiser took,
   where its path ended against the box) through the verdicts that read it, not to a number
   tolerance: present on both sides (or empty on both), its differences counted and the largest
@@ -42,7 +43,8 @@ from magexp.core.outcomes import ROUNDOFF_FLOOR
 #: ``NUMBA_CPU_NAME=generic`` against the default: ``lm`` 40 vs 53 evaluations, one Jacobian of 13;
 #: ``local`` 791 vs 2131; ``cmaes`` up to 11 %; no verdict changed). Such a column is compared through
 #: the verdicts that read it (a claim's ``verdict``, exactly) and is otherwise only required to be a number,
-#: or empty, on both sides; a claim's evidence text that prints one is held to :data:`~magexp.artifacts.tolerances.RTOL` like every text.
+#: or empty, on both sides; a claim's evidence text that prints one is held to
+#: :data:`~magexp.artifacts.tolerances.RTOL` like every text.
 PATH_DIAGNOSTICS = {
     "nit": "iterations: lm's and local's stopping tests (xtol/ftol at 1e-12, BFGS's line search at its "
            "precision) are met at a round-off-dependent iteration; CMA-ES's stopping tests likewise",
@@ -243,7 +245,8 @@ def text_lines(path: Path, cut: list[str]) -> list[str]:
 
 
 def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison, cut: list[str]) -> None:
-    """Compare two report or LaTeX files line by line (:func:`~magexp.artifacts.tolerances.compare_text`), without the sections ``cut``."""
+    """Compare two report or LaTeX files line by line (:func:`~magexp.artifacts.tolerances.compare_text`),
+    without the sections ``cut``."""
     a, b = text_lines(ours, cut), text_lines(committed, cut)
     result.text_files += 1
     result.lines += len(b)

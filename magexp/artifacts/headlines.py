@@ -128,8 +128,9 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
 
 
 def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:
-    """One headline's row, decided by its primary reading (:meth:`magexp.artifacts.paper_spec.Headline.primary_parts`); its other
-    readings give ``robustness`` (:func:`robustness`) and never the verdict. The reason is the deciding
+    """One headline's row, decided by its primary reading
+    (:meth:`magexp.artifacts.paper_spec.Headline.primary_parts`); its other readings give ``robustness``
+    (:func:`robustness`) and never the verdict. The reason is the deciding
     numbers (:func:`_headline_verdict`); the evidence adds each reading's verdict, source and settings and
     every deciding part's outcome; ``readings_total`` counts its readings (1: none declared),
     ``readings_holding`` those under which it is supported; ``readings`` keeps each reading's row (for

@@ -78,8 +78,9 @@ def _draws(n_sim: int, n: int) -> np.ndarray:
 
 
 def wilcoxon_power(n: int, ratio: float, spread: float, level: float, n_sim: int = N_SIM) -> float:
-    """Simulated power of the one-sided paired Wilcoxon signed-rank test (:func:`magexp.artifacts.significance.wilcoxon_less`'s test)
-    at ``level`` with ``n`` seeds per cell (module docstring).
+    """Simulated power of the one-sided paired Wilcoxon signed-rank test
+    (:func:`magexp.artifacts.significance.wilcoxon_less`'s test) at ``level`` with ``n`` seeds per cell
+    (module docstring).
     """
     from scipy.stats import wilcoxon  # lazy: see magexp.artifacts.significance.wilcoxon_less
 

@@ -29,10 +29,10 @@ An artifact is a paper's figure or table as data::
 
 The schema is the type hints of the dataclasses below, validated by pydantic
 (:func:`magexp.artifacts.schema.build`; that module says why pydantic): a typo fails at load with
-one line naming the key and the allowed ones, a wrong value with one naming the type it must have. The papers are the
-folders of ``experiments/`` that hold an artifact (:func:`magexp.artifacts.paper_spec.papers`); each has a ``paper.yaml``
-(:class:`magexp.artifacts.paper_spec.Paper`: title, intro, order, deviations and its ``headline:`` claims,
-:class:`magexp.artifacts.paper_spec.Headline`).
+one line naming the key and the allowed ones, a wrong value with one naming the type it must have. The
+papers are the folders of ``experiments/`` that hold an artifact (:func:`magexp.artifacts.paper_spec.papers`);
+each has a ``paper.yaml`` (:class:`magexp.artifacts.paper_spec.Paper`: title, intro, order, deviations and its
+``headline:`` claims, :class:`magexp.artifacts.paper_spec.Headline`).
 """
 
 from __future__ import annotations
@@ -68,8 +68,8 @@ _DEFAULTED_WHEN_EMPTY = ("success", "tolerance", "summarise", "ratios", "reporte
 class Summarise:
     """One summary row per cell of ``metric`` (``mode: parameters``: one row per estimated parameter,
     ``only`` restricting it to some estimators; ``mode: ftest``: per axis the p-value of the F-test of
-    the cell's estimate against the least-squares fit, :func:`magexp.artifacts.least_squares.f_test`). ``aggregate: mean`` for 0/1 outcomes; ``interval``
-    (see :mod:`magexp.artifacts.summary`)."""
+    the cell's estimate against the least-squares fit, :func:`magexp.artifacts.least_squares.f_test`).
+    ``aggregate: mean`` for 0/1 outcomes; ``interval`` (see :mod:`magexp.artifacts.summary`)."""
 
     quantity: str = ""
     metric: str = ""

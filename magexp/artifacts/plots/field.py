@@ -50,7 +50,8 @@ def draw(frame: pd.DataFrame, spec, axes=None):
 
 
 def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
-    """The field panels of ``frame`` (error per reading, and the raw readings above with ``show_raw``), one per panel value."""
+    """The field panels of ``frame``, one per panel value: the error per reading (and, with ``show_raw``,
+    the raw readings against the reference above it)."""
     key, readings_unit = spec.plot.get("panels"), unit(spec)
     values = group_values(frame, key)
     fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)
