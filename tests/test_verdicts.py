@@ -73,7 +73,8 @@ from pathlib import Path  # noqa: E402
 from types import SimpleNamespace  # noqa: E402
 
 from magexp.artifacts.spec import Reported  # noqa: E402
-from magexp.artifacts.summary import block_scales, label_of, summarise, uninformative  # noqa: E402
+from magexp.artifacts.row_labels import label_of  # noqa: E402
+from magexp.artifacts.summary import block_scales, summarise, uninformative  # noqa: E402
 
 
 def test_rows_that_pin_a_value_down_stay_informative():

@@ -19,7 +19,8 @@ import pytest
 from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
 
 from magexp.artifacts.formats import SPEED_HEADING
-from magexp.artifacts.compare import RTOL, compare, compare_text
+from magexp.artifacts.compare import compare
+from magexp.artifacts.tolerances import RTOL, compare_text
 from magexp.artifacts.verify import committed_results, render
 from magexp.paths import EXPERIMENTS, RESULTS, ROOT
 

@@ -34,20 +34,7 @@ _BIG = 1e300  # a censored value inside a quantile's interpolation (any result n
 
 
 def censored_mask(runs: pd.DataFrame, metric: str) -> np.ndarray:
-    """Per run, whether ``metric`` (a runs column) is censored (False for an expression or no flag).
-
-    Parameters
-    ----------
-    runs : pandas.DataFrame
-        Runs, with ``metric`` and perhaps ``metric + "_censored"``.
-    metric : str
-        A runs column or an expression of them.
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        One entry per run.
-    """
+    """Per run, whether ``metric`` (a runs column) is censored (False for an expression or no flag)."""
     flag = f"{metric}{SUFFIX}"
     if metric not in runs or flag not in runs:
         return np.zeros(len(runs), bool)
@@ -55,18 +42,7 @@ def censored_mask(runs: pd.DataFrame, metric: str) -> np.ndarray:
 
 
 def with_censored(runs: pd.DataFrame) -> pd.DataFrame:
-    """``runs`` with every censored value of a column that has a ``_censored`` flag as ``+inf``.
-
-    Parameters
-    ----------
-    runs : pandas.DataFrame
-        Runs.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The same frame when nothing is censored, else a copy.
-    """
+    """``runs`` with every censored value of a column that has a ``_censored`` flag as ``+inf``."""
     flagged = [c[: -len(SUFFIX)] for c in runs.columns if c.endswith(SUFFIX) and c[: -len(SUFFIX)] in runs]
     masks = {c: censored_mask(runs, c) for c in flagged}
     if not any(m.any() for m in masks.values()):
@@ -80,18 +56,6 @@ def with_censored(runs: pd.DataFrame) -> pd.DataFrame:
 def censored_statistic(v: np.ndarray, stat: str) -> float:
     """``stat`` of ``v`` where ``+inf`` marks a censored value: ``+inf`` when the statistic is not
     known (module docstring), else its value.
-
-    Parameters
-    ----------
-    v : numpy.ndarray
-        Values, censored ones as ``+inf``.
-    stat : str
-        A name of :data:`magexp.artifacts.tables.STATS`.
-
-    Returns
-    -------
-    float
-        The statistic, or ``+inf`` when censored.
     """
     v = np.asarray(v, float)
     censored = np.isposinf(v)
@@ -104,22 +68,7 @@ def censored_statistic(v: np.ndarray, stat: str) -> float:
 
 
 def censored_text(runs: pd.DataFrame, metric: str, fmt: str = "g") -> str:
-    """The words printed for a censored statistic of ``metric``: "> c (censored in k of n seeds)".
-
-    Parameters
-    ----------
-    runs : pandas.DataFrame
-        The runs the statistic was taken over.
-    metric : str
-        Their censored column.
-    fmt : str
-        Format of the censoring point.
-
-    Returns
-    -------
-    str
-        The text; ``c`` is the smallest censoring point of the censored runs.
-    """
+    """The words printed for a censored statistic of ``metric``: "> c (censored in k of n seeds)"."""
     mask = censored_mask(runs, metric)
     points = pd.to_numeric(runs[f"{metric}{SUFFIX}"], errors="coerce").to_numpy(float)[mask]
     return f"> {format(float(points.min()), fmt)} (censored in {int(mask.sum())} of {len(mask)} seeds)"
@@ -128,19 +77,6 @@ def censored_text(runs: pd.DataFrame, metric: str, fmt: str = "g") -> str:
 def cell_quartiles(runs: pd.DataFrame, metric: str) -> dict:
     """The median and quartiles of ``metric`` over one cell's runs; for a censored metric also its
     extremes, the number of censored runs and the censoring point (``+inf``: a statistic not known).
-
-    Parameters
-    ----------
-    runs : pandas.DataFrame
-        One cell's runs.
-    metric : str
-        A runs column (absent: NaN).
-
-    Returns
-    -------
-    dict
-        ``median``, ``q25``, ``q75``; with a ``_censored`` flag also ``min``, ``max``, ``n_censored``,
-        ``censor_point`` (NaN when nothing is censored).
     """
     if metric not in runs:
         return {"median": np.nan, "q25": np.nan, "q75": np.nan}
@@ -160,20 +96,6 @@ def censor_row(row: dict, runs: pd.DataFrame, metric: str) -> dict:
     quartiles and judged value by :func:`cell_quartiles` (``+inf`` where censored), no interval (a
     bootstrap of censored values is none), every seed counted and the reason saying how many are
     censored. Unchanged when no run is censored.
-
-    Parameters
-    ----------
-    row : dict
-        The row :mod:`magexp.artifacts.summary` built from the observed values.
-    runs : pandas.DataFrame
-        The cell's runs.
-    metric : str
-        The row's runs column.
-
-    Returns
-    -------
-    dict
-        The row.
     """
     mask = censored_mask(runs, metric)
     if not mask.any():

@@ -168,10 +168,12 @@ rule judged it at, at which ``detectable`` (and ``detectable_words``) is then co
 
     @property
     def is_comparison(self) -> bool:
+        """Whether the outcome is a comparison's (it has a p-value)."""
         return bool(np.isfinite(self.p))
 
 
 def _name(where: dict) -> str:
+    """The cells ``where`` selects, as evidence text names them ("all cells" for none)."""
     return ", ".join(f"{k}={v}" for k, v in where.items()) or "all cells"
 
 
@@ -197,6 +199,7 @@ def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
 
 
 def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
+    """The outcome of ``claim`` on ``table``: a threshold (or success rate) test, else a comparison."""
     stat = "success_rate" if claim.kind == "success" else claim.stat
     if claim.kind in ("threshold", "success"):
         return _evaluate_threshold(claim, table, stat)
@@ -251,6 +254,7 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
 
 
 def _short_value(v: float) -> str:
+    """``v`` to three significant digits, as evidence text prints a value."""
     return f"{v:.3g}"
 
 
@@ -260,6 +264,7 @@ NO_RUNS = "(no runs)"
 
 
 def _setting_keys(table: pd.DataFrame) -> set:
+    """Every setting name of the table's cells: the keys a claim's ``where`` may use."""
     return {k for s in cell_settings(table).values() for k in s}
 
 

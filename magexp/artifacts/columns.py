@@ -19,7 +19,7 @@ COLUMNS = {
 }
 #: accuracy columns: their medians are over the successful runs only (failures are counted beside)
 ACCURACY = {"rms_ratio", "offset_error", "offset_error_ratio", "gram_error_ratio"}
-#: the columns of :func:`benchmark_table` computed here (not a median of a runs column)
+#: the columns of :func:`magexp.artifacts.kinds.heatmap.table` computed here (not a median of a runs column)
 DERIVED = {
     "bound_ratio": "RMS over successful runs of offset error / sqrt(tr CRB)",
     "success_rate": "fraction of runs that succeeded",
@@ -27,16 +27,5 @@ DERIVED = {
 
 
 def column_label(column: str) -> str:
-    """What a column of the benchmark table shows, in words.
-
-    Parameters
-    ----------
-    column : str
-        A column of the table of the kind ``heatmap``.
-
-    Returns
-    -------
-    str
-        Its words (:data:`COLUMNS`, :data:`DERIVED`), else its name with spaces.
-    """
+    """What a column of the benchmark table shows, in words."""
     return {**COLUMNS, **DERIVED}.get(column, column.replace("_", " "))

@@ -6,12 +6,13 @@ of some numbers and in the pixels of its figures; it should not differ in a verd
 
 * every verdict identical: the ``verdict`` column of every CSV (each summary row's verdict; in
   ``claims.csv`` each claim's result and each headline verdict);
-* every number within a tolerance (:func:`tolerance`): :data:`RTOL` relative, or one unit of its
-  printed precision, whichever is larger; a column of integers (seeds, cells, counts) is held to
+* every number within a tolerance (:func:`~magexp.artifacts.tolerances.tolerance`):
+  :data:`~magexp.artifacts.tolerances.RTOL` relative, or one unit of its printed precision, whichever is larger;
+  a column of integers (seeds, cells, counts) is held to
   the relative tolerance alone, i.e. exactly;
 * every text identical up to the numbers in it, which are held to the same tolerance
-  (:func:`compare_text`): the CSVs' labels, reasons and evidence, ``REPORT.md``, ``APPENDIX.md``
-  and the LaTeX tables;
+  (:func:`~magexp.artifacts.tolerances.compare_text`): the CSVs' labels, reasons and evidence,
+  ``REPORT.md``, ``APPENDIX.md`` and the LaTeX tables;
 * a path diagnostic (:data:`PATH_DIAGNOSTICS`: how many iterations or evaluations a minimiser took,
   where its path ended against the box) through the verdicts that read it, not to a number
   tolerance: present on both sides (or empty on both), its differences counted and the largest
@@ -25,26 +26,16 @@ of some numbers and in the pixels of its figures; it should not differ in a verd
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.formats import DIGITS, MEASURED, PEERS_HEADING, SPEED_HEADING
+from magexp.artifacts.formats import MEASURED, PEERS_HEADING, SPEED_HEADING
+from magexp.artifacts.tolerances import NUMBER, RTOL, compare_text, csv_unit, relative, tolerance
 from magexp.core.outcomes import ROUNDOFF_FLOOR
 
-#: relative tolerance of a number. A reproduction elsewhere (another CPU, BLAS or numba target, the numpy
-#: path) sums in another order: most numbers move in their 6th significant digit (1e-6 to 1e-5
-#: relative, the precision of the CSVs), but a difference of two nearly equal numbers magnifies the
-#: round-off of its operands by their ratio. Measured against the committed results: a Kalman estimate's
-#: distance from least squares (``yan2022_fig_tuning`` ``k_vs_ls``, 4e-9) moved by 3.9e-4 relative, a
-#: calibrated field's error ``|B_cal| - |B_ref|`` (0.003 nT of 50 000 nT, ``ding2024_fig2``) by 4.4e-4.
-#: 1e-3 covers those twice over and is at most one unit of the 4th significant digit, the precision
-#: REPORT.md prints: a difference it allows can show there only as a flip of a last digit, and never
-#: moves a verdict (verdicts are compared exactly).
-RTOL = 1e-3
 #: columns that describe a minimiser's path, not its result, with why they move between processors. A
 #: termination test met on numbers at round-off level is met at another iteration when the round-off
 #: differs, the result being the same to the printed digits (measured on this machine, a processor
@@ -52,7 +43,8 @@ RTOL = 1e-3
 #: ``NUMBA_CPU_NAME=generic`` against the default: ``lm`` 40 vs 53 evaluations, one Jacobian of 13;
 #: ``local`` 791 vs 2131; ``cmaes`` up to 11 %; no verdict changed). Such a column is compared through
 #: the verdicts that read it (a claim's ``verdict``, exactly) and is otherwise only required to be a number,
-#: or empty, on both sides; a claim's evidence text that prints one is held to :data:`RTOL` like every text.
+#: or empty, on both sides; a claim's evidence text that prints one is held to
+#: :data:`~magexp.artifacts.tolerances.RTOL` like every text.
 PATH_DIAGNOSTICS = {
     "nit": "iterations: lm's and local's stopping tests (xtol/ftol at 1e-12, BFGS's line search at its "
            "precision) are met at a round-off-dependent iteration; CMA-ES's stopping tests likewise",
@@ -76,15 +68,13 @@ OPTIONAL = {"peers/": "make peers-bench"}
 #: sections of the report files left out: ``(file, heading, the folder or file it shows)``; a section
 #: whose source is compared (on both sides) is compared too
 SECTIONS = (("APPENDIX.md", SPEED_HEADING, "bench.csv"), ("REPORT.md", PEERS_HEADING, "peers/"))
-#: files compared line by line, their numbers tokenised (:func:`compare_text`)
+#: files compared line by line, their numbers tokenised (:func:`~magexp.artifacts.tolerances.compare_text`)
 TEXT = (".md", ".tex")
 #: figures: present on both sides, their pixels never compared (their data is in the CSVs)
 FIGURES = (".png", ".pdf")
 #: columns that name a row in a disagreement (the first few present)
 KEYS = ("artifact", "id", "role", "quantity", "parameter", "case", "family", "label", "scenario", "estimator",
         "objective", "cell", "seed", "measure", "metric")
-#: a number in a text: not inside a word (``exp1``, ``S11``, ``ding2024``), an optional sign, an exponent
-NUMBER = re.compile(r"((?<![\w.])[-+]?(?>\d+(?:\.\d*)?|\.\d+)(?>[eE][-+]?\d+)?(?!\w))")
 
 
 @dataclass
@@ -99,12 +89,7 @@ class Difference:
     relative: float = math.nan
 
     def line(self) -> str:
-        """The difference as one line: the file, where in it, both values.
-
-        Returns
-        -------
-        str
-        """
+        """The difference as one line: the file, where in it, both values."""
         where = ", ".join(x for x in (self.row, f"column {self.column}" if self.column else "") if x)
         return f"{self.file}{': ' + where if where else ''}: ours {_quote(self.ours)}, committed {_quote(self.committed)}"
 
@@ -131,181 +116,39 @@ class Comparison:
 
     @property
     def agrees(self) -> bool:
+        """Whether no verdict changed and nothing disagrees beyond the tolerance."""
         return not self.changed and not self.disagreements
 
     def within(self, diff: Difference, count: int = 1) -> None:
-        """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them.
-
-        Parameters
-        ----------
-        diff, count : Difference, int
-            The largest difference counted, and how many differences it stands for.
-        """
+        """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them."""
         self.below[diff.file] = self.below.get(diff.file, 0) + count
         if self.largest is None or diff.relative > self.largest.relative:
             self.largest = diff
 
     def path(self, diff: Difference, count: int = 1) -> None:
-        """Count ``count`` differing path diagnostics in ``diff.file``, ``diff`` the largest of them.
-
-        Parameters
-        ----------
-        diff, count : Difference, int
-            The largest differing path diagnostic, and how many differing diagnostics it stands for.
-        """
+        """Count ``count`` differing path diagnostics in ``diff.file``, ``diff`` the largest of them."""
         self.paths[diff.file] = self.paths.get(diff.file, 0) + count
         if self.path_largest is None or diff.relative > self.path_largest.relative:
             self.path_largest = diff
 
 
 def _quote(text: str, n: int = 60) -> str:
+    """``text`` quoted, cut to ``n`` characters: a value as a difference's line shows it."""
     text = str(text)
     return repr(text if len(text) <= n else text[: n - 3] + "...")
-
-
-# ---------------------------------------------------------------------------------------------
-# numbers and texts
-
-def tolerance(ours: np.ndarray, committed: np.ndarray, unit: np.ndarray, rtol: float) -> np.ndarray:
-    """The largest difference allowed between ``ours`` and ``committed``: ``rtol`` times the larger
-    magnitude, or one ``unit`` of the printed precision, whichever is larger.
-
-    Parameters
-    ----------
-    ours, committed, unit : numpy.ndarray
-        The two sides' values, and one unit of the printed precision per value.
-    rtol : float
-        The relative tolerance.
-
-    Returns
-    -------
-    numpy.ndarray
-    """
-    return np.maximum(rtol * np.maximum(np.abs(ours), np.abs(committed)), unit)
-
-
-def csv_unit(values: np.ndarray) -> np.ndarray:
-    """One unit of the last digit of floats written with :data:`magexp.artifacts.formats.DIGITS`
-    significant digits (``%.6g``: trailing zeros dropped, so the text itself does not tell). Round-off
-    is written as ``0`` or ``±ROUNDOFF_FLOOR`` (:func:`magexp.artifacts.formats.tidy`): a value of at most
-    that magnitude is printed to within the band ``-floor .. floor``, whose width is its unit.
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        Values as read from a results CSV.
-
-    Returns
-    -------
-    numpy.ndarray
-    """
-    mag = np.abs(values)
-    with np.errstate(divide="ignore"):
-        digit = np.where(mag > 0, 10.0 ** (np.floor(np.log10(np.where(mag > 0, mag, 1))) - (DIGITS - 1)), 0.0)
-    return np.where(mag <= ROUNDOFF_FLOOR, 2 * ROUNDOFF_FLOOR, digit)
-
-
-def text_unit(token: str) -> float:
-    """One unit of the last printed digit of a number in a text (``0.254`` -> 0.001, ``1.2e-05`` ->
-    1e-06, ``30`` -> 1).
-
-    Parameters
-    ----------
-    token : str
-        A number as printed.
-
-    Returns
-    -------
-    float
-    """
-    mantissa, _, exponent = token.lower().partition("e")
-    decimals = len(mantissa.partition(".")[2])
-    return 10.0 ** (int(exponent or 0) - decimals)
-
-
-def relative(a: float, b: float) -> float:
-    """``|a - b|`` over the larger magnitude (0 when both are 0).
-
-    Parameters
-    ----------
-    a, b : float
-        The two numbers.
-
-    Returns
-    -------
-    float
-    """
-    scale = max(abs(a), abs(b))
-    return abs(a - b) / scale if scale else 0.0
-
-
-def compare_text(ours: str, committed: str, rtol: float) -> tuple[bool, float, tuple[str, str]]:
-    """Whether two texts agree: the same words, and each number within :func:`tolerance` (its unit
-    the finer of the two printed precisions: ``1.5`` beside ``1.501`` is one unit of ``0.001``).
-    Returns ``(agrees, largest relative difference of a number, (ours, committed) of the first
-    disagreement or of the largest difference)``.
-
-    Parameters
-    ----------
-    ours, committed : str
-    rtol : float
-
-    Returns
-    -------
-    tuple
-    """
-    a, b = NUMBER.split(ours), NUMBER.split(committed)
-    if len(a) != len(b) or a[0::2] != b[0::2]:
-        return False, math.nan, _first_difference(ours, committed)
-    worst, where = 0.0, (ours, committed)
-    for x, y in zip(a[1::2], b[1::2]):
-        if x == y:
-            continue
-        fx, fy = float(x), float(y)
-        unit = min(text_unit(x), text_unit(y))
-        if abs(fx - fy) > tolerance(np.float64(fx), np.float64(fy), unit, rtol) * (1 + 1e-9):
-            return False, math.nan, (x, y)
-        if relative(fx, fy) >= worst:
-            worst, where = relative(fx, fy), (x, y)
-    return True, worst, where
-
-
-def _first_difference(a: str, b: str, context: int = 25) -> tuple[str, str]:
-    """The two texts around their first differing character."""
-    i = next((k for k, (x, y) in enumerate(zip(a, b)) if x != y), min(len(a), len(b)))
-    start = max(0, i - context)
-    return a[start:i + context], b[start:i + context]
 
 
 # ---------------------------------------------------------------------------------------------
 # files
 
 def read_table(path: Path) -> pd.DataFrame:
-    """A results CSV as text (every cell as written; an empty cell ``""``).
-
-    Parameters
-    ----------
-    path : Path
-
-    Returns
-    -------
-    pandas.DataFrame
-    """
+    """A results CSV as text (every cell as written; an empty cell ``""``)."""
     return pd.read_csv(path, dtype=str, keep_default_na=False)
 
 
 def row_name(frame: pd.DataFrame, i: int) -> str:
     """``row N (key=value, ...)``: the row's number (1 = the first after the header) and its first
     :data:`KEYS` present, each cut to 40 characters.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-    i : int
-
-    Returns
-    -------
-    str
     """
     keys = [c for c in KEYS if c in frame.columns][:3]
     shown = ", ".join(f"{k}={_cut(frame[k].iat[i])}" for k in keys)
@@ -313,19 +156,14 @@ def row_name(frame: pd.DataFrame, i: int) -> str:
 
 
 def _cut(text: str, n: int = 40) -> str:
+    """``text`` cut to ``n`` characters (``...`` marking the cut)."""
     return text if len(text) <= n else text[: n - 3] + "..."
 
 
 def compare_csv(name: str, ours: Path, committed: Path, result: Comparison) -> None:
     """Compare two results CSVs cell by cell (by row position; a different row count is one
     disagreement): a ``verdict`` cell exactly, numbers within the tolerance, texts by
-    :func:`compare_text`. Only the cells whose text differs are looked at further.
-
-    Parameters
-    ----------
-    name : str
-    ours, committed : Path
-    result : Comparison
+    :func:`~magexp.artifacts.tolerances.compare_text`. Only the cells whose text differs are looked at further.
     """
     a, b = read_table(ours), read_table(committed)
     columns = _columns(name, a, b, result)
@@ -393,15 +231,6 @@ def _compare_column(name: str, col: str, a: pd.DataFrame, b: pd.DataFrame, rows:
 def text_lines(path: Path, cut: list[str]) -> list[str]:
     """The lines of a text file, without the sections whose heading line starts with one of ``cut``
     (a section ends at the next heading of its level or above).
-
-    Parameters
-    ----------
-    path : Path
-    cut : list of str
-
-    Returns
-    -------
-    list of str
     """
     lines, keep, level = path.read_text(encoding="utf-8").splitlines(), [], 0
     for line in lines:
@@ -416,15 +245,8 @@ def text_lines(path: Path, cut: list[str]) -> list[str]:
 
 
 def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison, cut: list[str]) -> None:
-    """Compare two report or LaTeX files line by line (:func:`compare_text`), without the sections ``cut``.
-
-    Parameters
-    ----------
-    name : str
-    ours, committed : Path
-    result : Comparison
-    cut : list of str
-    """
+    """Compare two report or LaTeX files line by line (:func:`~magexp.artifacts.tolerances.compare_text`),
+    without the sections ``cut``."""
     a, b = text_lines(ours, cut), text_lines(committed, cut)
     result.text_files += 1
     result.lines += len(b)
@@ -446,16 +268,7 @@ def compare_text_file(name: str, ours: Path, committed: Path, result: Comparison
 
 
 def table_cells(line: str) -> list[str]:
-    """The cells of a row of a Markdown (``| a | b |``) or LaTeX (``a & b \\\\``) table, ``\\_`` read as ``_``.
-
-    Parameters
-    ----------
-    line : str
-
-    Returns
-    -------
-    list of str
-    """
+    """The cells of a row of a Markdown (``| a | b |``) or LaTeX (``a & b \\\\``) table, ``\\_`` read as ``_``."""
     if line.startswith("|"):
         return [c.strip() for c in line.strip().strip("|").split("|")]
     return [c.strip().replace("\\_", "_") for c in line.strip().removesuffix("\\\\").split("&")]
@@ -465,14 +278,6 @@ def table_headers(lines: list[str]) -> list[list[str] | None]:
     """For each line, the column names of the table it is a body row of (None outside a table): a
     Markdown table's header is the line above its ``|---|`` rule, a LaTeX table's the line after
     ``\\toprule``; a table ends at a line that is not one of its rows (``\\bottomrule``).
-
-    Parameters
-    ----------
-    lines : list of str
-
-    Returns
-    -------
-    list
     """
     out: list[list[str] | None] = [None] * len(lines)
     header = None
@@ -490,7 +295,7 @@ def table_headers(lines: list[str]) -> list[list[str] | None]:
 
 def _compare_table_row(name: str, i: int, header: list[str], ours: str, committed: str, result: Comparison) -> None:
     """Line ``i`` of a table with a path diagnostic among its columns: cell by cell, a path diagnostic's
-    numbers counted (:meth:`Comparison.path`), every other cell by :func:`compare_text`."""
+    numbers counted (:meth:`Comparison.path`), every other cell by :func:`~magexp.artifacts.tolerances.compare_text`."""
     for col, u, v in zip(header, table_cells(ours), table_cells(committed)):
         if u == v:
             continue
@@ -506,6 +311,7 @@ def _compare_table_row(name: str, i: int, header: list[str], ours: str, committe
 # two folders
 
 def _files(root: Path) -> set[str]:
+    """The files below ``root``, as POSIX paths relative to it."""
     return {p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file()}
 
 
@@ -518,16 +324,6 @@ def compare(ours: Path, committed: Path, *, rtol: float = RTOL, files=None) -> C
     """Compare the reproduction ``ours`` with the committed results ``committed`` (two folders laid
     out as ``results/``), every file but those that differ by design (module docstring); ``files``:
     only these relative paths (e.g. one artifact's).
-
-    Parameters
-    ----------
-    ours, committed : Path
-    rtol : float
-    files : iterable of str, optional
-
-    Returns
-    -------
-    Comparison
     """
     ours, committed = Path(ours), Path(committed)
     result = Comparison(rtol=rtol)

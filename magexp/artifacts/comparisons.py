@@ -83,20 +83,6 @@ class Test:
 def decide(p: float, p_contra: float, p_min: float, alpha: float = ALPHA) -> str:
     """The outcome of a comparison from its p-values (module docstring): :data:`UNDECIDED` when even
     the smallest attainable p is not below ``alpha``.
-
-    Parameters
-    ----------
-    p, p_contra : float
-        The one-sided p of the claimed direction and of its converse.
-    p_min : float
-        The smallest p the test can give at its n.
-    alpha : float
-        The level (Holm's adjusted p is compared with :data:`ALPHA`).
-
-    Returns
-    -------
-    str
-        :data:`HOLDS`, :data:`CONTRADICTED`, :data:`NO_DIFFERENCE` or :data:`UNDECIDED`.
     """
     if not p_min < alpha:
         return UNDECIDED
@@ -106,24 +92,7 @@ def decide(p: float, p_contra: float, p_min: float, alpha: float = ALPHA) -> str
 
 
 def compare(claim, table: pd.DataFrame, better: dict, worse: dict, stats: tuple, cis: tuple) -> Test:
-    """The test of "the cells ``better`` beat the cells ``worse``" by the claim's ``test``.
-
-    Parameters
-    ----------
-    claim : magexp.artifacts.claims.Claim
-        The comparison claim (its ``test``, ``metric``, ``stat`` and ``better``).
-    table : pandas.DataFrame
-        The runs table.
-    better, worse : dict
-        The selections of the two sides (:func:`magexp.artifacts.selection.select`).
-    stats, cis : tuple
-        Each side's statistic and its interval (the unpaired test's ``detectable`` reads the intervals).
-
-    Returns
-    -------
-    Test
-        The pair's test.
-    """
+    """The test of "the cells ``better`` beat the cells ``worse``" by the claim's ``test``."""
     test, pair = _test_of(claim, table, better, worse)
     if test == "fisher":
         return _fisher_test(claim, table, better, worse)
@@ -192,17 +161,6 @@ def combined(tests: list[Test]) -> dict:
     (``p``: the largest), one the other way contradicts it (``p_contra``: the smallest times the number of
     pairs), the largest ``p_min``, the smallest ``n``; the deciding pair's (the largest p) test,
     observed effect and ``detectable``, at :data:`ALPHA` until :func:`adjust` knows its level.
-
-    Parameters
-    ----------
-    tests : list of Test
-        The test of each pair of the claim (:func:`compare`).
-
-    Returns
-    -------
-    dict
-        ``p``, ``p_contra``, ``p_min``, ``n``, ``detectable``, ``detectable_words``, ``test``, ``observed``
-        and ``detect``.
     """
     deciding = max(tests, key=lambda t: t.p_hold)
     detectable, words = deciding.detect(ALPHA)
@@ -217,18 +175,6 @@ def adjust(outcomes: list, families: list[str] | None = None) -> list:
     sanity check). A sanity check or an exploratory claim keeps its own p. Each comparison gets its
     ``family``, ``family_size``, ``p_adjusted`` and ``level`` (``alpha / (m - rank)``, its step of Holm's
     rule); its result is decided again on ``p_adjusted`` (:func:`decide`) and its evidence names the family.
-
-    Parameters
-    ----------
-    outcomes : list of magexp.artifacts.claims.Outcome
-        One paper's outcomes.
-    families : list of str, optional
-        The family of each outcome, in order.
-
-    Returns
-    -------
-    list of magexp.artifacts.claims.Outcome
-        ``outcomes``, changed in place.
     """
     for o, name in zip(outcomes, families or [""] * len(outcomes)):
         o.family = name or ("sanity" if o.claim.role == "sanity" else "primary")

@@ -16,20 +16,7 @@ from __future__ import annotations
 
 
 def claim_families(headlines: list, specs: list) -> dict[str, str]:
-    """``{"<artifact>.<claim id>": family}`` of every claim of a paper (module docstring).
-
-    Parameters
-    ----------
-    headlines : list of Headline
-        The paper's headlines (``paper.yaml``: their primary and other readings).
-    specs : list of Artifact
-        Its artifacts.
-
-    Returns
-    -------
-    dict
-        The family of each claim.
-    """
+    """``{"<artifact>.<claim id>": family}`` of every claim of a paper (module docstring)."""
     primary = {p for h in headlines for p in h.primary_parts()}
     sensitivity = {p for h in headlines for p in h.sensitivity_parts()} - primary
     out = {}

@@ -46,18 +46,6 @@ def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
     """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
     written as ``±floor`` (not the :data:`EXACT` ones); every float then rounded to :data:`DIGITS`
     significant digits.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        A results table.
-    floor : float
-        The magnitude below which a float is round-off.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The tidied copy.
     """
     out = frame.copy()
     for col in out.columns:
@@ -75,13 +63,6 @@ def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
     """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
     when only round-off differs).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        A results table.
-    path : Path
-        The CSV written.
     """
     with atomic_path(path) as tmp:  # an interrupt leaves the old file or the new one
         tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
@@ -91,33 +72,12 @@ def read_runs(path: Path) -> pd.DataFrame:
     """A runs CSV, consolidated: ``read_csv`` leaves one block per column (95 in ``benchmark_heatmap``),
     a copy one per dtype, and the claims and the summary take rows from it hundreds of times (a
     selection of ``benchmark_heatmap``'s cells: 1.7 ms as read, 1.0 ms consolidated).
-
-    Parameters
-    ----------
-    path : Path
-        A runs CSV.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The runs table, consolidated.
     """
     return pd.read_csv(path).copy()
 
 
 def fmt(v) -> str:
-    """A value as a table shows it: 4 significant digits, ``yes``/``no``, '' for a missing number.
-
-    Parameters
-    ----------
-    v : object
-        A cell's value.
-
-    Returns
-    -------
-    str
-        Its text.
-    """
+    """A value as a table shows it: 4 significant digits, ``yes``/``no``, '' for a missing number."""
     if v is None or (isinstance(v, float) and not np.isfinite(v)):
         return ""
     if isinstance(v, (bool, np.bool_)):
@@ -132,24 +92,13 @@ _LATEX = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"
 
 
 def _tex(text: str) -> str:
+    """``text`` with LaTeX's special characters escaped."""
     return "".join(_LATEX.get(ch, ch) for ch in str(text))
 
 
 def latex_table(frame: pd.DataFrame, columns: list[str]) -> str:
     """The same table as :func:`markdown_table`, as a LaTeX ``tabular`` with ``booktabs`` rules
     (``\\usepackage{booktabs}``), ready to ``\\input`` into a paper.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table.
-    columns : list of str
-        The columns shown.
-
-    Returns
-    -------
-    str
-        The LaTeX source.
     """
     lines = [r"\begin{tabular}{" + "l" * len(columns) + "}", r"\toprule",
              " & ".join(_tex(c) for c in columns) + r" \\", r"\midrule"]
@@ -166,22 +115,6 @@ def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = N
     """A Markdown table of ``columns`` (headed ``names``, default the columns); with ``tex``, its
     LaTeX twin (:func:`latex_table`) is written there. A table without rows is an error: the
     caller says in words that there is nothing to show.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table (at least one row).
-    columns : list of str
-        The columns shown.
-    tex : Path, optional
-        Where the LaTeX twin is written.
-    names : list of str, optional
-        The headers (default: ``columns``).
-
-    Returns
-    -------
-    str
-        The Markdown source.
     """
     if not len(frame):
         raise MagexpError(f"an empty table ({', '.join(columns)}) would be printed: say so in words instead")

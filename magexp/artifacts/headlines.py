@@ -29,25 +29,13 @@ from magexp.paths import RESULTS
 
 
 def _runs(root: Path, paper: str, name: str) -> pd.DataFrame | None:
+    """An artifact's ``_runs.csv`` under ``root``, None when it has none there."""
     path = root / paper / f"{name}_runs.csv"
     return read_runs(path) if path.exists() else None
 
 
 def runs_reader(root: Path, paper: str):
-    """``name -> runs table`` of ``paper``: each runs CSV read once, however many sections use it.
-
-    Parameters
-    ----------
-    root : Path
-        The results folder.
-    paper : str
-        The paper.
-
-    Returns
-    -------
-    callable
-        ``name -> runs table`` (cached).
-    """
+    """``name -> runs table`` of ``paper``: each runs CSV read once, however many sections use it."""
     return functools.cache(lambda name: _runs(root, paper, name))
 
 
@@ -55,18 +43,6 @@ def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
     """``(artifact, Outcome)`` of every claim of ``specs`` (one paper) whose runs table (``runs(name)``)
     has rows, Holm-adjusted within its family (:func:`magexp.artifacts.families.claim_families`,
     :func:`magexp.artifacts.comparisons.adjust`).
-
-    Parameters
-    ----------
-    specs : list of Artifact
-        The paper's artifacts.
-    runs : callable
-        ``name -> runs table`` (:func:`runs_reader`).
-
-    Returns
-    -------
-    list of tuple
-        ``(artifact, Outcome)`` per claim.
     """
     out = []
     for spec in specs:
@@ -79,20 +55,7 @@ def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
 
 
 def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple[str, object]]:
-    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``.
-
-    Parameters
-    ----------
-    root : Path
-        The results folder.
-    paper : str, optional
-        One paper (default: every paper).
-
-    Returns
-    -------
-    list of tuple
-        ``(artifact, Outcome)`` per claim.
-    """
+    """``(artifact, Outcome)`` of every claim whose artifact has runs under ``root``."""
     return [o for p in ([paper] if paper else papers())
             for o in paper_outcomes([load(path) for path in artifact_paths(p)], runs_reader(root, p))]
 
@@ -101,16 +64,6 @@ def headline_verdict(results: list[str | None]) -> str:
     """The verdict of a headline claim from its parts' outcomes (None: the part's artifact has no
     runs here): ``supported`` (every part holds), ``contradicted`` (none holds), ``partly``
     (some hold), ``not testable here`` (no part could be evaluated).
-
-    Parameters
-    ----------
-    results : list of str or None
-        Each part's result (None: no runs).
-
-    Returns
-    -------
-    str
-        The verdict.
     """
     known = [r for r in results if r is not None]
     if not known:
@@ -140,18 +93,6 @@ def robustness(verdict: str, readings: list[dict]) -> str:
     """One sentence on how the verdict of a headline fares under its other readings: ``robust under all
     N readings`` where each gives the primary's verdict, else the primary's verdict and, per other
     verdict, the readings that give it and why each is less plausible.
-
-    Parameters
-    ----------
-    verdict : str
-        The headline's verdict (its primary reading's).
-    readings : list of dict
-        Its readings (:func:`_reading_rows`).
-
-    Returns
-    -------
-    str
-        The sentence.
     """
     if not readings:
         return "no unstated setting it turns on is read otherwise"
@@ -173,22 +114,6 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
     """Each headline claim of ``paper`` (``paper.yaml``) with its verdict, reason and figure
     (:func:`_headline_row`). ``outcomes``: ``{"artifact.id": Outcome}``; a part (of the headline or of
     a reading) naming no claim of the paper is an error.
-
-    Parameters
-    ----------
-    paper : str
-        The paper.
-    specs : list of Artifact
-        Its artifacts.
-    outcomes : dict
-        ``{"artifact.id": Outcome}``.
-    runs : callable
-        ``name -> runs table`` (:func:`runs_reader`).
-
-    Returns
-    -------
-    list of dict
-        A row per headline claim.
     """
     declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
     rows = []
@@ -203,8 +128,9 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
 
 
 def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:
-    """One headline's row, decided by its primary reading (:meth:`Headline.primary_parts`); its other
-    readings give ``robustness`` (:func:`robustness`) and never the verdict. The reason is the deciding
+    """One headline's row, decided by its primary reading
+    (:meth:`magexp.artifacts.paper_spec.Headline.primary_parts`); its other readings give ``robustness``
+    (:func:`robustness`) and never the verdict. The reason is the deciding
     numbers (:func:`_headline_verdict`); the evidence adds each reading's verdict, source and settings and
     every deciding part's outcome; ``readings_total`` counts its readings (1: none declared),
     ``readings_holding`` those under which it is supported; ``readings`` keeps each reading's row (for
@@ -273,20 +199,6 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
     effect where no difference is detected; a comparison's declared ``effect`` in words and the
     ``seeds_planned`` for it, :func:`magexp.artifacts.power.claim_plans`, whose evidence says the power
     reached where the cap bound).
-
-    Parameters
-    ----------
-    paper : str
-        The paper whose claims are listed.
-    specs : list of Artifact
-        Its artifacts, in order.
-    outcomes : list of tuple
-        ``(artifact, Outcome)`` per claim (:func:`paper_outcomes`).
-
-    Returns
-    -------
-    list of dict
-        A ``claims.csv`` row per claim.
     """
     own = {s.name: s for s in specs}
     plans = claim_plans(specs, claim_families(load_paper(paper).headline, specs))

@@ -147,26 +147,14 @@ class Headline:
                                   "headline's own: only the primary reading may")
 
     def primary_parts(self) -> list[str]:
-        """The claims that decide the verdict: the primary reading's parts, else the headline's own.
-
-        Returns
-        -------
-        list of str
-            ``<artifact>.<claim id>`` per part.
-        """
+        """The claims that decide the verdict: the primary reading's parts, else the headline's own."""
         for r in self.readings:
             if r.label == self.primary and r.parts:
                 return list(r.parts)
         return list(self.parts)
 
     def sensitivity_parts(self) -> list[str]:
-        """The claims that re-test the headline under its other readings (sensitivity analyses).
-
-        Returns
-        -------
-        list of str
-            ``<artifact>.<claim id>`` per part, in the order of the readings.
-        """
+        """The claims that re-test the headline under its other readings (sensitivity analyses)."""
         primary = set(self.primary_parts())
         return [p for r in self.readings if r.label != self.primary for p in r.parts if p not in primary]
 
@@ -186,20 +174,7 @@ class Paper:
 
 
 def load_paper(paper: str, root: Path | None = None) -> Paper:
-    """The validated ``paper.yaml`` of ``paper``.
-
-    Parameters
-    ----------
-    paper : str
-        The paper's folder name.
-    root : Path, optional
-        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
-
-    Returns
-    -------
-    Paper
-        The validated paper.
-    """
+    """The validated ``paper.yaml`` of ``paper``."""
     path = (root or EXPERIMENTS) / paper / "paper.yaml"
     data = (read_yaml(path) or {}) if path.exists() else {"title": paper}
     meta = build(Paper, data, f"{paper}/paper.yaml")
@@ -210,16 +185,6 @@ def load_paper(paper: str, root: Path | None = None) -> Paper:
 def papers(root: Path | None = None) -> list[str]:
     """Every folder of ``experiments/`` that holds an artifact YAML, in the papers' ``order``
     (``paper.yaml``, optional: title, intro, order, deviations).
-
-    Parameters
-    ----------
-    root : Path, optional
-        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
-
-    Returns
-    -------
-    list of str
-        The papers' names.
     """
     root = root or EXPERIMENTS
     names = [p.name for p in root.iterdir() if p.is_dir() and any(q.name != "paper.yaml" for q in p.glob("*.yaml"))]
@@ -227,20 +192,7 @@ def papers(root: Path | None = None) -> list[str]:
 
 
 def artifact_paths(paper: str, root: Path | None = None) -> list[Path]:
-    """The artifact files of ``paper``, in file-name order.
-
-    Parameters
-    ----------
-    paper : str
-        The paper whose artifact files are listed.
-    root : Path, optional
-        The experiments folder (default: :data:`magexp.paths.EXPERIMENTS`).
-
-    Returns
-    -------
-    list of Path
-        The artifact YAMLs.
-    """
+    """The artifact files of ``paper``, in file-name order."""
     root = root or EXPERIMENTS
     folder = root / paper
     if not folder.is_dir() or paper not in papers(root):

@@ -30,34 +30,12 @@ from magexp.run.executor import run_row
 
 
 def load_spec(path: Path | str):
-    """Read and validate an artifact YAML (:func:`magexp.artifacts.spec.load`).
-
-    Parameters
-    ----------
-    path : Path or str
-        The artifact's YAML.
-
-    Returns
-    -------
-    Artifact
-        The validated artifact.
-    """
+    """Read and validate an artifact YAML (:func:`magexp.artifacts.spec.load`)."""
     return load(path)
 
 
 def paper_specs(paper: str) -> list:
-    """Every artifact of ``paper``, in file-name order.
-
-    Parameters
-    ----------
-    paper : str
-        The paper.
-
-    Returns
-    -------
-    list of Artifact
-        Its artifacts.
-    """
+    """Every artifact of ``paper``, in file-name order."""
     return [load_spec(p) for p in artifact_paths(paper)]
 
 
@@ -66,16 +44,6 @@ def cells(spec) -> list[dict[str, str]]:
 
     ``cases`` (optional): a list of override lists (e.g. a scenario with its own settings),
     each crossed with the ``grid``; the case's overrides come first.
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact (its ``grid`` and ``cases``).
-
-    Returns
-    -------
-    list of dict
-        A ``{override key: value}`` per cell.
     """
     grid = dict(spec.grid)
     keys = list(grid)
@@ -90,20 +58,7 @@ BEST = "best"
 
 
 def best_of(table: pd.DataFrame, metric: str) -> pd.Series:
-    """Per run, the lowest ``metric`` over the runs of the same scenario and objective.
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The runs table.
-    metric : str
-        A metric column.
-
-    Returns
-    -------
-    pandas.Series
-        The lowest value per run's group.
-    """
+    """Per run, the lowest ``metric`` over the runs of the same scenario and objective."""
     return table[metric].astype(float).groupby([table.scenario, table.objective]).transform("min")
 
 
@@ -112,18 +67,6 @@ def succeeded(table: pd.DataFrame, success) -> pd.Series:
     rule (:class:`magexp.artifacts.spec.Success`), 1/0, NaN where the reference (the true calibration's
     value) is unknown. ``reference: best`` (:data:`BEST`): the lowest value of ``metric`` over the
     artifact's runs of the same scenario and objective.
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The runs table.
-    success : Success
-        The artifact's success rule.
-
-    Returns
-    -------
-    pandas.Series
-        1/0 per run, NaN where unknown.
     """
     if success.metric not in table or (success.reference not in table and success.reference != BEST):
         return pd.Series(np.nan, index=table.index)
@@ -146,18 +89,6 @@ def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None
     point. Computed from the stored estimates and the config (downstream of the run: no run changes).
     NaN where the run's config has no numeric offset interval; None when no row has one or the table
     has no offset columns.
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The runs table.
-    configs : list of dict
-        The resolved config of each run (row order).
-
-    Returns
-    -------
-    pandas.Series or None
-        The count per run (None: no run has a search box).
     """
     columns = next((c for c in OFFSET_COLUMNS if all(k in table for k in c)), None)
     if columns is None or len(configs) != len(table):
@@ -181,16 +112,6 @@ def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None
 def applicable(cfg: DictConfig) -> bool:
     """Whether the run's estimator applies to its problem: :func:`magexp.estimators.base.applies_to`
     on the classes named by the config (nothing is built or simulated).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        A run's composed config.
-
-    Returns
-    -------
-    bool
-        True when the estimator applies.
     """
     objective = cfg.get("objective") or cfg.scenario.get("objective")
     if objective is None:  # the scenario class fixes it
@@ -204,20 +125,6 @@ def overrides_of(spec, cell: dict[str, str], cfg: DictConfig | None = None) -> l
     """The Hydra overrides of a cell. ``?key=value`` entries of ``base`` apply only where the
     composed config has ``key`` (e.g. a swarm size that a closed-form estimator lacks); with
     ``cfg=None`` they are left out (the plain overrides to compose with).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact.
-    cell : dict
-        The cell's ``{key: value}``.
-    cfg : DictConfig, optional
-        The composed config (None: optional overrides left out).
-
-    Returns
-    -------
-    list of str
-        The Hydra overrides.
     """
     out = []
     for o in [str(o) for o in spec.base] + [f"{k}={v}" for k, v in cell.items()]:
@@ -230,37 +137,13 @@ def overrides_of(spec, cell: dict[str, str], cfg: DictConfig | None = None) -> l
 
 
 def apply_optional(spec, cfg: DictConfig) -> DictConfig:
-    """Apply the ``?key=value`` overrides of ``spec.base`` that ``cfg`` has a key for (Hydra's override step).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact.
-    cfg : DictConfig
-        A composed config.
-
-    Returns
-    -------
-    DictConfig
-        ``cfg`` with the optional overrides applied.
-    """
+    """Apply the ``?key=value`` overrides of ``spec.base`` that ``cfg`` has a key for (Hydra's override step)."""
     optional = [str(o)[1:] for o in spec.base if str(o).startswith("?")]
     return apply_overrides(cfg, [o for o in optional if OmegaConf.select(cfg, o.split("=", 1)[0]) is not None])
 
 
 def setting_of(overrides: list[str]) -> str:
-    """``key=value`` pairs joined by ``;``, the scenario first, the estimator left out.
-
-    Parameters
-    ----------
-    overrides : list of str
-        A cell's overrides.
-
-    Returns
-    -------
-    str
-        The setting's text.
-    """
+    """``key=value`` pairs joined by ``;``, the scenario first, the estimator left out."""
     pairs = dict(o.split("=", 1) for o in overrides)
     first = [f"scenario={pairs.pop('scenario')}"] if "scenario" in pairs else []
     pairs.pop("estimator", None)
@@ -268,18 +151,7 @@ def setting_of(overrides: list[str]) -> str:
 
 
 def shrink(cfg: DictConfig) -> DictConfig:
-    """Tiny sizes for smoke tests: cap each key of the estimator class's ``smoke`` sizes.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        A composed config.
-
-    Returns
-    -------
-    DictConfig
-        The config with tiny sizes.
-    """
+    """Tiny sizes for smoke tests: cap each key of the estimator class's ``smoke`` sizes."""
     for key, cap in getattr(get_class(cfg.estimator._target_), "smoke", {}).items():
         value = OmegaConf.select(cfg, f"estimator.{key}")
         if isinstance(value, int):
@@ -326,22 +198,6 @@ def plan_artifact(spec, *, seeds: int | None = None, tiny: bool = False, seeds_f
     the cells that get more (``{cell: seeds}``: those of a comparison's ``effect:``,
     :func:`magexp.artifacts.sample_sizes.planned_seeds`). ``seeds`` (an exploration) gives every cell that
     many and plans nothing more; so does ``tiny``.
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact.
-    seeds : int, optional
-        Seeds per cell (default: the spec's).
-    tiny : bool
-        Tiny sizes (:func:`shrink`).
-    seeds_for : callable, optional
-        ``plan -> {cell: seeds}`` of the cells that get more than the artifact's seeds.
-
-    Returns
-    -------
-    ArtifactPlan
-        Every run's config.
     """
     n_seeds = int(seeds if seeds is not None else spec.seeds)
     if n_seeds < 1:
@@ -377,18 +233,6 @@ def _settings(overrides: list[str]) -> dict:
 def claim_cells(plan: ArtifactPlan, claim) -> list[int]:
     """The cells of ``plan`` that a comparison claim selects (its ``cells``, matched on the cell's
     overrides; a key that is no setting, a row filter such as ``succeeded``, is left out).
-
-    Parameters
-    ----------
-    plan : ArtifactPlan
-        The plan.
-    claim : Claim
-        A comparison claim.
-
-    Returns
-    -------
-    list of int
-        The cells it selects.
     """
     settings = [_settings(o) for o in plan.overrides]
     keys = {k for s in settings for k in s}
@@ -414,20 +258,7 @@ class _ByRun(Mapping):
 
 
 def collect(plan: ArtifactPlan, outputs) -> ArtifactRuns:
-    """The :class:`ArtifactRuns` of ``plan`` from its outputs (in ``plan.configs`` order).
-
-    Parameters
-    ----------
-    plan : ArtifactPlan
-        The plan.
-    outputs : Outputs
-        The runs' outputs, in ``plan.configs`` order.
-
-    Returns
-    -------
-    ArtifactRuns
-        The runs with their table.
-    """
+    """The :class:`ArtifactRuns` of ``plan`` from its outputs (in ``plan.configs`` order)."""
     metrics = outputs.metrics if hasattr(outputs, "metrics") else (lambda k: run_row(outputs[k]))
     rows = [{"cell": ci, **plan.cells[ci], "setting": setting_of(plan.overrides[ci]), **metrics(k)}
             for k, (ci, seed) in enumerate(plan.index)]

@@ -24,35 +24,13 @@ class CommonPlot:
     def get(self, key: str, default=None):
         """A key's value, or ``default`` where it is unset (None) or not a key of this kind: the drawings
         read the typed keys and a test's plain mapping alike.
-
-        Parameters
-        ----------
-        key : str
-            A ``plot:`` key.
-        default : object
-            What an unset or absent key gives.
-
-        Returns
-        -------
-        object
-            The value.
         """
         value = getattr(self, key, None)
         return default if value is None else value
 
 
 def choice(where: str, value, allowed: tuple) -> None:
-    """Raise, in one line, unless ``value`` is one of ``allowed``.
-
-    Parameters
-    ----------
-    where : str
-        The key (``plot.xscale``).
-    value : object
-        Its value.
-    allowed : tuple of str
-        The values it may take.
-    """
+    """Raise, in one line, unless ``value`` is one of ``allowed``."""
     if value not in allowed:
         raise MagexpError(f"{where}={value!r} is not allowed: choose one of {', '.join(allowed)}")
 
@@ -62,17 +40,6 @@ FIT = ("F_g", "fg")
 
 
 def metric_list(plot) -> list[str]:
-    """The metric columns a ``final`` figure draws.
-
-    Parameters
-    ----------
-    plot : Plot or Mapping
-        The artifact's ``plot:`` (its ``metric``: one name or a list; default ``fun``).
-
-    Returns
-    -------
-    list of str
-        The names.
-    """
+    """The metric columns a ``final`` figure draws."""
     metric = plot.get("metric", "fun")
     return [metric] if isinstance(metric, str) else list(metric)

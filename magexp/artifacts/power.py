@@ -62,16 +62,6 @@ def comparison_test(claim) -> str:
     success rate, ``unpaired`` or ``paired`` where the claim says so; under ``test: auto``, ``paired``
     when its cells differ only in method keys (``estimator``, ``estimator.*``, ``objective``: the same
     readings), else ``unpaired`` (:func:`magexp.artifacts.comparisons.compare`).
-
-    Parameters
-    ----------
-    claim : Claim
-        A comparison claim.
-
-    Returns
-    -------
-    str
-        ``fisher``, ``paired`` or ``unpaired``.
     """
     if claim.stat == "success_rate":
         return "fisher"
@@ -88,26 +78,9 @@ def _draws(n_sim: int, n: int) -> np.ndarray:
 
 
 def wilcoxon_power(n: int, ratio: float, spread: float, level: float, n_sim: int = N_SIM) -> float:
-    """Simulated power of the one-sided paired Wilcoxon signed-rank test (:func:`wilcoxon_less`'s test)
-    at ``level`` with ``n`` seeds per cell (module docstring).
-
-    Parameters
-    ----------
-    n : int
-        Seeds per cell.
-    ratio : float
-        The worse side's median over the better side's.
-    spread : float
-        The standard deviation of the log of the metric per seed.
-    level : float
-        The raw-p level.
-    n_sim : int
-        Simulated data sets.
-
-    Returns
-    -------
-    float
-        The fraction of data sets whose p is below ``level``.
+    """Simulated power of the one-sided paired Wilcoxon signed-rank test
+    (:func:`magexp.artifacts.significance.wilcoxon_less`'s test) at ``level`` with ``n`` seeds per cell
+    (module docstring).
     """
     from scipy.stats import wilcoxon  # lazy: see magexp.artifacts.significance.wilcoxon_less
 
@@ -121,26 +94,6 @@ def permutation_power(n: int, ratio: float, spread: float, level: float, stat: s
     """Simulated power of the one-sided permutation test of ``stat``
     (:func:`magexp.artifacts.significance.permutation_less`) at ``level`` with ``n`` seeds per cell, each
     data set tested with ``min(N_PERM, ceil(2 / level) - 1)`` relabellings (module docstring).
-
-    Parameters
-    ----------
-    n : int
-        Seeds per cell.
-    ratio : float
-        The worse side's statistic over the better side's.
-    spread : float
-        The standard deviation of the log of the metric per seed.
-    level : float
-        The raw-p level.
-    stat : str
-        The statistic compared (:data:`magexp.artifacts.tables.STATS`).
-    n_sim : int
-        Simulated data sets.
-
-    Returns
-    -------
-    float
-        The fraction of data sets whose p is below ``level``.
     """
     n_perm = min(N_PERM, math.ceil(2 / level) - 1)
     z = _draws(n_sim, n)
@@ -180,24 +133,6 @@ def power_at(n: int, test: str, effect: tuple, level: float, stat: str = "median
     """The power of ``test`` at ``level`` with ``n`` seeds per cell against ``effect`` (the items of a
     claim's ``effect:``): :func:`~magexp.artifacts.significance.fisher_power`, :func:`wilcoxon_power` or
     :func:`permutation_power`.
-
-    Parameters
-    ----------
-    n : int
-        Seeds per cell.
-    test : str
-        ``fisher``, ``paired`` or ``unpaired``.
-    effect : tuple
-        ``((key, value), ...)`` of the claim's ``effect:``.
-    level : float
-        The raw-p level.
-    stat : str
-        The statistic compared (unpaired tests).
-
-    Returns
-    -------
-    float
-        The power.
     """
     e = dict(effect)
     if "rise" in e:
@@ -213,24 +148,6 @@ def required_seeds(test: str, effect: tuple, level: float, start: int, cap: int,
     """The smallest ``n`` in ``[start, cap]`` whose :func:`power_at` is at least :data:`POWER`, and that
     power; ``(cap, power at cap)`` when the cap does not reach it (module docstring: bisection, the exact
     Fisher power scanned below it).
-
-    Parameters
-    ----------
-    test : str
-        ``fisher``, ``paired`` or ``unpaired``.
-    effect : tuple
-        ``((key, value), ...)`` of the claim's ``effect:``.
-    level : float
-        The raw-p level.
-    start, cap : int
-        The artifact's seeds and its cap.
-    stat : str
-        The statistic compared (unpaired tests).
-
-    Returns
-    -------
-    tuple of (int, float)
-        The seeds and the power they reach.
     """
     power = functools.cache(lambda n: power_at(n, test, effect, level, stat))
     if power(cap) < POWER:
@@ -267,18 +184,6 @@ class ClaimPlan:
 def claim_levels(specs: list, family: dict[str, str]) -> dict[str, tuple[str, int, float]]:
     """``{"<artifact>.<claim id>": (family, m, level)}`` of every comparison claim of a paper: its Holm
     family, the number ``m`` of comparisons in it and the strictest step ``ALPHA / m`` (``ALPHA`` alone).
-
-    Parameters
-    ----------
-    specs : list of Artifact
-        The paper's artifacts.
-    family : dict
-        The family of each claim (:func:`magexp.artifacts.families.claim_families`).
-
-    Returns
-    -------
-    dict
-        ``(family, m, level)`` per comparison.
     """
     comparisons = [f"{s.name}.{c.id}" for s in specs for c in s.claims if c.kind in ("ordering", "winner")]
     sizes = {name: sum(family[k] == name for k in comparisons) for name in set(family.values())}
@@ -290,20 +195,7 @@ def claim_levels(specs: list, family: dict[str, str]) -> dict[str, tuple[str, in
 
 
 def claim_plans(specs: list, family: dict[str, str]) -> dict[str, ClaimPlan]:
-    """The :class:`ClaimPlan` of every comparison claim of a paper that declares an ``effect:``.
-
-    Parameters
-    ----------
-    specs : list of Artifact
-        The paper's artifacts.
-    family : dict
-        The family of each claim (:func:`magexp.artifacts.families.claim_families`).
-
-    Returns
-    -------
-    dict
-        ``{"<artifact>.<claim id>": ClaimPlan}``.
-    """
+    """The :class:`ClaimPlan` of every comparison claim of a paper that declares an ``effect:``."""
     levels = claim_levels(specs, family)
     out = {}
     for spec in specs:

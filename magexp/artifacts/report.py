@@ -51,11 +51,6 @@ def versions() -> dict:
     """The versions behind the results: python and the libraries (:mod:`magexp.run.provenance`) and
     ``magexp_commit``, the last commit that changed anything outside ``results/`` (so committing the
     regenerated results does not change the record, and a fresh clone writes the same bytes).
-
-    Returns
-    -------
-    dict
-        ``{name: version}``, ``magexp_commit`` last.
     """
     try:
         commit = subprocess.run(["git", "log", "-1", "--format=%h", "--abbrev=12", "--", ".", ":(exclude)results"],
@@ -69,18 +64,7 @@ def versions() -> dict:
 
 
 def collect(root: Path = RESULTS) -> pd.DataFrame:
-    """Every paper's summary part, in the papers' order.
-
-    Parameters
-    ----------
-    root : Path
-        The results folder, a subfolder per paper.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The summary rows.
-    """
+    """Every paper's summary part, in the papers' order."""
     parts = []
     for paper in papers():
         path = root / paper / "summary.csv"
@@ -93,17 +77,7 @@ def collect(root: Path = RESULTS) -> pd.DataFrame:
 
 
 class Paper:
-    """One paper's parts, each read once: meta, specs, runs, summary rows, claim outcomes.
-
-    Parameters
-    ----------
-    paper : str
-        The paper's folder name.
-    summary : pandas.DataFrame
-        Every paper's summary rows (:func:`collect`); this paper's are kept.
-    root : Path
-        The results folder, a subfolder per paper.
-    """
+    """One paper's parts, each read once: meta, specs, runs, summary rows, claim outcomes."""
 
     def __init__(self, paper: str, summary: pd.DataFrame, root: Path):
         self.paper, self.root = paper, root
@@ -133,16 +107,6 @@ def compared_rows(rows: pd.DataFrame) -> pd.DataFrame:
     (:func:`_judged_text`), except that a cell with more than :data:`COLLAPSE` of them (a parameter
     table) becomes one line: its verdict counts, and the rows not reproduced (every row stays in the
     appendix and ``summary.csv``).
-
-    Parameters
-    ----------
-    rows : pandas.DataFrame
-        Summary rows.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The compared rows.
     """
     out = []
     rows = rows[~rows.verdict.isin(NOT_COMPARED)]
@@ -176,16 +140,6 @@ def compared_counts(rows: pd.DataFrame) -> str:
     """The verdict counts of compared rows, ``differs`` split by its size on the block's scale and
     by a failed majority: ``reproduced 8, differs 4 (1 by less than 1 % of its scale; 2 on a failed
     majority), uninformative 4``; then the rows not compared.
-
-    Parameters
-    ----------
-    rows : pandas.DataFrame
-        Compared rows (:func:`compared_rows`).
-
-    Returns
-    -------
-    str
-        The counts' text.
     """
     counts = rows.verdict.value_counts()
     differs = rows[rows.verdict == "differs"]
@@ -200,6 +154,7 @@ def compared_counts(rows: pd.DataFrame) -> str:
 
 
 def _compared_table(p: Paper) -> str:
+    """The report's table of compared numbers of paper ``p`` ('' when it has none)."""
     rows = p.rows[p.rows.verdict != "n/a"]
     if not len(rows):
         return ""
@@ -243,6 +198,7 @@ def _winners_section(p: Paper) -> str:
 
 
 def _report_section(p: Paper) -> str:
+    """The report's section of paper ``p``: headlines, findings, winners, compared numbers, deviations."""
     intro = " ".join(str(p.meta.intro).split())
     lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n", headline_list(p)]
     lines += [findings_table(p), _winners_section(p), _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
@@ -292,16 +248,6 @@ _SEEDS_OF = re.compile(r"\{seeds:(\w+)\}")
 def seed_count(table: pd.DataFrame) -> str:
     """The seeds per cell of a runs table: ``"30"``, or ``"30 to 150"`` where a comparison's ``effect:``
     gave some cells more (:mod:`magexp.artifacts.power`).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        A runs table.
-
-    Returns
-    -------
-    str
-        The seeds per cell.
     """
     per = table.groupby("cell").seed.nunique() if "cell" in table else pd.Series([table.seed.nunique()])
     lo, hi = int(per.min()), int(per.max())
@@ -363,16 +309,6 @@ def _artifact_table(spec, path: Path) -> str:
 def peer_results(root: Path) -> list[str]:
     """The results of the claims of the section "magexp beside MAGYC": the second column of the claims
     table of ``root/peers/peers.md`` (the table under its ``**Claims**`` line; none without the file).
-
-    Parameters
-    ----------
-    root : Path
-        The results folder (its ``peers/peers.md``).
-
-    Returns
-    -------
-    list of str
-        The claims' results.
     """
     path = root / "peers" / "peers.md"
     if not path.exists():
@@ -409,6 +345,7 @@ def _peers_section(root: Path) -> str:
 
 
 def _speed_section(root: Path) -> str:
+    """The appendix's speed section from ``bench.csv`` ('' without one: only ``make bench`` writes it)."""
     path = root / "bench.csv"
     if not path.exists():
         return ""
@@ -433,11 +370,6 @@ RULE = ("The verdict of a compared number is one rule, applied in order: `differ
 def build(root: Path = RESULTS) -> None:
     """Write ``root/summary.csv``, ``root/claims.csv``, ``root/versions.csv``, ``root/REPORT.md``
     and ``root/APPENDIX.md``.
-
-    Parameters
-    ----------
-    root : Path
-        The results folder the report is written into.
     """
     summary = collect(root)
     write_csv(summary, root / "summary.csv")

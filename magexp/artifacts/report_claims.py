@@ -22,20 +22,7 @@ from magexp.artifacts.plots.style import save
 
 
 def link(figure: str, root: Path) -> str:
-    """A Markdown link to a figure ``<paper>/<artifact>`` (its PNG), or '' if it was not drawn.
-
-    Parameters
-    ----------
-    figure : str
-        ``<paper>/<artifact>``.
-    root : Path
-        The results folder.
-
-    Returns
-    -------
-    str
-        The link, or the artifact's name.
-    """
+    """A Markdown link to a figure ``<paper>/<artifact>`` (its PNG), or '' if it was not drawn."""
     if not figure:
         return ""
     name = figure.split("/")[-1]
@@ -43,18 +30,7 @@ def link(figure: str, root: Path) -> str:
 
 
 def bold(verdict: str) -> str:
-    """A verdict in bold where it is a negative one (a reader's eye goes to it first).
-
-    Parameters
-    ----------
-    verdict : str
-        A verdict or result.
-
-    Returns
-    -------
-    str
-        The verdict, Markdown.
-    """
+    """A verdict in bold where it is a negative one (a reader's eye goes to it first)."""
     return f"**{verdict}**" if verdict in ("contradicted", "partly", FAILS, CONTRADICTED, "differs") else verdict
 
 
@@ -62,16 +38,6 @@ def headline_list(p) -> str:
     """The headline claims of a section, each in words: its verdict under its primary reading, that reading
     and why the paper most plausibly meant it, the deciding numbers, and its robustness under the others;
     above them their counts by verdict.
-
-    Parameters
-    ----------
-    p : Paper
-        The section (:class:`magexp.artifacts.report.Paper`).
-
-    Returns
-    -------
-    str
-        Markdown.
     """
     if not p.headlines:
         return "No headline claim of this section is declared (`headline:` in its `paper.yaml`).\n"
@@ -91,18 +57,7 @@ def headline_list(p) -> str:
 
 
 def headline_counts(rows: list[dict]) -> str:
-    """``Headline claims: supported 2, partly 1, ...``: the headline rows by verdict.
-
-    Parameters
-    ----------
-    rows : list of dict
-        Claims rows; those of role ``headline`` are counted.
-
-    Returns
-    -------
-    str
-        The counts' text.
-    """
+    """``Headline claims: supported 2, partly 1, ...``: the headline rows by verdict."""
     heads = pd.Series([c["verdict"] for c in rows if c["role"] == "headline"], dtype=object).value_counts()
     if not len(heads):
         return "No headline claim"
@@ -113,11 +68,6 @@ def draw_readings(p) -> None:
     """``<paper>/readings.png``: the verdict of each headline under each reading
     (:mod:`magexp.artifacts.plots.readings`), and the cells it draws in ``readings.csv``; none for a
     paper without headlines.
-
-    Parameters
-    ----------
-    p : Paper
-        The paper's section.
     """
     if p.headlines:
         (p.root / p.paper).mkdir(parents=True, exist_ok=True)
@@ -132,18 +82,6 @@ def counts(claims: list[dict], peers: list[str] = ()) -> str:
     their primary readings), the papers' findings (the ``primary`` family's ``by: paper`` claims), magexp's
     own statements (with ``peers``: the outcomes of the MAGYC section's claims), and, counted apart, the
     re-tests under other readings (robustness), the exploratory claims and the sanity checks.
-
-    Parameters
-    ----------
-    claims : list of dict
-        The claims rows.
-    peers : list of str
-        The results of the MAGYC section's claims.
-
-    Returns
-    -------
-    str
-        The counts' text.
     """
     paper = [c["verdict"] for c in claims if _is_finding(c)]
     own = [c["verdict"] for c in claims if _is_statement(c)] + list(peers)
@@ -170,18 +108,7 @@ def _is_statement(c: dict) -> bool:
 
 
 def held(results: list[str]) -> str:
-    """``k of n hold`` and how the others went (``contradicted 2, no difference detected 3``).
-
-    Parameters
-    ----------
-    results : list of str
-        The claims' results.
-
-    Returns
-    -------
-    str
-        The text.
-    """
+    """``k of n hold`` and how the others went (``contradicted 2, no difference detected 3``)."""
     others = pd.Series([r for r in results if r != HOLDS], dtype=object).value_counts()
     rest = ", ".join(f"{k} {int(others[k])}" for k in (FAILS, CONTRADICTED, NO_DIFFERENCE, UNDECIDED) if k in others)
     return f"{sum(r == HOLDS for r in results)} of {len(results)} hold" + (f" ({rest})" if rest else "")
@@ -191,18 +118,6 @@ def findings_table(p, *, appendix: bool = False) -> str:
     """The findings of a section: in the report the paper's own (the primary family; magexp's statements
     too where the section has no headline claim: it is magexp's own work), in the appendix magexp's
     statements of a paper section; a counts line of exactly the rows listed above each table.
-
-    Parameters
-    ----------
-    p : Paper
-        The section (:class:`magexp.artifacts.report.Paper`).
-    appendix : bool
-        The appendix's table (magexp's statements) instead of the report's.
-
-    Returns
-    -------
-    str
-        Markdown ('' when nothing is listed).
     """
     own_here = appendix or not p.headlines
     found = [c for c in p.claims if (_is_statement(c) if appendix else _is_finding(c) or (own_here and _is_statement(c)))]
@@ -228,16 +143,6 @@ def readings_section(p) -> str:
     """The appendix's account of each headline's readings, side by side: the primary first, with the
     paper's words that make it the most plausible, then every other reading with why it is less plausible;
     each with its source, settings and the verdict under it.
-
-    Parameters
-    ----------
-    p : Paper
-        The section (:class:`magexp.artifacts.report.Paper`).
-
-    Returns
-    -------
-    str
-        Markdown ('' when no headline declares readings).
     """
     lines = []
     for h in (h for h in p.headlines if h["readings"]):

@@ -20,36 +20,13 @@ from magexp.artifacts.spec import load
 
 
 def paper_plans(paper: str, specs: list) -> dict[str, ClaimPlan]:
-    """:func:`magexp.artifacts.power.claim_plans` of ``paper``'s artifacts in their families.
-
-    Parameters
-    ----------
-    paper : str
-        The paper.
-    specs : list of Artifact
-        Its artifacts.
-
-    Returns
-    -------
-    dict
-        ``{"<artifact>.<claim id>": ClaimPlan}``.
-    """
+    """:func:`magexp.artifacts.power.claim_plans` of ``paper``'s artifacts in their families."""
     return claim_plans(specs, claim_families(load_paper(paper).headline, specs))
 
 
 def sibling_specs(spec) -> list:
     """``spec`` with the other artifacts of its folder (its paper: a family counts them all); alone when
     it was read from no file.
-
-    Parameters
-    ----------
-    spec : Artifact
-        An artifact.
-
-    Returns
-    -------
-    list of Artifact
-        The paper's artifacts, ``spec`` in place of its file's.
     """
     if getattr(spec, "path", None) is None:
         return [spec]
@@ -60,16 +37,6 @@ def sibling_specs(spec) -> list:
 def planned_seeds(plan: ArtifactPlan) -> dict[int, int]:
     """``{cell: seeds}`` of the cells of the comparisons of ``plan`` that declare an ``effect:`` (the most,
     where a cell serves several), from the artifact and its paper's family sizes alone.
-
-    Parameters
-    ----------
-    plan : ArtifactPlan
-        The plan (its cells).
-
-    Returns
-    -------
-    dict
-        ``{cell: seeds}``.
     """
     spec = plan.spec
     plans = paper_plans(spec.paper, sibling_specs(spec))
@@ -84,20 +51,6 @@ def planned_seeds(plan: ArtifactPlan) -> dict[int, int]:
 def plan_with_effects(spec, *, seeds: int | None = None, tiny: bool = False) -> ArtifactPlan:
     """:func:`magexp.artifacts.plan.plan_artifact` with the planned seeds of :func:`planned_seeds` (the
     canonical reproduction's plan; ``seeds`` or ``tiny``: an exploration, every cell alike).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact.
-    seeds : int, optional
-        Seeds per cell (an exploration).
-    tiny : bool
-        Tiny sizes.
-
-    Returns
-    -------
-    ArtifactPlan
-        Every run's config.
     """
     return planning.plan_artifact(spec, seeds=seeds, tiny=tiny, seeds_for=planned_seeds)
 
@@ -105,16 +58,6 @@ def plan_with_effects(spec, *, seeds: int | None = None, tiny: bool = False) -> 
 def main(argv: list[str] | None = None) -> int:
     """Print, per paper (every paper by default), each comparison's effect, family, level, test, seeds
     and power.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Papers.
-
-    Returns
-    -------
-    int
-        0.
     """
     for paper in (argv or papers()):
         specs = [load(p) for p in artifact_paths(paper)]

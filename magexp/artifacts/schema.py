@@ -57,35 +57,12 @@ Float = Annotated[float, BeforeValidator(_not_a_flag)]
 def allowed(cls) -> list[str]:
     """The keys a YAML mapping may give for the dataclass ``cls`` (its fields but those the loader
     sets, marked ``metadata={"yaml": False}``).
-
-    Parameters
-    ----------
-    cls : type
-        A dataclass of the schema.
-
-    Returns
-    -------
-    list of str
-        The field names, in order.
     """
     return [f.name for f in dataclasses.fields(cls) if f.init and f.metadata.get("yaml", True)]
 
 
 def unknown(where: str, key, cls) -> str:
-    """The line for an unknown ``key`` of a ``cls`` mapping at ``where``.
-
-    Parameters
-    ----------
-    where : str
-        Where the mapping is (file and key).
-    key : object
-        The unknown key.
-
-    Returns
-    -------
-    str
-        The message.
-    """
+    """The line for an unknown ``key`` of a ``cls`` mapping at ``where``."""
     return f"{where}: unknown key {key!r}: allowed keys are {', '.join(allowed(cls))}"
 
 
@@ -142,18 +119,6 @@ def build(cls, data, where: str):
     """The dataclass ``cls`` from the mapping ``data`` (a dict or an OmegaConf node), validated
     against the type hints of ``cls`` and of the dataclasses it nests; an unknown key, a missing key,
     a value of the wrong type or a check of a ``__post_init__`` fails with one line naming the key.
-
-    Parameters
-    ----------
-    data : Mapping
-        The mapping.
-    where : str
-        Where it is (for messages).
-
-    Returns
-    -------
-    object
-        The ``cls`` instance.
     """
     if isinstance(data, DictConfig):
         data = OmegaConf.to_container(data, resolve=True)

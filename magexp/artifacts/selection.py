@@ -14,18 +14,7 @@ from magexp.errors import MagexpError
 
 
 def cell_settings(table: pd.DataFrame) -> dict[int, dict]:
-    """``{cell: {key: value}}`` of a runs table: its ``setting`` pairs, estimator and objective.
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The runs table (a ``cell`` column; ``setting``, ``estimator``, ``objective``, ``scenario``, ``case``).
-
-    Returns
-    -------
-    dict of int to dict
-        Each cell's settings, read from its first row.
-    """
+    """``{cell: {key: value}}`` of a runs table: its ``setting`` pairs, estimator and objective."""
     if "cell" not in table or not len(table):
         return {}
     cell = table["cell"].to_numpy()
@@ -49,18 +38,6 @@ def restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict, dict
     to match) and the cells' settings (:func:`cell_settings`, the same for any of a cell's rows):
     ``seeds: n`` keeps the first ``n`` seeds (a conclusion at n and 2n seeds), ``succeeded: 1`` the
     successful runs (any runs column that is not a setting filters rows by its value).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The runs table.
-    where : dict
-        A selection: cell settings and row filters.
-
-    Returns
-    -------
-    tuple
-        ``(rows, settings to match, cell settings)``.
     """
     where = dict(where)
     if "seeds" in where:
@@ -76,18 +53,6 @@ def restrict(table: pd.DataFrame, where: dict) -> tuple[pd.DataFrame, dict, dict
 def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
     """The runs of every cell whose settings include every ``key: value`` of ``where`` (after the
     row filters of :func:`restrict`).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The runs table.
-    where : dict
-        The selection.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The selected rows.
     """
     table, where, settings = restrict(table, where)
     keep = [ci for ci, s in settings.items() if matches(where, s)]
@@ -97,20 +62,6 @@ def select(table: pd.DataFrame, where: dict) -> pd.DataFrame:
 def values(runs: pd.DataFrame, metric: str, stat: str) -> np.ndarray:
     """The per-seed values a statistic is taken over (``succeeded`` for ``success_rate``); a censored
     value (:mod:`magexp.artifacts.censoring`) is ``+inf``, never dropped.
-
-    Parameters
-    ----------
-    runs : pandas.DataFrame
-        The selected runs.
-    metric : str
-        A runs column or an expression of columns (``pandas.eval``).
-    stat : str
-        The statistic (:data:`magexp.artifacts.tables.STATS`, or ``success_rate``).
-
-    Returns
-    -------
-    numpy.ndarray
-        The values, censored ones as ``+inf``.
     """
     if stat == "success_rate":
         succeeded = runs["succeeded"] if "succeeded" in runs else pd.Series(dtype=float)
@@ -120,20 +71,7 @@ def values(runs: pd.DataFrame, metric: str, stat: str) -> np.ndarray:
 
 
 def column(runs: pd.DataFrame, metric: str) -> np.ndarray:
-    """``metric`` per run (NaN kept: pairs stay aligned).
-
-    Parameters
-    ----------
-    runs : pandas.DataFrame
-        The runs.
-    metric : str
-        A runs column or an expression of columns.
-
-    Returns
-    -------
-    numpy.ndarray
-        One float per run.
-    """
+    """``metric`` per run (NaN kept: pairs stay aligned)."""
     try:
         return np.asarray(runs[metric] if metric in runs else runs.eval(metric), float)
     except Exception as exc:

@@ -35,18 +35,6 @@ def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
     (``k1`` of ``n1``) exceeds the second's (``k2`` of ``n2``): the hypergeometric upper tail
     ``P(X >= k1)``, ``X ~ Hypergeom(n1 + n2, k1 + k2, n1)`` (what ``scipy.stats.fisher_exact(...,
     alternative="greater")`` gives).
-
-    Parameters
-    ----------
-    k1, n1 : int
-        Successes and runs of the side claimed better.
-    k2, n2 : int
-        Those of the other side.
-
-    Returns
-    -------
-    float
-        The one-sided p.
     """
     total, succ = n1 + n2, k1 + k2
     denom = math.comb(total, n1)
@@ -57,16 +45,6 @@ def fisher_greater(k1: int, n1: int, k2: int, n2: int) -> float:
 def wilcoxon_less(d: np.ndarray) -> float:
     """One-sided p-value of the Wilcoxon signed-rank test that the paired differences ``d`` lie
     below zero (zero differences dropped; 1 when none is left).
-
-    Parameters
-    ----------
-    d : numpy.ndarray
-        The paired differences.
-
-    Returns
-    -------
-    float
-        The one-sided p.
     """
     d = np.asarray(d, float)
     d = d[np.isfinite(d) & (d != 0)]
@@ -83,18 +61,6 @@ def wilcoxon_less(d: np.ndarray) -> float:
 def z_power(alpha: float = ALPHA, power: float = POWER) -> float:
     """``z(1 - alpha) + z(power)``: the distance, in standard errors, a one-sided test at ``alpha``
     needs to detect a difference with probability ``power``.
-
-    Parameters
-    ----------
-    alpha : float
-        The one-sided level.
-    power : float
-        The power.
-
-    Returns
-    -------
-    float
-        The distance in standard errors.
     """
     return float(ndtri(1 - alpha) + ndtri(power))
 
@@ -105,18 +71,6 @@ def detectable_paired(d: np.ndarray, alpha: float = ALPHA) -> float:
     square root of the test's asymptotic relative efficiency against the t-test (3/pi). ``s`` is the
     robust scale ``1.4826 MAD(d)`` (the standard deviation of normal differences): a rank test does
     not see how far a failed run's difference lies, so its tails do not inflate ``s``.
-
-    Parameters
-    ----------
-    d : numpy.ndarray
-        The paired differences.
-    alpha : float
-        The one-sided level.
-
-    Returns
-    -------
-    float
-        The shift (NaN below two differences).
     """
     d = np.asarray(d, float)
     d = d[np.isfinite(d)]
@@ -130,18 +84,6 @@ def detectable_unpaired(ci_a: tuple, ci_b: tuple, alpha: float = ALPHA) -> float
     """The difference of a statistic between two independent samples the permutation test at ``alpha`` detects
     with :data:`POWER`: ``(z(1-alpha) + z(power)) sqrt(se_a^2 + se_b^2)``, each standard error read
     off its 95 % bootstrap interval (``(hi - lo) / (2 z(0.975))``).
-
-    Parameters
-    ----------
-    ci_a, ci_b : tuple
-        The two sides' 95 % bootstrap intervals.
-    alpha : float
-        The one-sided level.
-
-    Returns
-    -------
-    float
-        The difference (NaN where an interval is not finite).
     """
     z = float(ndtri(0.975))
     se = [(hi - lo) / (2 * z) for lo, hi in (ci_a, ci_b)]
@@ -153,18 +95,6 @@ def permutation_less(a: np.ndarray, b: np.ndarray, stat: str) -> tuple[float, fl
     converse, and the smallest p the test can give: :data:`N_PERM` random relabellings of the pooled
     values (a fixed generator: the same on every run), ``p = (1 + #{relabelled difference at or
     beyond the observed}) / (N_PERM + 1)`` (Phipson & Smyth 2010), at least ``1 / C(n, n_a)``.
-
-    Parameters
-    ----------
-    a, b : numpy.ndarray
-        The two samples.
-    stat : str
-        The statistic (:data:`magexp.artifacts.tables.STATS`).
-
-    Returns
-    -------
-    tuple of float
-        ``(p_less, p_more, p_min)``.
     """
     a, b = np.asarray(a, float), np.asarray(b, float)
     pooled, na = np.r_[a, b], len(a)
@@ -180,16 +110,6 @@ def permutation_less(a: np.ndarray, b: np.ndarray, stat: str) -> tuple[float, fl
 def holm(p: list[float]) -> list[float]:
     """Holm's step-down adjusted p-values of ``p`` (NaN stays NaN and is not counted): the i-th
     smallest of m becomes ``max over j <= i of min(1, (m - j + 1) p_(j))`` (Holm 1979).
-
-    Parameters
-    ----------
-    p : list of float
-        The raw p-values.
-
-    Returns
-    -------
-    list of float
-        The adjusted p-values.
     """
     p = np.asarray(p, float)
     out = np.full(p.shape, np.nan)
@@ -211,18 +131,6 @@ def fisher_reject(n1: int, n2: int, level: float) -> np.ndarray:
     every table of both margins at once: the hypergeometric probabilities of ``k1`` given each total
     ``t = k1 + k2``, ``C(t, k1) C(N - t, n1 - k1) / C(N, n1)`` with ``N = n1 + n2`` (log-gamma, on the
     grid), summed from ``k1`` up (no loop over tables).
-
-    Parameters
-    ----------
-    n1, n2 : int
-        The runs of the side claimed better and of the other.
-    level : float
-        The raw-p level the test is judged at.
-
-    Returns
-    -------
-    numpy.ndarray
-        Boolean ``(n1 + 1, n2 + 1)``.
     """
     from scipy.special import gammaln
 
@@ -242,22 +150,6 @@ def fisher_power(n1: int, n2: int, p1, p0: float, level: float) -> np.ndarray:
     probability ``p1`` (a scalar or an array) and the other with ``p0``:
     ``sum_{k1, k2} Bin(k1; n1, p1) Bin(k2; n2, p0) 1[p(k1, k2) < level]`` over every table
     (:func:`fisher_reject`).
-
-    Parameters
-    ----------
-    n1, n2 : int
-        The runs of each side.
-    p1 : float or array_like
-        The better side's success probability.
-    p0 : float
-        The other side's.
-    level : float
-        The raw-p level.
-
-    Returns
-    -------
-    numpy.ndarray
-        The power at each ``p1``.
     """
     from scipy.stats import binom
 
@@ -277,20 +169,6 @@ def detect_rise(p0: float, n1: int, n2: int, level: float) -> tuple[float, str]:
     exact enumeration (:func:`fisher_power` on a grid of rates ``p0 + j (1 - p0) / RISE_GRID``; the
     power rises with the rate), and its words; NaN and "no rise up to a success rate of 1 reaches
     80 % power at this level" when even a rate of 1 does not.
-
-    Parameters
-    ----------
-    p0 : float
-        The worse side's observed success rate.
-    n1, n2 : int
-        The runs of the better side and of the worse.
-    level : float
-        The raw-p level the comparison is judged at.
-
-    Returns
-    -------
-    tuple of (float, str)
-        The rise and its words.
     """
     if min(n1, n2) < 1 or not np.isfinite(p0) or p0 >= 1:
         return float("nan"), "no rise is possible from a success rate of 1" if p0 >= 1 else "not computable"
@@ -308,18 +186,6 @@ def detect_paired(d: np.ndarray, level: float) -> tuple[float, str]:
     words; NaN and "not computable (k of n ties)" when the robust scale is degenerate: the MAD of the
     differences is 0 or at least half of them are tied at their median (the rank test then sees few
     differences and the scale says nothing of them).
-
-    Parameters
-    ----------
-    d : numpy.ndarray
-        The paired differences.
-    level : float
-        The raw-p level.
-
-    Returns
-    -------
-    tuple of (float, str)
-        The shift and its words.
     """
     d = np.asarray(d, float)
     d = d[np.isfinite(d)]
@@ -333,20 +199,7 @@ def detect_paired(d: np.ndarray, level: float) -> tuple[float, str]:
 
 
 def detect_unpaired(ci_a: tuple, ci_b: tuple, level: float) -> tuple[float, str]:
-    """:func:`detectable_unpaired` at ``level`` and its words.
-
-    Parameters
-    ----------
-    ci_a, ci_b : tuple
-        The two sides' 95 % bootstrap intervals.
-    level : float
-        The raw-p level.
-
-    Returns
-    -------
-    tuple of (float, str)
-        The difference and its words.
-    """
+    """:func:`detectable_unpaired` at ``level`` and its words."""
     diff = detectable_unpaired(ci_a, ci_b, level)
     return diff, f"a difference of {diff:.3g}" if np.isfinite(diff) else "not computable"
 
@@ -358,18 +211,7 @@ EFFECT_KEYS = {"rates": ("rise", "baseline"), "ratio": ("ratio", "spread")}
 
 
 def effect_kind(stat: str) -> str:
-    """The kind of ``effect:`` a comparison of ``stat`` declares.
-
-    Parameters
-    ----------
-    stat : str
-        The compared statistic.
-
-    Returns
-    -------
-    str
-        ``rates`` for a success rate or a mean (of a 0/1 metric), ``ratio`` for any other statistic.
-    """
+    """The kind of ``effect:`` a comparison of ``stat`` declares."""
     return "rates" if stat in ("success_rate", "mean") else "ratio"
 
 
@@ -377,18 +219,6 @@ def effect_error(effect: dict, stat: str) -> str:
     """Why ``effect`` is not allowed for a comparison of ``stat`` ("" when it is): ``{rise, baseline}``
     with ``0 < rise``, ``0 <= baseline`` and ``baseline + rise <= 1`` for a success rate or a mean of a
     0/1 metric; ``{ratio, spread}`` with ``ratio > 1`` and ``spread > 0`` for another statistic.
-
-    Parameters
-    ----------
-    effect : dict
-        A claim's ``effect:``.
-    stat : str
-        The compared statistic.
-
-    Returns
-    -------
-    str
-        What is allowed, or "".
     """
     keys = EFFECT_KEYS[effect_kind(stat)]
     if set(effect) != set(keys) or not all(isinstance(effect[k], (int, float)) for k in keys):
@@ -404,16 +234,6 @@ def effect_error(effect: dict, stat: str) -> str:
 def effect_words(effect: dict) -> str:
     """An ``effect:`` in words: "a success-rate rise of 0.15 from 0.80" or "a 1.5x ratio of medians
     (log spread 0.5 per seed)"; "" when none is declared.
-
-    Parameters
-    ----------
-    effect : dict
-        A claim's ``effect:``.
-
-    Returns
-    -------
-    str
-        Its words.
     """
     if "rise" in effect:
         return f"a success-rate rise of {effect['rise']:g} from {effect['baseline']:.2f}"

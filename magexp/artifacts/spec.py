@@ -29,9 +29,10 @@ An artifact is a paper's figure or table as data::
 
 The schema is the type hints of the dataclasses below, validated by pydantic
 (:func:`magexp.artifacts.schema.build`; that module says why pydantic): a typo fails at load with
-one line naming the key and the allowed ones, a wrong value with one naming the type it must have. The papers are the
-folders of ``experiments/`` that hold an artifact (:func:`papers`); each has a ``paper.yaml``
-(:class:`Paper`: title, intro, order, deviations and its ``headline:`` claims, :class:`Headline`).
+one line naming the key and the allowed ones, a wrong value with one naming the type it must have. The
+papers are the folders of ``experiments/`` that hold an artifact (:func:`magexp.artifacts.paper_spec.papers`);
+each has a ``paper.yaml`` (:class:`magexp.artifacts.paper_spec.Paper`: title, intro, order, deviations and its
+``headline:`` claims, :class:`magexp.artifacts.paper_spec.Headline`).
 """
 
 from __future__ import annotations
@@ -67,8 +68,8 @@ _DEFAULTED_WHEN_EMPTY = ("success", "tolerance", "summarise", "ratios", "reporte
 class Summarise:
     """One summary row per cell of ``metric`` (``mode: parameters``: one row per estimated parameter,
     ``only`` restricting it to some estimators; ``mode: ftest``: per axis the p-value of the F-test of
-    the cell's estimate against the least-squares fit, :func:`magexp.artifacts.summary.f_test`). ``aggregate: mean`` for 0/1 outcomes; ``interval``
-    (see :mod:`magexp.artifacts.summary`)."""
+    the cell's estimate against the least-squares fit, :func:`magexp.artifacts.least_squares.f_test`).
+    ``aggregate: mean`` for 0/1 outcomes; ``interval`` (see :mod:`magexp.artifacts.summary`)."""
 
     quantity: str = ""
     metric: str = ""
@@ -121,30 +122,15 @@ class Tolerance:
 
     @property
     def kind(self) -> str:
+        """Which of the tolerance's fields is set: ``below``, ``abs``, ``factor`` or ``rel``."""
         return next(k for k in ("below", "abs", "factor", "rel") if getattr(self, k) is not None)
 
     def text(self) -> str:
-        """The tolerance as ``<kind> <value>`` (e.g. ``rel 0.15``).
-
-        Returns
-        -------
-        str
-        """
+        """The tolerance as ``<kind> <value>`` (e.g. ``rel 0.15``)."""
         return f"{self.kind} {getattr(self, self.kind):g}"
 
     def holds(self, value: float, paper: float) -> bool:
-        """Whether ``value`` is within this tolerance of the paper's ``paper``.
-
-        Parameters
-        ----------
-        value, paper : float
-            Our value and the paper's.
-
-        Returns
-        -------
-        bool
-            True when the tolerance holds.
-        """
+        """Whether ``value`` is within this tolerance of the paper's ``paper``."""
         t = getattr(self, self.kind)
         return {"abs": lambda: abs(value - paper) <= t, "below": lambda: value < t and paper < t,
                 "factor": lambda: paper / t <= value <= paper * t,
@@ -173,12 +159,7 @@ class Reported:
             raise MagexpError(f"reported {self.quantity}: compared: false needs a reason (why the number is not compared)")
 
     def half_unit(self) -> float:
-        """Half a unit of the last printed digit: the paper's printing precision.
-
-        Returns
-        -------
-        float
-        """
+        """Half a unit of the last printed digit: the paper's printing precision."""
         if self.decimals is not None:
             return 0.5 * 10.0 ** (-self.decimals)
         exponent = decimal.Decimal(repr(float(self.value))).normalize().as_tuple().exponent
@@ -229,20 +210,7 @@ class Artifact:
     path: Any = field(default=None, metadata={"yaml": False})  # the file it was read from (set by the loader)
 
     def get(self, key: str, default=None):
-        """Mapping-style access (``spec.get("caption")``), for code written against the old node.
-
-        Parameters
-        ----------
-        key : str
-            A field's name.
-        default : object
-            Returned when the field is absent or None.
-
-        Returns
-        -------
-        object
-            The field's value.
-        """
+        """Mapping-style access (``spec.get("caption")``), for code written against the old node."""
         value = getattr(self, key, default)
         return default if value is None else value
 
@@ -288,35 +256,14 @@ def _check_fixed_tolerances(art: Artifact, where: str) -> None:
 
 
 def check_unique_ids(items: list, where: str) -> None:
-    """Raise unless the ``id`` of every item of ``items`` differs from the others.
-
-    Parameters
-    ----------
-    items : list
-        Claims or headlines (anything with an ``id``).
-    where : str
-        Where they were read, for the message.
-    """
+    """Raise unless the ``id`` of every item of ``items`` differs from the others."""
     ids = [item.id for item in items]
     if len(set(ids)) != len(ids):
         raise MagexpError(f"{where}: ids must be unique, got {ids}")
 
 
 def parse(data: dict, path: Path) -> Artifact:
-    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults).
-
-    Parameters
-    ----------
-    data : dict
-        The loaded YAML mapping.
-    path : Path
-        The artifact's file.
-
-    Returns
-    -------
-    Artifact
-        The validated artifact.
-    """
+    """Validate a loaded artifact mapping (``path`` names it in errors and gives the defaults)."""
     where = path.stem
     if not isinstance(data, dict):
         raise MagexpError(f"artifact {str(path)!r} is not a mapping of keys {', '.join(allowed(Artifact))}")
@@ -343,39 +290,19 @@ _LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 @functools.lru_cache(maxsize=256)
 def _parsed(text: str):
+    """The YAML ``text`` parsed with the safe loader, cached (specs are read again and again)."""
     return yaml.load(text, Loader=_LOADER)  # noqa: S506 (a safe loader)
 
 
 def read_yaml(path: Path):
     """``yaml.safe_load`` of the file ``path``, parsed once per distinct content (a process lists the
     papers and reads every spec many times: planning, summary, claims, report); a fresh copy each call.
-
-    Parameters
-    ----------
-    path : Path
-        A YAML file.
-
-    Returns
-    -------
-    object
-        Its loaded content (a fresh copy).
     """
     return copy.deepcopy(_parsed(Path(path).read_text()))
 
 
 def load(path: Path | str) -> Artifact:
-    """Read and validate an artifact YAML.
-
-    Parameters
-    ----------
-    path : Path or str
-        An artifact YAML.
-
-    Returns
-    -------
-    Artifact
-        The validated artifact.
-    """
+    """Read and validate an artifact YAML."""
     path = Path(path)
     if not path.exists():
         raise MagexpError(f"artifact {str(path)!r} does not exist")

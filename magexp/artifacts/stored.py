@@ -30,13 +30,6 @@ class StoredOutputs(Mapping):
     wrote (``--redraw``: no run): ``x`` from the runs CSV's parameter columns, and ``parameter_names``,
     ``truth_x``, ``lower``, ``upper``, ``design`` of the cell's first run from its cells CSV
     (``facts``: ``{cell: facts}``, :func:`read_facts`).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The runs CSV read back (:func:`magexp.artifacts.formats.read_runs`).
-    facts : dict
-        ``{cell: facts}`` of its cells CSV (:func:`read_facts`).
     """
 
     def __init__(self, table: pd.DataFrame, facts: dict):
@@ -65,16 +58,6 @@ def facts_rows(runs) -> pd.DataFrame:
     """The cells CSV of an artifact: per cell, the facts its first run stored (:data:`PARAMETER_FACTS`
     by parameter; :data:`DESIGN_FACTS` where the artifact judges on a least-squares design: ``interval:
     ls``, ``mode: ftest``), one value a row: ``cell, seed, fact, parameter, index, value``.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs and their outputs.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per stored value.
     """
     design = any(item.interval == "ls" or item.mode == "ftest" for item in runs.spec.summarise)
     rows = []
@@ -93,31 +76,13 @@ def facts_rows(runs) -> pd.DataFrame:
 def write_facts(frame: pd.DataFrame, path: Path) -> None:
     """The cells CSV at full precision (``%.17g``: read back to the bit, so that ``--redraw`` judges on
     what the reproduction judged on).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        :func:`facts_rows`.
-    path : Path
-        ``<name>_cells.csv``.
     """
     with atomic_path(path) as tmp:
         frame.to_csv(tmp, index=False, float_format="%.17g")
 
 
 def read_facts(path: Path) -> dict[int, dict]:
-    """``{cell: {parameter_names, truth_x, lower, upper, design}}`` of a cells CSV (:func:`facts_rows`).
-
-    Parameters
-    ----------
-    path : Path
-        ``<name>_cells.csv``.
-
-    Returns
-    -------
-    dict
-        ``{cell: facts}``, what :class:`StoredOutputs` hands the summary.
-    """
+    """``{cell: {parameter_names, truth_x, lower, upper, design}}`` of a cells CSV (:func:`facts_rows`)."""
     frame = pd.read_csv(path, keep_default_na=False, na_values=[""])  # pandas 3 reads %.17g back to the bit
     out = {}
     for ci, sub in frame.groupby("cell", sort=True):
@@ -139,20 +104,6 @@ def summarise_stored(spec, folder: Path, plan=None) -> pd.DataFrame:
     written (6 digits, round-off floored), nothing run or simulated. A reproduction returns these
     rows and ``--redraw`` rebuilds them: one path, so that every number of ``summary.csv``
     recomputes from the runs CSV it names.
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact.
-    folder : Path
-        The paper's results folder (``results/<paper>``).
-    plan : ArtifactPlan or ArtifactRuns, optional
-        Its ``cells`` and their ``overrides`` (default: :func:`magexp.artifacts.plan.plan_artifact`).
-
-    Returns
-    -------
-    pandas.DataFrame
-        Its rows of ``summary.csv`` (:func:`magexp.artifacts.summary.summarise`).
     """
     plan = plan if plan is not None else plan_artifact(spec)
     table = read_runs(folder / f"{spec.name}_runs.csv")

@@ -31,12 +31,13 @@ the quantities sharing the row's block, e.g. S's nine entries of the same cell; 
 its block: its own magnitude) and ``rel_difference`` ``|judged_value - paper_value| / scale``: how
 far the paper's number is from ours on that scale.
 
-``label`` names the row for a reader ("IPSO final RMS, exp1, A = 2 nT"); ``reason`` says in a
+``label`` names the row for a reader (:mod:`magexp.artifacts.row_labels`); ``reason`` says in a
 line why the verdict is what it is. ``truth_in_interval`` says whether the true calibration's value
 is in the interval too: then the row shows that the method converged to the noise floor, not more.
 A fixed tolerance is used only where the paper gives no run to compare with
 (``reported[].tolerance`` with its ``reason``). For a single deterministic run on recorded data
-(``interval: ls``), the interval is the least-squares estimate ± t(0.975, dof) standard errors.
+(``interval: ls``), the interval is the least-squares estimate ± t(0.975, dof) standard errors
+(:mod:`magexp.artifacts.least_squares`).
 """
 
 from __future__ import annotations
@@ -45,14 +46,14 @@ import re
 
 import numpy as np
 import pandas as pd
-from scipy.special import fdtrc, stdtrit
 
 from magexp.artifacts.censoring import censor_row, censored_mask
+from magexp.artifacts.least_squares import f_test, least_squares_interval
 from magexp.artifacts.plan import ArtifactRuns
+from magexp.artifacts.row_labels import label_of
 from magexp.artifacts.tables import (cell_overrides, cell_runs, first_output, matches, median,
                                      outcomes, parameter_values, reported_entry, row_numbers, successful_medians)
 from magexp.core.outcomes import failed_majority, success_threshold
-from magexp.errors import MagexpError
 from magexp.run.compose import estimator_label
 
 COLUMNS = ["paper", "artifact", "quantity", "estimator", "setting", "truth", "paper_value", "value",
@@ -67,11 +68,6 @@ SEARCH_FRACTION = 0.5
 #: a parameter's interval wider than this fraction of its block's scale (the RMS of the medians of the
 #: parameters sharing its name's letters: S's nine entries, b's three components) is uninformative
 BLOCK_FRACTION = 0.15
-#: readable names of quantities in row labels (others are shown as they are)
-QUANTITY_NAMES = {"final_rms": "final RMS", "converged_fraction": "converged fraction",
-                  "improvement_ratio": "final RMS ratio", "fit_rms": "fit RMS"}
-
-
 
 
 def judge(paper: float | None, lo: float, hi: float, width: float, success_rate: float, *, floor: float = 0.0,
@@ -79,13 +75,6 @@ def judge(paper: float | None, lo: float, hi: float, width: float, success_rate:
     """The verdict of one row before the informativeness rules (module docstring, steps 1-3): inside
     or outside first (:func:`inside`), then a failed majority. ``tolerance``: a fixed
     :class:`magexp.artifacts.spec.Tolerance` against ``value`` instead of the interval.
-
-    Parameters
-    ----------
-    paper : float or None
-    lo, hi, width, success_rate, floor : float
-    tolerance : Tolerance, optional
-    value : float
     """
     if paper is None or not np.isfinite(paper):
         return "n/a"
@@ -98,12 +87,6 @@ def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0
            value: float = np.nan) -> bool:
     """Whether the paper's value lies in ``lo``-``hi`` widened by ``width`` (a value below the
     round-off ``floor`` counts as it), or within a fixed ``tolerance`` of ``value``.
-
-    Parameters
-    ----------
-    paper, lo, hi, width, floor : float
-    tolerance : Tolerance, optional
-    value : float
     """
     if tolerance is not None:
         return bool(np.isfinite(value) and tolerance.holds(value, paper))
@@ -112,12 +95,7 @@ def inside(paper: float, lo: float, hi: float, width: float, *, floor: float = 0
 
 
 def reported_entries(spec) -> list[dict]:
-    """The paper's numbers as plain ``{quantity, match, value}`` mappings.
-
-    Parameters
-    ----------
-    spec : Artifact
-    """
+    """The paper's numbers as plain ``{quantity, match, value}`` mappings."""
     return [{"quantity": e.quantity, "match": dict(e.match), "value": e.value} for e in spec.reported]
 
 
@@ -136,14 +114,6 @@ def uninformative(paper: float, lo: float, hi: float, *, kind: str = "value", se
        tell the entry from values that change the calibration by that much (entries near zero are
        judged on the block's scale, not on their own);
     4. any other row whose interval is wider than the magnitude of the paper's value.
-
-    Parameters
-    ----------
-    paper, lo, hi : float
-    kind : str
-    search_range, block_scale : float, optional
-    mixed_outcome : bool
-    median : float
     """
     width = hi - lo
     if not np.isfinite(width):
@@ -206,10 +176,6 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
 def relative(x: float) -> str:
     """A difference on its block's scale: a percentage with two significant digits below 10 times the
     scale (``0.0003`` -> ``0.03 % of its scale``), else a multiple (``38 times its scale``).
-
-    Parameters
-    ----------
-    x : float
     """
     if not np.isfinite(x):
         return "n/a"
@@ -244,12 +210,6 @@ def paper_scale(spec, quantity: str, settings: dict) -> float:
     """The scale a row's difference is read on: the RMS of the paper's values of the quantities of
     the row's block (:func:`block_of`: ``S11``..``S33`` -> ``S``) reported for the same cell; a
     quantity alone in its block (a final RMS, an F_g) has its own magnitude.
-
-    Parameters
-    ----------
-    spec : Artifact
-    quantity : str
-    settings : dict
     """
     block = block_of(quantity)
     paper = [float(e.value) for e in spec.reported if block_of(e.quantity) == block and matches(e.match, settings)]
@@ -307,68 +267,14 @@ def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol,
     return where
 
 
-def label_of(spec, cells: list[dict], ci: int, quantity: str, estimator: str, prefix: str = "") -> str:
-    """A readable row label: estimator, quantity and the settings that tell this cell from the
-    artifact's others (``plot.labels`` names a key; a trailing ``(unit)`` moves after the value;
-    scenario names lose their paper prefix), e.g. ``IPSO final RMS, exp1, A = 2 nT``.
-
-    Parameters
-    ----------
-    spec : Artifact
-    cells : list of dict
-    ci : int
-    quantity, estimator, prefix : str
-    """
-    cell = cells[ci] if ci < len(cells) else {}
-    varying = [k for k in cell if k != "estimator" and len({str(c.get(k)) for c in cells}) > 1]
-    names = dict(spec.plot.get("labels", {}) or {}) if spec.plot is not None else {}
-    parts = [_setting_text(key, str(cell[key]), names) for key in varying]
-    head = " ".join(p for p in (prefix or estimator_label(estimator),
-                                QUANTITY_NAMES.get(quantity, quantity)) if p)
-    return ", ".join([head, *parts])
-
-
-def _setting_text(key: str, value: str, names: dict) -> str:
-    """One setting of a row label: a scenario by its name without the paper prefix
-    (``yuan2018_mode1`` -> ``mode1``), any other key as ``name = value unit`` (:func:`_name_and_unit`)."""
-    if key == "scenario":
-        return re.sub(r"^[a-z]+\d{4}_", "", value).replace("_", " ")
-    name, unit = _name_and_unit(str(names.get(key, key.split(".")[-1].replace("_", " "))))
-    return f"{name} = {value}" + (f" {unit}" if unit else "")
-
-
-def _name_and_unit(name: str) -> tuple[str, str]:
-    """A setting's name split from a trailing ``(unit)`` of at most 6 characters; a name of several
-    words ending in a symbol of at most 2 letters becomes the symbol (``noise amplitude A`` -> ``A``)."""
-    unit = ""
-    m = re.match(r"^(.*?)\s*\(([^()]*)\)$", name)
-    if m and len(m.group(2)) <= 6:
-        name, unit = m.group(1), m.group(2)
-    words = name.split()
-    if words and len(words[-1]) <= 2 and len(words) > 1:  # "noise amplitude A" -> "A"
-        name = words[-1]
-    return name, unit
-
-
 def block_of(name: str) -> str:
-    """The block a parameter belongs to: its name's leading letters (``S13`` -> ``S``, ``Bp1`` -> ``Bp``).
-
-    Parameters
-    ----------
-    name : str
-    """
+    """The block a parameter belongs to: its name's leading letters (``S13`` -> ``S``, ``Bp1`` -> ``Bp``)."""
     m = re.match(r"^[A-Za-z_]*[A-Za-z]", name)
     return m.group(0) if m else name
 
 
 def block_scales(names: list[str], medians: np.ndarray) -> dict[str, float]:
-    """``{block: RMS of its parameters' medians}`` (:func:`block_of`).
-
-    Parameters
-    ----------
-    names : list of str
-    medians : numpy.ndarray
-    """
+    """``{block: RMS of its parameters' medians}`` (:func:`block_of`)."""
     groups: dict[str, list] = {}
     for name, m in zip(names, medians):
         groups.setdefault(block_of(name), []).append(m)
@@ -377,6 +283,7 @@ def block_scales(names: list[str], medians: np.ndarray) -> dict[str, float]:
 
 
 def _cell_ok(runs: ArtifactRuns, ci: int) -> np.ndarray:
+    """The per-seed outcomes (1/0/NaN) of cell ``ci``."""
     return outcomes(cell_runs(runs, ci, by_seed=True))
 
 
@@ -403,68 +310,12 @@ def _parameter_rows(runs: ArtifactRuns, item) -> list[dict]:
 def search_ranges(runs: ArtifactRuns, ci: int) -> dict[str, float]:
     """``{parameter: upper - lower}`` of cell ``ci``'s search box, as its first run stored it (empty
     where it stored none).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-    ci : int
     """
     out = first_output(runs, ci)
     lower, upper = getattr(out, "lower", None), getattr(out, "upper", None)
     if lower is None or upper is None:
         return {}
     return {n: float(u - lo) for n, lo, u in zip(out.parameter_names, lower, upper)}
-
-
-def least_squares_interval(runs: ArtifactRuns, ci: int, level: float = 0.95) -> dict:
-    """``{parameter: (estimate, half width)}`` of the least-squares fit of a linear ship model
-    (Yan & Zhou 2022, eq 1: per axis ``B_i = [A_i Be, 1] [K_i, Bp_i]^T``, 4 parameters).
-
-    Per axis ``s^2 = RSS / (N - 4)`` and ``Cov = s^2 (C^T C)^{-1}``; the half width is
-    ``t(1 - (1 - level)/2, N - 4)`` standard errors (12 readings: 8 degrees of freedom), the quantile
-    from ``scipy.special.stdtrit`` (what ``scipy.stats.t.ppf`` evaluates, without importing
-    ``scipy.stats``).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-    ci : int
-    level : float
-    """
-    gram, coef, rss, n, names = _design_of(runs, ci)  # coef (4, 3): column a = axis a's [K_a1, K_a2, K_a3, Bp_a]
-    p = gram.shape[0]
-    dof = n - p
-    cov = np.linalg.inv(gram)
-    se = np.sqrt(np.outer(np.diag(cov), rss / dof))  # (4, 3)
-    t = stdtrit(dof, 0.5 + level / 2)
-    out = {}
-    for a in range(3):
-        for j in range(3):
-            out[names[3 * a + j]] = (float(coef[j, a]), float(t * se[j, a]))
-        out[names[9 + a]] = (float(coef[3, a]), float(t * se[3, a]))
-    return out
-
-
-def f_test(runs: ArtifactRuns, ci: int, theta: np.ndarray) -> list[dict]:
-    """Per axis, the F-test of the hypothesis that ``theta`` (e.g. the paper's K, Bp) is the true
-    parameter of the linear model: ``F = (b - b_ls)^T C^T C (b - b_ls) / p / s^2 ~ F(p, N - p)``; the
-    p-value from ``scipy.special.fdtrc`` (what ``scipy.stats.f.sf`` evaluates).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-    ci : int
-    theta : numpy.ndarray
-    """
-    gram, coef, rss, n, _ = _design_of(runs, ci)
-    p = gram.shape[0]
-    k, bp = np.asarray(theta[:9], float).reshape(3, 3), np.asarray(theta[9:], float)
-    out = []
-    for a in range(3):
-        d = np.append(k[a], bp[a]) - coef[:, a]
-        f = float(d @ gram @ d / p / (rss[a] / (n - p)))
-        out.append({"axis": a + 1, "F": f, "dof": (p, n - p), "p_value": float(fdtrc(p, n - p, f))})
-    return out
 
 
 def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
@@ -484,24 +335,8 @@ def _ftest_rows(runs: ArtifactRuns, item) -> list[dict]:
     return rows
 
 
-def _design_of(runs: ArtifactRuns, ci: int) -> tuple:
-    """``(C^T C, least-squares coefficients, residual sums of squares per axis, N, parameter names)`` of
-    the linear problem of cell ``ci``'s first seed, as its run stored them (``design``); a problem
-    without a linear design cannot give a least-squares interval (one line)."""
-    out = first_output(runs, ci)
-    design = getattr(out, "design", None)
-    if not design:
-        raise MagexpError(f"{runs.spec.name}: cell {ci} has no linear design (interval: ls and mode: ftest need one)")
-    return (np.asarray(design["gram"], float), np.asarray(design["coef"], float), np.asarray(design["rss"], float),
-            int(design["n"]), list(out.parameter_names))
-
-
 def summarise(runs: ArtifactRuns) -> pd.DataFrame:
     """One row per (summarised quantity, cell) and per ratio group, from ``runs`` as handed (a reproduction: as stored).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
     """
     rows = []
     for item in runs.spec.summarise:

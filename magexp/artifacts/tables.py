@@ -3,7 +3,7 @@
 An artifact's runs (:class:`magexp.artifacts.plan.ArtifactRuns`: one row per (cell, seed), and each
 run's stored output) become here
 
-* the table behind its figure (:func:`tabulate`, one builder per kind in :data:`BUILDERS`): medians
+* the table behind its figure (:func:`magexp.artifacts.kinds.tabulate`, each kind's ``table``): medians
   and quartiles over seeds, success fractions, intervals. :mod:`magexp.artifacts.plots` only draws it,
   from the CSV alone;
 * the numbers of a summary row (:func:`row_numbers`) of the runs handed (the runs CSV as written:
@@ -46,39 +46,18 @@ N_BOOT = 2000
 # -- the one interval helper and what is read off it ---------------------------------------------
 
 def finite(values) -> np.ndarray:
-    """The finite ``values`` as floats.
-
-    Parameters
-    ----------
-    values : array_like
-        Numbers, NaN and infinite ones allowed.
-
-    Returns
-    -------
-    numpy.ndarray
-        The finite ones.
-    """
+    """The finite ``values`` as floats."""
     v = np.asarray(values, float)
     return v[np.isfinite(v)]
 
 
 def interval(values, level: float = 0.95, *, stat: str | None = None, floor: float = 0.0,
              axis: int | None = None) -> tuple:
-    """The central ``level`` interval: its ``(1 - level) / 2`` and ``(1 + level) / 2`` quantiles.
-
-    Parameters
-    ----------
-    values : the per-seed values.
-    level : the fraction of the distribution inside (0.95: where a single run falls; 0.5: the quartiles).
-    stat : None: the interval of the finite ``values`` themselves (NaN for none); a name of
-        :data:`STATS`: the percentile bootstrap interval of that statistic (:data:`N_BOOT` resamples
-        from a fixed generator; NaN for fewer than two values).
-    floor : a non-negative value below it counts as it (the round-off floor).
-    axis : quantiles along this axis of an array (no value left out), e.g. per step over seeds.
-
-    Returns
-    -------
-    ``(lo, hi)``: floats, or arrays with ``axis``.
+    """``(lo, hi)``, the central ``level`` interval (0.95: where a single run falls; 0.5: the quartiles): with
+    ``stat=None`` of the finite ``values`` themselves (NaN for none); with a name of :data:`STATS` the percentile
+    bootstrap interval of that statistic (:data:`N_BOOT` resamples from a fixed generator; NaN for fewer than two
+    values). A non-negative value below ``floor`` (the round-off floor) counts as it; ``axis``: quantiles of an
+    array along it, e.g. per step over seeds (arrays returned).
     """
     tail = round((1 - level) / 2, 12)
     if axis is not None:
@@ -102,18 +81,6 @@ def interval(values, level: float = 0.95, *, stat: str | None = None, floor: flo
 def quartiles(values, axis: int | None = None) -> tuple:
     """Median, 25 % and 75 % quantiles of the finite ``values`` (NaN for none; ``axis``: of an array
     along it, :func:`interval` at ``level=0.5``).
-
-    Parameters
-    ----------
-    values : array_like
-        Numbers (NaN allowed).
-    axis : int, optional
-        The axis of an array (None: all values).
-
-    Returns
-    -------
-    tuple
-        ``(median, q25, q75)``.
     """
     if axis is not None:
         return (np.quantile(np.asarray(values, float), 0.5, axis=axis), *interval(values, 0.5, axis=axis))
@@ -124,34 +91,13 @@ def quartiles(values, axis: int | None = None) -> tuple:
 
 
 def median(values) -> float:
-    """The median of the finite ``values`` (NaN for none).
-
-    Parameters
-    ----------
-    values : array_like
-        The numbers (NaN ones are left out).
-
-    Returns
-    -------
-    float
-        The median.
-    """
+    """The median of the finite ``values`` (NaN for none)."""
     return quartiles(values)[0]
 
 
 def fraction(outcomes) -> float:
     """The fraction of the judged runs that succeeded: the mean of the finite 0/1 (or boolean)
     ``outcomes`` (NaN: not judged; NaN if none is).
-
-    Parameters
-    ----------
-    outcomes : array_like
-        0/1 or boolean per run (NaN: not judged).
-
-    Returns
-    -------
-    float
-        The success fraction.
     """
     v = finite(np.asarray(outcomes, float))
     return float(v.mean()) if v.size else np.nan
@@ -160,18 +106,7 @@ def fraction(outcomes) -> float:
 # -- runs columns and selections ------------------------------------------------------------------
 
 def same(a, b) -> bool:
-    """Two setting values are equal as numbers where both are numbers (``2`` and ``2.0``), else as text.
-
-    Parameters
-    ----------
-    a, b : object
-        Two setting values.
-
-    Returns
-    -------
-    bool
-        True when equal.
-    """
+    """Two setting values are equal as numbers where both are numbers (``2`` and ``2.0``), else as text."""
     try:
         return float(a) == float(b)
     except (TypeError, ValueError):
@@ -179,91 +114,28 @@ def same(a, b) -> bool:
 
 
 def matches(selection: dict, settings: dict) -> bool:
-    """True if every ``key: value`` of ``selection`` is among ``settings``.
-
-    Parameters
-    ----------
-    selection : dict
-        The ``{key: value}`` wanted.
-    settings : dict
-        A cell's settings.
-
-    Returns
-    -------
-    bool
-        True when all match (:func:`same`).
-    """
+    """True if every ``key: value`` of ``selection`` is among ``settings``."""
     return all(k in settings and same(settings[k], v) for k, v in selection.items())
 
 
 def statistic(v: np.ndarray, stat: str) -> float:
-    """``stat`` (:data:`STATS`) of the values ``v`` (NaN for none).
-
-    Parameters
-    ----------
-    v : numpy.ndarray
-        The values.
-    stat : str
-        A name of :data:`STATS`.
-
-    Returns
-    -------
-    float
-        The statistic.
-    """
+    """``stat`` (:data:`STATS`) of the values ``v`` (NaN for none)."""
     return float(STATS[stat](v)) if len(v) else float("nan")
 
 
 def cell_runs(runs, ci: int, by_seed: bool = False) -> pd.DataFrame:
-    """The rows of cell ``ci`` of ``runs.table`` (``by_seed``: sorted by seed).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (their ``table``).
-    ci : int
-        The cell whose rows are taken.
-    by_seed : bool
-        Sort by seed.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The cell's rows.
-    """
+    """The rows of cell ``ci`` of ``runs.table`` (``by_seed``: sorted by seed)."""
     sub = runs.table[runs.table.cell == ci]
     return sub.sort_values("seed") if by_seed else sub
 
 
 def outcomes(sub: pd.DataFrame) -> np.ndarray:
-    """The ``succeeded`` column of a cell's rows (all NaN without one: not judged).
-
-    Parameters
-    ----------
-    sub : pandas.DataFrame
-        A cell's rows.
-
-    Returns
-    -------
-    numpy.ndarray
-        1/0/NaN per run.
-    """
+    """The ``succeeded`` column of a cell's rows (all NaN without one: not judged)."""
     return sub["succeeded"].to_numpy(float) if "succeeded" in sub else np.full(len(sub), np.nan)
 
 
 def successful(sub: pd.DataFrame) -> pd.DataFrame:
-    """The runs of ``sub`` that succeeded (all of them where none is judged: no truth).
-
-    Parameters
-    ----------
-    sub : pandas.DataFrame
-        The rows of one cell, with ``succeeded`` where judged.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The successful runs.
-    """
+    """The runs of ``sub`` that succeeded (all of them where none is judged: no truth)."""
     if "succeeded" in sub and sub.succeeded.notna().any():
         return sub[sub.succeeded == 1]
     return sub
@@ -272,59 +144,17 @@ def successful(sub: pd.DataFrame) -> pd.DataFrame:
 def cell_overrides(runs, ci: int) -> dict:
     """The ``{key: value}`` overrides of cell ``ci`` (base and grid), as requested: what a paper's
     ``reported[].match`` is matched against.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (their ``overrides``).
-    ci : int
-        The cell's index.
-
-    Returns
-    -------
-    dict
-        ``{key: value}``.
     """
     return dict(o.split("=", 1) for o in runs.overrides[ci])
 
 
 def reported_entry(spec, quantity: str, settings: dict):
-    """The paper's :class:`magexp.artifacts.spec.Reported` entry of ``quantity`` for a cell (None if absent).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact (its ``reported:`` entries).
-    quantity : str
-        The summarised quantity.
-    settings : dict
-        The cell's settings (matched against each ``match``).
-
-    Returns
-    -------
-    Reported or None
-        The entry.
-    """
+    """The paper's :class:`magexp.artifacts.spec.Reported` entry of ``quantity`` for a cell (None if absent)."""
     return next((e for e in spec.reported if e.quantity == quantity and matches(e.match, settings)), None)
 
 
 def reported_value(spec, quantity: str, settings: dict):
-    """The paper's value of ``quantity`` for a cell and its entry (``(None, None)`` if absent).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact.
-    quantity : str
-        The quantity whose value is looked up.
-    settings : dict
-        The cell's settings.
-
-    Returns
-    -------
-    tuple
-        ``(value, entry)``.
-    """
+    """The paper's value of ``quantity`` for a cell and its entry (``(None, None)`` if absent)."""
     entry = reported_entry(spec, quantity, settings)
     return (None, None) if entry is None else (float(entry.value), entry)
 
@@ -332,37 +162,12 @@ def reported_value(spec, quantity: str, settings: dict):
 def first_output(runs, ci: int):
     """The stored output of cell ``ci``'s first seed: its parameter names, true vector, search box
     and linear design summary (what a run stores for the summary; nothing is simulated again).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (their stored ``outputs``).
-    ci : int
-        The cell whose first seed is read.
-
-    Returns
-    -------
-    RunOutput
-        The first seed's stored output.
     """
     return runs.outputs[min(k for k in runs.outputs if k[0] == ci)]
 
 
 def parameter_values(runs, ci: int) -> tuple[list[str], np.ndarray, np.ndarray | None]:
-    """Parameter names, estimates ``(seeds, p)`` and the true vector of cell ``ci``.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs, with their stored outputs.
-    ci : int
-        The cell whose estimates are read.
-
-    Returns
-    -------
-    tuple
-        ``(names, estimates, truth)``.
-    """
+    """Parameter names, estimates ``(seeds, p)`` and the true vector of cell ``ci``."""
     outs = [runs.outputs[k] for k in sorted(runs.outputs) if k[0] == ci]
     return list(outs[0].parameter_names), np.array([o.x for o in outs]), getattr(outs[0], "truth_x", None)
 
@@ -375,24 +180,6 @@ def compared_runs(v: np.ndarray, ok: np.ndarray, paper, *, parameters: bool, suc
     "successful", "failed" or ""). A parameter is read from the successful runs; with a
     ``success_threshold`` the paper's run is classified by our success rule and compared with our
     runs of the same outcome (with all of them if we have none).
-
-    Parameters
-    ----------
-    v : numpy.ndarray
-        The cell's per-seed values.
-    ok : numpy.ndarray
-        Their outcomes (1/0/NaN).
-    paper : float or None
-        The paper's value.
-    parameters : bool
-        The row is a parameter's.
-    success_threshold : float or None
-        Our success rule applied to the paper's value.
-
-    Returns
-    -------
-    tuple
-        ``(basis, same, outcome)``.
     """
     judged = np.isfinite(ok).any()
     basis, same_, outcome = v, None, ""
@@ -413,30 +200,6 @@ def row_numbers(v, ok, paper, *, parameters: bool = False, success_threshold=Non
     ``aggregate: mean`` the mean of 0/1 outcomes); ``lo``, ``hi`` (:func:`interval` of all runs, or
     the least-squares ``ls = (estimate, half width)``), ``lo_same``, ``hi_same`` (of the runs of the
     paper's outcome), the judged ``jlo``, ``jhi``, ``judged`` runs and ``outcome``.
-
-    Parameters
-    ----------
-    v : array_like
-        The cell's per-seed values.
-    ok : array_like or None
-        Their outcomes (1/0/NaN).
-    paper : float or None
-        The paper's value.
-    parameters : bool
-        The row is a parameter's.
-    success_threshold : float, optional
-        Our success rule applied to the paper's value.
-    aggregate : str
-        ``median`` or ``mean``.
-    floor : float
-        The round-off floor of :func:`interval`.
-    ls : tuple, optional
-        A least-squares ``(estimate, half width)``.
-
-    Returns
-    -------
-    dict
-        The row's numbers.
     """
     v = np.asarray(v, float)
     ok = np.full(v.shape, np.nan) if ok is None else np.asarray(ok, float)
@@ -455,18 +218,6 @@ def row_numbers(v, ok, paper, *, parameters: bool = False, success_threshold=Non
 def successful_medians(values: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """Per parameter, the median over the successful seeds (every seed where none succeeded or
     none is judged).
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        ``(seeds, p)`` estimates.
-    ok : numpy.ndarray
-        Per seed 1/0/NaN.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(p,)`` medians.
     """
     kept = values[ok == 1] if np.isfinite(ok).any() and (ok == 1).any() else values
     return np.nanmedian(kept, axis=0) if len(kept) else np.full(values.shape[1], np.nan)
@@ -476,16 +227,6 @@ def scenario_label(scenario: str) -> str:
     """A scenario's name, readable in a legend or on a tick: without its paper's prefix, the rotation
     mode or experiment numbered apart (``yuan2018_mode1`` -> ``mode 1``), and a recording without
     ``real_`` and its sensor (``real_hmc5883l_rotate_ccw_around_x`` -> ``rotate ccw around x``).
-
-    Parameters
-    ----------
-    scenario : str
-        A scenario's name.
-
-    Returns
-    -------
-    str
-        Its label.
     """
     name = str(scenario)
     if name.startswith("real_"):

@@ -37,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from magexp import paths
-from magexp.artifacts.compare import FIGURES, PATH_DIAGNOSTICS, RTOL, Comparison, Difference, compare
+from magexp.artifacts.compare import FIGURES, PATH_DIAGNOSTICS, Comparison, Difference, compare
+from magexp.artifacts.tolerances import RTOL
 from magexp.errors import MagexpError, exit_code
 from magexp.core.limits import check_limits
 from magexp.run.files import check_file
@@ -56,18 +57,7 @@ MAX_FILES = 100_000
 # which folders
 
 def git(*args: str) -> str:
-    """The output of ``git ARGS`` in the checkout; one line (exit 2) when there is no git or no repository.
-
-    Parameters
-    ----------
-    *args : str
-        The git arguments.
-
-    Returns
-    -------
-    str
-        Its standard output.
-    """
+    """The output of ``git ARGS`` in the checkout; one line (exit 2) when there is no git or no repository."""
     try:
         done = subprocess.run(["git", "-C", str(paths.ROOT), *args], capture_output=True, check=True)
     except FileNotFoundError:
@@ -83,18 +73,6 @@ def git(*args: str) -> str:
 def committed_results(dest: Path, files=("results",)) -> str:
     """Extract ``results/`` (or only ``files``, paths from the checkout's root) of the last commit
     into ``dest`` (``dest/results/...``); returns a line naming the commit.
-
-    Parameters
-    ----------
-    dest : Path
-        Where the files are extracted.
-    files : tuple of str
-        Paths from the checkout's root.
-
-    Returns
-    -------
-    str
-        The line naming the commit.
     """
     head = git("rev-parse", "--short=12", "HEAD").strip()
     last = git("log", "-1", "--format=%h %cs", "--", "results").strip()
@@ -104,23 +82,12 @@ def committed_results(dest: Path, files=("results",)) -> str:
 
 
 def changed_results() -> bool:
-    """Whether the working tree's ``results/`` differs from the committed one (git).
-
-    Returns
-    -------
-    bool
-        True when ``git status`` lists a change under ``results/``.
-    """
+    """Whether the working tree's ``results/`` differs from the committed one (git)."""
     return bool(git("status", "--porcelain", "--untracked-files=all", "--", "results").strip())
 
 
 def scratch() -> Path:
-    """The folder of :func:`reproduce_scratch`: beside the run cache (``.cache/verify``), never ``results/``.
-
-    Returns
-    -------
-    Path
-    """
+    """The folder of :func:`reproduce_scratch`: beside the run cache (``.cache/verify``), never ``results/``."""
     return paths.CACHE.parent / "verify"
 
 
@@ -131,18 +98,6 @@ def reproduce_scratch(jobs: int, out: Path) -> Path:
     (:mod:`magexp.artifacts.plots.memo`); every other file is written afresh, and a figure whose CSV
     was not written again is removed. (The reproduction takes the committed ``results/peers/`` with it:
     :func:`magexp.artifacts.reproduce.with_peer_bench`.)
-
-    Parameters
-    ----------
-    jobs : int
-        Worker processes (0: one per core).
-    out : Path
-        The folder, checked by :func:`reproduction_folder`.
-
-    Returns
-    -------
-    Path
-        The reproduced results folder.
     """
     if out.is_dir():
         for path in [p for p in out.rglob("*") if p.is_file() and p.suffix not in FIGURES]:
@@ -163,20 +118,6 @@ def reproduce_scratch(jobs: int, out: Path) -> Path:
 def render(result: Comparison, ours: str, committed: str, *, every: bool = False) -> str:
     """One screen: what was compared with what, the counts, and the verdict of the comparison; up to
     :data:`SHOWN` disagreements each on a line, more grouped by file and column (``every``: each on a line).
-
-    Parameters
-    ----------
-    result : Comparison
-        The comparison.
-    ours, committed : str
-        What was compared (in words).
-    every : bool
-        Each disagreement on a line.
-
-    Returns
-    -------
-    str
-        The screen.
     """
     n = sum(result.verdicts.values())
     lines = [f"verify: {ours}", f"  against {committed}",
@@ -220,20 +161,17 @@ def render(result: Comparison, ours: str, committed: str, *, every: bool = False
 
 
 def _size(d: Difference) -> float:
+    """How far apart a difference is, for sorting (``inf`` when not relative)."""
     return d.relative if np.isfinite(d.relative) else math.inf
 
 
 def _shown(d: Difference) -> str:
+    """A difference's line with its relative size when it has one."""
     return d.line() + (f" (relative {d.relative:.2g})" if np.isfinite(d.relative) else "")
 
 
 def parser() -> argparse.ArgumentParser:
-    """The argument parser of ``magexp verify``.
-
-    Returns
-    -------
-    argparse.ArgumentParser
-    """
+    """The argument parser of ``magexp verify``."""
     p = OneLineParser(prog="magexp verify", description=__doc__.splitlines()[0])
     p.add_argument("--against", "--out", dest="against", default=None,
                    help="the reproduction to check, a results folder (default: results/ if it differs from the "
@@ -252,24 +190,8 @@ def parser() -> argparse.ArgumentParser:
 def results_folder(text: str, what: str) -> Path:
     """The results folder ``text`` given as ``what`` (``--against``, ``--committed``): a folder holding
     :data:`RESULTS_FILES`, at most :data:`MAX_FILES` files, each passing the file gate
-    (:func:`magexp.run.files.check_file`: no device or FIFO, within the size and line limits); else one line.
-
-    Parameters
-    ----------
-    text : str
-        The folder as given.
-    what : str
-        The option naming it.
-
-    Returns
-    -------
-    Path
-        The folder.
-
-    Raises
-    ------
-    MagexpError
-        Anything but a results folder.
+    (:func:`magexp.run.files.check_file`: no device or FIFO, within the size and line limits); else one line
+    (a :class:`~magexp.errors.MagexpError`).
     """
     path = Path(text).expanduser()
     if not path.is_dir():  # a device, FIFO or socket too: refused unopened
@@ -290,22 +212,8 @@ def results_folder(text: str, what: str) -> Path:
 def reproduction_folder(text: str | None) -> Path:
     """The folder a reproduction is computed into: ``--into`` (``text``) or :func:`scratch`; it must be new,
     empty or a results folder of an earlier reproduction (:func:`reproduce_scratch` replaces its files), and a
-    folder a command may write (:func:`magexp.run.folders.check_destination`: not inside ``results/``).
-
-    Parameters
-    ----------
-    text : str or None
-        ``--into`` as given (None: the default).
-
-    Returns
-    -------
-    Path
-        The folder.
-
-    Raises
-    ------
-    MagexpError
-        A folder holding anything but an earlier reproduction.
+    folder a command may write (:func:`magexp.run.folders.check_destination`: not inside ``results/``); a
+    folder holding anything else is refused (:class:`~magexp.errors.MagexpError`).
     """
     what = "--into" if text is not None else "the reproduction's default folder (--into)"
     folder = Path(text).expanduser() if text is not None else scratch()
@@ -322,16 +230,6 @@ def reproduction_folder(text: str | None) -> Path:
 def command(argv: list[str]) -> int:
     """``magexp verify [OPTIONS]``: 0 when the reproduction agrees, 1 when not (errors are raised:
     the one error path, :func:`magexp.errors.guarded`, turns them into one line and exit 2).
-
-    Parameters
-    ----------
-    argv : list of str
-        The command's arguments.
-
-    Returns
-    -------
-    int
-        The exit code.
     """
     check_limits()
     args = parser().parse_args(argv)
@@ -368,18 +266,7 @@ def command(argv: list[str]) -> int:
 
 
 def main(argv=None) -> int:
-    """``python -m magexp.artifacts.verify ...``: the exit code of :func:`command` (2 on bad input).
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        The command-line words after ``verify``; default ``sys.argv[1:]``.
-
-    Returns
-    -------
-    int
-        The exit code of :func:`command`, 2 on bad input.
-    """
+    """``python -m magexp.artifacts.verify ...``: the exit code of :func:`command` (2 on bad input)."""
     return exit_code(command, sys.argv[1:] if argv is None else list(argv))
 
 

@@ -64,29 +64,12 @@ ALIASES = {"value": "metric", "metrics": "metric"}
 
 @functools.cache
 def names() -> tuple[str, ...]:
-    """The kinds: the modules of this package not starting with ``_``.
-
-    Returns
-    -------
-    tuple of str
-        Their names, sorted.
-    """
+    """The kinds: the modules of this package not starting with ``_``."""
     return tuple(sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_")))
 
 
 def kind(name: str):
-    """The module of the artifact kind ``name``.
-
-    Parameters
-    ----------
-    name : str
-        A kind: the name of one of this package's modules (:func:`names`).
-
-    Returns
-    -------
-    module
-        The kind's module, with its ``Plot``, ``table`` and ``draw``.
-    """
+    """The module of the artifact kind ``name``."""
     if name not in names():
         raise MagexpError(f"artifact kind={name!r} is not allowed: choose one of {', '.join(names())}")
     return importlib.import_module(f"{__name__}.{name}")
@@ -96,20 +79,6 @@ def plot_of(name: str, data, where: str):
     """The typed ``plot:`` of an artifact of kind ``name``: its old keys renamed (:data:`ALIASES`,
     ``logx: true`` as ``xscale: log``), validated against the kind's ``Plot``; an unknown key or a
     value of the wrong type fails in one line naming ``where``, the kind, the key and the keys it has.
-
-    Parameters
-    ----------
-    name : str
-        The artifact's kind (:func:`names`).
-    data : Mapping or None
-        The spec's ``plot:`` mapping.
-    where : str
-        The artifact's name, for messages.
-
-    Returns
-    -------
-    CommonPlot
-        The kind's ``Plot`` instance.
     """
     if data is not None and not isinstance(data, dict):
         raise MagexpError(f"{where}.plot={data!r} is not allowed: it must be a mapping")
@@ -123,18 +92,7 @@ def plot_of(name: str, data, where: str):
 
 
 def tabulate(runs):
-    """The table behind the figure of ``runs.spec``: its kind's ``table(runs, plot)``.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-
-    Returns
-    -------
-    pandas.DataFrame
-        The table its figure is drawn from.
-    """
+    """The table behind the figure of ``runs.spec``: its kind's ``table(runs, plot)``."""
     return kind(runs.spec.kind).table(runs, runs.spec.plot)
 
 
@@ -152,24 +110,13 @@ def _key(f) -> str:
 
 
 def common_keys() -> set[str]:
-    """The ``plot:`` keys every kind takes (those of :class:`magexp.artifacts.plot_keys.CommonPlot`).
-
-    Returns
-    -------
-    set of str
-        The keys every kind's ``Plot`` has.
-    """
+    """The ``plot:`` keys every kind takes (those of :class:`magexp.artifacts.plot_keys.CommonPlot`)."""
     return set.intersection(*({f.name for f in dataclasses.fields(kind(n).Plot)} for n in names()))
 
 
 def docs_section() -> str:
     """The generated part of docs/extending.md: the keys every kind takes, then one row per kind (what it
     draws, from its module's first docstring line, and its own ``plot:`` keys with their defaults).
-
-    Returns
-    -------
-    str
-        Markdown, between :data:`BEGIN` and :data:`END`.
     """
     common = common_keys()
     first = dataclasses.fields(kind(names()[0]).Plot)
@@ -183,18 +130,7 @@ def docs_section() -> str:
 
 
 def with_docs_section(text: str) -> str:
-    """``text`` (docs/extending.md) with its generated section replaced by :func:`docs_section`.
-
-    Parameters
-    ----------
-    text : str
-        The page, holding :data:`BEGIN` and :data:`END` once each.
-
-    Returns
-    -------
-    str
-        The page with the current table of kinds.
-    """
+    """``text`` (docs/extending.md) with its generated section replaced by :func:`docs_section`."""
     if text.count(BEGIN) != 1 or text.count(END) != 1:
         raise MagexpError(f"the page must hold the lines {BEGIN!r} and {END!r} once each")
     head, rest = text.split(BEGIN)

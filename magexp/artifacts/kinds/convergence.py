@@ -21,6 +21,7 @@ class Plot(CommonPlot):
 
 
 def _stack(histories: list[np.ndarray]) -> np.ndarray:
+    """The histories as one array, each shorter one padded with its last value (a run that stopped holds its value)."""
     n = max(len(h) for h in histories)
     return np.vstack([np.pad(h, (0, n - len(h)), mode="edge") for h in histories])
 

@@ -28,18 +28,6 @@ class Plot(CommonPlot):
 def shown_seed(runs, ci: int) -> tuple[int, str]:
     """The seed of cell ``ci`` whose readings are drawn and its outcome (``succeeded``, ``failed``
     or ``not judged``): the first successful seed, else the first seed.
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs.
-    ci : int
-        A cell's index.
-
-    Returns
-    -------
-    tuple of (int, str)
-        The seed and its outcome.
     """
     seeds = sorted(s for (c, s) in runs.outputs if c == ci)
     sub = cell_runs(runs, ci)

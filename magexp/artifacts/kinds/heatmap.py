@@ -33,16 +33,6 @@ def _case_label(cell: dict, grid_keys) -> str:
 def bound_ratio(sub: pd.DataFrame) -> tuple[float, float, float]:
     """RMS over the successful seeds (every seed where none is judged) of offset error / sqrt(tr CRB),
     and its 95 % bootstrap interval (NaN without a bound or without a successful run).
-
-    Parameters
-    ----------
-    sub : pandas.DataFrame
-        One cell's runs.
-
-    Returns
-    -------
-    tuple of float
-        The RMS, then its interval's ends.
     """
     if "offset_error_ratio" not in sub:
         return (np.nan,) * 3
@@ -80,18 +70,6 @@ def table(runs, plot) -> pd.DataFrame:
 def winners(frame: pd.DataFrame, by: str = "bound_ratio") -> pd.DataFrame:
     """Per case, the estimator with the lowest ``by``; it is the ``winner`` only where its 95 % CI
     lies entirely below every other estimator's, else ``tied`` lists those whose CIs overlap it.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The benchmark table (:func:`table`).
-    by : str
-        The column ranked, with its interval's ``_lo`` and ``_hi`` columns.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per case.
     """
     out = []
     for case, sub in frame.groupby("case", sort=False):

@@ -24,20 +24,6 @@ class Plot(CommonPlot):
 def cell_label(cell: dict, estimator: str, spec) -> str:
     """A short legend text of a cell: the estimator, then its other swept values (a scenario by its
     readable name, :func:`scenario_label`; other keys as ``name = value`` with ``plot.labels``).
-
-    Parameters
-    ----------
-    cell : dict
-        The cell's swept values.
-    estimator : str
-        Its estimator.
-    spec : Artifact
-        The artifact (its ``plot.labels``).
-
-    Returns
-    -------
-    str
-        The legend text.
     """
     names = dict(spec.plot.get("labels", {}) or {})
     rest = [scenario_label(v) if k == "scenario" else f"{names.get(k, k.split('.')[-1].replace('_', ' '))} = {v}"

@@ -29,18 +29,6 @@ def canonical_sign(names: list[str], x: np.ndarray) -> np.ndarray:
     """The member with ``det S > 0`` of the pair ``(S, b, h)``, ``(-S, b, -h)`` that the gyro-aided
     objective cannot tell apart (``h`` by azimuth ``a`` and elevation ``e``: ``-h`` is ``(a + pi, -e)``);
     other parameter vectors are returned as they are.
-
-    Parameters
-    ----------
-    names : list of str
-        The parameters' names.
-    x : numpy.ndarray
-        A parameter vector.
-
-    Returns
-    -------
-    numpy.ndarray
-        The vector of the pair's member with ``det S > 0``.
     """
     x = np.array(x, float)
     if "field_azimuth" not in names or np.linalg.det(x[:9].reshape(3, 3)) >= 0:

@@ -29,6 +29,7 @@ class Plot(CommonPlot):
 
 
 def _names(out, key: str) -> list[str]:
+    """The names of the traced ``key`` columns (the estimator's parameter names unless the trace gives its own)."""
     return list(out.trace.get(f"{key}_names", out.parameter_names))
 
 

@@ -28,6 +28,7 @@ class Plot(CommonPlot):
 
 
 def _rate(values) -> float:
+    """The success rate of the known 0/1 ``values`` (:func:`fraction`)."""
     return fraction(pd.Series(values).dropna().astype(float))
 
 
@@ -51,18 +52,7 @@ ESTIMATOR_KEYS = {"estimator", "estimator.name"}  # the settings naming an estim
 
 
 def family_words(spec, family: str) -> str:
-    """An estimator's name in words on a tuning figure: ``plot.names[family]``, else its label.
-
-    Parameters
-    ----------
-    spec, family : ArtifactSpec, str
-        The artifact (its ``plot.names``); the estimator's name (a family, or a setting in a legend).
-
-    Returns
-    -------
-    str
-        The words (:func:`magexp.run.compose.estimator_label` when ``plot.names`` has none).
-    """
+    """An estimator's name in words on a tuning figure: ``plot.names[family]``, else its label."""
     return str(dict(spec.plot.get("names", {}) or {}).get(family) or estimator_label(family))
 
 

@@ -52,6 +52,7 @@ LABELLED_SPAN = 0.5
 
 
 def _finite(values) -> bool:
+    """Whether ``values`` hold at least one finite number (something a panel can show)."""
     a = np.asarray(values, dtype=float)
     return a.size > 0 and bool(np.isfinite(a).any())
 
@@ -98,22 +99,13 @@ def _collection_draws_data(artist: Collection) -> bool:
 
 
 def _is_colorbar(ax: Axes) -> bool:
+    """Whether ``ax`` is a colour bar's axes (not a panel to check)."""
     return getattr(ax, "_colorbar", None) is not None
 
 
 def overflowing_cells(fig) -> list[str]:
     """Table cells whose text is wider or taller than the cell (it runs into its neighbours);
     call after a layout pass (:func:`overlapping_text` makes one).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        A laid-out figure whose table cells are measured.
-
-    Returns
-    -------
-    list of str
-        A line per cell whose text overflows it.
     """
     renderer = fig.canvas.get_renderer()
     found = []
@@ -130,18 +122,7 @@ def overflowing_cells(fig) -> list[str]:
 
 
 def empty_axes(fig) -> list[str]:
-    """Visible data axes (not colour bars) on which nothing is drawn from data.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure whose data axes are looked at.
-
-    Returns
-    -------
-    list of str
-        A line per empty axes.
-    """
+    """Visible data axes (not colour bars) on which nothing is drawn from data."""
     found = []
     for k, ax in enumerate(fig.axes):
         if not ax.get_visible() or _is_colorbar(ax):
@@ -225,18 +206,7 @@ def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def overlapping_text(fig) -> list[str]:
-    """Pairs of texts whose window extents overlap (after a layout pass without rendering).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure; it is laid out here (no rendering).
-
-    Returns
-    -------
-    list of str
-        A line per pair of overlapping texts.
-    """
+    """Pairs of texts whose window extents overlap (after a layout pass without rendering)."""
     fig.draw_without_rendering()
     renderer = fig.canvas.get_renderer()
     items = _texts(fig, renderer)
@@ -256,16 +226,6 @@ def overlapping_text(fig) -> list[str]:
 def colorbar_mismatch(fig) -> list[str]:
     """Colour bars without a recorded column, or whose label is not that column's label, or whose
     image was drawn from another column than the bar records.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure whose colour bars are compared with their images.
-
-    Returns
-    -------
-    list of str
-        A line per colour bar that does not match.
     """
     found = []
     for ax in fig.axes:
@@ -290,18 +250,7 @@ RAW_OVERRIDE = re.compile(r"[A-Za-z_][\w.]*=\S")
 
 
 def raw_legends(fig) -> list[str]:
-    """Legend entries made of raw override strings (``lm, scenario=real_x, window=null``).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure whose legends are read.
-
-    Returns
-    -------
-    list of str
-        A line per legend entry made of overrides.
-    """
+    """Legend entries made of raw override strings (``lm, scenario=real_x, window=null``)."""
     legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes)]
     texts = [t.get_text() for lg in legends if isinstance(lg, Legend) for t in lg.get_texts()]
     return [f"legend entry {t!r} is a raw override string" for t in texts if RAW_OVERRIDE.search(t)]
@@ -340,16 +289,6 @@ def _look(handle) -> tuple:
 def legend_defects(fig) -> list[str]:
     """Legend entries whose series has nothing drawn (all of its values missing), and entries of
     one legend a reader cannot tell apart (same colour, marker, line style).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure; each legend entry is matched with the series it names.
-
-    Returns
-    -------
-    list of str
-        A line per empty or indistinct entry.
     """
     drawn: dict[str, list] = {}
     for ax in fig.axes:
@@ -394,16 +333,6 @@ def _worded_texts(fig) -> list[tuple[str, str]]:
 def raw_names(fig) -> list[str]:
     """Config names (:data:`CONFIG_NAME`) printed where a reader wants words: a legend entry, a
     title, a colour-bar label or a table header (``plot.names`` gives them words).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure whose legends, titles, colour-bar labels and table headers are read.
-
-    Returns
-    -------
-    list of str
-        A line per config name printed.
     """
     return [f"{where} {text!r} prints the config name {m.group(0)!r}"
             for where, text in _worded_texts(fig) for m in [CONFIG_NAME.search(text)] if m]
@@ -423,16 +352,6 @@ def clipped_markers(fig) -> list[str]:
     """Markers cut by the edge of their axes: the centre inside the view (edge included), the marker
     (half its size plus half its edge) reaching more than :data:`OVERLAP_PX` over the edge. Call
     after a layout pass (:func:`overlapping_text` makes one).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure, after a layout pass; each marker is measured against its axes.
-
-    Returns
-    -------
-    list of str
-        A line per clipped marker.
     """
     found = []
     for k, ax in enumerate(fig.axes):
@@ -476,16 +395,6 @@ def unlabelled_log_range(fig) -> list[str]:
     """Log axes labelled at fewer than two powers of ten whose labelled ticks (major and minor,
     inside the view) span less than :data:`LABELLED_SPAN` of the view in log: a reader cannot read
     the values beyond them (two labelled decades give the scale). Call after a layout pass.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure, after a layout pass; its log axes are read.
-
-    Returns
-    -------
-    list of str
-        A line per log axis a reader cannot read values from.
     """
     found = []
     for k, ax, name, axis in _log_axes(fig):
@@ -504,16 +413,6 @@ def unlabelled_log_range(fig) -> list[str]:
 def small_text(fig) -> list[str]:
     """Visible texts of ``fig`` smaller than :data:`MIN_POINTS` (a figure is saved at its own size, so
     points are what a reader gets); texts of one legend, one table are reported once.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure whose visible texts are measured.
-
-    Returns
-    -------
-    list of str
-        A line per text (or legend, table) below the size.
     """
     found, seen = [], set()
     for text in fig.findobj(Text):
@@ -532,16 +431,6 @@ def small_text(fig) -> list[str]:
 def defects(fig) -> list[str]:
     """Every defect of ``fig`` found by the checks of this module (also of a figure already saved
     and closed: it gets an Agg canvas to lay it out again).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure to check (open or saved and closed).
-
-    Returns
-    -------
-    list of str
-        Every defect found, one line each (empty: none).
     """
     if not hasattr(fig.canvas, "get_renderer"):
         FigureCanvasAgg(fig)

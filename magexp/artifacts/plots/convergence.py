@@ -14,22 +14,7 @@ from magexp.artifacts.plots.style import group_values, label, panels, plt, share
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    """The best objective against the iteration: median line and IQR band per cell, a panel per ``plot.panels``.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.convergence.table`.
-    spec : Artifact
-        The artifact: ``plot.panels`` splits the panels, ``plot.hue`` the lines.
-    axes : sequence of Axes, optional
-        The caller's panels, one per value of ``plot.panels`` (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The best objective against the iteration, on a log axis.
-    """
+    """The best objective against the iteration: median line and IQR band per cell, a panel per ``plot.panels``."""
     panel_key, hue_key = spec.plot.get("panels"), spec.plot.get("hue")
     panel_vals = group_values(frame, panel_key)
     fig, axes = panels(len(panel_vals), axes=axes)

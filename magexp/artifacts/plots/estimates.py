@@ -20,6 +20,7 @@ from magexp.artifacts.plots.style import panels, paper_values, plt
 
 
 def _cell(row) -> str:
+    """A table cell's text: the median, and its quartiles below it when there are several seeds."""
     if not np.isfinite(row["median"]):
         return ""
     text = f"{row['median']:.6g}"
@@ -27,22 +28,7 @@ def _cell(row) -> str:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    """The estimates as a table figure: per cell and quantity, median and IQR over seeds beside the truth.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.estimates.table`.
-    spec : Artifact
-        The artifact: ``plot.rows`` adds quantities, ``plot.names`` gives the cells words.
-    axes : Axes, optional
-        The caller's Axes for the table (default: a new figure sized to it).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The table of estimates, a row per quantity.
-    """
+    """The estimates as a table figure: per cell and quantity, median and IQR over seeds beside the truth."""
     quantities, columns, body = _table(frame, spec)
     widths = _column_widths(columns, body)
     lines = [max(1, *(c.count("\n") + 1 for c in cells)) for cells in body]

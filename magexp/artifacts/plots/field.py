@@ -37,26 +37,12 @@ def _which(sub) -> str:
 
 
 def _lines(*parts: str) -> str:
+    """The non-empty ``parts``, one a line."""
     return "\n".join(p for p in parts if p)
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    """The readings of the shown seed: total field against the reference, or in 3-D against the sphere.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.field.table`.
-    spec : Artifact
-        The artifact: ``plot.quantity`` (``sphere`` or ``magnitude``), ``plot.panels``.
-    axes : sequence of Axes, optional
-        The caller's panels (3-D ones for ``sphere``; default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The readings' field, raw and calibrated.
-    """
+    """The readings of the shown seed: total field against the reference, or in 3-D against the sphere."""
     quantity = spec.plot.get("quantity", "sphere" if spec.kind == "sphere" else "magnitude")
     if quantity == "sphere":
         return _draw_sphere(frame, spec, axes=axes)
@@ -64,6 +50,8 @@ def draw(frame: pd.DataFrame, spec, axes=None):
 
 
 def _draw_field(frame: pd.DataFrame, spec, show_raw: bool, axes=None):
+    """The field panels of ``frame``, one per panel value: the error per reading (and, with ``show_raw``,
+    the raw readings against the reference above it)."""
     key, readings_unit = spec.plot.get("panels"), unit(spec)
     values = group_values(frame, key)
     fig, axes = panels(len(values) * (2 if show_raw else 1), rows=2 if show_raw else 1, height=3.0, axes=axes)

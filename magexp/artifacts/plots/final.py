@@ -51,18 +51,6 @@ CRB_FLOOR = "Cramér-Rao floor (Gaussian)"
 def ylog(spec, metric: str) -> bool:
     """Whether ``metric``'s panels have a log y axis (``plot.ylog``: one flag, or ``{metric: flag}``,
     default true).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact, whose ``plot.ylog`` is one flag or ``{metric: flag}``.
-    metric : str
-        A metric column the figure draws, by its name.
-
-    Returns
-    -------
-    bool
-        True for a log y axis.
     """
     flag = spec.plot.get("ylog", True)
     return bool(flag.get(metric, True)) if isinstance(flag, Mapping) else bool(flag)
@@ -195,20 +183,6 @@ def level_span(x: float, xs: list[float], log: bool = False) -> tuple[float, flo
     """The ends of a level's line drawn at ``x`` only: 0.4 of the gap to each neighbouring x; beyond
     the first or last x, the axis's default margin (5 % of the range of ``xs``), so that the line does
     not widen the x range; on a log axis, in the logarithm.
-
-    Parameters
-    ----------
-    x : float
-        The x value the level belongs to.
-    xs : list of float
-        The sorted x values of the panel's cells.
-    log : bool
-        Whether the x axis is logarithmic.
-
-    Returns
-    -------
-    tuple of float
-        The left and right ends of the line (a single x: 0.5 either side).
     """
     f, inv = (math.log10, lambda v: 10.0 ** v) if log and min(xs) > 0 else (float, float)
     at, margin = f(x), 0.05 * (f(max(xs)) - f(min(xs))) or 0.5
@@ -243,22 +217,7 @@ def _references(ax, sub, spec, x_key, metric):
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    """The final value of each metric against the swept key ``plot.x``: median and IQR per hue, a panel per metric.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.final.table`.
-    spec : Artifact
-        The artifact: ``plot.x``, ``plot.panels``, ``plot.hue``, ``plot.ylog`` and its ``ratios``.
-    axes : sequence of Axes, optional
-        The caller's panels, one per metric and panel value (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The final values against ``plot.x``, the paper's values marked.
-    """
+    """The final value of each metric against the swept key ``plot.x``: median and IQR per hue, a panel per metric."""
     x_key, panel_key = spec.plot.x, spec.plot.get("panels")
     frame, hue_key = _with_hue(frame, spec, spec.plot.get("hue", "estimator"))
     metrics = metric_list(spec.plot) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
@@ -317,18 +276,6 @@ def _scale_axes(ax, spec, sub: pd.DataFrame, xs: pd.Series, log_y: bool) -> None
 def symlog_ticks(xs: pd.Series, linthresh: float) -> list[float]:
     """Major ticks of a ``symlog`` axis from 0: 0, then the decades from the first at or above
     ``linthresh`` to the largest value's (a decade inside the linear part would be printed beside 0).
-
-    Parameters
-    ----------
-    xs : pandas.Series
-        The values on the axis.
-    linthresh : float
-        The linear threshold of the ``symlog`` scale.
-
-    Returns
-    -------
-    list of float
-        The major tick positions.
     """
     top = float(xs.astype(float).max())
     first = math.ceil(math.log10(linthresh))

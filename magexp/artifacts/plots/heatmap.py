@@ -25,16 +25,6 @@ from magexp.core.outcomes import failed_majority
 def readable_case(case: str) -> str:
     """A case's tick label: ``key=value`` settings as ``key = value`` on their own line, unset ones
     (``=null``) left out.
-
-    Parameters
-    ----------
-    case : str
-        A case's name (``scenario key=value ...``).
-
-    Returns
-    -------
-    str
-        The tick label.
     """
     parts = str(case).split(" ")
     settings = [p.replace("=", " = ") for p in parts[1:] if "=" in p and not p.endswith("=null")]
@@ -61,16 +51,6 @@ SCALE_RANGES = (2.0, 3.0, 5.0, 10.0, 100.0, 1.0e4)
 def colour_range(values: np.ndarray) -> float:
     """``R`` of the colour scale ``[1/R, R]``: the smallest of :data:`SCALE_RANGES` that holds every
     finite positive value (ratios above or below 1 by the same factor get the same depth of colour).
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        The values the colours show.
-
-    Returns
-    -------
-    float
-        ``R``.
     """
     v = values[np.isfinite(values) & (values > 0)]
     widest = float(np.max(np.maximum(v, 1 / v))) if v.size else 1.0
@@ -88,22 +68,7 @@ def _cell_text(r, value: str) -> tuple[str, str | None]:
 
 
 def draw(frame, spec, ax=None):
-    """Estimator against case, coloured by ``plot.metric`` (default the error over the Cramér-Rao bound).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.heatmap.table`.
-    spec : Artifact
-        The artifact: ``plot.metric`` (default ``bound_ratio``) colours the cells.
-    ax : Axes, optional
-        The caller's Axes (default: a new figure with a colour bar).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The heat map, estimator against case.
-    """
+    """Estimator against case, coloured by ``plot.metric`` (default the error over the Cramér-Rao bound)."""
     value = spec.plot.get("metric", "bound_ratio")
     valued = set(frame.case[np.isfinite(frame[value].astype(float))])
     frame = frame[frame.case.isin(valued)]  # a case with no value anywhere: in the table only

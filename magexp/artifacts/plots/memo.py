@@ -39,25 +39,13 @@ from magexp.run.cache import files_digest, write
 
 
 def root() -> Path:
-    """The figure cache: beside the run cache (:data:`magexp.paths.CACHE`), never inside it.
-
-    Returns
-    -------
-    Path
-        ``<cache>-figures``.
-    """
+    """The figure cache: beside the run cache (:data:`magexp.paths.CACHE`), never inside it."""
     return paths.CACHE.parent / f"{paths.CACHE.name}-figures"
 
 
 @lru_cache(maxsize=1)
 def figure_code_version() -> str:
-    """Hash of all of magexp's source and of the drawing libraries' versions (module docstring).
-
-    Returns
-    -------
-    str
-        A hex digest.
-    """
+    """Hash of all of magexp's source and of the drawing libraries' versions (module docstring)."""
     h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
     h.update(f"{matplotlib.__version__} {numpy.__version__} {pandas.__version__}".encode())
     return h.hexdigest()
@@ -66,18 +54,6 @@ def figure_code_version() -> str:
 def key(spec, csv_bytes: bytes) -> str:
     """The key of the figure of ``spec`` drawn from a CSV holding ``csv_bytes`` (module docstring),
     with matplotlib's settings as they are now (a user's ``matplotlibrc`` draws otherwise).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact drawn.
-    csv_bytes : bytes
-        The bytes of the CSV it is drawn from.
-
-    Returns
-    -------
-    str
-        The hex digest naming the drawing.
     """
     h = hashlib.sha256(figure_code_version().encode())
     h.update(repr(sorted(plt.rcParams.items())).encode())  # the settings the draw uses: magexp's style on the user's
@@ -87,18 +63,7 @@ def key(spec, csv_bytes: bytes) -> str:
 
 
 def digests(files: list[Path]) -> list[str] | None:
-    """SHA-256 of each file (None if one is missing).
-
-    Parameters
-    ----------
-    files : list of Path
-        The files drawn.
-
-    Returns
-    -------
-    list of str or None
-        A hex digest per file, None if one is missing.
-    """
+    """SHA-256 of each file (None if one is missing)."""
     try:
         return [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files]
     except FileNotFoundError:
@@ -106,24 +71,12 @@ def digests(files: list[Path]) -> list[str] | None:
 
 
 def _stamp(k: str) -> Path:
+    """The stamp file recording what the files drawn under key ``k`` hold."""
     return root() / k[:2] / f"{k}.json"
 
 
 def current(k: str, files: list[Path]) -> bool:
-    """Whether ``files`` are what the draw of key ``k`` wrote (their recorded digests).
-
-    Parameters
-    ----------
-    k : str
-        The drawing's key (:func:`key`).
-    files : list of Path
-        The files the drawing writes.
-
-    Returns
-    -------
-    bool
-        True when every file holds what was recorded under ``k``.
-    """
+    """Whether ``files`` are what the draw of key ``k`` wrote (their recorded digests)."""
     try:
         recorded = json.loads(_stamp(k).read_text())
     except (OSError, ValueError):
@@ -135,13 +88,6 @@ def record(k: str, files: list[Path]) -> None:
     """Keep the digests of the ``files`` just drawn under key ``k`` (atomically, readable by whom the
     cache folder is: :func:`magexp.run.cache.write`; where the cache cannot be written, nothing is kept
     and the figure is drawn again next time).
-
-    Parameters
-    ----------
-    k : str
-        The drawing's key (:func:`key`).
-    files : list of Path
-        The files just drawn.
     """
     try:
         write(_stamp(k), json.dumps(digests(files)).encode(), root())

@@ -52,20 +52,6 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     """Two panels (matrix entries, offsets): estimate minus truth, symlog axis; filled marker and
     bar: median and IQR over seeds; open marker: the paper's value minus the truth. A third panel
     shows F_g where the runs measure it.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.parameters.table`.
-    spec : Artifact
-        The artifact (``plot.unit`` of the offsets, its title).
-    axes : sequence of Axes, optional
-        The caller's two panels, three with F_g (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Estimate minus truth per parameter.
     """
     names = [n for n in dict.fromkeys(frame.parameter) if n != FIT[0]]
     groups = [names[:9], names[9:]]

@@ -27,16 +27,6 @@ def cells_of(headline: dict) -> list[tuple[str, str, bool]]:
     """``(reading label, verdict, primary)`` of each cell of a headline row (``readings`` of
     :func:`magexp.artifacts.headlines.headlines`), the primary reading first; one cell of the paper's
     stated settings when it has none.
-
-    Parameters
-    ----------
-    headline : dict
-        A headline row.
-
-    Returns
-    -------
-    list of tuple
-        ``(reading label, verdict, primary)`` per cell.
     """
     readings = sorted(headline.get("readings") or [], key=lambda r: not r["primary"])
     return ([(r["label"], r["verdict"], r["primary"]) for r in readings]
@@ -44,54 +34,20 @@ def cells_of(headline: dict) -> list[tuple[str, str, bool]]:
 
 
 def drawn(headlines: list[dict]) -> list[dict]:
-    """The headlines the grid draws: every one but the untestable (no runs to judge).
-
-    Parameters
-    ----------
-    headlines : list of dict
-        A paper's headline rows (their ``verdict`` is read).
-
-    Returns
-    -------
-    list of dict
-        Those with runs to judge.
-    """
+    """The headlines the grid draws: every one but the untestable (no runs to judge)."""
     return [h for h in headlines if h["verdict"] != "not testable here"]
 
 
 def cells(headlines: list[dict]) -> list[dict]:
     """The data the grid draws, a row per cell: ``headline`` (its id), ``reading``, ``verdict`` and
     ``primary`` (written beside the figure as ``readings.csv``, what ``magexp verify`` compares).
-
-    Parameters
-    ----------
-    headlines : list of dict
-        A paper's headline rows, with their readings.
-
-    Returns
-    -------
-    list of dict
-        A ``{headline, reading, verdict, primary}`` row per cell.
     """
     return [{"headline": h["id"], "reading": label, "verdict": verdict, "primary": primary}
             for h in drawn(headlines) for label, verdict, primary in cells_of(h)]
 
 
 def draw(headlines: list[dict], title: str):
-    """The grid of ``headlines`` (rows of :func:`magexp.artifacts.report.headlines`) as a figure.
-
-    Parameters
-    ----------
-    headlines : list of dict
-        The headline rows of a paper.
-    title : str
-        The figure's title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The grid drawn.
-    """
+    """The grid of ``headlines`` (rows of :func:`magexp.artifacts.report.headlines`) as a figure."""
     rows = drawn(headlines)
     width = max((len(cells_of(h)) for h in rows), default=1)
     fig, ax = plt.subplots(figsize=(1.9 * width + 2.2, 0.8 * len(rows) + 0.9))

@@ -94,22 +94,7 @@ def _estimates(ax, frame: pd.DataFrame, title: str, names: list[str], labels: li
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    """Six panels (module docstring); the hue is the estimator (one recording) or the recording.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.recording.table`.
-    spec : Artifact
-        The artifact (``plot.metric``, its success rule and title).
-    axes : sequence of Axes, optional
-        The caller's six panels (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The six panels of the recordings' fits.
-    """
+    """Six panels (module docstring); the hue is the estimator (one recording) or the recording."""
     metric = spec.plot.get("metric", "fg")
     labels = list(dict.fromkeys(frame.label))
     colours = {lab: f"C{k}" for k, lab in enumerate(labels)}

@@ -27,20 +27,6 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     """One panel per recording: per estimator, the calibrated spread on the fitted readings (dot)
     and on the held-out block (diamond, with its interval), the raw spread as a dashed line; an
     estimator whose runs mostly failed is drawn in red.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.recording_spread.table`.
-    spec : Artifact
-        The artifact (its title).
-    axes : sequence of Axes, optional
-        The caller's panels, one per recording (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The calibrated spread per recording and estimator.
     """
     cases = list(dict.fromkeys(frame.case))
     fig, axes = panels(len(cases), width=3.6, height=3.0, rows=2 if len(cases) > 2 else 1, axes=axes)

@@ -13,22 +13,7 @@ MARKERS = "osD^v<>PX*hp"
 
 
 def draw(frame, spec, ax=None):
-    """The speed benchmark: ``plot.metric`` per estimator and case, grouped by paper, on a log axis.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.heatmap.table`.
-    spec : Artifact
-        The artifact: ``plot.metric`` (default ``bound_ratio``) on the log axis.
-    ax : Axes, optional
-        The caller's Axes, one for every paper (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The speed per estimator and case.
-    """
+    """The speed benchmark: ``plot.metric`` per estimator and case, grouped by paper, on a log axis."""
     value = spec.plot.get("metric", "bound_ratio")
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 4.8), layout="constrained")
     papers = list(dict.fromkeys(s.split("_")[0] for s in frame.scenario))

@@ -46,11 +46,6 @@ def share_mathtext_parses() -> bool:
     A parse depends only on the parser's output type and the arguments of the cached call, so one
     cache per output type gives the same glyphs, hence the same bytes, with fewer parses (a test
     compares the bytes of figures drawn with and without it).
-
-    Returns
-    -------
-    bool
-        Whether it is in place (it is skipped if this matplotlib lays ``parse`` out otherwise).
     """
     cached = getattr(mathtext.MathTextParser, "_parse_cached", None)
     if getattr(cached, "shared", False):
@@ -76,22 +71,7 @@ share_mathtext_parses()
 
 
 def label(spec, key: str, value=None) -> str:
-    """Readable label of a grid key (``plot.labels`` in the artifact may rename keys).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact (its ``plot.labels``).
-    key : str
-        A grid key.
-    value : object, optional
-        A value of the key, appended as ``label = value``.
-
-    Returns
-    -------
-    str
-        The label.
-    """
+    """Readable label of a grid key (``plot.labels`` in the artifact may rename keys)."""
     names = dict(spec.plot.get("labels", {}) or {})
     name = names.get(key, key.split(".")[-1].replace("_", " "))
     return name if value is None else f"{name} = {value}"
@@ -100,16 +80,6 @@ def label(spec, key: str, value=None) -> str:
 def unit(spec) -> str:
     """The unit of the readings an artifact's scenarios generate (``plot.unit``, default ``nT``; Yuan's
     scenarios: ``mG``), printed wherever a figure draws a field, an offset or an objective in it.
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact (its ``plot.unit`` and scenarios).
-
-    Returns
-    -------
-    str
-        The unit's name.
     """
     return str(spec.plot.get("unit", "nT"))
 
@@ -117,22 +87,6 @@ def unit(spec) -> str:
 def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, axes=None):
     """A row (or grid) of ``n`` axes; ``axes`` (``n`` Axes of the caller's figure, or one Axes for
     ``n == 1``) draws into the caller's own layout instead of a new figure.
-
-    Parameters
-    ----------
-    n : int
-        The number of panels.
-    width, height : float
-        The size of one panel, in inches.
-    rows : int
-        The number of rows of the grid.
-    axes : Axes or sequence of Axes, optional
-        The caller's axes to draw into.
-
-    Returns
-    -------
-    tuple
-        ``(figure, list of n Axes)``.
     """
     if axes is not None:
         axes = [axes] if hasattr(axes, "plot") else list(axes)
@@ -153,55 +107,19 @@ def panels(n: int, *, width: float = 3.4, height: float = 2.8, rows: int = 1, ax
 def quantities_of(spec, metric: str) -> set[str]:
     """The summary quantities computed from the runs column ``metric`` (a ratio's quantity is its
     own): the ``reported:`` entries of these are the paper's values of what a figure draws.
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact (its ``summarise:`` entries and ``ratios``).
-    metric : str
-        A runs column.
-
-    Returns
-    -------
-    set of str
-        The summary quantities computed from it.
     """
     names = {s.quantity for s in spec.get("summarise", []) if getattr(s, "metric", None) == metric and s.quantity}
     return names | {r.quantity for r in spec.get("ratios", []) if r.quantity == metric}
 
 
 def paper_values(spec, metric: str) -> list:
-    """The artifact's ``reported:`` entries of ``metric`` (by name, or by a quantity summarised from it).
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact (its ``reported:`` entries).
-    metric : str
-        The runs column a figure draws.
-
-    Returns
-    -------
-    list of Reported
-        The paper's values of it.
-    """
+    """The artifact's ``reported:`` entries of ``metric`` (by name, or by a quantity summarised from it)."""
     names = quantities_of(spec, metric) | {metric}
     return [e for e in spec.get("reported", []) if e.quantity in names]
 
 
 def legend_entries(axes) -> dict:
-    """``{label: handle}`` of every labelled artist of ``axes``, each label once (first seen).
-
-    Parameters
-    ----------
-    axes : sequence of Axes
-        The panels.
-
-    Returns
-    -------
-    dict
-        ``{label: handle}``.
-    """
+    """``{label: handle}`` of every labelled artist of ``axes``, each label once (first seen)."""
     unique = {}
     for ax in axes:
         for handle, name in zip(*ax.get_legend_handles_labels()):
@@ -213,26 +131,6 @@ def shared_legend(fig, axes, entries: dict | None = None, *, ncols: int = 4, ins
     """One legend for the panels ``axes``: below them, outside, where the figure has constrained
     layout (its own figures) and not ``inside``; else in the first panel (a caller's axes).
     ``entries``: ``{label: handle}`` (default: :func:`legend_entries`); nothing is drawn without any.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure.
-    axes : sequence of Axes
-        The panels the legend serves.
-    entries : dict, optional
-        ``{label: handle}`` (default: :func:`legend_entries`).
-    ncols : int
-        Columns of the legend at most (fewer where that many would be wider than the figure).
-    inside : bool
-        Put it in the first panel even where the figure has constrained layout.
-    **kwargs
-        Passed to ``legend``.
-
-    Returns
-    -------
-    matplotlib.legend.Legend or None
-        The legend (None when there is no entry).
     """
     entries = legend_entries(axes) if entries is None else entries
     if not entries:
@@ -258,20 +156,7 @@ COLUMN_ATTR = "magexp_column"
 
 
 def drawn_from(image, column: str):
-    """Record on ``image`` the data column its cells were filled from; returns ``image``.
-
-    Parameters
-    ----------
-    image : matplotlib.image.AxesImage
-        The image.
-    column : str
-        The data column its cells show.
-
-    Returns
-    -------
-    matplotlib.image.AxesImage
-        ``image``.
-    """
+    """Record on ``image`` the data column its cells were filled from; returns ``image``."""
     setattr(image, COLUMN_ATTR, column)
     return image
 
@@ -280,24 +165,6 @@ def colorbar(image, ax, *, column: str, label: str, **kwargs):
     """A colour bar of ``image`` labelled ``label``, recording the column it says it shows
     (:data:`COLUMN_ATTR`): a check compares it with the label and with the column the image was
     filled from (:func:`drawn_from`; :func:`magexp.artifacts.plots.check.colorbar_mismatch`).
-
-    Parameters
-    ----------
-    image : matplotlib.image.AxesImage
-        The image the bar explains.
-    ax : Axes
-        The axes it belongs to.
-    column : str
-        The data column the bar shows.
-    label : str
-        The bar's label.
-    **kwargs
-        Passed to ``Figure.colorbar``.
-
-    Returns
-    -------
-    matplotlib.colorbar.Colorbar
-        The colour bar.
     """
     bar = ax.figure.colorbar(image, ax=ax, **kwargs)
     setattr(bar, COLUMN_ATTR, column)
@@ -308,18 +175,6 @@ def colorbar(image, ax, *, column: str, label: str, **kwargs):
 def save(fig, path: Path) -> list[Path]:
     """Write the figure as a PNG and its vector twin (PDF), both without time stamps or
     producer strings, so the same figure gives the same bytes; return both paths.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure.
-    path : Path
-        The PNG's path (the PDF's: the same stem).
-
-    Returns
-    -------
-    list of Path
-        The PNG and the PDF written.
     """
     path = Path(path)
     twin = path.with_suffix(VECTOR)
@@ -350,18 +205,6 @@ def narrow_log_ticks(lo: float, hi: float, at_least: int = MIN_LOG_TICKS) -> lis
     set of :data:`NARROW_LOG_SUBS` that puts ``at_least`` ticks inside it (a view of 0.85 to
     1.8 gets 0.9, 1, 1.2, 1.5); a view too narrow for any of them, evenly spaced round values.
     Used by :func:`tidy_log_axes` and for colour bars of ratios.
-
-    Parameters
-    ----------
-    lo, hi : float
-        The view's limits (positive).
-    at_least : int
-        The number of ticks wanted inside it.
-
-    Returns
-    -------
-    list of float
-        The tick positions.
     """
     lo, hi = sorted((lo, hi))
     for subs in NARROW_LOG_SUBS:
@@ -378,6 +221,7 @@ class _ReadableLogLocator(matplotlib.ticker.LogLocator):
     Decided when the figure is drawn, after every limit is set."""
 
     def tick_values(self, vmin, vmax):
+        """Plain ticks on a log axis spanning less than two decades, else matplotlib's."""
         lo, hi = sorted((vmin, vmax))
         if lo > 0 and np.isfinite(hi) and _decade_ticks(lo, hi) < 2:
             return np.array(narrow_log_ticks(lo, hi))
@@ -389,6 +233,7 @@ class _ReadableLogLabels(matplotlib.ticker.LogFormatterSciNotation):
     narrow view (fewer than two decade ticks) as plain numbers (``1.5``, ``0.02``)."""
 
     def __call__(self, x, pos=None):
+        """A tick's label: plain ``%g`` on a log axis spanning less than two decades, else matplotlib's."""
         lo, hi = sorted(self.axis.get_view_interval())
         if lo > 0 and _decade_ticks(lo, hi) < 2:
             return f"{x:g}"
@@ -396,6 +241,7 @@ class _ReadableLogLabels(matplotlib.ticker.LogFormatterSciNotation):
 
 
 def _unlabelled(x, pos=None) -> str:
+    """No label: the formatter of ticks left unlabelled."""
     return ""
 
 
@@ -403,16 +249,6 @@ def tidy_log_axes(fig):
     """Give every log-scaled axis of ``fig`` readable ticks: decades where its view holds two or more
     (minor ticks unlabelled), else the plain ticks of :func:`narrow_log_ticks` (a reader can read a
     point at 1.8 on an axis from 0.85); returns ``fig`` (call it last in a kind's ``draw``).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        ``fig``.
     """
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
@@ -424,20 +260,7 @@ def tidy_log_axes(fig):
 
 
 def group_values(frame, key):
-    """Distinct values of ``key`` in ``frame`` in first-seen order (None: one group).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table.
-    key : str or None
-        A column (None: one group).
-
-    Returns
-    -------
-    list
-        The distinct values (``[None]`` without a key).
-    """
+    """Distinct values of ``key`` in ``frame`` in first-seen order (None: one group)."""
     if not key:
         return [None]
     return list(dict.fromkeys(frame[key].tolist()))

@@ -34,22 +34,7 @@ def _name(spec, estimator: str) -> str:
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    """The traced parameters against the filter step: median and IQR per cell, a panel per group, truth as a level.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.trace.table`.
-    spec : Artifact
-        The artifact: ``plot.groups`` of parameters, ``plot.start``, ``plot.trace``.
-    axes : sequence of Axes, optional
-        The caller's panels, one per group (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The traces against the filter step.
-    """
+    """The traced parameters against the filter step: median and IQR per cell, a panel per group, truth as a level."""
     traces = frame[(frame.kind == "trace") & (frame.step >= float(spec.plot.get("start", 0)))]
     groups = [list(g) for g in spec.plot.get("groups", [])] or [[p] for p in dict.fromkeys(traces.parameter)]
     distance = "distance" in set(frame.kind)

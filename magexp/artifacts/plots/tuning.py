@@ -161,22 +161,7 @@ def _ranked(top, bottom, sub, families):
 
 
 def draw(frame: pd.DataFrame, spec, axes=None):
-    """The tuning sweep: per family and scenario, the metric of each setting, best, median and worst marked.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :func:`magexp.artifacts.kinds.tuning.table`.
-    spec : Artifact
-        The artifact: ``plot.metric``, ``plot.names``, ``plot.labels``.
-    axes : sequence of Axes, optional
-        The caller's Axes: two rows, a column per scenario (default: a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The tuning sweep per family and scenario.
-    """
+    """The tuning sweep: per family and scenario, the metric of each setting, best, median and worst marked."""
     scenarios = list(dict.fromkeys(frame.scenario))
     families = list(dict.fromkeys(frame.family))
     ticks = dict(zip(frame.family, frame.family_label))  # each family's words (plot.names, else its label)
