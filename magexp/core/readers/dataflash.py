@@ -15,7 +15,7 @@ magnetometer ``MAG``: ``MagX/Y/Z`` (mGauss, body frame), ``OfsX/Y/Z`` (the offse
              ``MOfsX/Y/Z`` (the motor compensation in use); unit ``mG``
 gyroscope    ``IMU``: ``GyrX/Y/Z`` (rad/s, body frame)
 attitude     ``ATT``: ``Roll, Pitch, Yaw`` (degrees; ``Z-Y-X`` Euler angles, body -> NED),
-             interpolated at the readings (:func:`magexp.core.readers.attitude_at`)
+             interpolated at the readings (:func:`magexp.core.readers._logs.attitude_at`)
 position     ``GPS``: ``Lat, Lng`` (degrees), ``Alt`` (m above sea level), fixes with ``Status >= 3``;
              the date from ``GWk`` and ``GMS`` (GPS week and milliseconds; the leap seconds are
              ignored: the date is what the field model needs)
@@ -54,10 +54,16 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
-                                 navigation_angles, need, place)
+from magexp.core.readers._logs import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
+                                       navigation_angles, need, place)
 from magexp.errors import MagexpError
 from magexp.core.recording import Recording
+
+NAME = "dataflash"
+PRIORITY = 20
+SUFFIXES = (".bin",)
+UNIT = "mG (milligauss), fixed by the format"
+EXTRA = "dataflash"
 
 #: ``struct`` codes of DataFlash fields -> numpy dtypes (little-endian, packed)
 DTYPES = {"b": "i1", "B": "u1", "h": "<i2", "H": "<u2", "i": "<i4", "I": "<u4", "q": "<i8", "Q": "<u8",
@@ -353,3 +359,7 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
     meta.update(_gps(gps))
     return log_recording(Path(path), readings=raw, unit="mG", times=times, angles=angles, gyro=gyro, meta=meta,
                          mag_axes=mag_axes, gyro_axes=gyro_axes, logged=logged if undo else None)
+
+
+#: the format's reader, by the name every format module gives it
+read = read_dataflash

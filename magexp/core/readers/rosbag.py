@@ -41,9 +41,21 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.datafiles import BAG_MARKER
-from magexp.core.readers import check_count, log_recording, log_unit, navigation_angles, need, place
+from magexp.core.readers._logs import check_count, log_recording, log_unit, navigation_angles, need, place
 from magexp.errors import MagexpError
 from magexp.core.recording import Recording
+
+NAME = "rosbag"
+PRIORITY = 30
+SUFFIXES = (".bag", ".mcap", ".db3")
+UNIT = "uT (read from tesla), fixed by the format"
+EXTRA = "ros"
+
+
+def claims(path: Path) -> bool:
+    """A folder holding ``metadata.yaml`` (a ROS 2 bag)."""
+    return path.is_dir() and (path / BAG_MARKER).is_file()
+
 
 MAG, IMU, FIX = "sensor_msgs/msg/MagneticField", "sensor_msgs/msg/Imu", "sensor_msgs/msg/NavSatFix"
 #: tesla -> µT
@@ -291,3 +303,7 @@ def _imu_streams(imu, imus, t0: float, times: np.ndarray, meta: dict):
         angles = navigation_angles(imu[0][has_orientation] - t0, xyzw[:, [3, 0, 1, 2]], times, enu=True)
         meta["attitude"] = f"{imus[0].topic} orientation (body -> ENU, converted to NED)"
     return angles, (imu[0] - t0, imu[1]["angular_velocity"])
+
+
+#: the format's reader, by the name every format module gives it
+read = read_rosbag

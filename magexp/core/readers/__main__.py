@@ -1,0 +1,8 @@
+"""``python -m magexp.core.readers``: rewrite the table of formats in docs/calibrate.md from the format modules."""
+
+from magexp.core.readers import with_docs_section
+from magexp.paths import ROOT
+
+if __name__ == "__main__":
+    page = ROOT / "docs" / "calibrate.md"
+    page.write_text(with_docs_section(page.read_text()))
