@@ -285,7 +285,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.geometry import axis_map
-from magexp.core.readers._text import read_lines
+from magexp.core.textfiles import read_lines
 from magexp.core.recording import Recording, check_unit
 from magexp.errors import MagexpError
 

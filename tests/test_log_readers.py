@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from magexp.calibration.command import main as calibrate_main
-from magexp.core.readers._logs import angles_from_attitude, attitude_at, euler_quaternions
+from magexp.core.logfiles import angles_from_attitude, attitude_at, euler_quaternions
 from magexp.errors import MagexpError
 from magexp.core.geometry import quat_to_matrix, random_rotations, rotation_angle, ship_attitude
 from magexp.paths import SHARED_DATA

@@ -20,7 +20,7 @@ from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
 from magexp.core.limits import check_limits
 from magexp.core.recording import Recording, check_unit
-from magexp.core.readers._text import check_unique
+from magexp.core.textfiles import check_unique
 from magexp.core.readers.header_row import MAG_COLUMNS
 from magexp.core.recordings import load_recording, resolve
 from magexp.core.seeding import run_generators

@@ -1,7 +1,8 @@
 """Recording formats: one module per format in this package, found by listing it (as the artifact kinds
-are, :mod:`magexp.artifacts.kinds`). Modules whose name starts with ``_`` are helpers, not formats:
-:mod:`~magexp.core.readers._text` (the parsing the text formats share) and :mod:`~magexp.core.readers._logs`
-(what the flight and robot logs' readers share).
+are, :mod:`magexp.artifacts.kinds`): every module here whose name does not start with ``_`` is a format
+(``__main__`` writes the docs' table). What formats share lives beside the package, not in it:
+:mod:`magexp.core.textfiles` (the parsing the text formats share) and :mod:`magexp.core.logfiles` (what
+the flight and robot logs' readers share).
 
 A format module holds all of its format:
 

@@ -15,7 +15,7 @@ magnetometer ``MAG``: ``MagX/Y/Z`` (mGauss, body frame), ``OfsX/Y/Z`` (the offse
              ``MOfsX/Y/Z`` (the motor compensation in use); unit ``mG``
 gyroscope    ``IMU``: ``GyrX/Y/Z`` (rad/s, body frame)
 attitude     ``ATT``: ``Roll, Pitch, Yaw`` (degrees; ``Z-Y-X`` Euler angles, body -> NED),
-             interpolated at the readings (:func:`magexp.core.readers._logs.attitude_at`)
+             interpolated at the readings (:func:`magexp.core.logfiles.attitude_at`)
 position     ``GPS``: ``Lat, Lng`` (degrees), ``Alt`` (m above sea level), fixes with ``Status >= 3``;
              the date from ``GWk`` and ``GMS`` (GPS week and milliseconds; the leap seconds are
              ignored: the date is what the field model needs)
@@ -54,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers._logs import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
+from magexp.core.logfiles import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
                                        navigation_angles, need, place)
 from magexp.errors import MagexpError
 from magexp.core.recording import Recording

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.geometry import axis_map
-from magexp.core.readers._text import (GYRO, GYRO_UNITS, RATE_SUFFIX, UNIT_SUFFIX, check_unique, numeric_table,
+from magexp.core.textfiles import (GYRO, GYRO_UNITS, RATE_SUFFIX, UNIT_SUFFIX, check_unique, numeric_table,
                                        read_lines, same_unit, to_rad_s)
 from magexp.core.recording import RAW_UNITS, UNITS, Recording, check_unit
 from magexp.errors import MagexpError, excerpt

@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers._text import GYRO, GYRO_UNITS, check_unique, number, read_lines
+from magexp.core.textfiles import GYRO, GYRO_UNITS, check_unique, number, read_lines
 from magexp.core.recording import Recording, check_unit
 from magexp.errors import MagexpError, excerpt
 

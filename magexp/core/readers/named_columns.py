@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.geometry import axis_map
-from magexp.core.readers._text import GYRO_UNITS, check_unique, numeric_table, read_lines, same_unit, to_rad_s
+from magexp.core.textfiles import GYRO_UNITS, check_unique, numeric_table, read_lines, same_unit, to_rad_s
 from magexp.core.recording import Recording, check_unit
 from magexp.errors import MagexpError
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.geometry import axis_map
-from magexp.core.readers._text import number, read_lines
+from magexp.core.textfiles import number, read_lines
 from magexp.core.recording import UNITS, Recording, check_unit
 from magexp.errors import LARGEST, MagexpError
 

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.datafiles import BAG_MARKER
-from magexp.core.readers._logs import check_count, log_recording, log_unit, navigation_angles, need, place
+from magexp.core.logfiles import check_count, log_recording, log_unit, navigation_angles, need, place
 from magexp.errors import MagexpError
 from magexp.core.recording import Recording
 

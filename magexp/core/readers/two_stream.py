@@ -17,7 +17,7 @@ import numpy as np
 
 from magexp.core.datafiles import TWO_STREAM
 from magexp.core.geometry import axis_map
-from magexp.core.readers._text import RATE_SUFFIX, UNIT_SUFFIX, check_unique, numeric_table, read_lines, same_unit, to_rad_s
+from magexp.core.textfiles import RATE_SUFFIX, UNIT_SUFFIX, check_unique, numeric_table, read_lines, same_unit, to_rad_s
 from magexp.core.recording import Recording
 from magexp.errors import MagexpError, excerpt
 

@@ -17,7 +17,7 @@ magnetometer       the one with most samples of ``vehicle_magnetometer.magnetome
 gyroscope          ``sensor_combined.gyro_rad[0..2]`` (rad/s, body frame), else
                    ``vehicle_angular_velocity.xyz[0..2]``
 attitude           ``vehicle_attitude.q[0..3]`` (``w, x, y, z``, body FRD -> NED), interpolated at the
-                   readings (:func:`magexp.core.readers._logs.attitude_at`)
+                   readings (:func:`magexp.core.logfiles.attitude_at`)
 position, date     ``vehicle_gps_position`` or ``sensor_gps``: ``lat``/``lon`` (1e-7 degrees) or
                    ``latitude_deg``/``longitude_deg``; ``alt`` (mm) or ``altitude_msl_m``; the fixes
                    with ``fix_type >= 3``; the date from ``time_utc_usec``
@@ -55,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers._logs import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
+from magexp.core.logfiles import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
                                        navigation_angles, need, place)
 from magexp.errors import MagexpError
 from magexp.core.geometry import quat_to_matrix
@@ -284,7 +284,7 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
     -------
     Recording
         The readings (gauss) at their times, the attitude angles, the gyroscope, the GPS place and date, and
-        the undone calibration in ``meta`` (``onboard_rotation``: :func:`magexp.core.readers._logs.onboard_rotation_of`).
+        the undone calibration in ``meta`` (``onboard_rotation``: :func:`magexp.core.logfiles.onboard_rotation_of`).
     """
     name = Path(path).name
     core = need("pyulog.core", f"{name} (a PX4 ULog)")

@@ -1,4 +1,4 @@
-"""The parsing the text formats share (a helper module of :mod:`magexp.core.readers`, not a format): their
+"""The parsing the text formats of :mod:`magexp.core.readers` share (a helper, not a format): their
 lines read (:func:`read_lines`), numbers checked (:func:`number`, :func:`numeric_table`), column names and
 units checked, with one-line errors naming the file, the line and the fault.
 """

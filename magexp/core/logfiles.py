@@ -1,4 +1,4 @@
-"""Readers of the flight and robot logs users have: PX4 ULog, ArduPilot DataFlash, ROS 1/2 bags and MCAP.
+"""What the readers of the flight and robot logs users have share (PX4 ULog, ArduPilot DataFlash, ROS 1/2 bags, MCAP).
 
 Each reader returns a :class:`magexp.core.recording.Recording` (the structure every other magexp
 recording uses) with, on one clock:
