@@ -149,9 +149,11 @@ def test_the_formats_tables_are_the_modules():
     written from the format modules (python -m magexp.core.readers), listed in the order ``auto`` tries them."""
     from magexp.calibration.options import CONFIG, help_text
     from magexp.core import readers
+    from magexp.core.generated import with_section
 
     page = (ROOT / "docs" / "calibrate.md").read_text()
-    assert readers.with_docs_section(page) == page, "docs/calibrate.md: run python -m magexp.core.readers"
+    assert with_section(page, readers.BEGIN, readers.END, readers.docs_section()) == page, \
+        "docs/calibrate.md: run python -m magexp.core.readers"
     rows = [line for line in page.splitlines() if line.startswith("| `")]
     shown = [line.split("`")[1] for line in rows if line.split("`")[1] in readers.names()]
     assert shown == list(readers.names())

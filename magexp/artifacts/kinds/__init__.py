@@ -56,6 +56,7 @@ import importlib
 import pkgutil
 
 from magexp.artifacts.schema import build
+from magexp.core.generated import with_section
 from magexp.errors import MagexpError
 
 #: old plot keys, still read: each becomes its canonical key at load
@@ -195,7 +196,4 @@ def with_docs_section(text: str) -> str:
     str
         The page with the current table of kinds.
     """
-    if text.count(BEGIN) != 1 or text.count(END) != 1:
-        raise MagexpError(f"the page must hold the lines {BEGIN!r} and {END!r} once each")
-    head, rest = text.split(BEGIN)
-    return head + docs_section() + rest.split(END, 1)[1]
+    return with_section(text, BEGIN, END, docs_section())

@@ -245,7 +245,8 @@ def detection(module) -> str:
 
 
 def docs_section() -> str:
-    """The generated part of docs/calibrate.md: one row per format, in the order ``auto`` tries them.
+    """The generated part of docs/calibrate.md (between :data:`BEGIN` and :data:`END`, rewritten by
+    :func:`magexp.core.generated.with_section`): one row per format, in the order ``auto`` tries them.
 
     Returns
     -------
@@ -259,22 +260,3 @@ def docs_section() -> str:
         extra = f"`pip install 'magexp[{m.EXTRA}]'`" if m.EXTRA else ""
         lines.append(f"| `{m.NAME}` | {summary(m)} | {detection(m)} | {m.UNIT} | {extra} |")
     return "\n".join(lines + [END])
-
-
-def with_docs_section(text: str) -> str:
-    """``text`` (docs/calibrate.md) with its generated section replaced by :func:`docs_section`.
-
-    Parameters
-    ----------
-    text : str
-        The page, holding :data:`BEGIN` and :data:`END` once each.
-
-    Returns
-    -------
-    str
-        The page with the current table of formats.
-    """
-    if text.count(BEGIN) != 1 or text.count(END) != 1:
-        raise MagexpError(f"the page must hold the lines {BEGIN!r} and {END!r} once each")
-    head, rest = text.split(BEGIN)
-    return head + docs_section() + rest.split(END, 1)[1]
