@@ -296,6 +296,8 @@ PRIORITY = 55
 SUFFIXES = (".toy",)
 UNIT = "its first line's"
 EXTRA = None
+BINARY = False
+READ_MEMORY = 80
 
 
 def sniff(head: list[str]) -> bool:

@@ -16,6 +16,9 @@ A format module holds all of its format:
 * ``FALLBACK = True``, on one format only: a text file nothing claims is read as that format;
 * ``UNIT``: where its readings' unit comes from (one line); ``EXTRA``: the ``pip install 'magexp[<extra>]'``
   its reader needs, or None;
+* ``BINARY``: its files are bytes, not lines (the file gate, :mod:`magexp.run.files`, checks no line length);
+  ``READ_MEMORY``: the most memory its reader holds, in bytes a byte of the file (the gate refuses a file
+  whose reading would pass the memory limit; ``tests/test_file_gate.py`` measures the readers);
 * ``read(path, *, unit=None, mag_axes=None, gyro_axes=None)``: the :class:`~magexp.core.recording.Recording`
   of the file (a format may take more keyword options: ``instance`` of ``dataflash``).
 

@@ -64,6 +64,8 @@ PRIORITY = 20
 SUFFIXES = (".bin",)
 UNIT = "mG (milligauss), fixed by the format"
 EXTRA = "dataflash"
+BINARY = True
+READ_MEMORY = 32
 
 #: ``struct`` codes of DataFlash fields -> numpy dtypes (little-endian, packed)
 DTYPES = {"b": "i1", "B": "u1", "h": "<i2", "H": "<u2", "i": "<i4", "I": "<u4", "q": "<i8", "Q": "<u8",

@@ -19,6 +19,8 @@ PRIORITY = 60
 SUFFIXES = ()
 UNIT = "`counts`, or `data.unit`"
 EXTRA = None
+BINARY = False
+READ_MEMORY = 80
 
 
 def sniff(head: list[str]) -> bool:

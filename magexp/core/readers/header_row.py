@@ -26,6 +26,8 @@ PRIORITY = 80
 SUFFIXES = ()
 UNIT = "the magnetometer columns' suffix (`mx_uT`), else `data.unit`"
 EXTRA = None
+BINARY = False
+READ_MEMORY = 80
 #: the magnetometer columns a header row may name, first found used (:func:`read_header_row`; a DataFrame's too)
 MAG_COLUMNS = (("bx", "by", "bz"), ("mx", "my", "mz"), ("x", "y", "z"))
 #: the names of a header row's time column (seconds)

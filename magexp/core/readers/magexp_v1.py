@@ -61,6 +61,8 @@ PRIORITY = 50
 SUFFIXES = ()
 UNIT = "its `# unit:` line (default nT)"
 EXTRA = None
+BINARY = False
+READ_MEMORY = 80
 #: a text file no other format claims is read as this format (its reader then names what is wrong)
 FALLBACK = True
 #: the first line of every file of this format

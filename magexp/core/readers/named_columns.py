@@ -20,6 +20,8 @@ PRIORITY = 70
 SUFFIXES = ()
 UNIT = "the magnetometer columns' names (`Magnetometer X (uT)`)"
 EXTRA = None
+BINARY = False
+READ_MEMORY = 80
 #: a ``named-columns`` column: ``<Sensor> <X|Y|Z> (<unit>)``
 NAMED = re.compile(r"^\s*(\w+)\s+([xyz])\s*\((.+)\)\s*$", re.IGNORECASE)
 

@@ -21,6 +21,8 @@ PRIORITY = 90
 SUFFIXES = ()
 UNIT = "`data.unit` (required)"
 EXTRA = None
+BINARY = False
+READ_MEMORY = 16
 
 
 def split(line: str) -> list[str]:

@@ -50,6 +50,8 @@ PRIORITY = 30
 SUFFIXES = (".bag", ".mcap", ".db3")
 UNIT = "uT (read from tesla), fixed by the format"
 EXTRA = "ros"
+BINARY = True
+READ_MEMORY = 32
 
 
 def claims(path: Path) -> bool:

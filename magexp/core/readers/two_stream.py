@@ -26,6 +26,8 @@ PRIORITY = 40
 SUFFIXES = ()
 UNIT = "the magnetometer columns' suffix (`mx_uT`)"
 EXTRA = None
+BINARY = False
+READ_MEMORY = 80
 
 
 def claims(path: Path) -> bool:

@@ -66,6 +66,8 @@ PRIORITY = 10
 SUFFIXES = (".ulg",)
 UNIT = "G (gauss), fixed by the format"
 EXTRA = "ulog"
+BINARY = True
+READ_MEMORY = 8
 
 #: the topics read (pyulog loads only these)
 TOPICS = ("vehicle_magnetometer", "sensor_combined", "sensor_mag", "vehicle_attitude", "vehicle_angular_velocity",
