@@ -6,8 +6,8 @@ the flight and robot logs' readers share).
 
 A format module holds all of its format:
 
-* its first docstring line: what it reads (``magexp calibrate --help`` and the table of formats in
-  ``docs/calibrate.md`` are generated from it, :func:`docs_section`), the rest of the docstring the details;
+* its docstring's first paragraph: what it reads (``magexp calibrate --help`` and the table of formats in
+  ``docs/calibrate.md`` are generated from it, :func:`summary`, :func:`docs_section`), the rest the details;
 * ``NAME``: its ``data.format`` value;
 * ``PRIORITY``: where ``data.format=auto`` tries it (lower first; the formats are listed in this order);
 * ``SUFFIXES``: the file name endings that make a file this format (lower case, ``()`` for none);
