@@ -138,6 +138,7 @@ def angles_from_attitude(a: np.ndarray) -> np.ndarray:
 
 
 def _unit_quaternions(q: np.ndarray) -> np.ndarray:
+    """``q`` normalised to unit quaternions; one line for a zero or non-finite one."""
     q = np.asarray(q, float)
     norm = np.linalg.norm(q, axis=1, keepdims=True)
     if not np.all(norm > 0) or not np.all(np.isfinite(q)):

@@ -67,15 +67,20 @@ def load_recording(path: str | Path, *, unit: str | None = None, format: str = "
 
     Parameters
     ----------
-    path : the file (for ``two-stream``, either file or their common stem); a relative path is
-        looked up from the working folder first, then in ``data/`` (:func:`resolve`).
-    unit : unit of a plain file's readings (required for one); for a file that names its unit it
-        may be left None and must otherwise agree with it.
-    format : a format's name (:func:`magexp.core.readers.names`), or ``auto`` (:func:`detect`).
-    mag_axes, gyro_axes : signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`);
-        None keeps the format's default.
-    instance : the compass (and IMU) instance of a DataFlash log (0: the first; None: 0); the other
-        formats hold one magnetometer and ignore it.
+    path : str or Path
+        The file (for ``two-stream``, either file or their common stem; a ROS 2 bag, its folder); a relative
+        path is looked up from the working folder first, then in ``data/`` (:func:`resolve`).
+    unit : str, optional
+        ``data.unit``: the unit of a file that does not name it (required for a ``plain`` file); for a file
+        that names its unit it may be left None and must otherwise agree with it.
+    format : str
+        A format's name (:func:`magexp.core.readers.names`), or ``auto``: told from the file (:func:`detect`).
+    mag_axes, gyro_axes : str, optional
+        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`); None keeps the
+        format's default.
+    instance : int, optional
+        The compass (and IMU) instance of a DataFlash log (0: the first; None: 0); a format whose reader takes
+        no ``instance`` holds one magnetometer and ignores it.
 
     Returns
     -------

@@ -81,6 +81,7 @@ GPS_EPOCH = _dt.datetime(1980, 1, 6, tzinfo=_dt.timezone.utc)
 
 
 def _dtype(fmt) -> np.dtype:
+    """The numpy dtype of a DataFlash message format ``fmt`` (its ``msg_struct``): decoded by a fixed layout."""
     codes, k = [], 1  # msg_struct is "<" then the codes; a count prefixes the strings ("16s")
     text = fmt.msg_struct
     while k < len(text):
@@ -232,6 +233,7 @@ def undo_correction(mag: dict, params: dict, instance: int) -> tuple[np.ndarray,
 
 
 def _gps(gps: dict | None) -> dict:
+    """The log's place and date from its ``GPS`` messages with a 3D fix (:func:`magexp.core.logfiles.place`), {} without."""
     if gps is None:
         return {}
     fix = np.asarray(gps.get("Status", np.full(len(gps["Lat"]), 3))) >= 3
@@ -313,11 +315,13 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
 
     Parameters
     ----------
-    path : the ``.bin`` file.
-    unit : must be None or ``mG`` (DataFlash ``MAG`` is in mGauss).
-    mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    instance : the compass and IMU instance (0: the first).
-    undo : undo the onboard correction (default); False keeps ``MagX/Y/Z`` as logged.
+    path, unit, mag_axes, gyro_axes
+        As ``read`` of every format (:mod:`magexp.core.readers`): ``path`` the ``.bin`` file; ``unit`` None or
+        ``mG`` (DataFlash ``MAG`` is in mGauss).
+    instance : int
+        The compass and IMU instance (0: the first).
+    undo : bool
+        Undo the onboard correction (default); False keeps ``MagX/Y/Z`` as logged.
 
     Returns
     -------

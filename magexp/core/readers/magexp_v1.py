@@ -84,6 +84,7 @@ def read(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
 
 
 def _header(lines: list[str], name: str) -> tuple[dict, int]:
+    """The ``# key: value`` metadata and the index of the first line after it; one line if line 1 is not the version line."""
     if not lines or lines[0].strip() != VERSION_LINE:
         first = lines[0].rstrip("\r\n") if lines else ""
         col = len(os.path.commonprefix([first, VERSION_LINE])) + 1  # where it departs from the version line
@@ -100,6 +101,7 @@ def _header(lines: list[str], name: str) -> tuple[dict, int]:
 
 
 def _field(meta: dict, name: str) -> np.ndarray | None:
+    """The ``# field:`` vector (three numbers), or None without the line."""
     if "field" not in meta:
         return None
     parts = meta["field"].split(",")
@@ -109,6 +111,7 @@ def _field(meta: dict, name: str) -> np.ndarray | None:
 
 
 def _choice(meta: dict, key: str, allowed: tuple[str, ...], name: str) -> str:
+    """The ``# <key>:`` value (default: the first of ``allowed``), one of ``allowed``, else one line."""
     value = meta.get(key, allowed[0])
     if value not in allowed:
         raise MagexpError(f"{name}: {key}={value!r} is not allowed: choose one of {', '.join(allowed)}")
@@ -150,6 +153,7 @@ def _csv_table(lines: list[str], name: str, first_line: int) -> tuple[list[str],
 
 
 def _versioned(lines: list[str], name: str, unit: str | None) -> Recording:
+    """The Recording of a ``magexp-recording v1`` file's ``lines`` (module docstring)."""
     meta, start = _header(lines, name)
     file_unit = _file_unit(meta, name, unit)
     angle_unit = _choice(meta, "angles", ANGLE_UNITS, name)

@@ -101,6 +101,7 @@ def _plain_values(path: Path) -> np.ndarray | None:
 
 
 def _plain_table(lines: list[str], name: str) -> np.ndarray:
+    """The ``(N, 3)`` values read line by line: the slow path, which names the first bad line."""
     values = []
     for k, line in enumerate(lines, start=1):
         cells = split(line)

@@ -134,6 +134,7 @@ class Messages:
         return self.buf[at[:, None] + np.arange(dt.itemsize * count)].view(dt)
 
     def skip_string(self) -> None:
+        """Step over a CDR string field (its length, then its bytes) of every message."""
         n = self.read("<u4")[:, 0].astype(np.int64)
         if np.any(self.start + self.pos + n > self.end):
             raise LayoutError("a string longer than the message")
@@ -245,10 +246,11 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
 
     Parameters
     ----------
-    path : the ``.bag`` / ``.mcap`` / ``.db3`` file, or a ROS 2 bag folder.
-    unit : must be None or ``uT`` (the tesla of ``MagneticField`` are read as µT).
-    mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    topic : the ``MagneticField`` topic (None: the one with most messages).
+    path, unit, mag_axes, gyro_axes
+        As ``read`` of every format (:mod:`magexp.core.readers`): ``path`` the ``.bag`` / ``.mcap`` / ``.db3``
+        file, or a ROS 2 bag folder; ``unit`` None or ``uT`` (the tesla of ``MagneticField`` are read as µT).
+    topic : str, optional
+        The ``MagneticField`` topic (None: the one with most messages).
 
     Returns
     -------

@@ -87,6 +87,7 @@ ROTATIONS = ((0, 0, 0), (0, 0, 45), (0, 0, 90), (0, 0, 135), (0, 0, 180), (0, 0,
 
 
 def _columns(data: dict, names: list[str]) -> np.ndarray:
+    """The fields ``names`` of a ULog dataset's ``data``, stacked as float columns."""
     return np.column_stack([np.asarray(data[n], float) for n in names])
 
 
@@ -99,6 +100,7 @@ def _version(ulog) -> tuple[int, int] | None:
 
 
 def _dataset(ulog, name: str, multi_id: int = 0):
+    """The dataset of topic ``name`` (instance ``multi_id``), or None when not logged."""
     return next((d for d in ulog.data_list if d.name == name and d.multi_id == multi_id), None)
 
 
@@ -125,6 +127,7 @@ def _candidates(ulog, prime: int | None) -> list[tuple[str, np.ndarray, np.ndarr
 
 
 def _slot(params: dict, device: int | None, name: str) -> int:
+    """The ``CAL_MAGn`` slot calibrating the magnetometer ``device``, else one line naming what to do."""
     slots = [n for n in range(4) if device is not None and params.get(f"CAL_MAG{n}_ID") == device]
     if not slots:
         raise MagexpError(f"{name}: the magnetometer (device id {'unknown' if device is None else device}) has no CAL_MAGn_ID in the log's parameters: "
@@ -247,6 +250,7 @@ def undo_calibration(ulog, topic: str, device: int | None, readings: np.ndarray,
 
 
 def _gps(ulog) -> dict:
+    """The log's place and date from its GPS topic (:func:`magexp.core.logfiles.place`), {} without."""
     d = _dataset(ulog, "vehicle_gps_position") or _dataset(ulog, "sensor_gps")
     if d is None:
         return {}
@@ -263,6 +267,7 @@ def _gps(ulog) -> dict:
 
 
 def _gyro(ulog, t0: int) -> tuple | None:
+    """``(times s, rates rad/s)`` of the gyroscope from ``t0`` (µs), or None when not logged."""
     sc = _dataset(ulog, "sensor_combined")
     if sc is not None and "gyro_rad[0]" in sc.data:
         return (np.asarray(sc.data["timestamp"], np.int64) - t0) / 1e6, _columns(sc.data, [f"gyro_rad[{i}]" for i in range(3)])
@@ -277,10 +282,11 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
 
     Parameters
     ----------
-    path : the ``.ulg`` file.
-    unit : must be None or ``G`` (ULog magnetometer topics are in gauss).
-    mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    undo : undo the onboard calibration (default); False keeps the readings as logged.
+    path, unit, mag_axes, gyro_axes
+        As ``read`` of every format (:mod:`magexp.core.readers`): ``path`` the ``.ulg`` file; ``unit`` None or
+        ``G`` (ULog magnetometer topics are in gauss).
+    undo : bool
+        Undo the onboard calibration (default); False keeps the readings as logged.
 
     Returns
     -------
