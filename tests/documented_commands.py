@@ -204,6 +204,8 @@ COMMANDS: dict[str, tuple] = {
     "python -m magexp.perf.bench --help": (RUN_FULL, "prints the options (two interpreters: one BLAS thread)"),
     "python -m magexp.artifacts.kinds": (RUN_FULL, "rewrites the table of kinds in docs/extending.md (the same "
                                          "bytes when current, which test_extending checks)"),
+    "python -m magexp.core.readers": (RUN_FULL, "rewrites the table of formats in docs/calibrate.md (the same "
+                                      "bytes when current, which test_extending checks)"),
     "python -m magexp.perf.warmup": (RUN_FULL, "the kernels compiled once (make venv)"),
     "python -m magexp.perf.autocost": (RUN_FULL, "auto beside full on every shared recording with a gyroscope: 80 s",
                                        {"shared": True}),

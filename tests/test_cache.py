@@ -492,7 +492,7 @@ def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sour
             "dataflash": reading(lm, tmp_path / "c.bin"), "plain": reading(lm, tmp_path / "d.txt"),
             "ros2 bag": reading(lm, bag),
             "simulated": lm, "ding": keyed["ding2024_exp1", "pso"]}
-    imported = {m for m in sys.modules if m.startswith("magexp.core.readers")}
+    imported = {m for m in sys.modules if m.split(".")[0] in ("pyulog", "pymavlink", "rosbags")}
     assert "magexp.core.readers.ulog.read_ulog" in cache.run_targets(runs["named ulog"])  # the format named wins
     before = keys_of(runs)
     (sources / "magexp/core/readers/new.py").write_text('"""A reader of a new format."""\n')
@@ -506,9 +506,11 @@ def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sour
     assert changed(again, again := keys_of(runs)) == {"ros2 bag"}
     (bag / "bag_0.db3").write_bytes(b"SQLite format 3\x00\x01")
     assert changed(again, again := keys_of(runs)) == {"ros2 bag"}  # a bag folder's files are its data
+    code_edit(sources / "magexp/core/logfiles.py")
+    assert changed(again, again := keys_of(runs)) == {"ulog", "named ulog", "dataflash", "ros2 bag"}  # what they import
     code_edit(sources / "magexp/core/readers/__init__.py")
-    assert changed(again, keys_of(runs)) == {"ulog", "named ulog", "dataflash", "ros2 bag"}  # what they all import
-    assert {m for m in sys.modules if m.startswith("magexp.core.readers")} == imported  # named, never imported
+    assert changed(again, keys_of(runs)) == {"ulog", "named ulog", "dataflash", "plain", "ros2 bag"}  # the registry
+    assert {m for m in sys.modules if m.split(".")[0] in ("pyulog", "pymavlink", "rosbags")} == imported  # never read
 
 
 def test_a_recording_of_the_shared_data_folder_is_keyed_by_its_content(tmp_path, monkeypatch):

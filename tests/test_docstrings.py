@@ -73,7 +73,7 @@ PUBLIC = _public_api()
 #: protocol implementations (issue 42): functions that every module of a package defines with one
 #: signature, documented once, in full, by the package's docstring (its sections "Parameters of ``name``"
 #: and "Returns of ``name``"); an implementation needs only a first line saying what it does
-PROTOCOLS = {"artifacts/kinds": ("table", "draw")}
+PROTOCOLS = {"artifacts/kinds": ("table", "draw"), "core/readers": ("read", "claims", "sniff")}
 
 
 def sections(doc: str) -> dict[str, list[str]]:

@@ -144,6 +144,52 @@ def test_adding_a_kind_is_adding_one_module(tmp_path):
     assert checks.returncode == 0, checks.stdout[-3000:]
 
 
+def test_the_formats_tables_are_the_modules():
+    """The table of formats in docs/calibrate.md, ``magexp calibrate --help`` and conf/calibrate.yaml are
+    written from the format modules (python -m magexp.core.readers), listed in the order ``auto`` tries them."""
+    from magexp.calibration.options import CONFIG, help_text
+    from magexp.core import readers
+    from magexp.core.generated import with_section
+
+    page = (ROOT / "docs" / "calibrate.md").read_text()
+    assert with_section(page, readers.BEGIN, readers.END, readers.docs_section()) == page, \
+        "docs/calibrate.md: run python -m magexp.core.readers"
+    rows = [line for line in page.splitlines() if line.startswith("| `")]
+    shown = [line.split("`")[1] for line in rows if line.split("`")[1] in readers.names()]
+    assert shown == list(readers.names())
+    listed = [line.split()[0] for line in help_text().split("in the order auto tries them):\n")[1].splitlines()
+              if line.startswith("  ") and not line.startswith("   ")]
+    assert listed == list(readers.names())
+    assert not any(name in CONFIG.read_text() for name in ("magexp-v1", "named-columns", "header-counts"))
+    assert [m.NAME for m in readers.formats() if getattr(m, "FALLBACK", False)] == ["magexp-v1"]
+    assert all(m.__name__.rpartition(".")[2] == m.NAME.replace("-", "_") for m in readers.formats())
+
+
+@pytest.mark.full
+def test_adding_a_format_is_adding_one_module(tmp_path):
+    """A module dropped into magexp/core/readers/ of a copy is a format: listed in its place, detected by its
+    suffix and by its first line, read by load_recording, in the docs' table and --help, and every
+    architecture and docstring test of the copy passes."""
+    root = tmp_path / "repo"
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for folder in ("magexp", "tests", "hydra_plugins", "conf", "docs"):
+        if (ROOT / folder).exists():
+            shutil.copytree(ROOT / folder, root / folder, ignore=ignore)
+    (root / "magexp" / "core" / "readers" / "toy.py").write_text(TOY_FORMAT.lstrip())
+    toy_recording(tmp_path / "turns.toy")
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    found = subprocess.run([sys.executable, "-c", ADDED_FORMAT, str(tmp_path / "turns.toy")], cwd=root, env=env,
+                           capture_output=True, text=True, timeout=120)
+    assert found.returncode == 0, found.stderr
+    row, helped = found.stdout.splitlines()
+    assert row.startswith("| `toy` | A toy format") and "`.toy`; the first line starts with `TOY`" in row, row
+    assert helped.split()[:3] == ["toy", "A", "toy"], helped
+    checks = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:randomly", "-p", "no:cacheprovider",
+                             "tests/test_architecture.py", "tests/test_docstrings.py"],
+                            cwd=root, env=env, capture_output=True, text=True, timeout=300)
+    assert checks.returncode == 0, checks.stdout[-3000:]
+
+
 # -- following the page in a copy of the repository ----------------------------------------------------
 
 TOY_ESTIMATOR = '''
@@ -231,22 +277,64 @@ summarise: [{quantity: final_rms, metric: fun}]
 caption: "Median over {seeds} seeds."
 """
 
-TOY_READER = '''
+TOY_FORMAT = '''
+"""A toy format (docs/extending.md, "Add a recording format"): a line ``TOY <unit>``, then ``x;y;z`` lines."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from magexp.core.geometry import axis_map
+from magexp.core.textfiles import read_lines
+from magexp.core.recording import Recording, check_unit
+from magexp.errors import MagexpError
+
+NAME = "toy"
+PRIORITY = 55
+SUFFIXES = (".toy",)
+UNIT = "its first line's"
+EXTRA = None
+BINARY = False
+READ_MEMORY = 80
 
 
-def read_toy(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
-    """A toy format (docs/extending.md, "Add a recording format"): a line ``TOY <unit>``, then ``x;y;z`` lines."""
-    lines = Path(path).read_text().splitlines()
+def sniff(head: list[str]) -> bool:
+    """The first line starts with ``TOY``."""
+    return head[0].startswith("TOY ")
+
+
+def read(path: Path, *, unit=None, mag_axes=None, gyro_axes=None) -> Recording:
+    """The readings, in the first line's unit."""
+    lines = read_lines(path)
     if not lines or not lines[0].startswith("TOY "):
-        raise MagexpError(f"{Path(path).name}: line 1: not a toy recording (it must begin with TOY <unit>)")
+        raise MagexpError(f"{path.name}: line 1: not a toy recording (it must begin with TOY <unit>)")
     rows = []
     for number, line in enumerate(lines[1:], start=2):
         try:
             rows.append([float(v) for v in line.split(";")])
         except ValueError:
-            raise MagexpError(f"{Path(path).name}: line {number}: {line!r} is not x;y;z") from None
+            raise MagexpError(f"{path.name}: line {number}: {line!r} is not x;y;z") from None
     return Recording(readings=np.array(rows) @ axis_map(mag_axes).T, angles=None, field=None,
                      unit=check_unit(lines[0].split()[1], "data.unit"), meta={"format": "toy"})
+'''
+
+ADDED_FORMAT = '''
+import sys
+from pathlib import Path
+from magexp.calibration.options import help_text
+from magexp.core import readers
+from magexp.core.recordings import load_recording
+assert "toy" in readers.names() and readers.names().index("toy") == readers.names().index("magexp-v1") + 1
+path, sniffed = Path(sys.argv[1]), Path(sys.argv[1]).with_suffix(".txt")
+sniffed.write_text(path.read_text())
+assert readers.detect(path) == readers.detect(sniffed) == "toy"  # by its suffix, and by its first line
+assert readers.reader_of(path) == "magexp.core.readers.toy.read"
+rec = load_recording(sniffed)
+assert rec.unit == "uT" and rec.readings.shape == (400, 3) and rec.meta["format"] == "toy"
+print([line for line in readers.docs_section().splitlines() if line.startswith("| `toy` |")][0])
+print([line for line in help_text().splitlines() if line.startswith("  toy ")][0])
 '''
 
 
@@ -281,7 +369,7 @@ def magexp(copy: Path, *args, cwd: Path) -> subprocess.CompletedProcess:
 @pytest.mark.full
 def test_following_extending_adds_an_estimator_a_paper_and_a_reader(copy, tmp_path):
     """One class and one YAML make an estimator (typed, labelled, smoke-sized); a folder of experiments/
-    makes a paper that reproduces; one function and its READERS entry make a format a recorded scenario reads."""
+    makes a paper that reproduces; one module of magexp/core/readers/ makes a format a recorded scenario reads."""
     work = tmp_path / "work"
     work.mkdir()
     (copy / "magexp" / "estimators" / "toy.py").write_text(textwrap.dedent(TOY_ESTIMATOR).lstrip())
@@ -307,12 +395,7 @@ def test_following_extending_adds_an_estimator_a_paper_and_a_reader(copy, tmp_pa
     assert set(runs.estimator) == {"toy", "lm"} and len(runs) == 8
     assert (runs[runs.estimator == "toy"].nfev == 8).all()  # --tiny: the class's smoke size
 
-    with (copy / "magexp" / "core" / "text_readers.py").open("a") as fh:  # step 1: the reader
-        fh.write(TOY_READER)
-    with (copy / "magexp" / "core" / "recordings.py").open("a") as fh:  # step 2: its entries
-        fh.write("\nfrom magexp.core.text_readers import read_toy  # noqa: E402\n\nREADERS['toy'] = read_toy\n")
-    with (copy / "magexp" / "core" / "formats.py").open("a") as fh:
-        fh.write("\nREADER_NAMES['toy'] = 'magexp.core.text_readers.read_toy'\n")
+    (copy / "magexp" / "core" / "readers" / "toy.py").write_text(TOY_FORMAT.lstrip())  # one module
     toy_recording(tmp_path / "turns.toy")
     scenario = (copy / "conf" / "scenario" / "real_qmc5883l.yaml").read_text()
     scenario = re.sub(r"\nname: .*", "\nname: real_toy", scenario)

@@ -1,4 +1,4 @@
-"""The log readers (magexp.core.readers): the real PX4 and ArduPilot samples, the attitude
+"""The log readers (magexp.core.readers: ulog, dataflash, _logs): the real PX4 and ArduPilot samples, the attitude
 conversions, and the one-line refusals (ROS bags: test_rosbag_reader.py)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from magexp.calibration.command import main as calibrate_main
-from magexp.core.readers import angles_from_attitude, attitude_at, euler_quaternions
+from magexp.core.logfiles import angles_from_attitude, attitude_at, euler_quaternions
 from magexp.errors import MagexpError
 from magexp.core.geometry import quat_to_matrix, random_rotations, rotation_angle, ship_attitude
 from magexp.paths import SHARED_DATA

@@ -10,7 +10,8 @@ from magexp.errors import MagexpError
 from magexp.core.geometry import (attitude_at, attitude_with_bias, axis_map, cumulative_product, exp_so3,
                              integrate_rates, preintegrate)
 from magexp.paths import DATA, SHARED_DATA
-from magexp.core.recordings import READERS, detect, load_recording, resolve
+from magexp.core.readers import names
+from magexp.core.recordings import detect, load_recording, resolve
 
 needs_data = pytest.mark.skipif(not SHARED_DATA.is_dir(), reason=f"{SHARED_DATA} is not present")
 
@@ -118,7 +119,7 @@ def test_bad_stream_files_are_one_line(tmp_path, text, message):
 
 def test_unknown_format_is_one_line(tmp_path):
     (tmp_path / "a.txt").write_text("1 2 3\n")
-    with pytest.raises(MagexpError, match="data.format='nope' is not allowed: choose one of auto, " + ", ".join(READERS)):
+    with pytest.raises(MagexpError, match="data.format='nope' is not allowed: choose one of auto, " + ", ".join(names())):
         load_recording(tmp_path / "a.txt", unit="uT", format="nope")
 
 
@@ -146,16 +147,33 @@ def test_rest_recording_gyro_bias_is_a_few_deg_per_second():
     assert 1.0 < np.linalg.norm(bias) < 10.0
 
 
-def test_the_readers_registry_and_the_names_the_cache_keys_on_agree():
-    """:data:`READERS` (the functions) and :data:`magexp.core.formats.READER_NAMES` (what the run cache keys a
-    run on, without importing a reader) name the same function for every format."""
-    from magexp.core.formats import READER_NAMES, reader_of
+def test_the_format_modules_are_the_registry_and_name_the_reader_the_cache_keys_on(tmp_path):
+    """Every module of magexp/core/readers/ not starting with ``_`` is a format (listed in ``PRIORITY`` order),
+    and :func:`magexp.core.readers.reader_of` names its ``read`` (what the run cache keys a run on), a real
+    function; ``auto`` tries the suffixes, then the paths, then the first lines in that order."""
+    import pkgutil
 
-    assert {k: f"{f.__module__}.{f.__qualname__}" for k, f in READERS.items()} == READER_NAMES
-    for name in READER_NAMES.values():  # each name is a real function of a real module
-        module, _, function = name.rpartition(".")
-        assert callable(getattr(__import__(module, fromlist=[function]), function))
-    assert reader_of(Path("x.ulg")) == READER_NAMES["ulog"]
+    from magexp.core import readers
+
+    listed = {m.name for m in pkgutil.iter_modules(readers.__path__) if not m.name.startswith("_")}
+    assert {m.__name__.rpartition(".")[2] for m in readers.formats()} == listed
+    assert [m.PRIORITY for m in readers.formats()] == sorted(m.PRIORITY for m in readers.formats())
+    assert len({m.PRIORITY for m in readers.formats()}) == len(listed)  # no two tried at once
+    for module in readers.formats():
+        assert callable(module.read) and module.NAME in readers.names()
+        name = readers.reader_of(tmp_path / "x", module.NAME)
+        owner, _, function = name.rpartition(".")
+        assert owner == module.__name__ and getattr(module, function) is module.read
+    assert readers.reader_of(Path("x.ulg")) == "magexp.core.readers.ulog.read_ulog"
+    assert readers.by_suffix(Path("a.MCAP")) == "rosbag" and readers.by_suffix(Path("a.csv")) is None
+    for head, fmt in [("# magexp-recording v1\n", "magexp-v1"), ("Fs,100\n", "header-counts"),
+                      ("Time (s),Magnetometer X (uT)\n", "named-columns"), ("t,mx,my,mz\n", "header-row"),
+                      ("1 2 3\n", "plain"), ("hello\n", "magexp-v1"), ("mx_uT,Gyroscope X (deg/s)\n", "named-columns"),
+                      ("fs, x, y, z\n", "header-counts")]:
+        (tmp_path / "r.csv").write_text(head)
+        assert readers.detect(tmp_path / "r.csv") == fmt, head
+    (tmp_path / "x_mag.csv").write_text("1 2 3\n")  # the name wins over the first line
+    assert readers.detect(tmp_path / "x_mag.csv") == readers.detect(tmp_path / "x") == "two-stream"
 
 
 def test_no_reader_imports_the_loader():
@@ -166,8 +184,7 @@ def test_no_reader_imports_the_loader():
     import magexp.core.readers
 
     folder = Path(magexp.core.readers.__file__).parent
-    for path in [*folder.glob("*.py"), folder.parent / "text_readers.py", folder.parent / "recording.py",
-                 folder.parent / "formats.py"]:
+    for path in [*folder.glob("*.py"), folder.parent / "recording.py"]:
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.ImportFrom):
                 assert node.module != "magexp.core.recordings", path

@@ -8,7 +8,7 @@ import functools
 import numpy as np
 import pytest
 
-from magexp.core.readers import NED_TO_ENU
+from magexp.core.logfiles import NED_TO_ENU
 from magexp.errors import MagexpError
 from magexp.core.geometry import random_rotations
 from magexp.core.recordings import load_recording

@@ -20,7 +20,9 @@ from magexp.calibration.options import DEFAULTS, ESTIMATOR
 from magexp.calibration.result import Calibration
 from magexp.core.limits import check_limits
 from magexp.core.recording import Recording, check_unit
-from magexp.core.recordings import MAG_COLUMNS, check_unique, load_recording, resolve
+from magexp.core.textfiles import check_unique
+from magexp.core.readers.header_row import MAG_COLUMNS
+from magexp.core.recordings import load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError
 from magexp.run.keys import check_seed
@@ -31,7 +33,7 @@ from magexp.run.compose import options
 
 def frame_readings(frame) -> np.ndarray:
     """The ``(N, 3)`` readings of a DataFrame: its ``bx, by, bz`` (or ``mx, my, mz``, ``x, y, z``:
-    :data:`~magexp.core.recordings.MAG_COLUMNS`) columns, else its three numeric columns."""
+    :data:`~magexp.core.readers.header_row.MAG_COLUMNS`) columns, else its three numeric columns."""
     cols = [str(c).strip().lower() for c in frame.columns]
     check_unique(cols, "readings")
     pick = next((names for names in MAG_COLUMNS if all(n in cols for n in names)), None)
@@ -108,7 +110,7 @@ def calibrate(readings, *, unit: str | None = None, estimator=ESTIMATOR, objecti
     readings : array_like, DataFrame, str, Path or Recording
         ``(N, 3)`` raw readings, a DataFrame (``bx, by, bz`` / ``mx, my, mz`` / ``x, y, z`` columns, else
         its three numeric columns), a recording's path in any format of
-        :data:`magexp.core.recordings.READERS`, or a loaded :class:`~magexp.core.recording.Recording`.
+        :mod:`magexp.core.readers`, or a loaded :class:`~magexp.core.recording.Recording`.
     unit : str or None
         Unit of an array or DataFrame (``nT, uT, mG, G, T, counts``); of a path, as ``data.unit``.
     estimator : str or estimator

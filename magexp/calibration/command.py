@@ -27,9 +27,9 @@ from magexp.calibration.write import check_out, summary, table, write
 from magexp.core.field_model import check_given, check_model, field_of_recording, place_of
 from magexp.core.recording import UNITS, Recording
 from magexp.core.datafiles import BAG_MARKER
-from magexp.core.formats import LOG_SUFFIXES, detect
+from magexp.core.readers import by_suffix, detect, names
 from magexp.core.geometry import axis_map
-from magexp.core.recordings import READERS, load_recording, resolve
+from magexp.core.recordings import load_recording, resolve
 from magexp.core.seeding import run_generators
 from magexp.errors import MagexpError, check_positive_int, exit_code
 from magexp.problems.kernels import numpy_only
@@ -183,12 +183,12 @@ def unplaced(place: dict, known: dict | None = None) -> str | None:
 
 def check_data_options(cfg, file: Path) -> None:
     """``data.*`` and ``field.*`` checked before the recording ``file`` is read: ``data.format`` a format of
-    :data:`magexp.core.recordings.READERS` (``rosbag``: a bag's file or folder), the axis maps, and a field
+    :mod:`magexp.core.readers` (``rosbag``: a bag's file or folder), the axis maps, and a field
     model's date or longitude only with a place (a recording of a format that cannot carry a GPS place)."""
     data, fmt = cfg.data, cfg.data.get("format") or "auto"
-    if fmt not in ("auto", *READERS):
-        raise MagexpError(f"data.format={fmt!r} is not allowed: choose one of auto, {', '.join(READERS)}")
-    bag = LOG_SUFFIXES.get(file.suffix.lower()) == "rosbag" or (file / BAG_MARKER).is_file()
+    if fmt not in ("auto", *names()):
+        raise MagexpError(f"data.format={fmt!r} is not allowed: choose one of auto, {', '.join(names())}")
+    bag = by_suffix(file) == "rosbag" or (file / BAG_MARKER).is_file()
     if fmt == "rosbag" and not bag:
         raise MagexpError(f"data.format='rosbag' is not allowed for {file.name!r}: a ROS bag is a .bag, .mcap or .db3 "
                           "file or a ROS 2 bag folder (with metadata.yaml); set data.format to the file's format")

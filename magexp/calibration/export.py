@@ -163,7 +163,7 @@ def px4(w, offset, unit: str, *, field_unit=None, counts_nt=None, instance: int 
     ``ODIAG``, ``R`` the board or ``CAL_MAGn_ROT`` rotation (kept: set it as before). From
     ``Rᵀ B = S' (r − o')`` (:func:`to_firmware` of ``Rᵀ W``, gauss): ``OFF = o'``, ``S = S'``.
     ``rotation``: that ``R`` when ``W`` maps the readings into the body frame (a vector calibration
-    of a ULog's readings, :func:`magexp.core.readers.onboard_rotation_of`); None: the identity (a
+    of a ULog's readings: its ``meta['onboard_rotation']``); None: the identity (a
     total-field calibration, or readings in the body frame). ``instance``: the slot ``n`` of
     ``CAL_MAGn_*`` (0-3; keep its ``CAL_MAGn_ID``). ``orient`` (without ``rotation``): ``W``'s rotation
     was determined (:func:`to_firmware`); its standard rotation is written as ``CAL_MAGn_ROT``."""

@@ -3,11 +3,11 @@ standard input, :class:`StdinSource`), how they are cut into lines (:class:`Line
 ``live.max_line`` bytes) and how each line is judged and kept (:class:`StreamFile`).
 
 The stream is one of the text formats :mod:`magexp.core.recordings` reads (told by
-:func:`magexp.core.formats.detect` from its first line, as a file's is): headerless ``x y z`` lines
+:func:`magexp.core.readers.detect` from its first line, as a file's is): headerless ``x y z`` lines
 (``plain``), a header row (``header-row``), ``Fs,``/``mx,my,mz`` lines (``header-counts``), named columns or
 ``magexp-recording v1``. The header lines (every line before the first data row: the metadata, then the row
 that names the columns) are kept as they came; a data row is kept when it holds as many cells as the header
-names (3 for ``plain``), each a finite number (:func:`magexp.core.text_readers.numeric_table`, the readers' own
+names (3 for ``plain``), each a finite number (:func:`magexp.core.textfiles.numeric_table`, the readers' own
 parsing); any other line is *garbage*, counted and named once, never kept. What is kept is written to the
 stream file (``stream.txt``) as it arrives, line for line as received, so that the file the live check reads
 (:mod:`magexp.calibration.live`) and the one ``magexp calibrate data.path=`` reads back are the same.
@@ -20,8 +20,12 @@ import select
 import sys
 from pathlib import Path
 
-from magexp.core.formats import NAMED, VERSION_LINE, detect, header_cells, header_columns, split
-from magexp.core.text_readers import numeric_table
+from magexp.core.readers import detect
+from magexp.core.textfiles import numeric_table
+from magexp.core.readers.header_row import header_cells, header_columns
+from magexp.core.readers.magexp_v1 import VERSION_LINE
+from magexp.core.readers.named_columns import NAMED
+from magexp.core.readers.plain import split
 from magexp.errors import MagexpError, excerpt
 
 #: bytes read from a source at most at a time

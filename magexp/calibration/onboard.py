@@ -1,8 +1,8 @@
 """What a log's firmware already did (issue 33 item 6): the onboard calibration a PX4 ULog or ArduPilot
-DataFlash log carries, which its reader undid (:mod:`magexp.core.readers`), and how good it was.
+DataFlash log carries, which its reader undid (:mod:`magexp.core.logfiles`), and how good it was.
 
 The reader keeps the readings as logged (after the onboard calibration) beside the raw ones (columns
-:data:`magexp.core.readers.LOGGED`). The onboard calibration was fitted before the log was recorded, so every
+:data:`magexp.core.logfiles.LOGGED`). The onboard calibration was fitted before the log was recorded, so every
 reading of the log is held out from it: the spread of the logged magnitudes is its held-out spread, set beside
 the raw readings' spread and magexp's own held-out spread (:func:`magexp.calibration.fit.heldout`). The
 printed report, ``calibration.json`` (``quality.onboard_calibration``) and a refusal say it.
@@ -17,7 +17,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from magexp.core.identifiability import spread
-from magexp.core.readers import LOGGED
+from magexp.core.logfiles import LOGGED
 from magexp.core.recording import Recording
 from magexp.errors import MagexpError
 

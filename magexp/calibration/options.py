@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 from magexp.calibration.checks import GATE
 from magexp.calibration.models import MARGIN
+from magexp.core.readers import formats, names, summary
 
 #: ``live.margin``: the live stop rule's margin on the gate (:mod:`magexp.calibration.live`)
 LIVE_MARGIN = 0.5
@@ -74,10 +75,10 @@ class GateOptions:
 class DataOptions:
     """``data.*``: the recording (:func:`magexp.core.recordings.load_recording`)."""
 
-    path: str | None = option(None, "any format of magexp.core.recordings.READERS (two-stream: either file or their "
+    path: str | None = option(None, "a recording in any format of data.format (two-stream: either file or their "
                                     "stem)")
-    format: str = option("auto", "auto | magexp-v1 | plain | two-stream | named-columns | header-counts | header-row "
-                                 "| ulog | dataflash | rosbag (docs/calibrate.md#file-formats)")
+    format: str = option("auto", "auto (told from the file) or a format's name: magexp calibrate --help lists them "
+                                 "(docs/calibrate.md#file-formats)")
     unit: str | None = option(None, "unit of a file that does not name it (nT | uT | mG | G | T | counts)")
     mag_axes: str | None = option(None, 'signed axis map of the magnetometer onto the body axes, e.g. "-x,y,z" '
                                         "(null: the format's)")
@@ -232,7 +233,7 @@ def yaml_text() -> str:
 
 def help_text(estimators=()) -> str:
     """``magexp calibrate --help``: every key of the schema (dotted), its type, default and sentence, then
-    the estimators to choose from."""
+    the estimators and the recording formats (:mod:`magexp.core.readers`) to choose from."""
     table = [(key, kind, "(group)" if kind == "group" else _yaml_value(default), text)
              for key, kind, default, text in rows()]
     width, kinds = max(len(r[0]) for r in table), max(len(r[1]) for r in table)
@@ -241,7 +242,11 @@ def help_text(estimators=()) -> str:
              f"{'key':<{width}}  {'type':<{kinds}}  default: meaning"]
     lines += [f"{k:<{width}}  {t:<{kinds}}  {v}: {s}" for k, t, v, s in table]
     lines += ["", f"estimator: one of {', '.join(estimators)} (conf/estimator/*.yaml; "
-              "estimator.<option>=... sets its options)"]
+              "estimator.<option>=... sets its options)", "", "data.format: auto, or one of (in the order auto tries them):"]
+    width = max(map(len, names()))
+    for module in formats():
+        lines += textwrap.wrap(summary(module), 118, initial_indent=f"  {module.NAME:<{width}}  ",
+                               subsequent_indent=" " * (width + 4))
     return "\n".join(lines)
 
 

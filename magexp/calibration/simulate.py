@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.atomic import write_text
-from magexp.core.formats import VERSION_LINE
+from magexp.core.readers.magexp_v1 import VERSION_LINE
 from magexp.core.geometry import ship_attitude
 from magexp.core.limits import refuse_over
 from magexp.core.recordings import load_recording

@@ -41,7 +41,7 @@ from magexp.calibration.schema import FORMATS, check_parameters, read_json
 from magexp.core.atomic import _stops_held as stops_held, write_text
 from magexp.core.identifiability import CELLS
 from magexp.run.folders import check_destination, first_missing
-from magexp.core.formats import VERSION_LINE
+from magexp.core.readers.magexp_v1 import VERSION_LINE
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.run.provenance import provenance

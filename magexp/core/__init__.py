@@ -8,9 +8,9 @@ one total-field RMS), :mod:`~magexp.core.outcomes` (what a successful run is, a 
 the search box, the round-off floor),
 :mod:`~magexp.core.bounds` (Cramér-Rao bounds), :mod:`~magexp.core.identifiability` (canonical form,
 standard errors, coverage, spread), :mod:`~magexp.core.ellipsoid` (the algebraic ellipsoid fit),
-:mod:`~magexp.core.recording` (a recording and its Dataset), :mod:`~magexp.core.formats` (format names
-and detection), :mod:`~magexp.core.recordings` (one reader per recording format: :mod:`~magexp.core.text_readers`,
-:mod:`~magexp.core.readers`), :mod:`~magexp.core.datafiles`,
+:mod:`~magexp.core.recording` (a recording and its Dataset), :mod:`~magexp.core.readers` (one module per
+recording format: its name, detection and reader), :mod:`~magexp.core.recordings` (the loader),
+:mod:`~magexp.core.datafiles`,
 :mod:`~magexp.core.atomic` (atomic file writes).
 
 May import: numpy, scipy, omegaconf (a scenario's config node, :mod:`~magexp.core.seeding`), pandas and

@@ -48,7 +48,7 @@ from pathlib import Path
 
 from magexp.core.atomic import write_bytes
 from magexp.core.datafiles import data_files, data_formats
-from magexp.core.formats import reader_of
+from magexp.core.readers import reader_of
 from magexp.paths import CACHE
 from magexp.problems import OBJECTIVES
 from magexp.run.codekey import code_hash, default_objective, source_stamp
@@ -83,7 +83,7 @@ def _targets_in(node, found: set) -> set:
 
 def data_readers(formats: dict) -> set[str]:
     """The readers of a config's data files (``formats``: its :func:`magexp.core.datafiles.data_formats`):
-    the dotted name of the function reading each (:func:`magexp.core.formats.reader_of`) in the
+    the dotted name of the function reading each (:func:`magexp.core.readers.reader_of`) in the
     format named beside it, else in the one detected from its name or first lines. None is imported: a
     log's reader module is imported by name when the log is read."""
     return {reader_of(path, format) for path, format in formats.items()}

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.datafiles import BAG_MARKER, TWO_STREAM
-from magexp.core.formats import LOG_SUFFIXES, detect
+from magexp.core.readers import by_suffix, detect, formats
 from magexp.core.limits import LIMITS, limit, refuse_over, show
 from magexp.errors import MagexpError
 from magexp.run.budget import CALIBRATION_FLOATS_PER_READING, estimate_file_readings
@@ -47,11 +47,11 @@ CHUNK = 1 << 20
 #: the most entries of a folder read as one recording (a ROS 2 bag) the gate looks at
 MAX_ENTRIES = 1000
 #: the formats read as bytes, not lines: no line limit (a ``figure``: a file ``magexp verify`` counts, never reads)
-BINARY_FORMATS = frozenset({*LOG_SUFFIXES.values(), "figure"})
+BINARY_FORMATS = frozenset({*(m.NAME for m in formats() if m.BINARY), "figure"})
 #: the most memory a reader holds above the interpreter, in bytes a byte of the file it reads (measured: module
 #: docstring): the plain reader (blocks parsed by pandas), the other text readers (the file's lines as strings),
 #: the logs' readers, ``json.loads`` of a calibration
-READ_MEMORY = {"plain": 16, "text": 80, "ulog": 8, "dataflash": 32, "rosbag": 32, "json": 32, "figure": 0}
+READ_MEMORY = {"text": 80, "json": 32, "figure": 0, **{m.NAME: m.READ_MEMORY for m in formats()}}
 
 #: the kinds of file that are not a recording: reading one never ends (``/dev/zero``) or blocks (a FIFO)
 SPECIAL_FILES = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"),
@@ -106,7 +106,7 @@ def check_file(path, what: str, *, kind: str = "text", folder: bool = False) -> 
         The key or argument naming it in messages (``data.path``, ``scenario.file``).
     kind : str
         Its reader: a key of :data:`READ_MEMORY` (``plain``, ``text`` and ``json`` are line-checked, the logs
-        only sized), or ``recording``: a text recording whose reader :func:`magexp.core.formats.detect` tells once
+        only sized), or ``recording``: a text recording whose reader :func:`magexp.core.readers.detect` tells once
         its lines are checked.
     folder : bool
         A folder is expected here (it passes; its files are the caller's to check).
@@ -138,12 +138,12 @@ def check_file(path, what: str, *, kind: str = "text", folder: bool = False) -> 
         return size
     scan_lines(path, subject, size)
     if kind == "recording":
-        _check_memory(size, READ_MEMORY["plain" if detect(Path(path)) == "plain" else "text"], subject)
+        _check_memory(size, READ_MEMORY[detect(Path(path))], subject)
     return size
 
 
 #: the readers a kind of :func:`check_file` may be read by
-READERS_OF = {"recording": ("plain", "text")}
+READERS_OF = {"recording": tuple(m.NAME for m in formats() if not m.BINARY)}
 
 
 def _check_memory(size: int, multiple: int, subject: str) -> None:
@@ -256,8 +256,8 @@ def check_recording(path, what: str, format: str | None = "auto") -> int:
     bag = path.is_dir()
     sizes = [0]
     for file in recording_files(path):
-        key = "rosbag" if bag else format if format not in (None, "", "auto") else LOG_SUFFIXES.get(file.suffix.lower())
-        kind = key if key in BINARY_FORMATS or key == "plain" else "text" if key else "recording"
+        key = "rosbag" if bag else format if format not in (None, "", "auto") else by_suffix(file)
+        kind = key if key in READ_MEMORY else "text" if key else "recording"
         sizes.append(check_file(file, what, kind=kind, folder=file == path))
     return max(sizes)
 

@@ -1,6 +1,6 @@
 """A recording as a scenario like any other: ``scenario=real_<recording>`` (``conf/scenario/real_*.yaml``).
 
-:class:`RecordingScenario` loads a file of :data:`magexp.core.recordings.READERS` (from
+:class:`RecordingScenario` loads a file of any format of :mod:`magexp.core.readers` (from
 :data:`magexp.paths.SHARED_DATA`, i.e. ``$MAGEXP_DATA`` or ``../shared/data``), optionally cuts a
 time ``window``, and gives the :class:`~magexp.core.dataset.Dataset` of one objective (by
 :func:`magexp.core.recording.recording_dataset`, the path ``magexp calibrate`` takes too):

@@ -56,6 +56,7 @@ import importlib
 import pkgutil
 
 from magexp.artifacts.schema import build
+from magexp.core.generated import with_section
 from magexp.errors import MagexpError
 
 #: old plot keys, still read: each becomes its canonical key at load
@@ -131,7 +132,4 @@ def docs_section() -> str:
 
 def with_docs_section(text: str) -> str:
     """``text`` (docs/extending.md) with its generated section replaced by :func:`docs_section`."""
-    if text.count(BEGIN) != 1 or text.count(END) != 1:
-        raise MagexpError(f"the page must hold the lines {BEGIN!r} and {END!r} once each")
-    head, rest = text.split(BEGIN)
-    return head + docs_section() + rest.split(END, 1)[1]
+    return with_section(text, BEGIN, END, docs_section())

@@ -1,382 +1,265 @@
-"""Readers of the flight and robot logs users have: PX4 ULog, ArduPilot DataFlash, ROS 1/2 bags and MCAP.
+"""Recording formats: one module per format in this package, found by listing it (as the artifact kinds
+are, :mod:`magexp.artifacts.kinds`): every module here whose name does not start with ``_`` is a format
+(``__main__`` writes the docs' table). What formats share lives beside the package, not in it:
+:mod:`magexp.core.textfiles` (the parsing the text formats share) and :mod:`magexp.core.logfiles` (what
+the flight and robot logs' readers share).
 
-Each reader returns a :class:`magexp.core.recording.Recording` (the structure every other magexp
-recording uses) with, on one clock:
+A format module holds all of its format:
 
-* ``readings``: the magnetometer, *before* the firmware's onboard calibration (undone where the
-  log says which calibration was applied; see each module), in the frame in which that
-  firmware's calibration parameters apply, so that a calibration fitted to them can be exported
-  back (:mod:`magexp.calibration.export`);
-* ``times``: seconds from the start of the log (the log's own clock: microseconds since boot for
-  ULog and DataFlash, the header stamps for ROS);
-* ``angles``: the logged attitude at each reading (interpolated on the rotation group,
-  :func:`attitude_at`), as the ``heading, roll, trim`` of :func:`magexp.core.geometry.ship_attitude`
-  whose matrix is exactly the logged navigation -> body rotation (:func:`angles_from_attitude`);
-  the navigation frame is **NED** for every format (a ROS ENU orientation is converted);
-* ``gyro_stream``: the gyroscope's ``(times, rates rad/s)`` at its own times;
-* ``columns`` :data:`LOGGED`: the readings as logged (after the onboard calibration), where it was undone;
-* ``meta``: the position and date of the log (``latitude``, ``longitude`` in degrees,
-  ``altitude_km``, ``date`` ISO, from its GPS), the source topics, what was undone, the firmware.
-  :func:`magexp.core.field_model.place_of` reads the position back.
+* its docstring's first paragraph: what it reads (``magexp calibrate --help`` and the table of formats in
+  ``docs/calibrate.md`` are generated from it, :func:`summary`, :func:`docs_section`), the rest the details;
+* ``NAME``: its ``data.format`` value;
+* ``PRIORITY``: where ``data.format=auto`` tries it (lower first; the formats are listed in this order);
+* ``SUFFIXES``: the file name endings that make a file this format (lower case, ``()`` for none);
+* ``claims(path)``, optional: a test of the path alone (a folder, a file name), before any file is read;
+* ``sniff(head)``, optional: a test of the file's first three lines (``head``, a list of str);
+* ``FALLBACK = True``, on one format only: a text file nothing claims is read as that format;
+* ``UNIT``: where its readings' unit comes from (one line); ``EXTRA``: the ``pip install 'magexp[<extra>]'``
+  its reader needs, or None;
+* ``BINARY``: its files are bytes, not lines (the file gate, :mod:`magexp.run.files`, checks no line length);
+  ``READ_MEMORY``: the most memory its reader holds, in bytes a byte of the file (the gate refuses a file
+  whose reading would pass the memory limit; ``tests/test_file_gate.py`` measures the readers);
+* ``read(path, *, unit=None, mag_axes=None, gyro_axes=None)``: the :class:`~magexp.core.recording.Recording`
+  of the file (a format may take more keyword options: ``instance`` of ``dataflash``).
 
-Modules: :mod:`~magexp.core.readers.ulog` (``pip install 'magexp[ulog]'``, pyulog),
-:mod:`~magexp.core.readers.dataflash` (``magexp[dataflash]``, pymavlink),
-:mod:`~magexp.core.readers.rosbag` (``magexp[ros]``, rosbags). A missing package is one
-:class:`~magexp.errors.MagexpError` line naming the ``pip install`` to run. Nothing read can run
-code: binary records are decoded by fixed layouts (numpy views), ROS messages only with the
-message definitions built into rosbags (never the definitions a bag carries).
+:func:`detect` tells a file's format: the suffixes of every format first, then each ``claims``, then each
+``sniff`` of the first three lines, in ``PRIORITY`` order, else the fallback. Adding a format is adding one
+module here. A reader imports :mod:`magexp.core.recording` (the type), never :mod:`magexp.core.recordings`
+(the loader), and this package imports no format statically: the run cache keys a run on the module of the
+reader its data's format names (:func:`reader_of`), found from the sources
+(:mod:`magexp.run.codekey`), so an edit of one format reruns only the runs reading it.
 
-A reader does not judge whether a log can support a calibration: a log with too few readings
-or one attitude loads, and :func:`magexp.calibration.calibrate_recording` refuses it in one line.
+``read``, ``claims`` and ``sniff`` are documented here, once; a format's own say in a line what they do
+(``tests/test_docstrings.py`` checks these sections).
+
+Parameters of ``read``
+----------------------
+path : Path
+    The file (or, for a format whose ``claims`` says so, a folder or a stem), resolved by
+    :func:`magexp.core.recordings.resolve`.
+unit : str, optional
+    ``data.unit``: the unit of a file that does not name it (:data:`magexp.core.recording.UNITS`, or
+    ``counts``); for a file that names its unit it may be left None and must otherwise agree with it.
+mag_axes, gyro_axes : str, optional
+    Signed axis maps of the magnetometer and the gyroscope onto the common body axes (``"-x,y,z"``,
+    :func:`magexp.core.geometry.axis_map`); None keeps the format's default.
+
+Returns of ``read``
+-------------------
+Recording
+    The readings in the common body axes, their unit, and what the format holds beside them (attitude
+    angles, a gyroscope, times, a reference field, a log's GPS place and date).
+
+Raises of ``read``
+------------------
+MagexpError
+    One line naming the file, the line and the fault for a malformed file.
+
+Parameters of ``claims``
+------------------------
+path : Path
+    The recording as given (a file, a folder, or a stem that is neither).
+
+Returns of ``claims``
+---------------------
+bool
+    Whether the path alone makes it this format.
+
+Parameters of ``sniff``
+-----------------------
+head : list of str
+    The file's first :data:`HEAD_LINES` lines as read (``""`` past its end; decoded as UTF-8, a bad byte
+    replaced).
+
+Returns of ``sniff``
+--------------------
+bool
+    Whether these lines make it this format.
 """
 
 from __future__ import annotations
 
-import datetime as _dt
+import functools
 import importlib
+import pkgutil
+from pathlib import Path
 
-import numpy as np
-
-from magexp.core.limits import refuse_over
 from magexp.errors import MagexpError
-from magexp.core.geometry import axis_map, quat_to_matrix
-from magexp.core.recording import Recording
 
-#: the ``pip install`` extra of each optional package a reader needs
-EXTRAS = {"pyulog": "ulog", "pymavlink": "dataflash", "rosbags": "ros"}
-
-#: NED coordinates -> ENU coordinates (a symmetric permutation with a sign: its own inverse)
-NED_TO_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+#: the lines of a file :func:`detect` reads for the formats' ``sniff``
+HEAD_LINES = 3
 
 
-def need(module: str, what: str):
-    """The module ``module`` (``pyulog.core``, ...), or one line naming the extra to install.
+@functools.cache
+def formats() -> tuple:
+    """The format modules: this package's modules not starting with ``_``, imported (each is small; a reader
+    imports its optional package only when it reads).
+
+    Returns
+    -------
+    tuple of module
+        The formats, in ``PRIORITY`` order.
+    """
+    found = [importlib.import_module(f"{__name__}.{m.name}") for m in pkgutil.iter_modules(__path__)
+             if not m.name.startswith("_")]
+    return tuple(sorted(found, key=lambda module: (module.PRIORITY, module.NAME)))
+
+
+def names() -> tuple[str, ...]:
+    """The formats' names (``data.format``), in ``PRIORITY`` order.
+
+    Returns
+    -------
+    tuple of str
+        Every format's ``NAME``.
+    """
+    return tuple(module.NAME for module in formats())
+
+
+def format_of(name: str):
+    """The module of the format ``name``.
 
     Parameters
     ----------
-    module : str
-        The module's dotted name.
-    what : str
-        What it is needed for (``a ULog``), named in the refusal.
+    name : str
+        A format's ``NAME`` (:func:`names`).
 
     Returns
     -------
     module
-        The imported module.
+        The format's module, with its ``read``.
 
     Raises
     ------
     MagexpError
-        One line naming the ``pip install 'magexp[<extra>]'`` to run (:data:`EXTRAS`).
+        One line naming the formats there are, for any other name.
     """
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        package = module.split(".")[0]
-        raise MagexpError(f"reading {what} needs the optional package {package}: run "
-                          f"pip install 'magexp[{EXTRAS[package]}]'") from None
+    module = next((m for m in formats() if m.NAME == name), None)
+    if module is None:
+        raise MagexpError(f"data.format={name!r} is not allowed: choose one of auto, {', '.join(names())}")
+    return module
 
 
-def log_unit(unit, fixed: str, name: str, what: str) -> str:
-    """``fixed``, the unit a log format defines; one line if ``data.unit`` (``unit``) names another.
-
-    Parameters
-    ----------
-    unit : str or None
-        ``data.unit`` (None: not given).
-    fixed : str
-        The format's unit.
-    name : str
-        The log, named in the refusal.
-    what : str
-        What is in ``fixed``, named in the refusal.
-
-    Returns
-    -------
-    str
-        ``fixed``.
-
-    Raises
-    ------
-    MagexpError
-        One line when ``unit`` names another.
-    """
-    if unit is not None and unit != fixed:
-        raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: {what} is in {fixed} (leave data.unit "
-                          "unset)")
-    return fixed
-
-
-def angles_from_attitude(a: np.ndarray) -> np.ndarray:
-    """``(N, 3)`` ``[heading, roll, trim]`` (radians) with ``ship_attitude(*angles.T) == a``.
-
-    :func:`magexp.core.geometry.ship_attitude` is ``A = R_y(t) R_x(-r) R_z(-h)`` (active rotations).
-    Its middle row is ``[cos r' sin h', cos r' cos h', -sin r']`` and its last column
-    ``[sin t cos r', -sin r', cos t cos r']`` with ``r' = -r``, ``h' = -h``; so
-
-    .. math:: r = \\arcsin A_{12},\\quad h = -\\operatorname{atan2}(A_{10}, A_{11}),\\quad
-              t = \\operatorname{atan2}(A_{02}, A_{22}).
-
-    Exact for every rotation with ``|A_12| < 1`` (the logged attitudes: ``|A_12| = 1`` is the
-    body's y axis along the navigation z axis, a 90° roll about x after the heading turn).
-
-    Parameters
-    ----------
-    a : ndarray, shape (N, 3, 3)
-        Navigation -> sensor rotations.
-
-    Returns
-    -------
-    ndarray, shape (N, 3)
-        Yan & Zhou 2022's eq 2 angles ψ, θ, φ.
-    """
-    a = np.asarray(a, float)
-    roll = np.arcsin(np.clip(a[..., 1, 2], -1.0, 1.0))
-    heading = -np.arctan2(a[..., 1, 0], a[..., 1, 1])
-    trim = np.arctan2(a[..., 0, 2], a[..., 2, 2])
-    return np.stack([heading, roll, trim], axis=-1)
-
-
-def _unit_quaternions(q: np.ndarray) -> np.ndarray:
-    q = np.asarray(q, float)
-    norm = np.linalg.norm(q, axis=1, keepdims=True)
-    if not np.all(norm > 0) or not np.all(np.isfinite(q)):
-        raise MagexpError("an attitude quaternion is zero or not finite: the log's attitude is unusable")
-    return q / norm
-
-
-def attitude_at(times: np.ndarray, quats: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """Body -> NED rotations ``(len(at), 3, 3)`` at the times ``at``: the logged unit quaternions
-    ``[w, x, y, z]`` (body -> NED) at ``times`` interpolated by spherical linear interpolation
-    between the two neighbouring samples (held at the first or last outside them), vectorised.
-
-    Parameters
-    ----------
-    times : ndarray, shape (K,)
-        The quaternions' times (s).
-    quats : ndarray, shape (K, 4)
-        Body -> NED quaternions ``[w, x, y, z]`` (normalised here).
-    at : ndarray, shape (M,)
-        The times wanted (s).
-
-    Returns
-    -------
-    ndarray, shape (M, 3, 3)
-        The rotations.
-
-    Raises
-    ------
-    MagexpError
-        One line for a zero or non-finite quaternion.
-    """
-    q = _unit_quaternions(quats)
-    times = np.asarray(times, float)
-    order = np.argsort(times, kind="stable")
-    times, q = times[order], q[order]
-    k = np.clip(np.searchsorted(times, at, side="right") - 1, 0, len(times) - 1)
-    k1 = np.minimum(k + 1, len(times) - 1)
-    span = times[k1] - times[k]
-    u = np.where(span > 0, np.clip((at - times[k]) / np.where(span > 0, span, 1.0), 0.0, 1.0), 0.0)[:, None]
-    q0, q1 = q[k], q[k1]
-    dot = np.sum(q0 * q1, axis=1, keepdims=True)
-    q1 = np.where(dot < 0, -q1, q1)  # the shorter arc
-    dot = np.abs(dot)
-    theta = np.arccos(np.clip(dot, -1.0, 1.0))
-    small = theta < 1e-6
-    s = np.where(small, 1.0, np.sin(theta))
-    w0 = np.where(small, 1.0 - u, np.sin((1.0 - u) * theta) / s)
-    w1 = np.where(small, u, np.sin(u * theta) / s)
-    return quat_to_matrix(_unit_quaternions(w0 * q0 + w1 * q1))
-
-
-def euler_quaternions(roll, pitch, yaw) -> np.ndarray:
-    """Unit quaternions ``[w, x, y, z]`` of the aerospace ``Z-Y-X`` Euler angles (radians): the
-    body -> NED rotation ``R_z(yaw) R_y(pitch) R_x(roll)``.
-
-    Parameters
-    ----------
-    roll, pitch, yaw : array_like
-        Radians, broadcast to one dimension.
-
-    Returns
-    -------
-    ndarray, shape (N, 4)
-        The quaternions.
-    """
-    cr, sr = np.cos(np.asarray(roll, float) / 2), np.sin(np.asarray(roll, float) / 2)
-    cp, sp = np.cos(np.asarray(pitch, float) / 2), np.sin(np.asarray(pitch, float) / 2)
-    cy, sy = np.cos(np.asarray(yaw, float) / 2), np.sin(np.asarray(yaw, float) / 2)
-    return np.column_stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                            cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])
-
-
-def navigation_angles(times: np.ndarray, quats: np.ndarray, at: np.ndarray, *, enu: bool = False) -> np.ndarray:
-    """``[heading, roll, trim]`` at ``at`` of the NED -> body rotations of body -> navigation
-    quaternions ``quats`` at ``times``; ``enu``: the quaternions rotate into ENU (ROS, REP-103),
-    converted to NED (``A_ned = A_enu C``, ``C`` = :data:`NED_TO_ENU`).
-
-    Parameters
-    ----------
-    times : ndarray, shape (K,)
-        The quaternions' times (s).
-    quats : ndarray, shape (K, 4)
-        Body -> navigation quaternions ``[w, x, y, z]``.
-    at : ndarray, shape (M,)
-        The readings' times (s).
-    enu : bool
-        The navigation frame is ENU (else NED).
-
-    Returns
-    -------
-    ndarray, shape (M, 3)
-        Yan & Zhou 2022's eq 2 angles (:func:`angles_from_attitude`).
-    """
-    to_body = np.transpose(attitude_at(times, quats, at), (0, 2, 1))
-    return angles_from_attitude(to_body @ NED_TO_ENU if enu else to_body)
-
-
-def place(latitude, longitude, altitude_m, when: _dt.datetime | None) -> dict:
-    """Metadata of the log's place and date: the median of the fixes (degrees, km), ISO date; {}
-    without a fix.
-
-    Parameters
-    ----------
-    latitude, longitude : array_like
-        The fixes, degrees (the non-finite and out-of-range ones left out).
-    altitude_m : array_like
-        Their altitudes (m; a non-finite one counts as 0).
-    when : datetime, optional
-        The log's date.
-
-    Returns
-    -------
-    dict
-        ``latitude``, ``longitude``, ``altitude_km``, ``gps_fixes`` and ``date`` as text (``meta`` values).
-    """
-    latitude, longitude, altitude_m = (np.asarray(v, float) for v in (latitude, longitude, altitude_m))
-    ok = np.isfinite(latitude) & np.isfinite(longitude) & (np.abs(latitude) <= 90) & (np.abs(longitude) <= 360)
-    if not np.any(ok):
-        return {}
-    out = {"latitude": repr(float(np.median(latitude[ok]))), "longitude": repr(float(np.median(longitude[ok]))),
-           "altitude_km": repr(float(np.median(np.where(np.isfinite(altitude_m[ok]), altitude_m[ok], 0.0))) / 1e3),
-           "gps_fixes": str(int(np.sum(ok)))}
-    if when is not None:
-        out["date"] = when.date().isoformat()
-    return out
-
-
-#: the columns of a log's readings as logged, after the onboard calibration its reader undid (:func:`log_recording`)
-LOGGED = ("logged_bx", "logged_by", "logged_bz")
-
-
-def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, angles: np.ndarray | None,
-                  gyro: tuple | None, meta: dict, mag_axes=None, gyro_axes=None, logged: np.ndarray | None = None):
-    """The :class:`~magexp.core.recording.Recording` of a log: readings (with ``mag_axes``) at
-    ``times``, the attitude angles, the gyroscope stream (with ``gyro_axes``), ``meta``; ``logged``: the
-    readings as logged, before the reader undid the onboard calibration (columns :data:`LOGGED`), or None.
+def by_suffix(path: Path) -> str | None:
+    """The format whose ``SUFFIXES`` hold ``path``'s suffix (``.ulg``, ...), else None.
 
     Parameters
     ----------
     path : Path
-        The log.
-    readings : ndarray, shape (N, 3)
-        The magnetometer's readings, in the log's axes.
-    unit : str
-        Their unit.
-    times : ndarray, shape (N,)
-        Their times (s); the recording is sorted by them.
-    angles : ndarray, shape (N, 3), optional
-        ``[heading, roll, trim]`` at each reading.
-    gyro : tuple, optional
-        ``(times (G,), rates (G, 3))`` of the gyroscope (rad/s).
-    meta : dict
-        The recording's metadata.
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    logged : ndarray, shape (N, 3), optional
-        The readings as logged.
+        A file or folder name.
 
     Returns
     -------
-    Recording
-        The recording, ``meta['nav_frame'] = 'NED'``.
+    str or None
+        A format's name.
     """
-    order = np.argsort(times, kind="stable")
-    axes = axis_map(mag_axes, "data.mag_axes").T
-    columns = {} if logged is None else dict(zip(LOGGED, (np.asarray(logged, float)[order] @ axes).T))
-    rec = Recording(readings=np.asarray(readings, float)[order] @ axes,
-                    angles=None if angles is None else np.asarray(angles)[order], field=None, unit=unit,
-                    meta={"nav_frame": "NED", **meta}, times=np.asarray(times, float)[order], path=path,
-                    columns=columns)
-    if gyro is not None and len(gyro[0]) >= 2:
-        g_order = np.argsort(gyro[0], kind="stable")
-        rec.gyro_stream = (np.asarray(gyro[0], float)[g_order],
-                           np.asarray(gyro[1], float)[g_order] @ axis_map(gyro_axes, "data.gyro_axes").T)
-    return rec
+    suffix = path.suffix.lower()
+    return next((m.NAME for m in formats() if suffix in m.SUFFIXES), None)
 
 
-def matrix_text(m: np.ndarray) -> str:
-    """A 3 x 3 matrix as ``meta`` text, rows separated by ``;`` (:func:`matrix_of` reads it back).
+def detect(path: Path) -> str:
+    """The format of ``path``: by its suffix, then by its path alone (each format's ``claims``), then by its
+    first lines (each ``sniff``), in ``PRIORITY`` order; a text file nothing claims is the ``FALLBACK`` format.
 
     Parameters
     ----------
-    m : array_like, shape (3, 3)
-        The matrix.
+    path : Path
+        A recording file or folder.
 
     Returns
     -------
     str
-        E.g. ``1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 1.0``.
+        A format's name.
     """
-    return "; ".join(", ".join(f"{v!r}" for v in np.asarray(row, float).tolist()) for row in m)
+    found = by_suffix(path) or next((m.NAME for m in formats() if hasattr(m, "claims") and m.claims(path)), None)
+    if found is not None:
+        return found
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        head = [fh.readline() for _ in range(HEAD_LINES)]
+    return next((m.NAME for m in formats() if hasattr(m, "sniff") and m.sniff(head)),
+                next(m.NAME for m in formats() if getattr(m, "FALLBACK", False)))
 
 
-def matrix_of(text: str) -> np.ndarray:
-    """The matrix of :func:`matrix_text`.
+def reader_of(path: Path, format: str | None = "auto") -> str:
+    """The dotted name of the function that reads the recording ``path`` in ``format`` (``auto``, None or a
+    name no format has: :func:`detect`'s): the run cache keys a run that reads ``path`` on that module's
+    source (:func:`magexp.run.cache.data_readers`).
 
     Parameters
     ----------
-    text : str
-        A matrix as :func:`matrix_text` writes it.
-
-    Returns
-    -------
-    ndarray
-        The matrix.
-    """
-    return np.array([[float(v) for v in row.split(",")] for row in text.split(";")])
-
-
-def onboard_rotation_of(rec: Recording) -> np.ndarray:
-    """The rotation the firmware applies after its calibration (``meta['onboard_rotation']`` of a
-    PX4 log), else the identity: what :func:`magexp.calibration.export.px4` takes as ``rotation``.
-
-    Parameters
-    ----------
-    rec : Recording
+    path : Path
         A recording.
+    format : str, optional
+        A format's name, ``auto`` or None.
 
     Returns
     -------
-    ndarray, shape (3, 3)
-        The rotation.
+    str
+        ``module.function`` of the reader.
     """
-    return matrix_of(rec.meta["onboard_rotation"]) if "onboard_rotation" in rec.meta else np.eye(3)
+    module = format_of(format if format in names() else detect(path))
+    return f"{module.__name__}.{module.read.__name__}"
 
 
-def check_count(count: int, subject: str) -> None:
-    """Refuse, before decoding, a log holding more readings than :mod:`magexp.core.limits` allows.
+# -- the tables of formats in --help and docs/calibrate.md, written from the modules -------------------------
+
+#: the lines around the generated table of formats in docs/calibrate.md
+BEGIN, END = "<!-- formats: written by python -m magexp.core.readers; do not edit -->", "<!-- /formats -->"
+
+
+def summary(module) -> str:
+    """What the format ``module`` reads: its docstring's first paragraph on one line, in Markdown's quotes.
 
     Parameters
     ----------
-    count : int
-        The log's magnetometer readings.
-    subject : str
-        The log, named in the refusal.
+    module : module
+        A format's module (:func:`formats`).
 
-    Raises
-    ------
-    MagexpError
-        One line over the ``readings`` limit (:func:`magexp.core.limits.refuse_over`).
+    Returns
+    -------
+    str
+        The paragraph, for ``--help`` and the docs' table.
     """
-    refuse_over(count, "readings", subject, "its magnetometer messages hold")
+    return " ".join(module.__doc__.split("\n\n")[0].split()).replace("``", "`")
+
+
+def detection(module) -> str:
+    """How ``data.format=auto`` tells the format ``module``: its suffixes, ``claims`` and ``sniff`` (their
+    docstrings' first lines), or that it is the fallback.
+
+    Parameters
+    ----------
+    module : module
+        A format's module (:func:`formats`).
+
+    Returns
+    -------
+    str
+        One line, for the docs' table.
+    """
+    ways = [", ".join(f"`{s}`" for s in module.SUFFIXES)] if module.SUFFIXES else []
+    for test in ("claims", "sniff"):
+        if hasattr(module, test):
+            line = getattr(module, test).__doc__.splitlines()[0].rstrip(".")
+            ways.append(line[0].lower() + line[1:])
+    if getattr(module, "FALLBACK", False):
+        ways.append("any other text file")
+    return "; ".join(ways).replace("``", "`")
+
+
+def docs_section() -> str:
+    """The generated part of docs/calibrate.md (between :data:`BEGIN` and :data:`END`, rewritten by
+    :func:`magexp.core.generated.with_section`): one row per format, in the order ``auto`` tries them.
+
+    Returns
+    -------
+    str
+        Markdown, between :data:`BEGIN` and :data:`END`.
+    """
+    lines = [BEGIN, "`auto` tries the formats in this order: a file's name first (every format's suffixes, "
+             "then a folder or a file name), then its first lines.", "",
+             "| format | what it reads | `auto` tells it by | unit | needs |", "|---|---|---|---|---|"]
+    for m in formats():
+        extra = f"`pip install 'magexp[{m.EXTRA}]'`" if m.EXTRA else ""
+        lines.append(f"| `{m.NAME}` | {summary(m)} | {detection(m)} | {m.UNIT} | {extra} |")
+    return "\n".join(lines + [END])

@@ -15,7 +15,7 @@ magnetometer ``MAG``: ``MagX/Y/Z`` (mGauss, body frame), ``OfsX/Y/Z`` (the offse
              ``MOfsX/Y/Z`` (the motor compensation in use); unit ``mG``
 gyroscope    ``IMU``: ``GyrX/Y/Z`` (rad/s, body frame)
 attitude     ``ATT``: ``Roll, Pitch, Yaw`` (degrees; ``Z-Y-X`` Euler angles, body -> NED),
-             interpolated at the readings (:func:`magexp.core.readers.attitude_at`)
+             interpolated at the readings (:func:`magexp.core.logfiles.attitude_at`)
 position     ``GPS``: ``Lat, Lng`` (degrees), ``Alt`` (m above sea level), fixes with ``Status >= 3``;
              the date from ``GWk`` and ``GMS`` (GPS week and milliseconds; the leap seconds are
              ignored: the date is what the field model needs)
@@ -54,10 +54,18 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
-                                 navigation_angles, need, place)
+from magexp.core.logfiles import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
+                                       navigation_angles, need, place)
 from magexp.errors import MagexpError
 from magexp.core.recording import Recording
+
+NAME = "dataflash"
+PRIORITY = 20
+SUFFIXES = (".bin",)
+UNIT = "mG (milligauss), fixed by the format"
+EXTRA = "dataflash"
+BINARY = True
+READ_MEMORY = 32
 
 #: ``struct`` codes of DataFlash fields -> numpy dtypes (little-endian, packed)
 DTYPES = {"b": "i1", "B": "u1", "h": "<i2", "H": "<u2", "i": "<i4", "I": "<u4", "q": "<i8", "Q": "<u8",
@@ -73,6 +81,7 @@ GPS_EPOCH = _dt.datetime(1980, 1, 6, tzinfo=_dt.timezone.utc)
 
 
 def _dtype(fmt) -> np.dtype:
+    """The numpy dtype of a DataFlash message format ``fmt`` (its ``msg_struct``): decoded by a fixed layout."""
     codes, k = [], 1  # msg_struct is "<" then the codes; a count prefixes the strings ("16s")
     text = fmt.msg_struct
     while k < len(text):
@@ -224,6 +233,7 @@ def undo_correction(mag: dict, params: dict, instance: int) -> tuple[np.ndarray,
 
 
 def _gps(gps: dict | None) -> dict:
+    """The log's place and date from its ``GPS`` messages with a 3D fix (:func:`magexp.core.logfiles.place`), {} without."""
     if gps is None:
         return {}
     fix = np.asarray(gps.get("Status", np.full(len(gps["Lat"]), 3))) >= 3
@@ -305,11 +315,13 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
 
     Parameters
     ----------
-    path : the ``.bin`` file.
-    unit : must be None or ``mG`` (DataFlash ``MAG`` is in mGauss).
-    mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    instance : the compass and IMU instance (0: the first).
-    undo : undo the onboard correction (default); False keeps ``MagX/Y/Z`` as logged.
+    path, unit, mag_axes, gyro_axes
+        As ``read`` of every format (:mod:`magexp.core.readers`): ``path`` the ``.bin`` file; ``unit`` None or
+        ``mG`` (DataFlash ``MAG`` is in mGauss).
+    instance : int
+        The compass and IMU instance (0: the first).
+    undo : bool
+        Undo the onboard correction (default); False keeps ``MagX/Y/Z`` as logged.
 
     Returns
     -------
@@ -353,3 +365,7 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
     meta.update(_gps(gps))
     return log_recording(Path(path), readings=raw, unit="mG", times=times, angles=angles, gyro=gyro, meta=meta,
                          mag_axes=mag_axes, gyro_axes=gyro_axes, logged=logged if undo else None)
+
+
+#: the format's reader, by the name every format module gives it
+read = read_dataflash

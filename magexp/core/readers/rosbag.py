@@ -41,9 +41,23 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.datafiles import BAG_MARKER
-from magexp.core.readers import check_count, log_recording, log_unit, navigation_angles, need, place
+from magexp.core.logfiles import check_count, log_recording, log_unit, navigation_angles, need, place
 from magexp.errors import MagexpError
 from magexp.core.recording import Recording
+
+NAME = "rosbag"
+PRIORITY = 30
+SUFFIXES = (".bag", ".mcap", ".db3")
+UNIT = "uT (read from tesla), fixed by the format"
+EXTRA = "ros"
+BINARY = True
+READ_MEMORY = 32
+
+
+def claims(path: Path) -> bool:
+    """A folder holding ``metadata.yaml`` (a ROS 2 bag)."""
+    return path.is_dir() and (path / BAG_MARKER).is_file()
+
 
 MAG, IMU, FIX = "sensor_msgs/msg/MagneticField", "sensor_msgs/msg/Imu", "sensor_msgs/msg/NavSatFix"
 #: tesla -> µT
@@ -120,6 +134,7 @@ class Messages:
         return self.buf[at[:, None] + np.arange(dt.itemsize * count)].view(dt)
 
     def skip_string(self) -> None:
+        """Step over a CDR string field (its length, then its bytes) of every message."""
         n = self.read("<u4")[:, 0].astype(np.int64)
         if np.any(self.start + self.pos + n > self.end):
             raise LayoutError("a string longer than the message")
@@ -231,10 +246,11 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
 
     Parameters
     ----------
-    path : the ``.bag`` / ``.mcap`` / ``.db3`` file, or a ROS 2 bag folder.
-    unit : must be None or ``uT`` (the tesla of ``MagneticField`` are read as µT).
-    mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    topic : the ``MagneticField`` topic (None: the one with most messages).
+    path, unit, mag_axes, gyro_axes
+        As ``read`` of every format (:mod:`magexp.core.readers`): ``path`` the ``.bag`` / ``.mcap`` / ``.db3``
+        file, or a ROS 2 bag folder; ``unit`` None or ``uT`` (the tesla of ``MagneticField`` are read as µT).
+    topic : str, optional
+        The ``MagneticField`` topic (None: the one with most messages).
 
     Returns
     -------
@@ -291,3 +307,7 @@ def _imu_streams(imu, imus, t0: float, times: np.ndarray, meta: dict):
         angles = navigation_angles(imu[0][has_orientation] - t0, xyzw[:, [3, 0, 1, 2]], times, enu=True)
         meta["attitude"] = f"{imus[0].topic} orientation (body -> ENU, converted to NED)"
     return angles, (imu[0] - t0, imu[1]["angular_velocity"])
+
+
+#: the format's reader, by the name every format module gives it
+read = read_rosbag

@@ -17,7 +17,7 @@ magnetometer       the one with most samples of ``vehicle_magnetometer.magnetome
 gyroscope          ``sensor_combined.gyro_rad[0..2]`` (rad/s, body frame), else
                    ``vehicle_angular_velocity.xyz[0..2]``
 attitude           ``vehicle_attitude.q[0..3]`` (``w, x, y, z``, body FRD -> NED), interpolated at the
-                   readings (:func:`magexp.core.readers.attitude_at`)
+                   readings (:func:`magexp.core.logfiles.attitude_at`)
 position, date     ``vehicle_gps_position`` or ``sensor_gps``: ``lat``/``lon`` (1e-7 degrees) or
                    ``latitude_deg``/``longitude_deg``; ``alt`` (mm) or ``altitude_msl_m``; the fixes
                    with ``fix_type >= 3``; the date from ``time_utc_usec``
@@ -55,11 +55,19 @@ from pathlib import Path
 
 import numpy as np
 
-from magexp.core.readers import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
-                                 navigation_angles, need, place)
+from magexp.core.logfiles import (check_count, euler_quaternions, log_recording, log_unit, matrix_text,
+                                       navigation_angles, need, place)
 from magexp.errors import MagexpError
 from magexp.core.geometry import quat_to_matrix
 from magexp.core.recording import Recording
+
+NAME = "ulog"
+PRIORITY = 10
+SUFFIXES = (".ulg",)
+UNIT = "G (gauss), fixed by the format"
+EXTRA = "ulog"
+BINARY = True
+READ_MEMORY = 8
 
 #: the topics read (pyulog loads only these)
 TOPICS = ("vehicle_magnetometer", "sensor_combined", "sensor_mag", "vehicle_attitude", "vehicle_angular_velocity",
@@ -79,6 +87,7 @@ ROTATIONS = ((0, 0, 0), (0, 0, 45), (0, 0, 90), (0, 0, 135), (0, 0, 180), (0, 0,
 
 
 def _columns(data: dict, names: list[str]) -> np.ndarray:
+    """The fields ``names`` of a ULog dataset's ``data``, stacked as float columns."""
     return np.column_stack([np.asarray(data[n], float) for n in names])
 
 
@@ -91,6 +100,7 @@ def _version(ulog) -> tuple[int, int] | None:
 
 
 def _dataset(ulog, name: str, multi_id: int = 0):
+    """The dataset of topic ``name`` (instance ``multi_id``), or None when not logged."""
     return next((d for d in ulog.data_list if d.name == name and d.multi_id == multi_id), None)
 
 
@@ -117,6 +127,7 @@ def _candidates(ulog, prime: int | None) -> list[tuple[str, np.ndarray, np.ndarr
 
 
 def _slot(params: dict, device: int | None, name: str) -> int:
+    """The ``CAL_MAGn`` slot calibrating the magnetometer ``device``, else one line naming what to do."""
     slots = [n for n in range(4) if device is not None and params.get(f"CAL_MAG{n}_ID") == device]
     if not slots:
         raise MagexpError(f"{name}: the magnetometer (device id {'unknown' if device is None else device}) has no CAL_MAGn_ID in the log's parameters: "
@@ -239,6 +250,7 @@ def undo_calibration(ulog, topic: str, device: int | None, readings: np.ndarray,
 
 
 def _gps(ulog) -> dict:
+    """The log's place and date from its GPS topic (:func:`magexp.core.logfiles.place`), {} without."""
     d = _dataset(ulog, "vehicle_gps_position") or _dataset(ulog, "sensor_gps")
     if d is None:
         return {}
@@ -255,6 +267,7 @@ def _gps(ulog) -> dict:
 
 
 def _gyro(ulog, t0: int) -> tuple | None:
+    """``(times s, rates rad/s)`` of the gyroscope from ``t0`` (µs), or None when not logged."""
     sc = _dataset(ulog, "sensor_combined")
     if sc is not None and "gyro_rad[0]" in sc.data:
         return (np.asarray(sc.data["timestamp"], np.int64) - t0) / 1e6, _columns(sc.data, [f"gyro_rad[{i}]" for i in range(3)])
@@ -269,16 +282,17 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
 
     Parameters
     ----------
-    path : the ``.ulg`` file.
-    unit : must be None or ``G`` (ULog magnetometer topics are in gauss).
-    mag_axes, gyro_axes : signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    undo : undo the onboard calibration (default); False keeps the readings as logged.
+    path, unit, mag_axes, gyro_axes
+        As ``read`` of every format (:mod:`magexp.core.readers`): ``path`` the ``.ulg`` file; ``unit`` None or
+        ``G`` (ULog magnetometer topics are in gauss).
+    undo : bool
+        Undo the onboard calibration (default); False keeps the readings as logged.
 
     Returns
     -------
     Recording
         The readings (gauss) at their times, the attitude angles, the gyroscope, the GPS place and date, and
-        the undone calibration in ``meta`` (``onboard_rotation``: :func:`magexp.core.readers.onboard_rotation_of`).
+        the undone calibration in ``meta`` (``onboard_rotation``: the firmware's rotation ``R``, :func:`magexp.core.logfiles.matrix_text`).
     """
     name = Path(path).name
     core = need("pyulog.core", f"{name} (a PX4 ULog)")
@@ -315,3 +329,7 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
     return log_recording(Path(path), readings=readings, unit="G", times=times, angles=angles, gyro=_gyro(ulog, t0),
                          meta=meta, mag_axes=mag_axes, gyro_axes=gyro_axes,
                          logged=logged if meta["corrected"].startswith("undone") else None)
+
+
+#: the format's reader, by the name every format module gives it
+read = read_ulog

@@ -1,0 +1,31 @@
+"""The generated sections of the docs: the lines between two marker lines of a page, written from the code
+(the table of artifact kinds in docs/extending.md, :mod:`magexp.artifacts.kinds`; the table of recording
+formats in docs/calibrate.md, :mod:`magexp.core.readers`), so a test can hold each page current.
+"""
+
+from __future__ import annotations
+
+from magexp.errors import MagexpError
+
+
+def with_section(text: str, begin: str, end: str, section: str) -> str:
+    """``text`` with the lines from ``begin`` to ``end`` replaced by ``section`` (which holds both markers).
+
+    Parameters
+    ----------
+    text : str
+        The page, holding ``begin`` and ``end`` once each.
+    begin, end : str
+        The marker lines.
+    section : str
+        The new section, markers included.
+
+    Returns
+    -------
+    str
+        The page with its section replaced.
+    """
+    if text.count(begin) != 1 or text.count(end) != 1:
+        raise MagexpError(f"the page must hold the lines {begin!r} and {end!r} once each")
+    head, rest = text.split(begin)
+    return head + section + rest.split(end, 1)[1]
