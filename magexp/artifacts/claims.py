@@ -189,13 +189,20 @@ def _describe(where: dict, v: np.ndarray, stat: str) -> tuple[float, tuple, str]
     return s, (lo, hi), f"{_name(where)}: {stat} {s:.4g}{shown} (n={len(v)})"
 
 
+class NotEvaluable(RuntimeError):
+    """A claim that cannot be evaluated on its runs: a bug, never a verdict (the spec check before any run,
+    :mod:`magexp.artifacts.spec_check`, refuses every claim it can tell cannot be evaluated)."""
+
+
 def evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
-    """Whether ``claim`` holds on a runs table, with its evidence (numbers from the table); a claim
-    whose metric the table lacks does not hold, and says why."""
+    """Whether ``claim`` holds on a runs table, with its evidence (numbers from the table). A claim that
+    cannot be evaluated (a metric the table lacks, a selection of no cell) raises :class:`NotEvaluable`:
+    "not evaluable" is never a verdict."""
     try:
         return _evaluate(claim, table)
     except MagexpError as exc:
-        return Outcome(claim, False, f"not evaluable: {exc}")
+        raise NotEvaluable(f"claim {claim.id!r} cannot be evaluated on its runs ({str(exc).splitlines()[0]}): a bug, "
+                           "the spec check before the run (magexp.artifacts.spec_check) should have refused it") from None
 
 
 def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
@@ -210,7 +217,10 @@ def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome
     """``kind: threshold | success``: ``stat`` of every selected cell against ``op value``."""
     table, where, cells = restrict(table, claim.where)
     present = set(table.cell.unique().tolist())  # cells with rows left after the row filters
-    chosen = [ci for ci, s in cells.items() if matches(where, s) and ci in present]
+    selected = [ci for ci, s in cells.items() if matches(where, s)]
+    if not selected:
+        raise MagexpError(f"where={claim.where} selects no cell")
+    chosen = [ci for ci in selected if ci in present]
     if not chosen:
         return Outcome(claim, False, f"no runs match {_name(claim.where)}")
     parts, stats, ok, n = [], [], True, []
@@ -234,6 +244,9 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
     a pair the other way contradicts it (the converse's p: the smallest, times the number of pairs)."""
     stats, cis, parts = [], [], []
     for where in claim.cells:
+        _, rest, settings = restrict(table, where)
+        if not any(matches(rest, s) for s in settings.values()):
+            raise MagexpError(f"cells entry {where} selects no cell")
         v = values(select(table, where), claim.metric, stat)
         s, bounds, text = _describe(where, v, stat)
         stats.append(s), cis.append(bounds), parts.append(text)

@@ -21,7 +21,8 @@ from magexp.artifacts.comparisons import HOLDS, NO_DIFFERENCE, adjust
 from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
-from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
+from magexp.artifacts.spec_check import check_claims
+from magexp.artifacts.paper_spec import artifact_paths, check_headlines, load_paper, papers
 from magexp.artifacts.power import claim_plans
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
@@ -48,6 +49,7 @@ def paper_outcomes(specs: list, runs) -> list[tuple[str, object]]:
     for spec in specs:
         table = runs(spec.name) if spec.claims else None
         if table is not None and len(table):
+            check_claims(spec, table)  # a spec edited since its runs (a redraw): one line, never a verdict
             out += [(spec.name, evaluate(c, table)) for c in spec.claims]
     family = claim_families(load_paper(specs[0].paper).headline, specs) if specs else {}
     adjust([o for _, o in out], [family[f"{name}.{o.claim.id}"] for name, o in out])
@@ -115,16 +117,9 @@ def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
     (:func:`_headline_row`). ``outcomes``: ``{"artifact.id": Outcome}``; a part (of the headline or of
     a reading) naming no claim of the paper is an error.
     """
-    declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
-    rows = []
-    for h in load_paper(paper).headline:
-        named = list(h.parts) + [p for r in h.readings for p in r.parts]
-        unknown = [p for p in named if p not in declared]
-        if unknown:
-            raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {unknown[0]!r} names no claim of {paper} "
-                              "(write <artifact>.<claim id>)")
-        rows.append(_headline_row(paper, h, outcomes, runs))
-    return rows
+    listed = load_paper(paper).headline
+    check_headlines(paper, listed, specs)
+    return [_headline_row(paper, h, outcomes, runs) for h in listed]
 
 
 def _headline_row(paper: str, h, outcomes: dict, runs) -> dict:

@@ -182,6 +182,31 @@ def load_paper(paper: str, root: Path | None = None) -> Paper:
     return meta
 
 
+def check_headlines(paper: str, headlines: list, specs: list) -> None:
+    """Raise :class:`~magexp.errors.MagexpError` unless every part of each headline (and of its readings)
+    names a claim ``<artifact>.<claim id>`` of ``specs``: checked when a paper's artifacts are read, before
+    any run.
+
+    Parameters
+    ----------
+    paper : str
+        The paper (its folder).
+    headlines : list of Headline
+        Its ``paper.yaml`` headlines.
+    specs : list of Artifact
+        Its artifacts.
+    """
+    declared = {f"{s.name}.{c.id}" for s in specs for c in s.claims}
+    for h in headlines:
+        for part in [p for p in list(h.parts) + [p for r in h.readings for p in r.parts] if p not in declared]:
+            artifact = part.split(".")[0]
+            ids = [c.id for s in specs if s.name == artifact for c in s.claims]
+            exists = (f"{artifact} has claims {', '.join(ids)}" if ids else
+                      f"artifacts with claims: {', '.join(s.name for s in specs if s.claims)}")
+            raise MagexpError(f"{paper}/paper.yaml headline {h.id!r}: part {part!r} names no claim of {paper} "
+                              f"(write <artifact>.<claim id>; {exists})")
+
+
 def papers(root: Path | None = None) -> list[str]:
     """Every folder of ``experiments/`` that holds an artifact YAML, in the papers' ``order``
     (``paper.yaml``, optional: title, intro, order, deviations).

@@ -20,7 +20,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from magexp.artifacts.claims import matches
 from magexp.artifacts.spec import load
-from magexp.artifacts.paper_spec import artifact_paths
+from magexp.artifacts.paper_spec import artifact_paths, check_headlines, load_paper
 from magexp.core import outcomes
 from magexp.errors import MagexpError
 from magexp.estimators.base import applies_to
@@ -35,8 +35,11 @@ def load_spec(path: Path | str):
 
 
 def paper_specs(paper: str) -> list:
-    """Every artifact of ``paper``, in file-name order."""
-    return [load_spec(p) for p in artifact_paths(paper)]
+    """Every artifact of ``paper``, in file-name order; its headlines' parts checked against their claims
+    (:func:`magexp.artifacts.paper_spec.check_headlines`)."""
+    specs = [load_spec(p) for p in artifact_paths(paper)]
+    check_headlines(paper, load_paper(paper).headline, specs)
+    return specs
 
 
 def cells(spec) -> list[dict[str, str]]:

@@ -17,6 +17,7 @@ from magexp.artifacts import plan as planning  # plan_artifact read at call time
 from magexp.artifacts.plan import ArtifactPlan, claim_cells
 from magexp.artifacts.power import ClaimPlan, claim_plans
 from magexp.artifacts.spec import load
+from magexp.artifacts.spec_check import check_plan
 
 
 def paper_plans(paper: str, specs: list) -> dict[str, ClaimPlan]:
@@ -50,9 +51,12 @@ def planned_seeds(plan: ArtifactPlan) -> dict[int, int]:
 
 def plan_with_effects(spec, *, seeds: int | None = None, tiny: bool = False) -> ArtifactPlan:
     """:func:`magexp.artifacts.plan.plan_artifact` with the planned seeds of :func:`planned_seeds` (the
-    canonical reproduction's plan; ``seeds`` or ``tiny``: an exploration, every cell alike).
+    canonical reproduction's plan; ``seeds`` or ``tiny``: an exploration, every cell alike), its claims and
+    reported values checked against its planned cells before anything runs (:func:`magexp.artifacts.spec_check.check_plan`).
     """
-    return planning.plan_artifact(spec, seeds=seeds, tiny=tiny, seeds_for=planned_seeds)
+    plan = planning.plan_artifact(spec, seeds=seeds, tiny=tiny, seeds_for=planned_seeds)
+    check_plan(plan)
+    return plan
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -5,6 +5,7 @@ statistic is taken over (:func:`values`; a censored value is ``+inf``, never dro
 
 from __future__ import annotations
 
+import re
 import numpy as np
 import pandas as pd
 
@@ -71,8 +72,32 @@ def values(runs: pd.DataFrame, metric: str, stat: str) -> np.ndarray:
 
 
 def column(runs: pd.DataFrame, metric: str) -> np.ndarray:
-    """``metric`` per run (NaN kept: pairs stay aligned)."""
+    """``metric`` per run (NaN kept: pairs stay aligned): a runs column, or a pandas expression of them
+    whose column names are written as they are (:func:`expression`)."""
     try:
-        return np.asarray(runs[metric] if metric in runs else runs.eval(metric), float)
+        return np.asarray(runs[metric] if metric in runs else runs.eval(expression(metric, runs.columns)), float)
     except Exception as exc:
         raise MagexpError(f"metric {metric!r} is not a column or an expression of the runs' columns: {exc}") from None
+
+
+def expression(metric: str, columns) -> str:
+    """``metric`` as ``pandas.eval`` reads it: every name of ``columns`` that is no Python identifier
+    (``scenario.n_readings``, ``iterations_to_1.1``) put in backticks where it stands whole, so that
+    a spec writes a dotted config key as it is (one already in backticks is left as written).
+
+    Parameters
+    ----------
+    metric : str
+        A runs column or a pandas expression of the runs' columns.
+    columns : iterable of str
+        The runs table's columns.
+
+    Returns
+    -------
+    str
+        The expression with its non-identifier column names quoted.
+    """
+    odd = sorted((str(c) for c in columns if not str(c).isidentifier()), key=len, reverse=True)
+    for name in odd:
+        metric = re.sub(rf"(?<![\w.`]){re.escape(name)}(?![\w`]|\.[A-Za-z_])", f"`{name}`", metric)
+    return metric
