@@ -74,6 +74,41 @@ FILES = {
     "evil.pickle": "cio\nopen\np0\n(VPWNED\np1\nVw\np2\ntp3\nRp4\n.",  # unpickled, it creates PWNED here
     "userplain.py": "class Plain:\n    pass\n\ndef f():\n    pass\n",  # a user module with no plug-in class
 }
+#: a paper of one artifact that reproduces as written (``--tiny``), and its spec mistakes (issue 44 item 2):
+#: each one a folder ``specs/<mistake>/`` read as ``experiments/`` (the rows patch
+#: ``magexp.artifacts.paper_spec.EXPERIMENTS``), refused in one line before any run
+TOY_PAPER = """title: A toy paper
+headline:
+  - {id: falls, text: The offset error falls with the readings, section: Sec. 1, parts: [toy_fig1.falls]}
+"""
+TOY_ARTIFACT = """title: Offset error against readings
+kind: final
+seeds: 2
+base: [scenario=ding2024_exp1, estimator=ellipsoid]
+grid: {scenario.n_readings: [20, 200]}
+plot: {x: scenario.n_readings, metric: offset_error}
+summarise: [{quantity: offset_error, metric: offset_error}]
+reported:
+  - {quantity: offset_error, match: {scenario.n_readings: 20}, value: 3.0, tolerance: {factor: 10, reason: toy}}
+claims:
+  - {id: falls, text: N^0.6 times the error is bounded, kind: threshold, metric: offset_error * scenario.n_readings ** 0.6,
+     op: "<", value: 1000}
+  - {id: order, text: more readings smaller error, kind: ordering, metric: offset_error,
+     cells: [{scenario.n_readings: 200}, {scenario.n_readings: 20}]}
+"""
+SPEC_MISTAKES = {  # mistake: (file, text replaced, by)
+    "unknown_column": ("toy_fig1.yaml", "metric: offset_error * scenario", "metric: offset_eror * scenario"),
+    "dotted_typo": ("toy_fig1.yaml", "n_readings ** 0.6", "n_reading ** 0.6"),
+    "cells_none": ("toy_fig1.yaml", "cells: [{scenario.n_readings: 200}", "cells: [{scenario.n_readings: 2000}"),
+    "where_none": ("toy_fig1.yaml", 'op: "<"', 'where: {scenario.n_readings: 50}, op: "<"'),
+    "where_key": ("toy_fig1.yaml", 'op: "<"', 'where: {scenario.nreadings: 20}, op: "<"'),
+    "match_none": ("toy_fig1.yaml", "match: {scenario.n_readings: 20}", "match: {scenario.n_readings: 21}"),
+    "headline_part": ("paper.yaml", "parts: [toy_fig1.falls]", "parts: [toy_fig1.fall]"),
+}
+SPECS = {f"specs/{mistake}/toy/{name}": (text.replace(old, new) if name == file else text)
+         for mistake, (file, old, new) in SPEC_MISTAKES.items()
+         for name, text in (("paper.yaml", TOY_PAPER), ("toy_fig1.yaml", TOY_ARTIFACT))}
+
 BINARY = bytes(range(256)) * 4  # not UTF-8 text
 ENVIRON = b"SECRET_KEY=swordfish\x00HOME=/root\x00PATH=/usr/bin\x00"  # like /proc/self/environ
 
@@ -1226,6 +1261,23 @@ API_ESTIMATORS = ("cmaes", "de", "ellipsoid_specific", "ipso", "lm", "local", "m
 
 TABLE += generated_rows() + calibrate_rows()
 
+
+def spec_mistake(mistake: str, words: list[str]):
+    """A row: ``magexp reproduce toy --tiny`` of the toy paper with one spec mistake (:data:`SPEC_MISTAKES`)."""
+    return row("reproduce", ["toy", "--tiny", "--out", "fresh"], words,
+               patch=[("magexp.artifacts.paper_spec.EXPERIMENTS", Path("specs", mistake))])
+
+
+TABLE += [  # ---- a spec checked whole before any run (issue 44 item 2)
+    spec_mistake("unknown_column", ["toy_fig1.claims[falls].metric=", "'offset_eror'", "nearest: offset_error"]),
+    spec_mistake("dotted_typo", ["toy_fig1.claims[falls].metric=", "'scenario.n_reading'", "scenario.n_readings"]),
+    spec_mistake("cells_none", ["toy_fig1.claims[order].cells[0]=", "2000", "selects no planned cell", "[20, 200]"]),
+    spec_mistake("where_none", ["toy_fig1.claims[falls].where=", "selects no planned cell", "[20, 200]"]),
+    spec_mistake("where_key", ["toy_fig1.claims[falls].where=", "'scenario.nreadings'", "scenario.n_readings"]),
+    spec_mistake("match_none", ["toy_fig1.reported[0]", "match=", "21", "selects no planned cell", "[20, 200]"]),
+    spec_mistake("headline_part", ["toy/paper.yaml", "'falls'", "'toy_fig1.fall'", "toy_fig1 has claims falls, order"]),
+]
+
 CATEGORIES = ("clean", "not one line", "wrote something", "wrong result")
 
 #: the rows of each entry point that make test runs at most, evenly spaced over the table (:func:`in_make_test`)
@@ -1276,6 +1328,9 @@ def make_workdir(folder: Path) -> Path:
     a calibration already, and a link into ``results/``."""
     folder.mkdir(parents=True, exist_ok=True)
     for name, text in FILES.items():
+        (folder / name).write_text(text)
+    for name, text in SPECS.items():
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
         (folder / name).write_text(text)
     (folder / "binary.csv").write_bytes(BINARY)
     (folder / "environ").write_bytes(ENVIRON)
