@@ -1,0 +1,67 @@
+"""The whole spec checked before any run (issue 44 item 2, :mod:`magexp.artifacts.spec_check`): every committed
+artifact passes it; a metric names dotted config keys as written, evaluated and checked alike; a claim that cannot
+be evaluated is a bug, never a verdict. Each spec mistake through the command line: ``tests/test_bad_input.py``
+(its ``spec_mistake`` rows)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from magexp.artifacts.claims import Claim, NotEvaluable, evaluate
+from magexp.artifacts.paper_spec import papers
+from magexp.artifacts.plan import paper_specs, plan_artifact
+from magexp.artifacts.reproduce import skipped_for_data
+from magexp.artifacts.selection import column, expression
+from magexp.artifacts.spec_check import check_claims, check_plan, planned_table
+from magexp.errors import MagexpError
+
+
+@pytest.mark.parametrize("paper", papers())
+def test_every_committed_artifact_passes_the_check(paper):
+    """Each artifact of ``experiments/`` planned (one seed a cell: the cells are what is checked) passes the
+    check, on a planned table that has each planned cell once and the columns its claims name (an artifact
+    whose recordings are absent is skipped, as a reproduction skips it)."""
+    for spec in [s for s in paper_specs(paper) if not skipped_for_data(s, log=lambda line: None)]:
+        plan = plan_artifact(spec, seeds=1)
+        check_plan(plan)
+        table = planned_table(plan)
+        assert len(table) == len(plan.cells) and table.columns.is_unique
+        assert {c.metric for c in spec.claims if c.metric in table} <= set(table.columns)
+
+
+def test_a_dotted_config_key_is_written_as_it_is():
+    """``scenario.n_readings`` and ``iterations_to_1.1`` are columns, not attribute access: quoted where they
+    stand whole, left as written inside backticks or as part of a longer name."""
+    columns = ["offset_error", "scenario.n_readings", "scenario.n", "iterations_to_1.1"]
+    assert expression("offset_error * scenario.n_readings ** 0.6", columns) == "offset_error * `scenario.n_readings` ** 0.6"
+    assert expression("`scenario.n` + scenario.n", columns) == "`scenario.n` + `scenario.n`"
+    assert expression("log(iterations_to_1.1) - 1.5e-3", columns) == "log(`iterations_to_1.1`) - 1.5e-3"
+    table = pd.DataFrame({c: [2.0, 4.0] for c in columns})
+    np.testing.assert_allclose(column(table, "offset_error * scenario.n_readings ** 0.5"), [2 * 2 ** 0.5, 8.0])
+    with pytest.raises(MagexpError, match="scenario.n_reading"):
+        column(table, "offset_error * scenario.n_reading")
+
+
+def _runs() -> pd.DataFrame:
+    """A runs table of two cells (noise 1 and 2) of three seeds."""
+    return pd.DataFrame({"cell": [0, 0, 0, 1, 1, 1], "seed": [0, 1, 2] * 2, "scenario.noise": [1.0] * 3 + [2.0] * 3,
+                         "setting": ["scenario=s;scenario.noise=1"] * 3 + ["scenario=s;scenario.noise=2"] * 3,
+                         "estimator": ["lm"] * 6, "fun": [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]})
+
+
+def test_a_claim_that_cannot_be_evaluated_is_a_bug_not_a_verdict():
+    """A metric the runs lack or a selection of no cell raises :class:`NotEvaluable` when judged (never "does
+    not hold"), and the check refuses it first, naming the entry and what exists."""
+    runs = _runs()
+    good = Claim(id="low", text="t", kind="threshold", metric="fun * scenario.noise", op="<=", value=20)
+    assert evaluate(good, runs).holds
+    bad = [Claim(id="typo", text="t", kind="threshold", metric="fum", op="<=", value=1),
+           Claim(id="none", text="t", kind="threshold", where={"scenario.noise": 3}, op="<=", value=1),
+           Claim(id="pair", text="t", kind="ordering", cells=[{"scenario.noise": 1}, {"scenario.noise": 5}])]
+    words = ["'fum' is no column", "selects no planned cell", "selects no planned cell"]
+    for claim, said in zip(bad, words):
+        with pytest.raises(NotEvaluable, match="a bug"):
+            evaluate(claim, runs)
+        spec = type("Spec", (), {"name": "art", "claims": [claim]})()
+        with pytest.raises(MagexpError, match=f"art.claims\\[{claim.id}\\].*{said}.*"):
+            check_claims(spec, runs)
