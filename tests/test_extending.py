@@ -406,3 +406,26 @@ def test_following_extending_adds_an_estimator_a_paper_and_a_reader(copy, tmp_pa
     assert fitted.returncode == 0, fitted.stderr
     recorded = pd.read_csv(sorted(work.rglob("metrics.csv"))[-1])
     assert recorded.scenario.iloc[0] == "real_toy" and recorded.fun.iloc[0] < 0.5  # uT: the noise, not the errors
+
+
+@pytest.mark.full
+def test_adding_a_scenario_and_an_estimator_needs_no_test_edit(copy, tmp_path):
+    """Issue 44 item 6: a scenario YAML and an estimator YAML added to a copy of the repository, the documented
+    way (docs/extending.md: a copy of ``ding2024_exp1.yaml`` with other numbers; a config of an existing class),
+    and the copy's tests that count configs (tests/test_schemas.py, the typed-config checks of
+    tests/test_configs.py) pass unedited: they derive their counts from ``conf/`` and ``experiments/``."""
+    shutil.copytree(ROOT / "tests", copy / "tests", dirs_exist_ok=True,
+                    ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    scenario = (copy / "conf" / "scenario" / "ding2024_exp1.yaml").read_text()
+    scenario = re.sub(r"\nname: .*", "\nname: ding2024_toy", scenario)
+    (copy / "conf" / "scenario" / "ding2024_toy.yaml").write_text(scenario)
+    estimator = re.sub(r"\nname: .*", "\nname: lm_loose", (copy / "conf" / "estimator" / "lm.yaml").read_text())
+    (copy / "conf" / "estimator" / "lm_loose.yaml").write_text(estimator.replace("tol: 1.0e-12", "tol: 1.0e-8"))
+    env = {**os.environ, "PYTHONPATH": str(copy), "MAGEXP_CACHE": str(tmp_path / "cache")}
+    checks = subprocess.run([sys.executable, "-m", "pytest", "-rA", "-p", "no:randomly", "-p", "no:cacheprovider",
+                             "tests/test_schemas.py", "tests/test_configs.py", "-k",
+                             "typed_by_its_class or inherit_one_base or ding2024_toy or lm_loose"],
+                            cwd=copy, env=env, capture_output=True, text=True, timeout=600)
+    assert checks.returncode == 0, checks.stdout[-3000:]
+    ran = [line for line in checks.stdout.splitlines() if "PASSED" in line]
+    assert any("ding2024_toy" in line for line in ran) and any("lm_loose" in line for line in ran), checks.stdout[-3000:]

@@ -10,9 +10,11 @@ run) and once more on the stored runs a redraw judges (:func:`check_claims`):
   the cell's settings (its grid, cases and base keys, dotted names written as they are,
   :func:`magexp.artifacts.selection.expression`), the columns the runs table adds (:data:`TABLE_COLUMNS`,
   ``best_<success metric>``) and the metrics a run writes (every column of a committed
-  ``results/<paper>/*_runs.csv``: the runs are the code's output, :func:`written_columns`); the check
-  evaluates it on one row per planned cell with the same function the claim is judged with
-  (:func:`magexp.artifacts.selection.column`), so the two agree;
+  ``results/<paper>/*_runs.csv``: the runs are the code's output, :func:`written_columns`; where there is
+  none, a copy without ``results/``, only the expression's syntax is checked); the check evaluates it on
+  one row per planned cell with the same function the claim is judged with
+  (:func:`magexp.artifacts.selection.column`), so the two agree. A metric that only a new estimator
+  writes is known once its runs are committed (reproduce the artifact once without the claim);
 * every claim's ``where`` and each of its ``cells`` selects at least one planned cell (a key that is no
   setting must be a runs column, a row filter such as ``succeeded``, or ``seeds``);
 * every ``reported`` entry's ``match`` selects at least one planned cell (the cells' overrides, what
@@ -112,7 +114,7 @@ def planned_table(plan) -> pd.DataFrame:
     table = pd.DataFrame(rows)
     for key in {k for cell in plan.cells for k in cell}:
         table[key] = _numeric(table[key].tolist())
-    metrics = sorted((written_columns() | {f"best_{plan.spec.success.metric}", "succeeded", "offset_at_face"})
+    metrics = sorted((written_columns() | set(TABLE_COLUMNS) | {f"best_{plan.spec.success.metric}"})
                      - set(table.columns))
     return pd.concat([table, pd.DataFrame(1.0, index=table.index, columns=metrics)], axis=1)
 
@@ -177,6 +179,8 @@ def check_metric(where: str, metric: str, table: pd.DataFrame, settings: dict) -
     text = re.sub(r"`[^`]*`", " ", expression(metric, table.columns))
     unknown = [n for n in _NAME.findall(text) if n not in table.columns and n not in _WORDS]
     bad = [n.strip("`") for n in re.findall(r"`[^`]*`", metric) if n.strip("`") not in table.columns] + unknown
+    if bad and not written_columns():  # no committed runs name the metrics (a copy without results/): syntax only
+        table, bad = table.assign(**{n: 1.0 for n in bad}), []
     if bad:
         near = difflib.get_close_matches(bad[0], [str(c) for c in table.columns], n=3, cutoff=0.6)
         raise MagexpError(f"{where}={metric!r} is not allowed: {bad[0]!r} is no column of its runs "
