@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts.claims import NO_RUNS, Claim, evaluate, interpolate
+from magexp.artifacts.claims import NO_RUNS, Claim, NotEvaluable, evaluate, interpolate
 from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, adjust
 from magexp.artifacts.significance import (detect_rise, detectable_paired, fisher_greater, holm, permutation_less,
                                            wilcoxon_less)
@@ -58,8 +58,13 @@ def test_seeds_key_keeps_the_first_seeds():
 
 
 def test_no_runs_never_holds():
-    c = Claim(id="t", text="", kind="threshold", where={"estimator": "zz"}, op="<", value=1)
+    """Cells whose rows a row filter removes: the claim does not hold; a ``where`` selecting no cell at all is
+    no verdict but a bug of the spec check before the run (issue 44)."""
+    c = Claim(id="t", text="", kind="threshold", where={"estimator": "d", "seed": -1}, op="<", value=1)
     assert not evaluate(c, TABLE).holds
+    c = Claim(id="t", text="", kind="threshold", where={"estimator": "zz"}, op="<", value=1)
+    with pytest.raises(NotEvaluable, match="selects no cell"):
+        evaluate(c, TABLE)
 
 
 def test_bootstrap_interval_covers_the_statistic_and_is_deterministic():

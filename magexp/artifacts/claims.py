@@ -20,7 +20,8 @@ A claim sits in the artifact YAML next to the runs it is about::
         role: sanity                      # holds by construction: a check of the code, never counted
         ...
 
-``metric`` is a runs column or an expression of columns (``pandas.eval``); ``stat`` one of
+``metric`` is a runs column or an expression of columns (``pandas.eval``; a dotted config key written as it
+is, :func:`~magexp.artifacts.selection.expression`), checked before any run (:mod:`magexp.artifacts.spec_check`); ``stat`` one of
 :data:`STATS` over the seeds of the selected cells (pooled). Confidence intervals are 95 %
 percentile bootstrap intervals over seeds (a fixed generator: the same on every
 run, :func:`magexp.artifacts.tables.interval`). ``role: finding`` (default) claims with ``by: magexp``
@@ -213,14 +214,20 @@ def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
     return _evaluate_comparison(claim, table, stat)
 
 
-def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
-    """``kind: threshold | success``: ``stat`` of every selected cell against ``op value``."""
+def _threshold_cells(claim: Claim, table: pd.DataFrame) -> tuple[pd.DataFrame, dict, dict, list]:
+    """The rows after ``where``'s row filters, its settings, the cells' settings and the selected cells with
+    rows left; a ``where`` that selects no cell at all raises (a spec mistake, never a verdict)."""
     table, where, cells = restrict(table, claim.where)
     present = set(table.cell.unique().tolist())  # cells with rows left after the row filters
     selected = [ci for ci, s in cells.items() if matches(where, s)]
     if not selected:
         raise MagexpError(f"where={claim.where} selects no cell")
-    chosen = [ci for ci in selected if ci in present]
+    return table, where, cells, [ci for ci in selected if ci in present]
+
+
+def _evaluate_threshold(claim: Claim, table: pd.DataFrame, stat: str) -> Outcome:
+    """``kind: threshold | success``: ``stat`` of every selected cell against ``op value``."""
+    table, where, cells, chosen = _threshold_cells(claim, table)
     if not chosen:
         return Outcome(claim, False, f"no runs match {_name(claim.where)}")
     parts, stats, ok, n = [], [], True, []
