@@ -21,7 +21,7 @@ from pathlib import Path
 from magexp.paths import DATA, SHARED_DATA
 
 #: the endings of the two files of a two-stream recording, which is named by their common stem or by
-#: either file (:func:`magexp.core.recordings.read_two_stream`)
+#: either file (:mod:`magexp.core.readers.two_stream`)
 TWO_STREAM = ("_mag.csv", "_imu.csv")
 #: the file that makes a folder a ROS 2 bag (:mod:`magexp.core.readers.rosbag`)
 BAG_MARKER = "metadata.yaml"

@@ -27,7 +27,7 @@ code: binary records are decoded by fixed layouts (numpy views), ROS messages on
 message definitions built into rosbags (never the definitions a bag carries).
 
 A reader does not judge whether a log can support a calibration: a log with too few readings
-or one attitude loads, and :func:`magexp.calibration.calibrate_recording` refuses it in one line.
+or one attitude loads, and :func:`magexp.calibration.fit.calibrate_recording` refuses it in one line.
 """
 
 from __future__ import annotations

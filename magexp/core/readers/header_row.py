@@ -28,7 +28,7 @@ UNIT = "the magnetometer columns' suffix (`mx_uT`), else `data.unit`"
 EXTRA = None
 BINARY = False
 READ_MEMORY = 80
-#: the magnetometer columns a header row may name, first found used (:func:`read_header_row`; a DataFrame's too)
+#: the magnetometer columns a header row may name, first found used (:func:`read`; a DataFrame's too)
 MAG_COLUMNS = (("bx", "by", "bz"), ("mx", "my", "mz"), ("x", "y", "z"))
 #: the names of a header row's time column (seconds)
 TIME_COLUMNS = ("t", "t_s", "time", "time_s", "timestamp")
