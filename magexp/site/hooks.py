@@ -47,3 +47,12 @@ def on_files(files: Files, config) -> Files:
         files.append(File(f"{PREFIX}/{rel.as_posix()}", src_dir=str(RESULTS.parent), dest_dir=config.site_dir,
                           use_directory_urls=config.use_directory_urls))
     return files
+
+
+def on_post_build(config) -> None:
+    """``search/search_index.js``: the search index as a script, which the theme loads in place of the JSON
+    when the site is opened from ``file://`` (as Material's offline plugin writes it, without its
+    use_directory_urls change and its polyfill fetched from a CDN)."""
+    index = Path(config.site_dir) / "search" / "search_index.json"
+    if index.is_file():
+        index.with_suffix(".js").write_text(f"var __index = {index.read_text(encoding='utf-8')}", encoding="utf-8")

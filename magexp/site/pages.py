@@ -104,6 +104,16 @@ def sections(root: Path) -> list[Section]:
     return out
 
 
+#: a bold line that titles the table under it: ``**name** (note)``, then a blank line and a table
+TABLE_TITLE = re.compile(r"^\*\*(.+?)\*\*(.*)\n\n(?=\|)", re.M)
+
+
+def headed(text: str) -> str:
+    """``text`` with each bold line that titles a table made a heading, so a long page of tables has
+    headings to jump by."""
+    return TABLE_TITLE.sub(lambda m: f"### {m.group(1).replace('`', '')}{m.group(2)}\n\n", text)
+
+
 def overall(root: Path) -> str:
     """The report's ``**Overall.**`` paragraph (the counts of every claim and compared number)."""
     return next((line for line in (root / "REPORT.md").read_text().splitlines() if line.startswith("**Overall.**")), "")
@@ -233,7 +243,7 @@ def other_pages(root: Path, links: Links) -> dict[str, str]:
     out = {"peers.md": links.rewrite(demote(f"## {peers}\n{report.get(peers, '')}"), 0),
            "speed.md": links.rewrite(demote(f"## {speed}\n{appendix[speed]}"), 0) if speed else "# Speed of the core\n"}
     if (root / PEERS_TABLES).exists():  # the section links its every table
-        out[PEERS_TABLES] = demote((root / PEERS_TABLES).read_text())
+        out[PEERS_TABLES] = headed(demote((root / PEERS_TABLES).read_text()))
     return out
 
 
