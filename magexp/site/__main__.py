@@ -11,7 +11,7 @@ import tempfile
 from pathlib import Path
 
 from magexp.errors import MagexpError
-from magexp.site.browser import build, explorer_screenshot
+from magexp.site.browser import build, explorer_screenshot, require
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -25,6 +25,8 @@ def main(argv: list[str] | None = None) -> None:
     if args.screenshot is not None and args.screenshot.suffix.lower() != ".png":
         parser.exit(2, f"--screenshot {str(args.screenshot)!r}: a .png file is allowed\n")
     try:
+        if args.screenshot is not None:
+            require()
         with tempfile.TemporaryDirectory(prefix="magexp-site-") as tmp:
             site = args.site_dir or Path(tmp) / "site"
             build(site)
@@ -32,7 +34,8 @@ def main(argv: list[str] | None = None) -> None:
                 explorer_screenshot(site, args.screenshot)
     except MagexpError as exc:
         parser.exit(2, f"{exc}\n")
-    print(f"site built in {site}" + (f"; explorer screenshot: {args.screenshot}" if args.screenshot else ""))
+    where = site if args.site_dir else "a temporary folder (removed)"
+    print(f"site built strictly into {where}" + (f"; explorer screenshot: {args.screenshot}" if args.screenshot else ""))
 
 
 if __name__ == "__main__":

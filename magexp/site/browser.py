@@ -57,6 +57,13 @@ def playwright():
     return sync_playwright()
 
 
+def require() -> None:
+    """Nothing, when Playwright and a Chromium are there to take a screenshot; else the
+    :class:`MagexpError` saying which is missing (before anything is built or written)."""
+    playwright()
+    chromium()
+
+
 def explorer_screenshot(site: Path, out: Path, paper: str = "yuan2018") -> None:
     """A screenshot of the claims explorer in ``site`` into ``out``: the claims of ``paper``, sorted by
     p, the first row opened to its evidence and figure."""
