@@ -7,9 +7,12 @@ folder, ``screenshots/``). make test-full only: it builds the site and drives a 
 from __future__ import annotations
 
 import csv
+import functools
+import http.server
 import os
 import shutil
 import subprocess
+import threading
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
@@ -122,9 +125,31 @@ def test_the_explorers_filters_and_sorting_change_the_rows_shown(site, browser):
     shown.first.click()
     opened = table.locator(".mx-detail")
     assert opened.count() == 1 and "evidence" in opened.inner_text()
-    numbers = page.locator('.mx-explorer[data-table="numbers"] tr.mx-row')
-    assert numbers.count() > 0
+    numbers = page.locator('.mx-explorer[data-table="numbers"]')
+    every = numbers.locator("tr.mx-row").count()
+    numbers.locator('select[data-filter="verdict"]').select_option("reproduced")
+    assert 0 < numbers.locator("tr.mx-row").count() < every
     page.close()
+
+
+def test_the_sites_search_finds_a_claim_when_served(site, browser):
+    """The site's own search (served by any static server: the theme's search runs in a web worker)."""
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(Quiet, directory=str(site)))
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        page = browser.new_page(viewport={"width": 1280, "height": 900})
+        page.goto(f"http://127.0.0.1:{server.server_port}/results/")
+        page.keyboard.press("s")
+        page.keyboard.type("Circle map")
+        page.locator(".md-search-result__item").first.wait_for(timeout=15_000)
+        assert "results/" in page.locator(".md-search-result__item a").first.get_attribute("href")
+        page.close()
+    finally:
+        server.shutdown()
 
 
 def test_each_paper_page_is_not_blank(site, browser, tmp_path_factory):
