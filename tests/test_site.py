@@ -21,6 +21,7 @@ import pytest
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
 from magexp.site.browser import EXPLORER, build, chromium, launch, playwright
+from magexp.site.data import explorer_data
 
 pytestmark = pytest.mark.full
 #: a screenshot of a page's first screen has at least this many distinct colours and this share of
@@ -119,6 +120,11 @@ def test_the_explorers_filters_and_sorting_change_the_rows_shown(site, browser):
     assert shown.count() == sum(c["verdict"] == verdict and c["paper"] == claims[0]["paper"] for c in claims)
     table.locator('select[data-filter="verdict"]').select_option("")
     table.locator('select[data-filter="paper"]').select_option("")
+    data = explorer_data(RESULTS)["claims"]["rows"]
+    reading = next(r["reading"] for r in data if "; " in r["reading"]).split("; ")[-1]  # one of a claim's readings
+    table.locator('select[data-filter="reading"]').select_option(reading)
+    assert shown.count() == sum(reading in r["reading"].split("; ") for r in data) > 0
+    table.locator('select[data-filter="reading"]').select_option("")
     table.locator('th[data-sort="p"]').click()
     ps = [float(t) for t in table.locator('td[data-key="p"]').all_inner_texts() if t]
     assert len(ps) > 10 and ps == sorted(ps)

@@ -11,7 +11,7 @@ import re
 import pytest
 
 from magexp.paths import RESULTS
-from magexp.site.data import CLAIM_FILTERS, explorer_data, options, reading_of
+from magexp.site.data import CLAIM_FILTERS, explorer_data, options, reading_names, reading_of
 from magexp.site.pages import Links, nav, pages, sections
 
 pytestmark = pytest.mark.skipif(not (RESULTS / "REPORT.md").exists(), reason="results/ holds no report")
@@ -61,7 +61,20 @@ def test_the_filters_options_are_the_datas_values():
     claims = rows("claims.csv")
     for key in ("paper", "role", "verdict"):
         assert sorted(filters[key]) == sorted({r[key] for r in claims}), key
-    assert sorted(filters["reading"]) == sorted({reading_of(r) for r in claims})
+    readings = {v for r in explorer_data(RESULTS)["claims"]["rows"] for v in r["reading"].split("; ")}
+    assert sorted(filters["reading"]) == sorted(readings)
+    assert "Kennedy & Eberhart 1995: w = 1, c = 2" in filters["reading"]  # a headline's other reading, by name
+
+
+def test_a_claims_reading_is_named_by_the_headline_readings_it_tests():
+    names = reading_names(["ding2024"])
+    first = rows("claims.csv")[0]
+    assert first["role"] == "headline" and reading_of(first, names) == f"{first['primary_reading']} (primary reading)"
+    part = next(iter(names))
+    row = {"paper": part[0], "artifact": part[1].split(".")[0], "id": part[1].split(".")[1], "family": "sensitivity"}
+    assert reading_of(row, names) == names[part]
+    assert reading_of({**row, "id": "no_such_claim"}, names) == "other reading (re-test)"
+    assert reading_of({"paper": "x", "family": "sanity"}, names) == "none (sanity check)"
 
 
 def test_each_figure_is_on_its_paper_page_with_its_caption(site):

@@ -114,7 +114,10 @@
     var self = this;
     var rows = this.table.rows.filter(function (row) {
       return Object.keys(self.chosen).every(function (key) {
-        return !self.chosen[key] || String(row[key]) === self.chosen[key];
+        if (!self.chosen[key]) { return true; }
+        var multi = self.table.multi.indexOf(key) >= 0;  // several values in one field (magexp.site.data.MULTI)
+        var values = multi ? String(row[key]).split(self.table.separator) : [String(row[key])];
+        return values.indexOf(self.chosen[key]) >= 0;
       });
     });
     if (this.sort) {
