@@ -1,8 +1,8 @@
 """Assemble ``results/summary.csv``, ``results/claims.csv``, ``results/versions.csv``,
 ``results/REPORT.md`` and ``results/APPENDIX.md`` from the papers' parts.
 
-``REPORT.md`` is claims first (each paper's section at most :data:`MAX_LINES` lines and :data:`MAX_CHARS`
-characters, so a paper added makes room for itself; no text cut): per paper, (1) its headline claims with their verdicts under their primary readings, the deciding
+``REPORT.md`` is claims first (each paper's section at most :data:`MAX_CHARS` characters, so a paper added makes
+room for itself; no text cut; no line over :data:`~magexp.artifacts.formats.LINE_LIMIT`): per paper, (1) its headline claims with their verdicts under their primary readings, the deciding
 numbers and their robustness (:mod:`magexp.artifacts.headlines`), (2) the paper's findings, (3) the compared
 numbers (rows with a paper value), (4) the deviations. ``APPENDIX.md`` holds the rest: per
 artifact its figure, caption, full summary table (``n/a`` rows too), table and notes (measured
@@ -21,7 +21,8 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.claims import interpolate
-from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, write_csv
+from magexp.artifacts.formats import (PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, wrap_markdown,
+                                     write_csv)
 from magexp.artifacts.headlines import claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.kinds.heatmap import winners
 from magexp.artifacts.report_claims import (bold, counts, draw_readings, findings_table, headline_list, link,
@@ -37,9 +38,10 @@ from magexp.run import provenance
 
 SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "judged_value", "judged_lo", "judged_hi",
                  "judged_runs", "judged_n", "success_rate", "truth_in_interval", "verdict", "rel_difference"]
-#: limits of each section of REPORT.md (a paper's; the appendix holds the rest; the section "magexp beside
-#: MAGYC" links its claims table): a reviewer reads one in a few minutes
-MAX_LINES, MAX_CHARS = 150, 30_000
+#: the limit of each section of REPORT.md (a paper's; the appendix holds the rest; the section "magexp beside
+#: MAGYC" links its claims table): a reviewer reads one in a few minutes. Characters measure reading, not
+#: source lines, which depend on where :func:`~magexp.artifacts.formats.wrap_markdown` wraps
+MAX_CHARS = 30_000
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
@@ -395,14 +397,14 @@ def build(root: Path = RESULTS) -> None:
     ]
     text += [_report_section(p) for p in parts]
     text.append(_peers_section(root))
-    write_text(root / "REPORT.md", "\n".join(text))
+    write_text(root / "REPORT.md", wrap_markdown("\n".join(text)))
     appendix = ["# magexp report: appendix\n", "Everything [REPORT.md](REPORT.md) leaves out: per artifact its figure, "
                 "caption, every summary row (`n/a` rows too), its table and notes; per paper its sanity checks. "
                 "Columns of the tables: see the README (`results/summary.csv`); `judged_*` are the median, interval, "
                 "runs and their number that the verdict used.\n"]
     appendix += [_appendix_section(p) for p in parts]
     appendix.append(_speed_section(root))
-    write_text(root / "APPENDIX.md", "\n".join(appendix))
+    write_text(root / "APPENDIX.md", wrap_markdown("\n".join(appendix)))
 
 
 if __name__ == "__main__":
