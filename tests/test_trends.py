@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts import claims, trends
+from magexp.artifacts import claims, kinds, trends
 from magexp.artifacts.claims import Claim, evaluate
 from magexp.artifacts.comparisons import HOLDS, UNDECIDED
 from magexp.artifacts.spec import parse
@@ -129,3 +129,20 @@ def test_a_bad_trend_fails_at_load_in_one_line(change, words):
 def test_a_log_trend_needs_a_positive_axis():
     with pytest.raises(MagexpError, match="all positive with log: true"):
         parse({**BASE, "grid": {AXIS: [0, 20]}, "claims": [TREND]}, Path("toy_fig1.yaml"))
+
+
+def test_the_final_kind_draws_the_trend_and_a_figure_without_one_is_unchanged():
+    spec = parse({"title": "t", "kind": "final", "seeds": 30, "grid": {AXIS: list(NS), "estimator": ["ellipsoid", "lm"]},
+                  "plot": {"x": AXIS, "metric": "offset_error", "xscale": "log"},
+                  "claims": [{**TREND, "where": {"estimator": "ellipsoid"}}]}, Path("toy_fig1.yaml"))
+    table = runs(-0.5)
+    table[AXIS] = table.setting.str.extract(rf"{AXIS}=(\d+)")[0].astype(float)
+    cells = (table.groupby(["estimator", AXIS]).offset_error.quantile([0.25, 0.5, 0.75]).unstack()
+             .set_axis(["q25", "median", "q75"], axis=1).reset_index()
+             .assign(objective="scalar", metric="offset_error", n_seeds=30))
+    frame = pd.concat([cells, pd.DataFrame(trends.figure_rows(spec, table, AXIS, ["offset_error"]))], ignore_index=True)
+    drawn = kinds.kind("final").draw(frame, spec).axes[0]
+    labels = [line.get_label() for line in drawn.get_lines()]
+    assert "trend claim falls: least-squares fit" in labels and len(drawn.collections) >= 1
+    plain = kinds.kind("final").draw(cells, spec).axes[0]
+    assert not any("trend" in line.get_label() for line in plain.get_lines())

@@ -256,8 +256,10 @@ def _split_trends(frame: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
 def _trends(ax, fits: pd.DataFrame, x_key: str, metric: str, panel_key, pv) -> None:
     """Each trend claim of the panel's metric (and panel, where its ``where`` names it): its fitted line,
     solid black, and the 2.5-97.5 % band of its bootstrap lines, grey (:mod:`magexp.artifacts.trends`)."""
-    mine = fits[fits.metric == metric] if len(fits) else fits
-    if pv is not None and len(mine):
+    if not len(fits):
+        return
+    mine = fits[fits.metric == metric]
+    if pv is not None:
         mine = mine[mine[panel_key].astype(str) == str(pv)] if panel_key in mine else mine.iloc[:0]
     for name, line in mine.groupby("trend", sort=False):
         x = line[x_key].astype(float).to_numpy()
