@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 from magexp.artifacts import monte_carlo
+from magexp.artifacts.report import MONTE_CARLO_RULE, RULE, rule
 from magexp.artifacts.spec import parse
 from magexp.artifacts.summary import summarise
 from magexp.errors import MagexpError
@@ -87,3 +88,10 @@ def test_a_bad_monte_carlo_entry_fails_at_load_in_one_line(change, words):
     assert "\n" not in message and message.startswith("toy_fig1.reported[0] (offset_error): ")
     for w in words:
         assert w in message, (w, message)
+
+
+def test_the_reports_rule_names_the_case_only_where_a_row_uses_it():
+    plain = pd.DataFrame({"judged_runs": ["all seeds", "successful seeds"]})
+    assert rule(plain) == RULE  # the committed report: unchanged
+    with_mc = pd.DataFrame([verdict(round(MEDIAN, 2), statistic="median", trials=1000)])
+    assert rule(with_mc) == RULE + MONTE_CARLO_RULE and "trials" in MONTE_CARLO_RULE
