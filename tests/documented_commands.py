@@ -202,6 +202,9 @@ COMMANDS: dict[str, tuple] = {
     # docs/results.md, Sample sizes: the planned seeds of each comparison (planning only, no run: 2 s)
     "python -m magexp.artifacts.sample_sizes yuan2018": (RUN_FULL, "prints each comparison's effect, level, seeds and power"),
     "python -m magexp.perf.bench --help": (RUN_FULL, "prints the options (two interpreters: one BLAS thread)"),
+    "python -m magexp.site --screenshot docs/img/explorer.png": (RUN_FULL, "builds the site and photographs the "
+                                                                  "explorer in headless Chromium: 20 s",
+                                                                  {"replace": {"docs/img/explorer.png": "explorer.png"}}),
     "python -m magexp.artifacts.kinds": (RUN_FULL, "rewrites the table of kinds in docs/extending.md (the same "
                                          "bytes when current, which test_extending checks)"),
     "python -m magexp.core.readers": (RUN_FULL, "rewrites the table of formats in docs/calibrate.md (the same "

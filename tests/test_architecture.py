@@ -64,6 +64,7 @@ MAY_IMPORT = {
     "artifacts": {"core", "problems", "scenarios", "estimators", "run"},
     "calibration": {"core", "problems", "scenarios", "estimators", "run", "artifacts"},
     "perf": {"core", "problems", "scenarios", "estimators", "run", "artifacts", "calibration"},
+    "site": {"core", "problems", "scenarios", "estimators", "run", "artifacts"},
 }
 
 

@@ -63,6 +63,7 @@ def test_strict_build_fails_on_a_broken_link(tmp_path):
     """The strict build is a check: a link to a missing heading fails it (mkdocs.yml's validation)."""
     shutil.copytree(DOCS, tmp_path / "docs")
     shutil.copy(ROOT / "mkdocs.yml", tmp_path / "mkdocs.yml")
+    (tmp_path / "magexp").symlink_to(ROOT / "magexp")  # mkdocs.yml's hook (the results pages) beside it
     page = tmp_path / "docs" / "index.md"
     page.write_text(page.read_text() + "\n[broken](results.md#no-such-heading)\n")
     done = build(tmp_path / "mkdocs.yml", tmp_path / "site")

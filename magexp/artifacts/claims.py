@@ -5,7 +5,7 @@ A claim sits in the artifact YAML next to the runs it is about::
     claims:
       - id: ipso_converges
         text: "IPSO reaches the optimum the truth gives on at least 90 % of seeds at every noise level"
-        kind: success                     # threshold | success | ordering | winner
+        kind: success                     # threshold | success | ordering | winner | trend
         where: {estimator: ipso}          # every selected cell must satisfy it
         op: ">="
         value: 0.9
@@ -42,6 +42,10 @@ better than every other) hold only when a test separates the two sides (``test:`
   estimator-side keys (``estimator``, ``estimator.*``, ``objective``) and have the same seeds,
   ``unpaired`` otherwise.
 
+A **trend** (``kind: trend``: the slope of ``metric``, or of its log against the log of ``axis``, over every
+cell of a grid ``axis``, judged against ``between: [lo, hi]`` or ``sign``) is decided by its bootstrap
+interval over seeds: :mod:`magexp.artifacts.trends` states the statistic, the interval and the rule.
+
 Each comparison is decided by :mod:`magexp.artifacts.comparisons` (its ``p``, ``p_min``,
 ``detectable`` and Holm's adjustment within its family).
 
@@ -62,17 +66,18 @@ import pandas as pd
 
 from magexp.artifacts.censoring import censored_mask, censored_statistic, censored_text
 from magexp.artifacts.comparisons import HOLDS, combined, compare, decide
-from magexp.artifacts.schema import Float, typed
+from magexp.artifacts.schema import Bool, Float, typed
 from magexp.artifacts.selection import cell_settings, restrict, select, values
 from magexp.artifacts.significance import effect_error
 from magexp.artifacts.tables import STATS, interval, matches
+from magexp.artifacts import trends
 from magexp.errors import MagexpError
 
 OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge, ">": operator.gt}
 #: the words of an operator and of a statistic in a claim's short evidence
 OP_WORDS = {"<=": "at most", "<": "below", ">=": "at least", ">": "above"}
 STAT_WORDS = {"success_rate": "success rate", "max": "largest", "min": "smallest"}
-KINDS = ("threshold", "success", "ordering", "winner")
+KINDS = ("threshold", "success", "ordering", "winner", "trend")
 #: ``finding``: counted; ``sanity``: true by construction, a check of the code; ``exploratory``: a setting
 #: chosen because its runs resemble the paper's numbers, shown but never counted nor tested in a family
 ROLES = ("finding", "sanity", "exploratory")
@@ -103,6 +108,10 @@ class Claim:
     figure: str = ""
     test: str = "auto"
     effect: dict = field(default_factory=dict)
+    axis: str = ""  # a trend's grid key (magexp.artifacts.trends), with log, between or sign
+    log: Bool = False
+    between: list[Float] = field(default_factory=list)
+    sign: str = ""
 
     def __post_init__(self):
         checks = [("kind", self.kind, KINDS), ("by", self.by, ("magexp", "paper")), ("stat", self.stat, tuple(STATS)),
@@ -211,6 +220,8 @@ def _evaluate(claim: Claim, table: pd.DataFrame) -> Outcome:
     stat = "success_rate" if claim.kind == "success" else claim.stat
     if claim.kind in ("threshold", "success"):
         return _evaluate_threshold(claim, table, stat)
+    if claim.kind == "trend":
+        return _evaluate_trend(claim, table)
     return _evaluate_comparison(claim, table, stat)
 
 
@@ -271,6 +282,14 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
                       for (i, j), t in zip(pairs, tests))
     return Outcome(claim, result == HOLDS, head + "; ".join(parts) + "; one-sided tests: " + "; ".join(t.text for t in tests),
                    result=result, short=short, **joined)
+
+
+def _evaluate_trend(claim: Claim, table: pd.DataFrame) -> Outcome:
+    """``kind: trend``: the slope's bootstrap interval against the claim's range (:mod:`magexp.artifacts.trends`);
+    ``observed`` is the slope, ``n`` the fewest seeds at an axis value."""
+    f = trends.fit(claim, table)
+    result, short, evidence = trends.words(claim, f)
+    return Outcome(claim, result == HOLDS, evidence, result=result, short=short, n=int(f.n.min()), observed=f.slope)
 
 
 def _short_value(v: float) -> str:

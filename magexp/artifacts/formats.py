@@ -7,6 +7,8 @@ one unit of these digits."""
 
 from __future__ import annotations
 
+import re
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +26,9 @@ MEASURED = "wall_time"
 #: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
 #: them out unless both sides have their source)
 PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
+#: the longest line the report's Markdown holds (issue 43): a longer paragraph or list item is wrapped at
+#: :data:`WRAP` columns (the rendered page is the same), a table with a longer row is written as a list
+LINE_LIMIT, WRAP = 500, 120
 
 
 def _floats(column: pd.Series) -> np.ndarray | None:
@@ -120,5 +125,29 @@ def markdown_table(frame: pd.DataFrame, columns: list[str], tex: Path | None = N
         raise MagexpError(f"an empty table ({', '.join(columns)}) would be printed: say so in words instead")
     if tex is not None:
         write_text(tex, latex_table(frame, columns))
-    head = "| " + " | ".join(names or columns) + " |\n|" + "---|" * len(columns) + "\n"
-    return head + "".join("| " + " | ".join(_cell(r[c]) for c in columns) + " |\n" for _, r in frame.iterrows())
+    names = names or columns
+    rows = [[_cell(r[c]) for c in columns] for _, r in frame.iterrows()]
+    lines = ["| " + " | ".join(cells) + " |" for cells in rows]
+    if max(map(len, lines)) <= LINE_LIMIT:
+        return "| " + " | ".join(names) + " |\n|" + "---|" * len(columns) + "\n" + "".join(f"{x}\n" for x in lines)
+    return "".join(f"- **{cells[0]}** — " + "; ".join(f"{n}: {c}" for n, c in zip(names[1:], cells[1:])) + "\n"
+                   for cells in rows)
+
+
+#: a Markdown line that is not prose: a table row, a heading, a code fence, a raw HTML line
+_NOT_PROSE = re.compile(r"^\s*(\||#|```|<)")
+
+
+def wrap_markdown(text: str) -> str:
+    """``text`` with every prose line (paragraph or list item) longer than :data:`LINE_LIMIT` wrapped at
+    :data:`WRAP` columns, list items with their continuation indented: the same page rendered, a source a
+    reviewer can read and diff."""
+    out = []
+    for line in text.split("\n"):
+        if len(line) <= LINE_LIMIT or _NOT_PROSE.match(line):
+            out.append(line)
+            continue
+        item = re.match(r"^(\s*(?:[-*]|\d+\.)\s+)", line)
+        indent = " " * len(item.group(1)) if item else re.match(r"^\s*", line).group(0)
+        out += textwrap.wrap(line, WRAP, subsequent_indent=indent, break_long_words=False, break_on_hyphens=False)
+    return "\n".join(out)

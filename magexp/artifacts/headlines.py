@@ -191,7 +191,7 @@ def _failing(verdict: str, deciding: list[str], parts: list) -> tuple[str, set]:
 def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
     """One ``claims.csv`` row per evaluated claim of ``paper`` (its ``family``; ``level``, ``p``,
     ``p_adjusted``, ``p_min`` for comparisons; ``detectable`` at the row's level beside the ``observed``
-    effect where no difference is detected; a comparison's declared ``effect`` in words and the
+    effect where no difference is detected, a trend's slope; a comparison's declared ``effect`` in words and the
     ``seeds_planned`` for it, :func:`magexp.artifacts.power.claim_plans`, whose evidence says the power
     reached where the cap bound).
     """
@@ -209,6 +209,6 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
                      "family": o.family, "level": o.level if o.is_comparison else np.nan,
                      "p": o.p, "p_adjusted": o.p_adjusted, "p_min": o.p_min,
                      "detectable": o.detectable if undetected else np.nan,
-                     "observed": o.observed if undetected else np.nan, "seeds": o.n or np.nan,
+                     "observed": o.observed if undetected or o.claim.kind == "trend" else np.nan, "seeds": o.n or np.nan,
                      "effect": plan.words if plan else "", "seeds_planned": plan.seeds if plan else np.nan})
     return rows

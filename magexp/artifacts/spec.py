@@ -47,7 +47,8 @@ from typing import Any
 import yaml
 
 from magexp.artifacts.claims import Claim
-from magexp.artifacts import kinds
+from magexp.artifacts import kinds, trends
+from magexp.artifacts.monte_carlo import STATISTICS
 from magexp.artifacts.schema import Bool, Float, Int, allowed, build, typed, unknown
 from magexp.core.outcomes import ROUNDOFF_FLOOR, SUCCESS_FACTOR
 from magexp.errors import MagexpError
@@ -151,6 +152,8 @@ class Reported:
     informative: Bool = True  # false: a row inside its interval is ``uninformative`` (``reason`` says why)
     compared: Bool = True  # false: the row is ``not compared`` (``reason`` says why: not comparable, a repeat)
     reason: str = ""
+    statistic: str | None = None  # the paper's value is this statistic over its own ``trials`` (magexp.artifacts.monte_carlo)
+    trials: Int | None = None
 
     def __post_init__(self):
         if not self.informative and not str(self.reason).strip():
@@ -255,6 +258,32 @@ def _check_fixed_tolerances(art: Artifact, where: str) -> None:
                           f"({loose[0]}) needs at least {MIN_SEEDS_COMPARED} seeds")
 
 
+def _check_trends(art: Artifact, where: str) -> None:
+    """Every trend claim names a numeric grid axis and one range; no other claim has a trend's keys
+    (:func:`magexp.artifacts.trends.spec_error`)."""
+    for i, c in enumerate(art.claims):
+        why = trends.spec_error(c, art.grid)
+        if why:
+            raise MagexpError(f"{where}.claims[{i}] ({c.id}): {why}")
+
+
+def _check_monte_carlo(art: Artifact, where: str) -> None:
+    """A reported statistic over the paper's trials names both ``statistic`` (one of
+    :data:`~magexp.artifacts.monte_carlo.STATISTICS`) and ``trials`` (at least 1), and no fixed tolerance."""
+    for i, r in enumerate(art.reported):
+        at = f"{where}.reported[{i}] ({r.quantity})"
+        if r.statistic is None and r.trials is None:
+            continue
+        if r.statistic not in STATISTICS:
+            raise MagexpError(f"{at}: statistic={r.statistic!r} is not allowed: choose one of {', '.join(STATISTICS)}"
+                              " (the paper's value is that statistic over its trials)")
+        if r.trials is None or r.trials < 1:
+            raise MagexpError(f"{at}: trials={r.trials!r} is not allowed: give the paper's number of trials, at least 1")
+        if r.tolerance is not None or art.tolerance is not None:
+            raise MagexpError(f"{at}: statistic={r.statistic!r} with a fixed tolerance is not allowed: "
+                              "a statistic over trials is judged against our statistic's interval, not a tolerance")
+
+
 def check_unique_ids(items: list, where: str) -> None:
     """Raise unless the ``id`` of every item of ``items`` differs from the others."""
     ids = [item.id for item in items]
@@ -277,6 +306,8 @@ def parse(data: dict, path: Path) -> Artifact:
     art.path = path
     art.plot = kinds.plot_of(art.kind, plot, where)
     _check_fixed_tolerances(art, where)
+    _check_trends(art, where)
+    _check_monte_carlo(art, where)
     check_unique_ids(art.claims, f"{where}.claims")
     if art.max_seeds < art.seeds:
         raise MagexpError(f"{where}.max_seeds={art.max_seeds} is not allowed: at least seeds ({art.seeds})")

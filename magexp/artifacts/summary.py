@@ -34,7 +34,9 @@ far the paper's number is from ours on that scale.
 ``label`` names the row for a reader (:mod:`magexp.artifacts.row_labels`); ``reason`` says in a
 line why the verdict is what it is. ``truth_in_interval`` says whether the true calibration's value
 is in the interval too: then the row shows that the method converged to the noise floor, not more.
-A fixed tolerance is used only where the paper gives no run to compare with
+A paper's value that is a statistic over its own trials (``reported[].statistic`` and ``trials``) is judged
+against the interval of that statistic over as many runs like ours (:mod:`magexp.artifacts.monte_carlo`),
+not against the spread of single runs; ``judged_runs`` says so. A fixed tolerance is used only where the paper gives no run to compare with
 (``reported[].tolerance`` with its ``reason``). For a single deterministic run on recorded data
 (``interval: ls``), the interval is the least-squares estimate ± t(0.975, dof) standard errors
 (:mod:`magexp.artifacts.least_squares`).
@@ -47,6 +49,7 @@ import re
 import numpy as np
 import pandas as pd
 
+from magexp.artifacts import monte_carlo
 from magexp.artifacts.censoring import censor_row, censored_mask
 from magexp.artifacts.least_squares import f_test, least_squares_interval
 from magexp.artifacts.plan import ArtifactRuns
@@ -149,13 +152,15 @@ def _row(spec, quantity, estimator, setting, truth, values, settings, *, ok=None
     floor = float(spec.floor)
     n = row_numbers(v, ok, paper, parameters=parameters, success_threshold=success_threshold, aggregate=aggregate,
                     floor=floor, ls=ls)
+    n.update(monte_carlo.judged(v, entry))  # a statistic over the paper's trials: its interval
     success_rate, med, jlo, jhi, outcome = n["success_rate"], n["value"], n["jlo"], n["jhi"], n["outcome"]
     width = entry.half_unit() if entry is not None else 0.0
     tol = None if entry is None else (entry.tolerance or spec.tolerance)
-    judged = _judged(n["judged"], med, aggregate, ls, tol, outcome)
+    judged = _judged(n["judged"], med, aggregate, ls, tol, outcome, entry)
     verdict = judge(paper, jlo, jhi, width, success_rate, floor=floor, tolerance=tol, value=med)
     within = paper is not None and inside(paper, jlo, jhi, width, floor=floor, tolerance=tol, value=med)
-    reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, outcome, ls is not None, within)
+    against = _against(entry, outcome, ls is not None)
+    reason = _reason(verdict, paper, jlo, jhi, success_rate, tol, med, against, within)
     kind = "ratio" if ratio else "parameter" if parameters else "value"
     verdict, reason = _informative(verdict, reason, entry, tol, lambda: uninformative(
         paper, jlo, jhi, kind=kind, search_range=search_range, block_scale=block_scale, median=med,
@@ -184,11 +189,14 @@ def relative(x: float) -> str:
     return f"{100 * x:{'.0f' if x >= 1 else '.2g'}} % of its scale"
 
 
-def _judged(runs: np.ndarray, med: float, aggregate: str, ls, tol, outcome: str) -> dict:
+def _judged(runs: np.ndarray, med: float, aggregate: str, ls, tol, outcome: str, entry=None) -> dict:
     """``judged_runs``, ``judged_n`` and ``judged_value`` of a row: which runs the verdict used, how
     many, and their median (the least-squares estimate of an ``ls`` row, the row's value for a fixed
-    tolerance or an ``aggregate: mean`` row)."""
+    tolerance or an ``aggregate: mean`` row; a paper's statistic over trials: ours,
+    :func:`magexp.artifacts.monte_carlo.columns`)."""
     finite = runs[np.isfinite(runs)]
+    if entry is not None and entry.statistic is not None:
+        return monte_carlo.columns(runs, entry)
     if ls is not None:
         return {"judged_runs": "least-squares t-interval", "judged_n": 1, "judged_value": float(ls[0])}
     which = f"{outcome} seeds" if outcome else "all seeds"
@@ -249,18 +257,28 @@ def _tolerance_text(entry, tol, ls, width: float) -> str:
         return ""
     if tol is not None:
         return tol.text()
+    if entry.statistic is not None:
+        return f"95 % of {monte_carlo.words(entry).removeprefix('our ')}" + (f" ± {width:.2g}" if width else "")
     return ("ls t-interval" if ls is not None else "95 % of runs") + (f" ± {width:.2g}" if width else "")
 
 
-def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol, med: float, outcome: str,
-            ls: bool, within: bool) -> str:
-    """A short line: why ``verdict`` (numbers from the row; ``within``: :func:`inside`)."""
+def _against(entry, outcome: str, ls: bool) -> str:
+    """What a row's interval is of, in its reason: the least-squares t-interval, our runs (of the paper
+    run's outcome), or our statistic over the paper's trials (:mod:`magexp.artifacts.monte_carlo`)."""
+    if entry is not None and entry.statistic is not None:
+        return monte_carlo.words(entry)
+    return "the least-squares t-interval" if ls else f"our {outcome} runs" if outcome else "our runs"
+
+
+def _reason(verdict: str, paper, lo: float, hi: float, success_rate: float, tol, med: float, against: str,
+            within: bool) -> str:
+    """A short line: why ``verdict`` (numbers from the row; ``against``: what the interval is of,
+    :func:`_against`; ``within``: :func:`inside`)."""
     if verdict == "n/a":
         return ""
     if tol is not None:
         where = f"median {med:.4g} vs paper {paper:.4g} ({tol.text()})"
     else:
-        against = "the least-squares t-interval" if ls else f"our {outcome} runs" if outcome else "our runs"
         where = f"paper {paper:.4g} {'inside' if within else 'outside'} {against} ({lo:.4g} to {hi:.4g})"
     if within and failed_majority(success_rate):
         return f"our runs succeed on {success_rate:.0%} of seeds (a failed majority); {where}"

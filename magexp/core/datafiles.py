@@ -21,7 +21,7 @@ from pathlib import Path
 from magexp.paths import DATA, SHARED_DATA
 
 #: the endings of the two files of a two-stream recording, which is named by their common stem or by
-#: either file (:func:`magexp.core.recordings.read_two_stream`)
+#: either file (:mod:`magexp.core.readers.two_stream`)
 TWO_STREAM = ("_mag.csv", "_imu.csv")
 #: the file that makes a folder a ROS 2 bag (:mod:`magexp.core.readers.rosbag`)
 BAG_MARKER = "metadata.yaml"
@@ -73,6 +73,7 @@ def _as_files(text: str) -> list[Path]:
 
 @lru_cache(maxsize=4096)
 def _file_digest(path: Path, mtime_ns: int, size: int) -> str:
+    """The sha256 of ``path``, cached on its ``mtime_ns`` and ``size`` so an unchanged file is read once per process."""
     h = hashlib.sha256()
     with path.open("rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -81,18 +82,8 @@ def _file_digest(path: Path, mtime_ns: int, size: int) -> str:
 
 
 def data_formats(resolved: dict) -> dict[Path, str | None]:
-    """``{path: format}`` of every existing file that a string value of the config names: the
-    ``format`` value beside that string (``scenario.format``, ``data.format``), None if there is none.
-
-    Parameters
-    ----------
-    resolved : dict
-        The resolved config tree.
-
-    Returns
-    -------
-    dict
-        Path -> format (or None), for every file named.
+    """``{path: format}`` of every existing file a string of the ``resolved`` config names, with the ``format``
+    value beside that string (``scenario.format``, ``data.format``; None if none): which reader the run executes.
     """
     found = {}
     for text, format in dict.fromkeys(_strings(resolved)):
@@ -102,20 +93,8 @@ def data_formats(resolved: dict) -> dict[Path, str | None]:
 
 
 def data_files(resolved: dict, formats: dict | None = None) -> dict[str, str]:
-    """``{path: sha256}`` of every existing file that a string value of the config names (``formats``:
-    its :func:`data_formats`, found here if None).
-
-    Parameters
-    ----------
-    resolved : dict
-        The resolved config tree.
-    formats : dict, optional
-        Its :func:`data_formats`.
-
-    Returns
-    -------
-    dict
-        Path (str) -> the file's sha256 hex digest, part of a run's cache key.
+    """``{path: sha256}`` of those files (``formats``: their :func:`data_formats`, found here if None): the
+    content part of a run's cache key.
     """
     out = {}
     for path in data_formats(resolved) if formats is None else formats:

@@ -9,21 +9,8 @@ from magexp.errors import MagexpError
 
 
 def with_section(text: str, begin: str, end: str, section: str) -> str:
-    """``text`` with the lines from ``begin`` to ``end`` replaced by ``section`` (which holds both markers).
-
-    Parameters
-    ----------
-    text : str
-        The page, holding ``begin`` and ``end`` once each.
-    begin, end : str
-        The marker lines.
-    section : str
-        The new section, markers included.
-
-    Returns
-    -------
-    str
-        The page with its section replaced.
+    """``text`` with the lines from marker ``begin`` to marker ``end`` replaced by ``section`` (which holds both);
+    one line if the page does not hold each marker once.
     """
     if text.count(begin) != 1 or text.count(end) != 1:
         raise MagexpError(f"the page must hold the lines {begin!r} and {end!r} once each")

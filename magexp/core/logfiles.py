@@ -27,7 +27,7 @@ code: binary records are decoded by fixed layouts (numpy views), ROS messages on
 message definitions built into rosbags (never the definitions a bag carries).
 
 A reader does not judge whether a log can support a calibration: a log with too few readings
-or one attitude loads, and :func:`magexp.calibration.calibrate_recording` refuses it in one line.
+or one attitude loads, and :func:`magexp.calibration.fit.calibrate_recording` refuses it in one line.
 """
 
 from __future__ import annotations
@@ -50,25 +50,7 @@ NED_TO_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 
 def need(module: str, what: str):
-    """The module ``module`` (``pyulog.core``, ...), or one line naming the extra to install.
-
-    Parameters
-    ----------
-    module : str
-        The module's dotted name.
-    what : str
-        What it is needed for (``a ULog``), named in the refusal.
-
-    Returns
-    -------
-    module
-        The imported module.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the ``pip install 'magexp[<extra>]'`` to run (:data:`EXTRAS`).
-    """
+    """The module ``module``, or one line naming the ``pip install 'magexp[<extra>]'`` (:data:`EXTRAS`) that ``what`` (``a ULog``) needs."""
     try:
         return importlib.import_module(module)
     except ImportError:
@@ -78,29 +60,7 @@ def need(module: str, what: str):
 
 
 def log_unit(unit, fixed: str, name: str, what: str) -> str:
-    """``fixed``, the unit a log format defines; one line if ``data.unit`` (``unit``) names another.
-
-    Parameters
-    ----------
-    unit : str or None
-        ``data.unit`` (None: not given).
-    fixed : str
-        The format's unit.
-    name : str
-        The log, named in the refusal.
-    what : str
-        What is in ``fixed``, named in the refusal.
-
-    Returns
-    -------
-    str
-        ``fixed``.
-
-    Raises
-    ------
-    MagexpError
-        One line when ``unit`` names another.
-    """
+    """``fixed``, the unit a log format defines; one line naming the log ``name`` and ``what`` is in it if ``unit`` (``data.unit``) names another."""
     if unit is not None and unit != fixed:
         raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: {what} is in {fixed} (leave data.unit "
                           "unset)")
@@ -108,27 +68,17 @@ def log_unit(unit, fixed: str, name: str, what: str) -> str:
 
 
 def angles_from_attitude(a: np.ndarray) -> np.ndarray:
-    """``(N, 3)`` ``[heading, roll, trim]`` (radians) with ``ship_attitude(*angles.T) == a``.
+    """``(N, 3)`` ``[heading, roll, trim]`` (radians, Yan & Zhou 2022 eq 2) of navigation -> sensor rotations ``a``,
+    with ``ship_attitude(*angles.T) == a``.
 
-    :func:`magexp.core.geometry.ship_attitude` is ``A = R_y(t) R_x(-r) R_z(-h)`` (active rotations).
-    Its middle row is ``[cos r' sin h', cos r' cos h', -sin r']`` and its last column
-    ``[sin t cos r', -sin r', cos t cos r']`` with ``r' = -r``, ``h' = -h``; so
+    :func:`magexp.core.geometry.ship_attitude` is ``A = R_y(t) R_x(-r) R_z(-h)`` (active rotations); its middle row
+    is ``[cos r' sin h', cos r' cos h', -sin r']`` and its last column ``[sin t cos r', -sin r', cos t cos r']``
+    (``r' = -r``, ``h' = -h``), so
 
     .. math:: r = \\arcsin A_{12},\\quad h = -\\operatorname{atan2}(A_{10}, A_{11}),\\quad
               t = \\operatorname{atan2}(A_{02}, A_{22}).
 
-    Exact for every rotation with ``|A_12| < 1`` (the logged attitudes: ``|A_12| = 1`` is the
-    body's y axis along the navigation z axis, a 90° roll about x after the heading turn).
-
-    Parameters
-    ----------
-    a : ndarray, shape (N, 3, 3)
-        Navigation -> sensor rotations.
-
-    Returns
-    -------
-    ndarray, shape (N, 3)
-        Yan & Zhou 2022's eq 2 angles ψ, θ, φ.
+    Exact whenever ``|A_12| < 1`` (``|A_12| = 1``: the body's y axis along the navigation z axis).
     """
     a = np.asarray(a, float)
     roll = np.arcsin(np.clip(a[..., 1, 2], -1.0, 1.0))
@@ -147,28 +97,8 @@ def _unit_quaternions(q: np.ndarray) -> np.ndarray:
 
 
 def attitude_at(times: np.ndarray, quats: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """Body -> NED rotations ``(len(at), 3, 3)`` at the times ``at``: the logged unit quaternions
-    ``[w, x, y, z]`` (body -> NED) at ``times`` interpolated by spherical linear interpolation
-    between the two neighbouring samples (held at the first or last outside them), vectorised.
-
-    Parameters
-    ----------
-    times : ndarray, shape (K,)
-        The quaternions' times (s).
-    quats : ndarray, shape (K, 4)
-        Body -> NED quaternions ``[w, x, y, z]`` (normalised here).
-    at : ndarray, shape (M,)
-        The times wanted (s).
-
-    Returns
-    -------
-    ndarray, shape (M, 3, 3)
-        The rotations.
-
-    Raises
-    ------
-    MagexpError
-        One line for a zero or non-finite quaternion.
+    """Body -> NED rotations ``(len(at), 3, 3)`` at the times ``at``: the logged body -> NED quaternions ``[w, x, y, z]``
+    at ``times`` slerped between neighbouring samples (held outside them); one line for a zero or non-finite one.
     """
     q = _unit_quaternions(quats)
     times = np.asarray(times, float)
@@ -191,19 +121,7 @@ def attitude_at(times: np.ndarray, quats: np.ndarray, at: np.ndarray) -> np.ndar
 
 
 def euler_quaternions(roll, pitch, yaw) -> np.ndarray:
-    """Unit quaternions ``[w, x, y, z]`` of the aerospace ``Z-Y-X`` Euler angles (radians): the
-    body -> NED rotation ``R_z(yaw) R_y(pitch) R_x(roll)``.
-
-    Parameters
-    ----------
-    roll, pitch, yaw : array_like
-        Radians, broadcast to one dimension.
-
-    Returns
-    -------
-    ndarray, shape (N, 4)
-        The quaternions.
-    """
+    """Unit quaternions ``[w, x, y, z]`` of the aerospace Z-Y-X Euler angles (radians): body -> NED ``R_z(yaw) R_y(pitch) R_x(roll)``."""
     cr, sr = np.cos(np.asarray(roll, float) / 2), np.sin(np.asarray(roll, float) / 2)
     cp, sp = np.cos(np.asarray(pitch, float) / 2), np.sin(np.asarray(pitch, float) / 2)
     cy, sy = np.cos(np.asarray(yaw, float) / 2), np.sin(np.asarray(yaw, float) / 2)
@@ -212,47 +130,16 @@ def euler_quaternions(roll, pitch, yaw) -> np.ndarray:
 
 
 def navigation_angles(times: np.ndarray, quats: np.ndarray, at: np.ndarray, *, enu: bool = False) -> np.ndarray:
-    """``[heading, roll, trim]`` at ``at`` of the NED -> body rotations of body -> navigation
-    quaternions ``quats`` at ``times``; ``enu``: the quaternions rotate into ENU (ROS, REP-103),
-    converted to NED (``A_ned = A_enu C``, ``C`` = :data:`NED_TO_ENU`).
-
-    Parameters
-    ----------
-    times : ndarray, shape (K,)
-        The quaternions' times (s).
-    quats : ndarray, shape (K, 4)
-        Body -> navigation quaternions ``[w, x, y, z]``.
-    at : ndarray, shape (M,)
-        The readings' times (s).
-    enu : bool
-        The navigation frame is ENU (else NED).
-
-    Returns
-    -------
-    ndarray, shape (M, 3)
-        Yan & Zhou 2022's eq 2 angles (:func:`angles_from_attitude`).
+    """``[heading, roll, trim]`` (:func:`angles_from_attitude`) at ``at`` of body -> navigation quaternions ``quats``
+    at ``times``; ``enu``: they rotate into ENU (ROS, REP-103), converted to NED (``A_ned = A_enu C``, :data:`NED_TO_ENU`).
     """
     to_body = np.transpose(attitude_at(times, quats, at), (0, 2, 1))
     return angles_from_attitude(to_body @ NED_TO_ENU if enu else to_body)
 
 
 def place(latitude, longitude, altitude_m, when: _dt.datetime | None) -> dict:
-    """Metadata of the log's place and date: the median of the fixes (degrees, km), ISO date; {}
-    without a fix.
-
-    Parameters
-    ----------
-    latitude, longitude : array_like
-        The fixes, degrees (the non-finite and out-of-range ones left out).
-    altitude_m : array_like
-        Their altitudes (m; a non-finite one counts as 0).
-    when : datetime, optional
-        The log's date.
-
-    Returns
-    -------
-    dict
-        ``latitude``, ``longitude``, ``altitude_km``, ``gps_fixes`` and ``date`` as text (``meta`` values).
+    """``meta`` of the log's place and date: the median of the valid fixes (degrees, altitude m -> km, a non-finite
+    one 0), their count and the ISO date of ``when``; {} without a fix.
     """
     latitude, longitude, altitude_m = (np.asarray(v, float) for v in (latitude, longitude, altitude_m))
     ok = np.isfinite(latitude) & np.isfinite(longitude) & (np.abs(latitude) <= 90) & (np.abs(longitude) <= 360)
@@ -272,35 +159,9 @@ LOGGED = ("logged_bx", "logged_by", "logged_bz")
 
 def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, angles: np.ndarray | None,
                   gyro: tuple | None, meta: dict, mag_axes=None, gyro_axes=None, logged: np.ndarray | None = None):
-    """The :class:`~magexp.core.recording.Recording` of a log: readings (with ``mag_axes``) at
-    ``times``, the attitude angles, the gyroscope stream (with ``gyro_axes``), ``meta``; ``logged``: the
-    readings as logged, before the reader undid the onboard calibration (columns :data:`LOGGED`), or None.
-
-    Parameters
-    ----------
-    path : Path
-        The log.
-    readings : ndarray, shape (N, 3)
-        The magnetometer's readings, in the log's axes.
-    unit : str
-        Their unit.
-    times : ndarray, shape (N,)
-        Their times (s); the recording is sorted by them.
-    angles : ndarray, shape (N, 3), optional
-        ``[heading, roll, trim]`` at each reading.
-    gyro : tuple, optional
-        ``(times (G,), rates (G, 3))`` of the gyroscope (rad/s).
-    meta : dict
-        The recording's metadata.
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps (:func:`magexp.core.geometry.axis_map`).
-    logged : ndarray, shape (N, 3), optional
-        The readings as logged.
-
-    Returns
-    -------
-    Recording
-        The recording, ``meta['nav_frame'] = 'NED'``.
+    """The :class:`~magexp.core.recording.Recording` of a log, sorted by ``times`` (s), ``meta['nav_frame'] = 'NED'``:
+    readings and ``gyro`` ``(times, rad/s)`` mapped by ``mag_axes``/``gyro_axes``; ``logged``: the readings as logged,
+    before the reader undid the onboard calibration (columns :data:`LOGGED`), or None.
     """
     order = np.argsort(times, kind="stable")
     axes = axis_map(mag_axes, "data.mag_axes").T
@@ -317,34 +178,10 @@ def log_recording(path, *, readings: np.ndarray, unit: str, times: np.ndarray, a
 
 
 def matrix_text(m: np.ndarray) -> str:
-    """A 3 x 3 matrix as ``meta`` text, rows separated by ``;`` (``np.array([[float(v) for v in row.split(',')] for row in text.split(';')])`` reads it back).
-
-    Parameters
-    ----------
-    m : array_like, shape (3, 3)
-        The matrix.
-
-    Returns
-    -------
-    str
-        E.g. ``1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 1.0``.
-    """
+    """A 3 x 3 matrix as ``meta`` text: rows separated by ``;``, values by ``,`` (``repr``, so it reads back exactly)."""
     return "; ".join(", ".join(f"{v!r}" for v in np.asarray(row, float).tolist()) for row in m)
 
 
 def check_count(count: int, subject: str) -> None:
-    """Refuse, before decoding, a log holding more readings than :mod:`magexp.core.limits` allows.
-
-    Parameters
-    ----------
-    count : int
-        The log's magnetometer readings.
-    subject : str
-        The log, named in the refusal.
-
-    Raises
-    ------
-    MagexpError
-        One line over the ``readings`` limit (:func:`magexp.core.limits.refuse_over`).
-    """
+    """Refuse, before decoding, a log whose ``count`` magnetometer readings pass the ``readings`` limit (:func:`magexp.core.limits.refuse_over`)."""
     refuse_over(count, "readings", subject, "its magnetometer messages hold")

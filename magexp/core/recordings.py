@@ -28,34 +28,13 @@ __all__ = ["detect", "exists", "load_recording", "reader_of", "resolve", "Record
 def exists(path: Path) -> bool:
     """Whether ``path`` names a recording: a file, a folder (a ROS 2 bag), or a two-stream stem
     (``<path>_mag.csv`` exists; its ``_imu.csv`` is checked by the reader).
-
-    Parameters
-    ----------
-    path : Path
-        A path.
-
-    Returns
-    -------
-    bool
-        True when it names a recording.
     """
     return path.exists() or Path(f"{path}{TWO_STREAM[0]}").is_file()
 
 
 def resolve(path: str | Path) -> Path:
-    """Where the recording ``path`` is: an absolute path as given; a relative one against the
-    working folder first (a file, a folder or a two-stream stem found there, :func:`exists`), else
-    relative to the project's ``data/`` folder (the recordings shipped with magexp).
-
-    Parameters
-    ----------
-    path : str or Path
-        The recording as given.
-
-    Returns
-    -------
-    Path
-        The path to read (not checked to exist).
+    """Where the recording ``path`` is (not checked to exist): an absolute path as given; a relative one from the
+    working folder if it :func:`exists` there, else from the project's ``data/`` (the recordings shipped with magexp).
     """
     path = Path(path)
     return path if path.is_absolute() or exists(path) else DATA / path
@@ -63,37 +42,10 @@ def resolve(path: str | Path) -> Path:
 
 def load_recording(path: str | Path, *, unit: str | None = None, format: str = "auto",
                    mag_axes: str | None = None, gyro_axes: str | None = None, instance: int | None = None) -> Recording:
-    """Read a recording in any format of :mod:`magexp.core.readers`.
-
-    Parameters
-    ----------
-    path : str or Path
-        The file (for ``two-stream``, either file or their common stem; a ROS 2 bag, its folder); a relative
-        path is looked up from the working folder first, then in ``data/`` (:func:`resolve`).
-    unit : str, optional
-        ``data.unit``: the unit of a file that does not name it (required for a ``plain`` file); for a file
-        that names its unit it may be left None and must otherwise agree with it.
-    format : str
-        A format's name (:func:`magexp.core.readers.names`), or ``auto``: told from the file (:func:`detect`).
-    mag_axes, gyro_axes : str, optional
-        Signed axis maps onto the common body axes (:func:`magexp.core.geometry.axis_map`); None keeps the
-        format's default.
-    instance : int, optional
-        The compass (and IMU) instance of a DataFlash log (0: the first; None: 0); a format whose reader takes
-        no ``instance`` holds one magnetometer and ignores it.
-
-    Returns
-    -------
-    Recording
-        The readings in the common body axes, their unit, and what the format holds beside them
-        (attitude angles, a gyroscope, times, a reference field, the log's GPS place and date).
-
-    Raises
-    ------
-    MagexpError
-        One line for a missing file, an unknown format, a wrong version line, a missing or
-        duplicated column, a row of the wrong length, a value that is not a number, NaN or
-        infinite, an unknown unit, or a bad metadata value (e.g. ``reference_total <= 0``).
+    """The :class:`~magexp.core.recording.Recording` of ``path`` read by the module of ``format`` (a name of
+    :func:`magexp.core.readers.names`, or ``auto``: :func:`detect`); ``path``, ``unit``, ``mag_axes``, ``gyro_axes``
+    as in the ``read`` protocol of :mod:`magexp.core.readers`; ``instance`` goes to a reader that takes it (DataFlash).
+    One :class:`~magexp.errors.MagexpError` line for a missing file, an unknown format or a malformed file.
     """
     file = resolve(path)
     if file.is_dir() and not (file / BAG_MARKER).is_file():  # a ROS 2 bag is a folder with metadata.yaml

@@ -21,18 +21,7 @@ GYRO_UNITS = ("rad/s", "deg/s")
 
 
 def number(text: str, where: str, what: str) -> float:
-    """``text`` as a finite number of magnitude at most :data:`LARGEST`, else one line.
-
-    Parameters
-    ----------
-    text, where, what : str
-        A cell, and the file and line and the column named in the refusal.
-
-    Returns
-    -------
-    float
-        The number.
-    """
+    """``text`` as a finite number of magnitude at most :data:`LARGEST`, else one line naming ``where`` (file and line) and ``what`` (the column)."""
     try:
         value = float(text)
     except ValueError:
@@ -44,13 +33,7 @@ def number(text: str, where: str, what: str) -> float:
 
 
 def check_unique(header: list[str], name: str) -> None:
-    """Fail in one line if a column name appears twice.
-
-    Parameters
-    ----------
-    header, name : list of str, str
-        The column names, and the file named in the refusal.
-    """
+    """Refuse in one line, naming the file ``name``, a column that appears twice in ``header``."""
     seen = set()
     for col in header:
         if col in seen:
@@ -59,19 +42,8 @@ def check_unique(header: list[str], name: str) -> None:
 
 
 def numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> np.ndarray:
-    """Comma-separated numbers, ``ncols`` per row, every value finite (one-line errors).
-
-    Parameters
-    ----------
-    lines, name : list of str, str
-        The data rows, and the file named in a refusal.
-    first_line, ncols : int
-        The file line number of ``lines[0]``, and the columns of a row.
-
-    Returns
-    -------
-    ndarray, shape (N, ncols)
-        The numbers.
+    """The ``(N, ncols)`` comma-separated numbers of the data rows ``lines`` (the first on file line ``first_line``);
+    if any is malformed, one line naming the first bad line of the file ``name``.
     """
     try:
         table = np.loadtxt(lines, delimiter=",", ndmin=2)
@@ -91,18 +63,7 @@ def numeric_table(lines: list[str], name: str, first_line: int, ncols: int) -> n
 
 
 def read_lines(path: Path) -> list[str]:
-    """The file's lines; a UTF-8 byte-order mark is accepted, a binary file refused in one line.
-
-    Parameters
-    ----------
-    path : Path
-        A text file.
-
-    Returns
-    -------
-    list of str
-        Its lines.
-    """
+    """The lines of the text file ``path`` (a UTF-8 byte-order mark accepted); a binary file refused in one line."""
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -115,31 +76,12 @@ def read_lines(path: Path) -> list[str]:
 
 
 def to_rad_s(values: np.ndarray, unit: str) -> np.ndarray:
-    """Angular rates in rad/s.
-
-    Parameters
-    ----------
-    values, unit : ndarray, str
-        Rates and their unit, ``deg/s`` or ``rad/s``.
-
-    Returns
-    -------
-    ndarray
-        ``values`` in rad/s.
-    """
+    """The rates ``values`` in rad/s, from ``unit`` ``deg/s`` or ``rad/s``."""
     return np.deg2rad(values) if unit == "deg/s" else values
 
 
 def same_unit(unit, file_unit: str, name: str) -> None:
-    """Refuse, in one line, a ``data.unit`` that disagrees with the unit the file's columns name.
-
-    Parameters
-    ----------
-    unit, file_unit : str
-        ``data.unit`` (None: not given, nothing checked) and the file's unit.
-    name : str
-        The file, named in the refusal.
-    """
+    """Refuse in one line a ``data.unit`` (``unit``; None: nothing checked) that disagrees with the unit ``file_unit`` the columns of ``name`` name."""
     if unit is not None and check_unit(unit, "data.unit") != file_unit:
         raise MagexpError(f"data.unit={unit!r} is not allowed for {name}: the file's columns say {file_unit} "
                           "(leave data.unit unset)")

@@ -7,6 +7,7 @@ from typing import Any
 
 import pandas as pd
 
+from magexp.artifacts import trends
 from magexp.artifacts.censoring import cell_quartiles
 from magexp.artifacts.plot_keys import CommonPlot, choice, metric_list
 from magexp.artifacts.schema import Bool, Float, typed
@@ -70,7 +71,8 @@ def _ratio_rows(runs) -> list[dict]:
 
 def table(runs, plot) -> pd.DataFrame:
     """Per cell and metric: quartiles (censored ones with extremes, :func:`magexp.artifacts.censoring.cell_quartiles`),
-    success and converged rates, the floors and the median of ``plot.bound``; then the ratios."""
+    success and converged rates, the floors and the median of ``plot.bound``; then the ratios, then each
+    trend claim's fitted line and band against ``plot.x`` (:func:`magexp.artifacts.trends.figure_rows`)."""
     bound = plot.bound
     rows = []
     for ci, cell in enumerate(runs.cells):
@@ -86,7 +88,8 @@ def table(runs, plot) -> pd.DataFrame:
             if "succeeded" in sub and sub.succeeded.notna().any():
                 row["success_rate"] = fraction(sub.succeeded)
             rows.append(row)
-    return pd.DataFrame(rows + _ratio_rows(runs))
+    trend = trends.figure_rows(runs.spec, runs.table, plot.x, metric_list(plot)) if plot.x else []
+    return pd.DataFrame(rows + _ratio_rows(runs) + trend)
 
 
 def draw(table, spec, axes=None):

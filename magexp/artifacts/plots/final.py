@@ -25,7 +25,8 @@ with "k/n" censored (its median too when ``k >= n/2``), and the earliest and lat
 ``reported:`` entries of the quantities summarised from the metric) are open diamonds in the colour of
 their line. Each of the artifact's ``ratios:`` (per seed, numerator over denominator cell) adds a row
 of panels: its median and quartiles over seeds, with the paper's ratios and the line of equality.
-The table: :func:`magexp.artifacts.kinds.final.table`.
+A trend claim drawn on the figure (:mod:`magexp.artifacts.trends`) is its fitted line, solid black, with the
+95 % band of its bootstrap lines in grey. The table: :func:`magexp.artifacts.kinds.final.table`.
 """
 
 from __future__ import annotations
@@ -219,6 +220,7 @@ def _references(ax, sub, spec, x_key, metric):
 def draw(frame: pd.DataFrame, spec, axes=None):
     """The final value of each metric against the swept key ``plot.x``: median and IQR per hue, a panel per metric."""
     x_key, panel_key = spec.plot.x, spec.plot.get("panels")
+    frame, fits = _split_trends(frame)
     frame, hue_key = _with_hue(frame, spec, spec.plot.get("hue", "estimator"))
     metrics = metric_list(spec.plot) + [r.quantity for r in spec.get("ratios", []) if (frame.get("metric") == r.quantity).any()]
     columns = group_values(frame, panel_key)
@@ -233,6 +235,7 @@ def draw(frame: pd.DataFrame, spec, axes=None):
             placed = _lines(ax, sub, spec, x_key, hue_key, colours)
             _paper(ax, spec, placed, metric, colours)
             _references(ax, sub, spec, x_key, metric)
+            _trends(ax, fits, x_key, metric, panel_key, pv)
             _scale_axes(ax, spec, sub, frame[x_key], ylog(spec, metric))
             _levels(ax, spec, sub, metric, x_key)
             _label_panel(ax, spec, metric, len(metrics), panel_key, pv)
@@ -240,6 +243,29 @@ def draw(frame: pd.DataFrame, spec, axes=None):
     shared_legend(fig, axes, entries, inside=len(axes) == 1 and len(entries) <= 6)
     fig.suptitle(spec.title, fontsize=10)
     return tidy_log_axes(fig)
+
+
+def _split_trends(frame: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The cells' rows and the trend claims' rows (a ``trend`` id; none in a table without trends)."""
+    if "trend" not in frame:
+        return frame, frame.iloc[:0]
+    drawn = frame.trend.notna()
+    return frame[~drawn].drop(columns=["trend", "fit", "fit_lo", "fit_hi"]), frame[drawn]
+
+
+def _trends(ax, fits: pd.DataFrame, x_key: str, metric: str, panel_key, pv) -> None:
+    """Each trend claim of the panel's metric (and panel, where its ``where`` names it): its fitted line,
+    solid black, and the 2.5-97.5 % band of its bootstrap lines, grey (:mod:`magexp.artifacts.trends`)."""
+    if not len(fits):
+        return
+    mine = fits[fits.metric == metric]
+    if pv is not None:
+        mine = mine[mine[panel_key].astype(str) == str(pv)] if panel_key in mine else mine.iloc[:0]
+    for name, line in mine.groupby("trend", sort=False):
+        x = line[x_key].astype(float).to_numpy()
+        ax.fill_between(x, line.fit_lo.astype(float), line.fit_hi.astype(float), color="0.6", alpha=0.3, lw=0,
+                        zorder=2, label="trend claim: 95 % band of the fitted line")
+        ax.plot(x, line.fit.astype(float), color="k", lw=1.2, zorder=3, label=f"trend claim {name}: least-squares fit")
 
 
 def _with_hue(frame: pd.DataFrame, spec, hue_key) -> tuple[pd.DataFrame, str]:

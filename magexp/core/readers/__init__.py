@@ -92,48 +92,19 @@ HEAD_LINES = 3
 
 @functools.cache
 def formats() -> tuple:
-    """The format modules: this package's modules not starting with ``_``, imported (each is small; a reader
-    imports its optional package only when it reads).
-
-    Returns
-    -------
-    tuple of module
-        The formats, in ``PRIORITY`` order.
-    """
+    """The format modules (this package's modules not starting with ``_``), imported, in ``PRIORITY`` order; a reader imports its optional package only when it reads."""
     found = [importlib.import_module(f"{__name__}.{m.name}") for m in pkgutil.iter_modules(__path__)
              if not m.name.startswith("_")]
     return tuple(sorted(found, key=lambda module: (module.PRIORITY, module.NAME)))
 
 
 def names() -> tuple[str, ...]:
-    """The formats' names (``data.format``), in ``PRIORITY`` order.
-
-    Returns
-    -------
-    tuple of str
-        Every format's ``NAME``.
-    """
+    """The formats' ``NAME`` (``data.format`` values), in ``PRIORITY`` order."""
     return tuple(module.NAME for module in formats())
 
 
 def format_of(name: str):
-    """The module of the format ``name``.
-
-    Parameters
-    ----------
-    name : str
-        A format's ``NAME`` (:func:`names`).
-
-    Returns
-    -------
-    module
-        The format's module, with its ``read``.
-
-    Raises
-    ------
-    MagexpError
-        One line naming the formats there are, for any other name.
-    """
+    """The module of the format ``name``; one line naming the formats there are for any other name."""
     module = next((m for m in formats() if m.NAME == name), None)
     if module is None:
         raise MagexpError(f"data.format={name!r} is not allowed: choose one of auto, {', '.join(names())}")
@@ -141,35 +112,14 @@ def format_of(name: str):
 
 
 def by_suffix(path: Path) -> str | None:
-    """The format whose ``SUFFIXES`` hold ``path``'s suffix (``.ulg``, ...), else None.
-
-    Parameters
-    ----------
-    path : Path
-        A file or folder name.
-
-    Returns
-    -------
-    str or None
-        A format's name.
-    """
+    """The format whose ``SUFFIXES`` hold ``path``'s suffix (``.ulg``, ...), else None."""
     suffix = path.suffix.lower()
     return next((m.NAME for m in formats() if suffix in m.SUFFIXES), None)
 
 
 def detect(path: Path) -> str:
-    """The format of ``path``: by its suffix, then by its path alone (each format's ``claims``), then by its
-    first lines (each ``sniff``), in ``PRIORITY`` order; a text file nothing claims is the ``FALLBACK`` format.
-
-    Parameters
-    ----------
-    path : Path
-        A recording file or folder.
-
-    Returns
-    -------
-    str
-        A format's name.
+    """The format of the recording ``path``: by its suffix, then each format's ``claims``, then each ``sniff`` of its
+    first lines, in ``PRIORITY`` order; a text file nothing claims is the ``FALLBACK`` format.
     """
     found = by_suffix(path) or next((m.NAME for m in formats() if hasattr(m, "claims") and m.claims(path)), None)
     if found is not None:
@@ -181,21 +131,8 @@ def detect(path: Path) -> str:
 
 
 def reader_of(path: Path, format: str | None = "auto") -> str:
-    """The dotted name of the function that reads the recording ``path`` in ``format`` (``auto``, None or a
-    name no format has: :func:`detect`'s): the run cache keys a run that reads ``path`` on that module's
-    source (:func:`magexp.run.cache.data_readers`).
-
-    Parameters
-    ----------
-    path : Path
-        A recording.
-    format : str, optional
-        A format's name, ``auto`` or None.
-
-    Returns
-    -------
-    str
-        ``module.function`` of the reader.
+    """``module.function`` of the reader of ``path`` in ``format`` (``auto``, None or an unknown name: :func:`detect`'s):
+    the run cache keys a run on that module's source (:func:`magexp.run.cache.data_readers`).
     """
     module = format_of(format if format in names() else detect(path))
     return f"{module.__name__}.{module.read.__name__}"
@@ -208,35 +145,12 @@ BEGIN, END = "<!-- formats: written by python -m magexp.core.readers; do not edi
 
 
 def summary(module) -> str:
-    """What the format ``module`` reads: its docstring's first paragraph on one line, in Markdown's quotes.
-
-    Parameters
-    ----------
-    module : module
-        A format's module (:func:`formats`).
-
-    Returns
-    -------
-    str
-        The paragraph, for ``--help`` and the docs' table.
-    """
+    """What the format ``module`` reads, for ``--help`` and the docs' table: its docstring's first paragraph on one line."""
     return " ".join(module.__doc__.split("\n\n")[0].split()).replace("``", "`")
 
 
 def detection(module) -> str:
-    """How ``data.format=auto`` tells the format ``module``: its suffixes, ``claims`` and ``sniff`` (their
-    docstrings' first lines), or that it is the fallback.
-
-    Parameters
-    ----------
-    module : module
-        A format's module (:func:`formats`).
-
-    Returns
-    -------
-    str
-        One line, for the docs' table.
-    """
+    """How ``data.format=auto`` tells the format ``module`` (its suffixes, ``claims``, ``sniff`` first lines, or fallback): one line for the docs' table."""
     ways = [", ".join(f"`{s}`" for s in module.SUFFIXES)] if module.SUFFIXES else []
     for test in ("claims", "sniff"):
         if hasattr(module, test):
@@ -248,13 +162,8 @@ def detection(module) -> str:
 
 
 def docs_section() -> str:
-    """The generated part of docs/calibrate.md (between :data:`BEGIN` and :data:`END`, rewritten by
+    """The generated table of docs/calibrate.md, :data:`BEGIN` to :data:`END` (written by
     :func:`magexp.core.generated.with_section`): one row per format, in the order ``auto`` tries them.
-
-    Returns
-    -------
-    str
-        Markdown, between :data:`BEGIN` and :data:`END`.
     """
     lines = [BEGIN, "`auto` tries the formats in this order: a file's name first (every format's suffixes, "
              "then a folder or a file name), then its first lines.", "",

@@ -94,20 +94,7 @@ def _dtype(fmt) -> np.dtype:
 
 
 def table(reader, name: str) -> dict | None:
-    """Every ``name`` message of the log as ``{column: array}`` (multipliers applied), or None.
-
-    Parameters
-    ----------
-    reader : DFReader
-        pymavlink's reader of the log.
-    name : str
-        The message type (``MAG``, ``ATT``, ``GPS``, ...).
-
-    Returns
-    -------
-    dict or None
-        Column -> array, or None when the log has none.
-    """
+    """Every ``name`` message (``MAG``, ``ATT``, ...) of the log read by pymavlink's ``reader`` as ``{column: array}``, multipliers applied; None if it has none."""
     ids = [t for t, f in reader.formats.items() if f.name == name]
     offsets = np.asarray(reader.offsets[ids[0]] if ids else [], np.int64)  # offsets: a list by type id
     if offsets.size == 0:
@@ -145,20 +132,7 @@ def _instance(reader, name: str, instance: int) -> dict | None:
 
 
 def parameters(reader, before_us: float) -> dict:
-    """``{name: value}`` of the ``PARM`` messages logged up to ``before_us`` (the last value of each).
-
-    Parameters
-    ----------
-    reader : DFReader
-        pymavlink's reader of the log.
-    before_us : float
-        The time (µs) up to which the parameters are read.
-
-    Returns
-    -------
-    dict
-        Parameter name -> value.
-    """
+    """``{name: value}`` of the log's ``PARM`` messages up to ``before_us`` (µs), the last value of each: the calibration in use at the first reading."""
     rows = table(reader, "PARM")
     if rows is None:
         return {}
@@ -168,23 +142,8 @@ def parameters(reader, before_us: float) -> dict:
 
 
 def correction(params: dict, instance: int) -> tuple[np.ndarray, float, np.ndarray]:
-    """``(M, s, OFS)`` of compass ``instance`` from the parameters (module docstring).
-
-    Parameters
-    ----------
-    params : dict
-        The log's parameters (:func:`parameters`).
-    instance : int
-        The compass (0: ``COMPASS_*``, 1: ``COMPASS_*2``, 2: ``COMPASS_*3``).
-
-    Returns
-    -------
-    M : ndarray, shape (3, 3)
-        The symmetric matrix of ``COMPASS_DIA`` and ``COMPASS_ODI``.
-    s : float
-        ``COMPASS_SCALE`` (1 outside ArduPilot's accepted range, as ArduPilot applies it).
-    OFS : ndarray, shape (3,)
-        ``COMPASS_OFS``.
+    """``(M, s, OFS)`` of compass ``instance`` (0: ``COMPASS_*``, k: ``COMPASS_*<k+1>``) from the log's ``params`` (module
+    docstring); ``s`` is 1 outside :data:`SCALE_RANGE`, as ArduPilot applies it.
     """
     suffix = "" if instance == 0 else str(instance + 1)
     p = lambda key, axis, default: float(params.get(f"COMPASS_{key}{suffix}_{axis}", default))  # noqa: E731
@@ -199,23 +158,8 @@ def correction(params: dict, instance: int) -> tuple[np.ndarray, float, np.ndarr
 
 
 def undo_correction(mag: dict, params: dict, instance: int) -> tuple[np.ndarray, dict]:
-    """``r = (M⁻¹ (B − MOFS)) / s − OFS`` (module docstring) and what was undone.
-
-    Parameters
-    ----------
-    mag : dict
-        The ``MAG`` messages (``MagX/Y/Z``, ``MOX/Y/Z``).
-    params : dict
-        The log's parameters.
-    instance : int
-        The compass.
-
-    Returns
-    -------
-    raw : ndarray, shape (N, 3)
-        The raw body-frame field ``r`` (mGauss).
-    meta : dict
-        What was undone, as ``meta`` text.
+    """``(r, meta)``: the raw body-frame field ``r = (M⁻¹ (B − MOFS)) / s − OFS`` (mGauss, module docstring) of the
+    ``MAG`` messages ``mag``, and what was undone as ``meta`` text.
     """
     b = np.column_stack([mag[f"Mag{a}"] for a in "XYZ"]).astype(float)
     motor = np.column_stack([mag.get(f"MOfs{a}", np.zeros(len(b))) for a in "XYZ"]).astype(float)
@@ -311,7 +255,11 @@ def _open(df, path: Path, name: str):
 
 def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, instance: int = 0,
                    undo: bool = True) -> Recording:
-    """The :class:`~magexp.core.recording.Recording` of an ArduPilot DataFlash ``.bin`` log (module docstring).
+    """The :class:`~magexp.core.recording.Recording` of an ArduPilot DataFlash ``.bin`` log, the onboard correction undone.
+
+    The readings are the raw body-frame field ``r = (M⁻¹ (B − MOFS)) / s − OFS`` of the logged ``MAG`` field ``B``
+    (the inverse of ArduPilot's ``AP_Compass_Backend::correct_field``, module docstring), in mGauss, with the
+    attitude of ``ATT``, the gyroscope of ``IMU`` and the GPS place and date.
 
     Parameters
     ----------
@@ -326,8 +274,20 @@ def read_dataflash(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, inst
     Returns
     -------
     Recording
-        The readings (mGauss) at their times, the attitude angles of ``ATT``, the gyroscope of ``IMU``, the
-        GPS place and date and the undone correction in ``meta``.
+        The readings (mGauss) at their times (s from the log's first ``TimeUS``), the attitude angles, the
+        gyroscope stream, the GPS place and date and the undone correction in ``meta``; the readings as logged
+        in the columns :data:`magexp.core.logfiles.LOGGED`.
+
+    Raises
+    ------
+    MagexpError
+        One line when pymavlink is missing, ``unit`` is not ``mG``, the file is no DataFlash log or is damaged,
+        it has no ``MAG`` message of ``instance``, or more readings than the ``readings`` limit.
+
+    References
+    ----------
+    ArduPilot, ``libraries/AP_Compass/AP_Compass_Backend.cpp`` (``correct_field``) and ``AP_Compass.cpp``
+    (``have_scale_factor``).
     """
     name = Path(path).name
     df = need("pymavlink.DFReader", f"{name} (an ArduPilot DataFlash log)")

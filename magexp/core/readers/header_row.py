@@ -28,7 +28,7 @@ UNIT = "the magnetometer columns' suffix (`mx_uT`), else `data.unit`"
 EXTRA = None
 BINARY = False
 READ_MEMORY = 80
-#: the magnetometer columns a header row may name, first found used (:func:`read_header_row`; a DataFrame's too)
+#: the magnetometer columns a header row may name, first found used (:func:`read`; a DataFrame's too)
 MAG_COLUMNS = (("bx", "by", "bz"), ("mx", "my", "mz"), ("x", "y", "z"))
 #: the names of a header row's time column (seconds)
 TIME_COLUMNS = ("t", "t_s", "time", "time_s", "timestamp")
@@ -37,35 +37,14 @@ _COLUMN = re.compile(r"^(?P<base>[a-z][a-z0-9]*?)(?:_(?P<suffix>[a-z]+)|\s*\((?P
 
 
 def header_cells(line: str) -> list[str]:
-    """The cells of a header row: separated by commas, semicolons or tabs if it has any, else by spaces.
-
-    Parameters
-    ----------
-    line : str
-        A header row.
-
-    Returns
-    -------
-    list of str
-        Its cells, stripped.
-    """
+    """The stripped cells of a header row: split at commas, semicolons or tabs if it has any, else at spaces."""
     text = line.strip()
     return [c.strip() for c in (re.split(r"[,;\t]", text) if re.search(r"[,;\t]", text) else text.split())]
 
 
 def header_columns(line: str) -> dict[str, tuple[int, str | None]] | None:
-    """``{name: (column, unit or None)}`` of a header row that names a magnetometer (:data:`MAG_COLUMNS`),
-    else None. A column's unit comes from its ``_<suffix>`` (``mx_ut``, ``gx_dps``) or ``(<unit>)``.
-
-    Parameters
-    ----------
-    line : str
-        The first row of a CSV (:func:`header_cells`).
-
-    Returns
-    -------
-    dict or None
-        Column name (lower case, unit suffix removed) -> (its index, its unit or None).
+    """``{name: (index, unit or None)}`` of a header row that names a magnetometer (:data:`MAG_COLUMNS`), else None;
+    a name is lower case without its unit, given as ``_<suffix>`` (``mx_ut``, ``gx_dps``) or ``(<unit>)``.
     """
     columns = {}
     for j, cell in enumerate(header_cells(line)):

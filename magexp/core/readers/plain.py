@@ -26,18 +26,7 @@ READ_MEMORY = 16
 
 
 def split(line: str) -> list[str]:
-    """The cells of a plain line, separated by commas or white space.
-
-    Parameters
-    ----------
-    line : str
-        A line of numbers.
-
-    Returns
-    -------
-    list of str
-        Its cells.
-    """
+    """The cells of a plain ``line``, separated by commas or white space."""
     return [cell for cell in re.split(r"[,\s]+", line.strip()) if cell]
 
 

@@ -81,16 +81,9 @@ class LayoutError(ValueError):
 
 
 class Messages:
-    """Serialised messages of one type decoded field by field for all of them at once (numpy
-    gathers): ROS 2's CDR (a 4-byte encapsulation header, then each value aligned to its size
-    from the body's start) or ROS 1's packed serialisation.
-
-    Parameters
-    ----------
-    raws : list of bytes
-        The serialised messages.
-    cdr : bool
-        ROS 2's CDR (True) or ROS 1's serialisation.
+    """The serialised messages ``raws`` of one type, decoded field by field for all of them at once (numpy gathers):
+    ROS 2's CDR (``cdr``: a 4-byte encapsulation header, then each value aligned to its size from the body's
+    start) or ROS 1's packed serialisation.
     """
 
     def __init__(self, raws: list[bytes], *, cdr: bool):
@@ -105,25 +98,7 @@ class Messages:
         self.pos = np.zeros(len(raws), np.int64)  # from each body's start
 
     def read(self, dtype, count: int = 1) -> np.ndarray:
-        """The next ``count`` values of ``dtype`` of every message, ``(n, count)``.
-
-        Parameters
-        ----------
-        dtype : str or numpy.dtype
-            A little-endian scalar type, e.g. ``<f8``.
-        count : int
-            How many values.
-
-        Returns
-        -------
-        ndarray, shape (n, count)
-            The values, each aligned to its size under CDR.
-
-        Raises
-        ------
-        LayoutError
-            When a message is too short.
-        """
+        """The next ``count`` values of the little-endian ``dtype`` of every message, ``(n, count)``, each aligned to its size under CDR; :class:`LayoutError` if a message is too short."""
         dt = np.dtype(dtype)
         if self.cdr:
             self.pos = -(-self.pos // dt.itemsize) * dt.itemsize
@@ -141,13 +116,7 @@ class Messages:
         self.pos = self.pos + n
 
     def header(self) -> tuple[np.ndarray, np.ndarray]:
-        """``std_msgs/Header``: ``(sec, nanosec)`` (ROS 1: ``seq`` first, read past).
-
-        Returns
-        -------
-        sec, nanosec : ndarray, shape (n,)
-            The stamps.
-        """
+        """``(sec, nanosec)`` of every message's ``std_msgs/Header`` (ROS 1: ``seq`` first, read past; ``frame_id`` skipped)."""
         if not self.cdr:
             self.read("<u4")
         sec, nsec = self.read("<i4")[:, 0], self.read("<u4")[:, 0]
@@ -175,31 +144,8 @@ def _open(path: Path):
 
 
 def decode(raws: list[bytes], received: np.ndarray, msgtype: str, *, cdr: bool) -> tuple[np.ndarray, dict]:
-    """``(times s, {field: (n, k) array})`` of serialised ``msgtype`` messages (:data:`LAYOUTS`);
-    a time is the header stamp, else (a zero stamp) the bag's receive time ``received`` (ns).
-
-    Parameters
-    ----------
-    raws : list of bytes
-        The serialised messages.
-    received : ndarray, shape (n,)
-        Their receive times (ns).
-    msgtype : str
-        A key of :data:`LAYOUTS`.
-    cdr : bool
-        ROS 2 CDR (else ROS 1's serialisation).
-
-    Returns
-    -------
-    times : ndarray, shape (n,)
-        Seconds.
-    fields : dict
-        Field -> ``(n, k)`` array.
-
-    Raises
-    ------
-    LayoutError
-        When a message does not have the layout.
+    """``(times s, {field: (n, k) array})`` of the serialised ``msgtype`` messages ``raws`` (:data:`LAYOUTS`; ``cdr``
+    as in :class:`Messages`); a time is the header stamp, else (zero) the bag's receive time ``received`` (ns).
     """
     rows = Messages(raws, cdr=cdr)
     sec, nsec = rows.header()
@@ -242,7 +188,11 @@ def _messages(reader, connections, msgtype: str, cdr: bool, name: str) -> tuple[
 
 
 def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: str | None = None) -> Recording:
-    """The :class:`~magexp.core.recording.Recording` of a ROS 1/2 bag or MCAP file (module docstring).
+    """The :class:`~magexp.core.recording.Recording` of a ROS 1/2 bag or MCAP file.
+
+    The ``sensor_msgs/MagneticField`` readings (tesla, REP-145) read as µT, with the attitude and angular
+    rate of ``sensor_msgs/Imu`` (body -> ENU, REP-103, converted to NED) and the place and date of
+    ``sensor_msgs/NavSatFix`` (module docstring). No calibration is undone: the message records none.
 
     Parameters
     ----------
@@ -255,8 +205,20 @@ def read_rosbag(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, topic: 
     Returns
     -------
     Recording
-        The readings (µT) at their times, the orientation's angles and the angular rate of the ``Imu``
-        messages where there are some.
+        The readings (µT) at their times (s from the earliest message read), the orientation's angles and the
+        angular rate of the ``Imu`` messages where there are some, the GPS place and date in ``meta``.
+
+    Raises
+    ------
+    MagexpError
+        One line when rosbags is missing, ``unit`` is not ``uT``, the bag is unreadable, ``topic`` or the bag
+        holds no ``MagneticField`` messages, a message does not fit its type's layout, or the bag holds more
+        readings than the ``readings`` limit.
+
+    References
+    ----------
+    ROS REP-103 (Standard Units of Measure and Coordinate Conventions) and REP-145 (Conventions for IMU
+    Sensor Drivers).
     """
     path = Path(path)
     name = path.name

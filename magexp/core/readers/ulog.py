@@ -154,18 +154,8 @@ def _changed(ulog, n: int, t0: float, t1: float) -> str | None:
 
 
 def rotation_matrix(enum: int) -> np.ndarray:
-    """PX4's ``get_rot_matrix`` (``src/lib/conversion/rotation.cpp``): the ``Z-Y-X`` Euler angles of
-    :data:`ROTATIONS` as a board -> body matrix.
-
-    Parameters
-    ----------
-    enum : int
-        A key of :data:`ROTATIONS` (``CAL_MAGn_ROT``, ``SENS_BOARD_ROT``).
-
-    Returns
-    -------
-    ndarray, shape (3, 3)
-        ``R_z(yaw) R_y(pitch) R_x(roll)``.
+    """PX4's ``get_rot_matrix(enum)`` (``src/lib/conversion/rotation.cpp``): the board -> body matrix
+    ``R_z(yaw) R_y(pitch) R_x(roll)`` of :data:`ROTATIONS` ``[enum]``; one line for an unknown ``enum``.
     """
     if not 0 <= enum < len(ROTATIONS):
         raise MagexpError(f"rotation {enum} is not allowed: PX4's rotations are 0 to {len(ROTATIONS) - 1}")
@@ -173,21 +163,8 @@ def rotation_matrix(enum: int) -> np.ndarray:
 
 
 def onboard_rotation(params: dict, n: int) -> np.ndarray:
-    """``R`` PX4 applies after the calibration of slot ``n``: ``get_rot_matrix(CAL_MAGn_ROT)`` for an
-    external magnetometer (``ROT >= 0``), else the board's: ``Euler(SENS_BOARD_X/Y/Z_OFF) ·
-    get_rot_matrix(SENS_BOARD_ROT)`` (``GetBoardRotation``).
-
-    Parameters
-    ----------
-    params : dict
-        The log's parameters.
-    n : int
-        The ``CAL_MAGn`` slot.
-
-    Returns
-    -------
-    ndarray, shape (3, 3)
-        ``R`` of ``Magnetometer::Correct``'s ``B = R S (r − OFF)``.
+    """``R`` of ``B = R S (r − OFF)`` for slot ``n``: ``get_rot_matrix(CAL_MAGn_ROT)`` for an external magnetometer
+    (``ROT >= 0``), else the board's ``Euler(SENS_BOARD_X/Y/Z_OFF) · get_rot_matrix(SENS_BOARD_ROT)`` (``GetBoardRotation``).
     """
     rot = int(params.get(f"CAL_MAG{n}_ROT", -1))
     if rot >= 0:
@@ -198,36 +175,9 @@ def onboard_rotation(params: dict, n: int) -> np.ndarray:
 
 def undo_calibration(ulog, topic: str, device: int | None, readings: np.ndarray, times_us: np.ndarray,
                      name: str) -> tuple[np.ndarray, dict]:
-    """The readings before PX4's onboard calibration, ``r = S⁻¹ Rᵀ B + OFF`` (module docstring),
-    and what was undone.
-
-    Parameters
-    ----------
-    ulog : ULog
-        pyulog's parsed log (its parameters and their changes).
-    topic : str
-        The readings' topic (``sensor_mag`` is raw from PX4 1.12 on: nothing to undo; corrected before,
-        not rotated).
-    device : int or None
-        The magnetometer's device id, matched against ``CAL_MAGn_ID``.
-    readings : ndarray, shape (N, 3)
-        The logged field ``B`` (gauss).
-    times_us : ndarray, shape (N,)
-        Their times (µs), to find a calibration changed during the log.
-    name : str
-        The log, named in a refusal.
-
-    Returns
-    -------
-    raw : ndarray, shape (N, 3)
-        ``r`` (gauss).
-    meta : dict
-        What was undone, as ``meta`` text (the slot, ``S``, ``OFF``, ``R``).
-
-    Raises
-    ------
-    MagexpError
-        One line when the device has no ``CAL_MAGn_ID`` or its calibration changed during the log.
+    """``(r, meta)``: the ``readings`` ``B`` (gauss) of ``topic`` before PX4's onboard calibration, ``r = S⁻¹ Rᵀ B + OFF``
+    (module docstring), and what was undone; one line if ``device`` has no ``CAL_MAGn_ID`` or its calibration
+    changes within ``times_us``. ``sensor_mag`` is raw from PX4 1.12 on (nothing undone) and unrotated before.
     """
     version = _version(ulog)
     new = version is not None and version >= NEW_CALIBRATION
@@ -278,7 +228,11 @@ def _gyro(ulog, t0: int) -> tuple | None:
 
 
 def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: bool = True) -> Recording:
-    """The :class:`~magexp.core.recording.Recording` of a PX4 ULog file (module docstring).
+    """The :class:`~magexp.core.recording.Recording` of a PX4 ULog file, the onboard calibration undone.
+
+    The readings are the field ``r = S⁻¹ Rᵀ B + OFF`` before PX4's calibration ``B = R S (r − OFF)``
+    (``Magnetometer::Correct``, module docstring), in the frame its offsets apply in, with the attitude of
+    ``vehicle_attitude``, the gyroscope and the GPS place and date.
 
     Parameters
     ----------
@@ -291,8 +245,21 @@ def read_ulog(path: Path, *, unit=None, mag_axes=None, gyro_axes=None, undo: boo
     Returns
     -------
     Recording
-        The readings (gauss) at their times, the attitude angles, the gyroscope, the GPS place and date, and
-        the undone calibration in ``meta`` (``onboard_rotation``: the firmware's rotation ``R``, :func:`magexp.core.logfiles.matrix_text`).
+        The readings (gauss) at their times (s from the log's start), the attitude angles, the gyroscope
+        stream, the GPS place and date, and the undone calibration in ``meta`` (``onboard_rotation``: the
+        firmware's ``R``, :func:`magexp.core.logfiles.matrix_text`).
+
+    Raises
+    ------
+    MagexpError
+        One line when pyulog is missing, ``unit`` is not ``G``, the file is no readable ULog, it has no
+        magnetometer topic or more readings than the ``readings`` limit, or the calibration cannot be undone
+        (no ``CAL_MAGn_ID`` for the device, parameters changed while logging).
+
+    References
+    ----------
+    PX4, ``src/lib/sensor_calibration/Magnetometer.hpp`` (``Magnetometer::Correct``) and
+    ``src/lib/conversion/rotation.cpp`` (``get_rot_matrix``).
     """
     name = Path(path).name
     core = need("pyulog.core", f"{name} (a PX4 ULog)")
