@@ -15,7 +15,8 @@ run) and once more on the stored runs a redraw judges (:func:`check_claims`):
   one row per planned cell with the same function the claim is judged with
   (:func:`magexp.artifacts.selection.column`), so the two agree. A metric that only a new estimator
   writes is known once its runs are committed (reproduce the artifact once without the claim);
-* every claim's ``where`` and each of its ``cells`` selects at least one planned cell (a key that is no
+* every claim's ``where`` (a threshold's, a success rate's, a trend's) and each of a comparison's ``cells``
+  selects at least one planned cell (a key that is no
   setting must be a runs column, a row filter such as ``succeeded``, or ``seeds``);
 * every ``reported`` entry's ``match`` selects at least one planned cell (the cells' overrides, what
   :func:`magexp.artifacts.tables.reported_entry` matches);
@@ -150,8 +151,8 @@ def check_claims(spec, table: pd.DataFrame) -> None:
     for claim in spec.claims:
         where = f"{spec.name}.claims[{claim.id}]"
         check_metric(f"{where}.metric", claim.metric, table, settings)
-        selections = [("where", claim.where)] if claim.kind in ("threshold", "success") else \
-            [(f"cells[{i}]", c) for i, c in enumerate(claim.cells)]
+        selections = ([(f"cells[{i}]", c) for i, c in enumerate(claim.cells)] if claim.kind in ("ordering", "winner")
+                      else [("where", claim.where)])
         for key, selection in selections:
             _check_selection(f"{where}.{key}", selection, table, settings)
 
