@@ -26,6 +26,7 @@ import pandas as pd
 
 from magexp.artifacts.kinds import kind, tabulate
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs
+from magexp.artifacts.plan_cache import planned
 from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.artifacts.plots import VECTOR
 from magexp.artifacts.formats import MEASURED, write_csv
@@ -251,7 +252,7 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
     executor : Executor, optional
     log : callable
     """
-    plans = [(paper, plan_with_effects(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
+    plans = [(paper, planned(spec, seeds=seeds, tiny=tiny, fresh=force)) for paper, specs in selected.items()
              for spec in specs if not skipped_for_data(spec, log)]
     configs = [c for _, plan in plans for c in plan.configs]
     counts: dict = {}

@@ -159,27 +159,47 @@ def run_key(resolved: dict, files: dict[str, str] | None = None, code: str | Non
     resolved, files, code : dict, dict or None, str or None
         The resolved config; its :func:`data_files` and :func:`code_version` (None: found here).
     """
-    text = json.dumps(resolved, sort_keys=True, default=str)
     files = data_files(resolved) if files is None else files
+    code = code_version(run_targets(resolved)) if code is None else code
+    return _key_of(json.dumps(resolved, sort_keys=True, default=str), files, code)
+
+
+def _key_of(text: str, files: dict[str, str], code: str) -> str:
+    """:func:`run_key` from the config's sorted JSON ``text``: one place that hashes a key."""
     if files:
         text += json.dumps(sorted(files.values()))
-    text += code_version(run_targets(resolved)) if code is None else code
-    return hashlib.sha256(text.encode()).hexdigest()[:32]
+    return hashlib.sha256((text + code).encode()).hexdigest()[:32]
+
+
+def _sorted_json(cfg: dict, parts: dict) -> str:
+    """``json.dumps(cfg, sort_keys=True, default=str)`` of a config with string keys, each top-level value's
+    text taken from ``parts`` (by identity: the seeds of a cell share every value but their seed)."""
+    texts = []
+    for name in sorted(cfg):
+        value = cfg[name]
+        if id(value) not in parts:
+            parts[id(value)] = (value, json.dumps(value, sort_keys=True, default=str))
+        texts.append(f"{json.dumps(name)}: {parts[id(value)][1]}")
+    return "{" + ", ".join(texts) + "}"
 
 
 def run_keys(configs) -> list[str]:
     """:func:`run_key` of each config; its data files and code version are looked up once per config
-    that differs in more than its seed."""
+    that differs in more than its seed, and each top-level value written as JSON once (:func:`_sorted_json`)."""
     known: dict[str, tuple] = {}
-    rests = []
+    texts, rests, parts = [], [], {}  # parts hold their values: an id is not reused meanwhile
     for cfg in configs:
-        rest = json.dumps({k: v for k, v in cfg.items() if k != "seed"}, sort_keys=True, default=str)
+        plain = all(isinstance(name, str) for name in cfg)
+        text = _sorted_json(cfg, parts) if plain else json.dumps(cfg, sort_keys=True, default=str)
+        rest = _sorted_json({k: v for k, v in cfg.items() if k != "seed"}, parts) if plain else \
+            json.dumps({k: v for k, v in cfg.items() if k != "seed"}, sort_keys=True, default=str)
         if rest not in known:
             formats = data_formats(cfg)
             known[rest] = (data_files(cfg, formats), run_targets(cfg, formats))
+        texts.append(text)
         rests.append(rest)
     versions = code_versions(targets for _, targets in known.values())
-    return [run_key(cfg, known[rest][0], versions[known[rest][1]]) for cfg, rest in zip(configs, rests)]
+    return [_key_of(text, known[rest][0], versions[known[rest][1]]) for text, rest in zip(texts, rests)]
 
 
 # ---------------------------------------------------------------------------------------------
