@@ -33,7 +33,9 @@ import omegaconf
 from magexp import paths
 from magexp.artifacts.plan import ArtifactPlan
 from magexp.artifacts.sample_sizes import plan_with_effects
-from magexp.run.cache import InvalidEntry, files_digest, pack, read, write
+from magexp.run.cache import write
+from magexp.run.entries import InvalidEntry, pack, read
+from magexp.run.runkeys import files_digest
 
 #: the kind of a plan's entry (:func:`magexp.run.cache.pack`)
 KIND = "ArtifactPlan"

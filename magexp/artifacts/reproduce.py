@@ -39,7 +39,8 @@ from magexp.errors import MagexpError, exit_code
 from magexp.paths import RESULTS
 from magexp.core.limits import LIMITS, check_limits, refuse_over, show
 from magexp.run.budget import estimate_run
-from magexp.run.executor import Outputs, check_executor, make_executor, run_many
+from magexp.run.executor import Outputs, run_many
+from magexp.run.executors import check_executor, make_executor
 from magexp.run.flags import OneLineParser
 from magexp.run.folders import check_destination, check_output_folder, removed_on_failure
 from magexp.run.progress import Progress

@@ -37,7 +37,8 @@ from omegaconf import OmegaConf, open_dict
 from magexp.core.atomic import atomic_open, write_text
 from magexp.errors import MagexpError
 from magexp.run.compose import apply_overrides, compose_config, hydra_compose, resolved
-from magexp.run.executor import check_executor, make_executor, run_many
+from magexp.run.executor import run_many
+from magexp.run.executors import check_executor, make_executor
 from magexp.run.folders import check_job_folders
 from magexp.run.hydra_cli import check_hydra_node
 from magexp.run.outputs import write_outputs
@@ -141,7 +142,7 @@ class SweepTable(Callback):
         print(f"sweep table: {path}")
 
 
-#: the ``hydra.launcher.*`` settings of magexp's launcher, as :func:`magexp.run.executor.check_executor`'s options
+#: the ``hydra.launcher.*`` settings of magexp's launcher, as :func:`magexp.run.executors.check_executor`'s options
 SETTINGS = {"executor": "--executor", "jobs": "--jobs", "scheduler": "--scheduler"}
 
 
@@ -251,7 +252,7 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     """Run a batch of sweep jobs through :func:`magexp.run.executor.run_many`; Hydra's job returns.
 
     ``settings``: ``executor`` (``local`` | ``dask``), ``jobs`` (0: all cores) and ``scheduler``
-    (:func:`magexp.run.executor.make_executor`). A job's ``cached`` column says whether its result
+    (:func:`magexp.run.executors.make_executor`). A job's ``cached`` column says whether its result
     was read from the run cache (a valid entry; a damaged one is recomputed and says False).
 
     Parameters
