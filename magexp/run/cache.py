@@ -133,13 +133,7 @@ def say_notes(stream=None) -> list[str]:
 # runs
 
 def entry_path(key: str, root: Path | None = None) -> Path:
-    """Where the run of ``key`` is stored.
-
-    Parameters
-    ----------
-    key, root : str, pathlib.Path or None
-        The run's key; the cache folder (None: :data:`magexp.paths.CACHE`).
-    """
+    """Where the run of ``key`` is stored."""
     return (CACHE if root is None else Path(root)) / key[:2] / f"{key}{SUFFIX}"
 
 
@@ -183,12 +177,7 @@ def _run_output(value):
 def load(key: str, root: Path | None = None):
     """The stored run of ``key`` (a :class:`magexp.estimators.result.RunOutput`), or None: absent, or not a
     valid entry of ``key`` (a miss noted for :func:`say_notes`; the entry is left in place, the
-    recomputed run replaces it), or not readable by this user (noted, never replaced).
-
-    Parameters
-    ----------
-    key, root : str, pathlib.Path or None
-    """
+    recomputed run replaces it), or not readable by this user (noted, never replaced)."""
     root = CACHE if root is None else Path(root)
     try:
         return _run_output(read(entry_path(key, root), key, "RunOutput"))
@@ -205,12 +194,7 @@ def load(key: str, root: Path | None = None):
 
 def exists(key: str, root: Path | None = None) -> bool:
     """Whether a run of ``key`` is stored (its file's first bytes are those of an entry; the
-    content is checked when it is read).
-
-    Parameters
-    ----------
-    key, root : str, pathlib.Path or None
-    """
+    content is checked when it is read)."""
     try:  # not blocking: a FIFO planted in the cache would hold a plain open forever; only a regular file is an entry
         with os.fdopen(os.open(entry_path(key, root), os.O_RDONLY | os.O_NONBLOCK), "rb") as fh:
             return stat.S_ISREG(os.fstat(fh.fileno()).st_mode) and fh.read(len(MAGIC)) == MAGIC
@@ -220,12 +204,7 @@ def exists(key: str, root: Path | None = None) -> bool:
 
 def store(key: str, value, root: Path | None = None) -> bool:
     """Store the run ``value`` under ``key`` atomically; whether it was kept. A cache that cannot be
-    written, or an entry of another user this user cannot read (left in place), keeps nothing (noted).
-
-    Parameters
-    ----------
-    key, value, root : str, RunOutput, pathlib.Path or None
-    """
+    written, or an entry of another user this user cannot read (left in place), keeps nothing (noted)."""
     root = CACHE if root is None else Path(root)
     path = entry_path(key, root)
     try:  # an entry this user cannot read belongs to another user: never replaced (not blocking on a FIFO there)
@@ -256,6 +235,7 @@ class Claim:
         self.fd, self.path = fd, path
 
     def release(self) -> None:
+        """Give the claim up: its lock file removed while still locked, then closed."""
         if self.fd is not None:
             try:
                 os.unlink(self.path)  # while locked: whoever opened it before sees its inode gone
@@ -268,12 +248,7 @@ class Claim:
 def claim(key: str, root: Path | None = None, *, wait: bool = False) -> Claim | None:
     """A :class:`Claim` on computing ``key``'s run, or None if another process holds it (``wait``:
     wait until it is released instead). Processes that wait must claim their keys in sorted order
-    while holding only claims of smaller keys (so no two wait for each other).
-
-    Parameters
-    ----------
-    key, root, wait : str, pathlib.Path or None, bool
-    """
+    while holding only claims of smaller keys (so no two wait for each other)."""
     root = CACHE if root is None else Path(root)
     path = entry_path(key, root).with_suffix(".lock")
     while True:

@@ -65,8 +65,7 @@ def pack(key: str, kind: str, value) -> bytes:
     replaced by ``{"$array": i}``; spaces up to a multiple of 16 bytes; the arrays' raw bytes, each
     at a multiple of 16 bytes. The SHA-256 digest covers everything after the first line (the key
     and kind included), so a truncated, altered or swapped entry is detected when read
-    (:func:`unpack`). Nothing in it is code: reading it parses JSON and views bytes as numbers.
-    """
+    (:func:`unpack`). Nothing in it is code: reading it parses JSON and views bytes as numbers."""
     arrays: list = []
     tree = _tree(value, arrays, kind)
     table, offset = [], 0

@@ -48,8 +48,7 @@ def _run_task(configs: list[dict], keys: list[str], root=None, reuse: bool = Tru
     run, ``(row, fit_cpu)`` (:func:`run_row`; ``fit_cpu`` None for a run read, not computed), the
     output itself where the cache could not keep it, or None for a run another process is computing
     (without ``wait``): nothing large goes back to the parent otherwise. Without ``root``,
-    ``results`` holds the outputs.
-    """
+    ``results`` holds the outputs."""
     start = time.process_time()
     if root is None:
         return list(run_batch(configs)), time.process_time() - start, []
@@ -81,12 +80,7 @@ def _group_key(cfg: dict) -> str:
 
 
 def cost_hint(cfg: dict) -> float:
-    """A rough relative cost of a run, to hand out the longest tasks first.
-
-    Parameters
-    ----------
-    cfg : dict
-    """
+    """A rough relative cost of a run, to hand out the longest tasks first."""
     est, scen = cfg.get("estimator") or {}, cfg.get("scenario") or {}
 
     def number(node, *keys, default=1.0):
@@ -102,13 +96,7 @@ def cost_hint(cfg: dict) -> float:
 
 def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
     """Indices of ``configs`` in tasks: per scenario group, blocks of whole seeds (every estimator
-    of a seed in one task), about ``len(configs) / (8 workers)`` runs a task; longest first.
-
-    Parameters
-    ----------
-    configs, workers : sequence of dict, int
-        The resolved configs; the executor's workers.
-    """
+    of a seed in one task), about ``len(configs) / (8 workers)`` runs a task; longest first."""
     groups: dict[str, dict[int, list[int]]] = defaultdict(lambda: defaultdict(list))
     for i, cfg in enumerate(configs):
         groups[_group_key(cfg)][cfg.get("seed")].append(i)
@@ -128,13 +116,7 @@ def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
 
 def run_row(out) -> dict:
     """A run's row of the runs table: its metrics and its parameter estimates (one column per
-    parameter name that is not already a metric).
-
-    Parameters
-    ----------
-    out : RunOutput
-        The run's output.
-    """
+    parameter name that is not already a metric)."""
     estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
     return {**out.metrics, **estimate}
 
@@ -152,21 +134,11 @@ class Outputs(Sequence):
         return len(self.keys)
 
     def metrics(self, i: int) -> dict:
-        """Run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output.
-
-        Parameters
-        ----------
-        i : int
-        """
+        """Run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output."""
         return self._metrics[self.keys[i]]
 
     def was_cached(self, i: int) -> bool:
-        """Whether run ``i`` was read from the run cache (a valid entry) rather than computed.
-
-        Parameters
-        ----------
-        i : int
-        """
+        """Whether run ``i`` was read from the run cache (a valid entry) rather than computed."""
         return self.keys[i] in self.read
 
     def __getitem__(self, i):
@@ -191,21 +163,11 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
              counts: dict | None = None) -> Outputs:
     """Run resolved configs, each distinct one once, cached; returns their :class:`Outputs`.
 
-    Parameters
-    ----------
-    configs : sequence of dict
-        The resolved configs.
-    jobs, executor : int, executor or None
-        From :func:`make_executor` (default: local processes over ``jobs``, 0 = all cores).
-    use_cache : bool
-        False reruns every distinct run (and stores it).
-    progress : callable or None
-        ``progress(n)`` is called with the number of runs just finished.
-    counts : dict or None
-        Receives ``requested``, ``distinct``, ``computed``, ``cached``, ``fit_cpu`` (CPU seconds inside
-        the computed runs' fits) and ``task_cpu`` (CPU seconds of the tasks, measured inside the workers
-        around each task), so ``task_cpu - fit_cpu`` is the workers' cost outside the fits.
-    """
+    ``executor`` from :func:`magexp.run.executors.make_executor` (default: local processes over ``jobs``, 0 = all
+    cores); ``use_cache=False`` reruns every distinct run (and stores it); ``progress(n)`` is called with the
+    number of runs just finished; ``counts`` receives ``requested``, ``distinct``, ``computed``, ``cached``,
+    ``fit_cpu`` (CPU seconds inside the computed runs' fits) and ``task_cpu`` (CPU seconds of the tasks, measured
+    inside the workers around each task), so ``task_cpu - fit_cpu`` is the workers' cost outside the fits."""
     check_runs(configs)  # the runs limit, each run's memory and work, their total: before any runs
     keys = runkeys.run_keys(configs)
     first = {}

@@ -71,13 +71,7 @@ def watch_parent(parent: int, poll: float = PARENT_POLL) -> None:
     ``os.getppid()`` (an orphan is re-parented) and ends the process if not. A worker killed so
     loses only its running task: its runs are cached only once complete (:func:`_run_task`).
     The kernel's "parent" is the *thread* that forked the worker: :class:`LocalExecutor` forks its
-    workers at the first ``submit``, from the calling thread (the command's main thread).
-
-    Parameters
-    ----------
-    parent, poll : int, float
-        The parent's process id; seconds between looks.
-    """
+    workers at the first ``submit``, from the calling thread (the command's main thread)."""
     if sys.platform.startswith("linux"):
         try:
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
@@ -128,6 +122,7 @@ class _Deferred:
         self.fn, self.args = fn, args
 
     def result(self):
+        """The call's value, computed now."""
         return self.fn(*self.args)
 
 
@@ -138,24 +133,15 @@ class InlineExecutor:
     shares_files = True  # workers see the parent's run cache (they store runs there themselves)
 
     def submit(self, fn, *args):
-        """``fn(*args)``, called when its result is asked for.
-
-        Parameters
-        ----------
-        fn, *args : callable and its arguments
-        """
+        """``fn(*args)``, called when its result is asked for."""
         return _Deferred(fn, args)
 
     def as_completed(self, futures: Iterable) -> Iterator:
-        """``futures``, in order.
-
-        Parameters
-        ----------
-        futures : iterable of submitted calls
-        """
+        """``futures``, in order."""
         return iter(list(futures))
 
     def close(self) -> None:
+        """Nothing to release: the calls ran in this process."""
         pass
 
     def __enter__(self):
@@ -174,6 +160,7 @@ class LocalExecutor(InlineExecutor):
 
     @property
     def pool(self):
+        """The process pool, forked at its first use (after :func:`preload`)."""
         if self._pool is None:
             method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
             if method == "fork":
@@ -183,12 +170,15 @@ class LocalExecutor(InlineExecutor):
         return self._pool
 
     def submit(self, fn, *args):
+        """``fn(*args)`` in a worker process (:func:`_in_worker`)."""
         return self.pool.submit(_in_worker, fn, *args)
 
     def as_completed(self, futures: Iterable) -> Iterator:
+        """``futures`` as they finish."""
         return futures_as_completed(list(futures))
 
     def close(self) -> None:
+        """Wait for the workers' tasks and end the pool."""
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
@@ -246,26 +236,24 @@ class DaskExecutor(InlineExecutor):
         self.workers = max(len(self.client.scheduler_info().get("workers", {})), n if self.cluster else 1)
 
     def submit(self, fn, *args):
+        """``fn(*args)`` on the cluster (never taken for a result of the same call: ``pure=False``)."""
         return self.client.submit(fn, *args, pure=False)
 
     def as_completed(self, futures: Iterable) -> Iterator:
+        """``futures`` as they finish (Dask's ``as_completed``)."""
         from distributed import as_completed  # lazy: as in __init__ (distributed: 0.30 s CPU)
 
         return iter(as_completed(list(futures)))
 
     def close(self) -> None:
+        """Close the client and the cluster this executor started."""
         self.client.close()
         if self.cluster is not None:
             self.cluster.close()
 
 
 def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
-    """Refuse bad executor settings in one line (before anything is computed).
-
-    Parameters
-    ----------
-    kind, jobs, scheduler : str, int, str or None
-    """
+    """Refuse bad executor settings in one line (before anything is computed)."""
     if kind not in EXECUTORS:
         raise MagexpError(f"--executor {kind!r} is not allowed: choose one of {', '.join(EXECUTORS)}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
@@ -281,13 +269,7 @@ def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
 
 def check_scheduler_address(scheduler) -> None:
     """A Dask scheduler: None (a local cluster), a cluster system (slurm, pbs, sge) or an address
-    with a port (``tcp://host:8786``, ``host:8786``).
-
-    Parameters
-    ----------
-    scheduler : str or None
-        The scheduler setting.
-    """
+    with a port (``tcp://host:8786``, ``host:8786``)."""
     if scheduler is None or scheduler in JOBQUEUES:
         return
     match = _ADDRESS.fullmatch(str(scheduler))
@@ -297,12 +279,7 @@ def check_scheduler_address(scheduler) -> None:
 
 
 def jobqueue_cluster(system: str):
-    """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job.
-
-    Parameters
-    ----------
-    system : str
-    """
+    """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job."""
     try:  # lazy: an optional extra that imports distributed (as in DaskExecutor), only for --scheduler slurm|pbs|sge
         import dask_jobqueue
     except ImportError:
@@ -311,13 +288,8 @@ def jobqueue_cluster(system: str):
 
 
 def make_executor(kind: str = "local", *, jobs: int = 0, scheduler: str | None = None):
-    """The executor ``kind`` (:data:`EXECUTORS`); ``jobs``: processes (0: all cores).
-
-    Parameters
-    ----------
-    kind, jobs, scheduler : str, int, str or None
-        ``scheduler``: :class:`DaskExecutor`'s.
-    """
+    """The executor ``kind`` (:data:`EXECUTORS`); ``jobs``: processes (0: all cores); ``scheduler``:
+    :class:`DaskExecutor`'s."""
     check_executor(kind, jobs, scheduler)
     if kind == "dask":
         return DaskExecutor(jobs, scheduler)

@@ -113,23 +113,12 @@ def code_versions(target_sets) -> dict[tuple, str]:
 
 def code_version(targets: tuple[str, ...] = ()) -> str:
     """Hash of the code a run of ``targets`` (its :func:`run_targets`) executes: the name and content of
-    each file of :func:`magexp.run.codekey.code_files`. Only an edit of such a file invalidates the run.
-
-    Parameters
-    ----------
-    targets : tuple of str
-    """
+    each file of :func:`magexp.run.codekey.code_files`. Only an edit of such a file invalidates the run."""
     return code_versions([tuple(targets)])[tuple(targets)]
 
 
 def run_key(resolved: dict, files: dict[str, str] | None = None, code: str | None = None) -> str:
-    """Key of a run: its resolved config, the content of the data files it names, the code it executes.
-
-    Parameters
-    ----------
-    resolved, files, code : dict, dict or None, str or None
-        The resolved config; its :func:`data_files` and :func:`code_version` (None: found here).
-    """
+    """Key of a run: its resolved config, the content of the data files it names, the code it executes."""
     files = data_files(resolved) if files is None else files
     code = code_version(run_targets(resolved)) if code is None else code
     return _key_of(json.dumps(resolved, sort_keys=True, default=str), files, code)
