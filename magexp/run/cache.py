@@ -174,12 +174,26 @@ def _run_output(value):
     return RunOutput(**value)
 
 
-def load(key: str, root: Path | None = None):
-    """The stored run of ``key`` (a :class:`magexp.estimators.result.RunOutput`), or None: absent, or not a
+def _fields(value, fields: tuple[str, ...]) -> types.SimpleNamespace:
+    """The ``fields`` of a run entry's value, each checked as :func:`_run_output` checks it, or :class:`InvalidEntry`."""
+    checks = _run_checks()
+    if type(value) is not dict or value.keys() != checks.keys():
+        raise InvalidEntry("does not hold a run's fields")
+    for name in fields:
+        if not checks[name](value[name]):
+            raise InvalidEntry(f"its field {name} is not of its type")
+    return types.SimpleNamespace(**{name: value[name] for name in fields})
+
+
+def load(key: str, root: Path | None = None, fields: tuple[str, ...] | None = None):
+    """The stored run of ``key`` (a :class:`magexp.estimators.result.RunOutput`; with ``fields``, a namespace of
+    those fields only, the other arrays never made: a run's row needs three), or None: absent, or not a
     valid entry of ``key`` (a miss noted for :func:`say_notes`; the entry is left in place, the
     recomputed run replaces it), or not readable by this user (noted, never replaced)."""
     root = CACHE if root is None else Path(root)
     try:
+        if fields is not None:
+            return _fields(read(entry_path(key, root), key, "RunOutput", fields), fields)
         return _run_output(read(entry_path(key, root), key, "RunOutput"))
     except (FileNotFoundError, NotADirectoryError):  # absent (or no cache folder at all)
         return None

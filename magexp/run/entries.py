@@ -83,10 +83,11 @@ def pack(key: str, kind: str, value) -> bytes:
     return MAGIC + f" {digest} {len(meta):12d} {len(doc):12d}\n".encode() + body
 
 
-def unpack(buf: bytearray, key: str, kind: str):
+def unpack(buf: bytearray, key: str, kind: str, fields: tuple[str, ...] | None = None):
     """The value of an entry read into ``buf`` (writable: its arrays are views of it), after checking
     that it is an entry of ``kind`` under ``key`` whose content has the digest it carries.
-    Raises :class:`InvalidEntry` naming what does not hold."""
+    Raises :class:`InvalidEntry` naming what does not hold. With ``fields`` (of a value that is a dict),
+    only those fields' arrays are made (:func:`_selected`): the rest is left as parsed."""
     view = memoryview(buf)
     if len(buf) < _FIRST or bytes(view[:len(MAGIC)]) != MAGIC or buf[_FIRST - 1] != 0x0A:
         raise InvalidEntry("not an entry of this format")
@@ -106,6 +107,8 @@ def unpack(buf: bytearray, key: str, kind: str):
     if meta.get("kind") != kind:
         raise InvalidEntry(f"holds a {str(meta.get('kind'))[:40]!r}, not a {kind!r}")
     start = _FIRST + m + n
+    if fields is not None:
+        return _selected(buf, meta, bytes(view[_FIRST + m:start]), start, fields)
     try:
         arrays = _arrays(buf, meta["arrays"], start) if meta["arrays"] else []
     except (TypeError, ValueError, KeyError):
@@ -123,6 +126,37 @@ def unpack(buf: bytearray, key: str, kind: str):
         return json.loads(bytes(view[_FIRST + m:start]), object_hook=array)
     except ValueError:
         raise InvalidEntry("value is not JSON") from None
+
+
+def _selected(buf: bytearray, meta: dict, doc: bytes, start: int, fields: tuple[str, ...]) -> dict:
+    """The value (a dict) of an entry whose JSON ``doc`` is parsed, with the arrays of ``fields`` made and
+    checked as :func:`unpack` makes them all: reading a run's row skips the arrays it does not show."""
+    try:
+        value, table = json.loads(doc), meta["arrays"]
+    except (ValueError, KeyError):
+        raise InvalidEntry("value is not JSON") from None
+    if type(value) is not dict or not all(name in value for name in fields) or not isinstance(table, list):
+        raise InvalidEntry("does not hold the fields asked for")
+    made: dict[int, object] = {}
+
+    def resolve(node):  # JSON gives lists, dicts and scalars: only a list or dict holds an array
+        if type(node) is list:
+            return [resolve(item) if type(item) in (list, dict) else item for item in node]
+        if type(node) is not dict:
+            return node
+        if _ARRAY not in node:
+            return {name: resolve(item) if type(item) in (list, dict) else item for name, item in node.items()}
+        index = node[_ARRAY]
+        if len(node) != 1 or type(index) is not int or not 0 <= index < len(table):
+            raise InvalidEntry("an array reference is malformed")
+        if index not in made:
+            try:
+                made[index] = _arrays(buf, table[index:index + 1], start)[0]
+            except (TypeError, ValueError):
+                raise InvalidEntry("its array table is malformed") from None
+        return made[index]
+
+    return {**value, **{name: resolve(value[name]) for name in fields}}
 
 
 def _arrays(buf: bytearray, table: list, start: int) -> list:
@@ -146,8 +180,8 @@ def _arrays(buf: bytearray, table: list, start: int) -> list:
 MAX_ENTRY = 2 ** 30
 
 
-def read(path: Path, key: str, kind: str):
-    """The value of the entry at ``path`` (:func:`unpack`). Raises ``FileNotFoundError`` if there
+def read(path: Path, key: str, kind: str, fields: tuple[str, ...] | None = None):
+    """The value of the entry at ``path`` (:func:`unpack`, of ``fields`` only where given). Raises ``FileNotFoundError`` if there
     is none, ``PermissionError`` if it cannot be read, :class:`InvalidEntry` if it is not valid.
     An entry is read only if it is a regular file (a FIFO or a device is never opened for a
     blocking read) of at most :data:`MAX_ENTRY` bytes (a huge file is refused by its size, unread)."""
@@ -164,4 +198,4 @@ def read(path: Path, key: str, kind: str):
         buf = bytearray(st.st_size)
         if fh.readinto(buf) != len(buf):
             raise InvalidEntry("shorter than its size")
-    return unpack(buf, key, kind)
+    return unpack(buf, key, kind, fields)

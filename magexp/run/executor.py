@@ -114,6 +114,10 @@ def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
     return sorted(tasks, key=lambda t: -sum(cost_hint(configs[i]) for i in t))
 
 
+#: the fields of a run that its row (:func:`run_row`) reads
+ROW_FIELDS = ("metrics", "parameter_names", "x")
+
+
 def run_row(out) -> dict:
     """A run's row of the runs table: its metrics and its parameter estimates (one column per
     parameter name that is not already a metric)."""
@@ -206,7 +210,7 @@ def _cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:
     """The rows (:func:`run_row`) of the distinct runs ``first`` (key -> index) already in the run cache."""
     rows = {}
     for key in first:
-        out = cache.load(key) if use_cache else None
+        out = cache.load(key, fields=ROW_FIELDS) if use_cache else None
         if out is not None:
             rows[key] = run_row(out)
     return rows
