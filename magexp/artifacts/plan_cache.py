@@ -98,25 +98,8 @@ def _same(plan: ArtifactPlan, again: ArtifactPlan) -> bool:
 
 
 def planned(spec, *, seeds: int | None = None, tiny: bool = False, fresh: bool = False) -> ArtifactPlan:
-    """The plan of ``spec`` (:func:`magexp.artifacts.sample_sizes.plan_with_effects`), read from the plan
-    cache when it holds it, else composed and kept there.
-
-    Parameters
-    ----------
-    spec : Artifact
-        The artifact.
-    seeds : int, optional
-        Seeds per cell (an exploration).
-    tiny : bool
-        Tiny sizes.
-    fresh : bool
-        Compose it even if the plan cache holds it (``--force``), and keep the new plan.
-
-    Returns
-    -------
-    ArtifactPlan
-        Every run's config, in the order :func:`plan_with_effects` gives.
-    """
+    """:func:`magexp.artifacts.sample_sizes.plan_with_effects` of ``spec``, ``seeds`` and ``tiny``, read from the plan
+    cache when it holds it, else composed and kept there; ``fresh`` (``--force``) composes it all the same."""
     k = key(spec, seeds, tiny)
     if not fresh:
         try:
@@ -125,10 +108,9 @@ def planned(spec, *, seeds: int | None = None, tiny: bool = False, fresh: bool =
             pass  # absent or not a plan: composed again, and replaced
     plan = plan_with_effects(spec, seeds=seeds, tiny=tiny)
     value = packed(plan)
-    data = pack(k, KIND, value)
     if _same(plan, unpacked(spec, json.loads(json.dumps(value)))):
         try:
-            write(_entry(k), data, root())
+            write(_entry(k), pack(k, KIND, value), root())
         except OSError:  # a read-only cache folder: composed each time
             pass
     return plan
