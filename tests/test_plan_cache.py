@@ -47,7 +47,7 @@ def test_a_changed_input_or_a_damaged_entry_composes_again(monkeypatch, tmp_path
     calls = _counted(monkeypatch)
     spec = load(SPEC)
     plan_cache.planned(spec, seeds=1, tiny=True)
-    entry = plan_cache._entry(plan_cache.key(spec, 1, True))
+    entry = plan_cache.entry(plan_cache.key(spec, 1, True))
     data = bytearray(entry.read_bytes())
     data[-2] ^= 1
     entry.write_bytes(bytes(data))

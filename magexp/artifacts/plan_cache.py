@@ -63,7 +63,7 @@ def key(spec, seeds: int | None, tiny: bool) -> str:
     return h.hexdigest()[:32]
 
 
-def _entry(k: str) -> Path:
+def entry(k: str) -> Path:
     """Where the plan of key ``k`` is kept."""
     return root() / k[:2] / f"{k}.plan"
 
@@ -103,14 +103,14 @@ def planned(spec, *, seeds: int | None = None, tiny: bool = False, fresh: bool =
     k = key(spec, seeds, tiny)
     if not fresh:
         try:
-            return unpacked(spec, read(_entry(k), k, KIND))
+            return unpacked(spec, read(entry(k), k, KIND))
         except (OSError, InvalidEntry, KeyError, TypeError, ValueError, IndexError):
             pass  # absent or not a plan: composed again, and replaced
     plan = plan_with_effects(spec, seeds=seeds, tiny=tiny)
     value = packed(plan)
     if _same(plan, unpacked(spec, json.loads(json.dumps(value)))):
         try:
-            write(_entry(k), pack(k, KIND, value), root())
+            write(entry(k), pack(k, KIND, value), root())
         except OSError:  # a read-only cache folder: composed each time
             pass
     return plan
