@@ -83,3 +83,26 @@ def test_a_row_read_from_its_fields_is_the_row_of_the_whole_run(tmp_path):
     path.write_bytes(path.read_bytes().replace(b'"nit": 3', b'"nit": 4'))  # content no longer matches its digest
     assert cache.load("k" * 32, tmp_path, fields=ROW_FIELDS) is None
     assert any("not valid" in line for line in cache.say_notes())
+
+
+def test_rows_kept_beside_their_entries_are_the_rows_read_and_a_replaced_entry_is_read_again(tmp_path, monkeypatch):
+    from magexp.run import executor
+
+    outs = {f"{c}{'0' * 31}": RunOutput(metrics={"fun": 0.1 * i, "nan": float("nan"), "ok": True, "n": i},
+                                         history=np.zeros(2), history_nfev=np.zeros(2, int), x=np.array([i, -0.0]),
+                                         parameter_names=["a", "b"]) for i, c in enumerate("ab")}
+    for key, out in outs.items():
+        assert cache.store(key, out)
+    first = {key: i for i, key in enumerate(outs)}
+    read = executor._cached_rows(first, True)
+    assert set(cache.known_rows(first)) == set(outs)  # kept beside the entries
+    loads = []
+    real = cache.load
+    monkeypatch.setattr(cache, "load", lambda *a, **k: loads.append(a[0]) or real(*a, **k))
+    again = executor._cached_rows(first, True)
+    assert loads == [] and json.dumps(again) == json.dumps(read)  # no entry read, the same rows to the byte
+    key = next(iter(outs))
+    changed = RunOutput(**{**vars(outs[key]), "metrics": {"fun": 9.0}})
+    assert cache.store(key, changed)  # a new file: its stamp differs
+    rows = executor._cached_rows(first, True)
+    assert loads == [key] and rows[key]["fun"] == 9.0

@@ -206,6 +206,61 @@ def load(key: str, root: Path | None = None, fields: tuple[str, ...] | None = No
     return None
 
 
+#: the rows of the valid entries of a two-letter folder, kept in it (:func:`known_rows`)
+ROWS = "rows.memo"
+
+
+def _stamp(path: Path) -> list[int] | None:
+    """Size, modification time and inode of an entry file (None: absent): an entry replaced changes it."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return [st.st_size, st.st_mtime_ns, st.st_ino]
+
+
+def known_rows(keys, root: Path | None = None) -> dict[str, dict]:
+    """``{key: row}`` of the ``keys`` whose row :func:`keep_rows` kept and whose entry is the file it was read
+    from (same stamp): a warm command reads one small file per folder instead of every entry."""
+    root = CACHE if root is None else Path(root)
+    by_folder: dict[str, list[str]] = {}
+    for key in keys:
+        by_folder.setdefault(key[:2], []).append(key)
+    rows = {}
+    for folder, wanted in by_folder.items():
+        try:
+            kept = read(root / folder / ROWS, folder, "Rows")
+        except (OSError, InvalidEntry):
+            continue
+        for key in wanted:
+            item = kept.get(key) if isinstance(kept, dict) else None
+            if isinstance(item, list) and len(item) == 2 and isinstance(item[1], dict) \
+                    and item[0] == _stamp(entry_path(key, root)):
+                rows[key] = item[1]
+    return rows
+
+
+def keep_rows(rows: dict[str, dict], root: Path | None = None) -> None:
+    """Keep ``rows`` (``{key: row}`` just read from valid entries) beside their entries, each with its entry's
+    stamp, merged with what each folder kept (atomically; nothing where the cache cannot be written)."""
+    root = CACHE if root is None else Path(root)
+    by_folder: dict[str, dict] = {}
+    for key, row in rows.items():
+        by_folder.setdefault(key[:2], {})[key] = row
+    for folder, new in by_folder.items():
+        try:
+            kept = read(root / folder / ROWS, folder, "Rows")
+        except (OSError, InvalidEntry):
+            kept = {}
+        kept = {k: v for k, v in (kept if isinstance(kept, dict) else {}).items()
+                if isinstance(v, list) and v and v[0] == _stamp(entry_path(k, root))}
+        kept.update({key: [_stamp(entry_path(key, root)), row] for key, row in new.items()})
+        try:
+            write(root / folder / ROWS, pack(folder, "Rows", kept), root)
+        except (OSError, TypeError):  # a read-only cache; a row JSON cannot hold: read from its entry each time
+            pass
+
+
 def exists(key: str, root: Path | None = None) -> bool:
     """Whether a run of ``key`` is stored (its file's first bytes are those of an entry; the
     content is checked when it is read)."""

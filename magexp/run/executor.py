@@ -207,12 +207,21 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
 
 
 def _cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:
-    """The rows (:func:`run_row`) of the distinct runs ``first`` (key -> index) already in the run cache."""
-    rows = {}
+    """The rows (:func:`run_row`) of the distinct runs ``first`` (key -> index) already in the run cache: those
+    kept beside their entries (:func:`magexp.run.cache.known_rows`), the others read and then kept."""
+    if not use_cache:
+        return {}
+    known = cache.known_rows(first)
+    rows, read = {}, {}
     for key in first:
-        out = cache.load(key, fields=ROW_FIELDS) if use_cache else None
+        if key in known:
+            rows[key] = known[key]
+            continue
+        out = cache.load(key, fields=ROW_FIELDS)
         if out is not None:
-            rows[key] = run_row(out)
+            rows[key] = read[key] = run_row(out)
+    if read:
+        cache.keep_rows(read)
     return rows
 
 
