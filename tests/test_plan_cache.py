@@ -94,15 +94,15 @@ def test_rows_kept_beside_their_entries_are_the_rows_read_and_a_replaced_entry_i
     for key, out in outs.items():
         assert cache.store(key, out)
     first = {key: i for i, key in enumerate(outs)}
-    read = executor._cached_rows(first, True)
+    read = executor.cached_rows(first, True)
     assert set(cache.known_rows(first)) == set(outs)  # kept beside the entries
     loads = []
     real = cache.load
     monkeypatch.setattr(cache, "load", lambda *a, **k: loads.append(a[0]) or real(*a, **k))
-    again = executor._cached_rows(first, True)
+    again = executor.cached_rows(first, True)
     assert loads == [] and json.dumps(again) == json.dumps(read)  # no entry read, the same rows to the byte
     key = next(iter(outs))
     changed = RunOutput(**{**vars(outs[key]), "metrics": {"fun": 9.0}})
     assert cache.store(key, changed)  # a new file: its stamp differs
-    rows = executor._cached_rows(first, True)
+    rows = executor.cached_rows(first, True)
     assert loads == [key] and rows[key]["fun"] == 9.0

@@ -177,7 +177,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     first = {}
     for i, key in enumerate(keys):
         first.setdefault(key, i)
-    metrics = _cached_rows(first, use_cache)
+    metrics = cached_rows(first, use_cache)
     read = frozenset(metrics)  # valid entries only: a damaged one is recomputed, not read
     todo = [i for key, i in first.items() if key not in metrics]
     if counts is not None:
@@ -206,7 +206,7 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     return Outputs(keys, metrics, held=done.held, read=read)
 
 
-def _cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:
+def cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:
     """The rows (:func:`run_row`) of the distinct runs ``first`` (key -> index) already in the run cache: those
     kept beside their entries (:func:`magexp.run.cache.known_rows`), the others read and then kept."""
     if not use_cache:
