@@ -26,6 +26,7 @@ import pandas as pd
 
 from magexp.artifacts.kinds import kind, tabulate
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs
+from magexp.artifacts.plan_cache import planned
 from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.artifacts.plots import VECTOR
 from magexp.artifacts.formats import MEASURED, write_csv
@@ -38,7 +39,8 @@ from magexp.errors import MagexpError, exit_code
 from magexp.paths import RESULTS
 from magexp.core.limits import LIMITS, check_limits, refuse_over, show
 from magexp.run.budget import estimate_run
-from magexp.run.executor import Outputs, check_executor, make_executor, run_many
+from magexp.run.executor import Outputs, run_many
+from magexp.run.executors import check_executor, make_executor
 from magexp.run.flags import OneLineParser
 from magexp.run.folders import check_destination, check_output_folder, removed_on_failure
 from magexp.run.progress import Progress
@@ -251,7 +253,7 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
     executor : Executor, optional
     log : callable
     """
-    plans = [(paper, plan_with_effects(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
+    plans = [(paper, planned(spec, seeds=seeds, tiny=tiny, fresh=force)) for paper, specs in selected.items()
              for spec in specs if not skipped_for_data(spec, log)]
     configs = [c for _, plan in plans for c in plan.configs]
     counts: dict = {}
