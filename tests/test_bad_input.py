@@ -376,7 +376,7 @@ TABLE = [
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1", "seed=1,2"], ["'tcp://node1'", "PORT"]),
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://node1:99999", "seed=1,2"], ["99999", "PORT"]),
     row("sweep", ["-m", *DASK, "hydra.launcher.scheduler=tcp://127.0.0.1:1", "seed=1,2"], ["no Dask scheduler"],
-        patch=[("magexp.run.executor.DaskExecutor.__init__", no_scheduler)]),
+        patch=[("magexp.run.executors.DaskExecutor.__init__", no_scheduler)]),
     row("sweep", ["-m", "estimator=ellipsoid", "seed=1,2"], ["interrupted"], code=130,
         patch=[("magexp.run.sweep.run_many", interrupt)]),
     row("sweep", ["-m", "hydra.sweep.dir=a_file", "seed=1,2"], ["a_file", "is a file"]),

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from magexp.run import cache, codekey
+from magexp.run import cache, codekey, runkeys
 
 from magexp.artifacts import reproduce
 from magexp.estimators.result import RunOutput
@@ -345,7 +345,7 @@ def sources(tmp_path, monkeypatch):
 
 
 def keys_of(configs: dict) -> dict:
-    return dict(zip(configs, cache.run_keys(list(configs.values()))))
+    return dict(zip(configs, runkeys.run_keys(list(configs.values()))))
 
 
 def edit(path: Path, old: str, new: str) -> None:
@@ -368,7 +368,7 @@ def changed(before: dict, after: dict) -> set:
 
 
 def test_a_runs_code_is_the_closure_of_what_it_builds_and_of_the_core(keyed):
-    files = set(codekey.code_files(cache.run_targets(keyed["ding2024_exp1", "pso"])))
+    files = set(codekey.code_files(runkeys.run_targets(keyed["ding2024_exp1", "pso"])))
     for needed in ("magexp.run.runner", "magexp.core.metrics", "magexp.core.bounds", "magexp.core.seeding", "magexp",
                    "magexp.scenarios.ding", "magexp.problems.scalar", "magexp.estimators.swarm",
                    "magexp.estimators.velocity", "magexp.estimators.schedules", "magexp.estimators.initialisers"):
@@ -378,7 +378,7 @@ def test_a_runs_code_is_the_closure_of_what_it_builds_and_of_the_core(keyed):
                   "magexp.scenarios.yuan", "magexp.problems.vector", "magexp.problems.ship"):
         assert other not in files, other  # downstream code, and other runs' classes
     # a ship scenario's config names no objective: its class fixes it (``objective = "ship"``)
-    assert [t for t in cache.run_targets(keyed["yan2022_sim", "kf"]) if t.startswith("magexp.problems.")] == [
+    assert [t for t in runkeys.run_targets(keyed["yan2022_sim", "kf"]) if t.startswith("magexp.problems.")] == [
         "magexp.problems.ship.ShipMagnetization"]
 
 
@@ -442,7 +442,7 @@ def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sourc
             "pso": keyed["yuan2018_mode1", "pso"]}
     before = keys_of(runs)
     assert "toypkg" not in sys.modules  # found from its source, not imported
-    assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(codekey.code_files(cache.run_targets(runs["docs"])))
+    assert {"toypkg", "toypkg.methods", "magexp.estimators.lm"} <= set(codekey.code_files(runkeys.run_targets(runs["docs"])))
     code_edit(package / "methods.py")
     assert changed(before, keys_of(runs)) == {"docs", "module"}
     again = keys_of(runs)
@@ -459,15 +459,15 @@ def test_an_estimator_of_another_package_is_keyed_by_its_source_unimported(sourc
 def test_code_versions_are_kept_under_the_sources_stamp(sources, keyed):
     import json
 
-    targets = cache.run_targets(keyed["ding2024_exp1", "pso"])
-    version = cache.code_version(targets)
+    targets = runkeys.run_targets(keyed["ding2024_exp1", "pso"])
+    version = runkeys.code_version(targets)
     memo = cache.CACHE / "code-version.json"
     (stamp, kept), = json.loads(memo.read_text()).items()  # the versions, under the sources' stamp
     assert kept == {"|".join(targets): version}
     memo.write_text(json.dumps({stamp: {"|".join(targets): "kept"}}))
-    assert cache.code_version(targets) == "kept"  # read back, not worked out
+    assert runkeys.code_version(targets) == "kept"  # read back, not worked out
     code_edit(sources / "magexp/estimators/swarm.py")
-    new = cache.code_version(targets)
+    new = runkeys.code_version(targets)
     assert new not in ("kept", version)  # a new stamp: worked out again
     assert json.loads(memo.read_text())[next(k for k in json.loads(memo.read_text()) if k != stamp)] == {
         "|".join(targets): new}
@@ -493,7 +493,7 @@ def test_a_reader_edit_changes_the_keys_of_the_runs_reading_its_format_only(sour
             "ros2 bag": reading(lm, bag),
             "simulated": lm, "ding": keyed["ding2024_exp1", "pso"]}
     imported = {m for m in sys.modules if m.split(".")[0] in ("pyulog", "pymavlink", "rosbags")}
-    assert "magexp.core.readers.ulog.read_ulog" in cache.run_targets(runs["named ulog"])  # the format named wins
+    assert "magexp.core.readers.ulog.read_ulog" in runkeys.run_targets(runs["named ulog"])  # the format named wins
     before = keys_of(runs)
     (sources / "magexp/core/readers/new.py").write_text('"""A reader of a new format."""\n')
     codekey.forget_code()

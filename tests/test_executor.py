@@ -9,9 +9,9 @@ import time
 import pytest
 from omegaconf import OmegaConf
 
-from magexp.run import cache
+from magexp.run import cache, runkeys
 
-from magexp.run import executor
+from magexp.run import executor, executors
 
 from magexp.run import runner
 from magexp.run.compose import compose_config
@@ -65,7 +65,7 @@ def test_identical_runs_run_once_also_when_forced():
 def test_outputs_are_read_back_from_the_cache():
     batch = configs(*DING, "estimator=ellipsoid")
     outputs = executor.run_many(batch, jobs=1)
-    keys = [cache.run_key(c) for c in batch]
+    keys = [runkeys.run_key(c) for c in batch]
     assert outputs.keys == keys and all(cache.exists(k) for k in keys)
     assert same(outputs[1], cache.load(keys[1]))
 
@@ -87,8 +87,8 @@ def test_local_processes_give_the_same_bytes_as_this_process(tmp_path, monkeypat
     batch = configs(*DING, "estimator=ellipsoid", seeds=range(4)) + configs(*DING, "estimator=lm", seeds=range(4))
     inline = executor.run_many(batch, jobs=1)
     monkeypatch.setattr(cache, "CACHE", tmp_path / "other")
-    with executor.make_executor("local", jobs=2) as ex:
-        assert isinstance(ex, executor.LocalExecutor)
+    with executors.make_executor("local", jobs=2) as ex:
+        assert isinstance(ex, executors.LocalExecutor)
         pooled = executor.run_many(batch, executor=ex)
     assert all(same(a, b) for a, b in zip(inline, pooled))
 
@@ -102,7 +102,7 @@ def test_bad_executor_settings(kind, kwargs, words):
     from magexp.errors import MagexpError
 
     with pytest.raises(MagexpError, match=words):
-        executor.make_executor(kind, **kwargs)
+        executors.make_executor(kind, **kwargs)
 
 
 def _kill_a_worker_once_busy(client, done: threading.Event):
@@ -134,7 +134,7 @@ def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, 
     reproduce(selected, tmp_path / "local", seeds=2, jobs=1, tiny=True, log=lambda *_: None)
 
     monkeypatch.setattr(cache, "CACHE", tmp_path / "cache_dask")
-    with executor.make_executor("dask", jobs=1) as ex:  # its nanny restarts it and the task runs again
+    with executors.make_executor("dask", jobs=1) as ex:  # its nanny restarts it and the task runs again
         done = threading.Event()
         killer = threading.Thread(target=lambda: killed.append(_kill_a_worker_once_busy(ex.client, done)))
         killed: list = []
@@ -154,7 +154,7 @@ def test_jobqueue_submits_single_threaded_one_worker_jobs():
     import dask
 
     with dask.config.set({"jobqueue.slurm.memory": "2GB", "jobqueue.slurm.queue": "normal"}):
-        cluster = executor.jobqueue_cluster("slurm")
+        cluster = executors.jobqueue_cluster("slurm")
         try:
             script = cluster.job_script()
         finally:
@@ -169,16 +169,16 @@ def test_jobqueue_missing_names_the_install(monkeypatch):
 
     monkeypatch.setitem(sys.modules, "dask_jobqueue", None)
     with pytest.raises(MagexpError, match=r"pip install 'magexp\[cluster\]'"):
-        executor.jobqueue_cluster("pbs")
+        executors.jobqueue_cluster("pbs")
 
 
-class _RemoteLike(executor.InlineExecutor):
+class _RemoteLike(executors.InlineExecutor):
     """An executor whose workers do not see the parent's files (a remote Dask scheduler)."""
 
     shares_files = False
 
 
-class _Recording(executor.InlineExecutor):
+class _Recording(executors.InlineExecutor):
     """The in-process executor, keeping what each task sends back to the parent and which runs the
     cache held when the task was done."""
 
@@ -198,7 +198,7 @@ def test_workers_store_their_runs_and_the_counts_split_the_cpu(tmp_path, monkeyp
     from magexp.artifacts.reproduce import cpu_line
 
     batch = configs(*DING, "estimator=ellipsoid", seeds=range(3)) + configs(*DING, "estimator=pso", seeds=range(3))
-    keys = cache.run_keys(batch)
+    keys = runkeys.run_keys(batch)
     monkeypatch.setattr(cache, "CACHE", tmp_path / "shared")
     stored = []
     real_store = cache.store

@@ -1,4 +1,4 @@
-"""Workers end with their parent (:func:`magexp.run.executor.watch_parent`): a reproduction whose parent
+"""Workers end with their parent (:func:`magexp.run.executors.watch_parent`): a reproduction whose parent
 is killed (``kill -9``) leaves no worker running."""
 
 from __future__ import annotations
@@ -64,11 +64,11 @@ def test_the_portable_fallback_alone_ends_an_orphan(tmp_path):
     """Without ``prctl`` (another system): the thread that looks at ``os.getppid()`` ends the worker."""
     script = textwrap.dedent("""
         import os, sys, time
-        from magexp.run import executor
+        from magexp.run import executors
         pid = os.fork()
         if pid == 0:
             sys.platform = "darwin"  # no prctl: the polling thread only
-            executor.watch_parent(os.getppid(), poll=0.05)
+            executors.watch_parent(os.getppid(), poll=0.05)
             print(os.getpid(), flush=True)
             os.close(1), os.close(2)  # the test reads the output to its end: not this process's end
             time.sleep(60)

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from magexp.run import cache
+from magexp.run import cache, runkeys
 
 
 KILL_AFTER = 2
@@ -56,6 +56,6 @@ def test_kill_midway_then_resume(tmp_path, mockup_reproduction, figures_not_rend
 
 
 def test_run_key_depends_on_every_config_value():
-    a = cache.run_key({"seed": 1, "scenario": {"noise": 2}})
-    assert a == cache.run_key({"scenario": {"noise": 2}, "seed": 1})
-    assert a != cache.run_key({"seed": 1, "scenario": {"noise": 2.5}})
+    a = runkeys.run_key({"seed": 1, "scenario": {"noise": 2}})
+    assert a == runkeys.run_key({"scenario": {"noise": 2}, "seed": 1})
+    assert a != runkeys.run_key({"seed": 1, "scenario": {"noise": 2.5}})

@@ -26,6 +26,7 @@ import pandas as pd
 
 from magexp.artifacts.kinds import kind, tabulate
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs
+from magexp.artifacts.plan_cache import planned
 from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.artifacts.plots import VECTOR
 from magexp.artifacts.formats import MEASURED, write_csv
@@ -38,7 +39,8 @@ from magexp.errors import MagexpError, exit_code
 from magexp.paths import RESULTS
 from magexp.core.limits import LIMITS, check_limits, refuse_over, show
 from magexp.run.budget import estimate_run
-from magexp.run.executor import Outputs, check_executor, make_executor, run_many
+from magexp.run.executor import Outputs, run_many
+from magexp.run.executors import check_executor, make_executor
 from magexp.run.flags import OneLineParser
 from magexp.run.folders import check_destination, check_output_folder, removed_on_failure
 from magexp.run.progress import Progress
@@ -51,15 +53,6 @@ def available_papers() -> list[str]:
 
 def select(papers: list[str], only: str | None) -> dict[str, list]:
     """``{paper: [spec, ...]}`` of ``papers``; with ``only``, just that artifact, in whichever paper has it.
-
-    Parameters
-    ----------
-    papers : list of str
-    only : str or None
-
-    Returns
-    -------
-    dict
     """
     chosen = {paper: paper_specs(paper) for paper in papers}
     if only is None:
@@ -76,12 +69,6 @@ def check_canonical(out, *, seeds, tiny: bool) -> Path:
     """The folder ``--out`` names, if this reproduction may write there: exploration (``--seeds``,
     ``--tiny``) never into the canonical ``results/``, and no reproduction into a folder inside it
     (:func:`magexp.run.folders.check_destination`: resolved paths).
-
-    Parameters
-    ----------
-    out : Path or str
-    seeds : int or None
-    tiny : bool
     """
     text = str(out)
     if "${" in text or any(ord(c) < 32 for c in text):
@@ -108,12 +95,6 @@ def draw(spec, csv: Path, out: Path, *, force: bool = False) -> bool:
     layout pass (about a third of a second a figure), so exploration folders and tests skip it;
     ``tests/test_figure_defects.py`` checks one committed figure of each kind, and
     ``make test-full`` all of them.
-
-    Parameters
-    ----------
-    spec : Artifact
-    csv, out : Path
-    force : bool
     """
     # lazy: matplotlib (memo, style) only here, where a figure is checked or drawn; importing this
     # module (--help, a refused command) never pays for it (493 ms CPU after this module, min of 5)
@@ -143,11 +124,6 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
     """Move the wall-time columns of ``frame`` into the timing file ``path`` (with the row keys):
     the results' CSVs then hold only what a fresh clone computes to the same bytes, and
     ``results/timing/`` and ``results/timing.csv`` what this machine measured.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-    path : Path
     """
     timed = [c for c in frame.columns if MEASURED in c]
     if not timed:
@@ -160,20 +136,6 @@ def split_timing(frame: pd.DataFrame, path: Path) -> pd.DataFrame:
 def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     """An artifact's CSVs and figure into ``out`` (``force``: draw it even if unchanged); returns its
     summary rows, computed from the CSVs just written (:func:`summarise_stored`, as ``--redraw`` does).
-
-    Parameters
-    ----------
-    runs : ArtifactRuns
-        The artifact's runs (:func:`magexp.artifacts.plan.collect`).
-    out : Path
-        The paper's results folder.
-    force : bool
-        Draw the figure even if the figure cache has it.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The artifact's rows of ``summary.csv``.
     """
     path = out / f"{runs.spec.name}.csv"
     frame = tabulate(runs)
@@ -188,12 +150,6 @@ def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
 
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
     """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows.
-
-    Parameters
-    ----------
-    paper : str
-    parts : dict
-    out : Path
     """
     summary = pd.concat(list(parts.values()), ignore_index=True) if parts else pd.DataFrame(columns=COLUMNS)
     path = out / "summary.csv"
@@ -209,11 +165,6 @@ def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.D
 def skipped_for_data(spec, log=print) -> bool:
     """Whether ``spec`` reads a recording that is not in :data:`magexp.paths.SHARED_DATA` (the
     recordings of others are never shipped): then it is skipped, with one line.
-
-    Parameters
-    ----------
-    spec : Artifact
-    log : callable
     """
     missing = [f for f in spec.get("requires_data") or [] if not (paths.SHARED_DATA / f).is_file()]
     if missing:
@@ -224,11 +175,6 @@ def skipped_for_data(spec, log=print) -> bool:
 def slice_outputs(outputs, start: int, n: int):
     """Runs ``start .. start + n`` of :class:`magexp.run.executor.Outputs`, as an ``Outputs`` of their own
     (metrics at hand, outputs read from the same run cache on access).
-
-    Parameters
-    ----------
-    outputs : Outputs
-    start, n : int
     """
     keys = outputs.keys[start:start + n]
     return Outputs(keys, {key: outputs.metrics(start + j) for j, key in enumerate(keys)}, outputs.root,
@@ -240,18 +186,8 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
     """Plan every run of the ``selected`` artifacts, run them in one pass, write each artifact.
 
     Returns ``{"requested", "distinct", "computed", "cached", "paper summaries": {...}}``.
-
-    Parameters
-    ----------
-    selected : dict
-    root : Path
-    seeds : int, optional
-    jobs : int
-    tiny, force : bool
-    executor : Executor, optional
-    log : callable
     """
-    plans = [(paper, plan_with_effects(spec, seeds=seeds, tiny=tiny)) for paper, specs in selected.items()
+    plans = [(paper, planned(spec, seeds=seeds, tiny=tiny, fresh=force)) for paper, specs in selected.items()
              for spec in specs if not skipped_for_data(spec, log)]
     configs = [c for _, plan in plans for c in plan.configs]
     counts: dict = {}
@@ -282,20 +218,6 @@ def redraw(selected: dict[str, list], root: Path, *, force: bool = False) -> tup
     """Each selected artifact's figure from its CSV in ``root`` (unchanged ones are kept, unless
     ``force``: :func:`draw`) and its summary rows from its runs CSV (:func:`summarise_stored`, into
     ``root/<paper>/summary.csv``): what a reproduction into ``root`` wrote, to the byte.
-
-    Parameters
-    ----------
-    selected : dict
-        ``{paper: [Artifact, ...]}`` (:func:`select`).
-    root : Path
-        The results folder.
-    force : bool
-        Draw every figure, even an unchanged one.
-
-    Returns
-    -------
-    tuple of int
-        How many figures were drawn and how many were unchanged.
     """
     drawn = kept = 0
     for paper, specs in selected.items():
@@ -379,11 +301,6 @@ def canonical_needs(chosen: list[str] | None = None) -> dict:
 def print_limits(chosen: list[str] | None = None) -> None:
     """``magexp reproduce [PAPER] --limits``: the limits in force beside what ``make reproduce`` needs of each
     (of the ``chosen`` papers' reproduction).
-
-    Parameters
-    ----------
-    chosen : list of str or None
-        The papers (None: every paper).
     """
     need = canonical_needs(chosen)
     for name, lim in LIMITS.items():
@@ -398,6 +315,7 @@ def print_limits(chosen: list[str] | None = None) -> None:
 
 
 def parser() -> argparse.ArgumentParser:
+    """The command line of ``magexp reproduce`` (its options and their help)."""
     p = OneLineParser(prog="magexp reproduce", description=__doc__.splitlines()[0])
     p.add_argument("paper", nargs="?", help="all, or one of: " + ", ".join(available_papers()))
     p.add_argument("--jobs", type=int, default=0, help="parallel processes (0: all cores)")
@@ -434,6 +352,7 @@ NOT_WITH_LIMITS = {"only": None, "seeds": None, "tiny": False, "out": str(RESULT
 
 
 def _main(args) -> int:
+    """Run the parsed command: check where it writes, then redraw, list the limits or reproduce."""
     if args.paper is None and not args.limits:
         raise MagexpError("a paper is needed: magexp reproduce all, or one of " + ", ".join(available_papers()))
     papers = available_papers() if args.paper in ("all", None) else [args.paper]
@@ -492,6 +411,8 @@ def _write(args, selected) -> int:
     if args.only is None and args.seeds is None and not args.tiny:
         record_timing(args.out, args.paper, seconds, counts)
     print(f"done in {seconds:.1f} s; report: {args.out / 'REPORT.md'}")
+    if args.out.resolve() == RESULTS.resolve():  # the website's pages are generated from results/ (magexp.site)
+        print("the results website (claims explorer, a page per paper): make docs, then open site/index.html")
     return 0
 
 

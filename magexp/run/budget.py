@@ -77,6 +77,7 @@ SHORTEST_LINE = 6
 # estimates
 
 def _int(node: Mapping | None, key: str) -> int | None:
+    """The non-negative finite number ``node[key]`` as an int, else None (a setting an estimate can use)."""
     value = node.get(key) if node is not None else None
     return int(value) if isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0 \
         and math.isfinite(value) else None
@@ -100,12 +101,7 @@ class Estimate:
         return self.evaluations * self.readings
 
     def subject(self) -> str:
-        """``key=value`` of the largest factor (the one a mistake most likely typed).
-
-        Returns
-        -------
-        str
-        """
+        """``key=value`` of the largest factor (the one a mistake most likely typed)."""
         key, value = max(self.factors, key=lambda kv: kv[1])
         return f"{key}={value}"
 
@@ -115,28 +111,7 @@ def estimate_fit(estimator: Mapping, n_readings: int, prefix: str = "estimator."
                  problem=CalibrationProblem) -> Estimate:
     """The :class:`Estimate` of fitting ``estimator`` (its settings: a config node or an estimator's
     ``vars()``) to ``n_readings`` readings of ``problem`` (its class: what its cost holds; the
-    module docstring's ``E`` and ``M``).
-
-    Parameters
-    ----------
-    estimator : Mapping
-        The estimator's settings: a config node or an estimator's ``vars()``.
-    n_readings : int
-        Readings fitted.
-    prefix : str
-        Key prefix naming the estimator's settings in messages.
-    readings_key : str
-        Key naming the readings in messages.
-    floats_per_reading : int
-        Floats a reading holds in the cost.
-    problem : type
-        The problem class whose cost is fitted.
-
-    Returns
-    -------
-    Estimate
-        Memory and work of the fit.
-    """
+    module docstring's ``E`` and ``M``)."""
     particles, state = _int(estimator, "n_particles"), 0
     popsize = _int(estimator, "popsize")
     factors = [(readings_key, n_readings)]
@@ -167,18 +142,7 @@ def estimate_fit(estimator: Mapping, n_readings: int, prefix: str = "estimator."
 
 def run_readings(scenario: Mapping) -> int:
     """Readings of a run's scenario: ``n_readings``, else (a recording read whole) the most its
-    file can hold, else the scenario's default size (300).
-
-    Parameters
-    ----------
-    scenario : Mapping
-        The run's scenario node.
-
-    Returns
-    -------
-    int
-        The readings of the run.
-    """
+    file can hold, else the scenario's default size (300)."""
     n = _int(scenario, "n_readings")
     if n is not None:
         return n
@@ -189,18 +153,7 @@ def run_readings(scenario: Mapping) -> int:
 def run_problem(cfg: Mapping):
     """The problem class of a run: its ``objective``, else its scenario's; the generic
     :class:`~magexp.problems.base.CalibrationProblem` when neither names one (a scenario whose
-    class fixes it).
-
-    Parameters
-    ----------
-    cfg : Mapping
-        The run's (composed or resolved) config.
-
-    Returns
-    -------
-    type
-        The problem class.
-    """
+    class fixes it)."""
     objective = cfg.get("objective") or (cfg.get("scenario") or {}).get("objective")
     try:
         return problem_class(objective) if isinstance(objective, str) else CalibrationProblem
@@ -209,50 +162,20 @@ def run_problem(cfg: Mapping):
 
 
 def estimate_run(cfg: Mapping) -> Estimate:
-    """The :class:`Estimate` of a run of the (composed or resolved) config ``cfg``.
-
-    Parameters
-    ----------
-    cfg : Mapping
-        A composed or resolved run config.
-
-    Returns
-    -------
-    Estimate
-        Memory and work of the run.
-    """
+    """The :class:`Estimate` of a run of the (composed or resolved) config ``cfg``."""
     scenario, estimator = cfg.get("scenario") or {}, cfg.get("estimator") or {}
     return estimate_fit(estimator, run_readings(scenario), problem=run_problem(cfg))
 
 
 def check_estimate(est: Estimate, what: str) -> None:
-    """Refuse one fit over the memory or work limit, naming its largest factor.
-
-    Parameters
-    ----------
-    est : Estimate
-        The fit's estimate.
-    what : str
-        What the fit is, named in the message.
-    """
+    """Refuse one fit over the memory or work limit, naming its largest factor."""
     detail = ", ".join(f"{k.rpartition('.')[2]} {v}" for k, v in est.factors)
     refuse_over(est.memory, "run_memory", est.subject(), f"{what} ({detail}) needs")
     refuse_over(est.work, "run_work", est.subject(), f"{what} ({detail}) needs")
 
 
 def check_run(cfg: Mapping) -> Estimate:
-    """Refuse a run over the memory or work limit (and over the memory available); returns its estimate.
-
-    Parameters
-    ----------
-    cfg : Mapping
-        A run config, checked before it runs.
-
-    Returns
-    -------
-    Estimate
-        The run's estimate.
-    """
+    """Refuse a run over the memory or work limit (and over the memory available); returns its estimate."""
     est = estimate_run(cfg)
     check_estimate(est, "the run")
     check_available(est.memory, est.subject())
@@ -260,15 +183,7 @@ def check_run(cfg: Mapping) -> Estimate:
 
 
 def check_available(need: int, subject: str) -> None:
-    """Refuse ``need`` bytes beyond the memory this machine has available now.
-
-    Parameters
-    ----------
-    need : int
-        Bytes needed.
-    subject : str
-        What needs them, named in the message.
-    """
+    """Refuse ``need`` bytes beyond the memory this machine has available now."""
     if need < 2 ** 28:  # under 256 MB: never worth asking the system
         return
     have = psutil.virtual_memory().available
@@ -291,34 +206,19 @@ class Tally:
         self.subject, self.runs, self.work = subject, 0, 0
 
     def add(self, est: Estimate, count: int = 1) -> None:
-        """Count ``count`` runs of estimate ``est`` and refuse the total (:meth:`check`).
-
-        Parameters
-        ----------
-        est : Estimate
-            One run's estimate.
-        count : int
-            How many such runs.
-        """
+        """Count ``count`` runs of estimate ``est`` and refuse the total (:meth:`check`)."""
         self.runs += count
         self.work += est.work * count
         self.check()
 
     def check(self) -> None:
+        """Refuse the runs counted so far over the runs or work limit."""
         refuse_over(self.runs, "runs", self.subject, "it makes")
         refuse_over(self.work, "work", self.subject, f"its {self.runs} runs need")
 
 
 def check_runs(configs, subject: str = "the command") -> None:
-    """Refuse a list of run configs over the runs, per-run or total limits (before any computes).
-
-    Parameters
-    ----------
-    configs : iterable of Mapping
-        The run configs.
-    subject : str
-        What asks for them, named in the message.
-    """
+    """Refuse a list of run configs over the runs, per-run or total limits (before any computes)."""
     refuse_over(len(configs), "runs", subject, "it makes")
     tally, seen = Tally(subject), {}
     for cfg in configs:
@@ -335,20 +235,7 @@ def check_runs(configs, subject: str = "the command") -> None:
 
 def sweep_axis_size(ov, options) -> int:
     """How many values the parsed override ``ov`` takes (``options``: a group's choices), without
-    listing them: ``range()`` is counted arithmetically.
-
-    Parameters
-    ----------
-    ov : Override
-        A parsed Hydra override.
-    options : list of str
-        The choices of its config group (empty for a plain key).
-
-    Returns
-    -------
-    int
-        The number of values.
-    """
+    listing them: ``range()`` is counted arithmetically."""
     # lazy, sweeps only: 115 ms CPU to import (min of 3, after this module's imports)
     from hydra.core.override_parser.types import ChoiceSweep, Glob, RangeSweep
 
@@ -369,20 +256,7 @@ def sweep_axis_size(ov, options) -> int:
 
 def check_sweep(parsed, options_of) -> int:
     """Refuse a sweep of more jobs than the runs limit, counted before it is expanded; returns the
-    number of jobs. ``parsed``: Hydra's parsed overrides; ``options_of(key)``: a group's choices.
-
-    Parameters
-    ----------
-    parsed : list of Override
-        Hydra's parsed overrides.
-    options_of : callable
-        ``options_of(key)``: the choices of a config group.
-
-    Returns
-    -------
-    int
-        The number of jobs.
-    """
+    number of jobs. ``parsed``: Hydra's parsed overrides; ``options_of(key)``: a group's choices."""
     sizes = [(ov, sweep_axis_size(ov, options_of(ov.get_key_element()))) for ov in parsed]
     total = math.prod(n for _, n in sizes)
     if sizes:
@@ -405,18 +279,7 @@ def estimate_file_readings(path: Path) -> int:
     """Readings a text recording holds, from its size and the mean length of the lines its first
     64 KiB end (an upper estimate for a file of shorter lines later on is not needed: the limit is
     generous). A head that ends no line (a binary or sparse file) counts the shortest line a reading:
-    a 2 GiB file of zeros holds up to 358 million readings, not one 64 KiB line's worth.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The recording file.
-
-    Returns
-    -------
-    int
-        The estimated readings.
-    """
+    a 2 GiB file of zeros holds up to 358 million readings, not one 64 KiB line's worth."""
     size = Path(path).stat().st_size
     with open(path, "rb") as fh:
         head = fh.read(1 << 16)
@@ -429,24 +292,7 @@ def check_calibration(n_readings: int, folds: int, estimator, problem=Calibratio
     """Refuse a calibration of ``n_readings`` readings over the readings limit, more held-out
     ``folds`` than readings, one fit over the memory or work limit, or ``folds + 1`` fits over
     the command's work limit; ``estimator``: its config node or the object (``vars()`` are its
-    settings); ``problem``: the class of the objective fitted (what its cost holds).
-
-    Parameters
-    ----------
-    n_readings : int
-        Readings calibrated.
-    folds : int
-        Held-out folds.
-    estimator : Mapping or object
-        The estimator's config node or the estimator itself.
-    problem : type
-        The class of the objective fitted.
-
-    Returns
-    -------
-    Estimate
-        One fit's estimate.
-    """
+    settings); ``problem``: the class of the objective fitted (what its cost holds)."""
     refuse_over(n_readings, "readings", f"{n_readings} readings", "the recording holds")
     if isinstance(folds, int) and folds > n_readings:
         raise MagexpError(f"folds={folds} is not allowed: at most {n_readings}, one per reading of the recording "

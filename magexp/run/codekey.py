@@ -130,18 +130,7 @@ def _target_module(target: str) -> str | None:
 
 def code_files(targets=()) -> dict[str, Path]:
     """The source files a run executes, by module name: the import closure (:func:`_deps`) of
-    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`magexp.run.cache.run_targets`).
-
-    Parameters
-    ----------
-    targets : iterable of str
-        ``_target_`` strings of the run.
-
-    Returns
-    -------
-    dict of str to pathlib.Path
-        Source file of each module.
-    """
+    :data:`CORE` and of the modules of ``targets`` (``_target_`` strings, :func:`magexp.run.cache.run_targets`)."""
     todo = list(CORE) + [m for m in map(_target_module, targets) if m is not None]
     found: dict[str, Path] = {}
     while todo:
@@ -173,18 +162,7 @@ def _fixed_objective(cls: ast.ClassDef) -> str | None:
 def default_objective(target: str) -> str | None:
     """The objective that the scenario class ``target`` fixes when its config names none, read from
     its module's source (:func:`_fixed_objective` of the class, else of its base classes defined in the
-    same module); None if not found so.
-
-    Parameters
-    ----------
-    target : str
-        Dotted name of the scenario class.
-
-    Returns
-    -------
-    str or None
-        The objective's dotted name.
-    """
+    same module); None if not found so."""
     module = _target_module(target)
     name = target[len(module) + 1:] if module is not None else ""
     if not name or "." in name:
@@ -207,6 +185,7 @@ class _NoDocstrings(ast.NodeTransformer):
     """Drops the docstring of a module, class or function: text a run does not execute."""
 
     def generic_visit(self, node):
+        """``node`` with its docstring dropped (a module's, class's or function's), its children visited."""
         body = getattr(node, "body", None)
         if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and body \
                 and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
@@ -228,18 +207,7 @@ def _digest(path: Path) -> str:
 
 
 def code_hash(targets: tuple[str, ...]) -> str:
-    """Hash of the name and executed content (:func:`_digest`) of each file of :func:`code_files`.
-
-    Parameters
-    ----------
-    targets : tuple of str
-        As in :func:`code_files`.
-
-    Returns
-    -------
-    str
-        Hex digest.
-    """
+    """Hash of the name and executed content (:func:`_digest`) of each file of :func:`code_files`."""
     h = hashlib.sha256()
     for name, path in code_files(targets).items():
         h.update(f"{name}\0{_digest(path)}\n".encode())
@@ -248,13 +216,7 @@ def code_hash(targets: tuple[str, ...]) -> str:
 
 def source_stamp() -> str:
     """A digest of where the package's sources are and of every ``.py`` file's path, size,
-    modification time and inode: any edit, checkout or copy changes it (cheap: stats, no reads).
-
-    Returns
-    -------
-    str
-        32 hex digits.
-    """
+    modification time and inode: any edit, checkout or copy changes it (cheap: stats, no reads)."""
     h = hashlib.sha256(str(ROOT).encode())
     for path in sorted((ROOT / "magexp").rglob("*.py")):
         st = path.stat()

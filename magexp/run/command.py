@@ -74,15 +74,7 @@ config groups (conf/<group>/<name>.yaml):
 
 
 def single_run(overrides: list[str], run_dir: str | None) -> None:
-    """Compose once, check, create the run's own folder, run, write, print.
-
-    Parameters
-    ----------
-    overrides : list of str
-        The user's ``KEY=VALUE`` overrides.
-    run_dir : str or None
-        The run's folder (``hydra.run.dir``), None for the default.
-    """
+    """Compose once, check, create the run's own folder, run, write, print."""
     (cfg,) = validate_runs([overrides])
     folder = Path(run_dir) if run_dir else Path(time.strftime(RUN_DIR))
     check_output_folder(folder, "run folder")
@@ -102,29 +94,12 @@ def single_run(overrides: list[str], run_dir: str | None) -> None:
 
 def sweep_job(cfg) -> dict:
     """Hydra's task function of one sweep job under Hydra's own launchers (``hydra/launcher=basic|joblib|
-    slurm``): the cached run into the job's folder. magexp's launcher runs its jobs itself.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The job's config composed by Hydra.
-
-    Returns
-    -------
-    dict
-        The run's metrics.
-    """
+    slurm``): the cached run into the job's folder. magexp's launcher runs its jobs itself."""
     return guarded(execute, cfg, Path(HydraConfig.get().runtime.output_dir))
 
 
 def check_launcher(hydra_overrides: list[str]) -> None:
-    """A launcher whose plugin is not installed: one line with the ``pip install`` to run.
-
-    Parameters
-    ----------
-    hydra_overrides : list of str
-        The ``hydra.*`` overrides.
-    """
+    """A launcher whose plugin is not installed: one line with the ``pip install`` to run."""
     for ov in hydra_overrides:
         key, _, value = ov.partition("=")
         if key.lstrip("+") != "hydra/launcher":
@@ -141,13 +116,7 @@ def check_launcher(hydra_overrides: list[str]) -> None:
 
 
 def hydra_app(args: list[str]) -> None:
-    """Run Hydra's application on ``args`` (``sys.argv`` as Hydra reads it), :func:`sweep_job` per job.
-
-    Parameters
-    ----------
-    args : list of str
-        The command-line arguments.
-    """
+    """Run Hydra's application on ``args`` (``sys.argv`` as Hydra reads it), :func:`sweep_job` per job."""
     register_schemas()
     app = hydra.main(version_base=None, config_path=str(CONF), config_name="config")(sweep_job)
     sys.argv = [sys.argv[0], *args]
@@ -155,15 +124,7 @@ def hydra_app(args: list[str]) -> None:
 
 
 def sweep(user: list[str], hydra_overrides: list[str]) -> None:
-    """Check every job, create the sweep's own folder, then hand the sweep to Hydra.
-
-    Parameters
-    ----------
-    user : list of str
-        The user's overrides.
-    hydra_overrides : list of str
-        The ``hydra.*`` overrides.
-    """
+    """Check every job, create the sweep's own folder, then hand the sweep to Hydra."""
     check_launcher(hydra_overrides)
     for ov in hydra_overrides:  # each job's folder inside the sweep's
         if ov.startswith("hydra.sweep.subdir="):
@@ -188,6 +149,7 @@ def sweep(user: list[str], hydra_overrides: list[str]) -> None:
 
 
 def print_help() -> None:
+    """Print ``magexp run --help``: the usage and each config group's choices."""
     lines = [USAGE]
     for group in GROUPS:
         lines.append(f"  {group}: {', '.join(options(group))}")
@@ -197,18 +159,7 @@ def print_help() -> None:
 
 
 def split_args(args: list[str]) -> tuple[list[str], list[str], dict]:
-    """``(user overrides, hydra overrides, flags)``; flags maps ``--name`` to its value.
-
-    Parameters
-    ----------
-    args : list of str
-        The command-line arguments.
-
-    Returns
-    -------
-    tuple of (list of str, list of str, dict)
-        User overrides, Hydra overrides, flags.
-    """
+    """``(user overrides, hydra overrides, flags)``; flags maps ``--name`` to its value."""
     user, hyd, flags = [], [], {}
     it = iter(args)
     for arg in it:
@@ -239,13 +190,7 @@ def _next_is(args: list[str], arg: str) -> bool:
 
 
 def run_one(user: list[str], hyd: list[str]) -> None:
-    """One run: ``hydra.run.dir`` is the only Hydra setting it takes; a value list needs ``-m``.
-
-    Parameters
-    ----------
-    user, hyd : list of str
-        The user's overrides; the ``hydra.*`` ones (:func:`split_args`).
-    """
+    """One run: ``hydra.run.dir`` is the only Hydra setting it takes; a value list needs ``-m``."""
     run_dirs = [folder_of(o) for o in hyd if o.startswith("hydra.run.dir=")]
     for run_dir in run_dirs:  # not empty, not a root, not inside results/
         check_destination(run_dir, "hydra.run.dir")
@@ -267,18 +212,7 @@ def folder_overrides(hyd: list[str]) -> list[str]:
     ``key=value``, its folder read as Hydra's parser reads it, or one line: an interpolation
     (``${oc.env:...}``, ``${hydra:...}``, resolved only later, could point into ``results/`` or name a
     folder literally ``${...}``), a deletion, or a value Hydra cannot read as one path (an ``=``, a
-    comma, a space...), with how to quote it.
-
-    Parameters
-    ----------
-    hyd : list of str
-        The ``hydra.*`` overrides.
-
-    Returns
-    -------
-    list of str
-        The overrides, output folders checked.
-    """
+    comma, a space...), with how to quote it."""
     out = []
     for ov in hyd:
         key, _, value = ov.partition("=")
@@ -305,33 +239,12 @@ def folder_overrides(hyd: list[str]) -> list[str]:
 
 
 def folder_of(ov: str) -> str:
-    """The folder of a checked output folder override (:func:`folder_overrides`).
-
-    Parameters
-    ----------
-    ov : str
-        A checked ``key=value`` override.
-
-    Returns
-    -------
-    str
-        Its folder.
-    """
+    """The folder of a checked output folder override (:func:`folder_overrides`)."""
     return parse_overrides([ov])[0].value()
 
 
 def run_command(args: list[str]) -> None:
-    """``magexp ARGS``: help, version, the composed config, Hydra's own flags, a sweep, or one run.
-
-    Parameters
-    ----------
-    args : list of str
-        The command-line arguments after ``magexp``.
-
-    Returns
-    -------
-    None
-    """
+    """``magexp ARGS``: help, version, the composed config, Hydra's own flags, a sweep, or one run."""
     user, hyd, flags = split_args(args)
     check_duplicates(user + hyd)  # Hydra would keep the last silently
     check_flags(flags)

@@ -86,16 +86,6 @@ def schema_of(cls) -> type:
     """The schema of the configs that build ``cls``: its ``Config`` dataclass if it has one, else a
     dataclass of its constructor's parameters with their annotations (:func:`_typed`) and defaults
     (none: the config must give it), plus ``_target_`` (kept in :data:`DERIVED` as ``<class>Conf``; class names are unique among the configs' classes).
-
-    Parameters
-    ----------
-    cls : type
-        A class a config group builds.
-
-    Returns
-    -------
-    type
-        The schema dataclass.
     """
     if "Config" in dir(cls):
         return cls.Config
@@ -120,18 +110,7 @@ def schema_of(cls) -> type:
 
 def schema_classes(group: str) -> list[type]:
     """Every class a ``_target_`` of ``conf/<group>/`` names (nested nodes and base configs included) that
-    :func:`magexp.run.targets.check_target` allows, imported: the classes whose schemas are registered.
-
-    Parameters
-    ----------
-    group : str
-        A config group of ``conf/``.
-
-    Returns
-    -------
-    list of type
-        The classes.
-    """
+    :func:`magexp.run.targets.check_target` allows, imported: the classes whose schemas are registered."""
     targets = sorted({t for path in (CONF / group).rglob("*.yaml") for t in _TARGET.findall(path.read_text())})
     classes = []
     for target in targets:
@@ -147,19 +126,7 @@ def schema_classes(group: str) -> list[type]:
 @functools.cache
 def register_schemas(groups: tuple[str, ...] = GROUPS) -> dict:
     """Store the schema of every class of :func:`schema_classes` in Hydra's ConfigStore (group
-    ``schema/<group>``, named after the class).
-
-    Parameters
-    ----------
-    groups : tuple of str
-        The config groups whose schemas are stored (all of :data:`GROUPS` by default; a primary config
-        composes only its own: :func:`primary_groups`).
-
-    Returns
-    -------
-    dict
-        ``{class name: schema}``.
-    """
+    ``schema/<group>``, named after the class)."""
     store, schemas = ConfigStore.instance(), {}
     for group in groups:
         for cls in schema_classes(group):
@@ -173,6 +140,7 @@ def register_schemas(groups: tuple[str, ...] = GROUPS) -> dict:
 
 @functools.cache
 def _override_parser():
+    """Hydra's override parser, made once per process."""
     return OverridesParser.create()
 
 
@@ -183,20 +151,7 @@ def _parsed(text: str) -> Override:
 
 
 def parse_overrides(overrides: list[str], *, parser: OverridesParser | None = None) -> list[Override]:
-    """Hydra's parsed overrides (its grammar types every value), or one MagexpError line.
-
-    Parameters
-    ----------
-    overrides : list of str
-        ``KEY=VALUE`` overrides.
-    parser : OverridesParser or None
-        A parser to reuse (None: a new one).
-
-    Returns
-    -------
-    list of Override
-        The parsed overrides.
-    """
+    """Hydra's parsed overrides (its grammar types every value), or one MagexpError line."""
     try:
         if parser is None:  # each override parsed once per process: the planning of make reproduce reads 1,578
             return [_parsed(text) for text in overrides]
@@ -208,67 +163,22 @@ def parse_overrides(overrides: list[str], *, parser: OverridesParser | None = No
 
 def override_value(text: str):
     """A command-line value as Hydra's override grammar types it (``2`` -> int, ``1e-06`` -> float,
-    ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str).
-
-    Parameters
-    ----------
-    text : str
-        The value as typed.
-
-    Returns
-    -------
-    object
-        The typed value.
-    """
+    ``[1,2]`` -> list, ``null`` -> None, ``a`` -> str)."""
     return parse_overrides([f"k={text}"])[0].value()
 
 
 def options(group: str) -> list[str]:
-    """Config names available in ``conf/<group>/`` (files directly in it; sub-folders hold bases).
-
-    Parameters
-    ----------
-    group : str
-        The config group (a folder of ``conf/``).
-
-    Returns
-    -------
-    list of str
-        The config names.
-    """
+    """Config names available in ``conf/<group>/`` (files directly in it; sub-folders hold bases)."""
     return sorted(p.stem for p in (CONF / group).glob("*.yaml"))
 
 
 def target_class(group: str, name: str, *, config_name: str = PRIMARY):
-    """The class named by ``_target_`` in the composed ``conf/<group>/<name>.yaml`` (imported, not built).
-
-    Parameters
-    ----------
-    group : str
-        A config group of ``conf/``.
-    name : str
-        A config of that group.
-    config_name : str
-        The primary config composed.
-
-    Returns
-    -------
-    type
-        The class.
-    """
+    """The class named by ``_target_`` in the composed ``conf/<group>/<name>.yaml`` (imported, not built)."""
     return get_class(compose_config([f"{group}={name}"], config_name=config_name)[group]._target_)
 
 
 def check_choice(group: str, choice: str) -> None:
-    """Fail unless ``conf/<group>/<choice>.yaml`` exists.
-
-    Parameters
-    ----------
-    group : str
-        A config group of ``conf/``.
-    choice : str
-        The option chosen.
-    """
+    """Fail unless ``conf/<group>/<choice>.yaml`` exists."""
     names = options(group)
     if choice not in names:
         raise MagexpError(f"{group}={choice!r} is not allowed: choose one of {', '.join(names)}")
@@ -280,18 +190,7 @@ def check_choice(group: str, choice: str) -> None:
 @functools.cache
 def primary_groups(config_name: str) -> tuple[str, ...]:
     """The groups of :data:`GROUPS` that ``conf/<config_name>.yaml``'s defaults list chooses from: the schemas its
-    composing needs (``calibrate``: the estimators only, which spares importing every scenario class).
-
-    Parameters
-    ----------
-    config_name : str
-        A primary config of ``conf/`` (``config``, ``calibrate``).
-
-    Returns
-    -------
-    tuple of str
-        Its groups, in the order of :data:`GROUPS`.
-    """
+    composing needs (``calibrate``: the estimators only, which spares importing every scenario class)."""
     defaults = OmegaConf.load(CONF / f"{config_name}.yaml").get("defaults") or []
     chosen = {key for item in defaults if isinstance(item, Mapping) or OmegaConf.is_dict(item) for key in item}
     return tuple(g for g in GROUPS if g in chosen)
@@ -310,13 +209,7 @@ def _hydra(config_name: str = PRIMARY):
 
 
 def config_loader():
-    """Hydra's config loader on ``conf/`` (it lists a config group's options, which a ``glob(...)`` sweep reads).
-
-    Returns
-    -------
-    hydra.core.config_loader.ConfigLoader
-        The loader.
-    """
+    """Hydra's config loader on ``conf/`` (it lists a config group's options, which a ``glob(...)`` sweep reads)."""
     with _hydra() as hydra:
         return hydra.config_loader()
 
@@ -324,22 +217,7 @@ def config_loader():
 def hydra_compose(overrides: tuple[str, ...] = (), config_name: str = PRIMARY, *,
                   with_hydra: bool = False) -> DictConfig:
     """``hydra.compose`` of ``conf/<config_name>.yaml``, or one MagexpError line; ``with_hydra``: with
-    the ``hydra`` node (launcher, sweeper, folders), which checks ``hydra.*`` overrides.
-
-    Parameters
-    ----------
-    overrides : tuple of str
-        ``KEY=VALUE`` overrides.
-    config_name : str
-        The primary config.
-    with_hydra : bool
-        Keep the ``hydra`` node.
-
-    Returns
-    -------
-    DictConfig
-        The composed config.
-    """
+    the ``hydra`` node (launcher, sweeper, folders), which checks ``hydra.*`` overrides."""
     try:
         with _hydra(config_name):
             return compose(config_name, overrides=list(overrides), return_hydra_config=with_hydra)
@@ -372,28 +250,14 @@ def _groups() -> frozenset:
 
 
 def apply_overrides(cfg: DictConfig, overrides: list[str], *, config_name: str = PRIMARY) -> DictConfig:
-    """Apply ``key=value`` overrides to ``cfg`` as Hydra's override step does (Hydra's parser types each
-    value, OmegaConf's update checks it against the config's schema).
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        A composed config, changed in place.
-    overrides : list of str
-        ``key=value`` overrides of keys ``cfg`` has (``seed=3``, ``scenario.noise=2``).
-    config_name : str
-        The primary config ``cfg`` was composed from (it words the error of an unknown key).
-
-    Returns
-    -------
-    DictConfig
-        ``cfg``.
+    """Apply ``key=value`` overrides to ``cfg`` (changed in place, and returned) as Hydra's override step does
+    (Hydra's parser types each value, OmegaConf's update checks it against the config's schema);
+    ``config_name``, the primary config ``cfg`` was composed from, words the error of an unknown key.
 
     Raises
     ------
     MagexpError
-        One line naming the key and what exists, for an unknown key or a value the schema's type refuses.
-    """
+        One line naming the key and what exists, for an unknown key or a value the schema's type refuses."""
     return _apply(cfg, parse_overrides(overrides), config_name)
 
 
@@ -454,25 +318,13 @@ def compose_config(overrides: list[str] | tuple[str, ...] = (), *, config_name: 
 
     Hydra composes the defaults of the config-group choices and of the overrides it applies while
     composing (``+key``, ``~key``, ``hydra.*``) once per process; a copy then takes the ``key=value``
-    overrides through :func:`apply_overrides` (Hydra's step after the defaults).
-
-    Parameters
-    ----------
-    overrides : list of str
-        Hydra overrides (``scenario=ding2024_exp1``, ``estimator.n_particles=30``, ``seed=3``).
-    config_name : str
-        The primary config: ``config`` (a run) or ``calibrate``.
-
-    Returns
-    -------
-    DictConfig
-        The composed config, in struct mode, the caller's own.
+    overrides through :func:`apply_overrides` (Hydra's step after the defaults). ``config_name``: the
+    primary config, ``config`` (a run) or ``calibrate``. The config returned is in struct mode, the caller's own.
 
     Raises
     ------
     MagexpError
-        One line for an unknown choice or key, or a value the schema refuses.
-    """
+        One line for an unknown choice or key, or a value the schema refuses."""
     parsed = parse_overrides(list(overrides))
     defaults = tuple(ov.input_line for ov in parsed if not _is_value(ov))
     if (config_name, defaults) not in _COMPOSED:
@@ -527,18 +379,7 @@ def _group_composed(config_name: str, group: str | None = None, choice: str | No
 
 
 def resolved(cfg: DictConfig) -> dict:
-    """The plain resolved container of a run config (``hydra`` node left out): what a run reads.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The run config.
-
-    Returns
-    -------
-    dict
-        The resolved config.
-    """
+    """The plain resolved container of a run config (``hydra`` node left out): what a run reads."""
     out = OmegaConf.to_container(cfg, resolve=True)
     out.pop("hydra", None)
     return out
@@ -546,19 +387,7 @@ def resolved(cfg: DictConfig) -> dict:
 
 @functools.cache
 def estimator_label(name: str) -> str:
-    """An estimator's name in words (row labels, figure axes).
-
-    Parameters
-    ----------
-    name : str
-        An estimator's name: a config of ``conf/estimator/``, or a variant named by ``estimator.name=``.
-
-    Returns
-    -------
-    str
-        Its config's ``label:``, else its class's ``label`` (:class:`magexp.estimators.base.Estimator`),
-        else ``name``.
-    """
+    """An estimator's name in words (row labels, figure axes)."""
     if name not in options("estimator"):
         return name
     label = OmegaConf.load(CONF / "estimator" / f"{name}.yaml").get("label")

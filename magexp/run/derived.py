@@ -20,18 +20,7 @@ class Derived(types.SimpleNamespace):
         super().__init__(_register=register)
 
     def __getattr__(self, name):
-        """The schema ``name``, derived first if it is not yet (a worker unpickling a config).
-
-        Parameters
-        ----------
-        name : str
-            The schema's name (``<class>Conf``).
-
-        Returns
-        -------
-        type
-            The schema dataclass.
-        """
+        """The schema ``name``, derived first if it is not yet (a worker unpickling a config)."""
         if name.startswith("__"):  # pickle's and copy's probes of special methods
             raise AttributeError(name)
         self._register()

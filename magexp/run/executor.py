@@ -2,7 +2,7 @@
 
 Runs (resolved configs) go through :func:`run_many`, which
 
-1. keys each run (:func:`magexp.run.cache.run_key`) and runs each distinct key once, also under
+1. keys each run (:func:`magexp.run.runkeys.run_key`) and runs each distinct key once, also under
    ``use_cache=False`` (``--force``): identical runs of several artifacts are one run;
 2. groups the runs to do into *tasks*: the runs of one scenario (and objective) for a block of
    seeds, every estimator included, so that a task builds its scenario and estimators once and each
@@ -13,335 +13,24 @@ Runs (resolved configs) go through :func:`run_many`, which
    parent stores as they arrive. The parent keeps only the small metrics dicts, and :class:`Outputs`
    reads a full output back from the cache when a figure needs it.
 
-Executors (:func:`make_executor`):
-
-* ``local`` (default): worker processes on this machine (``jobs``; 0 = all cores). With ``jobs=1``
-  or a single task the runs execute in this process.
-* ``dask``: a Dask ``distributed`` cluster. ``scheduler=None`` starts a ``LocalCluster`` of ``jobs``
-  single-threaded workers; ``scheduler="tcp://host:8786"`` connects to a running scheduler, e.g.
-  one started on a SLURM/PBS/SGE cluster with ``dask-jobqueue`` (the optional extra ``cluster``,
-  ``pip install 'magexp[cluster]'``). A worker that dies midway loses only its running task: the
-  scheduler gives it to another worker, and since every run is a pure function of its config the
-  results are the same bytes as a local run.
-
-The executor API, for callers other than :func:`run_many` (e.g. sweeps)::
-
-    from magexp.run.executor import make_executor, run_many
-
-    with make_executor("dask", jobs=2) as ex:           # or make_executor("local", jobs=0)
-        outputs = run_many(configs, executor=ex)        # cached, deduplicated, batched
-        future = ex.submit(fn, *args)                   # any picklable function
-        for future in ex.as_completed([future]):
-            value = future.result()
-
-``submit`` returns a future with ``result()``; ``as_completed`` yields futures as they finish.
+Where the tasks execute (worker processes, a Dask cluster): :mod:`magexp.run.executors`.
 """
 
 from __future__ import annotations
 
-import ctypes
-import importlib
 import json
 import math
-import multiprocessing
-import os
-import pkgutil
-import re
-import signal
-import sys
-import threading
 import time
 from collections import OrderedDict, defaultdict
-from collections.abc import Iterable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures import as_completed as futures_as_completed
+from collections.abc import Sequence
 
 import numpy as np
 
-from magexp.run import cache
+from magexp.run import cache, runkeys
 from magexp.run.budget import check_runs
 from magexp.errors import MagexpError
+from magexp.run.executors import InlineExecutor, make_executor
 from magexp.run.runner import run_batch
-
-EXECUTORS = ("local", "dask")
-
-
-def preload() -> None:
-    """Import what a run executes (runner, bounds, every scenario, problem and estimator module)
-    in this process, so that forked workers start with it instead of importing it each."""
-    for name in ("magexp.run.runner", "magexp.core.bounds"):
-        importlib.import_module(name)
-    for package in ("magexp.scenarios", "magexp.problems", "magexp.estimators"):
-        module = importlib.import_module(package)
-        for info in pkgutil.iter_modules(module.__path__, f"{package}."):
-            importlib.import_module(info.name)
-
-
-#: seconds between two looks of a worker at its parent (:func:`watch_parent`)
-PARENT_POLL = 0.5
-#: ``prctl`` option: the signal the kernel sends this process when its parent dies (linux/prctl.h)
-PR_SET_PDEATHSIG = 1
-
-
-def watch_parent(parent: int, poll: float = PARENT_POLL) -> None:
-    """Make this process end when process ``parent`` (the one that started it) dies.
-
-    On Linux the kernel sends SIGKILL the moment the parent exits (``prctl(PR_SET_PDEATHSIG)``);
-    everywhere a daemon thread also looks every ``poll`` seconds whether the parent is still
-    ``os.getppid()`` (an orphan is re-parented) and ends the process if not. A worker killed so
-    loses only its running task: its runs are cached only once complete (:func:`_run_task`).
-    The kernel's "parent" is the *thread* that forked the worker: :class:`LocalExecutor` forks its
-    workers at the first ``submit``, from the calling thread (the command's main thread).
-
-    Parameters
-    ----------
-    parent, poll : int, float
-        The parent's process id; seconds between looks.
-    """
-    if sys.platform.startswith("linux"):
-        try:
-            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-        except (OSError, AttributeError):  # no prctl in this libc: the thread below is enough
-            pass
-    if os.getppid() != parent:  # the parent died before the kernel was told
-        os._exit(1)
-
-    def look() -> None:
-        while os.getppid() == parent:
-            time.sleep(poll)
-        os._exit(1)
-
-    threading.Thread(target=look, name="magexp-watch-parent", daemon=True).start()
-
-
-#: seconds the parent waits for a stopped worker to clean up (its temporary files) before killing it
-STOP_GRACE = 10.0
-
-
-def _stopped(signum, frame) -> None:
-    """SIGTERM in a worker: leave through ``SystemExit``, so that every ``finally`` runs (an atomic
-    write being made removes its temporary file: :func:`magexp.core.atomic.atomic_path`)."""
-    raise SystemExit(128 + signum)
-
-
-def _in_worker(fn, *args):
-    """``fn(*args)`` in a worker process; stopped in the middle (:func:`_stopped`), the worker ends
-    once ``fn`` has unwound (the pool would otherwise catch the exit and wait for the next task)."""
-    try:
-        return fn(*args)
-    except SystemExit as stop:
-        os._exit(stop.code if isinstance(stop.code, int) else 1)
-
-
-def _init_worker(parent: int) -> None:
-    """A worker's start: it ends with its parent (:func:`watch_parent`), leaves Ctrl-C to the
-    parent, which stops it (no traceback from every worker), and cleans up when stopped (:func:`_stopped`)."""
-    watch_parent(parent)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, _stopped)
-
-
-class _Deferred:
-    """A call made when its result is asked for (so results stream one at a time)."""
-
-    def __init__(self, fn, args):
-        self.fn, self.args = fn, args
-
-    def result(self):
-        return self.fn(*self.args)
-
-
-class InlineExecutor:
-    """Runs each submitted call in this process, when its result is asked for (``jobs=1``)."""
-
-    workers = 1
-    shares_files = True  # workers see the parent's run cache (they store runs there themselves)
-
-    def submit(self, fn, *args):
-        """``fn(*args)``, called when its result is asked for.
-
-        Parameters
-        ----------
-        fn, *args : callable and its arguments
-        """
-        return _Deferred(fn, args)
-
-    def as_completed(self, futures: Iterable) -> Iterator:
-        """``futures``, in order.
-
-        Parameters
-        ----------
-        futures : iterable of submitted calls
-        """
-        return iter(list(futures))
-
-    def close(self) -> None:
-        pass
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-
-class LocalExecutor(InlineExecutor):
-    """Worker processes on this machine (forked, so they start in milliseconds)."""
-
-    def __init__(self, jobs: int = 0):
-        self.workers = jobs if jobs > 0 else (os.cpu_count() or 1)
-        self._pool = None
-
-    @property
-    def pool(self):
-        if self._pool is None:
-            method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
-            if method == "fork":
-                preload()
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context(method),
-                                             initializer=_init_worker, initargs=(os.getpid(),))
-        return self._pool
-
-    def submit(self, fn, *args):
-        return self.pool.submit(_in_worker, fn, *args)
-
-    def as_completed(self, futures: Iterable) -> Iterator:
-        return futures_as_completed(list(futures))
-
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
-
-    def __exit__(self, kind, *exc) -> None:
-        if kind is not None and self._pool is not None:  # interrupted or failed: stop the workers now
-            processes = list(getattr(self._pool, "_processes", {}).values())
-            for process in processes:
-                process.terminate()
-            deadline = time.monotonic() + STOP_GRACE
-            for process in processes:  # each one's cleanup done before the command says it stopped
-                process.join(max(0.0, deadline - time.monotonic()))
-                if process.is_alive():
-                    process.kill()
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = None
-        self.close()
-
-
-#: the cluster systems ``--scheduler`` may name instead of an address, each with its ``dask-jobqueue`` class
-JOBQUEUES = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster"}
-#: a Dask scheduler's address: an optional protocol, a host (a name, an IPv4 or a bracketed IPv6 address) and a port
-_ADDRESS = re.compile(r"(?:(?:tcp|tls|ucx|ws|wss)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):([0-9]{1,5})/?")
-
-
-class DaskExecutor(InlineExecutor):
-    """A Dask ``distributed`` client.
-
-    ``scheduler``: None starts a ``LocalCluster`` of ``jobs`` single-threaded worker processes;
-    ``slurm``, ``pbs`` or ``sge`` submits ``jobs`` batch jobs of one worker each through
-    ``dask-jobqueue`` (queue, account, memory and walltime come from its own configuration,
-    ``~/.config/dask/jobqueue.yaml``); anything else is the address of a running scheduler
-    (``tcp://host:8786``).
-    """
-
-    def __init__(self, jobs: int = 0, scheduler: str | None = None):
-        try:  # lazy: distributed, 0.30 s CPU to import (min of 3, after numpy), only for --executor dask
-            from distributed import Client, LocalCluster
-        except ImportError:  # pragma: no cover - distributed is a dependency
-            raise MagexpError("--executor dask needs the 'distributed' package: pip install 'magexp[dask]'") from None
-        self.cluster = None
-        n = jobs if jobs > 0 else (os.cpu_count() or 1)
-        self.shares_files = scheduler is None  # remote workers may not see this machine's files
-        if scheduler is None:
-            self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
-        elif scheduler in JOBQUEUES:
-            self.cluster = jobqueue_cluster(scheduler)
-            self.cluster.scale(jobs=n)
-        try:
-            self.client = Client(self.cluster if self.cluster is not None else scheduler, timeout="30s")
-        except OSError as exc:
-            raise MagexpError(f"--scheduler {scheduler!r}: no Dask scheduler answers there ({exc})") from None
-        if self.cluster is not None and scheduler in JOBQUEUES:
-            self.client.wait_for_workers(1)
-        self.workers = max(len(self.client.scheduler_info().get("workers", {})), n if self.cluster else 1)
-
-    def submit(self, fn, *args):
-        return self.client.submit(fn, *args, pure=False)
-
-    def as_completed(self, futures: Iterable) -> Iterator:
-        from distributed import as_completed  # lazy: as in __init__ (distributed: 0.30 s CPU)
-
-        return iter(as_completed(list(futures)))
-
-    def close(self) -> None:
-        self.client.close()
-        if self.cluster is not None:
-            self.cluster.close()
-
-
-def check_executor(kind: str, jobs: int, scheduler: str | None) -> None:
-    """Refuse bad executor settings in one line (before anything is computed).
-
-    Parameters
-    ----------
-    kind, jobs, scheduler : str, int, str or None
-    """
-    if kind not in EXECUTORS:
-        raise MagexpError(f"--executor {kind!r} is not allowed: choose one of {', '.join(EXECUTORS)}")
-    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
-        raise MagexpError(f"--jobs {jobs!r} is not allowed: it must be an integer >= 0 (0: all cores)")
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    if jobs > cores and (kind == "local" or scheduler is None):  # processes on this machine
-        raise MagexpError(f"--jobs {jobs} is not allowed: this machine gives {cores} cores; give at most {cores} "
-                          "(0: all cores)")
-    if scheduler is not None and kind != "dask":
-        raise MagexpError(f"--scheduler {scheduler!r} needs --executor dask")
-    check_scheduler_address(scheduler)
-
-
-def check_scheduler_address(scheduler) -> None:
-    """A Dask scheduler: None (a local cluster), a cluster system (slurm, pbs, sge) or an address
-    with a port (``tcp://host:8786``, ``host:8786``).
-
-    Parameters
-    ----------
-    scheduler : str or None
-        The scheduler setting.
-    """
-    if scheduler is None or scheduler in JOBQUEUES:
-        return
-    match = _ADDRESS.fullmatch(str(scheduler))
-    if not match or not 0 < int(match.group(2)) < 65536:
-        raise MagexpError(f"--scheduler {scheduler!r} is not allowed: give tcp://HOST:PORT (e.g. tcp://node1:8786), "
-                          f"or one of {', '.join(JOBQUEUES)}")
-
-
-def jobqueue_cluster(system: str):
-    """A ``dask-jobqueue`` cluster for ``system`` (slurm, pbs, sge): one single-threaded worker a job.
-
-    Parameters
-    ----------
-    system : str
-    """
-    try:  # lazy: an optional extra that imports distributed (as in DaskExecutor), only for --scheduler slurm|pbs|sge
-        import dask_jobqueue
-    except ImportError:
-        raise MagexpError(f"--scheduler {system} needs dask-jobqueue: pip install 'magexp[cluster]'") from None
-    return getattr(dask_jobqueue, JOBQUEUES[system])(processes=1, cores=1)
-
-
-def make_executor(kind: str = "local", *, jobs: int = 0, scheduler: str | None = None):
-    """The executor ``kind`` (:data:`EXECUTORS`); ``jobs``: processes (0: all cores).
-
-    Parameters
-    ----------
-    kind, jobs, scheduler : str, int, str or None
-        ``scheduler``: :class:`DaskExecutor`'s.
-    """
-    check_executor(kind, jobs, scheduler)
-    if kind == "dask":
-        return DaskExecutor(jobs, scheduler)
-    return InlineExecutor() if jobs == 1 else LocalExecutor(jobs)
 
 
 def _run_task(configs: list[dict], keys: list[str], root=None, reuse: bool = True,
@@ -359,8 +48,7 @@ def _run_task(configs: list[dict], keys: list[str], root=None, reuse: bool = Tru
     run, ``(row, fit_cpu)`` (:func:`run_row`; ``fit_cpu`` None for a run read, not computed), the
     output itself where the cache could not keep it, or None for a run another process is computing
     (without ``wait``): nothing large goes back to the parent otherwise. Without ``root``,
-    ``results`` holds the outputs.
-    """
+    ``results`` holds the outputs."""
     start = time.process_time()
     if root is None:
         return list(run_batch(configs)), time.process_time() - start, []
@@ -392,12 +80,7 @@ def _group_key(cfg: dict) -> str:
 
 
 def cost_hint(cfg: dict) -> float:
-    """A rough relative cost of a run, to hand out the longest tasks first.
-
-    Parameters
-    ----------
-    cfg : dict
-    """
+    """A rough relative cost of a run, to hand out the longest tasks first."""
     est, scen = cfg.get("estimator") or {}, cfg.get("scenario") or {}
 
     def number(node, *keys, default=1.0):
@@ -413,13 +96,7 @@ def cost_hint(cfg: dict) -> float:
 
 def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
     """Indices of ``configs`` in tasks: per scenario group, blocks of whole seeds (every estimator
-    of a seed in one task), about ``len(configs) / (8 workers)`` runs a task; longest first.
-
-    Parameters
-    ----------
-    configs, workers : sequence of dict, int
-        The resolved configs; the executor's workers.
-    """
+    of a seed in one task), about ``len(configs) / (8 workers)`` runs a task; longest first."""
     groups: dict[str, dict[int, list[int]]] = defaultdict(lambda: defaultdict(list))
     for i, cfg in enumerate(configs):
         groups[_group_key(cfg)][cfg.get("seed")].append(i)
@@ -437,15 +114,13 @@ def plan_tasks(configs: Sequence[dict], workers: int) -> list[list[int]]:
     return sorted(tasks, key=lambda t: -sum(cost_hint(configs[i]) for i in t))
 
 
+#: the fields of a run that its row (:func:`run_row`) reads
+ROW_FIELDS = ("metrics", "parameter_names", "x")
+
+
 def run_row(out) -> dict:
     """A run's row of the runs table: its metrics and its parameter estimates (one column per
-    parameter name that is not already a metric).
-
-    Parameters
-    ----------
-    out : RunOutput
-        The run's output.
-    """
+    parameter name that is not already a metric)."""
     estimate = {n: float(v) for n, v in zip(out.parameter_names, np.ravel(out.x)) if n not in out.metrics}
     return {**out.metrics, **estimate}
 
@@ -463,21 +138,11 @@ class Outputs(Sequence):
         return len(self.keys)
 
     def metrics(self, i: int) -> dict:
-        """Run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output.
-
-        Parameters
-        ----------
-        i : int
-        """
+        """Run ``i``'s row (:func:`run_row`: metrics and estimates) without reading its output."""
         return self._metrics[self.keys[i]]
 
     def was_cached(self, i: int) -> bool:
-        """Whether run ``i`` was read from the run cache (a valid entry) rather than computed.
-
-        Parameters
-        ----------
-        i : int
-        """
+        """Whether run ``i`` was read from the run cache (a valid entry) rather than computed."""
         return self.keys[i] in self.read
 
     def __getitem__(self, i):
@@ -502,27 +167,17 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
              counts: dict | None = None) -> Outputs:
     """Run resolved configs, each distinct one once, cached; returns their :class:`Outputs`.
 
-    Parameters
-    ----------
-    configs : sequence of dict
-        The resolved configs.
-    jobs, executor : int, executor or None
-        From :func:`make_executor` (default: local processes over ``jobs``, 0 = all cores).
-    use_cache : bool
-        False reruns every distinct run (and stores it).
-    progress : callable or None
-        ``progress(n)`` is called with the number of runs just finished.
-    counts : dict or None
-        Receives ``requested``, ``distinct``, ``computed``, ``cached``, ``fit_cpu`` (CPU seconds inside
-        the computed runs' fits) and ``task_cpu`` (CPU seconds of the tasks, measured inside the workers
-        around each task), so ``task_cpu - fit_cpu`` is the workers' cost outside the fits.
-    """
+    ``executor`` from :func:`magexp.run.executors.make_executor` (default: local processes over ``jobs``, 0 = all
+    cores); ``use_cache=False`` reruns every distinct run (and stores it); ``progress(n)`` is called with the
+    number of runs just finished; ``counts`` receives ``requested``, ``distinct``, ``computed``, ``cached``,
+    ``fit_cpu`` (CPU seconds inside the computed runs' fits) and ``task_cpu`` (CPU seconds of the tasks, measured
+    inside the workers around each task), so ``task_cpu - fit_cpu`` is the workers' cost outside the fits."""
     check_runs(configs)  # the runs limit, each run's memory and work, their total: before any runs
-    keys = cache.run_keys(configs)
+    keys = runkeys.run_keys(configs)
     first = {}
     for i, key in enumerate(keys):
         first.setdefault(key, i)
-    metrics = _cached_rows(first, use_cache)
+    metrics = cached_rows(first, use_cache)
     read = frozenset(metrics)  # valid entries only: a damaged one is recomputed, not read
     todo = [i for key, i in first.items() if key not in metrics]
     if counts is not None:
@@ -551,13 +206,22 @@ def run_many(configs: Sequence[dict], *, jobs: int = 0, use_cache: bool = True, 
     return Outputs(keys, metrics, held=done.held, read=read)
 
 
-def _cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:
-    """The rows (:func:`run_row`) of the distinct runs ``first`` (key -> index) already in the run cache."""
-    rows = {}
+def cached_rows(first: dict[str, int], use_cache: bool) -> dict[str, dict]:
+    """The rows (:func:`run_row`) of the distinct runs ``first`` (key -> index) already in the run cache: those
+    kept beside their entries (:func:`magexp.run.cache.known_rows`), the others read and then kept."""
+    if not use_cache:
+        return {}
+    known = cache.known_rows(first)
+    rows, read = {}, {}
     for key in first:
-        out = cache.load(key) if use_cache else None
+        if key in known:
+            rows[key] = known[key]
+            continue
+        out = cache.load(key, fields=ROW_FIELDS)
         if out is not None:
-            rows[key] = run_row(out)
+            rows[key] = read[key] = run_row(out)
+    if read:
+        cache.keep_rows(read)
     return rows
 
 

@@ -70,18 +70,10 @@ def check_regular(path, what: str) -> None:
     """Refuse, in one line and without opening it, a ``path`` that is a device, a FIFO or a socket (following
     links): its size says nothing of what reading it costs, and reading it may never end or never start.
 
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        A file about to be read (one that does not exist passes: its reader says so).
-    what : str
-        The key naming it in the message.
-
     Raises
     ------
     MagexpError
-        A special file.
-    """
+        A special file."""
     st = _stat(path)
     if st is None:
         return
@@ -96,31 +88,15 @@ def check_file(path, what: str, *, kind: str = "text", folder: bool = False) -> 
     a device, FIFO or socket, a folder where a file is expected, a file of unknown size, one over the file-size
     limit or whose reading would exceed the memory limit (:data:`READ_MEMORY` bytes a byte for its reader), and,
     of a text file, a line over the line limit (scanned in blocks of :data:`CHUNK` bytes: memory O(CHUNK)
-    whatever the file).
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The file (a path that does not exist passes: its reader names it).
-    what : str
-        The key or argument naming it in messages (``data.path``, ``scenario.file``).
-    kind : str
-        Its reader: a key of :data:`READ_MEMORY` (``plain``, ``text`` and ``json`` are line-checked, the logs
-        only sized), or ``recording``: a text recording whose reader :func:`magexp.core.readers.detect` tells once
-        its lines are checked.
-    folder : bool
-        A folder is expected here (it passes; its files are the caller's to check).
-
-    Returns
-    -------
-    int
-        The file's size in bytes (0 for a folder or a path that does not exist).
+    whatever the file). ``kind`` is its reader: a key of :data:`READ_MEMORY` (``plain``, ``text`` and ``json``
+    are line-checked, the logs only sized), or ``recording`` (a text recording whose reader
+    :func:`magexp.core.readers.detect` tells once its lines are checked); ``folder``: a folder is expected
+    (it passes). Returns the file's size in bytes (0 for a folder or a path that does not exist).
 
     Raises
     ------
     MagexpError
-        Any of the above.
-    """
+        Any of the above."""
     check_regular(path, what)
     st = _stat(path)
     if st is None:
@@ -167,25 +143,10 @@ def scan_lines(path, subject: str, size: int) -> int:
     of ``/proc``, or one growing while read), scanning it in blocks of :data:`CHUNK` bytes (each block's line ends
     found by numpy: a byte a byte and 16 bytes a line end of it held beside it, under 6 blocks in all); returns its longest line's length.
 
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        A regular file.
-    subject : str
-        ``key='path'``, naming it in messages.
-    size : int
-        Its size when it was checked (``os.stat``).
-
-    Returns
-    -------
-    int
-        Bytes of its longest line (newline excluded).
-
     Raises
     ------
     MagexpError
-        A line over the limit, or more bytes than ``size``.
-    """
+        A line over the limit, or more bytes than ``size``."""
     longest, current, total, bound = 0, 0, 0, limit("line")
     with open(path, "rb") as fh:
         while block := fh.read(CHUNK):
@@ -209,18 +170,7 @@ def scan_lines(path, subject: str, size: int) -> int:
 
 def recording_files(path) -> list[Path]:
     """The files the recording ``path`` names: itself; with its partner for a two-stream file or stem
-    (``<stem>_mag.csv`` and ``<stem>_imu.csv``); the entries of a ROS 2 bag folder (at most :data:`MAX_ENTRIES`).
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The recording as resolved (:func:`magexp.core.recordings.resolve`).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The files a reader of it would open (a path that does not exist is kept: the reader names it).
-    """
+    (``<stem>_mag.csv`` and ``<stem>_imu.csv``); the entries of a ROS 2 bag folder (at most :data:`MAX_ENTRIES`)."""
     path = Path(path)
     text = str(path)
     stem = next((text[: -len(tail)] for tail in TWO_STREAM if text.endswith(tail)), None)
@@ -236,22 +186,7 @@ def recording_files(path) -> list[Path]:
 
 def check_recording(path, what: str, format: str | None = "auto") -> int:
     """:func:`check_file` of every file the recording ``path`` names (:func:`recording_files`), each as its reader
-    reads it (``format``, else its name; a ROS 2 bag's files as a bag); returns the bytes of the largest.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The recording as resolved (:func:`magexp.core.recordings.resolve`).
-    what : str
-        The key naming it (``data.path``, ``scenario.file``).
-    format : str or None
-        ``data.format`` (``auto`` or None: from the name, then the first lines).
-
-    Returns
-    -------
-    int
-        Bytes of its largest file.
-    """
+    reads it (``format``, else its name; a ROS 2 bag's files as a bag); returns the bytes of the largest."""
     path = Path(path)
     bag = path.is_dir()
     sizes = [0]
@@ -266,22 +201,7 @@ def check_recording_file(path, what: str = "data.path", format: str | None = "au
     """Refuse what the file gate refuses (:func:`magexp.run.files.check_recording`: a device, FIFO or socket, a
     file over the size, line or reading-memory limits, of each file the recording names), a recording file whose
     estimated readings exceed the readings limit, or whose calibration would exceed the memory limit
-    (:data:`CALIBRATION_FLOATS_PER_READING` a reading), before it is read; returns the estimated readings.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The recording file.
-    what : str
-        The key naming it in messages.
-    format : str or None
-        ``data.format`` (``auto``: from the file's name, then its first lines).
-
-    Returns
-    -------
-    int
-        The estimated readings.
-    """
+    (:data:`CALIBRATION_FLOATS_PER_READING` a reading), before it is read; returns the estimated readings."""
     path = Path(path)
     check_recording(path, what, format)
     if not path.is_file():

@@ -20,13 +20,7 @@ def check_flags(flags: dict) -> None:
     """The options of ``magexp`` that Hydra would read, checked before Hydra sees them (whose own
     errors are its usage text, or exit 1): ``--cfg job|hydra|all``, ``--config-name`` naming a
     primary config of ``conf/``; ``--experimental-rerun`` (which unpickles a file) and ``--config-dir`` /
-    ``--config-path`` (configs from elsewhere, with their own ``_target_``) are refused.
-
-    Parameters
-    ----------
-    flags : dict
-        Each ``--name`` flag to its value.
-    """
+    ``--config-path`` (configs from elsewhere, with their own ``_target_``) are refused."""
 
     for flag in ("--cfg", "-c"):
         if flag in flags and flags[flag] not in CFG_CHOICES:
@@ -48,12 +42,6 @@ class OneLineParser(argparse.ArgumentParser):
     """``argparse`` whose every error is one line on stderr and exit 2 (``--help`` still prints the usage)."""
 
     def error(self, message: str):
-        """Print ``message``'s first line (not the usage text) and exit with code 2.
-
-        Parameters
-        ----------
-        message : str
-            What argparse refused.
-        """
+        """Print ``message``'s first line (not the usage text) and exit with code 2."""
         print(f"error: {message.splitlines()[0]} (see {self.prog} --help)", file=sys.stderr)
         sys.exit(2)

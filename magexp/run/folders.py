@@ -31,27 +31,14 @@ from magexp.errors import MagexpError
 
 
 def _results() -> Path:
+    """The canonical ``results/`` folder, resolved (what no other folder may lie inside)."""
     return paths.RESULTS.resolve()
 
 
 def check_destination(folder, what: str, *, canonical: bool = False) -> Path:
-    """The resolved output folder ``folder``, or one line saying why a command may not write there.
-
-    Parameters
-    ----------
-    folder : str or Path
-        The folder as the user gave it.
-    what : str
-        The option or key that named it (``--out``, ``hydra.run.dir``...), for the message.
-    canonical : bool
-        The command is a canonical reproduction: it may write ``results/`` itself (but no folder
-        inside it: the canonical layout is ``results/<paper>/``, made by the command).
-
-    Returns
-    -------
-    Path
-        The resolved folder.
-    """
+    """The resolved output folder ``folder``, or one line (naming it by ``what``: ``--out``, ``hydra.run.dir``...)
+    saying why a command may not write there; ``canonical``: a canonical reproduction, which may write
+    ``results/`` itself (but no folder inside it: the canonical layout is ``results/<paper>/``)."""
     text = "" if folder is None else str(folder)
     if not text.strip():
         raise MagexpError(f"{what}={text!r} is not allowed: name a folder (an empty path would write into the "
@@ -72,27 +59,13 @@ def check_destination(folder, what: str, *, canonical: bool = False) -> Path:
 @functools.lru_cache(maxsize=16)
 def check_cache_folder(root: str) -> None:
     """A run cache (``$MAGEXP_CACHE``) or a cache beside it (the figures'), never inside ``results/``
-    (:func:`check_destination`), checked before any command starts and before every cache write.
-
-    Parameters
-    ----------
-    root : str
-        The cache folder.
-    """
+    (:func:`check_destination`), checked before any command starts and before every cache write."""
     check_destination(root, "MAGEXP_CACHE (the run cache folder)")
 
 
 def check_subdir(subdir: str, what: str = "hydra.sweep.subdir") -> None:
     """A sweep job's folder name: relative, not empty, and with no ``..``, so that every job's
-    folder is a folder of its own inside the sweep's folder.
-
-    Parameters
-    ----------
-    subdir : str
-        The folder name.
-    what : str
-        The key naming it in messages.
-    """
+    folder is a folder of its own inside the sweep's folder."""
     text = str(subdir)
     parts = PurePosixPath(text.replace("\\", "/")).parts
     if not text.strip() or text.startswith(("/", "~")) or ".." in parts or all(p == "." for p in parts):
@@ -103,15 +76,7 @@ def check_subdir(subdir: str, what: str = "hydra.sweep.subdir") -> None:
 def check_job_folders(folders: list[Path], sweep_dir: Path) -> None:
     """Each job's folder (``hydra.sweep.subdir`` resolved for it, whose overrides may hold a ``/``)
     strictly inside the sweep's folder, and no two jobs sharing one (the second would overwrite
-    the first's files).
-
-    Parameters
-    ----------
-    folders : list of pathlib.Path
-        Each job's folder.
-    sweep_dir : pathlib.Path
-        The sweep's folder.
-    """
+    the first's files)."""
     outer = Path(sweep_dir).resolve()
     seen: dict = {}
     for n, folder in enumerate(folders):
@@ -131,15 +96,7 @@ def removed_on_failure(folder: Path, created: Path | None = None):
 
     A folder that did not exist (or ``created``, the highest folder the caller made for it) is
     removed with every parent made for it; in a folder that existed, only the entries the block
-    added are removed (what the user had is kept).
-
-    Parameters
-    ----------
-    folder : pathlib.Path
-        The folder the block writes into.
-    created : pathlib.Path or None
-        The highest folder the caller created for it.
-    """
+    added are removed (what the user had is kept)."""
     folder = Path(folder).absolute()
     top = created if created is not None else first_missing(folder)
     before = set() if top is not None or not folder.is_dir() else {p.name for p in folder.iterdir()}
@@ -170,22 +127,7 @@ def _undo(folder: Path, top: Path | None, before: set) -> None:
 def check_output_folder(folder: Path | str, what: str = "output folder", *, canonical: bool = False) -> Path:
     """Fail unless ``folder`` is (or can be created as) a writable directory a command may write
     (:func:`magexp.run.folders.check_destination`: not empty, not a root, not inside ``results/`` unless
-    ``canonical``); create nothing.
-
-    Parameters
-    ----------
-    folder : pathlib.Path or str
-        The folder.
-    what : str
-        What it is, named in messages.
-    canonical : bool
-        Allow a folder inside ``results/``.
-
-    Returns
-    -------
-    pathlib.Path
-        The folder as a path.
-    """
+    ``canonical``); create nothing."""
     check_destination(folder, what, canonical=canonical)
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
@@ -208,18 +150,7 @@ def check_output_folder(folder: Path | str, what: str = "output folder", *, cano
 
 def first_missing(folder: Path) -> Path | None:
     """The highest of ``folder`` and its parents that does not exist yet (None if ``folder`` exists):
-    removing it after a failure leaves no trace of the folders made for it.
-
-    Parameters
-    ----------
-    folder : pathlib.Path
-        The folder.
-
-    Returns
-    -------
-    pathlib.Path or None
-        The highest missing folder.
-    """
+    removing it after a failure leaves no trace of the folders made for it."""
     if folder.exists():
         return None
     top = folder
@@ -231,18 +162,7 @@ def first_missing(folder: Path) -> Path | None:
 def create_unique(folder: Path | str) -> tuple[Path, Path]:
     """Create ``folder`` exclusively; if it exists, ``folder-2``, ``folder-3``...: two runs started
     in the same second never share a folder. Returns ``(folder, top)``, ``top`` the highest
-    folder this call created (remove it to leave no trace).
-
-    Parameters
-    ----------
-    folder : pathlib.Path or str
-        The folder wanted.
-
-    Returns
-    -------
-    tuple of pathlib.Path
-        ``(folder, top)``.
-    """
+    folder this call created (remove it to leave no trace)."""
     folder = Path(folder)
     top = first_missing(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)

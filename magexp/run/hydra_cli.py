@@ -51,16 +51,10 @@ def check_commands(flags: dict) -> None:
     """Hydra's switches as Hydra reads them, or one line: one command at a time, ``--resolve`` and
     ``--package`` with ``--cfg``, ``--info`` and ``--shell-completion`` with a value Hydra knows.
 
-    Parameters
-    ----------
-    flags : dict
-        Each ``--name`` flag to its value (True for a switch).
-
     Raises
     ------
     MagexpError
-        One line naming the flag.
-    """
+        One line naming the flag."""
     given = list(dict.fromkeys(COMMANDS[f] for f in flags if f in COMMANDS))
     if len(given) > 1:
         raise MagexpError(f"{given[0]} and {given[1]} are not allowed together: Hydra does one of --run, --multirun "
@@ -102,19 +96,10 @@ def check_package(flags: dict, user: list[str], hydra_overrides: list[str]) -> N
     """``--package`` (``-p``) naming a node of the config ``--cfg kind`` prints (Hydra prints only a node), else
     one line naming the nodes there are.
 
-    Parameters
-    ----------
-    flags : dict
-        Each ``--name`` flag to its value: ``--package`` (``scenario``, ``scenario.field``, ``hydra.launcher``...)
-        and ``--cfg`` (``job``, ``hydra`` or ``all``).
-    user, hydra_overrides : list of str
-        The command line's overrides: the config's and the ``hydra.*`` ones.
-
     Raises
     ------
     MagexpError
-        A package that is not a node of that config.
-    """
+        A package that is not a node of that config."""
     package, kind = flags.get("--package", flags.get("-p")), flags.get("--cfg") or flags.get("-c")
     if package is None or not kind or package == "_global_":  # _global_: Hydra's name of the whole config
         return
@@ -135,16 +120,10 @@ def check_hydra_overrides(hydra_overrides: list[str]) -> None:
     """No ``${...}`` in a ``hydra.*`` setting's value but Hydra's own job keys in ``hydra.sweep.subdir``
     (:data:`JOB_KEYS`).
 
-    Parameters
-    ----------
-    hydra_overrides : list of str
-        The ``hydra.*`` overrides.
-
     Raises
     ------
     MagexpError
-        One line naming the setting.
-    """
+        One line naming the setting."""
     for ov in hydra_overrides:
         key, _, value = ov.partition("=")
         name = key.lstrip("+~")
@@ -160,16 +139,10 @@ def check_hydra_node(node) -> None:
     """The ``hydra`` node Hydra composes from a sweep's settings: a launcher node, the sweeper's
     ``max_batch_size`` null or an integer >= 1, ``hydra.job.chdir`` false, joblib's settings bounded.
 
-    Parameters
-    ----------
-    node : DictConfig
-        The composed ``hydra`` node.
-
     Raises
     ------
     MagexpError
-        One line naming the setting.
-    """
+        One line naming the setting."""
     launcher = node.get("launcher")
     if not isinstance(launcher, DictConfig):
         raise MagexpError(f"hydra.launcher={'null' if launcher is None else launcher!r} is not allowed: choose a "
@@ -195,16 +168,10 @@ def check_joblib(launcher) -> None:
     but some), ``verbose`` an integer >= 0, ``timeout`` null or a number > 0, ``batch_size`` auto or an
     integer >= 1; the others (:data:`JOBLIB_SETTINGS`) as Hydra sets them.
 
-    Parameters
-    ----------
-    launcher : DictConfig
-        The composed ``hydra.launcher`` node of joblib's launcher.
-
     Raises
     ------
     MagexpError
-        One line naming the setting.
-    """
+        One line naming the setting."""
     defaults = hydra_compose(("hydra/launcher=joblib",), with_hydra=True).hydra.launcher
     for key in launcher:
         if key not in JOBLIB_SETTINGS and launcher.get(key) != defaults.get(key):
@@ -233,23 +200,10 @@ def sweep_spelling(node, user: list[str]) -> list[str]:
     ``key: values`` as ``key=values``) first, the command line's ``user`` overrides after, one of the same key
     replacing the param in its place.
 
-    Parameters
-    ----------
-    node : DictConfig
-        The composed ``hydra`` node.
-    user : list of str
-        The command line's overrides.
-
-    Returns
-    -------
-    list of str
-        The overrides whose jobs the sweep runs.
-
     Raises
     ------
     MagexpError
-        A param that is not ``key: values`` of a config key (a ``hydra.*`` key, a node, null or an interpolation).
-    """
+        A param that is not ``key: values`` of a config key (a ``hydra.*`` key, a node, null or an interpolation)."""
     params = OmegaConf.to_container(node.sweeper, resolve=False).get("params") or {}
     if not isinstance(params, dict):
         raise MagexpError(f"hydra.sweeper.params={params!r} is not allowed: give {{key: values}}, e.g. "
@@ -275,16 +229,10 @@ def sweep_spelling(node, user: list[str]) -> list[str]:
 def check_nested(parsed) -> None:
     """Refuse a sweep inside a list of values (``seed=range(5),7``): Hydra cannot expand it.
 
-    Parameters
-    ----------
-    parsed : list of Override
-        Hydra's parsed overrides.
-
     Raises
     ------
     MagexpError
-        One line naming the override.
-    """
+        One line naming the override."""
     for ov in parsed:
         value = ov.value()
         if isinstance(value, ChoiceSweep) and any(isinstance(v, Sweep) for v in value.list):

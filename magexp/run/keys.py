@@ -52,16 +52,10 @@ def check_seed(seed, name: str = "seed") -> int:
 def check_duplicates(overrides: list[str]) -> None:
     """Refuse a key given twice (``scenario.noise=1 scenario.noise=2``, ``+k`` and ``k`` alike), in one line.
 
-    Parameters
-    ----------
-    overrides : list of str
-        The command line's ``KEY=VALUE`` overrides (``hydra.*`` ones included).
-
     Raises
     ------
     MagexpError
-        Naming the key and both values.
-    """
+        Naming the key and both values."""
     seen = {}
     for ov in overrides:
         key = ov.partition("=")[0].lstrip("+~")
@@ -74,20 +68,10 @@ def check_number(value, key: str, *, integer: bool = False) -> None:
     """Refuse a number that is not finite, larger than :data:`LARGEST` or, not zero, smaller than
     :data:`SMALLEST` in magnitude; with ``integer``, one that is not a whole number.
 
-    Parameters
-    ----------
-    value : int or float
-        The number (not a bool).
-    key : str
-        The dotted key the message names.
-    integer : bool
-        The schema types the key as an integer.
-
     Raises
     ------
     MagexpError
-        One line naming the key, the value and the range allowed.
-    """
+        One line naming the key, the value and the range allowed."""
     wanted = "an integer" if integer else "a number"
     if isinstance(value, float) and (not math.isfinite(value) or integer and not value.is_integer()):
         raise MagexpError(f"{key}={value!r} is not allowed: it must be {wanted}, finite")
@@ -105,18 +89,7 @@ def _is_number(value) -> bool:
 
 def shape(value) -> tuple | None:
     """The shape of a list of numbers, or a nested list of them (``[[1,0],[0,1]]``: ``(2, 2)``); None for
-    anything else (a ragged list, a list of texts or mappings, a number).
-
-    Parameters
-    ----------
-    value : object
-        A plain value.
-
-    Returns
-    -------
-    tuple or None
-        The shape.
-    """
+    anything else (a ragged list, a list of texts or mappings, a number)."""
     if not isinstance(value, (list, tuple)) or not value:
         return None
     if all(_is_number(v) for v in value):
@@ -135,22 +108,10 @@ def _node(cfg: DictConfig, key: str):
 def check_override(cfg: DictConfig, key: str, value, text: str) -> None:
     """A ``key=value`` override checked against the node of ``cfg`` it changes, before it is applied.
 
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config (its nodes typed by the schemas of :func:`magexp.run.compose.register_schemas`).
-    key : str
-        The dotted key, present in ``cfg``.
-    value : object
-        The value as Hydra's grammar types it (a quoted value is a text).
-    text : str
-        The value as typed, for the message.
-
     Raises
     ------
     MagexpError
-        An empty text, a text for a number or a flag, or a list of another shape than the key's.
-    """
+        An empty text, a text for a number or a flag, or a list of another shape than the key's."""
     if isinstance(value, str) and not value.strip():
         raise MagexpError(f"{key}={text!r} is not allowed: give a value (null for none)")
     node = _node(cfg, key)  # typed by a schema (an untyped key's value is checked by its own check)
@@ -189,20 +150,10 @@ def check_value(value, hint, key: str) -> None:
     true or false, a number by :func:`check_number`, a text a non-empty text (or a number, read as its digits),
     a pair a list of its length, each item by its type.
 
-    Parameters
-    ----------
-    value : object
-        A plain value.
-    hint : type
-        The schema's annotation (``int``, ``float | None``, ``tuple[float, float]``, ``str``).
-    key : str
-        The dotted key the message names.
-
     Raises
     ------
     MagexpError
-        One line naming the key, the value and what is allowed.
-    """
+        One line naming the key, the value and what is allowed."""
     kind, optional = _kind(hint)
     if value is None:
         if not optional:
@@ -233,20 +184,10 @@ def check_schema(node: dict, schema, prefix: str = "") -> None:
     """Every key of the plain config ``node`` that ``schema`` (a dataclass, its groups dataclasses) types,
     checked by :func:`check_value`; a group given as anything but a mapping is refused.
 
-    Parameters
-    ----------
-    node : dict
-        The resolved config (or one of its groups).
-    schema : type
-        Its dataclass.
-    prefix : str
-        The dotted path of ``node`` (``""`` at the top, ``"data."``...).
-
     Raises
     ------
     MagexpError
-        One line for the first key its schema refuses.
-    """
+        One line for the first key its schema refuses."""
     hints = _hints(schema)
     for f in dataclasses.fields(schema):
         if f.name not in node:

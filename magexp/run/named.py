@@ -13,26 +13,14 @@ from magexp.run.runner import build
 
 
 def estimator_named(name: str, **overrides):
-    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides``, composed as every config is
+    """The estimator of ``conf/estimator/<name>.yaml`` with ``overrides`` (its options: ``n_iterations=3``...),
+    built by :func:`magexp.run.runner.build` from the config composed as every config is
     (:func:`compose_config`, the calibration's primary config ``conf/calibrate.yaml``).
-
-    Parameters
-    ----------
-    name : str
-        A name of ``conf/estimator/*.yaml``.
-    **overrides
-        Options of that config (``n_iterations=3``...).
-
-    Returns
-    -------
-    estimator
-        The estimator built from the config (:func:`magexp.run.runner.build`).
 
     Raises
     ------
     MagexpError
-        An unknown name or option.
-    """
+        An unknown name or option."""
     check_choice("estimator", name)
     node = compose_config([f"estimator={name}"], config_name="calibrate").estimator
     unknown = [key for key in overrides if key not in node]

@@ -20,30 +20,14 @@ from magexp.run.provenance import provenance
 
 
 def print_table(rows: dict) -> None:
-    """``key  value`` lines, keys aligned; floats with 6 significant digits.
-
-    Parameters
-    ----------
-    rows : dict
-        Each key to its value.
-    """
+    """``key  value`` lines, keys aligned; floats with 6 significant digits."""
     width = max(len(k) for k in rows)
     for key, value in rows.items():
         print(f"{key:<{width}}  {value:.6g}" if isinstance(value, float) else f"{key:<{width}}  {value}")
 
 
 def write_csv(path: Path, header: list[str], rows) -> None:
-    """``path`` written atomically: ``header``, then ``rows``.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The file.
-    header : list of str
-        Column names.
-    rows : iterable of sequence
-        The rows.
-    """
+    """``path`` written atomically: ``header``, then ``rows``."""
     with atomic_open(path, "w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(header)
@@ -55,24 +39,7 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
 
     ``metrics.csv`` is one row: the run's metrics, ``cached`` (whether the result came from the
     cache) and the provenance (:func:`magexp.run.provenance.provenance`); ``config.yaml`` is the
-    resolved config ``plain`` the run read. Returns the metrics with ``cached``.
-
-    Parameters
-    ----------
-    out : RunOutput
-        The run's output.
-    plain : dict
-        The resolved config.
-    out_dir : pathlib.Path
-        The run's folder.
-    cached : bool
-        Whether the result came from the cache.
-
-    Returns
-    -------
-    dict
-        The metrics with ``cached``.
-    """
+    resolved config ``plain`` the run read. Returns the metrics with ``cached``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     metrics = {**out.metrics, "cached": cached, **provenance(plain)}
     write_csv(out_dir / "metrics.csv", list(metrics), [list(metrics.values())])
@@ -86,22 +53,7 @@ def write_outputs(out, plain: dict, out_dir: Path, *, cached: bool) -> dict:
 
 def execute(cfg, out_dir: Path, *, use_cache: bool = True) -> dict:
     """Run ``cfg`` in this process through the run cache (:func:`magexp.run.executor.run_many`) and
-    write its outputs into ``out_dir`` (:func:`write_outputs`); returns its metrics.
-
-    Parameters
-    ----------
-    cfg : dict
-        The resolved run config.
-    out_dir : pathlib.Path
-        The run's folder.
-    use_cache : bool
-        Read and write the run cache.
-
-    Returns
-    -------
-    dict
-        The run's metrics.
-    """
+    write its outputs into ``out_dir`` (:func:`write_outputs`); returns its metrics."""
     plain = resolved(cfg)
     counts: dict = {}
     outputs = run_many([plain], jobs=1, use_cache=use_cache, counts=counts)

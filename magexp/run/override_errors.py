@@ -25,22 +25,7 @@ def _keys_of(cfg: DictConfig, key: str) -> tuple[str, list[str]]:
 
 
 def unknown_key(cfg: DictConfig, key: str, value: str, config_name: str = PRIMARY) -> MagexpError:
-    """The one-line error of an override whose key is not in the config.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The composed config.
-    key, value : str
-        The override's key and value.
-    config_name : str
-        The primary config.
-
-    Returns
-    -------
-    MagexpError
-        The error.
-    """
+    """The one-line error of an override whose key is not in the config."""
     if config_name == PRIMARY and key.split(".")[0] in CALIBRATE_KEYS:
         return MagexpError(f"{key}={value} is not allowed: the simulation command has no {key.split('.')[0]!r}; "
                            "calibrate a recording with `magexp calibrate data.path=<file> ...`")
@@ -50,22 +35,7 @@ def unknown_key(cfg: DictConfig, key: str, value: str, config_name: str = PRIMAR
 
 
 def bad_value(key: str, value: str, exc: BaseException) -> MagexpError:
-    """A value the schema's type refuses: one line naming the key, the value and the type wanted.
-
-    Parameters
-    ----------
-    key : str
-        The dotted key (``estimator.n_particles``).
-    value : str
-        The value as given.
-    exc : BaseException
-        OmegaConf's or Hydra's refusal (its first line, or the type it wanted, is named).
-
-    Returns
-    -------
-    MagexpError
-        The one line.
-    """
+    """A value the schema's type refuses: one line naming the key, the value and the type wanted."""
     while exc.__cause__ is not None:  # Hydra keeps OmegaConf's reason in the cause
         exc = exc.__cause__
     msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__

@@ -27,18 +27,7 @@ def check_override_values(overrides: list[str]) -> list[str]:
     choices (``+analysis=field_kalman``). A value holding ``${`` is refused (an interpolation reads other keys, the environment or
     files: a command-line value must be the value itself); ``hydra.*`` settings keep theirs
     (``hydra.sweep.subdir=${hydra.job.num}``). A plain value with characters outside ASCII
-    (``data.unit=µT``), which Hydra's lexer cannot read, is quoted for it.
-
-    Parameters
-    ----------
-    overrides : list of str
-        The command-line overrides.
-
-    Returns
-    -------
-    list of str
-        The checked overrides.
-    """
+    (``data.unit=µT``), which Hydra's lexer cannot read, is quoted for it."""
     out = []
     for ov in overrides:
         key, sep, value = ov.partition("=")
@@ -77,13 +66,7 @@ HYDRA_KEYS = ("hydra.run.dir", "hydra.sweep.dir", "hydra.sweep.subdir", "hydra.l
 
 
 def check_hydra_keys(overrides: list[str]) -> None:
-    """Refuse a ``hydra.*`` override outside :data:`HYDRA_KEYS`, in one line, before Hydra reads it.
-
-    Parameters
-    ----------
-    overrides : list of str
-        The ``hydra.*`` overrides.
-    """
+    """Refuse a ``hydra.*`` override outside :data:`HYDRA_KEYS`, in one line, before Hydra reads it."""
     for ov in overrides:
         key = ov.partition("=")[0].lstrip("+~")
         if not key.startswith("hydra"):
@@ -99,13 +82,7 @@ def check_hydra_keys(overrides: list[str]) -> None:
 
 def check_override_targets(overrides: list[str]) -> None:
     """Every ``_target_`` an override sets (``estimator._target_=...``, or inside a value such as
-    ``estimator.velocity={_target_: ...}``) checked by :func:`check_target` before Hydra sees it.
-
-    Parameters
-    ----------
-    overrides : list of str
-        The command-line overrides.
-    """
+    ``estimator.velocity={_target_: ...}``) checked by :func:`check_target` before Hydra sees it."""
     for ov in overrides:
         key, _, value = ov.partition("=")
         where = key.lstrip("+~")

@@ -39,16 +39,10 @@ def check_discrete(parsed: list[Override]) -> None:
     """Refuse, in one line, a swept override whose values cannot be listed (``interval(...)``: a sweep
     lists its jobs).
 
-    Parameters
-    ----------
-    parsed : list of Override
-        Hydra's parsed overrides (:func:`parse_overrides`).
-
     Raises
     ------
     MagexpError
-        One line naming the override.
-    """
+        One line naming the override."""
     for ov in parsed:
         if ov.is_sweep_override() and not ov.is_discrete_sweep():
             raise MagexpError(f"{ov.input_line} is not allowed: only a,b,... lists, range(), choice() and a "
@@ -61,21 +55,10 @@ def sweep_jobs(overrides: list[str]) -> list[list[str]]:
     ``range(...)``, ``choice(...)`` and a config group's ``glob(...)`` (its options read by Hydra's
     config loader), each enumerated by Hydra's parser.
 
-    Parameters
-    ----------
-    overrides : list of str
-        The sweep's overrides.
-
-    Returns
-    -------
-    list of list of str
-        Each job's overrides.
-
     Raises
     ------
     MagexpError
-        An override whose values cannot be listed (``interval(...)``).
-    """
+        An override whose values cannot be listed (``interval(...)``)."""
     parsed = parse_overrides(overrides, parser=OverridesParser.create(config_loader=config_loader()))
     check_discrete(parsed)
     values = {}
@@ -92,18 +75,7 @@ SCHEDULES = "magexp.estimators.schedules."
 
 def expand_sweep(overrides: list[str]) -> list[list[str]]:
     """The jobs of a sweep (:func:`sweep_jobs`, in the order Hydra's basic sweeper gives), once their
-    count is within the runs limit (:func:`magexp.run.budget.check_sweep`).
-
-    Parameters
-    ----------
-    overrides : list of str
-        The sweep's overrides (``-m``).
-
-    Returns
-    -------
-    list of list of str
-        As :func:`sweep_jobs`.
-    """
+    count is within the runs limit (:func:`magexp.run.budget.check_sweep`)."""
     parsed = parse_overrides(overrides)
     check_discrete(parsed)
     check_nested(parsed)
@@ -112,32 +84,13 @@ def expand_sweep(overrides: list[str]) -> list[list[str]]:
 
 
 def swept_keys(overrides: list[str]) -> list[str]:
-    """The keys of ``overrides`` that take more than one value.
-
-    Parameters
-    ----------
-    overrides : list of str
-        The sweep's overrides (Hydra's syntax: ``a,b``, ``range(...)``...).
-
-    Returns
-    -------
-    list of str
-        The swept keys.
-    """
+    """The keys of ``overrides`` that take more than one value."""
     return [ov.get_key_element() for ov in parse_overrides(overrides) if ov.is_sweep_override()]
 
 
 def check_problem(cfg, scenario) -> None:
     """The scenario's data (seed ``cfg.seed``) give at least as many residuals as the problem has
-    parameters: fewer readings than parameters is refused for every estimator.
-
-    Parameters
-    ----------
-    cfg : DictConfig
-        The run config.
-    scenario : object
-        The built scenario.
-    """
+    parameters: fewer readings than parameters is refused for every estimator."""
 
     data_rng, _ = run_generators(cfg.seed)
     dataset = scenario.generate(rng=data_rng)
@@ -157,20 +110,7 @@ def validate_runs(jobs: list[list[str]], *, keep: bool = True) -> list:
     Each distinct scenario (with its objective) is built and its data checked once, each
     distinct estimator built once. Without ``keep`` (a sweep, whose jobs Hydra composes
     itself), jobs that differ only in ``seed`` are composed once and their seeds checked
-    alone, so a sweep over many seeds costs almost nothing to check.
-
-    Parameters
-    ----------
-    jobs : list of list of str
-        Each job's overrides.
-    keep : bool
-        Return the composed configs.
-
-    Returns
-    -------
-    list
-        The composed configs (empty without ``keep``).
-    """
+    alone, so a sweep over many seeds costs almost nothing to check."""
     _check_choices(jobs)
     configs, seen, composed, estimates = [], set(), {}, {}
     tally = Tally("the sweep" if len(jobs) > 1 else "the run")  # memory and work: magexp.run.budget
@@ -235,16 +175,10 @@ def check_scenario_files(scenario: dict) -> None:
     """Refuse, before the scenario is built, a file it would read that is a device, a FIFO or a socket, or too big
     for the readings or memory limit (:func:`magexp.run.files.check_recording_file`, as ``magexp calibrate``'s).
 
-    Parameters
-    ----------
-    scenario : dict
-        The resolved ``scenario`` node of a run.
-
     Raises
     ------
     MagexpError
-        One line naming the key.
-    """
+        One line naming the key."""
     for key, folder in SCENARIO_FILES.items():
         value = scenario.get(key)
         if isinstance(value, str) and value:
@@ -256,16 +190,10 @@ def check_window(scenario: dict) -> None:
     """A recording scenario's ``window`` (null: the whole recording) refused unless it is ``[start, end]`` seconds,
     ``0 <= start < end``, of a recording that has reading times (read here, before the scenario cuts it).
 
-    Parameters
-    ----------
-    scenario : dict
-        The resolved ``scenario`` node of a run.
-
     Raises
     ------
     MagexpError
-        One line naming ``scenario.window``.
-    """
+        One line naming ``scenario.window``."""
     window, file = scenario.get("window"), scenario.get("file")
     if window is None or not isinstance(file, str):
         return
@@ -282,15 +210,7 @@ def check_window(scenario: dict) -> None:
 def check_schedules(node: dict, prefix: str = "estimator") -> None:
     """Every value of a coefficient schedule under ``node`` (:mod:`magexp.estimators.schedules`) a finite
     number, named by its whole key (``estimator.velocity.c1.start``): the schedule knows only its own
-    part's name (``start``).
-
-    Parameters
-    ----------
-    node : dict
-        A config node.
-    prefix : str
-        The node's key.
-    """
+    part's name (``start``)."""
     schedule = str(node.get("_target_", "")).startswith(SCHEDULES)
     for key, value in node.items():
         if isinstance(value, dict):
@@ -303,13 +223,7 @@ def check_schedules(node: dict, prefix: str = "estimator") -> None:
 def check_label(estimator) -> None:
     """An estimator's ``name`` labels its metrics in every table: set to the name of another estimator
     config whose class differs (``estimator=lm estimator.name=ipso``: ``lm`` labelled ``ipso``) is refused; a
-    name of its own (``estimator.name=ipso_w``, an ablation's variant) is the caller's label.
-
-    Parameters
-    ----------
-    estimator : DictConfig
-        The estimator node.
-    """
+    name of its own (``estimator.name=ipso_w``, an ablation's variant) is the caller's label."""
     name, target = estimator.get("name"), estimator.get("_target_")
     if isinstance(name, str) and name in options("estimator"):
         theirs = compose_config([f"estimator={name}"]).estimator.get("_target_")
@@ -321,15 +235,7 @@ def check_label(estimator) -> None:
 
 def check_jobs(overrides: list[str], jobs: list) -> None:
     """A sweep with no job (``estimator=glob(zzz*)``, ``seed=range(0,0)``) is refused, naming the
-    override that selects nothing (and, for a config group, the options there are).
-
-    Parameters
-    ----------
-    overrides : list of str
-        The sweep's overrides.
-    jobs : list
-        The jobs they form.
-    """
+    override that selects nothing (and, for a config group, the options there are)."""
     if jobs:
         return
 

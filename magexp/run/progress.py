@@ -33,25 +33,14 @@ class Progress:
         self.enabled = enabled and total > 0
 
     def text(self) -> str:
-        """The line shown: label, runs done of the total, seconds elapsed and left.
-
-        Returns
-        -------
-        str
-        """
+        """The line shown: label, runs done of the total, seconds elapsed and left."""
         elapsed = time.perf_counter() - self.start
         left = elapsed / self.done * (self.total - self.done) if self.done else float("nan")
         eta = f", ~{left:.0f} s left" if self.done else ""
         return f"{self.label} {self.done}/{self.total} runs, {elapsed:.0f} s elapsed{eta}"
 
     def __call__(self, n: int = 1) -> None:
-        """Count ``n`` more finished runs and redraw the line.
-
-        Parameters
-        ----------
-        n : int
-            The runs just finished.
-        """
+        """Count ``n`` more finished runs and redraw the line."""
         self.done += n
         if self.enabled:
             end = "\n" if self.done >= self.total else ""

@@ -29,16 +29,12 @@ COMMIT_FILE = PACKAGE / "_resources" / "commit.txt"  # written into a wheel at b
 
 
 def version() -> str:
-    """magexp's version (:data:`magexp._version.__version__`, its one home; ``pyproject.toml`` reads it).
-
-    Returns
-    -------
-    str
-    """
+    """magexp's version (:data:`magexp._version.__version__`, its one home; ``pyproject.toml`` reads it)."""
     return __version__
 
 
 def _git_dir(root) -> "Path | None":
+    """The git folder of the checkout at ``root`` (a worktree's ``gitdir:``), or None."""
     git = root / ".git"
     if git.is_file():  # a worktree: "gitdir: <path>"
         text = git.read_text().strip()
@@ -72,12 +68,7 @@ def commit() -> str:
     """The git commit of the code (12 hex digits), or ``unknown``.
 
     A source checkout reads it from ``.git`` (no git process: this runs on every run); an
-    installed wheel reads the commit recorded when it was built (``_resources/commit.txt``).
-
-    Returns
-    -------
-    str
-    """
+    installed wheel reads the commit recorded when it was built (``_resources/commit.txt``)."""
     if SOURCE_CHECKOUT:
         try:
             git_dir = _git_dir(ROOT)
@@ -93,12 +84,7 @@ def commit() -> str:
 
 
 def working_tree_state() -> str:
-    """``clean`` or ``modified`` (uncommitted changes in the checkout), ``n/a`` for an installed wheel.
-
-    Returns
-    -------
-    str
-    """
+    """``clean`` or ``modified`` (uncommitted changes in the checkout), ``n/a`` for an installed wheel."""
     if not SOURCE_CHECKOUT:
         return "n/a"
     try:
@@ -110,18 +96,7 @@ def working_tree_state() -> str:
 
 
 def config_hash(config: dict | None) -> str:
-    """SHA-256 (16 hex digits) of a resolved config as canonical JSON; empty for no config.
-
-    Parameters
-    ----------
-    config : dict or None
-        The resolved config.
-
-    Returns
-    -------
-    str
-        The hash.
-    """
+    """SHA-256 (16 hex digits) of a resolved config as canonical JSON; empty for no config."""
     if config is None:
         return ""
     text = json.dumps(config, sort_keys=True, default=str, separators=(",", ":"))
@@ -149,28 +124,12 @@ def _libraries() -> dict:
 
 
 def provenance(config: dict | None = None) -> dict:
-    """The provenance fields of an output made with the resolved ``config`` (flat, str values).
-
-    Parameters
-    ----------
-    config : dict or None
-        The resolved config (None: no config fields).
-
-    Returns
-    -------
-    dict
-        The provenance fields.
-    """
+    """The provenance fields of an output made with the resolved ``config`` (flat, str values)."""
     return {"magexp_version": version(), "magexp_commit": commit(), "python": platform.python_version(),
             **_libraries(), "config_hash": config_hash(config)}
 
 
 def version_line() -> str:
-    """``magexp <version> (commit <sha>[, with uncommitted changes])`` for ``magexp --version``.
-
-    Returns
-    -------
-    str
-    """
+    """``magexp <version> (commit <sha>[, with uncommitted changes])`` for ``magexp --version``."""
     state = working_tree_state()
     return f"magexp {version()} (commit {commit()}{', with uncommitted changes' if state == 'modified' else ''})"

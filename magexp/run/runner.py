@@ -68,10 +68,12 @@ def run(cfg: DictConfig) -> RunOutput:
 
 
 def _plain(node):
+    """A config node as plain containers (resolved), anything else as it is: what a cache key hashes."""
     return OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node
 
 
 def _text(node) -> str:
+    """A config node as sorted JSON: the text two equal nodes share, to key what is built from them."""
     return json.dumps(_plain(node), sort_keys=True, default=str)
 
 
@@ -136,6 +138,7 @@ class _Shared:
         return entry[1]
 
     def build(self, node, what: str):
+        """The object ``node`` builds, built once per batch (:func:`build_once`)."""
         return build_once(node, what, key=self.key(node, what))
 
     def problem(self, cfg, scenario, seed: int):

@@ -37,7 +37,8 @@ from omegaconf import OmegaConf, open_dict
 from magexp.core.atomic import atomic_open, write_text
 from magexp.errors import MagexpError
 from magexp.run.compose import apply_overrides, compose_config, hydra_compose, resolved
-from magexp.run.executor import check_executor, make_executor, run_many
+from magexp.run.executor import run_many
+from magexp.run.executors import check_executor, make_executor
 from magexp.run.folders import check_job_folders
 from magexp.run.hydra_cli import check_hydra_node
 from magexp.run.outputs import write_outputs
@@ -50,37 +51,19 @@ _PLANNED: dict[tuple[str, ...], list[list[str]]] = {}
 
 
 def plan_jobs(overrides: list[str], jobs: list[list[str]]) -> None:
-    """Hand the jobs of a checked sweep to the sweeper that launches them (:func:`planned_jobs`).
-
-    Parameters
-    ----------
-    overrides : list of str
-        The sweep's overrides, as Hydra passes them to its sweeper.
-    jobs : list of list of str
-        Their jobs (:func:`magexp.run.preflight.expand_sweep`), each checked.
-    """
+    """Hand the jobs of a checked sweep to the sweeper that launches them (:func:`planned_jobs`)."""
     _PLANNED[tuple(overrides)] = jobs
 
 
 def planned_jobs(overrides: list[str]) -> list[list[str]]:
     """The jobs of the sweep of ``overrides``: those :func:`plan_jobs` handed over (the sweep expanded once),
-    else expanded and counted now (a sweep Hydra started without magexp's command).
-
-    Parameters
-    ----------
-    overrides : list of str
-        As :func:`plan_jobs`.
-
-    Returns
-    -------
-    list of list of str
-        As :func:`magexp.run.preflight.sweep_jobs`.
-    """
+    else expanded and counted now (a sweep Hydra started without magexp's command)."""
     jobs = _PLANNED.pop(tuple(overrides), None)
     return jobs if jobs is not None else expand_sweep(overrides)
 
 
 def _job_overrides(job_dir: Path) -> dict[str, str]:
+    """``{key: value}`` of the overrides Hydra recorded for the job in ``job_dir`` (empty if none)."""
     path = job_dir / ".hydra" / "overrides.yaml"
     if not path.exists():
         return {}
@@ -88,20 +71,7 @@ def _job_overrides(job_dir: Path) -> dict[str, str]:
 
 
 def gather(sweep_dir: Path | str, keys: list[str]) -> Path:
-    """Write ``sweep_dir/sweep.csv`` from the job folders' ``metrics.csv``; return its path.
-
-    Parameters
-    ----------
-    sweep_dir : pathlib.Path or str
-        The sweep's folder.
-    keys : list of str
-        The swept keys (columns).
-
-    Returns
-    -------
-    pathlib.Path
-        The table's path.
-    """
+    """Write ``sweep_dir/sweep.csv`` from the job folders' ``metrics.csv``; return its path."""
     sweep_dir = Path(sweep_dir)
     jobs = sorted((p.parent for p in sweep_dir.glob("*/metrics.csv")),
                   key=lambda p: (0, int(p.name)) if p.name.isdigit() else (1, p.name))
@@ -127,32 +97,18 @@ class SweepTable(Callback):
     """Hydra callback: after a multirun, write ``sweep.csv`` into the sweep folder."""
 
     def on_multirun_end(self, config, **kwargs) -> None:
-        """Write the sweep's table (:func:`gather`) when the sweep ends.
-
-        Parameters
-        ----------
-        config : DictConfig
-            The sweep's config.
-        **kwargs
-            Hydra's other arguments (unused).
-        """
+        """Write the sweep's table (:func:`gather`) when the sweep ends."""
         overrides = [str(o) for o in config.hydra.overrides.task]
         path = gather(config.hydra.sweep.dir, swept_keys(overrides))
         print(f"sweep table: {path}")
 
 
-#: the ``hydra.launcher.*`` settings of magexp's launcher, as :func:`magexp.run.executor.check_executor`'s options
+#: the ``hydra.launcher.*`` settings of magexp's launcher, as :func:`magexp.run.executors.check_executor`'s options
 SETTINGS = {"executor": "--executor", "jobs": "--jobs", "scheduler": "--scheduler"}
 
 
 def check_settings(settings: dict) -> None:
-    """Refuse bad ``hydra.launcher.*`` settings in one line naming the setting (the executor's rules).
-
-    Parameters
-    ----------
-    settings : dict
-        The ``hydra.launcher`` settings.
-    """
+    """Refuse bad ``hydra.launcher.*`` settings in one line naming the setting (the executor's rules)."""
 
     try:
         check_executor(settings["executor"], settings["jobs"], settings["scheduler"])
@@ -166,18 +122,7 @@ def check_settings(settings: dict) -> None:
 def check_hydra_settings(settings: list[str]):
     """Check a sweep's ``hydra.*`` overrides before anything is written (one line on the first bad one):
     Hydra composes its own node with them, then magexp's launcher settings are checked if it is the
-    launcher chosen.
-
-    Parameters
-    ----------
-    settings : list of str
-        The ``hydra.*`` overrides.
-
-    Returns
-    -------
-    DictConfig
-        The composed ``hydra`` node (:func:`magexp.run.hydra_cli.check_hydra_node` checked).
-    """
+    launcher chosen."""
 
     node = hydra_compose(tuple(settings), with_hydra=True).hydra
     check_hydra_node(node)
@@ -188,22 +133,7 @@ def check_hydra_settings(settings: list[str]):
 
 
 def job_subdir(config, num: int, overrides: Sequence[str]) -> str:
-    """The folder name of job ``num``: ``hydra.sweep.subdir`` resolved for it (by default ``num``).
-
-    Parameters
-    ----------
-    config : DictConfig
-        The sweep's config.
-    num : int
-        The job's number.
-    overrides : sequence of str
-        The job's overrides.
-
-    Returns
-    -------
-    str
-        The folder name.
-    """
+    """The folder name of job ``num``: ``hydra.sweep.subdir`` resolved for it (by default ``num``)."""
 
     raw = OmegaConf.to_container(config.hydra.sweep, resolve=False)["subdir"]
     if raw == "${hydra.job.num}":
@@ -251,25 +181,8 @@ def launch(config, job_overrides: Sequence[Sequence[str]], initial_job_idx: int,
     """Run a batch of sweep jobs through :func:`magexp.run.executor.run_many`; Hydra's job returns.
 
     ``settings``: ``executor`` (``local`` | ``dask``), ``jobs`` (0: all cores) and ``scheduler``
-    (:func:`magexp.run.executor.make_executor`). A job's ``cached`` column says whether its result
-    was read from the run cache (a valid entry; a damaged one is recomputed and says False).
-
-    Parameters
-    ----------
-    config : DictConfig
-        The sweep's config.
-    job_overrides : sequence of sequence of str
-        Each job's overrides.
-    initial_job_idx : int
-        The first job's number.
-    settings : dict
-        The launcher's settings.
-
-    Returns
-    -------
-    list
-        Hydra's job returns.
-    """
+    (:func:`magexp.run.executors.make_executor`). A job's ``cached`` column says whether its result
+    was read from the run cache (a valid entry; a damaged one is recomputed and says False)."""
     check_settings(settings)
     jobs = [list(o) for o in job_overrides]
     plains = _configs(jobs)

@@ -33,13 +33,7 @@ def check_run_values(plain: dict) -> None:
       magnitude >= :data:`magexp.run.keys.SMALLEST` (:func:`magexp.run.keys.check_number`);
     * ``scenario.field``: a vector not zero; ``total`` > 0, ``inclination`` in :data:`INCLINATION`,
       ``declination`` in :data:`DECLINATION` (degrees);
-    * ``write_history``: true or false.
-
-    Parameters
-    ----------
-    plain : dict
-        The resolved run config.
-    """
+    * ``write_history``: true or false."""
     for group in ("scenario", "estimator"):
         for key, value in _numbers(plain.get(group) or {}, group):
             check_number(value, key)

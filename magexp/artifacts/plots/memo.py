@@ -35,7 +35,8 @@ import pandas
 
 from magexp import paths
 from magexp.artifacts.plots.style import plt
-from magexp.run.cache import files_digest, write
+from magexp.run.cache import write
+from magexp.run.runkeys import files_digest
 
 
 def root() -> Path:
