@@ -349,6 +349,8 @@ def listed(a, b):
 
 
 def test_the_public_api_is_found():
+    if not (ROOT / "conf" / "estimator").is_dir():
+        pytest.skip("no conf/estimator/ beside the package (a copy of magexp/ alone): the estimators' classes are unknown")
     assert PUBLIC["calibration/api.py"] == {"calibrate"} and "Calibration" in PUBLIC["calibration/result.py"]
     assert {"SwarmOptimizer"} <= PUBLIC["estimators/swarm.py"] and {"KalmanFilter"} <= PUBLIC["estimators/kalman.py"]
     assert {"Linear"} <= PUBLIC["estimators/schedules.py"]  # a strategy a config builds
