@@ -144,6 +144,7 @@ COMMANDS: dict[str, tuple] = {
     # checking a reproduction (README.md, docs/results.md): reproduces what the cache lacks, then compares
     "make verify": (COMPOSE, "every run of every paper that the cache lacks"),
     "python -m magexp verify": (COMPOSE, "every run of every paper that the cache lacks"),
+    "python -m magexp verify --paper yan2022": (COMPOSE, "the runs of yan2022 that the cache lacks"),
     # the installed wheel (docs/guide/runs.md): the same console script, from another folder
     "pip install .": (PIP, "installs into the reader's environment"),
     "pip install -e '.[cluster]'": (PIP, "installs dask-jobqueue"),

@@ -276,7 +276,7 @@ def test_which_reproduction_is_checked(cli, sides, monkeypatch):
     assert done.returncode == 0 and "verify: results/ (the working tree" in done.stdout
     edit(ours / "summary.csv", first_row(ours / "summary.csv", "verdict", "reproduced"), "verdict", "differs")
     monkeypatch.setattr("magexp.artifacts.verify.changed_results", lambda: False)
-    monkeypatch.setattr("magexp.artifacts.verify.reproduce_scratch", lambda jobs, out: ours)
+    monkeypatch.setattr("magexp.artifacts.verify.reproduce_scratch", lambda jobs, out, only=None: ours)
     done = cli("verify", "--committed", committed)
     assert done.returncode == 1 and "reproducing every paper into" in done.stdout
     assert "(reproduced now: results/ is the committed one)" in done.stdout and "1 verdicts changed" in done.stdout

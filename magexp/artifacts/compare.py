@@ -20,7 +20,9 @@ of some numbers and in the pixels of its figures; it should not differ in a verd
 * a figure through the data it draws (its ``.csv`` and ``_runs.csv``), never its pixels: its PNG
   and PDF must exist on both sides;
 * a file on one side only is a disagreement; what differs by design is left out, and listed
-  (:data:`EXCLUDED`, :data:`OPTIONAL`, :data:`MEASURED`, :data:`SECTIONS`).
+  (:data:`EXCLUDED`, :data:`OPTIONAL`, :data:`MEASURED`, :data:`SECTIONS`);
+* a paper on one side only is named as added (the reproduction's) or missing, its files not compared one by
+  one, and ``papers`` (``--paper``) scopes the comparison (:mod:`magexp.artifacts.scope`).
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.formats import MEASURED, PEERS_HEADING, SPEED_HEADING
+from magexp.artifacts.scope import (REPORTS, SHARED, Scope, paper_folders, paper_rows, paper_scope, papers_of,
+                                   report_cut)
 from magexp.artifacts.tolerances import NUMBER, RTOL, compare_text, csv_unit, relative, tolerance
 from magexp.core.outcomes import ROUNDOFF_FLOOR
 
@@ -65,6 +69,8 @@ EXCLUDED = {
 }
 #: folders compared only when both sides have them (only ``make peers-bench`` writes them)
 OPTIONAL = {"peers/": "make peers-bench"}
+#: the folders of a results folder that are no paper's (:mod:`magexp.artifacts.scope`)
+NOT_PAPERS = tuple(r.rstrip("/") for r in (*EXCLUDED, *OPTIONAL) if r.endswith("/"))
 #: sections of the report files left out: ``(file, heading, the folder or file it shows)``; a section
 #: whose source is compared (on both sides) is compared too
 SECTIONS = (("APPENDIX.md", SPEED_HEADING, "bench.csv"), ("REPORT.md", PEERS_HEADING, "peers/"))
@@ -113,11 +119,12 @@ class Comparison:
     path_largest: Difference | None = None  # the largest relative difference of a path diagnostic
     largest: Difference | None = None  # the largest relative difference within the tolerance
     excluded: list = field(default_factory=list)  # what was left out, and why
+    scope: Scope = field(default_factory=Scope)  # the papers compared, added and missing
 
     @property
     def agrees(self) -> bool:
-        """Whether no verdict changed and nothing disagrees beyond the tolerance."""
-        return not self.changed and not self.disagreements
+        """Whether no verdict changed, nothing disagrees beyond the tolerance and no paper is missing."""
+        return not self.changed and not self.disagreements and not self.scope.missing
 
     def within(self, diff: Difference, count: int = 1) -> None:
         """Count ``count`` differences within the tolerance in ``diff.file``, ``diff`` the largest of them."""
@@ -163,9 +170,12 @@ def _cut(text: str, n: int = 40) -> str:
 def compare_csv(name: str, ours: Path, committed: Path, result: Comparison) -> None:
     """Compare two results CSVs cell by cell (by row position; a different row count is one
     disagreement): a ``verdict`` cell exactly, numbers within the tolerance, texts by
-    :func:`~magexp.artifacts.tolerances.compare_text`. Only the cells whose text differs are looked at further.
+    :func:`~magexp.artifacts.tolerances.compare_text`. Only the cells whose text differs are looked at further;
+    a shared CSV only in the rows of the papers compared (:func:`~magexp.artifacts.scope.paper_rows`).
     """
     a, b = read_table(ours), read_table(committed)
+    if name in SHARED:
+        a, b = paper_rows(a, result.scope), paper_rows(b, result.scope)
     columns = _columns(name, a, b, result)
     result.csv_files += 1
     result.rows += len(b)
@@ -228,11 +238,18 @@ def _compare_column(name: str, col: str, a: pd.DataFrame, b: pd.DataFrame, rows:
         result.within(diff) if ok else result.disagreements.append(diff)
 
 
+#: in a ``cut`` list: the opening of a report file (its lines above the first ``## `` heading) is left out
+OPENING = "(opening)"
+
+
 def text_lines(path: Path, cut: list[str]) -> list[str]:
     """The lines of a text file, without the sections whose heading line starts with one of ``cut``
-    (a section ends at the next heading of its level or above).
+    (a section ends at the next heading of its level or above), and without its opening if ``cut`` holds
+    :data:`OPENING`.
     """
     lines, keep, level = path.read_text(encoding="utf-8").splitlines(), [], 0
+    if OPENING in cut:
+        lines = lines[next((i for i, line in enumerate(lines) if line.startswith("## ")), len(lines)):]
     for line in lines:
         heading = len(line) - len(line.lstrip("#")) if line.startswith("#") and " " in line else 0
         if level and heading and heading <= level:
@@ -320,10 +337,11 @@ def _left_out(rel: str, rules) -> str | None:
     return next((r for r in rules if rel == r or (r.endswith("/") and rel.startswith(r))), None)
 
 
-def compare(ours: Path, committed: Path, *, rtol: float = RTOL, files=None) -> Comparison:
+def compare(ours: Path, committed: Path, *, rtol: float = RTOL, files=None, papers=None) -> Comparison:
     """Compare the reproduction ``ours`` with the committed results ``committed`` (two folders laid
     out as ``results/``), every file but those that differ by design (module docstring); ``files``:
-    only these relative paths (e.g. one artifact's).
+    only these relative paths (e.g. one artifact's); ``papers``: only these papers (``--paper``; a paper on
+    one side only is named in ``result.scope``, not compared: :mod:`magexp.artifacts.scope`).
     """
     ours, committed = Path(ours), Path(committed)
     result = Comparison(rtol=rtol)
@@ -332,8 +350,14 @@ def compare(ours: Path, committed: Path, *, rtol: float = RTOL, files=None) -> C
         mine, theirs = mine & set(files), theirs & set(files)
     by_design = _by_design(mine, theirs, result)
     mine, theirs = mine - by_design, theirs - by_design
+    result.scope = paper_scope(papers_of(ours, mine, NOT_PAPERS), papers_of(committed, theirs, NOT_PAPERS), papers)
+    folders = paper_folders(mine | theirs, NOT_PAPERS)
+    mine = {f for f in mine if result.scope.keeps(f, folders)}
+    theirs = {f for f in theirs if result.scope.keeps(f, folders)}
     both = sorted(mine & theirs)
     cut = _cut_sections(both, result)
+    if result.scope.partial:
+        _cut_papers(both, [ours, committed], cut, result)
     for rel in sorted(theirs - mine):
         result.disagreements.append(Difference(rel, "", "", "(missing)", "(a file)"))
     for rel in sorted(mine - theirs):
@@ -386,11 +410,21 @@ def _cut_sections(both: list[str], result: Comparison) -> dict[str, list[str]]:
     return cut
 
 
+def _cut_papers(both: list[str], folders: list[Path], cut: dict, result: Comparison) -> None:
+    """Add to ``cut`` every section of the report files but the papers' compared, and their openings."""
+    sections = report_cut(result.scope, folders)
+    for name in (n for n in REPORTS if n in both):
+        cut.setdefault(name, []).extend([OPENING, *sections])
+    if any(n in both for n in REPORTS):
+        result.excluded.append("REPORT.md and APPENDIX.md outside the sections of the papers compared (their openings "
+                               "and the other sections count or show every paper)")
+
+
 def _count_verdicts(committed: Path, both: list[str], result: Comparison) -> None:
-    """How many verdicts were compared: summary rows, claims and headline verdicts."""
+    """How many verdicts were compared: summary rows, claims and headline verdicts (of the papers compared)."""
     if "summary.csv" in both:
-        result.verdicts["summary rows"] = len(read_table(committed / "summary.csv"))
+        result.verdicts["summary rows"] = len(paper_rows(read_table(committed / "summary.csv"), result.scope))
     if "claims.csv" in both:
-        roles = read_table(committed / "claims.csv")["role"]
+        roles = paper_rows(read_table(committed / "claims.csv"), result.scope)["role"]
         result.verdicts["claims"] = int((roles != "headline").sum())
         result.verdicts["headline verdicts"] = int((roles == "headline").sum())

@@ -47,30 +47,56 @@ def _floats(column: pd.Series) -> np.ndarray | None:
 EXACT = ("p", "p_adjusted", "p_min")
 
 
+def _round(v: np.ndarray, col: str, floor: float) -> np.ndarray:
+    """Floats ``v`` of column ``col`` as :func:`tidy` writes them: round-off floored, :data:`DIGITS` digits."""
+    small = np.isfinite(v) & (v != 0) & (np.abs(v) < (0 if col in EXACT else floor))
+    v = np.where(small, np.sign(v) * floor, v)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mag = np.where(np.isfinite(v) & (v != 0), np.floor(np.log10(np.abs(np.where(v == 0, 1, v)))), 0)
+    scale = 10.0 ** (DIGITS - 1 - mag)
+    return np.where(np.isfinite(v), np.round(v * scale) / scale, v)
+
+
+def _rounded(x, col: str, floor: float):
+    """A value of a mixed column: a float rounded as :func:`_round`; anything else (text, integer, flag) as it is."""
+    if isinstance(x, (float, np.floating)) and not isinstance(x, bool):
+        return float(_round(np.array([float(x)]), col, floor)[0])
+    return x
+
+
 def tidy(frame: pd.DataFrame, floor: float = ROUNDOFF_FLOOR) -> pd.DataFrame:
     """Float columns with magnitudes below ``floor`` (round-off, e.g. a noise-free RMS of 1e-11)
     written as ``±floor`` (not the :data:`EXACT` ones); every float then rounded to :data:`DIGITS`
-    significant digits.
+    significant digits, also where its column holds integers, text or flags beside it.
     """
     out = frame.copy()
     for col in out.columns:
         v = _floats(out[col])
         if v is not None:
-            small = np.isfinite(v) & (v != 0) & (np.abs(v) < (0 if col in EXACT else floor))
-            v = np.where(small, np.sign(v) * floor, v)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                mag = np.where(np.isfinite(v) & (v != 0), np.floor(np.log10(np.abs(np.where(v == 0, 1, v)))), 0)
-            scale = 10.0 ** (DIGITS - 1 - mag)
-            out[col] = np.where(np.isfinite(v), np.round(v * scale) / scale, v)
+            out[col] = _round(v, col, floor)
+        elif out[col].dtype == object:  # floats beside integers, text or flags: each rounded alone
+            out[col] = out[col].map(lambda x: _rounded(x, col, floor))
     return out
 
 
+def _one_form(column: pd.Series) -> pd.Series:
+    """A mixed column (text, flags, integers beside floats) with each float as ``%.6g`` text: pandas writes a
+    float of an object column as ``repr`` (``1.0``), so its form would depend on the other rows (issue 44)."""
+    def form(v):
+        return f"{v:.{DIGITS}g}" if isinstance(v, (float, np.floating)) and np.isfinite(v) else v
+
+    return column.map(form) if column.dtype == object else column
+
+
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
-    """A results CSV: :func:`tidy` values, ``%.6g`` floats (identical bytes on every fresh clone
-    when only round-off differs).
+    """A results CSV: :func:`tidy` values, every float written ``%.6g`` whatever else its column holds (a
+    paper's rows read the same beside any other paper's), so identical bytes on every fresh clone when only
+    round-off differs.
     """
+    out = tidy(frame)
+    out = out.apply(_one_form) if len(out.columns) else out
     with atomic_path(path) as tmp:  # an interrupt leaves the old file or the new one
-        tidy(frame).to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
+        out.to_csv(tmp, index=False, float_format=f"%.{DIGITS}g")
 
 
 def read_runs(path: Path) -> pd.DataFrame:

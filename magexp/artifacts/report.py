@@ -2,7 +2,9 @@
 ``results/REPORT.md`` and ``results/APPENDIX.md`` from the papers' parts.
 
 ``REPORT.md`` is claims first (each paper's section at most :data:`MAX_CHARS` characters, so a paper added makes
-room for itself; no text cut; no line over :data:`~magexp.artifacts.formats.LINE_LIMIT`): per paper, (1) its headline claims with their verdicts under their primary readings, the deciding
+room for itself; the legends the sections share written once, in its section "How to read" (:func:`how_to_read`);
+no text cut; no line over :data:`~magexp.artifacts.formats.LINE_LIMIT`): per paper, (1) its headline claims with
+their verdicts under their primary readings, the deciding
 numbers and their robustness (:mod:`magexp.artifacts.headlines`), (2) the paper's findings, (3) the compared
 numbers (rows with a paper value), (4) the deviations. ``APPENDIX.md`` holds the rest: per
 artifact its figure, caption, full summary table (``n/a`` rows too), table and notes (measured
@@ -25,8 +27,8 @@ from magexp.artifacts.formats import (PEERS_HEADING, SPEED_HEADING, fmt, latex_t
                                      write_csv)
 from magexp.artifacts.headlines import claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.kinds.heatmap import winners
-from magexp.artifacts.report_claims import (bold, counts, draw_readings, findings_table, headline_list, link,
-                                            readings_section)
+from magexp.artifacts.report_claims import (FINDINGS_LEGEND, HEADLINES_LEGEND, LEGENDS, bold, counts, draw_readings,
+                                            findings_table, headline_list, link, readings_section)
 from magexp.artifacts.spec import load
 from magexp.artifacts.paper_spec import artifact_paths, load_paper, papers
 from magexp.artifacts.summary import COLUMNS, NOT_COMPARED, VERDICTS, relative
@@ -38,9 +40,11 @@ from magexp.run import provenance
 
 SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "judged_value", "judged_lo", "judged_hi",
                  "judged_runs", "judged_n", "success_rate", "truth_in_interval", "verdict", "rel_difference"]
-#: the limit of each section of REPORT.md (a paper's; the appendix holds the rest; the section "magexp beside
-#: MAGYC" links its claims table): a reviewer reads one in a few minutes. Characters measure reading, not
-#: source lines, which depend on where :func:`~magexp.artifacts.formats.wrap_markdown` wraps
+#: the budget of each section of REPORT.md (a paper's; the appendix holds the rest; the section "magexp beside
+#: MAGYC" links its claims table; the legends every paper shares are written once, in "How to read"): a
+#: reviewer reads one in a few minutes, and a paper added brings its own budget (:func:`over_budget` names a
+#: section over it and by how much). Characters measure reading, not source lines, which depend on where
+#: :func:`~magexp.artifacts.formats.wrap_markdown` wraps
 MAX_CHARS = 30_000
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
@@ -161,12 +165,8 @@ def _compared_table(p: Paper) -> str:
     if not len(rows):
         return ""
     return ("### Compared numbers\n\n" + compared_counts(rows)
-            + " (`uninformative` is not counted as reproduced; `not compared`: the row's reason says why). *ours*: "
-            "the median and 2.5-97.5 % interval the verdict used, over the runs named (all seeds, or those of the "
-            "paper run's outcome) and their number; a `differs` row gives its distance from the paper's value as a "
-            "share of its block's scale (summary.csv `scale`); a parameter table is one line (all its rows: "
-            f"[appendix](APPENDIX.md#{p.paper})). The {int((p.rows.verdict == 'n/a').sum())} rows without a paper "
-            "value are in the appendix and [`summary.csv`](summary.csv).\n\n"
+            + f" ({LEGENDS}). The {int((p.rows.verdict == 'n/a').sum())} rows without a paper value, and every row of "
+            f"a parameter table: [appendix](APPENDIX.md#{p.paper}), [`summary.csv`](summary.csv).\n\n"
             + markdown_table(compared_rows(rows[rows.verdict != "not compared"]), ["label", "paper", "ours", "verdict", "reason"],
                              names=["quantity", "paper", "ours", "verdict", "reason"]))
 
@@ -193,8 +193,7 @@ def _winners_section(p: Paper) -> str:
         best = winners(frame)
         if not len(best):
             continue
-        parts.append(f"**{spec.title}** ({link(f'{p.paper}/{spec.name}', p.root)}): lowest RMS offset error / "
-                     "sqrt(tr CRB), a winner only where its 95 % CI lies below every other's, else the tied set.\n\n"
+        parts.append(f"**{spec.title}** ({link(f'{p.paper}/{spec.name}', p.root)}; {LEGENDS})\n\n"
                      + markdown_table(best, ["case", "winner", "bound_ratio", "success_rate", "tied"]))
     return "### Which method to pick\n\n" + "\n".join(parts) if parts else ""
 
@@ -381,6 +380,38 @@ def rule(summary: pd.DataFrame) -> str:
     return RULE + (MONTE_CARLO_RULE if mc else "")
 
 
+#: the legend of the compared numbers after :func:`rule` (once in REPORT.md, under "How to read")
+COMPARED_LEGEND = ("`uninformative` is not counted as reproduced. *ours*: the "
+                   "median and 2.5-97.5 % interval the verdict used, over the runs named (all seeds, or those of the "
+                   "paper run's outcome) and their number; a `differs` row gives its distance from the paper's value "
+                   "as a share of its block's scale (summary.csv `scale`); a cell with more than "
+                   f"{COLLAPSE} compared numbers (a parameter table) is one line.")
+#: the legend of the winners tables (once in REPORT.md, under "How to read")
+WINNERS_LEGEND = ("magexp's own pick per case: the estimator with the lowest RMS offset error / sqrt(tr CRB), a winner "
+                  "only where its 95 % CI lies below every other's, else the tied set.")
+
+
+def how_to_read(summary: pd.DataFrame) -> str:
+    """The section "How to read" of REPORT.md: the legends every paper's section shares, written once (issue 44:
+    1,700 characters a paper before) and linked from each part (:data:`~magexp.artifacts.report_claims.LEGENDS`)."""
+    return ("## How to read\n\nThe legends of the parts of every paper's section below (each part links here).\n\n"
+            f"### Headline claims\n\n{HEADLINES_LEGEND}\n\n### Findings\n\n{FINDINGS_LEGEND}\n\n"
+            f"### Compared numbers\n\n{rule(summary)} {COMPARED_LEGEND}\n\n### Which method to pick\n\n{WINNERS_LEGEND}\n")
+
+
+def section_sizes(text: str) -> dict[str, int]:
+    """``{heading: characters}`` of each section of a report's Markdown (split at its ``## `` headings; the
+    opening under its ``# `` title)."""
+    return {section.splitlines()[0].lstrip("# "): len(section) for section in text.split("\n## ")}
+
+
+def over_budget(text: str, limit: int = MAX_CHARS) -> list[str]:
+    """One line per section of ``text`` longer than ``limit`` characters (:data:`MAX_CHARS`), naming it and by
+    how much: what a failing size test prints."""
+    return [f"section {name!r} has {n:,} characters: {n - limit:,} over its budget of {limit:,} (MAX_CHARS, "
+            "magexp/artifacts/report.py)" for name, n in section_sizes(text).items() if n > limit]
+
+
 def build(root: Path = RESULTS) -> None:
     """Write ``root/summary.csv``, ``root/claims.csv``, ``root/versions.csv``, ``root/REPORT.md``
     and ``root/APPENDIX.md``.
@@ -401,12 +432,14 @@ def build(root: Path = RESULTS) -> None:
         "Every number below is regenerated by `make reproduce` (one paper: `make reproduce-<paper>`). Per paper: "
         "its headline claims and whether our runs support them, the paper's findings and magexp's own statements, "
         "the paper's numbers beside ours, "
-        "and where we depart from its text. " + rule(summary) + " Figures, notes, full tables and sanity checks: "
+        "and where we depart from its text; their legends, written once: [How to read](#how-to-read). Figures, "
+        "notes, full tables and sanity checks: "
         "[APPENDIX.md](APPENDIX.md); every row: [`summary.csv`](summary.csv); every claim with its full evidence: "
         "[`claims.csv`](claims.csv); versions: [`versions.csv`](versions.csv).\n",
         f"**Overall.** {counts(claims.to_dict('records'), peer_results(root))}. Compared numbers ("
         f"{len(compared)} of {len(summary)} summary rows have a paper value): {compared_counts(compared)}.\n",
     ]
+    text.append(how_to_read(summary))
     text += [_report_section(p) for p in parts]
     text.append(_peers_section(root))
     write_text(root / "REPORT.md", wrap_markdown("\n".join(text)))

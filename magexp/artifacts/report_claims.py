@@ -21,6 +21,23 @@ from magexp.artifacts.plots import readings as readings_plot
 from magexp.artifacts.plots.style import save
 
 
+#: where a paper's section of REPORT.md points for the legends it shares with every other (issue 44: written once)
+LEGENDS = "[how to read](#how-to-read)"
+#: the legend of a findings table (once in REPORT.md, under "How to read"; in each appendix section)
+FINDINGS_LEGEND = ("*paper*: the paper's statement, checked; *magexp*: stated by this report, a test fails if one "
+                   "does not hold. A comparison holds only where its test separates the two sides at alpha 0.05 after "
+                   "Holm's correction within its family (the paper's findings and the parts of the headlines' primary "
+                   "readings; magexp's statements apart; the re-tests under other readings apart, in the readings "
+                   "figure); full evidence and p-values: [`claims.csv`](claims.csv).")
+#: the legend of the headline claims (once in REPORT.md, under "How to read")
+HEADLINES_LEGEND = ("Each headline claim is judged under its primary reading of what the paper leaves unstated; the "
+                    "others test its robustness and never decide. *Primary reading*: the reading that decides, with a "
+                    "link to its source and why the paper most plausibly meant it (the paper's appendix); "
+                    "*Deciding numbers* (or *Why not*, for a claim not testable here): the numbers the verdict turns "
+                    "on; *Robustness*: the verdicts under the other readings. Every headline under every reading: "
+                    "the paper's readings figure, linked above its list.")
+
+
 def link(figure: str, root: Path) -> str:
     """A Markdown link to a figure ``<paper>/<artifact>`` (its PNG), or '' if it was not drawn."""
     if not figure:
@@ -42,14 +59,14 @@ def headline_list(p) -> str:
     if not p.headlines:
         return "No headline claim of this section is declared (`headline:` in its `paper.yaml`).\n"
     lines = [f"**{headline_counts(p.headlines)}** (each under its primary reading; every headline under every "
-             f"reading: {link(f'{p.paper}/readings', p.root)}).\n"]
+             f"reading: {link(f'{p.paper}/readings', p.root)}; {LEGENDS}).\n"]
     for i, h in enumerate(p.headlines, 1):
         lines.append(f"{i}. {bold(h['verdict'])}: {h['text']} ({h['section']}; {link(h['figure'], p.root)})")
         primary = next((r for r in h["readings"] if r["primary"]), None)
         if primary:
             settings = f": {primary['settings']}" if primary["settings"] else ""
-            lines.append(f"   - *Primary reading:* {primary['label']}{settings} (its source, and why the paper most "
-                         f"plausibly meant it: [appendix](APPENDIX.md#{p.paper}-readings)).")
+            lines.append(f"   - *Primary reading:* {primary['label']}{settings} "
+                         f"([why](APPENDIX.md#{p.paper}-readings)).")
         lines.append(f"   - *{'Why not' if h['verdict'] == 'not testable here' else 'Deciding numbers'}:* {h['reason']}")
         if h["readings"]:
             lines.append(f"   - *Robustness:* {h['robustness']}.")
@@ -130,12 +147,8 @@ def findings_table(p, *, appendix: bool = False) -> str:
     where = ("" if own_here else " magexp's own statements on this paper's runs are listed in the "
              f"[appendix](APPENDIX.md#{p.paper}).")
     title = "### magexp's own statements\n\n" if appendix else "### Findings\n\n"
-    return (title + f"**{held(frame.verdict.tolist())}.** *paper*: the paper's statement, checked; *magexp*: "
-            "stated by this report, a test fails if one does not hold. A comparison holds only where its test "
-            "separates the two sides at alpha 0.05 after Holm's correction within its family (the paper's findings "
-            "and the parts of the headlines' primary readings; magexp's statements apart; the re-tests under other "
-            "readings apart, in the readings figure); full evidence and p-values: "
-            f"[`claims.csv`](claims.csv).{where}"
+    legend = FINDINGS_LEGEND if appendix else f"({LEGENDS})"
+    return (title + f"**{held(frame.verdict.tolist())}.** {legend}{where}"
             + "\n\n" + markdown_table(frame, ["by", "claim", "result", "reason"], names=["by", "claim", "result", "evidence"]))
 
 

@@ -1,13 +1,16 @@
 """Does a reproduction agree with the published one? ``magexp verify`` (what ``make verify`` runs).
 
-    python -m magexp verify [--against DIR] [--committed DIR] [--rtol R] [--all] [--jobs N]
+    python -m magexp verify [--against DIR] [--committed DIR] [--paper NAME ...] [--rtol R] [--all] [--jobs N]
 
 On another machine (another CPU, numba kernels compiled for another target, the numpy path
 ``MAGEXP_NUMBA=0``) a reproduction differs from the committed ``results/`` in the last printed digits
 of some numbers and in the pixels of its figures; it should not differ in a verdict. ``verify``
 holds a reproduction to that; the rules of the comparison (every verdict identical, every number
 within a tolerance, texts up to their numbers, figures through their data, what is left out by
-design) are :mod:`magexp.artifacts.compare`'s.
+design) are :mod:`magexp.artifacts.compare`'s. ``--paper NAME`` (repeatable) checks only those papers: their
+files, their rows of ``summary.csv`` and ``claims.csv`` and their sections of the report; a paper the
+reproduction has and the committed results lack is named as added, one it lacks as missing
+(:mod:`magexp.artifacts.scope`).
 
 The reproduction is ``--against DIR`` if given; else ``results/`` when it differs from the committed
 one (after ``make reproduce``); else a reproduction of every paper into ``--into DIR``, by default
@@ -38,6 +41,7 @@ import numpy as np
 
 from magexp import paths
 from magexp.artifacts.compare import FIGURES, PATH_DIAGNOSTICS, Comparison, Difference, compare
+from magexp.artifacts.paper_spec import papers
 from magexp.artifacts.tolerances import RTOL
 from magexp.errors import MagexpError, exit_code
 from magexp.core.limits import check_limits
@@ -91,9 +95,9 @@ def scratch() -> Path:
     return paths.CACHE.parent / "verify"
 
 
-def reproduce_scratch(jobs: int, out: Path) -> Path:
-    """Reproduce every paper into ``out`` (:func:`scratch` unless ``--into``; runs from the run cache where it has
-    them). The
+def reproduce_scratch(jobs: int, out: Path, only=None) -> Path:
+    """Reproduce every paper (or those of ``only``, one after the other) into ``out`` (:func:`scratch` unless ``--into``;
+    runs from the run cache where it has them). The
     figures of the last such reproduction are kept, so that an unchanged figure is not drawn again
     (:mod:`magexp.artifacts.plots.memo`); every other file is written afresh, and a figure whose CSV
     was not written again is removed. (The reproduction takes the committed ``results/peers/`` with it:
@@ -102,11 +106,11 @@ def reproduce_scratch(jobs: int, out: Path) -> Path:
     if out.is_dir():
         for path in [p for p in out.rglob("*") if p.is_file() and p.suffix not in FIGURES]:
             path.unlink()
-    # a process of its own, as make reproduce runs it (its progress on this terminal)
-    code = subprocess.run([sys.executable, "-m", "magexp", "reproduce", "all", "--out", str(out), "--jobs", str(jobs)],
-                          cwd=paths.ROOT).returncode
-    if code:
-        raise MagexpError(f"the reproduction into {out} failed (exit {code})")
+    for target in only or ["all"]:  # a process of its own, as make reproduce runs it (its progress on this terminal)
+        code = subprocess.run([sys.executable, "-m", "magexp", "reproduce", target, "--out", str(out), "--jobs",
+                               str(jobs)], cwd=paths.ROOT).returncode
+        if code:
+            raise MagexpError(f"the reproduction of {target} into {out} failed (exit {code})")
     for figure in [p for p in out.rglob("*") if p.suffix in FIGURES and not p.with_suffix(".csv").is_file()]:
         figure.unlink()
     return out
@@ -142,12 +146,14 @@ def render(result: Comparison, ours: str, committed: str, *, every: bool = False
                      f"{big.line()} (relative {big.relative:.2g})")
     else:
         lines.append(f"path diagnostics ({named}: compared through the verdicts that read them): none differ")
+    lines += _paper_lines(result)
     wrong = result.changed + result.disagreements
     if result.agrees:
         lines.append("AGREES: every verdict, claim and headline identical, every number within the tolerance "
                      "(path diagnostics through the verdicts), every word identical")
         return "\n".join(lines)
-    lines.append(f"DISAGREES: {len(result.changed)} verdicts changed, {len(result.disagreements)} other disagreements")
+    lines.append(f"DISAGREES: {len(result.changed)} verdicts changed, {len(result.disagreements)} other disagreements"
+                 + (f", papers missing: {len(result.scope.missing)}" if result.scope.missing else ""))
     if len(wrong) <= SHOWN or every:
         return "\n".join(lines + [f"  {_shown(d)}" for d in wrong])
     groups: dict[tuple, list] = {}
@@ -158,6 +164,20 @@ def render(result: Comparison, ours: str, committed: str, *, every: bool = False
     if len(groups) > SHOWN:
         lines.append(f"  ... and {len(groups) - SHOWN} more columns and files")
     return "\n".join(lines)
+
+
+def _paper_lines(result: Comparison) -> list[str]:
+    """The screen's lines on the papers: which were compared (when not all), which added, which missing."""
+    scope, lines = result.scope, []
+    if scope.scoped:
+        lines.append(f"papers compared (--paper): {', '.join(sorted(scope.compared)) or 'none on both sides'}")
+    if scope.added:
+        lines.append(f"papers ADDED (in the reproduction, not in the committed results; not compared): "
+                     f"{', '.join(scope.added)}")
+    if scope.missing:
+        lines.append(f"papers MISSING (committed, not in the reproduction): {', '.join(scope.missing)}"
+                     + ("" if scope.scoped else "; --paper NAME checks only the papers reproduced"))
+    return lines
 
 
 def _size(d: Difference) -> float:
@@ -181,6 +201,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--into", default=None,
                    help="where a fresh reproduction is computed: a new or empty folder, or an earlier one's "
                         "(default: verify/ beside the run cache, .cache/verify in a checkout)")
+    p.add_argument("--paper", action="append", dest="papers", default=None, metavar="NAME",
+                   help="check only this paper (repeatable): its files, rows and report sections")
     p.add_argument("--rtol", type=float, default=RTOL, help=f"relative tolerance of a number (default {RTOL:g})")
     p.add_argument("--all", action="store_true", dest="every", help="list every disagreement, one a line")
     p.add_argument("--jobs", type=int, default=0, help="processes of a fresh reproduction (0: all cores)")
@@ -227,6 +249,17 @@ def reproduction_folder(text: str | None) -> Path:
     return folder
 
 
+def _check_papers(names: list[str] | None, *, fresh: bool) -> None:
+    """``--paper`` names: each once and, for a fresh reproduction, a paper of ``experiments/`` (one line if not;
+    with ``--against``, :func:`magexp.artifacts.scope.paper_scope` checks them against the folders)."""
+    for i, name in enumerate(names or []):
+        if name in names[:i]:
+            raise MagexpError(f"--paper {name!r} is not allowed twice")
+        if fresh and name not in papers():
+            raise MagexpError(f"--paper {name!r} is not allowed: it is no paper of experiments/ (there are: "
+                              f"{', '.join(papers())})")
+
+
 def command(argv: list[str]) -> int:
     """``magexp verify [OPTIONS]``: 0 when the reproduction agrees, 1 when not (errors are raised:
     the one error path, :func:`magexp.errors.guarded`, turns them into one line and exit 2).
@@ -237,6 +270,7 @@ def command(argv: list[str]) -> int:
         raise MagexpError(f"--rtol {args.rtol!r} is not allowed: it must be a number >= 0 and < 1")
     if args.jobs < 0:
         raise MagexpError(f"--jobs {args.jobs} is not allowed: it must be an integer >= 0")
+    _check_papers(args.papers, fresh=args.against is None)
     ours = results_folder(args.against, "--against") if args.against is not None else None
     committed = results_folder(args.committed, "--committed") if args.committed is not None else None
     if ours is not None and args.into is not None:
@@ -254,11 +288,11 @@ def command(argv: list[str]) -> int:
             ours, label = paths.RESULTS, "results/ (the working tree: it differs from the committed one)"
         elif ours is None:
             print(f"results/ is the committed one: reproducing every paper into {into} first", flush=True)
-            ours = reproduce_scratch(args.jobs, into)
+            ours = reproduce_scratch(args.jobs, into, args.papers)
             label = f"{ours} (reproduced now: results/ is the committed one)"
         else:
             label = str(ours)
-        result = compare(ours, committed, rtol=args.rtol)
+        result = compare(ours, committed, rtol=args.rtol, papers=args.papers)
         print(render(result, label, named, every=args.every))
     if not result.agrees:
         raise SystemExit(1)
