@@ -26,6 +26,8 @@ MEASURED = "wall_time"
 #: the headings of the report's sections on what ``make reproduce`` does not write (``magexp verify`` leaves
 #: them out unless both sides have their source)
 PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
+#: the heading of the report's section holding the legends every paper's section links (``#how-to-read``)
+HOW_TO_READ = "## How to read"
 #: the longest line the report's Markdown holds (issue 43): a longer paragraph or list item is wrapped at
 #: :data:`WRAP` columns (the rendered page is the same), a table with a longer row is written as a list
 LINE_LIMIT, WRAP = 500, 120

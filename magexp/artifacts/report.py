@@ -23,8 +23,8 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.claims import interpolate
-from magexp.artifacts.formats import (PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table, wrap_markdown,
-                                     write_csv)
+from magexp.artifacts.formats import (HOW_TO_READ, PEERS_HEADING, SPEED_HEADING, fmt, latex_table, markdown_table,
+                                     wrap_markdown, write_csv)
 from magexp.artifacts.headlines import claim_rows, headlines, paper_outcomes, runs_reader
 from magexp.artifacts.kinds.heatmap import winners
 from magexp.artifacts.report_claims import (FINDINGS_LEGEND, HEADLINES_LEGEND, LEGENDS, bold, counts, draw_readings,
@@ -394,7 +394,7 @@ WINNERS_LEGEND = ("magexp's own pick per case: the estimator with the lowest RMS
 def how_to_read(summary: pd.DataFrame) -> str:
     """The section "How to read" of REPORT.md: the legends every paper's section shares, written once (issue 44:
     1,700 characters a paper before) and linked from each part (:data:`~magexp.artifacts.report_claims.LEGENDS`)."""
-    return ("## How to read\n\nThe legends of the parts of every paper's section below (each part links here).\n\n"
+    return (f"{HOW_TO_READ}\n\nThe legends of the parts of every paper's section below (each part links here).\n\n"
             f"### Headline claims\n\n{HEADLINES_LEGEND}\n\n### Findings\n\n{FINDINGS_LEGEND}\n\n"
             f"### Compared numbers\n\n{rule(summary)} {COMPARED_LEGEND}\n\n### Which method to pick\n\n{WINNERS_LEGEND}\n")
 

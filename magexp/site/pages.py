@@ -12,7 +12,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from magexp.artifacts.formats import PEERS_HEADING, SPEED_HEADING
+from magexp.artifacts.formats import HOW_TO_READ, PEERS_HEADING, SPEED_HEADING
 from magexp.artifacts.paper_spec import load_paper, papers
 from magexp.site.data import embedded_json, explorer_data, read_csv, readings
 
@@ -104,19 +104,24 @@ def sections(root: Path) -> list[Section]:
     return out
 
 
-#: a bold line that titles the table under it: ``**name** (note)``, then a blank line and a table
-TABLE_TITLE = re.compile(r"^\*\*(.+?)\*\*(.*)\n\n(?=\|)", re.M)
+#: a bold line that titles the table or list under it: ``**name** (note)``, then a blank line and a table or list
+TABLE_TITLE = re.compile(r"^\*\*(.+?)\*\*(.*)\n\n(?=\||- )", re.M)
+#: a paragraph the appendix opens with a claim's id in bold (``**ipso_more_accurate** (supported; ...``)
+CLAIM_TITLE = re.compile(r"^\*\*(\w+)\*\* ", re.M)
+#: the page of the report's legends, and the anchor every paper section links them by (``#how-to-read``)
+LEGENDS, LEGENDS_ANCHOR = "how-to-read.md", "#" + HOW_TO_READ.removeprefix("## ").lower().replace(" ", "-")
 
 
 def headed(text: str) -> str:
-    """``text`` with each bold line that titles a table made a heading, so a long page of tables has
-    headings to jump by."""
-    return TABLE_TITLE.sub(lambda m: f"### {m.group(1).replace('`', '')}{m.group(2)}\n\n", text)
+    """``text`` with each bold line that titles a table or list, and each paragraph opened by a claim's id in
+    bold, made a heading: a long page of tables and readings has headings to jump by."""
+    text = TABLE_TITLE.sub(lambda m: f"### {m.group(1).replace('`', '')}{m.group(2)}\n\n", text)
+    return CLAIM_TITLE.sub(lambda m: f"### {m.group(1)}\n\n", text)
 
 
 def overall(root: Path) -> str:
-    """The report's ``**Overall.**`` paragraph (the counts of every claim and compared number)."""
-    return next((line for line in (root / "REPORT.md").read_text().splitlines() if line.startswith("**Overall.**")), "")
+    """The report's ``**Overall.**`` paragraph, all its lines (the counts of every claim and compared number)."""
+    return next((p.strip() for p in (root / "REPORT.md").read_text().split("\n\n") if p.startswith("**Overall.**")), "")
 
 
 class Links:
@@ -131,10 +136,12 @@ class Links:
 
     def target(self, target: str, depth: int) -> str:
         """Where ``target`` points from a page ``depth`` folders below ``results/``."""
-        if re.match(r"[a-z]+:|#", target):
+        if re.match(r"[a-z]+:", target) or target.startswith("#") and target != LEGENDS_ANCHOR:
             return target
         path, _, anchor = target.partition("#")
         up = "../" * depth
+        if path in ("", "REPORT.md") and f"#{anchor}" == LEGENDS_ANCHOR:
+            return up + LEGENDS
         if path == "APPENDIX.md":
             return up + (self.anchors.get(anchor, "index.md") if anchor else "index.md")
         if path == "REPORT.md":
@@ -169,7 +176,8 @@ def landing(secs: list[Section], root: Path) -> str:
     lines = ["# Results\n", "The results of `make reproduce`, as committed under `results/`: each paper's "
              "headline claims with their verdicts under their primary readings, the paper's findings, its numbers "
              "beside ours, the deviations and every figure. Every claim and compared number is also in the "
-             "[claims explorer](explorer.md), to filter and sort.\n", overall(root) + "\n"]
+             "[claims explorer](explorer.md), to filter and sort; the legends of every page: [how to read](how-to-read.md).\n",
+             overall(root) + "\n"]
     for s in secs:
         lines += [f"## {s.title}\n", headline_table(s.paper, root),
                   f"[Claims and figures]({s.paper}/index.md) · [readings side by side]({s.paper}/readings.md) · "
@@ -195,7 +203,7 @@ def paper_page(s: Section, links: Links) -> str:
 def appendix_page(s: Section, links: Links) -> str:
     """A paper's appendix sub-page: its readings, deviations, findings and sanity checks in full, and per
     artifact its tables and notes (the figure itself is on the paper page)."""
-    text = links.rewrite(demote(f"## {s.title}: appendix\n{s.appendix}"), 1)
+    text = links.rewrite(headed(demote(f"## {s.title}: appendix\n{s.appendix}")), 1)
     for f in s.figures:
         text = text.replace(f"## {f.name}: {f.title}\n", f"## {f.name}: {f.title} {{#{f.name}}}\n")
         text = text.replace(f"![{f.name}](../{f.png})", f"Figure and caption: [on the paper's page](index.md#{f.name}).")
@@ -251,7 +259,9 @@ def pages(root: Path) -> dict[str, str]:
     """Every page of the site's results part: ``{path under results/: Markdown}``."""
     secs = sections(root)
     links = Links(secs)
-    out = {"index.md": links.rewrite(landing(secs, root), 0), "explorer.md": explorer_page(root)}
+    legends = dict(split((root / "REPORT.md").read_text())).get(HOW_TO_READ.removeprefix("## "), "")
+    out = {"index.md": links.rewrite(landing(secs, root), 0), "explorer.md": explorer_page(root),
+           LEGENDS: links.rewrite(demote(f"{HOW_TO_READ}\n{legends}"), 0)}
     for s in secs:
         out[f"{s.paper}/index.md"] = paper_page(s, links)
         out[f"{s.paper}/readings.md"] = readings_page(s, root)
@@ -262,7 +272,8 @@ def pages(root: Path) -> dict[str, str]:
 
 def nav(root: Path) -> list:
     """The site's navigation entries for the results pages (mkdocs ``nav`` form)."""
-    entries = [{"Overview": f"{PREFIX}/index.md"}, {"Claims explorer": f"{PREFIX}/explorer.md"}]
+    entries = [{"Overview": f"{PREFIX}/index.md"}, {"How to read": f"{PREFIX}/{LEGENDS}"},
+               {"Claims explorer": f"{PREFIX}/explorer.md"}]
     for s in sections(root):
         entries.append({s.title: [{"Claims and figures": f"{PREFIX}/{s.paper}/index.md"},
                                   {"Readings side by side": f"{PREFIX}/{s.paper}/readings.md"},
