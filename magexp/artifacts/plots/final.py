@@ -261,7 +261,8 @@ def _trends(ax, fits: pd.DataFrame, x_key: str, metric: str, panel_key, pv) -> N
     mine = fits[fits.metric == metric]
     if pv is not None:
         mine = mine[mine[panel_key].astype(str) == str(pv)] if panel_key in mine else mine.iloc[:0]
-    for name, line in mine.groupby("trend", sort=False):
+    for name in mine.trend.unique():  # each claim's rows, as its table wrote them
+        line = mine[mine.trend == name]
         x = line[x_key].astype(float).to_numpy()
         ax.fill_between(x, line.fit_lo.astype(float), line.fit_hi.astype(float), color="0.6", alpha=0.3, lw=0,
                         zorder=2, label="trend claim: 95 % band of the fitted line")
