@@ -88,7 +88,8 @@ def test_a_changed_input_or_output_writes_the_artifact_again(warm, mockup_reprod
     if change in ("deleted file", "edited file", "force"):  # restored: the reproduction's bytes
         assert cells.read_bytes() == mockup_reproduction.files[f"yan2022/{cells.name}"]
     if change == "run row":
-        assert (out / "yan2022" / f"{NAME}_runs.csv").read_bytes() != mockup_reproduction.files[f"yan2022/{NAME}_runs.csv"]
+        runs = f"yan2022/{NAME}_runs.csv"
+        assert (out / runs).read_bytes() != mockup_reproduction.files[runs]
     pd.testing.assert_frame_equal(rows, summarise_stored(plan.spec, out / "yan2022"))
 
 

@@ -94,7 +94,8 @@ class Memo:
             return False
         names = [os.path.relpath(f, base) for f in files]
         try:
-            write(self.entry(key), pack(key, self.kind, {"files": dict(zip(names, found)), "value": value}), self.root())
+            entry = pack(key, self.kind, {"files": dict(zip(names, found)), "value": value})
+            write(self.entry(key), entry, self.root())
         except (OSError, TypeError):  # a read-only cache, or a value JSON cannot hold
             return False
         self.prune()

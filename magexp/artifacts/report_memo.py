@@ -82,6 +82,7 @@ def built(root: Path, *, force: bool = False) -> bool:
         return False
     before = {rel: (st.st_ino, st.st_mtime_ns, st.st_size) for rel, st in _files(root).items()}
     build(root)
-    outputs = sorted(rel for rel, st in _files(root).items() if before.get(rel) != (st.st_ino, st.st_mtime_ns, st.st_size))
+    after = {rel: (st.st_ino, st.st_mtime_ns, st.st_size) for rel, st in _files(root).items()}
+    outputs = sorted(rel for rel, stamp in after.items() if before.get(rel) != stamp)  # each written anew
     REPORTS.record(k, root, [root / rel for rel in outputs], inputs_digest(root, outputs))
     return True

@@ -338,7 +338,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--tiny", action="store_true", help="tiny sizes, a smoke test (exploration: needs --out)")
     p.add_argument("--out", default=str(RESULTS), help="results folder (default: results/)")
     p.add_argument("--force", action="store_true",
-                   help="recompute every distinct run even if it is cached, and write every artifact, figure and report")
+                   help="recompute every distinct run even if cached, and write every artifact, figure and report")
     p.add_argument("--redraw", action="store_true", help="rebuild figures, summary and report from the CSVs; no run")
     p.add_argument("--executor", default="local", help="local (processes on this machine) or dask")
     p.add_argument("--scheduler", default=None, help="a Dask scheduler address (default: a local cluster)")
