@@ -70,7 +70,7 @@ def test_an_unchanged_artifact_is_not_written_and_its_summary_rows_are_the_recom
 
 
 @pytest.mark.parametrize("change", ["spec", "run row", "deleted file", "edited file", "force"])
-def test_a_changed_input_or_output_writes_the_artifact_again(warm, mockup_reproduction, change):
+def test_a_changed_input_or_output_writes_the_artifact_again(warm, mockup_reproduction, change, figures_not_rendered):
     out, plan, outputs = warm
     _write(plan, outputs, out)
     before = _mtimes(out)
