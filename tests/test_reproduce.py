@@ -187,7 +187,7 @@ def test_an_unchanged_figure_is_kept_and_any_change_draws_it(tmp_path, monkeypat
     assert "0 computed, 6 from the cache" in capsys.readouterr().out
     first = png.read_bytes(), pdf.read_bytes()
     assert first[0] != mockup_reproduction.files[f"yan2022/{name}.png"]  # what this drawing wrote
-    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.json"))  # beside the run cache
+    assert memo.root() == tmp_path / "cache-figures" and any(memo.root().rglob("*.memo"))  # beside the run cache
     assert reproduce.main(redraw) == 0 and len(drawn) == 1  # unchanged: kept
     assert "redrew 0 figures (1 unchanged" in capsys.readouterr().out
     assert reproduce.main(argv) == 0 and len(drawn) == 1  # a cached reproduction keeps it too

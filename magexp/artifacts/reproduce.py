@@ -24,13 +24,14 @@ from pathlib import Path
 
 import pandas as pd
 
+from magexp.artifacts import artifact_memo
 from magexp.artifacts.kinds import kind, tabulate
 from magexp.artifacts.plan import ArtifactRuns, cells, collect, paper_specs
 from magexp.artifacts.plan_cache import planned
 from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.artifacts.plots import VECTOR
 from magexp.artifacts.formats import MEASURED, write_csv
-from magexp.artifacts.report import build
+from magexp.artifacts.report_memo import built
 from magexp.artifacts.paper_spec import papers
 from magexp.artifacts.stored import facts_rows, summarise_stored, write_facts
 from magexp.artifacts.summary import COLUMNS
@@ -148,6 +149,18 @@ def write_artifact(runs, out: Path, *, force: bool = False) -> pd.DataFrame:
     return summarise_stored(runs.spec, out, runs)
 
 
+def write_unchanged(plan, outputs, out: Path, *, seeds=None, tiny: bool = False, force: bool = False) -> pd.DataFrame:
+    """:func:`write_artifact` of ``plan``'s runs ``outputs`` into ``out``, unless the artifact's memo
+    (:mod:`magexp.artifacts.artifact_memo`) says its files in ``out`` are what these inputs write: then its
+    summary rows are those kept. ``force`` writes it all the same."""
+    k = artifact_memo.key(plan, outputs, seeds, tiny)
+    rows = None if force else artifact_memo.recall(k, plan.spec, out)
+    if rows is None:
+        rows = write_artifact(collect(plan, outputs), out, force=force)
+        artifact_memo.keep(k, plan.spec, out, rows)
+    return rows
+
+
 def write_summary(paper: str, parts: dict[str, pd.DataFrame], out: Path) -> pd.DataFrame:
     """``out/summary.csv`` of ``paper``: the rows of the artifacts in ``parts`` replace their old rows.
     """
@@ -201,7 +214,8 @@ def reproduce(selected: dict[str, list], root: Path = RESULTS, *, seeds=None, jo
         out = root / paper
         out.mkdir(parents=True, exist_ok=True)
         n = len(plan.configs)
-        parts[paper][plan.spec.name] = write_artifact(collect(plan, slice_outputs(outputs, start, n)), out, force=force)
+        parts[paper][plan.spec.name] = write_unchanged(plan, slice_outputs(outputs, start, n), out, seeds=seeds,
+                                                       tiny=tiny, force=force)
         start += n
     counts["paper summaries"] = {paper: write_summary(paper, parts[paper], root / paper) for paper in parts}
     return counts
@@ -324,7 +338,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--tiny", action="store_true", help="tiny sizes, a smoke test (exploration: needs --out)")
     p.add_argument("--out", default=str(RESULTS), help="results folder (default: results/)")
     p.add_argument("--force", action="store_true",
-                   help="recompute every distinct run even if it is cached, and draw every figure")
+                   help="recompute every distinct run even if cached, and write every artifact, figure and report")
     p.add_argument("--redraw", action="store_true", help="rebuild figures, summary and report from the CSVs; no run")
     p.add_argument("--executor", default="local", help="local (processes on this machine) or dask")
     p.add_argument("--scheduler", default=None, help="a Dask scheduler address (default: a local cluster)")
@@ -396,7 +410,7 @@ def _write(args, selected) -> int:
     start = time.perf_counter()
     if args.redraw:
         drawn, kept = redraw(selected, args.out, force=args.force)
-        build(args.out)
+        built(args.out, force=args.force)
         print(f"redrew {drawn} figures ({kept} unchanged, kept), summary and report in "
               f"{time.perf_counter() - start:.1f} s: {args.out / 'REPORT.md'}")
         return 0
@@ -404,7 +418,7 @@ def _write(args, selected) -> int:
     with make_executor(args.executor, jobs=args.jobs, scheduler=args.scheduler) as executor:
         counts = reproduce(selected, args.out, seeds=args.seeds, jobs=args.jobs, tiny=args.tiny, force=args.force,
                            executor=executor)
-    build(args.out)
+    built(args.out, force=args.force)
     seconds = time.perf_counter() - start
     if args.executor == "local":  # remote workers' CPU is not seen here
         print(cpu_line(cpu_seconds() - cpu, counts))

@@ -15,17 +15,16 @@ keyed by the code it executes only, so that a plot edit keeps every run; a figur
 source (:func:`magexp.run.cache.files_digest`) and the drawing libraries, since the artifact,
 summary, style and plot code all shape it)
 
-and the cache keeps, under that key, the SHA-256 digests of the PNG and PDF the draw wrote. A figure
-whose two files are still in place with those digests is not drawn again; otherwise it is drawn and
-its digests recorded. Any change (a new CSV, a deleted or edited figure, a code edit) draws it.
-``--force`` draws every figure. The cache lives beside the run cache
+and the cache (a :class:`magexp.artifacts.memo.Memo`) keeps, under that key, the SHA-256 digests of the
+PNG and PDF the draw wrote. A figure whose two files are still in place with those digests is not drawn
+again; otherwise it is drawn and its digests recorded. Any change (a new CSV, a deleted or edited figure,
+a code edit) draws it. ``--force`` draws every figure. The cache lives beside the run cache
 (``<run cache>-figures``), never in ``results/``.
 """
 
 from __future__ import annotations
 
 import hashlib
-import json
 from functools import lru_cache
 from pathlib import Path
 
@@ -34,14 +33,18 @@ import numpy
 import pandas
 
 from magexp import paths
+from magexp.artifacts.memo import Memo, beside_cache
 from magexp.artifacts.plots.style import plt
-from magexp.run.cache import write
 from magexp.run.runkeys import files_digest
 
 
 def root() -> Path:
     """The figure cache: beside the run cache (:data:`magexp.paths.CACHE`), never inside it."""
-    return paths.CACHE.parent / f"{paths.CACHE.name}-figures"
+    return beside_cache("figures")
+
+
+#: the drawn figures' digests (its folder is :func:`root`, looked up on each use)
+FIGURES = Memo("Figure", lambda: root())
 
 
 @lru_cache(maxsize=1)
@@ -52,45 +55,31 @@ def figure_code_version() -> str:
     return h.hexdigest()
 
 
+def drawing_version() -> str:
+    """:func:`figure_code_version` with matplotlib's settings as they are now: all a drawing depends on but
+    its CSV and spec."""
+    h = hashlib.sha256(figure_code_version().encode())
+    h.update(repr(sorted(plt.rcParams.items())).encode())  # the settings the draw uses: magexp's style on the user's
+    return h.hexdigest()
+
+
 def key(spec, csv_bytes: bytes) -> str:
     """The key of the figure of ``spec`` drawn from a CSV holding ``csv_bytes`` (module docstring),
     with matplotlib's settings as they are now (a user's ``matplotlibrc`` draws otherwise).
     """
-    h = hashlib.sha256(figure_code_version().encode())
-    h.update(repr(sorted(plt.rcParams.items())).encode())  # the settings the draw uses: magexp's style on the user's
+    h = hashlib.sha256(drawing_version().encode())
     h.update(repr(spec).encode())
     h.update(hashlib.sha256(csv_bytes).digest())
     return h.hexdigest()[:32]
 
 
-def digests(files: list[Path]) -> list[str] | None:
-    """SHA-256 of each file (None if one is missing)."""
-    try:
-        return [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files]
-    except FileNotFoundError:
-        return None
-
-
-def _stamp(k: str) -> Path:
-    """The stamp file recording what the files drawn under key ``k`` hold."""
-    return root() / k[:2] / f"{k}.json"
-
-
 def current(k: str, files: list[Path]) -> bool:
-    """Whether ``files`` are what the draw of key ``k`` wrote (their recorded digests)."""
-    try:
-        recorded = json.loads(_stamp(k).read_text())
-    except (OSError, ValueError):
-        return False
-    return recorded == digests(files)
+    """Whether ``files`` (a figure's PNG and PDF, in one folder) are what the draw of key ``k`` wrote."""
+    kept = FIGURES.recall(k, Path(files[0]).parent)
+    return kept is not None and sorted(kept["files"]) == sorted(Path(f).name for f in files)
 
 
 def record(k: str, files: list[Path]) -> None:
-    """Keep the digests of the ``files`` just drawn under key ``k`` (atomically, readable by whom the
-    cache folder is: :func:`magexp.run.cache.write`; where the cache cannot be written, nothing is kept
-    and the figure is drawn again next time).
-    """
-    try:
-        write(_stamp(k), json.dumps(digests(files)).encode(), root())
-    except OSError:
-        pass
+    """Keep the digests of the ``files`` just drawn under key ``k`` (where the cache cannot be written, nothing
+    is kept and the figure is drawn again next time)."""
+    FIGURES.record(k, Path(files[0]).parent, list(files))
