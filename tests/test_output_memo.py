@@ -69,7 +69,9 @@ def test_an_unchanged_artifact_is_not_written_and_its_summary_rows_are_the_recom
     pd.testing.assert_frame_equal(again, summarise_stored(plan.spec, out / "yan2022"))
 
 
-@pytest.mark.parametrize("change", ["spec", "run row", "deleted file", "edited file", "force"])
+#: make test: one input and one output changed; make test-full every case
+@pytest.mark.parametrize("change", [pytest.param(c, marks=[] if c in ("run row", "deleted file") else [pytest.mark.full])
+                                    for c in ("spec", "run row", "deleted file", "edited file", "force")])
 def test_a_changed_input_or_output_writes_the_artifact_again(warm, mockup_reproduction, change, figures_not_rendered):
     out, plan, outputs = warm
     _write(plan, outputs, out)
