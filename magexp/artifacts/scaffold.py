@@ -150,7 +150,7 @@ def command(args: list[str]) -> None:
     args : list of str
         The command line after ``new-paper``.
     """
-    parser = argparse.ArgumentParser(prog="magexp new-paper", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="magexp new-paper", description="Write experiments/NAME/: a new paper (paper.yaml and one artifact) that reproduces as written; every value to replace is marked EDIT (docs/extending.md, \"Start from the scaffold\").")
     parser.add_argument("name", help="the paper's name: a lowercase identifier, not yet a folder of experiments/")
     name = parser.parse_args(args).name
     for path in new_paper(name):
