@@ -28,6 +28,7 @@ def test_the_scaffold_writes_a_paper_that_loads_with_a_claim_of_each_kind(tmp_pa
     assert "docs/extending.md" in meta.intro
     assert [h.figure for h in meta.headline] == ["demo/demo_fig1"] and meta.headline[0].section
     assert {c.kind for c in spec.claims} == {"trend", "threshold", "ordering"}
+    assert all(c.effect for c in spec.claims if c.kind == "ordering")  # a comparison's seeds are planned
     assert [(r.statistic, r.trials) for r in spec.reported] == [("median", 1000)]
     assert spec.summarise and spec.paper == "demo" and spec.name == "demo_fig1"
     assert all("EDIT" in c.text for c in spec.claims)  # every placeholder shows in the report

@@ -94,6 +94,9 @@ claims:                      # each judged against the distribution of the runs
     text: "EDIT (a comparison): Levenberg-Marquardt's offset error is smaller with 200 readings than with 20"
     kind: ordering               # each cell better (here: lower median) than the next, by a one-sided test
     metric: offset_error
+    # EDIT: the smallest effect worth detecting (here: a median twice as low) and the metric's log spread over
+    # seeds, which plan the cells' seeds (docs/results.md, "Sample sizes")
+    effect: {ratio: 2, spread: 0.5}
     cells: [{estimator: lm, scenario.n_readings: 200}, {estimator: lm, scenario.n_readings: 20}]
 caption: >
   EDIT: median over {seeds} seeds (bars: IQR) of the offset error; numbers in a caption are interpolated from
