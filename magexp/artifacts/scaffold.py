@@ -56,7 +56,7 @@ name: ${name}_fig1
 paper: $name
 title: "EDIT: Fig. 1 of the paper (here: offset error vs number of readings, Ding 2024 simulation 1, A = 2 nT)"
 kind: final                  # a plot kind (docs/extending.md, "Plot kinds")
-seeds: 30                   # per cell (a cell compared with a paper number needs 30; a trend 5 at each axis value)
+seeds: 30                    # per cell (a cell compared with a paper number needs 30; a trend 5 at each axis value)
 base: [scenario=ding2024_exp1, scenario.noise=2]   # overrides of every run: an existing scenario
 grid:                        # the cells: the cartesian product of these keys' values
   scenario.n_readings: [20, 60, 200]
