@@ -8,6 +8,8 @@
                                 (:mod:`magexp.artifacts.reproduce`; what ``make reproduce`` runs)
 ``magexp verify [OPTIONS]``     compare a reproduction with the committed results
                                 (:mod:`magexp.artifacts.verify`; what ``make verify`` runs)
+``magexp new-paper NAME``       a new paper's folder ``experiments/NAME/`` that reproduces as written
+                                (:mod:`magexp.artifacts.scaffold`)
 ==============================  ==================================================================
 
 Every command runs under :func:`magexp.errors.guarded`: any error is one line on stderr and an
@@ -36,6 +38,8 @@ def command(name: str):
         from magexp.artifacts.reproduce import command as main
     elif name == "verify":
         from magexp.artifacts.verify import command as main
+    elif name == "new-paper":
+        from magexp.artifacts.scaffold import command as main
     else:
         from magexp.run.command import run_command as main
     return main
@@ -47,7 +51,7 @@ def main(argv: list[str] | None = None) -> None:
     if argv is None:  # a closed pipe (magexp --help | head) ends quietly, as for any Unix tool
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
         stop_on_signals()  # SIGTERM, and SIGINT to this process alone, end as Ctrl-C does
-    name = args[0] if args and args[0] in ("calibrate", "reproduce", "verify") else "run"
+    name = args[0] if args and args[0] in ("calibrate", "reproduce", "verify", "new-paper") else "run"
     one_blas_thread()  # this process and its workers; before the command imports numpy
     guarded(start, name, args[1:] if name != "run" else args)
 

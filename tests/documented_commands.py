@@ -95,6 +95,9 @@ SHELL = "shell"
 #: ``pip install`` of this checkout: the extras it names exist in pyproject.toml; installing the
 #: wheel and running it elsewhere is ``tests/test_install.py`` (make test-full)
 PIP = "pip"
+#: the walk-through of docs/extending.md ("Start from the scaffold"): it writes into ``experiments/``, so it runs
+#: in order in a copy of the repository, in ``tests/test_extending.py`` (make test-full), never in a linked clone
+WALKTHROUGH = "walk-through"
 #: a command of the past that docs/measurements.md records (it ran at the commits the page names):
 #: those commits exist in the clone's history, and a ``python -m magexp.<module>`` existed there
 HISTORY = "history"
@@ -139,6 +142,9 @@ COMMANDS: dict[str, tuple] = {
     "magexp reproduce all --force": (COMPOSE, "every run of every paper, into results/"),
     "magexp reproduce yan2022 --out scratch": (RUN_FULL, "30 s"),
     "magexp reproduce --help": (RUN_FULL, "prints the options"),
+    # docs/extending.md: a new paper from the scaffold, and its reproduction (seconds: closed-form fits)
+    "magexp new-paper smith2025": (WALKTHROUGH, "writes experiments/smith2025/"),
+    "magexp reproduce smith2025 --out scratch": (WALKTHROUGH, "the scaffolded paper, then the completed one"),
     "magexp reproduce --limits": (RUN_FULL, "20 s: plans every artifact"),
     "magexp reproduce all --limits": (RUN_FULL, "20 s: plans every artifact (the paper is not read)"),
     # checking a reproduction (README.md, docs/results.md): reproduces what the cache lacks, then compares

@@ -429,3 +429,89 @@ def test_adding_a_scenario_and_an_estimator_needs_no_test_edit(copy, tmp_path):
     assert checks.returncode == 0, checks.stdout[-3000:]
     ran = [line for line in checks.stdout.splitlines() if "PASSED" in line]
     assert any("ding2024_toy" in line for line in ran) and any("lm_loose" in line for line in ran), checks.stdout[-3000:]
+
+
+# -- a new paper from the scaffold (docs/extending.md, "Start from the scaffold") ------------------------
+
+#: a whole file of the walk-through: a yaml block whose first line names it
+WALKED_FILE = re.compile(r"```yaml\n# (experiments/smith2025/[\w.]+)\n(.*?)```", re.S)
+CLAIM_VERDICTS = {"holds", "does not hold", "cannot be decided"}
+HEADLINE_VERDICTS = {"supported", "partly", "contradicted"}
+
+
+def check_verdicts(out: Path, paper: str, headlines: int) -> pd.DataFrame:
+    """The claims of ``paper`` in ``out/claims.csv``, each with a real verdict, and its section in the report."""
+    claims = pd.read_csv(out / "claims.csv")
+    mine = claims[claims.paper == paper]
+    heads = mine[mine.role == "headline"]
+    assert len(heads) == headlines and set(heads.verdict) <= HEADLINE_VERDICTS, heads[["id", "verdict"]]
+    assert set(mine[mine.role != "headline"].verdict) <= CLAIM_VERDICTS, mine[["id", "verdict", "reason"]]
+    assert set(claims.paper) == {paper}  # one paper reproduced: no other paper's rows
+    return mine
+
+
+@pytest.mark.full
+def test_the_scaffold_reproduces_and_the_walk_through_makes_a_paper(copy, tmp_path):
+    """Issue 44 item 1: ``magexp new-paper demo`` then ``magexp reproduce demo`` works as scaffolded (every claim a
+    verdict, the paper in the report, no other paper's file touched); following the walk-through of
+    docs/extending.md (its commands, then its files written as they stand) makes a paper of two artifacts with
+    two trend claims and a Monte-Carlo reported value; and the copy's tests that make test runs on the specs and
+    the report pass with both papers present, unedited."""
+    from documented_commands import COMMANDS, WALKTHROUGH
+
+    work = tmp_path / "work"
+    work.mkdir()
+    before = {p: p.read_bytes() for p in (copy / "experiments").rglob("*") if p.is_file()}
+    made = magexp(copy, "new-paper", "demo", cwd=work)
+    assert made.returncode == 0, made.stderr
+    again = magexp(copy, "new-paper", "demo", cwd=work)
+    assert again.returncode == 2 and len(again.stderr.strip().splitlines()) == 1, again.stderr
+    assert {p: p.read_bytes() for p in (copy / "experiments").rglob("*") if p.is_file() and p.parent.name != "demo"} \
+        == before
+    reproduced = magexp(copy, "reproduce", "demo", "--out", tmp_path / "demo-out", cwd=work)
+    assert reproduced.returncode == 0, reproduced.stderr
+    demo = check_verdicts(tmp_path / "demo-out", "demo", headlines=1)
+    assert set(demo.id) == {"offset_falls_with_n", "offset_falls", "offset_small_at_200", "more_readings_better"}
+    assert "## demo (a new paper: EDIT experiments/demo/paper.yaml)" in (tmp_path / "demo-out" / "REPORT.md").read_text()
+    assert (tmp_path / "demo-out" / "demo" / "demo_fig1.png").exists()
+
+    section = DOC.split("### Start from the scaffold")[1].split("\n## ")[0]
+    steps = [command for command, (kind, *_) in COMMANDS.items() if kind == WALKTHROUGH]
+    assert steps and all(f"\n{step}\n" in section for step in steps), steps
+    for step in steps:
+        done = magexp(copy, *step.split()[1:], cwd=work)
+        assert done.returncode == 0, (step, done.stderr)
+    files = WALKED_FILE.findall(section)
+    assert sorted(name for name, _ in files) == ["experiments/smith2025/paper.yaml",
+                                                 "experiments/smith2025/smith2025_fig1.yaml",
+                                                 "experiments/smith2025/smith2025_fig2.yaml"]
+    for name, text in files:
+        (copy / name).write_text(text)
+    completed = magexp(copy, *steps[-1].split()[1:], cwd=work)
+    assert completed.returncode == 0, completed.stderr
+    smith = check_verdicts(work / "scratch", "smith2025", headlines=2)
+    assert {"offset_falls", "offset_small_at_200", "more_readings_better", "offset_linear_in_noise"} <= set(smith.id)
+    summary = pd.read_csv(work / "scratch" / "summary.csv")
+    compared = summary[summary.paper_value.notna()]
+    assert len(compared) == 1 and "1000 trials" in compared.tolerance.iloc[0], compared.T
+    report = (work / "scratch" / "REPORT.md").read_text()
+    assert "## Smith 2025: the ellipsoid fit's offset error" in report
+
+    for folder in ("tests", "results"):
+        shutil.copytree(ROOT / folder, copy / folder, dirs_exist_ok=True,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    failed = failing_tests(copy, ["tests/test_schemas.py", "tests/test_spec_check.py", "tests/test_report.py",
+                                  "tests/test_power.py", "tests/test_scaffold.py"], tmp_path)
+    assert not failed or failing_tests(ROOT, failed, tmp_path) == failed, \
+        f"fail with the new papers and pass without them: {sorted(set(failed) - set(failing_tests(ROOT, failed, tmp_path)))}"
+
+
+def failing_tests(root: Path, tests: list[str], tmp_path: Path) -> list[str]:
+    """The ids among ``tests`` that fail when pytest runs them in ``root`` (a test failing on the committed
+    results alone fails in the repository too: only a failure the new papers add is theirs)."""
+    env = {**os.environ, "PYTHONPATH": str(root), "MAGEXP_CACHE": str(tmp_path / "cache" / "runs")}
+    checks = subprocess.run([sys.executable, "-m", "pytest", "-q", "-rf", "-p", "no:randomly", "-p", "no:cacheprovider",
+                             *tests], cwd=root, env=env, capture_output=True, text=True, timeout=900)
+    failed = sorted(line.split()[1] for line in checks.stdout.splitlines() if line.startswith("FAILED "))
+    assert checks.returncode in (0, 1) and bool(failed) == bool(checks.returncode), checks.stdout[-3000:]
+    return failed
