@@ -61,6 +61,8 @@ usage: magexp [KEY=VALUE ...]              one run (scenario x estimator x seed)
        magexp -m KEY=A,B KEY='range(N)' ...  a sweep: every combination, one folder each, sweep.csv
        magexp calibrate KEY=VALUE ...       calibrate a recording (magexp calibrate --help)
        magexp reproduce PAPER [OPTIONS]     regenerate a paper's figures and tables (magexp reproduce --help)
+       magexp verify [OPTIONS]              does a reproduction agree with the committed results? (--help)
+       magexp new-paper NAME                scaffold experiments/NAME/ for a paper of your own (--help)
        magexp --cfg job [KEY=VALUE ...]     print the composed config and stop
        magexp --version | --help
 
