@@ -1612,6 +1612,7 @@ def test_a_signal_ends_as_ctrl_c_does(capsys):
         "error: interrupted (SIGTERM); finished runs are cached, rerun the same command to resume"]
 
 
+@pytest.mark.full  # make test's budget: a slow case (make test-full runs it)
 def test_sigterm_during_a_sweep_leaves_nothing(tmp_path):
     """``kill -TERM`` of a sweep's process (issue 34: exit -15, no line, its folder left behind): one line,
     exit 143, and its folder gone (a real process: the signal handlers are the command's)."""

@@ -120,6 +120,7 @@ def _kill_a_worker_once_busy(client, done: threading.Event):
     return None
 
 
+@pytest.mark.full  # make test's budget: a slow case (make test-full runs it)
 @pytest.mark.slow
 def test_dask_cluster_survives_a_killed_worker_with_identical_results(tmp_path, monkeypatch):
     """A LocalCluster of one worker runs a tiny reproduction; the worker is killed midway; the scheduler

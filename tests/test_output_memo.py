@@ -123,6 +123,7 @@ def test_the_report_is_built_once_per_content_of_its_folder(warm, monkeypatch, m
     assert report_memo.built(out, force=True) and len(builds) == 4  # --force builds it all the same
 
 
+@pytest.mark.full  # make test's budget: a slow case (make test-full runs it)
 def test_a_warm_reproduction_writes_nothing_and_gives_the_same_bytes(warm, monkeypatch, mockup_reproduction, capsys):
     out, _, _ = warm
     argv = [*mockup_reproduction.args, "--out", str(out)]
