@@ -57,7 +57,7 @@ report: $(STAMP) ## rebuild results/summary.csv and results/REPORT.md from the a
 bench: $(STAMP) ## speed benchmark; writes results/bench.csv
 	$(PY) -m magexp.perf.bench
 
-# make test's budget: 135 CPU-s (user+sys, about 80 s) on two quiet cores (TEST_JOBS=2), with room for the bad-input
+# make test's budget: 90 s of wall time on two quiet cores (TEST_JOBS=2), after make venv's warm-up, with room for the bad-input
 # table to grow. It is kept by testing less in it, never by machinery in magexp for the tests' sake: a slow case, or a
 # parametrisation beyond one cheap case of each behaviour, is marked `full` (make test-full); the bad-input table runs
 # a fixed subset (tests/test_bad_input.py: in_make_test), the artifacts' smoke runs one per plot family
