@@ -13,7 +13,7 @@ from magexp.artifacts.formats import markdown_table
 from magexp.artifacts.headlines import headline_verdict
 from magexp.artifacts.paper_spec import HEADLINE_VERDICTS
 from magexp.artifacts.formats import LINE_LIMIT
-from magexp.artifacts.report import MAX_CHARS, compared_counts, compared_rows, over_budget
+from magexp.artifacts.report import MAX_CHARS, MAX_REPORT_LINES, compared_counts, compared_rows, over_budget
 from magexp.artifacts.report_claims import counts
 from magexp.artifacts.schema import build
 from magexp.artifacts.paper_spec import Headline
@@ -161,6 +161,7 @@ def test_the_report_has_no_ellipsis_and_keeps_its_size():
     long = [(name, n + 1) for name, text in (("REPORT.md", report), ("APPENDIX.md", appendix))
             for n, line in enumerate(text.splitlines()) if len(line) > LINE_LIMIT]
     assert not long, f"lines over {LINE_LIMIT} characters: {long[:5]}"
+    assert len(report.splitlines()) <= MAX_REPORT_LINES, f"REPORT.md has {len(report.splitlines())} lines"
 
 
 def test_counts_keep_the_papers_claims_apart_from_magexps_and_sanity_checks():

@@ -30,7 +30,7 @@ PEERS_HEADING, SPEED_HEADING = "## magexp beside MAGYC", "## Speed of the core"
 HOW_TO_READ = "## How to read"
 #: the longest line the report's Markdown holds (issue 43): a longer paragraph or list item is wrapped at
 #: :data:`WRAP` columns (the rendered page is the same), a table with a longer row is written as a list
-LINE_LIMIT, WRAP = 500, 120
+LINE_LIMIT, WRAP = 500, 480
 
 
 def _floats(column: pd.Series) -> np.ndarray | None:

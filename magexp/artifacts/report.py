@@ -46,6 +46,8 @@ SUMMARY_SHOWN = ["quantity", "estimator", "setting", "truth", "paper_value", "ju
 #: section over it and by how much). Characters measure reading, not source lines, which depend on where
 #: :func:`~magexp.artifacts.formats.wrap_markdown` wraps
 MAX_CHARS = 30_000
+#: the whole of REPORT.md's lines: claims first, the rest in the CSVs and the appendix
+MAX_REPORT_LINES = 400
 #: the line of ``results/peers/peers.md`` (written by ``make peers-bench``) that ends what REPORT.md shows of it
 PEERS_MARK = "<!-- REPORT.md shows the text above this line; the tables below are in peers/peers.md only -->"
 CLAIM_COLUMNS = ["paper", "artifact", "id", "by", "role", "section", "figure", "text", "verdict", "reason", "evidence",
@@ -181,7 +183,8 @@ def _deviations_section(meta, paper: str, root: Path, *, full: bool = False) -> 
 
 
 def _winners_section(p: Paper) -> str:
-    """magexp's "which method to pick": the winner per case of each artifact with a winners table."""
+    """magexp's "which method to pick": the winner per case of each artifact with a winners table (in the
+    appendix: the report, read first, holds the claims and links these tables)."""
     parts = []
     for spec in p.specs:
         path = p.root / p.paper / f"{spec.name}.csv"
@@ -193,7 +196,8 @@ def _winners_section(p: Paper) -> str:
         best = winners(frame)
         if not len(best):
             continue
-        parts.append(f"**{spec.title}** ({link(f'{p.paper}/{spec.name}', p.root)}; {LEGENDS})\n\n"
+        legends = LEGENDS.replace("](#", "](REPORT.md#")  # the legend lives in the report
+        parts.append(f"**{spec.title}** ({link(f'{p.paper}/{spec.name}', p.root)}; {legends})\n\n"
                      + markdown_table(best, ["case", "winner", "bound_ratio", "success_rate", "tied"]))
     return "### Which method to pick\n\n" + "\n".join(parts) if parts else ""
 
@@ -202,7 +206,9 @@ def _report_section(p: Paper) -> str:
     """The report's section of paper ``p``: headlines, findings, winners, compared numbers, deviations."""
     intro = " ".join(str(p.meta.intro).split())
     lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n", headline_list(p)]
-    lines += [findings_table(p), _winners_section(p), _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
+    winners = ("### Which method to pick\n\nThe winner per case of each benchmark table: "
+               f"[appendix](APPENDIX.md#{p.paper}-which-method-to-pick).\n") if _winners_section(p) else ""
+    lines += [findings_table(p), winners, _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
               f"Figures, notes, full tables and sanity checks: [appendix](APPENDIX.md#{p.paper}).\n"]
     return "\n".join(x for x in lines if x)
 
@@ -212,6 +218,9 @@ def _appendix_section(p: Paper) -> str:
     lines = [f'<a id="{p.paper}"></a>\n', f"## {p.meta.title}\n", f"{str(p.meta.intro).strip()}\n",
              readings_section(p), _deviations_section(p.meta, p.paper, p.root, full=True)]
     lines.append(findings_table(p, appendix=True))
+    winners = _winners_section(p)
+    if winners:
+        lines.append(f'<a id="{p.paper}-which-method-to-pick"></a>\n\n{winners}\n')
     frame = pd.DataFrame(p.claims) if p.claims else pd.DataFrame(columns=CLAIM_COLUMNS)
     sanity = frame[frame.role == "sanity"]
     if len(sanity):
