@@ -31,6 +31,7 @@ import hydra
 import omegaconf
 
 from magexp import paths
+from magexp.artifacts.memo import beside_cache
 from magexp.artifacts.plan import ArtifactPlan
 from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.run.cache import write
@@ -42,8 +43,8 @@ KIND = "ArtifactPlan"
 
 
 def root() -> Path:
-    """The plan cache: beside the run cache (:data:`magexp.paths.CACHE`), never inside it."""
-    return paths.CACHE.parent / f"{paths.CACHE.name}-plans"
+    """The plan cache: beside the run cache, never inside it (:func:`magexp.artifacts.memo.beside_cache`)."""
+    return beside_cache("plans")
 
 
 @lru_cache(maxsize=1)
