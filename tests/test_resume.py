@@ -32,6 +32,7 @@ def results(cache_dir):
     return {p.name: p.stat().st_mtime_ns for p in cache_dir.rglob(f"*{cache.SUFFIX}")}
 
 
+@pytest.mark.full  # make test's budget: a slow case (make test-full runs it)
 @pytest.mark.slow
 def test_kill_midway_then_resume(tmp_path, mockup_reproduction, figures_not_rendered):
     """A reproduction killed (SIGKILL, no clean-up) after its 2nd finished run of 6 resumes: the finished
