@@ -77,7 +77,7 @@ def test_an_effect_is_validated_with_one_line():
     with pytest.raises(MagexpError, match="baseline \\+ rise <= 1"):
         Claim(id="c", text="", kind="ordering", stat="success_rate", cells=[{"a": 1}, {"a": 2}],
               effect={"rise": 0.5, "baseline": 0.7})
-    with pytest.raises(MagexpError, match="only a comparison has one"):
+    with pytest.raises(MagexpError, match="only a comparison or a trend has one"):
         Claim(id="c", text="", kind="success", value=0.9, effect={"rise": 0.1, "baseline": 0.5})
     assert effect_error({"ratio": 1.2, "spread": 0.3}, "median") == ""
 

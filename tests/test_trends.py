@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from magexp.artifacts import claims, kinds, trends
+from magexp.artifacts import claims, kinds, power, significance, trends
 from magexp.artifacts.claims import Claim, evaluate
-from magexp.artifacts.comparisons import HOLDS, UNDECIDED
+from magexp.artifacts.comparisons import HOLDS, UNDECIDED, adjust
 from magexp.artifacts.spec import parse
 from magexp.errors import MagexpError
 
@@ -38,8 +38,13 @@ def claim(**keys) -> Claim:
                     "where": {"estimator": "ellipsoid"}, "log": True, "between": [-0.6, -0.4], **keys})
 
 
+def judged(c: Claim, table: pd.DataFrame):
+    """The outcome of ``c`` on ``table`` judged as a paper judges it: in its Holm family (alone here)."""
+    return adjust([evaluate(c, table)])[0]
+
+
 def test_a_known_exponent_inside_the_range_holds_and_outside_does_not():
-    inside, outside = evaluate(claim(), runs(-0.5)), evaluate(claim(), runs(-1.0))
+    inside, outside = judged(claim(), runs(-0.5)), judged(claim(), runs(-1.0))
     assert inside.result == HOLDS and inside.holds
     assert outside.result == claims.FAILS == trends.FAILS and not outside.holds
     assert abs(inside.observed + 0.5) < 0.05 and abs(outside.observed + 1.0) < 0.05
@@ -53,17 +58,17 @@ def test_two_seeds_cannot_decide_and_say_why():
 
 
 def test_an_interval_wider_than_the_range_cannot_decide_and_says_what_could_be_seen():
-    o = evaluate(claim(), runs(-0.5, seeds=6, sigma=1.5))
+    o = judged(claim(), runs(-0.5, seeds=6, sigma=1.5))
     assert o.result == UNDECIDED
-    assert "wider than the range" in o.short and "80 % power" in o.short
+    assert "narrower than twice" in o.short and "80% power" in o.short
 
 
 def test_a_sign_claim():
     negative = claim(between=[], sign="negative")
-    assert evaluate(negative, runs(-0.5)).result == HOLDS
-    assert evaluate(negative, runs(+0.5)).result == claims.FAILS
-    flat = evaluate(negative, runs(0.0, sigma=0.5))
-    assert flat.result == UNDECIDED and "holds 0" in flat.short
+    assert judged(negative, runs(-0.5)).result == HOLDS
+    assert judged(negative, runs(+0.5)).result == claims.FAILS
+    flat = judged(negative, runs(0.0, sigma=0.5))
+    assert flat.result == UNDECIDED and "beyond 0" in flat.short and "80% power" in flat.short
 
 
 def test_a_linear_trend_is_the_slope_of_the_metric_itself():
@@ -146,3 +151,67 @@ def test_the_final_kind_draws_the_trend_and_a_figure_without_one_is_unchanged():
     assert "trend claim falls: least-squares fit" in labels and len(drawn.collections) >= 1
     plain = kinds.kind("final").draw(cells, spec).axes[0]
     assert not any("trend" in line.get_label() for line in plain.get_lines())
+
+
+def test_the_bootstrap_p_is_the_share_of_slopes_on_the_wrong_side():
+    inside, outside = np.full(1999, -0.5), np.r_[np.full(1899, -1.0), np.full(100, -0.5)]
+    p, pc = trends.p_values([-0.6, -0.4], "", inside)
+    assert p == pytest.approx(1 / 2000) and pc == 1.0
+    p, pc = trends.p_values([-0.6, -0.4], "", outside)
+    assert p == pytest.approx(1900 / 2000) and pc == pytest.approx(2 * 101 / 2000)  # two sides tested
+    assert trends.p_values([], "negative", outside)[0] == pytest.approx(1 / 2000)
+    assert trends.p_values([], "positive", outside)[0] == 1.0
+
+
+def test_a_trend_is_tested_in_its_holm_family():
+    """Three trends of one family: each p is Holm-adjusted over the three and decided on its adjusted p."""
+    outcomes = [evaluate(claim(id=f"t{k}", between=[], sign="negative"), runs(-0.05, seeds=12, sigma=0.4, seed=k))
+                for k in range(3)]
+    raw = [o.p for o in outcomes]
+    adjust(outcomes, ["primary"] * 3)
+    for o, p in zip(outcomes, significance.holm(raw)):
+        assert o.family_size == 3 and o.p_adjusted == p and o.test == "bootstrap"
+        assert o.result == trends.decide(o.p_adjusted, np.nan, o.p_min) or o.result == claims.FAILS
+        assert "after Holm over 3 primary tests" in o.short
+    alone = adjust([evaluate(claim(id="t0", between=[], sign="negative"), runs(-0.05, seeds=12, sigma=0.4, seed=0))])[0]
+    assert alone.p_adjusted == raw[0] and alone.p_adjusted <= outcomes[0].p_adjusted
+
+
+def test_a_trend_counts_in_its_family_and_plans_its_seeds_by_power():
+    spec = parse({**BASE, "grid": {AXIS: [50, 200, 800, 3200], "estimator": ["ellipsoid", "lm"]}, "max_seeds": 300,
+                  "claims": [{**TREND, "where": {"estimator": "ellipsoid"}, "effect": {"slope": -0.5, "spread": 0.5}},
+                             {"id": "order", "text": "t", "kind": "ordering", "metric": "offset_error",
+                              "cells": [{"estimator": "ellipsoid"}, {"estimator": "lm"}]}]}, Path("toy_fig1.yaml"))
+    family = {"toy_fig1.falls": "primary", "toy_fig1.order": "primary"}
+    assert power.claim_levels([spec], family)["toy_fig1.falls"] == ("primary", 2, 0.025)
+    plan = power.claim_plans([spec], family)["toy_fig1.falls"]
+    assert plan.test == "bootstrap" and not plan.capped and plan.power >= 0.8
+    xs = trends.axis_values(spec.claims[0], spec.grid)
+    below = power.trend_power(plan.seeds - 1, xs, "median", (-0.6, -0.4), "", -0.5, 0.5, 0.025)
+    assert below < 0.8 <= power.trend_power(plan.seeds, xs, "median", (-0.6, -0.4), "", -0.5, 0.5, 0.025)
+    effect = (("slope", -0.5), ("spread", 0.5))
+    wider = power.trend_seeds(xs, "median", (-0.7, -0.3), "", effect, 0.025, 30, 300)[0]
+    stricter = power.trend_seeds(xs, "median", (-0.6, -0.4), "", effect, 0.0025, 30, 300)[0]
+    assert wider < plan.seeds < stricter
+
+
+@pytest.mark.parametrize("effect, words", [
+    ({"slope": -0.7, "spread": 0.5}, ["its slope -0.7 must lie between -0.6 and -0.4"]),
+    ({"slope": -0.5}, ["give exactly {slope: number, spread: number}"]),
+    ({"slope": -0.5, "spread": 0}, ["spread > 0"]),
+])
+def test_a_bad_trend_effect_fails_at_load_in_one_line(effect, words):
+    with pytest.raises(MagexpError) as info:
+        parse({**BASE, "claims": [{**TREND, "effect": effect}]}, Path("toy_fig1.yaml"))
+    assert "\n" not in str(info.value) and all(w in str(info.value) for w in words), str(info.value)
+
+
+@pytest.mark.full
+def test_the_simulated_power_is_the_power_of_the_test_the_claim_is_judged_with():
+    """The plan's simulation against the judged test itself: 150 runs tables drawn from the planned model,
+    each tested by trends.tested; the rejection rates agree within the simulations' binomial spread."""
+    ns, n = (50, 200, 800, 3200), 40
+    hits = [trends.tested(claim(), runs(-0.5, seeds=n, sigma=0.5, seed=500 + k, ns=ns)).p < 0.05
+            for k in range(150)]
+    planned = power.trend_power(n, tuple(np.log(ns)), "median", (-0.6, -0.4), "", -0.5, 0.5, 0.05)
+    assert abs(np.mean(hits) - planned) < 0.1

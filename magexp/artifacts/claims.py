@@ -43,8 +43,9 @@ better than every other) hold only when a test separates the two sides (``test:`
   ``unpaired`` otherwise.
 
 A **trend** (``kind: trend``: the slope of ``metric``, or of its log against the log of ``axis``, over every
-cell of a grid ``axis``, judged against ``between: [lo, hi]`` or ``sign``) is decided by its bootstrap
-interval over seeds: :mod:`magexp.artifacts.trends` states the statistic, the interval and the rule.
+cell of a grid ``axis``, judged against ``between: [lo, hi]`` or ``sign``) is decided by a one-sided bootstrap
+test over seeds, Holm-adjusted in its family beside the comparisons: :mod:`magexp.artifacts.trends` states the
+statistic, the test and the rule.
 
 Each comparison is decided by :mod:`magexp.artifacts.comparisons` (its ``p``, ``p_min``,
 ``detectable`` and Holm's adjustment within its family).
@@ -133,10 +134,12 @@ class Claim:
             object.__setattr__(self, "test", "unpaired")
 
     def _check_effect(self) -> None:
-        """An ``effect:`` only on a comparison, with the keys of its statistic (:func:`effect_error`)."""
+        """An ``effect:`` only on a comparison, with the keys of its statistic (:func:`effect_error`), or on a
+        trend (:func:`magexp.artifacts.trends.effect_error`)."""
         if not self.effect:
             return
-        why = effect_error(self.effect, self.stat) if self.kind in ("ordering", "winner") else "only a comparison has one"
+        why = (effect_error(self.effect, self.stat) if self.kind in ("ordering", "winner")
+               else trends.effect_error(self) if self.kind == "trend" else "only a comparison or a trend has one")
         if why:
             raise MagexpError(f"claim {self.id!r}: effect={self.effect} is not allowed: {why}")
 
@@ -171,6 +174,7 @@ rule judged it at, at which ``detectable`` (and ``detectable_words``) is then co
     observed: float = float("nan")
     detect: object = None  # level -> (detectable, its words): the deciding pair's (comparisons.Test.detect)
     detectable_words: str = ""
+    rule: object = None  # (p, p_contra, p_min) -> verdict: a trend's (trends.decide); None: a comparison's
 
     def __post_init__(self):
         self.result = self.result or (HOLDS if self.holds else FAILS)
@@ -285,11 +289,13 @@ def _evaluate_comparison(claim: Claim, table: pd.DataFrame, stat: str) -> Outcom
 
 
 def _evaluate_trend(claim: Claim, table: pd.DataFrame) -> Outcome:
-    """``kind: trend``: the slope's bootstrap interval against the claim's range (:mod:`magexp.artifacts.trends`);
-    ``observed`` is the slope, ``n`` the fewest seeds at an axis value."""
-    f = trends.fit(claim, table)
-    result, short, evidence = trends.words(claim, f)
-    return Outcome(claim, result == HOLDS, evidence, result=result, short=short, n=int(f.n.min()), observed=f.slope)
+    """``kind: trend``: the slope's one-sided bootstrap test against the claim's range
+    (:mod:`magexp.artifacts.trends`), decided alone until its family is known; ``observed`` is the slope, ``n``
+    the fewest seeds at an axis value."""
+    t = trends.tested(claim, table)
+    return Outcome(claim, t.result == HOLDS, t.evidence, result=t.result, short=t.short, p=t.p, p_contra=t.p_contra,
+                   p_min=t.p_min, n=int(t.fit.n.min()), observed=t.fit.slope, test="bootstrap", detect=t.detect,
+                   rule=trends.decide)
 
 
 def _short_value(v: float) -> str:

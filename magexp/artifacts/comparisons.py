@@ -196,7 +196,7 @@ def _adjust_family(family: list, alone: bool) -> None:
         o.family_size, o.p_adjusted, o.level = m, p, ALPHA / (1 if alone else m - rank[id(o)])
         if o.detect is not None:
             o.detectable, o.detectable_words = o.detect(o.level)
-        o.result = decide(p, pc, o.p_min)
+        o.result = (o.rule or decide)(p, pc, o.p_min)
         o.holds = o.result == HOLDS
         note = _adjusted_note(o, m)
         o.short, o.evidence = f"{o.short}; {note}", f"{o.evidence}; {note}"
@@ -206,9 +206,9 @@ def _adjusted_note(o, m: int) -> str:
     """What the evidence of a comparison adds once its family is known: the adjusted p, and what it
     could detect (no difference) or why it cannot decide."""
     note = f"{o.p_adjusted:.3g} after Holm over {m} {o.family} tests" if m > 1 else f"p = {o.p:.3g}"
-    if o.result == UNDECIDED:
+    if o.result == UNDECIDED and not o.p_min < o.level:
         return f"{note}; cannot be decided at n = {o.n}: its smallest p is {o.p_min:.3g}"
-    if o.result == NO_DIFFERENCE and o.detectable_words:
+    if o.result in (NO_DIFFERENCE, UNDECIDED) and o.detectable_words:
         return (f"{note}; detectable at {POWER:.0%} power at its level {o.level:.3g}: {o.detectable_words} "
                 f"(observed: {o.observed:.3g})")
     return note

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.claims import evaluate, interpolate
-from magexp.artifacts.comparisons import HOLDS, NO_DIFFERENCE, adjust
+from magexp.artifacts.comparisons import HOLDS, NO_DIFFERENCE, UNDECIDED, adjust
 from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
@@ -190,8 +190,8 @@ def _failing(verdict: str, deciding: list[str], parts: list) -> tuple[str, set]:
 
 def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
     """One ``claims.csv`` row per evaluated claim of ``paper`` (its ``family``; ``level``, ``p``,
-    ``p_adjusted``, ``p_min`` for comparisons; ``detectable`` at the row's level beside the ``observed``
-    effect where no difference is detected, a trend's slope; a comparison's declared ``effect`` in words and the
+    ``p_adjusted``, ``p_min`` for comparisons and trends; ``detectable`` at the row's level beside the
+    ``observed`` effect where no difference is detected (a trend that cannot be decided at its level), a trend's slope; a comparison's declared ``effect`` in words and the
     ``seeds_planned`` for it, :func:`magexp.artifacts.power.claim_plans`, whose evidence says the power
     reached where the cap bound).
     """
@@ -202,7 +202,7 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
         plan = plans.get(f"{name}.{o.claim.id}")
         capped = (f"; planned seeds capped at {plan.seeds}: power {plan.power:.2f} against {plan.words} "
                   f"at level {plan.level:.3g}") if plan is not None and plan.capped else ""
-        undetected = o.result == NO_DIFFERENCE
+        undetected = o.result == NO_DIFFERENCE or o.result == UNDECIDED and o.p_min < o.level  # a trend's middle
         rows.append({"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
                      "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
                      "text": o.claim.text, "verdict": o.result, "reason": o.short, "evidence": o.evidence + capped,

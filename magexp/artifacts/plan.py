@@ -234,12 +234,12 @@ def _settings(overrides: list[str]) -> dict:
 
 
 def claim_cells(plan: ArtifactPlan, claim) -> list[int]:
-    """The cells of ``plan`` that a comparison claim selects (its ``cells``, matched on the cell's
-    overrides; a key that is no setting, a row filter such as ``succeeded``, is left out).
+    """The cells of ``plan`` that a comparison claim selects (its ``cells``), or a trend (its ``where``), matched
+    on the cell's overrides; a key that is no setting, a row filter such as ``succeeded``, is left out.
     """
     settings = [_settings(o) for o in plan.overrides]
     keys = {k for s in settings for k in s}
-    return sorted({ci for where in claim.cells for ci, s in enumerate(settings)
+    return sorted({ci for where in (claim.cells or [claim.where]) for ci, s in enumerate(settings)
                    if matches({k: v for k, v in where.items() if k in keys}, s)})
 
 

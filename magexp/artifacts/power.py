@@ -26,7 +26,18 @@ rank the comparison takes in its family.
   ``level`` (``1 / (n_perm + 1) <= level / 2``), on a coarser grid, so the simulated test rejects less
   often than the report's and the plan errs towards more seeds, never fewer.
 
-**Seeds** (:func:`required_seeds`): the smallest ``n >= seeds`` with ``power(n) >= POWER``, found by
+* a trend's one-sided bootstrap test (:mod:`magexp.artifacts.trends`): ``effect: {slope, spread}``,
+  simulated: :data:`N_SIM` data sets of per-seed values ``y_ij = slope x_j + spread z_ij`` at the grid's
+  axis values ``x_j`` (logs of both with ``log: true``; ``z ~ N(0, 1)``, seed ``i`` of every data set drawn
+  before seed ``i + 1``, so a data set of ``n`` seeds extends that of ``n - 1``), each judged as the claim is:
+  ``stat`` per axis value, :data:`~magexp.artifacts.trends.N_BOOT` bootstrap resamples of each value's
+  seeds (one fixed set of resamples for every data set, drawn independently per axis value), the
+  least-squares slopes and their p (:func:`magexp.artifacts.trends.p_values`); ``power(n)`` the fraction of
+  data sets whose p is below ``level`` (:func:`trend_power`). A median of a resample is read off the data
+  set's sorted values at the resample's sorted middle indices, no sort per resample. One cell per axis value is
+  assumed: cells that share a value pool their seeds, which only adds to the power.
+
+**Seeds** (:func:`required_seeds`, :func:`trend_seeds`): the smallest ``n >= seeds`` with ``power(n) >= POWER``, found by
 bisection between the artifact's ``seeds`` and its cap ``max_seeds`` (the simulations draw one set of
 values for every ``n``: common random numbers keep ``power(n)`` monotone; the exact Fisher power is
 then scanned over the ten ``n`` below the bisection's answer, where its saw-tooth could reach the target
@@ -45,6 +56,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from magexp.artifacts import trends
 from magexp.artifacts.comparisons import ALONE, ESTIMATOR_SIDE
 from magexp.artifacts.significance import ALPHA, N_PERM, POWER, effect_kind, effect_words, fisher_power
 from magexp.artifacts.tables import STATS
@@ -55,6 +67,8 @@ N_SIM = 400
 N_SIM_PERM = 400
 #: the generator seed of the simulations (fixed: the plan is the same on every machine)
 SIM_SEED = 20240639
+#: the claim kinds tested in a Holm family (each has a p-value)
+TESTED = ("ordering", "winner", "trend")
 
 
 def comparison_test(claim) -> str:
@@ -142,14 +156,10 @@ def power_at(n: int, test: str, effect: tuple, level: float, stat: str = "median
     return permutation_power(n, e["ratio"], e["spread"], level, stat)
 
 
-@functools.cache
-def required_seeds(test: str, effect: tuple, level: float, start: int, cap: int,
-                   stat: str = "median") -> tuple[int, float]:
-    """The smallest ``n`` in ``[start, cap]`` whose :func:`power_at` is at least :data:`POWER`, and that
-    power; ``(cap, power at cap)`` when the cap does not reach it (module docstring: bisection, the exact
-    Fisher power scanned below it).
-    """
-    power = functools.cache(lambda n: power_at(n, test, effect, level, stat))
+def _smallest(power, start: int, cap: int, scan: bool = False) -> tuple[int, float]:
+    """The smallest ``n`` in ``[start, cap]`` whose ``power(n)`` is at least :data:`POWER` and that power, by
+    bisection (``scan``: then over the ten ``n`` below, for a saw-tooth power); ``(cap, power(cap))`` when the
+    cap does not reach it."""
     if power(cap) < POWER:
         return cap, power(cap)
     lo, hi = start, cap  # power(hi) >= POWER; below lo nothing is asked
@@ -158,9 +168,61 @@ def required_seeds(test: str, effect: tuple, level: float, start: int, cap: int,
     while hi - lo > 1:
         mid = (lo + hi) // 2
         lo, hi = (lo, mid) if power(mid) >= POWER else (mid, hi)
-    if "rise" in dict(effect):
+    if scan:
         hi = next((n for n in range(max(start, hi - 10), hi) if power(n) >= POWER), hi)
     return hi, power(hi)
+
+
+@functools.cache
+def required_seeds(test: str, effect: tuple, level: float, start: int, cap: int,
+                   stat: str = "median") -> tuple[int, float]:
+    """The smallest ``n`` in ``[start, cap]`` whose :func:`power_at` is at least :data:`POWER`, and that
+    power; ``(cap, power at cap)`` when the cap does not reach it (module docstring: bisection, the exact
+    Fisher power scanned below it).
+    """
+    power = functools.cache(lambda n: power_at(n, test, effect, level, stat))
+    return _smallest(power, start, cap, scan="rise" in dict(effect))
+
+
+def _resample_stat(y: np.ndarray, idx: np.ndarray, stat: str) -> np.ndarray:
+    """``stat`` of every bootstrap resample ``idx`` ``(J, B, n)`` of each data set's values ``y``
+    ``(n_sim, J, n)``: ``(n_sim, J, B)`` (a median off the sorted values at the sorted middle indices)."""
+    rows = np.arange(y.shape[1])[:, None]
+    if stat == "median":
+        ordered, order = np.sort(y, axis=-1), np.sort(idx, axis=-1)
+        n = y.shape[-1]
+        return (ordered[:, rows, order[..., (n - 1) // 2]] + ordered[:, rows, order[..., n // 2]]) / 2
+    f, out = STATS[stat], np.empty(y.shape[:2] + idx.shape[1:2])
+    chunk = max(1, 4_000_000 // idx.size)
+    for s in range(0, y.shape[0], chunk):
+        out[s:s + chunk] = f(y[s:s + chunk][:, rows[..., None], idx], axis=-1)
+    return out
+
+
+def trend_power(n: int, xs: tuple, stat: str, between: tuple, sign: str, slope: float, spread: float,
+                level: float, n_sim: int = N_SIM) -> float:
+    """Simulated power of a trend's one-sided bootstrap test at ``level`` with ``n`` seeds per axis value
+    against a true ``slope`` with per-seed ``spread`` around the line, the points at ``xs`` (logs with
+    ``log: true``, :func:`magexp.artifacts.trends.axis_values`) (module docstring).
+    """
+    x = np.asarray(xs, float)
+    z = np.random.default_rng(SIM_SEED).standard_normal((n, n_sim, len(x))).transpose(1, 2, 0)
+    idx = np.random.default_rng(SIM_SEED + 2).integers(0, n, size=(len(x), trends.N_BOOT, n))
+    boot = _resample_stat(slope * x[None, :, None] + spread * z, idx, stat)
+    xc = x - x.mean()
+    slopes = np.einsum("sjb,j->sb", boot, xc) / (xc @ xc)
+    p, _ = trends.p_values(between, sign, slopes)
+    return float(np.mean(p < level))
+
+
+@functools.cache
+def trend_seeds(xs: tuple, stat: str, between: tuple, sign: str, effect: tuple, level: float, start: int,
+                cap: int) -> tuple[int, float]:
+    """The smallest ``n`` in ``[max(start, MIN_SEEDS), cap]`` whose :func:`trend_power` is at least
+    :data:`POWER`, and that power (``(cap, power at cap)`` when the cap does not reach it)."""
+    e = dict(effect)
+    power = functools.cache(lambda n: trend_power(n, xs, stat, between, sign, e["slope"], e["spread"], level))
+    return _smallest(power, max(start, trends.MIN_SEEDS), max(cap, trends.MIN_SEEDS))
 
 
 @dataclass(frozen=True)
@@ -182,10 +244,11 @@ class ClaimPlan:
 
 
 def claim_levels(specs: list, family: dict[str, str]) -> dict[str, tuple[str, int, float]]:
-    """``{"<artifact>.<claim id>": (family, m, level)}`` of every comparison claim of a paper: its Holm
-    family, the number ``m`` of comparisons in it and the strictest step ``ALPHA / m`` (``ALPHA`` alone).
+    """``{"<artifact>.<claim id>": (family, m, level)}`` of every comparison and trend claim of a paper: its
+    Holm family, the number ``m`` of tested claims in it and the strictest step ``ALPHA / m`` (``ALPHA``
+    alone).
     """
-    comparisons = [f"{s.name}.{c.id}" for s in specs for c in s.claims if c.kind in ("ordering", "winner")]
+    comparisons = [f"{s.name}.{c.id}" for s in specs for c in s.claims if c.kind in TESTED]
     sizes = {name: sum(family[k] == name for k in comparisons) for name in set(family.values())}
     out = {}
     for key in comparisons:
@@ -195,7 +258,7 @@ def claim_levels(specs: list, family: dict[str, str]) -> dict[str, tuple[str, in
 
 
 def claim_plans(specs: list, family: dict[str, str]) -> dict[str, ClaimPlan]:
-    """The :class:`ClaimPlan` of every comparison claim of a paper that declares an ``effect:``."""
+    """The :class:`ClaimPlan` of every comparison or trend claim of a paper that declares an ``effect:``."""
     levels = claim_levels(specs, family)
     out = {}
     for spec in specs:
@@ -205,8 +268,13 @@ def claim_plans(specs: list, family: dict[str, str]) -> dict[str, ClaimPlan]:
             if key not in levels or not c.effect:
                 continue
             name, m, level = levels[key]
-            test = "fisher" if effect_kind(c.stat) == "rates" else comparison_test(c)
-            n, reached = required_seeds(test, tuple(sorted(c.effect.items())), level, int(spec.seeds), cap, c.stat)
-            out[key] = ClaimPlan(key, test, dict(c.effect), effect_words(c.effect), name, m, level, n, reached,
-                                 reached < POWER)
+            effect = tuple(sorted(c.effect.items()))
+            if c.kind == "trend":
+                test, words = "bootstrap", trends.effect_words(c.effect)
+                n, reached = trend_seeds(trends.axis_values(c, spec.grid), c.stat, tuple(c.between), c.sign, effect,
+                                         level, int(spec.seeds), cap)
+            else:
+                test, words = ("fisher" if effect_kind(c.stat) == "rates" else comparison_test(c)), effect_words(c.effect)
+                n, reached = required_seeds(test, effect, level, int(spec.seeds), cap, c.stat)
+            out[key] = ClaimPlan(key, test, dict(c.effect), words, name, m, level, n, reached, reached < POWER)
     return out

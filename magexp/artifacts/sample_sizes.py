@@ -1,9 +1,9 @@
-"""The seeds of each cell, fixed before any run: a cell of a comparison that declares an ``effect:`` gets
-the seeds that detect it with 80 % power at its family's strictest Holm level (:mod:`magexp.artifacts.power`,
-which states the calculation), every other cell the artifact's ``seeds``.
+"""The seeds of each cell, fixed before any run: a cell of a comparison or a trend that declares an
+``effect:`` gets the seeds that detect it with 80 % power at its family's strictest Holm level
+(:mod:`magexp.artifacts.power`, which states the calculation), every other cell the artifact's ``seeds``.
 
-``python -m magexp.artifacts.sample_sizes [paper ...]`` prints, per paper, each comparison's effect, family,
-level, test, seeds and the power they reach.
+``python -m magexp.artifacts.sample_sizes [paper ...]`` prints, per paper, each planned claim's effect,
+family, level, test, seeds and the power they reach.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def sibling_specs(spec) -> list:
 
 
 def planned_seeds(plan: ArtifactPlan) -> dict[int, int]:
-    """``{cell: seeds}`` of the cells of the comparisons of ``plan`` that declare an ``effect:`` (the most,
+    """``{cell: seeds}`` of the cells of the comparisons and trends of ``plan`` that declare an ``effect:`` (the most,
     where a cell serves several), from the artifact and its paper's family sizes alone.
     """
     spec = plan.spec
@@ -60,8 +60,8 @@ def plan_with_effects(spec, *, seeds: int | None = None, tiny: bool = False) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print, per paper (every paper by default), each comparison's effect, family, level, test, seeds
-    and power.
+    """Print, per paper (every paper by default), each planned comparison's or trend's effect, family,
+    level, test, seeds and power.
     """
     for paper in (argv or papers()):
         specs = [load(p) for p in artifact_paths(paper)]

@@ -81,6 +81,9 @@ claims:                      # each judged against the distribution of the runs
     where: {estimator: ellipsoid}
     log: true                    # the slope of log metric against log axis: an exponent
     sign: negative               # or between: [lo, hi] (e.g. [-0.6, -0.4] for "falls as 1/sqrt(N)")
+    # EDIT: the slope you expect and the spread of a seed's log error around the line, which plan the seeds
+    # (tested in the paper's Holm family: docs/extending.md, "Trend claims and Monte-Carlo values")
+    effect: {slope: -0.5, spread: 0.5}
   - id: offset_small_at_200
     by: paper
     section: "EDIT: where the paper says it"

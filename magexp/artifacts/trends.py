@@ -30,19 +30,31 @@ every axis value's seeds with replacement (as many as it has) and fitting again;
 quantiles of the slopes. The draws come from ``numpy.random.default_rng(TREND_SEED)``, axis values in
 ascending order: the same interval on every run, to the bit.
 
-**The verdict** (:func:`judge`): with ``between: [lo, hi]`` the claim ``holds`` when the interval lies inside
-``[lo, hi]``, ``does not hold`` when it lies wholly outside it, and ``cannot be decided`` otherwise; with
-``sign: negative`` it holds when the interval lies below 0, does not hold when it lies above, and cannot be
-decided when it holds 0 (``positive``: the mirror). An axis value with fewer than :data:`MIN_SEEDS` seeds
-makes the claim ``cannot be decided``: the whole range of ``n`` seeds covers their median with probability
-``1 - 2^(1-n)`` (0.5 at 2 seeds, 0.94 at 5), so below 5 no resampling of a value's seeds gives a 95 %
-interval. What could have been seen (:func:`detectable`): the distance beyond a boundary at which a true
-slope is caught with 80 % power, ``(z(0.975) + z(0.8)) se``, ``se = (hi - lo) / (2 z(0.975))`` read off the
-interval (as :func:`magexp.artifacts.significance.detectable_unpaired` reads a comparison's).
+**The test** (:func:`p_values`): the claim's one-sided bootstrap p, the share of the ``B = N_BOOT`` bootstrap
+slopes ``s*`` on the wrong side, ``(1 + #{s* >= 0}) / (B + 1)`` for ``sign: negative`` (``<= 0`` for
+``positive``) and, for ``between: [lo, hi]``, the larger of the two one-sided p (an intersection-union test:
+the slope is above ``lo`` and below ``hi``), ``max((1 + #{s* <= lo}), (1 + #{s* >= hi})) / (B + 1)``. Its
+converse (the slope lies on the other side, or outside the range) has ``p_contra``: ``(1 + #{s* <= 0}) /
+(B + 1)`` for a sign, and for a range twice the smaller of ``(1 + #{s* >= lo}) / (B + 1)`` (below ``lo``) and
+``(1 + #{s* <= hi}) / (B + 1)`` (above ``hi``), one test per side. The smallest p is ``1 / (B + 1)``.
 
-**Seeds.** A trend plans none: its cells get the artifact's ``seeds`` (or more, where a comparison's
-``effect:`` plans them, :mod:`magexp.artifacts.power`), and its evidence says what those seeds resolve. It is
-judged on its own 95 % interval, like a threshold, in no Holm family.
+**The verdict** (:func:`decide`): a trend is tested in its paper's Holm family beside the comparisons
+(:mod:`magexp.artifacts.families`, :func:`magexp.artifacts.comparisons.adjust`): it ``holds`` when its
+Holm-adjusted p is below :data:`~magexp.artifacts.significance.ALPHA`, ``does not hold`` when its converse's
+is, and ``cannot be decided`` otherwise. Alone (``m = 1``) it holds when at least 95 % of the bootstrap
+slopes lie inside the range (on the side of the sign): the one-sided 95 % bound, or the 90 % interval inside
+``[lo, hi]``; the evidence prints the 95 % interval as a description. An axis value with fewer than
+:data:`MIN_SEEDS` seeds gives no p and makes the claim ``cannot be decided``: the whole range of ``n`` seeds
+covers their median with probability ``1 - 2^(1-n)`` (0.5 at 2 seeds, 0.94 at 5), so below 5 no resampling of
+a value's seeds gives a 95 % interval. What could have been seen (:func:`detect`): the distance beyond a
+boundary at which a true slope is caught with 80 % power at the level Holm's rule judged it at,
+``(z(1 - level) + z(0.8)) se``, ``se`` the standard deviation of the bootstrap slopes.
+
+**Seeds** (:mod:`magexp.artifacts.power`): a trend that declares the slope it expects, ``effect: {slope: s,
+spread: sd}`` (``s`` inside the range or on the side of the sign; ``sd`` the standard deviation of a seed's
+value, of its log with ``log: true``, around the line), gets the seeds at which this test detects it with 80
+% power at its family's strictest Holm level, found by simulation before any run (:func:`magexp.artifacts.power.trend_power`); without
+one its cells get the artifact's ``seeds`` and its evidence says what they resolve.
 
 **On the figure** (:func:`band`): the fitted line and the pointwise 2.5-97.5 % band of the bootstrap lines,
 drawn by the kinds that plot a metric against a grid axis (``final``, ``sweep``) for the trends whose
@@ -59,7 +71,7 @@ from scipy.special import ndtri
 
 from magexp.artifacts.comparisons import HOLDS, UNDECIDED
 from magexp.artifacts.selection import restrict, values
-from magexp.artifacts.significance import POWER
+from magexp.artifacts.significance import ALPHA, POWER
 from magexp.artifacts.tables import STATS, matches
 from magexp.errors import MagexpError
 
@@ -135,6 +147,35 @@ def _range_error(claim) -> str:
     return ""
 
 
+def effect_error(claim) -> str:
+    """Why a trend's ``effect:`` is not allowed ('' when it is, or when it has none): ``{slope, spread}``,
+    numbers, ``spread > 0`` and ``slope`` strictly inside ``between`` (on the side of ``sign``): the slope the
+    seeds are planned to show holds the claim."""
+    e = claim.effect
+    if not e:
+        return ""
+    if set(e) != {"slope", "spread"} or not all(isinstance(v, (int, float)) for v in e.values()):
+        return "give exactly {slope: number, spread: number} for a trend"
+    if not e["spread"] > 0:
+        return "spread > 0 (the standard deviation of a seed's value around the line)"
+    lo, hi = claim.between or ((-np.inf, 0.0) if claim.sign == "negative" else (0.0, np.inf))
+    if not lo < e["slope"] < hi:
+        return f"its slope {e['slope']:g} must lie {required(claim)} (strictly): a slope outside plans no power to hold"
+    return ""
+
+
+def effect_words(effect: dict) -> str:
+    """A trend's ``effect:`` in words: "a slope of -0.5 (spread 0.3 per seed around the line)"."""
+    return f"a slope of {effect['slope']:g} (spread {effect['spread']:g} per seed around the line)"
+
+
+def axis_values(claim, grid: dict) -> tuple[float, ...]:
+    """The axis values a trend's points will sit at, as its fit takes them (logs with ``log``), ascending:
+    the grid's values of its ``axis`` (what the seeds are planned for before any run)."""
+    xs = sorted({float(v) for v in grid[claim.axis]})
+    return tuple(float(v) for v in (np.log(xs) if claim.log else xs))
+
+
 def points(claim, table: pd.DataFrame) -> tuple[np.ndarray, list[np.ndarray]]:
     """The axis values (ascending) of the cells ``claim.where`` selects and each one's per-seed values of
     the metric (the cells sharing a value pooled, in the order of cell and seed: the bootstrap draws the same
@@ -193,21 +234,40 @@ def _no_interval(claim, xs: np.ndarray, n: np.ndarray, y: np.ndarray, non_positi
     return ""
 
 
-def judge(claim, lo: float, hi: float) -> str:
-    """The verdict of a trend from its interval ``[lo, hi]`` (module docstring)."""
-    if not (np.isfinite(lo) and np.isfinite(hi)):
+def p_values(between, sign: str, slopes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The one-sided bootstrap p of a trend claiming its slope lies in ``between`` (else on the side of
+    ``sign``) and of its converse, from bootstrap slopes along the last axis of ``slopes`` (module docstring:
+    the test); vectorised over leading axes (the power simulations' data sets).
+    """
+    share = lambda wrong: (1 + np.sum(wrong, axis=-1)) / (slopes.shape[-1] + 1)
+    if len(between):
+        lo, hi = between
+        return (np.maximum(share(slopes <= lo), share(slopes >= hi)),
+                np.minimum(1.0, 2 * np.minimum(share(slopes >= lo), share(slopes <= hi))))
+    below, above = share(slopes >= 0), share(slopes <= 0)
+    return (below, above) if sign == "negative" else (above, below)
+
+
+def decide(p: float, p_contra: float, p_min: float, alpha: float = ALPHA) -> str:
+    """The verdict of a trend from its (Holm-adjusted) p-values (module docstring): :data:`UNDECIDED` when
+    even its smallest p is not below ``alpha`` or neither p is."""
+    if not p_min < alpha:
         return UNDECIDED
-    a, b = claim.between if claim.between else ((-np.inf, 0.0) if claim.sign == "negative" else (0.0, np.inf))
-    if a <= lo and hi <= b:
+    if p < alpha:
         return HOLDS
-    return FAILS if hi < a or lo > b else UNDECIDED
+    return FAILS if p_contra < alpha else UNDECIDED
 
 
-def detectable(lo: float, hi: float) -> float:
-    """How far beyond a boundary a true slope must lie for the interval to exclude the boundary with
-    :data:`~magexp.artifacts.significance.POWER` (module docstring)."""
-    z = float(ndtri(0.975))
-    return (z + float(ndtri(POWER))) * (hi - lo) / (2 * z)
+def detect(claim, se: float, level: float) -> tuple[float, str]:
+    """How far beyond a boundary a true slope must lie for the test at ``level`` to see it with
+    :data:`~magexp.artifacts.significance.POWER`, ``(z(1 - level) + z(POWER)) se``, and that in words."""
+    d = (float(ndtri(1 - level)) + float(ndtri(POWER))) * se
+    if not claim.between:
+        return d, f"a slope {d:.3g} beyond 0"
+    span = claim.between[1] - claim.between[0]
+    if 2 * d > span:
+        return d, f"no slope: the range ({span:.3g} wide) is narrower than twice {d:.3g}, the distance from each end"
+    return d, f"a slope {d:.3g} inside each end of the range"
 
 
 def required(claim) -> str:
@@ -217,32 +277,41 @@ def required(claim) -> str:
     return "below 0" if claim.sign == "negative" else "above 0"
 
 
-def words(claim, f: Fit) -> tuple[str, str, str]:
-    """``(verdict, short, evidence)`` of a trend: the slope, its interval, the range, and when it cannot be
-    decided why and what could have been seen."""
+@dataclass(frozen=True)
+class TrendTest:
+    """A trend's test on its runs: its ``claim`` and :class:`Fit`, the one-sided bootstrap ``p`` and ``p_contra``, the
+    smallest ``p_min`` (NaN without an interval), the verdict alone (at ``ALPHA``) and the texts."""
+
+    claim: object
+    fit: Fit
+    p: float
+    p_contra: float
+    p_min: float
+    result: str
+    short: str
+    evidence: str
+
+    def detect(self, level: float) -> tuple[float, str]:
+        """What the test at ``level`` sees with 80 % power (:func:`detect`)."""
+        return detect(self.claim, float(np.std(self.fit.boot[:, 0])), level)
+
+
+def tested(claim, table: pd.DataFrame) -> TrendTest:
+    """The test of ``claim`` on a runs table (module docstring): its fit, p-values, verdict alone and the
+    slope, its interval, the range and the points in words (why it cannot be decided where it has no p)."""
+    f = fit(claim, table)
     lo, hi = f.ci
-    result = judge(claim, lo, hi)
+    p, pc = p_values(claim.between, claim.sign, f.boot[:, 0]) if not f.why else (np.nan, np.nan)
+    p_min = 1 / (N_BOOT + 1) if not f.why else np.nan
     of = f"log {claim.stat} of {claim.metric} against log {claim.axis}" if claim.log \
         else f"{claim.stat} of {claim.metric} against {claim.axis}"
     shown = f" [95 % CI {lo:.3g}, {hi:.3g}]" if np.isfinite(lo) and np.isfinite(hi) else ""
     short = (f"slope of {of} {f.slope:.3g}{shown} ({len(f.x)} values, {int(f.n.min())} seeds or more each); "
-             f"required {required(claim)}")
-    if result == UNDECIDED:
-        short += "; cannot be decided: " + (f.why or _straddles(claim, lo, hi))
+             f"required {required(claim)}" + (f"; cannot be decided: {f.why}" if f.why else ""))
     points_text = ", ".join(f"{x:.4g}: {y:.4g} (n={k})" for x, y, k in zip(f.x, f.y, f.n))
-    return result, short, f"{short}; points ({'log ' if claim.log else ''}axis: statistic): {points_text}"
-
-
-def _straddles(claim, lo: float, hi: float) -> str:
-    """Why an interval decides nothing: it holds a boundary, with the slope beyond it that would be seen."""
-    width = hi - lo
-    far = f"a slope {detectable(lo, hi):.3g} beyond it would be seen with {POWER * 100:.0f} % power"
-    if not claim.between:
-        return f"the interval holds 0; {far.replace('beyond it', 'beyond 0')}"
-    span = claim.between[1] - claim.between[0]
-    if width > span:
-        return f"the interval is {width:.3g} wide, wider than the range ({span:.3g}); {far}"
-    return f"the interval holds a boundary of the range; {far}"
+    evidence = f"{short}; points ({'log ' if claim.log else ''}axis: statistic): {points_text}"
+    result = UNDECIDED if f.why else decide(float(p), float(pc), p_min)
+    return TrendTest(claim, f, float(p), float(pc), p_min, result, short, evidence)
 
 
 def band(claim, f: Fit, n_points: int = BAND_POINTS) -> pd.DataFrame:
