@@ -58,6 +58,9 @@ def cells(spec) -> list[dict[str, str]]:
 #: ``success.reference`` of data without a truth (recordings): the lowest ``success.metric`` that any
 #: run of the artifact reached on the same scenario and objective (the best optimum found by any method)
 BEST = "best"
+#: the columns :func:`collect` adds to the runs' own (``offset_at_face`` where a config has a numeric offset
+#: interval), beside ``best_<metric>`` with ``success: {reference: best}`` and each cell's settings
+TABLE_COLUMNS = ("cell", "setting", "succeeded", "offset_at_face")
 
 
 def best_of(table: pd.DataFrame, metric: str) -> pd.Series:
