@@ -8,8 +8,8 @@ from omegaconf import OmegaConf
 
 from magexp import paths
 
-from magexp.artifacts.plan import shrink
-from magexp.artifacts.run_columns import objective_of, run_columns
+from magexp.artifacts.plan import objective_of, shrink
+from magexp.artifacts.run_columns import run_columns
 from magexp.core.recordings import exists
 from magexp.errors import MagexpError
 from magexp.estimators.base import applies_to

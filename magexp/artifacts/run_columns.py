@@ -26,7 +26,7 @@ import inspect
 from hydra.utils import get_class
 
 from magexp.artifacts.formats import MEASURED
-from magexp.artifacts.plan import BEST, TABLE_COLUMNS
+from magexp.artifacts.plan import BEST, TABLE_COLUMNS, objective_of
 from magexp.core.metrics import METRICS
 from magexp.problems import problem_class
 from magexp.run.runner import RUN_COLUMNS
@@ -42,26 +42,6 @@ def _declared(node) -> tuple:
     """The ``METRICS`` of the class a config node's ``_target_`` names (none without a node)."""
     target = node.get("_target_") if isinstance(node, dict) else None
     return tuple(getattr(_class(target), "METRICS", ())) if target else ()
-
-
-def objective_of(cfg: dict) -> str:
-    """The objective of a run's resolved config: its own, its scenario's, else the scenario class's.
-
-    Parameters
-    ----------
-    cfg : dict
-        A resolved run config.
-
-    Returns
-    -------
-    str
-        The objective's name (empty when none is given).
-    """
-    scenario = cfg.get("scenario") or {}
-    found = cfg.get("objective") or scenario.get("objective")
-    if found is None and scenario.get("_target_"):
-        found = getattr(_class(scenario["_target_"]), "objective", None)
-    return str(found or "")
 
 
 def _parameters(problem, scenario: dict) -> tuple:

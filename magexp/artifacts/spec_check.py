@@ -8,13 +8,12 @@ run) and once more on the stored runs a redraw judges (:func:`check_claims`):
 
 * every claim's ``metric`` is a pandas expression (``pandas.eval``) of the columns its runs will have:
   the cell's settings (its grid, cases and base keys, dotted names written as they are,
-  :func:`magexp.artifacts.selection.expression`), the columns the runs table adds (:data:`TABLE_COLUMNS`,
-  ``best_<success metric>``) and the metrics a run writes (every column of a committed
-  ``results/<paper>/*_runs.csv``: the runs are the code's output, :func:`written_columns`; where there is
-  none, a copy without ``results/``, only the expression's syntax is checked); the check evaluates it on
-  one row per planned cell with the same function the claim is judged with
-  (:func:`magexp.artifacts.selection.column`), so the two agree. A metric that only a new estimator
-  writes is known once its runs are committed (reproduce the artifact once without the claim);
+  :func:`magexp.artifacts.selection.expression`) and every column its planned runs may write, the union of the
+  declarations of their writers (:func:`magexp.artifacts.run_columns.planned_columns`: the runner's, the core
+  metrics', the problem's, the scenario's, the estimator's and an analysis step's, and the columns the runs table
+  adds), so a metric a new estimator declares is known before any run, with or without ``results/``; the check
+  evaluates it on one row per planned cell with the same function the claim is judged with
+  (:func:`magexp.artifacts.selection.column`), so the two agree;
 * every claim's ``where`` (a threshold's, a success rate's, a trend's) and each of a comparison's ``cells``
   selects at least one planned cell (a key that is no
   setting must be a runs column, a row filter such as ``succeeded``, or ``seeds``);
@@ -35,8 +34,8 @@ import re
 
 import pandas as pd
 
-from magexp.artifacts.plan import setting_of
-from magexp.artifacts.run_columns import cell_configs, objective_of, planned_columns
+from magexp.artifacts.plan import objective_of, setting_of
+from magexp.artifacts.run_columns import cell_configs, planned_columns
 from magexp.artifacts.selection import cell_settings, column, expression, restrict
 from magexp.artifacts.tables import matches
 from magexp.errors import MagexpError

@@ -66,9 +66,9 @@ class GyroAidedCalibration(CalibrationProblem):
     #: its 17 parameters (:meth:`pack_all`'s order): the 12 of the calibration, then :data:`EXTRA`
     PARAMETERS = {p: names + EXTRA for p, names in CalibrationProblem.PARAMETERS.items()}
     #: the columns :meth:`metrics` writes (``gyro_bias_rest_*`` and ``gyro_bias_difference`` with a rest recording)
-    METRICS = ("fg", "field_rms", "vector_residual_fraction", "spread_after", *EXTRA, *(f"gyro_bias_rest_{a}" for a in "xyz"),
-               "gyro_bias_difference", "field_azimuth_deg", "field_elevation_deg", "condition_number",
-               "weakest_relative_sv", "weakest_combination")
+    METRICS = ("fg", "field_rms", "vector_residual_fraction", "spread_after", *EXTRA,
+               *(f"gyro_bias_rest_{a}" for a in "xyz"), "gyro_bias_difference", "field_azimuth_deg",
+               "field_elevation_deg", "condition_number", "weakest_relative_sv", "weakest_combination")
     PARAMETER_METRICS = ("se_",)
     n_params = 17
 

@@ -34,7 +34,8 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
 
     objective = "ship"
     #: its 12 parameters (``theta``'s order): ``K11``...``K33``, ``Bp1``...``Bp3``
-    PARAMETERS = {"forward": (*(f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)), *(f"Bp{i + 1}" for i in range(3)))}
+    PARAMETERS = {"forward": (*(f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)),
+                              *(f"Bp{i + 1}" for i in range(3)))}
     #: the columns :meth:`metrics` writes (the errors with a known truth); each parameter's estimate, and its
     #: ``truth_<parameter>`` with a known truth
     METRICS = ("fit_rms", "ls_fit_rms", "k_vs_ls", "bp_vs_ls", "k_error", "bp_error", "offset_error")
