@@ -3,17 +3,20 @@ artifact passes it; a metric names dotted config keys as written, evaluated and 
 be evaluated is a bug, never a verdict. Each spec mistake through the command line: ``tests/test_bad_input.py``
 (its ``spec_mistake`` rows)."""
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
 
+from magexp import paths
 from magexp.artifacts.claims import Claim, NotEvaluable, evaluate
 from magexp.artifacts.paper_spec import papers
-from magexp import paths
-from magexp.artifacts.plan import load_spec, paper_specs, plan_artifact
+from magexp.artifacts.plan import paper_specs, plan_artifact
 from magexp.artifacts.reproduce import skipped_for_data
-from magexp.artifacts.selection import column, expression
 from magexp.artifacts.run_columns import planned_columns
+from magexp.artifacts.selection import column, expression
+from magexp.artifacts.spec import parse
 from magexp.artifacts.spec_check import check_claims, check_plan, planned_table
 from magexp.errors import MagexpError
 from magexp.estimators.lm import LevenbergMarquardt
@@ -74,28 +77,21 @@ def test_a_claim_that_cannot_be_evaluated_is_a_bug_not_a_verdict():
             check_claims(spec, runs)
 
 
-ARTIFACT = """
-name: toy_fig1
-title: "t"
-kind: final
-seeds: 2
-base: [scenario=ding2024_exp1, scenario.n_readings=40]
-grid:
-  scenario.noise: [1, 10]
-  estimator: [lm]
-plot: {x: scenario.noise, hue: estimator, metric: fun}
-claims:
-  - {id: steps, text: "t", kind: threshold, metric: METRIC, where: {estimator: lm}, op: "<=", value: 100}
-"""
+def _toy(metric: str):
+    """An artifact of ``lm`` at two noise levels with one threshold claim on ``metric``."""
+    claim = {"id": "steps", "text": "t", "kind": "threshold", "metric": metric, "where": {"estimator": "lm"},
+             "op": "<=", "value": 100}
+    return parse({"title": "t", "kind": "final", "seeds": 2, "base": ["scenario=ding2024_exp1"],
+                  "grid": {"scenario.noise": [1, 10], "estimator": ["lm"]}, "plot": {"x": "scenario.noise"},
+                  "claims": [claim]}, Path("toy_fig1.yaml"))
 
 
-def test_a_metric_an_estimator_declares_is_known_before_any_run(tmp_path, monkeypatch):
+def test_a_metric_an_estimator_declares_is_known_before_any_run(monkeypatch):
     """The census comes from the writers' declarations, not from committed runs: a metric the estimator class
     declares (``METRICS``) passes the check with no run anywhere; undeclared, or misspelt, it is refused in one
     line naming the artifact, the claim and the nearest columns."""
     def plan(metric):
-        (tmp_path / "toy_fig1.yaml").write_text(ARTIFACT.replace("METRIC", metric))
-        return plan_artifact(load_spec(tmp_path / "toy_fig1.yaml"), seeds=1)
+        return plan_artifact(_toy(metric), seeds=1)
 
     with pytest.raises(MagexpError, match="toy_fig1.claims\\[steps\\].metric='lm_steps'.*no column"):
         check_plan(plan("lm_steps"))

@@ -95,12 +95,12 @@ def planned_columns(plan) -> frozenset:
     Parameters
     ----------
     plan : ArtifactPlan
-        The artifact's planned cells and configs.
+        What :func:`magexp.artifacts.plan.plan_artifact` planned: its cells, their configs and its spec's ``success``.
 
     Returns
     -------
     frozenset of str
-        The column names.
+        The names a claim's metric may use beside pandas' words.
     """
     found = set(TABLE_COLUMNS) | {k for cell in plan.cells for k in cell}
     for cfg in cell_configs(plan).values():
