@@ -219,6 +219,7 @@ class RandomSearch:
     label = "random search"
     smoke = {"n_samples": 8}
     references = "Brooks 1958, A discussion of random methods for seeking maxima"
+    METRICS = ("draws",)  # the columns of its FitResult.metrics
 
     def __init__(self, *, name: str = "toy", n_samples: int = 200):
         self.name = name
@@ -242,7 +243,8 @@ class RandomSearch:
         best = x[int(np.argmin(cost))]
         fun = problem.cost_direct(best)
         return FitResult(x=best, fun=fun, nit=1, nfev=self.n_samples, history=np.array([fun]),
-                         history_nfev=np.array([self.n_samples]), message=f"best of {self.n_samples} draws")
+                         history_nfev=np.array([self.n_samples]), metrics={"draws": self.n_samples},
+                         message=f"best of {self.n_samples} draws")
 '''
 
 TOY_CONFIG = """
@@ -274,6 +276,9 @@ grid:
   estimator: [toy, lm]
 plot: {x: scenario.noise, hue: estimator, metric: fun, xscale: log}
 summarise: [{quantity: final_rms, metric: fun}]
+claims:
+  - {id: draws, role: sanity, text: "Random search evaluates its draws", kind: threshold, metric: draws,
+     where: {estimator: toy}, op: ">=", value: 1}
 caption: "Median over {seeds} seeds."
 """
 
@@ -394,6 +399,12 @@ def test_following_extending_adds_an_estimator_a_paper_and_a_reader(copy, tmp_pa
     runs = pd.read_csv(out / "toy" / "toy_fig1_runs.csv")
     assert set(runs.estimator) == {"toy", "lm"} and len(runs) == 8
     assert (runs[runs.estimator == "toy"].nfev == 8).all()  # --tiny: the class's smoke size
+    assert (runs[runs.estimator == "toy"].draws == 8).all()  # the column it declares, claimed before any run
+    (copy / "experiments" / "toy" / "toy_fig1.yaml").write_text(TOY_ARTIFACT.lstrip().replace("metric: draws", "metric: drawz"))
+    typo = magexp(copy, "reproduce", "toy", "--tiny", "--out", tmp_path / "typo", cwd=work)
+    assert typo.returncode == 2 and typo.stderr.count("\n") == 1 and not (tmp_path / "typo").exists(), typo.stderr
+    assert "toy_fig1.claims[draws].metric='drawz'" in typo.stderr and "nearest: draws" in typo.stderr, typo.stderr
+    (copy / "experiments" / "toy" / "toy_fig1.yaml").write_text(TOY_ARTIFACT.lstrip())
 
     (copy / "magexp" / "core" / "readers" / "toy.py").write_text(TOY_FORMAT.lstrip())  # one module
     toy_recording(tmp_path / "turns.toy")

@@ -58,6 +58,9 @@ def cells(spec) -> list[dict[str, str]]:
 #: ``success.reference`` of data without a truth (recordings): the lowest ``success.metric`` that any
 #: run of the artifact reached on the same scenario and objective (the best optimum found by any method)
 BEST = "best"
+#: the columns :func:`collect` adds to the runs' own (``offset_at_face`` where a config has a numeric offset
+#: interval), beside ``best_<metric>`` with ``success: {reference: best}`` and each cell's settings
+TABLE_COLUMNS = ("cell", "setting", "succeeded", "offset_at_face")
 
 
 def best_of(table: pd.DataFrame, metric: str) -> pd.Series:
@@ -112,14 +115,32 @@ def offset_at_face(table: pd.DataFrame, configs: list[dict]) -> pd.Series | None
     return pd.Series(np.where(known, on.sum(axis=1), np.nan), index=table.index, name="offset_at_face")
 
 
+def objective_of(cfg: dict) -> str:
+    """The objective of a run's config: its own, its scenario's, else the scenario class's (imported, not built).
+
+    Parameters
+    ----------
+    cfg : dict or DictConfig
+        A run config, composed or resolved.
+
+    Returns
+    -------
+    str
+        The objective's name (empty when none is given).
+    """
+    scenario = cfg.get("scenario") or {}
+    found = cfg.get("objective") or scenario.get("objective")
+    if found is None and scenario.get("_target_"):
+        found = getattr(get_class(scenario["_target_"]), "objective", None)
+    return str(found or "")
+
+
 def applicable(cfg: DictConfig) -> bool:
     """Whether the run's estimator applies to its problem: :func:`magexp.estimators.base.applies_to`
     on the classes named by the config (nothing is built or simulated).
     """
-    objective = cfg.get("objective") or cfg.scenario.get("objective")
-    if objective is None:  # the scenario class fixes it
-        objective = getattr(get_class(cfg.scenario._target_), "objective", None)
-    if objective is None:
+    objective = objective_of(cfg)
+    if not objective:
         return True
     return applies_to(get_class(cfg.estimator._target_), problem_class(objective))[0]
 

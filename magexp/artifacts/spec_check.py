@@ -8,13 +8,12 @@ run) and once more on the stored runs a redraw judges (:func:`check_claims`):
 
 * every claim's ``metric`` is a pandas expression (``pandas.eval``) of the columns its runs will have:
   the cell's settings (its grid, cases and base keys, dotted names written as they are,
-  :func:`magexp.artifacts.selection.expression`), the columns the runs table adds (:data:`TABLE_COLUMNS`,
-  ``best_<success metric>``) and the metrics a run writes (every column of a committed
-  ``results/<paper>/*_runs.csv``: the runs are the code's output, :func:`written_columns`; where there is
-  none, a copy without ``results/``, only the expression's syntax is checked); the check evaluates it on
-  one row per planned cell with the same function the claim is judged with
-  (:func:`magexp.artifacts.selection.column`), so the two agree. A metric that only a new estimator
-  writes is known once its runs are committed (reproduce the artifact once without the claim);
+  :func:`magexp.artifacts.selection.expression`) and every column its planned runs may write, the union of the
+  declarations of their writers (:func:`magexp.artifacts.run_columns.planned_columns`: the runner's, the core
+  metrics', the problem's, the scenario's, the estimator's and an analysis step's, and the columns the runs table
+  adds), so a metric a new estimator declares is known before any run, with or without ``results/``; the check
+  evaluates it on one row per planned cell with the same function the claim is judged with
+  (:func:`magexp.artifacts.selection.column`), so the two agree;
 * every claim's ``where`` (a threshold's, a success rate's, a trend's) and each of a comparison's ``cells``
   selects at least one planned cell (a key that is no
   setting must be a runs column, a row filter such as ``succeeded``, or ``seeds``);
@@ -31,54 +30,19 @@ evaluated when it is judged is a bug of this check (:func:`magexp.artifacts.clai
 from __future__ import annotations
 
 import difflib
-import functools
 import re
-from pathlib import Path
 
 import pandas as pd
-from hydra.utils import get_class
 
-from magexp.artifacts.plan import setting_of
+from magexp.artifacts.plan import objective_of, setting_of
+from magexp.artifacts.run_columns import cell_configs, planned_columns
 from magexp.artifacts.selection import cell_settings, column, expression, restrict
 from magexp.artifacts.tables import matches
 from magexp.errors import MagexpError
-from magexp import paths
 
-#: the columns every runs table has beside its metrics and settings (:func:`magexp.artifacts.plan.collect`)
-TABLE_COLUMNS = ("cell", "seed", "setting", "scenario", "estimator", "objective", "succeeded", "offset_at_face")
 #: names an expression may use that are no column (``pandas.eval``'s words)
 _WORDS = {"and", "or", "not", "in", "True", "False"}
 _NAME = re.compile(r"(?<![\w.])[A-Za-z_]\w*(?:\.\w+)*(?!\w*\s*\()")
-
-
-@functools.lru_cache(maxsize=8)
-def _headers(root: str) -> frozenset:
-    """Every column named in the header of a runs CSV under ``root`` (first lines only: cheap)."""
-    names = set()
-    for path in Path(root).glob("*/*_runs.csv"):
-        with open(path, encoding="utf-8") as fh:
-            names.update(c.strip().strip('"') for c in fh.readline().rstrip("\n").split(","))
-    return frozenset(n for n in names if n)
-
-
-def written_columns() -> frozenset:
-    """The metric columns a run writes: every column of the committed runs CSVs (``results/``).
-
-    Returns
-    -------
-    frozenset of str
-        The column names.
-    """
-    return _headers(str(paths.RESULTS))
-
-
-def _objective(cfg: dict) -> str:
-    """The objective of a run's resolved config: its own, its scenario's, else the scenario class's."""
-    scenario = cfg.get("scenario") or {}
-    found = cfg.get("objective") or scenario.get("objective")
-    if found is None and scenario.get("_target_"):
-        found = getattr(get_class(scenario["_target_"]), "objective", None)
-    return str(found or "")
 
 
 def _numeric(values: list):
@@ -103,20 +67,17 @@ def planned_table(plan) -> pd.DataFrame:
     pandas.DataFrame
         The skeleton runs table the claims are checked on.
     """
-    first = {}
-    for k, (ci, _) in enumerate(plan.index):
-        first.setdefault(ci, plan.configs[k])
+    first = cell_configs(plan)
     rows = []
     for ci, cell in enumerate(plan.cells):
         cfg = first.get(ci, {})
         rows.append({"cell": ci, "seed": 0, **cell, "setting": setting_of(plan.overrides[ci]),
                      "scenario": (cfg.get("scenario") or {}).get("name", ""),
-                     "estimator": (cfg.get("estimator") or {}).get("name", ""), "objective": _objective(cfg)})
+                     "estimator": (cfg.get("estimator") or {}).get("name", ""), "objective": objective_of(cfg)})
     table = pd.DataFrame(rows)
     for key in {k for cell in plan.cells for k in cell}:
         table[key] = _numeric(table[key].tolist())
-    metrics = sorted((written_columns() | set(TABLE_COLUMNS) | {f"best_{plan.spec.success.metric}"})
-                     - set(table.columns))
+    metrics = sorted(planned_columns(plan) - set(table.columns))
     return pd.concat([table, pd.DataFrame(1.0, index=table.index, columns=metrics)], axis=1)
 
 
@@ -180,8 +141,6 @@ def check_metric(where: str, metric: str, table: pd.DataFrame, settings: dict) -
     text = re.sub(r"`[^`]*`", " ", expression(metric, table.columns))
     unknown = [n for n in _NAME.findall(text) if n not in table.columns and n not in _WORDS]
     bad = [n.strip("`") for n in re.findall(r"`[^`]*`", metric) if n.strip("`") not in table.columns] + unknown
-    if bad and not written_columns():  # no committed runs name the metrics (a copy without results/): syntax only
-        table, bad = table.assign(**{n: 1.0 for n in bad}), []
     if bad:
         near = difflib.get_close_matches(bad[0], [str(c) for c in table.columns], n=3, cutoff=0.6)
         raise MagexpError(f"{where}={metric!r} is not allowed: {bad[0]!r} is no column of its runs "

@@ -121,6 +121,11 @@ def spread(magnitudes) -> float:
     return float(mags.std() / mags.mean()) if mags.size else float("nan")
 
 
+#: the columns :func:`recording_metrics` writes (a recording's run; the ``heldout_*`` ones with a held-out block)
+RECORDING_METRICS = ("spread_before", "spread_after", "coverage_cells", "heldout_spread", "heldout_spread_lo",
+                     "heldout_spread_hi")
+
+
 def recording_metrics(problem, theta) -> dict:
     """Spread of a recording before and after the fit, on the fit's readings and on the held-out block
     (``dataset.extra["heldout"]``, :class:`magexp.scenarios.recording.RecordingScenario`), and the direction

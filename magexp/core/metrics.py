@@ -11,6 +11,16 @@ from magexp.core.bounds import cramer_rao
 from magexp.core.identifiability import recording_metrics
 from magexp.core.outcomes import reach_level
 
+#: the errors :func:`bound_metrics` divides by their Cramér-Rao bound (``<name>_bound``, ``<name>_error_ratio``)
+BOUNDED = ("offset", "gram", "matrix")
+#: the columns :func:`evaluate` writes for every problem, beside the problem's, the recording's
+#: (:data:`magexp.core.identifiability.RECORDING_METRICS`) and the estimator's own (their ``METRICS``);
+#: conditional: ``noise_floor`` (a known noise level), ``truth_fun``, ``converged`` and ``nfev_to_floor`` (a
+#: truth), ``iterations_to_1.1`` and ``nfev_to_1.1`` (a finite history), the bound's (a Cramér-Rao bound;
+#: ``rms_bound`` for an RMS objective, else ``residual_rms_bound``)
+METRICS = ("fun", "nit", "nfev", "optimizer_flag", "noise_floor", "truth_fun", "converged", "iterations_to_1.1",
+           "nfev_to_1.1", "nfev_to_floor", "rms_bound", "residual_rms_bound", "identifiable", "rms_ratio",
+           *(f"{name}_bound" for name in BOUNDED), *(f"{name}_error_ratio" for name in BOUNDED))
 #: :func:`truth_cost` of each live problem (a problem's data and truth do not change)
 _TRUTH_COST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -144,7 +154,7 @@ def bound_metrics(problem, measured: dict, crb: dict | bool | None = None) -> di
     out = {name: crb["rms_floor"], "identifiable": crb["identifiable"]}
     if crb["rms_floor"] > 0:  # residual RMS per component against the expected floor
         out["rms_ratio"] = rms(problem.residuals(measured["x"])) / crb["rms_floor"]
-    for name in ("offset", "gram", "matrix"):
+    for name in BOUNDED:
         bound = crb.get(f"{name}_bound")
         if bound is not None:
             out[f"{name}_bound"] = bound  # inf: the data cannot identify it

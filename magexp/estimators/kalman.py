@@ -40,6 +40,9 @@ from magexp.errors import check, check_nonnegative, check_positive_int
 from magexp.estimators.base import check_applies
 from magexp.estimators.result import FitResult
 
+#: the components of the field ``Be`` the analysis step :class:`FieldKalmanFilter` estimates (its columns)
+FIELD = ("Be1", "Be2", "Be3")
+
 
 def kalman_update(x, p, h, y, q, sigma2: float):
     """One step (1)-(4) of the module docstring (Yan & Zhou 2022, sec 2.1)."""
@@ -142,6 +145,8 @@ class KalmanFilter(_Tuning):
     references = "Yan & Zhou 2022, sec 2.1"
     label = "KF"
     smoke = {"n_steps": 12}
+    #: the columns its fit writes (:meth:`fit`'s ``metrics``)
+    METRICS = ("steps_to_ls", "steps_to_ls_censored", "steps_to_ls_every_step", "steps_to_ls_every_step_censored")
 
     def __init__(self, *, name: str = "kf", p0: float = 1.0, q: float = 0.0, sigma2: float = 3333.0,
                  offset_scale: float = 3000.0, n_steps: int = 600, agree_k: float = 1e-4, agree_bp: float = 1.0,
@@ -221,6 +226,8 @@ class FieldKalmanFilter:
     """
 
     references = "Yan & Zhou 2022, sec 3.2, Fig 4"
+    #: the columns the step writes: the errors, each component of ``Be`` and its ``truth_`` value
+    METRICS = ("be_rms", "be_max_rel", "be_direct_rms", "be_direct_max_rel", *FIELD, *(f"truth_{n}" for n in FIELD))
     needs = ("linear_design",)
 
     def __init__(self, *, name: str = "field_kalman", p0: float = 1e10, q: float = 0.0, sigma2: float = 3333.0,
@@ -243,7 +250,7 @@ class FieldKalmanFilter:
         start = min(int(self.settle * self.n_steps) + 1, self.n_steps)
         rms, rel = field_errors(states[start:], field)
         d_rms, d_rel = field_errors(direct_field(k, bp, ds.attitude, ds.readings), field)
-        names = ["Be1", "Be2", "Be3"]
+        names = list(FIELD)
         result.metrics.update({"be_rms": rms, "be_max_rel": rel, "be_direct_rms": d_rms, "be_direct_max_rel": d_rel,
                                **dict(zip(names, map(float, states[-1]))),
                                **{f"truth_{n}": float(v) for n, v in zip(names, field)}})

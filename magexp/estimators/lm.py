@@ -81,6 +81,9 @@ class LevenbergMarquardt:
     references = "Levenberg 1944; Marquardt 1963; More 1978 (MINPACK)"
     label = ""
     smoke = {"max_nfev": 50}
+    #: the columns its fit writes: :func:`offset_check`'s, in a gauge-fixed fit (``gauge: symmetric``, a
+    #: total-field problem)
+    METRICS = ("offset_standard_error", "offset_determined")
     needs = ("residuals",)
     iterative = True
 

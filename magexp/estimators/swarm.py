@@ -121,6 +121,7 @@ class SwarmOptimizer:
     iterative = True
     label = ""
     smoke = {"n_particles": 6, "n_iterations": 6}
+    METRICS = ("on_boundary",)  # the columns its fit writes (:meth:`fit`'s ``metrics``)
 
     def __init__(self, *, name: str = "pso", n_particles: int = 50, n_iterations: int = 800,
                  velocity=None, init=None, velocity_clamp: float = 0.2,

@@ -148,6 +148,7 @@ class TwoStep:
     references = "Alonso & Shuster 2002 (TWOSTEP), J. Astronaut. Sci. 50(4):433-451 and 477-490"
     label = ""
     smoke = {"max_iter": 12}
+    METRICS = ("twostep_centred_fun",)  # the columns its fit writes (:meth:`fit`'s ``metrics``)
     needs = ("total_field",)
     iterative = True
     monotone_history = False  # it minimises J (squared magnitudes), not the problem's RMS of magnitudes

@@ -229,6 +229,13 @@ class CalibrationProblem:
 
     n_params = 12
     capabilities = frozenset({"cost", "residuals"})
+    #: the parameter names of each parameterisation (:meth:`parameter_names`): the runs table's estimate columns
+    PARAMETERS = {p: (*(f"{m}{i + 1}{j + 1}" for i in range(3) for j in range(3)), *(f"{o}{i + 1}" for i in range(3)))
+                  for p, (m, o) in {"inverse": ("Minv", "I"), "forward": ("S", "b")}.items()}
+    #: the columns :meth:`metrics` writes (``fg`` with known attitudes, the errors with a known truth)
+    METRICS = ("fg", "gram_error", "offset_error", "matrix_error", "param_matrix_error", "param_offset_error")
+    #: the prefixes of the columns :meth:`metrics` names after each parameter (``se_`` writes ``se_<parameter>``)
+    PARAMETER_METRICS: tuple = ()
 
     def __init__(self, dataset, search, *, parameterisation: str = "inverse"):
         if parameterisation not in PARAMETERISATIONS:
@@ -365,9 +372,7 @@ class CalibrationProblem:
             ``Minv11``...``Minv33``, ``I1``...``I3`` (inverse, Ding 2024's ``M^-1`` and ``I``) or ``S11``...``S33``,
             ``b1``...``b3`` (forward, Yuan 2018's ``S`` and ``b``).
         """
-        m = "S" if self.parameterisation == "forward" else "Minv"
-        o = "b" if self.parameterisation == "forward" else "I"
-        return [f"{m}{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"{o}{i + 1}" for i in range(3)]
+        return list(self.PARAMETERS[self.parameterisation])
 
     # -- metrics ---------------------------------------------------------------------------
     def metrics(self, theta: np.ndarray) -> dict:

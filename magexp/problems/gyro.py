@@ -63,6 +63,13 @@ class GyroAidedCalibration(CalibrationProblem):
 
     objective = "gyro"
     objective_is_rms = False
+    #: its 17 parameters (:meth:`pack_all`'s order): the 12 of the calibration, then :data:`EXTRA`
+    PARAMETERS = {p: names + EXTRA for p, names in CalibrationProblem.PARAMETERS.items()}
+    #: the columns :meth:`metrics` writes (``gyro_bias_rest_*`` and ``gyro_bias_difference`` with a rest recording)
+    METRICS = ("fg", "field_rms", "vector_residual_fraction", "spread_after", *EXTRA,
+               *(f"gyro_bias_rest_{a}" for a in "xyz"), "gyro_bias_difference", "field_azimuth_deg",
+               "field_elevation_deg", "condition_number", "weakest_relative_sv", "weakest_combination")
+    PARAMETER_METRICS = ("se_",)
     n_params = 17
 
     def __init__(self, dataset, search, *, parameterisation: str = "forward", bias_bound_deg_s: float = 10.0,
@@ -209,10 +216,6 @@ class GyroAidedCalibration(CalibrationProblem):
                                                   r.mean(axis=0))
         w = canonical(w)
         return self.pack_all(w, o, w @ (self.dataset.readings[0] - o), np.zeros(3))
-
-    def parameter_names(self) -> list[str]:
-        """The names of the 17 parameters, in :meth:`pack_all`'s order."""
-        return super().parameter_names() + list(EXTRA)
 
     def metrics(self, theta) -> dict:
         """``fg``; ``vector_residual_fraction``: RMS of ``|R_jᵀh - W(B_j - b)|`` over ``F``;

@@ -33,6 +33,13 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
     """
 
     objective = "ship"
+    #: its 12 parameters (``theta``'s order): ``K11``...``K33``, ``Bp1``...``Bp3``
+    PARAMETERS = {"forward": (*(f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)),
+                              *(f"Bp{i + 1}" for i in range(3)))}
+    #: the columns :meth:`metrics` writes (the errors with a known truth); each parameter's estimate, and its
+    #: ``truth_<parameter>`` with a known truth
+    METRICS = ("fit_rms", "ls_fit_rms", "k_vs_ls", "bp_vs_ls", "k_error", "bp_error", "offset_error")
+    PARAMETER_METRICS = ("truth_",)
 
     def __init__(self, dataset, search):
         super().__init__(dataset, search, parameterisation="forward")
@@ -43,10 +50,6 @@ class ShipMagnetization(LinearVectorModel, CalibrationProblem):
         self._floor = float(np.sum((self._y - q @ z) ** 2))  # rho: the least-squares residual
         self._map = (r @ theta_to_state(np.eye(self.n_params))).reshape(self.n_params, -1)  # theta -> vec(R x)
         self._target = z.ravel()  # vec(Z)
-
-    def parameter_names(self) -> list[str]:
-        """The names of the 12 parameters, in ``theta``'s order."""
-        return [f"K{i + 1}{j + 1}" for i in range(3) for j in range(3)] + [f"Bp{i + 1}" for i in range(3)]
 
     def predict(self, thetas: np.ndarray) -> np.ndarray:
         """Modelled readings ``C x`` for every particle, shape ``(n, N, 3)``."""

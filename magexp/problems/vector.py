@@ -87,6 +87,8 @@ class VectorCalibration(LinearVectorModel, CalibrationProblem):
     """
 
     objective = "vector"
+    #: the columns :meth:`metrics` writes: the calibration's, ``field_rms`` and (with a truth) ``noise_floor``
+    METRICS = (*CalibrationProblem.METRICS, "field_rms", "noise_floor")
     objective_is_rms = False  # F is a sum of norms: the RMS floor is not drawn against it
 
     def __init__(self, dataset, search, *, parameterisation: str = "forward"):

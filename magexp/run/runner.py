@@ -21,6 +21,10 @@ from magexp.problems import make_problem, problem_class
 from magexp.core.seeding import run_sequences, scenario_stream
 
 
+#: the columns :func:`run_batch` writes beside :func:`magexp.core.metrics.evaluate`'s
+RUN_COLUMNS = ("scenario", "estimator", "objective", "seed", "wall_time")
+
+
 def build(node, what: str):
     """Instantiate a ``_target_`` node with plain-Python arguments, one-line errors. ``what`` begins with
     what the node is (``estimator 'lm'``): every ``_target_`` in the node is checked first

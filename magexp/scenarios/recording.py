@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from magexp.core.dataset import Dataset
+from magexp.core.identifiability import RECORDING_METRICS
 from magexp.core.recording import evenly_spaced, recording_dataset
 from magexp.core.recordings import exists, load_recording
 from magexp.errors import MagexpError, check, check_nonnegative, check_positive_int
@@ -73,6 +74,10 @@ class RecordingScenario:
         ``offset_width`` is None, else within that fraction of the readings' sphere radius of its centre,
         Yuan's 100 mG of 527 mG being 0.19).
     """
+
+    #: the columns its runs write beside the problem's: a recording's spread and coverage
+    #: (:func:`magexp.core.identifiability.recording_metrics`, on its dataset's ``all_readings`` and ``heldout``)
+    METRICS = RECORDING_METRICS
 
     def __init__(self, *, name: str, file: str, objective: str = "scalar", unit: str | None = None,
                  format: str = "auto", mag_axes: str | None = None, gyro_axes: str | None = None,
