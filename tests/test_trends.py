@@ -49,6 +49,7 @@ def test_a_known_exponent_inside_the_range_holds_and_outside_does_not():
     assert outside.result == claims.FAILS == trends.FAILS and not outside.holds
     assert abs(inside.observed + 0.5) < 0.05 and abs(outside.observed + 1.0) < 0.05
     assert "required between -0.6 and -0.4" in inside.short and "95 % CI" in inside.short
+    assert "its converse: p = " in outside.short and "its converse" not in inside.short
 
 
 def test_two_seeds_cannot_decide_and_say_why():

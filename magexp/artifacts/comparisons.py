@@ -198,7 +198,7 @@ def _adjust_family(family: list, alone: bool) -> None:
             o.detectable, o.detectable_words = o.detect(o.level)
         o.result = (o.rule or decide)(p, pc, o.p_min)
         o.holds = o.result == HOLDS
-        note = _adjusted_note(o, m)
+        note = _adjusted_note(o, m) + (f"; its converse: p = {pc:.3g}" if o.rule is not None and pc < ALPHA else "")
         o.short, o.evidence = f"{o.short}; {note}", f"{o.evidence}; {note}"
 
 
