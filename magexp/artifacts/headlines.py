@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from magexp.artifacts.claims import evaluate, interpolate
-from magexp.artifacts.comparisons import HOLDS, NO_DIFFERENCE, UNDECIDED, adjust
+from magexp.artifacts.claims import FAILS, evaluate, interpolate
+from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, adjust
 from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
@@ -64,8 +64,9 @@ def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple
 
 def headline_verdict(results: list[str | None]) -> str:
     """The verdict of a headline claim from its parts' outcomes (None: the part's artifact has no
-    runs here): ``supported`` (every part holds), ``contradicted`` (none holds), ``partly``
-    (some hold), ``not testable here`` (no part could be evaluated).
+    runs here): ``supported`` (every part holds), ``partly`` (some hold), ``contradicted`` (none holds and
+    one does not hold or is contradicted), ``cannot be decided`` (none holds and none goes against it: each
+    part cannot be decided or detects no difference), ``not testable here`` (no part could be evaluated).
     """
     known = [r for r in results if r is not None]
     if not known:
@@ -73,7 +74,9 @@ def headline_verdict(results: list[str | None]) -> str:
     held = sum(r == HOLDS for r in known)
     if held == len(results):
         return "supported"
-    return "contradicted" if held == 0 else "partly"
+    if held:
+        return "partly"
+    return "contradicted" if any(r in (FAILS, CONTRADICTED) for r in known) else UNDECIDED
 
 
 def _reading_rows(h, outcomes: dict) -> list[dict]:

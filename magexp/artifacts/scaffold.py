@@ -160,6 +160,6 @@ def command(args: list[str]) -> None:
     parser.add_argument("name", help="the paper's name: a lowercase identifier, not yet a folder of experiments/")
     name = parser.parse_args(args).name
     for path in new_paper(name):
-        print(f"wrote {path.relative_to(paths.ROOT) if path.is_relative_to(paths.ROOT) else path}")
+        print(f"wrote {path.relative_to(Path.cwd()) if path.is_relative_to(Path.cwd()) else path}")  # where it is
     print(f"next: replace every EDIT, then `magexp reproduce {name} --out scratch` "
           "(docs/extending.md, \"Start from the scaffold\")")
