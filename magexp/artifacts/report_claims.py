@@ -25,7 +25,8 @@ from magexp.artifacts.plots.style import save
 LEGENDS = "[how to read](#how-to-read)"
 #: the legend of a findings table (once in REPORT.md, under "How to read"; in each appendix section)
 FINDINGS_LEGEND = ("*paper*: the paper's statement, checked; *magexp*: stated by this report, a test fails if one "
-                   "does not hold. A comparison holds only where its test separates the two sides at alpha 0.05 after "
+                   "does not hold. A comparison holds only where its test separates the two sides, a trend only where its "
+                   "bootstrap test puts the slope inside its range, at alpha 0.05 after "
                    "Holm's correction within its family (the paper's findings and the parts of the headlines' primary "
                    "readings; magexp's statements apart; the re-tests under other readings apart, in the readings "
                    "figure); full evidence and p-values: [`claims.csv`](claims.csv).")

@@ -50,6 +50,10 @@ class Estimator(Protocol):
         The paper(s) the method comes from.
     monotone_history : bool, optional
         False where the history need not decrease (a filter's objective per step); default True.
+    METRICS : tuple of str, optional
+        The columns its ``FitResult.metrics`` holds (``("on_boundary",)``), so the spec check knows them before
+        any run (:mod:`magexp.artifacts.run_columns`); ``tests/test_run_columns.py`` fails on a column written
+        undeclared or declared and never written. Default: none.
 
     Raises
     ------
