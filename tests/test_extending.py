@@ -447,7 +447,7 @@ def test_adding_a_scenario_and_an_estimator_needs_no_test_edit(copy, tmp_path):
 #: a whole file of the walk-through: a yaml block whose first line names it
 WALKED_FILE = re.compile(r"```yaml\n# (experiments/smith2025/[\w.]+)\n(.*?)```", re.S)
 CLAIM_VERDICTS = {"holds", "does not hold", "cannot be decided"}
-HEADLINE_VERDICTS = {"supported", "partly", "contradicted", "cannot be decided"}
+HEADLINE_VERDICTS = {"supported", "partly", "contradicted", "not shown"}
 
 
 def check_verdicts(out: Path, paper: str, headlines: int) -> pd.DataFrame:

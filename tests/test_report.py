@@ -23,7 +23,7 @@ def test_headline_verdict_aggregates_its_parts():
     assert headline_verdict([HOLDS, HOLDS]) == "supported"
     assert headline_verdict([HOLDS, NO_DIFFERENCE]) == "partly"
     assert headline_verdict([FAILS, CONTRADICTED, NO_DIFFERENCE]) == "contradicted"
-    assert headline_verdict([UNDECIDED, NO_DIFFERENCE]) == "cannot be decided"  # nothing holds, nothing against
+    assert headline_verdict([UNDECIDED, NO_DIFFERENCE]) == "not shown"  # nothing holds, nothing against
     assert headline_verdict([UNDECIDED, FAILS]) == "contradicted"
     assert headline_verdict([None, None]) == "not testable here"  # no part has runs here
     assert headline_verdict([HOLDS, None]) == "partly"  # one part could not be evaluated

@@ -22,7 +22,7 @@ from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
 from magexp.artifacts.spec_check import check_claims
-from magexp.artifacts.paper_spec import artifact_paths, check_headlines, load_paper, papers
+from magexp.artifacts.paper_spec import NOT_SHOWN, artifact_paths, check_headlines, load_paper, papers
 from magexp.artifacts.power import claim_plans
 from magexp.errors import MagexpError
 from magexp.paths import RESULTS
@@ -65,8 +65,8 @@ def claim_outcomes(root: Path = RESULTS, paper: str | None = None) -> list[tuple
 def headline_verdict(results: list[str | None]) -> str:
     """The verdict of a headline claim from its parts' outcomes (None: the part's artifact has no
     runs here): ``supported`` (every part holds), ``partly`` (some hold), ``contradicted`` (none holds and
-    one does not hold or is contradicted), ``cannot be decided`` (none holds and none goes against it: each
-    part cannot be decided or detects no difference), ``not testable here`` (no part could be evaluated).
+    one does not hold or is contradicted), ``not shown`` (none holds and none goes against it: each part
+    cannot be decided or detects no difference), ``not testable here`` (no part could be evaluated).
     """
     known = [r for r in results if r is not None]
     if not known:
@@ -76,7 +76,7 @@ def headline_verdict(results: list[str | None]) -> str:
         return "supported"
     if held:
         return "partly"
-    return "contradicted" if any(r in (FAILS, CONTRADICTED) for r in known) else UNDECIDED
+    return "contradicted" if any(r in (FAILS, CONTRADICTED) for r in known) else NOT_SHOWN
 
 
 def _reading_rows(h, outcomes: dict) -> list[dict]:

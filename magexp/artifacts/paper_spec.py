@@ -37,8 +37,10 @@ from magexp.paths import EXPERIMENTS
 
 #: longest label of a :class:`Reading` (the robustness sentence names readings by it)
 READING_LABEL = 40
+#: the verdict of a headline none of whose parts holds and none goes against (:func:`magexp.artifacts.headlines.headline_verdict`)
+NOT_SHOWN = "not shown"
 #: verdicts of a headline claim (its primary reading's: :mod:`magexp.artifacts.headlines`)
-HEADLINE_VERDICTS = ("supported", "partly", "contradicted", "cannot be decided", "not testable here", "by construction")
+HEADLINE_VERDICTS = ("supported", "partly", "contradicted", NOT_SHOWN, "not testable here", "by construction")
 
 
 @typed
@@ -88,8 +90,8 @@ class Headline:
     """A headline claim of the paper (``headline:`` of ``paper.yaml``), in the paper's own words.
 
     ``parts``: the artifact claims (``<artifact>.<claim id>``) that test it; its verdict is ``supported``
-    (every part holds), ``partly`` (some hold), ``contradicted`` (none holds, one goes against it), ``cannot be
-    decided`` (none holds, none goes against it), or ``not testable here`` when
+    (every part holds), ``partly`` (some hold), ``contradicted`` (none holds, one goes against it), ``not shown``
+    (none holds, none goes against it), or ``not testable here`` when
     ``untestable`` (why) is given instead of parts. A claim about *every* instance ("any two axes", "all
     noise levels") lists each instance as a part: one that fails makes it ``partly`` at best. ``reason``: an
     optional template interpolated with the runs of the first part's artifact

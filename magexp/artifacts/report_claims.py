@@ -16,7 +16,7 @@ import pandas as pd
 from magexp.artifacts.claims import FAILS
 from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED
 from magexp.artifacts.formats import markdown_table, write_csv
-from magexp.artifacts.paper_spec import HEADLINE_VERDICTS
+from magexp.artifacts.paper_spec import HEADLINE_VERDICTS, NOT_SHOWN
 from magexp.artifacts.plots import readings as readings_plot
 from magexp.artifacts.plots.style import save
 
@@ -49,7 +49,7 @@ def link(figure: str, root: Path) -> str:
 
 def bold(verdict: str) -> str:
     """A verdict in bold where it is a negative one (a reader's eye goes to it first)."""
-    return f"**{verdict}**" if verdict in ("contradicted", "partly", FAILS, CONTRADICTED, "differs") else verdict
+    return f"**{verdict}**" if verdict in ("contradicted", "partly", NOT_SHOWN, FAILS, CONTRADICTED, "differs") else verdict
 
 
 def headline_list(p) -> str:

@@ -17,7 +17,7 @@ from matplotlib.patches import Patch, Rectangle
 from magexp.artifacts.plots.style import plt
 
 #: fill of a cell per verdict (the words in the cell say it too)
-COLOURS = {"supported": "#a6d96a", "partly": "#fee08b", "contradicted": "#f46d43", "cannot be decided": "#f7f7f7",
+COLOURS = {"supported": "#a6d96a", "partly": "#fee08b", "contradicted": "#f46d43", "not shown": "#f7f7f7",
            "not testable here": "#dddddd", "by construction": "#abd9e9"}
 #: characters per line of a cell's text
 WRAP = 24
