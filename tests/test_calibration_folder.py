@@ -130,6 +130,7 @@ rng = np.random.default_rng(4)
 u = rng.standard_normal((300, 3))
 cal = magexp.calibrate(50 * u / np.linalg.norm(u, axis=1, keepdims=True) + 3, unit="uT", model="sphere", folds=0)
 out = sys.argv[1]
+signal.signal(signal.SIGINT, signal.default_int_handler)  # a test run started as a background job inherits it ignored
 w.write(cal, out, export="ardupilot")
 replace = os.replace
 def interrupted(src, dst):
