@@ -64,6 +64,15 @@ def smoke_runs() -> list[tuple[dict, set]]:
     return runs
 
 
+def test_a_swarm_run_on_a_simulation_writes_only_declared_columns():
+    """The fast case of the two below: one swarm run (its own ``on_boundary``, the core's, the problem's and
+    its estimates) writes only declared columns, and its declared ``on_boundary`` among them."""
+    cfg = OmegaConf.to_container(shrink(compose_config([*SCENARIOS["scalar"], "estimator=pso", "seed=0"])), resolve=True)
+    written = set(run_row(next(run_batch([cfg]))))
+    assert "on_boundary" in written and not written - run_columns(cfg), sorted(written - run_columns(cfg))
+
+
+@pytest.mark.full  # every estimator on seven scenarios: 6 s
 def test_a_run_writes_only_declared_columns(smoke_runs):
     """Each smoke run's row (its metrics and estimates) holds only columns its config declares."""
     assert len({cfg["estimator"]["name"] for cfg, _ in smoke_runs}) == len(options("estimator"))
@@ -72,6 +81,7 @@ def test_a_run_writes_only_declared_columns(smoke_runs):
         assert not undeclared, (cfg["scenario"]["name"], cfg["estimator"]["name"], sorted(undeclared))
 
 
+@pytest.mark.full
 def test_every_declared_column_is_written_by_some_run(smoke_runs):
     """No declaration names a column no run writes (each conditional one is written where its condition holds:
     a truth, a bound, a held-out block, a rest recording, a gauge-fixed fit, an analysis step)."""

@@ -179,7 +179,7 @@ def test_a_trend_is_tested_in_its_holm_family():
 
 
 def test_a_trend_counts_in_its_family_and_plans_its_seeds_by_power():
-    spec = parse({**BASE, "grid": {AXIS: [50, 200, 800, 3200], "estimator": ["ellipsoid", "lm"]}, "max_seeds": 300,
+    spec = parse({**BASE, "grid": {AXIS: [50, 200, 800, 3200], "estimator": ["ellipsoid", "lm"]}, "max_seeds": 120,
                   "claims": [{**TREND, "where": {"estimator": "ellipsoid"}, "effect": {"slope": -0.5, "spread": 0.5}},
                              {"id": "order", "text": "t", "kind": "ordering", "metric": "offset_error",
                               "cells": [{"estimator": "ellipsoid"}, {"estimator": "lm"}]}]}, Path("toy_fig1.yaml"))
@@ -191,8 +191,8 @@ def test_a_trend_counts_in_its_family_and_plans_its_seeds_by_power():
     below = power.trend_power(plan.seeds - 1, xs, "median", (-0.6, -0.4), "", -0.5, 0.5, 0.025)
     assert below < 0.8 <= power.trend_power(plan.seeds, xs, "median", (-0.6, -0.4), "", -0.5, 0.5, 0.025)
     effect = (("slope", -0.5), ("spread", 0.5))
-    wider = power.trend_seeds(xs, "median", (-0.7, -0.3), "", effect, 0.025, 30, 300)[0]
-    stricter = power.trend_seeds(xs, "median", (-0.6, -0.4), "", effect, 0.0025, 30, 300)[0]
+    wider = power.trend_seeds(xs, "median", (-0.7, -0.3), "", effect, 0.025, 30, 120)[0]
+    stricter = power.trend_seeds(xs, "median", (-0.6, -0.4), "", effect, 0.0025, 30, 120)[0]
     assert wider < plan.seeds < stricter
 
 
