@@ -7,6 +7,7 @@ import pytest
 
 from magexp.artifacts import headlines
 from magexp.artifacts.claims import Claim, evaluate
+from magexp.artifacts.comparisons import adjust
 from magexp.artifacts.schema import build
 from magexp.artifacts.paper_spec import Headline, Paper
 from magexp.errors import MagexpError
@@ -130,3 +131,23 @@ def test_every_reading_of_every_paper_is_sourced_and_argued():
                 assert "point to" not in source and "resemble" not in source, (paper, h.id, r.label)
                 checked += 1
     assert checked >= 20
+
+
+def test_a_reading_neither_shown_nor_contradicted_says_what_its_test_could_have_seen(monkeypatch):
+    """A reading whose only part detects no difference is "not shown" (not contradicted), and the robustness
+    sentence says the difference its test would have seen with 80 % power at its level."""
+    table = _table({"a": 1.0, "b": 1.0}, 12)  # the same values on both sides: no difference
+    a_ok = Claim(id="a_ok", text="", kind="success", where={"estimator": "a"}, op=">=", value=0.9)
+    a_beats_b = Claim(id="a_beats_b", text="", kind="ordering", metric="fun", test="unpaired",
+                      cells=[{"estimator": "a"}, {"estimator": "b"}])
+    head = {"id": "h", "text": "t", "section": "s", "parts": ["art.a_ok"], "primary": "A", "why": "w",
+            "readings": [{"label": "A", "source": "x"},
+                         {"label": "B", "source": "y", "parts": ["art.a_beats_b"], "less_plausible": "z"}]}
+    specs = [SimpleNamespace(name="art", claims=[a_ok, a_beats_b])]
+    outcomes = {f"art.{c.id}": adjust([evaluate(c, table)], ["sensitivity"])[0] for c in (a_ok, a_beats_b)}
+    monkeypatch.setattr(headlines, "load_paper", lambda name: Paper(title="p", headline=[build(Headline, head, "h")]))
+    row = headlines.headlines("p", specs, outcomes, lambda name: table)[0]
+    assert row["verdict"] == "supported"
+    assert row["robustness"].startswith('supported under the primary reading; not shown under "B" (no difference '
+                                        "detected; a_beats_b would have seen a difference of ")
+    assert "with 80 % power at its level 0.05 (observed: 0); less plausible: z)" in row["robustness"]

@@ -90,14 +90,33 @@ def _reading_rows(h, outcomes: dict) -> list[dict]:
                      "settings": " ".join(str(r.settings).split()), "parts": parts,
                      "less_plausible": " ".join(str(r.less_plausible).split()), "primary": r.label == h.primary,
                      "verdict": headline_verdict(results),
-                     "outcomes": "; ".join(f"{p}: {res or 'no runs here'}" for p, res in zip(parts, results))})
+                     "outcomes": "; ".join(f"{p}: {res or 'no runs here'}" for p, res in zip(parts, results)),
+                     "could_see": could_see([outcomes[p] for p in parts if p in outcomes])})
     return rows
+
+
+def could_see(parts: list) -> str:
+    """What the tests of a reading's parts could have seen, in words, where none holds and none goes against it
+    (its verdict :data:`~magexp.artifacts.paper_spec.NOT_SHOWN`; '' otherwise): its first part's, with how many
+    parts are alike."""
+    if headline_verdict([o.result for o in parts]) != NOT_SHOWN:
+        return ""
+    o, alike = parts[0], sum(q.result == parts[0].result for q in parts)
+    head = (o.result if len(parts) == 1 else f"all {alike} parts: {o.result}" if alike == len(parts)
+            else f"{alike} of its {len(parts)} parts: {o.result}")
+    if o.detectable_words and o.p_min < o.level:
+        return (f"{head}; {o.claim.id} would have seen {o.detectable_words} with 80 % power at its level "
+                f"{o.level:.3g} (observed: {o.observed:.3g})")
+    if o.p_min >= o.level:
+        return f"{head}; {o.claim.id} cannot reach its level at n = {o.n}: its smallest p is {o.p_min:.3g}"
+    return f"{head}: {o.short}"
 
 
 def robustness(verdict: str, readings: list[dict]) -> str:
     """One sentence on how the verdict of a headline fares under its other readings: ``robust under all
     N readings`` where each gives the primary's verdict, else the primary's verdict and, per other
-    verdict, the readings that give it and why each is less plausible.
+    verdict, the readings that give it, what a "not shown" one's tests could have seen (:func:`could_see`) and
+    why each is less plausible.
     """
     if not readings:
         return "no unstated setting it turns on is read otherwise"
@@ -111,8 +130,14 @@ def robustness(verdict: str, readings: list[dict]) -> str:
         if r["verdict"] != verdict:
             sides.setdefault(r["verdict"], []).append(r)
     for v, rs in sides.items():
-        text += f"; {v} under " + " and ".join(f'"{r["label"]}" (less plausible: {r["less_plausible"]})' for r in rs)
+        text += f"; {v} under " + " and ".join(f'"{r["label"]}" ({_seen(r)}less plausible: {r["less_plausible"]})'
+                                               for r in rs)
     return text
+
+
+def _seen(reading: dict) -> str:
+    """What a reading's tests could have seen, ending in '; ' ('' when it is not "not shown")."""
+    return f"{reading['could_see']}; " if reading.get("could_see") else ""
 
 
 def headlines(paper: str, specs: list, outcomes: dict, runs) -> list[dict]:
