@@ -16,6 +16,7 @@ from magexp.run import cache
 from magexp.run import executor
 
 from magexp.artifacts import reproduce
+from magexp.artifacts.memo import source_digest
 
 from magexp.run import runner
 from magexp.run.compose import compose_config
@@ -222,17 +223,20 @@ def test_figure_key_sees_the_csv_the_spec_and_the_code(tmp_path, monkeypatch):
         assert memo.key(spec, b"a,b\n1,2\n") != k
     assert memo.key(spec, b"a,b\n1,2\n") == k
     memo.figure_code_version.cache_clear()
+    source_digest.cache_clear()
     copy = tmp_path / "pkg"
     shutil.copytree(ROOT / "magexp", copy, ignore=shutil.ignore_patterns("__pycache__"))
     monkeypatch.setattr("magexp.paths.PACKAGE", copy)
     try:
         assert memo.key(spec, b"a,b\n1,2\n") == k
         memo.figure_code_version.cache_clear()
+        source_digest.cache_clear()
         with (copy / "artifacts" / "plots" / "style.py").open("a") as fh:
             fh.write("\n# a style edit\n")
         assert memo.key(spec, b"a,b\n1,2\n") != k
     finally:
         memo.figure_code_version.cache_clear()
+        source_digest.cache_clear()
 
 
 #: t(0.975, 8): the two-sided 95 % quantile of Student's t with 8 degrees of freedom (printed tables: 2.306)

@@ -21,16 +21,26 @@ from __future__ import annotations
 import hashlib
 import os
 from collections.abc import Callable
+from functools import lru_cache
 from pathlib import Path
 
 from magexp import paths
 from magexp.run.cache import write
 from magexp.run.entries import InvalidEntry, pack, read
+from magexp.run.runkeys import files_digest
 
 #: the most entries, and bytes, one memo keeps (:meth:`Memo.prune`)
 MAX_ENTRIES, MAX_BYTES = 20_000, 256 * 2**20
 #: file name suffix of a memo's entry
 SUFFIX = ".memo"
+
+
+@lru_cache(maxsize=1)
+def source_digest() -> str:
+    """The SHA-256 of magexp's own source (each ``.py`` of the package, its path and content), once per process:
+    what the plan cache (:func:`magexp.artifacts.plan_cache.inputs_digest`) and the figure memo
+    (:func:`magexp.artifacts.plots.memo.figure_code_version`) key on beside their own inputs."""
+    return files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE).hexdigest()
 
 
 def digests(files: list[Path]) -> list[str] | None:

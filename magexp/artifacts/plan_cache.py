@@ -31,7 +31,7 @@ import hydra
 import omegaconf
 
 from magexp import paths
-from magexp.artifacts.memo import beside_cache
+from magexp.artifacts.memo import beside_cache, source_digest
 from magexp.artifacts.plan import ArtifactPlan
 from magexp.artifacts.sample_sizes import plan_with_effects
 from magexp.run.cache import write
@@ -50,7 +50,7 @@ def root() -> Path:
 @lru_cache(maxsize=1)
 def inputs_digest() -> str:
     """The digest of everything a plan is composed from but the artifact itself (module docstring)."""
-    h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
+    h = hashlib.sha256(source_digest().encode())
     for folder in (paths.CONF, paths.EXPERIMENTS):
         h.update(files_digest(sorted(p for p in folder.rglob("*") if p.is_file()), folder).digest())
     h.update(f"{sys.version} {hydra.__version__} {omegaconf.__version__}".encode())

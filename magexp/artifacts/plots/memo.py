@@ -12,7 +12,7 @@ bytes. So a figure is keyed by
 
 (:func:`figure_code_version` is not the run cache's :func:`magexp.run.cache.code_version`: a run is
 keyed by the code it executes only, so that a plot edit keeps every run; a figure by all of magexp's
-source (:func:`magexp.run.cache.files_digest`) and the drawing libraries, since the artifact,
+source (:func:`magexp.artifacts.memo.source_digest`) and the drawing libraries, since the artifact,
 summary, style and plot code all shape it)
 
 and the cache (a :class:`magexp.artifacts.memo.Memo`) keeps, under that key, the SHA-256 digests of the
@@ -32,10 +32,8 @@ import matplotlib
 import numpy
 import pandas
 
-from magexp import paths
-from magexp.artifacts.memo import Memo, beside_cache
+from magexp.artifacts.memo import Memo, beside_cache, source_digest
 from magexp.artifacts.plots.style import plt
-from magexp.run.runkeys import files_digest
 
 
 def root() -> Path:
@@ -50,7 +48,7 @@ FIGURES = Memo("Figure", lambda: root())
 @lru_cache(maxsize=1)
 def figure_code_version() -> str:
     """Hash of all of magexp's source and of the drawing libraries' versions (module docstring)."""
-    h = files_digest(sorted(paths.PACKAGE.rglob("*.py")), paths.PACKAGE)
+    h = hashlib.sha256(source_digest().encode())
     h.update(f"{matplotlib.__version__} {numpy.__version__} {pandas.__version__}".encode())
     return h.hexdigest()
 
