@@ -66,7 +66,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.censoring import censored_mask, censored_statistic, censored_text
-from magexp.artifacts.comparisons import HOLDS, combined, compare, decide
+from magexp.artifacts.comparisons import HOLDS, NO_DIFFERENCE, UNDECIDED, combined, compare, decide
 from magexp.artifacts.schema import Bool, Float, typed
 from magexp.artifacts.selection import cell_settings, restrict, select, values
 from magexp.artifacts.significance import effect_error
@@ -179,6 +179,12 @@ rule judged it at, at which ``detectable`` (and ``detectable_words``) is then co
     def __post_init__(self):
         self.result = self.result or (HOLDS if self.holds else FAILS)
         self.short = self.short or self.evidence
+
+    @property
+    def undetected(self) -> bool:
+        """Whether its test decided nothing though it could: no difference detected, or a trend that cannot be
+        decided at its level (then ``detectable`` says what it could have seen)."""
+        return self.result == NO_DIFFERENCE or self.result == UNDECIDED and self.p_min < self.level
 
     @property
     def is_comparison(self) -> bool:

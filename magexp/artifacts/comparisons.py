@@ -208,7 +208,7 @@ def _adjusted_note(o, m: int) -> str:
     note = f"{o.p_adjusted:.3g} after Holm over {m} {o.family} tests" if m > 1 else f"p = {o.p:.3g}"
     if o.result == UNDECIDED and not o.p_min < o.level:
         return f"{note}; cannot be decided at n = {o.n}: its smallest p is {o.p_min:.3g}"
-    if o.result in (NO_DIFFERENCE, UNDECIDED) and o.detectable_words:
+    if o.undetected and o.detectable_words:
         return (f"{note}; detectable at {POWER:.0%} power at its level {o.level:.3g}: {o.detectable_words} "
                 f"(observed: {o.observed:.3g})")
     return note

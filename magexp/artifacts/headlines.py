@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from magexp.artifacts.claims import FAILS, evaluate, interpolate
-from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, NO_DIFFERENCE, UNDECIDED, adjust
+from magexp.artifacts.comparisons import CONTRADICTED, HOLDS, adjust
 from magexp.artifacts.families import claim_families
 from magexp.artifacts.formats import read_runs
 from magexp.artifacts.spec import load
@@ -104,7 +104,7 @@ def could_see(parts: list) -> str:
     o, alike = parts[0], sum(q.result == parts[0].result for q in parts)
     head = (o.result if len(parts) == 1 else f"all {alike} parts: {o.result}" if alike == len(parts)
             else f"{alike} of its {len(parts)} parts: {o.result}")
-    if o.detectable_words and o.p_min < o.level:
+    if o.undetected and o.detectable_words:
         return (f"{head}; {o.claim.id} would have seen {o.detectable_words} with 80 % power at its level "
                 f"{o.level:.3g} (observed: {o.observed:.3g})")
     if o.p_min >= o.level:
@@ -230,7 +230,7 @@ def claim_rows(paper: str, specs: list, outcomes: list) -> list[dict]:
         plan = plans.get(f"{name}.{o.claim.id}")
         capped = (f"; planned seeds capped at {plan.seeds}: power {plan.power:.2f} against {plan.words} "
                   f"at level {plan.level:.3g}") if plan is not None and plan.capped else ""
-        undetected = o.result == NO_DIFFERENCE or o.result == UNDECIDED and o.p_min < o.level  # a trend's middle
+        undetected = o.undetected
         rows.append({"paper": paper, "artifact": name, "id": o.claim.id, "by": o.claim.by, "role": o.claim.role,
                      "section": o.claim.section, "figure": f"{paper}/{o.claim.figure or own[name].name}",
                      "text": o.claim.text, "verdict": o.result, "reason": o.short, "evidence": o.evidence + capped,
