@@ -14,6 +14,7 @@ and table is written in the formats of :mod:`magexp.artifacts.formats`."""
 
 from __future__ import annotations
 
+import functools
 import re
 import subprocess
 import sys
@@ -97,6 +98,12 @@ class Paper:
         by_id = {f"{name}.{o.claim.id}": o for name, o in self.outcomes}
         self.headlines = headlines(paper, self.specs, by_id, self.runs)
         self.claims = claim_rows(paper, self.specs, self.outcomes)
+
+    @functools.cached_property
+    def winners(self) -> str:
+        """Its "which method to pick" section (:func:`_winners_section`), its CSVs read once for the report's
+        pointer and the appendix."""
+        return _winners_section(self)
 
 
 #: a cell with more compared numbers than this (a parameter table) is one line of the report
@@ -207,7 +214,7 @@ def _report_section(p: Paper) -> str:
     intro = " ".join(str(p.meta.intro).split())
     lines = [f"## {p.meta.title}\n", f"{intro}\n" if intro else "", "### Headline claims\n", headline_list(p)]
     winners = ("### Which method to pick\n\nThe winner per case of each benchmark table: "
-               f"[appendix](APPENDIX.md#{p.paper}-which-method-to-pick).\n") if _winners_section(p) else ""
+               f"[appendix](APPENDIX.md#{p.paper}-which-method-to-pick).\n") if p.winners else ""
     lines += [findings_table(p), winners, _compared_table(p), _deviations_section(p.meta, p.paper, p.root),
               f"Figures, notes, full tables and sanity checks: [appendix](APPENDIX.md#{p.paper}).\n"]
     return "\n".join(x for x in lines if x)
@@ -218,9 +225,8 @@ def _appendix_section(p: Paper) -> str:
     lines = [f'<a id="{p.paper}"></a>\n', f"## {p.meta.title}\n", f"{str(p.meta.intro).strip()}\n",
              readings_section(p), _deviations_section(p.meta, p.paper, p.root, full=True)]
     lines.append(findings_table(p, appendix=True))
-    winners = _winners_section(p)
-    if winners:
-        lines.append(f'<a id="{p.paper}-which-method-to-pick"></a>\n\n{winners}\n')
+    if p.winners:
+        lines.append(f'<a id="{p.paper}-which-method-to-pick"></a>\n\n{p.winners}\n')
     frame = pd.DataFrame(p.claims) if p.claims else pd.DataFrame(columns=CLAIM_COLUMNS)
     sanity = frame[frame.role == "sanity"]
     if len(sanity):
